@@ -1,0 +1,22 @@
+//! Criterion benchmarks of the classic baselines on the cubic sensor of 004 (44): one whole
+//! run (T = 5, Δτ = 0.01, 500 steps) per method.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use zakai::experiment::{Experiment, Silent};
+use zakai::scenario::{presets, MethodConfig};
+
+fn baselines(c: &mut Criterion) {
+    let base = presets::preset("cubic-sensor-1d").expect("preset exists");
+    for key in ["ekf", "ukf", "pf"] {
+        let mut config = base.clone();
+        config.methods = vec![MethodConfig::from_key(key).expect("known method")];
+        let experiment = Experiment::new(config).expect("valid preset");
+        let name = experiment.method_names()[0].clone();
+        c.bench_function(&format!("cubic-sensor-1d run {name}"), |b| {
+            b.iter(|| experiment.run_with(3, None, &mut Silent).expect("runs"))
+        });
+    }
+}
+
+criterion_group!(benches, baselines);
+criterion_main!(benches);

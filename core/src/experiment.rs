@@ -1,0 +1,375 @@
+//! The one driver: simulate the truth once, then feed the same observations to every selected
+//! filter, recording estimates, per-step wall time and failures (in the spirit of argmin's
+//! `Executor`: the maths never reports progress itself; an [`Observer`] does).
+//!
+//! A run can be driven all at once ([`Experiment::run`]) or stepped
+//! ([`Experiment::start`] then [`ExperimentRun::advance`]), which is what the wasm `Session`
+//! does. A method that fails (non-finite numbers, lost density, divergence beyond the
+//! scenario's bound) is stopped and marked failed for the run — the papers' "—" — and its
+//! numbers never reach a table.
+
+use alloc::boxed::Box;
+use alloc::string::{String, ToString};
+use alloc::vec::Vec;
+
+use crate::error::ZakaiError;
+use crate::filters::{Filter, Observation, ObservationKind};
+use crate::metrics;
+use crate::model::{Model, Prior};
+use crate::scenario::ScenarioConfig;
+use crate::simulate::{rng_from_seed, simulate, Trajectory};
+
+/// A source of wall-clock time in seconds (std: `Instant`; wasm: `performance.now()`).
+pub trait Clock {
+    /// Seconds since an arbitrary fixed origin.
+    fn now(&self) -> f64;
+}
+
+/// [`Clock`] on `std::time::Instant` (not on wasm32-unknown-unknown, where `Instant` panics).
+#[cfg(feature = "std")]
+pub struct StdClock(std::time::Instant);
+
+#[cfg(feature = "std")]
+impl Default for StdClock {
+    fn default() -> Self {
+        StdClock(std::time::Instant::now())
+    }
+}
+
+#[cfg(feature = "std")]
+impl Clock for StdClock {
+    fn now(&self) -> f64 {
+        self.0.elapsed().as_secs_f64()
+    }
+}
+
+/// Receives progress from the driver.
+pub trait Observer {
+    /// After observation `k` of `total` was given to every live filter.
+    fn on_step(&mut self, _k: usize, _total: usize) {}
+    /// When method `index` fails at observation `k`.
+    fn on_failure(&mut self, _index: usize, _k: usize, _message: &str) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl Observer for Silent {}
+
+/// Where and why a method failed in a run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Failure {
+    /// Observation index where it failed.
+    pub k: usize,
+    /// The error message.
+    pub message: String,
+}
+
+/// One method's record in one run.
+#[derive(Clone, Debug)]
+pub struct MethodTrack {
+    /// Display name.
+    pub name: String,
+    /// State dimension.
+    pub n: usize,
+    /// Estimates x̂(τ_k), row-major, for k = 0..(rows − 1); rows stop at a failure.
+    pub estimates: Vec<f64>,
+    /// The failure, if the method failed.
+    pub failure: Option<Failure>,
+    /// Total wall time spent in `step` (seconds; 0 without a clock).
+    pub seconds: f64,
+    /// Number of steps taken.
+    pub steps: usize,
+}
+
+impl MethodTrack {
+    /// Number of estimate rows.
+    pub fn rows(&self) -> usize {
+        self.estimates.len() / self.n
+    }
+    /// True when the method failed in this run.
+    pub fn failed(&self) -> bool {
+        self.failure.is_some()
+    }
+    /// Mean wall time per step in seconds.
+    pub fn seconds_per_step(&self) -> f64 {
+        if self.steps == 0 {
+            0.0
+        } else {
+            self.seconds / self.steps as f64
+        }
+    }
+    /// The estimates when the method finished the run against `truth`, else `None`.
+    fn complete(&self, truth: &[f64]) -> Option<&[f64]> {
+        (!self.failed() && self.estimates.len() == truth.len()).then_some(&self.estimates[..])
+    }
+    /// MSE of 004 (43) summed over components against the truth's states; `None` when the
+    /// method failed or did not finish.
+    pub fn mse(&self, truth: &[f64]) -> Option<f64> {
+        self.mse_components(truth).map(|c| c.iter().sum())
+    }
+    /// MSE of 004 (43) per component; `None` when failed or unfinished.
+    pub fn mse_components(&self, truth: &[f64]) -> Option<Vec<f64>> {
+        let est = self.complete(truth)?;
+        Some(metrics::mse_components(truth, est, self.n))
+    }
+    /// E_RMS of 000 §4.2 per component (k = 1..N); `None` when failed or unfinished.
+    pub fn rms_components(&self, truth: &[f64]) -> Option<Vec<f64>> {
+        let est = self.complete(truth)?;
+        Some(metrics::rms_components(truth, est, self.n))
+    }
+}
+
+/// A finished run.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    /// The seed of the run.
+    pub seed: u64,
+    /// Truth and observations.
+    pub trajectory: Trajectory,
+    /// One record per method, in the scenario's order.
+    pub methods: Vec<MethodTrack>,
+}
+
+impl RunResult {
+    /// MSE of 004 (43) of method `index` (`None` when it failed).
+    pub fn mse(&self, index: usize) -> Option<f64> {
+        self.methods.get(index)?.mse(&self.trajectory.states)
+    }
+}
+
+/// A validated scenario with its model and prior built, ready to run any number of times.
+pub struct Experiment {
+    config: ScenarioConfig,
+    model: Model,
+    prior: Prior,
+    names: Vec<String>,
+    probes: Vec<Vec<f64>>,
+}
+
+/// The seed of method `index` in the run with seed `seed` (independent of the truth's stream).
+pub fn method_seed(seed: u64, index: usize) -> u64 {
+    seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))
+}
+
+impl Experiment {
+    /// Validates the scenario (all problems at once) and builds its model and prior.
+    pub fn new(config: ScenarioConfig) -> Result<Self, ZakaiError> {
+        config.check()?;
+        let model = config.build_model()?;
+        let prior = config.build_prior()?;
+        let names = config.method_names();
+        let probes = config.probe_points();
+        Ok(Experiment {
+            config,
+            model,
+            prior,
+            names,
+            probes,
+        })
+    }
+
+    /// The scenario.
+    pub fn config(&self) -> &ScenarioConfig {
+        &self.config
+    }
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+    /// The prior.
+    pub fn prior(&self) -> &Prior {
+        &self.prior
+    }
+    /// Method display names.
+    pub fn method_names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Simulates the truth for `seed` and builds every filter; observation 0 is processed
+    /// (a measurement at τ₀ for discrete models) and the initial estimates recorded.
+    pub fn start(&self, seed: u64) -> Result<ExperimentRun, ZakaiError> {
+        let mut rng = rng_from_seed(seed);
+        let x0 = match &self.config.initial_state {
+            Some(x) => x.clone(),
+            None => self.prior.sample(&mut rng).as_slice().to_vec(),
+        };
+        let trajectory = simulate(&self.model, &x0, self.config.time_grid(), &mut rng);
+        let mut filters = Vec::with_capacity(self.config.methods.len());
+        for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
+            filters.push(method.build(
+                name.clone(),
+                &self.model,
+                &self.prior,
+                method_seed(seed, i),
+                &self.probes,
+            )?);
+        }
+        let tracks = self
+            .names
+            .iter()
+            .map(|name| MethodTrack {
+                name: name.clone(),
+                n: self.model.n,
+                estimates: Vec::with_capacity(trajectory.states.len()),
+                failure: None,
+                seconds: 0.0,
+                steps: 0,
+            })
+            .collect();
+        let mut run = ExperimentRun {
+            seed,
+            trajectory,
+            filters,
+            tracks,
+            next: 0,
+            bound: self.config.failure.divergence_bound,
+        };
+        run.observe(0, None, &mut Silent);
+        Ok(run)
+    }
+
+    /// A whole run, timed with `clock` (none: times are 0), reporting to `observer`.
+    pub fn run_with(
+        &self,
+        seed: u64,
+        clock: Option<&dyn Clock>,
+        observer: &mut dyn Observer,
+    ) -> Result<RunResult, ZakaiError> {
+        let mut run = self.start(seed)?;
+        run.advance(usize::MAX, clock, observer);
+        Ok(run.finish())
+    }
+
+    /// A whole run, timed by the standard clock where there is one.
+    pub fn run(&self, seed: u64) -> Result<RunResult, ZakaiError> {
+        #[cfg(feature = "std")]
+        {
+            self.run_with(seed, Some(&StdClock::default()), &mut Silent)
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            self.run_with(seed, None, &mut Silent)
+        }
+    }
+}
+
+/// A run in progress (see [`Experiment::start`]).
+pub struct ExperimentRun {
+    seed: u64,
+    trajectory: Trajectory,
+    filters: Vec<Box<dyn Filter>>,
+    tracks: Vec<MethodTrack>,
+    next: usize,
+    bound: f64,
+}
+
+impl ExperimentRun {
+    /// The truth and observations of the whole run (simulated up front).
+    pub fn trajectory(&self) -> &Trajectory {
+        &self.trajectory
+    }
+    /// Per-method records so far.
+    pub fn tracks(&self) -> &[MethodTrack] {
+        &self.tracks
+    }
+    /// The live filters (for densities and estimates).
+    pub fn filters(&self) -> &[Box<dyn Filter>] {
+        &self.filters
+    }
+    /// Index of the next observation to process (observations 0..next are done).
+    pub fn position(&self) -> usize {
+        self.next
+    }
+    /// True when every observation has been processed.
+    pub fn is_finished(&self) -> bool {
+        self.next > self.trajectory.steps()
+    }
+
+    /// Gives observation `k` to every live filter and records its estimate or failure.
+    fn observe(&mut self, k: usize, clock: Option<&dyn Clock>, observer: &mut dyn Observer) {
+        let t = &self.trajectory;
+        let kind = if t.continuous {
+            ObservationKind::Increment
+        } else {
+            ObservationKind::Measurement
+        };
+        let dt = if k == 0 { 0.0 } else { t.times[k] - t.times[k - 1] };
+        let obs = Observation {
+            k,
+            t: t.times[k],
+            dt,
+            value: t.observation(k),
+            kind,
+        };
+        for (i, (filter, track)) in self.filters.iter_mut().zip(&mut self.tracks).enumerate() {
+            if track.failed() {
+                continue;
+            }
+            let start = clock.map(|c| c.now());
+            let stepped = if k == 0 && t.continuous {
+                Ok(())
+            } else {
+                filter.step(&obs)
+            };
+            if let (Some(c), Some(s)) = (clock, start) {
+                track.seconds += c.now() - s;
+            }
+            if k > 0 {
+                track.steps += 1;
+            }
+            let result = stepped.map_err(|e| e.to_string()).and_then(|_| {
+                let est = filter.estimate();
+                let magnitude = est.mean.amax();
+                if est.mean.iter().any(|v| !v.is_finite()) {
+                    Err("the estimate became non-finite".to_string())
+                } else if magnitude > self.bound {
+                    Err(crate::error::FilterError::Diverged {
+                        magnitude,
+                        bound: self.bound,
+                    }
+                    .to_string())
+                } else {
+                    Ok(est)
+                }
+            });
+            match result {
+                Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
+                Err(message) => {
+                    observer.on_failure(i, k, &message);
+                    track.failure = Some(Failure { k, message });
+                }
+            }
+        }
+        self.next = k + 1;
+    }
+
+    /// Processes up to `count` further observations; returns how many were processed.
+    pub fn advance(
+        &mut self,
+        count: usize,
+        clock: Option<&dyn Clock>,
+        observer: &mut dyn Observer,
+    ) -> usize {
+        let total = self.trajectory.steps();
+        let mut done = 0;
+        while done < count && !self.is_finished() {
+            let k = self.next;
+            self.observe(k, clock, observer);
+            observer.on_step(k, total);
+            done += 1;
+        }
+        done
+    }
+
+    /// Ends the run (processing any remaining observations) and hands over the records.
+    pub fn finish(mut self) -> RunResult {
+        if !self.is_finished() {
+            self.advance(usize::MAX, None, &mut Silent);
+        }
+        RunResult {
+            seed: self.seed,
+            trajectory: self.trajectory,
+            methods: self.tracks,
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! The Kalman–Bucy filter for linear Gaussian models — the exact reference.
+//!
+//! For `dx = (A x + b) dt + G dv` the prediction over Δτ is exact:
+//! `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` with `Φ = e^{AΔτ}`, `Γ = ∫₀^Δτ e^{As} ds` and
+//! `Q_d = ∫₀^Δτ e^{As} Q e^{Aᵀs} ds` (Van Loan's block exponential). The update uses the
+//! observation as a measurement ([`super::measurement`]): exact for discrete linear
+//! measurements, and the Euler form of Kalman–Bucy's `dm = P Cᵀ S⁻¹ (dy − C m dt)` for
+//! increments, which converges to the Kalman–Bucy filter as Δτ → 0.
+//!
+//! The model must be affine: A, b, C, c are read off at the origin and the Jacobians are
+//! checked at probe points spread over the domain; a nonlinear model is refused with an error.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::measurement::MeasurementForm;
+use super::{GaussianInit, GaussianState};
+use crate::error::FilterError;
+use crate::filters::{Estimate, Filter, Observation};
+use crate::model::{Model, Prior, VectorFunction};
+
+/// Parameters of [`KalmanBucy`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KalmanParams {
+    /// Overrides the prior's mean and covariance.
+    pub init: GaussianInit,
+}
+
+/// Jacobian of `g` at `x` as a matrix.
+fn jacobian_at(g: &dyn VectorFunction, x: &[f64]) -> DMatrix<f64> {
+    let (n, m) = (g.input_dim(), g.output_dim());
+    let mut j = vec![0.0; n * m];
+    g.jacobian(x, &mut j);
+    DMatrix::from_row_slice(m, n, &j)
+}
+
+/// `(J, g(0))` of an affine `g`, or an error naming the first probe where `J` differs.
+pub fn affine_parts(
+    g: &dyn VectorFunction,
+    what: &str,
+    probes: &[Vec<f64>],
+) -> Result<(DMatrix<f64>, DVector<f64>), FilterError> {
+    let n = g.input_dim();
+    let origin = vec![0.0; n];
+    let j0 = jacobian_at(g, &origin);
+    for p in probes {
+        let jp = jacobian_at(g, p);
+        let scale = 1.0 + j0.amax();
+        if (&jp - &j0).amax() > 1e-6 * scale {
+            return Err(FilterError::Unsuitable(format!(
+                "the Kalman–Bucy filter needs a linear model, but the Jacobian of the {what} at {p:?} differs from the one at 0"
+            )));
+        }
+    }
+    Ok((j0, DVector::from_vec(g.value(&origin))))
+}
+
+/// Exact discretisation of `dx = (A x + b) dt + G dv` over `dt`: `(Φ, Γ b, Q_d)`.
+pub fn discretize(
+    a: &DMatrix<f64>,
+    b: &DVector<f64>,
+    q: &DMatrix<f64>,
+    dt: f64,
+) -> (DMatrix<f64>, DVector<f64>, DMatrix<f64>) {
+    let n = a.nrows();
+    // [[A, b], [0, 0]] Δτ  →  [[Φ, Γ b], [0, 1]].
+    let mut aug = DMatrix::zeros(n + 1, n + 1);
+    aug.view_mut((0, 0), (n, n)).copy_from(&(a * dt));
+    aug.view_mut((0, n), (n, 1)).copy_from(&(b * dt));
+    let e = crate::linalg::expm(&aug);
+    let phi = e.view((0, 0), (n, n)).into_owned();
+    let gamma_b = e.view((0, n), (n, 1)).column(0).into_owned();
+    // Van Loan: exp([[−A, Q], [0, Aᵀ]] Δτ) = [[·, Φ⁻¹ Q_d], [0, Φᵀ]].
+    let mut vl = DMatrix::zeros(2 * n, 2 * n);
+    vl.view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
+    vl.view_mut((0, n), (n, n)).copy_from(&(q * dt));
+    vl.view_mut((n, n), (n, n)).copy_from(&(a.transpose() * dt));
+    let ev = crate::linalg::expm(&vl);
+    let mut qd = &phi * ev.view((0, n), (n, n));
+    crate::linalg::symmetrize(&mut qd);
+    (phi, gamma_b, qd)
+}
+
+/// The Kalman–Bucy filter (see the module doc).
+pub struct KalmanBucy {
+    name: String,
+    model: Model,
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+    q: DMatrix<f64>,
+    form: MeasurementForm,
+    state: GaussianState,
+    /// (Δτ, Φ, Γb, Q_d) of the last interval, reused while Δτ does not change.
+    cached: Option<(f64, DMatrix<f64>, DVector<f64>, DMatrix<f64>)>,
+}
+
+impl KalmanBucy {
+    /// Builds the filter; `probes` are points where linearity is checked.
+    pub fn new(
+        name: String,
+        model: &Model,
+        prior: &Prior,
+        params: &KalmanParams,
+        probes: &[Vec<f64>],
+    ) -> Result<Self, FilterError> {
+        let (a, b) = affine_parts(&*model.drift, "drift f", probes)?;
+        affine_parts(&*model.observation, "observation h", probes)?;
+        Ok(KalmanBucy {
+            name,
+            model: model.clone(),
+            a,
+            b,
+            q: model.process_noise(),
+            form: MeasurementForm::new(model),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init),
+            cached: None,
+        })
+    }
+}
+
+impl Filter for KalmanBucy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            if self.cached.as_ref().map(|c| c.0) != Some(obs.dt) {
+                let (phi, gb, qd) = discretize(&self.a, &self.b, &self.q, obs.dt);
+                self.cached = Some((obs.dt, phi, gb, qd));
+            }
+            let (_, phi, gb, qd) = self.cached.as_ref().expect("just set");
+            self.state.mean = phi * &self.state.mean + gb;
+            self.state.cov = phi * &self.state.cov * phi.transpose() + qd;
+        }
+        let meas = self.form.at(obs)?;
+        if meas.scale == 0.0 {
+            return self.state.check();
+        }
+        self.state.linearized_update(&self.model, &meas)
+    }
+
+    fn estimate(&self) -> Estimate {
+        self.state.estimate()
+    }
+}

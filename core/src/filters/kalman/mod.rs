@@ -1,0 +1,155 @@
+//! Gaussian filters on nalgebra, n-dimensional: [`KalmanBucy`] (exact for linear Gaussian
+//! models), [`ExtendedKalman`] and [`UnscentedKalman`]. They share the Gaussian state
+//! `N(m, P)`, the observation-as-measurement form of [`measurement`], and the
+//! continuous-time propagation of [`propagate`].
+
+pub mod ekf;
+pub mod linear;
+pub mod measurement;
+pub mod propagate;
+pub mod ukf;
+
+pub use ekf::{EkfParams, ExtendedKalman};
+pub use linear::{KalmanBucy, KalmanParams};
+pub use ukf::{UkfParams, UnscentedKalman};
+
+use alloc::vec::Vec;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::error::FilterError;
+use crate::linalg::{check_finite_matrix, check_finite_vector, symmetrize};
+
+/// An optional initial Gaussian that overrides the prior's moments (002 starts its EKF at
+/// x̂₀ = 1 with P₀ ∈ {1, 5, 10} whatever σ₀ is).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaussianInit {
+    /// x̂₀ (length n).
+    pub mean: Option<Vec<f64>>,
+    /// P₀ as a full n × n matrix (rows), or
+    pub cov: Option<Vec<Vec<f64>>>,
+    /// P₀ = variance · I.
+    pub variance: Option<f64>,
+}
+
+/// The Gaussian state `N(m, P)` of the Kalman family.
+#[derive(Clone, Debug)]
+pub struct GaussianState {
+    /// Mean m.
+    pub mean: DVector<f64>,
+    /// Covariance P.
+    pub cov: DMatrix<f64>,
+}
+
+impl GaussianState {
+    /// From the prior moments, overridden by `init` where it says so.
+    pub fn initial(
+        prior_mean: DVector<f64>,
+        prior_cov: DMatrix<f64>,
+        init: &GaussianInit,
+    ) -> Self {
+        let n = prior_mean.len();
+        let mean = init
+            .mean
+            .as_ref()
+            .map(|m| DVector::from_column_slice(m))
+            .unwrap_or(prior_mean);
+        let cov = if let Some(rows) = &init.cov {
+            DMatrix::from_fn(n, n, |i, j| rows[i][j])
+        } else if let Some(v) = init.variance {
+            DMatrix::identity(n, n) * v
+        } else {
+            prior_cov
+        };
+        GaussianState { mean, cov }
+    }
+
+    /// The linear(ised) update with residual `r = z − ẑ`, gain from the cross covariance
+    /// `P_xz` and innovation covariance `P_zz`: `m += K r`, `P −= K P_zz Kᵀ`.
+    pub fn update(
+        &mut self,
+        residual: &DVector<f64>,
+        pxz: &DMatrix<f64>,
+        pzz: &DMatrix<f64>,
+    ) -> Result<(), FilterError> {
+        let chol = crate::linalg::cholesky(pzz, "innovation covariance")?;
+        // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ.
+        let k = chol.solve(&pxz.transpose()).transpose();
+        self.mean += &k * residual;
+        self.cov -= &k * pzz * k.transpose();
+        symmetrize(&mut self.cov);
+        self.check()
+    }
+
+    /// The Kalman update with h linearised at the current mean (KF, EKF):
+    /// `H = scale · ∂h/∂x(m)`, `P_xz = P Hᵀ`, `P_zz = H P Hᵀ + R`.
+    pub fn linearized_update(
+        &mut self,
+        model: &crate::model::Model,
+        meas: &measurement::Measurement,
+    ) -> Result<(), FilterError> {
+        let x = self.mean.as_slice().to_vec();
+        let h = meas.jacobian(model, &x);
+        let residual = &meas.value - meas.predict(model, &x);
+        let pxz = &self.cov * h.transpose();
+        let pzz = &h * &pxz + &meas.noise_cov;
+        self.update(&residual, &pxz, &pzz)
+    }
+
+    /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).
+    pub fn estimate(&self) -> crate::filters::Estimate {
+        crate::filters::Estimate {
+            mean: self.mean.clone(),
+            covariance: Some(self.cov.clone()),
+            map: None,
+        }
+    }
+
+    /// Fails when m or P is non-finite.
+    pub fn check(&self) -> Result<(), FilterError> {
+        check_finite_vector(&self.mean, "mean")?;
+        check_finite_matrix(&self.cov, "covariance")
+    }
+}
+
+/// Validates a [`GaussianInit`] against the state dimension, appending problems.
+pub fn validate_init(init: &GaussianInit, n: usize, field: &str, problems: &mut Vec<crate::scenario::ConfigProblem>) {
+    use crate::scenario::ConfigProblem;
+    use alloc::format;
+    if let Some(m) = &init.mean {
+        if m.len() != n {
+            problems.push(ConfigProblem::new(
+                format!("{field}.init.mean"),
+                format!("needs {n} entries, {} given", m.len()),
+            ));
+        } else if m.iter().any(|v| !v.is_finite()) {
+            problems.push(ConfigProblem::new(format!("{field}.init.mean"), "must be finite"));
+        }
+    }
+    if let Some(c) = &init.cov {
+        if c.len() != n || c.iter().any(|r| r.len() != n) {
+            problems.push(ConfigProblem::new(
+                format!("{field}.init.cov"),
+                format!("must be {n}×{n}"),
+            ));
+        } else {
+            let p = DMatrix::from_fn(n, n, |i, j| c[i][j]);
+            if p.clone().cholesky().is_none() || (&p - p.transpose()).amax() > 1e-12 {
+                problems.push(ConfigProblem::new(
+                    format!("{field}.init.cov"),
+                    "must be symmetric positive definite",
+                ));
+            }
+        }
+    }
+    if let Some(v) = init.variance {
+        if !(v > 0.0 && v.is_finite()) {
+            problems.push(ConfigProblem::new(
+                format!("{field}.init.variance"),
+                "must be positive and finite",
+            ));
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! Filters: one [`Filter`] trait, one module per method family.
+//!
+//! * [`kalman`] — Kalman–Bucy (exact for linear Gaussian models), EKF, UKF;
+//! * [`particle`] — the bootstrap particle filter.
+//!
+//! Every filter is built from a [`crate::model::Model`] plus its own parameters (a serde struct
+//! with defaults and a `validate()`), consumes the same [`Observation`]s, and exposes its
+//! [`Estimate`]; grid methods also expose their density through [`DensityView`].
+
+pub mod kalman;
+pub mod particle;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::FilterError;
+
+/// What an observation row means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObservationKind {
+    /// Δy = y(τ_k) − y(τ_{k−1}) of a continuous observation dy = h dt + dw.
+    Increment,
+    /// z_k = h(x_k) + v_k of a discrete measurement.
+    Measurement,
+}
+
+/// One observation, handed to every filter in turn.
+#[derive(Clone, Copy, Debug)]
+pub struct Observation<'a> {
+    /// Index k of the observation time τ_k.
+    pub k: usize,
+    /// τ_k.
+    pub t: f64,
+    /// τ_k − τ_{k−1}: how far to predict before using `value` (0 for a measurement at τ_0).
+    pub dt: f64,
+    /// The increment or measurement (length m).
+    pub value: &'a [f64],
+    /// Increment or measurement.
+    pub kind: ObservationKind,
+}
+
+/// A filter's current estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// Conditional mean (or the method's point estimate).
+    pub mean: DVector<f64>,
+    /// Conditional covariance, where the method has one.
+    pub covariance: Option<DMatrix<f64>>,
+    /// Maximum a posteriori point, where the method computes one.
+    pub map: Option<DVector<f64>>,
+}
+
+/// A read-only view of a grid density (first dimension fastest).
+#[derive(Clone, Copy, Debug)]
+pub struct DensityView<'a> {
+    /// Per-dimension `(lower, upper)` bounds of the grid.
+    pub bounds: &'a [(f64, f64)],
+    /// Points per dimension.
+    pub shape: &'a [usize],
+    /// Normalised density values at the grid points.
+    pub values: &'a [f64],
+}
+
+/// A nonlinear filter: advance over one observation interval, then report.
+pub trait Filter {
+    /// Display name, e.g. `"EKF"` or `"PF(200)"`.
+    fn name(&self) -> &str;
+    /// Predicts over `obs.dt` and assimilates `obs.value`.
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError>;
+    /// The current estimate.
+    fn estimate(&self) -> Estimate;
+    /// The current density, for grid methods; `None` otherwise.
+    fn density(&self) -> Option<DensityView<'_>> {
+        None
+    }
+}

@@ -1,0 +1,179 @@
+//! The Monte Carlo runner: repeat an [`Experiment`] over seeds `seed, seed + 1, …` (in
+//! parallel on rayon with the `parallel` feature) and summarise every method: mean ± standard
+//! error of the MSE over the runs where it did not fail, the number of failed runs, mean
+//! time per run and per step, and e_mean(τ_k).
+
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use serde::{Deserialize, Serialize};
+
+use super::{abs_errors, mean_and_stderr};
+use crate::error::ZakaiError;
+use crate::experiment::{Clock, Experiment, RunResult, Silent};
+
+/// Summary of one method over a Monte Carlo job.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MethodSummary {
+    /// Display name.
+    pub name: String,
+    /// Number of runs.
+    pub runs: usize,
+    /// Runs in which the method failed.
+    pub failed: usize,
+    /// Mean MSE (004 (43), summed over components) over the runs that did not fail.
+    pub mse: Option<f64>,
+    /// Standard error of that mean.
+    pub mse_stderr: Option<f64>,
+    /// Mean MSE per component.
+    pub mse_components: Option<Vec<f64>>,
+    /// Mean E_RMS (000 §4.2) per component.
+    pub rms_components: Option<Vec<f64>>,
+    /// Mean wall time per run (seconds).
+    pub seconds_per_run: f64,
+    /// Mean wall time per step (seconds).
+    pub seconds_per_step: f64,
+    /// e_mean(τ_k), k = 0..N, over the runs that did not fail.
+    pub e_mean: Vec<f64>,
+    /// First failure message seen, for the report.
+    pub first_failure: Option<String>,
+}
+
+/// All methods' summaries.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MonteCarloSummary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of runs.
+    pub runs: usize,
+    /// Seed of the first run.
+    pub seed: u64,
+    /// Per method, in the scenario's order.
+    pub methods: Vec<MethodSummary>,
+}
+
+/// The Monte Carlo runner.
+pub struct MonteCarlo<'a> {
+    experiment: &'a Experiment,
+}
+
+fn mean_vectors(vs: &[Vec<f64>]) -> Option<Vec<f64>> {
+    let first = vs.first()?;
+    let mut m = vec![0.0; first.len()];
+    for v in vs {
+        for (a, b) in m.iter_mut().zip(v) {
+            *a += b;
+        }
+    }
+    Some(m.into_iter().map(|a| a / vs.len() as f64).collect())
+}
+
+impl<'a> MonteCarlo<'a> {
+    /// A runner over `experiment`.
+    pub fn new(experiment: &'a Experiment) -> Self {
+        MonteCarlo { experiment }
+    }
+
+    fn one(&self, seed: u64) -> Result<RunResult, ZakaiError> {
+        #[cfg(feature = "std")]
+        {
+            let clock = crate::experiment::StdClock::default();
+            self.experiment
+                .run_with(seed, Some(&clock as &dyn Clock), &mut Silent)
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            self.experiment.run_with(seed, None::<&dyn Clock>, &mut Silent)
+        }
+    }
+
+    /// Runs `runs` repetitions with seeds `seed..seed + runs`; `progress` is called after
+    /// each finished run (from any thread).
+    pub fn run(
+        &self,
+        runs: usize,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<MonteCarloSummary, ZakaiError> {
+        let seeds: Vec<u64> = (0..runs as u64).map(|i| seed.wrapping_add(i)).collect();
+        let job = |s: &u64| {
+            let r = self.one(*s);
+            progress();
+            r
+        };
+        #[cfg(feature = "parallel")]
+        let results: Vec<Result<RunResult, ZakaiError>> = {
+            use rayon::prelude::*;
+            seeds.par_iter().map(job).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let results: Vec<Result<RunResult, ZakaiError>> = seeds.iter().map(job).collect();
+        let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+        Ok(self.summarise(&results, seed))
+    }
+
+    /// Summarises finished runs.
+    pub fn summarise(&self, results: &[RunResult], seed: u64) -> MonteCarloSummary {
+        let names = self.experiment.method_names();
+        let methods = names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let mut mses = Vec::new();
+                let mut comps = Vec::new();
+                let mut rms = Vec::new();
+                let mut errors = Vec::new();
+                let mut failed = 0;
+                let mut first_failure = None;
+                let (mut seconds, mut steps) = (0.0, 0usize);
+                for r in results {
+                    let track = &r.methods[i];
+                    let truth = &r.trajectory.states;
+                    seconds += track.seconds;
+                    steps += track.steps;
+                    match track.mse_components(truth) {
+                        Some(c) => {
+                            mses.push(c.iter().sum());
+                            comps.push(c);
+                            rms.push(track.rms_components(truth).unwrap_or_default());
+                            errors.push(abs_errors(truth, &track.estimates, track.n));
+                        }
+                        None => {
+                            failed += 1;
+                            if first_failure.is_none() {
+                                first_failure = track.failure.as_ref().map(|f| {
+                                    alloc::format!("run seed {}: step {}: {}", r.seed, f.k, f.message)
+                                });
+                            }
+                        }
+                    }
+                }
+                let stats = mean_and_stderr(&mses);
+                MethodSummary {
+                    name: name.clone(),
+                    runs: results.len(),
+                    failed,
+                    mse: stats.map(|s| s.0),
+                    mse_stderr: stats.map(|s| s.1),
+                    mse_components: mean_vectors(&comps),
+                    rms_components: mean_vectors(&rms),
+                    seconds_per_run: if results.is_empty() {
+                        0.0
+                    } else {
+                        seconds / results.len() as f64
+                    },
+                    seconds_per_step: if steps == 0 { 0.0 } else { seconds / steps as f64 },
+                    e_mean: mean_vectors(&errors).unwrap_or_default(),
+                    first_failure,
+                }
+            })
+            .collect();
+        MonteCarloSummary {
+            scenario: self.experiment.config().name.clone(),
+            runs: results.len(),
+            seed,
+            methods,
+        }
+    }
+}

@@ -1,0 +1,316 @@
+//! Functions from text: `f` and `h` typed as expressions in `x1..xn` (and `x` when n = 1),
+//! parsed once by the `exmex` crate, with exact partial derivatives computed symbolically at
+//! construction (exmex's `Differentiate`). Functions exmex cannot differentiate (`abs`, `erf`,
+//! rounding) make the whole function fall back to central differences, reported as
+//! [`Derivatives::Numerical`].
+
+use alloc::string::{String, ToString};
+use alloc::vec::Vec;
+use std::fmt::Debug;
+
+use exmex::prelude::*;
+use exmex::{FloatOpsFactory, MakeOperators, Operator};
+
+use super::expression_error::{normalize_expression, variable_index, ExprError};
+use super::function::{numerical_hessian, numerical_jacobian, Derivatives, VectorFunction};
+
+/// exmex's float operators plus `erf`, `erfc` and the constant `pi`.
+#[derive(Clone, Debug)]
+pub struct ZakaiOps;
+
+impl MakeOperators<f64> for ZakaiOps {
+    fn make<'a>() -> Vec<Operator<'a, f64>> {
+        let mut ops = FloatOpsFactory::<f64>::make();
+        ops.push(Operator::make_unary("erf", libm::erf));
+        ops.push(Operator::make_unary("erfc", libm::erfc));
+        ops.push(Operator::make_constant("pi", core::f64::consts::PI));
+        ops
+    }
+}
+
+type Ex = FlatEx<f64, ZakaiOps>;
+
+/// Largest number of distinct variable names one expression may use.
+const MAX_VARS: usize = 16;
+
+/// One compiled scalar expression and, for each of its variables (exmex orders them
+/// alphabetically), the index of the state component it reads.
+#[derive(Clone, Debug)]
+struct Scalar {
+    ex: Ex,
+    state_index: Vec<usize>,
+}
+
+impl Scalar {
+    #[inline]
+    fn eval(&self, x: &[f64]) -> f64 {
+        let mut args = [0.0; MAX_VARS];
+        for (a, &i) in args.iter_mut().zip(&self.state_index) {
+            *a = x[i];
+        }
+        self.ex
+            .eval(&args[..self.state_index.len()])
+            .unwrap_or(f64::NAN)
+    }
+
+    /// ∂/∂x_j: the sum of exmex partials over every name that maps to state j (`x` and `x1`
+    /// both map to 0 in one dimension). `Ok(None)` when the expression does not depend on x_j.
+    fn partial(&self, j: usize) -> Result<Option<Scalar>, ()> {
+        let mut total: Option<Ex> = None;
+        for (v, &i) in self.state_index.iter().enumerate() {
+            if i != j {
+                continue;
+            }
+            let d = self.ex.clone().partial(v).map_err(|_| ())?;
+            total = Some(match total {
+                None => d,
+                Some(t) => t.operate_binary(d, "+").map_err(|_| ())?,
+            });
+        }
+        Ok(total.map(|ex| Scalar {
+            ex,
+            state_index: self.state_index.clone(),
+        }))
+    }
+}
+
+/// Exact derivative tables, or `None` when some operator has no symbolic derivative.
+#[derive(Clone, Debug)]
+struct ExactDerivatives {
+    /// `jacobian[i * n + j]` = ∂g_i/∂x_j (None = identically zero).
+    jacobian: Vec<Option<Scalar>>,
+    /// `hessian[(i * n + j) * n + l]` = ∂²g_i/∂x_j∂x_l.
+    hessian: Vec<Option<Scalar>>,
+}
+
+/// A [`VectorFunction`] given by text expressions.
+#[derive(Clone, Debug)]
+pub struct ExpressionFunction {
+    n: usize,
+    texts: Vec<String>,
+    components: Vec<Scalar>,
+    exact: Option<ExactDerivatives>,
+}
+
+impl ExpressionFunction {
+    /// Parses one expression per output component, in the state variables of an
+    /// `n`-dimensional model. `what` names the function in error messages ("drift f").
+    pub fn parse(what: &str, texts: &[String], n: usize, m: usize) -> Result<Self, ExprError> {
+        if texts.len() != m {
+            return Err(ExprError::WrongComponentCount {
+                what: what.to_string(),
+                expected: m,
+                found: texts.len(),
+            });
+        }
+        let components = texts
+            .iter()
+            .map(|t| compile(t, n))
+            .collect::<Result<Vec<_>, _>>()?;
+        let exact = exact_derivatives(&components, n);
+        Ok(ExpressionFunction {
+            n,
+            texts: texts.to_vec(),
+            components,
+            exact,
+        })
+    }
+
+    /// The expressions as given.
+    pub fn texts(&self) -> &[String] {
+        &self.texts
+    }
+
+    /// True when every component is affine in x (all second derivatives vanish
+    /// symbolically or, with numerical derivatives, at the probe points given).
+    pub fn is_affine(&self, probes: &[Vec<f64>]) -> bool {
+        match &self.exact {
+            Some(d) => d.hessian.iter().all(|h| match h {
+                None => true,
+                Some(s) => probes.iter().all(|p| s.eval(p) == 0.0),
+            }),
+            None => {
+                let mut hess = alloc::vec![0.0; self.n * self.n];
+                probes.iter().all(|p| {
+                    (0..self.components.len()).all(|i| {
+                        self.hessian(i, p, &mut hess);
+                        hess.iter().all(|v| v.abs() < 1e-6)
+                    })
+                })
+            }
+        }
+    }
+}
+
+fn compile(text: &str, n: usize) -> Result<Scalar, ExprError> {
+    let normalized = normalize_expression(text, n)?;
+    let ex = Ex::parse(&normalized).map_err(|e| ExprError::Syntax {
+        expr: text.to_string(),
+        position: None,
+        message: e.msg().to_string(),
+    })?;
+    let mut state_index = Vec::new();
+    for name in ex.var_names() {
+        match variable_index(name, n) {
+            Some(i) => state_index.push(i),
+            None => {
+                return Err(ExprError::UnknownVariable {
+                    expr: text.to_string(),
+                    name: name.clone(),
+                    position: text.find(name.as_str()).unwrap_or(0),
+                    allowed: super::expression_error::variable_names(n).join(", "),
+                })
+            }
+        }
+    }
+    if state_index.len() > MAX_VARS {
+        return Err(ExprError::Syntax {
+            expr: text.to_string(),
+            position: None,
+            message: alloc::format!("at most {MAX_VARS} distinct variables per expression"),
+        });
+    }
+    Ok(Scalar { ex, state_index })
+}
+
+fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives> {
+    let mut jacobian = Vec::with_capacity(components.len() * n);
+    let mut hessian = Vec::with_capacity(components.len() * n * n);
+    for c in components {
+        for j in 0..n {
+            let d = c.partial(j).ok()?;
+            for l in 0..n {
+                hessian.push(match &d {
+                    Some(dj) => dj.partial(l).ok()?,
+                    None => None,
+                });
+            }
+            jacobian.push(d);
+        }
+    }
+    Some(ExactDerivatives { jacobian, hessian })
+}
+
+fn eval_table(table: &[Option<Scalar>], x: &[f64], out: &mut [f64]) {
+    for (o, d) in out.iter_mut().zip(table) {
+        *o = d.as_ref().map_or(0.0, |s| s.eval(x));
+    }
+}
+
+impl VectorFunction for ExpressionFunction {
+    fn input_dim(&self) -> usize {
+        self.n
+    }
+    fn output_dim(&self) -> usize {
+        self.components.len()
+    }
+    #[inline]
+    fn eval(&self, x: &[f64], out: &mut [f64]) {
+        for (o, c) in out.iter_mut().zip(&self.components) {
+            *o = c.eval(x);
+        }
+    }
+    fn jacobian(&self, x: &[f64], out: &mut [f64]) {
+        match &self.exact {
+            Some(d) => eval_table(&d.jacobian, x, out),
+            None => {
+                let f = |y: &[f64], o: &mut [f64]| self.eval(y, o);
+                numerical_jacobian(&f, self.n, self.components.len(), x, out)
+            }
+        }
+    }
+    fn hessian(&self, i: usize, x: &[f64], out: &mut [f64]) {
+        let nn = self.n * self.n;
+        match &self.exact {
+            Some(d) => eval_table(&d.hessian[i * nn..(i + 1) * nn], x, out),
+            None => {
+                let j = |y: &[f64], o: &mut [f64]| self.jacobian(y, o);
+                numerical_hessian(&j, self.n, self.components.len(), i, x, out)
+            }
+        }
+    }
+    fn derivatives(&self) -> Derivatives {
+        if self.exact.is_some() {
+            Derivatives::Exact
+        } else {
+            Derivatives::Numerical
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec;
+
+    fn strings(v: &[&str]) -> Vec<String> {
+        v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn values_and_exact_derivatives() {
+        let f = ExpressionFunction::parse(
+            "drift f",
+            &strings(&["-cos(x1)-sin(x2)", "x1^3*x2"]),
+            2,
+            2,
+        )
+        .unwrap();
+        assert_eq!(f.derivatives(), Derivatives::Exact);
+        let x = [0.3, -1.2];
+        let v = f.value(&x);
+        assert!((v[0] - (-(0.3f64).cos() - (-1.2f64).sin())).abs() < 1e-14);
+        let mut jac = vec![0.0; 4];
+        f.jacobian(&x, &mut jac);
+        assert!((jac[0] - (0.3f64).sin()).abs() < 1e-14);
+        assert!((jac[1] + (-1.2f64).cos()).abs() < 1e-14);
+        assert!((jac[2] - 3.0 * 0.09 * -1.2).abs() < 1e-13);
+        assert!((jac[3] - 0.027).abs() < 1e-14);
+        let mut hess = vec![0.0; 4];
+        f.hessian(1, &x, &mut hess);
+        assert!((hess[0] - 6.0 * 0.3 * -1.2).abs() < 1e-13);
+        assert!((hess[1] - 3.0 * 0.09).abs() < 1e-13);
+    }
+
+    #[test]
+    fn x_and_x1_are_the_same_variable_in_one_dimension() {
+        let f = ExpressionFunction::parse("h", &strings(&["x*x1"]), 1, 1).unwrap();
+        let mut jac = [0.0];
+        f.jacobian(&[2.0], &mut jac);
+        assert!((jac[0] - 4.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn erf_falls_back_to_numerical_derivatives() {
+        let f = ExpressionFunction::parse("f", &strings(&["erf(x)"]), 1, 1).unwrap();
+        assert_eq!(f.derivatives(), Derivatives::Numerical);
+        let mut jac = [0.0];
+        f.jacobian(&[0.4], &mut jac);
+        let exact = 2.0 / core::f64::consts::PI.sqrt() * (-0.16f64).exp();
+        assert!((jac[0] - exact).abs() < 1e-8);
+    }
+
+    #[test]
+    fn wrong_component_count_is_reported() {
+        let e = ExpressionFunction::parse("drift f", &strings(&["x1"]), 2, 2).unwrap_err();
+        assert!(matches!(
+            e,
+            ExprError::WrongComponentCount {
+                expected: 2,
+                found: 1,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn affinity_is_detected() {
+        let probes = vec![vec![0.5, -2.0], vec![3.0, 1.0]];
+        let lin = ExpressionFunction::parse("f", &strings(&["-0.05*x1 + x2", "0.7*x1"]), 2, 2)
+            .unwrap();
+        assert!(lin.is_affine(&probes));
+        let nonlin =
+            ExpressionFunction::parse("f", &strings(&["x1*x2", "0.7*x1"]), 2, 2).unwrap();
+        assert!(!nonlin.is_affine(&probes));
+    }
+}

@@ -1,0 +1,129 @@
+//! Gaussian and Gaussian-mixture densities: observation noise (001 uses mixtures,
+//! p(v_k) = Σ_i α_i N(v_k : μ_i, Σ_i)), priors and the Gaussian-sum reference.
+
+use alloc::vec::Vec;
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::error::ZakaiError;
+use crate::linalg::{gaussian_log_density, log_sum_exp};
+
+/// One weighted Gaussian component `α N(μ, Σ)`.
+#[derive(Clone, Debug)]
+pub struct Component {
+    /// Weight α (the weights of a mixture sum to one).
+    pub weight: f64,
+    /// Mean μ.
+    pub mean: DVector<f64>,
+    /// Covariance Σ.
+    pub cov: DMatrix<f64>,
+    chol: Cholesky<f64, Dyn>,
+}
+
+/// A Gaussian mixture `Σ_i α_i N(μ_i, Σ_i)`; a single Gaussian is a mixture of one.
+#[derive(Clone, Debug)]
+pub struct GaussianMixture {
+    components: Vec<Component>,
+}
+
+impl GaussianMixture {
+    /// Builds a mixture, normalising the weights. Fails on negative or zero total weight,
+    /// inconsistent dimensions, non-finite entries or a covariance that is not positive
+    /// definite.
+    pub fn new(parts: Vec<(f64, DVector<f64>, DMatrix<f64>)>) -> Result<Self, ZakaiError> {
+        let Some(first) = parts.first() else {
+            return Err(ZakaiError::Other("a mixture needs at least one component".into()));
+        };
+        let d = first.1.len();
+        let total: f64 = parts.iter().map(|p| p.0).sum();
+        if !(total > 0.0 && total.is_finite()) || parts.iter().any(|p| p.0 < 0.0) {
+            return Err(ZakaiError::Other(
+                "mixture weights must be nonnegative with a positive finite sum".into(),
+            ));
+        }
+        let mut components = Vec::with_capacity(parts.len());
+        for (i, (w, mean, cov)) in parts.into_iter().enumerate() {
+            if mean.len() != d || cov.nrows() != d || cov.ncols() != d {
+                return Err(ZakaiError::Dimension(alloc::format!(
+                    "mixture component {i} has mean of length {} and covariance {}×{}, expected {d}",
+                    mean.len(),
+                    cov.nrows(),
+                    cov.ncols()
+                )));
+            }
+            let chol = crate::linalg::cholesky(&cov, "mixture covariance").map_err(|_| {
+                ZakaiError::Other(alloc::format!(
+                    "covariance of mixture component {i} is not symmetric positive definite"
+                ))
+            })?;
+            components.push(Component {
+                weight: w / total,
+                mean,
+                cov,
+                chol,
+            });
+        }
+        Ok(GaussianMixture { components })
+    }
+
+    /// A single Gaussian `N(mean, cov)`.
+    pub fn gaussian(mean: DVector<f64>, cov: DMatrix<f64>) -> Result<Self, ZakaiError> {
+        Self::new(alloc::vec![(1.0, mean, cov)])
+    }
+
+    /// Dimension.
+    pub fn dim(&self) -> usize {
+        self.components[0].mean.len()
+    }
+
+    /// The components.
+    pub fn components(&self) -> &[Component] {
+        &self.components
+    }
+
+    /// `log p(x)`.
+    pub fn log_pdf(&self, x: &DVector<f64>) -> f64 {
+        log_sum_exp(self.components.iter().map(|c| {
+            libm::log(c.weight) + gaussian_log_density(&(x - &c.mean), &c.chol)
+        }))
+    }
+
+    /// The mixture mean Σ α_i μ_i.
+    pub fn mean(&self) -> DVector<f64> {
+        let mut m = DVector::zeros(self.dim());
+        for c in &self.components {
+            m += &c.mean * c.weight;
+        }
+        m
+    }
+
+    /// The mixture covariance Σ α_i (Σ_i + (μ_i − μ)(μ_i − μ)ᵀ).
+    pub fn covariance(&self) -> DMatrix<f64> {
+        let m = self.mean();
+        let d = self.dim();
+        let mut p = DMatrix::zeros(d, d);
+        for c in &self.components {
+            let dm = &c.mean - &m;
+            p += (&c.cov + &dm * dm.transpose()) * c.weight;
+        }
+        p
+    }
+
+    /// One draw: a component by its weight, then μ + L ξ with ξ ~ N(0, I).
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> DVector<f64> {
+        let u: f64 = rand::RngExt::random(rng);
+        let mut acc = 0.0;
+        let mut chosen = &self.components[self.components.len() - 1];
+        for c in &self.components {
+            acc += c.weight;
+            if u < acc {
+                chosen = c;
+                break;
+            }
+        }
+        let xi = DVector::from_fn(self.dim(), |_, _| StandardNormal.sample(rng));
+        &chosen.mean + chosen.chol.l() * xi
+    }
+}

@@ -1,0 +1,119 @@
+//! The methods a scenario can run, each with its own parameters (serde, with defaults), and
+//! the one place that turns a [`MethodConfig`] into a boxed [`Filter`].
+
+use alloc::boxed::Box;
+use alloc::format;
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use serde::{Deserialize, Serialize};
+
+use super::ConfigProblem;
+use crate::error::ZakaiError;
+use crate::filters::kalman::{
+    validate_init, EkfParams, ExtendedKalman, KalmanBucy, KalmanParams, UkfParams,
+    UnscentedKalman,
+};
+use crate::filters::particle::{ParticleFilter, PfParams};
+use crate::filters::Filter;
+use crate::model::{Model, Prior};
+
+/// One method with its parameters. In JSON: `{"method": "pf", "particles": 200}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum MethodConfig {
+    /// Kalman–Bucy filter (linear Gaussian models only).
+    Kalman(KalmanParams),
+    /// Extended Kalman filter.
+    Ekf(EkfParams),
+    /// Unscented Kalman filter.
+    Ukf(UkfParams),
+    /// Bootstrap particle filter.
+    Pf(PfParams),
+}
+
+/// Every method key with a one-line description (for `zakai list` and the page).
+pub const METHODS: &[(&str, &str)] = &[
+    ("kalman", "Kalman–Bucy filter, exact for linear Gaussian models"),
+    ("ekf", "extended Kalman filter (continuous–discrete, RK4 moment equations)"),
+    ("ukf", "unscented Kalman filter (van der Merwe scaled sigma points)"),
+    ("pf", "bootstrap particle filter (systematic resampling on an ESS threshold)"),
+];
+
+impl MethodConfig {
+    /// The method key (`"ekf"`, `"pf"`, …).
+    pub fn key(&self) -> &'static str {
+        match self {
+            MethodConfig::Kalman(_) => "kalman",
+            MethodConfig::Ekf(_) => "ekf",
+            MethodConfig::Ukf(_) => "ukf",
+            MethodConfig::Pf(_) => "pf",
+        }
+    }
+
+    /// The method with default parameters, from its key.
+    pub fn from_key(key: &str) -> Option<Self> {
+        Some(match key {
+            "kalman" | "kf" => MethodConfig::Kalman(KalmanParams::default()),
+            "ekf" => MethodConfig::Ekf(EkfParams::default()),
+            "ukf" => MethodConfig::Ukf(UkfParams::default()),
+            "pf" => MethodConfig::Pf(PfParams::default()),
+            _ => return None,
+        })
+    }
+
+    /// Display name: `"KF"`, `"EKF"`, `"UKF"`, `"PF(200)"`.
+    pub fn display_name(&self) -> String {
+        match self {
+            MethodConfig::Kalman(_) => "KF".into(),
+            MethodConfig::Ekf(_) => "EKF".into(),
+            MethodConfig::Ukf(_) => "UKF".into(),
+            MethodConfig::Pf(p) => format!("PF({})", p.particles),
+        }
+    }
+
+    /// Appends every problem with the parameters for an `n`-dimensional model.
+    pub fn validate(&self, n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
+        let mut push = |name: &str, msg: String| {
+            problems.push(ConfigProblem::new(format!("{field}.{name}"), msg));
+        };
+        match self {
+            MethodConfig::Kalman(p) => validate_init(&p.init, n, field, problems),
+            MethodConfig::Ekf(p) => {
+                if p.substeps == 0 {
+                    push("substeps", "must be at least 1".into());
+                }
+                validate_init(&p.init, n, field, problems);
+            }
+            MethodConfig::Ukf(p) => {
+                for (name, msg) in p.problems(n) {
+                    push(name, msg);
+                }
+                validate_init(&p.init, n, field, problems);
+            }
+            MethodConfig::Pf(p) => {
+                for (name, msg) in p.problems() {
+                    push(name, msg);
+                }
+            }
+        }
+    }
+
+    /// Builds the filter. `seed` feeds methods that draw random numbers; `probes` are points
+    /// of the domain where structural assumptions (linearity) are checked.
+    pub fn build(
+        &self,
+        name: String,
+        model: &Model,
+        prior: &Prior,
+        seed: u64,
+        probes: &[Vec<f64>],
+    ) -> Result<Box<dyn Filter>, ZakaiError> {
+        Ok(match self {
+            MethodConfig::Kalman(p) => Box::new(KalmanBucy::new(name, model, prior, p, probes)?),
+            MethodConfig::Ekf(p) => Box::new(ExtendedKalman::new(name, model, prior, p)),
+            MethodConfig::Ukf(p) => Box::new(UnscentedKalman::new(name, model, prior, p)?),
+            MethodConfig::Pf(p) => Box::new(ParticleFilter::new(name, model, prior, p, seed)?),
+        })
+    }
+}

@@ -1,0 +1,537 @@
+//! The single description of an experiment: [`ScenarioConfig`] (serde, JSON). The CLI, the
+//! wasm `Session`, the page's URL and the tests all use it; nothing re-describes a scenario in
+//! another shape.
+
+pub mod methods;
+pub mod presets;
+
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::sync::Arc;
+use alloc::vec;
+use alloc::vec::Vec;
+use core::fmt;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+pub use methods::{MethodConfig, METHODS};
+
+use crate::error::ZakaiError;
+use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};
+use crate::simulate::TimeGrid;
+
+/// Largest state dimension a scenario may declare.
+pub const MAX_STATE_DIM: usize = 8;
+/// Largest number of observation intervals in one run.
+pub const MAX_STEPS: usize = 2_000_000;
+
+/// One problem found by [`ScenarioConfig::validate`]: the field's path and what is wrong.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConfigProblem {
+    /// Path of the field, e.g. `model.drift[0]` or `methods[2].particles`.
+    pub field: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+impl ConfigProblem {
+    /// A problem with `field`.
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        ConfigProblem {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for ConfigProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
+/// A weighted Gaussian component in a config: `weight · N(mean, cov)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaussianComponent {
+    /// Weight (normalised over the mixture).
+    #[serde(default = "one")]
+    pub weight: f64,
+    /// Mean.
+    pub mean: Vec<f64>,
+    /// Covariance, rows.
+    pub cov: Vec<Vec<f64>>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The observation noise of the model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ObservationNoiseConfig {
+    /// `dy = h dt + dw`, `E[dw dwᵀ] = S dt`; `cov` = S (identity when absent).
+    Continuous {
+        /// S, rows.
+        #[serde(default)]
+        cov: Option<Vec<Vec<f64>>>,
+    },
+    /// `z_k = h(x_k) + v_k` with v_k a Gaussian mixture (one component = Gaussian).
+    Discrete {
+        /// Components of the density of v_k.
+        mixture: Vec<GaussianComponent>,
+    },
+}
+
+/// The model as text.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelConfig {
+    /// Drift f, one expression per state component, in `x1..xn` (`x` when n = 1).
+    pub drift: Vec<String>,
+    /// Observation h, one expression per observation component.
+    pub observation: Vec<String>,
+    /// Diffusion G (rows); the identity when absent.
+    #[serde(default)]
+    pub diffusion: Option<Vec<Vec<f64>>>,
+    /// Observation noise.
+    pub noise: ObservationNoiseConfig,
+}
+
+/// The prior density σ₀ of x₀.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PriorConfig {
+    /// N(mean, cov).
+    Gaussian {
+        /// Mean.
+        mean: Vec<f64>,
+        /// Covariance, rows.
+        cov: Vec<Vec<f64>>,
+    },
+    /// A Gaussian mixture.
+    Mixture {
+        /// The components.
+        components: Vec<GaussianComponent>,
+    },
+    /// An unnormalised density given as an expression, restricted to the domain.
+    Density {
+        /// σ₀(x), nonnegative on the domain.
+        expression: String,
+    },
+}
+
+/// Observation times and the truth's time step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    /// Final time T.
+    pub t_final: f64,
+    /// Δτ between observations.
+    pub dt_obs: f64,
+    /// Euler–Maruyama steps of the truth per observation interval.
+    #[serde(default = "one_usize")]
+    pub inner_steps: usize,
+}
+
+fn one_usize() -> usize {
+    1
+}
+
+/// When a method's run counts as failed, besides non-finite numbers and lost mass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FailureRule {
+    /// A run fails when any component of the estimate exceeds this in absolute value.
+    pub divergence_bound: f64,
+}
+
+impl Default for FailureRule {
+    fn default() -> Self {
+        FailureRule {
+            divergence_bound: 1.0e3,
+        }
+    }
+}
+
+/// The single description of a filtering experiment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioConfig {
+    /// Short identifier, e.g. `cubic-sensor-1d`.
+    pub name: String,
+    /// One-line title.
+    #[serde(default)]
+    pub title: String,
+    /// Paper and equation the scenario comes from.
+    #[serde(default)]
+    pub reference: String,
+    /// Longer description (choices made where the paper is silent).
+    #[serde(default)]
+    pub description: String,
+    /// The model.
+    pub model: ModelConfig,
+    /// The prior density σ₀.
+    pub prior: PriorConfig,
+    /// x₀ of the truth; drawn from the prior when absent.
+    #[serde(default)]
+    pub initial_state: Option<Vec<f64>>,
+    /// The box `[lower, upper]` per dimension where grid methods live and density priors are
+    /// tabulated.
+    pub domain: Vec<[f64; 2]>,
+    /// Time steps.
+    pub time: TimeConfig,
+    /// Seed of the run (run i of a Monte Carlo job uses `seed + i`).
+    #[serde(default)]
+    pub seed: u64,
+    /// Failure rule.
+    #[serde(default)]
+    pub failure: FailureRule,
+    /// The methods to run, in order.
+    pub methods: Vec<MethodConfig>,
+}
+
+fn matrix(rows: &[Vec<f64>], n: usize) -> Option<DMatrix<f64>> {
+    (rows.len() == n && rows.iter().all(|r| r.len() == n))
+        .then(|| DMatrix::from_fn(n, n, |i, j| rows[i][j]))
+}
+
+fn check_spd(rows: &[Vec<f64>], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
+    match matrix(rows, n) {
+        None => problems.push(ConfigProblem::new(field, format!("must be a {n}×{n} matrix"))),
+        Some(p) if p.iter().any(|v| !v.is_finite()) => {
+            problems.push(ConfigProblem::new(field, "entries must be finite"))
+        }
+        Some(p) => {
+            if (&p - p.transpose()).amax() > 1e-12 * (1.0 + p.amax()) || p.cholesky().is_none() {
+                problems.push(ConfigProblem::new(
+                    field,
+                    "must be symmetric positive definite",
+                ))
+            }
+        }
+    }
+}
+
+fn check_vector(v: &[f64], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
+    if v.len() != n {
+        problems.push(ConfigProblem::new(
+            field,
+            format!("needs {n} entries, {} given", v.len()),
+        ));
+    } else if v.iter().any(|x| !x.is_finite()) {
+        problems.push(ConfigProblem::new(field, "entries must be finite"));
+    }
+}
+
+fn check_mixture(
+    comps: &[GaussianComponent],
+    n: usize,
+    field: &str,
+    problems: &mut Vec<ConfigProblem>,
+) {
+    if comps.is_empty() {
+        problems.push(ConfigProblem::new(field, "needs at least one component"));
+    }
+    for (i, c) in comps.iter().enumerate() {
+        if !(c.weight >= 0.0 && c.weight.is_finite()) {
+            problems.push(ConfigProblem::new(
+                format!("{field}[{i}].weight"),
+                "must be nonnegative and finite",
+            ));
+        }
+        check_vector(&c.mean, n, &format!("{field}[{i}].mean"), problems);
+        check_spd(&c.cov, n, &format!("{field}[{i}].cov"), problems);
+    }
+    if !comps.is_empty() && comps.iter().map(|c| c.weight).sum::<f64>() <= 0.0 {
+        problems.push(ConfigProblem::new(field, "weights must have a positive sum"));
+    }
+}
+
+fn mixture(comps: &[GaussianComponent], n: usize) -> Result<GaussianMixture, ZakaiError> {
+    GaussianMixture::new(
+        comps
+            .iter()
+            .map(|c| {
+                (
+                    c.weight,
+                    DVector::from_column_slice(&c.mean),
+                    matrix(&c.cov, n).unwrap_or_else(|| DMatrix::zeros(n, n)),
+                )
+            })
+            .collect(),
+    )
+}
+
+/// Parses a text vector function (needs the `std` feature).
+#[cfg(feature = "std")]
+pub fn parse_function(
+    what: &str,
+    texts: &[String],
+    n: usize,
+    m: usize,
+) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
+    Ok(Arc::new(crate::model::expression::ExpressionFunction::parse(
+        what, texts, n, m,
+    )?))
+}
+
+/// Parses a text vector function (needs the `std` feature).
+#[cfg(not(feature = "std"))]
+pub fn parse_function(
+    _what: &str,
+    _texts: &[String],
+    _n: usize,
+    _m: usize,
+) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
+    Err(crate::model::expression_error::ExprError::Unavailable.into())
+}
+
+impl ScenarioConfig {
+    /// State dimension n (the number of drift components).
+    pub fn state_dim(&self) -> usize {
+        self.model.drift.len()
+    }
+
+    /// Observation dimension m.
+    pub fn obs_dim(&self) -> usize {
+        self.model.observation.len()
+    }
+
+    /// N = round(T / Δτ).
+    pub fn steps(&self) -> usize {
+        let s = self.time.t_final / self.time.dt_obs;
+        if s.is_finite() && s >= 0.0 {
+            libm::round(s) as usize
+        } else {
+            0
+        }
+    }
+
+    /// The time grid.
+    pub fn time_grid(&self) -> TimeGrid {
+        TimeGrid {
+            dt_obs: self.time.dt_obs,
+            steps: self.steps(),
+            inner_steps: self.time.inner_steps,
+        }
+    }
+
+    /// The domain as `(lower, upper)` pairs.
+    pub fn bounds(&self) -> Vec<(f64, f64)> {
+        self.domain.iter().map(|b| (b[0], b[1])).collect()
+    }
+
+    /// Every problem with the configuration (empty when it is valid).
+    pub fn validate(&self) -> Vec<ConfigProblem> {
+        let mut p = Vec::new();
+        let n = self.state_dim();
+        let m = self.obs_dim();
+        if n == 0 || n > MAX_STATE_DIM {
+            p.push(ConfigProblem::new(
+                "model.drift",
+                format!("needs 1 to {MAX_STATE_DIM} components, {n} given"),
+            ));
+        }
+        if m == 0 || m > MAX_STATE_DIM {
+            p.push(ConfigProblem::new(
+                "model.observation",
+                format!("needs 1 to {MAX_STATE_DIM} components, {m} given"),
+            ));
+        }
+        if n == 0 || n > MAX_STATE_DIM || m == 0 || m > MAX_STATE_DIM {
+            return p;
+        }
+        for (field, texts) in [("drift", &self.model.drift), ("observation", &self.model.observation)] {
+            for (i, t) in texts.iter().enumerate() {
+                if let Err(e) = parse_function(field, core::slice::from_ref(t), n, 1) {
+                    p.push(ConfigProblem::new(format!("model.{field}[{i}]"), e.to_string()));
+                }
+            }
+        }
+        if let Some(g) = &self.model.diffusion {
+            match matrix(g, n) {
+                None => p.push(ConfigProblem::new("model.diffusion", format!("must be {n}×{n}"))),
+                Some(g) if g.iter().any(|v| !v.is_finite()) => {
+                    p.push(ConfigProblem::new("model.diffusion", "entries must be finite"))
+                }
+                Some(_) => {}
+            }
+        }
+        match &self.model.noise {
+            ObservationNoiseConfig::Continuous { cov: Some(s) } => {
+                check_spd(s, m, "model.noise.cov", &mut p)
+            }
+            ObservationNoiseConfig::Continuous { cov: None } => {}
+            ObservationNoiseConfig::Discrete { mixture } => {
+                check_mixture(mixture, m, "model.noise.mixture", &mut p)
+            }
+        }
+        match &self.prior {
+            PriorConfig::Gaussian { mean, cov } => {
+                check_vector(mean, n, "prior.mean", &mut p);
+                check_spd(cov, n, "prior.cov", &mut p);
+            }
+            PriorConfig::Mixture { components } => {
+                check_mixture(components, n, "prior.components", &mut p)
+            }
+            PriorConfig::Density { expression } => {
+                if let Err(e) = parse_function("prior density", core::slice::from_ref(expression), n, 1) {
+                    p.push(ConfigProblem::new("prior.expression", e.to_string()));
+                }
+            }
+        }
+        if let Some(x0) = &self.initial_state {
+            check_vector(x0, n, "initial_state", &mut p);
+        }
+        if self.domain.len() != n {
+            p.push(ConfigProblem::new(
+                "domain",
+                format!("needs {n} intervals, {} given", self.domain.len()),
+            ));
+        }
+        for (i, b) in self.domain.iter().enumerate() {
+            if !(b[0].is_finite() && b[1].is_finite() && b[0] < b[1]) {
+                p.push(ConfigProblem::new(
+                    format!("domain[{i}]"),
+                    format!("needs finite lower < upper, got [{}, {}]", b[0], b[1]),
+                ));
+            }
+        }
+        let t = &self.time;
+        if !(t.t_final > 0.0 && t.t_final.is_finite()) {
+            p.push(ConfigProblem::new("time.t_final", "must be positive and finite"));
+        }
+        if !(t.dt_obs > 0.0 && t.dt_obs.is_finite()) {
+            p.push(ConfigProblem::new("time.dt_obs", "must be positive and finite"));
+        } else if t.t_final.is_finite() && t.dt_obs > t.t_final {
+            p.push(ConfigProblem::new("time.dt_obs", "must not exceed t_final"));
+        } else if self.steps() > MAX_STEPS {
+            p.push(ConfigProblem::new(
+                "time.dt_obs",
+                format!("t_final / dt_obs = {} exceeds {MAX_STEPS} steps", self.steps()),
+            ));
+        }
+        if t.inner_steps == 0 || t.inner_steps > 100_000 {
+            p.push(ConfigProblem::new("time.inner_steps", "must be in 1..=100000"));
+        }
+        if !(self.failure.divergence_bound > 0.0) {
+            p.push(ConfigProblem::new("failure.divergence_bound", "must be positive"));
+        }
+        if self.methods.is_empty() {
+            p.push(ConfigProblem::new("methods", "choose at least one method"));
+        }
+        for (i, method) in self.methods.iter().enumerate() {
+            method.validate(n, &format!("methods[{i}]"), &mut p);
+        }
+        p
+    }
+
+    /// `Ok(())` or every problem as one error.
+    pub fn check(&self) -> Result<(), ZakaiError> {
+        let problems = self.validate();
+        if problems.is_empty() {
+            Ok(())
+        } else {
+            Err(ZakaiError::Config(problems))
+        }
+    }
+
+    /// Builds the model (expressions are parsed here).
+    pub fn build_model(&self) -> Result<Model, ZakaiError> {
+        let n = self.state_dim();
+        let m = self.obs_dim();
+        let drift = parse_function("drift f", &self.model.drift, n, n)?;
+        let observation = parse_function("observation h", &self.model.observation, n, m)?;
+        let diffusion = match &self.model.diffusion {
+            Some(g) => matrix(g, n).ok_or_else(|| {
+                ZakaiError::Dimension(format!("diffusion G must be {n}×{n}"))
+            })?,
+            None => DMatrix::identity(n, n),
+        };
+        let observations = match &self.model.noise {
+            ObservationNoiseConfig::Continuous { cov } => ObservationModel::Continuous {
+                noise_cov: match cov {
+                    Some(s) => matrix(s, m).ok_or_else(|| {
+                        ZakaiError::Dimension(format!("noise S must be {m}×{m}"))
+                    })?,
+                    None => DMatrix::identity(m, m),
+                },
+            },
+            ObservationNoiseConfig::Discrete { mixture: comps } => ObservationModel::Discrete {
+                noise: mixture(comps, m)?,
+            },
+        };
+        Model::new(drift, observation, diffusion, observations)
+    }
+
+    /// Builds the prior; density priors are tabulated on the domain.
+    pub fn build_prior(&self) -> Result<Prior, ZakaiError> {
+        let n = self.state_dim();
+        match &self.prior {
+            PriorConfig::Gaussian { mean, cov } => Ok(Prior::Mixture(mixture(
+                &[GaussianComponent {
+                    weight: 1.0,
+                    mean: mean.clone(),
+                    cov: cov.clone(),
+                }],
+                n,
+            )?)),
+            PriorConfig::Mixture { components } => Ok(Prior::Mixture(mixture(components, n)?)),
+            PriorConfig::Density { expression } => {
+                let f = parse_function("prior density", core::slice::from_ref(expression), n, 1)?;
+                let cells = match n {
+                    1 => 4000,
+                    2 => 400,
+                    3 => 60,
+                    _ => 16,
+                };
+                Ok(Prior::Density(crate::model::prior::TabulatedDensity::new(
+                    f,
+                    &self.bounds(),
+                    cells,
+                )?))
+            }
+        }
+    }
+
+    /// Points spread over the domain (corners pulled inwards and the centre) where methods
+    /// check structural assumptions such as linearity.
+    pub fn probe_points(&self) -> Vec<Vec<f64>> {
+        let n = self.state_dim();
+        let bounds = self.bounds();
+        let mut probes = Vec::new();
+        for corner in 0..(1usize << n.min(6)) {
+            let p: Vec<f64> = (0..n)
+                .map(|d| {
+                    let (lo, hi) = bounds.get(d).copied().unwrap_or((-1.0, 1.0));
+                    let f = if (corner >> d) & 1 == 1 { 0.8 } else { 0.15 };
+                    lo + f * (hi - lo)
+                })
+                .collect();
+            probes.push(p);
+        }
+        probes.push(vec![0.37; n]);
+        probes
+    }
+
+    /// Method display names, made unique (`EKF`, `EKF #2`).
+    pub fn method_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        for m in &self.methods {
+            let base = m.display_name();
+            let count = names
+                .iter()
+                .filter(|n| *n == &base || n.starts_with(&format!("{base} #")))
+                .count();
+            names.push(if count == 0 {
+                base
+            } else {
+                format!("{base} #{}", count + 1)
+            });
+        }
+        names
+    }
+}

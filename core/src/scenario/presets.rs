@@ -1,0 +1,369 @@
+//! Presets: every example of the five papers as a [`ScenarioConfig`], each citing its paper
+//! and equation. Where a paper leaves a choice open (a prior, a horizon, 003's bearings
+//! function) the preset's `description` says what was chosen and why. Methods not built yet
+//! are simply absent from a preset's method list.
+
+use alloc::string::{String, ToString};
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::{
+    FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
+    PriorConfig, ScenarioConfig, TimeConfig,
+};
+use crate::filters::kalman::{EkfParams, GaussianInit, KalmanParams, UkfParams};
+use crate::filters::particle::PfParams;
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+fn gaussian(mean: &[f64], variance: f64) -> PriorConfig {
+    let n = mean.len();
+    PriorConfig::Gaussian {
+        mean: mean.to_vec(),
+        cov: diagonal(n, variance),
+    }
+}
+
+fn diagonal(n: usize, v: f64) -> Vec<Vec<f64>> {
+    (0..n)
+        .map(|i| (0..n).map(|j| if i == j { v } else { 0.0 }).collect())
+        .collect()
+}
+
+fn component(weight: f64, mean: &[f64], variance: f64) -> GaussianComponent {
+    GaussianComponent {
+        weight,
+        mean: mean.to_vec(),
+        cov: diagonal(mean.len(), variance),
+    }
+}
+
+fn continuous() -> ObservationNoiseConfig {
+    ObservationNoiseConfig::Continuous { cov: None }
+}
+
+fn ukf(alpha: f64, beta: f64, kappa: f64) -> MethodConfig {
+    MethodConfig::Ukf(UkfParams {
+        alpha,
+        beta,
+        kappa,
+        ..UkfParams::default()
+    })
+}
+
+fn pf(particles: usize) -> MethodConfig {
+    MethodConfig::Pf(PfParams {
+        particles,
+        ..PfParams::default()
+    })
+}
+
+fn ekf_from(mean: f64, variance: f64) -> MethodConfig {
+    MethodConfig::Ekf(EkfParams {
+        init: GaussianInit {
+            mean: Some(vec![mean]),
+            cov: None,
+            variance: Some(variance),
+        },
+        ..EkfParams::default()
+    })
+}
+
+struct Spec<'a> {
+    name: &'a str,
+    title: &'a str,
+    reference: &'a str,
+    description: &'a str,
+    drift: &'a [&'a str],
+    observation: &'a [&'a str],
+    noise: ObservationNoiseConfig,
+    prior: PriorConfig,
+    initial_state: Option<Vec<f64>>,
+    domain: Vec<[f64; 2]>,
+    time: (f64, f64),
+    methods: Vec<MethodConfig>,
+}
+
+fn build(s: Spec) -> ScenarioConfig {
+    ScenarioConfig {
+        name: s.name.into(),
+        title: s.title.into(),
+        reference: s.reference.into(),
+        description: s.description.into(),
+        model: ModelConfig {
+            drift: strings(s.drift),
+            observation: strings(s.observation),
+            diffusion: None,
+            noise: s.noise,
+        },
+        prior: s.prior,
+        initial_state: s.initial_state,
+        domain: s.domain,
+        time: TimeConfig {
+            t_final: s.time.0,
+            dt_obs: s.time.1,
+            inner_steps: 1,
+        },
+        seed: 1,
+        failure: FailureRule::default(),
+        methods: s.methods,
+    }
+}
+
+/// σ₀ of 002 §4.2, (38): `e^{−x sin x − ½ x cos x − x² + 3x + 2} / 71.2186`.
+const SIGMA0_002: &str = "exp(-x*sin(x) - 0.5*x*cos(x) - x^2 + 3*x + 2)/71.2186";
+
+fn cos_xn(power: u32) -> ScenarioConfig {
+    let name = alloc::format!("cos-x{power}");
+    let h = alloc::format!("x^{power}");
+    let title = alloc::format!("f = cos x, h = x^{power} (000 Table 1)");
+    let mut s = build(Spec {
+        name: &name,
+        title: &title,
+        reference: "000 §4.2, Table 1",
+        description: "EKF against the Yau–Yau filters for f(x) = cos x and h(x) = xⁿ, n = 2..6. \
+            000 gives neither σ₀ nor the horizon: we take σ₀ = N(0, 1), x₀ drawn from it, \
+            T = 5 and Δτ = 0.01, and the domain [−4, 6] around the stable point π/2 of f.",
+        drift: &["cos(x)"],
+        observation: &[&h],
+        noise: continuous(),
+        prior: gaussian(&[0.0], 1.0),
+        initial_state: None,
+        domain: vec![[-4.0, 6.0]],
+        time: (5.0, 0.01),
+        methods: vec![
+            MethodConfig::Ekf(EkfParams::default()),
+            ukf(0.5, 2.0, 0.0),
+            pf(500),
+        ],
+    });
+    s.seed = 10 + power as u64;
+    s
+}
+
+/// Every preset, in the order `zakai list` shows them.
+pub fn all() -> Vec<ScenarioConfig> {
+    let mut v = vec![
+        build(Spec {
+            name: "cubic-sensor-1d",
+            title: "Cubic sensor dx = dv, dy = x³ dt + dw (004 Example 1)",
+            reference: "004 (44), Table 1",
+            description: "The cubic sensor of 004 (44): σ₀ ∝ exp(−(x−1)²/(2·0.1)), x₀ = 1, \
+                T = 5, Δτ = 0.01; EKF, UKF (α = 0.05, β = 2, κ = 0) and PF with 50–200 \
+                particles as in Table 1 (DMZ method MSE 0.4317, PF(200) 0.9115, EKF/UKF fail).",
+            drift: &["0"],
+            observation: &["x^3"],
+            noise: continuous(),
+            prior: gaussian(&[1.0], 0.1),
+            initial_state: Some(vec![1.0]),
+            domain: vec![[-4.0, 4.0]],
+            time: (5.0, 0.01),
+            methods: vec![
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.05, 2.0, 0.0),
+                pf(50),
+                pf(100),
+                pf(150),
+                pf(200),
+            ],
+        }),
+        build(Spec {
+            name: "cubic-sensor-2d",
+            title: "2-D linear drift, cubic sensors (004 Example 2)",
+            reference: "004 (46), Table 2",
+            description: "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
+                σ₀ ∝ exp(−((x₁−1)² + (x₂−1)²)/(2·0.1)), x₀ = (1, 1), T = 5, Δτ = 0.01, UKF \
+                α = 0.01, β = 2, κ = 0 (Table 2: DMZ MSE 0.4081 / 0.3646, PF(200) 1.19 / 1.01).",
+            drift: &["-0.4*x1 + 0.1*x2", "-0.6*x2"],
+            observation: &["x1^3", "x2^3"],
+            noise: continuous(),
+            prior: gaussian(&[1.0, 1.0], 0.1),
+            initial_state: Some(vec![1.0, 1.0]),
+            domain: vec![[-4.0, 4.0], [-4.0, 4.0]],
+            time: (5.0, 0.01),
+            methods: vec![
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.01, 2.0, 0.0),
+                pf(50),
+                pf(200),
+            ],
+        }),
+        build(Spec {
+            name: "yau-cubic-sensor",
+            title: "Cubic sensor f = 0, h = x³ on [−10, 10] (000)",
+            reference: "000 (32), Fig. 1",
+            description: "000 (32) with the paper's domain R = 10. 000 does not state σ₀ or T \
+                for this figure: we take σ₀ = N(0, 1) with x₀ drawn from it (so the sign of x \
+                is ambiguous at first, the classic difficulty of the cubic sensor), T = 5 and \
+                Δτ = 0.01.",
+            drift: &["0"],
+            observation: &["x^3"],
+            noise: continuous(),
+            prior: gaussian(&[0.0], 1.0),
+            initial_state: None,
+            domain: vec![[-10.0, 10.0]],
+            time: (5.0, 0.01),
+            methods: vec![
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.5, 2.0, 0.0),
+                pf(500),
+            ],
+        }),
+        build(Spec {
+            name: "yau-2d",
+            title: "2-D example f = (−cos x₁ − sin x₂, cos x₁ + sin x₂) (000)",
+            reference: "000 (33), Figs. 2–3",
+            description: "000 (33): h = (x₁ − x₂, x₁ + x₂). σ₀ = N(0, 0.1 I), the Gaussian \
+                e^{−5(x₁² + x₂²)} 000 §4.3 uses as initial density; T = 2, Δτ = 0.01 and the \
+                domain [−6, 6]² are our choice (the paper's figures run to t ≈ 2).",
+            drift: &["-cos(x1) - sin(x2)", "cos(x1) + sin(x2)"],
+            observation: &["x1 - x2", "x1 + x2"],
+            noise: continuous(),
+            prior: gaussian(&[0.0, 0.0], 0.1),
+            initial_state: Some(vec![0.0, 0.0]),
+            domain: vec![[-6.0, 6.0], [-6.0, 6.0]],
+            time: (2.0, 0.01),
+            methods: vec![
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.5, 2.0, 0.0),
+                pf(500),
+            ],
+        }),
+        build(Spec {
+            name: "sa-example-1",
+            title: "Linear non-Gaussian system, mixture noise (001 Example 1)",
+            reference: "001 §4, Example 1, Fig. 4",
+            description: "001 §4: dx = 0.1 x dt + dw, z_k = 2 x_k + v_k at t_k = 0.1 k, \
+                p(x₀) = N(−2, 1), p(v_k) = 0.5 N(0.5, 0.1) + 0.5 N(2, 0.2) (second argument a \
+                variance), grid [−10, 10]. The horizon T = 2 is our choice. The Kalman filter \
+                here uses the noise's mean and variance (the best linear filter); the exact \
+                reference is the Gaussian-sum filter.",
+            drift: &["0.1*x"],
+            observation: &["2*x"],
+            noise: ObservationNoiseConfig::Discrete {
+                mixture: vec![component(0.5, &[0.5], 0.1), component(0.5, &[2.0], 0.2)],
+            },
+            prior: gaussian(&[-2.0], 1.0),
+            initial_state: None,
+            domain: vec![[-10.0, 10.0]],
+            time: (2.0, 0.1),
+            methods: vec![
+                MethodConfig::Kalman(KalmanParams::default()),
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.5, 2.0, 0.0),
+                pf(1000),
+            ],
+        }),
+        build(Spec {
+            name: "sa-example-2",
+            title: "2-D linear system, mixture prior and noise (001 Example 2)",
+            reference: "001 §4.1, Example 2, Figs. 5–6",
+            description: "001 §4.1: dx₁ = (−0.05 x₁ + x₂) dt + dw₁, dx₂ = (0.7 x₁ − 0.4 x₂) dt + dw₂, \
+                z = (x₁ + x₂, x₂) + v at t_k = 0.2 k, prior 0.5 N((0,0), 0.1 I) + 0.5 N((1,1), 0.1 I), \
+                v ~ 0.5 N((0,0), 0.1 I) + 0.5 N((−1,1), 0.1 I), grid [−2, 5]² (35 × 35). The \
+                system is unstable (an eigenvalue ≈ 0.62), so the horizon T = 2 (our choice) \
+                keeps the state on the paper's grid.",
+            drift: &["-0.05*x1 + x2", "0.7*x1 - 0.4*x2"],
+            observation: &["x1 + x2", "x2"],
+            noise: ObservationNoiseConfig::Discrete {
+                mixture: vec![
+                    component(0.5, &[0.0, 0.0], 0.1),
+                    component(0.5, &[-1.0, 1.0], 0.1),
+                ],
+            },
+            prior: PriorConfig::Mixture {
+                components: vec![
+                    component(0.5, &[0.0, 0.0], 0.1),
+                    component(0.5, &[1.0, 1.0], 0.1),
+                ],
+            },
+            initial_state: None,
+            domain: vec![[-2.0, 5.0], [-2.0, 5.0]],
+            time: (2.0, 0.2),
+            methods: vec![
+                MethodConfig::Kalman(KalmanParams::default()),
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.5, 2.0, 0.0),
+                pf(1000),
+            ],
+        }),
+        build(Spec {
+            name: "direct-4.3",
+            title: "f = tanh x, h = (x sin x, x cos x) (002 Example 4.3)",
+            reference: "002 (38), Example 4.3, Table 3",
+            description: "002 (38) with f = tanh x (the drift form dx = f dt + dw is meant), \
+                σ₀ ∝ e^{−x sin x − ½ x cos x − x² + 3x + 2}, x₀ drawn from σ₀, T = 30, Δτ = 0.1; \
+                the EKF starts at x̂₀ = 1, P₀ = 1 (Table 3 also uses P₀ = 5, 10; the direct \
+                method's MSE is 0.18–0.22 and the EKF fails). Since f ≈ 1 for x > 0 the state \
+                drifts right by about T, hence the domain [−10, 45].",
+            drift: &["tanh(x)"],
+            observation: &["x*sin(x)", "x*cos(x)"],
+            noise: continuous(),
+            prior: PriorConfig::Density {
+                expression: SIGMA0_002.into(),
+            },
+            initial_state: None,
+            domain: vec![[-10.0, 45.0]],
+            time: (30.0, 0.1),
+            methods: vec![ekf_from(1.0, 1.0), ukf(0.5, 2.0, 0.0), pf(500)],
+        }),
+        build(Spec {
+            name: "direct-4.4",
+            title: "f = x + 1 + F'(x) with F defined by an integral (002 Example 4.4)",
+            reference: "002 (38), Example 4.4, Fig. 3",
+            description: "002 Example 4.4: f = x + 1 + dF/dx with \
+                dF/dx = e^{−(x−½)²} / ∫_{−∞}^x e^{−(y−½)²} dy − 3/2 = \
+                e^{−(x−½)²} / ((√π/2) erfc(½ − x)) − 3/2, h = (x sin x, x cos x), σ₀ as in 4.3, \
+                T = 2, Δτ = 0.001; the EKF starts at x̂₀ = 1, P₀ = 3 and blows up in the paper; \
+                the direct method's MSE is 0.2016. erf/erfc have no symbolic derivative in the \
+                expression layer, so this drift's derivatives are central differences.",
+            drift: &["x - 0.5 + exp(-(x-0.5)^2)/(0.886226925452758*erfc(0.5-x))"],
+            observation: &["x*sin(x)", "x*cos(x)"],
+            noise: continuous(),
+            prior: PriorConfig::Density {
+                expression: SIGMA0_002.into(),
+            },
+            initial_state: None,
+            domain: vec![[-6.0, 30.0]],
+            time: (2.0, 0.001),
+            methods: vec![ekf_from(1.0, 3.0), ukf(0.5, 2.0, 0.0), pf(500)],
+        }),
+        build(Spec {
+            name: "bearings-only",
+            title: "Bearings-only tracking, constant velocity (003 §5)",
+            reference: "003 (5.2), Table 1",
+            description: "003 (5.2): x = (p₁, p₂, v₁, v₂), dx = F x dt + dw with F the \
+                constant-velocity matrix, z_k = h(x_k) + B_k, B_k ~ N(0, I₂), 1000 steps. 003 \
+                omits h: R⁴ → R². We use the standard two-sensor bearings-only model: bearings \
+                (radians, measured from the p₂ axis) of the target seen from sensors at \
+                (−40, −50) and (40, −50), h_i = atan((p₁ − a_i)/(p₂ + 50)). Writing the bearing \
+                with atan instead of atan2 keeps exact symbolic derivatives and is valid while \
+                the target stays above the sensors' line p₂ = −50, which it does on the domain. \
+                Δτ = 0.01 (T = 10), x₀ = (0, 0, 1, 0), prior N(x₀, I); UKF α = 0.5, β = 2, \
+                κ = −0.5 as in 003 §5.",
+            drift: &["x3", "x4", "0", "0"],
+            observation: &["atan((x1 + 40)/(x2 + 50))", "atan((x1 - 40)/(x2 + 50))"],
+            noise: ObservationNoiseConfig::Discrete {
+                mixture: vec![component(1.0, &[0.0, 0.0], 1.0)],
+            },
+            prior: gaussian(&[0.0, 0.0, 1.0, 0.0], 1.0),
+            initial_state: Some(vec![0.0, 0.0, 1.0, 0.0]),
+            domain: vec![[-45.0, 45.0], [-45.0, 45.0], [-15.0, 15.0], [-15.0, 15.0]],
+            time: (10.0, 0.01),
+            methods: vec![
+                MethodConfig::Ekf(EkfParams::default()),
+                ukf(0.5, 2.0, -0.5),
+                pf(1000),
+            ],
+        }),
+    ];
+    v.extend((2..=6).map(cos_xn));
+    v
+}
+
+/// The preset called `name`.
+pub fn preset(name: &str) -> Option<ScenarioConfig> {
+    all().into_iter().find(|p| p.name == name)
+}

@@ -1,0 +1,153 @@
+//! Truth and observation generators. The simulator never knows about filters.
+//!
+//! * Continuous observations — 000 Algorithm 1 (Euler forward differences):
+//!   `x_{k+1} = x_k + f(x_k) Δτ + G v √Δτ`, `y_{k+1} = y_k + h(x_k) Δτ + S^{1/2} w √Δτ`,
+//!   `y_0 = 0`, optionally with `inner_steps` Euler–Maruyama steps of `Δτ / inner_steps`
+//!   inside each observation interval (with `inner_steps = 1` it is Algorithm 1 exactly).
+//! * Continuous–discrete (001 (1)–(2), 003 (5.2)): the same Euler–Maruyama signal, and a
+//!   measurement `z_k = h(x_k) + v_k` at every observation time `t_k = k Δτ`, k = 0..N.
+//!
+//! Random numbers come from one seeded [`SimRng`] (xoshiro256++, seeded through
+//! `seed_from_u64`), whose stream is the same on every platform: same seed, same trajectory
+//! natively and in wasm.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::{DMatrix, DVector};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::model::{Model, ObservationModel};
+
+/// The generator of every random number in a run (platform-independent stream).
+pub type SimRng = rand::rngs::Xoshiro256PlusPlus;
+
+/// A generator from a seed.
+pub fn rng_from_seed(seed: u64) -> SimRng {
+    SimRng::seed_from_u64(seed)
+}
+
+/// Observation times: N intervals of length Δτ, each simulated with `inner_steps` steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeGrid {
+    /// Δτ, the observation interval.
+    pub dt_obs: f64,
+    /// N, the number of observation intervals (times τ_0..τ_N).
+    pub steps: usize,
+    /// Euler–Maruyama steps per observation interval for the truth.
+    pub inner_steps: usize,
+}
+
+/// A simulated truth with its observations.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// State dimension.
+    pub n: usize,
+    /// Observation dimension.
+    pub m: usize,
+    /// τ_k = k Δτ, k = 0..N.
+    pub times: Vec<f64>,
+    /// x(τ_k), row k at `states[k*n..(k+1)*n]`.
+    pub states: Vec<f64>,
+    /// Row k: the increment y(τ_k) − y(τ_{k−1}) (continuous; row 0 is zero) or z_k (discrete).
+    pub observations: Vec<f64>,
+    /// Whether observations are increments of a continuous y.
+    pub continuous: bool,
+}
+
+impl Trajectory {
+    /// x(τ_k).
+    pub fn state(&self, k: usize) -> &[f64] {
+        &self.states[k * self.n..(k + 1) * self.n]
+    }
+    /// Observation row k (see [`Trajectory::observations`]).
+    pub fn observation(&self, k: usize) -> &[f64] {
+        &self.observations[k * self.m..(k + 1) * self.m]
+    }
+    /// N, the number of observation intervals.
+    pub fn steps(&self) -> usize {
+        self.times.len() - 1
+    }
+    /// The cumulative observation path y(τ_k) (continuous models), row-major.
+    pub fn cumulative_y(&self) -> Vec<f64> {
+        let mut y = self.observations.clone();
+        for k in 1..self.times.len() {
+            for j in 0..self.m {
+                y[k * self.m + j] += y[(k - 1) * self.m + j];
+            }
+        }
+        y
+    }
+}
+
+fn standard_normal_vector(rng: &mut SimRng, d: usize) -> DVector<f64> {
+    DVector::from_fn(d, |_, _| StandardNormal.sample(rng))
+}
+
+/// Simulates the model from `x0` over `time`, drawing all noise from `rng`.
+pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> Trajectory {
+    let (n, m) = (model.n, model.m);
+    let inner = time.inner_steps.max(1);
+    let dt = time.dt_obs / inner as f64;
+    let sqrt_dt = libm::sqrt(dt);
+    let obs_sqrt: Option<DMatrix<f64>> = match &model.observations {
+        ObservationModel::Continuous { noise_cov } => Some(
+            noise_cov
+                .clone()
+                .cholesky()
+                .map(|c| c.l())
+                .unwrap_or_else(|| DMatrix::identity(m, m)),
+        ),
+        ObservationModel::Discrete { .. } => None,
+    };
+    let steps = time.steps;
+    let mut times = Vec::with_capacity(steps + 1);
+    let mut states = Vec::with_capacity((steps + 1) * n);
+    let mut observations = vec![0.0; (steps + 1) * m];
+    let mut x = x0.to_vec();
+    let mut fx = vec![0.0; n];
+    let mut hx = vec![0.0; m];
+
+    let measure = |x: &[f64], rng: &mut SimRng, out: &mut [f64], hx: &mut [f64]| {
+        if let ObservationModel::Discrete { noise } = &model.observations {
+            model.observation.eval(x, hx);
+            let v = noise.sample(rng);
+            for j in 0..m {
+                out[j] = hx[j] + v[j];
+            }
+        }
+    };
+
+    times.push(0.0);
+    states.extend_from_slice(&x);
+    measure(&x, rng, &mut observations[0..m], &mut hx);
+    for k in 1..=steps {
+        let row = &mut observations[k * m..(k + 1) * m];
+        for _ in 0..inner {
+            model.drift.eval(&x, &mut fx);
+            if let Some(l) = &obs_sqrt {
+                model.observation.eval(&x, &mut hx);
+                let w = l * standard_normal_vector(rng, m);
+                for j in 0..m {
+                    row[j] += hx[j] * dt + w[j] * sqrt_dt;
+                }
+            }
+            let v = &model.diffusion * standard_normal_vector(rng, n);
+            for i in 0..n {
+                x[i] += fx[i] * dt + v[i] * sqrt_dt;
+            }
+        }
+        measure(&x, rng, row, &mut hx);
+        times.push(k as f64 * time.dt_obs);
+        states.extend_from_slice(&x);
+    }
+    Trajectory {
+        n,
+        m,
+        times,
+        states,
+        observations,
+        continuous: obs_sqrt.is_some(),
+    }
+}
