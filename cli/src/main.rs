@@ -1,1 +1,215 @@
-fn main() {}
+//! `zakai` — run Zakai scenarios from the command line.
+//!
+//! ```text
+//! zakai list
+//! zakai show <preset>
+//! zakai run <preset|file.json> [--methods ekf,ukf,pf] [--runs N] [--seed S]
+//!           [--format table|json|csv] [--out FILE]
+//! ```
+//!
+//! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
+
+mod output;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use zakai::metrics::MonteCarlo;
+use zakai::scenario::{presets, MethodConfig, ScenarioConfig, METHODS};
+use zakai::Experiment;
+
+#[derive(Parser)]
+#[command(name = "zakai", version, about = "Continuous-time nonlinear filtering, side by side")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List the presets and the methods.
+    List,
+    /// Print a preset's scenario as JSON (edit it and pass the file to `run`).
+    Show {
+        /// Preset name.
+        preset: String,
+    },
+    /// Run a scenario once or as a Monte Carlo job and print per-method results.
+    Run {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// Comma-separated method keys to keep (e.g. ekf,ukf,pf); keys the scenario lacks are
+        /// added with default parameters.
+        #[arg(long, value_delimiter = ',')]
+        methods: Option<Vec<String>>,
+        /// Number of Monte Carlo runs (seeds seed, seed+1, …).
+        #[arg(long, default_value_t = 1)]
+        runs: usize,
+        /// Seed of the first run (default: the scenario's seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = Format::Table)]
+        format: Format,
+        /// Write the output to FILE instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// Output formats of `zakai run`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum Format {
+    /// Aligned text table.
+    Table,
+    /// JSON summary.
+    Json,
+    /// CSV, one row per method.
+    Csv,
+}
+
+fn load(scenario: &str) -> Result<ScenarioConfig, String> {
+    if let Some(p) = presets::preset(scenario) {
+        return Ok(p);
+    }
+    let path = std::path::Path::new(scenario);
+    if !path.exists() {
+        return Err(format!(
+            "`{scenario}` is neither a preset (see `zakai list`) nor an existing file"
+        ));
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("cannot read {scenario}: {e}"))?;
+    serde_json::from_str(&text).map_err(|e| format!("{scenario}: invalid scenario JSON: {e}"))
+}
+
+/// Keeps the scenario's methods whose key is listed, adding listed keys it lacks.
+fn select_methods(config: &mut ScenarioConfig, keys: &[String]) -> Result<(), String> {
+    let mut kept: Vec<MethodConfig> = Vec::new();
+    for key in keys {
+        let key = key.trim().to_lowercase();
+        let key = if key == "kf" { "kalman".to_string() } else { key };
+        let matching: Vec<MethodConfig> = config
+            .methods
+            .iter()
+            .filter(|m| m.key() == key)
+            .cloned()
+            .collect();
+        if matching.is_empty() {
+            let method = MethodConfig::from_key(&key).ok_or_else(|| {
+                let known: Vec<&str> = METHODS.iter().map(|m| m.0).collect();
+                format!("unknown method `{key}` (known: {})", known.join(", "))
+            })?;
+            kept.push(method);
+        } else {
+            kept.extend(matching);
+        }
+    }
+    config.methods = kept;
+    Ok(())
+}
+
+fn run(
+    scenario: &str,
+    methods: Option<Vec<String>>,
+    runs: usize,
+    seed: Option<u64>,
+    format: Format,
+    out: Option<PathBuf>,
+) -> Result<(), String> {
+    let mut config = load(scenario)?;
+    if let Some(keys) = methods {
+        select_methods(&mut config, &keys)?;
+    }
+    if runs == 0 {
+        return Err("--runs must be at least 1".into());
+    }
+    let seed = seed.unwrap_or(config.seed);
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let bar = if runs > 1 {
+        let bar = ProgressBar::with_draw_target(Some(runs as u64), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs")
+                .map_err(|e| e.to_string())?,
+        );
+        Some(bar)
+    } else {
+        None
+    };
+    let done = AtomicUsize::new(0);
+    let progress = || {
+        done.fetch_add(1, Ordering::Relaxed);
+        if let Some(b) = &bar {
+            b.inc(1);
+        }
+    };
+    let summary = MonteCarlo::new(&experiment)
+        .run(runs, seed, &progress)
+        .map_err(|e| e.to_string())?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let text = output::render(&experiment, &summary, format).map_err(|e| e.to_string())?;
+    match out {
+        Some(path) => std::fs::write(&path, text)
+            .map_err(|e| format!("cannot write {}: {e}", path.display())),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn list() -> String {
+    let mut s = String::from("Presets:\n");
+    for p in presets::all() {
+        s.push_str(&format!("  {:<18} {}  [{}]\n", p.name, p.title, p.reference));
+    }
+    s.push_str("\nMethods:\n");
+    for (key, about) in METHODS {
+        s.push_str(&format!("  {key:<18} {about}\n"));
+    }
+    s
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let result = match cli.command {
+        Command::List => {
+            print!("{}", list());
+            Ok(())
+        }
+        Command::Show { preset } => presets::preset(&preset)
+            .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
+            .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
+            .map(|json| println!("{json}")),
+        Command::Run {
+            scenario,
+            methods,
+            runs,
+            seed,
+            format,
+            out,
+        } => run(&scenario, methods, runs, seed, format, out),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("zakai: error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}

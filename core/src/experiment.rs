@@ -79,6 +79,8 @@ pub struct MethodTrack {
     pub seconds: f64,
     /// Number of steps taken.
     pub steps: usize,
+    /// Since when the error has been above the track-loss threshold.
+    off_track_since: Option<f64>,
 }
 
 impl MethodTrack {
@@ -214,6 +216,7 @@ impl Experiment {
                 failure: None,
                 seconds: 0.0,
                 steps: 0,
+                off_track_since: None,
             })
             .collect();
         let mut run = ExperimentRun {
@@ -223,6 +226,7 @@ impl Experiment {
             tracks,
             next: 0,
             bound: self.config.failure.divergence_bound,
+            track_loss: self.config.failure.track_loss,
         };
         run.observe(0, None, &mut Silent);
         Ok(run)
@@ -261,6 +265,7 @@ pub struct ExperimentRun {
     tracks: Vec<MethodTrack>,
     next: usize,
     bound: f64,
+    track_loss: Option<crate::scenario::TrackLoss>,
 }
 
 impl ExperimentRun {
@@ -332,6 +337,33 @@ impl ExperimentRun {
                     Ok(est)
                 }
             });
+            let result = match (result, &self.track_loss) {
+                (Ok(est), Some(rule)) => {
+                    let truth = t.state(k);
+                    let error = libm::sqrt(
+                        est.mean
+                            .iter()
+                            .zip(truth)
+                            .map(|(a, b)| (a - b) * (a - b))
+                            .sum::<f64>(),
+                    );
+                    if error <= rule.error {
+                        track.off_track_since = None;
+                        Ok(est)
+                    } else {
+                        let since = *track.off_track_since.get_or_insert(t.times[k]);
+                        if t.times[k] - since > rule.duration {
+                            Err(alloc::format!(
+                                "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
+                                rule.error, t.times[k]
+                            ))
+                        } else {
+                            Ok(est)
+                        }
+                    }
+                }
+                (r, _) => r,
+            };
             match result {
                 Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
                 Err(message) => {

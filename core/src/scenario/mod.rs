@@ -146,12 +146,27 @@ fn one_usize() -> usize {
 pub struct FailureRule {
     /// A run fails when any component of the estimate exceeds this in absolute value.
     pub divergence_bound: f64,
+    /// Optional track-loss rule — the papers' "fails tracking the real state" (004 Table 1)
+    /// made mechanical: a run fails when `‖x̂ − x‖` stays above `error` for longer than
+    /// `duration`. Applies to every method alike.
+    pub track_loss: Option<TrackLoss>,
+}
+
+/// See [`FailureRule::track_loss`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackLoss {
+    /// Error threshold, in state units.
+    pub error: f64,
+    /// How long (in time units) the error must stay above the threshold.
+    pub duration: f64,
 }
 
 impl Default for FailureRule {
     fn default() -> Self {
         FailureRule {
             divergence_bound: 1.0e3,
+            track_loss: None,
         }
     }
 }
@@ -419,6 +434,17 @@ impl ScenarioConfig {
         }
         if !(self.failure.divergence_bound > 0.0) {
             p.push(ConfigProblem::new("failure.divergence_bound", "must be positive"));
+        }
+        if let Some(tl) = &self.failure.track_loss {
+            if !(tl.error > 0.0 && tl.error.is_finite()) {
+                p.push(ConfigProblem::new("failure.track_loss.error", "must be positive and finite"));
+            }
+            if !(tl.duration >= 0.0 && tl.duration.is_finite()) {
+                p.push(ConfigProblem::new(
+                    "failure.track_loss.duration",
+                    "must be nonnegative and finite",
+                ));
+            }
         }
         if self.methods.is_empty() {
             p.push(ConfigProblem::new("methods", "choose at least one method"));

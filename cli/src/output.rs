@@ -1,0 +1,104 @@
+//! Rendering a Monte Carlo summary as a table, JSON or CSV. All three carry the same numbers;
+//! a method that failed in every run shows "failed" (table), `null` (JSON) or an empty
+//! field (CSV), never NaN.
+
+use std::fmt::Write;
+
+use zakai::metrics::MonteCarloSummary;
+use zakai::Experiment;
+
+use crate::Format;
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "failed".to_string(), |x| format!("{x:.4}"))
+}
+
+/// Renders `summary` in `format`.
+pub fn render(
+    experiment: &Experiment,
+    summary: &MonteCarloSummary,
+    format: Format,
+) -> Result<String, std::fmt::Error> {
+    let mut s = String::new();
+    match format {
+        Format::Json => {
+            s = serde_json::to_string_pretty(summary).map_err(|_| std::fmt::Error)?;
+            s.push('\n');
+        }
+        Format::Csv => {
+            writeln!(
+                s,
+                "method,runs,failed,mse,mse_stderr,mse_components,rms_components,seconds_per_run,seconds_per_step"
+            )?;
+            for m in &summary.methods {
+                let join = |v: &Option<Vec<f64>>| {
+                    v.as_ref()
+                        .map(|v| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(";"))
+                        .unwrap_or_default()
+                };
+                writeln!(
+                    s,
+                    "{},{},{},{},{},{},{},{},{}",
+                    m.name,
+                    m.runs,
+                    m.failed,
+                    m.mse.map(|v| v.to_string()).unwrap_or_default(),
+                    m.mse_stderr.map(|v| v.to_string()).unwrap_or_default(),
+                    join(&m.mse_components),
+                    join(&m.rms_components),
+                    m.seconds_per_run,
+                    m.seconds_per_step
+                )?;
+            }
+        }
+        Format::Table => {
+            let c = experiment.config();
+            writeln!(s, "{} — {}", c.name, c.title)?;
+            writeln!(
+                s,
+                "{} run(s) from seed {}, T = {}, Δτ = {}  [{}]",
+                summary.runs, summary.seed, c.time.t_final, c.time.dt_obs, c.reference
+            )?;
+            writeln!(s)?;
+            writeln!(
+                s,
+                "{:<12} {:>18} {:>8} {:>22} {:>12} {:>12}",
+                "method", "MSE (004 (43))", "failed", "MSE per component", "ms/run", "µs/step"
+            )?;
+            for m in &summary.methods {
+                let mse = match (m.mse, m.mse_stderr) {
+                    (Some(v), Some(se)) if summary.runs > 1 => format!("{v:.4} ± {se:.4}"),
+                    (v, _) => fmt_opt(v),
+                };
+                let comps = m
+                    .mse_components
+                    .as_ref()
+                    .map(|v| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" / "))
+                    .unwrap_or_else(|| "—".into());
+                writeln!(
+                    s,
+                    "{:<12} {:>18} {:>8} {:>22} {:>12.3} {:>12.2}",
+                    m.name,
+                    mse,
+                    format!("{}/{}", m.failed, m.runs),
+                    comps,
+                    m.seconds_per_run * 1e3,
+                    m.seconds_per_step * 1e6
+                )?;
+            }
+            let notes: Vec<_> = summary
+                .methods
+                .iter()
+                .filter_map(|m| m.first_failure.as_ref().map(|f| (m, f)))
+                .collect();
+            if !notes.is_empty() {
+                writeln!(s)?;
+                writeln!(s, "Failures (first per method; MSE is over the runs that did not fail):")?;
+                for (m, f) in notes {
+                    writeln!(s, "  {}: {f}", m.name)?;
+                }
+            }
+        }
+    }
+    Ok(s)
+}
