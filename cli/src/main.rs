@@ -22,7 +22,11 @@ use zakai::scenario::{presets, MethodConfig, ScenarioConfig, METHODS};
 use zakai::Experiment;
 
 #[derive(Parser)]
-#[command(name = "zakai", version, about = "Continuous-time nonlinear filtering, side by side")]
+#[command(
+    name = "zakai",
+    version,
+    about = "Continuous-time nonlinear filtering, side by side"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -81,8 +85,7 @@ fn load(scenario: &str) -> Result<ScenarioConfig, String> {
             "`{scenario}` is neither a preset (see `zakai list`) nor an existing file"
         ));
     }
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot read {scenario}: {e}"))?;
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {scenario}: {e}"))?;
     serde_json::from_str(&text).map_err(|e| format!("{scenario}: invalid scenario JSON: {e}"))
 }
 
@@ -91,7 +94,11 @@ fn select_methods(config: &mut ScenarioConfig, keys: &[String]) -> Result<(), St
     let mut kept: Vec<MethodConfig> = Vec::new();
     for key in keys {
         let key = key.trim().to_lowercase();
-        let key = if key == "kf" { "kalman".to_string() } else { key };
+        let key = if key == "kf" {
+            "kalman".to_string()
+        } else {
+            key
+        };
         let matching: Vec<MethodConfig> = config
             .methods
             .iter()
@@ -154,8 +161,9 @@ fn run(
     }
     let text = output::render(&experiment, &summary, format).map_err(|e| e.to_string())?;
     match out {
-        Some(path) => std::fs::write(&path, text)
-            .map_err(|e| format!("cannot write {}: {e}", path.display())),
+        Some(path) => {
+            std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+        }
         None => {
             print!("{text}");
             Ok(())
@@ -166,7 +174,10 @@ fn run(
 fn list() -> String {
     let mut s = String::from("Presets:\n");
     for p in presets::all() {
-        s.push_str(&format!("  {:<18} {}  [{}]\n", p.name, p.title, p.reference));
+        s.push_str(&format!(
+            "  {:<18} {}  [{}]\n",
+            p.name, p.title, p.reference
+        ));
     }
     s.push_str("\nMethods:\n");
     for (key, about) in METHODS {

@@ -33,7 +33,12 @@ pub fn render(
             for m in &summary.methods {
                 let join = |v: &Option<Vec<f64>>| {
                     v.as_ref()
-                        .map(|v| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(";"))
+                        .map(|v| {
+                            v.iter()
+                                .map(|x| format!("{x}"))
+                                .collect::<Vec<_>>()
+                                .join(";")
+                        })
                         .unwrap_or_default()
                 };
                 writeln!(
@@ -73,7 +78,12 @@ pub fn render(
                 let comps = m
                     .mse_components
                     .as_ref()
-                    .map(|v| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" / "))
+                    .map(|v| {
+                        v.iter()
+                            .map(|x| format!("{x:.4}"))
+                            .collect::<Vec<_>>()
+                            .join(" / ")
+                    })
                     .unwrap_or_else(|| "—".into());
                 writeln!(
                     s,
@@ -93,7 +103,10 @@ pub fn render(
                 .collect();
             if !notes.is_empty() {
                 writeln!(s)?;
-                writeln!(s, "Failures (first per method; MSE is over the runs that did not fail):")?;
+                writeln!(
+                    s,
+                    "Failures (first per method; MSE is over the runs that did not fail):"
+                )?;
                 for (m, f) in notes {
                     writeln!(s, "  {}: {f}", m.name)?;
                 }

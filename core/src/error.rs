@@ -41,7 +41,10 @@ impl fmt::Display for FilterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FilterError::NonFinite { what } => write!(f, "the {what} became non-finite"),
-            FilterError::MassLost => write!(f, "the density lost all its mass (every weight underflowed)"),
+            FilterError::MassLost => write!(
+                f,
+                "the density lost all its mass (every weight underflowed)"
+            ),
             FilterError::NotPositiveDefinite { what } => {
                 write!(f, "the {what} is not positive definite")
             }

@@ -298,7 +298,11 @@ impl ExperimentRun {
         } else {
             ObservationKind::Measurement
         };
-        let dt = if k == 0 { 0.0 } else { t.times[k] - t.times[k - 1] };
+        let dt = if k == 0 {
+            0.0
+        } else {
+            t.times[k] - t.times[k - 1]
+        };
         let obs = Observation {
             k,
             t: t.times[k],
@@ -355,7 +359,8 @@ impl ExperimentRun {
                         if t.times[k] - since > rule.duration {
                             Err(alloc::format!(
                                 "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
-                                rule.error, t.times[k]
+                                rule.error,
+                                t.times[k]
                             ))
                         } else {
                             Ok(est)

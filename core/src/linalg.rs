@@ -50,7 +50,10 @@ pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) 
     for i in 0..n {
         log_det += libm::log(l[(i, i)]);
     }
-    let z = chol.l().solve_lower_triangular(residual).unwrap_or_else(|| residual.clone());
+    let z = chol
+        .l()
+        .solve_lower_triangular(residual)
+        .unwrap_or_else(|| residual.clone());
     -0.5 * z.norm_squared() - log_det - 0.5 * (n as f64) * libm::log(2.0 * core::f64::consts::PI)
 }
 

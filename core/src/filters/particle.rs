@@ -49,10 +49,16 @@ impl PfParams {
     pub fn problems(&self) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
         if self.particles == 0 || self.particles > 10_000_000 {
-            p.push(("particles", format!("must be in 1..=10000000, got {}", self.particles)));
+            p.push((
+                "particles",
+                format!("must be in 1..=10000000, got {}", self.particles),
+            ));
         }
         if !(0.0..=1.0).contains(&self.ess_threshold) {
-            p.push(("ess_threshold", format!("must be in [0, 1], got {}", self.ess_threshold)));
+            p.push((
+                "ess_threshold",
+                format!("must be in [0, 1], got {}", self.ess_threshold),
+            ));
         }
         if self.substeps == 0 {
             p.push(("substeps", "must be at least 1".into()));
@@ -220,8 +226,7 @@ impl Filter for ParticleFilter {
             self.predict(obs.dt);
         }
         self.weigh(obs)?;
-        if self.effective_sample_size() < self.params.ess_threshold * self.params.particles as f64
-        {
+        if self.effective_sample_size() < self.params.ess_threshold * self.params.particles as f64 {
             self.resample();
         }
         Ok(())

@@ -84,7 +84,8 @@ impl<'a> MonteCarlo<'a> {
         }
         #[cfg(not(feature = "std"))]
         {
-            self.experiment.run_with(seed, None::<&dyn Clock>, &mut Silent)
+            self.experiment
+                .run_with(seed, None::<&dyn Clock>, &mut Silent)
         }
     }
 
@@ -143,7 +144,12 @@ impl<'a> MonteCarlo<'a> {
                             failed += 1;
                             if first_failure.is_none() {
                                 first_failure = track.failure.as_ref().map(|f| {
-                                    alloc::format!("run seed {}: step {}: {}", r.seed, f.k, f.message)
+                                    alloc::format!(
+                                        "run seed {}: step {}: {}",
+                                        r.seed,
+                                        f.k,
+                                        f.message
+                                    )
                                 });
                             }
                         }
@@ -163,7 +169,11 @@ impl<'a> MonteCarlo<'a> {
                     } else {
                         seconds / results.len() as f64
                     },
-                    seconds_per_step: if steps == 0 { 0.0 } else { seconds / steps as f64 },
+                    seconds_per_step: if steps == 0 {
+                        0.0
+                    } else {
+                        seconds / steps as f64
+                    },
                     e_mean: mean_vectors(&errors).unwrap_or_default(),
                     first_failure,
                 }

@@ -249,13 +249,9 @@ mod tests {
 
     #[test]
     fn values_and_exact_derivatives() {
-        let f = ExpressionFunction::parse(
-            "drift f",
-            &strings(&["-cos(x1)-sin(x2)", "x1^3*x2"]),
-            2,
-            2,
-        )
-        .unwrap();
+        let f =
+            ExpressionFunction::parse("drift f", &strings(&["-cos(x1)-sin(x2)", "x1^3*x2"]), 2, 2)
+                .unwrap();
         assert_eq!(f.derivatives(), Derivatives::Exact);
         let x = [0.3, -1.2];
         let v = f.value(&x);
@@ -306,11 +302,10 @@ mod tests {
     #[test]
     fn affinity_is_detected() {
         let probes = vec![vec![0.5, -2.0], vec![3.0, 1.0]];
-        let lin = ExpressionFunction::parse("f", &strings(&["-0.05*x1 + x2", "0.7*x1"]), 2, 2)
-            .unwrap();
+        let lin =
+            ExpressionFunction::parse("f", &strings(&["-0.05*x1 + x2", "0.7*x1"]), 2, 2).unwrap();
         assert!(lin.is_affine(&probes));
-        let nonlin =
-            ExpressionFunction::parse("f", &strings(&["x1*x2", "0.7*x1"]), 2, 2).unwrap();
+        let nonlin = ExpressionFunction::parse("f", &strings(&["x1*x2", "0.7*x1"]), 2, 2).unwrap();
         assert!(!nonlin.is_affine(&probes));
     }
 }

@@ -92,10 +92,7 @@ impl fmt::Display for ExprError {
                 what,
                 expected,
                 found,
-            } => write!(
-                f,
-                "{what} needs {expected} component(s), {found} given"
-            ),
+            } => write!(f, "{what} needs {expected} component(s), {found} given"),
             ExprError::NonFiniteConstant {
                 expr,
                 literal,
@@ -104,10 +101,7 @@ impl fmt::Display for ExprError {
                 f,
                 "constant `{literal}` at position {position} in `{expr}` is not a finite number"
             ),
-            ExprError::Unavailable => write!(
-                f,
-                "text expressions need the `std` feature of zakai"
-            ),
+            ExprError::Unavailable => write!(f, "text expressions need the `std` feature of zakai"),
         }
     }
 }
@@ -289,7 +283,14 @@ mod tests {
 
     #[test]
     fn sound_expressions_pass() {
-        for e in ["x^3", "-cos(x1)-sin(x2)", "x1 - x2", "2.5e-3*x1^2", "-(x)", "exp(-x^2/2)"] {
+        for e in [
+            "x^3",
+            "-cos(x1)-sin(x2)",
+            "x1 - x2",
+            "2.5e-3*x1^2",
+            "-(x)",
+            "exp(-x^2/2)",
+        ] {
             let n = if e.contains("x2") { 2 } else { 1 };
             assert!(normalize_expression(e, n).is_ok(), "{e}");
         }
@@ -297,14 +298,38 @@ mod tests {
 
     #[test]
     fn mistakes_report_their_position() {
-        assert_eq!(position(normalize_expression("x1 + $", 1).unwrap_err()), Some(5));
-        assert_eq!(position(normalize_expression("sin(x1", 1).unwrap_err()), Some(3));
-        assert_eq!(position(normalize_expression("x1 + y", 1).unwrap_err()), Some(5));
-        assert_eq!(position(normalize_expression("x1 *", 1).unwrap_err()), Some(3));
-        assert_eq!(position(normalize_expression("2 x1", 1).unwrap_err()), Some(2));
-        assert_eq!(position(normalize_expression("x3", 2).unwrap_err()), Some(0));
-        assert_eq!(position(normalize_expression("x + 1e999", 1).unwrap_err()), Some(4));
-        assert_eq!(position(normalize_expression("x)", 1).unwrap_err()), Some(1));
+        assert_eq!(
+            position(normalize_expression("x1 + $", 1).unwrap_err()),
+            Some(5)
+        );
+        assert_eq!(
+            position(normalize_expression("sin(x1", 1).unwrap_err()),
+            Some(3)
+        );
+        assert_eq!(
+            position(normalize_expression("x1 + y", 1).unwrap_err()),
+            Some(5)
+        );
+        assert_eq!(
+            position(normalize_expression("x1 *", 1).unwrap_err()),
+            Some(3)
+        );
+        assert_eq!(
+            position(normalize_expression("2 x1", 1).unwrap_err()),
+            Some(2)
+        );
+        assert_eq!(
+            position(normalize_expression("x3", 2).unwrap_err()),
+            Some(0)
+        );
+        assert_eq!(
+            position(normalize_expression("x + 1e999", 1).unwrap_err()),
+            Some(4)
+        );
+        assert_eq!(
+            position(normalize_expression("x)", 1).unwrap_err()),
+            Some(1)
+        );
         assert!(matches!(
             normalize_expression("x3", 2).unwrap_err(),
             ExprError::UnknownVariable { .. }

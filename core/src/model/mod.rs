@@ -8,9 +8,9 @@
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
 
-pub mod expression_error;
 #[cfg(feature = "std")]
 pub mod expression;
+pub mod expression_error;
 pub mod function;
 pub mod noise;
 pub mod prior;
@@ -72,7 +72,9 @@ impl Model {
             if got == want {
                 Ok(())
             } else {
-                Err(ZakaiError::Dimension(format!("{what} is {got}, expected {want}")))
+                Err(ZakaiError::Dimension(format!(
+                    "{what} is {got}, expected {want}"
+                )))
             }
         };
         dim("drift output dimension", drift.output_dim(), n)?;
@@ -86,10 +88,14 @@ impl Model {
                 crate::linalg::cholesky(noise_cov, "observation noise covariance S")
                     .map_err(|e| ZakaiError::Other(format!("{e}")))?;
             }
-            ObservationModel::Discrete { noise } => dim("measurement noise dimension", noise.dim(), m)?,
+            ObservationModel::Discrete { noise } => {
+                dim("measurement noise dimension", noise.dim(), m)?
+            }
         }
         if diffusion.iter().any(|v| !v.is_finite()) {
-            return Err(ZakaiError::Other("diffusion G has non-finite entries".into()));
+            return Err(ZakaiError::Other(
+                "diffusion G has non-finite entries".into(),
+            ));
         }
         Ok(Model {
             n,

@@ -34,7 +34,9 @@ impl GaussianMixture {
     /// definite.
     pub fn new(parts: Vec<(f64, DVector<f64>, DMatrix<f64>)>) -> Result<Self, ZakaiError> {
         let Some(first) = parts.first() else {
-            return Err(ZakaiError::Other("a mixture needs at least one component".into()));
+            return Err(ZakaiError::Other(
+                "a mixture needs at least one component".into(),
+            ));
         };
         let d = first.1.len();
         let total: f64 = parts.iter().map(|p| p.0).sum();
@@ -85,9 +87,11 @@ impl GaussianMixture {
 
     /// `log p(x)`.
     pub fn log_pdf(&self, x: &DVector<f64>) -> f64 {
-        log_sum_exp(self.components.iter().map(|c| {
-            libm::log(c.weight) + gaussian_log_density(&(x - &c.mean), &c.chol)
-        }))
+        log_sum_exp(
+            self.components
+                .iter()
+                .map(|c| libm::log(c.weight) + gaussian_log_density(&(x - &c.mean), &c.chol)),
+        )
     }
 
     /// The mixture mean Σ α_i μ_i.

@@ -11,8 +11,7 @@ use serde::{Deserialize, Serialize};
 use super::ConfigProblem;
 use crate::error::ZakaiError;
 use crate::filters::kalman::{
-    validate_init, EkfParams, ExtendedKalman, KalmanBucy, KalmanParams, UkfParams,
-    UnscentedKalman,
+    validate_init, EkfParams, ExtendedKalman, KalmanBucy, KalmanParams, UkfParams, UnscentedKalman,
 };
 use crate::filters::particle::{ParticleFilter, PfParams};
 use crate::filters::Filter;
@@ -34,10 +33,22 @@ pub enum MethodConfig {
 
 /// Every method key with a one-line description (for `zakai list` and the page).
 pub const METHODS: &[(&str, &str)] = &[
-    ("kalman", "Kalman–Bucy filter, exact for linear Gaussian models"),
-    ("ekf", "extended Kalman filter (continuous–discrete, RK4 moment equations)"),
-    ("ukf", "unscented Kalman filter (van der Merwe scaled sigma points)"),
-    ("pf", "bootstrap particle filter (systematic resampling on an ESS threshold)"),
+    (
+        "kalman",
+        "Kalman–Bucy filter, exact for linear Gaussian models",
+    ),
+    (
+        "ekf",
+        "extended Kalman filter (continuous–discrete, RK4 moment equations)",
+    ),
+    (
+        "ukf",
+        "unscented Kalman filter (van der Merwe scaled sigma points)",
+    ),
+    (
+        "pf",
+        "bootstrap particle filter (systematic resampling on an ESS threshold)",
+    ),
 ];
 
 impl MethodConfig {

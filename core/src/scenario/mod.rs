@@ -215,7 +215,10 @@ fn matrix(rows: &[Vec<f64>], n: usize) -> Option<DMatrix<f64>> {
 
 fn check_spd(rows: &[Vec<f64>], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
     match matrix(rows, n) {
-        None => problems.push(ConfigProblem::new(field, format!("must be a {n}×{n} matrix"))),
+        None => problems.push(ConfigProblem::new(
+            field,
+            format!("must be a {n}×{n} matrix"),
+        )),
         Some(p) if p.iter().any(|v| !v.is_finite()) => {
             problems.push(ConfigProblem::new(field, "entries must be finite"))
         }
@@ -261,7 +264,10 @@ fn check_mixture(
         check_spd(&c.cov, n, &format!("{field}[{i}].cov"), problems);
     }
     if !comps.is_empty() && comps.iter().map(|c| c.weight).sum::<f64>() <= 0.0 {
-        problems.push(ConfigProblem::new(field, "weights must have a positive sum"));
+        problems.push(ConfigProblem::new(
+            field,
+            "weights must have a positive sum",
+        ));
     }
 }
 
@@ -288,9 +294,9 @@ pub fn parse_function(
     n: usize,
     m: usize,
 ) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
-    Ok(Arc::new(crate::model::expression::ExpressionFunction::parse(
-        what, texts, n, m,
-    )?))
+    Ok(Arc::new(
+        crate::model::expression::ExpressionFunction::parse(what, texts, n, m)?,
+    ))
 }
 
 /// Parses a text vector function (needs the `std` feature).
@@ -359,19 +365,29 @@ impl ScenarioConfig {
         if n == 0 || n > MAX_STATE_DIM || m == 0 || m > MAX_STATE_DIM {
             return p;
         }
-        for (field, texts) in [("drift", &self.model.drift), ("observation", &self.model.observation)] {
+        for (field, texts) in [
+            ("drift", &self.model.drift),
+            ("observation", &self.model.observation),
+        ] {
             for (i, t) in texts.iter().enumerate() {
                 if let Err(e) = parse_function(field, core::slice::from_ref(t), n, 1) {
-                    p.push(ConfigProblem::new(format!("model.{field}[{i}]"), e.to_string()));
+                    p.push(ConfigProblem::new(
+                        format!("model.{field}[{i}]"),
+                        e.to_string(),
+                    ));
                 }
             }
         }
         if let Some(g) = &self.model.diffusion {
             match matrix(g, n) {
-                None => p.push(ConfigProblem::new("model.diffusion", format!("must be {n}×{n}"))),
-                Some(g) if g.iter().any(|v| !v.is_finite()) => {
-                    p.push(ConfigProblem::new("model.diffusion", "entries must be finite"))
-                }
+                None => p.push(ConfigProblem::new(
+                    "model.diffusion",
+                    format!("must be {n}×{n}"),
+                )),
+                Some(g) if g.iter().any(|v| !v.is_finite()) => p.push(ConfigProblem::new(
+                    "model.diffusion",
+                    "entries must be finite",
+                )),
                 Some(_) => {}
             }
         }
@@ -393,7 +409,9 @@ impl ScenarioConfig {
                 check_mixture(components, n, "prior.components", &mut p)
             }
             PriorConfig::Density { expression } => {
-                if let Err(e) = parse_function("prior density", core::slice::from_ref(expression), n, 1) {
+                if let Err(e) =
+                    parse_function("prior density", core::slice::from_ref(expression), n, 1)
+                {
                     p.push(ConfigProblem::new("prior.expression", e.to_string()));
                 }
             }
@@ -417,27 +435,45 @@ impl ScenarioConfig {
         }
         let t = &self.time;
         if !(t.t_final > 0.0 && t.t_final.is_finite()) {
-            p.push(ConfigProblem::new("time.t_final", "must be positive and finite"));
+            p.push(ConfigProblem::new(
+                "time.t_final",
+                "must be positive and finite",
+            ));
         }
         if !(t.dt_obs > 0.0 && t.dt_obs.is_finite()) {
-            p.push(ConfigProblem::new("time.dt_obs", "must be positive and finite"));
+            p.push(ConfigProblem::new(
+                "time.dt_obs",
+                "must be positive and finite",
+            ));
         } else if t.t_final.is_finite() && t.dt_obs > t.t_final {
             p.push(ConfigProblem::new("time.dt_obs", "must not exceed t_final"));
         } else if self.steps() > MAX_STEPS {
             p.push(ConfigProblem::new(
                 "time.dt_obs",
-                format!("t_final / dt_obs = {} exceeds {MAX_STEPS} steps", self.steps()),
+                format!(
+                    "t_final / dt_obs = {} exceeds {MAX_STEPS} steps",
+                    self.steps()
+                ),
             ));
         }
         if t.inner_steps == 0 || t.inner_steps > 100_000 {
-            p.push(ConfigProblem::new("time.inner_steps", "must be in 1..=100000"));
+            p.push(ConfigProblem::new(
+                "time.inner_steps",
+                "must be in 1..=100000",
+            ));
         }
-        if !(self.failure.divergence_bound > 0.0) {
-            p.push(ConfigProblem::new("failure.divergence_bound", "must be positive"));
+        if self.failure.divergence_bound.is_nan() || self.failure.divergence_bound <= 0.0 {
+            p.push(ConfigProblem::new(
+                "failure.divergence_bound",
+                "must be positive",
+            ));
         }
         if let Some(tl) = &self.failure.track_loss {
             if !(tl.error > 0.0 && tl.error.is_finite()) {
-                p.push(ConfigProblem::new("failure.track_loss.error", "must be positive and finite"));
+                p.push(ConfigProblem::new(
+                    "failure.track_loss.error",
+                    "must be positive and finite",
+                ));
             }
             if !(tl.duration >= 0.0 && tl.duration.is_finite()) {
                 p.push(ConfigProblem::new(
@@ -472,17 +508,15 @@ impl ScenarioConfig {
         let drift = parse_function("drift f", &self.model.drift, n, n)?;
         let observation = parse_function("observation h", &self.model.observation, n, m)?;
         let diffusion = match &self.model.diffusion {
-            Some(g) => matrix(g, n).ok_or_else(|| {
-                ZakaiError::Dimension(format!("diffusion G must be {n}×{n}"))
-            })?,
+            Some(g) => matrix(g, n)
+                .ok_or_else(|| ZakaiError::Dimension(format!("diffusion G must be {n}×{n}")))?,
             None => DMatrix::identity(n, n),
         };
         let observations = match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov } => ObservationModel::Continuous {
                 noise_cov: match cov {
-                    Some(s) => matrix(s, m).ok_or_else(|| {
-                        ZakaiError::Dimension(format!("noise S must be {m}×{m}"))
-                    })?,
+                    Some(s) => matrix(s, m)
+                        .ok_or_else(|| ZakaiError::Dimension(format!("noise S must be {m}×{m}")))?,
                     None => DMatrix::identity(m, m),
                 },
             },

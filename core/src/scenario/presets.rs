@@ -8,8 +8,8 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{
-    FailureRule, TrackLoss, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
-    PriorConfig, ScenarioConfig, TimeConfig,
+    FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
+    ScenarioConfig, TimeConfig, TrackLoss,
 };
 use crate::filters::kalman::{EkfParams, GaussianInit, KalmanParams, UkfParams};
 use crate::filters::particle::PfParams;

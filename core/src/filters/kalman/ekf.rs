@@ -8,7 +8,7 @@ use alloc::string::String;
 use serde::{Deserialize, Serialize};
 
 use super::measurement::MeasurementForm;
-use super::propagate::rk4_moments;
+use super::propagate::{linearized_rates, rk4_moments};
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
@@ -64,15 +64,14 @@ impl Filter for ExtendedKalman {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         if obs.dt > 0.0 {
+            let (model, q) = (&self.model, &self.q);
             rk4_moments(
-                &self.model,
-                &self.q,
                 &mut self.state.mean,
                 &mut self.state.cov,
                 obs.dt,
                 self.substeps,
-            );
-            crate::linalg::symmetrize(&mut self.state.cov);
+                |m, p| linearized_rates(model, q, m, p),
+            )?;
             self.state.check()?;
         }
         let meas = self.form.at(obs)?;

@@ -96,8 +96,16 @@ pub struct KalmanBucy {
     q: DMatrix<f64>,
     form: MeasurementForm,
     state: GaussianState,
-    /// (Δτ, Φ, Γb, Q_d) of the last interval, reused while Δτ does not change.
-    cached: Option<(f64, DMatrix<f64>, DVector<f64>, DMatrix<f64>)>,
+    /// The exact discretisation of the last interval, reused while Δτ does not change.
+    cached: Option<Discretization>,
+}
+
+/// `(Δτ, Φ, Γ b, Q_d)` of [`discretize`].
+struct Discretization {
+    dt: f64,
+    phi: DMatrix<f64>,
+    gamma_b: DVector<f64>,
+    qd: DMatrix<f64>,
 }
 
 impl KalmanBucy {
@@ -131,13 +139,22 @@ impl Filter for KalmanBucy {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         if obs.dt > 0.0 {
-            if self.cached.as_ref().map(|c| c.0) != Some(obs.dt) {
-                let (phi, gb, qd) = discretize(&self.a, &self.b, &self.q, obs.dt);
-                self.cached = Some((obs.dt, phi, gb, qd));
-            }
-            let (_, phi, gb, qd) = self.cached.as_ref().expect("just set");
-            self.state.mean = phi * &self.state.mean + gb;
-            self.state.cov = phi * &self.state.cov * phi.transpose() + qd;
+            let (a, b, q) = (&self.a, &self.b, &self.q);
+            let d = match self.cached.take() {
+                Some(d) if d.dt == obs.dt => d,
+                _ => {
+                    let (phi, gamma_b, qd) = discretize(a, b, q, obs.dt);
+                    Discretization {
+                        dt: obs.dt,
+                        phi,
+                        gamma_b,
+                        qd,
+                    }
+                }
+            };
+            self.state.mean = &d.phi * &self.state.mean + &d.gamma_b;
+            self.state.cov = &d.phi * &self.state.cov * d.phi.transpose() + &d.qd;
+            self.cached = Some(d);
         }
         let meas = self.form.at(obs)?;
         if meas.scale == 0.0 {

@@ -45,11 +45,7 @@ pub struct GaussianState {
 
 impl GaussianState {
     /// From the prior moments, overridden by `init` where it says so.
-    pub fn initial(
-        prior_mean: DVector<f64>,
-        prior_cov: DMatrix<f64>,
-        init: &GaussianInit,
-    ) -> Self {
+    pub fn initial(prior_mean: DVector<f64>, prior_cov: DMatrix<f64>, init: &GaussianInit) -> Self {
         let n = prior_mean.len();
         let mean = init
             .mean
@@ -115,7 +111,12 @@ impl GaussianState {
 }
 
 /// Validates a [`GaussianInit`] against the state dimension, appending problems.
-pub fn validate_init(init: &GaussianInit, n: usize, field: &str, problems: &mut Vec<crate::scenario::ConfigProblem>) {
+pub fn validate_init(
+    init: &GaussianInit,
+    n: usize,
+    field: &str,
+    problems: &mut Vec<crate::scenario::ConfigProblem>,
+) {
     use crate::scenario::ConfigProblem;
     use alloc::format;
     if let Some(m) = &init.mean {
@@ -125,7 +126,10 @@ pub fn validate_init(init: &GaussianInit, n: usize, field: &str, problems: &mut 
                 format!("needs {n} entries, {} given", m.len()),
             ));
         } else if m.iter().any(|v| !v.is_finite()) {
-            problems.push(ConfigProblem::new(format!("{field}.init.mean"), "must be finite"));
+            problems.push(ConfigProblem::new(
+                format!("{field}.init.mean"),
+                "must be finite",
+            ));
         }
     }
     if let Some(c) = &init.cov {

@@ -2,8 +2,11 @@
 //! and 004 §4): `λ = α²(n + κ) − n`, points `m` and `m ± √(n+λ) Lᵢ` (L the Cholesky factor of
 //! P), weights `W₀ᵐ = λ/(n+λ)`, `W₀ᶜ = W₀ᵐ + 1 − α² + β`, `Wᵢ = 1/(2(n+λ))`.
 //!
-//! Prediction propagates every sigma point through `dx/dt = f(x)` (RK4) and adds `Q Δτ`;
-//! the update uses the observation as a measurement ([`super::measurement`]). P is
+//! Prediction integrates the sigma-point moment equations of the continuous–discrete UKF
+//! (Särkkä 2007) by RK4: with sigma points χᵢ of (m, P),
+//! `dm/dt = Σ Wᵢᵐ f(χᵢ)`, `dP/dt = Σ Wᵢᶜ [(f(χᵢ) − dm/dt)(χᵢ − m)ᵀ + (χᵢ − m)(f(χᵢ) − dm/dt)ᵀ] + Q`
+//! (exact for linear drifts, where it reduces to the Kalman–Bucy moment equations). The
+//! update uses the observation as a measurement ([`super::measurement`]). P is
 //! symmetrised after each step; a failed Cholesky factorisation is returned as
 //! [`FilterError::NotPositiveDefinite`], never a panic.
 
@@ -15,11 +18,11 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::measurement::{Measurement, MeasurementForm};
-use super::propagate::rk4_point;
+use super::propagate::rk4_moments;
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
-use crate::linalg::{cholesky, symmetrize};
+use crate::linalg::cholesky;
 use crate::model::{Model, Prior};
 
 /// Parameters of [`UnscentedKalman`].
@@ -32,7 +35,7 @@ pub struct UkfParams {
     pub beta: f64,
     /// Secondary scaling; n + κ must be positive.
     pub kappa: f64,
-    /// RK4 steps per observation interval for each sigma point.
+    /// RK4 steps per observation interval for the sigma-point moment equations.
     pub substeps: usize,
     /// Overrides the prior's mean and covariance.
     pub init: GaussianInit,
@@ -58,10 +61,16 @@ impl UkfParams {
             p.push(("alpha", format!("must be in (0, 1], got {}", self.alpha)));
         }
         if !self.beta.is_finite() || self.beta < 0.0 {
-            p.push(("beta", format!("must be finite and nonnegative, got {}", self.beta)));
+            p.push((
+                "beta",
+                format!("must be finite and nonnegative, got {}", self.beta),
+            ));
         }
-        if !(n as f64 + self.kappa > 0.0) || !self.kappa.is_finite() {
-            p.push(("kappa", format!("n + κ must be positive (n = {n}, κ = {})", self.kappa)));
+        if !self.kappa.is_finite() || n as f64 + self.kappa <= 0.0 {
+            p.push((
+                "kappa",
+                format!("n + κ must be positive (n = {n}, κ = {})", self.kappa),
+            ));
         }
         if self.substeps == 0 {
             p.push(("substeps", "must be at least 1".into()));
@@ -120,17 +129,40 @@ impl UnscentedKalman {
         })
     }
 
-    /// The 2n + 1 sigma points of the current state, as columns.
-    fn sigma_points(&self) -> Result<DMatrix<f64>, FilterError> {
+    /// The 2n + 1 sigma points of `N(m, P)`, as columns.
+    fn sigma_points(
+        &self,
+        m: &DVector<f64>,
+        p: &DMatrix<f64>,
+    ) -> Result<DMatrix<f64>, FilterError> {
         let n = self.model.n;
-        let l = cholesky(&self.state.cov, "covariance")?.l() * self.weights.spread;
+        let l = cholesky(p, "covariance")?.l() * self.weights.spread;
         let mut pts = DMatrix::zeros(n, 2 * n + 1);
-        pts.set_column(0, &self.state.mean);
+        pts.set_column(0, m);
         for i in 0..n {
-            pts.set_column(1 + i, &(&self.state.mean + l.column(i)));
-            pts.set_column(1 + n + i, &(&self.state.mean - l.column(i)));
+            pts.set_column(1 + i, &(m + l.column(i)));
+            pts.set_column(1 + n + i, &(m - l.column(i)));
         }
         Ok(pts)
+    }
+
+    /// The sigma-point moment rates (see the module doc).
+    fn rates(
+        &self,
+        m: &DVector<f64>,
+        p: &DMatrix<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>), FilterError> {
+        let pts = self.sigma_points(m, p)?;
+        let mut fs = DMatrix::zeros(self.model.n, pts.ncols());
+        for (i, c) in pts.column_iter().enumerate() {
+            self.model
+                .drift
+                .eval(c.as_slice(), fs.column_mut(i).as_mut_slice());
+        }
+        let dm = self.mean_of(&fs);
+        let cross = self.cross_cov(&fs, &dm, &pts, m);
+        let dp = &cross + cross.transpose() + &self.q;
+        Ok((dm, dp))
     }
 
     fn weight_mean(&self, i: usize) -> f64 {
@@ -176,19 +208,14 @@ impl UnscentedKalman {
     }
 
     fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
-        let mut pts = self.sigma_points()?;
-        for mut c in pts.column_iter_mut() {
-            rk4_point(&self.model, c.as_mut_slice(), dt, self.substeps);
-        }
-        let m = self.mean_of(&pts);
-        let mut p = self.cross_cov(&pts, &m, &pts, &m) + &self.q * dt;
-        symmetrize(&mut p);
+        let (mut m, mut p) = (self.state.mean.clone(), self.state.cov.clone());
+        rk4_moments(&mut m, &mut p, dt, self.substeps, |m, p| self.rates(m, p))?;
         self.state = GaussianState { mean: m, cov: p };
         self.state.check()
     }
 
     fn update(&mut self, meas: &Measurement) -> Result<(), FilterError> {
-        let pts = self.sigma_points()?;
+        let pts = self.sigma_points(&self.state.mean, &self.state.cov)?;
         let mut zs = DMatrix::zeros(self.model.m, pts.ncols());
         for (i, c) in pts.column_iter().enumerate() {
             zs.set_column(i, &meas.predict(&self.model, c.as_slice()));

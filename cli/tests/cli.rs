@@ -1,0 +1,166 @@
+//! The `zakai` binary: clean failures, and the same numbers in every output format.
+
+use std::process::{Command, Output};
+
+fn zakai(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_zakai"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("zakai-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, contents).unwrap();
+    path
+}
+
+fn assert_clean_failure(o: &Output, needle: &str) {
+    assert!(!o.status.success(), "should fail");
+    let err = stderr(o);
+    assert!(err.contains(needle), "stderr lacks `{needle}`: {err}");
+    assert!(!err.contains("panicked"), "panicked: {err}");
+    assert_eq!(
+        err.trim().lines().count(),
+        1,
+        "one-line message expected: {err}"
+    );
+}
+
+#[test]
+fn malformed_files_fail_cleanly() {
+    let path = temp_file("broken.json", "{ \"name\": \"x\", ");
+    let o = zakai(&["run", path.to_str().unwrap()]);
+    assert_clean_failure(&o, "invalid scenario JSON");
+
+    let o = zakai(&["run", "/no/such/file.json"]);
+    assert_clean_failure(&o, "neither a preset");
+
+    // A well-formed file with a bad expression: the message names the field and position.
+    let show = zakai(&["show", "cubic-sensor-1d"]);
+    assert!(show.status.success());
+    let mut v: serde_json::Value = serde_json::from_slice(&show.stdout).unwrap();
+    v["model"]["observation"][0] = "x^^3".into();
+    v["time"]["dt_obs"] = serde_json::json!(0.0);
+    let path = temp_file("bad-expr.json", &v.to_string());
+    let o = zakai(&["run", path.to_str().unwrap()]);
+    assert_clean_failure(&o, "model.observation[0]: syntax error at position 2");
+    assert!(
+        stderr(&o).contains("time.dt_obs: must be positive"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_arguments_fail_cleanly() {
+    assert_clean_failure(&zakai(&["show", "nope"]), "unknown preset `nope`");
+    assert_clean_failure(
+        &zakai(&["run", "cubic-sensor-1d", "--methods", "ekf,magic"]),
+        "unknown method `magic`",
+    );
+    assert_clean_failure(
+        &zakai(&["run", "cubic-sensor-1d", "--runs", "0"]),
+        "at least 1",
+    );
+    let o = zakai(&["run", "cubic-sensor-1d", "--format", "xml"]);
+    assert!(!o.status.success());
+    assert!(!stderr(&o).contains("panicked"));
+}
+
+#[test]
+fn list_names_every_preset() {
+    let o = zakai(&["list"]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    for p in [
+        "cubic-sensor-1d",
+        "yau-2d",
+        "sa-example-1",
+        "direct-4.3",
+        "bearings-only",
+        "cos-x6",
+    ] {
+        assert!(out.contains(p), "{p} missing");
+    }
+}
+
+#[test]
+fn table_json_and_csv_carry_the_same_numbers_and_never_nan() {
+    let args = [
+        "run",
+        "cubic-sensor-1d",
+        "--methods",
+        "ekf,ukf,pf",
+        "--runs",
+        "12",
+        "--seed",
+        "5",
+    ];
+    let json = zakai(&[&args[..], &["--format", "json"]].concat());
+    assert!(json.status.success(), "{}", stderr(&json));
+    let text = String::from_utf8_lossy(&json.stdout);
+    assert!(!text.to_lowercase().contains("nan"));
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let methods = summary["methods"].as_array().unwrap();
+    // ekf, ukf and the preset's four particle filters.
+    assert_eq!(methods.len(), 6);
+    let table = zakai(&[&args[..], &["--format", "table"]].concat());
+    let table = String::from_utf8_lossy(&table.stdout).into_owned();
+    let csv = zakai(&[&args[..], &["--format", "csv"]].concat());
+    let csv = String::from_utf8_lossy(&csv.stdout).into_owned();
+    for m in methods {
+        let name = m["name"].as_str().unwrap();
+        let failed = m["failed"].as_u64().unwrap();
+        let runs = m["runs"].as_u64().unwrap();
+        assert_eq!(runs, 12);
+        let row = table.lines().find(|l| l.starts_with(name)).unwrap();
+        assert!(row.contains(&format!("{failed}/{runs}")), "{row}");
+        let csv_row = csv
+            .lines()
+            .find(|l| l.starts_with(&format!("{name},")))
+            .unwrap();
+        match m["mse"].as_f64() {
+            Some(mse) => {
+                assert!(row.contains(&format!("{mse:.4}")), "{row} vs {mse}");
+                let csv_mse: f64 = csv_row.split(',').nth(3).unwrap().parse().unwrap();
+                assert_eq!(csv_mse, mse);
+            }
+            None => {
+                assert_eq!(failed, runs);
+                assert!(row.contains("failed"));
+            }
+        }
+    }
+    // A second run with the same seed gives the same numbers.
+    let again = zakai(&[&args[..], &["--format", "json"]].concat());
+    let again: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    for (a, b) in methods.iter().zip(again["methods"].as_array().unwrap()) {
+        assert_eq!(a["mse"], b["mse"]);
+    }
+}
+
+#[test]
+fn out_writes_a_file() {
+    let dir = std::env::temp_dir().join(format!("zakai-cli-out-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("r.csv");
+    let o = zakai(&[
+        "run",
+        "sa-example-1",
+        "--format",
+        "csv",
+        "--out",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(&path).unwrap();
+    assert!(csv.starts_with("method,runs,failed,mse"));
+    assert_eq!(csv.lines().count(), 5);
+}

@@ -1,0 +1,93 @@
+//! Text expressions: exact derivatives agree with finite differences; errors are typed.
+
+use zakai::model::expression::ExpressionFunction;
+use zakai::model::expression_error::ExprError;
+use zakai::model::{Derivatives, VectorFunction};
+
+fn parse(texts: &[&str], n: usize) -> ExpressionFunction {
+    let t: Vec<String> = texts.iter().map(|s| s.to_string()).collect();
+    ExpressionFunction::parse("f", &t, n, t.len()).unwrap()
+}
+
+#[test]
+fn exact_derivatives_agree_with_finite_differences() {
+    // Central differences with step 1e-5 have error ~1e-10 × |f'''|; tolerance 1e-6.
+    let cases: Vec<(Vec<&str>, usize)> = vec![
+        (vec!["x^3", "x*sin(x)", "x*cos(x)", "tanh(x)"], 1),
+        (
+            vec!["-cos(x1)-sin(x2)", "cos(x1)+sin(x2)", "x1^3*exp(-x2^2/2)"],
+            2,
+        ),
+        (
+            vec![
+                "atan((x1 + 40)/(x2 + 50))",
+                "sqrt(x1^2 + x2^2 + 1)",
+                "x1*x2/(1 + x2^2)",
+            ],
+            2,
+        ),
+    ];
+    let points = [[0.3, -0.7], [1.9, 0.4], [-1.1, 2.2]];
+    for (texts, n) in cases {
+        let f = parse(&texts, n);
+        assert_eq!(f.derivatives(), Derivatives::Exact, "{texts:?}");
+        let m = texts.len();
+        for p in points {
+            let x = &p[..n];
+            let mut jac = vec![0.0; m * n];
+            f.jacobian(x, &mut jac);
+            for j in 0..n {
+                let h = 1e-5;
+                let mut xp = x.to_vec();
+                let mut xm = x.to_vec();
+                xp[j] += h;
+                xm[j] -= h;
+                let (fp, fm) = (f.value(&xp), f.value(&xm));
+                for i in 0..m {
+                    let fd = (fp[i] - fm[i]) / (2.0 * h);
+                    assert!(
+                        (jac[i * n + j] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                        "{} d/dx{j} at {x:?}",
+                        texts[i]
+                    );
+                }
+                // Second derivatives against differences of the exact Jacobian.
+                let (mut jp, mut jm) = (vec![0.0; m * n], vec![0.0; m * n]);
+                f.jacobian(&xp, &mut jp);
+                f.jacobian(&xm, &mut jm);
+                for i in 0..m {
+                    let mut hess = vec![0.0; n * n];
+                    f.hessian(i, x, &mut hess);
+                    for l in 0..n {
+                        let fd = (jp[i * n + l] - jm[i * n + l]) / (2.0 * h);
+                        assert!(
+                            (hess[l * n + j] - fd).abs() < 1e-5 * (1.0 + fd.abs()),
+                            "{} d²/dx{l}dx{j} at {x:?}: {} vs {fd}",
+                            texts[i],
+                            hess[l * n + j]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn errors_are_typed_and_readable() {
+    let one = |t: &str, n: usize| ExpressionFunction::parse("drift f", &[t.to_string()], n, 1);
+    match one("x1 + * 2", 2).unwrap_err() {
+        ExprError::Syntax { position, .. } => assert_eq!(position, Some(5)),
+        e => panic!("unexpected {e:?}"),
+    }
+    let e = one("y^2", 1).unwrap_err();
+    assert!(matches!(e, ExprError::UnknownVariable { ref name, position: 0, .. } if name == "y"));
+    assert!(e.to_string().contains("allowed: x1, x"), "{e}");
+    let e = one("2e400*x", 1).unwrap_err();
+    assert!(
+        matches!(e, ExprError::NonFiniteConstant { position: 0, .. }),
+        "{e:?}"
+    );
+    let e = ExpressionFunction::parse("drift f", &["x1".into()], 2, 2).unwrap_err();
+    assert_eq!(e.to_string(), "drift f needs 2 component(s), 1 given");
+}
