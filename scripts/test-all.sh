@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# The whole test suite of Zakai (README's test command; .ci/run calls exactly this).
+# The whole test suite of Zakai (the README's test command; .ci/run calls exactly this).
+# Installs what a fresh machine lacks: rust targets, wasm-bindgen-cli, npm packages, and
+# Debian's chromium for the browser tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,6 +18,7 @@ cargo fmt --all --check
 
 step "cargo clippy --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy -p zakai-wasm --target wasm32-unknown-unknown --all-targets -- -D warnings
 
 step "cargo test --workspace"
 cargo test --workspace
@@ -24,7 +27,25 @@ step "no_std builds of the core"
 cargo build -p zakai --no-default-features --target wasm32-unknown-unknown
 cargo build -p zakai --no-default-features --target thumbv7em-none-eabihf
 
-step "wasm adapter builds for the browser"
-cargo build -p zakai-wasm --target wasm32-unknown-unknown
+step "playground build (wasm package, npm packages)"
+bash scripts/build-web.sh
+
+step "wasm tests in node (wasm-bindgen-test-runner)"
+CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
+  cargo test -p zakai-wasm --target wasm32-unknown-unknown
+
+step "same seed, same truth: native CLI vs wasm"
+cargo build --release -p zakai-cli
+node tests/web/determinism.mjs
+
+step "browser end-to-end tests (headless chromium)"
+if ! command -v chromium >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+  else
+    sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+  fi
+fi
+node tests/web/e2e.mjs
 
 step "all green"

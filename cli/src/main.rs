@@ -41,6 +41,15 @@ enum Command {
         /// Preset name.
         preset: String,
     },
+    /// Simulate a scenario's truth and observations (no filters) and print them as JSON:
+    /// `{"times": [...], "states": [...], "observations": [...]}` (rows flattened).
+    Simulate {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// Seed (default: the scenario's seed).
+        #[arg(long)]
+        seed: Option<u64>,
+    },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
         /// A preset name or a path to a scenario JSON file.
@@ -171,6 +180,24 @@ fn run(
     }
 }
 
+fn simulate(scenario: &str, seed: Option<u64>) -> Result<(), String> {
+    let config = load(scenario)?;
+    let seed = seed.unwrap_or(config.seed);
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let run = experiment.start(seed).map_err(|e| e.to_string())?;
+    let t = run.trajectory();
+    let json = serde_json::json!({
+        "seed": seed,
+        "n": t.n,
+        "m": t.m,
+        "times": t.times,
+        "states": t.states,
+        "observations": t.observations,
+    });
+    println!("{json}");
+    Ok(())
+}
+
 fn list() -> String {
     let mut s = String::from("Presets:\n");
     for p in presets::all() {
@@ -207,6 +234,7 @@ fn main() -> ExitCode {
             .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
             .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
             .map(|json| println!("{json}")),
+        Command::Simulate { scenario, seed } => simulate(&scenario, seed),
         Command::Run {
             scenario,
             methods,

@@ -281,6 +281,21 @@ impl ExperimentRun {
     pub fn filters(&self) -> &[Box<dyn Filter>] {
         &self.filters
     }
+    /// MSE of 004 (43) of method `index` over the observations processed so far (`None`
+    /// once it has failed).
+    pub fn running_mse(&self, index: usize) -> Option<f64> {
+        let track = self.tracks.get(index)?;
+        if track.failed() || track.estimates.is_empty() {
+            return None;
+        }
+        let truth = &self.trajectory.states[..track.estimates.len()];
+        Some(
+            metrics::mse_components(truth, &track.estimates, track.n)
+                .iter()
+                .sum(),
+        )
+    }
+
     /// Index of the next observation to process (observations 0..next are done).
     pub fn position(&self) -> usize {
         self.next

@@ -1,21 +1,26 @@
 //! `zakai-wasm`: a thin wasm-bindgen adapter over the `zakai` core — no maths here.
 //!
-//! A [`Session`] is built from a `ScenarioConfig` (as a JS object or JSON text), simulates the
-//! truth once, and steps every selected filter on request. Errors become JS `Error`s carrying
-//! the core's message; a panic hook logs anything that slips through.
+//! A [`Session`] is built from a `ScenarioConfig` (a JS object, through serde-wasm-bindgen),
+//! simulates the truth once, and steps every selected filter on request. Arrays cross the
+//! boundary as one `Float64Array` copy per call (no per-element calls); configs and small
+//! summaries as plain JS objects. Every error becomes a JS `Error` carrying the core's
+//! message; a panic hook logs anything that slips through.
 
+use serde::Serialize;
 use wasm_bindgen::prelude::*;
 use zakai::experiment::{Clock, ExperimentRun, Observer};
-use zakai::scenario::ScenarioConfig;
+use zakai::scenario::{ConfigProblem, ScenarioConfig};
 use zakai::Experiment;
 
-/// Wall-clock time from `performance.now()` (or `Date.now()` where there is no performance).
+/// Wall-clock time from `performance.now()` (or `Date.now()` where there is none).
 struct JsClock;
 
 impl Clock for JsClock {
     fn now(&self) -> f64 {
-        js_sys::Reflect::get(&js_sys::global(), &JsValue::from_str("performance"))
+        let global = js_sys::global();
+        js_sys::Reflect::get(&global, &JsValue::from_str("performance"))
             .ok()
+            .filter(|p| !p.is_undefined())
             .and_then(|p| {
                 let now = js_sys::Reflect::get(&p, &JsValue::from_str("now")).ok()?;
                 let f: js_sys::Function = now.dyn_into().ok()?;
@@ -30,27 +35,108 @@ fn js_error(message: impl std::fmt::Display) -> JsError {
     JsError::new(&message.to_string())
 }
 
-/// Installs the panic hook (idempotent).
+fn to_js<T: Serialize>(value: &T) -> Result<JsValue, JsError> {
+    value
+        .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+        .map_err(js_error)
+}
+
+fn parse_config(config: JsValue) -> Result<ScenarioConfig, Vec<ConfigProblem>> {
+    serde_wasm_bindgen::from_value(config)
+        .map_err(|e| vec![ConfigProblem::new("", format!("invalid scenario: {e}"))])
+}
+
+/// Installs the panic hook (runs when the module is instantiated).
 #[wasm_bindgen(start)]
 pub fn start() {
     console_error_panic_hook::set_once();
 }
 
-/// The presets' names, as a JS array of strings.
-#[wasm_bindgen(js_name = presetNames)]
-pub fn preset_names() -> Vec<String> {
-    zakai::scenario::presets::all()
-        .into_iter()
-        .map(|p| p.name)
-        .collect()
+/// Every preset scenario, as an array of plain objects.
+#[wasm_bindgen]
+pub fn presets() -> Result<JsValue, JsError> {
+    to_js(&zakai::scenario::presets::all())
 }
 
-/// A preset's scenario as JSON text.
-#[wasm_bindgen(js_name = presetJson)]
-pub fn preset_json(name: &str) -> Result<String, JsError> {
-    let p = zakai::scenario::presets::preset(name)
-        .ok_or_else(|| js_error(format!("unknown preset `{name}`")))?;
-    serde_json::to_string(&p).map_err(js_error)
+/// The methods: `[[key, description], …]`.
+#[wasm_bindgen]
+pub fn methods() -> Result<JsValue, JsError> {
+    to_js(&zakai::scenario::METHODS)
+}
+
+/// Every problem with a scenario, as `[{field, message}, …]` (empty when valid).
+#[wasm_bindgen(js_name = validateScenario)]
+pub fn validate_scenario(config: JsValue) -> Result<JsValue, JsError> {
+    let problems = match parse_config(config) {
+        Ok(c) => c.validate(),
+        Err(p) => p,
+    };
+    to_js(&problems)
+}
+
+/// A random seed from the browser's generator (getrandom, JS backend), below 2⁵³.
+#[wasm_bindgen(js_name = randomSeed)]
+pub fn random_seed() -> Result<f64, JsError> {
+    let mut bytes = [0u8; 8];
+    getrandom::fill(&mut bytes).map_err(js_error)?;
+    Ok((u64::from_le_bytes(bytes) >> 11) as f64)
+}
+
+/// What happened in one call to [`Session::step`].
+#[derive(Serialize)]
+struct StepSummary {
+    position: usize,
+    steps: usize,
+    time: f64,
+    finished: bool,
+    failures: Vec<FailureEvent>,
+}
+
+#[derive(Serialize)]
+struct FailureEvent {
+    method: usize,
+    k: usize,
+    message: String,
+}
+
+#[derive(Default)]
+struct Failures(Vec<FailureEvent>);
+
+impl Observer for Failures {
+    fn on_failure(&mut self, index: usize, k: usize, message: &str) {
+        self.0.push(FailureEvent {
+            method: index,
+            k,
+            message: message.to_string(),
+        });
+    }
+}
+
+/// Per-method diagnostics.
+#[derive(Serialize)]
+struct MethodDiagnostics {
+    name: String,
+    key: &'static str,
+    failed: bool,
+    failure: Option<String>,
+    failed_at: Option<usize>,
+    mse: Option<f64>,
+    ms_per_step: f64,
+    steps: usize,
+}
+
+/// Static facts about the session's scenario.
+#[derive(Serialize)]
+struct SessionInfo {
+    name: String,
+    n: usize,
+    m: usize,
+    steps: usize,
+    dt_obs: f64,
+    continuous: bool,
+    domain: Vec<[f64; 2]>,
+    methods: Vec<String>,
+    seed: u64,
 }
 
 /// A stepping session over one scenario.
@@ -58,67 +144,179 @@ pub fn preset_json(name: &str) -> Result<String, JsError> {
 pub struct Session {
     experiment: Experiment,
     run: ExperimentRun,
+    seed: u64,
 }
 
-struct Count(usize);
-impl Observer for Count {
-    fn on_failure(&mut self, _: usize, _: usize, _: &str) {
-        self.0 += 1;
+fn seed_from_js(seed: f64) -> Result<u64, JsError> {
+    if seed.is_finite() && seed >= 0.0 && seed <= 9_007_199_254_740_991.0 && seed.fract() == 0.0 {
+        Ok(seed as u64)
+    } else {
+        Err(js_error(format!(
+            "seed must be an integer in 0..=2^53-1, got {seed}"
+        )))
     }
 }
 
 #[wasm_bindgen]
 impl Session {
-    /// Builds a session from scenario JSON text and a seed.
+    /// Builds a session from a scenario object; `seed` overrides the scenario's seed.
     #[wasm_bindgen(constructor)]
-    pub fn new(config_json: &str, seed: u64) -> Result<Session, JsError> {
-        let config: ScenarioConfig = serde_json::from_str(config_json)
-            .map_err(|e| js_error(format!("invalid scenario JSON: {e}")))?;
+    pub fn new(config: JsValue, seed: Option<f64>) -> Result<Session, JsError> {
+        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+        let seed = match seed {
+            Some(s) => seed_from_js(s)?,
+            None => config.seed,
+        };
         let experiment = Experiment::new(config).map_err(js_error)?;
         let run = experiment.start(seed).map_err(js_error)?;
-        Ok(Session { experiment, run })
+        Ok(Session {
+            experiment,
+            run,
+            seed,
+        })
     }
 
-    /// Advances up to `k` observation intervals; returns how many failures occurred.
-    pub fn step(&mut self, k: usize) -> usize {
-        let mut count = Count(0);
-        self.run.advance(k, Some(&JsClock), &mut count);
-        count.0
+    /// Advances up to `k` observation intervals; returns
+    /// `{position, steps, time, finished, failures: [{method, k, message}]}`.
+    pub fn step(&mut self, k: usize) -> Result<JsValue, JsError> {
+        let mut failures = Failures::default();
+        let steps = self.run.advance(k, Some(&JsClock), &mut failures);
+        let position = self.run.position();
+        let t = &self.run.trajectory().times;
+        to_js(&StepSummary {
+            position,
+            steps,
+            time: t[position.saturating_sub(1).min(t.len() - 1)],
+            finished: self.run.is_finished(),
+            failures: failures.0,
+        })
     }
 
-    /// Restarts with a new seed (same scenario).
-    pub fn reset(&mut self, seed: u64) -> Result<(), JsError> {
+    /// Restarts the same scenario with a new seed.
+    pub fn reset(&mut self, seed: f64) -> Result<(), JsError> {
+        let seed = seed_from_js(seed)?;
         self.run = self.experiment.start(seed).map_err(js_error)?;
+        self.seed = seed;
         Ok(())
     }
 
-    /// Index of the next observation to process.
+    /// `{name, n, m, steps, dt_obs, continuous, domain, methods, seed}`.
+    pub fn info(&self) -> Result<JsValue, JsError> {
+        let c = self.experiment.config();
+        to_js(&SessionInfo {
+            name: c.name.clone(),
+            n: c.state_dim(),
+            m: c.obs_dim(),
+            steps: c.steps(),
+            dt_obs: c.time.dt_obs,
+            continuous: self.run.trajectory().continuous,
+            domain: c.domain.clone(),
+            methods: self.experiment.method_names().to_vec(),
+            seed: self.seed,
+        })
+    }
+
+    /// Index of the next observation to process (rows `0..position` are available).
     pub fn position(&self) -> usize {
         self.run.position()
     }
 
-    /// True when the run has processed every observation.
+    /// True when every observation has been processed.
     pub fn finished(&self) -> bool {
         self.run.is_finished()
     }
 
-    /// The truth x(τ_k), k = 0..N, row-major (one copy).
-    pub fn truth(&self) -> Vec<f64> {
-        self.run.trajectory().states.clone()
+    /// Observation times τ_k for rows `from..to` (clamped to the processed rows).
+    pub fn times(&self, from: usize, to: usize) -> Vec<f64> {
+        let (a, b) = self.clamp(from, to);
+        self.run.trajectory().times[a..b].to_vec()
     }
 
-    /// Estimates of method `index` so far, row-major (one copy).
-    pub fn estimates(&self, index: usize) -> Vec<f64> {
-        self.run
+    /// Truth rows `from..to`, row-major (clamped to the processed rows: no peeking ahead).
+    pub fn truth(&self, from: usize, to: usize) -> Vec<f64> {
+        let (a, b) = self.clamp(from, to);
+        let n = self.run.trajectory().n;
+        self.run.trajectory().states[a * n..b * n].to_vec()
+    }
+
+    /// Observation rows `from..to`, row-major: increments Δy (continuous) or z_k (discrete).
+    pub fn observations(&self, from: usize, to: usize) -> Vec<f64> {
+        let (a, b) = self.clamp(from, to);
+        let m = self.run.trajectory().m;
+        self.run.trajectory().observations[a * m..b * m].to_vec()
+    }
+
+    /// Estimate rows `from..to` of method `index`, row-major (fewer rows after a failure).
+    pub fn estimates(&self, index: usize, from: usize, to: usize) -> Vec<f64> {
+        let Some(track) = self.run.tracks().get(index) else {
+            return Vec::new();
+        };
+        let rows = track.rows();
+        let (a, b) = (from.min(rows), to.min(rows));
+        if a >= b {
+            return Vec::new();
+        }
+        track.estimates[a * track.n..b * track.n].to_vec()
+    }
+
+    /// `points` equally spaced points over the domain of component `dim`.
+    #[wasm_bindgen(js_name = densityGrid)]
+    pub fn density_grid(&self, dim: usize, points: usize) -> Vec<f64> {
+        let domain = &self.experiment.config().domain;
+        let Some([lo, hi]) = domain.get(dim).copied() else {
+            return Vec::new();
+        };
+        let points = points.clamp(2, 4096);
+        (0..points)
+            .map(|i| lo + (hi - lo) * i as f64 / (points - 1) as f64)
+            .collect()
+    }
+
+    /// Method `index`'s current marginal density of component `dim` on
+    /// [`Session::density_grid`] (empty once the method has failed).
+    pub fn density(&self, index: usize, dim: usize, points: usize) -> Vec<f64> {
+        let (Some(filter), Some(track)) =
+            (self.run.filters().get(index), self.run.tracks().get(index))
+        else {
+            return Vec::new();
+        };
+        if track.failed() || dim >= track.n {
+            return Vec::new();
+        }
+        let grid = self.density_grid(dim, points);
+        let mut out = vec![0.0; grid.len()];
+        filter.marginal_density(dim, &grid, &mut out);
+        out
+    }
+
+    /// Per method: `{name, key, failed, failure, failed_at, mse, ms_per_step, steps}`; `mse`
+    /// is 004 (43) over the rows so far.
+    pub fn diagnostics(&self) -> Result<JsValue, JsError> {
+        let methods = &self.experiment.config().methods;
+        let list: Vec<MethodDiagnostics> = self
+            .run
             .tracks()
-            .get(index)
-            .map(|t| t.estimates.clone())
-            .unwrap_or_default()
+            .iter()
+            .enumerate()
+            .map(|(i, t)| MethodDiagnostics {
+                name: t.name.clone(),
+                key: methods[i].key(),
+                failed: t.failed(),
+                failure: t.failure.as_ref().map(|f| f.message.clone()),
+                failed_at: t.failure.as_ref().map(|f| f.k),
+                mse: self.run.running_mse(i),
+                ms_per_step: t.seconds_per_step() * 1e3,
+                steps: t.steps,
+            })
+            .collect();
+        to_js(&list)
     }
+}
 
-    /// Method names.
-    #[wasm_bindgen(js_name = methodNames)]
-    pub fn method_names(&self) -> Vec<String> {
-        self.experiment.method_names().to_vec()
+impl Session {
+    fn clamp(&self, from: usize, to: usize) -> (usize, usize) {
+        let done = self.run.position();
+        let b = to.min(done);
+        (from.min(b), b)
     }
 }

@@ -8,6 +8,7 @@
 //! [`Estimate`]; grid methods also expose their density through [`DensityView`].
 
 pub mod kalman;
+pub mod marginal;
 pub mod particle;
 
 use nalgebra::{DMatrix, DVector};
@@ -71,5 +72,12 @@ pub trait Filter {
     /// The current density, for grid methods; `None` otherwise.
     fn density(&self) -> Option<DensityView<'_>> {
         None
+    }
+    /// The filter's marginal density of state component `dim` at the points `grid`, written
+    /// into `out` (for plots). The default is the Gaussian N(m_d, P_dd) of the estimate.
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        let est = self.estimate();
+        let var = est.covariance.map_or(0.0, |p| p[(dim, dim)]);
+        marginal::gaussian(est.mean[dim], var, grid, out);
     }
 }

@@ -13,14 +13,13 @@ use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation, ObservationKind};
 use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp};
 use crate::model::{Model, ObservationModel, Prior};
-use crate::simulate::{rng_from_seed, SimRng};
+use crate::simulate::{rng_from_seed, standard_normal, SimRng};
 
 /// Parameters of [`ParticleFilter`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -125,7 +124,7 @@ impl ParticleFilter {
             for _ in 0..self.params.substeps {
                 self.model.drift.eval(p, &mut fx);
                 for v in xi.iter_mut() {
-                    *v = StandardNormal.sample(&mut self.rng);
+                    *v = standard_normal(&mut self.rng);
                 }
                 let noise = &self.model.diffusion * &xi;
                 for i in 0..n {
@@ -230,6 +229,19 @@ impl Filter for ParticleFilter {
             self.resample();
         }
         Ok(())
+    }
+
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        let n = self.model.n;
+        let samples: Vec<f64> = self
+            .particles
+            .iter()
+            .skip(dim)
+            .step_by(n)
+            .copied()
+            .collect();
+        let weights: Vec<f64> = self.log_weights.iter().map(|w| libm::exp(*w)).collect();
+        crate::filters::marginal::kernel_density(&samples, &weights, grid, out);
     }
 
     fn estimate(&self) -> Estimate {

@@ -14,15 +14,64 @@ use exmex::{FloatOpsFactory, MakeOperators, Operator};
 use super::expression_error::{normalize_expression, variable_index, ExprError};
 use super::function::{numerical_hessian, numerical_jacobian, Derivatives, VectorFunction};
 
-/// exmex's float operators plus `erf`, `erfc` and the constant `pi`.
+/// exmex's float operators with every transcendental function (and `^`) computed by the
+/// pure-Rust `libm` crate instead of the platform's maths library, so that an expression gives
+/// bit-identical values natively and in wasm (same seed → same trajectory everywhere); plus
+/// `erf`, `erfc` and the constant `pi`.
 #[derive(Clone, Debug)]
 pub struct ZakaiOps;
 
+/// A real function of one real variable.
+type RealFn = fn(f64) -> f64;
+
+/// The unary functions, by name, as computed by `libm`.
+const LIBM_UNARY: &[(&str, RealFn)] = &[
+    ("abs", libm::fabs),
+    ("sin", libm::sin),
+    ("cos", libm::cos),
+    ("tan", libm::tan),
+    ("asin", libm::asin),
+    ("acos", libm::acos),
+    ("atan", libm::atan),
+    ("sinh", libm::sinh),
+    ("cosh", libm::cosh),
+    ("tanh", libm::tanh),
+    ("asinh", libm::asinh),
+    ("acosh", libm::acosh),
+    ("atanh", libm::atanh),
+    ("floor", libm::floor),
+    ("round", libm::round),
+    ("ceil", libm::ceil),
+    ("trunc", libm::trunc),
+    ("exp", libm::exp),
+    ("sqrt", libm::sqrt),
+    ("cbrt", libm::cbrt),
+    ("ln", libm::log),
+    ("log", libm::log),
+    ("log2", libm::log2),
+    ("log10", libm::log10),
+    ("erf", libm::erf),
+    ("erfc", libm::erfc),
+];
+
 impl MakeOperators<f64> for ZakaiOps {
     fn make<'a>() -> Vec<Operator<'a, f64>> {
-        let mut ops = FloatOpsFactory::<f64>::make();
-        ops.push(Operator::make_unary("erf", libm::erf));
-        ops.push(Operator::make_unary("erfc", libm::erfc));
+        let mut ops: Vec<Operator<'a, f64>> = FloatOpsFactory::<f64>::make()
+            .into_iter()
+            .filter(|op| op.repr() != "^" && !LIBM_UNARY.iter().any(|(name, _)| *name == op.repr()))
+            .collect();
+        // Same priority and associativity as exmex's own `^`.
+        ops.push(Operator::make_bin(
+            "^",
+            exmex::BinOp {
+                apply: libm::pow,
+                prio: 4,
+                is_commutative: false,
+            },
+        ));
+        for (name, f) in LIBM_UNARY {
+            ops.push(Operator::make_unary(name, *f));
+        }
         ops.push(Operator::make_constant("pi", core::f64::consts::PI));
         ops
     }
@@ -284,6 +333,19 @@ mod tests {
         f.jacobian(&[0.4], &mut jac);
         let exact = 2.0 / core::f64::consts::PI.sqrt() * (-0.16f64).exp();
         assert!((jac[0] - exact).abs() < 1e-8);
+    }
+
+    #[test]
+    fn operator_precedence_follows_mathematical_convention() {
+        let f = ExpressionFunction::parse("f", &strings(&["-x^2 + 2*x^3/4 - sin(pi/2)"]), 1, 1)
+            .unwrap();
+        let x = 1.5f64;
+        let expected = -(x * x) + 2.0 * x.powi(3) / 4.0 - 1.0;
+        assert!((f.value(&[x])[0] - expected).abs() < 1e-14);
+        let g = ExpressionFunction::parse("g", &strings(&["exp(-(x-0.5)^2)"]), 1, 1).unwrap();
+        assert!((g.value(&[1.5])[0] - (-1.0f64).exp()).abs() < 1e-15);
+        let h = ExpressionFunction::parse("h", &strings(&["2*-x^2"]), 1, 1).unwrap();
+        assert_eq!(h.value(&[3.0])[0], -18.0);
     }
 
     #[test]

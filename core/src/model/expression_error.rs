@@ -7,6 +7,7 @@
 
 use alloc::format;
 use alloc::string::{String, ToString};
+use alloc::vec;
 use alloc::vec::Vec;
 use core::fmt;
 
@@ -135,10 +136,133 @@ enum Token {
 }
 
 /// Checks `text` for the mistakes listed in the module doc, for a model with `n` state
-/// variables, and returns it normalised for exmex (numeric literals in plain decimal form,
-/// since exmex does not read exponents such as `2.5e-3`).
+/// variables, and returns it rewritten for exmex with the usual mathematical conventions:
+///
+/// * numeric literals in plain decimal form (exmex does not read exponents such as `2.5e-3`);
+/// * a leading minus binds looser than `^`: `-x^2` is `-(x^2)` and `exp(-(x-1)^2)` is
+///   `exp(-((x-1)^2))` (exmex alone would square the negated operand);
+/// * chained powers `a^b^c` are refused with a message asking for parentheses (exmex would
+///   read them left to right, the opposite of the usual right-to-left convention).
 pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
-    let mut normalized = String::with_capacity(text.len());
+    let tokens = tokenize(text, n)?;
+    let syntax = |position: usize, message: &str| ExprError::Syntax {
+        expr: text.to_string(),
+        position: Some(position),
+        message: message.to_string(),
+    };
+    // Chained powers: `^` whose left operand already ends a power `a^b`.
+    let mut depth_of_last_power: Vec<Option<usize>> = vec![None];
+    for (i, t) in tokens.iter().enumerate() {
+        match t.kind {
+            Token::Open => depth_of_last_power.push(None),
+            Token::Close => {
+                depth_of_last_power.pop();
+            }
+            Token::Operator if t.text == "^" => {
+                let last = depth_of_last_power.last_mut().expect("balanced");
+                if let Some(prev) = *last {
+                    if operand_end(&tokens, prev + 1) == i {
+                        return Err(syntax(
+                            t.position,
+                            "chained powers are ambiguous: write a^(b^c) or (a^b)^c",
+                        ));
+                    }
+                }
+                *last = Some(i);
+            }
+            _ => {}
+        }
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    let mut close_after: Vec<usize> = Vec::new();
+    for (i, t) in tokens.iter().enumerate() {
+        let prev = if i == 0 { None } else { Some(&tokens[i - 1]) };
+        let unary = t.kind == Token::Operator
+            && (t.text == "-" || t.text == "+")
+            && prev.is_none_or(|p| matches!(p.kind, Token::Open | Token::Comma | Token::Operator));
+        if unary {
+            match prev {
+                // At the start of an expression or argument: `-a^b…` → `0-a^b…`.
+                None
+                | Some(Token_ {
+                    kind: Token::Open | Token::Comma,
+                    ..
+                }) => {
+                    out.push('0');
+                    out.push_str(&t.text);
+                }
+                // After `^` exmex's tight unary minus is the convention: `2^-x` = 2^(−x).
+                Some(p) if p.text == "^" => out.push_str(&t.text),
+                // After another operator: wrap the signed power `(0-a^b)`.
+                Some(_) => {
+                    out.push_str("(0");
+                    out.push_str(&t.text);
+                    close_after.push(power_end(&tokens, i + 1));
+                }
+            }
+        } else {
+            out.push_str(&t.text);
+        }
+        while close_after.last() == Some(&(i + 1)) {
+            close_after.pop();
+            out.push(')');
+        }
+    }
+    Ok(out)
+}
+
+/// One token with its text (already normalised) and character position.
+#[derive(Clone, Debug)]
+struct Token_ {
+    kind: Token,
+    text: String,
+    position: usize,
+}
+
+/// Index one past the atom starting at `i` (a number, name, `( … )` or `f( … )`), skipping
+/// leading unary signs.
+fn operand_end(tokens: &[Token_], mut i: usize) -> usize {
+    while i < tokens.len() && tokens[i].kind == Token::Operator {
+        i += 1;
+    }
+    if i >= tokens.len() {
+        return i;
+    }
+    if tokens[i].kind == Token::Function {
+        i += 1;
+    }
+    if i < tokens.len() && tokens[i].kind == Token::Open {
+        let mut depth = 0;
+        while i < tokens.len() {
+            match tokens[i].kind {
+                Token::Open => depth += 1,
+                Token::Close => {
+                    depth -= 1;
+                    if depth == 0 {
+                        return i + 1;
+                    }
+                }
+                _ => {}
+            }
+            i += 1;
+        }
+        return i;
+    }
+    i + 1
+}
+
+/// Index one past the power `atom [^ atom]` starting at `i` (chains were refused earlier).
+fn power_end(tokens: &[Token_], i: usize) -> usize {
+    let end = operand_end(tokens, i);
+    if end < tokens.len() && tokens[end].text == "^" {
+        operand_end(tokens, end + 1)
+    } else {
+        end
+    }
+}
+
+/// Splits `text` into tokens, reporting lexical mistakes with their positions.
+fn tokenize(text: &str, n: usize) -> Result<Vec<Token_>, ExprError> {
     let chars: Vec<char> = text.chars().collect();
     let syntax = |position: usize, message: &str| ExprError::Syntax {
         expr: text.to_string(),
@@ -152,14 +276,13 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
             message: "the expression is empty".to_string(),
         });
     }
+    let mut tokens: Vec<Token_> = Vec::new();
     let mut open: Vec<usize> = Vec::new();
-    let mut prev: Option<(Token, usize)> = None;
     let mut i = 0;
     while i < chars.len() {
         let c = chars[i];
         let start = i;
-        let token = if c.is_whitespace() {
-            normalized.push(c);
+        let (kind, token_text) = if c.is_whitespace() {
             i += 1;
             continue;
         } else if c.is_ascii_digit() || c == '.' {
@@ -180,7 +303,7 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
             }
             let literal: String = chars[start..i].iter().collect();
             match literal.parse::<f64>() {
-                Ok(v) if v.is_finite() => normalized.push_str(&format!("{v}")),
+                Ok(v) if v.is_finite() => (Token::Operand, format!("{v}")),
                 Ok(_) => {
                     return Err(ExprError::NonFiniteConstant {
                         expr: text.to_string(),
@@ -190,17 +313,15 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
                 }
                 Err(_) => return Err(syntax(start, &format!("malformed number `{literal}`"))),
             }
-            Token::Operand
         } else if c.is_ascii_alphabetic() || c == '_' {
             while i < chars.len() && (chars[i].is_ascii_alphanumeric() || chars[i] == '_') {
                 i += 1;
             }
             let name: String = chars[start..i].iter().collect();
-            normalized.push_str(&name);
             if FUNCTIONS.contains(&name.as_str()) {
-                Token::Function
+                (Token::Function, name)
             } else if CONSTANTS.contains(&name.as_str()) || variable_index(&name, n).is_some() {
-                Token::Operand
+                (Token::Operand, name)
             } else {
                 return Err(ExprError::UnknownVariable {
                     expr: text.to_string(),
@@ -211,8 +332,7 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
             }
         } else {
             i += 1;
-            normalized.push(c);
-            match c {
+            let kind = match c {
                 '(' => {
                     open.push(start);
                     Token::Open
@@ -226,18 +346,29 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
                 '+' | '-' | '*' | '/' | '^' => Token::Operator,
                 ',' => Token::Comma,
                 _ => return Err(syntax(start, &format!("unexpected character `{c}`"))),
-            }
+            };
+            (kind, c.to_string())
         };
-        check_adjacent(prev, token, start, c).map_err(|m| syntax(start, m))?;
-        prev = Some((token, start));
+        let prev = tokens.last().map(|t| (t.kind, t.position));
+        check_adjacent(prev, kind, start, c).map_err(|m| syntax(start, m))?;
+        tokens.push(Token_ {
+            kind,
+            text: token_text,
+            position: start,
+        });
     }
     if let Some(p) = open.pop() {
         return Err(syntax(p, "`(` is never closed"));
     }
-    match prev {
-        Some((Token::Operator, p)) => Err(syntax(p, "an operator needs an operand after it")),
-        Some((Token::Function, p)) => Err(syntax(p, "a function name must be followed by `(`")),
-        _ => Ok(normalized),
+    match tokens.last() {
+        Some(t) if t.kind == Token::Operator => {
+            Err(syntax(t.position, "an operator needs an operand after it"))
+        }
+        Some(t) if t.kind == Token::Function => Err(syntax(
+            t.position,
+            "a function name must be followed by `(`",
+        )),
+        _ => Ok(tokens),
     }
 }
 
@@ -343,7 +474,27 @@ mod tests {
     #[test]
     fn exponents_become_plain_decimals() {
         assert_eq!(normalize_expression("2.5e-3*x", 1).unwrap(), "0.0025*x");
-        assert_eq!(normalize_expression("1E2 + x", 1).unwrap(), "100 + x");
+        assert_eq!(normalize_expression("1E2 + x", 1).unwrap(), "100+x");
+    }
+
+    #[test]
+    fn unary_minus_binds_looser_than_powers() {
+        let norm = |t: &str| normalize_expression(t, 2).unwrap();
+        assert_eq!(norm("-x1^2"), "0-x1^2");
+        assert_eq!(norm("exp(-(x1-1)^2)"), "exp(0-(x1-1)^2)");
+        assert_eq!(norm("3*-x1^2"), "3*(0-x1^2)");
+        assert_eq!(norm("x1/-sin(x2)^2*4"), "x1/(0-sin(x2)^2)*4");
+        assert_eq!(norm("2^-x1"), "2^-x1");
+        assert_eq!(norm("x1 - -x2"), "x1-(0-x2)");
+    }
+
+    #[test]
+    fn chained_powers_are_refused() {
+        let e = normalize_expression("2^x1^2", 1).unwrap_err();
+        assert_eq!(position(e), Some(4));
+        assert!(normalize_expression("2^(x1^2)", 1).is_ok());
+        assert!(normalize_expression("(2^x1)^2", 1).is_ok());
+        assert!(normalize_expression("x1^2 + x1^3", 1).is_ok());
     }
 
     #[test]

@@ -5,7 +5,6 @@ use alloc::vec::Vec;
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use rand::Rng;
-use rand_distr::{Distribution, StandardNormal};
 
 use crate::error::ZakaiError;
 use crate::linalg::{gaussian_log_density, log_sum_exp};
@@ -127,7 +126,7 @@ impl GaussianMixture {
                 break;
             }
         }
-        let xi = DVector::from_fn(self.dim(), |_, _| StandardNormal.sample(rng));
+        let xi = crate::simulate::standard_normal_vector(rng, self.dim());
         &chosen.mean + chosen.chol.l() * xi
     }
 }

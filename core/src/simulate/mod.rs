@@ -15,8 +15,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use rand::SeedableRng;
-use rand_distr::{Distribution, StandardNormal};
+use rand::{RngExt, SeedableRng};
 
 use crate::model::{Model, ObservationModel};
 
@@ -81,8 +80,19 @@ impl Trajectory {
     }
 }
 
-fn standard_normal_vector(rng: &mut SimRng, d: usize) -> DVector<f64> {
-    DVector::from_fn(d, |_, _| StandardNormal.sample(rng))
+/// One N(0, 1) draw by the Box–Muller transform, computed with `libm` so that the stream of
+/// normals is bit-identical on every platform (a ziggurat sampler's `exp` would come from the
+/// platform's maths library natively and from Rust's port in wasm).
+pub fn standard_normal<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
+    // u1 in (0, 1] so that ln u1 is finite.
+    let u1 = 1.0 - rng.random::<f64>();
+    let u2: f64 = rng.random();
+    libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(core::f64::consts::TAU * u2)
+}
+
+/// A vector of independent N(0, 1) draws.
+pub fn standard_normal_vector<R: rand::Rng + ?Sized>(rng: &mut R, d: usize) -> DVector<f64> {
+    DVector::from_fn(d, |_, _| standard_normal(rng))
 }
 
 /// Simulates the model from `x0` over `time`, drawing all noise from `rng`.

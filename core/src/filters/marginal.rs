@@ -1,0 +1,72 @@
+//! One-dimensional marginal densities for plots: what each filter believes about component d
+//! of the state, evaluated on a set of points. Gaussian filters give N(m_d, P_dd); particle
+//! filters a weighted Gaussian kernel density estimate; grid methods their own density.
+
+/// Writes the N(mean, variance) density at `grid` into `out` (zeros for a non-positive or
+/// non-finite variance).
+pub fn gaussian(mean: f64, variance: f64, grid: &[f64], out: &mut [f64]) {
+    if !(variance > 0.0 && variance.is_finite() && mean.is_finite()) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        return;
+    }
+    let norm = 1.0 / libm::sqrt(core::f64::consts::TAU * variance);
+    for (o, x) in out.iter_mut().zip(grid) {
+        let z = x - mean;
+        *o = norm * libm::exp(-0.5 * z * z / variance);
+    }
+}
+
+/// Writes a Gaussian kernel density estimate of weighted samples at `grid` into `out`.
+/// The bandwidth is Silverman's rule `1.06 σ N_eff^{−1/5}` with the weighted standard deviation
+/// σ and the effective sample size `N_eff = 1/Σwᵢ²`; `weights` must sum to one.
+pub fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut [f64]) {
+    let mean: f64 = samples.iter().zip(weights).map(|(x, w)| x * w).sum();
+    let var: f64 = samples
+        .iter()
+        .zip(weights)
+        .map(|(x, w)| w * (x - mean) * (x - mean))
+        .sum();
+    let n_eff = 1.0 / weights.iter().map(|w| w * w).sum::<f64>();
+    let spacing = if grid.len() > 1 {
+        libm::fabs(grid[1] - grid[0])
+    } else {
+        1.0
+    };
+    // Never narrower than the plotting grid, so that a collapsed cloud still shows.
+    let h = libm::fmax(1.06 * libm::sqrt(var) * libm::pow(n_eff, -0.2), spacing);
+    let norm = 1.0 / (h * libm::sqrt(core::f64::consts::TAU));
+    out.iter_mut().for_each(|o| *o = 0.0);
+    for (x, w) in samples.iter().zip(weights) {
+        if *w < 1e-300 {
+            continue;
+        }
+        for (o, g) in out.iter_mut().zip(grid) {
+            let z = (g - x) / h;
+            if z.abs() < 8.0 {
+                *o += w * norm * libm::exp(-0.5 * z * z);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec::Vec;
+
+    #[test]
+    fn both_densities_integrate_to_one_on_a_wide_grid() {
+        let grid: Vec<f64> = (0..2001).map(|i| -10.0 + 0.01 * i as f64).collect();
+        let mut out = alloc::vec![0.0; grid.len()];
+        gaussian(0.7, 0.3, &grid, &mut out);
+        let mass: f64 = out.iter().sum::<f64>() * 0.01;
+        assert!((mass - 1.0).abs() < 1e-6, "{mass}");
+        let samples = [-1.0, 0.0, 0.5, 2.0];
+        let weights = [0.1, 0.2, 0.3, 0.4];
+        kernel_density(&samples, &weights, &grid, &mut out);
+        let mass: f64 = out.iter().sum::<f64>() * 0.01;
+        assert!((mass - 1.0).abs() < 1e-4, "{mass}");
+        let mean: f64 = grid.iter().zip(&out).map(|(x, p)| x * p).sum::<f64>() * 0.01;
+        assert!((mean - 0.85).abs() < 1e-3, "{mean}");
+    }
+}

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Builds the playground: the wasm package (release) into web/pkg and web's npm packages,
+# installing what a fresh machine lacks (the wasm target, wasm-bindgen-cli of the version in
+# Cargo.lock, the npm packages).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+rustup target list --installed | grep -qx wasm32-unknown-unknown \
+  || rustup target add wasm32-unknown-unknown
+
+# The CLI must match the wasm-bindgen library version exactly.
+want=$(awk '/^name = "wasm-bindgen"$/ { getline; gsub(/version = |"/, ""); print; exit }' Cargo.lock)
+have=$(wasm-bindgen --version 2>/dev/null | awk '{print $2}' || true)
+if [ "$have" != "$want" ]; then
+  echo "installing wasm-bindgen-cli $want (found: ${have:-none})"
+  cargo install wasm-bindgen-cli --version "$want"
+fi
+
+cargo build -p zakai-wasm --profile wasm-release --target wasm32-unknown-unknown
+wasm-bindgen --target web --out-dir web/pkg \
+  target/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
+
+if [ ! -d web/node_modules/uplot ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
+  (cd web && npm ci --no-audit --no-fund)
+fi
+echo "built web/pkg ($(du -h web/pkg/zakai_wasm_bg.wasm | cut -f1) of wasm)"

@@ -1,0 +1,71 @@
+//! The wasm Session in a real wasm runtime (node, through wasm-bindgen-test-runner):
+//! round trip, errors for bad configs, determinism.
+#![cfg(target_arch = "wasm32")]
+
+use wasm_bindgen::JsValue;
+use wasm_bindgen_test::*;
+use zakai::scenario::presets;
+use zakai_wasm::{validate_scenario, Session};
+
+fn config_js(name: &str) -> JsValue {
+    let p = presets::preset(name).unwrap();
+    serde_wasm_bindgen::to_value(&p).unwrap()
+}
+
+fn message(e: wasm_bindgen::JsError) -> String {
+    let v: JsValue = e.into();
+    js_sys::Error::from(v).message().into()
+}
+
+#[wasm_bindgen_test]
+fn a_session_steps_and_reports() {
+    let mut s = Session::new(config_js("cubic-sensor-1d"), Some(3.0)).unwrap();
+    assert_eq!(s.position(), 1);
+    s.step(10).unwrap();
+    assert_eq!(s.position(), 11);
+    let truth = s.truth(0, 100);
+    assert_eq!(truth.len(), 11, "no rows beyond the processed ones");
+    for i in 0..6 {
+        let e = s.estimates(i, 0, 11);
+        assert_eq!(e.len(), 11);
+        assert!(e.iter().all(|v| v.is_finite()));
+    }
+    let density = s.density(0, 0, 101);
+    assert_eq!(density.len(), 101);
+    assert!(density.iter().any(|v| *v > 0.0));
+    s.step(usize::MAX).unwrap();
+    assert!(s.finished());
+}
+
+#[wasm_bindgen_test]
+fn invalid_configs_are_errors_not_panics() {
+    let not_a_config = JsValue::from_str("hello");
+    assert!(Session::new(not_a_config, None).is_err());
+    let mut p = presets::preset("yau-2d").unwrap();
+    p.model.drift[0] = "cos(x1".into();
+    let js = serde_wasm_bindgen::to_value(&p).unwrap();
+    let e = message(Session::new(js.clone(), None).err().unwrap());
+    assert!(
+        e.contains("model.drift[0]") && e.contains("position 3"),
+        "{e}"
+    );
+    let problems = validate_scenario(js).unwrap();
+    let problems: Vec<zakai::scenario::ConfigProblem> =
+        serde_wasm_bindgen::from_value(problems).unwrap();
+    assert_eq!(problems.len(), 1);
+    assert!(Session::new(config_js("yau-2d"), Some(-1.0)).is_err());
+    assert!(Session::new(config_js("yau-2d"), Some(0.5)).is_err());
+}
+
+#[wasm_bindgen_test]
+fn the_same_seed_gives_the_same_truth_and_reset_changes_it() {
+    let mut a = Session::new(config_js("yau-2d"), Some(11.0)).unwrap();
+    let mut b = Session::new(config_js("yau-2d"), Some(11.0)).unwrap();
+    a.step(usize::MAX).unwrap();
+    b.step(usize::MAX).unwrap();
+    let ta = a.truth(0, usize::MAX);
+    assert_eq!(ta, b.truth(0, usize::MAX));
+    b.reset(12.0).unwrap();
+    b.step(usize::MAX).unwrap();
+    assert_ne!(ta, b.truth(0, usize::MAX));
+}

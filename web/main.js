@@ -1,0 +1,561 @@
+// The Zakai playground page: a parameter form over one ScenarioConfig, a Web Worker that owns
+// the wasm Session, and live plots (uPlot) of truth, estimates and posterior densities.
+import uPlot from './node_modules/uplot/dist/uPlot.esm.js';
+
+const $ = (id) => document.getElementById(id);
+const COLORS = ['#2450b3', '#d9480f', '#2b8a3e', '#ae3ec9', '#e8590c', '#0b7285', '#c2255c', '#5c940d', '#364fc7', '#862e9c'];
+const PARAMS = {
+  kalman: [],
+  ekf: [['substeps', 'int']],
+  ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
+  pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
+};
+const DENSITY_POINTS = 200;
+
+const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+const state = {
+  presets: [],
+  methodKinds: [],
+  base: null, // the preset or loaded scenario the form edits
+  methodRows: [], // [{enabled, config}]
+  info: null,
+  playing: false,
+  queue: [],
+  validateId: 0,
+  data: null,
+  fps: 0,
+  lastFrameTimes: [],
+};
+window.zakaiPage = state; // for the end-to-end tests
+
+// ---------- form <-> ScenarioConfig ----------
+
+function parseJSONField(text, fallback) {
+  const t = text.trim();
+  if (t === '') return fallback;
+  try {
+    return JSON.parse(t);
+  } catch (e) {
+    return { __invalid: `not valid JSON: ${e.message}` };
+  }
+}
+
+function parseList(text) {
+  const t = text.trim();
+  if (t === '') return null;
+  return t.split(',').map((s) => Number(s.trim()));
+}
+
+function exprInputs(container, label, field, values) {
+  container.innerHTML = '';
+  values.forEach((v, i) => {
+    const l = document.createElement('label');
+    l.textContent = `${label}${values.length > 1 ? i + 1 : ''}(x) = `;
+    const input = document.createElement('input');
+    input.value = v;
+    input.dataset.field = `${field}[${i}]`;
+    input.addEventListener('input', scheduleValidate);
+    l.appendChild(input);
+    const err = document.createElement('span');
+    err.className = 'error';
+    err.dataset.error = `${field}[${i}]`;
+    container.append(l, err);
+  });
+}
+
+function domainInputs(domain) {
+  const c = $('domain');
+  c.innerHTML = '<label>domain (lower, upper per component; grid methods and density plots live here)</label>';
+  domain.forEach((b, i) => {
+    const row = document.createElement('div');
+    row.className = 'row';
+    row.innerHTML = `<span>x${i + 1}</span><input type="number" step="any" data-field="domain[${i}]" data-bound="0" value="${b[0]}"><input type="number" step="any" data-field="domain[${i}]" data-bound="1" value="${b[1]}">`;
+    const err = document.createElement('span');
+    err.className = 'error';
+    err.dataset.error = `domain[${i}]`;
+    c.append(row, err);
+  });
+  c.querySelectorAll('input').forEach((el) => el.addEventListener('input', scheduleValidate));
+}
+
+function methodRowsUI() {
+  const c = $('methods');
+  c.innerHTML = '';
+  state.methodRows.forEach((row, i) => {
+    const div = document.createElement('div');
+    div.className = 'method-row';
+    const params = PARAMS[row.config.method] ?? [];
+    div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
+      <div class="params">${params.map(([p]) => `<label>${p}<input type="number" step="any" data-row="${i}" data-param="${p}" value="${row.config[p] ?? ''}"></label>`).join('')}</div>
+      <span class="error" data-method-row="${i}"></span>`;
+    c.appendChild(div);
+  });
+  c.querySelectorAll('.enable').forEach((el) => el.addEventListener('change', () => {
+    state.methodRows[el.dataset.row].enabled = el.checked;
+    scheduleValidate();
+  }));
+  c.querySelectorAll('.remove').forEach((el) => el.addEventListener('click', () => {
+    state.methodRows.splice(Number(el.dataset.row), 1);
+    methodRowsUI();
+    scheduleValidate();
+  }));
+  c.querySelectorAll('input[data-param]').forEach((el) => el.addEventListener('input', scheduleValidate));
+}
+
+function showPriorKind(kind) {
+  for (const k of ['gaussian', 'mixture', 'density']) {
+    document.querySelectorAll(`.prior-${k}`).forEach((el) => { el.style.display = k === kind ? '' : 'none'; });
+  }
+}
+
+function showNoiseKind(kind) {
+  $('noise-cov-label').style.display = kind === 'continuous' ? '' : 'none';
+  $('noise-mix-label').style.display = kind === 'discrete' ? '' : 'none';
+}
+
+function fillForm(config) {
+  state.base = structuredClone(config);
+  const n = config.model.drift.length;
+  $('dim').value = n;
+  exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
+  exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
+  $('diffusion').value = config.model.diffusion ? JSON.stringify(config.model.diffusion) : '';
+  const noise = config.model.noise;
+  $('noise-kind').value = noise.kind;
+  $('noise-cov').value = noise.kind === 'continuous' && noise.cov ? JSON.stringify(noise.cov) : '';
+  $('noise-mix').value = noise.kind === 'discrete' ? JSON.stringify(noise.mixture) : '[{"weight": 1, "mean": [0], "cov": [[1]]}]';
+  showNoiseKind(noise.kind);
+  const prior = config.prior;
+  $('prior-kind').value = prior.kind;
+  $('prior-mean').value = prior.kind === 'gaussian' ? prior.mean.join(', ') : Array(n).fill(0).join(', ');
+  $('prior-cov').value = prior.kind === 'gaussian' ? JSON.stringify(prior.cov) : JSON.stringify(identity(n));
+  $('prior-mix').value = prior.kind === 'mixture' ? JSON.stringify(prior.components) : '';
+  $('prior-expr').value = prior.kind === 'density' ? prior.expression : '';
+  showPriorKind(prior.kind);
+  $('x0').value = config.initial_state ? config.initial_state.join(', ') : '';
+  domainInputs(config.domain);
+  $('t-final').value = config.time.t_final;
+  $('dt-obs').value = config.time.dt_obs;
+  $('inner').value = config.time.inner_steps;
+  $('seed').value = config.seed;
+  state.methodRows = config.methods.map((m) => ({ enabled: true, config: structuredClone(m) }));
+  methodRowsUI();
+  $('description').textContent = config.description;
+  $('reference').textContent = config.reference ? `Source: ${config.reference}` : '';
+}
+
+function identity(n) {
+  return Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
+}
+
+function readForm() {
+  const c = structuredClone(state.base);
+  const values = (id) => [...$(id).querySelectorAll('input')].map((el) => el.value);
+  c.model.drift = values('drift');
+  c.model.observation = values('observation');
+  c.model.diffusion = parseJSONField($('diffusion').value, null);
+  if ($('noise-kind').value === 'continuous') {
+    c.model.noise = { kind: 'continuous', cov: parseJSONField($('noise-cov').value, null) };
+  } else {
+    c.model.noise = { kind: 'discrete', mixture: parseJSONField($('noise-mix').value, []) };
+  }
+  const kind = $('prior-kind').value;
+  if (kind === 'gaussian') {
+    c.prior = { kind, mean: parseList($('prior-mean').value) ?? [], cov: parseJSONField($('prior-cov').value, []) };
+  } else if (kind === 'mixture') {
+    c.prior = { kind, components: parseJSONField($('prior-mix').value, []) };
+  } else {
+    c.prior = { kind, expression: $('prior-expr').value };
+  }
+  c.initial_state = parseList($('x0').value);
+  const domain = [];
+  $('domain').querySelectorAll('input').forEach((el) => {
+    const i = Number(el.dataset.field.match(/\d+/)[0]);
+    domain[i] = domain[i] ?? [0, 0];
+    domain[i][Number(el.dataset.bound)] = Number(el.value);
+  });
+  c.domain = domain;
+  c.time = { t_final: Number($('t-final').value), dt_obs: Number($('dt-obs').value), inner_steps: Number($('inner').value) };
+  c.seed = Number($('seed').value);
+  $('methods').querySelectorAll('input[data-param]').forEach((el) => {
+    const row = state.methodRows[el.dataset.row];
+    const spec = PARAMS[row.config.method].find(([p]) => p === el.dataset.param);
+    row.config[el.dataset.param] = spec[1] === 'int' ? Math.round(Number(el.value)) : Number(el.value);
+  });
+  state.enabledRows = state.methodRows.map((r, i) => (r.enabled ? i : -1)).filter((i) => i >= 0);
+  c.methods = state.enabledRows.map((i) => state.methodRows[i].config);
+  return c;
+}
+
+// Local problems the wasm validator cannot see (JSON typed into text fields).
+function localProblems(config) {
+  const problems = [];
+  const check = (value, field) => {
+    if (value && value.__invalid) problems.push({ field, message: value.__invalid });
+  };
+  check(config.model.diffusion, 'model.diffusion');
+  check(config.model.noise.cov, 'model.noise.cov');
+  check(config.model.noise.mixture, 'model.noise.mixture');
+  check(config.prior.cov, 'prior.cov');
+  check(config.prior.components, 'prior.components');
+  if (config.initial_state && config.initial_state.some((v) => Number.isNaN(v))) {
+    problems.push({ field: 'initial_state', message: 'needs comma-separated numbers' });
+  }
+  if (config.prior.mean && config.prior.mean.some((v) => Number.isNaN(v))) {
+    problems.push({ field: 'prior.mean', message: 'needs comma-separated numbers' });
+  }
+  if (!Number.isInteger(config.seed) || config.seed < 0) {
+    problems.push({ field: 'seed', message: 'must be a nonnegative integer' });
+  }
+  return problems;
+}
+
+function showProblems(problems) {
+  document.querySelectorAll('[data-error], [data-method-row]').forEach((el) => { el.textContent = ''; });
+  document.querySelectorAll('.invalid').forEach((el) => el.classList.remove('invalid'));
+  const general = [];
+  for (const p of problems) {
+    let field = p.field;
+    const m = field.match(/^methods\[(\d+)\]/);
+    if (m) {
+      const row = state.enabledRows[Number(m[1])];
+      const el = document.querySelector(`[data-method-row="${row}"]`);
+      if (el) {
+        el.textContent += `${field.slice(m[0].length + 1) || 'method'}: ${p.message}\n`;
+        continue;
+      }
+    }
+    // Most specific error slot whose field is a prefix of the problem's field.
+    let target = null;
+    while (field && !target) {
+      target = document.querySelector(`[data-error="${CSS.escape(field)}"]`);
+      if (!target) field = field.replace(/(\[\d+\]|\.[^.[\]]+)$/, '');
+    }
+    if (target) {
+      target.textContent += (target.textContent ? '\n' : '') + p.message;
+      document.querySelectorAll(`[data-field="${CSS.escape(field)}"]`).forEach((el) => el.classList.add('invalid'));
+    } else {
+      general.push(`${p.field || 'scenario'}: ${p.message}`);
+    }
+  }
+  $('general-error').textContent = general.join('\n');
+  $('form-status').textContent = problems.length ? `${problems.length} problem(s)` : 'valid';
+}
+
+let validateTimer = null;
+function scheduleValidate() {
+  clearTimeout(validateTimer);
+  validateTimer = setTimeout(validate, 150);
+}
+
+function validate() {
+  const config = readForm();
+  const local = localProblems(config);
+  if (local.length) {
+    showProblems(local);
+    return;
+  }
+  state.validateId += 1;
+  worker.postMessage({ type: 'validate', id: state.validateId, config });
+}
+
+function apply() {
+  const config = readForm();
+  const local = localProblems(config);
+  if (local.length) {
+    showProblems(local);
+    return;
+  }
+  setPlaying(false);
+  worker.postMessage({ type: 'load', config, seed: config.seed });
+  state.pendingConfig = config;
+}
+
+function changeDimension() {
+  const n = Math.max(1, Math.min(8, Number($('dim').value) | 0));
+  const c = readForm();
+  const resize = (arr, fill) => Array.from({ length: n }, (_, i) => arr[i] ?? fill(i));
+  c.model.drift = resize(c.model.drift, () => '0');
+  c.domain = resize(c.domain, () => [-5, 5]);
+  if (c.prior.kind === 'gaussian') {
+    c.prior.mean = resize(c.prior.mean, () => 0);
+    c.prior.cov = identity(n).map((row, i) => row.map((v, j) => c.prior.cov?.[i]?.[j] ?? v));
+  }
+  if (c.initial_state) c.initial_state = resize(c.initial_state, () => 0);
+  c.model.diffusion = null;
+  c.methods = state.methodRows.map((r) => r.config);
+  const rows = state.methodRows;
+  fillForm(c);
+  state.methodRows = rows;
+  methodRowsUI();
+  scheduleValidate();
+}
+
+// ---------- plots ----------
+
+function makePlots(info) {
+  const n = info.n;
+  $('component').innerHTML = Array.from({ length: n }, (_, i) => `<option value="${i}">x${i + 1}</option>`).join('');
+  $('density-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
+  // The richest density by default: the last particle filter, else the first method.
+  const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
+  $('density-method').value = String(pf ?? 0);
+  $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;
+  const empty = () => ({ times: [], truth: Array.from({ length: n }, () => []), est: info.methods.map(() => Array.from({ length: n }, () => [])) });
+  state.data = empty();
+  state.heatX = 0;
+  const width = $('trajectory-plot').clientWidth || 800;
+  const series = [{}, { label: 'truth', stroke: '#111', width: 2 }];
+  info.methods.forEach((m, i) => series.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
+  state.trajPlot?.destroy();
+  state.trajPlot = new uPlot({
+    width, height: 280, series, scales: { x: { time: false } },
+    axes: [{ label: 't' }, { label: 'x' }],
+  }, [[], [], ...info.methods.map(() => [])], $('trajectory-plot'));
+  const dseries = [{}];
+  info.methods.forEach((m, i) => dseries.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
+  state.densityPlot?.destroy();
+  state.densityPlot = new uPlot({
+    width: ($('density-plot').clientWidth || 360), height: 200, series: dseries, scales: { x: { time: false } },
+    legend: { show: false },
+    axes: [{ label: 'x' }, {}],
+    hooks: { draw: [(u) => drawTruthMarker(u)] },
+  }, [[], ...info.methods.map(() => [])], $('density-plot'));
+  const heat = $('heat');
+  heat.getContext('2d').clearRect(0, 0, heat.width, heat.height);
+  $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
+  $('heat-legend').title = '0 → maximum density at each time';
+  $('metrics').querySelector('tbody').innerHTML = info.methods.map((m, i) => `<tr data-method="${i}"><td><span class="swatch" style="background:${COLORS[i % COLORS.length]}"></span>${m}</td><td class="mse">–</td><td class="status">running</td><td class="time">–</td></tr>`).join('');
+  worker.postMessage({ type: 'view', view: { dim: 0, points: DENSITY_POINTS, densityMethod: 0 } });
+}
+
+function drawTruthMarker(u) {
+  const d = state.data;
+  if (!d || d.times.length === 0) return;
+  const dim = Number($('component').value) || 0;
+  const x = d.truth[dim][d.truth[dim].length - 1];
+  const px = u.valToPos(x, 'x', true);
+  const ctx = u.ctx;
+  ctx.save();
+  ctx.strokeStyle = '#111';
+  ctx.setLineDash([4, 3]);
+  ctx.beginPath();
+  ctx.moveTo(px, u.bbox.top);
+  ctx.lineTo(px, u.bbox.top + u.bbox.height);
+  ctx.stroke();
+  ctx.restore();
+}
+
+// A perceptually ordered blue → green → yellow scale (viridis-like stops).
+const STOPS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+function colormap(v) {
+  const x = Math.max(0, Math.min(1, v)) * (STOPS.length - 1);
+  const i = Math.min(STOPS.length - 2, Math.floor(x));
+  const f = x - i;
+  return STOPS[i].map((c, k) => Math.round(c + f * (STOPS[i + 1][k] - c)));
+}
+const rgb = (c) => `rgb(${c[0]},${c[1]},${c[2]})`;
+
+function drawHeatColumns(frame) {
+  const canvas = $('heat');
+  const ctx = canvas.getContext('2d');
+  const info = state.info;
+  const method = Number($('density-method').value) || 0;
+  const dens = frame.densities[method];
+  if (!dens || dens.length === 0 || frame.to <= frame.from) return;
+  const T = info.steps * info.dt_obs;
+  // Columns from the end of the previous frame to this frame's last time: no gaps.
+  const x0 = Math.min(state.heatX ?? 0, canvas.width - 1);
+  const x1 = Math.max(x0 + 1, Math.ceil((frame.times[frame.times.length - 1] / T) * canvas.width));
+  state.heatX = x1;
+  let max = 0;
+  for (const v of dens) max = Math.max(max, v);
+  const h = canvas.height;
+  const img = ctx.createImageData(x1 - x0, h);
+  for (let y = 0; y < h; y++) {
+    const gi = Math.min(dens.length - 1, Math.floor(((h - 1 - y) / (h - 1)) * (dens.length - 1) + 0.5));
+    const c = colormap(max > 0 ? dens[gi] / max : 0);
+    for (let x = 0; x < x1 - x0; x++) {
+      const o = 4 * (y * (x1 - x0) + x);
+      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
+    }
+  }
+  ctx.putImageData(img, x0, 0);
+  // The truth as white dots.
+  const dim = Number($('component').value) || 0;
+  const [lo, hi] = info.domain[dim];
+  ctx.fillStyle = '#fff';
+  const n = info.n;
+  for (let r = 0; r < frame.times.length; r++) {
+    const px = (frame.times[r] / T) * canvas.width;
+    const py = h - ((frame.truth[r * n + dim] - lo) / (hi - lo)) * h;
+    ctx.fillRect(px - 1, py - 1, 2, 2);
+  }
+}
+
+function applyFrame(frame) {
+  const d = state.data;
+  const info = state.info;
+  const n = info.n;
+  const rows = frame.to - frame.from;
+  for (let r = 0; r < rows; r++) {
+    d.times.push(frame.times[r]);
+    for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
+    frame.estimates.forEach((e, i) => {
+      const have = e.length / n;
+      for (let j = 0; j < n; j++) d.est[i][j].push(r < have ? e[r * n + j] : null);
+    });
+  }
+  state.lastDensity = frame;
+  drawHeatColumns(frame);
+  state.diagnostics = frame.diagnostics;
+  state.summary = frame.summary;
+  for (const f of frame.summary.failures) {
+    $('run-error').textContent = `${info.methods[f.method]} failed at step ${f.k}: ${f.message}`;
+  }
+}
+
+function render() {
+  const d = state.data;
+  if (!d) return;
+  const dim = Number($('component').value) || 0;
+  state.trajPlot.setData([d.times, d.truth[dim], ...d.est.map((e) => e[dim])]);
+  const f = state.lastDensity;
+  if (f && f.grid.length) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
+  const t = d.times.length ? d.times[d.times.length - 1] : 0;
+  $('clock').textContent = `t = ${t.toFixed(2)} / ${(state.info.steps * state.info.dt_obs).toFixed(2)}`;
+  const tbody = $('metrics').querySelector('tbody');
+  (state.diagnostics ?? []).forEach((m, i) => {
+    const tr = tbody.querySelector(`tr[data-method="${i}"]`);
+    if (!tr) return;
+    tr.querySelector('.mse').textContent = m.mse == null ? '—' : m.mse.toFixed(4);
+    const status = tr.querySelector('.status');
+    status.textContent = m.failed ? `failed at step ${m.failed_at}` : 'running';
+    status.title = m.failure ?? '';
+    status.className = m.failed ? 'status failed' : 'status';
+    tr.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
+  });
+  if (state.summary?.finished) setPlaying(false);
+}
+
+function setPlaying(p) {
+  state.playing = p;
+  $('play').textContent = p ? '❚❚ pause' : '▶ play';
+  worker.postMessage({ type: p ? 'play' : 'pause' });
+}
+
+function loop(ts) {
+  state.lastFrameTimes.push(ts);
+  while (state.lastFrameTimes.length && ts - state.lastFrameTimes[0] > 1000) state.lastFrameTimes.shift();
+  state.fps = state.lastFrameTimes.length;
+  $('fps').textContent = `${state.fps} fps`;
+  if (state.queue.length) {
+    const frames = state.queue.splice(0);
+    frames.forEach(applyFrame);
+    render();
+    worker.postMessage({ type: 'ack' });
+  }
+  requestAnimationFrame(loop);
+}
+
+// ---------- wiring ----------
+
+worker.onmessage = ({ data }) => {
+  switch (data.type) {
+    case 'ready': {
+      state.presets = data.presets;
+      state.methodKinds = data.methods;
+      $('preset').innerHTML = data.presets.map((p) => `<option value="${p.name}">${p.name} — ${p.title}</option>`).join('');
+      $('add-method-kind').innerHTML = data.methods.map(([k, about]) => `<option value="${k}" title="${about}">${k}</option>`).join('');
+      state.randomSeed = data.seed;
+      const wanted = new URLSearchParams(location.search).get('preset');
+      const preset = data.presets.find((p) => p.name === wanted) ?? data.presets[0];
+      $('preset').value = preset.name;
+      fillForm(preset);
+      apply();
+      break;
+    }
+    case 'validated':
+      if (data.id === state.validateId) showProblems(data.problems);
+      break;
+    case 'loaded':
+      state.info = data.info;
+      if (state.pendingConfig) {
+        state.base = state.pendingConfig;
+        state.pendingConfig = null;
+      }
+      $('run-error').textContent = '';
+      showProblems([]);
+      makePlots(data.info);
+      break;
+    case 'frame':
+      state.queue.push(data);
+      break;
+    case 'seed':
+      $('seed').value = data.seed;
+      break;
+    case 'error':
+      // The previous session (if any) keeps running; the message goes next to the form.
+      state.pendingConfig = null;
+      setPlaying(false);
+      $('general-error').textContent = data.message;
+      $('form-status').textContent = 'not applied';
+      validate();
+      break;
+  }
+};
+
+$('preset').addEventListener('change', () => {
+  const p = state.presets.find((x) => x.name === $('preset').value);
+  fillForm(p);
+  apply();
+});
+$('apply').addEventListener('click', apply);
+$('play').addEventListener('click', () => setPlaying(!state.playing));
+$('step').addEventListener('click', () => { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); });
+$('reset').addEventListener('click', apply);
+$('speed').addEventListener('input', () => {
+  $('speed-value').textContent = $('speed').value;
+  worker.postMessage({ type: 'speed', value: Number($('speed').value) });
+});
+$('component').addEventListener('change', () => {
+  const dim = Number($('component').value);
+  worker.postMessage({ type: 'view', view: { dim } });
+  const [lo, hi] = state.info.domain[dim];
+  $('heat-range').textContent = `x${dim + 1} ∈ [${lo}, ${hi}] bottom → top`;
+  render();
+});
+$('density-method').addEventListener('change', () => render());
+$('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
+$('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); scheduleValidate(); });
+$('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); scheduleValidate(); });
+$('dim').addEventListener('change', changeDimension);
+$('add-h').addEventListener('click', () => {
+  const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
+  exprInputs($('observation'), 'h', 'model.observation', [...values, 'x1']);
+  scheduleValidate();
+});
+$('remove-h').addEventListener('click', () => {
+  const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
+  if (values.length > 1) exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
+  scheduleValidate();
+});
+$('add-method').addEventListener('click', () => {
+  const key = $('add-method-kind').value;
+  const defaults = { kalman: {}, ekf: { substeps: 4 }, ukf: { alpha: 0.5, beta: 2, kappa: 0, substeps: 4 }, pf: { particles: 500, ess_threshold: 0.5, substeps: 1 } };
+  state.methodRows.push({ enabled: true, config: { method: key, ...defaults[key] } });
+  methodRowsUI();
+  scheduleValidate();
+});
+for (const id of ['diffusion', 'noise-cov', 'noise-mix', 'prior-mean', 'prior-cov', 'prior-mix', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed']) {
+  $(id).addEventListener('input', scheduleValidate);
+}
+document.addEventListener('keydown', (e) => {
+  if (['INPUT', 'TEXTAREA', 'SELECT'].includes(document.activeElement?.tagName)) return;
+  if (e.key === ' ') { e.preventDefault(); setPlaying(!state.playing); }
+  if (e.key === 'ArrowRight') { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); }
+  if (e.key === 'r') apply();
+});
+
+worker.postMessage({ type: 'init' });
+requestAnimationFrame(loop);

@@ -1,0 +1,111 @@
+// The Zakai session lives here, off the main thread: the page stays responsive however long
+// a step takes. Protocol (main → worker): init, validate, load, play, pause, step, reset,
+// speed, view, ack. Worker → main: ready, validated, loaded, frame, error.
+import init, * as zakai from './pkg/zakai_wasm.js';
+
+let session = null;
+let info = null;
+let playing = false;
+let speed = 5;
+let awaitingAck = false;
+let view = { dim: 0, points: 200, densityMethod: 0 };
+let sent = 0; // rows already sent to the page
+
+const post = (msg, transfer = []) => self.postMessage(msg, transfer);
+
+function frame(summary) {
+  const to = session.position();
+  const from = sent;
+  const times = session.times(from, to);
+  const truth = session.truth(from, to);
+  const estimates = info.methods.map((_, i) => session.estimates(i, from, to));
+  const grid = session.densityGrid(view.dim, view.points);
+  const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
+  const diagnostics = session.diagnostics();
+  sent = to;
+  const transfer = [times.buffer, truth.buffer, grid.buffer,
+    ...estimates.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
+  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, summary }, transfer);
+}
+
+function tick() {
+  if (!playing || !session || awaitingAck) return;
+  const summary = session.step(speed);
+  awaitingAck = true;
+  frame(summary);
+  if (summary.finished) {
+    playing = false;
+  }
+}
+
+function guard(fn) {
+  try {
+    fn();
+  } catch (e) {
+    playing = false;
+    post({ type: 'error', message: String(e?.message ?? e) });
+  }
+}
+
+self.onmessage = async ({ data }) => {
+  switch (data.type) {
+    case 'init':
+      await init();
+      post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed() });
+      break;
+    case 'validate':
+      guard(() => post({ type: 'validated', id: data.id, problems: zakai.validateScenario(data.config) }));
+      break;
+    case 'load':
+      guard(() => {
+        const next = new zakai.Session(data.config, data.seed);
+        session?.free();
+        session = next;
+        info = session.info();
+        playing = false;
+        awaitingAck = false;
+        sent = 0;
+        post({ type: 'loaded', info });
+        frame(session.step(0));
+      });
+      break;
+    case 'reset':
+      guard(() => {
+        session.reset(data.seed);
+        info = session.info();
+        playing = false;
+        awaitingAck = false;
+        sent = 0;
+        post({ type: 'loaded', info });
+        frame(session.step(0));
+      });
+      break;
+    case 'play':
+      playing = true;
+      tick();
+      break;
+    case 'pause':
+      playing = false;
+      break;
+    case 'step':
+      guard(() => {
+        playing = false;
+        awaitingAck = true;
+        frame(session.step(data.k ?? 1));
+      });
+      break;
+    case 'speed':
+      speed = Math.max(1, Math.min(10000, data.value | 0));
+      break;
+    case 'view':
+      view = { ...view, ...data.view };
+      break;
+    case 'ack':
+      awaitingAck = false;
+      guard(tick);
+      break;
+    case 'randomSeed':
+      post({ type: 'seed', seed: zakai.randomSeed() });
+      break;
+  }
+};
