@@ -148,7 +148,7 @@ pub struct Session {
 }
 
 fn seed_from_js(seed: f64) -> Result<u64, JsError> {
-    if seed.is_finite() && seed >= 0.0 && seed <= 9_007_199_254_740_991.0 && seed.fract() == 0.0 {
+    if (0.0..=9_007_199_254_740_991.0).contains(&seed) && seed.fract() == 0.0 {
         Ok(seed as u64)
     } else {
         Err(js_error(format!(
