@@ -11,6 +11,7 @@ const PARAMS = {
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
 };
 const DENSITY_POINTS = 200;
+const PARAM_LABELS = { ess_threshold: 'ESS frac.' };
 
 const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
 const state = {
@@ -86,7 +87,7 @@ function methodRowsUI() {
     div.className = 'method-row';
     const params = PARAMS[row.config.method] ?? [];
     div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
-      <div class="params">${params.map(([p]) => `<label>${p}<input type="number" step="any" data-row="${i}" data-param="${p}" value="${row.config[p] ?? ''}"></label>`).join('')}</div>
+      <div class="params">${params.map(([p]) => `<label>${PARAM_LABELS[p] ?? p}<input type="number" step="any" data-row="${i}" data-param="${p}" value="${row.config[p] ?? ''}"></label>`).join('')}</div>
       <span class="error" data-method-row="${i}"></span>`;
     c.appendChild(div);
   });
@@ -365,22 +366,13 @@ function drawHeatColumns(frame) {
   if (!dens || dens.length === 0 || frame.to <= frame.from) return;
   const T = info.steps * info.dt_obs;
   // Columns from the end of the previous frame to this frame's last time: no gaps.
-  const x0 = Math.min(state.heatX ?? 0, canvas.width - 1);
-  const x1 = Math.max(x0 + 1, Math.ceil((frame.times[frame.times.length - 1] / T) * canvas.width));
-  state.heatX = x1;
-  let max = 0;
-  for (const v of dens) max = Math.max(max, v);
+  const x0 = state.heatX ?? 0;
+  const x1 = Math.min(canvas.width, Math.ceil((frame.times[frame.times.length - 1] / T) * canvas.width));
   const h = canvas.height;
-  const img = ctx.createImageData(x1 - x0, h);
-  for (let y = 0; y < h; y++) {
-    const gi = Math.min(dens.length - 1, Math.floor(((h - 1 - y) / (h - 1)) * (dens.length - 1) + 0.5));
-    const c = colormap(max > 0 ? dens[gi] / max : 0);
-    for (let x = 0; x < x1 - x0; x++) {
-      const o = 4 * (y * (x1 - x0) + x);
-      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
-    }
+  if (x1 > x0) {
+    state.heatX = x1;
+    drawColumns(ctx, dens, x0, x1, h);
   }
-  ctx.putImageData(img, x0, 0);
   // The truth as white dots.
   const dim = Number($('component').value) || 0;
   const [lo, hi] = info.domain[dim];
@@ -391,6 +383,21 @@ function drawHeatColumns(frame) {
     const py = h - ((frame.truth[r * n + dim] - lo) / (hi - lo)) * h;
     ctx.fillRect(px - 1, py - 1, 2, 2);
   }
+}
+
+function drawColumns(ctx, dens, x0, x1, h) {
+  let max = 0;
+  for (const v of dens) max = Math.max(max, v);
+  const img = ctx.createImageData(x1 - x0, h);
+  for (let y = 0; y < h; y++) {
+    const gi = Math.min(dens.length - 1, Math.floor(((h - 1 - y) / (h - 1)) * (dens.length - 1) + 0.5));
+    const c = colormap(max > 0 ? dens[gi] / max : 0);
+    for (let x = 0; x < x1 - x0; x++) {
+      const o = 4 * (y * (x1 - x0) + x);
+      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
+    }
+  }
+  ctx.putImageData(img, x0, 0);
 }
 
 function applyFrame(frame) {
