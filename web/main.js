@@ -10,7 +10,7 @@ const PARAMS = {
   ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
 };
-const DENSITY_POINTS = 200;
+const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = { ess_threshold: 'ESS frac.' };
 
 const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
@@ -327,7 +327,7 @@ function makePlots(info) {
   $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   $('heat-legend').title = '0 → maximum density at each time';
   $('metrics').querySelector('tbody').innerHTML = info.methods.map((m, i) => `<tr data-method="${i}"><td><span class="swatch" style="background:${COLORS[i % COLORS.length]}"></span>${m}</td><td class="mse">–</td><td class="status">running</td><td class="time">–</td></tr>`).join('');
-  worker.postMessage({ type: 'view', view: { dim: 0, points: DENSITY_POINTS, densityMethod: 0 } });
+  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: 0 } });
 }
 
 function drawTruthMarker(u) {
@@ -533,6 +533,7 @@ $('component').addEventListener('change', () => {
   render();
 });
 $('density-method').addEventListener('change', () => render());
+$('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
 $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); scheduleValidate(); });
 $('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); scheduleValidate(); });
