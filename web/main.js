@@ -9,9 +9,29 @@ const PARAMS = {
   ekf: [['substeps', 'int']],
   ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
+  qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
+  iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
+};
+const DEFAULTS = {
+  kalman: {},
+  ekf: { substeps: 4 },
+  ukf: { alpha: 0.5, beta: 2, kappa: 0, substeps: 4 },
+  pf: { particles: 500, ess_threshold: 0.5, substeps: 1 },
+  qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
+  iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
-const PARAM_LABELS = { ess_threshold: 'ESS frac.' };
+const PARAM_LABELS = { ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt' };
+
+function paramInput(row, i, name, type) {
+  const value = row.config[name];
+  if (type.startsWith('enum:')) {
+    const options = type.slice(5).split('|');
+    return `<select data-row="${i}" data-param="${name}">${options.map((o) => `<option ${o === (value ?? options[0]) ? 'selected' : ''}>${o}</option>`).join('')}</select>`;
+  }
+  const shown = type === 'intlist' ? (value ?? []).join(', ') : (value ?? '');
+  return `<input type="${type === 'intlist' ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}">`;
+}
 
 const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
 const state = {
@@ -87,7 +107,7 @@ function methodRowsUI() {
     div.className = 'method-row';
     const params = PARAMS[row.config.method] ?? [];
     div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
-      <div class="params">${params.map(([p]) => `<label>${PARAM_LABELS[p] ?? p}<input type="number" step="any" data-row="${i}" data-param="${p}" value="${row.config[p] ?? ''}"></label>`).join('')}</div>
+      <div class="params">${params.map(([p, type]) => `<label>${PARAM_LABELS[p] ?? p}${paramInput(row, i, p, type)}</label>`).join('')}</div>
       <span class="error" data-method-row="${i}"></span>`;
     c.appendChild(div);
   });
@@ -100,7 +120,7 @@ function methodRowsUI() {
     methodRowsUI();
     scheduleValidate();
   }));
-  c.querySelectorAll('input[data-param]').forEach((el) => el.addEventListener('input', scheduleValidate));
+  c.querySelectorAll('[data-param]').forEach((el) => el.addEventListener('input', scheduleValidate));
 }
 
 function showPriorKind(kind) {
@@ -178,10 +198,15 @@ function readForm() {
   c.domain = domain;
   c.time = { t_final: Number($('t-final').value), dt_obs: Number($('dt-obs').value), inner_steps: Number($('inner').value) };
   c.seed = Number($('seed').value);
-  $('methods').querySelectorAll('input[data-param]').forEach((el) => {
+  $('methods').querySelectorAll('[data-param]').forEach((el) => {
     const row = state.methodRows[el.dataset.row];
-    const spec = PARAMS[row.config.method].find(([p]) => p === el.dataset.param);
-    row.config[el.dataset.param] = spec[1] === 'int' ? Math.round(Number(el.value)) : Number(el.value);
+    const type = PARAMS[row.config.method].find(([p]) => p === el.dataset.param)[1];
+    let v;
+    if (type === 'int') v = Math.round(Number(el.value));
+    else if (type === 'intlist') v = el.value.split(',').map((x) => Math.round(Number(x.trim())));
+    else if (type.startsWith('enum:')) v = el.value;
+    else v = Number(el.value);
+    row.config[el.dataset.param] = v;
   });
   state.enabledRows = state.methodRows.map((r, i) => (r.enabled ? i : -1)).filter((i) => i >= 0);
   c.methods = state.enabledRows.map((i) => state.methodRows[i].config);
@@ -298,9 +323,10 @@ function makePlots(info) {
   const n = info.n;
   $('component').innerHTML = Array.from({ length: n }, (_, i) => `<option value="${i}">x${i + 1}</option>`).join('');
   $('density-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
-  // The richest density by default: the last particle filter, else the first method.
+  // The richest density by default: a grid filter, else the last particle filter, else the first.
+  const grid = info.methods.findIndex((m) => m.startsWith('QIEM') || m.startsWith('IEM'));
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
-  $('density-method').value = String(pf ?? 0);
+  $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
   $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;
   const empty = () => ({ times: [], truth: Array.from({ length: n }, () => []), est: info.methods.map(() => Array.from({ length: n }, () => [])) });
   state.data = empty();
@@ -442,6 +468,8 @@ function render() {
     status.className = m.failed ? 'status failed' : 'status';
     tr.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
   });
+  const warnings = (state.diagnostics ?? []).flatMap((m) => m.warnings.map((w) => `${m.name}: ${w}`));
+  $('warnings').textContent = warnings.join('\n');
   if (state.summary?.finished) setPlaying(false);
 }
 
@@ -550,8 +578,7 @@ $('remove-h').addEventListener('click', () => {
 });
 $('add-method').addEventListener('click', () => {
   const key = $('add-method-kind').value;
-  const defaults = { kalman: {}, ekf: { substeps: 4 }, ukf: { alpha: 0.5, beta: 2, kappa: 0, substeps: 4 }, pf: { particles: 500, ess_threshold: 0.5, substeps: 1 } };
-  state.methodRows.push({ enabled: true, config: { method: key, ...defaults[key] } });
+  state.methodRows.push({ enabled: true, config: { method: key, ...structuredClone(DEFAULTS[key] ?? {}) } });
   methodRowsUI();
   scheduleValidate();
 });

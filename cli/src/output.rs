@@ -67,8 +67,14 @@ pub fn render(
             writeln!(s)?;
             writeln!(
                 s,
-                "{:<12} {:>18} {:>8} {:>22} {:>12} {:>12}",
-                "method", "MSE (004 (43))", "failed", "MSE per component", "ms/run", "µs/step"
+                "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12} {:>12}",
+                "method",
+                "MSE (004 (43))",
+                "failed",
+                "MSE per component",
+                "RMS (000 §4.2)",
+                "ms/run",
+                "µs/step"
             )?;
             for m in &summary.methods {
                 let mse = match (m.mse, m.mse_stderr) {
@@ -85,16 +91,34 @@ pub fn render(
                             .join(" / ")
                     })
                     .unwrap_or_else(|| "—".into());
+                let rms = m
+                    .rms_components
+                    .as_ref()
+                    .map(|v| {
+                        v.iter()
+                            .map(|x| format!("{x:.4}"))
+                            .collect::<Vec<_>>()
+                            .join(" / ")
+                    })
+                    .unwrap_or_else(|| "—".into());
                 writeln!(
                     s,
-                    "{:<12} {:>18} {:>8} {:>22} {:>12.3} {:>12.2}",
+                    "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12.3} {:>12.2}",
                     m.name,
                     mse,
                     format!("{}/{}", m.failed, m.runs),
                     comps,
+                    rms,
                     m.seconds_per_run * 1e3,
                     m.seconds_per_step * 1e6
                 )?;
+            }
+            if !summary.warnings.is_empty() {
+                writeln!(s)?;
+                writeln!(s, "Warnings (guarantees of the chosen steps):")?;
+                for (method, w) in &summary.warnings {
+                    writeln!(s, "  {method}: {w}")?;
+                }
             }
             let notes: Vec<_> = summary
                 .methods

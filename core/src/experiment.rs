@@ -16,6 +16,7 @@ use crate::error::ZakaiError;
 use crate::filters::{Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
+use crate::scenario::methods::BuildContext;
 use crate::scenario::ScenarioConfig;
 use crate::simulate::{rng_from_seed, simulate, Trajectory};
 
@@ -130,6 +131,8 @@ pub struct RunResult {
     pub trajectory: Trajectory,
     /// One record per method, in the scenario's order.
     pub methods: Vec<MethodTrack>,
+    /// The methods' warnings about their parameters, as `(method, message)`.
+    pub warnings: Vec<(String, String)>,
 }
 
 impl RunResult {
@@ -197,14 +200,17 @@ impl Experiment {
         };
         let trajectory = simulate(&self.model, &x0, self.config.time_grid(), &mut rng);
         let mut filters = Vec::with_capacity(self.config.methods.len());
+        let bounds = self.config.bounds();
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
-            filters.push(method.build(
-                name.clone(),
-                &self.model,
-                &self.prior,
-                method_seed(seed, i),
-                &self.probes,
-            )?);
+            let ctx = BuildContext {
+                model: &self.model,
+                prior: &self.prior,
+                seed: method_seed(seed, i),
+                probes: &self.probes,
+                bounds: &bounds,
+                dt_obs: self.config.time.dt_obs,
+            };
+            filters.push(method.build(name.clone(), &ctx)?);
         }
         let tracks = self
             .names
@@ -277,6 +283,18 @@ impl ExperimentRun {
     pub fn tracks(&self) -> &[MethodTrack] {
         &self.tracks
     }
+    /// Every method's warnings about its parameters (violated stability or positivity
+    /// conditions), as `(method name, message)`.
+    pub fn warnings(&self) -> Vec<(String, String)> {
+        self.filters
+            .iter()
+            .flat_map(|f| {
+                let name = f.name().to_string();
+                f.warnings().into_iter().map(move |w| (name.clone(), w))
+            })
+            .collect()
+    }
+
     /// The live filters (for densities and estimates).
     pub fn filters(&self) -> &[Box<dyn Filter>] {
         &self.filters
@@ -420,6 +438,7 @@ impl ExperimentRun {
         }
         RunResult {
             seed: self.seed,
+            warnings: self.warnings(),
             trajectory: self.trajectory,
             methods: self.tracks,
         }

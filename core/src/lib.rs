@@ -47,6 +47,7 @@ extern crate std;
 pub mod error;
 pub mod experiment;
 pub mod filters;
+pub mod grid;
 pub mod linalg;
 pub mod metrics;
 pub mod model;

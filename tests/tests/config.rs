@@ -35,6 +35,7 @@ fn validation_reports_every_bad_field() {
     };
     c.domain[1] = [3.0, -3.0];
     c.time.dt_obs = -0.1;
+    let bad_method = format!("methods[{}].particles", c.methods.len());
     c.methods
         .push(MethodConfig::Pf(zakai::filters::particle::PfParams {
             particles: 0,
@@ -49,7 +50,7 @@ fn validation_reports_every_bad_field() {
         "prior.cov",
         "domain[1]",
         "time.dt_obs",
-        "methods[3].particles",
+        bad_method.as_str(),
     ] {
         assert!(
             fields.contains(&expected),

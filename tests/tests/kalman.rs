@@ -196,8 +196,17 @@ fn the_kalman_filter_refuses_a_nonlinear_model() {
 fn a_wrong_observation_is_an_error_not_a_panic() {
     let config = linear_2d(ObservationNoiseConfig::Continuous { cov: None }, 0.01);
     let experiment = Experiment::new(config).unwrap();
+    let bounds = experiment.config().bounds();
+    let ctx = zakai::scenario::methods::BuildContext {
+        model: experiment.model(),
+        prior: experiment.prior(),
+        seed: 1,
+        probes: &[],
+        bounds: &bounds,
+        dt_obs: 0.01,
+    };
     let mut filter = experiment.config().methods[1]
-        .build("EKF".into(), experiment.model(), experiment.prior(), 1, &[])
+        .build("EKF".into(), &ctx)
         .unwrap();
     let bad = [1.0];
     let obs = Observation {

@@ -123,6 +123,7 @@ struct MethodDiagnostics {
     mse: Option<f64>,
     ms_per_step: f64,
     steps: usize,
+    warnings: Vec<String>,
 }
 
 /// Static facts about the session's scenario.
@@ -289,8 +290,9 @@ impl Session {
         out
     }
 
-    /// Per method: `{name, key, failed, failure, failed_at, mse, ms_per_step, steps}`; `mse`
-    /// is 004 (43) over the rows so far.
+    /// Per method: `{name, key, failed, failure, failed_at, mse, ms_per_step, steps,
+    /// warnings}`; `mse` is 004 (43) over the rows so far; `warnings` name violated stability
+    /// or positivity conditions of the chosen steps (000 (22), (30), (31)).
     pub fn diagnostics(&self) -> Result<JsValue, JsError> {
         let methods = &self.experiment.config().methods;
         let list: Vec<MethodDiagnostics> = self
@@ -307,6 +309,7 @@ impl Session {
                 mse: self.run.running_mse(i),
                 ms_per_step: t.seconds_per_step() * 1e3,
                 steps: t.steps,
+                warnings: self.run.filters()[i].warnings(),
             })
             .collect();
         to_js(&list)

@@ -1,7 +1,9 @@
 //! Filters: one [`Filter`] trait, one module per method family.
 //!
 //! * [`kalman`] — Kalman–Bucy (exact for linear Gaussian models), EKF, UKF;
-//! * [`particle`] — the bootstrap particle filter.
+//! * [`particle`] — the bootstrap particle filter;
+//! * [`yau_fd`] — the finite-difference Yau–Yau filters of 000 (IEM, QIEM; the filters
+//!   need the `std` feature for their FFT plans).
 //!
 //! Every filter is built from a [`crate::model::Model`] plus its own parameters (a serde struct
 //! with defaults and a `validate()`), consumes the same [`Observation`]s, and exposes its
@@ -10,6 +12,10 @@
 pub mod kalman;
 pub mod marginal;
 pub mod particle;
+pub mod yau_fd;
+
+use alloc::string::String;
+use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -72,6 +78,11 @@ pub trait Filter {
     /// The current density, for grid methods; `None` otherwise.
     fn density(&self) -> Option<DensityView<'_>> {
         None
+    }
+    /// Warnings about the chosen parameters (violated stability or positivity conditions),
+    /// known before the first step.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
     }
     /// The filter's marginal density of state component `dim` at the points `grid`, written
     /// into `out` (for plots). The default is the Gaussian N(m_d, P_dd) of the estimate.

@@ -51,6 +51,8 @@ pub struct MonteCarloSummary {
     pub seed: u64,
     /// Per method, in the scenario's order.
     pub methods: Vec<MethodSummary>,
+    /// The methods' warnings about their parameters (from the first run), `(method, message)`.
+    pub warnings: Vec<(String, String)>,
 }
 
 /// The Monte Carlo runner.
@@ -184,6 +186,10 @@ impl<'a> MonteCarlo<'a> {
             runs: results.len(),
             seed,
             methods,
+            warnings: results
+                .first()
+                .map(|r| r.warnings.clone())
+                .unwrap_or_default(),
         }
     }
 }

@@ -17,6 +17,32 @@ use crate::filters::particle::{ParticleFilter, PfParams};
 use crate::filters::Filter;
 use crate::model::{Model, Prior};
 
+pub use crate::filters::yau_fd::{Scheme, YauYauParams};
+
+#[cfg(feature = "std")]
+fn yau_yau(
+    name: String,
+    scheme: Scheme,
+    p: &YauYauParams,
+    ctx: &BuildContext,
+) -> Result<Box<dyn Filter>, ZakaiError> {
+    Ok(Box::new(crate::filters::yau_fd::YauYauFilter::new(
+        name, scheme, ctx.model, ctx.prior, p, ctx.bounds, ctx.dt_obs,
+    )?))
+}
+
+#[cfg(not(feature = "std"))]
+fn yau_yau(
+    name: String,
+    _: Scheme,
+    _: &YauYauParams,
+    _: &BuildContext,
+) -> Result<Box<dyn Filter>, ZakaiError> {
+    Err(ZakaiError::Other(format!(
+        "{name} needs the `std` feature of zakai (FFT plans)"
+    )))
+}
+
 /// One method with its parameters. In JSON: `{"method": "pf", "particles": 200}`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "snake_case")]
@@ -29,6 +55,26 @@ pub enum MethodConfig {
     Ukf(UkfParams),
     /// Bootstrap particle filter.
     Pf(PfParams),
+    /// Yau–Yau implicit Euler (000 (12)–(14)).
+    Iem(YauYauParams),
+    /// Yau–Yau quasi-implicit Euler with DST (000 (17)–(18)).
+    Qiem(YauYauParams),
+}
+
+/// What building a filter needs besides its own parameters.
+pub struct BuildContext<'a> {
+    /// The model.
+    pub model: &'a Model,
+    /// The prior.
+    pub prior: &'a Prior,
+    /// Seed for methods that draw random numbers.
+    pub seed: u64,
+    /// Points of the domain where structural assumptions (linearity) are checked.
+    pub probes: &'a [Vec<f64>],
+    /// The scenario's domain (grid methods live here).
+    pub bounds: &'a [(f64, f64)],
+    /// Δτ.
+    pub dt_obs: f64,
 }
 
 /// Every method key with a one-line description (for `zakai list` and the page).
@@ -59,6 +105,8 @@ impl MethodConfig {
             MethodConfig::Ekf(_) => "ekf",
             MethodConfig::Ukf(_) => "ukf",
             MethodConfig::Pf(_) => "pf",
+            MethodConfig::Iem(_) => "iem",
+            MethodConfig::Qiem(_) => "qiem",
         }
     }
 
@@ -69,6 +117,8 @@ impl MethodConfig {
             "ekf" => MethodConfig::Ekf(EkfParams::default()),
             "ukf" => MethodConfig::Ukf(UkfParams::default()),
             "pf" => MethodConfig::Pf(PfParams::default()),
+            "iem" => MethodConfig::Iem(YauYauParams::default()),
+            "qiem" => MethodConfig::Qiem(YauYauParams::default()),
             _ => return None,
         })
     }
@@ -80,6 +130,8 @@ impl MethodConfig {
             MethodConfig::Ekf(_) => "EKF".into(),
             MethodConfig::Ukf(_) => "UKF".into(),
             MethodConfig::Pf(p) => format!("PF({})", p.particles),
+            MethodConfig::Iem(_) => "IEM".into(),
+            MethodConfig::Qiem(_) => "QIEM".into(),
         }
     }
 
@@ -107,24 +159,31 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Iem(p) => {
+                for (name, msg) in p.problems(Scheme::Iem, n) {
+                    push(name, msg);
+                }
+            }
+            MethodConfig::Qiem(p) => {
+                for (name, msg) in p.problems(Scheme::Qiem, n) {
+                    push(name, msg);
+                }
+            }
         }
     }
 
-    /// Builds the filter. `seed` feeds methods that draw random numbers; `probes` are points
-    /// of the domain where structural assumptions (linearity) are checked.
-    pub fn build(
-        &self,
-        name: String,
-        model: &Model,
-        prior: &Prior,
-        seed: u64,
-        probes: &[Vec<f64>],
-    ) -> Result<Box<dyn Filter>, ZakaiError> {
+    /// Builds the filter.
+    pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
+        let (model, prior) = (ctx.model, ctx.prior);
         Ok(match self {
-            MethodConfig::Kalman(p) => Box::new(KalmanBucy::new(name, model, prior, p, probes)?),
+            MethodConfig::Kalman(p) => {
+                Box::new(KalmanBucy::new(name, model, prior, p, ctx.probes)?)
+            }
             MethodConfig::Ekf(p) => Box::new(ExtendedKalman::new(name, model, prior, p)),
             MethodConfig::Ukf(p) => Box::new(UnscentedKalman::new(name, model, prior, p)?),
-            MethodConfig::Pf(p) => Box::new(ParticleFilter::new(name, model, prior, p, seed)?),
+            MethodConfig::Pf(p) => Box::new(ParticleFilter::new(name, model, prior, p, ctx.seed)?),
+            MethodConfig::Iem(p) => yau_yau(name, Scheme::Iem, p, ctx)?,
+            MethodConfig::Qiem(p) => yau_yau(name, Scheme::Qiem, p, ctx)?,
         })
     }
 }

@@ -1,5 +1,6 @@
 //! Presets: every example of the five papers as a [`ScenarioConfig`], each citing its paper
-//! and equation. Where a paper leaves a choice open (a prior, a horizon, 003's bearings
+//! and equation. Grid filters (QIEM, IEM) use grids sized for the playground (a few hundred
+//! points per dimension, 128² in 2-D); 000 itself used Δs = 0.01, Δt = 10⁻⁴ on [−10, 10]. Where a paper leaves a choice open (a prior, a horizon, 003's bearings
 //! function) the preset's `description` says what was chosen and why. Methods not built yet
 //! are simply absent from a preset's method list.
 
@@ -13,6 +14,7 @@ use super::{
 };
 use crate::filters::kalman::{EkfParams, GaussianInit, KalmanParams, UkfParams};
 use crate::filters::particle::PfParams;
+use crate::filters::yau_fd::YauYauParams;
 
 fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()
@@ -58,6 +60,22 @@ fn pf(particles: usize) -> MethodConfig {
         particles,
         ..PfParams::default()
     })
+}
+
+fn grid(points: &[usize], dt: f64) -> YauYauParams {
+    YauYauParams {
+        points: points.to_vec(),
+        dt,
+        ..YauYauParams::default()
+    }
+}
+
+fn qiem(points: &[usize], dt: f64) -> MethodConfig {
+    MethodConfig::Qiem(grid(points, dt))
+}
+
+fn iem(points: usize, dt: f64) -> MethodConfig {
+    MethodConfig::Iem(grid(&[points], dt))
 }
 
 fn ekf_from(mean: f64, variance: f64) -> MethodConfig {
@@ -152,6 +170,7 @@ fn cos_xn(power: u32) -> ScenarioConfig {
             MethodConfig::Ekf(EkfParams::default()),
             ukf(0.5, 2.0, 0.0),
             pf(500),
+            qiem(&[501], 1e-3),
         ],
     });
     s.seed = 10 + power as u64;
@@ -183,6 +202,8 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(100),
                 pf(150),
                 pf(200),
+                qiem(&[401], 1e-3),
+                iem(401, 1e-3),
             ],
         }),
         build(Spec {
@@ -205,6 +226,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 ukf(0.01, 2.0, 0.0),
                 pf(50),
                 pf(200),
+                qiem(&[128, 128], 2e-3),
             ],
         }),
         build(Spec {
@@ -227,6 +249,8 @@ pub fn all() -> Vec<ScenarioConfig> {
                 MethodConfig::Ekf(EkfParams::default()),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
+                qiem(&[1001], 1e-3),
+                iem(1001, 1e-3),
             ],
         }),
         build(Spec {
@@ -248,6 +272,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 MethodConfig::Ekf(EkfParams::default()),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
+                qiem(&[128, 128], 1e-3),
             ],
         }),
         build(Spec {
@@ -329,7 +354,12 @@ pub fn all() -> Vec<ScenarioConfig> {
             domain: vec![[-10.0, 45.0]],
             time: (30.0, 0.1),
             track_loss: None,
-            methods: vec![ekf_from(1.0, 1.0), ukf(0.5, 2.0, 0.0), pf(500)],
+            methods: vec![
+                ekf_from(1.0, 1.0),
+                ukf(0.5, 2.0, 0.0),
+                pf(500),
+                qiem(&[1101], 1e-2),
+            ],
         }),
         build(Spec {
             name: "direct-4.4",
@@ -351,7 +381,12 @@ pub fn all() -> Vec<ScenarioConfig> {
             domain: vec![[-6.0, 30.0]],
             time: (2.0, 0.001),
             track_loss: None,
-            methods: vec![ekf_from(1.0, 3.0), ukf(0.5, 2.0, 0.0), pf(500)],
+            methods: vec![
+                ekf_from(1.0, 3.0),
+                ukf(0.5, 2.0, 0.0),
+                pf(500),
+                qiem(&[721], 1e-3),
+            ],
         }),
         build(Spec {
             name: "bearings-only",

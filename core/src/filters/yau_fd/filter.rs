@@ -1,0 +1,349 @@
+//! The Yau–Yau filter itself: schemes, update, estimate (see the parent module's doc).
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::DVector;
+
+use super::guarantees::{self, GuaranteeWarning};
+use super::operator::KolmogorovOperator;
+use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
+use crate::error::FilterError;
+use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind};
+use crate::grid::dst::DstPlan;
+use crate::grid::TensorGrid;
+use crate::model::{Model, Prior};
+
+/// The tridiagonal system of 1-D IEM, LU-factored once (Thomas algorithm).
+struct Tridiagonal {
+    /// Modified diagonal after forward elimination.
+    diag: Vec<f64>,
+    /// Super-diagonal of `I − αΔt A`.
+    upper: Vec<f64>,
+    /// Elimination multipliers.
+    mult: Vec<f64>,
+    /// Rows of `I + βΔt A` (sub, diag, super).
+    explicit: [Vec<f64>; 3],
+}
+
+impl Tridiagonal {
+    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64, alpha: f64) -> Self {
+        let n = grid.len();
+        let ds = grid.spacing()[0];
+        let qd = op.diffusion[0];
+        let (mut sub, mut dia, mut sup) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for i in 0..n {
+            sub[i] = qd / (2.0 * ds * ds) - op.p[0][i] / (2.0 * ds);
+            sup[i] = qd / (2.0 * ds * ds) + op.p[0][i] / (2.0 * ds);
+            dia[i] = -qd / (ds * ds) + op.q[i];
+        }
+        let beta = 1.0 - alpha;
+        let explicit = [
+            sub.iter().map(|a| beta * dt * a).collect(),
+            dia.iter().map(|a| 1.0 + beta * dt * a).collect(),
+            sup.iter().map(|a| beta * dt * a).collect(),
+        ];
+        let lower: Vec<f64> = sub.iter().map(|a| -alpha * dt * a).collect();
+        let upper: Vec<f64> = sup.iter().map(|a| -alpha * dt * a).collect();
+        let mut diag: Vec<f64> = dia.iter().map(|a| 1.0 - alpha * dt * a).collect();
+        let mut mult = vec![0.0; n];
+        for i in 1..n {
+            mult[i] = lower[i] / diag[i - 1];
+            diag[i] -= mult[i] * upper[i - 1];
+        }
+        Tridiagonal {
+            diag,
+            upper,
+            mult,
+            explicit,
+        }
+    }
+
+    /// `u ← [I − αΔtA]⁻¹ [I + βΔtA] u`, using `tmp`.
+    fn step(&self, u: &mut [f64], tmp: &mut [f64]) {
+        let n = u.len();
+        let [s, d, p] = &self.explicit;
+        for i in 0..n {
+            let left = if i > 0 { u[i - 1] } else { 0.0 };
+            let right = if i + 1 < n { u[i + 1] } else { 0.0 };
+            tmp[i] = s[i] * left + d[i] * u[i] + p[i] * right;
+        }
+        for i in 1..n {
+            tmp[i] -= self.mult[i] * tmp[i - 1];
+        }
+        u[n - 1] = tmp[n - 1] / self.diag[n - 1];
+        for i in (0..n - 1).rev() {
+            u[i] = (tmp[i] - self.upper[i] * u[i + 1]) / self.diag[i];
+        }
+    }
+}
+
+/// The spectral solve of QIEM: DST plans per dimension and the eigenvalue divisors.
+struct SpectralSolve {
+    plans: Vec<DstPlan>,
+    /// `1 / (1 + Δt Σ_d Q_dd (2/Δs_d²) sin²(j_d π / (2(N_d + 1))))` times the inverse-DST
+    /// scale `Π_d 2/(N_d + 1)`, per node.
+    divisor: Vec<f64>,
+    line: Vec<f64>,
+}
+
+impl SpectralSolve {
+    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Self {
+        let plans = grid.shape().iter().map(|&n| DstPlan::new(n)).collect();
+        let scale: f64 = grid.shape().iter().map(|&n| 2.0 / (n + 1) as f64).product();
+        let divisor = (0..grid.len())
+            .map(|i| {
+                let mut lambda = 0.0;
+                for d in 0..grid.dim() {
+                    let j = grid.index_in(i, d) + 1;
+                    let n = grid.shape()[d];
+                    let ds = grid.spacing()[d];
+                    let s = libm::sin(j as f64 * core::f64::consts::PI / (2.0 * (n + 1) as f64));
+                    lambda += op.diffusion[d] * 2.0 / (ds * ds) * s * s;
+                }
+                scale / (1.0 + dt * lambda)
+            })
+            .collect();
+        SpectralSolve {
+            plans,
+            divisor,
+            line: Vec::new(),
+        }
+    }
+
+    /// `u ← (I − Δt/2 Σ Q_dd T_d)⁻¹ u`.
+    fn solve(&mut self, grid: &TensorGrid, u: &mut [f64]) {
+        for (d, plan) in self.plans.iter_mut().enumerate() {
+            plan.transform_axis(u, grid.stride(d), &mut self.line);
+        }
+        for (v, w) in u.iter_mut().zip(&self.divisor) {
+            *v *= w;
+        }
+        for (d, plan) in self.plans.iter_mut().enumerate() {
+            plan.transform_axis(u, grid.stride(d), &mut self.line);
+        }
+    }
+}
+
+enum Solver {
+    Iem(Tridiagonal),
+    Qiem(SpectralSolve),
+}
+
+/// A Yau–Yau finite-difference filter (see the module doc).
+pub struct YauYauFilter {
+    name: String,
+    scheme: Scheme,
+    params: YauYauParams,
+    grid: TensorGrid,
+    op: KolmogorovOperator,
+    /// The density, normalised to unit mass.
+    u: Vec<f64>,
+    tmp: Vec<f64>,
+    /// `e^{Δt q}` or `1 + Δt q` per node for QIEM.
+    potential: Vec<f64>,
+    solver: Option<(f64, usize, Solver)>,
+    update_dt: f64,
+    warnings: Vec<GuaranteeWarning>,
+    estimate: Estimate,
+}
+
+impl YauYauFilter {
+    /// Tabulates the operator and the prior on the grid over `bounds`.
+    pub fn new(
+        name: String,
+        scheme: Scheme,
+        model: &Model,
+        prior: &Prior,
+        params: &YauYauParams,
+        bounds: &[(f64, f64)],
+        dt_obs: f64,
+    ) -> Result<Self, FilterError> {
+        if let Some((field, msg)) = params.problems(scheme, model.n).into_iter().next() {
+            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
+        }
+        let grid = TensorGrid::new(bounds, &params.shape(model.n))
+            .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
+        let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
+        let u = grid.tabulate(|x| prior.density(x));
+        let mut filter = YauYauFilter {
+            name,
+            scheme,
+            params: params.clone(),
+            tmp: vec![0.0; grid.len()],
+            potential: Vec::new(),
+            grid,
+            op,
+            u,
+            solver: None,
+            update_dt: 0.0,
+            warnings: Vec::new(),
+            estimate: Estimate {
+                mean: DVector::zeros(model.n),
+                covariance: None,
+                map: None,
+            },
+        };
+        filter.normalise()?;
+        filter.prepare(dt_obs);
+        Ok(filter)
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &TensorGrid {
+        &self.grid
+    }
+
+    /// Builds the solver for observation interval `dt_obs` (Δt rounded so that it divides it)
+    /// and evaluates the guarantees for that step.
+    fn prepare(&mut self, dt_obs: f64) {
+        let substeps = libm::ceil(dt_obs / self.params.dt - 1e-9).max(1.0) as usize;
+        let dt = dt_obs / substeps as f64;
+        let solver = match self.scheme {
+            Scheme::Iem => Solver::Iem(Tridiagonal::new(
+                &self.op,
+                &self.grid,
+                dt,
+                self.params.alpha,
+            )),
+            Scheme::Qiem => {
+                self.potential = self
+                    .op
+                    .q
+                    .iter()
+                    .map(|&q| match self.params.potential {
+                        PotentialTerm::Explicit => 1.0 + dt * q,
+                        PotentialTerm::Exponential => libm::exp(dt * q),
+                    })
+                    .collect();
+                Solver::Qiem(SpectralSolve::new(&self.op, &self.grid, dt))
+            }
+        };
+        self.warnings = match self.scheme {
+            Scheme::Iem => {
+                let mut w = guarantees::m_matrix(&self.op, &self.grid, dt);
+                w.extend(guarantees::iem_stability(&self.op, &self.grid));
+                w
+            }
+            Scheme::Qiem if self.params.potential == PotentialTerm::Explicit => {
+                guarantees::qiem_stability(&self.op, &self.grid, dt)
+            }
+            Scheme::Qiem => Vec::new(),
+        };
+        self.solver = Some((dt_obs, substeps, solver));
+    }
+
+    /// Normalises to unit mass and refreshes the estimate.
+    fn normalise(&mut self) -> Result<(), FilterError> {
+        let mass = self.grid.mass(&self.u);
+        if !mass.is_finite() {
+            return Err(FilterError::NonFinite { what: "density" });
+        }
+        if mass <= 0.0 {
+            return Err(FilterError::MassLost);
+        }
+        let inv = 1.0 / mass;
+        self.u.iter_mut().for_each(|v| *v *= inv);
+        let (mean, cov, map) = self.grid.moments(&self.u);
+        self.estimate = Estimate {
+            mean,
+            covariance: Some(cov),
+            map: Some(map),
+        };
+        Ok(())
+    }
+
+    /// The robust-DMZ factor (15) in the log domain (see the module doc).
+    fn update(&mut self, dy: &[f64], dt_obs: f64) {
+        self.update_dt = dt_obs;
+        let shift = self
+            .u
+            .iter()
+            .enumerate()
+            .filter(|(_, &v)| v > 0.0)
+            .map(|(i, &v)| self.exponent(dy, i) + libm::log(v))
+            .fold(f64::NEG_INFINITY, f64::max);
+        for i in 0..self.u.len() {
+            let v = self.u[i];
+            self.u[i] = if v > 0.0 {
+                libm::exp(self.exponent(dy, i) + libm::log(v) - shift)
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// `Δyᵀ S⁻¹ h(s_i)` (− `½ hᵀS⁻¹h(s_i) Δτ` when the likelihood is in the update).
+    #[inline]
+    fn exponent(&self, dy: &[f64], i: usize) -> f64 {
+        dy.iter()
+            .zip(&self.op.s_inv_h)
+            .map(|(y, h)| y * h[i])
+            .sum::<f64>()
+            - self.op.half_hsh[i] * self.update_dt
+    }
+
+    fn predict(&mut self, dt_obs: f64) {
+        if self.solver.as_ref().map(|s| s.0) != Some(dt_obs) {
+            self.prepare(dt_obs);
+        }
+        let (_, substeps, solver) = self.solver.as_mut().expect("prepared");
+        for _ in 0..*substeps {
+            match solver {
+                Solver::Iem(tri) => tri.step(&mut self.u, &mut self.tmp),
+                Solver::Qiem(spectral) => {
+                    let dt = dt_obs / *substeps as f64;
+                    self.op
+                        .add_advection(&self.grid, &self.u, dt, &mut self.tmp);
+                    for ((v, t), w) in self.u.iter_mut().zip(&self.tmp).zip(&self.potential) {
+                        *v = t * w;
+                    }
+                    spectral.solve(&self.grid, &mut self.u);
+                }
+            }
+        }
+    }
+}
+
+impl Filter for YauYauFilter {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        if obs.kind != ObservationKind::Increment || obs.value.len() != self.op.s_inv_h.len() {
+            return Err(FilterError::BadObservation(format!(
+                "{} needs increments of length {}",
+                self.name,
+                self.op.s_inv_h.len()
+            )));
+        }
+        if obs.dt > 0.0 {
+            self.predict(obs.dt);
+            self.update(obs.value, obs.dt);
+        }
+        self.normalise()
+    }
+
+    fn estimate(&self) -> Estimate {
+        self.estimate.clone()
+    }
+
+    fn density(&self) -> Option<DensityView<'_>> {
+        Some(DensityView {
+            bounds: self.grid.bounds(),
+            shape: self.grid.shape(),
+            values: &self.u,
+        })
+    }
+
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.grid.marginal(&self.u, dim, grid, out);
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.iter().map(|w| w.message.clone()).collect()
+    }
+}
