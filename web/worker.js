@@ -38,6 +38,16 @@ function tick() {
   }
 }
 
+// After a new or reset session: report it and send its first frame.
+function restarted() {
+  info = session.info();
+  playing = false;
+  awaitingAck = false;
+  sent = 0;
+  post({ type: 'loaded', info });
+  frame(session.step(0));
+}
+
 function guard(fn) {
   try {
     fn();
@@ -58,26 +68,17 @@ self.onmessage = async ({ data }) => {
       break;
     case 'load':
       guard(() => {
+        // Build first: an invalid scenario leaves the running session untouched.
         const next = new zakai.Session(data.config, data.seed);
         session?.free();
         session = next;
-        info = session.info();
-        playing = false;
-        awaitingAck = false;
-        sent = 0;
-        post({ type: 'loaded', info });
-        frame(session.step(0));
+        restarted();
       });
       break;
     case 'reset':
       guard(() => {
         session.reset(data.seed);
-        info = session.info();
-        playing = false;
-        awaitingAck = false;
-        sent = 0;
-        post({ type: 'loaded', info });
-        frame(session.step(0));
+        restarted();
       });
       break;
     case 'play':

@@ -13,6 +13,18 @@ fn fmt_opt(v: Option<f64>) -> String {
     v.map_or_else(|| "failed".to_string(), |x| format!("{x:.4}"))
 }
 
+/// `a / b / …` with four decimals, or "—" when the method failed in every run.
+fn per_component(v: &Option<Vec<f64>>) -> String {
+    v.as_ref()
+        .map(|v| {
+            v.iter()
+                .map(|x| format!("{x:.4}"))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        })
+        .unwrap_or_else(|| "—".into())
+}
+
 /// Renders `summary` in `format`.
 pub fn render(
     experiment: &Experiment,
@@ -81,26 +93,8 @@ pub fn render(
                     (Some(v), Some(se)) if summary.runs > 1 => format!("{v:.4} ± {se:.4}"),
                     (v, _) => fmt_opt(v),
                 };
-                let comps = m
-                    .mse_components
-                    .as_ref()
-                    .map(|v| {
-                        v.iter()
-                            .map(|x| format!("{x:.4}"))
-                            .collect::<Vec<_>>()
-                            .join(" / ")
-                    })
-                    .unwrap_or_else(|| "—".into());
-                let rms = m
-                    .rms_components
-                    .as_ref()
-                    .map(|v| {
-                        v.iter()
-                            .map(|x| format!("{x:.4}"))
-                            .collect::<Vec<_>>()
-                            .join(" / ")
-                    })
-                    .unwrap_or_else(|| "—".into());
+                let comps = per_component(&m.mse_components);
+                let rms = per_component(&m.rms_components);
                 writeln!(
                     s,
                     "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12.3} {:>12.2}",

@@ -1,0 +1,79 @@
+//! Criterion benchmarks of the finite-difference Yau–Yau filters of 000: one scheme step
+//! (prediction over Δt = Δτ with one substep, the robust update and the moments) on the cubic
+//! sensor (1-D, h = x³ on [−10, 10]) and on the 2-D example (33).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use zakai::experiment::Experiment;
+use zakai::filters::yau_fd::YauYauParams;
+use zakai::filters::{Observation, ObservationKind};
+use zakai::scenario::methods::BuildContext;
+use zakai::scenario::{presets, MethodConfig};
+
+fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize], iem: bool) {
+    let mut config = presets::preset(preset).expect("preset");
+    config.domain = domain;
+    config.methods = vec![MethodConfig::from_key("ekf").unwrap()];
+    let experiment = Experiment::new(config).expect("valid");
+    let n = experiment.model().n;
+    let bounds = experiment.config().bounds();
+    let dt = 0.01;
+    let mut group = c.benchmark_group(format!("{preset} one step (Δt = Δτ = {dt})"));
+    for &points in sizes {
+        let params = YauYauParams {
+            points: vec![points],
+            dt,
+            ..YauYauParams::default()
+        };
+        let mut methods = vec![("QIEM", MethodConfig::Qiem(params.clone()))];
+        if iem {
+            methods.push(("IEM", MethodConfig::Iem(params)));
+        }
+        for (label, method) in methods {
+            let ctx = BuildContext {
+                model: experiment.model(),
+                prior: experiment.prior(),
+                seed: 1,
+                probes: &[],
+                bounds: &bounds,
+                dt_obs: dt,
+            };
+            let mut filter = method.build(label.into(), &ctx).expect("builds");
+            let dy = vec![1e-3; experiment.model().m];
+            let obs = Observation {
+                k: 1,
+                t: dt,
+                dt,
+                value: &dy,
+                kind: ObservationKind::Increment,
+            };
+            let size = (0..n)
+                .map(|_| points.to_string())
+                .collect::<Vec<_>>()
+                .join("x");
+            group.bench_with_input(BenchmarkId::new(label, size), &obs, |b, obs| {
+                b.iter(|| filter.step(obs).expect("steps"))
+            });
+        }
+    }
+    group.finish();
+}
+
+fn yau_yau(c: &mut Criterion) {
+    bench(
+        c,
+        "yau-cubic-sensor",
+        vec![[-10.0, 10.0]],
+        &[256, 512, 1024, 2001, 4096],
+        true,
+    );
+    bench(
+        c,
+        "yau-2d",
+        vec![[-6.0, 6.0], [-6.0, 6.0]],
+        &[128, 256],
+        false,
+    );
+}
+
+criterion_group!(benches, yau_yau);
+criterion_main!(benches);
