@@ -159,13 +159,8 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
-            MethodConfig::Iem(p) => {
-                for (name, msg) in p.problems(Scheme::Iem, n) {
-                    push(name, msg);
-                }
-            }
-            MethodConfig::Qiem(p) => {
-                for (name, msg) in p.problems(Scheme::Qiem, n) {
+            MethodConfig::Iem(p) | MethodConfig::Qiem(p) => {
+                for (name, msg) in p.problems(n) {
                     push(name, msg);
                 }
             }
