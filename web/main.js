@@ -11,6 +11,7 @@ const PARAMS = {
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
   qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
+  spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator']],
 };
 const DEFAULTS = {
   kalman: {},
@@ -19,6 +20,7 @@ const DEFAULTS = {
   pf: { particles: 500, ess_threshold: 0.5, substeps: 1 },
   qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
   iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
+  spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update' },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = { ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt' };
@@ -324,7 +326,7 @@ function makePlots(info) {
   $('component').innerHTML = Array.from({ length: n }, (_, i) => `<option value="${i}">x${i + 1}</option>`).join('');
   $('density-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
   // The richest density by default: a grid filter, else the last particle filter, else the first.
-  const grid = info.methods.findIndex((m) => m.startsWith('QIEM') || m.startsWith('IEM'));
+  const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT)/.test(m));
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
   $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
   $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;

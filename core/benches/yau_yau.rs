@@ -58,6 +58,54 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
     group.finish();
 }
 
+/// The superposition technique against QIEM on the cubic sensor: the off-line build (bump
+/// solutions over one interval of Δτ = 0.01 with Δt = 10⁻³) and one on-line interval.
+fn superposition(c: &mut Criterion) {
+    let config = presets::preset("cubic-sensor-1d").expect("preset");
+    let experiment = Experiment::new(config).expect("valid");
+    let bounds = experiment.config().bounds();
+    let ctx = BuildContext {
+        model: experiment.model(),
+        prior: experiment.prior(),
+        seed: 1,
+        probes: &[],
+        bounds: &bounds,
+        dt_obs: 0.01,
+    };
+    let params = YauYauParams {
+        points: vec![401],
+        dt: 1e-3,
+        centres: vec![101],
+        ..YauYauParams::default()
+    };
+    let mut group =
+        c.benchmark_group("cubic-sensor-1d superposition (401 points, 101 bumps, Δτ = 10 Δt)");
+    group.sample_size(20);
+    group.bench_function("SPT off-line build", |b| {
+        b.iter(|| {
+            MethodConfig::Spt(params.clone())
+                .build("SPT".into(), &ctx)
+                .expect("builds")
+        })
+    });
+    let dy = [1e-3];
+    let obs = Observation {
+        k: 1,
+        t: 0.01,
+        dt: 0.01,
+        value: &dy,
+        kind: ObservationKind::Increment,
+    };
+    for (label, method) in [
+        ("SPT on-line interval", MethodConfig::Spt(params.clone())),
+        ("QIEM interval", MethodConfig::Qiem(params.clone())),
+    ] {
+        let mut filter = method.build(label.into(), &ctx).expect("builds");
+        group.bench_function(label, |b| b.iter(|| filter.step(&obs).expect("steps")));
+    }
+    group.finish();
+}
+
 fn yau_yau(c: &mut Criterion) {
     bench(
         c,
@@ -75,5 +123,5 @@ fn yau_yau(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, yau_yau);
+criterion_group!(benches, yau_yau, superposition);
 criterion_main!(benches);

@@ -331,11 +331,9 @@ impl ExperimentRun {
         } else {
             ObservationKind::Measurement
         };
-        let dt = if k == 0 {
-            0.0
-        } else {
-            t.times[k] - t.times[k - 1]
-        };
+        // Exactly Δτ (not τ_k − τ_{k−1}, which rounds differently from step to step and would
+        // make filters that cache per-Δτ operators rebuild them).
+        let dt = if k == 0 { 0.0 } else { t.dt_obs };
         let obs = Observation {
             k,
             t: t.times[k],

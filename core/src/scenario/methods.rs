@@ -59,6 +59,8 @@ pub enum MethodConfig {
     Iem(YauYauParams),
     /// Yau–Yau quasi-implicit Euler with DST (000 (17)–(18)).
     Qiem(YauYauParams),
+    /// The superposition technique of 000 §2.5 over QIEM.
+    Spt(YauYauParams),
 }
 
 /// What building a filter needs besides its own parameters.
@@ -107,6 +109,7 @@ impl MethodConfig {
             MethodConfig::Pf(_) => "pf",
             MethodConfig::Iem(_) => "iem",
             MethodConfig::Qiem(_) => "qiem",
+            MethodConfig::Spt(_) => "spt",
         }
     }
 
@@ -119,6 +122,7 @@ impl MethodConfig {
             "pf" => MethodConfig::Pf(PfParams::default()),
             "iem" => MethodConfig::Iem(YauYauParams::default()),
             "qiem" => MethodConfig::Qiem(YauYauParams::default()),
+            "spt" => MethodConfig::Spt(YauYauParams::default()),
             _ => return None,
         })
     }
@@ -132,6 +136,7 @@ impl MethodConfig {
             MethodConfig::Pf(p) => format!("PF({})", p.particles),
             MethodConfig::Iem(_) => "IEM".into(),
             MethodConfig::Qiem(_) => "QIEM".into(),
+            MethodConfig::Spt(_) => "SPT".into(),
         }
     }
 
@@ -164,6 +169,11 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Spt(p) => {
+                for (name, msg) in p.problems(n).into_iter().chain(p.superposition_problems(n)) {
+                    push(name, msg);
+                }
+            }
         }
     }
 
@@ -179,6 +189,7 @@ impl MethodConfig {
             MethodConfig::Pf(p) => Box::new(ParticleFilter::new(name, model, prior, p, ctx.seed)?),
             MethodConfig::Iem(p) => yau_yau(name, Scheme::Iem, p, ctx)?,
             MethodConfig::Qiem(p) => yau_yau(name, Scheme::Qiem, p, ctx)?,
+            MethodConfig::Spt(p) => yau_yau(name, Scheme::Superposition, p, ctx)?,
         })
     }
 }

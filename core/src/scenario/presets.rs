@@ -78,6 +78,13 @@ fn iem(points: usize, dt: f64) -> MethodConfig {
     MethodConfig::Iem(grid(&[points], dt))
 }
 
+fn spt(points: usize, dt: f64, centres: usize) -> MethodConfig {
+    MethodConfig::Spt(YauYauParams {
+        centres: vec![centres],
+        ..grid(&[points], dt)
+    })
+}
+
 fn ekf_from(mean: f64, variance: f64) -> MethodConfig {
     MethodConfig::Ekf(EkfParams {
         init: GaussianInit {
@@ -204,6 +211,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(200),
                 qiem(&[401], 1e-3),
                 iem(401, 1e-3),
+                spt(401, 1e-3, 101),
             ],
         }),
         build(Spec {
@@ -251,6 +259,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(500),
                 qiem(&[1001], 1e-3),
                 iem(1001, 1e-3),
+                spt(1001, 1e-3, 201),
             ],
         }),
         build(Spec {

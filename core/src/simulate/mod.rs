@@ -45,6 +45,8 @@ pub struct Trajectory {
     pub n: usize,
     /// Observation dimension.
     pub m: usize,
+    /// Δτ, the length of every observation interval.
+    pub dt_obs: f64,
     /// τ_k = k Δτ, k = 0..N.
     pub times: Vec<f64>,
     /// x(τ_k), row k at `states[k*n..(k+1)*n]`.
@@ -155,6 +157,7 @@ pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> 
     Trajectory {
         n,
         m,
+        dt_obs: time.dt_obs,
         times,
         states,
         observations,

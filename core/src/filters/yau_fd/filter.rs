@@ -9,6 +9,7 @@ use nalgebra::DVector;
 
 use super::guarantees::{self, GuaranteeWarning};
 use super::operator::KolmogorovOperator;
+use super::superposition::Superposition;
 use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
 use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind};
@@ -170,9 +171,43 @@ impl SpectralSolve {
     }
 }
 
+/// One QIEM step (18): explicit drift and potential, then the spectral implicit Laplacian.
+struct QiemStep {
+    spectral: SpectralSolve,
+    /// `e^{Δt q}` or `1 + Δt q` per node.
+    potential: Vec<f64>,
+    dt: f64,
+}
+
+impl QiemStep {
+    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64, term: PotentialTerm) -> Self {
+        let potential =
+            op.q.iter()
+                .map(|&q| match term {
+                    PotentialTerm::Explicit => 1.0 + dt * q,
+                    PotentialTerm::Exponential => libm::exp(dt * q),
+                })
+                .collect();
+        QiemStep {
+            spectral: SpectralSolve::new(op, grid, dt),
+            potential,
+            dt,
+        }
+    }
+
+    fn step(&mut self, op: &KolmogorovOperator, grid: &TensorGrid, u: &mut [f64], tmp: &mut [f64]) {
+        op.add_advection(grid, u, self.dt, tmp);
+        for ((v, t), w) in u.iter_mut().zip(tmp.iter()).zip(&self.potential) {
+            *v = t * w;
+        }
+        self.spectral.solve(grid, u);
+    }
+}
+
 enum Solver {
     Iem(SplitIem),
-    Qiem(SpectralSolve),
+    Qiem(QiemStep),
+    Superposition(Superposition),
 }
 
 /// A Yau–Yau finite-difference filter (see the module doc).
@@ -185,8 +220,6 @@ pub struct YauYauFilter {
     /// The density, normalised to unit mass.
     u: Vec<f64>,
     tmp: Vec<f64>,
-    /// `e^{Δt q}` or `1 + Δt q` per node for QIEM.
-    potential: Vec<f64>,
     solver: Option<(f64, usize, Solver)>,
     update_dt: f64,
     warnings: Vec<GuaranteeWarning>,
@@ -204,7 +237,11 @@ impl YauYauFilter {
         bounds: &[(f64, f64)],
         dt_obs: f64,
     ) -> Result<Self, FilterError> {
-        if let Some((field, msg)) = params.problems(model.n).into_iter().next() {
+        let mut problems = params.problems(model.n);
+        if scheme == Scheme::Superposition {
+            problems.extend(params.superposition_problems(model.n));
+        }
+        if let Some((field, msg)) = problems.into_iter().next() {
             return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
         }
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
@@ -216,7 +253,6 @@ impl YauYauFilter {
             scheme,
             params: params.clone(),
             tmp: vec![0.0; grid.len()],
-            potential: Vec::new(),
             grid,
             op,
             u,
@@ -230,7 +266,7 @@ impl YauYauFilter {
             },
         };
         filter.normalise()?;
-        filter.prepare(dt_obs);
+        filter.prepare(dt_obs)?;
         Ok(filter)
     }
 
@@ -241,22 +277,24 @@ impl YauYauFilter {
 
     /// Builds the solver for observation interval `dt_obs` (Δt rounded so that it divides it)
     /// and evaluates the guarantees for that step.
-    fn prepare(&mut self, dt_obs: f64) {
+    fn prepare(&mut self, dt_obs: f64) -> Result<(), FilterError> {
         let substeps = libm::ceil(dt_obs / self.params.dt - 1e-9).max(1.0) as usize;
         let dt = dt_obs / substeps as f64;
         let solver = match self.scheme {
             Scheme::Iem => Solver::Iem(SplitIem::new(&self.op, &self.grid, dt, self.params.alpha)),
-            Scheme::Qiem => {
-                self.potential = self
-                    .op
-                    .q
-                    .iter()
-                    .map(|&q| match self.params.potential {
-                        PotentialTerm::Explicit => 1.0 + dt * q,
-                        PotentialTerm::Exponential => libm::exp(dt * q),
-                    })
-                    .collect();
-                Solver::Qiem(SpectralSolve::new(&self.op, &self.grid, dt))
+            Scheme::Qiem => Solver::Qiem(QiemStep::new(
+                &self.op,
+                &self.grid,
+                dt,
+                self.params.potential,
+            )),
+            Scheme::Superposition => {
+                let mut qiem = QiemStep::new(&self.op, &self.grid, dt, PotentialTerm::Exponential);
+                Solver::Superposition(Superposition::new(&self.grid, &self.params, |u, tmp| {
+                    for _ in 0..substeps {
+                        qiem.step(&self.op, &self.grid, u, tmp);
+                    }
+                })?)
             }
         };
         self.warnings = match self.scheme {
@@ -268,9 +306,10 @@ impl YauYauFilter {
             Scheme::Qiem if self.params.potential == PotentialTerm::Explicit => {
                 guarantees::qiem_stability(&self.op, &self.grid, dt)
             }
-            Scheme::Qiem => Vec::new(),
+            Scheme::Qiem | Scheme::Superposition => Vec::new(),
         };
         self.solver = Some((dt_obs, substeps, solver));
+        Ok(())
     }
 
     /// Normalises to unit mass and refreshes the estimate.
@@ -306,7 +345,12 @@ impl YauYauFilter {
         for i in 0..self.u.len() {
             let v = self.u[i];
             self.u[i] = if v > 0.0 {
-                libm::exp(self.exponent(dy, i) + libm::log(v) - shift)
+                let w = libm::exp(self.exponent(dy, i) + libm::log(v) - shift);
+                if w < super::FLUSH_BELOW {
+                    0.0
+                } else {
+                    w
+                }
             } else {
                 0.0
             };
@@ -323,25 +367,26 @@ impl YauYauFilter {
             - self.op.half_hsh[i] * self.update_dt
     }
 
-    fn predict(&mut self, dt_obs: f64) {
+    fn predict(&mut self, dt_obs: f64) -> Result<(), FilterError> {
         if self.solver.as_ref().map(|s| s.0) != Some(dt_obs) {
-            self.prepare(dt_obs);
+            self.prepare(dt_obs)?;
         }
         let (_, substeps, solver) = self.solver.as_mut().expect("prepared");
-        for _ in 0..*substeps {
-            match solver {
-                Solver::Iem(tri) => tri.step(&mut self.u, &mut self.tmp),
-                Solver::Qiem(spectral) => {
-                    let dt = dt_obs / *substeps as f64;
-                    self.op
-                        .add_advection(&self.grid, &self.u, dt, &mut self.tmp);
-                    for ((v, t), w) in self.u.iter_mut().zip(&self.tmp).zip(&self.potential) {
-                        *v = t * w;
-                    }
-                    spectral.solve(&self.grid, &mut self.u);
+        match solver {
+            Solver::Iem(tri) => {
+                for _ in 0..*substeps {
+                    tri.step(&mut self.u, &mut self.tmp);
                 }
             }
+            Solver::Qiem(qiem) => {
+                for _ in 0..*substeps {
+                    qiem.step(&self.op, &self.grid, &mut self.u, &mut self.tmp);
+                }
+            }
+            // The whole interval at once: project onto the bumps, combine their solutions.
+            Solver::Superposition(spt) => spt.apply(&mut self.u),
         }
+        Ok(())
     }
 }
 
@@ -359,7 +404,7 @@ impl Filter for YauYauFilter {
             )));
         }
         if obs.dt > 0.0 {
-            self.predict(obs.dt);
+            self.predict(obs.dt)?;
             self.update(obs.value, obs.dt);
         }
         self.normalise()

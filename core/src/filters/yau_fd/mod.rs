@@ -10,7 +10,11 @@
 //!   one such tridiagonal θ-step per dimension (O(Δt) splitting error, the scheme's own order);
 //! * [`Scheme::Qiem`] — the quasi-implicit scheme (17)–(18), Algorithm 3: drift and potential
 //!   explicit, the Laplacian implicit, solved by a DST-I in every dimension (rustfft plans
-//!   built once, no allocation per step).
+//!   built once, no allocation per step);
+//! * [`Scheme::Superposition`] — the superposition technique of §2.5: off-line, QIEM carries
+//!   Gaussian bumps `e^{−η‖s − c_k‖²}` over one observation interval; on-line, the density is
+//!   projected onto the bumps by least squares and the prediction is the same combination of
+//!   their stored solutions (two matrix–vector products per interval, no allocation).
 //!
 //! The potential term `q u` of QIEM is explicit in (18); for steep h (`q = −½ h²` reaches
 //! −10⁹ at the edge of a box for h = x⁶) the factor `1 + Δt q` is hugely negative and the
@@ -32,6 +36,8 @@
 mod filter;
 pub mod guarantees;
 pub mod operator;
+#[cfg(feature = "std")]
+mod superposition;
 
 #[cfg(feature = "std")]
 pub use filter::YauYauFilter;
@@ -51,6 +57,8 @@ pub enum Scheme {
     Iem,
     /// Quasi-implicit Euler with DST (17)–(18).
     Qiem,
+    /// The superposition technique (§2.5) over QIEM.
+    Superposition,
 }
 
 /// How QIEM treats the potential term q u.
@@ -63,6 +71,13 @@ pub enum PotentialTerm {
     #[default]
     Exponential,
 }
+
+/// Density values below this (the density is normalised to unit mass) are set to zero after
+/// an update: they carry no information and, once subnormal, make every later operation slow.
+pub const FLUSH_BELOW: f64 = 1e-250;
+
+/// Largest number of stored values (grid nodes × bumps) of the superposition technique.
+pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
 /// Where the `−½ hᵀS⁻¹h` term of the potential (4) is applied.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -90,6 +105,12 @@ pub struct YauYauParams {
     pub potential: PotentialTerm,
     /// Where the observation part of the potential is applied.
     pub likelihood: Likelihood,
+    /// Superposition technique only: bump centres per dimension (one number: the same in
+    /// every dimension), spread evenly over the domain.
+    pub centres: Vec<usize>,
+    /// Superposition technique only: the bumps are `e^{−η‖s − c_k‖²}`; by default
+    /// `η = 1/h_c²` with h_c the spacing of the centres.
+    pub eta: Option<f64>,
 }
 
 impl Default for YauYauParams {
@@ -100,6 +121,8 @@ impl Default for YauYauParams {
             alpha: 1.0,
             potential: PotentialTerm::Exponential,
             likelihood: Likelihood::InUpdate,
+            centres: vec![81],
+            eta: None,
         }
     }
 }
@@ -111,6 +134,51 @@ impl YauYauParams {
             1 => vec![self.points[0]; n],
             _ => self.points.clone(),
         }
+    }
+
+    /// Bump centres per dimension for an `n`-dimensional model (superposition technique).
+    pub fn centre_shape(&self, n: usize) -> Vec<usize> {
+        match self.centres.len() {
+            1 => vec![self.centres[0]; n],
+            _ => self.centres.clone(),
+        }
+    }
+
+    /// Problems with the superposition technique's own parameters.
+    pub fn superposition_problems(&self, n: usize) -> Vec<(&'static str, String)> {
+        let mut p = Vec::new();
+        if self.centres.len() != 1 && self.centres.len() != n {
+            p.push((
+                "centres",
+                format!("give one count or {n}, got {}", self.centres.len()),
+            ));
+        }
+        if self.centres.contains(&0) {
+            p.push(("centres", "at least 1 per dimension".into()));
+        }
+        if let Some(eta) = self.eta {
+            if !(eta > 0.0 && eta.is_finite()) {
+                p.push(("eta", "must be positive and finite".into()));
+            }
+        }
+        let nodes = self
+            .shape(n)
+            .iter()
+            .try_fold(1usize, |a, &k| a.checked_mul(k));
+        let bumps = self
+            .centre_shape(n)
+            .iter()
+            .try_fold(1usize, |a, &k| a.checked_mul(k));
+        match (nodes, bumps) {
+            (Some(a), Some(b)) if a.checked_mul(b).is_some_and(|e| e <= MAX_SUPERPOSITION_ENTRIES) => {}
+            _ => p.push((
+                "centres",
+                format!(
+                    "grid nodes × bumps exceeds {MAX_SUPERPOSITION_ENTRIES} stored values (64 MiB); use fewer centres or points"
+                ),
+            )),
+        }
+        p
     }
 
     /// Problems with the parameters for an `n`-dimensional model.
