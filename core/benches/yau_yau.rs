@@ -6,16 +6,15 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use zakai::experiment::Experiment;
 use zakai::filters::yau_fd::YauYauParams;
 use zakai::filters::{Observation, ObservationKind};
-use zakai::scenario::methods::BuildContext;
 use zakai::scenario::{presets, MethodConfig};
 
 fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize], iem: bool) {
     let mut config = presets::preset(preset).expect("preset");
     config.domain = domain;
     config.methods = vec![MethodConfig::from_key("ekf").unwrap()];
+    config.time.dt_obs = 0.01;
     let experiment = Experiment::new(config).expect("valid");
     let n = experiment.model().n;
-    let bounds = experiment.config().bounds();
     let dt = 0.01;
     let mut group = c.benchmark_group(format!("{preset} one step (Δt = Δτ = {dt})"));
     for &points in sizes {
@@ -29,15 +28,9 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
             methods.push(("IEM", MethodConfig::Iem(params)));
         }
         for (label, method) in methods {
-            let ctx = BuildContext {
-                model: experiment.model(),
-                prior: experiment.prior(),
-                seed: 1,
-                probes: &[],
-                bounds: &bounds,
-                dt_obs: dt,
-            };
-            let mut filter = method.build(label.into(), &ctx).expect("builds");
+            let mut filter = experiment
+                .build_method(&method, label.into(), 1)
+                .expect("builds");
             let dy = vec![1e-3; experiment.model().m];
             let obs = Observation {
                 k: 1,
@@ -63,15 +56,6 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
 fn superposition(c: &mut Criterion) {
     let config = presets::preset("cubic-sensor-1d").expect("preset");
     let experiment = Experiment::new(config).expect("valid");
-    let bounds = experiment.config().bounds();
-    let ctx = BuildContext {
-        model: experiment.model(),
-        prior: experiment.prior(),
-        seed: 1,
-        probes: &[],
-        bounds: &bounds,
-        dt_obs: 0.01,
-    };
     let params = YauYauParams {
         points: vec![401],
         dt: 1e-3,
@@ -83,8 +67,8 @@ fn superposition(c: &mut Criterion) {
     group.sample_size(20);
     group.bench_function("SPT off-line build", |b| {
         b.iter(|| {
-            MethodConfig::Spt(params.clone())
-                .build("SPT".into(), &ctx)
+            experiment
+                .build_method(&MethodConfig::Spt(params.clone()), "SPT".into(), 1)
                 .expect("builds")
         })
     });
@@ -100,7 +84,9 @@ fn superposition(c: &mut Criterion) {
         ("SPT on-line interval", MethodConfig::Spt(params.clone())),
         ("QIEM interval", MethodConfig::Qiem(params.clone())),
     ] {
-        let mut filter = method.build(label.into(), &ctx).expect("builds");
+        let mut filter = experiment
+            .build_method(&method, label.into(), 1)
+            .expect("builds");
         group.bench_function(label, |b| b.iter(|| filter.step(&obs).expect("steps")));
     }
     group.finish();

@@ -16,7 +16,7 @@ use crate::error::ZakaiError;
 use crate::filters::{Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
-use crate::scenario::methods::BuildContext;
+use crate::scenario::methods::{BuildContext, MethodConfig};
 use crate::scenario::ScenarioConfig;
 use crate::simulate::{rng_from_seed, simulate, Trajectory};
 
@@ -190,6 +190,28 @@ impl Experiment {
         &self.names
     }
 
+    /// Builds `method` (any method, not only the scenario's) on this experiment's model, prior,
+    /// domain and Δτ, with `seed` for its random numbers.
+    pub fn build_method(
+        &self,
+        method: &MethodConfig,
+        name: String,
+        seed: u64,
+    ) -> Result<Box<dyn Filter>, ZakaiError> {
+        let bounds = self.config.bounds();
+        method.build(
+            name,
+            &BuildContext {
+                model: &self.model,
+                prior: &self.prior,
+                seed,
+                probes: &self.probes,
+                bounds: &bounds,
+                dt_obs: self.config.time.dt_obs,
+            },
+        )
+    }
+
     /// Simulates the truth for `seed` and builds every filter; observation 0 is processed
     /// (a measurement at τ₀ for discrete models) and the initial estimates recorded.
     pub fn start(&self, seed: u64) -> Result<ExperimentRun, ZakaiError> {
@@ -200,17 +222,8 @@ impl Experiment {
         };
         let trajectory = simulate(&self.model, &x0, self.config.time_grid(), &mut rng);
         let mut filters = Vec::with_capacity(self.config.methods.len());
-        let bounds = self.config.bounds();
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
-            let ctx = BuildContext {
-                model: &self.model,
-                prior: &self.prior,
-                seed: method_seed(seed, i),
-                probes: &self.probes,
-                bounds: &bounds,
-                dt_obs: self.config.time.dt_obs,
-            };
-            filters.push(method.build(name.clone(), &ctx)?);
+            filters.push(self.build_method(method, name.clone(), method_seed(seed, i))?);
         }
         let tracks = self
             .names
