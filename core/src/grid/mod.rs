@@ -124,15 +124,31 @@ impl TensorGrid {
         (idx / self.strides[d]) % self.shape[d]
     }
 
+    /// Calls `f(idx, x)` for every node in storage order, updating the coordinates `x`
+    /// incrementally (an odometer) instead of dividing the flat index.
+    pub fn for_each_node(&self, mut f: impl FnMut(usize, &[f64])) {
+        let d = self.dim();
+        let mut counter = vec![0usize; d];
+        let mut x: Vec<f64> = (0..d).map(|k| self.coordinate(k, 0)).collect();
+        for idx in 0..self.len {
+            f(idx, &x);
+            for k in 0..d {
+                counter[k] += 1;
+                if counter[k] < self.shape[k] {
+                    x[k] += self.spacing[k];
+                    break;
+                }
+                counter[k] = 0;
+                x[k] = self.coordinate(k, 0);
+            }
+        }
+    }
+
     /// Evaluates `f` at every node.
     pub fn tabulate(&self, mut f: impl FnMut(&[f64]) -> f64) -> Vec<f64> {
-        let mut x = vec![0.0; self.dim()];
-        (0..self.len)
-            .map(|idx| {
-                self.node(idx, &mut x);
-                f(&x)
-            })
-            .collect()
+        let mut out = Vec::with_capacity(self.len);
+        self.for_each_node(|_, x| out.push(f(x)));
+        out
     }
 
     /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero).
@@ -146,16 +162,15 @@ impl TensorGrid {
         let mut total = 0.0;
         let mut mean = vec![0.0; d];
         let mut second = vec![0.0; d * d];
-        let mut x = vec![0.0; d];
         let mut best = (f64::NEG_INFINITY, 0);
-        for (idx, &w) in u.iter().enumerate() {
+        self.for_each_node(|idx, x| {
+            let w = u[idx];
             if w > best.0 {
                 best = (w, idx);
             }
             if w == 0.0 {
-                continue;
+                return;
             }
-            self.node(idx, &mut x);
             total += w;
             for a in 0..d {
                 mean[a] += w * x[a];
@@ -163,7 +178,8 @@ impl TensorGrid {
                     second[a * d + b] += w * x[a] * x[b];
                 }
             }
-        }
+        });
+        let mut x = vec![0.0; d];
         let mean = DVector::from_iterator(d, mean.iter().map(|m| m / total));
         let cov = DMatrix::from_fn(d, d, |a, b| second[a * d + b] / total - mean[a] * mean[b]);
         self.node(best.1, &mut x);

@@ -335,25 +335,22 @@ impl YauYauFilter {
     /// The robust-DMZ factor (15) in the log domain (see the module doc).
     fn update(&mut self, dy: &[f64], dt_obs: f64) {
         self.update_dt = dt_obs;
-        let shift = self
-            .u
-            .iter()
-            .enumerate()
-            .filter(|(_, &v)| v > 0.0)
-            .map(|(i, &v)| self.exponent(dy, i) + libm::log(v))
-            .fold(f64::NEG_INFINITY, f64::max);
+        // Pass 1: log of the updated value, a_i + ln u_i, and its maximum (one log per node).
+        let mut shift = f64::NEG_INFINITY;
         for i in 0..self.u.len() {
             let v = self.u[i];
-            self.u[i] = if v > 0.0 {
-                let w = libm::exp(self.exponent(dy, i) + libm::log(v) - shift);
-                if w < super::FLUSH_BELOW {
-                    0.0
-                } else {
-                    w
-                }
+            self.tmp[i] = if v > 0.0 {
+                let e = self.exponent(dy, i) + libm::log(v);
+                shift = shift.max(e);
+                e
             } else {
-                0.0
+                f64::NEG_INFINITY
             };
+        }
+        // Pass 2: rescaled values (one exp per node); the largest is exactly 1.
+        for (u, &e) in self.u.iter_mut().zip(&self.tmp) {
+            let w = libm::exp(e - shift);
+            *u = if w < super::FLUSH_BELOW { 0.0 } else { w };
         }
     }
 
