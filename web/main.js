@@ -10,6 +10,7 @@ const PARAMS = {
   ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
   qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
+  qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
   spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator']],
 };
@@ -21,6 +22,7 @@ const DEFAULTS = {
   qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
   iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
   spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update' },
+  qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = { ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt' };

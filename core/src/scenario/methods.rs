@@ -61,6 +61,8 @@ pub enum MethodConfig {
     Qiem(YauYauParams),
     /// The superposition technique of 000 §2.5 over QIEM.
     Spt(YauYauParams),
+    /// Fourth-order 2-D QIEM (000 (20)–(21), Algorithm 4).
+    Qiem4(YauYauParams),
 }
 
 /// What building a filter needs besides its own parameters.
@@ -110,6 +112,7 @@ impl MethodConfig {
             MethodConfig::Iem(_) => "iem",
             MethodConfig::Qiem(_) => "qiem",
             MethodConfig::Spt(_) => "spt",
+            MethodConfig::Qiem4(_) => "qiem4",
         }
     }
 
@@ -123,6 +126,7 @@ impl MethodConfig {
             "iem" => MethodConfig::Iem(YauYauParams::default()),
             "qiem" => MethodConfig::Qiem(YauYauParams::default()),
             "spt" => MethodConfig::Spt(YauYauParams::default()),
+            "qiem4" => MethodConfig::Qiem4(YauYauParams::default()),
             _ => return None,
         })
     }
@@ -137,6 +141,7 @@ impl MethodConfig {
             MethodConfig::Iem(_) => "IEM".into(),
             MethodConfig::Qiem(_) => "QIEM".into(),
             MethodConfig::Spt(_) => "SPT".into(),
+            MethodConfig::Qiem4(_) => "QIEM-4".into(),
         }
     }
 
@@ -174,6 +179,11 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Qiem4(p) => {
+                for (name, msg) in p.problems(n).into_iter().chain(p.fourth_order_problems(n)) {
+                    push(name, msg);
+                }
+            }
         }
     }
 
@@ -190,6 +200,7 @@ impl MethodConfig {
             MethodConfig::Iem(p) => yau_yau(name, Scheme::Iem, p, ctx)?,
             MethodConfig::Qiem(p) => yau_yau(name, Scheme::Qiem, p, ctx)?,
             MethodConfig::Spt(p) => yau_yau(name, Scheme::Superposition, p, ctx)?,
+            MethodConfig::Qiem4(p) => yau_yau(name, Scheme::Qiem4, p, ctx)?,
         })
     }
 }

@@ -282,6 +282,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
                 qiem(&[128, 128], 1e-3),
+                MethodConfig::Qiem4(grid(&[128, 128], 1e-3)),
             ],
         }),
         build(Spec {

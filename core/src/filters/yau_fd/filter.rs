@@ -157,6 +157,40 @@ impl SpectralSolve {
         }
     }
 
+    /// The spectral solve of 000 Algorithm 4 (2-D, equal Δs and Q in both dimensions) with the
+    /// compact right-hand side: in the DST basis, with `σ_j = −4 sin²(jπ/(2(N+1)))`, the 9-point
+    /// Laplacian (20)–(21) has eigenvalues `λ̃ = ((σ_i + 6)(σ_j + 6) − 36)/(6Δs²)` and the 5-point
+    /// one `λ₅ = (σ_i + σ_j)/Δs²`. Algorithm 4 divides by `1 − (Δt/2) Q λ̃`; the 9-point stencil
+    /// alone is only second order (its error is `(Δs²/12)Δ²u`), so we also apply the compact
+    /// (Mehrstellen) operator `I + (Δs²/12)Δ₅` to the right-hand side, which makes the Laplacian
+    /// part fourth order: divisor `(1 + cλ₅)/(1 + cλ₅ − (Δt/2) Q λ̃)`, `c = Δs²/12`.
+    fn new_fourth_order(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Self {
+        let plans = grid.shape().iter().map(|&n| DstPlan::new(n)).collect();
+        let scale: f64 = grid.shape().iter().map(|&n| 2.0 / (n + 1) as f64).product();
+        let ds = grid.spacing()[0];
+        let q = op.diffusion[0];
+        let c = ds * ds / 12.0;
+        let sigma = |i: usize, d: usize| {
+            let j = grid.index_in(i, d) + 1;
+            let n = grid.shape()[d];
+            let s = libm::sin(j as f64 * core::f64::consts::PI / (2.0 * (n + 1) as f64));
+            -4.0 * s * s
+        };
+        let divisor = (0..grid.len())
+            .map(|i| {
+                let (s1, s2) = (sigma(i, 0), sigma(i, 1));
+                let nine = ((s1 + 6.0) * (s2 + 6.0) - 36.0) / (6.0 * ds * ds);
+                let five = (s1 + s2) / (ds * ds);
+                scale * (1.0 + c * five) / (1.0 + c * five - 0.5 * dt * q * nine)
+            })
+            .collect();
+        SpectralSolve {
+            plans,
+            divisor,
+            line: Vec::new(),
+        }
+    }
+
     /// `u ← (I − Δt/2 Σ Q_dd T_d)⁻¹ u`.
     fn solve(&mut self, grid: &TensorGrid, u: &mut [f64]) {
         for (d, plan) in self.plans.iter_mut().enumerate() {
@@ -174,13 +208,20 @@ impl SpectralSolve {
 /// One QIEM step (18): explicit drift and potential, then the spectral implicit Laplacian.
 struct QiemStep {
     spectral: SpectralSolve,
+    fourth_order: bool,
     /// `e^{Δt q}` or `1 + Δt q` per node.
     potential: Vec<f64>,
     dt: f64,
 }
 
 impl QiemStep {
-    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64, term: PotentialTerm) -> Self {
+    fn new(
+        op: &KolmogorovOperator,
+        grid: &TensorGrid,
+        dt: f64,
+        term: PotentialTerm,
+        fourth_order: bool,
+    ) -> Self {
         let potential =
             op.q.iter()
                 .map(|&q| match term {
@@ -189,14 +230,19 @@ impl QiemStep {
                 })
                 .collect();
         QiemStep {
-            spectral: SpectralSolve::new(op, grid, dt),
+            spectral: if fourth_order {
+                SpectralSolve::new_fourth_order(op, grid, dt)
+            } else {
+                SpectralSolve::new(op, grid, dt)
+            },
+            fourth_order,
             potential,
             dt,
         }
     }
 
     fn step(&mut self, op: &KolmogorovOperator, grid: &TensorGrid, u: &mut [f64], tmp: &mut [f64]) {
-        op.add_advection(grid, u, self.dt, tmp);
+        op.add_advection_with(grid, u, self.dt, tmp, self.fourth_order);
         for ((v, t), w) in u.iter_mut().zip(tmp.iter()).zip(&self.potential) {
             *v = t * w;
         }
@@ -241,12 +287,24 @@ impl YauYauFilter {
         if scheme == Scheme::Superposition {
             problems.extend(params.superposition_problems(model.n));
         }
+        if scheme == Scheme::Qiem4 {
+            problems.extend(params.fourth_order_problems(model.n));
+        }
         if let Some((field, msg)) = problems.into_iter().next() {
             return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
         }
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
         let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
+        if scheme == Scheme::Qiem4 {
+            let (a, b) = (grid.spacing()[0], grid.spacing()[1]);
+            if (a - b).abs() > 1e-9 * a || op.diffusion[0] != op.diffusion[1] {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name}: the 9-point scheme needs square cells and equal diffusion, got Δs = ({a:.4}, {b:.4}) and Q = ({}, {}); make the domain square or adjust the points",
+                    op.diffusion[0], op.diffusion[1]
+                )));
+            }
+        }
         let u = grid.tabulate(|x| prior.density(x));
         let mut filter = YauYauFilter {
             name,
@@ -282,14 +340,16 @@ impl YauYauFilter {
         let dt = dt_obs / substeps as f64;
         let solver = match self.scheme {
             Scheme::Iem => Solver::Iem(SplitIem::new(&self.op, &self.grid, dt, self.params.alpha)),
-            Scheme::Qiem => Solver::Qiem(QiemStep::new(
+            Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
                 &self.op,
                 &self.grid,
                 dt,
                 self.params.potential,
+                self.scheme == Scheme::Qiem4,
             )),
             Scheme::Superposition => {
-                let mut qiem = QiemStep::new(&self.op, &self.grid, dt, PotentialTerm::Exponential);
+                let mut qiem =
+                    QiemStep::new(&self.op, &self.grid, dt, PotentialTerm::Exponential, false);
                 Solver::Superposition(Superposition::new(&self.grid, &self.params, |u, tmp| {
                     for _ in 0..substeps {
                         qiem.step(&self.op, &self.grid, u, tmp);
@@ -303,10 +363,10 @@ impl YauYauFilter {
                 w.extend(guarantees::iem_stability(&self.op, &self.grid));
                 w
             }
-            Scheme::Qiem if self.params.potential == PotentialTerm::Explicit => {
+            Scheme::Qiem | Scheme::Qiem4 if self.params.potential == PotentialTerm::Explicit => {
                 guarantees::qiem_stability(&self.op, &self.grid, dt)
             }
-            Scheme::Qiem | Scheme::Superposition => Vec::new(),
+            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => Vec::new(),
         };
         self.solver = Some((dt_obs, substeps, solver));
         Ok(())

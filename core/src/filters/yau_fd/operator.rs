@@ -126,7 +126,48 @@ impl KolmogorovOperator {
     /// drift part of (18); `q` is applied by the caller. Walks every grid line once per
     /// dimension, without per-node index arithmetic.
     pub fn add_advection(&self, grid: &TensorGrid, u: &[f64], dt: f64, out: &mut [f64]) {
+        self.add_advection_with(grid, u, dt, out, false)
+    }
+
+    /// As [`KolmogorovOperator::add_advection`], with the 5-point fourth-order first difference
+    /// `(−u_{j+2} + 8u_{j+1} − 8u_{j−1} + u_{j−2})/(12Δs)` when `fourth_order` (000 Algorithm 4's
+    /// 𝔻_d, as we read it; zero values beyond the boundary).
+    pub fn add_advection_with(
+        &self,
+        grid: &TensorGrid,
+        u: &[f64],
+        dt: f64,
+        out: &mut [f64],
+        fourth_order: bool,
+    ) {
         out.copy_from_slice(u);
+        if fourth_order {
+            for d in 0..grid.dim() {
+                let stride = grid.stride(d);
+                let n = grid.shape()[d] as isize;
+                let c = dt / (12.0 * grid.spacing()[d]);
+                let p = &self.p[d];
+                let block = stride * n as usize;
+                for outer in (0..u.len()).step_by(block) {
+                    for inner in 0..stride {
+                        let base = outer + inner;
+                        let at = |j: isize| {
+                            if j < 0 || j >= n {
+                                0.0
+                            } else {
+                                u[base + j as usize * stride]
+                            }
+                        };
+                        for j in 0..n {
+                            let i = base + j as usize * stride;
+                            let diff = -at(j + 2) + 8.0 * at(j + 1) - 8.0 * at(j - 1) + at(j - 2);
+                            out[i] += c * p[i] * diff;
+                        }
+                    }
+                }
+            }
+            return;
+        }
         for d in 0..grid.dim() {
             let stride = grid.stride(d);
             let n = grid.shape()[d];
