@@ -278,24 +278,27 @@ function scheduleValidate() {
   validateTimer = setTimeout(validate, 150);
 }
 
-function validate() {
+// The form's scenario, or null after showing the problems only the page can see.
+function checkedForm() {
   const config = readForm();
   const local = localProblems(config);
   if (local.length) {
     showProblems(local);
-    return;
+    return null;
   }
+  return config;
+}
+
+function validate() {
+  const config = checkedForm();
+  if (!config) return;
   state.validateId += 1;
   worker.postMessage({ type: 'validate', id: state.validateId, config });
 }
 
 function apply() {
-  const config = readForm();
-  const local = localProblems(config);
-  if (local.length) {
-    showProblems(local);
-    return;
-  }
+  const config = checkedForm();
+  if (!config) return;
   setPlaying(false);
   worker.postMessage({ type: 'load', config, seed: config.seed });
   state.pendingConfig = config;

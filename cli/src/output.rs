@@ -13,16 +13,22 @@ fn fmt_opt(v: Option<f64>) -> String {
     v.map_or_else(|| "failed".to_string(), |x| format!("{x:.4}"))
 }
 
-/// `a / b / …` with four decimals, or "—" when the method failed in every run.
-fn per_component(v: &Option<Vec<f64>>) -> String {
+/// Per-component values joined by `sep`, each written by `cell`; `missing` when the method
+/// failed in every run.
+fn join_components(
+    v: &Option<Vec<f64>>,
+    cell: fn(&f64) -> String,
+    sep: &str,
+    missing: &str,
+) -> String {
     v.as_ref()
-        .map(|v| {
-            v.iter()
-                .map(|x| format!("{x:.4}"))
-                .collect::<Vec<_>>()
-                .join(" / ")
-        })
-        .unwrap_or_else(|| "—".into())
+        .map(|v| v.iter().map(cell).collect::<Vec<_>>().join(sep))
+        .unwrap_or_else(|| missing.into())
+}
+
+/// `a / b / …` with four decimals, or "—" (table cells).
+fn per_component(v: &Option<Vec<f64>>) -> String {
+    join_components(v, |x| format!("{x:.4}"), " / ", "—")
 }
 
 /// Renders `summary` in `format`.
@@ -43,16 +49,7 @@ pub fn render(
                 "method,runs,failed,mse,mse_stderr,mse_components,rms_components,seconds_per_run,seconds_per_step"
             )?;
             for m in &summary.methods {
-                let join = |v: &Option<Vec<f64>>| {
-                    v.as_ref()
-                        .map(|v| {
-                            v.iter()
-                                .map(|x| format!("{x}"))
-                                .collect::<Vec<_>>()
-                                .join(";")
-                        })
-                        .unwrap_or_default()
-                };
+                let join = |v: &Option<Vec<f64>>| join_components(v, |x| format!("{x}"), ";", "");
                 writeln!(
                     s,
                     "{},{},{},{},{},{},{},{},{}",

@@ -47,6 +47,19 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
     }
 }
 
+/// A stable 2-D linear model observed in both components, on [−5, 5]².
+fn linear_2d(points: usize, dt: f64) -> ScenarioConfig {
+    let mut c = linear(points, dt);
+    c.model.drift = vec!["-0.6*x1 + 0.3*x2".into(), "-0.2*x1 - 0.5*x2".into()];
+    c.model.observation = vec!["x1".into(), "x1 + x2".into()];
+    c.prior = PriorConfig::Gaussian {
+        mean: vec![0.5, -0.3],
+        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]],
+    };
+    c.domain = vec![[-5.0, 5.0], [-5.0, 5.0]];
+    c
+}
+
 #[test]
 fn grid_filters_track_the_kalman_bucy_posterior_on_a_linear_model() {
     // The KF is exact up to its O(Δτ) update; the grid filters add O(Δs²) + O(Δt). With
@@ -254,14 +267,7 @@ fn split_iem_and_qiem_track_the_kalman_filter_in_two_dimensions() {
         dt: 2e-3,
         ..YauYauParams::default()
     };
-    let mut c = linear(96, 2e-3);
-    c.model.drift = vec!["-0.6*x1 + 0.3*x2".into(), "-0.2*x1 - 0.5*x2".into()];
-    c.model.observation = vec!["x1".into(), "x1 + x2".into()];
-    c.prior = PriorConfig::Gaussian {
-        mean: vec![0.5, -0.3],
-        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]],
-    };
-    c.domain = vec![[-5.0, 5.0], [-5.0, 5.0]];
+    let mut c = linear_2d(96, 2e-3);
     c.time.t_final = 1.0;
     c.methods = vec![
         MethodConfig::Kalman(KalmanParams::default()),
@@ -320,14 +326,7 @@ fn the_superposition_technique_reproduces_qiem() {
 }
 
 fn final_density_2d(method: fn(YauYauParams) -> MethodConfig, points: usize) -> (usize, Vec<f64>) {
-    let mut c = linear(points, 1e-3);
-    c.model.drift = vec!["-0.6*x1 + 0.3*x2".into(), "-0.2*x1 - 0.5*x2".into()];
-    c.model.observation = vec!["x1".into(), "x1 + x2".into()];
-    c.prior = PriorConfig::Gaussian {
-        mean: vec![0.5, -0.3],
-        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]],
-    };
-    c.domain = vec![[-5.0, 5.0], [-5.0, 5.0]];
+    let mut c = linear_2d(points, 1e-3);
     c.time.t_final = 0.2;
     c.methods = vec![method(YauYauParams {
         points: vec![points],

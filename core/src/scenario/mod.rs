@@ -213,7 +213,14 @@ fn matrix(rows: &[Vec<f64>], n: usize) -> Option<DMatrix<f64>> {
         .then(|| DMatrix::from_fn(n, n, |i, j| rows[i][j]))
 }
 
-fn check_spd(rows: &[Vec<f64>], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
+/// Appends a problem unless `rows` is an `n × n` finite symmetric positive-definite matrix
+/// (symmetric to 1e-12).
+pub(crate) fn check_spd(
+    rows: &[Vec<f64>],
+    n: usize,
+    field: &str,
+    problems: &mut Vec<ConfigProblem>,
+) {
     match matrix(rows, n) {
         None => problems.push(ConfigProblem::new(
             field,
@@ -223,7 +230,7 @@ fn check_spd(rows: &[Vec<f64>], n: usize, field: &str, problems: &mut Vec<Config
             problems.push(ConfigProblem::new(field, "entries must be finite"))
         }
         Some(p) => {
-            if (&p - p.transpose()).amax() > 1e-12 * (1.0 + p.amax()) || p.cholesky().is_none() {
+            if (&p - p.transpose()).amax() > 1e-12 || p.cholesky().is_none() {
                 problems.push(ConfigProblem::new(
                     field,
                     "must be symmetric positive definite",
@@ -233,7 +240,8 @@ fn check_spd(rows: &[Vec<f64>], n: usize, field: &str, problems: &mut Vec<Config
     }
 }
 
-fn check_vector(v: &[f64], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
+/// Appends a problem unless `v` has `n` finite entries.
+pub(crate) fn check_vector(v: &[f64], n: usize, field: &str, problems: &mut Vec<ConfigProblem>) {
     if v.len() != n {
         problems.push(ConfigProblem::new(
             field,

@@ -117,36 +117,13 @@ pub fn validate_init(
     field: &str,
     problems: &mut Vec<crate::scenario::ConfigProblem>,
 ) {
-    use crate::scenario::ConfigProblem;
+    use crate::scenario::{check_spd, check_vector, ConfigProblem};
     use alloc::format;
     if let Some(m) = &init.mean {
-        if m.len() != n {
-            problems.push(ConfigProblem::new(
-                format!("{field}.init.mean"),
-                format!("needs {n} entries, {} given", m.len()),
-            ));
-        } else if m.iter().any(|v| !v.is_finite()) {
-            problems.push(ConfigProblem::new(
-                format!("{field}.init.mean"),
-                "must be finite",
-            ));
-        }
+        check_vector(m, n, &format!("{field}.init.mean"), problems);
     }
     if let Some(c) = &init.cov {
-        if c.len() != n || c.iter().any(|r| r.len() != n) {
-            problems.push(ConfigProblem::new(
-                format!("{field}.init.cov"),
-                format!("must be {n}×{n}"),
-            ));
-        } else {
-            let p = DMatrix::from_fn(n, n, |i, j| c[i][j]);
-            if p.clone().cholesky().is_none() || (&p - p.transpose()).amax() > 1e-12 {
-                problems.push(ConfigProblem::new(
-                    format!("{field}.init.cov"),
-                    "must be symmetric positive definite",
-                ));
-            }
-        }
+        check_spd(c, n, &format!("{field}.init.cov"), problems);
     }
     if let Some(v) = init.variance {
         if !(v > 0.0 && v.is_finite()) {

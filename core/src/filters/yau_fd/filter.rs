@@ -134,20 +134,21 @@ struct SpectralSolve {
 }
 
 impl SpectralSolve {
-    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Self {
+    /// Plans the DSTs and tabulates `symbol(sin²)` times the inverse-DST scale per node, where
+    /// `sin²[d] = sin²(j_d π / (2(N_d + 1)))` for the node's DST index j_d.
+    fn from_symbol(grid: &TensorGrid, symbol: impl Fn(&[f64]) -> f64) -> Self {
         let plans = grid.shape().iter().map(|&n| DstPlan::new(n)).collect();
         let scale: f64 = grid.shape().iter().map(|&n| 2.0 / (n + 1) as f64).product();
+        let mut sin2 = vec![0.0; grid.dim()];
         let divisor = (0..grid.len())
             .map(|i| {
-                let mut lambda = 0.0;
-                for d in 0..grid.dim() {
+                for (d, s2) in sin2.iter_mut().enumerate() {
                     let j = grid.index_in(i, d) + 1;
                     let n = grid.shape()[d];
-                    let ds = grid.spacing()[d];
                     let s = libm::sin(j as f64 * core::f64::consts::PI / (2.0 * (n + 1) as f64));
-                    lambda += op.diffusion[d] * 2.0 / (ds * ds) * s * s;
+                    *s2 = s * s;
                 }
-                scale / (1.0 + dt * lambda)
+                scale * symbol(&sin2)
             })
             .collect();
         SpectralSolve {
@@ -155,6 +156,18 @@ impl SpectralSolve {
             divisor,
             line: Vec::new(),
         }
+    }
+
+    /// QIEM (18): `1 / (1 + Δt Σ_d Q_dd (2/Δs_d²) sin²)`.
+    fn new(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Self {
+        Self::from_symbol(grid, |sin2| {
+            let lambda: f64 = sin2
+                .iter()
+                .enumerate()
+                .map(|(d, s2)| op.diffusion[d] * 2.0 / (grid.spacing()[d] * grid.spacing()[d]) * s2)
+                .sum();
+            1.0 / (1.0 + dt * lambda)
+        })
     }
 
     /// The spectral solve of 000 Algorithm 4 (2-D, equal Δs and Q in both dimensions) with the
@@ -165,30 +178,15 @@ impl SpectralSolve {
     /// (Mehrstellen) operator `I + (Δs²/12)Δ₅` to the right-hand side, which makes the Laplacian
     /// part fourth order: divisor `(1 + cλ₅)/(1 + cλ₅ − (Δt/2) Q λ̃)`, `c = Δs²/12`.
     fn new_fourth_order(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Self {
-        let plans = grid.shape().iter().map(|&n| DstPlan::new(n)).collect();
-        let scale: f64 = grid.shape().iter().map(|&n| 2.0 / (n + 1) as f64).product();
         let ds = grid.spacing()[0];
         let q = op.diffusion[0];
         let c = ds * ds / 12.0;
-        let sigma = |i: usize, d: usize| {
-            let j = grid.index_in(i, d) + 1;
-            let n = grid.shape()[d];
-            let s = libm::sin(j as f64 * core::f64::consts::PI / (2.0 * (n + 1) as f64));
-            -4.0 * s * s
-        };
-        let divisor = (0..grid.len())
-            .map(|i| {
-                let (s1, s2) = (sigma(i, 0), sigma(i, 1));
-                let nine = ((s1 + 6.0) * (s2 + 6.0) - 36.0) / (6.0 * ds * ds);
-                let five = (s1 + s2) / (ds * ds);
-                scale * (1.0 + c * five) / (1.0 + c * five - 0.5 * dt * q * nine)
-            })
-            .collect();
-        SpectralSolve {
-            plans,
-            divisor,
-            line: Vec::new(),
-        }
+        Self::from_symbol(grid, |sin2| {
+            let (s1, s2) = (-4.0 * sin2[0], -4.0 * sin2[1]);
+            let nine = ((s1 + 6.0) * (s2 + 6.0) - 36.0) / (6.0 * ds * ds);
+            let five = (s1 + s2) / (ds * ds);
+            (1.0 + c * five) / (1.0 + c * five - 0.5 * dt * q * nine)
+        })
     }
 
     /// `u ← (I − Δt/2 Σ Q_dd T_d)⁻¹ u`.

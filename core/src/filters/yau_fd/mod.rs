@@ -82,6 +82,34 @@ pub enum PotentialTerm {
 /// an update: they carry no information and, once subnormal, make every later operation slow.
 pub const FLUSH_BELOW: f64 = 1e-250;
 
+/// One count for every dimension, or the per-dimension list as given.
+fn per_dimension(counts: &[usize], n: usize) -> Vec<usize> {
+    match counts.len() {
+        1 => vec![counts[0]; n],
+        _ => counts.to_vec(),
+    }
+}
+
+/// The product of `counts`, or `None` on overflow.
+fn product(counts: &[usize]) -> Option<usize> {
+    counts.iter().try_fold(1usize, |a, &k| a.checked_mul(k))
+}
+
+/// A per-dimension count list must have one entry or `n`.
+fn count_problem(
+    field: &'static str,
+    counts: &[usize],
+    n: usize,
+    problems: &mut Vec<(&'static str, String)>,
+) {
+    if counts.len() != 1 && counts.len() != n {
+        problems.push((
+            field,
+            format!("give one count or {n}, got {}", counts.len()),
+        ));
+    }
+}
+
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
 pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
@@ -136,18 +164,12 @@ impl Default for YauYauParams {
 impl YauYauParams {
     /// Points per dimension for an `n`-dimensional model.
     pub fn shape(&self, n: usize) -> Vec<usize> {
-        match self.points.len() {
-            1 => vec![self.points[0]; n],
-            _ => self.points.clone(),
-        }
+        per_dimension(&self.points, n)
     }
 
     /// Bump centres per dimension for an `n`-dimensional model (superposition technique).
     pub fn centre_shape(&self, n: usize) -> Vec<usize> {
-        match self.centres.len() {
-            1 => vec![self.centres[0]; n],
-            _ => self.centres.clone(),
-        }
+        per_dimension(&self.centres, n)
     }
 
     /// Problems specific to the fourth-order 2-D scheme.
@@ -165,12 +187,7 @@ impl YauYauParams {
     /// Problems with the superposition technique's own parameters.
     pub fn superposition_problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        if self.centres.len() != 1 && self.centres.len() != n {
-            p.push((
-                "centres",
-                format!("give one count or {n}, got {}", self.centres.len()),
-            ));
-        }
+        count_problem("centres", &self.centres, n, &mut p);
         if self.centres.contains(&0) {
             p.push(("centres", "at least 1 per dimension".into()));
         }
@@ -179,15 +196,7 @@ impl YauYauParams {
                 p.push(("eta", "must be positive and finite".into()));
             }
         }
-        let nodes = self
-            .shape(n)
-            .iter()
-            .try_fold(1usize, |a, &k| a.checked_mul(k));
-        let bumps = self
-            .centre_shape(n)
-            .iter()
-            .try_fold(1usize, |a, &k| a.checked_mul(k));
-        match (nodes, bumps) {
+        match (product(&self.shape(n)), product(&self.centre_shape(n))) {
             (Some(a), Some(b)) if a.checked_mul(b).is_some_and(|e| e <= MAX_SUPERPOSITION_ENTRIES) => {}
             _ => p.push((
                 "centres",
@@ -202,20 +211,11 @@ impl YauYauParams {
     /// Problems with the parameters for an `n`-dimensional model.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        if self.points.len() != 1 && self.points.len() != n {
-            p.push((
-                "points",
-                format!("give one count or {n}, got {}", self.points.len()),
-            ));
-        }
+        count_problem("points", &self.points, n, &mut p);
         if self.points.iter().any(|&k| k < 3) {
             p.push(("points", "at least 3 per dimension".into()));
         }
-        let total = self
-            .shape(n)
-            .iter()
-            .try_fold(1usize, |acc, &k| acc.checked_mul(k));
-        match total {
+        match product(&self.shape(n)) {
             Some(t) if t <= crate::grid::MAX_NODES => {}
             _ => p.push((
                 "points",
