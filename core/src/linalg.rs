@@ -57,6 +57,66 @@ pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) 
     -0.5 * z.norm_squared() - log_det - 0.5 * (n as f64) * libm::log(2.0 * core::f64::consts::PI)
 }
 
+/// `v = m · 2^e` with `m ∈ [½, 1)` for finite `v > 0` (subnormals included), e as a float: the
+/// binary exponent stands in for `log₂ v` where a logarithm per value would cost too much.
+#[inline]
+pub fn binary_split(v: f64) -> (f64, f64) {
+    const EXPONENT: u64 = 0x7ff << 52;
+    let (v, bias) = if v.to_bits() & EXPONENT == 0 {
+        (v * f64::from_bits((1023 + 64) << 52), 64.0)
+    } else {
+        (v, 0.0)
+    };
+    let bits = v.to_bits();
+    let e = ((bits & EXPONENT) >> 52) as f64 - 1022.0 - bias;
+    let m = f64::from_bits((bits & !EXPONENT) | (1022 << 52));
+    (m, e)
+}
+
+/// `e^x` for `x ≤ ln 2`, within a few ulp, and 0 (not a subnormal) for `x < −700`. Made for
+/// loops over grid nodes: only additions, multiplications and integer bit operations, so the
+/// compiler vectorises it, and the result is bit-identical on every IEEE-754 target.
+///
+/// `x = k ln 2 + r` with `k = round(x / ln 2)` (round to nearest by adding and subtracting
+/// 1.5·2⁵²), `|r| ≤ ½ ln 2` by the two-part Cody–Waite constant, `e^r` by its Taylor polynomial
+/// of degree 13 (truncation `(½ ln 2)¹⁴/14! < 10⁻¹⁸`), and `2^k` written into the exponent bits.
+#[inline]
+pub fn exp_nonpositive(x: f64) -> f64 {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    let below = x < -700.0;
+    let x = if below { -700.0 } else { x };
+    let t = x * core::f64::consts::LOG2_E + ROUND;
+    let k = t - ROUND;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let mut p = 1.0 / 6_227_020_800.0;
+    for c in [
+        1.0 / 479_001_600.0,
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ] {
+        p = p * r + c;
+    }
+    // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
+    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
+    if below {
+        0.0
+    } else {
+        p * scale
+    }
+}
+
 /// `log Σ exp(a_i)` without overflow; `-∞` for an empty or all `-∞` input.
 pub fn log_sum_exp(a: impl Iterator<Item = f64> + Clone) -> f64 {
     let max = a.clone().fold(f64::NEG_INFINITY, f64::max);
@@ -101,6 +161,38 @@ pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exp_nonpositive_matches_libm() {
+        let mut worst: f64 = 0.0;
+        for i in 0..=200_000 {
+            let x = 0.69 - i as f64 * 700.0 / 200_000.0;
+            let (a, b) = (exp_nonpositive(x), libm::exp(x));
+            worst = worst.max((a - b).abs() / b);
+        }
+        assert!(worst < 4.0 * f64::EPSILON, "worst relative error {worst:e}");
+        assert_eq!(exp_nonpositive(-700.5), 0.0);
+        assert_eq!(exp_nonpositive(f64::NEG_INFINITY), 0.0);
+        assert_eq!(exp_nonpositive(0.0), 1.0);
+    }
+
+    #[test]
+    fn binary_split_recombines_exactly() {
+        for v in [
+            1.0,
+            0.5,
+            0.75,
+            3.0e-300,
+            5e-320,
+            1.7e308,
+            core::f64::consts::PI,
+        ] {
+            let (m, e) = binary_split(v);
+            assert!((0.5..1.0).contains(&m), "{v}: {m}");
+            assert_eq!(libm::ldexp(m, e as i32), v, "{v}");
+            assert_eq!(libm::frexp(v), (m, e as i32), "{v}");
+        }
+    }
 
     #[test]
     fn expm_of_a_rotation_generator_is_a_rotation() {

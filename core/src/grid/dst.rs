@@ -5,35 +5,49 @@
 //! `−(4/Δs²) sin²(jπ / (2(N + 1)))` (000 Algorithm 3, line 13). DST-I is its own inverse up to
 //! the factor `2/(N + 1)`.
 //!
-//! Computation: two real lines at once, as the real and imaginary parts of one complex odd
-//! extension of length 2(N + 1), whose FFT gives both transforms (−Im and +Re parts / 2).
+//! Computation (one real FFT of length N + 1 per line, which realfft performs as a complex FFT
+//! of half that length): with M = N + 1 and x_0 = x_M = 0, the sequence
+//! `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})`, j = 0..M−1, has the real DFT
+//! `Σ_j y_j e^{−2πijk/M} = R_k − i I_k` with `I_k = X_{2k}` (the antisymmetric half of y picks out
+//! the even sine frequencies) and `R_k = X_{2k+1} − X_{2k−1}` (the symmetric half, through
+//! `2 sin a cos b = sin(a + b) + sin(a − b)`), so the odd coefficients follow by the running sum
+//! from `X_1 = R_0 / 2`.
 
 use alloc::sync::Arc;
 use alloc::vec;
 use alloc::vec::Vec;
 
+use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
-use rustfft::{Fft, FftPlanner};
 
 /// A planned DST-I of one length with its scratch buffers.
 pub struct DstPlan {
     n: usize,
-    fft: Arc<dyn Fft<f64>>,
-    buffer: Vec<Complex<f64>>,
+    fft: Arc<dyn RealToComplex<f64>>,
+    /// `sin(jπ/(N + 1))`, j = 0..N.
+    sines: Vec<f64>,
+    input: Vec<f64>,
+    spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
+    line: Vec<f64>,
 }
 
 impl DstPlan {
     /// Plans the transform of length `n` (allocates here, never in `transform`).
     pub fn new(n: usize) -> Self {
-        let m = 2 * (n + 1);
-        let fft = FftPlanner::new().plan_fft_forward(m);
-        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        let m = n + 1;
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(m);
+        let sines = (0..m)
+            .map(|j| libm::sin(j as f64 * core::f64::consts::PI / m as f64))
+            .collect();
         DstPlan {
             n,
+            sines,
+            input: fft.make_input_vec(),
+            spectrum: fft.make_output_vec(),
+            scratch: fft.make_scratch_vec(),
+            line: vec![0.0; n],
             fft,
-            buffer: vec![Complex::new(0.0, 0.0); m],
-            scratch,
         }
     }
 
@@ -47,73 +61,59 @@ impl DstPlan {
         self.n == 0
     }
 
-    /// Transforms two lines in place (`b` may be `None` for a single line).
-    pub fn transform_pair(&mut self, a: &mut [f64], b: Option<&mut [f64]>) {
+    /// Transforms one line of length N in place.
+    pub fn transform(&mut self, x: &mut [f64]) {
         let n = self.n;
-        let m = 2 * (n + 1);
-        let buf = &mut self.buffer;
-        buf[0] = Complex::new(0.0, 0.0);
-        buf[n + 1] = Complex::new(0.0, 0.0);
-        match &b {
-            Some(b) => {
-                for i in 0..n {
-                    buf[i + 1] = Complex::new(a[i], b[i]);
-                    buf[m - 1 - i] = Complex::new(-a[i], -b[i]);
-                }
-            }
-            None => {
-                for i in 0..n {
-                    buf[i + 1] = Complex::new(a[i], 0.0);
-                    buf[m - 1 - i] = Complex::new(-a[i], 0.0);
-                }
-            }
+        let m = n + 1;
+        self.input[0] = 0.0;
+        for j in 1..m {
+            let (a, b) = (x[j - 1], x[m - j - 1]);
+            self.input[j] = self.sines[j] * (a + b) + 0.5 * (a - b);
         }
-        self.fft.process_with_scratch(buf, &mut self.scratch);
-        // FFT of the odd extension of x is −2i·DST(x); with x = a + i b it is
-        // −2i·DST(a) + 2·DST(b), so DST(a) = −Im/2 and DST(b) = Re/2.
-        for k in 0..n {
-            a[k] = -0.5 * buf[k + 1].im;
-        }
-        if let Some(b) = b {
-            for k in 0..n {
-                b[k] = 0.5 * buf[k + 1].re;
+        let done =
+            self.fft
+                .process_with_scratch(&mut self.input, &mut self.spectrum, &mut self.scratch);
+        // The buffers were made by the plan, so their lengths are right.
+        debug_assert!(done.is_ok());
+        let mut odd = 0.5 * self.spectrum[0].re;
+        x[0] = odd;
+        for (k, c) in self.spectrum.iter().enumerate().skip(1) {
+            if 2 * k > n {
+                break;
             }
+            x[2 * k - 1] = -c.im;
+            if 2 * k + 1 > n {
+                break;
+            }
+            odd += c.re;
+            x[2 * k] = odd;
         }
     }
 
     /// Transforms every line of a tensor array along the dimension with `stride`, whose lines
-    /// have this plan's length; `line` is scratch of twice that length.
-    pub fn transform_axis(&mut self, data: &mut [f64], stride: usize, line: &mut Vec<f64>) {
+    /// have this plan's length.
+    pub fn transform_axis(&mut self, data: &mut [f64], stride: usize) {
         let n = self.n;
-        line.resize(2 * n, 0.0);
-        let block = stride * n;
-        let lines = data.len() / n;
-        // Line number l starts at (l / stride) * block + l % stride; take them two at a time.
-        let start = |l: usize| (l / stride) * block + l % stride;
-        let mut l = 0;
-        while l < lines {
-            let (la, lb) = line.split_at_mut(n);
-            let s0 = start(l);
-            for i in 0..n {
-                la[i] = data[s0 + i * stride];
+        if stride == 1 {
+            for line in data.chunks_exact_mut(n) {
+                self.transform(line);
             }
-            if l + 1 < lines {
-                let s1 = start(l + 1);
-                for i in 0..n {
-                    lb[i] = data[s1 + i * stride];
-                }
-                self.transform_pair(la, Some(lb));
-                for i in 0..n {
-                    data[s1 + i * stride] = lb[i];
-                }
-            } else {
-                self.transform_pair(la, None);
-            }
-            for i in 0..n {
-                data[s0 + i * stride] = la[i];
-            }
-            l += 2;
+            return;
         }
+        let block = stride * n;
+        let mut line = core::mem::take(&mut self.line);
+        for l in 0..data.len() / n {
+            // Line number l starts at (l / stride) * block + l % stride.
+            let s = (l / stride) * block + l % stride;
+            for (i, v) in line.iter_mut().enumerate() {
+                *v = data[s + i * stride];
+            }
+            self.transform(&mut line);
+            for (i, v) in line.iter().enumerate() {
+                data[s + i * stride] = *v;
+            }
+        }
+        self.line = line;
     }
 }
 
@@ -136,19 +136,20 @@ mod tests {
 
     #[test]
     fn matches_the_definition_and_inverts_itself() {
-        for n in [1usize, 5, 16, 31] {
+        for n in [1usize, 2, 5, 16, 31, 100] {
             let a: Vec<f64> = (0..n).map(|i| ((i * 7 + 3) % 11) as f64 - 4.5).collect();
             let b: Vec<f64> = (0..n).map(|i| ((i * 5 + 1) % 13) as f64 * 0.3).collect();
             let mut plan = DstPlan::new(n);
             let (mut ta, mut tb) = (a.clone(), b.clone());
-            plan.transform_pair(&mut ta, Some(&mut tb));
+            plan.transform(&mut ta);
+            plan.transform(&mut tb);
             for (x, y) in ta.iter().zip(naive(&a)) {
                 assert!((x - y).abs() < 1e-10);
             }
             for (x, y) in tb.iter().zip(naive(&b)) {
                 assert!((x - y).abs() < 1e-10);
             }
-            plan.transform_pair(&mut ta, None);
+            plan.transform(&mut ta);
             let scale = 2.0 / (n + 1) as f64;
             for (x, y) in ta.iter().zip(&a) {
                 assert!((x * scale - y).abs() < 1e-10);
@@ -161,12 +162,19 @@ mod tests {
         let (n0, n1) = (4usize, 3usize);
         let data: Vec<f64> = (0..n0 * n1).map(|i| (i as f64 * 0.7).sin()).collect();
         let mut d = data.clone();
-        let mut line = Vec::new();
-        DstPlan::new(n1).transform_axis(&mut d, n0, &mut line);
+        DstPlan::new(n1).transform_axis(&mut d, n0);
         for i in 0..n0 {
             let col: Vec<f64> = (0..n1).map(|j| data[i + j * n0]).collect();
             for (j, v) in naive(&col).iter().enumerate() {
                 assert!((d[i + j * n0] - v).abs() < 1e-12);
+            }
+        }
+        let mut rows = data.clone();
+        DstPlan::new(n0).transform_axis(&mut rows, 1);
+        for j in 0..n1 {
+            let row = &data[j * n0..(j + 1) * n0];
+            for (i, v) in naive(row).iter().enumerate() {
+                assert!((rows[i + j * n0] - v).abs() < 1e-12);
             }
         }
     }

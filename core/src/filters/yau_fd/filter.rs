@@ -15,6 +15,7 @@ use crate::error::FilterError;
 use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind};
 use crate::grid::dst::DstPlan;
 use crate::grid::TensorGrid;
+use crate::linalg;
 use crate::model::{Model, Prior};
 
 /// IEM in D dimensions by Lie operator splitting: `A = Σ_d A_d` with
@@ -130,7 +131,6 @@ struct SpectralSolve {
     /// `1 / (1 + Δt Σ_d Q_dd (2/Δs_d²) sin²(j_d π / (2(N_d + 1))))` times the inverse-DST
     /// scale `Π_d 2/(N_d + 1)`, per node.
     divisor: Vec<f64>,
-    line: Vec<f64>,
 }
 
 impl SpectralSolve {
@@ -151,11 +151,7 @@ impl SpectralSolve {
                 scale * symbol(&sin2)
             })
             .collect();
-        SpectralSolve {
-            plans,
-            divisor,
-            line: Vec::new(),
-        }
+        SpectralSolve { plans, divisor }
     }
 
     /// QIEM (18): `1 / (1 + Δt Σ_d Q_dd (2/Δs_d²) sin²)`.
@@ -192,13 +188,13 @@ impl SpectralSolve {
     /// `u ← (I − Δt/2 Σ Q_dd T_d)⁻¹ u`.
     fn solve(&mut self, grid: &TensorGrid, u: &mut [f64]) {
         for (d, plan) in self.plans.iter_mut().enumerate() {
-            plan.transform_axis(u, grid.stride(d), &mut self.line);
+            plan.transform_axis(u, grid.stride(d));
         }
         for (v, w) in u.iter_mut().zip(&self.divisor) {
             *v *= w;
         }
         for (d, plan) in self.plans.iter_mut().enumerate() {
-            plan.transform_axis(u, grid.stride(d), &mut self.line);
+            plan.transform_axis(u, grid.stride(d));
         }
     }
 }
@@ -265,7 +261,6 @@ pub struct YauYauFilter {
     u: Vec<f64>,
     tmp: Vec<f64>,
     solver: Option<(f64, usize, Solver)>,
-    update_dt: f64,
     warnings: Vec<GuaranteeWarning>,
     estimate: Estimate,
 }
@@ -313,7 +308,6 @@ impl YauYauFilter {
             op,
             u,
             solver: None,
-            update_dt: 0.0,
             warnings: Vec::new(),
             estimate: Estimate {
                 mean: DVector::zeros(model.n),
@@ -372,54 +366,57 @@ impl YauYauFilter {
 
     /// Normalises to unit mass and refreshes the estimate.
     fn normalise(&mut self) -> Result<(), FilterError> {
-        let mass = self.grid.mass(&self.u);
-        if !mass.is_finite() {
+        let m = self.grid.moments(&self.u);
+        if !m.mass.is_finite() {
             return Err(FilterError::NonFinite { what: "density" });
         }
-        if mass <= 0.0 {
+        if m.mass <= 0.0 {
             return Err(FilterError::MassLost);
         }
-        let inv = 1.0 / mass;
+        let inv = 1.0 / m.mass;
         self.u.iter_mut().for_each(|v| *v *= inv);
-        let (mean, cov, map) = self.grid.moments(&self.u);
         self.estimate = Estimate {
-            mean,
-            covariance: Some(cov),
-            map: Some(map),
+            mean: m.mean,
+            covariance: Some(m.covariance),
+            map: Some(m.map),
         };
         Ok(())
     }
 
-    /// The robust-DMZ factor (15) in the log domain (see the module doc).
+    /// The robust-DMZ factor (15) in the log domain (see the module doc), without a logarithm:
+    /// each value is split as `u_i = m_i 2^{e_i}` with `m_i ∈ [½, 1)`, the exponent
+    /// `a_i + e_i ln 2` (with `a_i = Δyᵀ S⁻¹ h(s_i)`, less `½ hᵀS⁻¹h(s_i) Δτ` when the likelihood
+    /// is in the update) is within ln 2 of `a_i + ln u_i`, and the new value is
+    /// `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value is at
+    /// most 1, the largest at least ½, and no intermediate overflows.
     fn update(&mut self, dy: &[f64], dt_obs: f64) {
-        self.update_dt = dt_obs;
-        // Pass 1: log of the updated value, a_i + ln u_i, and its maximum (one log per node).
-        let mut shift = f64::NEG_INFINITY;
-        for i in 0..self.u.len() {
-            let v = self.u[i];
-            self.tmp[i] = if v > 0.0 {
-                let e = self.exponent(dy, i) + libm::log(v);
-                shift = shift.max(e);
-                e
-            } else {
-                f64::NEG_INFINITY
-            };
+        let a = &mut self.tmp;
+        for (a, h) in a.iter_mut().zip(&self.op.half_hsh) {
+            *a = -dt_obs * h;
         }
-        // Pass 2: rescaled values (one exp per node); the largest is exactly 1.
-        for (u, &e) in self.u.iter_mut().zip(&self.tmp) {
-            let w = libm::exp(e - shift);
+        for (y, sh) in dy.iter().zip(&self.op.s_inv_h) {
+            for (a, h) in a.iter_mut().zip(sh) {
+                *a += y * h;
+            }
+        }
+        let mut shift = f64::NEG_INFINITY;
+        for (u, a) in self.u.iter_mut().zip(a.iter_mut()) {
+            if *u > 0.0 {
+                let (m, e) = linalg::binary_split(*u);
+                *u = m;
+                *a += e * core::f64::consts::LN_2;
+                shift = shift.max(*a);
+            }
+        }
+        if shift == f64::NEG_INFINITY {
+            // No mass left: `normalise` reports it.
+            return;
+        }
+        for (u, &a) in self.u.iter_mut().zip(a.iter()) {
+            // Zero values stay zero (their mantissa was not set).
+            let w = *u * linalg::exp_nonpositive(a - shift);
             *u = if w < super::FLUSH_BELOW { 0.0 } else { w };
         }
-    }
-
-    /// `Δyᵀ S⁻¹ h(s_i)` (− `½ hᵀS⁻¹h(s_i) Δτ` when the likelihood is in the update).
-    #[inline]
-    fn exponent(&self, dy: &[f64], i: usize) -> f64 {
-        dy.iter()
-            .zip(&self.op.s_inv_h)
-            .map(|(y, h)| y * h[i])
-            .sum::<f64>()
-            - self.op.half_hsh[i] * self.update_dt
     }
 
     fn predict(&mut self, dt_obs: f64) -> Result<(), FilterError> {
