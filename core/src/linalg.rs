@@ -83,8 +83,9 @@ pub fn binary_split(v: f64) -> (f64, f64) {
 #[inline]
 pub fn exp_nonpositive(x: f64) -> f64 {
     const ROUND: f64 = 6_755_399_441_055_744.0;
-    const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // ln 2 = LN2_HI + LN2_LO, the high part with 32 trailing zero bits so that k·LN2_HI is exact.
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
     let below = x < -700.0;
     let x = if below { -700.0 } else { x };
     let t = x * core::f64::consts::LOG2_E + ROUND;
