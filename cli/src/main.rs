@@ -5,6 +5,7 @@
 //! zakai show <preset>
 //! zakai run <preset|file.json> [--methods ekf,ukf,pf] [--runs N] [--seed S]
 //!           [--format table|json|csv] [--out FILE]
+//! zakai reproduce [table|all] [--runs N]
 //! ```
 //!
 //! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
@@ -18,6 +19,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use zakai::metrics::MonteCarlo;
+use zakai::reproduction;
 use zakai::scenario::{presets, MethodConfig, ScenarioConfig, METHODS};
 use zakai::Experiment;
 
@@ -49,6 +51,15 @@ enum Command {
         /// Seed (default: the scenario's seed).
         #[arg(long)]
         seed: Option<u64>,
+    },
+    /// Reproduce a paper's table: run every row's preset as a Monte Carlo job and print our
+    /// numbers beside the paper's (`zakai reproduce` lists the tables).
+    Reproduce {
+        /// Table identifier (e.g. 000-table-1), or `all`.
+        table: Option<String>,
+        /// Runs per row (default: the table's own count).
+        #[arg(long)]
+        runs: Option<usize>,
     },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
@@ -146,12 +157,7 @@ fn run(
     let seed = seed.unwrap_or(config.seed);
     let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
     let bar = if runs > 1 {
-        let bar = ProgressBar::with_draw_target(Some(runs as u64), ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs")
-                .map_err(|e| e.to_string())?,
-        );
-        Some(bar)
+        Some(progress_bar(runs, "runs")?)
     } else {
         None
     };
@@ -178,6 +184,52 @@ fn run(
             Ok(())
         }
     }
+}
+
+fn progress_bar(len: usize, what: &str) -> Result<ProgressBar, String> {
+    let bar = ProgressBar::with_draw_target(Some(len as u64), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {what}"
+        ))
+        .map_err(|e| e.to_string())?,
+    );
+    Ok(bar)
+}
+
+fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
+    let all = reproduction::tables();
+    let chosen: Vec<_> = match id {
+        None => {
+            println!("Tables (zakai reproduce <id>, or `all`):");
+            for t in &all {
+                println!("  {:<14} {} [{}]", t.id, t.title, t.source);
+            }
+            return Ok(());
+        }
+        Some("all") => all,
+        Some(id) => vec![reproduction::table(id).ok_or_else(|| {
+            let ids: Vec<&str> = all.iter().map(|t| t.id).collect();
+            format!("unknown table `{id}` (known: {})", ids.join(", "))
+        })?],
+    };
+    if runs == Some(0) {
+        return Err("--runs must be at least 1".into());
+    }
+    for table in &chosen {
+        let runs = runs.unwrap_or(table.runs);
+        let bar = progress_bar(runs * table.rows.len(), "runs")?;
+        let mut results = Vec::new();
+        for row in &table.rows {
+            let tick = || bar.inc(1);
+            results.push(
+                reproduction::reproduce_row(table, row, runs, &tick).map_err(|e| e.to_string())?,
+            );
+        }
+        bar.finish_and_clear();
+        print!("{}", output::reproduction(table, &results, runs));
+    }
+    Ok(())
 }
 
 fn simulate(scenario: &str, seed: Option<u64>) -> Result<(), String> {
@@ -235,6 +287,7 @@ fn main() -> ExitCode {
             .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
             .map(|json| println!("{json}")),
         Command::Simulate { scenario, seed } => simulate(&scenario, seed),
+        Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Run {
             scenario,
             methods,

@@ -5,6 +5,7 @@
 use std::fmt::Write;
 
 use zakai::metrics::MonteCarloSummary;
+use zakai::reproduction::{PaperTable, RowResult};
 use zakai::Experiment;
 
 use crate::Format;
@@ -129,4 +130,50 @@ pub fn render(
         }
     }
     Ok(s)
+}
+
+/// A reproduced paper table: per row and method, ours (mean ± s.e., failed runs) beside the
+/// paper's number and the ratio ours / paper.
+pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> String {
+    let mut s = String::new();
+    let metric = table.metric.label();
+    let _ = writeln!(
+        s,
+        "{} — {} [{}], {runs} runs per row\n",
+        table.id, table.title, table.source
+    );
+    let _ = writeln!(
+        s,
+        "{:<10} {:<8} {:>18} {:>8} {:>10} {:>7} {:>10}",
+        "row",
+        "method",
+        format!("ours {metric}"),
+        "paper",
+        "ours/paper",
+        "failed",
+        "ms/run"
+    );
+    for row in rows {
+        for (i, c) in row.cells.iter().enumerate() {
+            let ours = match (c.ours, c.stderr) {
+                (Some(v), Some(e)) => format!("{v:.4} ± {e:.4}"),
+                (Some(v), None) => format!("{v:.4}"),
+                _ => "failed".into(),
+            };
+            let ratio = c.ours.map_or("—".into(), |v| format!("{:.2}", v / c.paper));
+            let _ = writeln!(
+                s,
+                "{:<10} {:<8} {:>18} {:>8.4} {:>10} {:>7} {:>10.2}",
+                if i == 0 { row.label } else { "" },
+                c.name,
+                ours,
+                c.paper,
+                ratio,
+                format!("{}/{}", c.failed, c.runs),
+                c.seconds_per_run * 1e3
+            );
+        }
+    }
+    s.push('\n');
+    s
 }

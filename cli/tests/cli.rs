@@ -75,6 +75,28 @@ fn bad_arguments_fail_cleanly() {
 }
 
 #[test]
+fn reproduce_lists_tables_and_prints_ours_beside_the_paper() {
+    let o = zakai(&["reproduce"]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("000-table-1"));
+    assert_clean_failure(&zakai(&["reproduce", "999-table-9"]), "unknown table");
+    assert_clean_failure(
+        &zakai(&["reproduce", "000-table-1", "--runs", "0"]),
+        "at least 1",
+    );
+    let o = zakai(&["reproduce", "000-table-1", "--runs", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    // Every row with the paper's numbers for both methods.
+    for needle in [
+        "h = x^2", "h = x^6", "0.6364", "0.4630", "1.3314", "0.5597", "QIEM",
+    ] {
+        assert!(out.contains(needle), "{needle} missing from\n{out}");
+    }
+    assert!(!out.contains("NaN"));
+}
+
+#[test]
 fn list_names_every_preset() {
     let o = zakai(&["list"]);
     assert!(o.status.success());

@@ -6,6 +6,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use zakai::experiment::Experiment;
 use zakai::filters::yau_fd::YauYauParams;
 use zakai::filters::{Observation, ObservationKind};
+use zakai::grid::dst::DstPlan;
 use zakai::scenario::{presets, MethodConfig};
 
 fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize], iem: bool) {
@@ -92,6 +93,40 @@ fn superposition(c: &mut Criterion) {
     group.finish();
 }
 
+/// The bare transforms of a QIEM step: forward and inverse DST-I along every dimension, the
+/// denominator of the step-to-transform ratio of issue 4.
+fn bare_dst(c: &mut Criterion) {
+    let mut group = c.benchmark_group("bare forward + inverse DST-I");
+    for shape in [vec![2001usize], vec![256, 256]] {
+        let len: usize = shape.iter().product();
+        let mut plans: Vec<DstPlan> = shape.iter().map(|&n| DstPlan::new(n)).collect();
+        let strides: Vec<usize> = shape
+            .iter()
+            .scan(1, |s, &n| {
+                let stride = *s;
+                *s *= n;
+                Some(stride)
+            })
+            .collect();
+        let mut data: Vec<f64> = (0..len).map(|i| (i as f64 * 0.37).sin()).collect();
+        let label = shape
+            .iter()
+            .map(|n| n.to_string())
+            .collect::<Vec<_>>()
+            .join("x");
+        group.bench_function(label, |b| {
+            b.iter(|| {
+                for _ in 0..2 {
+                    for (plan, &stride) in plans.iter_mut().zip(&strides) {
+                        plan.transform_axis(&mut data, stride);
+                    }
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
 fn yau_yau(c: &mut Criterion) {
     bench(
         c,
@@ -109,5 +144,5 @@ fn yau_yau(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, yau_yau, superposition);
+criterion_group!(benches, yau_yau, bare_dst, superposition);
 criterion_main!(benches);

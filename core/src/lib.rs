@@ -51,6 +51,7 @@ pub mod grid;
 pub mod linalg;
 pub mod metrics;
 pub mod model;
+pub mod reproduction;
 pub mod scenario;
 pub mod simulate;
 

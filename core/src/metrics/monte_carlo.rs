@@ -30,6 +30,8 @@ pub struct MethodSummary {
     pub mse_components: Option<Vec<f64>>,
     /// Mean E_RMS (000 §4.2) per component.
     pub rms_components: Option<Vec<f64>>,
+    /// Standard error of that mean per component.
+    pub rms_stderr: Option<Vec<f64>>,
     /// Mean wall time per run (seconds).
     pub seconds_per_run: f64,
     /// Mean wall time per step (seconds).
@@ -166,6 +168,14 @@ impl<'a> MonteCarlo<'a> {
                     mse_stderr: stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),
                     rms_components: mean_vectors(&rms),
+                    rms_stderr: rms.first().map(|first| {
+                        (0..first.len())
+                            .map(|c| {
+                                let column: Vec<f64> = rms.iter().map(|r| r[c]).collect();
+                                mean_and_stderr(&column).map_or(0.0, |s| s.1)
+                            })
+                            .collect()
+                    }),
                     seconds_per_run: if results.is_empty() {
                         0.0
                     } else {

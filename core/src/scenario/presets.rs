@@ -163,21 +163,23 @@ fn cos_xn(power: u32) -> ScenarioConfig {
         title: &title,
         reference: "000 §4.2, Table 1",
         description: "EKF against the Yau–Yau filters for f(x) = cos x and h(x) = xⁿ, n = 2..6. \
-            000 gives neither σ₀ nor the horizon: we take σ₀ = N(0, 1), x₀ drawn from it, \
-            T = 5 and Δτ = 0.01, and the domain [−4, 6] around the stable point π/2 of f.",
+            000 gives neither σ₀ nor the horizon: we take σ₀ = N(1, 0.25) (a prior centred \
+            away from 0, because for even n the observation cannot tell x from −x), x₀ drawn \
+            from it, T = 5, Δτ = 0.01, and the domain [−6, 8] around the stable point π/2 of f \
+            with the paper's Δs = 0.01.",
         drift: &["cos(x)"],
         observation: &[&h],
         noise: continuous(),
-        prior: gaussian(&[0.0], 1.0),
+        prior: gaussian(&[1.0], 0.25),
         initial_state: None,
-        domain: vec![[-4.0, 6.0]],
+        domain: vec![[-6.0, 8.0]],
         time: (5.0, 0.01),
         track_loss: None,
         methods: vec![
             MethodConfig::Ekf(EkfParams::default()),
             ukf(0.5, 2.0, 0.0),
             pf(500),
-            qiem(&[501], 1e-3),
+            qiem(&[1401], 1e-3),
         ],
     });
     s.seed = 10 + power as u64;
