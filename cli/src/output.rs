@@ -47,13 +47,13 @@ pub fn render(
         Format::Csv => {
             writeln!(
                 s,
-                "method,runs,failed,mse,mse_stderr,mse_components,rms_components,seconds_per_run,seconds_per_step"
+                "method,runs,failed,mse,mse_stderr,mse_components,rms_components,seconds_per_run,seconds_per_step,build_seconds"
             )?;
             for m in &summary.methods {
                 let join = |v: &Option<Vec<f64>>| join_components(v, |x| format!("{x}"), ";", "");
                 writeln!(
                     s,
-                    "{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{},{},{}",
                     m.name,
                     m.runs,
                     m.failed,
@@ -62,7 +62,8 @@ pub fn render(
                     join(&m.mse_components),
                     join(&m.rms_components),
                     m.seconds_per_run,
-                    m.seconds_per_step
+                    m.seconds_per_step,
+                    m.build_seconds
                 )?;
             }
         }
@@ -77,14 +78,15 @@ pub fn render(
             writeln!(s)?;
             writeln!(
                 s,
-                "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12} {:>12}",
+                "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12} {:>12} {:>10}",
                 "method",
                 "MSE (004 (43))",
                 "failed",
                 "MSE per component",
                 "RMS (000 §4.2)",
                 "ms/run",
-                "µs/step"
+                "µs/step",
+                "build ms"
             )?;
             for m in &summary.methods {
                 let mse = match (m.mse, m.mse_stderr) {
@@ -95,14 +97,15 @@ pub fn render(
                 let rms = per_component(&m.rms_components);
                 writeln!(
                     s,
-                    "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12.3} {:>12.2}",
+                    "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}",
                     m.name,
                     mse,
                     format!("{}/{}", m.failed, m.runs),
                     comps,
                     rms,
                     m.seconds_per_run * 1e3,
-                    m.seconds_per_step * 1e6
+                    m.seconds_per_step * 1e6,
+                    m.build_seconds * 1e3
                 )?;
             }
             if !summary.warnings.is_empty() {

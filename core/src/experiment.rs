@@ -80,6 +80,8 @@ pub struct MethodTrack {
     pub seconds: f64,
     /// Number of steps taken.
     pub steps: usize,
+    /// Wall time spent building the filter — its off-line part (seconds; 0 without a clock).
+    pub build_seconds: f64,
     /// Since when the error has been above the track-loss threshold.
     off_track_since: Option<f64>,
 }
@@ -215,6 +217,15 @@ impl Experiment {
     /// Simulates the truth for `seed` and builds every filter; observation 0 is processed
     /// (a measurement at τ₀ for discrete models) and the initial estimates recorded.
     pub fn start(&self, seed: u64) -> Result<ExperimentRun, ZakaiError> {
+        self.start_timed(seed, None)
+    }
+
+    /// As [`Experiment::start`], timing every filter's build (its off-line part) with `clock`.
+    pub fn start_timed(
+        &self,
+        seed: u64,
+        clock: Option<&dyn Clock>,
+    ) -> Result<ExperimentRun, ZakaiError> {
         let mut rng = rng_from_seed(seed);
         let x0 = match &self.config.initial_state {
             Some(x) => x.clone(),
@@ -222,19 +233,27 @@ impl Experiment {
         };
         let trajectory = simulate(&self.model, &x0, self.config.time_grid(), &mut rng);
         let mut filters = Vec::with_capacity(self.config.methods.len());
+        let mut build_seconds = Vec::with_capacity(self.config.methods.len());
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
+            let start = clock.map(|c| c.now());
             filters.push(self.build_method(method, name.clone(), method_seed(seed, i))?);
+            build_seconds.push(match (clock, start) {
+                (Some(c), Some(s)) => c.now() - s,
+                _ => 0.0,
+            });
         }
         let tracks = self
             .names
             .iter()
-            .map(|name| MethodTrack {
+            .zip(build_seconds)
+            .map(|(name, build_seconds)| MethodTrack {
                 name: name.clone(),
                 n: self.model.n,
                 estimates: Vec::with_capacity(trajectory.states.len()),
                 failure: None,
                 seconds: 0.0,
                 steps: 0,
+                build_seconds,
                 off_track_since: None,
             })
             .collect();
@@ -258,7 +277,7 @@ impl Experiment {
         clock: Option<&dyn Clock>,
         observer: &mut dyn Observer,
     ) -> Result<RunResult, ZakaiError> {
-        let mut run = self.start(seed)?;
+        let mut run = self.start_timed(seed, clock)?;
         run.advance(usize::MAX, clock, observer);
         Ok(run.finish())
     }

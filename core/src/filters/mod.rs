@@ -3,7 +3,8 @@
 //! * [`kalman`] — Kalman–Bucy (exact for linear Gaussian models), EKF, UKF;
 //! * [`particle`] — the bootstrap particle filter;
 //! * [`yau_fd`] — the finite-difference Yau–Yau filters of 000 (IEM, QIEM; the filters
-//!   need the `std` feature for their FFT plans).
+//!   need the `std` feature for their FFT plans);
+//! * [`spectral`] — the off-line/on-line spectral Yau–Yau filter of 004 (Legendre basis).
 //!
 //! Every filter is built from a [`crate::model::Model`] plus its own parameters (a serde struct
 //! with defaults and a `validate()`), consumes the same [`Observation`]s, and exposes its
@@ -12,6 +13,7 @@
 pub mod kalman;
 pub mod marginal;
 pub mod particle;
+pub mod spectral;
 pub mod yau_fd;
 
 use alloc::string::String;

@@ -36,6 +36,8 @@ pub struct MethodSummary {
     pub seconds_per_run: f64,
     /// Mean wall time per step (seconds).
     pub seconds_per_step: f64,
+    /// Mean wall time to build the filter — its off-line part (seconds).
+    pub build_seconds: f64,
     /// e_mean(τ_k), k = 0..N, over the runs that did not fail.
     pub e_mean: Vec<f64>,
     /// First failure message seen, for the report.
@@ -131,12 +133,13 @@ impl<'a> MonteCarlo<'a> {
                 let mut errors = Vec::new();
                 let mut failed = 0;
                 let mut first_failure = None;
-                let (mut seconds, mut steps) = (0.0, 0usize);
+                let (mut seconds, mut steps, mut build) = (0.0, 0usize, 0.0);
                 for r in results {
                     let track = &r.methods[i];
                     let truth = &r.trajectory.states;
                     seconds += track.seconds;
                     steps += track.steps;
+                    build += track.build_seconds;
                     match track.mse_components(truth) {
                         Some(c) => {
                             mses.push(c.iter().sum());
@@ -185,6 +188,11 @@ impl<'a> MonteCarlo<'a> {
                         0.0
                     } else {
                         seconds / steps as f64
+                    },
+                    build_seconds: if results.is_empty() {
+                        0.0
+                    } else {
+                        build / results.len() as f64
                     },
                     e_mean: mean_vectors(&errors).unwrap_or_default(),
                     first_failure,

@@ -8,6 +8,7 @@
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
 
+pub mod dmz;
 #[cfg(feature = "std")]
 pub mod expression;
 pub mod expression_error;

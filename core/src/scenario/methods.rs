@@ -14,9 +14,11 @@ use crate::filters::kalman::{
     validate_init, EkfParams, ExtendedKalman, KalmanBucy, KalmanParams, UkfParams, UnscentedKalman,
 };
 use crate::filters::particle::{ParticleFilter, PfParams};
+use crate::filters::spectral::SpectralFilter;
 use crate::filters::Filter;
 use crate::model::{Model, Prior};
 
+pub use crate::filters::spectral::SpectralParams;
 pub use crate::filters::yau_fd::{Scheme, YauYauParams};
 
 #[cfg(feature = "std")]
@@ -63,6 +65,8 @@ pub enum MethodConfig {
     Spt(YauYauParams),
     /// Fourth-order 2-D QIEM (000 (20)–(21), Algorithm 4).
     Qiem4(YauYauParams),
+    /// The off-line/on-line spectral Yau–Yau filter of 004 (generalized Legendre basis).
+    Spectral(SpectralParams),
 }
 
 /// What building a filter needs besides its own parameters.
@@ -99,6 +103,26 @@ pub const METHODS: &[(&str, &str)] = &[
         "pf",
         "bootstrap particle filter (systematic resampling on an ESS threshold)",
     ),
+    (
+        "qiem",
+        "Yau–Yau quasi-implicit Euler, Laplacian by DST-I (000 (17)–(18), Algorithm 3)",
+    ),
+    (
+        "iem",
+        "Yau–Yau implicit Euler θ-scheme, tridiagonal / split (000 (12)–(14), Algorithm 2)",
+    ),
+    (
+        "spt",
+        "Yau–Yau superposition technique over QIEM (000 §2.5)",
+    ),
+    (
+        "qiem4",
+        "fourth-order 2-D QIEM (000 (20)–(21), Algorithm 4)",
+    ),
+    (
+        "spectral",
+        "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis (004)",
+    ),
 ];
 
 impl MethodConfig {
@@ -113,6 +137,7 @@ impl MethodConfig {
             MethodConfig::Qiem(_) => "qiem",
             MethodConfig::Spt(_) => "spt",
             MethodConfig::Qiem4(_) => "qiem4",
+            MethodConfig::Spectral(_) => "spectral",
         }
     }
 
@@ -127,6 +152,7 @@ impl MethodConfig {
             "qiem" => MethodConfig::Qiem(YauYauParams::default()),
             "spt" => MethodConfig::Spt(YauYauParams::default()),
             "qiem4" => MethodConfig::Qiem4(YauYauParams::default()),
+            "spectral" => MethodConfig::Spectral(SpectralParams::default()),
             _ => return None,
         })
     }
@@ -142,6 +168,7 @@ impl MethodConfig {
             MethodConfig::Qiem(_) => "QIEM".into(),
             MethodConfig::Spt(_) => "SPT".into(),
             MethodConfig::Qiem4(_) => "QIEM-4".into(),
+            MethodConfig::Spectral(_) => "Spectral".into(),
         }
     }
 
@@ -184,6 +211,11 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Spectral(p) => {
+                for (name, msg) in p.problems(n) {
+                    push(name, msg);
+                }
+            }
         }
     }
 
@@ -201,6 +233,9 @@ impl MethodConfig {
             MethodConfig::Qiem(p) => yau_yau(name, Scheme::Qiem, p, ctx)?,
             MethodConfig::Spt(p) => yau_yau(name, Scheme::Superposition, p, ctx)?,
             MethodConfig::Qiem4(p) => yau_yau(name, Scheme::Qiem4, p, ctx)?,
+            MethodConfig::Spectral(p) => Box::new(SpectralFilter::new(
+                name, model, prior, p, ctx.bounds, ctx.dt_obs,
+            )?),
         })
     }
 }

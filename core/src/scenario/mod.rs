@@ -15,7 +15,7 @@ use core::fmt;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-pub use methods::{MethodConfig, METHODS};
+pub use methods::{MethodConfig, SpectralParams, METHODS};
 
 use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};
@@ -495,6 +495,15 @@ impl ScenarioConfig {
         }
         for (i, method) in self.methods.iter().enumerate() {
             method.validate(n, &format!("methods[{i}]"), &mut p);
+            if let MethodConfig::Spectral(s) = method {
+                let dt = self.time.dt_obs;
+                if let Some(t0) = s.t0.filter(|t0| (t0 - dt).abs() > 1e-9 * dt.abs()) {
+                    p.push(ConfigProblem::new(
+                        format!("methods[{i}].t0"),
+                        format!("T₀ = {t0} must equal the observation interval Δτ = {dt} (004 propagates one interval per observation)"),
+                    ));
+                }
+            }
         }
         p
     }

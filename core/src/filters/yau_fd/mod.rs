@@ -113,17 +113,7 @@ fn count_problem(
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
 pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
-/// Where the `−½ hᵀS⁻¹h` term of the potential (4) is applied.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Likelihood {
-    /// In the update, with (15): `exp(Δyᵀ S⁻¹ h − ½ hᵀ S⁻¹ h Δτ)` (bounded; robust for steep
-    /// h; see [`operator`]).
-    #[default]
-    InUpdate,
-    /// In the operator's q, as 000 (2)–(4) write it.
-    InOperator,
-}
+pub use crate::model::dmz::Likelihood;
 
 /// Parameters of the Yau–Yau finite-difference filters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

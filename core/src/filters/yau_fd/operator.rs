@@ -17,7 +17,8 @@ use alloc::vec::Vec;
 
 use crate::error::FilterError;
 use crate::grid::TensorGrid;
-use crate::model::{Model, ObservationModel};
+use crate::model::dmz::DmzCoefficients;
+use crate::model::Model;
 
 /// p, q, ∇·f and S⁻¹h at every grid node.
 #[derive(Clone, Debug)]
@@ -45,12 +46,7 @@ impl KolmogorovOperator {
         grid: &TensorGrid,
         likelihood_in_update: bool,
     ) -> Result<Self, FilterError> {
-        let (n, m) = (model.n, model.m);
-        let ObservationModel::Continuous { noise_cov } = &model.observations else {
-            return Err(FilterError::Unsuitable(
-                "the Yau–Yau filters need continuous observations dy = h dt + dw".into(),
-            ));
-        };
+        let n = model.n;
         let q_mat = model.process_noise();
         for i in 0..n {
             for j in 0..n {
@@ -68,50 +64,22 @@ impl KolmogorovOperator {
                 "the Yau–Yau filters need a positive diffusion in every dimension".into(),
             ));
         }
-        let s_inv = noise_cov
-            .clone()
-            .try_inverse()
-            .ok_or(FilterError::NotPositiveDefinite {
-                what: "observation noise covariance",
-            })?;
-        let len = grid.len();
-        let mut p = vec![vec![0.0; len]; n];
-        let mut q = vec![0.0; len];
-        let mut half_hsh = vec![0.0; len];
-        let mut div_f = vec![0.0; len];
-        let mut s_inv_h = vec![vec![0.0; len]; m];
-        let mut x = vec![0.0; n];
-        let mut f = vec![0.0; n];
-        let mut jac = vec![0.0; n * n];
-        let mut h = vec![0.0; m];
-        for i in 0..len {
-            grid.node(i, &mut x);
-            model.drift.eval(&x, &mut f);
-            model.drift.jacobian(&x, &mut jac);
-            model.observation.eval(&x, &mut h);
-            let div: f64 = (0..n).map(|d| jac[d * n + d]).sum();
-            let mut hsh = 0.0;
-            for a in 0..m {
-                let sh: f64 = (0..m).map(|b| s_inv[(a, b)] * h[b]).sum();
-                s_inv_h[a][i] = sh;
-                hsh += h[a] * sh;
-            }
-            for d in 0..n {
-                p[d][i] = -f[d];
-            }
-            div_f[i] = div;
-            if likelihood_in_update {
-                q[i] = -div;
-                half_hsh[i] = 0.5 * hsh;
-            } else {
-                q[i] = -(div + 0.5 * hsh);
-            }
-        }
-        if q.iter().chain(p.iter().flatten()).any(|v| !v.is_finite()) {
-            return Err(FilterError::Unsuitable(
-                "f, ∇·f or h is not finite somewhere on the grid; shrink the domain".into(),
-            ));
-        }
+        let c = DmzCoefficients::tabulate(model, "the Yau–Yau filters", grid.len(), |i, x| {
+            grid.node(i, x)
+        })?;
+        let p = c.f.iter().map(|f| f.iter().map(|v| -v).collect()).collect();
+        let (q, half_hsh) = if likelihood_in_update {
+            (c.div_f.iter().map(|d| -d).collect(), c.half_hsh)
+        } else {
+            let q = c
+                .div_f
+                .iter()
+                .zip(&c.half_hsh)
+                .map(|(d, h)| -(d + h))
+                .collect();
+            (q, vec![0.0; grid.len()])
+        };
+        let (div_f, s_inv_h) = (c.div_f, c.s_inv_h);
         Ok(KolmogorovOperator {
             p,
             q,
