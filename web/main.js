@@ -13,6 +13,7 @@ const PARAMS = {
   qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
   spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator']],
+  spectral: [['offline_basis', 'optint'], ['online_basis', 'optint'], ['partitions', 'int'], ['quadrature', 'optint'], ['online_nodes', 'optint'], ['likelihood', 'enum:in_update|in_operator']],
 };
 const DEFAULTS = {
   kalman: {},
@@ -23,9 +24,13 @@ const DEFAULTS = {
   iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
   spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update' },
   qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
+  spectral: { partitions: 1, likelihood: 'in_update' },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
-const PARAM_LABELS = { ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt' };
+const PARAM_LABELS = {
+  ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
+  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes',
+};
 
 function paramInput(row, i, name, type) {
   const value = row.config[name];
@@ -34,7 +39,8 @@ function paramInput(row, i, name, type) {
     return `<select data-row="${i}" data-param="${name}">${options.map((o) => `<option ${o === (value ?? options[0]) ? 'selected' : ''}>${o}</option>`).join('')}</select>`;
   }
   const shown = type === 'intlist' ? (value ?? []).join(', ') : (value ?? '');
-  return `<input type="${type === 'intlist' ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}">`;
+  const placeholder = type === 'optint' ? ' placeholder="auto"' : '';
+  return `<input type="${type === 'intlist' ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}"${placeholder}>`;
 }
 
 const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
@@ -207,6 +213,7 @@ function readForm() {
     const type = PARAMS[row.config.method].find(([p]) => p === el.dataset.param)[1];
     let v;
     if (type === 'int') v = Math.round(Number(el.value));
+    else if (type === 'optint') v = el.value.trim() === '' ? null : Math.round(Number(el.value));
     else if (type === 'intlist') v = el.value.split(',').map((x) => Math.round(Number(x.trim())));
     else if (type.startsWith('enum:')) v = el.value;
     else v = Number(el.value);

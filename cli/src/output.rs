@@ -135,6 +135,14 @@ pub fn render(
     Ok(s)
 }
 
+/// `a / b` with four decimals.
+fn slash(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x:.4}"))
+        .collect::<Vec<_>>()
+        .join(" / ")
+}
+
 /// A reproduced paper table: per row and method, ours (mean ± s.e., failed runs) beside the
 /// paper's number and the ratio ours / paper.
 pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> String {
@@ -147,33 +155,48 @@ pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> Stri
     );
     let _ = writeln!(
         s,
-        "{:<10} {:<8} {:>18} {:>8} {:>10} {:>7} {:>10}",
+        "{:<13} {:<9} {:>30} {:>16} {:>11} {:>7} {:>9} {:>9}",
         "row",
         "method",
         format!("ours {metric}"),
         "paper",
         "ours/paper",
         "failed",
-        "ms/run"
+        "ms/run",
+        "build ms"
     );
     for row in rows {
         for (i, c) in row.cells.iter().enumerate() {
-            let ours = match (c.ours, c.stderr) {
-                (Some(v), Some(e)) => format!("{v:.4} ± {e:.4}"),
-                (Some(v), None) => format!("{v:.4}"),
+            let ours = match (&c.ours, &c.stderr) {
+                (Some(v), Some(e)) => v
+                    .iter()
+                    .zip(e)
+                    .map(|(v, e)| format!("{v:.4} ± {e:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(" / "),
                 _ => "failed".into(),
             };
-            let ratio = c.ours.map_or("—".into(), |v| format!("{:.2}", v / c.paper));
+            let paper = c.paper.as_deref().map_or("failed".into(), slash);
+            let ratio = match (&c.ours, &c.paper) {
+                (Some(o), Some(p)) => o
+                    .iter()
+                    .zip(p)
+                    .map(|(o, p)| format!("{:.2}", o / p))
+                    .collect::<Vec<_>>()
+                    .join(" / "),
+                _ => "—".into(),
+            };
             let _ = writeln!(
                 s,
-                "{:<10} {:<8} {:>18} {:>8.4} {:>10} {:>7} {:>10.2}",
+                "{:<13} {:<9} {:>30} {:>16} {:>11} {:>7} {:>9.2} {:>9.2}",
                 if i == 0 { row.label } else { "" },
                 c.name,
                 ours,
-                c.paper,
+                paper,
                 ratio,
                 format!("{}/{}", c.failed, c.runs),
-                c.seconds_per_run * 1e3
+                c.seconds_per_run * 1e3,
+                c.build_seconds * 1e3
             );
         }
     }

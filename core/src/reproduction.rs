@@ -5,7 +5,6 @@
 //! `zakai reproduce <table>` prints them; the reproduction tests assert the papers' claims on
 //! the same data.
 
-use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
@@ -20,6 +19,8 @@ pub enum Metric {
     Rms,
     /// MSE of 004 (43), summed over the state components, averaged over the runs.
     Mse,
+    /// MSE of 004 (43) per state component (one column per component).
+    MseComponents,
 }
 
 impl Metric {
@@ -28,19 +29,22 @@ impl Metric {
         match self {
             Metric::Rms => "E_RMS",
             Metric::Mse => "MSE",
+            Metric::MseComponents => "MSE per component",
         }
     }
 }
 
-/// One row of a paper's table: a preset and the paper's number per method key.
+/// One row of a paper's table: a preset and the paper's numbers per method.
 #[derive(Clone, Debug)]
 pub struct PaperRow {
     /// Row label as in the paper.
     pub label: &'static str,
     /// The preset that encodes the row's scenario.
     pub preset: &'static str,
-    /// `(method key, the paper's value)`; the key selects the preset's method of that kind.
-    pub paper: Vec<(&'static str, f64)>,
+    /// `(method display name, the paper's values)`: the name selects the preset's method
+    /// (`"EKF"`, `"PF(200)"`, `"Spectral"`, …); `None` where the paper reports the method as
+    /// failed (no number).
+    pub paper: Vec<(&'static str, Option<Vec<f64>>)>,
 }
 
 /// A paper's table.
@@ -60,33 +64,79 @@ pub struct PaperTable {
     pub rows: Vec<PaperRow>,
 }
 
+fn cells(values: &[(&'static str, Option<&[f64]>)]) -> Vec<(&'static str, Option<Vec<f64>>)> {
+    values
+        .iter()
+        .map(|(name, v)| (*name, v.map(|v| v.to_vec())))
+        .collect()
+}
+
 /// Every table Zakai reproduces.
 pub fn tables() -> Vec<PaperTable> {
     let paper_000_table_1 = [
-        (2, 0.6364, 0.4630),
-        (3, 0.6677, 0.3600),
-        (4, 0.9298, 0.5089),
-        (5, 1.2140, 0.4279),
-        (6, 1.3314, 0.5597),
+        ("h = x^2", "cos-x2", 0.6364, 0.4630),
+        ("h = x^3", "cos-x3", 0.6677, 0.3600),
+        ("h = x^4", "cos-x4", 0.9298, 0.5089),
+        ("h = x^5", "cos-x5", 1.2140, 0.4279),
+        ("h = x^6", "cos-x6", 1.3314, 0.5597),
     ];
-    let labels = ["h = x^2", "h = x^3", "h = x^4", "h = x^5", "h = x^6"];
-    let presets_000 = ["cos-x2", "cos-x3", "cos-x4", "cos-x5", "cos-x6"];
-    alloc::vec![PaperTable {
-        id: "000-table-1",
-        title: "E_RMS of EKF and QIEM for f = cos x, h = x^n",
-        source: "000 §4.2, Table 1",
-        metric: Metric::Rms,
-        runs: 100,
-        rows: paper_000_table_1
-            .iter()
-            .zip(labels.iter().zip(presets_000))
-            .map(|(&(_, ekf, qiem), (&label, preset))| PaperRow {
-                label,
-                preset,
-                paper: alloc::vec![("ekf", ekf), ("qiem", qiem)],
-            })
-            .collect(),
-    }]
+    alloc::vec![
+        PaperTable {
+            id: "000-table-1",
+            title: "E_RMS of EKF and QIEM for f = cos x, h = x^n",
+            source: "000 §4.2, Table 1",
+            metric: Metric::Rms,
+            runs: 100,
+            rows: paper_000_table_1
+                .iter()
+                .map(|&(label, preset, ekf, qiem)| PaperRow {
+                    label,
+                    preset,
+                    paper: cells(&[("EKF", Some(&[ekf])), ("QIEM", Some(&[qiem]))]),
+                })
+                .collect(),
+        },
+        PaperTable {
+            id: "004-table-1",
+            title: "MSE of the spectral DMZ method, EKF, UKF and PF on the cubic sensor (44)",
+            source: "004 §IV, Table 1",
+            metric: Metric::Mse,
+            runs: 100,
+            rows: alloc::vec![PaperRow {
+                label: "cubic sensor",
+                preset: "cubic-sensor-1d",
+                paper: cells(&[
+                    ("Spectral", Some(&[0.4317])),
+                    ("EKF", None),
+                    ("UKF", None),
+                    ("PF(50)", Some(&[1.3067])),
+                    ("PF(100)", Some(&[1.1342])),
+                    ("PF(150)", Some(&[0.9657])),
+                    ("PF(200)", Some(&[0.9115])),
+                ]),
+            }],
+        },
+        PaperTable {
+            id: "004-table-2",
+            title: "MSE of x1 and x2 for the 2-D example (46)",
+            source: "004 §IV, Table 2",
+            metric: Metric::MseComponents,
+            runs: 20,
+            rows: alloc::vec![PaperRow {
+                label: "example 2",
+                preset: "cubic-sensor-2d",
+                paper: cells(&[
+                    ("Spectral", Some(&[0.4081, 0.3646])),
+                    ("EKF", None),
+                    ("UKF", None),
+                    ("PF(50)", Some(&[1.5826, 1.3508])),
+                    ("PF(100)", Some(&[1.6919, 1.0715])),
+                    ("PF(150)", Some(&[1.3538, 1.0411])),
+                    ("PF(200)", Some(&[1.1881, 1.0133])),
+                ]),
+            }],
+        },
+    ]
 }
 
 /// The table with identifier `id`.
@@ -97,22 +147,23 @@ pub fn table(id: &str) -> Option<PaperTable> {
 /// Our result for one method of one row.
 #[derive(Clone, Debug)]
 pub struct CellResult {
-    /// Method key.
-    pub key: &'static str,
-    /// The method's display name in the preset.
-    pub name: String,
-    /// Our mean over the runs that did not fail (`None` if every run failed).
-    pub ours: Option<f64>,
-    /// Standard error of that mean.
-    pub stderr: Option<f64>,
-    /// Failed runs.
+    /// The method's display name.
+    pub name: &'static str,
+    /// Our mean over the runs that did not fail, per reported value (`None` if every run
+    /// failed).
+    pub ours: Option<Vec<f64>>,
+    /// Standard errors of those means.
+    pub stderr: Option<Vec<f64>>,
+    /// Failed runs (by the preset's failure rule).
     pub failed: usize,
     /// Runs.
     pub runs: usize,
-    /// Mean wall time per run (seconds).
+    /// Mean wall time per run (seconds), without the build.
     pub seconds_per_run: f64,
-    /// The paper's value.
-    pub paper: f64,
+    /// Mean build (off-line) time (seconds).
+    pub build_seconds: f64,
+    /// The paper's values (`None`: reported as failed).
+    pub paper: Option<Vec<f64>>,
 }
 
 /// Our results for one row.
@@ -128,13 +179,15 @@ pub struct RowResult {
     pub cells: Vec<CellResult>,
 }
 
-fn value(metric: Metric, m: &MethodSummary) -> (Option<f64>, Option<f64>) {
+type Values = (Option<Vec<f64>>, Option<Vec<f64>>);
+
+fn value(metric: Metric, m: &MethodSummary) -> Values {
+    let one = |v: Option<f64>| v.map(|v| alloc::vec![v]);
+    let first = |v: &Option<Vec<f64>>| v.as_ref().and_then(|v| v.first()).map(|v| alloc::vec![*v]);
     match metric {
-        Metric::Mse => (m.mse, m.mse_stderr),
-        Metric::Rms => {
-            let first = |v: &Option<Vec<f64>>| v.as_ref().and_then(|v| v.first().copied());
-            (first(&m.rms_components), first(&m.rms_stderr))
-        }
+        Metric::Mse => (one(m.mse), one(m.mse_stderr)),
+        Metric::Rms => (first(&m.rms_components), first(&m.rms_stderr)),
+        Metric::MseComponents => (m.mse_components.clone(), m.mse_component_stderr.clone()),
     }
 }
 
@@ -148,15 +201,15 @@ pub fn reproduce_row(
     let mut config = presets::preset(row.preset)
         .ok_or_else(|| ZakaiError::Other(alloc::format!("no preset `{}`", row.preset)))?;
     let mut methods = Vec::new();
-    for (key, _) in &row.paper {
+    for (name, _) in &row.paper {
         let method = config
             .methods
             .iter()
-            .find(|m| m.key() == *key)
+            .find(|m| m.display_name() == *name)
             .cloned()
             .ok_or_else(|| {
                 ZakaiError::Other(alloc::format!(
-                    "preset `{}` has no method `{key}` for {}",
+                    "preset `{}` has no method `{name}` for {}",
                     row.preset,
                     table.id
                 ))
@@ -171,17 +224,17 @@ pub fn reproduce_row(
         .paper
         .iter()
         .zip(&summary.methods)
-        .map(|(&(key, paper), m)| {
+        .map(|((name, paper), m)| {
             let (ours, stderr) = value(table.metric, m);
             CellResult {
-                key,
-                name: m.name.to_string(),
+                name,
                 ours,
                 stderr,
                 failed: m.failed,
                 runs: m.runs,
                 seconds_per_run: m.seconds_per_run,
-                paper,
+                build_seconds: m.build_seconds,
+                paper: paper.clone(),
             }
         })
         .collect();

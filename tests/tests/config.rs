@@ -73,3 +73,24 @@ fn unknown_fields_and_methods_are_rejected() {
     v["methods"][0] = serde_json::json!({"method": "kalmn"});
     assert!(serde_json::from_value::<ScenarioConfig>(v).is_err());
 }
+
+/// Every method key is listed (the CLI's `list`, the page's "add method" menu), builds from its
+/// key, and every preset uses only listed methods.
+#[test]
+fn every_method_is_listed_and_every_listed_method_exists() {
+    for (key, about) in zakai::scenario::METHODS {
+        let m = zakai::scenario::MethodConfig::from_key(key).expect("listed key builds");
+        assert_eq!(m.key(), *key);
+        assert!(!about.is_empty());
+    }
+    for p in zakai::scenario::presets::all() {
+        for m in &p.methods {
+            assert!(
+                zakai::scenario::METHODS.iter().any(|(k, _)| *k == m.key()),
+                "{}: method {} is not listed",
+                p.name,
+                m.key()
+            );
+        }
+    }
+}

@@ -28,6 +28,8 @@ pub struct MethodSummary {
     pub mse_stderr: Option<f64>,
     /// Mean MSE per component.
     pub mse_components: Option<Vec<f64>>,
+    /// Standard error of that mean per component.
+    pub mse_component_stderr: Option<Vec<f64>>,
     /// Mean E_RMS (000 §4.2) per component.
     pub rms_components: Option<Vec<f64>>,
     /// Standard error of that mean per component.
@@ -73,6 +75,19 @@ fn mean_vectors(vs: &[Vec<f64>]) -> Option<Vec<f64>> {
         }
     }
     Some(m.into_iter().map(|a| a / vs.len() as f64).collect())
+}
+
+/// Per-component standard errors of the mean of `vs`.
+fn stderr_vectors(vs: &[Vec<f64>]) -> Option<Vec<f64>> {
+    let first = vs.first()?;
+    Some(
+        (0..first.len())
+            .map(|c| {
+                let column: Vec<f64> = vs.iter().map(|v| v[c]).collect();
+                mean_and_stderr(&column).map_or(0.0, |s| s.1)
+            })
+            .collect(),
+    )
 }
 
 impl<'a> MonteCarlo<'a> {
@@ -171,14 +186,8 @@ impl<'a> MonteCarlo<'a> {
                     mse_stderr: stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),
                     rms_components: mean_vectors(&rms),
-                    rms_stderr: rms.first().map(|first| {
-                        (0..first.len())
-                            .map(|c| {
-                                let column: Vec<f64> = rms.iter().map(|r| r[c]).collect();
-                                mean_and_stderr(&column).map_or(0.0, |s| s.1)
-                            })
-                            .collect()
-                    }),
+                    rms_stderr: stderr_vectors(&rms),
+                    mse_component_stderr: stderr_vectors(&comps),
                     seconds_per_run: if results.is_empty() {
                         0.0
                     } else {

@@ -14,6 +14,7 @@ use super::{
 };
 use crate::filters::kalman::{EkfParams, GaussianInit, KalmanParams, UkfParams};
 use crate::filters::particle::PfParams;
+use crate::filters::spectral::SpectralParams;
 use crate::filters::yau_fd::YauYauParams;
 
 fn strings(v: &[&str]) -> Vec<String> {
@@ -211,6 +212,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(100),
                 pf(150),
                 pf(200),
+                MethodConfig::Spectral(SpectralParams::default()),
                 qiem(&[401], 1e-3),
                 iem(401, 1e-3),
                 spt(401, 1e-3, 101),
@@ -235,7 +237,10 @@ pub fn all() -> Vec<ScenarioConfig> {
                 MethodConfig::Ekf(EkfParams::default()),
                 ukf(0.01, 2.0, 0.0),
                 pf(50),
+                pf(100),
+                pf(150),
                 pf(200),
+                MethodConfig::Spectral(SpectralParams::default()),
                 qiem(&[128, 128], 2e-3),
             ],
         }),

@@ -201,13 +201,15 @@ impl SpectralParams {
 fn tensor_product(a0: &DMatrix<f64>, a1: &DMatrix<f64>, x: &[f64], t: &mut [f64], out: &mut [f64]) {
     let (s0, rows) = a0.shape();
     let (s1, cols) = a1.shape();
+    // Column-major storage: column k of A0 is a contiguous slice.
+    let columns = a0.as_slice();
     for j in 0..cols {
         let tj = &mut t[j * s0..(j + 1) * s0];
         tj.iter_mut().for_each(|v| *v = 0.0);
         for k in 0..rows {
             let w = x[k + rows * j];
             if w != 0.0 {
-                for (tv, av) in tj.iter_mut().zip(a0.column(k).iter()) {
+                for (tv, av) in tj.iter_mut().zip(&columns[k * s0..(k + 1) * s0]) {
                     *tv += w * av;
                 }
             }
@@ -433,11 +435,16 @@ impl SpectralFilter {
 
     /// Propagation (40) and the density at the on-line nodes.
     fn propagate(&mut self) {
-        let m = &self.propagation;
+        let rows = self.offline.len();
+        let columns = self.propagation.as_slice();
         self.offline.iter_mut().for_each(|v| *v = 0.0);
         for (k, &c) in self.coeffs.iter().enumerate() {
             if c != 0.0 {
-                for (g, w) in self.offline.iter_mut().zip(m.column(k).iter()) {
+                for (g, w) in self
+                    .offline
+                    .iter_mut()
+                    .zip(&columns[k * rows..(k + 1) * rows])
+                {
                     *g += c * w;
                 }
             }
