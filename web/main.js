@@ -9,6 +9,8 @@ const PARAMS = {
   ekf: [['substeps', 'int']],
   ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
+  iekf: [['iterations', 'int'], ['tolerance', 'num'], ['substeps', 'int']],
+  iokf: [['splits', 'int'], ['newton_steps', 'int'], ['substeps', 'int']],
   qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
   qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
@@ -20,6 +22,8 @@ const DEFAULTS = {
   ekf: { substeps: 4 },
   ukf: { alpha: 0.5, beta: 2, kappa: 0, substeps: 4 },
   pf: { particles: 500, ess_threshold: 0.5, substeps: 1 },
+  iekf: { iterations: 6, tolerance: 1e-10, substeps: 4 },
+  iokf: { splits: 3, newton_steps: 2, substeps: 4 },
   qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
   iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
   spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update' },
@@ -29,7 +33,7 @@ const DEFAULTS = {
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = {
   ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
-  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes',
+  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', newton_steps: 'm (Newton)',
 };
 
 function paramInput(row, i, name, type) {

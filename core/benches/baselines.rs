@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the classic baselines on the cubic sensor of 004 (44): one whole
-//! run (T = 5, Δτ = 0.01, 500 steps) per method.
+//! run (T = 5, Δτ = 0.01, 500 steps) per method; and of the MAP filters of 003 against the UKF
+//! on the bearings-only preset (one whole run of 1000 steps, including the simulation).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::experiment::{Experiment, Silent};
@@ -18,5 +19,20 @@ fn baselines(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, baselines);
+fn bearings_only(c: &mut Criterion) {
+    let base = presets::preset("bearings-only").expect("preset exists");
+    let mut group = c.benchmark_group("bearings-only run (1000 steps)");
+    group.sample_size(20);
+    for method in base.methods.iter().filter(|m| m.key() != "pf") {
+        let mut config = base.clone();
+        config.methods = vec![method.clone()];
+        let experiment = Experiment::new(config).expect("valid preset");
+        group.bench_function(method.display_name(), |b| {
+            b.iter(|| experiment.run_with(3, None, &mut Silent).expect("runs"))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, baselines, bearings_only);
 criterion_main!(benches);

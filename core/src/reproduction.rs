@@ -21,6 +21,8 @@ pub enum Metric {
     Mse,
     /// MSE of 004 (43) per state component (one column per component).
     MseComponents,
+    /// 003 (5.1): the time-averaged error norm ‖x − x̂‖₂, averaged over the runs.
+    ErrorNorm,
 }
 
 impl Metric {
@@ -30,6 +32,7 @@ impl Metric {
             Metric::Rms => "E_RMS",
             Metric::Mse => "MSE",
             Metric::MseComponents => "MSE per component",
+            Metric::ErrorNorm => "MSE (5.1)",
         }
     }
 }
@@ -136,6 +139,22 @@ pub fn tables() -> Vec<PaperTable> {
                 ]),
             }],
         },
+        PaperTable {
+            id: "003-table-1",
+            title: "bearings-only tracking (5.2), 1000 steps: IOKF, IEKF, UKF",
+            source: "003 §5, Table 1",
+            metric: Metric::ErrorNorm,
+            runs: 100,
+            rows: alloc::vec![PaperRow {
+                label: "BOT",
+                preset: "bearings-only",
+                paper: cells(&[
+                    ("IOKF(2×3)", Some(&[0.6274])),
+                    ("IEKF(6)", Some(&[0.68334])),
+                    ("UKF", Some(&[0.6295])),
+                ]),
+            }],
+        },
     ]
 }
 
@@ -188,6 +207,7 @@ fn value(metric: Metric, m: &MethodSummary) -> Values {
         Metric::Mse => (one(m.mse), one(m.mse_stderr)),
         Metric::Rms => (first(&m.rms_components), first(&m.rms_stderr)),
         Metric::MseComponents => (m.mse_components.clone(), m.mse_component_stderr.clone()),
+        Metric::ErrorNorm => (one(m.error_norm), one(m.error_norm_stderr)),
     }
 }
 

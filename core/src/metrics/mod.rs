@@ -45,6 +45,17 @@ pub fn abs_errors(truth: &[f64], estimate: &[f64], n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// `(1/(K+1)) Σ_k ‖x_k − x̂_k‖₂` over the rows present in `estimate` (003 (5.1), which calls
+/// the average over runs of this the MSE although it does not square the norm).
+pub fn mean_error_norm(truth: &[f64], estimate: &[f64], n: usize) -> f64 {
+    let e = abs_errors(truth, estimate, n);
+    if e.is_empty() {
+        0.0
+    } else {
+        e.iter().sum::<f64>() / e.len() as f64
+    }
+}
+
 /// Mean and standard error of the mean of `values` (standard error 0 for fewer than 2).
 pub fn mean_and_stderr(values: &[f64]) -> Option<(f64, f64)> {
     if values.is_empty() {

@@ -9,7 +9,7 @@ use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
-use super::{abs_errors, mean_and_stderr};
+use super::{abs_errors, mean_and_stderr, mean_error_norm};
 use crate::error::ZakaiError;
 use crate::experiment::{Clock, Experiment, RunResult, Silent};
 
@@ -26,6 +26,10 @@ pub struct MethodSummary {
     pub mse: Option<f64>,
     /// Standard error of that mean.
     pub mse_stderr: Option<f64>,
+    /// Mean over the runs of the time-averaged error norm `‖x_k − x̂_k‖₂` (003 (5.1)).
+    pub error_norm: Option<f64>,
+    /// Standard error of that mean.
+    pub error_norm_stderr: Option<f64>,
     /// Mean MSE per component.
     pub mse_components: Option<Vec<f64>>,
     /// Standard error of that mean per component.
@@ -145,6 +149,7 @@ impl<'a> MonteCarlo<'a> {
                 let mut mses = Vec::new();
                 let mut comps = Vec::new();
                 let mut rms = Vec::new();
+                let mut norms = Vec::new();
                 let mut errors = Vec::new();
                 let mut failed = 0;
                 let mut first_failure = None;
@@ -160,6 +165,7 @@ impl<'a> MonteCarlo<'a> {
                             mses.push(c.iter().sum());
                             comps.push(c);
                             rms.push(track.rms_components(truth).unwrap_or_default());
+                            norms.push(mean_error_norm(truth, &track.estimates, track.n));
                             errors.push(abs_errors(truth, &track.estimates, track.n));
                         }
                         None => {
@@ -178,12 +184,15 @@ impl<'a> MonteCarlo<'a> {
                     }
                 }
                 let stats = mean_and_stderr(&mses);
+                let norm_stats = mean_and_stderr(&norms);
                 MethodSummary {
                     name: name.clone(),
                     runs: results.len(),
                     failed,
                     mse: stats.map(|s| s.0),
                     mse_stderr: stats.map(|s| s.1),
+                    error_norm: norm_stats.map(|s| s.0),
+                    error_norm_stderr: norm_stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),
                     rms_components: mean_vectors(&rms),
                     rms_stderr: stderr_vectors(&rms),

@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 use super::ConfigProblem;
 use crate::error::ZakaiError;
 use crate::filters::kalman::{
-    validate_init, EkfParams, ExtendedKalman, KalmanBucy, KalmanParams, UkfParams, UnscentedKalman,
+    validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
+    MapKalman, MapSolver, UkfParams, UnscentedKalman,
 };
 use crate::filters::particle::{ParticleFilter, PfParams};
 use crate::filters::spectral::SpectralFilter;
@@ -57,6 +58,10 @@ pub enum MethodConfig {
     Ukf(UkfParams),
     /// Bootstrap particle filter.
     Pf(PfParams),
+    /// Iterated EKF: Gauss–Newton MAP update (003 (4.5)).
+    Iekf(IekfParams),
+    /// Iterated optimisation Kalman filter: λ-homotopy MAP update (003 Algorithm 4.1).
+    Iokf(IokfParams),
     /// Yau–Yau implicit Euler (000 (12)–(14)).
     Iem(YauYauParams),
     /// Yau–Yau quasi-implicit Euler with DST (000 (17)–(18)).
@@ -104,6 +109,14 @@ pub const METHODS: &[(&str, &str)] = &[
         "bootstrap particle filter (systematic resampling on an ESS threshold)",
     ),
     (
+        "iekf",
+        "iterated EKF: Gauss–Newton on the MAP problem (003 (4.5))",
+    ),
+    (
+        "iokf",
+        "iterated optimisation Kalman filter: λ-homotopy with guarded Newton steps (003 Algorithm 4.1)",
+    ),
+    (
         "qiem",
         "Yau–Yau quasi-implicit Euler, Laplacian by DST-I (000 (17)–(18), Algorithm 3)",
     ),
@@ -133,6 +146,8 @@ impl MethodConfig {
             MethodConfig::Ekf(_) => "ekf",
             MethodConfig::Ukf(_) => "ukf",
             MethodConfig::Pf(_) => "pf",
+            MethodConfig::Iekf(_) => "iekf",
+            MethodConfig::Iokf(_) => "iokf",
             MethodConfig::Iem(_) => "iem",
             MethodConfig::Qiem(_) => "qiem",
             MethodConfig::Spt(_) => "spt",
@@ -148,6 +163,8 @@ impl MethodConfig {
             "ekf" => MethodConfig::Ekf(EkfParams::default()),
             "ukf" => MethodConfig::Ukf(UkfParams::default()),
             "pf" => MethodConfig::Pf(PfParams::default()),
+            "iekf" => MethodConfig::Iekf(IekfParams::default()),
+            "iokf" => MethodConfig::Iokf(IokfParams::default()),
             "iem" => MethodConfig::Iem(YauYauParams::default()),
             "qiem" => MethodConfig::Qiem(YauYauParams::default()),
             "spt" => MethodConfig::Spt(YauYauParams::default()),
@@ -164,6 +181,8 @@ impl MethodConfig {
             MethodConfig::Ekf(_) => "EKF".into(),
             MethodConfig::Ukf(_) => "UKF".into(),
             MethodConfig::Pf(p) => format!("PF({})", p.particles),
+            MethodConfig::Iekf(p) => format!("IEKF({})", p.iterations),
+            MethodConfig::Iokf(p) => format!("IOKF({}×{})", p.newton_steps, p.splits),
             MethodConfig::Iem(_) => "IEM".into(),
             MethodConfig::Qiem(_) => "QIEM".into(),
             MethodConfig::Spt(_) => "SPT".into(),
@@ -195,6 +214,18 @@ impl MethodConfig {
                 for (name, msg) in p.problems() {
                     push(name, msg);
                 }
+            }
+            MethodConfig::Iekf(p) => {
+                for (name, msg) in p.problems() {
+                    push(name, msg);
+                }
+                validate_init(&p.init, n, field, problems);
+            }
+            MethodConfig::Iokf(p) => {
+                for (name, msg) in p.problems() {
+                    push(name, msg);
+                }
+                validate_init(&p.init, n, field, problems);
             }
             MethodConfig::Iem(p) | MethodConfig::Qiem(p) => {
                 for (name, msg) in p.problems(n) {
@@ -229,6 +260,28 @@ impl MethodConfig {
             MethodConfig::Ekf(p) => Box::new(ExtendedKalman::new(name, model, prior, p)),
             MethodConfig::Ukf(p) => Box::new(UnscentedKalman::new(name, model, prior, p)?),
             MethodConfig::Pf(p) => Box::new(ParticleFilter::new(name, model, prior, p, ctx.seed)?),
+            MethodConfig::Iekf(p) => Box::new(MapKalman::new(
+                name,
+                model,
+                prior,
+                &p.init,
+                p.substeps,
+                MapSolver::GaussNewton {
+                    iterations: p.iterations,
+                    tolerance: p.tolerance,
+                },
+            )),
+            MethodConfig::Iokf(p) => Box::new(MapKalman::new(
+                name,
+                model,
+                prior,
+                &p.init,
+                p.substeps,
+                MapSolver::Homotopy {
+                    splits: p.splits,
+                    newton_steps: p.newton_steps,
+                },
+            )),
             MethodConfig::Iem(p) => yau_yau(name, Scheme::Iem, p, ctx)?,
             MethodConfig::Qiem(p) => yau_yau(name, Scheme::Qiem, p, ctx)?,
             MethodConfig::Spt(p) => yau_yau(name, Scheme::Superposition, p, ctx)?,

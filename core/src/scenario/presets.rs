@@ -12,7 +12,9 @@ use super::{
     FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
     ScenarioConfig, TimeConfig, TrackLoss,
 };
-use crate::filters::kalman::{EkfParams, GaussianInit, KalmanParams, UkfParams};
+use crate::filters::kalman::{
+    EkfParams, GaussianInit, IekfParams, IokfParams, KalmanParams, UkfParams,
+};
 use crate::filters::particle::PfParams;
 use crate::filters::spectral::SpectralParams;
 use crate::filters::yau_fd::YauYauParams;
@@ -411,15 +413,16 @@ pub fn all() -> Vec<ScenarioConfig> {
             reference: "003 (5.2), Table 1",
             description: "003 (5.2): x = (p₁, p₂, v₁, v₂), dx = F x dt + dw with F the \
                 constant-velocity matrix, z_k = h(x_k) + B_k, B_k ~ N(0, I₂), 1000 steps. 003 \
-                omits h: R⁴ → R². We use the standard two-sensor bearings-only model: bearings \
-                (radians, measured from the p₂ axis) of the target seen from sensors at \
-                (−40, −50) and (40, −50), h_i = atan((p₁ − a_i)/(p₂ + 50)). Writing the bearing \
-                with atan instead of atan2 keeps exact symbolic derivatives and is valid while \
-                the target stays above the sensors' line p₂ = −50, which it does on the domain. \
-                Δτ = 0.01 (T = 10), x₀ = (0, 0, 1, 0), prior N(x₀, I); UKF α = 0.5, β = 2, \
-                κ = −0.5 as in 003 §5.",
+                omits h: R⁴ → R². We use the standard two-sensor bearings-only model: the \
+                bearings, in degrees (so that B_k ~ N(0, I₂) is a 1° error; in radians it would \
+                drown the signal), of the target seen from sensors at (−40, −50) and (40, −50), \
+                h_i = (180/π) atan((p₁ − a_i)/(p₂ + 50)). Writing the bearing with atan instead \
+                of atan2 keeps exact symbolic derivatives and is valid while the target stays \
+                above the sensors' line p₂ = −50, which it does on the domain. Δτ = 0.01 \
+                (T = 10), x₀ = (0, 0, 1, 0), prior N(x₀, I); IOKF 2 × 3, IEKF 6 iterations, UKF \
+                α = 0.5, β = 2, κ = −0.5 as in 003 §5.",
             drift: &["x3", "x4", "0", "0"],
-            observation: &["atan((x1 + 40)/(x2 + 50))", "atan((x1 - 40)/(x2 + 50))"],
+            observation: &["57.29577951308232*atan((x1 + 40)/(x2 + 50))", "57.29577951308232*atan((x1 - 40)/(x2 + 50))"],
             noise: ObservationNoiseConfig::Discrete {
                 mixture: vec![component(1.0, &[0.0, 0.0], 1.0)],
             },
@@ -429,8 +432,10 @@ pub fn all() -> Vec<ScenarioConfig> {
             time: (10.0, 0.01),
             track_loss: None,
             methods: vec![
-                MethodConfig::Ekf(EkfParams::default()),
+                MethodConfig::Iokf(IokfParams::default()),
+                MethodConfig::Iekf(IekfParams::default()),
                 ukf(0.5, 2.0, -0.5),
+                MethodConfig::Ekf(EkfParams::default()),
                 pf(1000),
             ],
         }),

@@ -8,7 +8,6 @@ use alloc::string::String;
 use serde::{Deserialize, Serialize};
 
 use super::measurement::MeasurementForm;
-use super::propagate::{linearized_rates, rk4_moments};
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
@@ -64,15 +63,8 @@ impl Filter for ExtendedKalman {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         if obs.dt > 0.0 {
-            let (model, q) = (&self.model, &self.q);
-            rk4_moments(
-                &mut self.state.mean,
-                &mut self.state.cov,
-                obs.dt,
-                self.substeps,
-                |m, p| linearized_rates(model, q, m, p),
-            )?;
-            self.state.check()?;
+            self.state
+                .predict_linearized(&self.model, &self.q, obs.dt, self.substeps)?;
         }
         let meas = self.form.at(obs)?;
         if meas.scale == 0.0 {

@@ -1,16 +1,19 @@
 //! Gaussian filters on nalgebra, n-dimensional: [`KalmanBucy`] (exact for linear Gaussian
-//! models), [`ExtendedKalman`] and [`UnscentedKalman`]. They share the Gaussian state
+//! models), [`ExtendedKalman`], [`UnscentedKalman`] and the MAP-update filters of 003
+//! ([`MapKalman`]: IEKF and IOKF). They share the Gaussian state
 //! `N(m, P)`, the observation-as-measurement form of [`measurement`], and the
 //! continuous-time propagation of [`propagate`].
 
 pub mod ekf;
 pub mod linear;
+pub mod map;
 pub mod measurement;
 pub mod propagate;
 pub mod ukf;
 
 pub use ekf::{EkfParams, ExtendedKalman};
 pub use linear::{KalmanBucy, KalmanParams};
+pub use map::{IekfParams, IokfParams, MapKalman, MapSolver};
 pub use ukf::{UkfParams, UnscentedKalman};
 
 use alloc::vec::Vec;
@@ -92,6 +95,21 @@ impl GaussianState {
         let pxz = &self.cov * h.transpose();
         let pzz = &h * &pxz + &meas.noise_cov;
         self.update(&residual, &pxz, &pzz)
+    }
+
+    /// The EKF prediction over `dt`: the linearised moment equations (Jazwinski) in
+    /// `substeps` RK4 steps.
+    pub fn predict_linearized(
+        &mut self,
+        model: &crate::model::Model,
+        q: &DMatrix<f64>,
+        dt: f64,
+        substeps: usize,
+    ) -> Result<(), FilterError> {
+        propagate::rk4_moments(&mut self.mean, &mut self.cov, dt, substeps, |m, p| {
+            propagate::linearized_rates(model, q, m, p)
+        })?;
+        self.check()
     }
 
     /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).
