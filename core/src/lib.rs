@@ -44,6 +44,7 @@ extern crate alloc;
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod diagnostics;
 pub mod error;
 pub mod experiment;
 pub mod filters;

@@ -290,6 +290,48 @@ impl Session {
         out
     }
 
+    /// Log-concavity of method `index`'s current grid density (003 §3): `{log_concave, worst:
+    /// [point, value] | null, shape, min_curvature}` with `min_curvature` per grid node (null
+    /// where the density is below `relative_floor` of its maximum), or `null` for methods
+    /// without a grid density (or beyond 2-D).
+    #[wasm_bindgen(js_name = logConcavity)]
+    pub fn log_concavity(&self, index: usize, relative_floor: f64) -> Result<JsValue, JsError> {
+        #[derive(Serialize)]
+        struct Map {
+            log_concave: bool,
+            worst: Option<(Vec<f64>, f64)>,
+            shape: Vec<usize>,
+            min_curvature: Vec<Option<f64>>,
+        }
+        let view = self
+            .run
+            .filters()
+            .get(index)
+            .filter(|_| !self.run.tracks()[index].failed())
+            .and_then(|f| f.density());
+        let floor = if relative_floor.is_finite() && relative_floor >= 0.0 {
+            relative_floor
+        } else {
+            1e-8
+        };
+        let Some(view) = view else {
+            return Ok(JsValue::NULL);
+        };
+        match zakai::diagnostics::log_concavity::log_concavity(&view, floor, 1e-6) {
+            None => Ok(JsValue::NULL),
+            Some(d) => to_js(&Map {
+                log_concave: d.log_concave,
+                worst: d.worst,
+                shape: view.shape.to_vec(),
+                min_curvature: d
+                    .min_curvature
+                    .iter()
+                    .map(|v| v.is_finite().then_some(*v))
+                    .collect(),
+            }),
+        }
+    }
+
     /// Per method: `{name, key, failed, failure, failed_at, mse, ms_per_step, steps,
     /// warnings}`; `mse` is 004 (43) over the rows so far; `warnings` name violated stability
     /// or positivity conditions of the chosen steps (000 (22), (30), (31)).

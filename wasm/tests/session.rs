@@ -69,3 +69,27 @@ fn the_same_seed_gives_the_same_truth_and_reset_changes_it() {
     b.step(usize::MAX).unwrap();
     assert_ne!(ta, b.truth(0, usize::MAX));
 }
+
+#[wasm_bindgen_test]
+fn log_concavity_of_a_grid_density() {
+    let p = presets::preset("cubic-sensor-1d").unwrap();
+    let qiem = p.methods.iter().position(|m| m.key() == "qiem").unwrap();
+    let mut s = Session::new(config_js("cubic-sensor-1d"), Some(3.0)).unwrap();
+    s.step(20).unwrap();
+    assert!(
+        s.log_concavity(0, 1e-8).unwrap().is_null(),
+        "the EKF has no grid"
+    );
+    let map = s.log_concavity(qiem, 1e-8).unwrap();
+    let get = |key: &str| js_sys::Reflect::get(&map, &JsValue::from_str(key)).unwrap();
+    assert!(get("log_concave").as_bool().is_some());
+    let values = js_sys::Array::from(&get("min_curvature"));
+    let points = p.methods[qiem].clone();
+    let zakai::scenario::MethodConfig::Qiem(params) = points else {
+        unreachable!()
+    };
+    assert_eq!(values.length() as usize, params.points[0]);
+    assert!(values
+        .iter()
+        .any(|v| v.as_f64().is_some_and(f64::is_finite)));
+}
