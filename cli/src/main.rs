@@ -61,6 +61,19 @@ enum Command {
         #[arg(long)]
         runs: Option<usize>,
     },
+    /// Check the convex-filter conditions of 003 §3 (Theorem 3.8; Theorem 3.2 when a
+    /// potential Φ is given) for a scenario's model on its domain.
+    Convexity {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// Φ for Theorem 3.2, an expression in the state variables (e.g. `-ln(cosh(x))`).
+        #[arg(long, allow_hyphen_values = true)]
+        phi: Option<String>,
+        /// J for Theorem 3.2: rows separated by `;`, entries by `,` (a single number means
+        /// that multiple of the identity).
+        #[arg(long, default_value = "0", allow_hyphen_values = true)]
+        j: String,
+    },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
         /// A preset name or a path to a scenario JSON file.
@@ -232,6 +245,72 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     Ok(())
 }
 
+/// J from `a,b;c,d` or a single number (times the identity).
+fn parse_matrix(text: &str, n: usize) -> Result<nalgebra::DMatrix<f64>, String> {
+    let rows: Vec<Vec<f64>> = text
+        .split(';')
+        .map(|row| {
+            row.split(',')
+                .map(|v| {
+                    v.trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| format!("--j: `{}` is not a finite number", v.trim()))
+                })
+                .collect()
+        })
+        .collect::<Result<_, _>>()?;
+    if rows.len() == 1 && rows[0].len() == 1 {
+        return Ok(nalgebra::DMatrix::identity(n, n) * rows[0][0]);
+    }
+    if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+        return Err(format!(
+            "--j must be {n} rows of {n} numbers (or one number)"
+        ));
+    }
+    Ok(nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k]))
+}
+
+fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
+    use zakai::diagnostics::convex_filter;
+    let config = load(scenario)?;
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let (model, prior) = (experiment.model(), experiment.prior());
+    let bounds = experiment.config().bounds();
+    let mut reports = vec![convex_filter::theorem_3_8(model, prior, &bounds)];
+    if let Some(text) = phi {
+        let phi = zakai::model::expression::ExpressionFunction::parse(
+            "phi",
+            &[text.to_string()],
+            model.n,
+            1,
+        )
+        .map_err(|e| e.to_string())?;
+        let j = parse_matrix(j, model.n)?;
+        reports.push(convex_filter::theorem_3_2(model, prior, &bounds, &phi, &j));
+    }
+    for r in reports {
+        println!(
+            "{}: {}",
+            r.theorem,
+            if r.holds() { "holds" } else { "does not hold" }
+        );
+        for c in &r.conditions {
+            println!(
+                "  [{}] {} — {}",
+                if c.holds { "ok" } else { "FAILS" },
+                c.name,
+                c.detail
+            );
+        }
+        if let Some(note) = &r.note {
+            println!("  note: {note}");
+        }
+    }
+    Ok(())
+}
+
 fn simulate(scenario: &str, seed: Option<u64>) -> Result<(), String> {
     let config = load(scenario)?;
     let seed = seed.unwrap_or(config.seed);
@@ -288,6 +367,7 @@ fn main() -> ExitCode {
             .map(|json| println!("{json}")),
         Command::Simulate { scenario, seed } => simulate(&scenario, seed),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
+        Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::Run {
             scenario,
             methods,

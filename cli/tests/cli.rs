@@ -97,6 +97,36 @@ fn reproduce_lists_tables_and_prints_ours_beside_the_paper() {
 }
 
 #[test]
+fn convexity_reports_each_condition() {
+    let o = zakai(&["convexity", "cos-x3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("Theorem 3.8") && out.contains("does not hold"),
+        "{out}"
+    );
+    assert!(out.contains("[FAILS] f is linear"), "{out}");
+    let o = zakai(&[
+        "convexity",
+        "cubic-sensor-1d",
+        "--phi",
+        "-x^2/2",
+        "--j",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Theorem 3.2"));
+    assert_clean_failure(
+        &zakai(&["convexity", "cubic-sensor-1d", "--phi", "sin(x"]),
+        "position",
+    );
+    assert_clean_failure(
+        &zakai(&["convexity", "cubic-sensor-1d", "--phi", "x", "--j", "1,2;3"]),
+        "--j",
+    );
+}
+
+#[test]
 fn list_names_every_preset() {
     let o = zakai(&["list"]);
     assert!(o.status.success());

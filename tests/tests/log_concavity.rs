@@ -102,3 +102,76 @@ fn two_dimensional_maps() {
     let (point, _) = d.worst.unwrap();
     assert!(point[0].abs() < 0.1, "{point:?}");
 }
+
+mod convex_filter_conditions {
+    use nalgebra::DMatrix;
+    use zakai::diagnostics::convex_filter::{theorem_3_2, theorem_3_8, ConvexReport};
+    use zakai::experiment::Experiment;
+    use zakai::model::expression::ExpressionFunction;
+    use zakai::scenario::{presets, PriorConfig, ScenarioConfig};
+
+    fn check(config: ScenarioConfig, phi_j: Option<(&str, f64)>) -> ConvexReport {
+        let e = Experiment::new(config).unwrap();
+        let bounds = e.config().bounds();
+        match phi_j {
+            None => theorem_3_8(e.model(), e.prior(), &bounds),
+            Some((phi, j)) => {
+                let phi = ExpressionFunction::parse("phi", &[phi.to_string()], 1, 1).unwrap();
+                theorem_3_2(
+                    e.model(),
+                    e.prior(),
+                    &bounds,
+                    &phi,
+                    &(DMatrix::identity(1, 1) * j),
+                )
+            }
+        }
+    }
+
+    fn model(drift: &str, observation: &str) -> ScenarioConfig {
+        let mut c = presets::preset("cubic-sensor-1d").unwrap();
+        c.model.drift = vec![drift.into()];
+        c.model.observation = vec![observation.into()];
+        c.prior = PriorConfig::Gaussian {
+            mean: vec![0.0],
+            cov: vec![vec![0.5]],
+        };
+        c.initial_state = None;
+        c.methods = vec![zakai::scenario::MethodConfig::from_key("ekf").unwrap()];
+        c
+    }
+
+    /// Theorem 3.8: the cubic sensor (f = 0, ½x⁶ convex, Gaussian σ₀) passes every static
+    /// condition; f = cos x fails "f is linear"; h = sin x fails "½hᵀS⁻¹h is convex"
+    /// (½ sin²x has curvature cos 2x: on the check's grid of [−4, 4], 11 points at
+    /// −4 + 8(k + ½)/11, the nearest to −π/2 is −16/11, where cos(−32/11) = −0.9731).
+    #[test]
+    fn theorem_3_8_names_the_failing_condition() {
+        let r = check(presets::preset("cubic-sensor-1d").unwrap(), None);
+        assert!(r.holds(), "{r:?}");
+        assert!(r.note.as_deref().unwrap().contains("Definition 3.6"));
+        let r = check(presets::preset("cos-x2").unwrap(), None);
+        assert_eq!(r.failing().unwrap().name, "f is linear");
+        let r = check(model("-0.5*x", "sin(x)"), None);
+        let failing = r.failing().unwrap();
+        assert_eq!(failing.name, "½hᵀS⁻¹h is convex");
+        assert!(
+            failing.detail.contains("-9.7309e-1") && failing.detail.contains("(-1.455)"),
+            "{}",
+            failing.detail
+        );
+    }
+
+    /// Theorem 3.2 on 003 Remark 3.3's example f = tanh x = −∇Φ, Φ = −ln cosh x, h = 2x,
+    /// σ₀ = N(0, 0.5): with J = ½ every condition holds (condition 4's function is
+    /// 5x² + 1); with J = 0, condition 2 fails (Φ is not convex).
+    #[test]
+    fn theorem_3_2_on_the_tanh_drift() {
+        let r = check(model("tanh(x)", "2*x"), Some(("-ln(cosh(x))", 0.5)));
+        assert!(r.holds(), "{r:?}");
+        let r = check(model("tanh(x)", "2*x"), Some(("-ln(cosh(x))", 0.0)));
+        assert_eq!(r.failing().unwrap().name, "2. Φ + xᵀJx is convex");
+        let r = check(model("tanh(x)", "x^3"), Some(("-ln(cosh(x))", 0.5)));
+        assert_eq!(r.failing().unwrap().name, "h is linear");
+    }
+}
