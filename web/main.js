@@ -371,7 +371,7 @@ function makePlots(info) {
   $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   $('heat-legend').title = '0 → maximum density at each time';
   $('metrics').querySelector('tbody').innerHTML = info.methods.map((m, i) => `<tr data-method="${i}"><td><span class="swatch" style="background:${COLORS[i % COLORS.length]}"></span>${m}</td><td class="mse">–</td><td class="status">running</td><td class="time">–</td></tr>`).join('');
-  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: 0 } });
+  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0 } });
 }
 
 function drawTruthMarker(u) {
@@ -444,6 +444,18 @@ function drawColumns(ctx, dens, x0, x1, h) {
   ctx.putImageData(img, x0, 0);
 }
 
+// 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
+function showLogConcavity(c) {
+  const el = $('log-concavity');
+  if (!c) {
+    el.textContent = '';
+    return;
+  }
+  const at = c.worst ? ` (smallest curvature of −log p ${c.worst[1].toFixed(2)} at x = ${c.worst[0].map((v) => v.toFixed(2)).join(', ')})` : '';
+  el.textContent = c.logConcave ? `log-concave${at}` : `not log-concave${at}`;
+  el.className = c.logConcave ? 'hint' : 'hint warning-text';
+}
+
 function applyFrame(frame) {
   const d = state.data;
   const info = state.info;
@@ -459,6 +471,7 @@ function applyFrame(frame) {
   }
   state.lastDensity = frame;
   drawHeatColumns(frame);
+  showLogConcavity(frame.logConcave);
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
   for (const f of frame.summary.failures) {
@@ -578,7 +591,10 @@ $('component').addEventListener('change', () => {
   $('heat-range').textContent = `x${dim + 1} ∈ [${lo}, ${hi}] bottom → top`;
   render();
 });
-$('density-method').addEventListener('change', () => render());
+$('density-method').addEventListener('change', () => {
+  worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
+  render();
+});
 $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
 $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); scheduleValidate(); });

@@ -22,10 +22,13 @@ function frame(summary) {
   const grid = session.densityGrid(view.dim, view.points);
   const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
   const diagnostics = session.diagnostics();
+  // Log-concavity (003 §3) of the density shown in the heat strip, for grid methods.
+  const concavity = session.logConcavity(view.densityMethod, 1e-8);
+  const logConcave = concavity ? { logConcave: concavity.log_concave, worst: concavity.worst } : null;
   sent = to;
   const transfer = [times.buffer, truth.buffer, grid.buffer,
     ...estimates.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
-  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, summary }, transfer);
+  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, logConcave, summary }, transfer);
 }
 
 function tick() {

@@ -76,6 +76,9 @@ try {
     return lit;
   });
   assert.ok(heatPixels > 1000, `heat strip drawn (${heatPixels} pixels)`);
+  // The heat strip shows a grid method's density, with its log-concavity verdict (003 §3).
+  const concavity = await page.textContent('#log-concavity');
+  assert.match(concavity, /^(not )?log-concave \(smallest curvature/, `log-concavity shown: ${concavity}`);
   await page.screenshot({ path: `${artifacts}/playground-cubic-sensor.png` });
 
   // 2. A broken expression shows its message next to the field; the page keeps stepping.
