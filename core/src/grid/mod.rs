@@ -142,6 +142,20 @@ impl TensorGrid {
         (idx / self.strides[d]) % self.shape[d]
     }
 
+    /// Advances the odometer `counter` (per-dimension indices from dimension `first` on) and
+    /// the coordinates `x` to the next node in storage order.
+    fn next_node(&self, counter: &mut [usize], x: &mut [f64], first: usize) {
+        for k in first..self.dim() {
+            counter[k] += 1;
+            if counter[k] < self.shape[k] {
+                x[k] += self.spacing[k];
+                return;
+            }
+            counter[k] = 0;
+            x[k] = self.coordinate(k, 0);
+        }
+    }
+
     /// Calls `f(idx, x)` for every node in storage order, updating the coordinates `x`
     /// incrementally (an odometer) instead of dividing the flat index.
     pub fn for_each_node(&self, mut f: impl FnMut(usize, &[f64])) {
@@ -150,15 +164,7 @@ impl TensorGrid {
         let mut x: Vec<f64> = (0..d).map(|k| self.coordinate(k, 0)).collect();
         for idx in 0..self.len {
             f(idx, &x);
-            for k in 0..d {
-                counter[k] += 1;
-                if counter[k] < self.shape[k] {
-                    x[k] += self.spacing[k];
-                    break;
-                }
-                counter[k] = 0;
-                x[k] = self.coordinate(k, 0);
-            }
+            self.next_node(&mut counter, &mut x, 0);
         }
     }
 
@@ -208,15 +214,7 @@ impl TensorGrid {
                     second[a * d + b] += s0 * x[a] * x[b];
                 }
             }
-            for k in 1..d {
-                counter[k] += 1;
-                if counter[k] < self.shape[k] {
-                    x[k] += self.spacing[k];
-                    break;
-                }
-                counter[k] = 0;
-                x[k] = self.coordinate(k, 0);
-            }
+            self.next_node(&mut counter, &mut x, 1);
         }
         let mean = DVector::from_iterator(d, mean.iter().map(|m| m / total));
         let covariance = DMatrix::from_fn(d, d, |a, b| {

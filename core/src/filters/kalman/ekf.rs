@@ -62,15 +62,16 @@ impl Filter for ExtendedKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            self.state
-                .predict_linearized(&self.model, &self.q, obs.dt, self.substeps)?;
+        match self.state.predict_then_measure(
+            &self.model,
+            &self.q,
+            self.substeps,
+            &self.form,
+            obs,
+        )? {
+            Some(meas) => self.state.linearized_update(&self.model, &meas),
+            None => Ok(()),
         }
-        let meas = self.form.at(obs)?;
-        if meas.scale == 0.0 {
-            return Ok(());
-        }
-        self.state.linearized_update(&self.model, &meas)
     }
 
     fn estimate(&self) -> Estimate {

@@ -336,14 +336,16 @@ impl Filter for MapKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            self.state
-                .predict_linearized(&self.model, &self.q, obs.dt, self.substeps)?;
-        }
-        let meas = self.form.at(obs)?;
-        if meas.scale == 0.0 {
+        let Some(meas) = self.state.predict_then_measure(
+            &self.model,
+            &self.q,
+            self.substeps,
+            &self.form,
+            obs,
+        )?
+        else {
             return Ok(());
-        }
+        };
         let x = self.map_point(&meas)?;
         // The Laplace covariance at the MAP point: P − K H P.
         let h = meas.jacobian(&self.model, x.as_slice());

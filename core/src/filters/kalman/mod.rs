@@ -112,6 +112,24 @@ impl GaussianState {
         self.check()
     }
 
+    /// The common first half of an EKF-type step: the linearised prediction over `obs.dt`,
+    /// then the measurement equation of `obs` (`None` when there is nothing to assimilate,
+    /// e.g. the zero increment at τ₀).
+    pub fn predict_then_measure(
+        &mut self,
+        model: &crate::model::Model,
+        q: &DMatrix<f64>,
+        substeps: usize,
+        form: &measurement::MeasurementForm,
+        obs: &crate::filters::Observation,
+    ) -> Result<Option<measurement::Measurement>, FilterError> {
+        if obs.dt > 0.0 {
+            self.predict_linearized(model, q, obs.dt, substeps)?;
+        }
+        let meas = form.at(obs)?;
+        Ok((meas.scale != 0.0).then_some(meas))
+    }
+
     /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).
     pub fn estimate(&self) -> crate::filters::Estimate {
         crate::filters::Estimate {
