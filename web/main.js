@@ -11,10 +11,10 @@ const PARAMS = {
   pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
   iekf: [['iterations', 'int'], ['tolerance', 'num'], ['substeps', 'int']],
   iokf: [['splits', 'int'], ['newton_steps', 'int'], ['substeps', 'int']],
-  qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
-  qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator']],
-  iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator']],
-  spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator']],
+  qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
+  qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
+  iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
+  spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
   spectral: [['offline_basis', 'optint'], ['online_basis', 'optint'], ['partitions', 'int'], ['quadrature', 'optint'], ['online_nodes', 'optint'], ['likelihood', 'enum:in_update|in_operator']],
 };
 const DEFAULTS = {
@@ -24,16 +24,16 @@ const DEFAULTS = {
   pf: { particles: 500, ess_threshold: 0.5, substeps: 1 },
   iekf: { iterations: 6, tolerance: 1e-10, substeps: 4 },
   iokf: { splits: 3, newton_steps: 2, substeps: 4 },
-  qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
-  iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update' },
-  spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update' },
-  qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update' },
+  qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
+  iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update', likelihood_samples: 1 },
+  spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update', likelihood_samples: 1 },
+  qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
   spectral: { partitions: 1, likelihood: 'in_update' },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = {
   ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
-  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', newton_steps: 'm (Newton)',
+  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', newton_steps: 'm (Newton)',
 };
 
 function paramInput(row, i, name, type) {

@@ -379,3 +379,42 @@ fn fourth_order_qiem_converges_at_fourth_order_in_space() {
         "QIEM-4 orders {fourth:?}"
     );
 }
+
+/// With h = x⁶ one interval's likelihood can be narrower than the grid (width
+/// 1/(h′(x)√Δτ) ≈ 0.002 at |x| ≈ 3 against Δs = 0.01), and point values of the factor (15)
+/// then weigh the two mirror modes by where the nodes fall. Averaging the factor over each
+/// cell (8 samples) makes QIEM on Δs = 0.01 follow a 4× finer grid (Δs = 0.0025,
+/// Δt = 5·10⁻⁴): time-averaged mean difference below 0.02 on seeds where point values are off
+/// by 0.1–1.6 (measured 0.003–0.008 against 0.10–1.56), and always below a tenth of it.
+#[test]
+fn the_cell_averaged_factor_resolves_likelihoods_narrower_than_the_grid() {
+    let q = |points: usize, dt: f64, samples: usize| {
+        MethodConfig::Qiem(YauYauParams {
+            points: vec![points],
+            dt,
+            likelihood_samples: samples,
+            ..YauYauParams::default()
+        })
+    };
+    let mut c = zakai::scenario::presets::preset("cos-x6").unwrap();
+    c.methods = vec![q(5601, 5e-4, 1), q(1401, 1e-3, 1), q(1401, 1e-3, 8)];
+    let e = Experiment::new(c).unwrap();
+    for seed in [70u64, 92] {
+        let r = e.run(seed).unwrap();
+        let reference = &r.methods[0].estimates;
+        let off = |i: usize| {
+            r.methods[i]
+                .estimates
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f64>()
+                / reference.len() as f64
+        };
+        let (point, cell) = (off(1), off(2));
+        assert!(
+            cell < 0.02 && cell < 0.1 * point,
+            "seed {seed}: point {point}, cell {cell}"
+        );
+    }
+}

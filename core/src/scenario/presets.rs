@@ -182,7 +182,10 @@ fn cos_xn(power: u32) -> ScenarioConfig {
             MethodConfig::Ekf(EkfParams::default()),
             ukf(0.5, 2.0, 0.0),
             pf(500),
-            qiem(&[1401], 1e-3),
+            MethodConfig::Qiem(YauYauParams {
+                likelihood_samples: 8,
+                ..grid(&[1401], 1e-3)
+            }),
         ],
     });
     s.seed = 10 + power as u64;

@@ -244,6 +244,51 @@ impl QiemStep {
     }
 }
 
+impl CellSamples {
+    /// [`YauYauFilter::update`] with the factor averaged over each cell's samples: every
+    /// exponent `a_is + e_i ln 2` is shifted by the largest, so the mean of the exponentials
+    /// is at most 1 and no intermediate overflows.
+    fn update(&mut self, u: &mut [f64], dy: &[f64], dt_obs: f64) {
+        let k = self.per_node;
+        for (a, h) in self.exponents.iter_mut().zip(&self.half_hsh) {
+            *a = -dt_obs * h;
+        }
+        for (y, sh) in dy.iter().zip(&self.s_inv_h) {
+            for (a, h) in self.exponents.iter_mut().zip(sh) {
+                *a += y * h;
+            }
+        }
+        let mut shift = f64::NEG_INFINITY;
+        for (v, a) in u.iter_mut().zip(self.exponents.chunks_exact_mut(k)) {
+            if *v > 0.0 {
+                let (m, e) = linalg::binary_split(*v);
+                *v = m;
+                for a in a.iter_mut() {
+                    *a += e * core::f64::consts::LN_2;
+                    shift = shift.max(*a);
+                }
+            }
+        }
+        if shift == f64::NEG_INFINITY {
+            return;
+        }
+        let inv = 1.0 / k as f64;
+        for (v, a) in u.iter_mut().zip(self.exponents.chunks_exact(k)) {
+            if *v <= 0.0 {
+                *v = 0.0;
+                continue;
+            }
+            let mean: f64 = a
+                .iter()
+                .map(|a| linalg::exp_nonpositive((a - shift).min(0.0)))
+                .sum::<f64>()
+                * inv;
+            let w = *v * mean;
+            *v = if w < super::FLUSH_BELOW { 0.0 } else { w };
+        }
+    }
+}
+
 enum Solver {
     Iem(SplitIem),
     Qiem(QiemStep),
@@ -263,6 +308,57 @@ pub struct YauYauFilter {
     solver: Option<(f64, usize, Solver)>,
     warnings: Vec<GuaranteeWarning>,
     estimate: Estimate,
+    /// The observation factor's samples inside every cell, when averaged over the cell.
+    cell: Option<CellSamples>,
+}
+
+/// `S⁻¹h` and `½hᵀS⁻¹h` at K^D points inside every cell (node-major), for the cell average
+/// of the observation factor, and scratch for their exponents.
+struct CellSamples {
+    per_node: usize,
+    s_inv_h: Vec<Vec<f64>>,
+    half_hsh: Vec<f64>,
+    exponents: Vec<f64>,
+}
+
+impl CellSamples {
+    /// Samples at the midpoints of K equal sub-cells per dimension around every node.
+    fn new(
+        model: &Model,
+        grid: &TensorGrid,
+        samples: usize,
+        in_update: bool,
+    ) -> Result<Self, FilterError> {
+        let dims = grid.dim();
+        let per_node = samples.pow(dims as u32);
+        let offset =
+            |k: usize, d: usize| ((k as f64 + 0.5) / samples as f64 - 0.5) * grid.spacing()[d];
+        let len = grid.len() * per_node;
+        let mut node = alloc::vec![0.0; dims];
+        let c = crate::model::dmz::DmzCoefficients::tabulate(
+            model,
+            "the Yau–Yau filters",
+            len,
+            |i, x| {
+                grid.node(i / per_node, &mut node);
+                let mut rest = i % per_node;
+                for d in 0..dims {
+                    x[d] = node[d] + offset(rest % samples, d);
+                    rest /= samples;
+                }
+            },
+        )?;
+        Ok(CellSamples {
+            per_node,
+            s_inv_h: c.s_inv_h,
+            half_hsh: if in_update {
+                c.half_hsh
+            } else {
+                alloc::vec![0.0; len]
+            },
+            exponents: alloc::vec![0.0; len],
+        })
+    }
 }
 
 impl YauYauFilter {
@@ -299,6 +395,16 @@ impl YauYauFilter {
             }
         }
         let u = grid.tabulate(|x| prior.density(x));
+        let cell = if params.likelihood_samples > 1 {
+            Some(CellSamples::new(
+                model,
+                &grid,
+                params.likelihood_samples,
+                params.likelihood == Likelihood::InUpdate,
+            )?)
+        } else {
+            None
+        };
         let mut filter = YauYauFilter {
             name,
             scheme,
@@ -309,6 +415,7 @@ impl YauYauFilter {
             u,
             solver: None,
             warnings: Vec::new(),
+            cell,
             estimate: Estimate {
                 mean: DVector::zeros(model.n),
                 covariance: None,
@@ -390,6 +497,10 @@ impl YauYauFilter {
     /// `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value is at
     /// most 1, the largest at least ½, and no intermediate overflows.
     fn update(&mut self, dy: &[f64], dt_obs: f64) {
+        if let Some(cell) = &mut self.cell {
+            cell.update(&mut self.u, dy, dt_obs);
+            return;
+        }
         let a = &mut self.tmp;
         for (a, h) in a.iter_mut().zip(&self.op.half_hsh) {
             *a = -dt_obs * h;
@@ -414,7 +525,8 @@ impl YauYauFilter {
         }
         for (u, &a) in self.u.iter_mut().zip(a.iter()) {
             // Zero values stay zero (their mantissa was not set).
-            let w = *u * linalg::exp_nonpositive(a - shift);
+            // Clamped at 0: only values that were not positive can exceed the shift.
+            let w = *u * linalg::exp_nonpositive((a - shift).min(0.0));
             *u = if w < super::FLUSH_BELOW { 0.0 } else { w };
         }
     }

@@ -129,6 +129,12 @@ pub struct YauYauParams {
     pub potential: PotentialTerm,
     /// Where the observation part of the potential is applied.
     pub likelihood: Likelihood,
+    /// Samples per dimension of the cell average of the observation factor (15): 1 (000's
+    /// point value at the node) or K > 1 — the factor is averaged over K × … × K points
+    /// inside each cell, which matters when one interval's likelihood is narrower than the
+    /// grid (steep h): point values then weigh separate modes by where the nodes happen to
+    /// fall, the cell average by the mass they carry.
+    pub likelihood_samples: usize,
     /// Superposition technique only: bump centres per dimension (one number: the same in
     /// every dimension), spread evenly over the domain.
     pub centres: Vec<usize>,
@@ -145,6 +151,7 @@ impl Default for YauYauParams {
             alpha: 1.0,
             potential: PotentialTerm::Exponential,
             likelihood: Likelihood::InUpdate,
+            likelihood_samples: 1,
             centres: vec![81],
             eta: None,
         }
@@ -218,6 +225,25 @@ impl YauYauParams {
         }
         if !(self.dt > 0.0 && self.dt.is_finite()) {
             p.push(("dt", "must be positive and finite".into()));
+        }
+        let samples = self.likelihood_samples;
+        let per_node = samples.checked_pow(n as u32).unwrap_or(usize::MAX);
+        if samples == 0 || samples > 64 {
+            p.push((
+                "likelihood_samples",
+                format!("must be between 1 and 64, got {samples}"),
+            ));
+        } else if product(&self.shape(n))
+            .and_then(|t| t.checked_mul(per_node))
+            .is_none_or(|t| t > crate::grid::MAX_NODES)
+        {
+            p.push((
+                "likelihood_samples",
+                format!(
+                    "{per_node} samples per node on this grid exceed the cap of {} tabulated points",
+                    crate::grid::MAX_NODES
+                ),
+            ));
         }
         if !(0.0..=1.0).contains(&self.alpha) {
             p.push(("alpha", format!("must be in [0, 1], got {}", self.alpha)));
