@@ -6,7 +6,8 @@
 //! the factor `2/(N + 1)`.
 //!
 //! Computation (one real FFT of length N + 1 per line, which realfft performs as a complex FFT
-//! of half that length): with M = N + 1 and x_0 = x_M = 0, the sequence
+//! of half that length; along an axis of a tensor array, two lines per complex FFT of length
+//! N + 1, batched): with M = N + 1 and x_0 = x_M = 0, the sequence
 //! `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})`, j = 0..M−1, has the real DFT
 //! `Σ_j y_j e^{−2πijk/M} = R_k − i I_k` with `I_k = X_{2k}` (the antisymmetric half of y picks out
 //! the even sine frequencies) and `R_k = X_{2k+1} − X_{2k−1}` (the symmetric half, through
@@ -19,24 +20,61 @@ use alloc::vec::Vec;
 
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
+use rustfft::{Fft, FftPlanner};
 
 /// A planned DST-I of one length with its scratch buffers.
 pub struct DstPlan {
     n: usize,
     fft: Arc<dyn RealToComplex<f64>>,
+    /// Complex FFT of length N + 1 for two lines at once (their sequences y as real and
+    /// imaginary part), run over a whole axis in one batch.
+    pair_fft: Arc<dyn Fft<f64>>,
     /// `sin(jπ/(N + 1))`, j = 0..N.
     sines: Vec<f64>,
     input: Vec<f64>,
     spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
+    /// The batch of paired lines of one axis (grown on first use, then reused).
+    batch: Vec<Complex<f64>>,
+    pair_scratch: Vec<Complex<f64>>,
+    /// One block of a strided axis, transposed into consecutive lines.
     line: Vec<f64>,
 }
 
+/// Writes X_1..X_N into `x` from the real DFT `Y_k = R_k − i I_k` of y (see the module doc):
+/// `X_{2k} = I_k`, `X_{2k+1} = X_{2k−1} + R_k`, `X_1 = R_0/2`.
+fn unpack(spectrum: impl Fn(usize) -> Complex<f64>, x: &mut [f64]) {
+    let n = x.len();
+    let mut odd = 0.5 * spectrum(0).re;
+    x[0] = odd;
+    let mut k = 1;
+    while 2 * k <= n {
+        let c = spectrum(k);
+        x[2 * k - 1] = -c.im;
+        if 2 * k + 1 > n {
+            break;
+        }
+        odd += c.re;
+        x[2 * k] = odd;
+        k += 1;
+    }
+}
+
+/// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` for j = 1..M−1 (y_0 = 0), with
+/// `sines[j] = sin(jπ/M)` and x of length M − 1.
+fn sequence(sines: &[f64], x: &[f64], j: usize) -> f64 {
+    let m = x.len() + 1;
+    let (a, b) = (x[j - 1], x[m - j - 1]);
+    sines[j] * (a + b) + 0.5 * (a - b)
+}
+
 impl DstPlan {
-    /// Plans the transform of length `n` (allocates here, never in `transform`).
+    /// Plans the transform of length `n` (allocates here; a whole-axis batch grows once on
+    /// the first [`DstPlan::transform_axis`], never in later ones).
     pub fn new(n: usize) -> Self {
         let m = n + 1;
         let fft = RealFftPlanner::<f64>::new().plan_fft_forward(m);
+        let pair_fft = FftPlanner::<f64>::new().plan_fft_forward(m);
         let sines = (0..m)
             .map(|j| libm::sin(j as f64 * core::f64::consts::PI / m as f64))
             .collect();
@@ -46,8 +84,11 @@ impl DstPlan {
             input: fft.make_input_vec(),
             spectrum: fft.make_output_vec(),
             scratch: fft.make_scratch_vec(),
-            line: vec![0.0; n],
+            pair_scratch: vec![Complex::new(0.0, 0.0); pair_fft.get_inplace_scratch_len()],
+            batch: Vec::new(),
+            line: Vec::new(),
             fft,
+            pair_fft,
         }
     }
 
@@ -63,57 +104,84 @@ impl DstPlan {
 
     /// Transforms one line of length N in place.
     pub fn transform(&mut self, x: &mut [f64]) {
-        let n = self.n;
-        let m = n + 1;
+        let m = self.n + 1;
         self.input[0] = 0.0;
         for j in 1..m {
-            let (a, b) = (x[j - 1], x[m - j - 1]);
-            self.input[j] = self.sines[j] * (a + b) + 0.5 * (a - b);
+            self.input[j] = sequence(&self.sines, x, j);
         }
         let done =
             self.fft
                 .process_with_scratch(&mut self.input, &mut self.spectrum, &mut self.scratch);
         // The buffers were made by the plan, so their lengths are right.
         debug_assert!(done.is_ok());
-        let mut odd = 0.5 * self.spectrum[0].re;
-        x[0] = odd;
-        for (k, c) in self.spectrum.iter().enumerate().skip(1) {
-            if 2 * k > n {
-                break;
-            }
-            x[2 * k - 1] = -c.im;
-            if 2 * k + 1 > n {
-                break;
-            }
-            odd += c.re;
-            x[2 * k] = odd;
-        }
+        let spectrum = &self.spectrum;
+        unpack(|k| spectrum[k], x);
     }
 
     /// Transforms every line of a tensor array along the dimension with `stride`, whose lines
-    /// have this plan's length.
+    /// have this plan's length. Lines along a strided dimension are first brought together
+    /// by a tiled transpose of each block, so that every pass reads memory in order.
     pub fn transform_axis(&mut self, data: &mut [f64], stride: usize) {
-        let n = self.n;
         if stride == 1 {
-            for line in data.chunks_exact_mut(n) {
-                self.transform(line);
-            }
+            self.transform_lines(data);
             return;
         }
-        let block = stride * n;
-        let mut line = core::mem::take(&mut self.line);
-        for l in 0..data.len() / n {
-            // Line number l starts at (l / stride) * block + l % stride.
-            let s = (l / stride) * block + l % stride;
-            for (i, v) in line.iter_mut().enumerate() {
-                *v = data[s + i * stride];
+        let block = stride * self.n;
+        let mut lines = core::mem::take(&mut self.line);
+        lines.resize(block, 0.0);
+        for chunk in data.chunks_exact_mut(block) {
+            // chunk: n rows (position along the line) × stride columns (the lines).
+            transpose(chunk, self.n, stride, &mut lines);
+            self.transform_lines(&mut lines);
+            transpose(&lines, stride, self.n, chunk);
+        }
+        self.line = lines;
+    }
+
+    /// Transforms consecutive lines of length N: two lines per complex FFT (`z = y_a + i y_b`,
+    /// then `Y_a = (Z_k + conj Z_{M−k})/2`, `Y_b = (Z_k − conj Z_{M−k})/(2i)`), all pairs in one
+    /// batched FFT call; an odd last line goes through [`DstPlan::transform`].
+    fn transform_lines(&mut self, data: &mut [f64]) {
+        let n = self.n;
+        let m = n + 1;
+        let lines = data.len() / n;
+        let pairs = lines / 2;
+        if pairs > 0 {
+            self.batch.resize(pairs * m, Complex::new(0.0, 0.0));
+            for (two, z) in data.chunks_exact(2 * n).zip(self.batch.chunks_exact_mut(m)) {
+                let (la, lb) = two.split_at(n);
+                z[0] = Complex::new(0.0, 0.0);
+                for j in 1..m {
+                    z[j] = Complex::new(sequence(&self.sines, la, j), sequence(&self.sines, lb, j));
+                }
             }
-            self.transform(&mut line);
-            for (i, v) in line.iter().enumerate() {
-                data[s + i * stride] = *v;
+            self.pair_fft
+                .process_with_scratch(&mut self.batch, &mut self.pair_scratch);
+            for (two, z) in data.chunks_exact_mut(2 * n).zip(self.batch.chunks_exact(m)) {
+                let mirror = |k: usize| if k == 0 { z[0] } else { z[m - k] }.conj();
+                let (la, lb) = two.split_at_mut(n);
+                unpack(|k| (z[k] + mirror(k)) * 0.5, la);
+                unpack(|k| (z[k] - mirror(k)) * Complex::new(0.0, -0.5), lb);
             }
         }
-        self.line = line;
+        if lines % 2 == 1 {
+            let last = (lines - 1) * n;
+            self.transform(&mut data[last..last + n]);
+        }
+    }
+}
+
+/// `dst = srcᵀ` for `src` of `rows × cols` (row-major), in 16 × 16 tiles.
+fn transpose(src: &[f64], rows: usize, cols: usize, dst: &mut [f64]) {
+    const TILE: usize = 16;
+    for r0 in (0..rows).step_by(TILE) {
+        for c0 in (0..cols).step_by(TILE) {
+            for r in r0..(r0 + TILE).min(rows) {
+                for c in c0..(c0 + TILE).min(cols) {
+                    dst[c * rows + r] = src[r * cols + c];
+                }
+            }
+        }
     }
 }
 
