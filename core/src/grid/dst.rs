@@ -151,8 +151,8 @@ impl DstPlan {
             for (two, z) in data.chunks_exact(2 * n).zip(self.batch.chunks_exact_mut(m)) {
                 let (la, lb) = two.split_at(n);
                 z[0] = Complex::new(0.0, 0.0);
-                for j in 1..m {
-                    z[j] = Complex::new(sequence(&self.sines, la, j), sequence(&self.sines, lb, j));
+                for (j, v) in z.iter_mut().enumerate().skip(1) {
+                    *v = Complex::new(sequence(&self.sines, la, j), sequence(&self.sines, lb, j));
                 }
             }
             self.pair_fft
