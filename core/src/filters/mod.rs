@@ -10,6 +10,7 @@
 //! with defaults and a `validate()`), consumes the same [`Observation`]s, and exposes its
 //! [`Estimate`]; grid methods also expose their density through [`DensityView`].
 
+pub mod direct;
 pub mod kalman;
 pub mod marginal;
 pub mod particle;
