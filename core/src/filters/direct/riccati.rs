@@ -1,0 +1,95 @@
+//! 002 Theorem 3.3: the Kolmogorov equation (32) with `l(x) = Dx + d` and
+//! `q(x) = ½(Σ l_i² − Σ ∂l_i/∂x_i − η) = xᵀQx + pᵀx + r` (33) keeps a Gaussian-type initial
+//! value `exp(xᵀAx + Bᵀx + C)` in that form (34), with
+//!
+//! * `dA/dt = 2A² − (AD + DᵀA) + Q`  (35)
+//! * `dBᵀ/dt = 2BᵀA − BᵀD − 2dᵀA + pᵀ`  (36)
+//! * `dC/dt = tr A + ½BᵀB − dᵀB + r`  (37)
+//!
+//! integrated here by classical RK4 (A re-symmetrised after every step), for any n.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::gaussian_approximation::GaussianTerm;
+use crate::linalg::symmetrize;
+
+/// `exp(xᵀAx + Bᵀx + C)` with A symmetric.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuadraticExponent {
+    /// A (n × n, symmetric).
+    pub a: DMatrix<f64>,
+    /// B.
+    pub b: DVector<f64>,
+    /// C.
+    pub c: f64,
+}
+
+/// The coefficients of (32)–(33): `l(x) = Dx + d`, `q(x) = xᵀQx + pᵀx + r`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KolmogorovCoefficients {
+    /// D.
+    pub d_mat: DMatrix<f64>,
+    /// d.
+    pub d_vec: DVector<f64>,
+    /// Q (symmetric).
+    pub q: DMatrix<f64>,
+    /// p.
+    pub p: DVector<f64>,
+    /// r.
+    pub r: f64,
+}
+
+impl QuadraticExponent {
+    /// A 1-D Gaussian term `|c| exp(−(x − μ)²/(2σ²))` (the sign of c is kept by the caller):
+    /// `A = −1/(2σ²)`, `B = μ/σ²`, `C = ln|c| − μ²/(2σ²)`.
+    pub fn from_term(term: &GaussianTerm) -> Self {
+        let s2 = term.sigma * term.sigma;
+        QuadraticExponent {
+            a: DMatrix::from_element(1, 1, -0.5 / s2),
+            b: DVector::from_element(1, term.mean / s2),
+            c: libm::log(term.weight.abs()) - 0.5 * term.mean * term.mean / s2,
+        }
+    }
+
+    /// The value `exp(xᵀAx + Bᵀx + C)` at x.
+    pub fn value(&self, x: &[f64]) -> f64 {
+        let v = DVector::from_column_slice(x);
+        libm::exp((v.transpose() * &self.a * &v)[(0, 0)] + self.b.dot(&v) + self.c)
+    }
+
+    fn rates(&self, k: &KolmogorovCoefficients) -> QuadraticExponent {
+        let (a, b) = (&self.a, &self.b);
+        let da = a * a * 2.0 - (a * &k.d_mat + k.d_mat.transpose() * a) + &k.q;
+        // Column-vector form of (36): dB/dt = 2AB − DᵀB − 2Ad + p (A symmetric).
+        let db = a * b * 2.0 - k.d_mat.transpose() * b - a * &k.d_vec * 2.0 + &k.p;
+        let dc = a.trace() + 0.5 * b.dot(b) - k.d_vec.dot(b) + k.r;
+        QuadraticExponent {
+            a: da,
+            b: db,
+            c: dc,
+        }
+    }
+
+    fn plus(&self, rate: &QuadraticExponent, h: f64) -> QuadraticExponent {
+        QuadraticExponent {
+            a: &self.a + &rate.a * h,
+            b: &self.b + &rate.b * h,
+            c: self.c + rate.c * h,
+        }
+    }
+
+    /// Integrates (35)–(37) over `dt` in `substeps` RK4 steps.
+    pub fn propagate(&mut self, k: &KolmogorovCoefficients, dt: f64, substeps: usize) {
+        let h = dt / substeps.max(1) as f64;
+        for _ in 0..substeps.max(1) {
+            let k1 = self.rates(k);
+            let k2 = self.plus(&k1, 0.5 * h).rates(k);
+            let k3 = self.plus(&k2, 0.5 * h).rates(k);
+            let k4 = self.plus(&k3, h).rates(k);
+            self.a += (k1.a + k2.a * 2.0 + k3.a * 2.0 + k4.a) * (h / 6.0);
+            self.b += (k1.b + k2.b * 2.0 + k3.b * 2.0 + k4.b) * (h / 6.0);
+            self.c += (k1.c + 2.0 * k2.c + 2.0 * k3.c + k4.c) * (h / 6.0);
+            symmetrize(&mut self.a);
+        }
+    }
+}
