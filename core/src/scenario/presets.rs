@@ -364,8 +364,9 @@ pub fn all() -> Vec<ScenarioConfig> {
             description: "002 (38) with f = tanh x (the drift form dx = f dt + dw is meant), \
                 σ₀ ∝ e^{−x sin x − ½ x cos x − x² + 3x + 2}, x₀ drawn from σ₀, T = 30, Δτ = 0.1; \
                 the EKF starts at x̂₀ = 1, P₀ = 1 (Table 3 also uses P₀ = 5, 10; the direct \
-                method's MSE is 0.18–0.22 and the EKF fails). Since f ≈ 1 for x > 0 the state \
-                drifts right by about T, hence the domain [−10, 45].",
+                method's MSE is 0.18–0.22 and the EKF fails). Since f = tanh x ≈ ±1 away from 0 \
+                the state drifts by about T to the right, or to the left when it starts below 0, \
+                hence the domain [−45, 45].",
             drift: &["tanh(x)"],
             observation: &["x*sin(x)", "x*cos(x)"],
             noise: continuous(),
@@ -373,14 +374,14 @@ pub fn all() -> Vec<ScenarioConfig> {
                 expression: SIGMA0_002.into(),
             },
             initial_state: None,
-            domain: vec![[-10.0, 45.0]],
+            domain: vec![[-45.0, 45.0]],
             time: (30.0, 0.1),
             track_loss: None,
             methods: vec![
                 ekf_from(1.0, 1.0),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
-                qiem(&[1101], 1e-2),
+                qiem(&[1801], 1e-2),
             ],
         }),
         build(Spec {
