@@ -15,6 +15,7 @@ const PARAMS = {
   qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
   spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
+  direct: [['points', 'int'], ['alpha', 'num'], ['max_terms', 'int'], ['substeps', 'int'], ['linear', 'numlist']],
   spectral: [['offline_basis', 'optint'], ['online_basis', 'optint'], ['partitions', 'int'], ['quadrature', 'optint'], ['online_nodes', 'optint'], ['likelihood', 'enum:in_update|in_operator']],
 };
 const DEFAULTS = {
@@ -29,11 +30,12 @@ const DEFAULTS = {
   spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update', likelihood_samples: 1 },
   qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
   spectral: { partitions: 1, likelihood: 'in_update' },
+  direct: { points: 801, alpha: 0.01, max_terms: 60, substeps: 10, linear: [0, 0] },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = {
   ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
-  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', newton_steps: 'm (Newton)',
+  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', max_terms: 'max terms', linear: 'l = a·x + b (a, b)', newton_steps: 'm (Newton)',
 };
 
 function paramInput(row, i, name, type) {
@@ -42,9 +44,10 @@ function paramInput(row, i, name, type) {
     const options = type.slice(5).split('|');
     return `<select data-row="${i}" data-param="${name}">${options.map((o) => `<option ${o === (value ?? options[0]) ? 'selected' : ''}>${o}</option>`).join('')}</select>`;
   }
-  const shown = type === 'intlist' ? (value ?? []).join(', ') : (value ?? '');
+  const list = type === 'intlist' || type === 'numlist';
+  const shown = list ? (value ?? []).join(', ') : (value ?? '');
   const placeholder = type === 'optint' ? ' placeholder="auto"' : '';
-  return `<input type="${type === 'intlist' ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}"${placeholder}>`;
+  return `<input type="${list ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}"${placeholder}>`;
 }
 
 const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
@@ -219,6 +222,7 @@ function readForm() {
     if (type === 'int') v = Math.round(Number(el.value));
     else if (type === 'optint') v = el.value.trim() === '' ? null : Math.round(Number(el.value));
     else if (type === 'intlist') v = el.value.split(',').map((x) => Math.round(Number(x.trim())));
+    else if (type === 'numlist') v = el.value.split(',').map((x) => Number(x.trim()));
     else if (type.startsWith('enum:')) v = el.value;
     else v = Number(el.value);
     row.config[el.dataset.param] = v;

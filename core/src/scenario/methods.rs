@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ConfigProblem;
 use crate::error::ZakaiError;
+use crate::filters::direct::filter::DirectFilter;
 use crate::filters::kalman::{
     validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
     MapKalman, MapSolver, UkfParams, UnscentedKalman,
@@ -19,6 +20,7 @@ use crate::filters::spectral::SpectralFilter;
 use crate::filters::Filter;
 use crate::model::{Model, Prior};
 
+pub use crate::filters::direct::filter::DirectParams;
 pub use crate::filters::spectral::SpectralParams;
 pub use crate::filters::yau_fd::{Scheme, YauYauParams};
 
@@ -72,6 +74,8 @@ pub enum MethodConfig {
     Qiem4(YauYauParams),
     /// The off-line/on-line spectral Yau–Yau filter of 004 (generalized Legendre basis).
     Spectral(SpectralParams),
+    /// The direct method of 002: Gaussian approximation and Riccati ODEs.
+    Direct(DirectParams),
 }
 
 /// What building a filter needs besides its own parameters.
@@ -133,6 +137,10 @@ pub const METHODS: &[(&str, &str)] = &[
         "fourth-order 2-D QIEM (000 (20)–(21), Algorithm 4)",
     ),
     (
+        "direct",
+        "direct method for Yau filtering systems: Gaussian approximation + Riccati ODEs (002)",
+    ),
+    (
         "spectral",
         "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis (004)",
     ),
@@ -153,6 +161,7 @@ impl MethodConfig {
             MethodConfig::Spt(_) => "spt",
             MethodConfig::Qiem4(_) => "qiem4",
             MethodConfig::Spectral(_) => "spectral",
+            MethodConfig::Direct(_) => "direct",
         }
     }
 
@@ -170,6 +179,7 @@ impl MethodConfig {
             "spt" => MethodConfig::Spt(YauYauParams::default()),
             "qiem4" => MethodConfig::Qiem4(YauYauParams::default()),
             "spectral" => MethodConfig::Spectral(SpectralParams::default()),
+            "direct" => MethodConfig::Direct(DirectParams::default()),
             _ => return None,
         })
     }
@@ -188,6 +198,7 @@ impl MethodConfig {
             MethodConfig::Spt(_) => "SPT".into(),
             MethodConfig::Qiem4(_) => "QIEM-4".into(),
             MethodConfig::Spectral(_) => "Spectral".into(),
+            MethodConfig::Direct(_) => "Direct".into(),
         }
     }
 
@@ -247,6 +258,11 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Direct(p) => {
+                for (name, msg) in p.problems(n) {
+                    push(name, msg);
+                }
+            }
         }
     }
 
@@ -289,6 +305,9 @@ impl MethodConfig {
             MethodConfig::Spectral(p) => Box::new(SpectralFilter::new(
                 name, model, prior, p, ctx.bounds, ctx.dt_obs,
             )?),
+            MethodConfig::Direct(p) => {
+                Box::new(DirectFilter::new(name, model, prior, p, ctx.bounds)?)
+            }
         })
     }
 }

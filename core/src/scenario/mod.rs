@@ -15,7 +15,7 @@ use core::fmt;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-pub use methods::{MethodConfig, SpectralParams, METHODS};
+pub use methods::{DirectParams, MethodConfig, SpectralParams, METHODS};
 
 use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};

@@ -12,6 +12,7 @@ use super::{
     FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
     ScenarioConfig, TimeConfig, TrackLoss,
 };
+use crate::filters::direct::filter::DirectParams;
 use crate::filters::kalman::{
     EkfParams, GaussianInit, IekfParams, IokfParams, KalmanParams, UkfParams,
 };
@@ -381,6 +382,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 ekf_from(1.0, 1.0),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
+                MethodConfig::Direct(DirectParams::default()),
                 qiem(&[1801], 1e-2),
             ],
         }),

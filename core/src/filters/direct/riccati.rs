@@ -78,10 +78,14 @@ impl QuadraticExponent {
         }
     }
 
-    /// Integrates (35)–(37) over `dt` in `substeps` RK4 steps.
+    /// Integrates (35)–(37) over `dt` in at least `substeps` RK4 steps — more when A is large:
+    /// (35) behaves like `dA/dt = 2A²`, whose explicit steps are stable only for
+    /// `h · 4‖A‖ ≲ 2.7`, so a narrow Gaussian (‖A‖ = 1/(2σ²)) gets `h ≤ 1/(4‖A‖)`.
     pub fn propagate(&mut self, k: &KolmogorovCoefficients, dt: f64, substeps: usize) {
-        let h = dt / substeps.max(1) as f64;
-        for _ in 0..substeps.max(1) {
+        let stiff = libm::ceil(4.0 * dt * self.a.amax().max(k.d_mat.amax())).min(1e6) as usize;
+        let steps = substeps.max(stiff).max(1);
+        let h = dt / steps as f64;
+        for _ in 0..steps {
             let k1 = self.rates(k);
             let k2 = self.plus(&k1, 0.5 * h).rates(k);
             let k3 = self.plus(&k2, 0.5 * h).rates(k);

@@ -1,0 +1,377 @@
+//! 002 Algorithm 2, the direct method as a [`Filter`] (1-D; the ODE part is n-dimensional).
+//!
+//! For a Yau filtering system (C1)–(C3) with Q = I and S = I, `f = l + F′` with l affine
+//! (the `linear` parameter, 0 by default, which makes `F = ∫ f`), and
+//! `q = ½(l² − l′ − η)`, `η = f² + f′ + h²` (7), (33) must be a quadratic `Qx² + px + r` on the
+//! domain — checked by a least-squares fit on the grid whose worst residual names the failing
+//! condition. Per observation interval:
+//!
+//! 1. decompose û (the density times `e^{−F}`, (30)–(31)) with the Gaussian approximation of
+//!    Algorithm 1;
+//! 2. carry every Gaussian through (32) by the Riccati ODEs (35)–(37);
+//! 3. recombine and apply the observation factor `exp(Δyᵀh)` (30), in the log domain with one
+//!    common shift so that nothing overflows; negative values of the recombined sum (from the
+//!    negative terms) are set to zero;
+//! 4. the density is `e^{F} û` (31), normalised on the grid, whose moments give the estimate.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::gaussian_approximation::gaussian_approximation;
+use super::riccati::{KolmogorovCoefficients, QuadraticExponent};
+use crate::error::FilterError;
+use crate::filters::{Estimate, Filter, Observation, ObservationKind};
+use crate::grid::TensorGrid;
+use crate::model::{Model, ObservationModel, Prior};
+
+/// Parameters of the direct method.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DirectParams {
+    /// Grid points on the domain (decomposition, recombination, estimate).
+    pub points: usize,
+    /// α of Algorithm 1 (threshold α · max).
+    pub alpha: f64,
+    /// Largest number of Gaussians per decomposition.
+    pub max_terms: usize,
+    /// RK4 steps per observation interval for (35)–(37).
+    pub substeps: usize,
+    /// The affine part `l(x) = slope · x + offset` of f in (C1).
+    pub linear: [f64; 2],
+}
+
+impl Default for DirectParams {
+    fn default() -> Self {
+        DirectParams {
+            points: 801,
+            alpha: 0.01,
+            max_terms: 60,
+            substeps: 10,
+            linear: [0.0, 0.0],
+        }
+    }
+}
+
+impl DirectParams {
+    /// Problems with these parameters for an n-dimensional model, `(field, message)`.
+    pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
+        let mut p = Vec::new();
+        if n != 1 {
+            p.push((
+                "method",
+                format!("the direct method is built for n = 1; the model has n = {n}"),
+            ));
+        }
+        if !(11..=100_000).contains(&self.points) {
+            p.push((
+                "points",
+                format!("must be between 11 and 100000, got {}", self.points),
+            ));
+        }
+        if !(self.alpha > 0.0 && self.alpha < 1.0) {
+            p.push(("alpha", format!("must be in (0, 1), got {}", self.alpha)));
+        }
+        if !(1..=1000).contains(&self.max_terms) {
+            p.push((
+                "max_terms",
+                format!("must be between 1 and 1000, got {}", self.max_terms),
+            ));
+        }
+        if !(1..=10_000).contains(&self.substeps) {
+            p.push((
+                "substeps",
+                format!("must be between 1 and 10000, got {}", self.substeps),
+            ));
+        }
+        if self.linear.iter().any(|v| !v.is_finite()) {
+            p.push(("linear", "must be finite".into()));
+        }
+        p
+    }
+}
+
+/// The least-squares quadratic `Q x² + p x + r` through `(x, y)`, with the largest residual
+/// and where it is.
+fn fit_quadratic(x: &[f64], y: &[f64]) -> ([f64; 3], f64, f64) {
+    let m = DMatrix::from_fn(x.len(), 3, |i, j| x[i].powi(j as i32));
+    let rhs = DVector::from_column_slice(y);
+    let normal = m.transpose() * &m;
+    let coef = normal
+        .cholesky()
+        .map(|c| c.solve(&(m.transpose() * &rhs)))
+        .unwrap_or_else(|| DVector::zeros(3));
+    let (mut worst, mut at) = (0.0f64, x[0]);
+    for (xi, yi) in x.iter().zip(y) {
+        let r = (yi - (coef[0] + coef[1] * xi + coef[2] * xi * xi)).abs();
+        if r > worst {
+            worst = r;
+            at = *xi;
+        }
+    }
+    ([coef[2], coef[1], coef[0]], worst, at)
+}
+
+/// The (C2)/(C3) check: `values` must be quadratic on the grid to relative accuracy 1e-6.
+fn quadratic_condition(name: &str, x: &[f64], values: &[f64]) -> Result<[f64; 3], FilterError> {
+    let (coef, worst, at) = fit_quadratic(x, values);
+    let scale = 1.0 + values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if worst > 1e-6 * scale {
+        return Err(FilterError::Unsuitable(format!(
+            "not a Yau filtering system: {name} is not a quadratic polynomial on the domain (the best quadratic misses by {worst:.3e} at x = {at:.3})"
+        )));
+    }
+    Ok(coef)
+}
+
+/// The direct method of 002 (see the module doc).
+pub struct DirectFilter {
+    name: String,
+    grid: TensorGrid,
+    params: DirectParams,
+    coefficients: KolmogorovCoefficients,
+    /// F at the grid nodes.
+    potential: Vec<f64>,
+    /// h at the grid nodes, per component.
+    h: Vec<Vec<f64>>,
+    /// û at the grid nodes (largest value 1).
+    u_hat: Vec<f64>,
+    /// The normalised density e^{F} û.
+    density: Vec<f64>,
+    estimate: Estimate,
+    terms: usize,
+}
+
+impl DirectFilter {
+    /// Checks (C1)–(C3) on the domain, tabulates F and the prior.
+    pub fn new(
+        name: String,
+        model: &Model,
+        prior: &Prior,
+        params: &DirectParams,
+        bounds: &[(f64, f64)],
+    ) -> Result<Self, FilterError> {
+        if let Some((field, msg)) = params.problems(model.n).into_iter().next() {
+            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
+        }
+        let ObservationModel::Continuous { noise_cov } = &model.observations else {
+            return Err(FilterError::Unsuitable(
+                "the direct method needs continuous observations dy = h dt + dw".into(),
+            ));
+        };
+        let identity =
+            |m: &DMatrix<f64>| (m - DMatrix::identity(m.nrows(), m.ncols())).amax() < 1e-12;
+        if !identity(noise_cov) || !identity(&model.process_noise()) {
+            return Err(FilterError::Unsuitable(
+                "the direct method of 002 is written for G = I and S = I".into(),
+            ));
+        }
+        let grid = TensorGrid::new(bounds, &[params.points])
+            .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
+        let x: Vec<f64> = (0..params.points).map(|i| grid.coordinate(0, i)).collect();
+        let dx = grid.spacing()[0];
+        let [slope, offset] = params.linear;
+        let (mut f, mut jac) = ([0.0], [0.0]);
+        let mut hv = vec![0.0; model.m];
+        let mut h = vec![Vec::with_capacity(x.len()); model.m];
+        let mut eta = Vec::with_capacity(x.len());
+        let mut rest = Vec::with_capacity(x.len());
+        let mut h2 = Vec::with_capacity(x.len());
+        for &xi in &x {
+            model.drift.eval(&[xi], &mut f);
+            model.drift.jacobian(&[xi], &mut jac);
+            model.observation.eval(&[xi], &mut hv);
+            let hh: f64 = hv.iter().map(|v| v * v).sum();
+            for (c, v) in h.iter_mut().zip(&hv) {
+                c.push(*v);
+            }
+            h2.push(hh);
+            eta.push(f[0] * f[0] + jac[0] + hh);
+            rest.push(f[0] - slope * xi - offset);
+        }
+        if eta.iter().chain(&rest).any(|v| !v.is_finite()) {
+            return Err(FilterError::Unsuitable(
+                "f, f′ or h is not finite on the domain; shrink it".into(),
+            ));
+        }
+        quadratic_condition("(C2) Σh²", &x, &h2)?;
+        let q: Vec<f64> = x
+            .iter()
+            .zip(&eta)
+            .map(|(xi, e)| {
+                let l = slope * xi + offset;
+                0.5 * (l * l - slope - e)
+            })
+            .collect();
+        let [qq, p, r] = quadratic_condition("(C3) η", &x, &q)?;
+        // F = ∫ (f − l) from the first node, by the trapezoidal rule.
+        let mut potential = vec![0.0; x.len()];
+        for i in 1..x.len() {
+            potential[i] = potential[i - 1] + 0.5 * dx * (rest[i - 1] + rest[i]);
+        }
+        let coefficients = KolmogorovCoefficients {
+            d_mat: DMatrix::from_element(1, 1, slope),
+            d_vec: DVector::from_element(1, offset),
+            q: DMatrix::from_element(1, 1, qq),
+            p: DVector::from_element(1, p),
+            r,
+        };
+        let log_u: Vec<f64> = x
+            .iter()
+            .zip(&potential)
+            .map(|(&xi, &big_f)| libm::log(prior.density(&[xi])) - big_f)
+            .collect();
+        let mut filter = DirectFilter {
+            name,
+            params: params.clone(),
+            coefficients,
+            potential,
+            h,
+            u_hat: exp_shifted(&log_u),
+            density: vec![0.0; x.len()],
+            estimate: Estimate {
+                mean: DVector::zeros(1),
+                covariance: None,
+                map: None,
+            },
+            terms: 0,
+            grid,
+        };
+        filter.refresh()?;
+        Ok(filter)
+    }
+
+    /// Gaussians in the last decomposition.
+    pub fn terms(&self) -> usize {
+        self.terms
+    }
+
+    /// The density `e^{F} û` normalised on the grid, and the estimate.
+    fn refresh(&mut self) -> Result<(), FilterError> {
+        let log: Vec<f64> = self
+            .u_hat
+            .iter()
+            .zip(&self.potential)
+            .map(|(&u, &big_f)| {
+                if u > 0.0 {
+                    libm::log(u) + big_f
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
+            .collect();
+        self.density = exp_shifted(&log);
+        let m = self.grid.moments(&self.density);
+        if !m.mass.is_finite() {
+            return Err(FilterError::NonFinite { what: "density" });
+        }
+        if m.mass <= 0.0 {
+            return Err(FilterError::MassLost);
+        }
+        let inv = 1.0 / m.mass;
+        self.density.iter_mut().for_each(|v| *v *= inv);
+        self.estimate = Estimate {
+            mean: m.mean,
+            covariance: Some(m.covariance),
+            map: Some(m.map),
+        };
+        Ok(())
+    }
+}
+
+/// `exp(v − max v)` (all zero when every value is −∞).
+fn exp_shifted(log: &[f64]) -> Vec<f64> {
+    let shift = log.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    log.iter()
+        .map(|&v| {
+            if shift.is_finite() {
+                libm::exp(v - shift)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+impl Filter for DirectFilter {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        if obs.kind != ObservationKind::Increment || obs.value.len() != self.h.len() {
+            return Err(FilterError::BadObservation(format!(
+                "{} needs increments of length {}",
+                self.name,
+                self.h.len()
+            )));
+        }
+        if obs.dt <= 0.0 {
+            return Ok(());
+        }
+        let len = self.u_hat.len();
+        let x: Vec<f64> = (0..len).map(|i| self.grid.coordinate(0, i)).collect();
+        let terms =
+            gaussian_approximation(&x, &self.u_hat, self.params.alpha, self.params.max_terms);
+        self.terms = terms.len();
+        if terms.is_empty() {
+            return Err(FilterError::MassLost);
+        }
+        // Exponents of every propagated term plus the observation factor, one common shift.
+        let factor: Vec<f64> = (0..len)
+            .map(|j| obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum())
+            .collect();
+        let mut exponents = Vec::with_capacity(terms.len());
+        let mut shift = f64::NEG_INFINITY;
+        for t in &terms {
+            let mut e = QuadraticExponent::from_term(t);
+            e.propagate(&self.coefficients, obs.dt, self.params.substeps);
+            let (a, b, c) = (e.a[(0, 0)], e.b[0], e.c);
+            if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                return Err(FilterError::NonFinite {
+                    what: "Riccati solution",
+                });
+            }
+            let values: Vec<f64> = x
+                .iter()
+                .zip(&factor)
+                .map(|(&xi, &g)| a * xi * xi + b * xi + c + g)
+                .collect();
+            shift = values.iter().copied().fold(shift, f64::max);
+            exponents.push((t.weight.signum(), values));
+        }
+        for (j, u) in self.u_hat.iter_mut().enumerate() {
+            let v: f64 = exponents
+                .iter()
+                .map(|(sign, e)| sign * libm::exp(e[j] - shift))
+                .sum();
+            *u = v.max(0.0);
+        }
+        let top = self.u_hat.iter().copied().fold(0.0, f64::max);
+        if top <= 0.0 || !top.is_finite() {
+            return Err(FilterError::MassLost);
+        }
+        self.u_hat.iter_mut().for_each(|u| *u /= top);
+        self.refresh()
+    }
+
+    fn estimate(&self) -> Estimate {
+        self.estimate.clone()
+    }
+
+    fn density(&self) -> Option<crate::filters::DensityView<'_>> {
+        Some(crate::filters::DensityView {
+            bounds: self.grid.bounds(),
+            shape: self.grid.shape(),
+            values: &self.density,
+        })
+    }
+
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.grid.marginal(&self.density, dim, grid, out);
+    }
+}
