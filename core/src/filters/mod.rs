@@ -70,6 +70,42 @@ pub struct DensityView<'a> {
     pub values: &'a [f64],
 }
 
+/// An increment Δy of length m, or the error a filter for continuous observations returns.
+pub(crate) fn check_increment(
+    name: &str,
+    obs: &Observation,
+    m: usize,
+) -> Result<(), crate::error::FilterError> {
+    if obs.kind != ObservationKind::Increment || obs.value.len() != m {
+        return Err(crate::error::FilterError::BadObservation(alloc::format!(
+            "{name} needs increments of length {m}"
+        )));
+    }
+    Ok(())
+}
+
+/// Normalises a grid density to unit mass in place and returns its estimate (mean,
+/// covariance, MAP node); a non-finite or vanished mass is an error, never NaN.
+pub(crate) fn normalise_on_grid(
+    grid: &crate::grid::TensorGrid,
+    u: &mut [f64],
+) -> Result<Estimate, crate::error::FilterError> {
+    let m = grid.moments(u);
+    if !m.mass.is_finite() {
+        return Err(crate::error::FilterError::NonFinite { what: "density" });
+    }
+    if m.mass <= 0.0 {
+        return Err(crate::error::FilterError::MassLost);
+    }
+    let inv = 1.0 / m.mass;
+    u.iter_mut().for_each(|v| *v *= inv);
+    Ok(Estimate {
+        mean: m.mean,
+        covariance: Some(m.covariance),
+        map: Some(m.map),
+    })
+}
+
 /// A nonlinear filter: advance over one observation interval, then report.
 pub trait Filter {
     /// Display name, e.g. `"EKF"` or `"PF(200)"`.

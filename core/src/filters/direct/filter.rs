@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use super::gaussian_approximation::gaussian_approximation;
 use super::riccati::{KolmogorovCoefficients, QuadraticExponent};
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation, ObservationKind};
+use crate::filters::{Estimate, Filter, Observation};
 use crate::grid::TensorGrid;
 use crate::model::{Model, ObservationModel, Prior};
 
@@ -98,7 +98,7 @@ impl DirectParams {
 /// The least-squares quadratic `Q x² + p x + r` through `(x, y)`, with the largest residual
 /// and where it is.
 fn fit_quadratic(x: &[f64], y: &[f64]) -> ([f64; 3], f64, f64) {
-    let m = DMatrix::from_fn(x.len(), 3, |i, j| x[i].powi(j as i32));
+    let m = DMatrix::from_fn(x.len(), 3, |i, j| [1.0, x[i], x[i] * x[i]][j]);
     let rhs = DVector::from_column_slice(y);
     let normal = m.transpose() * &m;
     let coef = normal
@@ -265,20 +265,7 @@ impl DirectFilter {
             })
             .collect();
         self.density = exp_shifted(&log);
-        let m = self.grid.moments(&self.density);
-        if !m.mass.is_finite() {
-            return Err(FilterError::NonFinite { what: "density" });
-        }
-        if m.mass <= 0.0 {
-            return Err(FilterError::MassLost);
-        }
-        let inv = 1.0 / m.mass;
-        self.density.iter_mut().for_each(|v| *v *= inv);
-        self.estimate = Estimate {
-            mean: m.mean,
-            covariance: Some(m.covariance),
-            map: Some(m.map),
-        };
+        self.estimate = crate::filters::normalise_on_grid(&self.grid, &mut self.density)?;
         Ok(())
     }
 }
@@ -303,13 +290,7 @@ impl Filter for DirectFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.kind != ObservationKind::Increment || obs.value.len() != self.h.len() {
-            return Err(FilterError::BadObservation(format!(
-                "{} needs increments of length {}",
-                self.name,
-                self.h.len()
-            )));
-        }
+        crate::filters::check_increment(&self.name, obs, self.h.len())?;
         if obs.dt <= 0.0 {
             return Ok(());
         }

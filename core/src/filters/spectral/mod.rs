@@ -32,7 +32,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation, ObservationKind};
+use crate::filters::{Estimate, Filter, Observation};
 use crate::linalg;
 use crate::model::dmz::{DmzCoefficients, Likelihood};
 use crate::model::{Model, Prior};
@@ -486,13 +486,7 @@ impl Filter for SpectralFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.kind != ObservationKind::Increment || obs.value.len() != self.s_inv_h.len() {
-            return Err(FilterError::BadObservation(format!(
-                "{} needs increments of length {}",
-                self.name,
-                self.s_inv_h.len()
-            )));
-        }
+        crate::filters::check_increment(&self.name, obs, self.s_inv_h.len())?;
         if obs.dt <= 0.0 {
             return Ok(());
         }

@@ -12,7 +12,7 @@ use super::operator::KolmogorovOperator;
 use super::superposition::Superposition;
 use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
-use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind};
+use crate::filters::{DensityView, Estimate, Filter, Observation};
 use crate::grid::dst::DstPlan;
 use crate::grid::TensorGrid;
 use crate::linalg;
@@ -473,20 +473,7 @@ impl YauYauFilter {
 
     /// Normalises to unit mass and refreshes the estimate.
     fn normalise(&mut self) -> Result<(), FilterError> {
-        let m = self.grid.moments(&self.u);
-        if !m.mass.is_finite() {
-            return Err(FilterError::NonFinite { what: "density" });
-        }
-        if m.mass <= 0.0 {
-            return Err(FilterError::MassLost);
-        }
-        let inv = 1.0 / m.mass;
-        self.u.iter_mut().for_each(|v| *v *= inv);
-        self.estimate = Estimate {
-            mean: m.mean,
-            covariance: Some(m.covariance),
-            map: Some(m.map),
-        };
+        self.estimate = crate::filters::normalise_on_grid(&self.grid, &mut self.u)?;
         Ok(())
     }
 
@@ -560,13 +547,7 @@ impl Filter for YauYauFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.kind != ObservationKind::Increment || obs.value.len() != self.op.s_inv_h.len() {
-            return Err(FilterError::BadObservation(format!(
-                "{} needs increments of length {}",
-                self.name,
-                self.op.s_inv_h.len()
-            )));
-        }
+        crate::filters::check_increment(&self.name, obs, self.op.s_inv_h.len())?;
         if obs.dt > 0.0 {
             self.predict(obs.dt)?;
             self.update(obs.value, obs.dt);
