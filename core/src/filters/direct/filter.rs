@@ -328,7 +328,7 @@ impl Filter for DirectFilter {
         for (j, u) in self.u_hat.iter_mut().enumerate() {
             let v: f64 = exponents
                 .iter()
-                .map(|(sign, e)| sign * libm::exp(e[j] - shift))
+                .map(|(sign, e)| sign * crate::linalg::exp_nonpositive(e[j] - shift))
                 .sum();
             *u = v.max(0.0);
         }
