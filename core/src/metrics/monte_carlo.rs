@@ -165,8 +165,9 @@ impl<'a> MonteCarlo<'a> {
                             mses.push(c.iter().sum());
                             comps.push(c);
                             rms.push(track.rms_components(truth).unwrap_or_default());
-                            norms.push(mean_error_norm(truth, &track.estimates, track.n));
-                            errors.push(abs_errors(truth, &track.estimates, track.n));
+                            let e = abs_errors(truth, &track.estimates, track.n);
+                            norms.push(mean_error_norm(&e));
+                            errors.push(e);
                         }
                         None => {
                             failed += 1;

@@ -144,6 +144,8 @@ pub struct DirectFilter {
     density: Vec<f64>,
     estimate: Estimate,
     terms: usize,
+    /// The grid's node coordinates.
+    nodes: Vec<f64>,
 }
 
 impl DirectFilter {
@@ -239,6 +241,7 @@ impl DirectFilter {
                 map: None,
             },
             terms: 0,
+            nodes: x,
             grid,
         };
         filter.refresh()?;
@@ -295,9 +298,9 @@ impl Filter for DirectFilter {
             return Ok(());
         }
         let len = self.u_hat.len();
-        let x: Vec<f64> = (0..len).map(|i| self.grid.coordinate(0, i)).collect();
+        let x = &self.nodes;
         let terms =
-            gaussian_approximation(&x, &self.u_hat, self.params.alpha, self.params.max_terms);
+            gaussian_approximation(x, &self.u_hat, self.params.alpha, self.params.max_terms);
         self.terms = terms.len();
         if terms.is_empty() {
             return Err(FilterError::MassLost);
