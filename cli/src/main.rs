@@ -74,6 +74,24 @@ enum Command {
         #[arg(long, default_value = "0", allow_hyphen_values = true)]
         j: String,
     },
+    /// J(t) = ∫ (p̂ − p)² dx of the scenario's continuous–discrete grid filters (`separation`,
+    /// `implicit_fdm`) against the exact Gaussian-sum density (001 §4, Fig. 4).
+    Jcurve {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// Seeds of the runs: the first (default: the scenario's seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Number of runs (seeds seed, seed+1, …).
+        #[arg(long, default_value_t = 1)]
+        runs: usize,
+        /// Samples of J per observation interval.
+        #[arg(long, default_value_t = 10)]
+        per_interval: usize,
+        /// Write every sample of the first run as CSV to FILE.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+    },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
         /// A preset name or a path to a scenario JSON file.
@@ -245,6 +263,34 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     Ok(())
 }
 
+fn jcurve(
+    scenario: &str,
+    seed: Option<u64>,
+    runs: usize,
+    per_interval: usize,
+    csv: Option<PathBuf>,
+) -> Result<(), String> {
+    if runs == 0 || per_interval == 0 {
+        return Err("--runs and --per-interval must be at least 1".into());
+    }
+    let config = load(scenario)?;
+    let first = seed.unwrap_or(config.seed);
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let mut curves = Vec::with_capacity(runs);
+    for r in 0..runs as u64 {
+        curves.push(
+            zakai::metrics::density_error::j_curve(&experiment, first + r, per_interval)
+                .map_err(|e| e.to_string())?,
+        );
+    }
+    if let Some(path) = csv {
+        std::fs::write(&path, output::j_curve_csv(&curves[0]))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    print!("{}", output::j_curve(&curves, first));
+    Ok(())
+}
+
 /// J from `a,b;c,d` or a single number (times the identity).
 fn parse_matrix(text: &str, n: usize) -> Result<nalgebra::DMatrix<f64>, String> {
     let rows: Vec<Vec<f64>> = text
@@ -368,6 +414,13 @@ fn main() -> ExitCode {
         Command::Simulate { scenario, seed } => simulate(&scenario, seed),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
+        Command::Jcurve {
+            scenario,
+            seed,
+            runs,
+            per_interval,
+            csv,
+        } => jcurve(&scenario, seed, runs, per_interval, csv),
         Command::Run {
             scenario,
             methods,

@@ -2,6 +2,7 @@
 //! a method that failed in every run shows "failed" (table), `null` (JSON) or an empty
 //! field (CSV), never NaN.
 
+use zakai::metrics::density_error::{JCurve, JKind};
 use std::fmt::Write;
 
 use zakai::metrics::MonteCarloSummary;
@@ -201,5 +202,84 @@ pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> Stri
         }
     }
     s.push('\n');
+    s
+}
+
+/// Every sample of a J(t) run as CSV: `t,kind,<name>…`.
+pub fn j_curve_csv(curve: &JCurve) -> String {
+    let mut s = format!("t,kind,{}\n", curve.names.join(","));
+    for sample in &curve.samples {
+        let kind = match sample.kind {
+            JKind::Filtering => "filtering",
+            JKind::Predictive => "predictive",
+            JKind::Between => "between",
+        };
+        let values: Vec<String> = sample.values.iter().map(|v| format!("{v:.6e}")).collect();
+        s.push_str(&format!("{},{kind},{}\n", sample.t, values.join(",")));
+    }
+    s
+}
+
+/// J at the measurement times of the first run, then the means and orderings over all runs.
+pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
+    let first = &curves[0];
+    let mut s = format!(
+        "J(t) = ∫(p̂ − p)² dx against the Gaussian-sum density (001 §4); seed {first_seed}\n\n{:>7}",
+        "t"
+    );
+    for name in &first.names {
+        s.push_str(&format!("  {:>11}  {:>11}", format!("{name} J'_k"), format!("{name} J_k")));
+    }
+    s.push('\n');
+    let mut predictive: Option<&[f64]> = None;
+    for sample in &first.samples {
+        match sample.kind {
+            JKind::Predictive => predictive = Some(&sample.values),
+            JKind::Filtering => {
+                s.push_str(&format!("{:>7.3}", sample.t));
+                for (i, v) in sample.values.iter().enumerate() {
+                    match predictive {
+                        Some(p) => s.push_str(&format!("  {:>11.4e}", p[i])),
+                        None => s.push_str(&format!("  {:>11}", "—")),
+                    }
+                    s.push_str(&format!("  {v:>11.4e}"));
+                }
+                s.push('\n');
+                predictive = None;
+            }
+            JKind::Between => {}
+        }
+    }
+    let all = [JKind::Filtering, JKind::Predictive, JKind::Between];
+    s.push_str(&format!(
+        "\nOver {} run(s) (seeds {first_seed}..{}):\n",
+        curves.len(),
+        first_seed + curves.len() as u64 - 1
+    ));
+    for (i, name) in first.names.iter().enumerate() {
+        let mean = curves.iter().map(|c| c.mean(i, &all)).sum::<f64>() / curves.len() as f64;
+        let gap = curves.iter().map(|c| c.mean_gap[i]).sum::<f64>() / curves.len() as f64;
+        s.push_str(&format!(
+            "  {name:<6} mean J {mean:.4e}   mean |x̂ − x̂_GSF| at t_k {gap:.4e}\n"
+        ));
+    }
+    for a in 0..first.names.len() {
+        for b in 0..first.names.len() {
+            if a != b && first.names[a] == "SA" && first.names[b] == "FDM" {
+                let frac = curves.iter().map(|c| c.fraction_below(a, b, &all)).sum::<f64>()
+                    / curves.len() as f64;
+                s.push_str(&format!(
+                    "  J of SA below FDM's at {:.1} % of the sample times (001 Fig. 4: at most times)\n",
+                    100.0 * frac
+                ));
+            }
+        }
+    }
+    let forced = curves.iter().map(|c| c.reduction.forced_cost).fold(0.0, f64::max);
+    let pruned = curves.iter().map(|c| c.reduction.pruned_weight).fold(0.0, f64::max);
+    s.push_str(&format!(
+        "  reference: {} components at the end; largest forced merge cost {forced:.2e} nats, pruned weight {pruned:.2e}\n",
+        first.components
+    ));
     s
 }

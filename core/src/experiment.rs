@@ -214,6 +214,17 @@ impl Experiment {
         )
     }
 
+    /// The truth and observations of the run with `seed` (x₀ from the scenario or drawn from
+    /// the prior, then the simulator on the same stream).
+    pub fn simulate(&self, seed: u64) -> Trajectory {
+        let mut rng = rng_from_seed(seed);
+        let x0 = match &self.config.initial_state {
+            Some(x) => x.clone(),
+            None => self.prior.sample(&mut rng).as_slice().to_vec(),
+        };
+        simulate(&self.model, &x0, self.config.time_grid(), &mut rng)
+    }
+
     /// Simulates the truth for `seed` and builds every filter; observation 0 is processed
     /// (a measurement at τ₀ for discrete models) and the initial estimates recorded.
     pub fn start(&self, seed: u64) -> Result<ExperimentRun, ZakaiError> {
@@ -226,12 +237,7 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
     ) -> Result<ExperimentRun, ZakaiError> {
-        let mut rng = rng_from_seed(seed);
-        let x0 = match &self.config.initial_state {
-            Some(x) => x.clone(),
-            None => self.prior.sample(&mut rng).as_slice().to_vec(),
-        };
-        let trajectory = simulate(&self.model, &x0, self.config.time_grid(), &mut rng);
+        let trajectory = self.simulate(seed);
         let mut filters = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {

@@ -11,6 +11,8 @@
 //! [`Estimate`]; grid methods also expose their density through [`DensityView`].
 
 pub mod direct;
+pub mod fpe_split;
+pub mod gaussian_sum;
 pub mod kalman;
 pub mod marginal;
 pub mod particle;
@@ -104,6 +106,34 @@ pub(crate) fn normalise_on_grid(
         covariance: Some(m.covariance),
         map: Some(m.map),
     })
+}
+
+/// One count for every dimension, or the per-dimension list as given.
+pub(crate) fn per_dimension(counts: &[usize], n: usize) -> Vec<usize> {
+    match counts.len() {
+        1 => alloc::vec![counts[0]; n],
+        _ => counts.to_vec(),
+    }
+}
+
+/// The product of `counts`, or `None` on overflow.
+pub(crate) fn product(counts: &[usize]) -> Option<usize> {
+    counts.iter().try_fold(1usize, |a, &k| a.checked_mul(k))
+}
+
+/// A per-dimension count list must have one entry or `n`.
+pub(crate) fn count_problem(
+    field: &'static str,
+    counts: &[usize],
+    n: usize,
+    problems: &mut Vec<(&'static str, String)>,
+) {
+    if counts.len() != 1 && counts.len() != n {
+        problems.push((
+            field,
+            alloc::format!("give one count or {n}, got {}", counts.len()),
+        ));
+    }
 }
 
 /// A nonlinear filter: advance over one observation interval, then report.

@@ -20,6 +20,17 @@ use crate::error::ZakaiError;
 /// array of f64).
 pub const MAX_NODES: usize = 1 << 24;
 
+/// Calls `f(start)` for the first node of every grid line along the dimension with `stride`
+/// and `n` nodes per line.
+pub fn for_each_line(len: usize, stride: usize, n: usize, mut f: impl FnMut(usize)) {
+    let block = stride * n;
+    for outer in (0..len).step_by(block) {
+        for inner in 0..stride {
+            f(outer + inner);
+        }
+    }
+}
+
 /// A tensor grid of interior nodes on a box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TensorGrid {

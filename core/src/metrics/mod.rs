@@ -5,6 +5,7 @@
 //! * E_RMS of 000 §4.2: `√(Σ_{i=1}^{N} (x̂(t_i) − x(t_i))² / N)`;
 //! * e_mean(τ_k) of 004 (43): the mean over runs of `‖x_k − x̂_k‖` at each τ_k.
 
+pub mod density_error;
 pub mod monte_carlo;
 
 use alloc::vec;

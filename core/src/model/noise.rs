@@ -19,6 +19,8 @@ pub struct Component {
     /// Covariance Σ.
     pub cov: DMatrix<f64>,
     chol: Cholesky<f64, Dyn>,
+    /// `log α − ½ log det(2π Σ)`.
+    log_scale: f64,
 }
 
 /// A Gaussian mixture `Σ_i α_i N(μ_i, Σ_i)`; a single Gaussian is a mixture of one.
@@ -59,7 +61,12 @@ impl GaussianMixture {
                     "covariance of mixture component {i} is not symmetric positive definite"
                 ))
             })?;
+            let log_det: f64 = (0..d).map(|k| libm::log(chol.l_dirty()[(k, k)])).sum();
+            let log_scale = libm::log(w / total)
+                - log_det
+                - 0.5 * d as f64 * libm::log(2.0 * core::f64::consts::PI);
             components.push(Component {
+                log_scale,
                 weight: w / total,
                 mean,
                 cov,
@@ -91,6 +98,42 @@ impl GaussianMixture {
                 .iter()
                 .map(|c| libm::log(c.weight) + gaussian_log_density(&(x - &c.mean), &c.chol)),
         )
+    }
+
+    /// `log p(x)` without allocating: `work` (length ≥ dim) holds the whitened residual.
+    /// Used where a density is evaluated at every grid node (001 (6)).
+    pub fn log_pdf_slice(&self, x: &[f64], work: &mut [f64]) -> f64 {
+        let d = self.dim();
+        let mut max = f64::NEG_INFINITY;
+        let mut sum = 0.0;
+        // log-sum-exp in one pass with a running maximum.
+        for c in &self.components {
+            let l = c.chol.l_dirty();
+            let mut quad = 0.0;
+            for i in 0..d {
+                let mut r = x[i] - c.mean[i];
+                for k in 0..i {
+                    r -= l[(i, k)] * work[k];
+                }
+                r /= l[(i, i)];
+                work[i] = r;
+                quad += r * r;
+            }
+            let v = c.log_scale - 0.5 * quad;
+            if !(v > f64::NEG_INFINITY) {
+                continue;
+            }
+            if v > max {
+                sum = sum * libm::exp(max - v) + 1.0;
+                max = v;
+            } else {
+                sum += libm::exp(v - max);
+            }
+        }
+        if max == f64::NEG_INFINITY {
+            return max;
+        }
+        max + libm::log(sum)
     }
 
     /// The mixture mean Σ α_i μ_i.

@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 use super::ConfigProblem;
 use crate::error::ZakaiError;
 use crate::filters::direct::filter::DirectFilter;
+use crate::filters::fpe_split::{ContinuousDiscreteGrid, FpeScheme};
+use crate::filters::gaussian_sum::GaussianSumFilter;
 use crate::filters::kalman::{
     validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
     MapKalman, MapSolver, UkfParams, UnscentedKalman,
@@ -21,6 +23,8 @@ use crate::filters::Filter;
 use crate::model::{Model, Prior};
 
 pub use crate::filters::direct::filter::DirectParams;
+pub use crate::filters::fpe_split::FpeParams;
+pub use crate::filters::gaussian_sum::GaussianSumParams;
 pub use crate::filters::spectral::SpectralParams;
 pub use crate::filters::yau_fd::{Scheme, YauYauParams};
 
@@ -76,6 +80,12 @@ pub enum MethodConfig {
     Spectral(SpectralParams),
     /// The direct method of 002: Gaussian approximation and Riccati ODEs.
     Direct(DirectParams),
+    /// The continuous–discrete grid filter of 001 with the separation approach (SA).
+    Separation(FpeParams),
+    /// The continuous–discrete grid filter of 001 with the classic implicit FDM.
+    ImplicitFdm(FpeParams),
+    /// The exact Gaussian-sum filter (linear models, mixture prior and noise; 001 §4).
+    GaussianSum(GaussianSumParams),
 }
 
 /// What building a filter needs besides its own parameters.
@@ -144,6 +154,18 @@ pub const METHODS: &[(&str, &str)] = &[
         "spectral",
         "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis (004)",
     ),
+    (
+        "separation",
+        "continuous–discrete FPE filter, separation approach: upwind FV + implicit FD (001 §3)",
+    ),
+    (
+        "implicit_fdm",
+        "continuous–discrete FPE filter, classic implicit FDM on the unsplit FPE (001 §4)",
+    ),
+    (
+        "gaussian_sum",
+        "Gaussian-sum filter, exact for linear models with mixture prior and noise (001 §4)",
+    ),
 ];
 
 impl MethodConfig {
@@ -162,6 +184,9 @@ impl MethodConfig {
             MethodConfig::Qiem4(_) => "qiem4",
             MethodConfig::Spectral(_) => "spectral",
             MethodConfig::Direct(_) => "direct",
+            MethodConfig::Separation(_) => "separation",
+            MethodConfig::ImplicitFdm(_) => "implicit_fdm",
+            MethodConfig::GaussianSum(_) => "gaussian_sum",
         }
     }
 
@@ -180,6 +205,9 @@ impl MethodConfig {
             "qiem4" => MethodConfig::Qiem4(YauYauParams::default()),
             "spectral" => MethodConfig::Spectral(SpectralParams::default()),
             "direct" => MethodConfig::Direct(DirectParams::default()),
+            "separation" | "sa" => MethodConfig::Separation(FpeParams::default()),
+            "implicit_fdm" | "fdm" => MethodConfig::ImplicitFdm(FpeParams::default()),
+            "gaussian_sum" | "gsf" => MethodConfig::GaussianSum(GaussianSumParams::default()),
             _ => return None,
         })
     }
@@ -199,6 +227,9 @@ impl MethodConfig {
             MethodConfig::Qiem4(_) => "QIEM-4".into(),
             MethodConfig::Spectral(_) => "Spectral".into(),
             MethodConfig::Direct(_) => "Direct".into(),
+            MethodConfig::Separation(_) => "SA".into(),
+            MethodConfig::ImplicitFdm(_) => "FDM".into(),
+            MethodConfig::GaussianSum(_) => "GSF".into(),
         }
     }
 
@@ -263,6 +294,16 @@ impl MethodConfig {
                     push(name, msg);
                 }
             }
+            MethodConfig::Separation(p) | MethodConfig::ImplicitFdm(p) => {
+                for (name, msg) in p.problems(n) {
+                    push(name, msg);
+                }
+            }
+            MethodConfig::GaussianSum(p) => {
+                for (name, msg) in p.problems() {
+                    push(name, msg);
+                }
+            }
         }
     }
 
@@ -308,6 +349,27 @@ impl MethodConfig {
             MethodConfig::Direct(p) => {
                 Box::new(DirectFilter::new(name, model, prior, p, ctx.bounds)?)
             }
+            MethodConfig::Separation(p) => Box::new(ContinuousDiscreteGrid::new(
+                name,
+                FpeScheme::Separation,
+                model,
+                prior,
+                p,
+                ctx.bounds,
+                ctx.dt_obs,
+            )?),
+            MethodConfig::ImplicitFdm(p) => Box::new(ContinuousDiscreteGrid::new(
+                name,
+                FpeScheme::ImplicitFdm,
+                model,
+                prior,
+                p,
+                ctx.bounds,
+                ctx.dt_obs,
+            )?),
+            MethodConfig::GaussianSum(p) => Box::new(GaussianSumFilter::new(
+                name, model, prior, p, ctx.probes,
+            )?),
         })
     }
 }

@@ -40,9 +40,11 @@ fn jacobian_at(g: &dyn VectorFunction, x: &[f64]) -> DMatrix<f64> {
     DMatrix::from_row_slice(m, n, &j)
 }
 
-/// `(J, g(0))` of an affine `g`, or an error naming the first probe where `J` differs.
+/// `(J, g(0))` of an affine `g`, or an error (for `method`) naming the first probe where `J`
+/// differs.
 pub fn affine_parts(
     g: &dyn VectorFunction,
+    method: &str,
     what: &str,
     probes: &[Vec<f64>],
 ) -> Result<(DMatrix<f64>, DVector<f64>), FilterError> {
@@ -54,7 +56,7 @@ pub fn affine_parts(
         let scale = 1.0 + j0.amax();
         if (&jp - &j0).amax() > 1e-6 * scale {
             return Err(FilterError::Unsuitable(format!(
-                "the Kalman–Bucy filter needs a linear model, but the Jacobian of the {what} at {p:?} differs from the one at 0"
+                "{method} needs a linear model, but the Jacobian of the {what} at {p:?} differs from the one at 0"
             )));
         }
     }
@@ -101,11 +103,33 @@ pub struct KalmanBucy {
 }
 
 /// `(Δτ, Φ, Γ b, Q_d)` of [`discretize`].
-struct Discretization {
-    dt: f64,
-    phi: DMatrix<f64>,
-    gamma_b: DVector<f64>,
-    qd: DMatrix<f64>,
+pub(crate) struct Discretization {
+    pub(crate) dt: f64,
+    pub(crate) phi: DMatrix<f64>,
+    pub(crate) gamma_b: DVector<f64>,
+    pub(crate) qd: DMatrix<f64>,
+}
+
+impl Discretization {
+    /// The exact discretisation over `dt`, reusing `cache` while Δτ does not change.
+    pub(crate) fn for_step<'c>(
+        cache: &'c mut Option<Discretization>,
+        a: &DMatrix<f64>,
+        b: &DVector<f64>,
+        q: &DMatrix<f64>,
+        dt: f64,
+    ) -> &'c Discretization {
+        if cache.as_ref().map(|d| d.dt) != Some(dt) {
+            let (phi, gamma_b, qd) = discretize(a, b, q, dt);
+            *cache = Some(Discretization {
+                dt,
+                phi,
+                gamma_b,
+                qd,
+            });
+        }
+        cache.as_ref().expect("just filled")
+    }
 }
 
 impl KalmanBucy {
@@ -117,8 +141,8 @@ impl KalmanBucy {
         params: &KalmanParams,
         probes: &[Vec<f64>],
     ) -> Result<Self, FilterError> {
-        let (a, b) = affine_parts(&*model.drift, "drift f", probes)?;
-        affine_parts(&*model.observation, "observation h", probes)?;
+        let (a, b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
+        affine_parts(&*model.observation, "the Kalman–Bucy filter", "observation h", probes)?;
         Ok(KalmanBucy {
             name,
             model: model.clone(),
@@ -139,22 +163,9 @@ impl Filter for KalmanBucy {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         if obs.dt > 0.0 {
-            let (a, b, q) = (&self.a, &self.b, &self.q);
-            let d = match self.cached.take() {
-                Some(d) if d.dt == obs.dt => d,
-                _ => {
-                    let (phi, gamma_b, qd) = discretize(a, b, q, obs.dt);
-                    Discretization {
-                        dt: obs.dt,
-                        phi,
-                        gamma_b,
-                        qd,
-                    }
-                }
-            };
+            let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, obs.dt);
             self.state.mean = &d.phi * &self.state.mean + &d.gamma_b;
             self.state.cov = &d.phi * &self.state.cov * d.phi.transpose() + &d.qd;
-            self.cached = Some(d);
         }
         let meas = self.form.at(obs)?;
         if meas.scale == 0.0 {

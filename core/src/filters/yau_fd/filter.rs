@@ -14,7 +14,7 @@ use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
 use crate::filters::{DensityView, Estimate, Filter, Observation};
 use crate::grid::dst::DstPlan;
-use crate::grid::TensorGrid;
+use crate::grid::{for_each_line, TensorGrid};
 use crate::linalg;
 use crate::model::{Model, Prior};
 
@@ -110,17 +110,6 @@ impl SplitIem {
                     u[i] = (tmp[i] - ax.upper[i] * u[i + stride]) / ax.diag[i];
                 }
             });
-        }
-    }
-}
-
-/// Calls `f(start)` for the first node of every grid line along the dimension with `stride`
-/// and `n` nodes per line.
-fn for_each_line(len: usize, stride: usize, n: usize, mut f: impl FnMut(usize)) {
-    let block = stride * n;
-    for outer in (0..len).step_by(block) {
-        for inner in 0..stride {
-            f(outer + inner);
         }
     }
 }

@@ -53,6 +53,8 @@ use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
+use crate::filters::{count_problem, per_dimension, product};
+
 /// Which finite-difference scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -81,34 +83,6 @@ pub enum PotentialTerm {
 /// Density values below this (the density is normalised to unit mass) are set to zero after
 /// an update: they carry no information and, once subnormal, make every later operation slow.
 pub const FLUSH_BELOW: f64 = 1e-250;
-
-/// One count for every dimension, or the per-dimension list as given.
-fn per_dimension(counts: &[usize], n: usize) -> Vec<usize> {
-    match counts.len() {
-        1 => vec![counts[0]; n],
-        _ => counts.to_vec(),
-    }
-}
-
-/// The product of `counts`, or `None` on overflow.
-fn product(counts: &[usize]) -> Option<usize> {
-    counts.iter().try_fold(1usize, |a, &k| a.checked_mul(k))
-}
-
-/// A per-dimension count list must have one entry or `n`.
-fn count_problem(
-    field: &'static str,
-    counts: &[usize],
-    n: usize,
-    problems: &mut Vec<(&'static str, String)>,
-) {
-    if counts.len() != 1 && counts.len() != n {
-        problems.push((
-            field,
-            format!("give one count or {n}, got {}", counts.len()),
-        ));
-    }
-}
 
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
 pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;

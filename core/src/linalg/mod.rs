@@ -1,5 +1,7 @@
 //! Small dense linear-algebra helpers on nalgebra shared by the filters.
 
+pub mod banded;
+
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::error::FilterError;

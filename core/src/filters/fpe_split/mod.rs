@@ -1,0 +1,472 @@
+//! The continuous–discrete grid filter of 001 (Šimandl & Švácha, 2005), with the separation
+//! approach to the Fokker–Planck equation and the classic implicit FDM it is compared with.
+//!
+//! Model (001 (1)–(2)): `dx = f(x) dt + G dw`, measurements `z_k = h(x_k) + v_k` at the
+//! observation times, `v_k` Gaussian or a Gaussian mixture. The density lives on a tensor grid
+//! of `N_1 × ⋯ × N_n` cells covering the scenario's domain; `P[i]` is the cell average and the
+//! value at the cell centre (001 (11), (18)).
+//!
+//! * **Bayes update** at `t_k` (001 (6)–(7)): `P ← P · p_v(z_k − h(x[i])) / c'_k`, evaluated in
+//!   the log domain so that a sharp likelihood cannot underflow the whole grid.
+//! * **Prediction** between measurements: the FPE (4)
+//!   `∂p/∂t = −∇p · f − p ∇·f + ½ Σ_l Q_ll ∂²p/∂x_l²` over `M` steps of `Δt` by one of two
+//!   schemes ([`FpeScheme`]):
+//!   - the **separation approach** (SA, 001 §3): per step, the hyperbolic part (9) by the
+//!     explicit upwind finite-volume scheme (12)–(14) / (19)–(22) ([`upwind`]), then the
+//!     parabolic part (10) by the implicit scheme (17) / (24) ([`implicit`]) — a banded direct
+//!     solve (tridiagonal in 1-D), factorised once per step length;
+//!   - the **classic implicit FDM** on the unsplit FPE (the comparator of 001 §4).
+//!
+//! **Step choice.** `Δt` is the parameter `dt` rounded down to divide the observation interval
+//! Δτ, then reduced further — the filter sub-steps automatically — until the CFL condition
+//! (16) / (23) `Σ_l |f_l| Δt / Δx_l ≤ 1` holds at every cell (SA) and `1 + Δt min ∇·f ≥ ½`
+//! (both: the implicit matrix then keeps a dominant positive diagonal). When that happens the
+//! filter says so in its [`Filter::warnings`]. The FDM's central differences lose positivity
+//! when a cell Péclet number `|f_l| Δx_l / Q_ll` exceeds 1; that is a grid condition no step
+//! choice can fix, so it is a warning.
+//!
+//! 001 (24) discretises the diagonal of `Q = G Gᵀ` only; a model with correlated diffusion is
+//! refused rather than silently changed.
+
+pub mod implicit;
+pub mod upwind;
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use serde::{Deserialize, Serialize};
+
+use self::implicit::ImplicitPart;
+use self::upwind::UpwindAdvection;
+use crate::error::{FilterError, ZakaiError};
+use crate::filters::{
+    count_problem, normalise_on_grid, per_dimension, product, DensityView, Estimate, Filter,
+    Observation, ObservationKind,
+};
+use crate::grid::TensorGrid;
+use crate::linalg::banded::{BandedLu, BandedMatrix};
+use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
+
+/// Largest number of values the banded factor of the implicit step may hold (2²⁴ ≈ 16.8
+/// million, 128 MiB).
+pub const MAX_BAND_VALUES: usize = 1 << 24;
+
+/// Largest number of FPE steps per observation interval the automatic sub-stepping may take.
+pub const MAX_SUBSTEPS: usize = 1_000_000;
+
+/// Which numerical scheme solves the FPE between measurements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FpeScheme {
+    /// 001 §3: upwind finite volumes for (9), implicit finite differences for (10).
+    Separation,
+    /// The classic implicit FDM on the unsplit FPE (4).
+    ImplicitFdm,
+}
+
+/// Parameters of the continuous–discrete grid filters (`separation`, `implicit_fdm`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FpeParams {
+    /// Cells per dimension over the scenario's domain (one number: the same in every
+    /// dimension); 001 §4 uses 200 on ⟨−10, 10⟩ and 35 × 35 on ⟨−2, 5⟩².
+    pub cells: Vec<usize>,
+    /// Time step Δt of the FPE scheme (rounded down to divide Δτ, reduced further when the CFL
+    /// condition (16) / (23) needs it).
+    pub dt: f64,
+}
+
+impl Default for FpeParams {
+    fn default() -> Self {
+        FpeParams {
+            cells: vec![200],
+            dt: 0.01,
+        }
+    }
+}
+
+impl FpeParams {
+    /// Cells per dimension for an `n`-dimensional model.
+    pub fn shape(&self, n: usize) -> Vec<usize> {
+        per_dimension(&self.cells, n)
+    }
+
+    /// Values stored by the banded factor of the implicit step (`None` on overflow).
+    pub fn band_values(&self, n: usize) -> Option<usize> {
+        let shape = self.shape(n);
+        let len = product(&shape)?;
+        let bw = shape[..shape.len().saturating_sub(1)]
+            .iter()
+            .try_fold(1usize, |a, &k| a.checked_mul(k))?;
+        BandedMatrix::storage(len, bw, bw)
+    }
+
+    /// Every problem with the parameters for an `n`-dimensional model.
+    pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
+        let mut p = Vec::new();
+        count_problem("cells", &self.cells, n, &mut p);
+        if self.cells.iter().any(|&c| c < 2) {
+            p.push(("cells", "at least 2 per dimension".into()));
+        }
+        if !(self.dt > 0.0 && self.dt.is_finite()) {
+            p.push(("dt", "must be positive and finite".into()));
+        }
+        if p.is_empty() {
+            match self.band_values(n) {
+                Some(v) if v <= MAX_BAND_VALUES => {}
+                v => p.push((
+                    "cells",
+                    format!(
+                        "the banded factor of the implicit step for {:?} cells needs {} MiB, above the cap of {} MiB",
+                        self.shape(n),
+                        v.map_or(String::from("more than 2^64 B"), |v| format!("{}", v * 8 >> 20)),
+                        MAX_BAND_VALUES * 8 >> 20
+                    ),
+                )),
+            }
+        }
+        p
+    }
+}
+
+/// How an observation interval is cut into FPE steps.
+struct StepPlan {
+    interval: f64,
+    substeps: usize,
+    dt: f64,
+    lu: BandedLu,
+}
+
+/// The continuous–discrete grid filter (see the module doc).
+pub struct ContinuousDiscreteGrid {
+    name: String,
+    scheme: FpeScheme,
+    grid: TensorGrid,
+    advection: UpwindAdvection,
+    divergence: Vec<f64>,
+    diffusion: Vec<f64>,
+    noise: GaussianMixture,
+    /// h at the cell centres, row per cell.
+    h_nodes: Vec<f64>,
+    target_dt: f64,
+    plan: Option<StepPlan>,
+    u: Vec<f64>,
+    tmp: Vec<f64>,
+    residual: Vec<f64>,
+    work: Vec<f64>,
+    estimate: Estimate,
+    warnings: Vec<String>,
+}
+
+impl ContinuousDiscreteGrid {
+    /// Builds the filter on `bounds` (the cells tile the box) for observation interval
+    /// `dt_obs` (used for the step-choice warnings).
+    pub fn new(
+        name: String,
+        scheme: FpeScheme,
+        model: &Model,
+        prior: &Prior,
+        params: &FpeParams,
+        bounds: &[(f64, f64)],
+        dt_obs: f64,
+    ) -> Result<Self, ZakaiError> {
+        let n = model.n;
+        let problems = params.problems(n);
+        if let Some((field, msg)) = problems.first() {
+            return Err(ZakaiError::Other(format!("{name}: {field}: {msg}")));
+        }
+        let noise = match &model.observations {
+            ObservationModel::Discrete { noise } => noise.clone(),
+            ObservationModel::Continuous { .. } => {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name} is the continuous–discrete filter of 001: it needs discrete measurements z_k = h(x_k) + v_k, and this model observes dy = h dt + dw"
+                ))
+                .into())
+            }
+        };
+        let q = model.process_noise();
+        for i in 0..n {
+            for j in 0..n {
+                if i != j && libm::fabs(q[(i, j)]) > 1e-12 * (q[(i, i)] + q[(j, j)]) {
+                    return Err(FilterError::Unsuitable(format!(
+                        "{name}: 001 (24) discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {}",
+                        i + 1,
+                        j + 1,
+                        q[(i, j)]
+                    ))
+                    .into());
+                }
+            }
+        }
+        let shape = params.shape(n);
+        let cell_bounds: Vec<(f64, f64)> = bounds
+            .iter()
+            .zip(&shape)
+            .map(|(&(a, b), &c)| {
+                let half = 0.5 * (b - a) / c as f64;
+                (a - half, b + half)
+            })
+            .collect();
+        let grid = TensorGrid::new(&cell_bounds, &shape)?;
+        let advection = UpwindAdvection::new(&grid, &*model.drift);
+        let mut jac = vec![0.0; n * n];
+        let mut divergence = Vec::with_capacity(grid.len());
+        let m = model.m;
+        let mut h_nodes = Vec::with_capacity(grid.len() * m);
+        let mut hx = vec![0.0; m];
+        grid.for_each_node(|_, x| {
+            model.drift.jacobian(x, &mut jac);
+            divergence.push((0..n).map(|l| jac[l * n + l]).sum());
+            model.observation.eval(x, &mut hx);
+            h_nodes.extend_from_slice(&hx);
+        });
+        let diffusion: Vec<f64> = (0..n).map(|l| q[(l, l)]).collect();
+        let mut u = grid.tabulate(|x| prior.density(x));
+        if u.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "prior density",
+            }
+            .into());
+        }
+        let estimate = normalise_on_grid(&grid, &mut u)?;
+        let len = grid.len();
+        let mut filter = ContinuousDiscreteGrid {
+            name,
+            scheme,
+            grid,
+            advection,
+            divergence,
+            diffusion,
+            noise,
+            h_nodes,
+            target_dt: params.dt,
+            plan: None,
+            u,
+            tmp: vec![0.0; len],
+            residual: vec![0.0; m],
+            work: vec![0.0; m],
+            estimate,
+            warnings: Vec::new(),
+        };
+        let (_, notes) = filter.step_count(dt_obs)?;
+        filter.warnings = notes;
+        if scheme == FpeScheme::ImplicitFdm {
+            filter.warnings.extend(filter.peclet_warning());
+        }
+        Ok(filter)
+    }
+
+    /// The grid of cell centres.
+    pub fn grid(&self) -> &TensorGrid {
+        &self.grid
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> FpeScheme {
+        self.scheme
+    }
+
+    /// FPE steps per observation interval of length `interval` (see the module doc), with the
+    /// notes on why more steps than `interval / dt` were needed.
+    pub fn step_count(&self, interval: f64) -> Result<(usize, Vec<String>), FilterError> {
+        let mut notes = Vec::new();
+        let requested = libm::ceil(interval / self.target_dt - 1e-9).max(1.0);
+        let mut steps = requested;
+        let mut x = vec![0.0; self.grid.dim()];
+        if self.scheme == FpeScheme::Separation {
+            let (rate, idx) = self.advection.courant_rate(&self.grid);
+            let needed = libm::ceil(rate * interval);
+            if needed > steps {
+                self.grid.node(idx, &mut x);
+                notes.push(format!(
+                    "(16)/(23) CFL: Σ|f_l|Δt/Δx_l reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    rate * interval / requested,
+                    rounded(&x),
+                    interval / requested,
+                    interval / needed,
+                    needed
+                ));
+                steps = needed;
+            }
+        }
+        let (min_div, idx) = self
+            .divergence
+            .iter()
+            .enumerate()
+            .fold((f64::INFINITY, 0), |acc, (i, &d)| if d < acc.0 { (d, i) } else { acc });
+        if min_div < 0.0 {
+            let needed = libm::ceil(2.0 * -min_div * interval);
+            if needed > steps {
+                self.grid.node(idx, &mut x);
+                notes.push(format!(
+                    "diagonal of the implicit step: 1 + Δt ∇·f = {:.3} < ½ at x = {:?}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    1.0 + interval / steps * min_div,
+                    rounded(&x),
+                    interval / needed,
+                    needed
+                ));
+                steps = needed;
+            }
+        }
+        if !steps.is_finite() || steps > MAX_SUBSTEPS as f64 {
+            return Err(FilterError::Unsuitable(format!(
+                "{} would need {steps:.3e} FPE steps per observation interval (more than {MAX_SUBSTEPS}): {}; use fewer cells or a smaller domain",
+                self.name,
+                notes.join("; ")
+            )));
+        }
+        Ok((steps as usize, notes))
+    }
+
+    /// The FDM positivity warning: a cell Péclet number `|f_l| Δx_l / Q_ll` above 1.
+    fn peclet_warning(&self) -> Option<String> {
+        let mut worst = (0.0, 0, 0);
+        for l in 0..self.grid.dim() {
+            let scale = self.grid.spacing()[l] / self.diffusion[l];
+            for (idx, f) in self.advection.velocity(l).iter().enumerate() {
+                let pe = libm::fabs(*f) * scale;
+                if pe > worst.0 || pe.is_nan() {
+                    worst = (pe, l, idx);
+                }
+            }
+        }
+        (worst.0 > 1.0 || worst.0.is_nan()).then(|| {
+            let mut x = vec![0.0; self.grid.dim()];
+            self.grid.node(worst.2, &mut x);
+            format!(
+                "M-matrix condition of the implicit FDM: the cell Péclet number |f_{0}|Δx_{0}/Q_{0}{0} is {1:.3} > 1 at x = {2:?}; central differences may turn the density negative there",
+                worst.1 + 1,
+                worst.0,
+                rounded(&x)
+            )
+        })
+    }
+
+    fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
+        if self.plan.as_ref().map(|p| p.interval) == Some(interval) {
+            return Ok(());
+        }
+        let (substeps, _) = self.step_count(interval)?;
+        let dt = interval / substeps as f64;
+        let part = match self.scheme {
+            FpeScheme::Separation => ImplicitPart::Parabolic,
+            FpeScheme::ImplicitFdm => ImplicitPart::Unsplit,
+        };
+        let lu = implicit::factorise(
+            &self.grid,
+            &self.advection,
+            &self.divergence,
+            &self.diffusion,
+            dt,
+            part,
+        )?;
+        self.plan = Some(StepPlan {
+            interval,
+            substeps,
+            dt,
+            lu,
+        });
+        Ok(())
+    }
+
+    /// FPE steps the filter takes per interval of the length it last predicted over.
+    pub fn substeps(&self) -> Option<(usize, f64)> {
+        self.plan.as_ref().map(|p| (p.substeps, p.dt))
+    }
+
+    /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement. The
+    /// density is not renormalised (mass that leaves the grid is lost, as in the scheme).
+    pub fn predict(&mut self, interval: f64) -> Result<(), FilterError> {
+        self.plan_for(interval)?;
+        let plan = self.plan.as_ref().expect("planned");
+        for _ in 0..plan.substeps {
+            if self.scheme == FpeScheme::Separation {
+                self.advection
+                    .step(&self.grid, plan.dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
+            plan.lu.solve(&mut self.u);
+        }
+        if self.u.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "predictive density",
+            });
+        }
+        Ok(())
+    }
+
+    /// The Bayes update (6)–(7) with measurement `z`, then the normalisation by `c'_k`.
+    pub fn update(&mut self, z: &[f64]) -> Result<(), FilterError> {
+        let m = self.residual.len();
+        let mut max = f64::NEG_INFINITY;
+        for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
+            if *u > 0.0 {
+                for (r, (zj, hj)) in self
+                    .residual
+                    .iter_mut()
+                    .zip(z.iter().zip(&self.h_nodes[idx * m..(idx + 1) * m]))
+                {
+                    *r = zj - hj;
+                }
+                *log = self.noise.log_pdf_slice(&self.residual, &mut self.work) + libm::log(*u);
+                max = max.max(*log);
+            } else {
+                *log = f64::NEG_INFINITY;
+            }
+        }
+        if !(max > f64::NEG_INFINITY) {
+            return Err(FilterError::MassLost);
+        }
+        for (u, log) in self.u.iter_mut().zip(&self.tmp) {
+            *u = libm::exp(log - max);
+        }
+        self.estimate = normalise_on_grid(&self.grid, &mut self.u)?;
+        Ok(())
+    }
+}
+
+/// Coordinates rounded to 4 significant decimals for messages.
+fn rounded(x: &[f64]) -> Vec<f64> {
+    x.iter().map(|v| libm::round(v * 1e4) / 1e4).collect()
+}
+
+impl Filter for ContinuousDiscreteGrid {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        if obs.kind != ObservationKind::Measurement || obs.value.len() != self.residual.len() {
+            return Err(FilterError::BadObservation(format!(
+                "{} needs measurements z_k of length {}",
+                self.name,
+                self.residual.len()
+            )));
+        }
+        if obs.dt > 0.0 {
+            self.predict(obs.dt)?;
+        }
+        self.update(obs.value)
+    }
+
+    fn estimate(&self) -> Estimate {
+        self.estimate.clone()
+    }
+
+    fn density(&self) -> Option<DensityView<'_>> {
+        Some(DensityView {
+            bounds: self.grid.bounds(),
+            shape: self.grid.shape(),
+            values: &self.u,
+        })
+    }
+
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.grid.marginal(&self.u, dim, grid, out);
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+}
