@@ -16,6 +16,9 @@ const PARAMS = {
   iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
   spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
   direct: [['points', 'int'], ['alpha', 'num'], ['max_terms', 'int'], ['substeps', 'int'], ['linear', 'numlist']],
+  separation: [['cells', 'intlist'], ['dt', 'num']],
+  implicit_fdm: [['cells', 'intlist'], ['dt', 'num']],
+  gaussian_sum: [['max_components', 'int'], ['prune', 'num'], ['merge_cost', 'num']],
   spectral: [['offline_basis', 'optint'], ['online_basis', 'optint'], ['partitions', 'int'], ['quadrature', 'optint'], ['online_nodes', 'optint'], ['likelihood', 'enum:in_update|in_operator']],
 };
 const DEFAULTS = {
@@ -31,11 +34,14 @@ const DEFAULTS = {
   qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
   spectral: { partitions: 1, likelihood: 'in_update' },
   direct: { points: 801, alpha: 0.01, max_terms: 60, substeps: 10, linear: [0, 0] },
+  separation: { cells: [200], dt: 0.01 },
+  implicit_fdm: { cells: [200], dt: 0.01 },
+  gaussian_sum: { max_components: 64, prune: 1e-12, merge_cost: 1e-10 },
 };
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 const PARAM_LABELS = {
   ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
-  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', max_terms: 'max terms', linear: 'l = a·x + b (a, b)', newton_steps: 'm (Newton)',
+  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', max_terms: 'max terms', cells: 'cells', max_components: 'max components', merge_cost: 'merge cost (nats)', linear: 'l = a·x + b (a, b)', newton_steps: 'm (Newton)',
 };
 
 function paramInput(row, i, name, type) {

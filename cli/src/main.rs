@@ -5,7 +5,8 @@
 //! zakai show <preset>
 //! zakai run <preset|file.json> [--methods ekf,ukf,pf] [--runs N] [--seed S]
 //!           [--format table|json|csv] [--out FILE]
-//! zakai reproduce [table|all] [--runs N]
+//! zakai reproduce [table|figure|all] [--runs N]
+//! zakai jcurve <preset|file.json> [--seed S] [--runs N] [--per-interval K] [--csv FILE]
 //! ```
 //!
 //! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
@@ -230,23 +231,43 @@ fn progress_bar(len: usize, what: &str) -> Result<ProgressBar, String> {
 
 fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     let all = reproduction::tables();
+    let figures = reproduction::figures();
+    if runs == Some(0) {
+        return Err("--runs must be at least 1".into());
+    }
     let chosen: Vec<_> = match id {
         None => {
-            println!("Tables (zakai reproduce <id>, or `all`):");
+            println!("Tables and figures (zakai reproduce <id>, or `all`):");
             for t in &all {
                 println!("  {:<14} {} [{}]", t.id, t.title, t.source);
+            }
+            for f in &figures {
+                println!("  {:<14} {} [{}]", f.id, f.title, f.source);
             }
             return Ok(());
         }
         Some("all") => all,
-        Some(id) => vec![reproduction::table(id).ok_or_else(|| {
-            let ids: Vec<&str> = all.iter().map(|t| t.id).collect();
-            format!("unknown table `{id}` (known: {})", ids.join(", "))
-        })?],
+        Some(id) => match figures.iter().find(|f| f.id == id) {
+            Some(f) => {
+                println!("{} — {} [{}]", f.id, f.title, f.source);
+                return jcurve(
+                    f.preset,
+                    Some(1),
+                    runs.unwrap_or(f.runs),
+                    f.per_interval,
+                    None,
+                );
+            }
+            None => vec![reproduction::table(id).ok_or_else(|| {
+                let ids: Vec<&str> = all
+                    .iter()
+                    .map(|t| t.id)
+                    .chain(figures.iter().map(|f| f.id))
+                    .collect();
+                format!("unknown table `{id}` (known: {})", ids.join(", "))
+            })?],
+        },
     };
-    if runs == Some(0) {
-        return Err("--runs must be at least 1".into());
-    }
     for table in &chosen {
         let runs = runs.unwrap_or(table.runs);
         let bar = progress_bar(runs * table.rows.len(), "runs")?;
@@ -259,6 +280,18 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
         }
         bar.finish_and_clear();
         print!("{}", output::reproduction(table, &results, runs));
+    }
+    if id == Some("all") {
+        for f in &figures {
+            println!("\n{} — {} [{}]", f.id, f.title, f.source);
+            jcurve(
+                f.preset,
+                Some(1),
+                runs.unwrap_or(f.runs),
+                f.per_interval,
+                None,
+            )?;
+        }
     }
     Ok(())
 }

@@ -2,8 +2,8 @@
 //! a method that failed in every run shows "failed" (table), `null` (JSON) or an empty
 //! field (CSV), never NaN.
 
-use zakai::metrics::density_error::{JCurve, JKind};
 use std::fmt::Write;
+use zakai::metrics::density_error::{JCurve, JKind};
 
 use zakai::metrics::MonteCarloSummary;
 use zakai::reproduction::{PaperTable, RowResult};
@@ -228,7 +228,11 @@ pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
         "t"
     );
     for name in &first.names {
-        s.push_str(&format!("  {:>11}  {:>11}", format!("{name} J'_k"), format!("{name} J_k")));
+        s.push_str(&format!(
+            "  {:>11}  {:>11}",
+            format!("{name} J'_k"),
+            format!("{name} J_k")
+        ));
     }
     s.push('\n');
     let mut predictive: Option<&[f64]> = None;
@@ -266,7 +270,10 @@ pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
     for a in 0..first.names.len() {
         for b in 0..first.names.len() {
             if a != b && first.names[a] == "SA" && first.names[b] == "FDM" {
-                let frac = curves.iter().map(|c| c.fraction_below(a, b, &all)).sum::<f64>()
+                let frac = curves
+                    .iter()
+                    .map(|c| c.fraction_below(a, b, &all))
+                    .sum::<f64>()
                     / curves.len() as f64;
                 s.push_str(&format!(
                     "  J of SA below FDM's at {:.1} % of the sample times (001 Fig. 4: at most times)\n",
@@ -275,8 +282,14 @@ pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
             }
         }
     }
-    let forced = curves.iter().map(|c| c.reduction.forced_cost).fold(0.0, f64::max);
-    let pruned = curves.iter().map(|c| c.reduction.pruned_weight).fold(0.0, f64::max);
+    let forced = curves
+        .iter()
+        .map(|c| c.reduction.forced_cost)
+        .fold(0.0, f64::max);
+    let pruned = curves
+        .iter()
+        .map(|c| c.reduction.pruned_weight)
+        .fold(0.0, f64::max);
     s.push_str(&format!(
         "  reference: {} components at the end; largest forced merge cost {forced:.2e} nats, pruned weight {pruned:.2e}\n",
         first.components

@@ -74,6 +74,46 @@ fn cells(values: &[(&'static str, Option<&[f64]>)]) -> Vec<(&'static str, Option
         .collect()
 }
 
+/// A figure of J(t) against the exact Gaussian-sum density (001), reproduced by
+/// [`crate::metrics::density_error::j_curve`] over `runs` seeds of `preset`.
+#[derive(Clone, Debug)]
+pub struct PaperFigure {
+    /// Identifier for `zakai reproduce`, e.g. `001-fig-4`.
+    pub id: &'static str,
+    /// What the figure shows.
+    pub title: &'static str,
+    /// Paper and figure.
+    pub source: &'static str,
+    /// The preset it runs.
+    pub preset: &'static str,
+    /// Runs (seeds 1..=runs).
+    pub runs: usize,
+    /// Samples of J per observation interval.
+    pub per_interval: usize,
+}
+
+/// Every J(t) figure Zakai reproduces.
+pub fn figures() -> Vec<PaperFigure> {
+    alloc::vec![
+        PaperFigure {
+            id: "001-fig-4",
+            title: "J(t) of the separation approach and the implicit FDM, 1-D linear non-Gaussian",
+            source: "001 §4, Fig. 4",
+            preset: "fpe-example-1",
+            runs: 20,
+            per_interval: 10,
+        },
+        PaperFigure {
+            id: "001-fig-5",
+            title: "2-D separation approach against the exact conditional mean and density",
+            source: "001 §4.1, Figs. 5–6",
+            preset: "fpe-example-2",
+            runs: 20,
+            per_interval: 4,
+        },
+    ]
+}
+
 /// Every table Zakai reproduces.
 pub fn tables() -> Vec<PaperTable> {
     let paper_000_table_1 = [

@@ -188,8 +188,14 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
         &probes,
     )
     .expect("gsf");
-    let mut kf = KalmanBucy::new("KF".into(), e.model(), e.prior(), &KalmanParams::default(), &probes)
-        .expect("kf");
+    let mut kf = KalmanBucy::new(
+        "KF".into(),
+        e.model(),
+        e.prior(),
+        &KalmanParams::default(),
+        &probes,
+    )
+    .expect("kf");
     let traj = e.simulate(4);
     for k in 0..=traj.steps() {
         let obs = Observation {
@@ -329,8 +335,7 @@ fn example_2_tracks_the_exact_conditional_mean() {
     let mass: f64 = d.values.iter().sum::<f64>() * 0.2 * 0.2;
     assert!((mass - 1.0).abs() < 1e-12);
     let truth = DVector::from_column_slice(traj.state(traj.steps()));
-    let last = DVector::from_column_slice(
-        &sa_track.estimates[traj.steps() * 2..traj.steps() * 2 + 2],
-    );
+    let last =
+        DVector::from_column_slice(&sa_track.estimates[traj.steps() * 2..traj.steps() * 2 + 2]);
     assert!((truth - last).norm() < 2.0);
 }

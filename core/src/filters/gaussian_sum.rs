@@ -87,7 +87,13 @@ impl Component {
     fn new(w: f64, m: DVector<f64>, mut p: DMatrix<f64>) -> Result<Self, FilterError> {
         symmetrize(&mut p);
         let chol = cholesky(&p, "Gaussian-sum component covariance")?;
-        let log_det = 2.0 * chol.l_dirty().diagonal().iter().map(|d| libm::log(*d)).sum::<f64>();
+        let log_det = 2.0
+            * chol
+                .l_dirty()
+                .diagonal()
+                .iter()
+                .map(|d| libm::log(*d))
+                .sum::<f64>();
         Ok(Component { w, m, p, log_det })
     }
 }
@@ -231,7 +237,8 @@ impl GaussianSumFilter {
     fn reduce(&mut self) {
         let largest = self.components.iter().map(|c| c.w).fold(0.0, f64::max);
         let before: f64 = self.components.iter().map(|c| c.w).sum();
-        self.components.retain(|c| c.w >= self.params.prune * largest);
+        self.components
+            .retain(|c| c.w >= self.params.prune * largest);
         let kept: f64 = self.components.iter().map(|c| c.w).sum();
         self.reduction.pruned_weight += before - kept;
         for c in &mut self.components {

@@ -83,7 +83,7 @@ impl BandedMatrix {
     pub fn factor(mut self, what: &'static str) -> Result<BandedLu, FilterError> {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         let mut pivots = vec![0usize; n];
-        for k in 0..n {
+        for (k, pivot_row) in pivots.iter_mut().enumerate() {
             let last_row = (k + kl).min(n - 1);
             let last_col = (k + kl + ku).min(n - 1);
             let mut p = k;
@@ -100,7 +100,7 @@ impl BandedMatrix {
                     "the {what} is singular (no nonzero pivot in column {k})"
                 )));
             }
-            pivots[k] = p;
+            *pivot_row = p;
             if p != k {
                 for j in k..=last_col {
                     let (a, b) = (self.slot(k, j), self.slot(p, j));
@@ -156,15 +156,17 @@ impl BandedLu {
             }
             let bk = b[k];
             if bk != 0.0 {
-                for i in k + 1..=(k + kl).min(n - 1) {
-                    b[i] -= f.data[f.slot(i, k)] * bk;
+                let last = (k + kl).min(n - 1);
+                for (i, bi) in b.iter_mut().enumerate().take(last + 1).skip(k + 1) {
+                    *bi -= f.data[f.slot(i, k)] * bk;
                 }
             }
         }
         for i in (0..n).rev() {
             let mut s = b[i];
-            for j in i + 1..=(i + kl + ku).min(n - 1) {
-                s -= f.data[f.slot(i, j)] * b[j];
+            let last = (i + kl + ku).min(n - 1);
+            for (j, bj) in b.iter().enumerate().take(last + 1).skip(i + 1) {
+                s -= f.data[f.slot(i, j)] * bj;
             }
             b[i] = s / f.data[f.slot(i, i)];
         }
@@ -185,7 +187,9 @@ mod tests {
         let mut dense = DMatrix::zeros(n, n);
         let mut state = 12345u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         for i in 0..n {
@@ -197,8 +201,15 @@ mod tests {
         }
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let mut x = b.clone();
-        a.clone().factor("test matrix").expect("nonsingular").solve(&mut x);
-        let reference = dense.clone().lu().solve(&DVector::from_vec(b.clone())).expect("dense");
+        a.clone()
+            .factor("test matrix")
+            .expect("nonsingular")
+            .solve(&mut x);
+        let reference = dense
+            .clone()
+            .lu()
+            .solve(&DVector::from_vec(b.clone()))
+            .expect("dense");
         let err = x
             .iter()
             .zip(reference.iter())
@@ -207,7 +218,11 @@ mod tests {
         assert!(err < 1e-9 * reference.amax().max(1.0), "error {err}");
         let mut ax = vec![0.0; n];
         a.mul_vec(&x, &mut ax);
-        let resid = ax.iter().zip(&b).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+        let resid = ax
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
         assert!(resid < 1e-10, "residual {resid}");
     }
 

@@ -173,7 +173,13 @@ pub fn j_curve(
                 } else {
                     JKind::Between
                 };
-                sample(t - dt_obs + part as f64 * h, kind, &grids, &gsf, &mut samples);
+                sample(
+                    t - dt_obs + part as f64 * h,
+                    kind,
+                    &grids,
+                    &gsf,
+                    &mut samples,
+                );
             }
         }
         let z = trajectory.observation(k);

@@ -120,7 +120,7 @@ impl GaussianMixture {
                 quad += r * r;
             }
             let v = c.log_scale - 0.5 * quad;
-            if !(v > f64::NEG_INFINITY) {
+            if v == f64::NEG_INFINITY || v.is_nan() {
                 continue;
             }
             if v > max {

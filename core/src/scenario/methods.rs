@@ -367,9 +367,9 @@ impl MethodConfig {
                 ctx.bounds,
                 ctx.dt_obs,
             )?),
-            MethodConfig::GaussianSum(p) => Box::new(GaussianSumFilter::new(
-                name, model, prior, p, ctx.probes,
-            )?),
+            MethodConfig::GaussianSum(p) => {
+                Box::new(GaussianSumFilter::new(name, model, prior, p, ctx.probes)?)
+            }
         })
     }
 }

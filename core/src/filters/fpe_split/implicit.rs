@@ -42,12 +42,12 @@ pub fn factorise(
 ) -> Result<BandedLu, FilterError> {
     let bw = half_bandwidth(grid.shape());
     let mut a = BandedMatrix::zeros(grid.len(), bw, bw);
-    for idx in 0..grid.len() {
-        a.add(idx, idx, 1.0 + dt * divergence[idx]);
-        for l in 0..grid.dim() {
+    for (idx, div) in divergence.iter().enumerate() {
+        a.add(idx, idx, 1.0 + dt * div);
+        for (l, q) in diffusion.iter().enumerate() {
             let (stride, dx) = (grid.stride(l), grid.spacing()[l]);
             let i = grid.index_in(idx, l);
-            let diff = 0.5 * dt * diffusion[l] / (dx * dx);
+            let diff = 0.5 * dt * q / (dx * dx);
             let adv = match part {
                 ImplicitPart::Parabolic => 0.0,
                 ImplicitPart::Unsplit => dt * advection.velocity(l)[idx] / (2.0 * dx),

@@ -120,8 +120,8 @@ impl FpeParams {
                     format!(
                         "the banded factor of the implicit step for {:?} cells needs {} MiB, above the cap of {} MiB",
                         self.shape(n),
-                        v.map_or(String::from("more than 2^64 B"), |v| format!("{}", v * 8 >> 20)),
-                        MAX_BAND_VALUES * 8 >> 20
+                        v.map_or(String::from("more than 2^64 B"), |v| format!("{}", (v * 8) >> 20)),
+                        (MAX_BAND_VALUES * 8) >> 20
                     ),
                 )),
             }
@@ -290,11 +290,14 @@ impl ContinuousDiscreteGrid {
                 steps = needed;
             }
         }
-        let (min_div, idx) = self
-            .divergence
-            .iter()
-            .enumerate()
-            .fold((f64::INFINITY, 0), |acc, (i, &d)| if d < acc.0 { (d, i) } else { acc });
+        let (min_div, idx) =
+            self.divergence
+                .iter()
+                .enumerate()
+                .fold(
+                    (f64::INFINITY, 0),
+                    |acc, (i, &d)| if d < acc.0 { (d, i) } else { acc },
+                );
         if min_div < 0.0 {
             let needed = libm::ceil(2.0 * -min_div * interval);
             if needed > steps {
@@ -415,7 +418,7 @@ impl ContinuousDiscreteGrid {
                 *log = f64::NEG_INFINITY;
             }
         }
-        if !(max > f64::NEG_INFINITY) {
+        if max == f64::NEG_INFINITY || max.is_nan() {
             return Err(FilterError::MassLost);
         }
         for (u, log) in self.u.iter_mut().zip(&self.tmp) {

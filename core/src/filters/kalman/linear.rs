@@ -142,7 +142,12 @@ impl KalmanBucy {
         probes: &[Vec<f64>],
     ) -> Result<Self, FilterError> {
         let (a, b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
-        affine_parts(&*model.observation, "the Kalman–Bucy filter", "observation h", probes)?;
+        affine_parts(
+            &*model.observation,
+            "the Kalman–Bucy filter",
+            "observation h",
+            probes,
+        )?;
         Ok(KalmanBucy {
             name,
             model: model.clone(),

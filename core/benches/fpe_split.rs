@@ -1,0 +1,75 @@
+//! Criterion benchmarks of the continuous–discrete filters of 001 at the paper's sizes: one
+//! prediction interval of the separation approach and of the implicit FDM (example 1: 200
+//! cells, Δt = 0.01, Δτ = 0.1 — 10 steps; example 2: 35 × 35 cells, Δt = 0.005, Δτ = 0.2 —
+//! 40 steps), a whole cycle with the Bayes update (6)–(7) on each grid, and one Gaussian-sum measurement step
+//! (prediction, update, reduction) of the reference.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use zakai::experiment::Experiment;
+use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
+use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
+use zakai::scenario::presets;
+
+fn fpe_split(c: &mut Criterion) {
+    let mut group = c.benchmark_group("fpe_split (001)");
+    for (preset, cells, dt) in [("fpe-example-1", 200, 0.01), ("fpe-example-2", 35, 0.005)] {
+        let experiment = Experiment::new(presets::preset(preset).expect("preset")).expect("valid");
+        let dt_obs = experiment.config().time.dt_obs;
+        let traj = experiment.simulate(1);
+        for (scheme, label) in [
+            (FpeScheme::Separation, "SA"),
+            (FpeScheme::ImplicitFdm, "FDM"),
+        ] {
+            let mut filter = ContinuousDiscreteGrid::new(
+                label.into(),
+                scheme,
+                experiment.model(),
+                experiment.prior(),
+                &FpeParams {
+                    cells: vec![cells],
+                    dt,
+                },
+                &experiment.config().bounds(),
+                dt_obs,
+            )
+            .expect("filter");
+            filter.update(traj.observation(0)).expect("update");
+            group.bench_function(format!("{preset} {label} prediction interval"), |b| {
+                b.iter(|| filter.predict(dt_obs).expect("predict"))
+            });
+            // A whole cycle, so that every update meets a spread-out predictive density (repeated
+            // updates alone would leave most cells at exactly zero and skip them).
+            group.bench_function(format!("{preset} {label} prediction + Bayes update"), |b| {
+                b.iter(|| {
+                    filter.predict(dt_obs).expect("predict");
+                    filter.update(traj.observation(1)).expect("update")
+                })
+            });
+        }
+        let mut gsf = GaussianSumFilter::new(
+            "GSF".into(),
+            experiment.model(),
+            experiment.prior(),
+            &GaussianSumParams::default(),
+            &experiment.config().probe_points(),
+        )
+        .expect("gsf");
+        // Fill the mixture up to its cap first so that the step reduces a full mixture.
+        for k in 0..=traj.steps() {
+            if k > 0 {
+                gsf.predict(dt_obs).expect("predict");
+            }
+            gsf.update(traj.observation(k)).expect("update");
+        }
+        group.bench_function(format!("{preset} GSF measurement step"), |b| {
+            b.iter(|| {
+                gsf.predict(dt_obs).expect("predict");
+                gsf.update(traj.observation(1)).expect("update");
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, fpe_split);
+criterion_main!(benches);
