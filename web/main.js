@@ -129,8 +129,10 @@ function methodRowsUI() {
     const div = document.createElement('div');
     div.className = 'method-row';
     const params = PARAMS[row.config.method] ?? [];
-    div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
+    div.dataset.row = String(i);
+    div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<span class="memory" title="memory this method allocates, estimated before anything is allocated"></span><button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
       <div class="params">${params.map(([p, type]) => `<label>${PARAM_LABELS[p] ?? p}${paramInput(row, i, p, type)}</label>`).join('')}</div>
+      <span class="reason"></span>
       <span class="error" data-method-row="${i}"></span>`;
     c.appendChild(div);
   });
@@ -144,6 +146,54 @@ function methodRowsUI() {
     scheduleValidate();
   }));
   c.querySelectorAll('[data-param]').forEach((el) => el.addEventListener('input', scheduleValidate));
+  showRowSuitability();
+}
+
+const formatBytes = (b) => (b >= 1 << 30 ? `${(b / (1 << 30)).toFixed(2)} GiB` : `${(b / (1 << 20)).toFixed(1)} MiB`);
+
+// Rows whose method does not apply to the model are switched off with the reason; the
+// memory estimate of every row is shown before anything is allocated.
+function showRowSuitability() {
+  state.methodRows.forEach((row, i) => {
+    const div = document.querySelector(`#methods .method-row[data-row="${i}"]`);
+    if (!div) return;
+    const box = div.querySelector('.enable');
+    box.disabled = Boolean(row.reason);
+    box.checked = row.enabled && !row.reason;
+    div.classList.toggle('unsuitable', Boolean(row.reason));
+    div.querySelector('.reason').textContent = row.reason ? `not applicable: ${row.reason}` : '';
+    div.querySelector('.memory').textContent = row.memory != null ? `≈ ${formatBytes(row.memory)}` : '';
+  });
+}
+
+function showSuitability(s) {
+  if (!s) return;
+  const reasons = new Map(s.kinds.map((k) => [k.key, k.reason]));
+  const list = $('unavailable-list');
+  list.replaceChildren();
+  for (const opt of $('add-method-kind').options) {
+    const reason = reasons.get(opt.value);
+    opt.disabled = Boolean(reason);
+    opt.title = reason ?? (state.methodKinds.find(([k]) => k === opt.value)?.[1] ?? '');
+    if (reason) {
+      const li = document.createElement('li');
+      li.dataset.method = opt.value;
+      li.textContent = `${opt.value}: ${reason}`;
+      list.appendChild(li);
+    }
+  }
+  $('unavailable').hidden = list.children.length === 0;
+  if ($('add-method-kind').selectedOptions[0]?.disabled) {
+    const first = [...$('add-method-kind').options].find((o) => !o.disabled);
+    if (first) $('add-method-kind').value = first.value;
+  }
+  s.rows.forEach((r, i) => {
+    const row = state.methodRows[i];
+    if (!row) return;
+    row.reason = r.reason;
+    row.memory = r.memory;
+  });
+  showRowSuitability();
 }
 
 function showPriorKind(kind) {
@@ -182,6 +232,7 @@ function fillForm(config) {
   $('dt-obs').value = config.time.dt_obs;
   $('inner').value = config.time.inner_steps;
   $('seed').value = config.seed;
+  $('mc-seed').value = config.seed;
   state.methodRows = config.methods.map((m) => ({ enabled: true, config: structuredClone(m) }));
   methodRowsUI();
   $('description').textContent = config.description;
@@ -233,7 +284,7 @@ function readForm() {
     else v = Number(el.value);
     row.config[el.dataset.param] = v;
   });
-  state.enabledRows = state.methodRows.map((r, i) => (r.enabled ? i : -1)).filter((i) => i >= 0);
+  state.enabledRows = state.methodRows.map((r, i) => (r.enabled && !r.reason ? i : -1)).filter((i) => i >= 0);
   c.methods = state.enabledRows.map((i) => state.methodRows[i].config);
   return c;
 }
@@ -314,7 +365,7 @@ function validate() {
   const config = checkedForm();
   if (!config) return;
   state.validateId += 1;
-  worker.postMessage({ type: 'validate', id: state.validateId, config });
+  worker.postMessage({ type: 'validate', id: state.validateId, config, allMethods: state.methodRows.map((r) => r.config) });
 }
 
 function apply() {
@@ -349,10 +400,11 @@ function changeDimension() {
 
 function makePlots(info) {
   const n = info.n;
+  $('heatmap-figure').hidden = n < 2;
   $('component').innerHTML = Array.from({ length: n }, (_, i) => `<option value="${i}">x${i + 1}</option>`).join('');
   $('density-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
   // The richest density by default: a grid filter, else the last particle filter, else the first.
-  const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT)/.test(m));
+  const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT|SA|FDM|Direct)/.test(m));
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
   $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
   $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;
@@ -376,12 +428,82 @@ function makePlots(info) {
     axes: [{ label: 'x' }, {}],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
   }, [[], ...info.methods.map(() => [])], $('density-plot'));
+  $('heatmap-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
+  $('heatmap-method').value = $('density-method').value;
+  $('heatmap-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
+  const key = $('heatmap-key');
+  key.replaceChildren();
+  const entry = (color, text, shape) => {
+    const span = document.createElement('span');
+    span.innerHTML = `<svg width="12" height="12"><${shape} fill="${color}" stroke="#000"/></svg> `;
+    span.append(text);
+    key.appendChild(span);
+  };
+  if (n >= 2) {
+    entry('#fff', 'truth', 'circle cx="6" cy="6" r="4"');
+    info.methods.forEach((m, i) => entry(COLORS[i % COLORS.length], m, 'rect x="2" y="2" width="8" height="8"'));
+  }
   const heat = $('heat');
   heat.getContext('2d').clearRect(0, 0, heat.width, heat.height);
   $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   $('heat-legend').title = '0 → maximum density at each time';
   $('metrics').querySelector('tbody').innerHTML = info.methods.map((m, i) => `<tr data-method="${i}"><td><span class="swatch" style="background:${COLORS[i % COLORS.length]}"></span>${m}</td><td class="mse">–</td><td class="status">running</td><td class="time">–</td></tr>`).join('');
-  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0 } });
+  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
+}
+
+// The 2-D heatmap: the chosen method's joint density of x1, x2 on a raster over the domain
+// (drawn from the typed array into the canvas), the truth and every estimate on top, and the
+// log-concavity layer in red where ∇²(−log p) has a negative eigenvalue.
+function drawHeatmap(frame) {
+  const h2 = frame.heat2d;
+  const canvas = $('heatmap');
+  const ctx = canvas.getContext('2d');
+  if (!h2 || !h2.values.length) {
+    ctx.fillStyle = '#eee';
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
+    return;
+  }
+  const P = h2.points;
+  let max = 0;
+  for (const v of h2.values) if (v > max) max = v;
+  const img = ctx.createImageData(P, P);
+  for (let j = 0; j < P; j++) {
+    for (let i = 0; i < P; i++) {
+      // Row j of the raster is x2 = ys[j]; the canvas has x2 growing upwards.
+      const v = h2.values[i + P * j];
+      let c = colormap(max > 0 ? v / max : 0);
+      const k = h2.curvature ? h2.curvature[i + P * j] : NaN;
+      if (k < -1e-6) c = [Math.round(0.45 * c[0] + 0.55 * 230), Math.round(0.45 * c[1] + 0.55 * 30), Math.round(0.45 * c[2] + 0.55 * 40)];
+      const o = 4 * (i + P * (P - 1 - j));
+      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
+    }
+  }
+  const off = new OffscreenCanvas(P, P);
+  off.getContext('2d').putImageData(img, 0, 0);
+  ctx.imageSmoothingEnabled = false;
+  ctx.drawImage(off, 0, 0, canvas.width, canvas.height);
+  const info = state.info;
+  const [[x0, x1], [y0, y1]] = info.domain;
+  const px = (x) => ((x - x0) / (x1 - x0)) * canvas.width;
+  const py = (y) => canvas.height - ((y - y0) / (y1 - y0)) * canvas.height;
+  const d = state.data;
+  const last = d.times.length - 1;
+  if (last < 0) return;
+  d.est.forEach((e, i) => {
+    const x = e[0][last];
+    const y = e[1][last];
+    if (x == null || y == null) return;
+    ctx.fillStyle = COLORS[i % COLORS.length];
+    ctx.strokeStyle = '#000';
+    ctx.fillRect(px(x) - 4, py(y) - 4, 8, 8);
+    ctx.strokeRect(px(x) - 4, py(y) - 4, 8, 8);
+  });
+  ctx.beginPath();
+  ctx.arc(px(d.truth[0][last]), py(d.truth[1][last]), 5, 0, 2 * Math.PI);
+  ctx.fillStyle = '#fff';
+  ctx.fill();
+  ctx.strokeStyle = '#000';
+  ctx.stroke();
 }
 
 function drawTruthMarker(u) {
@@ -481,6 +603,7 @@ function applyFrame(frame) {
   }
   state.lastDensity = frame;
   drawHeatColumns(frame);
+  if (info.n >= 2) drawHeatmap(frame);
   showLogConcavity(frame.logConcave);
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
@@ -534,6 +657,192 @@ function loop(ts) {
   requestAnimationFrame(loop);
 }
 
+// ---------- sharing and export ----------
+
+// The whole configuration (seed included) as base64url JSON in the address's fragment.
+function encodeConfig(config) {
+  const bytes = new TextEncoder().encode(JSON.stringify(config));
+  let bin = '';
+  for (let i = 0; i < bytes.length; i += 0x8000) bin += String.fromCharCode(...bytes.subarray(i, i + 0x8000));
+  return btoa(bin).replace(/\+/g, '-').replace(/\//g, '_').replace(/=+$/, '');
+}
+
+function decodeConfig(text) {
+  const b64 = text.replace(/-/g, '+').replace(/_/g, '/');
+  const bin = atob(b64 + '='.repeat((4 - (b64.length % 4)) % 4));
+  const bytes = Uint8Array.from(bin, (c) => c.charCodeAt(0));
+  return JSON.parse(new TextDecoder().decode(bytes));
+}
+
+function configFromAddress() {
+  const m = location.hash.match(/^#s=([A-Za-z0-9_-]+)$/);
+  if (!m) return null;
+  try {
+    const c = decodeConfig(m[1]);
+    return c && typeof c === 'object' && c.model && c.methods ? c : null;
+  } catch {
+    return null;
+  }
+}
+
+async function share() {
+  const config = checkedForm();
+  if (!config) return;
+  const url = `${location.origin}${location.pathname}#s=${encodeConfig(config)}`;
+  history.replaceState(null, '', url);
+  const field = $('share-url');
+  field.hidden = false;
+  field.value = url;
+  field.select();
+  try {
+    await navigator.clipboard.writeText(url);
+    $('form-status').textContent = 'link copied';
+  } catch {
+    $('form-status').textContent = 'link in the field above the plots';
+  }
+}
+
+function download(name, blob) {
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(blob);
+  a.download = name;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+}
+
+const csvCell = (v) => (v == null || Number.isNaN(v) ? '' : String(v));
+const csvName = (s) => `"${String(s).replace(/"/g, '""')}"`;
+
+// Truth and every method's estimates so far, one row per observation time.
+function exportCsv() {
+  const d = state.data;
+  const info = state.info;
+  if (!d || !info) return;
+  const n = info.n;
+  const head = ['t', ...Array.from({ length: n }, (_, j) => `truth_x${j + 1}`)];
+  info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_x${j + 1}`)); });
+  const lines = [head.join(',')];
+  for (let r = 0; r < d.times.length; r++) {
+    const row = [d.times[r]];
+    for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
+    d.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
+    lines.push(row.map(csvCell).join(','));
+  }
+  download(`zakai-${info.name}-seed${info.seed}.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));
+}
+
+// Every visible plot canvas stacked into one PNG.
+function exportPng() {
+  const canvases = [...document.querySelectorAll('#trajectory-plot canvas, #heat, #density-plot canvas, #heatmap')]
+    .filter((c) => c.offsetParent !== null && c.width > 0 && c.height > 0);
+  if (!canvases.length) return;
+  const width = Math.max(...canvases.map((c) => c.width));
+  const height = canvases.reduce((h, c) => h + c.height + 10, 10);
+  const out = document.createElement('canvas');
+  out.width = width;
+  out.height = height;
+  const ctx = out.getContext('2d');
+  ctx.fillStyle = '#fff';
+  ctx.fillRect(0, 0, width, height);
+  let y = 10;
+  for (const c of canvases) {
+    ctx.drawImage(c, 0, y);
+    y += c.height + 10;
+  }
+  out.toBlob((blob) => blob && download(`zakai-${state.info?.name ?? 'plots'}.png`, blob), 'image/png');
+}
+
+// ---------- Monte Carlo (its own worker, so the live run keeps going) ----------
+
+const mc = { worker: null, ready: false, summary: null, pending: null };
+
+function mcWorker() {
+  if (mc.worker) return mc.worker;
+  mc.worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  mc.worker.onmessage = ({ data }) => {
+    switch (data.type) {
+      case 'ready':
+        mc.ready = true;
+        if (mc.pending) mc.worker.postMessage(mc.pending);
+        mc.pending = null;
+        break;
+      case 'mcProgress':
+        $('mc-progress').max = data.runs;
+        $('mc-progress').value = data.done;
+        $('mc-status').textContent = `${data.done} / ${data.runs} runs`;
+        if (data.summary) showMonteCarlo(data.summary);
+        break;
+      case 'mcDone':
+        $('mc-start').disabled = false;
+        $('mc-cancel').disabled = true;
+        $('mc-status').textContent = data.cancelled ? `cancelled after ${data.done} of ${data.runs} runs` : `finished: ${data.done} runs`;
+        if (data.summary) showMonteCarlo(data.summary);
+        break;
+      case 'error':
+        $('mc-start').disabled = false;
+        $('mc-cancel').disabled = true;
+        $('mc-status').textContent = `error: ${data.message}`;
+        break;
+    }
+  };
+  mc.worker.postMessage({ type: 'init' });
+  return mc.worker;
+}
+
+function startMonteCarlo() {
+  const config = checkedForm();
+  if (!config) return;
+  const runs = Math.max(1, Math.min(10000, Number($('mc-runs').value) | 0));
+  const seed = Math.max(0, Number($('mc-seed').value) | 0);
+  $('mc-start').disabled = true;
+  $('mc-cancel').disabled = false;
+  $('mc-csv').disabled = true;
+  $('mc-progress').max = runs;
+  $('mc-progress').value = 0;
+  $('mc-status').textContent = `0 / ${runs} runs`;
+  $('mc-table').querySelector('tbody').replaceChildren();
+  const msg = { type: 'mcStart', config, seed, runs };
+  const w = mcWorker();
+  if (mc.ready) w.postMessage(msg);
+  else mc.pending = msg;
+}
+
+function showMonteCarlo(summary) {
+  mc.summary = summary;
+  const tbody = $('mc-table').querySelector('tbody');
+  tbody.replaceChildren();
+  for (const m of summary.methods) {
+    const tr = document.createElement('tr');
+    const cells = [
+      m.name,
+      m.mse == null ? '—' : `${m.mse.toFixed(4)} ± ${(m.mse_stderr ?? 0).toFixed(4)}`,
+      m.rms_components ? m.rms_components.map((v) => v.toFixed(4)).join(' / ') : '—',
+      `${m.failed} / ${m.runs}`,
+      (m.seconds_per_run * 1000).toFixed(1),
+    ];
+    for (const c of cells) {
+      const td = document.createElement('td');
+      td.textContent = c;
+      tr.appendChild(td);
+    }
+    tbody.appendChild(tr);
+  }
+  $('mc-csv').disabled = summary.methods.length === 0;
+}
+
+function exportMonteCarloCsv() {
+  const s = mc.summary;
+  if (!s) return;
+  const lines = ['method,runs,failed,mse,mse_stderr,rms_components,ms_per_run,ms_per_step'];
+  for (const m of s.methods) {
+    lines.push([csvName(m.name), m.runs, m.failed, csvCell(m.mse), csvCell(m.mse_stderr),
+      csvName((m.rms_components ?? []).join(' ')), m.seconds_per_run * 1000, m.seconds_per_step * 1000].join(','));
+  }
+  download(`zakai-${s.scenario}-montecarlo-${s.runs}runs.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));
+}
+
 // ---------- wiring ----------
 
 worker.onmessage = ({ data }) => {
@@ -544,15 +853,20 @@ worker.onmessage = ({ data }) => {
       $('preset').innerHTML = data.presets.map((p) => `<option value="${p.name}">${p.name} — ${p.title}</option>`).join('');
       $('add-method-kind').innerHTML = data.methods.map(([k, about]) => `<option value="${k}" title="${about}">${k}</option>`).join('');
       state.randomSeed = data.seed;
+      const shared = configFromAddress();
       const wanted = new URLSearchParams(location.search).get('preset');
-      const preset = data.presets.find((p) => p.name === wanted) ?? data.presets[0];
+      const preset = data.presets.find((p) => p.name === (shared?.name ?? wanted)) ?? data.presets[0];
       $('preset').value = preset.name;
-      fillForm(preset);
+      fillForm(shared ?? preset);
+      if (location.hash && !shared) $('general-error').textContent = 'the link\'s configuration could not be read; showing a preset';
       apply();
       break;
     }
     case 'validated':
-      if (data.id === state.validateId) showProblems(data.problems);
+      if (data.id === state.validateId) {
+        showProblems(data.problems);
+        showSuitability(data.suitability);
+      }
       break;
     case 'loaded':
       state.info = data.info;
@@ -563,6 +877,7 @@ worker.onmessage = ({ data }) => {
       $('run-error').textContent = '';
       showProblems([]);
       makePlots(data.info);
+      validate();
       break;
     case 'frame':
       state.queue.push(data);
@@ -587,6 +902,12 @@ $('preset').addEventListener('change', () => {
   apply();
 });
 $('apply').addEventListener('click', apply);
+$('share').addEventListener('click', share);
+$('export-csv').addEventListener('click', exportCsv);
+$('export-png').addEventListener('click', exportPng);
+$('mc-start').addEventListener('click', startMonteCarlo);
+$('mc-cancel').addEventListener('click', () => mc.worker?.postMessage({ type: 'mcCancel' }));
+$('mc-csv').addEventListener('click', exportMonteCarloCsv);
 $('play').addEventListener('click', () => setPlaying(!state.playing));
 $('step').addEventListener('click', () => { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); });
 $('reset').addEventListener('click', apply);
@@ -605,6 +926,8 @@ $('density-method').addEventListener('change', () => {
   worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
   render();
 });
+$('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
+$('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
 $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
 $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); scheduleValidate(); });

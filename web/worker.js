@@ -8,7 +8,7 @@ let info = null;
 let playing = false;
 let speed = 5;
 let awaitingAck = false;
-let view = { dim: 0, points: 200, densityMethod: 0 };
+let view = { dim: 0, points: 200, densityMethod: 0, heatmapMethod: 0, heatmapPoints: 120, lcLayer: false };
 let sent = 0; // rows already sent to the page
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
@@ -25,10 +25,22 @@ function frame(summary) {
   // Log-concavity (003 §3) of the density shown in the heat strip, for grid methods.
   const concavity = session.logConcavity(view.densityMethod, 1e-8);
   const logConcave = concavity ? { logConcave: concavity.log_concave, worst: concavity.worst } : null;
+  // 2-D models: the heatmap's joint density of x1, x2 and, on request, its log-concavity map.
+  let heat2d = null;
+  if (info.n >= 2) {
+    const P = view.heatmapPoints;
+    heat2d = {
+      points: P,
+      values: session.density2d(view.heatmapMethod, P),
+      curvature: view.lcLayer ? session.logConcavity2d(view.heatmapMethod, P, 1e-6) : null,
+    };
+  }
   sent = to;
   const transfer = [times.buffer, truth.buffer, grid.buffer,
     ...estimates.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
-  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, logConcave, summary }, transfer);
+  if (heat2d) transfer.push(heat2d.values.buffer);
+  if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
+  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 function tick() {
@@ -60,14 +72,55 @@ function guard(fn) {
   }
 }
 
+// Monte Carlo: one realisation per call, yielding between runs so that a cancel gets through.
+let mcCancelled = false;
+async function monteCarlo({ config, seed, runs }) {
+  mcCancelled = false;
+  let job;
+  try {
+    job = new zakai.MonteCarloJob(config, seed);
+  } catch (e) {
+    post({ type: 'error', message: String(e?.message ?? e) });
+    return;
+  }
+  let done = 0;
+  let lastSummary = 0;
+  try {
+    while (done < runs && !mcCancelled) {
+      done = job.runNext();
+      const now = performance.now();
+      // The summary costs a pass over every run so far: at most a few per second.
+      const summary = now - lastSummary > 250 || done === runs ? job.summary() : null;
+      if (summary) lastSummary = now;
+      post({ type: 'mcProgress', done, runs, summary });
+      await new Promise((r) => setTimeout(r, 0));
+    }
+    post({ type: 'mcDone', done, runs, cancelled: mcCancelled, summary: done > 0 ? job.summary() : null });
+  } catch (e) {
+    post({ type: 'error', message: String(e?.message ?? e) });
+  } finally {
+    job.free();
+  }
+}
+
 self.onmessage = async ({ data }) => {
   switch (data.type) {
+    case 'mcStart':
+      monteCarlo(data);
+      break;
+    case 'mcCancel':
+      mcCancelled = true;
+      break;
     case 'init':
       await init();
       post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed() });
       break;
     case 'validate':
-      guard(() => post({ type: 'validated', id: data.id, problems: zakai.validateScenario(data.config) }));
+      guard(() => {
+        const problems = zakai.validateScenario(data.config);
+        const suitability = zakai.methodSuitability({ ...data.config, methods: data.allMethods ?? data.config.methods });
+        post({ type: 'validated', id: data.id, problems, suitability });
+      });
       break;
     case 'load':
       guard(() => {
@@ -103,6 +156,10 @@ self.onmessage = async ({ data }) => {
       break;
     case 'view':
       view = { ...view, ...data.view };
+      if (data.redraw && session && !awaitingAck) guard(() => {
+        awaitingAck = true;
+        frame(session.step(0));
+      });
       break;
     case 'ack':
       awaitingAck = false;

@@ -12,7 +12,7 @@ use zakai::scenario::presets;
 
 fn fpe_split(c: &mut Criterion) {
     let mut group = c.benchmark_group("fpe_split (001)");
-    for (preset, cells, dt) in [("fpe-example-1", 200, 0.01), ("fpe-example-2", 35, 0.005)] {
+    for (preset, cells, dt) in [("sa-example-1", 200, 0.01), ("sa-example-2", 35, 0.005)] {
         let experiment = Experiment::new(presets::preset(preset).expect("preset")).expect("valid");
         let dt_obs = experiment.config().time.dt_obs;
         let traj = experiment.simulate(1);

@@ -32,7 +32,7 @@ fn grid_filter(e: &Experiment, scheme: FpeScheme, cells: usize, dt: f64) -> Cont
 
 /// An Ornstein–Uhlenbeck model dx = −x dt + dw with a Gaussian prior N(1, 0.2) on [−6, 6].
 fn ornstein_uhlenbeck() -> ScenarioConfig {
-    let mut c = presets::preset("fpe-example-1").expect("preset");
+    let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["-x".into()];
     c.prior = zakai::scenario::PriorConfig::Gaussian {
         mean: vec![1.0],
@@ -128,7 +128,7 @@ fn unsuitable_models_are_refused_with_the_reason() {
     .expect("refused");
     assert!(err.to_string().contains("discrete measurements"), "{err}");
 
-    let mut c = presets::preset("fpe-example-2").expect("preset");
+    let mut c = presets::preset("sa-example-2").expect("preset");
     c.model.diffusion = Some(vec![vec![1.0, 0.0], vec![0.5, 1.0]]);
     let e = experiment(c);
     let err = ContinuousDiscreteGrid::new(
@@ -147,7 +147,7 @@ fn unsuitable_models_are_refused_with_the_reason() {
     .expect("refused");
     assert!(err.to_string().contains("diagonal of Q"), "{err}");
 
-    let mut c = presets::preset("fpe-example-1").expect("preset");
+    let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["0.1*x^2".into()];
     let e = experiment(c);
     let err = GaussianSumFilter::new(
@@ -166,7 +166,7 @@ fn unsuitable_models_are_refused_with_the_reason() {
 /// filter: same mean and covariance to 1e-10 over a whole run.
 #[test]
 fn gaussian_sum_with_one_component_is_the_kalman_filter() {
-    let mut c = presets::preset("fpe-example-2").expect("preset");
+    let mut c = presets::preset("sa-example-2").expect("preset");
     c.model.noise = ObservationNoiseConfig::Discrete {
         mixture: vec![GaussianComponent {
             weight: 1.0,
@@ -219,7 +219,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
 /// prior(x) · p_v(z − 2x) normalised on a fine grid (the formulas checked independently).
 #[test]
 fn gaussian_sum_update_matches_the_brute_force_posterior() {
-    let e = experiment(presets::preset("fpe-example-1").expect("preset"));
+    let e = experiment(presets::preset("sa-example-1").expect("preset"));
     let mut gsf = GaussianSumFilter::new(
         "GSF".into(),
         e.model(),
@@ -258,7 +258,7 @@ fn gaussian_sum_update_matches_the_brute_force_posterior() {
 /// reported forced merge cost says how far the cap moved it.
 #[test]
 fn gaussian_sum_reduction_is_controlled() {
-    let e = experiment(presets::preset("fpe-example-1").expect("preset"));
+    let e = experiment(presets::preset("sa-example-1").expect("preset"));
     let traj = e.simulate(2);
     let run = |cap: usize| {
         let mut gsf = GaussianSumFilter::new(
@@ -295,12 +295,12 @@ fn gaussian_sum_reduction_is_controlled() {
 }
 
 /// 001 Fig. 4: J(t) of the separation approach below the implicit FDM's at most times. Over
-/// seeds 1–5 of `fpe-example-1` (the paper's grid Δx = 0.1 on ⟨−10, 10⟩, Δt = 0.01) we ask
+/// seeds 1–5 of `sa-example-1` (the paper's grid Δx = 0.1 on ⟨−10, 10⟩, Δt = 0.01) we ask
 /// for at least 80 % of the samples in every run (we measure ≈ 97 % over 20 seeds), J_0 ≈ 0
 /// (both grids evaluate the same posterior at t₀) and mean J of the SA below the FDM's.
 #[test]
 fn example_1_separation_beats_fdm_at_most_times() {
-    let e = experiment(presets::preset("fpe-example-1").expect("preset"));
+    let e = experiment(presets::preset("sa-example-1").expect("preset"));
     let all = [JKind::Filtering, JKind::Predictive, JKind::Between];
     for seed in 1..=5 {
         let curve = j_curve(&e, seed, 10).expect("J(t)");
@@ -320,7 +320,7 @@ fn example_1_separation_beats_fdm_at_most_times() {
 /// its 2-D density.
 #[test]
 fn example_2_tracks_the_exact_conditional_mean() {
-    let e = experiment(presets::preset("fpe-example-2").expect("preset"));
+    let e = experiment(presets::preset("sa-example-2").expect("preset"));
     let curve = j_curve(&e, 1, 4).expect("J(t)");
     let sa = curve.names.iter().position(|n| n == "SA").expect("SA");
     assert!(curve.mean_gap[sa] < 0.03, "gap {}", curve.mean_gap[sa]);

@@ -132,6 +132,186 @@ try {
     await page.waitForFunction(() => window.zakaiPage.data.times.length > 1, null, { timeout: 20000 });
   }
   console.log(`all ${names.length} presets load and step`);
+
+  const load = async (target, name) => {
+    await page.goto(target);
+    await page.waitForFunction((n) => window.zakaiPage?.info?.name === n, name, { timeout: 30000 });
+  };
+  const stepOnce = async () => {
+    const b = await page.evaluate(() => window.zakaiPage.data.times.length);
+    await page.click('#step');
+    await page.waitForFunction((x) => window.zakaiPage.data.times.length > x, b, { timeout: 20000 });
+  };
+  const heatmapStats = () => page.evaluate(() => {
+    const c = document.getElementById('heatmap');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const colours = new Set();
+    let lit = 0;
+    let red = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (d[i + 3] > 0 && !(d[i] === 238 && d[i + 1] === 238 && d[i + 2] === 238)) lit += 1;
+      if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 100) red += 1;
+      colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+    }
+    return { lit, colours: colours.size, red, hidden: document.getElementById('heatmap-figure').hidden };
+  });
+
+  // 5. A 2-D preset shows the joint density as a heatmap with non-blank pixels, truth and
+  //    estimates on top; the log-concavity layer paints where −log p is not convex.
+  await load(`${url}?preset=yau-2d`, 'yau-2d');
+  for (let i = 0; i < 5; i++) await stepOnce();
+  await page.waitForTimeout(300);
+  const h2 = await heatmapStats();
+  console.log('2-D heatmap:', JSON.stringify(h2));
+  assert.ok(!h2.hidden && h2.lit > 10000 && h2.colours > 20, `heatmap drawn: ${JSON.stringify(h2)}`);
+  await page.check('#lc-layer');
+  await page.waitForTimeout(500);
+  await page.screenshot({ path: `${artifacts}/playground-2d-heatmap.png` });
+  await load(`${url}?preset=sa-example-2`, 'sa-example-2');
+  await page.selectOption('#heatmap-method', { label: 'SA' });
+  for (let i = 0; i < 2; i++) await stepOnce();
+  await page.waitForTimeout(300);
+  const sa2 = await heatmapStats();
+  assert.ok(sa2.lit > 10000 && sa2.colours > 20, `separation-approach heatmap drawn: ${JSON.stringify(sa2)}`);
+  await page.screenshot({ path: `${artifacts}/playground-sa-example-2.png` });
+  await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
+  assert.ok((await heatmapStats()).hidden, 'no heatmap for a 1-D model');
+
+  // 6. Methods that do not apply to the model are disabled with the reason shown.
+  const kalmanOption = await page.$eval('#add-method-kind option[value="kalman"]', (o) => ({ disabled: o.disabled, title: o.title }));
+  assert.ok(kalmanOption.disabled, 'the Kalman filter is disabled on the cubic sensor');
+  const reasons = await page.$$eval('#unavailable-list li', (lis) => Object.fromEntries(lis.map((l) => [l.dataset.method, l.textContent])));
+  console.log('unavailable on the cubic sensor:', JSON.stringify(reasons));
+  assert.match(reasons.kalman, /linear model/);
+  assert.match(reasons.separation, /discrete measurements/);
+  assert.match(reasons.qiem4, /n = 1/);
+  assert.ok(await page.isVisible('#unavailable'), 'the reasons are on the page');
+  await load(`${url}?preset=sa-example-1`, 'sa-example-1');
+  const saReasons = await page.$$eval('#unavailable-list li', (lis) => Object.fromEntries(lis.map((l) => [l.dataset.method, l.textContent])));
+  assert.match(saReasons.qiem, /continuous observations/);
+  assert.equal(saReasons.separation, undefined);
+
+  // 7. The memory estimate is shown per method and a too-large grid is refused with the
+  //    message before anything is allocated; the running session is untouched.
+  await load(`${url}?preset=yau-2d`, 'yau-2d');
+  const memory = await page.textContent('#methods .method-row:nth-child(4) .memory');
+  assert.match(memory, /≈ \d+\.\d (MiB|GiB)/, `memory shown: ${memory}`);
+  await page.fill('#methods .method-row:nth-child(4) input[data-param="points"]', '4000');
+  await page.waitForFunction(() => document.querySelector('[data-method-row="3"]').textContent.includes('above the cap'), null, { timeout: 5000 });
+  const capMessage = await page.textContent('[data-method-row="3"]');
+  console.log('too-large grid:', capMessage.trim());
+  await page.click('#apply');
+  await page.waitForTimeout(500);
+  assert.equal(await page.evaluate(() => window.zakaiPage.info.name), 'yau-2d');
+  await stepOnce();
+  await page.screenshot({ path: `${artifacts}/playground-memory-cap.png` });
+
+  // 8. The whole configuration lives in the URL: a shared link restores it, same seed, same run.
+  await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
+  await page.fill('#seed', '7');
+  await page.fill('#t-final', '2');
+  await page.fill('[data-field="model.observation[0]"]', 'x^3 + 0.5*x');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.info?.seed === 7, null, { timeout: 10000 });
+  await stepOnce();
+  await stepOnce();
+  await page.click('#share');
+  const link = await page.inputValue('#share-url');
+  assert.match(link, /#s=[A-Za-z0-9_-]+$/);
+  const original = await page.evaluate(() => ({ truth: window.zakaiPage.data.truth[0].slice(0, 3), steps: window.zakaiPage.info.steps }));
+  const other = await browser.newPage({ viewport: { width: 1440, height: 1000 } });
+  other.on('pageerror', (e) => consoleErrors.push(String(e)));
+  await other.goto(link);
+  await other.waitForFunction(() => window.zakaiPage?.info?.seed === 7, null, { timeout: 30000 });
+  for (let i = 0; i < 2; i++) {
+    const b = await other.evaluate(() => window.zakaiPage.data.times.length);
+    await other.click('#step');
+    await other.waitForFunction((x) => window.zakaiPage.data.times.length > x, b, { timeout: 20000 });
+  }
+  const restored = await other.evaluate(() => ({
+    truth: window.zakaiPage.data.truth[0].slice(0, 3),
+    steps: window.zakaiPage.info.steps,
+    h: document.querySelector('[data-field="model.observation[0]"]').value,
+    seed: document.getElementById('seed').value,
+  }));
+  assert.deepEqual(restored.truth, original.truth, 'same truth from the shared link');
+  assert.equal(restored.steps, original.steps);
+  assert.equal(restored.h, 'x^3 + 0.5*x');
+  assert.equal(restored.seed, '7');
+  await other.close();
+
+  // 9. CSV of trajectories and estimates, PNG of the plots.
+  const [csv] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
+  const csvText = await (await import('node:fs/promises')).readFile(await csv.path(), 'utf8');
+  const csvLines = csvText.trim().split('\n');
+  assert.match(csvLines[0], /^t,truth_x1,"EKF_x1","UKF_x1"/);
+  assert.equal(csvLines.length, 1 + (await page.evaluate(() => window.zakaiPage.data.times.length)));
+  const [png] = await Promise.all([page.waitForEvent('download'), page.click('#export-png')]);
+  const pngBytes = await (await import('node:fs/promises')).readFile(await png.path());
+  assert.ok(png.suggestedFilename().endsWith('.png') && pngBytes.length > 5000 && pngBytes[1] === 0x50, 'a PNG of the plots');
+
+  // 10. Keyboard: → steps, space plays and pauses, r resets.
+  await page.evaluate(() => document.activeElement?.blur());
+  const rowsBefore = await page.evaluate(() => window.zakaiPage.data.times.length);
+  await page.keyboard.press('ArrowRight');
+  await page.waitForFunction((b) => window.zakaiPage.data.times.length === b + 1, rowsBefore, { timeout: 5000 });
+  await page.keyboard.press(' ');
+  assert.ok(await page.evaluate(() => window.zakaiPage.playing), 'space plays');
+  await page.keyboard.press(' ');
+  assert.ok(!(await page.evaluate(() => window.zakaiPage.playing)), 'space pauses');
+  await page.keyboard.press('r');
+  await page.waitForFunction(() => window.zakaiPage.data.times.length === 1, null, { timeout: 5000 });
+
+  // 11. Monte Carlo: N runs in a worker with progress, the paper-style table, CSV; cancel.
+  await page.click('#mc-panel summary');
+  await page.fill('#mc-runs', '3');
+  await page.click('#mc-start');
+  await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('finished: 3'), null, { timeout: 60000 });
+  const mcRows = await page.$$eval('#mc-table tbody tr', (rows) => rows.map((r) => [...r.children].map((c) => c.textContent)));
+  console.log('Monte Carlo table:', JSON.stringify(mcRows));
+  assert.equal(mcRows.length, (await page.evaluate(() => window.zakaiPage.info.methods.length)));
+  for (const r of mcRows) assert.match(r[3], /^\d+ \/ 3$/);
+  assert.ok(mcRows.some((r) => /^\d+\.\d{4} ± \d+\.\d{4}$/.test(r[1])), 'MSE ± s.e. shown');
+  const [mcCsv] = await Promise.all([page.waitForEvent('download'), page.click('#mc-csv')]);
+  const mcText = await (await import('node:fs/promises')).readFile(await mcCsv.path(), 'utf8');
+  assert.equal(mcText.trim().split('\n').length, 1 + mcRows.length);
+  await page.fill('#mc-runs', '2000');
+  await page.click('#mc-start');
+  await page.waitForFunction(() => Number(document.getElementById('mc-progress').value) >= 2, null, { timeout: 60000 });
+  await page.click('#mc-cancel');
+  await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('cancelled'), null, { timeout: 30000 });
+  const cancelled = await page.textContent('#mc-status');
+  console.log('Monte Carlo cancel:', cancelled);
+  assert.ok(Number(cancelled.match(/after (\d+)/)[1]) < 2000);
+  await page.screenshot({ path: `${artifacts}/playground-monte-carlo.png`, fullPage: true });
+
+  // 12. Frame rate of the 2-D example (33) with QIEM on 128² and PF(10 000), playing (the
+  //     page's own count of animation frames per second; recorded in BENCHMARKS.md).
+  await load(`${url}?preset=yau-2d`, 'yau-2d');
+  await page.evaluate(() => {
+    document.querySelectorAll('#methods .method-row').forEach((row) => {
+      const keep = row.querySelector('header').textContent.trim().startsWith('QIEM') && !row.querySelector('header').textContent.includes('QIEM4');
+      const box = row.querySelector('.enable');
+      if (box.checked !== keep) box.click();
+    });
+  });
+  await page.selectOption('#add-method-kind', 'pf');
+  await page.click('#add-method');
+  await page.fill('#methods .method-row:last-child input[data-param="particles"]', '10000');
+  await page.fill('#speed', '1');
+  await page.dispatchEvent('#speed', 'input');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.info?.methods.join() === 'QIEM,PF(10000)', null, { timeout: 20000 });
+  await page.click('#play');
+  await page.waitForTimeout(1500);
+  const fps2d = [];
+  for (let i = 0; i < 3; i++) {
+    await page.waitForTimeout(1000);
+    fps2d.push(await page.evaluate(() => ({ fps: window.zakaiPage.fps, rows: window.zakaiPage.data.times.length })));
+  }
+  const perStep2d = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[3].textContent}`));
+  console.log('frame rate of yau-2d with QIEM 128² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
+
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);
 } catch (e) {

@@ -74,6 +74,105 @@ pub fn validate_scenario(config: JsValue) -> Result<JsValue, JsError> {
     to_js(&problems)
 }
 
+/// Whether each method applies to a scenario's model, and what each of its methods would
+/// allocate: `{kinds: [{key, reason}], rows: [{reason, memory}], cap}` where `reason` is null
+/// when the method applies (kinds: every method with default parameters; rows: the scenario's
+/// methods with theirs) and `memory` is in bytes. `null` when the model itself does not build.
+#[wasm_bindgen(js_name = methodSuitability)]
+pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
+    #[derive(Serialize)]
+    struct Kind {
+        key: &'static str,
+        reason: Option<String>,
+    }
+    #[derive(Serialize)]
+    struct Row {
+        reason: Option<String>,
+        memory: Option<usize>,
+    }
+    #[derive(Serialize)]
+    struct Suitability {
+        kinds: Vec<Kind>,
+        rows: Vec<Row>,
+        cap: usize,
+    }
+    let Ok(config) = parse_config(config) else {
+        return Ok(JsValue::NULL);
+    };
+    let (Ok(model), Ok(prior)) = (config.build_model(), config.build_prior()) else {
+        return Ok(JsValue::NULL);
+    };
+    let probes = config.probe_points();
+    let n = model.n;
+    let kinds = zakai::scenario::METHODS
+        .iter()
+        .filter_map(|(key, _)| {
+            let method = zakai::scenario::MethodConfig::from_key(key)?;
+            Some(Kind {
+                key,
+                reason: method.suitability(&model, &prior, &probes),
+            })
+        })
+        .collect();
+    let rows = config
+        .methods
+        .iter()
+        .map(|m| Row {
+            reason: m.suitability(&model, &prior, &probes),
+            memory: m.memory_bytes(n),
+        })
+        .collect();
+    to_js(&Suitability {
+        kinds,
+        rows,
+        cap: zakai::scenario::MAX_MEMORY_BYTES,
+    })
+}
+
+/// A Monte Carlo job run one realisation at a time (so that the page can show progress and
+/// cancel between runs): seeds `seed, seed + 1, …`, summarised like `zakai run --runs N`.
+#[wasm_bindgen]
+pub struct MonteCarloJob {
+    experiment: Experiment,
+    seed: u64,
+    results: Vec<zakai::experiment::RunResult>,
+}
+
+#[wasm_bindgen]
+impl MonteCarloJob {
+    /// A job over a scenario object, first seed `seed`.
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: JsValue, seed: f64) -> Result<MonteCarloJob, JsError> {
+        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+        let seed = seed_from_js(seed)?;
+        let experiment = Experiment::new(config).map_err(js_error)?;
+        Ok(MonteCarloJob {
+            experiment,
+            seed,
+            results: Vec::new(),
+        })
+    }
+
+    /// Runs the next realisation; returns how many are done.
+    #[wasm_bindgen(js_name = runNext)]
+    pub fn run_next(&mut self) -> Result<usize, JsError> {
+        let seed = self.seed.wrapping_add(self.results.len() as u64);
+        let result = self
+            .experiment
+            .run_with(seed, Some(&JsClock), &mut zakai::experiment::Silent)
+            .map_err(js_error)?;
+        self.results.push(result);
+        Ok(self.results.len())
+    }
+
+    /// The summary of the runs done so far (`MonteCarloSummary`: per method MSE ± s.e.,
+    /// failed runs, mean time per run and per step, E_RMS, …).
+    pub fn summary(&self) -> Result<JsValue, JsError> {
+        let mc = zakai::metrics::MonteCarlo::new(&self.experiment);
+        to_js(&mc.summarise(&self.results, self.seed))
+    }
+}
+
 /// A random seed from the browser's generator (getrandom, JS backend), below 2⁵³.
 #[wasm_bindgen(js_name = randomSeed)]
 pub fn random_seed() -> Result<f64, JsError> {
@@ -288,6 +387,58 @@ impl Session {
         let mut out = vec![0.0; grid.len()];
         filter.marginal_density(dim, &grid, &mut out);
         out
+    }
+
+    /// Method `index`'s current joint density of components 1 and 2 on the raster
+    /// `densityGrid(0, points) × densityGrid(1, points)` (first component fastest; empty for
+    /// 1-D models and failed methods).
+    pub fn density2d(&self, index: usize, points: usize) -> Vec<f64> {
+        let (Some(filter), Some(track)) =
+            (self.run.filters().get(index), self.run.tracks().get(index))
+        else {
+            return Vec::new();
+        };
+        if track.failed() || track.n < 2 {
+            return Vec::new();
+        }
+        let (xs, ys) = (self.density_grid(0, points), self.density_grid(1, points));
+        let mut out = vec![0.0; xs.len() * ys.len()];
+        filter.marginal_density_2d((0, 1), &xs, &ys, &mut out);
+        out
+    }
+
+    /// The smallest eigenvalue of ∇²(−log p) (003 §3) of [`Session::density2d`] at every
+    /// raster point (NaN where the density is below `relative_floor` of its maximum or at the
+    /// raster's edge): the log-concavity layer of the 2-D heatmap.
+    #[wasm_bindgen(js_name = logConcavity2d)]
+    pub fn log_concavity_2d(&self, index: usize, points: usize, relative_floor: f64) -> Vec<f64> {
+        let values = self.density2d(index, points);
+        if values.is_empty() {
+            return Vec::new();
+        }
+        let (xs, ys) = (self.density_grid(0, points), self.density_grid(1, points));
+        // The raster's points are the interior nodes of a grid one spacing wider.
+        let bounds: Vec<(f64, f64)> = [&xs, &ys]
+            .iter()
+            .map(|g| {
+                let h = g[1] - g[0];
+                (g[0] - h, g[g.len() - 1] + h)
+            })
+            .collect();
+        let shape = [xs.len(), ys.len()];
+        let view = zakai::filters::DensityView {
+            bounds: &bounds,
+            shape: &shape,
+            values: &values,
+        };
+        let floor = if relative_floor.is_finite() && relative_floor >= 0.0 {
+            relative_floor
+        } else {
+            1e-8
+        };
+        zakai::diagnostics::log_concavity::log_concavity(&view, floor, 1e-6)
+            .map(|d| d.min_curvature)
+            .unwrap_or_default()
     }
 
     /// Log-concavity of method `index`'s current grid density (003 §3): `{log_concave, worst:

@@ -98,6 +98,49 @@ impl Component {
     }
 }
 
+/// A model the Gaussian-sum filter fits: `dx = (A x + b) dt + G dw`, `z = C x + c + v`.
+pub struct LinearMixtureModel<'p> {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+    c: DMatrix<f64>,
+    c0: DVector<f64>,
+    noise: GaussianMixture,
+    prior: &'p GaussianMixture,
+}
+
+/// The model's affine parts, noise and prior mixture when the filter fits it (linear,
+/// discrete measurements, Gaussian-mixture prior), or why it does not fit.
+pub fn check_model<'p>(
+    model: &Model,
+    prior: &'p Prior,
+    probes: &[Vec<f64>],
+) -> Result<LinearMixtureModel<'p>, FilterError> {
+    let method = "the Gaussian-sum filter";
+    let noise = match &model.observations {
+        ObservationModel::Discrete { noise } => noise.clone(),
+        ObservationModel::Continuous { .. } => {
+            return Err(FilterError::Unsuitable(format!(
+                "{method} of 001 needs discrete measurements z_k = C x_k + v_k; this model observes dy = h dt + dw"
+            )))
+        }
+    };
+    let (a, b) = affine_parts(&*model.drift, method, "drift f", probes)?;
+    let (c, c0) = affine_parts(&*model.observation, method, "observation h", probes)?;
+    let Prior::Mixture(mixture) = prior else {
+        return Err(FilterError::Unsuitable(format!(
+            "{method} needs a Gaussian or Gaussian-mixture prior, not a density expression"
+        )));
+    };
+    Ok(LinearMixtureModel {
+        a,
+        b,
+        c,
+        c0,
+        noise,
+        prior: mixture,
+    })
+}
+
 /// How far the reduction moved the mixture from the exact one.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Reduction {
@@ -135,24 +178,14 @@ impl GaussianSumFilter {
         if let Some((field, msg)) = params.problems().first() {
             return Err(ZakaiError::Other(format!("{name}: {field}: {msg}")));
         }
-        let method = "the Gaussian-sum filter";
-        let (a, b) = affine_parts(&*model.drift, method, "drift f", probes)?;
-        let (c, c0) = affine_parts(&*model.observation, method, "observation h", probes)?;
-        let noise = match &model.observations {
-            ObservationModel::Discrete { noise } => noise.clone(),
-            ObservationModel::Continuous { .. } => {
-                return Err(FilterError::Unsuitable(format!(
-                    "{method} of 001 needs discrete measurements z_k = C x_k + v_k; this model observes dy = h dt + dw"
-                ))
-                .into())
-            }
-        };
-        let Prior::Mixture(mixture) = prior else {
-            return Err(FilterError::Unsuitable(format!(
-                "{method} needs a Gaussian or Gaussian-mixture prior, not a density expression"
-            ))
-            .into());
-        };
+        let LinearMixtureModel {
+            a,
+            b,
+            c,
+            c0,
+            noise,
+            prior: mixture,
+        } = check_model(model, prior, probes)?;
         let components = mixture
             .components()
             .iter()
@@ -373,6 +406,19 @@ impl Filter for GaussianSumFilter {
             mean,
             covariance: Some(cov),
             map: None,
+        }
+    }
+
+    fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut one = alloc::vec![0.0; out.len()];
+        let (a, b) = dims;
+        for c in &self.components {
+            let cov = [[c.p[(a, a)], c.p[(a, b)]], [c.p[(b, a)], c.p[(b, b)]]];
+            marginal::gaussian_2d([c.m[a], c.m[b]], cov, xs, ys, &mut one);
+            for (o, v) in out.iter_mut().zip(&one) {
+                *o += c.w * v;
+            }
         }
     }
 

@@ -49,6 +49,49 @@ pub fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut 
     }
 }
 
+/// Writes the 2-D Gaussian density `N(mean, cov)` on the raster `xs × ys` (`xs` fastest) into
+/// `out` (zeros when `cov` is not positive definite or not finite).
+pub fn gaussian_2d(mean: [f64; 2], cov: [[f64; 2]; 2], xs: &[f64], ys: &[f64], out: &mut [f64]) {
+    let det = cov[0][0] * cov[1][1] - cov[0][1] * cov[1][0];
+    if !(det > 0.0 && cov[0][0] > 0.0 && det.is_finite() && mean.iter().all(|m| m.is_finite())) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        return;
+    }
+    let norm = 1.0 / (core::f64::consts::TAU * libm::sqrt(det));
+    let (ia, ib, ic) = (cov[1][1] / det, -cov[0][1] / det, cov[0][0] / det);
+    for (row, y) in out.chunks_mut(xs.len()).zip(ys) {
+        let dy = y - mean[1];
+        for (o, x) in row.iter_mut().zip(xs) {
+            let dx = x - mean[0];
+            *o = norm * libm::exp(-0.5 * (ia * dx * dx + 2.0 * ib * dx * dy + ic * dy * dy));
+        }
+    }
+}
+
+/// Adds `weight`-weighted samples `(x, y)` as a density histogram on the raster `xs × ys`
+/// (`xs` fastest; each raster point owns the cell around it; samples outside are dropped)
+/// into `out`, which is cleared first. The raster must be evenly spaced.
+pub fn histogram_2d(
+    points: impl Iterator<Item = (f64, f64, f64)>,
+    xs: &[f64],
+    ys: &[f64],
+    out: &mut [f64],
+) {
+    out.iter_mut().for_each(|o| *o = 0.0);
+    if xs.len() < 2 || ys.len() < 2 {
+        return;
+    }
+    let (hx, hy) = ((xs[1] - xs[0]), (ys[1] - ys[0]));
+    let area = libm::fabs(hx * hy);
+    for (x, y, w) in points {
+        let i = libm::round((x - xs[0]) / hx);
+        let j = libm::round((y - ys[0]) / hy);
+        if i >= 0.0 && j >= 0.0 && (i as usize) < xs.len() && (j as usize) < ys.len() {
+            out[i as usize + xs.len() * j as usize] += w / area;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

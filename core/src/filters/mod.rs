@@ -160,4 +160,21 @@ pub trait Filter {
         let var = est.covariance.map_or(0.0, |p| p[(dim, dim)]);
         marginal::gaussian(est.mean[dim], var, grid, out);
     }
+    /// The filter's joint marginal density of components `dims` on the raster `xs × ys`
+    /// (`xs` fastest), written into `out` (for 2-D heatmaps). The default uses the grid
+    /// density when there is one ([`Filter::density`]), else the Gaussian of the estimate.
+    fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        if let Some(view) = self.density() {
+            if let Ok(grid) = crate::grid::TensorGrid::new(view.bounds, view.shape) {
+                grid.marginal_2d(view.values, dims, xs, ys, out);
+                return;
+            }
+        }
+        let est = self.estimate();
+        let (a, b) = dims;
+        let cov = est.covariance.map_or([[0.0; 2]; 2], |p| {
+            [[p[(a, a)], p[(a, b)]], [p[(b, a)], p[(b, b)]]]
+        });
+        marginal::gaussian_2d([est.mean[a], est.mean[b]], cov, xs, ys, out);
+    }
 }

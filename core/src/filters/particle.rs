@@ -244,6 +244,16 @@ impl Filter for ParticleFilter {
         crate::filters::marginal::kernel_density(&samples, &weights, grid, out);
     }
 
+    fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        let n = self.model.n;
+        let points = self
+            .particles
+            .chunks_exact(n)
+            .zip(&self.log_weights)
+            .map(|(p, lw)| (p[dims.0], p[dims.1], libm::exp(*lw)));
+        crate::filters::marginal::histogram_2d(points, xs, ys, out);
+    }
+
     fn estimate(&self) -> Estimate {
         let n = self.model.n;
         let mut mean = DVector::zeros(n);

@@ -241,6 +241,19 @@ impl TensorGrid {
         }
     }
 
+    /// Where `x` falls along dimension `dim`: `(i, f)` with x between node i and i + 1 (0-based,
+    /// −1 and N standing for the zero boundary) at fraction f; `None` outside the box.
+    fn locate(&self, dim: usize, x: f64) -> Option<(isize, f64)> {
+        let n = self.shape[dim] as f64;
+        // Node i (0-based) sits at lo + (i + 1) h; boundaries carry zero.
+        let s = (x - self.bounds[dim].0) / self.spacing[dim] - 1.0;
+        if !(s > -1.0 && s < n) {
+            return None;
+        }
+        let i = libm::floor(s);
+        Some((i as isize, s - i))
+    }
+
     /// Marginal density of dimension `dim` at the points `at` (linear interpolation of the
     /// marginal summed over the other dimensions, zero outside the box), for a density `u`
     /// normalised to unit mass.
@@ -251,25 +264,55 @@ impl TensorGrid {
             m[self.index_in(idx, dim)] += w;
         }
         let other: f64 = self.cell_volume() / self.spacing[dim];
-        let (lo, _) = self.bounds[dim];
-        let h = self.spacing[dim];
-        for (o, &x) in out.iter_mut().zip(at) {
-            // Node i (0-based) sits at lo + (i + 1) h; boundaries carry zero.
-            let s = (x - lo) / h - 1.0;
-            let value = |i: isize| {
-                if i < 0 || i >= n as isize {
-                    0.0
-                } else {
-                    m[i as usize] * other
-                }
-            };
-            if !(s > -1.0 && s < n as f64) {
-                *o = 0.0;
-                continue;
+        let value = |i: isize| {
+            if i < 0 || i >= n as isize {
+                0.0
+            } else {
+                m[i as usize] * other
             }
-            let i = libm::floor(s) as isize;
-            let f = s - i as f64;
-            *o = (1.0 - f) * value(i) + f * value(i + 1);
+        };
+        for (o, &x) in out.iter_mut().zip(at) {
+            *o = self
+                .locate(dim, x)
+                .map_or(0.0, |(i, f)| (1.0 - f) * value(i) + f * value(i + 1));
+        }
+    }
+
+    /// Joint marginal density of dimensions `a` and `b` on the raster `xs × ys` (`xs`
+    /// fastest; bilinear interpolation of the marginal summed over the other dimensions, zero
+    /// outside the box), for a density `u` normalised to unit mass.
+    pub fn marginal_2d(
+        &self,
+        u: &[f64],
+        (a, b): (usize, usize),
+        xs: &[f64],
+        ys: &[f64],
+        out: &mut [f64],
+    ) {
+        let (na, nb) = (self.shape[a], self.shape[b]);
+        let mut m = vec![0.0; na * nb];
+        for (idx, &w) in u.iter().enumerate() {
+            m[self.index_in(idx, a) + na * self.index_in(idx, b)] += w;
+        }
+        let other = self.cell_volume() / (self.spacing[a] * self.spacing[b]);
+        let value = |i: isize, j: isize| {
+            if i < 0 || j < 0 || i >= na as isize || j >= nb as isize {
+                0.0
+            } else {
+                m[i as usize + na * j as usize] * other
+            }
+        };
+        for (row, &y) in out.chunks_mut(xs.len()).zip(ys) {
+            let Some((j, g)) = self.locate(b, y) else {
+                row.iter_mut().for_each(|o| *o = 0.0);
+                continue;
+            };
+            for (o, &x) in row.iter_mut().zip(xs) {
+                *o = self.locate(a, x).map_or(0.0, |(i, f)| {
+                    (1.0 - g) * ((1.0 - f) * value(i, j) + f * value(i + 1, j))
+                        + g * ((1.0 - f) * value(i, j + 1) + f * value(i + 1, j + 1))
+                });
+            }
         }
     }
 }

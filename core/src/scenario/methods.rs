@@ -307,6 +307,104 @@ impl MethodConfig {
         }
     }
 
+    /// Why the method does not apply to `model` and `prior` (wrong dimension, continuous vs
+    /// discrete observations, a nonlinear model for the exact linear filters, …), or `None`
+    /// when it does. Cheap: nothing is built. `probes` are where linearity is checked.
+    pub fn suitability(&self, model: &Model, prior: &Prior, probes: &[Vec<f64>]) -> Option<String> {
+        let mut problems = Vec::new();
+        self.validate(model.n, "", &mut problems);
+        if let Some(p) = problems.iter().find(|p| p.field == ".method") {
+            return Some(p.message.clone());
+        }
+        let name = self.display_name();
+        let result = match self {
+            MethodConfig::Kalman(_) => crate::filters::kalman::linear::affine_parts(
+                &*model.drift,
+                "the Kalman–Bucy filter",
+                "drift f",
+                probes,
+            )
+            .and_then(|_| {
+                crate::filters::kalman::linear::affine_parts(
+                    &*model.observation,
+                    "the Kalman–Bucy filter",
+                    "observation h",
+                    probes,
+                )
+            })
+            .map(|_| ()),
+            MethodConfig::Iem(_)
+            | MethodConfig::Qiem(_)
+            | MethodConfig::Spt(_)
+            | MethodConfig::Qiem4(_)
+            | MethodConfig::Spectral(_) => crate::model::dmz::continuous_noise_inverse(
+                model,
+                "the Yau–Yau and spectral DMZ filters",
+            )
+            .map(|_| ()),
+            MethodConfig::Direct(_) => crate::filters::direct::filter::check_model(model),
+            MethodConfig::Separation(_) | MethodConfig::ImplicitFdm(_) => {
+                crate::filters::fpe_split::check_model(&name, model).map(|_| ())
+            }
+            MethodConfig::GaussianSum(_) => {
+                crate::filters::gaussian_sum::check_model(model, prior, probes).map(|_| ())
+            }
+            _ => Ok(()),
+        };
+        result.err().map(|e| format!("{e}"))
+    }
+
+    /// Memory the method allocates for an `n`-dimensional model, estimated from its
+    /// parameters before anything is allocated (bytes; `None` when it overflows).
+    pub fn memory_bytes(&self, n: usize) -> Option<usize> {
+        const SMALL: usize = 64 << 10;
+        let f64s = |count: Option<usize>| count.and_then(|c| c.checked_mul(8));
+        let per_dim =
+            |counts: &[usize]| crate::filters::product(&crate::filters::per_dimension(counts, n));
+        let grid = |p: &YauYauParams| {
+            let nodes = per_dim(&p.points)?;
+            let samples = p.likelihood_samples.checked_pow(n as u32)?;
+            // u, tmp, the operator's p (n), q, div f, S⁻¹h, ½hᵀS⁻¹h, and the cell samples.
+            let arrays = 8 + 2 * n + samples;
+            f64s(nodes.checked_mul(arrays))
+        };
+        let bytes = match self {
+            MethodConfig::Kalman(_)
+            | MethodConfig::Ekf(_)
+            | MethodConfig::Ukf(_)
+            | MethodConfig::Iekf(_)
+            | MethodConfig::Iokf(_) => Some(SMALL),
+            MethodConfig::Pf(p) => f64s(p.particles.checked_mul(3 * n + 3)),
+            MethodConfig::Iem(p) | MethodConfig::Qiem(p) | MethodConfig::Qiem4(p) => grid(p),
+            MethodConfig::Spt(p) => {
+                let nodes = per_dim(&p.points)?;
+                let bumps = per_dim(&p.centres)?;
+                grid(p)?.checked_add(f64s(nodes.checked_mul(bumps))?)
+            }
+            MethodConfig::Spectral(p) => {
+                let (off, on) = p.counts(n);
+                let (off, on) = (off.checked_pow(n as u32)?, on.checked_pow(n as u32)?);
+                f64s(
+                    off.checked_mul(on)?
+                        .checked_mul(3)?
+                        .checked_add(off.checked_mul(off)?),
+                )
+            }
+            MethodConfig::Direct(p) => f64s(p.points.checked_mul(4 * p.max_terms + 8)),
+            MethodConfig::Separation(p) | MethodConfig::ImplicitFdm(p) => {
+                let cells = per_dim(&p.cells)?;
+                f64s(p.band_values(n)?.checked_add(cells.checked_mul(6 + 2 * n)?))
+            }
+            MethodConfig::GaussianSum(p) => {
+                // Candidates after an update (noise mixtures of up to 4 components assumed)
+                // and their pairwise merge costs.
+                let k = p.max_components.checked_mul(4)?;
+                f64s(k.checked_mul(k)?.checked_add(k.checked_mul(n * n + n + 2)?))
+            }
+        }?;
+        Some(bytes.max(SMALL))
+    }
+
     /// Builds the filter.
     pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
         let (model, prior) = (ctx.model, ctx.prior);

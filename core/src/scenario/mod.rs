@@ -23,6 +23,20 @@ use crate::simulate::TimeGrid;
 
 /// Largest state dimension a scenario may declare.
 pub const MAX_STATE_DIM: usize = 8;
+/// Largest memory all of a scenario's methods together may need (1 GiB: a browser tab's safe
+/// share), checked from [`MethodConfig::memory_bytes`] before anything is allocated.
+pub const MAX_MEMORY_BYTES: usize = 1 << 30;
+
+/// `bytes` for messages: `12.3 MiB`.
+pub fn format_bytes(bytes: usize) -> String {
+    let mib = bytes as f64 / (1u64 << 20) as f64;
+    if mib >= 1024.0 {
+        format!("{:.2} GiB", mib / 1024.0)
+    } else {
+        format!("{mib:.1} MiB")
+    }
+}
+
 /// Largest number of observation intervals in one run.
 pub const MAX_STEPS: usize = 2_000_000;
 
@@ -493,8 +507,23 @@ impl ScenarioConfig {
         if self.methods.is_empty() {
             p.push(ConfigProblem::new("methods", "choose at least one method"));
         }
+        let mut total: usize = 0;
         for (i, method) in self.methods.iter().enumerate() {
+            let before = p.len();
             method.validate(n, &format!("methods[{i}]"), &mut p);
+            if p.len() == before && (1..=MAX_STATE_DIM).contains(&n) {
+                match method.memory_bytes(n) {
+                    Some(b) if b <= MAX_MEMORY_BYTES => total = total.saturating_add(b),
+                    b => p.push(ConfigProblem::new(
+                        format!("methods[{i}]"),
+                        format!(
+                            "needs ≈ {} of memory, above the cap of {}; use a coarser grid or fewer particles/components",
+                            b.map_or_else(|| "more than 2^64 B".into(), format_bytes),
+                            format_bytes(MAX_MEMORY_BYTES)
+                        ),
+                    )),
+                }
+            }
             if let MethodConfig::Spectral(s) = method {
                 let dt = self.time.dt_obs;
                 if let Some(t0) = s.t0.filter(|t0| (t0 - dt).abs() > 1e-9 * dt.abs()) {
@@ -504,6 +533,16 @@ impl ScenarioConfig {
                     ));
                 }
             }
+        }
+        if total > MAX_MEMORY_BYTES {
+            p.push(ConfigProblem::new(
+                "methods",
+                format!(
+                    "the methods together need ≈ {}, above the cap of {}",
+                    format_bytes(total),
+                    format_bytes(MAX_MEMORY_BYTES)
+                ),
+            ));
         }
         p
     }

@@ -230,7 +230,8 @@ pub fn all() -> Vec<ScenarioConfig> {
             name: "cubic-sensor-2d",
             title: "2-D linear drift, cubic sensors (004 Example 2)",
             reference: "004 (46), Table 2",
-            description: "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
+            description:
+                "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
                 σ₀ ∝ exp(−((x₁−1)² + (x₂−1)²)/(2·0.1)), x₀ = (1, 1), T = 5, Δτ = 0.01, UKF \
                 α = 0.01, β = 2, κ = 0 (Table 2: DMZ MSE 0.4081 / 0.3646, PF(200) 1.19 / 1.01).",
             drift: &["-0.4*x1 + 0.1*x2", "-0.6*x2"],
@@ -298,66 +299,6 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(500),
                 qiem(&[128, 128], 1e-3),
                 MethodConfig::Qiem4(grid(&[128, 128], 1e-3)),
-            ],
-        }),
-        build(Spec {
-            name: "sa-example-1",
-            title: "Linear non-Gaussian system, mixture noise (001 Example 1)",
-            reference: "001 §4, Example 1, Fig. 4",
-            description: "001 §4: dx = 0.1 x dt + dw, z_k = 2 x_k + v_k at t_k = 0.1 k, \
-                p(x₀) = N(−2, 1), p(v_k) = 0.5 N(0.5, 0.1) + 0.5 N(2, 0.2) (second argument a \
-                variance), grid [−10, 10]. The horizon T = 2 is our choice. The Kalman filter \
-                here uses the noise's mean and variance (the best linear filter); the exact \
-                reference is the Gaussian-sum filter.",
-            drift: &["0.1*x"],
-            observation: &["2*x"],
-            noise: ObservationNoiseConfig::Discrete {
-                mixture: vec![component(0.5, &[0.5], 0.1), component(0.5, &[2.0], 0.2)],
-            },
-            prior: gaussian(&[-2.0], 1.0),
-            initial_state: None,
-            domain: vec![[-10.0, 10.0]],
-            time: (2.0, 0.1),
-            track_loss: None,
-            methods: vec![
-                MethodConfig::Kalman(KalmanParams::default()),
-                MethodConfig::Ekf(EkfParams::default()),
-                ukf(0.5, 2.0, 0.0),
-                pf(1000),
-            ],
-        }),
-        build(Spec {
-            name: "sa-example-2",
-            title: "2-D linear system, mixture prior and noise (001 Example 2)",
-            reference: "001 §4.1, Example 2, Figs. 5–6",
-            description: "001 §4.1: dx₁ = (−0.05 x₁ + x₂) dt + dw₁, dx₂ = (0.7 x₁ − 0.4 x₂) dt + dw₂, \
-                z = (x₁ + x₂, x₂) + v at t_k = 0.2 k, prior 0.5 N((0,0), 0.1 I) + 0.5 N((1,1), 0.1 I), \
-                v ~ 0.5 N((0,0), 0.1 I) + 0.5 N((−1,1), 0.1 I), grid [−2, 5]² (35 × 35). The \
-                system is unstable (an eigenvalue ≈ 0.62), so the horizon T = 2 (our choice) \
-                keeps the state on the paper's grid.",
-            drift: &["-0.05*x1 + x2", "0.7*x1 - 0.4*x2"],
-            observation: &["x1 + x2", "x2"],
-            noise: ObservationNoiseConfig::Discrete {
-                mixture: vec![
-                    component(0.5, &[0.0, 0.0], 0.1),
-                    component(0.5, &[-1.0, 1.0], 0.1),
-                ],
-            },
-            prior: PriorConfig::Mixture {
-                components: vec![
-                    component(0.5, &[0.0, 0.0], 0.1),
-                    component(0.5, &[1.0, 1.0], 0.1),
-                ],
-            },
-            initial_state: None,
-            domain: vec![[-2.0, 5.0], [-2.0, 5.0]],
-            time: (2.0, 0.2),
-            track_loss: None,
-            methods: vec![
-                MethodConfig::Kalman(KalmanParams::default()),
-                MethodConfig::Ekf(EkfParams::default()),
-                ukf(0.5, 2.0, 0.0),
-                pf(1000),
             ],
         }),
         build(Spec {
@@ -430,7 +371,10 @@ pub fn all() -> Vec<ScenarioConfig> {
                 (T = 10), x₀ = (0, 0, 1, 0), prior N(x₀, I); IOKF 2 × 3, IEKF 6 iterations, UKF \
                 α = 0.5, β = 2, κ = −0.5 as in 003 §5.",
             drift: &["x3", "x4", "0", "0"],
-            observation: &["57.29577951308232*atan((x1 + 40)/(x2 + 50))", "57.29577951308232*atan((x1 - 40)/(x2 + 50))"],
+            observation: &[
+                "57.29577951308232*atan((x1 + 40)/(x2 + 50))",
+                "57.29577951308232*atan((x1 - 40)/(x2 + 50))",
+            ],
             noise: ObservationNoiseConfig::Discrete {
                 mixture: vec![component(1.0, &[0.0, 0.0], 1.0)],
             },
@@ -463,7 +407,7 @@ fn fpe(cells: usize, dt: f64) -> FpeParams {
 /// The two examples of 001 §4 (continuous–discrete, Gaussian-mixture noise).
 fn fpe_examples() -> Vec<ScenarioConfig> {
     let mut one = build(Spec {
-        name: "fpe-example-1",
+        name: "sa-example-1",
         title: "Linear non-Gaussian: separation approach vs implicit FDM (001 §4, Fig. 4)",
         reference: "001 §4 example 1, Fig. 4",
         description: "001 §4: dx = 0.1 x dt + dw, z_k = 2 x_k + v_k every 0.1 s, \
@@ -472,7 +416,7 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
             and the classic implicit FDM on the grid Δx = 0.1, x ∈ ⟨−10, 10⟩ (N = 200), \
             Δt = 0.01, against the exact Gaussian-sum filter (GSF). Fig. 4 of 001 plots \
             J(t) = ∫ (p̂ − p)² dx: the SA's is below the FDM's. Look at the two grid densities \
-            against the GSF's, and run `zakai jcurve fpe-example-1` for J(t). 001 gives no \
+            against the GSF's, and run `zakai jcurve sa-example-1` for J(t). 001 gives no \
             horizon; we use T = 3 s (30 measurements), the truth on 10 Euler steps per interval.",
         drift: &["0.1*x"],
         observation: &["2*x"],
@@ -494,7 +438,7 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
     });
     one.time.inner_steps = 10;
     let mut two = build(Spec {
-        name: "fpe-example-2",
+        name: "sa-example-2",
         title: "2-D separation approach with mixture prior and noise (001 §4.1, Figs. 5–6)",
         reference: "001 §4.1 example 2, Figs. 5–6",
         description: "001 §4.1: dx₁ = (−0.05 x₁ + x₂) dt + dw₁, dx₂ = (0.7 x₁ − 0.4 x₂) dt + dw₂, \
@@ -503,7 +447,8 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
             ⟨−2, 5⟩², Δt = 0.005, tracks the state; its density is bimodal after the first \
             measurements (Fig. 6). The drift matrix has an eigenvalue +0.63, so the state leaves \
             the paper's domain after a few seconds: 001 gives no horizon and we use T = 1.6 s \
-            (8 measurements). The GSF is the exact reference.",
+            (8 measurements). The GSF is the exact reference; the KF uses the noise's mean and \
+            covariance (the best linear filter).",
         drift: &["-0.05*x1 + x2", "0.7*x1 - 0.4*x2"],
         observation: &["x1 + x2", "x2"],
         noise: ObservationNoiseConfig::Discrete {

@@ -148,6 +148,22 @@ pub struct DirectFilter {
     nodes: Vec<f64>,
 }
 
+/// The model fits the direct method as 002 writes it: continuous observations, G = I, S = I.
+pub fn check_model(model: &Model) -> Result<(), FilterError> {
+    let ObservationModel::Continuous { noise_cov } = &model.observations else {
+        return Err(FilterError::Unsuitable(
+            "the direct method needs continuous observations dy = h dt + dw".into(),
+        ));
+    };
+    let identity = |m: &DMatrix<f64>| (m - DMatrix::identity(m.nrows(), m.ncols())).amax() < 1e-12;
+    if !identity(noise_cov) || !identity(&model.process_noise()) {
+        return Err(FilterError::Unsuitable(
+            "the direct method of 002 is written for G = I and S = I".into(),
+        ));
+    }
+    Ok(())
+}
+
 impl DirectFilter {
     /// Checks (C1)–(C3) on the domain, tabulates F and the prior.
     pub fn new(
@@ -160,18 +176,7 @@ impl DirectFilter {
         if let Some((field, msg)) = params.problems(model.n).into_iter().next() {
             return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
         }
-        let ObservationModel::Continuous { noise_cov } = &model.observations else {
-            return Err(FilterError::Unsuitable(
-                "the direct method needs continuous observations dy = h dt + dw".into(),
-            ));
-        };
-        let identity =
-            |m: &DMatrix<f64>| (m - DMatrix::identity(m.nrows(), m.ncols())).amax() < 1e-12;
-        if !identity(noise_cov) || !identity(&model.process_noise()) {
-            return Err(FilterError::Unsuitable(
-                "the direct method of 002 is written for G = I and S = I".into(),
-            ));
-        }
+        check_model(model)?;
         let grid = TensorGrid::new(bounds, &[params.points])
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
         let x: Vec<f64> = (0..params.points).map(|i| grid.coordinate(0, i)).collect();

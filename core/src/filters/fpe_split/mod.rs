@@ -130,6 +130,34 @@ impl FpeParams {
     }
 }
 
+/// The model fits the filter: discrete measurements (their noise density is returned) and a
+/// diagonal `Q = G Gᵀ` (001 (24) has no mixed derivatives).
+pub fn check_model(name: &str, model: &Model) -> Result<GaussianMixture, FilterError> {
+    let noise = match &model.observations {
+        ObservationModel::Discrete { noise } => noise.clone(),
+        ObservationModel::Continuous { .. } => {
+            return Err(FilterError::Unsuitable(format!(
+                "{name} is the continuous–discrete filter of 001: it needs discrete measurements z_k = h(x_k) + v_k, and this model observes dy = h dt + dw"
+            )))
+        }
+    };
+    let q = model.process_noise();
+    let n = model.n;
+    for i in 0..n {
+        for j in 0..n {
+            if i != j && libm::fabs(q[(i, j)]) > 1e-12 * (q[(i, i)] + q[(j, j)]) {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name}: 001 (24) discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {}",
+                    i + 1,
+                    j + 1,
+                    q[(i, j)]
+                )));
+            }
+        }
+    }
+    Ok(noise)
+}
+
 /// How an observation interval is cut into FPE steps.
 struct StepPlan {
     interval: f64,
@@ -176,29 +204,8 @@ impl ContinuousDiscreteGrid {
         if let Some((field, msg)) = problems.first() {
             return Err(ZakaiError::Other(format!("{name}: {field}: {msg}")));
         }
-        let noise = match &model.observations {
-            ObservationModel::Discrete { noise } => noise.clone(),
-            ObservationModel::Continuous { .. } => {
-                return Err(FilterError::Unsuitable(format!(
-                    "{name} is the continuous–discrete filter of 001: it needs discrete measurements z_k = h(x_k) + v_k, and this model observes dy = h dt + dw"
-                ))
-                .into())
-            }
-        };
+        let noise = check_model(&name, model)?;
         let q = model.process_noise();
-        for i in 0..n {
-            for j in 0..n {
-                if i != j && libm::fabs(q[(i, j)]) > 1e-12 * (q[(i, i)] + q[(j, j)]) {
-                    return Err(FilterError::Unsuitable(format!(
-                        "{name}: 001 (24) discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {}",
-                        i + 1,
-                        j + 1,
-                        q[(i, j)]
-                    ))
-                    .into());
-                }
-            }
-        }
         let shape = params.shape(n);
         let cell_bounds: Vec<(f64, f64)> = bounds
             .iter()

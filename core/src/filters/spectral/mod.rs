@@ -111,7 +111,9 @@ impl Layout {
 }
 
 impl SpectralParams {
-    fn counts(&self, n: usize) -> (usize, usize) {
+    /// Off-line and on-line basis counts per dimension (N₁ + 1, N₂ + 1) for an `n`-dimensional
+    /// model, the defaults filled in.
+    pub fn counts(&self, n: usize) -> (usize, usize) {
         let (off, on) = if n == 1 { (11, 16) } else { (15, 15) };
         (
             self.offline_basis.unwrap_or(off),
