@@ -94,3 +94,94 @@ fn every_method_is_listed_and_every_listed_method_exists() {
         }
     }
 }
+
+/// Every preset's methods apply to its model; the reasons for the ones that do not are the
+/// conditions the constructors would fail on.
+#[test]
+fn suitability_names_the_reason_a_method_does_not_apply() {
+    use zakai::scenario::MethodConfig;
+    for preset in zakai::scenario::presets::all() {
+        let e = zakai::Experiment::new(preset.clone()).expect("valid preset");
+        let probes = preset.probe_points();
+        for m in &preset.methods {
+            assert_eq!(
+                m.suitability(e.model(), e.prior(), &probes, &preset.bounds()),
+                None,
+                "{} in {}",
+                m.display_name(),
+                preset.name
+            );
+        }
+    }
+    let reason = |preset: &str, key: &str| {
+        let c = zakai::scenario::presets::preset(preset).expect("preset");
+        let e = zakai::Experiment::new(c.clone()).expect("valid");
+        MethodConfig::from_key(key).expect("key").suitability(
+            e.model(),
+            e.prior(),
+            &c.probe_points(),
+            &c.bounds(),
+        )
+    };
+    assert!(reason("cubic-sensor-1d", "kalman")
+        .expect("refused")
+        .contains("linear model"));
+    assert!(reason("cubic-sensor-1d", "separation")
+        .expect("refused")
+        .contains("discrete measurements"));
+    assert!(reason("cubic-sensor-1d", "qiem4")
+        .expect("refused")
+        .contains("n = 1"));
+    assert!(reason("sa-example-1", "qiem")
+        .expect("refused")
+        .contains("continuous observations"));
+    assert!(reason("sa-example-1", "direct").is_some());
+    assert_eq!(reason("sa-example-1", "gaussian_sum"), None);
+    assert_eq!(reason("sa-example-2", "kalman"), None);
+    assert_eq!(reason("cubic-sensor-1d", "pf"), None);
+    // Every method that applies builds: the reasons are not too strict.
+    for preset in ["cubic-sensor-1d", "sa-example-1"] {
+        let c = zakai::scenario::presets::preset(preset).expect("preset");
+        let e = zakai::Experiment::new(c.clone()).expect("valid");
+        for (key, _) in zakai::scenario::METHODS {
+            let m = MethodConfig::from_key(key).expect("key");
+            if m.suitability(e.model(), e.prior(), &c.probe_points(), &c.bounds())
+                .is_none()
+            {
+                e.build_method(&m, m.display_name(), 1)
+                    .unwrap_or_else(|err| panic!("{key} on {preset} applies but fails: {err}"));
+            }
+        }
+    }
+}
+
+/// The memory estimate grows with the grid and a configuration above the cap is refused by
+/// validation, before anything is built.
+#[test]
+fn memory_cap_refuses_too_large_grids_before_allocation() {
+    let mut c = zakai::scenario::presets::preset("yau-2d").expect("preset");
+    let qiem = c
+        .methods
+        .iter()
+        .position(|m| m.key() == "qiem")
+        .expect("qiem");
+    let bytes = |points: usize| {
+        let mut m = c.methods[qiem].clone();
+        if let zakai::scenario::MethodConfig::Qiem(p) = &mut m {
+            p.points = vec![points];
+        }
+        m.memory_bytes(2).expect("finite")
+    };
+    assert!(bytes(256) > 3 * bytes(128) && bytes(128) > 3 * bytes(64));
+    if let zakai::scenario::MethodConfig::Qiem(p) = &mut c.methods[qiem] {
+        p.points = vec![4000];
+    }
+    let problems = c.validate();
+    let message = problems
+        .iter()
+        .find(|p| p.field == format!("methods[{qiem}]"))
+        .map(|p| p.message.clone())
+        .expect("refused");
+    assert!(message.contains("above the cap of 1.00 GiB"), "{message}");
+    assert!(zakai::Experiment::new(c).is_err());
+}

@@ -103,6 +103,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
         return Ok(JsValue::NULL);
     };
     let probes = config.probe_points();
+    let bounds = config.bounds();
     let n = model.n;
     let kinds = zakai::scenario::METHODS
         .iter()
@@ -110,7 +111,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
             let method = zakai::scenario::MethodConfig::from_key(key)?;
             Some(Kind {
                 key,
-                reason: method.suitability(&model, &prior, &probes),
+                reason: method.suitability(&model, &prior, &probes, &bounds),
             })
         })
         .collect();
@@ -118,7 +119,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
         .methods
         .iter()
         .map(|m| Row {
-            reason: m.suitability(&model, &prior, &probes),
+            reason: m.suitability(&model, &prior, &probes, &bounds),
             memory: m.memory_bytes(n),
         })
         .collect();

@@ -367,4 +367,34 @@ mod tests {
         assert!(alloc::format!("{e}").contains("exceeds the cap"), "{e}");
         assert!(TensorGrid::new(&[(0.0, 1.0)], &[2]).is_err());
     }
+
+    /// The 2-D marginal of a 3-D Gaussian on the grid, sampled on a raster, is the 2-D
+    /// Gaussian marginal: correct normalisation, shape and orientation of the axes.
+    #[test]
+    fn marginal_2d_of_a_gaussian() {
+        let g = TensorGrid::new(&[(-4.0, 4.0), (-5.0, 5.0), (-3.0, 3.0)], &[79, 99, 29]).unwrap();
+        let mut u = g.tabulate(|x| {
+            (-(x[0] - 0.5).powi(2) / (2.0 * 0.6)
+                - (x[1] + 1.0).powi(2) / (2.0 * 1.2)
+                - x[2].powi(2))
+            .exp()
+        });
+        let mass = g.mass(&u);
+        u.iter_mut().for_each(|v| *v /= mass);
+        let xs: Vec<f64> = (0..41).map(|i| -4.0 + 0.2 * i as f64).collect();
+        let ys: Vec<f64> = (0..51).map(|i| -5.0 + 0.2 * i as f64).collect();
+        let mut out = vec![0.0; xs.len() * ys.len()];
+        g.marginal_2d(&u, (0, 1), &xs, &ys, &mut out);
+        let mut worst = 0.0f64;
+        for (j, y) in ys.iter().enumerate() {
+            for (i, x) in xs.iter().enumerate() {
+                let exact = (-(x - 0.5).powi(2) / 1.2 - (y + 1.0).powi(2) / 2.4).exp()
+                    / (core::f64::consts::TAU * (0.6f64 * 1.2).sqrt());
+                worst = worst.max((out[i + xs.len() * j] - exact).abs());
+            }
+        }
+        assert!(worst < 2e-3, "largest error {worst}");
+        let total: f64 = out.iter().sum::<f64>() * 0.2 * 0.2;
+        assert!((total - 1.0).abs() < 1e-3, "{total}");
+    }
 }

@@ -307,10 +307,17 @@ impl MethodConfig {
         }
     }
 
-    /// Why the method does not apply to `model` and `prior` (wrong dimension, continuous vs
-    /// discrete observations, a nonlinear model for the exact linear filters, …), or `None`
-    /// when it does. Cheap: nothing is built. `probes` are where linearity is checked.
-    pub fn suitability(&self, model: &Model, prior: &Prior, probes: &[Vec<f64>]) -> Option<String> {
+    /// Why the method does not apply to `model` and `prior` on the domain `bounds` (wrong
+    /// dimension, continuous vs discrete observations, a nonlinear model for the exact linear
+    /// filters, not a Yau system for the direct method, …), or `None` when it does. Cheap:
+    /// nothing is built. `probes` are where linearity is checked.
+    pub fn suitability(
+        &self,
+        model: &Model,
+        prior: &Prior,
+        probes: &[Vec<f64>],
+        bounds: &[(f64, f64)],
+    ) -> Option<String> {
         let mut problems = Vec::new();
         self.validate(model.n, "", &mut problems);
         if let Some(p) = problems.iter().find(|p| p.field == ".method") {
@@ -342,7 +349,9 @@ impl MethodConfig {
                 "the Yau–Yau and spectral DMZ filters",
             )
             .map(|_| ()),
-            MethodConfig::Direct(_) => crate::filters::direct::filter::check_model(model),
+            MethodConfig::Direct(p) => {
+                crate::filters::direct::filter::check_system(model, p, bounds)
+            }
             MethodConfig::Separation(_) | MethodConfig::ImplicitFdm(_) => {
                 crate::filters::fpe_split::check_model(&name, model).map(|_| ())
             }

@@ -164,6 +164,74 @@ pub fn check_model(model: &Model) -> Result<(), FilterError> {
     Ok(())
 }
 
+/// What the (C2)/(C3) check of a model on nodes `x` yields: h at the nodes, `f − l`, and the
+/// quadratic `q(x) = Q x² + p x + r` of the Kolmogorov equation (002 (31)).
+struct YauSystem {
+    h: Vec<Vec<f64>>,
+    rest: Vec<f64>,
+    kolmogorov: [f64; 3],
+}
+
+/// Tabulates the model on `x` and checks that it is a Yau filtering system there: (C2) Σh²
+/// and (C3) η quadratic, with the linear part `l = a x + b` given by `linear`.
+fn yau_system(model: &Model, x: &[f64], linear: [f64; 2]) -> Result<YauSystem, FilterError> {
+    let [slope, offset] = linear;
+    let (mut f, mut jac) = ([0.0], [0.0]);
+    let mut hv = vec![0.0; model.m];
+    let mut h = vec![Vec::with_capacity(x.len()); model.m];
+    let mut eta = Vec::with_capacity(x.len());
+    let mut rest = Vec::with_capacity(x.len());
+    let mut h2 = Vec::with_capacity(x.len());
+    for &xi in x {
+        model.drift.eval(&[xi], &mut f);
+        model.drift.jacobian(&[xi], &mut jac);
+        model.observation.eval(&[xi], &mut hv);
+        let hh: f64 = hv.iter().map(|v| v * v).sum();
+        for (c, v) in h.iter_mut().zip(&hv) {
+            c.push(*v);
+        }
+        h2.push(hh);
+        eta.push(f[0] * f[0] + jac[0] + hh);
+        rest.push(f[0] - slope * xi - offset);
+    }
+    if eta.iter().chain(&rest).any(|v| !v.is_finite()) {
+        return Err(FilterError::Unsuitable(
+            "f, f′ or h is not finite on the domain; shrink it".into(),
+        ));
+    }
+    quadratic_condition("(C2) Σh²", x, &h2)?;
+    let q: Vec<f64> = x
+        .iter()
+        .zip(&eta)
+        .map(|(xi, e)| {
+            let l = slope * xi + offset;
+            0.5 * (l * l - slope - e)
+        })
+        .collect();
+    let kolmogorov = quadratic_condition("(C3) η", x, &q)?;
+    Ok(YauSystem {
+        h,
+        rest,
+        kolmogorov,
+    })
+}
+
+/// Whether the direct method applies to `model` on `bounds` with `params` — the model checks
+/// and (C2)/(C3) on 101 nodes (the conditions are algebraic; the filter re-checks on its own
+/// grid) — without building anything else.
+pub fn check_system(
+    model: &Model,
+    params: &DirectParams,
+    bounds: &[(f64, f64)],
+) -> Result<(), FilterError> {
+    check_model(model)?;
+    let (a, b) = *bounds
+        .first()
+        .ok_or_else(|| FilterError::Unsuitable("the direct method needs a 1-D domain".into()))?;
+    let x: Vec<f64> = (1..=101).map(|i| a + (b - a) * i as f64 / 102.0).collect();
+    yau_system(model, &x, params.linear).map(|_| ())
+}
+
 impl DirectFilter {
     /// Checks (C1)–(C3) on the domain, tabulates F and the prior.
     pub fn new(
@@ -182,39 +250,11 @@ impl DirectFilter {
         let x: Vec<f64> = (0..params.points).map(|i| grid.coordinate(0, i)).collect();
         let dx = grid.spacing()[0];
         let [slope, offset] = params.linear;
-        let (mut f, mut jac) = ([0.0], [0.0]);
-        let mut hv = vec![0.0; model.m];
-        let mut h = vec![Vec::with_capacity(x.len()); model.m];
-        let mut eta = Vec::with_capacity(x.len());
-        let mut rest = Vec::with_capacity(x.len());
-        let mut h2 = Vec::with_capacity(x.len());
-        for &xi in &x {
-            model.drift.eval(&[xi], &mut f);
-            model.drift.jacobian(&[xi], &mut jac);
-            model.observation.eval(&[xi], &mut hv);
-            let hh: f64 = hv.iter().map(|v| v * v).sum();
-            for (c, v) in h.iter_mut().zip(&hv) {
-                c.push(*v);
-            }
-            h2.push(hh);
-            eta.push(f[0] * f[0] + jac[0] + hh);
-            rest.push(f[0] - slope * xi - offset);
-        }
-        if eta.iter().chain(&rest).any(|v| !v.is_finite()) {
-            return Err(FilterError::Unsuitable(
-                "f, f′ or h is not finite on the domain; shrink it".into(),
-            ));
-        }
-        quadratic_condition("(C2) Σh²", &x, &h2)?;
-        let q: Vec<f64> = x
-            .iter()
-            .zip(&eta)
-            .map(|(xi, e)| {
-                let l = slope * xi + offset;
-                0.5 * (l * l - slope - e)
-            })
-            .collect();
-        let [qq, p, r] = quadratic_condition("(C3) η", &x, &q)?;
+        let YauSystem {
+            h,
+            rest,
+            kolmogorov: [qq, p, r],
+        } = yau_system(model, &x, params.linear)?;
         // F = ∫ (f − l) from the first node, by the trapezoidal rule.
         let mut potential = vec![0.0; x.len()];
         for i in 1..x.len() {
