@@ -16,9 +16,15 @@ if [ "$have" != "$want" ]; then
   cargo install wasm-bindgen-cli --version "$want"
 fi
 
+# The SIMD build (rustfft's wasm SIMD kernels, +simd128) and a scalar fallback for browsers
+# without wasm SIMD; the page's worker picks one with WebAssembly.validate.
 cargo build -p zakai-wasm --profile wasm-release --target wasm32-unknown-unknown
 wasm-bindgen --target web --out-dir web/pkg \
   target/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
+RUSTFLAGS='--cfg getrandom_backend="wasm_js"' cargo build -p zakai-wasm --profile wasm-release \
+  --target wasm32-unknown-unknown --no-default-features --target-dir target/scalar
+wasm-bindgen --target web --out-dir web/pkg-scalar \
+  target/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
 
 if [ ! -d web/node_modules/uplot ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
   (cd web && npm ci --no-audit --no-fund)

@@ -56,7 +56,9 @@ function paramInput(row, i, name, type) {
   return `<input type="${list ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}"${placeholder}>`;
 }
 
-const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+// The worker learns `?wasm=scalar` (force the fallback build) from its own URL.
+const workerUrl = () => new URL(`./worker.js${location.search.includes('wasm=') ? `?wasm=${new URLSearchParams(location.search).get('wasm')}` : ''}`, import.meta.url);
+const worker = new Worker(workerUrl(), { type: 'module' });
 const state = {
   presets: [],
   methodKinds: [],
@@ -133,6 +135,7 @@ function methodRowsUI() {
     div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<span class="memory" title="memory this method allocates, estimated before anything is allocated"></span><button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
       <div class="params">${params.map(([p, type]) => `<label>${PARAM_LABELS[p] ?? p}${paramInput(row, i, p, type)}</label>`).join('')}</div>
       <span class="reason"></span>
+      <span class="warning row-warnings" title="conditions of the chosen steps (000 (22), (30), (31); 001 (16), (23))"></span>
       <span class="error" data-method-row="${i}"></span>`;
     c.appendChild(div);
   });
@@ -374,6 +377,7 @@ function apply() {
   setPlaying(false);
   worker.postMessage({ type: 'load', config, seed: config.seed });
   state.pendingConfig = config;
+  state.pendingRows = state.enabledRows.slice();
 }
 
 function changeDimension() {
@@ -634,6 +638,13 @@ function render() {
   });
   const warnings = (state.diagnostics ?? []).flatMap((m) => m.warnings.map((w) => `${m.name}: ${w}`));
   $('warnings').textContent = warnings.join('\n');
+  // The same warnings next to the parameters they concern, in the method's own row.
+  document.querySelectorAll('#methods .row-warnings').forEach((el) => { el.textContent = ''; });
+  (state.diagnostics ?? []).forEach((m, i) => {
+    const row = state.runRows?.[i];
+    const el = row == null ? null : document.querySelector(`#methods .method-row[data-row="${row}"] .row-warnings`);
+    if (el) el.textContent = m.warnings.join('\n');
+  });
   if (state.summary?.finished) setPlaying(false);
 }
 
@@ -760,7 +771,7 @@ const mc = { worker: null, ready: false, summary: null, pending: null };
 
 function mcWorker() {
   if (mc.worker) return mc.worker;
-  mc.worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  mc.worker = new Worker(workerUrl(), { type: 'module' });
   mc.worker.onmessage = ({ data }) => {
     switch (data.type) {
       case 'ready':
@@ -850,6 +861,8 @@ worker.onmessage = ({ data }) => {
     case 'ready': {
       state.presets = data.presets;
       state.methodKinds = data.methods;
+      state.build = data.build;
+      $('fps').title = `frames per second of this page (wasm build: ${data.build})`;
       $('preset').innerHTML = data.presets.map((p) => `<option value="${p.name}">${p.name} — ${p.title}</option>`).join('');
       $('add-method-kind').innerHTML = data.methods.map(([k, about]) => `<option value="${k}" title="${about}">${k}</option>`).join('');
       state.randomSeed = data.seed;
@@ -873,6 +886,7 @@ worker.onmessage = ({ data }) => {
       if (state.pendingConfig) {
         state.base = state.pendingConfig;
         state.pendingConfig = null;
+        state.runRows = state.pendingRows;
       }
       $('run-error').textContent = '';
       showProblems([]);

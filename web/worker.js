@@ -1,7 +1,16 @@
 // The Zakai session lives here, off the main thread: the page stays responsive however long
 // a step takes. Protocol (main → worker): init, validate, load, play, pause, step, reset,
 // speed, view, ack. Worker → main: ready, validated, loaded, frame, error.
-import init, * as zakai from './pkg/zakai_wasm.js';
+// The SIMD build where the engine validates a SIMD instruction, else the scalar build
+// (`?wasm=scalar` forces it, for tests).
+const SIMD_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 5, 1, 96, 0, 1, 123, 3, 2, 1, 0, 10, 10, 1, 8, 0, 65, 0, 253, 15, 253, 98, 11]);
+const forced = new URLSearchParams(self.location.search).get('wasm');
+const build = forced === 'scalar' || !WebAssembly.validate(SIMD_PROBE) ? 'scalar' : 'simd';
+// Loaded asynchronously; the message handler is installed at once and waits for it, so no
+// early message is lost and messages keep their order.
+let zakai = null;
+const loading = import(build === 'simd' ? './pkg/zakai_wasm.js' : './pkg-scalar/zakai_wasm.js')
+  .then((m) => { zakai = m; });
 
 let session = null;
 let info = null;
@@ -104,6 +113,7 @@ async function monteCarlo({ config, seed, runs }) {
 }
 
 self.onmessage = async ({ data }) => {
+  if (!zakai) await loading;
   switch (data.type) {
     case 'mcStart':
       monteCarlo(data);
@@ -112,8 +122,8 @@ self.onmessage = async ({ data }) => {
       mcCancelled = true;
       break;
     case 'init':
-      await init();
-      post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed() });
+      await zakai.default();
+      post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed(), build });
       break;
     case 'validate':
       guard(() => {

@@ -190,6 +190,13 @@ try {
   const saReasons = await page.$$eval('#unavailable-list li', (lis) => Object.fromEntries(lis.map((l) => [l.dataset.method, l.textContent])));
   assert.match(saReasons.qiem, /continuous observations/);
   assert.equal(saReasons.separation, undefined);
+  // Stability conditions show next to the parameters they concern: the SA on 400 cells with
+  // Δt = 0.1 violates the CFL condition (16) and says how it sub-steps.
+  await page.fill('#methods .method-row:first-child input[data-param="cells"]', '400');
+  await page.fill('#methods .method-row:first-child input[data-param="dt"]', '0.1');
+  await page.click('#apply');
+  await page.waitForFunction(() => document.querySelector('#methods .method-row:first-child .row-warnings').textContent.includes('(16)/(23) CFL'), null, { timeout: 10000 });
+  console.log('CFL warning in the row:', await page.textContent('#methods .method-row:first-child .row-warnings'));
 
   // 7. The memory estimate is shown per method and a too-large grid is refused with the
   //    message before anything is allocated; the running session is untouched.
@@ -284,6 +291,14 @@ try {
   console.log('Monte Carlo cancel:', cancelled);
   assert.ok(Number(cancelled.match(/after (\d+)/)[1]) < 2000);
   await page.screenshot({ path: `${artifacts}/playground-monte-carlo.png`, fullPage: true });
+
+  // 12a. The SIMD build is used where the engine has wasm SIMD; the scalar fallback build
+  //      loads and steps too (forced with ?wasm=scalar).
+  assert.equal(await page.evaluate(() => window.zakaiPage.build), 'simd');
+  await load(`${url}?preset=yau-2d&wasm=scalar`, 'yau-2d');
+  assert.equal(await page.evaluate(() => window.zakaiPage.build), 'scalar');
+  await stepOnce();
+  await stepOnce();
 
   // 12. Frame rate of the 2-D example (33) with QIEM on 128² and PF(10 000), playing (the
   //     page's own count of animation frames per second; recorded in BENCHMARKS.md).

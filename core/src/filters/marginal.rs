@@ -36,6 +36,15 @@ pub fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut 
     let h = libm::fmax(1.06 * libm::sqrt(var) * libm::pow(n_eff, -0.2), spacing);
     let norm = 1.0 / (h * libm::sqrt(core::f64::consts::TAU));
     out.iter_mut().for_each(|o| *o = 0.0);
+    if samples.len() > 4 * grid.len() && grid.len() >= 2 {
+        binned(samples, weights, grid, h, norm, out);
+    } else {
+        direct(samples, weights, grid, h, norm, out);
+    }
+}
+
+/// The kernel density estimate as the sum over samples (output cleared by the caller).
+fn direct(samples: &[f64], weights: &[f64], grid: &[f64], h: f64, norm: f64, out: &mut [f64]) {
     for (x, w) in samples.iter().zip(weights) {
         if *w < 1e-300 {
             continue;
@@ -46,6 +55,38 @@ pub fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut 
                 *o += w * norm * libm::exp(-0.5 * z * z);
             }
         }
+    }
+}
+
+/// The kernel density estimate by linear binning onto the (evenly spaced) `grid` and a
+/// discrete convolution with the kernel sampled at the grid spacing: O(N + G·K) instead of
+/// O(N·G) for many samples (a particle filter with 10⁴ particles, every frame of the page).
+/// Samples beyond the grid's ends contribute nothing.
+fn binned(samples: &[f64], weights: &[f64], grid: &[f64], h: f64, norm: f64, out: &mut [f64]) {
+    let g = grid.len();
+    let step = grid[1] - grid[0];
+    let mut bins = alloc::vec![0.0; g];
+    for (x, w) in samples.iter().zip(weights) {
+        let s = (x - grid[0]) / step;
+        if !(s >= 0.0 && s <= (g - 1) as f64) {
+            continue;
+        }
+        let i = (libm::floor(s) as usize).min(g - 2);
+        let f = s - i as f64;
+        bins[i] += w * (1.0 - f);
+        bins[i + 1] += w * f;
+    }
+    let reach = (libm::ceil(8.0 * h / libm::fabs(step)) as usize).min(g);
+    let kernel: alloc::vec::Vec<f64> = (0..=reach)
+        .map(|j| {
+            let z = j as f64 * step / h;
+            norm * libm::exp(-0.5 * z * z)
+        })
+        .collect();
+    for (i, o) in out.iter_mut().enumerate() {
+        let lo = i.saturating_sub(reach);
+        let hi = (i + reach).min(g - 1);
+        *o = (lo..=hi).map(|j| bins[j] * kernel[i.abs_diff(j)]).sum();
     }
 }
 
@@ -111,5 +152,29 @@ mod tests {
         assert!((mass - 1.0).abs() < 1e-4, "{mass}");
         let mean: f64 = grid.iter().zip(&out).map(|(x, p)| x * p).sum::<f64>() * 0.01;
         assert!((mean - 0.85).abs() < 1e-3, "{mean}");
+    }
+
+    /// Binning then convolving agrees with the direct sum at the same bandwidth to the
+    /// binning error: below 1 % of the peak for a bandwidth of two grid spacings.
+    #[test]
+    fn binned_estimate_matches_the_direct_sum() {
+        let grid: Vec<f64> = (0..201).map(|i| -5.0 + 0.05 * i as f64).collect();
+        let samples: Vec<f64> = (0..5000)
+            .map(|i| ((i as f64) * 0.618_034).fract() * 4.0 - 2.5)
+            .collect();
+        let weights = alloc::vec![1.0 / 5000.0; 5000];
+        let h = 0.1;
+        let norm = 1.0 / (h * libm::sqrt(core::f64::consts::TAU));
+        let mut fast = alloc::vec![0.0; grid.len()];
+        binned(&samples, &weights, &grid, h, norm, &mut fast);
+        let mut exact = alloc::vec![0.0; grid.len()];
+        direct(&samples, &weights, &grid, h, norm, &mut exact);
+        let peak = exact.iter().copied().fold(0.0, f64::max);
+        let worst = fast
+            .iter()
+            .zip(&exact)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 0.01 * peak, "{worst} vs peak {peak}");
     }
 }
