@@ -14,6 +14,8 @@ fn every_preset_is_valid_and_round_trips_through_json() {
             "{}",
             p.name
         );
+        // The page's explanation panel: every preset says what to look for when played.
+        assert!(p.description.contains("Look for:"), "{}", p.name);
         let json = serde_json::to_string(&p).unwrap();
         let back: ScenarioConfig = serde_json::from_str(&json).unwrap();
         assert_eq!(back, p);

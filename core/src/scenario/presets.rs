@@ -172,7 +172,9 @@ fn cos_xn(power: u32) -> ScenarioConfig {
             000 gives neither σ₀ nor the horizon: we take σ₀ = N(1, 0.25) (a prior centred \
             away from 0, because for even n the observation cannot tell x from −x), x₀ drawn \
             from it, T = 5, Δτ = 0.01, and the domain [−6, 8] around the stable point π/2 of f \
-            with the paper's Δs = 0.01.",
+            with the paper's Δs = 0.01. Look for: with even n, h cannot tell x from −x, so \
+            the grid density (heat strip) can carry two humps where the EKF commits to one; with \
+            odd n both track and the QIEM's error is the smaller.",
         drift: &["cos(x)"],
         observation: &[&h],
         noise: continuous(),
@@ -204,7 +206,10 @@ pub fn all() -> Vec<ScenarioConfig> {
             reference: "004 (44), Table 1",
             description: "The cubic sensor of 004 (44): σ₀ ∝ exp(−(x−1)²/(2·0.1)), x₀ = 1, \
                 T = 5, Δτ = 0.01; EKF, UKF (α = 0.05, β = 2, κ = 0) and PF with 50–200 \
-                particles as in Table 1 (DMZ method MSE 0.4317, PF(200) 0.9115, EKF/UKF fail).",
+                particles as in Table 1 (DMZ method MSE 0.4317, PF(200) 0.9115, EKF/UKF fail). Look for: \
+                the EKF and UKF losing the state once x nears 0 (x³ is flat there), the grid and \
+                spectral densities widening and recovering, and the particle filters' error \
+                falling as particles are added (Monte Carlo panel).",
             drift: &["0"],
             observation: &["x^3"],
             noise: continuous(),
@@ -233,7 +238,9 @@ pub fn all() -> Vec<ScenarioConfig> {
             description:
                 "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
                 σ₀ ∝ exp(−((x₁−1)² + (x₂−1)²)/(2·0.1)), x₀ = (1, 1), T = 5, Δτ = 0.01, UKF \
-                α = 0.01, β = 2, κ = 0 (Table 2: DMZ MSE 0.4081 / 0.3646, PF(200) 1.19 / 1.01).",
+                α = 0.01, β = 2, κ = 0 (Table 2: DMZ MSE 0.4081 / 0.3646, PF(200) 1.19 / 1.01). Look \
+                for: the heatmap's density stretching along an axis whenever that component \
+                nears 0 (x³ is flat there) and the EKF's estimate of that component drifting.",
             drift: &["-0.4*x1 + 0.1*x2", "-0.6*x2"],
             observation: &["x1^3", "x2^3"],
             noise: continuous(),
@@ -260,7 +267,9 @@ pub fn all() -> Vec<ScenarioConfig> {
             description: "000 (32) with the paper's domain R = 10. 000 does not state σ₀ or T \
                 for this figure: we take σ₀ = N(0, 1) with x₀ drawn from it (so the sign of x \
                 is ambiguous at first, the classic difficulty of the cubic sensor), T = 5 and \
-                Δτ = 0.01.",
+                Δτ = 0.01. Look for: two humps at ±x in the heat strip while x³ \
+                cannot tell the sign, which QIEM keeps until the signal breaks the tie; the EKF \
+                picks one sign early and can stay on the wrong one.",
             drift: &["0"],
             observation: &["x^3"],
             noise: continuous(),
@@ -284,7 +293,9 @@ pub fn all() -> Vec<ScenarioConfig> {
             reference: "000 (33), Figs. 2–3",
             description: "000 (33): h = (x₁ − x₂, x₁ + x₂). σ₀ = N(0, 0.1 I), the Gaussian \
                 e^{−5(x₁² + x₂²)} 000 §4.3 uses as initial density; T = 2, Δτ = 0.01 and the \
-                domain [−6, 6]² are our choice (the paper's figures run to t ≈ 2).",
+                domain [−6, 6]² are our choice (the paper's figures run to t ≈ 2). Look \
+                for: one compact blob in the heatmap following the truth — h is linear, so EKF, \
+                UKF, PF and QIEM nearly agree and the grid filters' extra cost buys little here.",
             drift: &["-cos(x1) - sin(x2)", "cos(x1) + sin(x2)"],
             observation: &["x1 - x2", "x1 + x2"],
             noise: continuous(),
@@ -310,7 +321,9 @@ pub fn all() -> Vec<ScenarioConfig> {
                 the EKF starts at x̂₀ = 1, P₀ = 1 (Table 3 also uses P₀ = 5, 10; the direct \
                 method's MSE is 0.18–0.22 and the EKF fails). Since f = tanh x ≈ ±1 away from 0 \
                 the state drifts by about T to the right, or to the left when it starts below 0, \
-                hence the domain [−45, 45].",
+                hence the domain [−45, 45]. Look for: the EKF leaving the truth while the \
+                direct method and QIEM stay on it; the direct filter's density is in the heat \
+                strip.",
             drift: &["tanh(x)"],
             observation: &["x*sin(x)", "x*cos(x)"],
             noise: continuous(),
@@ -338,7 +351,8 @@ pub fn all() -> Vec<ScenarioConfig> {
                 e^{−(x−½)²} / ((√π/2) erfc(½ − x)) − 3/2, h = (x sin x, x cos x), σ₀ as in 4.3, \
                 T = 2, Δτ = 0.001; the EKF starts at x̂₀ = 1, P₀ = 3 and blows up in the paper; \
                 the direct method's MSE is 0.2016. erf/erfc have no symbolic derivative in the \
-                expression layer, so this drift's derivatives are central differences.",
+                expression layer, so this drift's derivatives are central differences. Look \
+                for: the EKF blowing up within the first second while QIEM follows the truth.",
             drift: &["x - 0.5 + exp(-(x-0.5)^2)/(0.886226925452758*erfc(0.5-x))"],
             observation: &["x*sin(x)", "x*cos(x)"],
             noise: continuous(),
@@ -369,7 +383,9 @@ pub fn all() -> Vec<ScenarioConfig> {
                 of atan2 keeps exact symbolic derivatives and is valid while the target stays \
                 above the sensors' line p₂ = −50, which it does on the domain. Δτ = 0.01 \
                 (T = 10), x₀ = (0, 0, 1, 0), prior N(x₀, I); IOKF 2 × 3, IEKF 6 iterations, UKF \
-                α = 0.5, β = 2, κ = −0.5 as in 003 §5.",
+                α = 0.5, β = 2, κ = −0.5 as in 003 §5. Look for: IOKF, IEKF and UKF nearly \
+                coinciding — with this geometry the MAP update is almost linear (`zakai \
+                reproduce 003-table-1`) — and the EKF next to them.",
             drift: &["x3", "x4", "0", "0"],
             observation: &[
                 "57.29577951308232*atan((x1 + 40)/(x2 + 50))",
@@ -417,7 +433,10 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
             Δt = 0.01, against the exact Gaussian-sum filter (GSF). Fig. 4 of 001 plots \
             J(t) = ∫ (p̂ − p)² dx: the SA's is below the FDM's. Look at the two grid densities \
             against the GSF's, and run `zakai jcurve sa-example-1` for J(t). 001 gives no \
-            horizon; we use T = 3 s (30 measurements), the truth on 10 Euler steps per interval.",
+            horizon; we use T = 3 s (30 measurements), the truth on 10 Euler steps per interval. Look \
+            for: the SA's and FDM's densities against the exact GSF density in the density plot \
+            (the two-component noise makes the posterior skewed), and the KF — the best linear \
+            filter — next to them.",
         drift: &["0.1*x"],
         observation: &["2*x"],
         noise: ObservationNoiseConfig::Discrete {
@@ -448,7 +467,9 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
             measurements (Fig. 6). The drift matrix has an eigenvalue +0.63, so the state leaves \
             the paper's domain after a few seconds: 001 gives no horizon and we use T = 1.6 s \
             (8 measurements). The GSF is the exact reference; the KF uses the noise's mean and \
-            covariance (the best linear filter).",
+            covariance (the best linear filter). Look for: the heatmap (choose SA or GSF) \
+            with two modes after the first measurements, one per noise component, merging as \
+            measurements accumulate.",
         drift: &["-0.05*x1 + x2", "0.7*x1 - 0.4*x2"],
         observation: &["x1 + x2", "x2"],
         noise: ObservationNoiseConfig::Discrete {
