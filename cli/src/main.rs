@@ -11,6 +11,7 @@
 //!
 //! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
 
+mod frontier_plot;
 mod output;
 
 use std::path::PathBuf;
@@ -92,6 +93,34 @@ enum Command {
         /// Write every sample of the first run as CSV to FILE.
         #[arg(long)]
         csv: Option<PathBuf>,
+    },
+    /// The accuracy–cost frontier: sweep every applicable method's cost knob over seeded runs
+    /// and write MSE against time per step to CSV and an SVG plot, with the reference
+    /// posterior's MSE (the optimal filter's) as the floor.
+    Frontier {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// Monte Carlo runs (seeds seed, seed+1, …).
+        #[arg(long, default_value_t = 100)]
+        runs: usize,
+        /// Seed of the first run (default: the scenario's seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Directory for `<scenario>-frontier.csv` and `.svg`.
+        #[arg(long, default_value = ".")]
+        out: PathBuf,
+        /// Method families to sweep (e.g. pf,qiem,spectral; default: all that apply).
+        #[arg(long, value_delimiter = ',')]
+        methods: Option<Vec<String>>,
+        /// Grid points per dimension of the QIEM reference posterior.
+        #[arg(long, default_value_t = 801)]
+        reference_points: usize,
+        /// Time step of the QIEM reference posterior.
+        #[arg(long, default_value_t = 1e-4)]
+        reference_dt: f64,
+        /// Runs of the convergence check of the reference (halved Δs and Δt).
+        #[arg(long, default_value_t = 5)]
+        check_runs: usize,
     },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
@@ -296,6 +325,57 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     Ok(())
 }
 
+struct FrontierArgs {
+    scenario: String,
+    runs: usize,
+    seed: Option<u64>,
+    out: PathBuf,
+    methods: Option<Vec<String>>,
+    reference_points: usize,
+    reference_dt: f64,
+    check_runs: usize,
+}
+
+fn frontier(a: &FrontierArgs) -> Result<(), String> {
+    use zakai::metrics::frontier as fr;
+    if a.runs == 0 {
+        return Err("--runs must be at least 1".into());
+    }
+    if !(a.reference_dt > 0.0 && a.reference_dt.is_finite()) || a.reference_points < 3 {
+        return Err("--reference-dt must be positive and --reference-points at least 3".into());
+    }
+    let config = load(&a.scenario)?;
+    let seed = a.seed.unwrap_or(config.seed);
+    let reference =
+        fr::reference(&config, a.reference_points, a.reference_dt).map_err(|e| e.to_string())?;
+    let mut sweep = fr::default_sweep(&config).map_err(|e| e.to_string())?;
+    if let Some(keep) = &a.methods {
+        let keep: Vec<String> = keep.iter().map(|k| k.to_lowercase()).collect();
+        sweep.retain(|p| keep.contains(&p.family.to_lowercase()));
+    }
+    if sweep.is_empty() {
+        return Err("no method to sweep (see --methods)".into());
+    }
+    eprintln!("reference: {}", reference.label);
+    let check =
+        fr::reference_check(&config, &reference, a.check_runs, seed).map_err(|e| e.to_string())?;
+    let bar = progress_bar(a.runs, "runs")?;
+    let tick = || bar.inc(1);
+    let result = fr::frontier(&config, &reference, &sweep, a.runs, seed, &tick)
+        .map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| format!("cannot create {}: {e}", a.out.display()))?;
+    let csv = a.out.join(format!("{}-frontier.csv", config.name));
+    std::fs::write(&csv, output::frontier_csv(&result))
+        .map_err(|e| format!("cannot write {}: {e}", csv.display()))?;
+    let svg = a.out.join(format!("{}-frontier.svg", config.name));
+    frontier_plot::draw(&result, &config.title, &svg)?;
+    print!("{}", output::frontier(&result, check.as_ref(), seed));
+    println!("wrote {} and {}", csv.display(), svg.display());
+    Ok(())
+}
+
 fn jcurve(
     scenario: &str,
     seed: Option<u64>,
@@ -447,6 +527,25 @@ fn main() -> ExitCode {
         Command::Simulate { scenario, seed } => simulate(&scenario, seed),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
+        Command::Frontier {
+            scenario,
+            runs,
+            seed,
+            out,
+            methods,
+            reference_points,
+            reference_dt,
+            check_runs,
+        } => frontier(&FrontierArgs {
+            scenario,
+            runs,
+            seed,
+            out,
+            methods,
+            reference_points,
+            reference_dt,
+            check_runs,
+        }),
         Command::Jcurve {
             scenario,
             seed,

@@ -4,6 +4,7 @@
 
 use std::fmt::Write;
 use zakai::metrics::density_error::{JCurve, JKind};
+use zakai::metrics::frontier::{Frontier, ReferenceCheck};
 
 use zakai::metrics::MonteCarloSummary;
 use zakai::reproduction::{PaperTable, RowResult};
@@ -294,5 +295,98 @@ pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
         "  reference: {} components at the end; largest forced merge cost {forced:.2e} nats, pruned weight {pruned:.2e}\n",
         first.components
     ));
+    s
+}
+
+/// The frontier as CSV: one row per swept point, the reference first.
+pub fn frontier_csv(f: &Frontier) -> String {
+    let mut s = String::from("family,knob,value,mse,mse_stderr,failed,runs,seconds_per_step\n");
+    s.push_str(&format!(
+        "{},reference,0,{},{},0,{},{}\n",
+        csv_text(&f.floor.0),
+        f.floor.1,
+        f.floor.2,
+        f.runs,
+        f.floor_seconds_per_step
+    ));
+    for p in &f.points {
+        s.push_str(&format!(
+            "{},{},{},{},{},{},{},{}\n",
+            p.sweep.family,
+            p.sweep.knob,
+            p.sweep.value,
+            p.mse.map_or(String::new(), |v| v.to_string()),
+            p.mse_stderr.map_or(String::new(), |v| v.to_string()),
+            p.failed,
+            f.runs,
+            p.seconds_per_step
+        ));
+    }
+    s
+}
+
+fn csv_text(t: &str) -> String {
+    format!("\"{}\"", t.replace('"', "\"\""))
+}
+
+/// The frontier as a table, the convergence check of the reference and, per family, the
+/// cheapest setting within 5 % of the optimal MSE.
+pub fn frontier(f: &Frontier, check: Option<&ReferenceCheck>, seed: u64) -> String {
+    let (label, floor, floor_se) = &f.floor;
+    let mut s = format!(
+        "Accuracy–cost frontier over {} runs (seeds {seed}..{})\n\nreference posterior: {label}\n  optimal MSE (floor) {floor:.4} ± {floor_se:.4}, {:.1} µs per step\n",
+        f.runs,
+        seed + f.runs as u64 - 1,
+        f.floor_seconds_per_step * 1e6
+    );
+    match check {
+        Some(c) => s.push_str(&format!(
+            "  convergence: halving Δs and Δt moves the posterior mean by at most {:.2e} over {} runs ({} 1e-3)\n",
+            c.max_mean_change,
+            c.runs,
+            if c.max_mean_change < 1e-3 { "<" } else { "NOT <" }
+        )),
+        None => s.push_str("  exact: no discretisation to check\n"),
+    }
+    s.push_str(&format!(
+        "\n{:<10} {:<13} {:>6} {:>18} {:>7} {:>12} {:>9}\n",
+        "method", "knob", "value", "MSE ± s.e.", "failed", "µs/step", "vs floor"
+    ));
+    for p in &f.points {
+        let mse = match (p.mse, p.mse_stderr) {
+            (Some(m), Some(e)) => format!("{m:.4} ± {e:.4}"),
+            (Some(m), None) => format!("{m:.4}"),
+            _ => "—".into(),
+        };
+        // A method that failed in some runs is compared over its good runs only: no ratio.
+        let ratio = match p.mse {
+            Some(m) if p.failed == 0 => format!("{:+.1} %", 100.0 * (m / floor - 1.0)),
+            _ => "failed".into(),
+        };
+        s.push_str(&format!(
+            "{:<10} {:<13} {:>6} {:>18} {:>7} {:>12.2} {:>9}\n",
+            p.sweep.family,
+            p.sweep.knob,
+            p.sweep.value,
+            mse,
+            format!("{}/{}", p.failed, f.runs),
+            p.seconds_per_step * 1e6,
+            ratio
+        ));
+    }
+    s.push_str("\nCheapest setting within 5 % of the optimal MSE:\n");
+    let mut families: Vec<&str> = f.points.iter().map(|p| p.sweep.family).collect();
+    families.dedup();
+    for family in families {
+        match f.cheapest_within(family, 0.05) {
+            Some(p) => s.push_str(&format!(
+                "  {family:<10} {} = {} at {:.2} µs per step\n",
+                p.sweep.knob,
+                p.sweep.value,
+                p.seconds_per_step * 1e6
+            )),
+            None => s.push_str(&format!("  {family:<10} none of the swept settings\n")),
+        }
+    }
     s
 }

@@ -216,3 +216,40 @@ fn out_writes_a_file() {
     assert!(csv.starts_with("method,runs,failed,mse"));
     assert_eq!(csv.lines().count(), 5);
 }
+
+#[test]
+fn frontier_writes_csv_and_svg_with_the_floor() {
+    let dir = std::env::temp_dir().join(format!("zakai-cli-frontier-{}", std::process::id()));
+    let o = zakai(&[
+        "frontier",
+        "cubic-sensor-1d",
+        "--runs",
+        "2",
+        "--check-runs",
+        "1",
+        "--methods",
+        "pf,qiem",
+        "--reference-points",
+        "201",
+        "--reference-dt",
+        "1e-3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("optimal MSE (floor)"), "{out}");
+    assert!(out.contains("convergence: halving Δs and Δt"), "{out}");
+    let csv = std::fs::read_to_string(dir.join("cubic-sensor-1d-frontier.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "family,knob,value,mse,mse_stderr,failed,runs,seconds_per_step"
+    );
+    // The reference, 7 particle counts and 5 grids.
+    assert_eq!(lines.len(), 1 + 1 + 7 + 5);
+    let svg = std::fs::read_to_string(dir.join("cubic-sensor-1d-frontier.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("optimal MSE"));
+    let bad = zakai(&["frontier", "cubic-sensor-1d", "--runs", "0"]);
+    assert!(!bad.status.success());
+}

@@ -6,6 +6,7 @@
 //! * e_mean(τ_k) of 004 (43): the mean over runs of `‖x_k − x̂_k‖` at each τ_k.
 
 pub mod density_error;
+pub mod frontier;
 pub mod monte_carlo;
 
 use alloc::vec;
