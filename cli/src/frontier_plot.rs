@@ -46,8 +46,9 @@ pub fn draw(f: &Frontier, title: &str, path: &Path) -> Result<(), String> {
     if !(tmin.is_finite() && tmax > 0.0) {
         return Err(format!("nothing to plot in {}", path.display()));
     }
-    // Up to 3× the floor: methods that failed to get near it are clipped at the top.
-    let ytop = ymax.min(3.0 * floor).max(floor * 1.2);
+    // Up to 1.5× the floor, where the frontier is decided: settings further off are drawn at
+    // the top edge.
+    let ytop = ymax.min(1.5 * floor).max(floor * 1.1);
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)

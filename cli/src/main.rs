@@ -121,6 +121,10 @@ enum Command {
         /// Runs of the convergence check of the reference (halved Δs and Δt).
         #[arg(long, default_value_t = 5)]
         check_runs: usize,
+        /// Widen the scenario's domain by this factor about its centre first (grid methods,
+        /// the reference included, cannot follow a state that leaves their box).
+        #[arg(long, default_value_t = 1.0)]
+        widen: f64,
     },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
@@ -334,6 +338,7 @@ struct FrontierArgs {
     reference_points: usize,
     reference_dt: f64,
     check_runs: usize,
+    widen: f64,
 }
 
 fn frontier(a: &FrontierArgs) -> Result<(), String> {
@@ -344,7 +349,14 @@ fn frontier(a: &FrontierArgs) -> Result<(), String> {
     if !(a.reference_dt > 0.0 && a.reference_dt.is_finite()) || a.reference_points < 3 {
         return Err("--reference-dt must be positive and --reference-points at least 3".into());
     }
-    let config = load(&a.scenario)?;
+    if !(a.widen >= 1.0 && a.widen.is_finite()) {
+        return Err("--widen must be a finite factor of at least 1".into());
+    }
+    let mut config = load(&a.scenario)?;
+    for [lo, hi] in &mut config.domain {
+        let (c, r) = (0.5 * (*lo + *hi), 0.5 * (*hi - *lo) * a.widen);
+        (*lo, *hi) = (c - r, c + r);
+    }
     let seed = a.seed.unwrap_or(config.seed);
     let reference =
         fr::reference(&config, a.reference_points, a.reference_dt).map_err(|e| e.to_string())?;
@@ -536,6 +548,7 @@ fn main() -> ExitCode {
             reference_points,
             reference_dt,
             check_runs,
+            widen,
         } => frontier(&FrontierArgs {
             scenario,
             runs,
@@ -545,6 +558,7 @@ fn main() -> ExitCode {
             reference_points,
             reference_dt,
             check_runs,
+            widen,
         }),
         Command::Jcurve {
             scenario,
