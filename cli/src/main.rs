@@ -18,7 +18,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use zakai::metrics::MonteCarlo;
 use zakai::reproduction;
@@ -97,35 +97,7 @@ enum Command {
     /// The accuracy–cost frontier: sweep every applicable method's cost knob over seeded runs
     /// and write MSE against time per step to CSV and an SVG plot, with the reference
     /// posterior's MSE (the optimal filter's) as the floor.
-    Frontier {
-        /// A preset name or a path to a scenario JSON file.
-        scenario: String,
-        /// Monte Carlo runs (seeds seed, seed+1, …).
-        #[arg(long, default_value_t = 100)]
-        runs: usize,
-        /// Seed of the first run (default: the scenario's seed).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Directory for `<scenario>-frontier.csv` and `.svg`.
-        #[arg(long, default_value = ".")]
-        out: PathBuf,
-        /// Method families to sweep (e.g. pf,qiem,spectral; default: all that apply).
-        #[arg(long, value_delimiter = ',')]
-        methods: Option<Vec<String>>,
-        /// Grid points per dimension of the QIEM reference posterior.
-        #[arg(long, default_value_t = 801)]
-        reference_points: usize,
-        /// Time step of the QIEM reference posterior.
-        #[arg(long, default_value_t = 1e-4)]
-        reference_dt: f64,
-        /// Runs of the convergence check of the reference (halved Δs and Δt).
-        #[arg(long, default_value_t = 5)]
-        check_runs: usize,
-        /// Widen the scenario's domain by this factor about its centre first (grid methods,
-        /// the reference included, cannot follow a state that leaves their box).
-        #[arg(long, default_value_t = 1.0)]
-        widen: f64,
-    },
+    Frontier(FrontierArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
         /// A preset name or a path to a scenario JSON file.
@@ -329,15 +301,35 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     Ok(())
 }
 
+/// The arguments of `zakai frontier`.
+#[derive(Args)]
 struct FrontierArgs {
+    /// A preset name or a path to a scenario JSON file.
     scenario: String,
+    /// Monte Carlo runs (seeds seed, seed+1, …).
+    #[arg(long, default_value_t = 100)]
     runs: usize,
+    /// Seed of the first run (default: the scenario's seed).
+    #[arg(long)]
     seed: Option<u64>,
+    /// Directory for `<scenario>-frontier.csv` and `.svg`.
+    #[arg(long, default_value = ".")]
     out: PathBuf,
+    /// Method families to sweep (e.g. pf,qiem,spectral; default: all that apply).
+    #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
+    /// Grid points per dimension of the QIEM reference posterior.
+    #[arg(long, default_value_t = 801)]
     reference_points: usize,
+    /// Time step of the QIEM reference posterior.
+    #[arg(long, default_value_t = 1e-4)]
     reference_dt: f64,
+    /// Runs of the convergence check of the reference (halved Δs and Δt).
+    #[arg(long, default_value_t = 5)]
     check_runs: usize,
+    /// Widen the scenario's domain by this factor about its centre first (grid methods,
+    /// the reference included, cannot follow a state that leaves their box).
+    #[arg(long, default_value_t = 1.0)]
     widen: f64,
 }
 
@@ -539,27 +531,7 @@ fn main() -> ExitCode {
         Command::Simulate { scenario, seed } => simulate(&scenario, seed),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
-        Command::Frontier {
-            scenario,
-            runs,
-            seed,
-            out,
-            methods,
-            reference_points,
-            reference_dt,
-            check_runs,
-            widen,
-        } => frontier(&FrontierArgs {
-            scenario,
-            runs,
-            seed,
-            out,
-            methods,
-            reference_points,
-            reference_dt,
-            check_runs,
-            widen,
-        }),
+        Command::Frontier(args) => frontier(&args),
         Command::Jcurve {
             scenario,
             seed,

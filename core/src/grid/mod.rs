@@ -254,6 +254,15 @@ impl TensorGrid {
         Some((i as isize, s - i))
     }
 
+    /// A read-only view of `values` on this grid (for [`crate::filters::Filter::density`]).
+    pub fn view<'a>(&'a self, values: &'a [f64]) -> crate::filters::DensityView<'a> {
+        crate::filters::DensityView {
+            bounds: &self.bounds,
+            shape: &self.shape,
+            values,
+        }
+    }
+
     /// Marginal density of dimension `dim` at the points `at` (linear interpolation of the
     /// marginal summed over the other dimensions, zero outside the box), for a density `u`
     /// normalised to unit mass.

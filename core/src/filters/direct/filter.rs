@@ -393,11 +393,7 @@ impl Filter for DirectFilter {
     }
 
     fn density(&self) -> Option<crate::filters::DensityView<'_>> {
-        Some(crate::filters::DensityView {
-            bounds: self.grid.bounds(),
-            shape: self.grid.shape(),
-            values: &self.density,
-        })
+        Some(self.grid.view(&self.density))
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {

@@ -465,11 +465,7 @@ impl Filter for ContinuousDiscreteGrid {
     }
 
     fn density(&self) -> Option<DensityView<'_>> {
-        Some(DensityView {
-            bounds: self.grid.bounds(),
-            shape: self.grid.shape(),
-            values: &self.u,
-        })
+        Some(self.grid.view(&self.u))
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {

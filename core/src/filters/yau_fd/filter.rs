@@ -549,11 +549,7 @@ impl Filter for YauYauFilter {
     }
 
     fn density(&self) -> Option<DensityView<'_>> {
-        Some(DensityView {
-            bounds: self.grid.bounds(),
-            shape: self.grid.shape(),
-            values: &self.u,
-        })
+        Some(self.grid.view(&self.u))
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
