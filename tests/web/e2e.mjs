@@ -176,6 +176,7 @@ try {
   await page.screenshot({ path: `${artifacts}/playground-sa-example-2.png` });
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   assert.ok((await heatmapStats()).hidden, 'no heatmap for a 1-D model');
+  await page.waitForFunction(() => document.querySelector('#unavailable-list li[data-method="kalman"]'), null, { timeout: 10000 });
 
   // 6. Methods that do not apply to the model are disabled with the reason shown.
   const kalmanOption = await page.$eval('#add-method-kind option[value="kalman"]', (o) => ({ disabled: o.disabled, title: o.title }));
@@ -187,6 +188,8 @@ try {
   assert.match(reasons.qiem4, /n = 1/);
   assert.ok(await page.isVisible('#unavailable'), 'the reasons are on the page');
   await load(`${url}?preset=sa-example-1`, 'sa-example-1');
+  // The reasons arrive with the validation that follows the load.
+  await page.waitForFunction(() => document.querySelector('#unavailable-list li[data-method="qiem"]'), null, { timeout: 10000 });
   const saReasons = await page.$$eval('#unavailable-list li', (lis) => Object.fromEntries(lis.map((l) => [l.dataset.method, l.textContent])));
   assert.match(saReasons.qiem, /continuous observations/);
   assert.equal(saReasons.separation, undefined);
@@ -201,6 +204,7 @@ try {
   // 7. The memory estimate is shown per method and a too-large grid is refused with the
   //    message before anything is allocated; the running session is untouched.
   await load(`${url}?preset=yau-2d`, 'yau-2d');
+  await page.waitForFunction(() => document.querySelector('#methods .method-row:nth-child(4) .memory')?.textContent, null, { timeout: 10000 });
   const memory = await page.textContent('#methods .method-row:nth-child(4) .memory');
   assert.match(memory, /≈ \d+\.\d (MiB|GiB)/, `memory shown: ${memory}`);
   await page.fill('#methods .method-row:nth-child(4) input[data-param="points"]', '4000');
