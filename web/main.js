@@ -882,6 +882,8 @@ worker.onmessage = ({ data }) => {
       }
       break;
     case 'loaded':
+      // Frames of the previous session still waiting to be drawn belong to another run.
+      state.queue.length = 0;
       state.info = data.info;
       if (state.pendingConfig) {
         state.base = state.pendingConfig;

@@ -1,6 +1,7 @@
 //! Criterion benchmarks of the classic baselines on the cubic sensor of 004 (44): one whole
 //! run (T = 5, Δτ = 0.01, 500 steps) per method; and of the MAP filters of 003 against the UKF
-//! on the bearings-only preset (one whole run of 1000 steps, including the simulation).
+//! on the bearings-only preset (one whole run of 1000 steps, including the simulation); and of
+//! the direct method of 002 on its Example 4.3.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::experiment::{Experiment, Silent};
@@ -34,5 +35,19 @@ fn bearings_only(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, baselines, bearings_only);
+/// The direct method of 002 on its Example 4.3 (`direct-4.3`: T = 30, Δτ = 0.1, 300 steps,
+/// 801 points): one whole run, including Algorithm 1's decomposition at every step.
+fn direct(c: &mut Criterion) {
+    let mut config = presets::preset("direct-4.3").expect("preset exists");
+    config.methods = vec![MethodConfig::from_key("direct").expect("known method")];
+    let experiment = Experiment::new(config).expect("valid preset");
+    let mut group = c.benchmark_group("direct-4.3 run (300 steps)");
+    group.sample_size(10);
+    group.bench_function("Direct", |b| {
+        b.iter(|| experiment.run_with(3, None, &mut Silent).expect("runs"))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, baselines, bearings_only, direct);
 criterion_main!(benches);
