@@ -26,7 +26,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::kalman::linear::{affine_parts, Discretization};
-use super::{marginal, Estimate, Filter, Observation, ObservationKind};
+use super::{marginal, Estimate, Filter, Observation};
 use crate::error::{FilterError, ZakaiError};
 use crate::grid::TensorGrid;
 use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp, symmetrize};
@@ -387,13 +387,7 @@ impl Filter for GaussianSumFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.kind != ObservationKind::Measurement || obs.value.len() != self.c.nrows() {
-            return Err(FilterError::BadObservation(format!(
-                "{} needs measurements z_k of length {}",
-                self.name,
-                self.c.nrows()
-            )));
-        }
+        crate::filters::check_measurement(&self.name, obs, self.c.nrows())?;
         if obs.dt > 0.0 {
             self.predict(obs.dt)?;
         }

@@ -86,6 +86,20 @@ pub(crate) fn check_increment(
     Ok(())
 }
 
+/// A measurement z_k of length m, or the error a filter for discrete measurements returns.
+pub(crate) fn check_measurement(
+    name: &str,
+    obs: &Observation,
+    m: usize,
+) -> Result<(), crate::error::FilterError> {
+    if obs.kind != ObservationKind::Measurement || obs.value.len() != m {
+        return Err(crate::error::FilterError::BadObservation(alloc::format!(
+            "{name} needs measurements z_k of length {m}"
+        )));
+    }
+    Ok(())
+}
+
 /// Normalises a grid density to unit mass in place and returns its estimate (mean,
 /// covariance, MAP node); a non-finite or vanished mass is an error, never NaN.
 pub(crate) fn normalise_on_grid(

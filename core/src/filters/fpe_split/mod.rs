@@ -43,7 +43,7 @@ use self::upwind::UpwindAdvection;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::{
     count_problem, normalise_on_grid, per_dimension, product, DensityView, Estimate, Filter,
-    Observation, ObservationKind,
+    Observation,
 };
 use crate::grid::TensorGrid;
 use crate::linalg::banded::{BandedLu, BandedMatrix};
@@ -447,13 +447,7 @@ impl Filter for ContinuousDiscreteGrid {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        if obs.kind != ObservationKind::Measurement || obs.value.len() != self.residual.len() {
-            return Err(FilterError::BadObservation(format!(
-                "{} needs measurements z_k of length {}",
-                self.name,
-                self.residual.len()
-            )));
-        }
+        crate::filters::check_measurement(&self.name, obs, self.residual.len())?;
         if obs.dt > 0.0 {
             self.predict(obs.dt)?;
         }
