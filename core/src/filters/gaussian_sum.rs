@@ -22,7 +22,7 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use serde::{Deserialize, Serialize};
 
 use super::kalman::linear::{affine_parts, Discretization};
@@ -80,6 +80,8 @@ struct Component {
     w: f64,
     m: DVector<f64>,
     p: DMatrix<f64>,
+    /// Cholesky factor of `p`, kept for evaluating the density.
+    chol: Cholesky<f64, Dyn>,
     log_det: f64,
 }
 
@@ -94,7 +96,13 @@ impl Component {
                 .iter()
                 .map(|d| libm::log(*d))
                 .sum::<f64>();
-        Ok(Component { w, m, p, log_det })
+        Ok(Component {
+            w,
+            m,
+            p,
+            chol,
+            log_det,
+        })
     }
 }
 
@@ -325,11 +333,7 @@ impl GaussianSumFilter {
         let x = DVector::from_column_slice(x);
         self.components
             .iter()
-            .map(|c| {
-                cholesky(&c.p, "component")
-                    .map(|ch| c.w * libm::exp(gaussian_log_density(&(&x - &c.m), &ch)))
-                    .unwrap_or(0.0)
-            })
+            .map(|c| c.w * libm::exp(gaussian_log_density(&(&x - &c.m), &c.chol)))
             .sum()
     }
 
@@ -339,14 +343,11 @@ impl GaussianSumFilter {
         let n = grid.dim();
         let mut r = DVector::zeros(n);
         for c in &self.components {
-            let Ok(ch) = cholesky(&c.p, "component") else {
-                continue;
-            };
             grid.for_each_node(|idx, x| {
                 for d in 0..n {
                     r[d] = x[d] - c.m[d];
                 }
-                out[idx] += c.w * libm::exp(gaussian_log_density(&r, &ch));
+                out[idx] += c.w * libm::exp(gaussian_log_density(&r, &c.chol));
             });
         }
     }

@@ -72,18 +72,32 @@ pub struct DensityView<'a> {
     pub values: &'a [f64],
 }
 
+/// An observation of the `kind` a filter takes, of length m, or the error it returns.
+fn check_observation(
+    name: &str,
+    obs: &Observation,
+    kind: ObservationKind,
+    m: usize,
+) -> Result<(), crate::error::FilterError> {
+    if obs.kind != kind || obs.value.len() != m {
+        let what = match kind {
+            ObservationKind::Increment => "increments",
+            ObservationKind::Measurement => "measurements z_k",
+        };
+        return Err(crate::error::FilterError::BadObservation(alloc::format!(
+            "{name} needs {what} of length {m}"
+        )));
+    }
+    Ok(())
+}
+
 /// An increment Δy of length m, or the error a filter for continuous observations returns.
 pub(crate) fn check_increment(
     name: &str,
     obs: &Observation,
     m: usize,
 ) -> Result<(), crate::error::FilterError> {
-    if obs.kind != ObservationKind::Increment || obs.value.len() != m {
-        return Err(crate::error::FilterError::BadObservation(alloc::format!(
-            "{name} needs increments of length {m}"
-        )));
-    }
-    Ok(())
+    check_observation(name, obs, ObservationKind::Increment, m)
 }
 
 /// A measurement z_k of length m, or the error a filter for discrete measurements returns.
@@ -92,12 +106,7 @@ pub(crate) fn check_measurement(
     obs: &Observation,
     m: usize,
 ) -> Result<(), crate::error::FilterError> {
-    if obs.kind != ObservationKind::Measurement || obs.value.len() != m {
-        return Err(crate::error::FilterError::BadObservation(alloc::format!(
-            "{name} needs measurements z_k of length {m}"
-        )));
-    }
-    Ok(())
+    check_observation(name, obs, ObservationKind::Measurement, m)
 }
 
 /// Normalises a grid density to unit mass in place and returns its estimate (mean,
