@@ -53,6 +53,11 @@ enum Command {
         /// Seed (default: the scenario's seed).
         #[arg(long)]
         seed: Option<u64>,
+        /// Also run the scenario's methods on these observations and add
+        /// `"estimates": [{"name", "values", "failure"}]` (rows flattened) — what the
+        /// native-vs-wasm determinism test compares.
+        #[arg(long)]
+        estimates: bool,
     },
     /// Reproduce a paper's table: run every row's preset as a Monte Carlo job and print our
     /// numbers beside the paper's (`zakai reproduce` lists the tables).
@@ -474,13 +479,18 @@ fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn simulate(scenario: &str, seed: Option<u64>) -> Result<(), String> {
+fn simulate(scenario: &str, seed: Option<u64>, estimates: bool) -> Result<(), String> {
     let config = load(scenario)?;
     let seed = seed.unwrap_or(config.seed);
     let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
     let run = experiment.start(seed).map_err(|e| e.to_string())?;
-    let t = run.trajectory();
-    let json = serde_json::json!({
+    let (t, tracks) = if estimates {
+        let result = run.finish();
+        (result.trajectory, result.methods)
+    } else {
+        (run.trajectory().clone(), Vec::new())
+    };
+    let mut json = serde_json::json!({
         "seed": seed,
         "n": t.n,
         "m": t.m,
@@ -488,6 +498,18 @@ fn simulate(scenario: &str, seed: Option<u64>) -> Result<(), String> {
         "states": t.states,
         "observations": t.observations,
     });
+    if estimates {
+        json["estimates"] = tracks
+            .iter()
+            .map(|m| {
+                serde_json::json!({
+                    "name": m.name,
+                    "values": m.estimates,
+                    "failure": m.failure.as_ref().map(|f| &f.message),
+                })
+            })
+            .collect();
+    }
     println!("{json}");
     Ok(())
 }
@@ -528,7 +550,11 @@ fn main() -> ExitCode {
             .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
             .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
             .map(|json| println!("{json}")),
-        Command::Simulate { scenario, seed } => simulate(&scenario, seed),
+        Command::Simulate {
+            scenario,
+            seed,
+            estimates,
+        } => simulate(&scenario, seed, estimates),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::Frontier(args) => frontier(&args),
