@@ -3,6 +3,22 @@
 import uPlot from './node_modules/uplot/dist/uPlot.esm.js';
 
 const $ = (id) => document.getElementById(id);
+// Elements are built with DOM calls only: text (every user string included) goes through
+// textContent/value/attributes, never through innerHTML, eval or Function (issue 11; the page's
+// Content-Security-Policy forbids the latter two anyway).
+const el = (tag, props = {}, ...children) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(props)) {
+    if (v == null || v === false) continue;
+    if (k === 'dataset') Object.assign(e.dataset, v);
+    else if (k in e && k !== 'list') e[k] = v;
+    else e.setAttribute(k, v === true ? '' : String(v));
+  }
+  e.append(...children.filter((c) => c != null));
+  return e;
+};
+// Fills a <select> with `[value, text, title?]` options.
+const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
 const COLORS = ['#2450b3', '#d9480f', '#2b8a3e', '#ae3ec9', '#e8590c', '#0b7285', '#c2255c', '#5c940d', '#364fc7', '#862e9c'];
 const PARAMS = {
   kalman: [],
@@ -46,14 +62,19 @@ const PARAM_LABELS = {
 
 function paramInput(row, i, name, type) {
   const value = row.config[name];
+  const dataset = { row: String(i), param: name };
   if (type.startsWith('enum:')) {
     const options = type.slice(5).split('|');
-    return `<select data-row="${i}" data-param="${name}">${options.map((o) => `<option ${o === (value ?? options[0]) ? 'selected' : ''}>${o}</option>`).join('')}</select>`;
+    const select = el('select', { dataset });
+    fillOptions(select, options.map((o) => [o, o]));
+    select.value = String(value ?? options[0]);
+    return select;
   }
   const list = type === 'intlist' || type === 'numlist';
-  const shown = list ? (value ?? []).join(', ') : (value ?? '');
-  const placeholder = type === 'optint' ? ' placeholder="auto"' : '';
-  return `<input type="${list ? 'text' : 'number'}" step="any" data-row="${i}" data-param="${name}" value="${shown}"${placeholder}>`;
+  const shown = list ? (Array.isArray(value) ? value : []).join(', ') : String(value ?? '');
+  const input = el('input', { type: list ? 'text' : 'number', step: 'any', dataset, placeholder: type === 'optint' ? 'auto' : null });
+  input.value = shown;
+  return input;
 }
 
 // The worker learns `?wasm=scalar` (force the fallback build) from its own URL.
@@ -93,7 +114,7 @@ function parseList(text) {
 }
 
 function exprInputs(container, label, field, values) {
-  container.innerHTML = '';
+  container.replaceChildren();
   values.forEach((v, i) => {
     const l = document.createElement('label');
     l.textContent = `${label}${values.length > 1 ? i + 1 : ''}(x) = `;
@@ -111,11 +132,14 @@ function exprInputs(container, label, field, values) {
 
 function domainInputs(domain) {
   const c = $('domain');
-  c.innerHTML = '<label>domain (lower, upper per component; grid methods and density plots live here)</label>';
+  c.replaceChildren(el('label', {}, 'domain (lower, upper per component; grid methods and density plots live here)'));
   domain.forEach((b, i) => {
-    const row = document.createElement('div');
-    row.className = 'row';
-    row.innerHTML = `<span>x${i + 1}</span><input type="number" step="any" data-field="domain[${i}]" data-bound="0" value="${b[0]}"><input type="number" step="any" data-field="domain[${i}]" data-bound="1" value="${b[1]}">`;
+    const bound = (j) => {
+      const input = el('input', { type: 'number', step: 'any', dataset: { field: `domain[${i}]`, bound: String(j) } });
+      input.value = String(b?.[j] ?? '');
+      return input;
+    };
+    const row = el('div', { className: 'row' }, el('span', {}, `x${i + 1}`), bound(0), bound(1));
     const err = document.createElement('span');
     err.className = 'error';
     err.dataset.error = `domain[${i}]`;
@@ -126,18 +150,20 @@ function domainInputs(domain) {
 
 function methodRowsUI() {
   const c = $('methods');
-  c.innerHTML = '';
+  c.replaceChildren();
   state.methodRows.forEach((row, i) => {
-    const div = document.createElement('div');
-    div.className = 'method-row';
     const params = PARAMS[row.config.method] ?? [];
-    div.dataset.row = String(i);
-    div.innerHTML = `<header><input type="checkbox" ${row.enabled ? 'checked' : ''} data-row="${i}" class="enable"> ${row.config.method.toUpperCase()}<span class="memory" title="memory this method allocates, estimated before anything is allocated"></span><button type="button" class="remove" data-row="${i}" title="remove">×</button></header>
-      <div class="params">${params.map(([p, type]) => `<label>${PARAM_LABELS[p] ?? p}${paramInput(row, i, p, type)}</label>`).join('')}</div>
-      <span class="reason"></span>
-      <span class="warning row-warnings" title="conditions of the chosen steps (000 (22), (30), (31); 001 (16), (23))"></span>
-      <span class="error" data-method-row="${i}"></span>`;
-    c.appendChild(div);
+    const dataset = { row: String(i) };
+    c.appendChild(el('div', { className: 'method-row', dataset },
+      el('header', {},
+        el('input', { type: 'checkbox', checked: row.enabled, className: 'enable', dataset }),
+        ` ${String(row.config.method).toUpperCase()}`,
+        el('span', { className: 'memory', title: 'memory this method allocates, estimated before anything is allocated' }),
+        el('button', { type: 'button', className: 'remove', title: 'remove', dataset }, '×')),
+      el('div', { className: 'params' }, ...params.map(([p, type]) => el('label', {}, PARAM_LABELS[p] ?? p, paramInput(row, i, p, type)))),
+      el('span', { className: 'reason' }),
+      el('span', { className: 'warning row-warnings', title: 'conditions of the chosen steps (000 (22), (30), (31); 001 (16), (23))' }),
+      el('span', { className: 'error', dataset: { methodRow: String(i) } })));
   });
   c.querySelectorAll('.enable').forEach((el) => el.addEventListener('change', () => {
     state.methodRows[el.dataset.row].enabled = el.checked;
@@ -405,8 +431,8 @@ function changeDimension() {
 function makePlots(info) {
   const n = info.n;
   $('heatmap-figure').hidden = n < 2;
-  $('component').innerHTML = Array.from({ length: n }, (_, i) => `<option value="${i}">x${i + 1}</option>`).join('');
-  $('density-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
+  fillOptions($('component'), Array.from({ length: n }, (_, i) => [i, `x${i + 1}`]));
+  fillOptions($('density-method'), info.methods.map((m, i) => [i, m]));
   // The richest density by default: a grid filter, else the last particle filter, else the first.
   const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT|SA|FDM|Direct)/.test(m));
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
@@ -432,26 +458,30 @@ function makePlots(info) {
     axes: [{ label: 'x' }, {}],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
   }, [[], ...info.methods.map(() => [])], $('density-plot'));
-  $('heatmap-method').innerHTML = info.methods.map((m, i) => `<option value="${i}">${m}</option>`).join('');
+  fillOptions($('heatmap-method'), info.methods.map((m, i) => [i, m]));
   $('heatmap-method').value = $('density-method').value;
   $('heatmap-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   const key = $('heatmap-key');
   key.replaceChildren();
-  const entry = (color, text, shape) => {
-    const span = document.createElement('span');
-    span.innerHTML = `<svg width="12" height="12"><${shape} fill="${color}" stroke="#000"/></svg> `;
-    span.append(text);
-    key.appendChild(span);
+  const entry = (color, text, round) => {
+    const mark = el('span', { className: round ? 'swatch round' : 'swatch' });
+    mark.style.background = color;
+    key.appendChild(el('span', {}, mark, text));
   };
   if (n >= 2) {
-    entry('#fff', 'truth', 'circle cx="6" cy="6" r="4"');
-    info.methods.forEach((m, i) => entry(COLORS[i % COLORS.length], m, 'rect x="2" y="2" width="8" height="8"'));
+    entry('#fff', 'truth', true);
+    info.methods.forEach((m, i) => entry(COLORS[i % COLORS.length], m, false));
   }
   const heat = $('heat');
   heat.getContext('2d').clearRect(0, 0, heat.width, heat.height);
   $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   $('heat-legend').title = '0 → maximum density at each time';
-  $('metrics').querySelector('tbody').innerHTML = info.methods.map((m, i) => `<tr data-method="${i}"><td><span class="swatch" style="background:${COLORS[i % COLORS.length]}"></span>${m}</td><td class="mse">–</td><td class="status">running</td><td class="time">–</td></tr>`).join('');
+  $('metrics').querySelector('tbody').replaceChildren(...info.methods.map((m, i) => {
+    const swatch = el('span', { className: 'swatch' });
+    swatch.style.background = COLORS[i % COLORS.length];
+    return el('tr', { dataset: { method: String(i) } },
+      el('td', {}, swatch, m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'), el('td', { className: 'time' }, '–'));
+  }));
   worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
 }
 
@@ -863,8 +893,8 @@ worker.onmessage = ({ data }) => {
       state.methodKinds = data.methods;
       state.build = data.build;
       $('fps').title = `frames per second of this page (wasm build: ${data.build})`;
-      $('preset').innerHTML = data.presets.map((p) => `<option value="${p.name}">${p.name} — ${p.title}</option>`).join('');
-      $('add-method-kind').innerHTML = data.methods.map(([k, about]) => `<option value="${k}" title="${about}">${k}</option>`).join('');
+      fillOptions($('preset'), data.presets.map((p) => [p.name, `${p.name} — ${p.title}`]));
+      fillOptions($('add-method-kind'), data.methods.map(([k, about]) => [k, k, about]));
       state.randomSeed = data.seed;
       const shared = configFromAddress();
       const wanted = new URLSearchParams(location.search).get('preset');

@@ -18,6 +18,9 @@ const types = {
   '.svg': 'image/svg+xml',
 };
 
+// The page's Content-Security-Policy, read from its meta tag (one policy, one place).
+const CSP = (await readFile(join(root, 'index.html'), 'utf8')).match(/http-equiv="Content-Security-Policy" content="([^"]+)"/)[1];
+
 const server = createServer(async (req, res) => {
   try {
     const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
@@ -35,6 +38,8 @@ const server = createServer(async (req, res) => {
       // which the per-step timing of the filters needs.
       'Cross-Origin-Opener-Policy': 'same-origin',
       'Cross-Origin-Embedder-Policy': 'require-corp',
+      // The page's meta policy, also as a header so that it covers the worker's script.
+      'Content-Security-Policy': CSP,
     });
     res.end(body);
   } catch {

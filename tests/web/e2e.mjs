@@ -234,7 +234,10 @@ try {
   other.on('pageerror', (e) => consoleErrors.push(String(e)));
   await other.goto(link);
   await other.waitForFunction(() => window.zakaiPage?.info?.seed === 7, null, { timeout: 30000 });
-  for (let i = 0; i < 2; i++) {
+  // Row 0 (the prior's estimate) arrives with the load, possibly after the first click: step
+  // until the shared run has as many rows as the original.
+  const wanted = original.truth.length;
+  for (let i = 0; i < 5 && (await other.evaluate(() => window.zakaiPage.data.times.length)) < wanted; i++) {
     const b = await other.evaluate(() => window.zakaiPage.data.times.length);
     await other.click('#step');
     await other.waitForFunction((x) => window.zakaiPage.data.times.length > x, b, { timeout: 20000 });
@@ -330,6 +333,63 @@ try {
   }
   const perStep2d = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[3].textContent}`));
   console.log('frame rate of yau-2d with QIEM 128² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
+
+  // 13. Web safety: hostile strings in every text field and in a shared link's config are
+  //     shown as text — nothing is parsed as HTML or run (and the CSP would refuse inline
+  //     handlers with a console error, which the last check below would catch).
+  const HOSTILE = '</script><img src=x onerror="window.__pwned=1"><b class="injected">x</b>';
+  await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
+  const csp = await page.getAttribute('meta[http-equiv="Content-Security-Policy"]', 'content');
+  assert.ok(csp && !csp.includes("'unsafe-eval'") && !/script-src[^;]*'unsafe-inline'/.test(csp), `CSP without unsafe-eval: ${csp}`);
+  const textFields = await page.$$eval('#form input:not([type]), #form input[type="text"], #form textarea, #methods input[type="text"]',
+    (els) => els.map((e) => (e.id ? `#${e.id}` : (e.dataset.field ? `[data-field="${e.dataset.field}"]` : `[data-row="${e.dataset.row}"][data-param="${e.dataset.param}"]`))));
+  assert.ok(textFields.length >= 8, `text fields found: ${textFields}`);
+  // Expressions first: the model's validation quotes them in its messages.
+  const fillHostile = async (sel) => {
+    if (await page.isVisible(sel)) await page.fill(sel, HOSTILE);
+    else await page.$eval(sel, (e, v) => { e.value = v; e.dispatchEvent(new Event('input', { bubbles: true })); }, HOSTILE);
+  };
+  const expressionFields = textFields.filter((f) => f.includes('model.drift') || f.includes('model.observation'));
+  for (const sel of expressionFields) await fillHostile(sel);
+  await page.waitForFunction((h) => [...document.querySelectorAll('.error')].filter((e) => e.textContent.includes(h)).length >= 2, HOSTILE, { timeout: 10000 });
+  const echoed = await page.$$eval('.error', (els, h) => els.filter((e) => e.textContent.includes(h)).map((e) => e.textContent), HOSTILE);
+  for (const sel of textFields) if (!expressionFields.includes(sel)) await fillHostile(sel);
+  await page.waitForTimeout(1000);
+  await page.click('#apply');
+  await page.waitForTimeout(500);
+  const shown = await page.evaluate((h) => ({
+    injected: document.querySelectorAll('.injected, img[src="x"]').length,
+    pwned: window.__pwned === 1,
+  }), HOSTILE);
+  console.log(`hostile strings in ${textFields.length} text fields: ${echoed.length} messages quote them as text (${JSON.stringify(echoed[0])}), ${shown.injected} injected elements`);
+  assert.equal(shown.injected, 0, 'no element made from user text');
+  assert.equal(shown.pwned, false, 'no user text ran');
+  assert.ok(echoed.length >= 2, 'the error messages show the hostile text literally');
+  const hostileConfig = await page.evaluate((h) => {
+    const c = structuredClone(window.zakaiPage.presets.find((p) => p.name === 'cubic-sensor-1d'));
+    c.name = h;
+    c.title = h;
+    c.description = h;
+    c.methods.push({ method: h });
+    c.domain = [[h, h]];
+    return c;
+  }, HOSTILE);
+  const evil = await browser.newPage({ viewport: { width: 1440, height: 1000 } });
+  evil.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(`shared hostile link: ${m.text()}`); });
+  evil.on('pageerror', (e) => consoleErrors.push(String(e)));
+  await evil.goto(`${url}#s=${Buffer.from(JSON.stringify(hostileConfig)).toString('base64url')}`);
+  await evil.waitForFunction(() => window.zakaiPage?.presets?.length > 0, null, { timeout: 30000 });
+  await evil.waitForTimeout(1500);
+  const evilShown = await evil.evaluate((h) => ({
+    injected: document.querySelectorAll('.injected, img[src="x"]').length,
+    pwned: window.__pwned === 1,
+    description: document.getElementById('description').textContent,
+  }), HOSTILE);
+  assert.equal(evilShown.injected, 0, 'a hostile shared link makes no element');
+  assert.equal(evilShown.pwned, false, 'a hostile shared link runs nothing');
+  assert.equal(evilShown.description, HOSTILE, 'its description is shown as text');
+  await evil.screenshot({ path: `${artifacts}/playground-hostile-link.png` });
+  await evil.close();
 
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);
