@@ -440,7 +440,15 @@ impl ExperimentRun {
             };
             match result {
                 Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
-                Err(message) => {
+                Err(mut message) => {
+                    // A failure under violated stability or positivity conditions says so:
+                    // the condition is the likely cause (000 (22)/(30)/(31), 001 (16)/(23)).
+                    let warnings = filter.warnings();
+                    if !warnings.is_empty() {
+                        message
+                            .push_str(" — with the chosen steps outside the method's conditions: ");
+                        message.push_str(&warnings.join("; "));
+                    }
                     observer.on_failure(i, k, &message);
                     track.failure = Some(Failure { k, message });
                 }
@@ -478,5 +486,58 @@ impl ExperimentRun {
             trajectory: self.trajectory,
             methods: self.tracks,
         }
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::error::FilterError;
+    use crate::filters::Estimate;
+
+    /// A filter whose chosen steps break a condition and whose density then vanishes.
+    struct Unstable;
+
+    impl Filter for Unstable {
+        fn name(&self) -> &str {
+            "unstable"
+        }
+        fn step(&mut self, _obs: &Observation) -> Result<(), FilterError> {
+            Err(FilterError::MassLost)
+        }
+        fn estimate(&self) -> Estimate {
+            Estimate {
+                mean: nalgebra::DVector::zeros(1),
+                covariance: None,
+                map: None,
+            }
+        }
+        fn warnings(&self) -> Vec<String> {
+            alloc::vec!["(31) fails at x = 9.9 with Δt = 0.1".to_string()]
+        }
+    }
+
+    #[test]
+    fn a_failure_under_a_violated_condition_names_the_condition() {
+        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
+        config.methods.push(config.methods[0].clone());
+        let experiment = Experiment::new(config).unwrap();
+        let mut run = experiment.start(3).unwrap();
+        run.filters[1] = Box::new(Unstable);
+        run.advance(5, None, &mut Silent);
+        let tracks = run.tracks();
+        assert!(!tracks[0].failed(), "the other method continues");
+        assert_eq!(tracks[0].rows(), 6);
+        let failure = tracks[1]
+            .failure
+            .as_ref()
+            .expect("the unstable method failed");
+        assert_eq!(failure.k, 1);
+        assert!(
+            failure.message.contains("lost all its mass") && failure.message.contains("(31)"),
+            "{}",
+            failure.message
+        );
     }
 }
