@@ -48,4 +48,9 @@ if ! command -v chromium >/dev/null 2>&1; then
 fi
 node tests/web/e2e.mjs
 
+if [ "${ZAKAI_SOAK:-0}" = 1 ]; then
+  step "soak: every 1-D method, 10^6 intervals of the cubic sensor (ZAKAI_SOAK=1)"
+  cargo test --release -p zakai-tests --test soak -- --ignored --nocapture
+fi
+
 step "all green"
