@@ -32,6 +32,11 @@ use zakai::Experiment;
     about = "Continuous-time nonlinear filtering, side by side"
 )]
 struct Cli {
+    /// Largest memory a scenario's methods may need together, checked before anything is
+    /// allocated (e.g. 512MiB, 8GiB; default 1GiB, the playground's cap). Also read from the
+    /// environment variable ZAKAI_MEMORY_CAP.
+    #[arg(long, global = true, env = "ZAKAI_MEMORY_CAP", value_parser = zakai::scenario::parse_bytes)]
+    memory_cap: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -541,6 +546,9 @@ fn main() -> ExitCode {
             };
         }
     };
+    if let Some(cap) = cli.memory_cap {
+        zakai::scenario::set_memory_cap(cap);
+    }
     let result = match cli.command {
         Command::List => {
             print!("{}", list());

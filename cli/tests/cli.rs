@@ -257,3 +257,29 @@ fn frontier_writes_csv_and_svg_with_the_floor() {
     let bad = zakai(&["frontier", "cubic-sensor-1d", "--runs", "0"]);
     assert!(!bad.status.success());
 }
+
+/// The memory cap (issue 11): 1 GiB by default, raised or lowered natively with
+/// `--memory-cap` / `ZAKAI_MEMORY_CAP`; checked before anything is allocated.
+#[test]
+fn the_memory_cap_can_be_changed_natively() {
+    // cubic-sensor-1d with QIEM on 2 000 001 points: ≈ 0.15 GiB for the grid method.
+    let show = zakai(&["show", "cubic-sensor-1d"]);
+    let mut config: serde_json::Value = serde_json::from_slice(&show.stdout).unwrap();
+    config["methods"] = serde_json::json!([{ "method": "qiem", "points": [2000001], "dt": 0.001 }]);
+    config["time"]["t_final"] = serde_json::json!(0.01);
+    let path = temp_file("cap.json", &config.to_string());
+    let path = path.to_str().unwrap();
+    let lowered = zakai(&["--memory-cap", "64MiB", "run", path]);
+    assert_clean_failure(&lowered, "above the cap of 64.0 MiB");
+    let by_env = Command::new(env!("CARGO_BIN_EXE_zakai"))
+        .args(["run", path])
+        .env("ZAKAI_MEMORY_CAP", "100MiB")
+        .output()
+        .unwrap();
+    assert_clean_failure(&by_env, "above the cap of 100.0 MiB");
+    let default = zakai(&["run", path]);
+    assert!(default.status.success(), "{}", stderr(&default));
+    let bad = zakai(&["--memory-cap", "lots", "run", path]);
+    assert_eq!(bad.status.code(), Some(2), "a usage error");
+    assert!(stderr(&bad).contains("`lots` is not a size"), "{}", stderr(&bad));
+}

@@ -126,7 +126,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
     to_js(&Suitability {
         kinds,
         rows,
-        cap: zakai::scenario::MAX_MEMORY_BYTES,
+        cap: zakai::scenario::memory_cap(),
     })
 }
 

@@ -23,9 +23,54 @@ use crate::simulate::TimeGrid;
 
 /// Largest state dimension a scenario may declare.
 pub const MAX_STATE_DIM: usize = 8;
-/// Largest memory all of a scenario's methods together may need (1 GiB: a browser tab's safe
-/// share), checked from [`MethodConfig::memory_bytes`] before anything is allocated.
+/// The default cap on the memory all of a scenario's methods together may need (1 GiB: a
+/// browser tab's safe share), checked from [`MethodConfig::memory_bytes`] before anything is
+/// allocated. Native programs may raise it with [`set_memory_cap`]; the playground never does.
 pub const MAX_MEMORY_BYTES: usize = 1 << 30;
+
+static MEMORY_CAP: core::sync::atomic::AtomicUsize =
+    core::sync::atomic::AtomicUsize::new(MAX_MEMORY_BYTES);
+
+/// The memory cap [`ScenarioConfig::validate`] checks against (default [`MAX_MEMORY_BYTES`]).
+pub fn memory_cap() -> usize {
+    MEMORY_CAP.load(core::sync::atomic::Ordering::Relaxed)
+}
+
+/// Sets the process-wide memory cap (bytes) for every later validation — the documented way
+/// to run grids larger than a browser tab allows natively (`zakai --memory-cap 8GiB …` or
+/// `ZAKAI_MEMORY_CAP` in the CLI). Returns the previous cap.
+pub fn set_memory_cap(bytes: usize) -> usize {
+    MEMORY_CAP.swap(bytes, core::sync::atomic::Ordering::Relaxed)
+}
+
+/// Parses a size such as `512MiB`, `8GiB`, `2G` or a plain byte count.
+pub fn parse_bytes(text: &str) -> Result<usize, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size (e.g. 512MiB, 8GiB)"))?;
+    let scale = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" | "kib" => 1024.0,
+        "m" | "mb" | "mib" => 1024.0 * 1024.0,
+        "g" | "gb" | "gib" => 1024.0 * 1024.0 * 1024.0,
+        "t" | "tb" | "tib" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        other => {
+            return Err(format!(
+                "unknown size unit `{other}` in `{text}` (use KiB, MiB, GiB)"
+            ))
+        }
+    };
+    let bytes = value * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < usize::MAX as f64) {
+        return Err(format!("`{text}` is out of range"));
+    }
+    Ok(bytes as usize)
+}
 
 /// `bytes` for messages: `12.3 MiB`.
 pub fn format_bytes(bytes: usize) -> String {
@@ -508,18 +553,19 @@ impl ScenarioConfig {
             p.push(ConfigProblem::new("methods", "choose at least one method"));
         }
         let mut total: usize = 0;
+        let cap = memory_cap();
         for (i, method) in self.methods.iter().enumerate() {
             let before = p.len();
             method.validate(n, &format!("methods[{i}]"), &mut p);
             if p.len() == before && (1..=MAX_STATE_DIM).contains(&n) {
                 match method.memory_bytes(n) {
-                    Some(b) if b <= MAX_MEMORY_BYTES => total = total.saturating_add(b),
+                    Some(b) if b <= cap => total = total.saturating_add(b),
                     b => p.push(ConfigProblem::new(
                         format!("methods[{i}]"),
                         format!(
                             "needs ≈ {} of memory, above the cap of {}; use a coarser grid or fewer particles/components",
                             b.map_or_else(|| "more than 2^64 B".into(), format_bytes),
-                            format_bytes(MAX_MEMORY_BYTES)
+                            format_bytes(cap)
                         ),
                     )),
                 }
@@ -534,13 +580,13 @@ impl ScenarioConfig {
                 }
             }
         }
-        if total > MAX_MEMORY_BYTES {
+        if total > cap {
             p.push(ConfigProblem::new(
                 "methods",
                 format!(
                     "the methods together need ≈ {}, above the cap of {}",
                     format_bytes(total),
-                    format_bytes(MAX_MEMORY_BYTES)
+                    format_bytes(cap)
                 ),
             ));
         }
@@ -649,5 +695,23 @@ impl ScenarioConfig {
             });
         }
         names
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_bytes;
+
+    #[test]
+    fn sizes_parse_with_binary_units() {
+        assert_eq!(parse_bytes("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_bytes("8 GiB"), Ok(8 << 30));
+        assert_eq!(parse_bytes("1.5k"), Ok(1536));
+        assert_eq!(parse_bytes("4096"), Ok(4096));
+        assert!(parse_bytes("lots").unwrap_err().contains("not a size"));
+        assert!(parse_bytes("2 parsecs")
+            .unwrap_err()
+            .contains("unknown size unit"));
+        assert!(parse_bytes("0").is_err());
     }
 }
