@@ -21,7 +21,7 @@ fi
 cargo build -p zakai-wasm --profile wasm-release --target wasm32-unknown-unknown
 wasm-bindgen --target web --out-dir web/pkg \
   target/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
-RUSTFLAGS='--cfg getrandom_backend="wasm_js"' cargo build -p zakai-wasm --profile wasm-release \
+RUSTFLAGS='--cfg getrandom_backend="wasm_js" -C link-arg=-zstack-size=8388608' cargo build -p zakai-wasm --profile wasm-release \
   --target wasm32-unknown-unknown --no-default-features --target-dir target/scalar
 wasm-bindgen --target web --out-dir web/pkg-scalar \
   target/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm

@@ -91,3 +91,63 @@ fn errors_are_typed_and_readable() {
     let e = ExpressionFunction::parse("drift f", &["x1".into()], 2, 2).unwrap_err();
     assert_eq!(e.to_string(), "drift f needs 2 component(s), 1 given");
 }
+
+/// Regression for the fuzzer's first find (issue 11): a power followed by a hundred stacked
+/// minus signs overflowed the stack in exmex's recursive differentiation. Such input is now a
+/// syntax error with its position; everything the limits accept — up to 32 levels of nesting
+/// and 1000 characters, with exact derivatives only within the symbolic budget (16 operations,
+/// 6 levels) and numerical ones beyond — parses and differentiates on a 2 MiB stack (a
+/// test thread's; the wasm build links an 8 MiB stack).
+#[test]
+fn deep_or_long_expressions_are_refused_or_handled_on_a_small_stack() {
+    let crash = format!("x1^{}x1*x1*-066661--2", "-".repeat(97));
+    let err = ExpressionFunction::parse("h", &[crash], 2, 1).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("nests deeper than 32"), "{message}");
+    assert!(message.contains("position 35"), "{message}");
+    let long = "x+".repeat(600);
+    let err = ExpressionFunction::parse("h", &[long], 1, 1).unwrap_err();
+    assert!(err.to_string().contains("longer than 1000 characters"));
+
+    // `open` k times, then `inner`, then `close` k times.
+    let nest = |open: &str, k: usize, inner: &str, close: &str| {
+        format!("{}{inner}{}", open.repeat(k), close.repeat(k))
+    };
+    let mut accepted = Vec::new();
+    for k in [2, 4, 6, 8, 12, 16, 31] {
+        accepted.push(nest("(", k, "x", ")"));
+        accepted.push(nest("-", k, "x", ""));
+        accepted.push(nest("sin(", k, "x+1", ")"));
+        accepted.push(nest("1/(1+", k, "x", ")"));
+        accepted.push(nest("x-(1-(", k / 2, "x", "))"));
+        accepted.push(nest("", k, "x", "+x*x"));
+        accepted.push(nest("", k, "x", "*sin(x)"));
+        accepted.push(nest("", k, "x", "/(1+x^2)"));
+        accepted.push(nest("", k, "x", "*exp(-x)"));
+    }
+    let handle = std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || {
+            let mut exact = 0;
+            for text in &accepted {
+                let f = ExpressionFunction::parse("h", std::slice::from_ref(text), 1, 1)
+                    .unwrap_or_else(|e| panic!("{text}: {e}"));
+                let (mut v, mut j, mut h) = ([0.0], [0.0], [0.0]);
+                f.eval(&[0.3], &mut v);
+                f.jacobian(&[0.3], &mut j);
+                f.hessian(0, &[0.3], &mut h);
+                assert!(
+                    v[0].is_finite() && j[0].is_finite() && h[0].is_finite(),
+                    "{text}"
+                );
+                exact += usize::from(f.derivatives() == Derivatives::Exact);
+            }
+            (exact, accepted.len())
+        })
+        .unwrap();
+    let (exact, total) = handle.join().expect("no stack overflow on 2 MiB");
+    assert!(
+        exact >= 20,
+        "only {exact} of {total} with exact derivatives"
+    );
+}

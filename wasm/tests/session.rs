@@ -93,3 +93,24 @@ fn log_concavity_of_a_grid_density() {
         .iter()
         .any(|v| v.as_f64().is_some_and(f64::is_finite)));
 }
+
+/// Issue 11's fuzzing found expressions whose symbolic derivatives overflowed wasm's default
+/// 1 MiB stack; the build links 8 MiB and the expression limits keep within 2 MiB natively.
+/// The heaviest shapes the limits accept build and step here; the fuzzer's input is an error.
+#[wasm_bindgen_test]
+fn heavy_expressions_build_without_overflowing_the_stack() {
+    let mut p = presets::preset("cubic-sensor-1d").unwrap();
+    p.model.drift = vec![format!("{}x+1{}", "sin(".repeat(6), ")".repeat(6))];
+    p.model.observation = vec![format!("x{}", "/(1+x^2)".repeat(4))];
+    p.time.t_final = 0.1;
+    let mut s = Session::new(serde_wasm_bindgen::to_value(&p).unwrap(), Some(1.0)).unwrap();
+    s.step(usize::MAX).unwrap();
+    assert!(s.finished());
+    p.model.observation = vec![format!("x1^{}x1*x1*-066661--2", "-".repeat(97))];
+    let e = message(
+        Session::new(serde_wasm_bindgen::to_value(&p).unwrap(), None)
+            .err()
+            .unwrap(),
+    );
+    assert!(e.contains("nests deeper than 32"), "{e}");
+}

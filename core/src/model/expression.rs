@@ -152,11 +152,25 @@ impl ExpressionFunction {
                 found: texts.len(),
             });
         }
+        let mut operations = 0;
         let components = texts
             .iter()
-            .map(|t| compile(t, n))
-            .collect::<Result<Vec<_>, _>>()?;
-        let exact = exact_derivatives(&components, n);
+            .map(|t| {
+                let (scalar, ops) = compile(t, n)?;
+                operations = operations.max(ops);
+                Ok(scalar)
+            })
+            .collect::<Result<Vec<_>, ExprError>>()?;
+        // exmex differentiates recursively with large frames, and nested functions or
+        // quotients grow the derivative trees fast: beyond the budget the derivatives are
+        // numerical instead, so that parsing never overflows a 2 MiB thread stack (found by
+        // fuzzing, issue 11; the budget is measured by the test
+        // `deep_or_long_expressions_are_refused_or_handled_on_a_small_stack`).
+        let exact = if operations <= MAX_SYMBOLIC_OPERATIONS {
+            exact_derivatives(&components, n)
+        } else {
+            None
+        };
         Ok(ExpressionFunction {
             n,
             texts: texts.to_vec(),
@@ -191,8 +205,32 @@ impl ExpressionFunction {
     }
 }
 
-fn compile(text: &str, n: usize) -> Result<Scalar, ExprError> {
+/// Most operations (operators, functions and parentheses) in one component for which exact
+/// symbolic derivatives are computed; larger expressions get numerical derivatives.
+pub const MAX_SYMBOLIC_OPERATIONS: usize = 16;
+/// Deepest parenthesis nesting for which exact symbolic derivatives are computed.
+pub const MAX_SYMBOLIC_DEPTH: usize = 6;
+
+/// The compiled expression and its symbolic cost: the number of operations (operators,
+/// functions, parentheses), or `usize::MAX` when it nests deeper than [`MAX_SYMBOLIC_DEPTH`].
+fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
     let normalized = normalize_expression(text, n)?;
+    let (mut operations, mut depth, mut deepest) = (0usize, 0usize, 0usize);
+    for c in normalized.chars() {
+        match c {
+            '+' | '-' | '*' | '/' | '^' => operations += 1,
+            '(' => {
+                operations += 1;
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            ')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    if deepest > MAX_SYMBOLIC_DEPTH {
+        operations = usize::MAX;
+    }
     let ex = Ex::parse(&normalized).map_err(|e| ExprError::Syntax {
         expr: text.to_string(),
         position: None,
@@ -219,7 +257,7 @@ fn compile(text: &str, n: usize) -> Result<Scalar, ExprError> {
             message: alloc::format!("at most {MAX_VARS} distinct variables per expression"),
         });
     }
-    Ok(Scalar { ex, state_index })
+    Ok((Scalar { ex, state_index }, operations))
 }
 
 fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives> {

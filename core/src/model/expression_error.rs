@@ -144,12 +144,40 @@ enum Token {
 /// * chained powers `a^b^c` are refused with a message asking for parentheses (exmex would
 ///   read them left to right, the opposite of the usual right-to-left convention).
 pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
-    let tokens = tokenize(text, n)?;
     let syntax = |position: usize, message: &str| ExprError::Syntax {
         expr: text.to_string(),
         position: Some(position),
         message: message.to_string(),
     };
+    if let Some((position, _)) = text.char_indices().nth(MAX_EXPRESSION_CHARS) {
+        return Err(syntax(
+            position,
+            &format!("longer than {MAX_EXPRESSION_CHARS} characters"),
+        ));
+    }
+    let tokens = tokenize(text, n)?;
+    // Nesting (parentheses and stacked signs, each of which becomes a level below): exmex
+    // differentiates recursively, and a few hundred levels overflow the 1 MiB stack of wasm
+    // (found by fuzzing: `x1^-----…`).
+    let (mut depth, mut signs) = (0usize, 0usize);
+    for (i, t) in tokens.iter().enumerate() {
+        match t.kind {
+            Token::Open => depth += 1,
+            Token::Close => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        signs = if is_unary_sign(&tokens, i) {
+            signs + 1
+        } else {
+            0
+        };
+        if depth + signs > MAX_NESTING {
+            return Err(syntax(
+                t.position,
+                &format!("nests deeper than {MAX_NESTING} levels of parentheses and signs"),
+            ));
+        }
+    }
     // Chained powers: `^` whose left operand already ends a power `a^b`.
     let mut depth_of_last_power: Vec<Option<usize>> = vec![None];
     for (i, t) in tokens.iter().enumerate() {
@@ -177,10 +205,7 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
     let mut close_after: Vec<usize> = Vec::new();
     for (i, t) in tokens.iter().enumerate() {
         let prev = if i == 0 { None } else { Some(&tokens[i - 1]) };
-        let unary = t.kind == Token::Operator
-            && (t.text == "-" || t.text == "+")
-            && prev.is_none_or(|p| matches!(p.kind, Token::Open | Token::Comma | Token::Operator));
-        if unary {
+        if is_unary_sign(&tokens, i) {
             match prev {
                 // At the start of an expression or argument: `-a^b…` → `0-a^b…`.
                 None
@@ -209,6 +234,23 @@ pub fn normalize_expression(text: &str, n: usize) -> Result<String, ExprError> {
         }
     }
     Ok(out)
+}
+
+/// Longest expression accepted, in characters.
+pub const MAX_EXPRESSION_CHARS: usize = 1000;
+/// Deepest nesting of parentheses and stacked unary signs accepted.
+pub const MAX_NESTING: usize = 32;
+
+/// Whether token `i` is a unary `+`/`−` (at the start, after `(`, `,` or another operator).
+fn is_unary_sign(tokens: &[Token_], i: usize) -> bool {
+    let t = &tokens[i];
+    t.kind == Token::Operator
+        && (t.text == "-" || t.text == "+")
+        && (i == 0
+            || matches!(
+                tokens[i - 1].kind,
+                Token::Open | Token::Comma | Token::Operator
+            ))
 }
 
 /// One token with its text (already normalised) and character position.
