@@ -10,7 +10,7 @@ use alloc::vec::Vec;
 use crate::error::ZakaiError;
 use crate::experiment::Experiment;
 use crate::metrics::{MethodSummary, MonteCarlo};
-use crate::scenario::presets;
+use crate::scenario::{presets, MethodConfig, ScenarioConfig};
 
 /// The error measure a table reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,6 +44,9 @@ pub struct PaperRow {
     pub label: &'static str,
     /// The preset that encodes the row's scenario.
     pub preset: &'static str,
+    /// What the row changes in the preset before it runs (another P₀ for the EKF, another
+    /// time step, …), or `None` to run the preset as it is.
+    pub adjust: Option<fn(&mut ScenarioConfig)>,
     /// `(method display name, the paper's values)`: the name selects the preset's method
     /// (`"EKF"`, `"PF(200)"`, `"Spectral"`, …); `None` where the paper reports the method as
     /// failed (no number).
@@ -135,6 +138,7 @@ pub fn tables() -> Vec<PaperTable> {
                 .map(|&(label, preset, ekf, qiem)| PaperRow {
                     label,
                     preset,
+                    adjust: None,
                     paper: cells(&[("EKF", Some(&[ekf])), ("QIEM", Some(&[qiem]))]),
                 })
                 .collect(),
@@ -148,6 +152,7 @@ pub fn tables() -> Vec<PaperTable> {
             rows: alloc::vec![PaperRow {
                 label: "cubic sensor",
                 preset: "cubic-sensor-1d",
+                adjust: None,
                 paper: cells(&[
                     ("Spectral", Some(&[0.4317])),
                     ("EKF", None),
@@ -168,6 +173,7 @@ pub fn tables() -> Vec<PaperTable> {
             rows: alloc::vec![PaperRow {
                 label: "example 2",
                 preset: "cubic-sensor-2d",
+                adjust: None,
                 paper: cells(&[
                     ("Spectral", Some(&[0.4081, 0.3646])),
                     ("EKF", None),
@@ -180,6 +186,60 @@ pub fn tables() -> Vec<PaperTable> {
             }],
         },
         PaperTable {
+            id: "002-table-3",
+            title: "average MSE of the direct method and the EKF, f = tanh x, T = 30, Δt = 0.1",
+            source: "002 §4.2, Example 4.3, Table 3",
+            metric: Metric::Mse,
+            runs: 100,
+            rows: alloc::vec![
+                PaperRow {
+                    label: "P₀ = 1",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| ekf_variance(c, 1.0)),
+                    paper: cells(&[("Direct", Some(&[0.1786])), ("EKF", None)]),
+                },
+                PaperRow {
+                    label: "P₀ = 5",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| ekf_variance(c, 5.0)),
+                    paper: cells(&[("Direct", Some(&[0.2206])), ("EKF", None)]),
+                },
+                PaperRow {
+                    label: "P₀ = 10",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| ekf_variance(c, 10.0)),
+                    paper: cells(&[("Direct", Some(&[0.1821])), ("EKF", None)]),
+                },
+            ],
+        },
+        PaperTable {
+            id: "002-table-4",
+            title: "MSE of the direct method with different Δt, f = tanh x, T = 10",
+            source: "002 §4.2, Example 4.3 (3), Table 4",
+            metric: Metric::Mse,
+            runs: 100,
+            rows: alloc::vec![
+                PaperRow {
+                    label: "Δt = 0.1",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| direct_time_step(c, 0.1)),
+                    paper: cells(&[("Direct", Some(&[0.3451]))]),
+                },
+                PaperRow {
+                    label: "Δt = 0.01",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| direct_time_step(c, 0.01)),
+                    paper: cells(&[("Direct", Some(&[0.2236]))]),
+                },
+                PaperRow {
+                    label: "Δt = 0.001",
+                    preset: "direct-4.3",
+                    adjust: Some(|c| direct_time_step(c, 0.001)),
+                    paper: cells(&[("Direct", Some(&[0.1714]))]),
+                },
+            ],
+        },
+        PaperTable {
             id: "003-table-1",
             title: "bearings-only tracking (5.2), 1000 steps: IOKF, IEKF, UKF",
             source: "003 §5, Table 1",
@@ -188,6 +248,7 @@ pub fn tables() -> Vec<PaperTable> {
             rows: alloc::vec![PaperRow {
                 label: "BOT",
                 preset: "bearings-only",
+                adjust: None,
                 paper: cells(&[
                     ("IOKF(2×3)", Some(&[0.6274])),
                     ("IEKF(6)", Some(&[0.68334])),
@@ -196,6 +257,21 @@ pub fn tables() -> Vec<PaperTable> {
             }],
         },
     ]
+}
+
+/// 002 Table 3's rows: the EKF of the preset `direct-4.3` started with variance `p0`.
+fn ekf_variance(config: &mut ScenarioConfig, p0: f64) {
+    for m in &mut config.methods {
+        if let MethodConfig::Ekf(p) = m {
+            p.init.variance = Some(p0);
+        }
+    }
+}
+
+/// 002 Table 4's rows: `direct-4.3` over T = 10 with time step `dt`.
+fn direct_time_step(config: &mut ScenarioConfig, dt: f64) {
+    config.time.t_final = 10.0;
+    config.time.dt_obs = dt;
 }
 
 /// The table with identifier `id`.
@@ -260,6 +336,9 @@ pub fn reproduce_row(
 ) -> Result<RowResult, ZakaiError> {
     let mut config = presets::preset(row.preset)
         .ok_or_else(|| ZakaiError::Other(alloc::format!("no preset `{}`", row.preset)))?;
+    if let Some(adjust) = row.adjust {
+        adjust(&mut config);
+    }
     let mut methods = Vec::new();
     for (name, _) in &row.paper {
         let method = config
