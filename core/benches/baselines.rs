@@ -35,17 +35,31 @@ fn bearings_only(c: &mut Criterion) {
     group.finish();
 }
 
-/// The direct method of 002 on its Example 4.3 (`direct-4.3`: T = 30, Δτ = 0.1, 300 steps,
-/// 801 points): one whole run, including Algorithm 1's decomposition at every step.
+/// The direct method of 002 on its Example 4.3 (`direct-4.3`: T = 30, Δτ = 0.1, 300 steps):
+/// one whole run, including Algorithm 1's decomposition at every step, with the preset's 3201
+/// points and with the default 801.
 fn direct(c: &mut Criterion) {
-    let mut config = presets::preset("direct-4.3").expect("preset exists");
-    config.methods = vec![MethodConfig::from_key("direct").expect("known method")];
-    let experiment = Experiment::new(config).expect("valid preset");
+    let preset = presets::preset("direct-4.3").expect("preset exists");
     let mut group = c.benchmark_group("direct-4.3 run (300 steps)");
     group.sample_size(10);
-    group.bench_function("Direct", |b| {
-        b.iter(|| experiment.run_with(3, None, &mut Silent).expect("runs"))
-    });
+    let from_preset = preset
+        .methods
+        .iter()
+        .find(|m| m.key() == "direct")
+        .expect("the preset has the direct method")
+        .clone();
+    let default = MethodConfig::from_key("direct").expect("known method");
+    for (label, method) in [
+        ("Direct 3201 points", from_preset),
+        ("Direct 801 points", default),
+    ] {
+        let mut config = preset.clone();
+        config.methods = vec![method];
+        let experiment = Experiment::new(config).expect("valid preset");
+        group.bench_function(label, |b| {
+            b.iter(|| experiment.run_with(3, None, &mut Silent).expect("runs"))
+        });
+    }
     group.finish();
 }
 
