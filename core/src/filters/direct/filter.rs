@@ -354,8 +354,7 @@ impl Filter for DirectFilter {
         let factor: Vec<f64> = (0..len)
             .map(|j| obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum())
             .collect();
-        let mut exponents = Vec::with_capacity(terms.len());
-        let mut shift = f64::NEG_INFINITY;
+        let mut quadratics = Vec::with_capacity(terms.len());
         for t in &terms {
             let mut e = QuadraticExponent::from_term(t);
             e.propagate(&self.coefficients, obs.dt, self.params.substeps);
@@ -365,21 +364,54 @@ impl Filter for DirectFilter {
                     what: "Riccati solution",
                 });
             }
-            let values: Vec<f64> = x
-                .iter()
-                .zip(&factor)
-                .map(|(&xi, &g)| a * xi * xi + b * xi + c + g)
-                .collect();
-            shift = values.iter().copied().fold(shift, f64::max);
-            exponents.push((t.weight.signum(), values));
+            quadratics.push((t.weight.signum(), a, b, c));
         }
-        for (j, u) in self.u_hat.iter_mut().enumerate() {
-            let v: f64 = exponents
-                .iter()
-                .map(|(sign, e)| sign * crate::linalg::exp_nonpositive(e[j] - shift))
-                .sum();
-            *u = v.max(0.0);
+        // Each term only where it can matter: with Q its peak, G = max g and L ≤ shift a value
+        // actually reached, a node where q − Q < −(800 + Q + G − L) has exponent below
+        // shift − 800, where exp underflows to 0 anyway — the same sums as over the whole grid.
+        let (x0, h) = (x[0], self.grid.spacing()[0]);
+        let node = |v: f64| ((v - x0) / h).clamp(0.0, (len - 1) as f64);
+        let value = |(_, a, b, c): (f64, f64, f64, f64), j: usize| {
+            a * x[j] * x[j] + b * x[j] + c + factor[j]
+        };
+        let peak = |(_, a, b, c): (f64, f64, f64, f64)| {
+            (a < 0.0).then(|| (-b / (2.0 * a), c - b * b / (4.0 * a)))
+        };
+        let g_max = factor.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let lower = quadratics
+            .iter()
+            .map(|&q| {
+                let j = peak(q).map_or(0, |(centre, _)| libm::round(node(centre)) as usize);
+                value(q, j)
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        let windows: Vec<(usize, usize)> = quadratics
+            .iter()
+            .map(|&q| match peak(q) {
+                Some((centre, top)) => {
+                    let reach = libm::sqrt((800.0 + top + g_max - lower) / -q.1);
+                    if reach.is_finite() {
+                        let from = libm::floor(node(centre - reach)) as usize;
+                        let to = libm::ceil(node(centre + reach)) as usize + 1;
+                        (from, to.min(len))
+                    } else {
+                        (0, len)
+                    }
+                }
+                None => (0, len),
+            })
+            .collect();
+        let mut shift = f64::NEG_INFINITY;
+        for (&q, &(from, to)) in quadratics.iter().zip(&windows) {
+            shift = (from..to).map(|j| value(q, j)).fold(shift, f64::max);
         }
+        self.u_hat.iter_mut().for_each(|u| *u = 0.0);
+        for (&q, &(from, to)) in quadratics.iter().zip(&windows) {
+            for j in from..to {
+                self.u_hat[j] += q.0 * crate::linalg::exp_nonpositive(value(q, j) - shift);
+            }
+        }
+        self.u_hat.iter_mut().for_each(|u| *u = u.max(0.0));
         let top = self.u_hat.iter().copied().fold(0.0, f64::max);
         if top <= 0.0 || !top.is_finite() {
             return Err(FilterError::MassLost);
