@@ -642,7 +642,7 @@ function applyFrame(frame) {
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
   for (const f of frame.summary.failures) {
-    $('run-error').textContent = `${info.methods[f.method]} failed at step ${f.k}: ${f.message}`;
+    $('run-error').textContent = `${info.methods[f.method]} failed at step ${f.k}: ${f.message}. The other methods continue; reset (r) starts the run again.`;
   }
 }
 

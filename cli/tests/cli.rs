@@ -281,5 +281,9 @@ fn the_memory_cap_can_be_changed_natively() {
     assert!(default.status.success(), "{}", stderr(&default));
     let bad = zakai(&["--memory-cap", "lots", "run", path]);
     assert_eq!(bad.status.code(), Some(2), "a usage error");
-    assert!(stderr(&bad).contains("`lots` is not a size"), "{}", stderr(&bad));
+    assert!(
+        stderr(&bad).contains("`lots` is not a size"),
+        "{}",
+        stderr(&bad)
+    );
 }
