@@ -240,6 +240,19 @@ pub fn tables() -> Vec<PaperTable> {
             ],
         },
         PaperTable {
+            id: "002-example-4.4",
+            title: "MSE of the direct method, f = x + 1 + F'(x), T = 2, Δt = 0.001 (002 reports one run)",
+            source: "002 §4.2, Example 4.4, Fig. 3",
+            metric: Metric::Mse,
+            runs: 20,
+            rows: alloc::vec![PaperRow {
+                label: "x̂₀ = 1, P₀ = 3",
+                preset: "direct-4.4",
+                adjust: None,
+                paper: cells(&[("Direct", Some(&[0.2016])), ("EKF", None)]),
+            }],
+        },
+        PaperTable {
             id: "003-table-1",
             title: "bearings-only tracking (5.2), 1000 steps: IOKF, IEKF, UKF",
             source: "003 §5, Table 1",

@@ -180,6 +180,16 @@ pub fn gaussian_approximation(
     alpha: f64,
     max_terms: usize,
 ) -> Vec<GaussianTerm> {
+    decompose(grid, phi, alpha, max_terms).0
+}
+
+/// Algorithm 1 with what it leaves: the terms and the residual `phi − Σ terms` on the grid.
+pub fn decompose(
+    grid: &[f64],
+    phi: &[f64],
+    alpha: f64,
+    max_terms: usize,
+) -> (Vec<GaussianTerm>, Vec<f64>) {
     let threshold = alpha * phi.iter().copied().fold(0.0, f64::max);
     let mut terms: Vec<GaussianTerm> = Vec::new();
     let mut residual = phi.to_vec();
@@ -224,5 +234,5 @@ pub fn gaussian_approximation(
         }
         terms.extend(new);
     }
-    terms
+    (terms, residual)
 }
