@@ -1,6 +1,6 @@
 //! The direct method of 002: its Gaussian approximation (Algorithm 1) against the paper's
 //! examples 4.1 and 4.2 (Tables 1 and 2) with α = 0.01 on a grid of step 0.01, and the filter
-//! against Table 3 (example 4.3).
+//! against Tables 3 and 4 (example 4.3) and example 4.4.
 
 use zakai::filters::direct::gaussian_approximation::{evaluate, gaussian_approximation};
 
@@ -224,8 +224,8 @@ mod filter {
 }
 
 /// 002 Table 3 (example 4.3, T = 30, Δt = 0.1, seeds 1–20): the direct method's MSE is near
-/// the paper's 0.18–0.22 (our 100-run mean is 0.27, equal to QIEM's — the optimal filter's
-/// level — within 1 %; tolerance here 0.15–0.40 over 20 runs) in every row, and the EKF,
+/// the paper's 0.18–0.22 (our 100-run mean is 0.266, as good as QIEM's 0.273 — the optimal
+/// filter's level; tolerance here 0.15–0.40 over 20 runs) in every row, and the EKF,
 /// started with the row's P₀, is at least ten times worse ("—" in the paper).
 #[test]
 fn example_4_3_reproduces_table_3() {
