@@ -136,6 +136,40 @@ mod riccati {
         assert!((u.c - exact_c).abs() < 1e-10, "{} vs {exact_c}", u.c);
     }
 
+    /// The same in 1-D, where `propagate` takes its scalar path (no matrices).
+    #[test]
+    fn the_scalar_riccati_solution_solves_the_kolmogorov_equation() {
+        let k = KolmogorovCoefficients {
+            d_mat: DMatrix::from_element(1, 1, -0.4),
+            d_vec: DVector::from_element(1, 0.2),
+            q: DMatrix::from_element(1, 1, -0.8),
+            p: DVector::from_element(1, 0.3),
+            r: 0.4,
+        };
+        let start = QuadraticExponent {
+            a: DMatrix::from_element(1, 1, -1.0),
+            b: DVector::from_element(1, 0.5),
+            c: 0.1,
+        };
+        let at = |t: f64| {
+            let mut u = start.clone();
+            u.propagate(&k, t, 2000);
+            u
+        };
+        let (t, dt) = (0.3, 1e-4);
+        let (before, mid, after) = (at(t - dt), at(t), at(t + dt));
+        let (a, b) = (mid.a[(0, 0)], mid.b[0]);
+        for x in [0.0, 0.5, -1.0, 1.2] {
+            let du_dt = (after.value(&[x]) - before.value(&[x])) / (2.0 * dt);
+            let u = mid.value(&[x]);
+            let grad = 2.0 * a * x + b;
+            let rhs = 0.5 * (2.0 * a + grad * grad) * u - (-0.4 * x + 0.2) * grad * u
+                + (-0.8 * x * x + 0.3 * x + 0.4) * u;
+            let rel = (du_dt - rhs).abs() / (du_dt.abs() + rhs.abs());
+            assert!(rel < 1e-7, "x = {x}: ∂u/∂t {du_dt} vs {rhs}");
+        }
+    }
+
     /// In 2-D with every coefficient of (32)–(33) nonzero, the RK4 solution of (35)–(37)
     /// satisfies the PDE (32) itself: ∂u/∂t by central differences in t of the integrated
     /// solution against `½Δu − lᵀ∇u + q u` from u's exact x-derivatives, relative residual

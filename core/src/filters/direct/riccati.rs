@@ -70,6 +70,35 @@ impl QuadraticExponent {
         }
     }
 
+    /// (35)–(37) for n = 1 in plain numbers (no matrix allocations: this is the direct
+    /// filter's inner loop): `a' = 2a² − 2Da + Q`, `b' = 2ab − Db − 2ad + p`,
+    /// `c' = a + ½b² − db + r`; `steps` RK4 steps of length h.
+    fn propagate_scalar(&mut self, k: &KolmogorovCoefficients, h: f64, steps: usize) {
+        let (dm, dv, q, p, r) = (k.d_mat[(0, 0)], k.d_vec[0], k.q[(0, 0)], k.p[0], k.r);
+        let rates = |[a, b, _]: [f64; 3]| {
+            [
+                2.0 * a * a - 2.0 * dm * a + q,
+                2.0 * a * b - dm * b - 2.0 * a * dv + p,
+                a + 0.5 * b * b - dv * b + r,
+            ]
+        };
+        let step =
+            |u: [f64; 3], k: [f64; 3], s: f64| [u[0] + s * k[0], u[1] + s * k[1], u[2] + s * k[2]];
+        let mut u = [self.a[(0, 0)], self.b[0], self.c];
+        for _ in 0..steps {
+            let k1 = rates(u);
+            let k2 = rates(step(u, k1, 0.5 * h));
+            let k3 = rates(step(u, k2, 0.5 * h));
+            let k4 = rates(step(u, k3, h));
+            for i in 0..3 {
+                u[i] += (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) * (h / 6.0);
+            }
+        }
+        self.a[(0, 0)] = u[0];
+        self.b[0] = u[1];
+        self.c = u[2];
+    }
+
     fn plus(&self, rate: &QuadraticExponent, h: f64) -> QuadraticExponent {
         QuadraticExponent {
             a: &self.a + &rate.a * h,
@@ -85,6 +114,10 @@ impl QuadraticExponent {
         let stiff = libm::ceil(4.0 * dt * self.a.amax().max(k.d_mat.amax())).min(1e6) as usize;
         let steps = substeps.max(stiff).max(1);
         let h = dt / steps as f64;
+        if self.a.nrows() == 1 {
+            self.propagate_scalar(k, h, steps);
+            return;
+        }
         for _ in 0..steps {
             let k1 = self.rates(k);
             let k2 = self.plus(&k1, 0.5 * h).rates(k);
