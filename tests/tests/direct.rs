@@ -136,6 +136,20 @@ mod riccati {
         assert!((u.c - exact_c).abs() < 1e-10, "{} vs {exact_c}", u.c);
     }
 
+    /// `start` propagated to t − δ, t and t + δ (t = 0.3, δ = 1e-4, 2000 RK4 steps), and δ.
+    fn around(
+        start: &QuadraticExponent,
+        k: &KolmogorovCoefficients,
+    ) -> (QuadraticExponent, QuadraticExponent, QuadraticExponent, f64) {
+        let at = |t: f64| {
+            let mut u = start.clone();
+            u.propagate(k, t, 2000);
+            u
+        };
+        let (t, dt) = (0.3, 1e-4);
+        (at(t - dt), at(t), at(t + dt), dt)
+    }
+
     /// The same in 1-D, where `propagate` takes its scalar path (no matrices).
     #[test]
     fn the_scalar_riccati_solution_solves_the_kolmogorov_equation() {
@@ -151,13 +165,7 @@ mod riccati {
             b: DVector::from_element(1, 0.5),
             c: 0.1,
         };
-        let at = |t: f64| {
-            let mut u = start.clone();
-            u.propagate(&k, t, 2000);
-            u
-        };
-        let (t, dt) = (0.3, 1e-4);
-        let (before, mid, after) = (at(t - dt), at(t), at(t + dt));
+        let (before, mid, after, dt) = around(&start, &k);
         let (a, b) = (mid.a[(0, 0)], mid.b[0]);
         for x in [0.0, 0.5, -1.0, 1.2] {
             let du_dt = (after.value(&[x]) - before.value(&[x])) / (2.0 * dt);
@@ -188,13 +196,7 @@ mod riccati {
             b: DVector::from_column_slice(&[0.5, -0.3]),
             c: 0.1,
         };
-        let at = |t: f64| {
-            let mut u = start.clone();
-            u.propagate(&k, t, 2000);
-            u
-        };
-        let (t, dt) = (0.3, 1e-4);
-        let (before, mid, after) = (at(t - dt), at(t), at(t + dt));
+        let (before, mid, after, dt) = around(&start, &k);
         for x in [[0.0, 0.0], [0.5, -0.4], [-1.0, 0.8], [1.2, 1.1]] {
             let du_dt = (after.value(&x) - before.value(&x)) / (2.0 * dt);
             let v = DVector::from_column_slice(&x);
