@@ -71,5 +71,41 @@ fn fpe_split(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, fpe_split);
+/// Cost against grid size: one prediction interval of example 1 (Δτ = 0.1, Δt = 0.01 before
+/// the CFL sub-stepping) on 100…1600 cells, for the scaling exponents in BENCHMARKS.md.
+fn scaling(c: &mut Criterion) {
+    let experiment =
+        Experiment::new(presets::preset("sa-example-1").expect("preset")).expect("valid");
+    let dt_obs = experiment.config().time.dt_obs;
+    let traj = experiment.simulate(1);
+    let mut group = c.benchmark_group("fpe_split scaling (001 example 1)");
+    for cells in [100, 200, 400, 800, 1600] {
+        for (scheme, label) in [
+            (FpeScheme::Separation, "SA"),
+            (FpeScheme::ImplicitFdm, "FDM"),
+        ] {
+            let mut filter = ContinuousDiscreteGrid::new(
+                label.into(),
+                scheme,
+                experiment.model(),
+                experiment.prior(),
+                &FpeParams {
+                    cells: vec![cells],
+                    dt: 0.01,
+                },
+                &experiment.config().bounds(),
+                dt_obs,
+            )
+            .expect("filter");
+            filter.update(traj.observation(0)).expect("update");
+            let (substeps, _) = filter.step_count(dt_obs).expect("steps");
+            group.bench_function(format!("{label} {cells} cells ({substeps} steps)"), |b| {
+                b.iter(|| filter.predict(dt_obs).expect("predict"))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, fpe_split, scaling);
 criterion_main!(benches);
