@@ -68,10 +68,15 @@ fn neighbourhood(f: &[f64], i: usize) -> (usize, usize) {
     (lo, hi)
 }
 
+/// The step of the uniform grid.
+fn spacing(grid: &[f64]) -> f64 {
+    (grid[grid.len() - 1] - grid[0]) / (grid.len() - 1).max(1) as f64
+}
+
 /// The least-squares width of a Gaussian of height `f[i]` at `grid[i]` on `lo..=hi`.
 fn fit_sigma(grid: &[f64], f: &[f64], i: usize, (lo, hi): (usize, usize)) -> f64 {
     let (x0, y0) = (grid[i], f[i]);
-    let h = (grid[grid.len() - 1] - grid[0]) / (grid.len() - 1).max(1) as f64;
+    let h = spacing(grid);
     // Beyond 9σ from the peak the Gaussian is below e^{−40.5} of its height: there the
     // residual is y itself, summed once by prefix sums of y² instead of evaluating exp.
     let mut tail = Vec::with_capacity(hi - lo + 2);
@@ -194,6 +199,7 @@ pub fn decompose(
     let mut terms: Vec<GaussianTerm> = Vec::new();
     let mut residual = phi.to_vec();
     let mut flipped = vec![0.0; phi.len()];
+    let h = spacing(grid);
     while terms.len() < max_terms {
         // Step 2 on the residual, else step 4 on its negative.
         let mut sign = 1.0;
@@ -219,7 +225,6 @@ pub fn decompose(
             })
             .collect();
         // Each term only within 9σ of its mean (beyond, below e^{−40.5} of its height).
-        let h = (grid[grid.len() - 1] - grid[0]) / (grid.len() - 1).max(1) as f64;
         for t in &new {
             let index = |x: f64| {
                 libm::floor((x - grid[0]) / h).clamp(0.0, (grid.len() - 1) as f64) as usize
