@@ -10,6 +10,32 @@ use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
 use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
 use zakai::scenario::presets;
 
+/// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
+/// measurement `z0` at τ₀.
+fn grid_filter(
+    experiment: &Experiment,
+    (scheme, label): (FpeScheme, &str),
+    cells: usize,
+    dt: f64,
+    z0: &[f64],
+) -> ContinuousDiscreteGrid {
+    let mut filter = ContinuousDiscreteGrid::new(
+        label.into(),
+        scheme,
+        experiment.model(),
+        experiment.prior(),
+        &FpeParams {
+            cells: vec![cells],
+            dt,
+        },
+        &experiment.config().bounds(),
+        experiment.config().time.dt_obs,
+    )
+    .expect("filter");
+    filter.update(z0).expect("update");
+    filter
+}
+
 fn fpe_split(c: &mut Criterion) {
     let mut group = c.benchmark_group("fpe_split (001)");
     for (preset, cells, dt) in [("sa-example-1", 200, 0.01), ("sa-example-2", 35, 0.005)] {
@@ -20,20 +46,8 @@ fn fpe_split(c: &mut Criterion) {
             (FpeScheme::Separation, "SA"),
             (FpeScheme::ImplicitFdm, "FDM"),
         ] {
-            let mut filter = ContinuousDiscreteGrid::new(
-                label.into(),
-                scheme,
-                experiment.model(),
-                experiment.prior(),
-                &FpeParams {
-                    cells: vec![cells],
-                    dt,
-                },
-                &experiment.config().bounds(),
-                dt_obs,
-            )
-            .expect("filter");
-            filter.update(traj.observation(0)).expect("update");
+            let mut filter =
+                grid_filter(&experiment, (scheme, label), cells, dt, traj.observation(0));
             group.bench_function(format!("{preset} {label} prediction interval"), |b| {
                 b.iter(|| filter.predict(dt_obs).expect("predict"))
             });
@@ -84,20 +98,13 @@ fn scaling(c: &mut Criterion) {
             (FpeScheme::Separation, "SA"),
             (FpeScheme::ImplicitFdm, "FDM"),
         ] {
-            let mut filter = ContinuousDiscreteGrid::new(
-                label.into(),
-                scheme,
-                experiment.model(),
-                experiment.prior(),
-                &FpeParams {
-                    cells: vec![cells],
-                    dt: 0.01,
-                },
-                &experiment.config().bounds(),
-                dt_obs,
-            )
-            .expect("filter");
-            filter.update(traj.observation(0)).expect("update");
+            let mut filter = grid_filter(
+                &experiment,
+                (scheme, label),
+                cells,
+                0.01,
+                traj.observation(0),
+            );
             let (substeps, _) = filter.step_count(dt_obs).expect("steps");
             group.bench_function(format!("{label} {cells} cells ({substeps} steps)"), |b| {
                 b.iter(|| filter.predict(dt_obs).expect("predict"))
