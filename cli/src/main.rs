@@ -86,6 +86,13 @@ enum Command {
         #[arg(long, default_value = "0", allow_hyphen_values = true)]
         j: String,
     },
+    /// Check whether a scenario's model is a Yau filtering system, 002 (C1)–(C3) (the direct
+    /// method's condition), on its domain: each condition with where it fails, l (given by the
+    /// scenario's direct method or inferred) and the quadratics Σh² and η.
+    YauSystem {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+    },
     /// J(t) = ∫ (p̂ − p)² dx of the scenario's continuous–discrete grid filters (`separation`,
     /// `implicit_fdm`) against the exact Gaussian-sum density (001 §4, Fig. 4).
     Jcurve {
@@ -463,24 +470,47 @@ fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
         let j = parse_matrix(j, model.n)?;
         reports.push(convex_filter::theorem_3_2(model, prior, &bounds, &phi, &j));
     }
-    for r in reports {
-        println!(
-            "{}: {}",
-            r.theorem,
-            if r.holds() { "holds" } else { "does not hold" }
-        );
-        for c in &r.conditions {
-            println!(
-                "  [{}] {} — {}",
-                if c.holds { "ok" } else { "FAILS" },
-                c.name,
-                c.detail
-            );
-        }
-        if let Some(note) = &r.note {
-            println!("  note: {note}");
-        }
+    for r in &reports {
+        print_report(r);
     }
+    Ok(())
+}
+
+/// A theorem's conditions, one line each, and its note.
+fn print_report(r: &zakai::diagnostics::ConditionReport) {
+    println!(
+        "{}: {}",
+        r.theorem,
+        if r.holds() { "holds" } else { "does not hold" }
+    );
+    for c in &r.conditions {
+        println!(
+            "  [{}] {} — {}",
+            if c.holds { "ok" } else { "FAILS" },
+            c.name,
+            c.detail
+        );
+    }
+    if let Some(note) = &r.note {
+        println!("  note: {note}");
+    }
+}
+
+fn yau_system(scenario: &str) -> Result<(), String> {
+    use zakai::diagnostics::yau_system::{check, Affine};
+    let config = load(scenario)?;
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let model = experiment.model();
+    // The l of the scenario's direct method, if it lists one (1-D).
+    let given = experiment.config().methods.iter().find_map(|m| match m {
+        MethodConfig::Direct(p) if model.n == 1 => Some(Affine {
+            d_mat: nalgebra::DMatrix::from_element(1, 1, p.linear[0]),
+            d_vec: nalgebra::DVector::from_element(1, p.linear[1]),
+        }),
+        _ => None,
+    });
+    let system = check(model, &experiment.config().bounds(), given.as_ref());
+    print_report(&system.report);
     Ok(())
 }
 
@@ -565,6 +595,7 @@ fn main() -> ExitCode {
         } => simulate(&scenario, seed, estimates),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
+        Command::YauSystem { scenario } => yau_system(&scenario),
         Command::Frontier(args) => frontier(&args),
         Command::Jcurve {
             scenario,

@@ -96,6 +96,23 @@ fn reproduce_lists_tables_and_prints_ours_beside_the_paper() {
     assert!(!out.contains("NaN"));
 }
 
+/// `zakai yau-system`: example 4.4 with its l = x + 1 holds (η printed); the 2-D example (33)
+/// fails (C1) — its drift has a varying curl — and names the derivatives.
+#[test]
+fn yau_system_reports_each_condition() {
+    let o = zakai(&["yau-system", "direct-4.4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("): holds") && out.contains("η = "), "{out}");
+    assert!(out.contains("(given)"), "{out}");
+    let o = zakai(&["yau-system", "yau-2d"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("does not hold") && out.contains("[FAILS] (C1)"), "{out}");
+    assert!(out.contains("∂f2/∂x1 − ∂f1/∂x2"), "{out}");
+    assert_clean_failure(&zakai(&["yau-system", "no-such-preset"]), "no-such-preset");
+}
+
 #[test]
 fn convexity_reports_each_condition() {
     let o = zakai(&["convexity", "cos-x3"]);

@@ -341,3 +341,103 @@ fn example_4_4_direct_method_tracks_where_the_ekf_fails() {
     assert!(direct < 1.25 * qiem, "direct {direct} vs QIEM {qiem}");
     assert!(ekf > 5.0 * direct, "EKF {ekf} vs direct {direct}");
 }
+
+/// The (C1)–(C3) check of 002 on models whose answer is known by hand.
+mod yau_system {
+    use std::sync::Arc;
+
+    use nalgebra::DMatrix;
+    use zakai::diagnostics::yau_system::{check, YauSystem};
+    use zakai::model::expression::ExpressionFunction;
+    use zakai::model::{Model, ObservationModel};
+
+    fn system(f: &[&str], h: &[&str], half_width: f64) -> YauSystem {
+        let (n, m) = (f.len(), h.len());
+        let texts = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let model = Model::new(
+            Arc::new(ExpressionFunction::parse("f", &texts(f), n, n).unwrap()),
+            Arc::new(ExpressionFunction::parse("h", &texts(h), n, m).unwrap()),
+            DMatrix::identity(n, n),
+            ObservationModel::Continuous {
+                noise_cov: DMatrix::identity(m, m),
+            },
+        )
+        .unwrap();
+        check(&model, &vec![(-half_width, half_width); n], None)
+    }
+
+    /// Example 4.3 of 002: f = tanh x, h = (x sin x, x cos x): f² + f′ = 1 and Σh² = x², so
+    /// η = x² + 1 and Σh² = x² exactly (coefficients to 1e-9).
+    #[test]
+    fn example_4_3_is_a_yau_system_with_eta_x2_plus_1() {
+        let s = system(&["tanh(x)"], &["x*sin(x)", "x*cos(x)"], 20.0);
+        assert!(s.report.holds(), "{:?}", s.report);
+        let eta = s.eta.unwrap();
+        assert!((eta.a[(0, 0)] - 1.0).abs() < 1e-9, "{eta}");
+        assert!(eta.b[0].abs() < 1e-9 && (eta.c - 1.0).abs() < 1e-9, "{eta}");
+        let h2 = s.sum_h2.unwrap();
+        assert!(
+            (h2.a[(0, 0)] - 1.0).abs() < 1e-9 && h2.c.abs() < 1e-9,
+            "{h2}"
+        );
+    }
+
+    /// The cubic sensor: Σh² = x⁶ fails (C2) (and η with it), and the report says where.
+    #[test]
+    fn cubic_sensor_fails_c2_with_a_location() {
+        let s = system(&["0"], &["x^3"], 4.0);
+        let c = &s.report.conditions;
+        assert!(c[0].holds, "(C1) holds in one dimension");
+        assert!(!c[1].holds && c[1].name.starts_with("(C2)"), "{c:?}");
+        assert!(c[1].detail.contains("at x = "), "{}", c[1].detail);
+        assert!(!c[2].holds);
+        let message = s.failure().unwrap();
+        assert!(
+            message.contains("(C2) Σh²") && message.contains("(C3) η"),
+            "{message}"
+        );
+    }
+
+    /// 2-D with a constant curl: f = (x1 − x2, x1) has ∂f2/∂x1 − ∂f1/∂x2 = 2, so l is inferred
+    /// as the rotation D = [[0, −1], [1, 0]]; with h = (x1, x2),
+    /// η = (x1 − x2)² + x1² + 1 + x1² + x2² = 3x1² − 2x1x2 + 2x2² + 1.
+    #[test]
+    fn two_dimensional_constant_curl_infers_l_and_eta() {
+        let s = system(&["x1 - x2", "x1"], &["x1", "x2"], 3.0);
+        assert!(s.report.holds(), "{:?}", s.report);
+        let d = &s.linear.d_mat;
+        assert!(
+            (d[(0, 1)] + 1.0).abs() < 1e-9 && (d[(1, 0)] - 1.0).abs() < 1e-9,
+            "{d}"
+        );
+        assert!(d[(0, 0)].abs() < 1e-12 && d[(1, 1)].abs() < 1e-12, "{d}");
+        let eta = s.eta.unwrap();
+        let want = [[3.0, -1.0], [-1.0, 2.0]];
+        for (i, row) in want.iter().enumerate() {
+            for (j, w) in row.iter().enumerate() {
+                assert!((eta.a[(i, j)] - w).abs() < 1e-9, "{eta}");
+            }
+        }
+        assert!(eta.b.amax() < 1e-9 && (eta.c - 1.0).abs() < 1e-9, "{eta}");
+    }
+
+    /// 2-D with a varying curl: f = (x2², 0) has ∂f2/∂x1 − ∂f1/∂x2 = −2x2, not constant; the
+    /// report names the derivative pair.
+    #[test]
+    fn varying_curl_fails_c1() {
+        let s = system(&["x2^2", "0"], &["x1"], 2.0);
+        let c1 = &s.report.conditions[0];
+        assert!(!c1.holds, "{c1:?}");
+        assert!(c1.detail.contains("∂f2/∂x1 − ∂f1/∂x2"), "{}", c1.detail);
+    }
+
+    /// 3-D linear (Kalman–Bucy) systems are Yau systems; n = 5 is not checked and says so.
+    #[test]
+    fn linear_3d_holds_and_5d_is_refused() {
+        let s = system(&["-x1 + x2", "x3", "-x3 + 0.5*x1"], &["x1 + x3"], 2.0);
+        assert!(s.report.holds(), "{:?}", s.report);
+        let five = system(&["0", "0", "0", "0", "0"], &["x1"], 1.0);
+        assert!(!five.report.holds());
+        assert!(five.failure().unwrap().contains("n ≤ 4"));
+    }
+}

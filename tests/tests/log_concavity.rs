@@ -105,12 +105,13 @@ fn two_dimensional_maps() {
 
 mod convex_filter_conditions {
     use nalgebra::DMatrix;
-    use zakai::diagnostics::convex_filter::{theorem_3_2, theorem_3_8, ConvexReport};
+    use zakai::diagnostics::convex_filter::{theorem_3_2, theorem_3_8};
+    use zakai::diagnostics::ConditionReport;
     use zakai::experiment::Experiment;
     use zakai::model::expression::ExpressionFunction;
     use zakai::scenario::{presets, PriorConfig, ScenarioConfig};
 
-    fn check(config: ScenarioConfig, phi_j: Option<(&str, f64)>) -> ConvexReport {
+    fn check(config: ScenarioConfig, phi_j: Option<(&str, f64)>) -> ConditionReport {
         let e = Experiment::new(config).unwrap();
         let bounds = e.config().bounds();
         match phi_j {

@@ -17,66 +17,14 @@
 //! function are central differences (tolerance `10⁻³` relative).
 
 use alloc::format;
-use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::DMatrix;
 
+use super::{fmt_point, interior_points, Condition, ConditionReport};
 use crate::model::function::VectorFunction;
 use crate::model::{Model, ObservationModel, Prior};
-
-/// One condition of a theorem.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Condition {
-    /// The condition as the paper states it.
-    pub name: String,
-    /// Whether it holds on the domain.
-    pub holds: bool,
-    /// Worst point and value, or why it could not be checked.
-    pub detail: String,
-}
-
-/// The conditions of one theorem.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct ConvexReport {
-    /// Which theorem.
-    pub theorem: String,
-    /// Its conditions, in the paper's order.
-    pub conditions: Vec<Condition>,
-    /// What the check cannot decide.
-    pub note: Option<String>,
-}
-
-impl ConvexReport {
-    /// True when every condition holds.
-    pub fn holds(&self) -> bool {
-        self.conditions.iter().all(|c| c.holds)
-    }
-    /// The first failing condition.
-    pub fn failing(&self) -> Option<&Condition> {
-        self.conditions.iter().find(|c| !c.holds)
-    }
-}
-
-/// Evaluation points: a tensor grid strictly inside the box.
-fn points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
-    let n = bounds.len();
-    let per: usize = if n <= 4 { 11 } else { 3 };
-    let total = per.pow(n as u32);
-    (0..total)
-        .map(|mut idx| {
-            bounds
-                .iter()
-                .map(|&(lo, hi)| {
-                    let k = idx % per;
-                    idx /= per;
-                    lo + (hi - lo) * (k as f64 + 0.5) / per as f64
-                })
-                .collect()
-        })
-        .collect()
-}
 
 fn min_max_eigen(m: &DMatrix<f64>) -> (f64, f64) {
     let e = m.clone().symmetric_eigenvalues();
@@ -100,11 +48,6 @@ fn numeric_hessian(f: &dyn Fn(&[f64]) -> f64, x: &[f64], h: f64) -> DMatrix<f64>
             (at(1, i, 1, j) - at(1, i, -1, j) - at(-1, i, 1, j) + at(-1, i, -1, j)) / (4.0 * h * h)
         }
     })
-}
-
-fn fmt_point(x: &[f64]) -> String {
-    let parts: Vec<String> = x.iter().map(|v| format!("{v:.3}")).collect();
-    format!("({})", parts.join(", "))
 }
 
 /// "Convex on the domain": the smallest Hessian eigenvalue over the points, with the worst
@@ -201,8 +144,8 @@ fn linear_condition(name: &str, f: &dyn VectorFunction, pts: &[Vec<f64>]) -> Con
     }
 }
 
-fn not_continuous(theorem: &str) -> ConvexReport {
-    ConvexReport {
+fn not_continuous(theorem: &str) -> ConditionReport {
+    ConditionReport {
         theorem: theorem.into(),
         conditions: vec![Condition {
             name: "continuous observations dy = h dt + dw".into(),
@@ -217,12 +160,12 @@ fn not_continuous(theorem: &str) -> ConvexReport {
 
 /// Theorem 3.8: linear f, convex `½hᵀS⁻¹h`, log-concave σ₀ (Definition 3.6 depends on the
 /// observations and is left to the density's log-concavity map).
-pub fn theorem_3_8(model: &Model, prior: &Prior, bounds: &[(f64, f64)]) -> ConvexReport {
+pub fn theorem_3_8(model: &Model, prior: &Prior, bounds: &[(f64, f64)]) -> ConditionReport {
     let theorem = "Theorem 3.8 (linear f, convex ½hᵀS⁻¹h)";
     let Some(s_inv) = continuous_s_inv(model) else {
         return not_continuous(theorem);
     };
-    let pts = points(bounds);
+    let pts = interior_points(bounds, if bounds.len() <= 4 { 11 } else { 3 });
     let (n, m) = (model.n, model.m);
     let h_fn = &model.observation;
     let potential_hessian = |x: &[f64]| {
@@ -241,7 +184,7 @@ pub fn theorem_3_8(model: &Model, prior: &Prior, bounds: &[(f64, f64)]) -> Conve
         Some(out)
     };
     let step = step_size(bounds);
-    ConvexReport {
+    ConditionReport {
         theorem: theorem.into(),
         conditions: vec![
             linear_condition("f is linear", model.drift.as_ref(), &pts),
@@ -264,13 +207,13 @@ pub fn theorem_3_2(
     bounds: &[(f64, f64)],
     phi: &dyn VectorFunction,
     j: &DMatrix<f64>,
-) -> ConvexReport {
+) -> ConditionReport {
     let theorem = "Theorem 3.2 (linear h, f = Lx + l − ∇Φ)";
     let Some(s_inv) = continuous_s_inv(model) else {
         return not_continuous(theorem);
     };
     let n = model.n;
-    let pts = points(bounds);
+    let pts = interior_points(bounds, if bounds.len() <= 4 { 11 } else { 3 });
     let step = step_size(bounds);
     let mut conditions = vec![linear_condition(
         "h is linear",
@@ -289,7 +232,7 @@ pub fn theorem_3_2(
                 j.ncols()
             ),
         });
-        return ConvexReport {
+        return ConditionReport {
             theorem: theorem.into(),
             conditions,
             note: None,
@@ -365,7 +308,7 @@ pub fn theorem_3_2(
         1e-3,
         &|x| Some(numeric_hessian(&g, x, step)),
     ));
-    ConvexReport {
+    ConditionReport {
         theorem: theorem.into(),
         conditions,
         note: None,

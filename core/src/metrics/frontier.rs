@@ -201,13 +201,18 @@ pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiEr
         MethodConfig::Qiem(yy(p))
     });
     add("IEM", "points", grid_points, &|p| MethodConfig::Iem(yy(p)));
-    add("Spectral", "online basis", &[6, 8, 12, 16, 24], &|k| {
-        MethodConfig::Spectral(SpectralParams {
-            online_basis: Some(k),
-            offline_basis: Some(k.max(11)),
-            ..SpectralParams::default()
-        })
-    });
+    add(
+        "Spectral",
+        "online basis",
+        &[6, 8, 12, 16, 24, 32, 48, 64, 80, 96, 128],
+        &|k| {
+            MethodConfig::Spectral(SpectralParams {
+                online_basis: Some(k),
+                offline_basis: Some(k.max(11)),
+                ..SpectralParams::default()
+            })
+        },
+    );
     add("SA", "cells", &[25, 50, 100, 200, 400], &|c| {
         MethodConfig::Separation(FpeParams {
             cells: vec![c],

@@ -2,9 +2,10 @@
 //!
 //! For a Yau filtering system (C1)–(C3) with Q = I and S = I, `f = l + F′` with l affine
 //! (the `linear` parameter, 0 by default, which makes `F = ∫ f`), and
-//! `q = ½(l² − l′ − η)`, `η = f² + f′ + h²` (7), (33) must be a quadratic `Qx² + px + r` on the
-//! domain — checked by a least-squares fit on the grid whose worst residual names the failing
-//! condition. Per observation interval:
+//! `q = ½(l² − l′ − η)`, `η = f² + f′ + h²` (7), (33) is then the quadratic `Qx² + px + r`
+//! whose coefficients come from the check of (C1)–(C3) in [`crate::diagnostics::yau_system`]
+//! (numerical on the domain; a model that fails is refused with that report). Per observation
+//! interval:
 //!
 //! 1. decompose û (the density times `e^{−F}`, (30)–(31)) with the Gaussian approximation of
 //!    Algorithm 1;
@@ -27,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::gaussian_approximation::decompose;
 use super::riccati::{KolmogorovCoefficients, QuadraticExponent};
+use crate::diagnostics::yau_system::{self, Affine};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::grid::TensorGrid;
@@ -98,39 +100,6 @@ impl DirectParams {
     }
 }
 
-/// The least-squares quadratic `Q x² + p x + r` through `(x, y)`, with the largest residual
-/// and where it is.
-fn fit_quadratic(x: &[f64], y: &[f64]) -> ([f64; 3], f64, f64) {
-    let m = DMatrix::from_fn(x.len(), 3, |i, j| [1.0, x[i], x[i] * x[i]][j]);
-    let rhs = DVector::from_column_slice(y);
-    let normal = m.transpose() * &m;
-    let coef = normal
-        .cholesky()
-        .map(|c| c.solve(&(m.transpose() * &rhs)))
-        .unwrap_or_else(|| DVector::zeros(3));
-    let (mut worst, mut at) = (0.0f64, x[0]);
-    for (xi, yi) in x.iter().zip(y) {
-        let r = (yi - (coef[0] + coef[1] * xi + coef[2] * xi * xi)).abs();
-        if r > worst {
-            worst = r;
-            at = *xi;
-        }
-    }
-    ([coef[2], coef[1], coef[0]], worst, at)
-}
-
-/// The (C2)/(C3) check: `values` must be quadratic on the grid to relative accuracy 1e-6.
-fn quadratic_condition(name: &str, x: &[f64], values: &[f64]) -> Result<[f64; 3], FilterError> {
-    let (coef, worst, at) = fit_quadratic(x, values);
-    let scale = 1.0 + values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    if worst > 1e-6 * scale {
-        return Err(FilterError::Unsuitable(format!(
-            "not a Yau filtering system: {name} is not a quadratic polynomial on the domain (the best quadratic misses by {worst:.3e} at x = {at:.3})"
-        )));
-    }
-    Ok(coef)
-}
-
 /// The direct method of 002 (see the module doc).
 pub struct DirectFilter {
     name: String,
@@ -167,72 +136,40 @@ pub fn check_model(model: &Model) -> Result<(), FilterError> {
     Ok(())
 }
 
-/// What the (C2)/(C3) check of a model on nodes `x` yields: h at the nodes, `f − l`, and the
-/// quadratic `q(x) = Q x² + p x + r` of the Kolmogorov equation (002 (31)).
-struct YauSystem {
-    h: Vec<Vec<f64>>,
-    rest: Vec<f64>,
-    kolmogorov: [f64; 3],
-}
-
-/// Tabulates the model on `x` and checks that it is a Yau filtering system there: (C2) Σh²
-/// and (C3) η quadratic, with the linear part `l = a x + b` given by `linear`.
-fn yau_system(model: &Model, x: &[f64], linear: [f64; 2]) -> Result<YauSystem, FilterError> {
+/// The (C1)–(C3) check of [`crate::diagnostics::yau_system`] with the given 1-D
+/// `l = slope · x + offset`: the Kolmogorov quadratic `q(x) = Q x² + p x + r` of (32),
+/// `q = ½(l² − l′ − η)`, or the report of the failing conditions.
+fn kolmogorov_quadratic(
+    model: &Model,
+    bounds: &[(f64, f64)],
+    linear: [f64; 2],
+) -> Result<[f64; 3], FilterError> {
     let [slope, offset] = linear;
-    let (mut f, mut jac) = ([0.0], [0.0]);
-    let mut hv = vec![0.0; model.m];
-    let mut h = vec![Vec::with_capacity(x.len()); model.m];
-    let mut eta = Vec::with_capacity(x.len());
-    let mut rest = Vec::with_capacity(x.len());
-    let mut h2 = Vec::with_capacity(x.len());
-    for &xi in x {
-        model.drift.eval(&[xi], &mut f);
-        model.drift.jacobian(&[xi], &mut jac);
-        model.observation.eval(&[xi], &mut hv);
-        let hh: f64 = hv.iter().map(|v| v * v).sum();
-        for (c, v) in h.iter_mut().zip(&hv) {
-            c.push(*v);
-        }
-        h2.push(hh);
-        eta.push(f[0] * f[0] + jac[0] + hh);
-        rest.push(f[0] - slope * xi - offset);
+    let l = Affine {
+        d_mat: DMatrix::from_element(1, 1, slope),
+        d_vec: DVector::from_element(1, offset),
+    };
+    let system = yau_system::check(model, bounds, Some(&l));
+    if let Some(message) = system.failure() {
+        return Err(FilterError::Unsuitable(message));
     }
-    if eta.iter().chain(&rest).any(|v| !v.is_finite()) {
-        return Err(FilterError::Unsuitable(
-            "f, f′ or h is not finite on the domain; shrink it".into(),
-        ));
-    }
-    quadratic_condition("(C2) Σh²", x, &h2)?;
-    let q: Vec<f64> = x
-        .iter()
-        .zip(&eta)
-        .map(|(xi, e)| {
-            let l = slope * xi + offset;
-            0.5 * (l * l - slope - e)
-        })
-        .collect();
-    let kolmogorov = quadratic_condition("(C3) η", x, &q)?;
-    Ok(YauSystem {
-        h,
-        rest,
-        kolmogorov,
-    })
+    let eta = system.eta.expect("(C3) holds");
+    Ok([
+        0.5 * (slope * slope - eta.a[(0, 0)]),
+        0.5 * (2.0 * slope * offset - eta.b[0]),
+        0.5 * (offset * offset - slope - eta.c),
+    ])
 }
 
 /// Whether the direct method applies to `model` on `bounds` with `params` — the model checks
-/// and (C2)/(C3) on 101 nodes (the conditions are algebraic; the filter re-checks on its own
-/// grid) — without building anything else.
+/// and (C1)–(C3) — without building anything else.
 pub fn check_system(
     model: &Model,
     params: &DirectParams,
     bounds: &[(f64, f64)],
 ) -> Result<(), FilterError> {
     check_model(model)?;
-    let (a, b) = *bounds
-        .first()
-        .ok_or_else(|| FilterError::Unsuitable("the direct method needs a 1-D domain".into()))?;
-    let x: Vec<f64> = (1..=101).map(|i| a + (b - a) * i as f64 / 102.0).collect();
-    yau_system(model, &x, params.linear).map(|_| ())
+    kolmogorov_quadratic(model, bounds, params.linear).map(|_| ())
 }
 
 impl DirectFilter {
@@ -253,11 +190,27 @@ impl DirectFilter {
         let x: Vec<f64> = (0..params.points).map(|i| grid.coordinate(0, i)).collect();
         let dx = grid.spacing()[0];
         let [slope, offset] = params.linear;
-        let YauSystem {
-            h,
-            rest,
-            kolmogorov: [qq, p, r],
-        } = yau_system(model, &x, params.linear)?;
+        let [qq, p, r] = kolmogorov_quadratic(model, bounds, params.linear)?;
+        let (mut fv, mut hv) = ([0.0], vec![0.0; model.m]);
+        let mut h = vec![Vec::with_capacity(x.len()); model.m];
+        let mut rest = Vec::with_capacity(x.len());
+        for &xi in &x {
+            model.drift.eval(&[xi], &mut fv);
+            model.observation.eval(&[xi], &mut hv);
+            for (c, v) in h.iter_mut().zip(&hv) {
+                c.push(*v);
+            }
+            rest.push(fv[0] - slope * xi - offset);
+        }
+        if rest
+            .iter()
+            .chain(h.iter().flatten())
+            .any(|v| !v.is_finite())
+        {
+            return Err(FilterError::Unsuitable(
+                "f or h is not finite on the domain; shrink it".into(),
+            ));
+        }
         // F = ∫ (f − l) from the first node, by the trapezoidal rule.
         let mut potential = vec![0.0; x.len()];
         for i in 1..x.len() {

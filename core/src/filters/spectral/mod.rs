@@ -38,9 +38,9 @@ use crate::model::dmz::{DmzCoefficients, Likelihood};
 use crate::model::{Model, Prior};
 
 /// Largest number of basis functions per dimension.
-pub const MAX_BASIS: usize = 64;
+pub const MAX_BASIS: usize = 128;
 /// Largest number of quadrature nodes per dimension.
-pub const MAX_NODES: usize = 256;
+pub const MAX_NODES: usize = 512;
 
 /// Parameters of the spectral filter (004 Algorithm 1–2). Counts are per dimension.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
