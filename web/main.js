@@ -859,6 +859,7 @@ function showMonteCarlo(summary) {
     const cells = [
       m.name,
       m.mse == null ? '—' : `${m.mse.toFixed(4)} ± ${(m.mse_stderr ?? 0).toFixed(4)}`,
+      m.mse_quartiles ? `${m.mse_quartiles[1].toFixed(4)} [${m.mse_quartiles[0].toFixed(4)}, ${m.mse_quartiles[2].toFixed(4)}]` : '—',
       m.rms_components ? m.rms_components.map((v) => v.toFixed(4)).join(' / ') : '—',
       `${m.failed} / ${m.runs}`,
       (m.seconds_per_run * 1000).toFixed(1),
@@ -876,9 +877,10 @@ function showMonteCarlo(summary) {
 function exportMonteCarloCsv() {
   const s = mc.summary;
   if (!s) return;
-  const lines = ['method,runs,failed,mse,mse_stderr,rms_components,ms_per_run,ms_per_step'];
+  const lines = ['method,runs,failed,mse,mse_stderr,mse_q1,mse_median,mse_q3,rms_components,ms_per_run,ms_per_step'];
   for (const m of s.methods) {
-    lines.push([csvName(m.name), m.runs, m.failed, csvCell(m.mse), csvCell(m.mse_stderr),
+    const q = m.mse_quartiles ?? [null, null, null];
+    lines.push([csvName(m.name), m.runs, m.failed, csvCell(m.mse), csvCell(m.mse_stderr), ...q.map(csvCell),
       csvName((m.rms_components ?? []).join(' ')), m.seconds_per_run * 1000, m.seconds_per_step * 1000].join(','));
   }
   download(`zakai-${s.scenario}-montecarlo-${s.runs}runs.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));

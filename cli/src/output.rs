@@ -49,18 +49,26 @@ pub fn render(
         Format::Csv => {
             writeln!(
                 s,
-                "method,runs,failed,mse,mse_stderr,mse_components,rms_components,seconds_per_run,seconds_per_step,build_seconds"
+                "method,runs,failed,mse,mse_stderr,mse_q1,mse_median,mse_q3,mse_components,rms_components,seconds_per_run,seconds_per_step,build_seconds"
             )?;
             for m in &summary.methods {
                 let join = |v: &Option<Vec<f64>>| join_components(v, |x| format!("{x}"), ";", "");
+                let quartile = |k: usize| {
+                    m.mse_quartiles
+                        .map(|q| q[k].to_string())
+                        .unwrap_or_default()
+                };
                 writeln!(
                     s,
-                    "{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     m.name,
                     m.runs,
                     m.failed,
                     m.mse.map(|v| v.to_string()).unwrap_or_default(),
                     m.mse_stderr.map(|v| v.to_string()).unwrap_or_default(),
+                    quartile(0),
+                    quartile(1),
+                    quartile(2),
                     join(&m.mse_components),
                     join(&m.rms_components),
                     m.seconds_per_run,
@@ -80,9 +88,10 @@ pub fn render(
             writeln!(s)?;
             writeln!(
                 s,
-                "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12} {:>12} {:>10}",
+                "{:<12} {:>18} {:>26} {:>8} {:>22} {:>16} {:>12} {:>12} {:>10}",
                 "method",
                 "MSE (004 (43))",
+                "median [q₁, q₃] of runs",
                 "failed",
                 "MSE per component",
                 "RMS (000 §4.2)",
@@ -95,13 +104,18 @@ pub fn render(
                     (Some(v), Some(se)) if summary.runs > 1 => format!("{v:.4} ± {se:.4}"),
                     (v, _) => fmt_opt(v),
                 };
+                let spread = m.mse_quartiles.map_or_else(
+                    || "—".to_string(),
+                    |[q1, med, q3]| format!("{med:.4} [{q1:.4}, {q3:.4}]"),
+                );
                 let comps = per_component(&m.mse_components);
                 let rms = per_component(&m.rms_components);
                 writeln!(
                     s,
-                    "{:<12} {:>18} {:>8} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}",
+                    "{:<12} {:>18} {:>26} {:>8} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}",
                     m.name,
                     mse,
+                    spread,
                     format!("{}/{}", m.failed, m.runs),
                     comps,
                     rms,
@@ -157,10 +171,11 @@ pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> Stri
     );
     let _ = writeln!(
         s,
-        "{:<13} {:<9} {:>30} {:>16} {:>11} {:>7} {:>9} {:>9}",
+        "{:<13} {:<9} {:>30} {:>9} {:>16} {:>11} {:>7} {:>9} {:>9}",
         "row",
         "method",
         format!("ours {metric}"),
+        "median",
         "paper",
         "ours/paper",
         "failed",
@@ -190,10 +205,12 @@ pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> Stri
             };
             let _ = writeln!(
                 s,
-                "{:<13} {:<9} {:>30} {:>16} {:>11} {:>7} {:>9.2} {:>9.2}",
+                "{:<13} {:<9} {:>30} {:>9} {:>16} {:>11} {:>7} {:>9.2} {:>9.2}",
                 if i == 0 { row.label } else { "" },
                 c.name,
                 ours,
+                c.median
+                    .map_or_else(|| "—".to_string(), |m| format!("{m:.4}")),
                 paper,
                 ratio,
                 format!("{}/{}", c.failed, c.runs),

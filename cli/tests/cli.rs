@@ -108,7 +108,10 @@ fn yau_system_reports_each_condition() {
     let o = zakai(&["yau-system", "yau-2d"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("does not hold") && out.contains("[FAILS] (C1)"), "{out}");
+    assert!(
+        out.contains("does not hold") && out.contains("[FAILS] (C1)"),
+        "{out}"
+    );
     assert!(out.contains("∂f2/∂x1 − ∂f1/∂x2"), "{out}");
     assert_clean_failure(&zakai(&["yau-system", "no-such-preset"]), "no-such-preset");
 }

@@ -302,6 +302,9 @@ pub struct CellResult {
     pub ours: Option<Vec<f64>>,
     /// Standard errors of those means.
     pub stderr: Option<Vec<f64>>,
+    /// Median of the per-run MSE, when the table reports the MSE (what a paper's single
+    /// run is best compared with).
+    pub median: Option<f64>,
     /// Failed runs (by the preset's failure rule).
     pub failed: usize,
     /// Runs.
@@ -382,6 +385,10 @@ pub fn reproduce_row(
                 name,
                 ours,
                 stderr,
+                median: match table.metric {
+                    Metric::Mse => m.mse_quartiles.map(|q| q[1]),
+                    _ => None,
+                },
                 failed: m.failed,
                 runs: m.runs,
                 seconds_per_run: m.seconds_per_run,

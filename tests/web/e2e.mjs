@@ -291,8 +291,9 @@ try {
   const mcRows = await page.$$eval('#mc-table tbody tr', (rows) => rows.map((r) => [...r.children].map((c) => c.textContent)));
   console.log('Monte Carlo table:', JSON.stringify(mcRows));
   assert.equal(mcRows.length, (await page.evaluate(() => window.zakaiPage.info.methods.length)));
-  for (const r of mcRows) assert.match(r[3], /^\d+ \/ 3$/);
+  for (const r of mcRows) assert.match(r[4], /^\d+ \/ 3$/);
   assert.ok(mcRows.some((r) => /^\d+\.\d{4} ± \d+\.\d{4}$/.test(r[1])), 'MSE ± s.e. shown');
+  assert.ok(mcRows.some((r) => /^\d+\.\d{4} \[\d+\.\d{4}, \d+\.\d{4}\]$/.test(r[2])), 'median [q1, q3] shown');
   const [mcCsv] = await Promise.all([page.waitForEvent('download'), page.click('#mc-csv')]);
   const mcText = await (await import('node:fs/promises')).readFile(await mcCsv.path(), 'utf8');
   assert.equal(mcText.trim().split('\n').length, 1 + mcRows.length);

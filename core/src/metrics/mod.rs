@@ -71,9 +71,39 @@ pub fn mean_and_stderr(values: &[f64]) -> Option<(f64, f64)> {
     Some((mean, libm::sqrt(var / n)))
 }
 
+/// The quartiles `[q₁, median, q₃]` of `values` (linear interpolation between order
+/// statistics, Hyndman–Fan type 7), or None for no values. Heavy-tailed per-run MSEs — a few
+/// runs where a filter loses the state — pull the mean far from the typical run; the median
+/// is what a single run of a paper is best compared with.
+pub fn quartiles(values: &[f64]) -> Option<[f64; 3]> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| {
+        let h = p * (v.len() - 1) as f64;
+        let (lo, frac) = (libm::floor(h) as usize, h - libm::floor(h));
+        let hi = (lo + 1).min(v.len() - 1);
+        v[lo] + frac * (v[hi] - v[lo])
+    };
+    Some([at(0.25), at(0.5), at(0.75)])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quartiles_interpolate_between_order_statistics() {
+        assert_eq!(quartiles(&[]), None);
+        assert_eq!(quartiles(&[2.0]), Some([2.0, 2.0, 2.0]));
+        // 1..=5 in any order: positions 1, 2, 3 of 0..4.
+        assert_eq!(quartiles(&[5.0, 1.0, 4.0, 2.0, 3.0]), Some([2.0, 3.0, 4.0]));
+        // Four values: h = 0.75, 1.5, 2.25.
+        let q = quartiles(&[0.0, 10.0, 20.0, 100.0]).unwrap();
+        assert_eq!(q, [7.5, 15.0, 40.0]);
+    }
 
     #[test]
     fn mse_and_rms_follow_their_definitions() {

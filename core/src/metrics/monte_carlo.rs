@@ -26,6 +26,9 @@ pub struct MethodSummary {
     pub mse: Option<f64>,
     /// Standard error of that mean.
     pub mse_stderr: Option<f64>,
+    /// Quartiles `[q₁, median, q₃]` of the per-run MSEs (the runs that did not fail).
+    #[serde(default)]
+    pub mse_quartiles: Option<[f64; 3]>,
     /// Mean over the runs of the time-averaged error norm `‖x_k − x̂_k‖₂` (003 (5.1)).
     pub error_norm: Option<f64>,
     /// Standard error of that mean.
@@ -192,6 +195,7 @@ impl<'a> MonteCarlo<'a> {
                     failed,
                     mse: stats.map(|s| s.0),
                     mse_stderr: stats.map(|s| s.1),
+                    mse_quartiles: super::quartiles(&mses),
                     error_norm: norm_stats.map(|s| s.0),
                     error_norm_stderr: norm_stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),
