@@ -219,7 +219,7 @@ mod filter {
 
     /// 002 Example 4.3 (f = tanh x, h = (x sin x, x cos x)), 20 runs from the preset's seed:
     /// the direct method tracks the state — MSE at most 0.4 (measured 0.28; 002 Table 3:
-    /// 0.18–0.22 over its own runs) and within 10 % of QIEM on 1801 points — while the EKF
+    /// 0.18–0.22 over its own runs) and within 10 % of QIEM on 1799 points — while the EKF
     /// started at x̂₀ = 1, P₀ = 1 is more than 10× worse.
     #[test]
     fn example_4_3_is_tracked_and_the_ekf_is_not() {

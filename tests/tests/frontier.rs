@@ -76,14 +76,14 @@ fn a_small_frontier_runs_and_the_grid_filter_reaches_the_floor() {
     let sweep: Vec<SweepPoint> = default_sweep(&c)
         .unwrap()
         .into_iter()
-        .filter(|p| (p.family == "QIEM" && p.value == 201) || (p.family == "PF" && p.value == 50))
+        .filter(|p| (p.family == "QIEM" && p.value == 191) || (p.family == "PF" && p.value == 50))
         .collect();
     assert_eq!(sweep.len(), 2);
     let f = frontier(&c, &r, &sweep, 4, 1, &|| {}).unwrap();
     assert_eq!(f.points.len(), 2);
     assert!(f.floor.1.is_finite() && f.floor.1 > 0.0);
     let qiem = f.cheapest_within("QIEM", 0.05).expect("QIEM within 5 %");
-    assert_eq!(qiem.sweep.value, 201);
+    assert_eq!(qiem.sweep.value, 191);
 }
 
 #[test]

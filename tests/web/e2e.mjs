@@ -315,7 +315,7 @@ try {
   await stepOnce();
   await stepOnce();
 
-  // 12. Frame rate of the 2-D example (33) with QIEM on 128² and PF(10 000), playing (the
+  // 12. Frame rate of the 2-D example (33) with QIEM on 127² and PF(10 000), playing (the
   //     page's own count of animation frames per second; recorded in BENCHMARKS.md).
   await load(`${url}?preset=yau-2d`, 'yau-2d');
   await page.evaluate(() => {
@@ -340,7 +340,7 @@ try {
     fps2d.push(await page.evaluate(() => ({ fps: window.zakaiPage.fps, rows: window.zakaiPage.data.times.length })));
   }
   const perStep2d = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[3].textContent}`));
-  console.log('frame rate of yau-2d with QIEM 128² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
+  console.log('frame rate of yau-2d with QIEM 127² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
 
   // 13. Web safety: hostile strings in every text field and in a shared link's config are
   //     shown as text — nothing is parsed as HTML or run (and the CSP would refuse inline

@@ -147,10 +147,11 @@ pub fn reference_check(
 pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiError> {
     let n = config.state_dim();
     let dt = config.time.dt_obs.min(1e-3);
+    // N + 1 = 3·2^k or 2^k: the DST-I of QIEM runs on FFTs of length N + 1, fast for these.
     let grid_points: &[usize] = match n {
-        1 => &[51, 101, 201, 401, 801],
-        2 => &[16, 32, 64, 128],
-        _ => &[8, 16, 32],
+        1 => &[47, 95, 191, 383, 767],
+        2 => &[15, 31, 63, 127],
+        _ => &[7, 15, 31],
     };
     let yy = |p: usize| YauYauParams {
         points: vec![p],

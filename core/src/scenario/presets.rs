@@ -1,6 +1,9 @@
 //! Presets: every example of the five papers as a [`ScenarioConfig`], each citing its paper
 //! and equation. Grid filters (QIEM, IEM) use grids sized for the playground (a few hundred
-//! points per dimension, 128² in 2-D); 000 itself used Δs = 0.01, Δt = 10⁻⁴ on [−10, 10]. Where a paper leaves a choice open (a prior, a horizon, 003's bearings
+//! points per dimension, 127² in 2-D); 000 itself used Δs = 0.01, Δt = 10⁻⁴ on [−10, 10].
+//! Interior point counts are chosen so that N + 1 — the number of cells, and the length of
+//! the FFTs under QIEM's DST-I — has only small prime factors (400, 1000, 1400, 128, …),
+//! which also makes Δs a round number. Where a paper leaves a choice open (a prior, a horizon, 003's bearings
 //! function) the preset's `description` says what was chosen and why. Methods not built yet
 //! are simply absent from a preset's method list.
 
@@ -189,7 +192,7 @@ fn cos_xn(power: u32) -> ScenarioConfig {
             pf(500),
             MethodConfig::Qiem(YauYauParams {
                 likelihood_samples: 8,
-                ..grid(&[1401], 1e-3)
+                ..grid(&[1399], 1e-3)
             }),
         ],
     });
@@ -226,9 +229,9 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(150),
                 pf(200),
                 MethodConfig::Spectral(SpectralParams::default()),
-                qiem(&[401], 1e-3),
-                iem(401, 1e-3),
-                spt(401, 1e-3, 101),
+                qiem(&[399], 1e-3),
+                iem(399, 1e-3),
+                spt(399, 1e-3, 101),
             ],
         }),
         build(Spec {
@@ -257,7 +260,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(150),
                 pf(200),
                 MethodConfig::Spectral(SpectralParams::default()),
-                qiem(&[128, 128], 2e-3),
+                qiem(&[127, 127], 2e-3),
             ],
         }),
         build(Spec {
@@ -282,9 +285,9 @@ pub fn all() -> Vec<ScenarioConfig> {
                 MethodConfig::Ekf(EkfParams::default()),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
-                qiem(&[1001], 1e-3),
-                iem(1001, 1e-3),
-                spt(1001, 1e-3, 201),
+                qiem(&[999], 1e-3),
+                iem(999, 1e-3),
+                spt(999, 1e-3, 201),
             ],
         }),
         build(Spec {
@@ -308,8 +311,8 @@ pub fn all() -> Vec<ScenarioConfig> {
                 MethodConfig::Ekf(EkfParams::default()),
                 ukf(0.5, 2.0, 0.0),
                 pf(500),
-                qiem(&[128, 128], 1e-3),
-                MethodConfig::Qiem4(grid(&[128, 128], 1e-3)),
+                qiem(&[127, 127], 1e-3),
+                MethodConfig::Qiem4(grid(&[127, 127], 1e-3)),
             ],
         }),
         build(Spec {
@@ -344,7 +347,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                     points: 3201,
                     ..DirectParams::default()
                 }),
-                qiem(&[1801], 1e-2),
+                qiem(&[1799], 1e-2),
             ],
         }),
         build(Spec {
@@ -378,7 +381,7 @@ pub fn all() -> Vec<ScenarioConfig> {
                     linear: [1.0, 1.0],
                     ..DirectParams::default()
                 }),
-                qiem(&[721], 1e-3),
+                qiem(&[719], 1e-3),
             ],
         }),
         build(Spec {
