@@ -61,16 +61,25 @@ pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) 
 
 /// `v = m · 2^e` with `m ∈ [½, 1)` for finite `v > 0` (subnormals included), e as a float: the
 /// binary exponent stands in for `log₂ v` where a logarithm per value would cost too much.
+///
+/// Only float compares, integer bit operations and float arithmetic (the exponent field is
+/// turned into a float by writing it under the mantissa of 2⁵²), so loops over it vectorise.
 #[inline]
 pub fn binary_split(v: f64) -> (f64, f64) {
     const EXPONENT: u64 = 0x7ff << 52;
-    let (v, bias) = if v.to_bits() & EXPONENT == 0 {
-        (v * f64::from_bits((1023 + 64) << 52), 64.0)
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    // Subnormals (and anything not positive, whose result the callers discard) are scaled
+    // by 2⁶⁴ first.
+    let small = v < f64::MIN_POSITIVE;
+    let v = if small {
+        v * f64::from_bits((1023 + 64) << 52)
     } else {
-        (v, 0.0)
+        v
     };
+    let bias = if small { 64.0 } else { 0.0 };
     let bits = v.to_bits();
-    let e = ((bits & EXPONENT) >> 52) as f64 - 1022.0 - bias;
+    let field = f64::from_bits(((bits & EXPONENT) >> 52) | TWO_52.to_bits()) - TWO_52;
+    let e = field - 1022.0 - bias;
     let m = f64::from_bits((bits & !EXPONENT) | (1022 << 52));
     (m, e)
 }
@@ -84,17 +93,21 @@ pub fn binary_split(v: f64) -> (f64, f64) {
 /// of degree 13 (truncation `(½ ln 2)¹⁴/14! < 10⁻¹⁸`), and `2^k` written into the exponent bits.
 #[inline]
 pub fn exp_nonpositive(x: f64) -> f64 {
+    let mut lane = [x];
+    exp_nonpositive_lanes(&mut lane);
+    lane[0]
+}
+
+/// [`exp_nonpositive`] on N values at once, written lane by lane so that the N Horner chains
+/// (each a long run of dependent multiply–adds) are independent and the compiler interleaves
+/// them in vector registers; the same operations per value as the scalar function.
+#[inline(always)]
+fn exp_nonpositive_lanes<const N: usize>(x: &mut [f64; N]) {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     // ln 2 = LN2_HI + LN2_LO, the high part with 32 trailing zero bits so that k·LN2_HI is exact.
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
     const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-    let below = x < -700.0;
-    let x = if below { -700.0 } else { x };
-    let t = x * core::f64::consts::LOG2_E + ROUND;
-    let k = t - ROUND;
-    let r = (x - k * LN2_HI) - k * LN2_LO;
-    let mut p = 1.0 / 6_227_020_800.0;
-    for c in [
+    const TAYLOR: [f64; 13] = [
         1.0 / 479_001_600.0,
         1.0 / 39_916_800.0,
         1.0 / 3_628_800.0,
@@ -108,16 +121,58 @@ pub fn exp_nonpositive(x: f64) -> f64 {
         0.5,
         1.0,
         1.0,
-    ] {
-        p = p * r + c;
+    ];
+    let mut below = [false; N];
+    let mut t = [0.0; N];
+    let mut r = [0.0; N];
+    for i in 0..N {
+        below[i] = x[i] < -700.0;
+        let xi = if below[i] { -700.0 } else { x[i] };
+        t[i] = xi * core::f64::consts::LOG2_E + ROUND;
+        let k = t[i] - ROUND;
+        r[i] = (xi - k * LN2_HI) - k * LN2_LO;
     }
-    // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
-    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
-    if below {
-        0.0
-    } else {
-        p * scale
+    let mut p = [1.0 / 6_227_020_800.0; N];
+    for c in TAYLOR {
+        for i in 0..N {
+            p[i] = p[i] * r[i] + c;
+        }
     }
+    for i in 0..N {
+        // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
+        let scale = f64::from_bits(t[i].to_bits().wrapping_add(1023) << 52);
+        x[i] = if below[i] { 0.0 } else { p[i] * scale };
+    }
+}
+
+/// [`exp_nonpositive`] of every value in place, eight at a time (see
+/// [`exp_nonpositive_lanes`]); the same bits as the scalar function.
+pub fn exp_nonpositive_in_place(x: &mut [f64]) {
+    let mut chunks = x.chunks_exact_mut(8);
+    for c in &mut chunks {
+        let lanes: &mut [f64; 8] = c.try_into().expect("chunks of 8");
+        exp_nonpositive_lanes(lanes);
+    }
+    for v in chunks.into_remainder() {
+        *v = exp_nonpositive(*v);
+    }
+}
+
+/// The largest value (−∞ for none; NaNs are ignored as by `f64::max`), with eight running
+/// maxima so that the loop vectorises — the maximum does not depend on the order.
+pub fn max_value(x: &[f64]) -> f64 {
+    let mut lanes = [f64::NEG_INFINITY; 8];
+    let mut chunks = x.chunks_exact(8);
+    for c in &mut chunks {
+        for (m, v) in lanes.iter_mut().zip(c) {
+            *m = m.max(*v);
+        }
+    }
+    let rest = chunks.remainder().iter().copied();
+    lanes
+        .into_iter()
+        .chain(rest)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// `log Σ exp(a_i)` without overflow; `-∞` for an empty or all `-∞` input.

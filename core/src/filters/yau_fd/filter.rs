@@ -486,23 +486,30 @@ impl YauYauFilter {
                 *a += y * h;
             }
         }
-        let mut shift = f64::NEG_INFINITY;
+        // Passes without branches: split, maximum, exponentials, product.
         for (u, a) in self.u.iter_mut().zip(a.iter_mut()) {
-            if *u > 0.0 {
-                let (m, e) = linalg::binary_split(*u);
-                *u = m;
-                *a += e * core::f64::consts::LN_2;
-                shift = shift.max(*a);
-            }
+            let (m, e) = linalg::binary_split(*u);
+            let positive = *u > 0.0;
+            *a = if positive {
+                *a + e * core::f64::consts::LN_2
+            } else {
+                f64::NEG_INFINITY
+            };
+            // Not positive: ±0, except that a NaN stays NaN (and `normalise` reports it).
+            *u = if positive { m } else { *u * 0.0 };
         }
+        let shift = linalg::max_value(a);
         if shift == f64::NEG_INFINITY {
             // No mass left: `normalise` reports it.
             return;
         }
-        for (u, &a) in self.u.iter_mut().zip(a.iter()) {
-            // Zero values stay zero (their mantissa was not set).
-            // Clamped at 0: only values that were not positive can exceed the shift.
-            let w = *u * linalg::exp_nonpositive((a - shift).min(0.0));
+        // Clamped at 0 against round-off; nodes without mass have −∞ and get 0.
+        for a in a.iter_mut() {
+            *a = (*a - shift).min(0.0);
+        }
+        linalg::exp_nonpositive_in_place(a);
+        for (u, &f) in self.u.iter_mut().zip(a.iter()) {
+            let w = *u * f;
             *u = if w < super::FLUSH_BELOW { 0.0 } else { w };
         }
     }
