@@ -60,12 +60,17 @@ fn unpack(spectrum: impl Fn(usize) -> Complex<f64>, x: &mut [f64]) {
     }
 }
 
-/// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` for j = 1..M−1 (y_0 = 0), with
-/// `sines[j] = sin(jπ/M)` and x of length M − 1.
-fn sequence(sines: &[f64], x: &[f64], j: usize) -> f64 {
-    let m = x.len() + 1;
-    let (a, b) = (x[j - 1], x[m - j - 1]);
-    sines[j] * (a + b) + 0.5 * (a - b)
+/// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` from `s = sin(jπ/M)`, `a = x_j`,
+/// `b = x_{M−j}`.
+#[inline(always)]
+fn mix(s: f64, a: f64, b: f64) -> f64 {
+    s * (a + b) + 0.5 * (a - b)
+}
+
+/// The pairs `(x_j, x_{M−j})`, j = 1..M−1, of x (length M − 1): a forward and a backward walk,
+/// without index arithmetic, so that the loops over them vectorise.
+fn ends(x: &[f64]) -> impl Iterator<Item = (&f64, &f64)> {
+    x.iter().zip(x.iter().rev())
 }
 
 impl DstPlan {
@@ -104,10 +109,14 @@ impl DstPlan {
 
     /// Transforms one line of length N in place.
     pub fn transform(&mut self, x: &mut [f64]) {
-        let m = self.n + 1;
+        // y_0 = 0, y_j = mix(sin(jπ/M), x_j, x_{M−j}).
         self.input[0] = 0.0;
-        for j in 1..m {
-            self.input[j] = sequence(&self.sines, x, j);
+        for ((y, s), (a, b)) in self.input[1..]
+            .iter_mut()
+            .zip(&self.sines[1..])
+            .zip(ends(x))
+        {
+            *y = mix(*s, *a, *b);
         }
         let done =
             self.fft
@@ -151,8 +160,11 @@ impl DstPlan {
             for (two, z) in data.chunks_exact(2 * n).zip(self.batch.chunks_exact_mut(m)) {
                 let (la, lb) = two.split_at(n);
                 z[0] = Complex::new(0.0, 0.0);
-                for (j, v) in z.iter_mut().enumerate().skip(1) {
-                    *v = Complex::new(sequence(&self.sines, la, j), sequence(&self.sines, lb, j));
+                let both = ends(la).zip(ends(lb));
+                for ((v, s), ((a1, b1), (a2, b2))) in
+                    z[1..].iter_mut().zip(&self.sines[1..]).zip(both)
+                {
+                    *v = Complex::new(mix(*s, *a1, *b1), mix(*s, *a2, *b2));
                 }
             }
             self.pair_fft

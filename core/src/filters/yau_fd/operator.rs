@@ -142,18 +142,60 @@ impl KolmogorovOperator {
             let c = dt / (2.0 * grid.spacing()[d]);
             let p = &self.p[d];
             let block = stride * n;
+            // `out_j += c p_j (u_{j+1} − u_{j−1})` along every line, zero beyond the ends;
+            // whole rows of `stride` values at a time (consecutive lines side by side), so
+            // that the loops run over contiguous memory and vectorise.
+            if stride == 1 {
+                for ((o, p), u) in out
+                    .chunks_exact_mut(n)
+                    .zip(p.chunks_exact(n))
+                    .zip(u.chunks_exact(n))
+                {
+                    along_line(o, p, u, c);
+                }
+                continue;
+            }
             for outer in (0..u.len()).step_by(block) {
-                for inner in 0..stride {
-                    let base = outer + inner;
-                    let mut left = 0.0;
-                    for j in 0..n {
-                        let i = base + j * stride;
-                        let right = if j + 1 < n { u[i + stride] } else { 0.0 };
-                        out[i] += c * p[i] * (right - left);
-                        left = u[i];
+                for j in 0..n {
+                    let row = outer + j * stride;
+                    let here = row..row + stride;
+                    let left = (j > 0).then(|| &u[row - stride..row]);
+                    let right = (j + 1 < n).then(|| &u[row + stride..row + 2 * stride]);
+                    let (o, p) = (&mut out[here.clone()], &p[here]);
+                    match (left, right) {
+                        (Some(l), Some(r)) => {
+                            for ((o, p), (r, l)) in o.iter_mut().zip(p).zip(r.iter().zip(l)) {
+                                *o += c * p * (r - l);
+                            }
+                        }
+                        (None, Some(r)) => {
+                            for ((o, p), r) in o.iter_mut().zip(p).zip(r) {
+                                *o += c * p * (r - 0.0);
+                            }
+                        }
+                        (Some(l), None) => {
+                            for ((o, p), l) in o.iter_mut().zip(p).zip(l) {
+                                *o += c * p * (0.0 - l);
+                            }
+                        }
+                        (None, None) => {}
                     }
                 }
             }
         }
     }
+}
+
+/// `o_j += c p_j (u_{j+1} − u_{j−1})` along one contiguous line, zero beyond its ends.
+fn along_line(o: &mut [f64], p: &[f64], u: &[f64], c: f64) {
+    let n = u.len();
+    if n == 1 {
+        return;
+    }
+    o[0] += c * p[0] * (u[1] - 0.0);
+    let inner = o[1..n - 1].iter_mut().zip(&p[1..n - 1]);
+    for ((o, p), (r, l)) in inner.zip(u[2..].iter().zip(&u[..n - 2])) {
+        *o += c * p * (r - l);
+    }
+    o[n - 1] += c * p[n - 1] * (0.0 - u[n - 2]);
 }
