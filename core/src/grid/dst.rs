@@ -44,19 +44,16 @@ pub struct DstPlan {
 /// Writes X_1..X_N into `x` from the real DFT `Y_k = R_k − i I_k` of y (see the module doc):
 /// `X_{2k} = I_k`, `X_{2k+1} = X_{2k−1} + R_k`, `X_1 = R_0/2`.
 fn unpack(spectrum: impl Fn(usize) -> Complex<f64>, x: &mut [f64]) {
-    let n = x.len();
     let mut odd = 0.5 * spectrum(0).re;
     x[0] = odd;
-    let mut k = 1;
-    while 2 * k <= n {
+    // (x[2k−1], x[2k]) = (X_{2k}, X_{2k+1}), the last pair possibly cut short.
+    for (k, pair) in (1..).zip(x[1..].chunks_mut(2)) {
         let c = spectrum(k);
-        x[2 * k - 1] = -c.im;
-        if 2 * k + 1 > n {
-            break;
+        pair[0] = -c.im;
+        if let Some(v) = pair.get_mut(1) {
+            odd += c.re;
+            *v = odd;
         }
-        odd += c.re;
-        x[2 * k] = odd;
-        k += 1;
     }
 }
 
