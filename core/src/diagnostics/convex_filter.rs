@@ -26,6 +26,11 @@ use super::{fmt_point, interior_points, Condition, ConditionReport};
 use crate::model::function::VectorFunction;
 use crate::model::{Model, ObservationModel, Prior};
 
+/// The evaluation points of the module doc: 11 per dimension up to 4 dimensions, else 3.
+fn points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
+    interior_points(bounds, if bounds.len() <= 4 { 11 } else { 3 })
+}
+
 fn min_max_eigen(m: &DMatrix<f64>) -> (f64, f64) {
     let e = m.clone().symmetric_eigenvalues();
     (e.min(), e.max())
@@ -165,7 +170,7 @@ pub fn theorem_3_8(model: &Model, prior: &Prior, bounds: &[(f64, f64)]) -> Condi
     let Some(s_inv) = continuous_s_inv(model) else {
         return not_continuous(theorem);
     };
-    let pts = interior_points(bounds, if bounds.len() <= 4 { 11 } else { 3 });
+    let pts = points(bounds);
     let (n, m) = (model.n, model.m);
     let h_fn = &model.observation;
     let potential_hessian = |x: &[f64]| {
@@ -213,7 +218,7 @@ pub fn theorem_3_2(
         return not_continuous(theorem);
     };
     let n = model.n;
-    let pts = interior_points(bounds, if bounds.len() <= 4 { 11 } else { 3 });
+    let pts = points(bounds);
     let step = step_size(bounds);
     let mut conditions = vec![linear_condition(
         "h is linear",

@@ -201,10 +201,10 @@ pub fn check(model: &Model, bounds: &[(f64, f64)], linear: Option<&Affine>) -> Y
 
 /// f's curl, Σh² and η at the test points.
 struct Tabulated {
+    /// The state dimension n.
+    n: usize,
     /// `curl[p][i * n + j] = ∂f_j/∂x_i − ∂f_i/∂x_j` at point p.
     curl: Vec<Vec<f64>>,
-    /// The antisymmetric part `½(J − Jᵀ)` of f's Jacobian, averaged over the points.
-    antisymmetric: DMatrix<f64>,
     /// Largest |∂f_i/∂x_j| seen.
     scale: f64,
     sum_h2: Vec<f64>,
@@ -216,8 +216,8 @@ impl Tabulated {
         let (n, m) = (model.n, model.m);
         let (mut f, mut jac, mut h) = (vec![0.0; n], vec![0.0; n * n], vec![0.0; m]);
         let mut t = Tabulated {
+            n,
             curl: Vec::with_capacity(pts.len()),
-            antisymmetric: DMatrix::zeros(n, n),
             scale: 0.0,
             sum_h2: Vec::with_capacity(pts.len()),
             eta: Vec::with_capacity(pts.len()),
@@ -235,14 +235,26 @@ impl Tabulated {
             for i in 0..n {
                 for j in 0..n {
                     curl[i * n + j] = jac[j * n + i] - jac[i * n + j];
-                    t.antisymmetric[(i, j)] += 0.5 * (jac[i * n + j] - jac[j * n + i]);
                 }
             }
             t.curl.push(curl);
             t.scale = jac.iter().fold(t.scale, |a, v| a.max(v.abs()));
         }
-        t.antisymmetric /= pts.len() as f64;
         t
+    }
+
+    /// The antisymmetric part `½(J − Jᵀ) = −½ curl` of f's Jacobian, averaged over the points.
+    fn mean_antisymmetric(&self) -> DMatrix<f64> {
+        let n = self.n;
+        let mut d = DMatrix::zeros(n, n);
+        for curl in &self.curl {
+            for i in 0..n {
+                for j in 0..n {
+                    d[(i, j)] -= 0.5 * curl[i * n + j];
+                }
+            }
+        }
+        d / self.curl.len().max(1) as f64
     }
 }
 
@@ -253,10 +265,10 @@ fn curl_condition(
     linear: Option<&Affine>,
     exact: bool,
 ) -> (Condition, Affine) {
-    let n = t.antisymmetric.nrows();
+    let n = t.n;
     let name = "(C1) f = l + ∇F with l affine (Theorem 2.1: constant curl ∂f_j/∂x_i − ∂f_i/∂x_j)";
     let l = linear.cloned().unwrap_or_else(|| Affine {
-        d_mat: t.antisymmetric.clone(),
+        d_mat: t.mean_antisymmetric(),
         d_vec: DVector::zeros(n),
     });
     let finite = t.curl.iter().flatten().all(|v| v.is_finite()) && t.scale.is_finite();

@@ -162,27 +162,30 @@ impl KolmogorovOperator {
                     let left = (j > 0).then(|| &u[row - stride..row]);
                     let right = (j + 1 < n).then(|| &u[row + stride..row + 2 * stride]);
                     let (o, p) = (&mut out[here.clone()], &p[here]);
+                    let zero = core::iter::repeat(&0.0);
                     match (left, right) {
-                        (Some(l), Some(r)) => {
-                            for ((o, p), (r, l)) in o.iter_mut().zip(p).zip(r.iter().zip(l)) {
-                                *o += c * p * (r - l);
-                            }
-                        }
-                        (None, Some(r)) => {
-                            for ((o, p), r) in o.iter_mut().zip(p).zip(r) {
-                                *o += c * p * (r - 0.0);
-                            }
-                        }
-                        (Some(l), None) => {
-                            for ((o, p), l) in o.iter_mut().zip(p).zip(l) {
-                                *o += c * p * (0.0 - l);
-                            }
-                        }
+                        (Some(l), Some(r)) => add_difference(o, p, c, r.iter(), l.iter()),
+                        (None, Some(r)) => add_difference(o, p, c, r.iter(), zero),
+                        (Some(l), None) => add_difference(o, p, c, zero, l.iter()),
                         (None, None) => {}
                     }
                 }
             }
         }
+    }
+}
+
+/// `o_i += c p_i (r_i − l_i)`; a missing neighbour is an iterator of zeros.
+#[inline]
+fn add_difference<'a>(
+    o: &mut [f64],
+    p: &[f64],
+    c: f64,
+    right: impl Iterator<Item = &'a f64>,
+    left: impl Iterator<Item = &'a f64>,
+) {
+    for ((o, p), (r, l)) in o.iter_mut().zip(p).zip(right.zip(left)) {
+        *o += c * p * (r - l);
     }
 }
 
@@ -193,9 +196,12 @@ fn along_line(o: &mut [f64], p: &[f64], u: &[f64], c: f64) {
         return;
     }
     o[0] += c * p[0] * (u[1] - 0.0);
-    let inner = o[1..n - 1].iter_mut().zip(&p[1..n - 1]);
-    for ((o, p), (r, l)) in inner.zip(u[2..].iter().zip(&u[..n - 2])) {
-        *o += c * p * (r - l);
-    }
+    add_difference(
+        &mut o[1..n - 1],
+        &p[1..n - 1],
+        c,
+        u[2..].iter(),
+        u[..n - 2].iter(),
+    );
     o[n - 1] += c * p[n - 1] * (0.0 - u[n - 2]);
 }
