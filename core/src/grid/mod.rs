@@ -205,15 +205,11 @@ impl TensorGrid {
         let mut x: Vec<f64> = (0..d).map(|k| self.coordinate(k, 0)).collect();
         let mut counter = vec![0usize; d];
         for (line, values) in u.chunks_exact(n0).enumerate() {
-            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-            for (i, &w) in values.iter().enumerate() {
-                let x0 = self.first_axis[i];
-                s0 += w;
-                s1 += w * x0;
-                s2 += w * x0 * x0;
-                if w > best.0 {
-                    best = (w, line * n0 + i);
-                }
+            let [s0, s1, s2, top] = line_sums(values, &self.first_axis);
+            if top > best.0 {
+                // The first node that holds the largest value, as a scan with `>` would pick.
+                let i = values.iter().position(|&w| w == top).unwrap_or(0);
+                best = (top, line * n0 + i);
             }
             total += s0;
             mean[0] += s1;
@@ -323,6 +319,52 @@ impl TensorGrid {
                 });
             }
         }
+    }
+}
+
+/// Partial sums per lane in [`line_sums`]: four vectors of four, so that no chain of dependent
+/// additions waits on another's latency.
+const LANES: usize = 16;
+
+crate::linalg::simd::per_node_kernel! {
+    /// `[Σ w_i, Σ w_i x_i, Σ w_i x_i², max w_i]` along one grid line, in [`LANES`] interleaved
+    /// partial sums (combined in a fixed order, so the result does not depend on the vector
+    /// width) that the compiler keeps in vector registers — one chain of dependent additions
+    /// would wait on every addition's latency.
+    fn line_sums(w: &[f64], x: &[f64]) -> [f64; 4] {
+        let (mut s0, mut s1, mut s2) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        let mut top = [f64::NEG_INFINITY; LANES];
+        let mut w_chunks = w.chunks_exact(LANES);
+        let mut x_chunks = x.chunks_exact(LANES);
+        let mut add = |l: usize, w: f64, x: f64| {
+            let wx = w * x;
+            s0[l] += w;
+            s1[l] += wx;
+            s2[l] += wx * x;
+            top[l] = top[l].max(w);
+        };
+        for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
+            for l in 0..LANES {
+                add(l, w[l], x[l]);
+            }
+        }
+        for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
+            add(l, *w, *x);
+        }
+        // Pairwise, in a fixed order.
+        let sum = |s: [f64; LANES]| {
+            let mut s = s;
+            let mut width = LANES;
+            while width > 1 {
+                width /= 2;
+                for l in 0..width {
+                    s[l] += s[l + width];
+                }
+            }
+            s[0]
+        };
+        let max = top.iter().fold(f64::NEG_INFINITY, |m, &t| m.max(t));
+        [sum(s0), sum(s1), sum(s2), max]
     }
 }
 

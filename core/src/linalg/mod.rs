@@ -1,6 +1,9 @@
 //! Small dense linear-algebra helpers on nalgebra shared by the filters.
 
 pub mod banded;
+pub(crate) mod simd;
+
+use simd::per_node_kernel;
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
@@ -145,34 +148,51 @@ fn exp_nonpositive_lanes<const N: usize>(x: &mut [f64; N]) {
     }
 }
 
-/// [`exp_nonpositive`] of every value in place, eight at a time (see
-/// [`exp_nonpositive_lanes`]); the same bits as the scalar function.
-pub fn exp_nonpositive_in_place(x: &mut [f64]) {
-    let mut chunks = x.chunks_exact_mut(8);
-    for c in &mut chunks {
-        let lanes: &mut [f64; 8] = c.try_into().expect("chunks of 8");
-        exp_nonpositive_lanes(lanes);
-    }
-    for v in chunks.into_remainder() {
-        *v = exp_nonpositive(*v);
+per_node_kernel! {
+    /// `u_i ← u_i e^{min(a_i − shift, 0)}`, and 0 where that falls below `flush`: the
+    /// exponentials by [`exp_nonpositive`], eight at a time (see [`exp_nonpositive_lanes`];
+    /// the same bits as the scalar function), fused with the product so that the values are
+    /// read and written once.
+    pub fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
+        let scale = |u: &mut f64, f: f64| {
+            let w = *u * f;
+            *u = if w < flush { 0.0 } else { w };
+        };
+        let mut lanes = [0.0; 8];
+        let mut u_chunks = u.chunks_exact_mut(8);
+        let mut a_chunks = a.chunks_exact(8);
+        for (u, a) in (&mut u_chunks).zip(&mut a_chunks) {
+            for (l, a) in lanes.iter_mut().zip(a) {
+                *l = (a - shift).min(0.0);
+            }
+            exp_nonpositive_lanes(&mut lanes);
+            for (u, &f) in u.iter_mut().zip(&lanes) {
+                scale(u, f);
+            }
+        }
+        for (u, a) in u_chunks.into_remainder().iter_mut().zip(a_chunks.remainder()) {
+            scale(u, exp_nonpositive((a - shift).min(0.0)));
+        }
     }
 }
 
-/// The largest value (−∞ for none; NaNs are ignored as by `f64::max`), with eight running
-/// maxima so that the loop vectorises — the maximum does not depend on the order.
-pub fn max_value(x: &[f64]) -> f64 {
-    let mut lanes = [f64::NEG_INFINITY; 8];
-    let mut chunks = x.chunks_exact(8);
-    for c in &mut chunks {
-        for (m, v) in lanes.iter_mut().zip(c) {
-            *m = m.max(*v);
+per_node_kernel! {
+    /// The largest value (−∞ for none; NaNs are ignored as by `f64::max`), with eight running
+    /// maxima so that the loop vectorises — the maximum does not depend on the order.
+    pub fn max_value(x: &[f64]) -> f64 {
+        let mut lanes = [f64::NEG_INFINITY; 8];
+        let mut chunks = x.chunks_exact(8);
+        for c in &mut chunks {
+            for (m, v) in lanes.iter_mut().zip(c) {
+                *m = m.max(*v);
+            }
         }
+        let rest = chunks.remainder().iter().copied();
+        lanes
+            .into_iter()
+            .chain(rest)
+            .fold(f64::NEG_INFINITY, f64::max)
     }
-    let rest = chunks.remainder().iter().copied();
-    lanes
-        .into_iter()
-        .chain(rest)
-        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// `log Σ exp(a_i)` without overflow; `-∞` for an empty or all `-∞` input.

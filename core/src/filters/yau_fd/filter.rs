@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use nalgebra::DVector;
 
 use super::guarantees::{self, GuaranteeWarning};
-use super::operator::KolmogorovOperator;
+use super::operator::{explicit_part, KolmogorovOperator};
 use super::superposition::Superposition;
 use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
@@ -194,6 +194,8 @@ struct QiemStep {
     fourth_order: bool,
     /// `e^{Δt q}` or `1 + Δt q` per node.
     potential: Vec<f64>,
+    /// `potential ⊙ p_d` per dimension (see [`super::operator::explicit_part`]).
+    weighted_drift: Vec<Vec<f64>>,
     dt: f64,
 }
 
@@ -205,12 +207,16 @@ impl QiemStep {
         term: PotentialTerm,
         fourth_order: bool,
     ) -> Self {
-        let potential =
+        let potential: Vec<f64> =
             op.q.iter()
                 .map(|&q| match term {
                     PotentialTerm::Explicit => 1.0 + dt * q,
                     PotentialTerm::Exponential => libm::exp(dt * q),
                 })
+                .collect();
+        let weighted_drift =
+            op.p.iter()
+                .map(|p| p.iter().zip(&potential).map(|(p, w)| p * w).collect())
                 .collect();
         QiemStep {
             spectral: if fourth_order {
@@ -220,15 +226,16 @@ impl QiemStep {
             },
             fourth_order,
             potential,
+            weighted_drift,
             dt,
         }
     }
 
-    fn step(&mut self, op: &KolmogorovOperator, grid: &TensorGrid, u: &mut [f64], tmp: &mut [f64]) {
-        op.add_advection_with(grid, u, self.dt, tmp, self.fourth_order);
-        for ((v, t), w) in u.iter_mut().zip(tmp.iter()).zip(&self.potential) {
-            *v = t * w;
-        }
+    /// One step from `u` (left in `tmp`) to the new density in `u` (the two swap places).
+    fn step(&mut self, grid: &TensorGrid, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+        let (drift, weight) = (&self.weighted_drift, &self.potential);
+        explicit_part(grid, drift, weight, u, self.dt, tmp, self.fourth_order);
+        core::mem::swap(u, tmp);
         self.spectral.solve(grid, u);
     }
 }
@@ -274,6 +281,32 @@ impl CellSamples {
                 * inv;
             let w = *v * mean;
             *v = if w < super::FLUSH_BELOW { 0.0 } else { w };
+        }
+    }
+}
+
+linalg::simd::per_node_kernel! {
+    /// The first pass of the factor (15) (see [`YauYauFilter::update`]):
+    /// `a_i ← [a_i] + y (S⁻¹h)_i − Δτ (½hᵀS⁻¹h)_i + e_i ln 2` (the bracket only when
+    /// `accumulate`) and `u_i ← m_i` for `u_i = m_i 2^{e_i} > 0`; where `u_i` is not positive,
+    /// `a_i = −∞` and `u_i = ±0` — except that a NaN stays NaN, for `normalise` to report.
+    /// Without branches, so that it vectorises.
+    fn split_exponents(
+        u: &mut [f64],
+        a: &mut [f64],
+        s_inv_h: &[f64],
+        half_hsh: &[f64],
+        y: f64,
+        dt_obs: f64,
+        accumulate: bool,
+    ) {
+        for (((u, a), h), c) in u.iter_mut().zip(a.iter_mut()).zip(s_inv_h).zip(half_hsh) {
+            let base = if accumulate { *a } else { 0.0 };
+            let (m, e) = linalg::binary_split(*u);
+            let positive = *u > 0.0;
+            let exponent = base + y * h - dt_obs * c + e * core::f64::consts::LN_2;
+            *a = if positive { exponent } else { f64::NEG_INFINITY };
+            *u = if positive { m } else { *u * 0.0 };
         }
     }
 }
@@ -440,7 +473,7 @@ impl YauYauFilter {
                     QiemStep::new(&self.op, &self.grid, dt, PotentialTerm::Exponential, false);
                 Solver::Superposition(Superposition::new(&self.grid, &self.params, |u, tmp| {
                     for _ in 0..substeps {
-                        qiem.step(&self.op, &self.grid, u, tmp);
+                        qiem.step(&self.grid, u, tmp);
                     }
                 })?)
             }
@@ -478,40 +511,29 @@ impl YauYauFilter {
             return;
         }
         let a = &mut self.tmp;
-        for (a, h) in a.iter_mut().zip(&self.op.half_hsh) {
-            *a = -dt_obs * h;
-        }
-        for (y, sh) in dy.iter().zip(&self.op.s_inv_h) {
+        // The components after the first: a_i = Σ_{j ≥ 1} y_j (S⁻¹h)_j(s_i); the first and the
+        // rest of the exponent follow in one pass with the split.
+        for (j, (y, sh)) in dy.iter().zip(&self.op.s_inv_h).enumerate().skip(1) {
             for (a, h) in a.iter_mut().zip(sh) {
-                *a += y * h;
+                *a = if j == 1 { y * h } else { *a + y * h };
             }
         }
-        // Passes without branches: split, maximum, exponentials, product.
-        for (u, a) in self.u.iter_mut().zip(a.iter_mut()) {
-            let (m, e) = linalg::binary_split(*u);
-            let positive = *u > 0.0;
-            *a = if positive {
-                *a + e * core::f64::consts::LN_2
-            } else {
-                f64::NEG_INFINITY
-            };
-            // Not positive: ±0, except that a NaN stays NaN (and `normalise` reports it).
-            *u = if positive { m } else { *u * 0.0 };
-        }
+        split_exponents(
+            &mut self.u,
+            a,
+            &self.op.s_inv_h[0],
+            &self.op.half_hsh,
+            dy[0],
+            dt_obs,
+            dy.len() > 1,
+        );
         let shift = linalg::max_value(a);
         if shift == f64::NEG_INFINITY {
             // No mass left: `normalise` reports it.
             return;
         }
         // Clamped at 0 against round-off; nodes without mass have −∞ and get 0.
-        for a in a.iter_mut() {
-            *a = (*a - shift).min(0.0);
-        }
-        linalg::exp_nonpositive_in_place(a);
-        for (u, &f) in self.u.iter_mut().zip(a.iter()) {
-            let w = *u * f;
-            *u = if w < super::FLUSH_BELOW { 0.0 } else { w };
-        }
+        linalg::scale_by_exp(&mut self.u, a, shift, super::FLUSH_BELOW);
     }
 
     fn predict(&mut self, dt_obs: f64) -> Result<(), FilterError> {
@@ -527,7 +549,7 @@ impl YauYauFilter {
             }
             Solver::Qiem(qiem) => {
                 for _ in 0..*substeps {
-                    qiem.step(&self.op, &self.grid, &mut self.u, &mut self.tmp);
+                    qiem.step(&self.grid, &mut self.u, &mut self.tmp);
                 }
             }
             // The whole interval at once: project onto the bumps, combine their solutions.

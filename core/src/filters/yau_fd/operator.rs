@@ -89,86 +89,87 @@ impl KolmogorovOperator {
             diffusion,
         })
     }
+}
 
-    /// `out = u + dt Σ_d p_d K_d u` (central differences, zero Dirichlet boundary): the explicit
-    /// drift part of (18); `q` is applied by the caller. Walks every grid line once per
-    /// dimension, without per-node index arithmetic.
-    pub fn add_advection(&self, grid: &TensorGrid, u: &[f64], dt: f64, out: &mut [f64]) {
-        self.add_advection_with(grid, u, dt, out, false)
-    }
-
-    /// As [`KolmogorovOperator::add_advection`], with the 5-point fourth-order first difference
-    /// `(−u_{j+2} + 8u_{j+1} − 8u_{j−1} + u_{j−2})/(12Δs)` when `fourth_order` (000 Algorithm 4's
-    /// 𝔻_d, as we read it; zero values beyond the boundary).
-    pub fn add_advection_with(
-        &self,
-        grid: &TensorGrid,
-        u: &[f64],
-        dt: f64,
-        out: &mut [f64],
-        fourth_order: bool,
-    ) {
-        out.copy_from_slice(u);
-        if fourth_order {
-            for d in 0..grid.dim() {
-                let stride = grid.stride(d);
-                let n = grid.shape()[d] as isize;
-                let c = dt / (12.0 * grid.spacing()[d]);
-                let p = &self.p[d];
-                let block = stride * n as usize;
-                for outer in (0..u.len()).step_by(block) {
-                    for inner in 0..stride {
-                        let base = outer + inner;
-                        let at = |j: isize| {
-                            if j < 0 || j >= n {
-                                0.0
-                            } else {
-                                u[base + j as usize * stride]
-                            }
-                        };
-                        for j in 0..n {
-                            let i = base + j as usize * stride;
-                            let diff = -at(j + 2) + 8.0 * at(j + 1) - 8.0 * at(j - 1) + at(j - 2);
-                            out[i] += c * p[i] * diff;
-                        }
-                    }
-                }
-            }
-            return;
+/// `out = w ⊙ u + Δt Σ_d p̃_d K_d u` (central differences, zero Dirichlet boundary): the explicit
+/// part of a QIEM step (18) — the drift, with the potential applied as the node weight `w`
+/// (`e^{Δt q}` or `1 + Δt q`) to the whole explicit result, so that `p̃_d = w ⊙ p_d` is the drift
+/// coefficient already weighted. With `fourth_order`, the 5-point fourth-order first difference
+/// `(−u_{j+2} + 8u_{j+1} − 8u_{j−1} + u_{j−2})/(12Δs)` (000 Algorithm 4's 𝔻_d, as we read it;
+/// zero values beyond the boundary). Walks every grid line once per dimension, without per-node
+/// index arithmetic; along the first (contiguous) dimension the weighting and the difference are
+/// one pass.
+pub fn explicit_part(
+    grid: &TensorGrid,
+    weighted_drift: &[Vec<f64>],
+    weight: &[f64],
+    u: &[f64],
+    dt: f64,
+    out: &mut [f64],
+    fourth_order: bool,
+) {
+    if fourth_order {
+        for ((o, w), u) in out.iter_mut().zip(weight).zip(u) {
+            *o = w * u;
         }
         for d in 0..grid.dim() {
             let stride = grid.stride(d);
-            let n = grid.shape()[d];
-            let c = dt / (2.0 * grid.spacing()[d]);
-            let p = &self.p[d];
-            let block = stride * n;
-            // `out_j += c p_j (u_{j+1} − u_{j−1})` along every line, zero beyond the ends;
-            // whole rows of `stride` values at a time (consecutive lines side by side), so
-            // that the loops run over contiguous memory and vectorise.
-            if stride == 1 {
-                for ((o, p), u) in out
-                    .chunks_exact_mut(n)
-                    .zip(p.chunks_exact(n))
-                    .zip(u.chunks_exact(n))
-                {
-                    along_line(o, p, u, c);
-                }
-                continue;
-            }
+            let n = grid.shape()[d] as isize;
+            let c = dt / (12.0 * grid.spacing()[d]);
+            let p = &weighted_drift[d];
+            let block = stride * n as usize;
             for outer in (0..u.len()).step_by(block) {
-                for j in 0..n {
-                    let row = outer + j * stride;
-                    let here = row..row + stride;
-                    let left = (j > 0).then(|| &u[row - stride..row]);
-                    let right = (j + 1 < n).then(|| &u[row + stride..row + 2 * stride]);
-                    let (o, p) = (&mut out[here.clone()], &p[here]);
-                    let zero = core::iter::repeat(&0.0);
-                    match (left, right) {
-                        (Some(l), Some(r)) => add_difference(o, p, c, r.iter(), l.iter()),
-                        (None, Some(r)) => add_difference(o, p, c, r.iter(), zero),
-                        (Some(l), None) => add_difference(o, p, c, zero, l.iter()),
-                        (None, None) => {}
+                for inner in 0..stride {
+                    let base = outer + inner;
+                    let at = |j: isize| {
+                        if j < 0 || j >= n {
+                            0.0
+                        } else {
+                            u[base + j as usize * stride]
+                        }
+                    };
+                    for j in 0..n {
+                        let i = base + j as usize * stride;
+                        let diff = -at(j + 2) + 8.0 * at(j + 1) - 8.0 * at(j - 1) + at(j - 2);
+                        out[i] += c * p[i] * diff;
                     }
+                }
+            }
+        }
+        return;
+    }
+    for d in 0..grid.dim() {
+        let stride = grid.stride(d);
+        let n = grid.shape()[d];
+        let c = dt / (2.0 * grid.spacing()[d]);
+        let p = &weighted_drift[d];
+        let block = stride * n;
+        // `out_j += c p̃_j (u_{j+1} − u_{j−1})` along every line, zero beyond the ends;
+        // whole rows of `stride` values at a time (consecutive lines side by side), so
+        // that the loops run over contiguous memory and vectorise.
+        if stride == 1 {
+            let lines = out
+                .chunks_exact_mut(n)
+                .zip(weight.chunks_exact(n))
+                .zip(p.chunks_exact(n).zip(u.chunks_exact(n)));
+            for ((o, w), (p, u)) in lines {
+                first_dimension(o, w, p, u, c);
+            }
+            continue;
+        }
+        for outer in (0..u.len()).step_by(block) {
+            for j in 0..n {
+                let row = outer + j * stride;
+                let here = row..row + stride;
+                let left = (j > 0).then(|| &u[row - stride..row]);
+                let right = (j + 1 < n).then(|| &u[row + stride..row + 2 * stride]);
+                let (o, p) = (&mut out[here.clone()], &p[here]);
+                let zero = core::iter::repeat(&0.0);
+                match (left, right) {
+                    (Some(l), Some(r)) => add_difference(o, p, c, r.iter(), l.iter()),
+                    (None, Some(r)) => add_difference(o, p, c, r.iter(), zero),
+                    (Some(l), None) => add_difference(o, p, c, zero, l.iter()),
+                    (None, None) => {}
                 }
             }
         }
@@ -189,19 +190,21 @@ fn add_difference<'a>(
     }
 }
 
-/// `o_j += c p_j (u_{j+1} − u_{j−1})` along one contiguous line, zero beyond its ends.
-fn along_line(o: &mut [f64], p: &[f64], u: &[f64], c: f64) {
+/// `o_j = w_j u_j + c p_j (u_{j+1} − u_{j−1})` along one contiguous line, zero beyond its ends.
+fn first_dimension(o: &mut [f64], w: &[f64], p: &[f64], u: &[f64], c: f64) {
     let n = u.len();
+    let at = |j: usize, l: f64, r: f64| w[j] * u[j] + c * p[j] * (r - l);
     if n == 1 {
+        o[0] = at(0, 0.0, 0.0);
         return;
     }
-    o[0] += c * p[0] * (u[1] - 0.0);
-    add_difference(
-        &mut o[1..n - 1],
-        &p[1..n - 1],
-        c,
-        u[2..].iter(),
-        u[..n - 2].iter(),
-    );
-    o[n - 1] += c * p[n - 1] * (0.0 - u[n - 2]);
+    o[0] = at(0, 0.0, u[1]);
+    let inner = o[1..n - 1]
+        .iter_mut()
+        .zip(w[1..n - 1].iter().zip(&u[1..n - 1]))
+        .zip(p[1..n - 1].iter().zip(u[2..].iter().zip(&u[..n - 2])));
+    for ((o, (w, u)), (p, (r, l))) in inner {
+        *o = w * u + c * p * (r - l);
+    }
+    o[n - 1] = at(n - 1, u[n - 2], 0.0);
 }

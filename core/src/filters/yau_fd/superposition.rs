@@ -32,7 +32,7 @@ impl Superposition {
     pub fn new(
         grid: &TensorGrid,
         params: &YauYauParams,
-        mut propagate: impl FnMut(&mut [f64], &mut [f64]),
+        mut propagate: impl FnMut(&mut Vec<f64>, &mut Vec<f64>),
     ) -> Result<Self, FilterError> {
         let dims = grid.dim();
         let counts = params.centre_shape(dims);

@@ -1,0 +1,41 @@
+//! Per-node loops compiled twice: for the target as configured, and with AVX2 for x86-64 CPUs
+//! that have it, chosen at run time.
+//!
+//! The grid filters spend most of their time in short loops over every node (the factor (15)
+//! of 000, the moments, the DST's pre- and post-passes). Written lane by lane, they vectorise
+//! to the widest registers the compiler may use; a portable x86-64 build may only use SSE2's
+//! two lanes, while the machines this runs on usually have AVX2's four. A kernel defined with
+//! [`per_node_kernel!`] checks the CPU once per call (`is_x86_feature_detected!` caches its
+//! answer) and runs its AVX2 copy when it can.
+//!
+//! The two copies do the same arithmetic in the same order — FMA is not enabled and Rust never
+//! fuses a multiply and an add by itself — so their results are bit-identical; only the
+//! vector width differs. Without `std` or on other architectures (wasm32 builds with
+//! `+simd128` instead) there is one copy.
+
+/// Defines a function whose body is compiled for the target and, on x86-64 with `std`, once
+/// more with AVX2 enabled, and runs the AVX2 copy when the CPU has it (see the module doc).
+/// Plain functions only: no generics, no `self`.
+macro_rules! per_node_kernel {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn body($($arg: $ty),*) $(-> $ret)? $body
+            #[cfg(all(feature = "std", target_arch = "x86_64"))]
+            {
+                #[target_feature(enable = "avx2")]
+                unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
+                    body($($arg),*)
+                }
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU supports AVX2, checked just above.
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            body($($arg),*)
+        }
+    };
+}
+
+pub(crate) use per_node_kernel;
