@@ -112,11 +112,10 @@ pub fn explicit_part(
         for ((o, w), u) in out.iter_mut().zip(weight).zip(u) {
             *o = w * u;
         }
-        for d in 0..grid.dim() {
+        for (d, p) in weighted_drift.iter().enumerate() {
             let stride = grid.stride(d);
             let n = grid.shape()[d] as isize;
             let c = dt / (12.0 * grid.spacing()[d]);
-            let p = &weighted_drift[d];
             let block = stride * n as usize;
             for outer in (0..u.len()).step_by(block) {
                 for inner in 0..stride {
@@ -138,11 +137,10 @@ pub fn explicit_part(
         }
         return;
     }
-    for d in 0..grid.dim() {
+    for (d, p) in weighted_drift.iter().enumerate() {
         let stride = grid.stride(d);
         let n = grid.shape()[d];
         let c = dt / (2.0 * grid.spacing()[d]);
-        let p = &weighted_drift[d];
         let block = stride * n;
         // `out_j += c p̃_j (u_{j+1} − u_{j−1})` along every line, zero beyond the ends;
         // whole rows of `stride` values at a time (consecutive lines side by side), so
