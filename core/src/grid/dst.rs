@@ -43,6 +43,7 @@ pub struct DstPlan {
 
 /// Writes X_1..X_N into `x` from the real DFT `Y_k = R_k − i I_k` of y (see the module doc):
 /// `X_{2k} = I_k`, `X_{2k+1} = X_{2k−1} + R_k`, `X_1 = R_0/2`.
+#[inline(always)]
 fn unpack(spectrum: impl Fn(usize) -> Complex<f64>, x: &mut [f64]) {
     let mut odd = 0.5 * spectrum(0).re;
     x[0] = odd;
@@ -68,6 +69,23 @@ fn mix(s: f64, a: f64, b: f64) -> f64 {
 /// without index arithmetic, so that the loops over them vectorise.
 fn ends(x: &[f64]) -> impl Iterator<Item = (&f64, &f64)> {
     x.iter().zip(x.iter().rev())
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `y_0 = 0`, `y_j = mix(sin(jπ/M), x_j, x_{M−j})` for one line.
+    fn mix_line(y: &mut [f64], sines: &[f64], x: &[f64]) {
+        y[0] = 0.0;
+        for ((y, s), (a, b)) in y[1..].iter_mut().zip(&sines[1..]).zip(ends(x)) {
+            *y = mix(*s, *a, *b);
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// [`unpack`] of one line's real DFT.
+    fn unpack_line(spectrum: &[Complex<f64>], x: &mut [f64]) {
+        unpack(|k| spectrum[k], x);
+    }
 }
 
 impl DstPlan {
@@ -106,22 +124,13 @@ impl DstPlan {
 
     /// Transforms one line of length N in place.
     pub fn transform(&mut self, x: &mut [f64]) {
-        // y_0 = 0, y_j = mix(sin(jπ/M), x_j, x_{M−j}).
-        self.input[0] = 0.0;
-        for ((y, s), (a, b)) in self.input[1..]
-            .iter_mut()
-            .zip(&self.sines[1..])
-            .zip(ends(x))
-        {
-            *y = mix(*s, *a, *b);
-        }
+        mix_line(&mut self.input, &self.sines, x);
         let done =
             self.fft
                 .process_with_scratch(&mut self.input, &mut self.spectrum, &mut self.scratch);
         // The buffers were made by the plan, so their lengths are right.
         debug_assert!(done.is_ok());
-        let spectrum = &self.spectrum;
-        unpack(|k| spectrum[k], x);
+        unpack_line(&self.spectrum, x);
     }
 
     /// Transforms every line of a tensor array along the dimension with `stride`, whose lines
