@@ -5,35 +5,37 @@
 //! `−(4/Δs²) sin²(jπ / (2(N + 1)))` (000 Algorithm 3, line 13). DST-I is its own inverse up to
 //! the factor `2/(N + 1)`.
 //!
-//! Computation (one real FFT of length N + 1 per line, which realfft performs as a complex FFT
-//! of half that length; along an axis of a tensor array, two lines per complex FFT of length
-//! N + 1, batched): with M = N + 1 and x_0 = x_M = 0, the sequence
+//! Computation (one real DFT of length M = N + 1 per line; along an axis of a tensor array, two
+//! lines per complex FFT of length M, batched): with x_0 = x_M = 0, the sequence
 //! `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})`, j = 0..M−1, has the real DFT
 //! `Σ_j y_j e^{−2πijk/M} = R_k − i I_k` with `I_k = X_{2k}` (the antisymmetric half of y picks out
 //! the even sine frequencies) and `R_k = X_{2k+1} − X_{2k−1}` (the symmetric half, through
 //! `2 sin a cos b = sin(a + b) + sin(a − b)`), so the odd coefficients follow by the running sum
 //! from `X_1 = R_0 / 2`.
+//!
+//! A single line's real DFT, for even M = 2L: the complex FFT of length L of
+//! `z_j = y_{2j} + i y_{2j+1}` gives `E_k = (Z_k + conj Z_{L−k})/2` and
+//! `O_k = (Z_k − conj Z_{L−k})/(2i)`, the DFTs of the even and odd samples, and
+//! `Y_k = E_k + e^{−2πik/M} O_k` — computed inside the unpacking pass, so that the spectrum is
+//! never stored. For odd M, the complex FFT of length M of y itself.
 
 use alloc::sync::Arc;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 /// A planned DST-I of one length with its scratch buffers.
 pub struct DstPlan {
     n: usize,
-    fft: Arc<dyn RealToComplex<f64>>,
+    /// One line's real DFT through a complex FFT of half the length (M even).
+    half: Option<HalfLength>,
     /// Complex FFT of length N + 1 for two lines at once (their sequences y as real and
-    /// imaginary part), run over a whole axis in one batch.
+    /// imaginary part), run over a whole axis in one batch; also one line of odd M alone.
     pair_fft: Arc<dyn Fft<f64>>,
     /// `sin(jπ/(N + 1))`, j = 0..N.
     sines: Vec<f64>,
-    input: Vec<f64>,
-    spectrum: Vec<Complex<f64>>,
-    scratch: Vec<Complex<f64>>,
     /// The batch of paired lines of one axis (grown on first use, then reused).
     batch: Vec<Complex<f64>>,
     pair_scratch: Vec<Complex<f64>>,
@@ -41,21 +43,36 @@ pub struct DstPlan {
     line: Vec<f64>,
 }
 
-/// Writes X_1..X_N into `x` from the real DFT `Y_k = R_k − i I_k` of y (see the module doc):
-/// `X_{2k} = I_k`, `X_{2k+1} = X_{2k−1} + R_k`, `X_1 = R_0/2`.
+/// The real DFT of one line of even length M = 2L by a complex FFT of length L (module doc).
+struct HalfLength {
+    fft: Arc<dyn Fft<f64>>,
+    /// `z_j = y_{2j} + i y_{2j+1}`, transformed in place.
+    z: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+    /// `−(i/2) e^{−2πik/M}`, k = 0..L−1.
+    twiddles: Vec<Complex<f64>>,
+}
+
+/// Writes X_1..X_N into `x` from the real DFT `Y_k = R_k − i I_k` of y, k = 0, 1, … (see the
+/// module doc): `X_{2k} = I_k`, `X_{2k+1} = X_{2k−1} + R_k`, `X_1 = R_0/2`.
 #[inline(always)]
-fn unpack(spectrum: impl Fn(usize) -> Complex<f64>, x: &mut [f64]) {
-    let mut odd = 0.5 * spectrum(0).re;
+fn unpack(mut spectrum: impl Iterator<Item = Complex<f64>>, x: &mut [f64]) {
+    let mut odd = 0.5 * spectrum.next().unwrap_or_default().re;
     x[0] = odd;
     // (x[2k−1], x[2k]) = (X_{2k}, X_{2k+1}), the last pair possibly cut short.
-    for (k, pair) in (1..).zip(x[1..].chunks_mut(2)) {
-        let c = spectrum(k);
+    for (pair, c) in x[1..].chunks_mut(2).zip(spectrum) {
         pair[0] = -c.im;
         if let Some(v) = pair.get_mut(1) {
             odd += c.re;
             *v = odd;
         }
     }
+}
+
+/// `(Z_k, conj Z_{L−k})` for k = 0..L−1, with `Z_L = Z_0`.
+fn with_mirror(z: &[Complex<f64>]) -> impl Iterator<Item = (Complex<f64>, Complex<f64>)> + '_ {
+    let mirror = core::iter::once(&z[0]).chain(z[1..].iter().rev());
+    z.iter().zip(mirror).map(|(a, b)| (*a, b.conj()))
 }
 
 /// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` from `s = sin(jπ/M)`, `a = x_j`,
@@ -82,9 +99,11 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
-    /// [`unpack`] of one line's real DFT.
-    fn unpack_line(spectrum: &[Complex<f64>], x: &mut [f64]) {
-        unpack(|k| spectrum[k], x);
+    /// [`unpack`] of one line's real DFT `Y_k = (Z_k + conj Z_{L−k})/2 + t_k (Z_k − conj Z_{L−k})`
+    /// from the half-length FFT Z and the twiddles t (module doc; `Z_L = Z_0`).
+    fn unpack_half(z: &[Complex<f64>], twiddles: &[Complex<f64>], x: &mut [f64]) {
+        let spectrum = with_mirror(z).zip(twiddles).map(|((a, b), t)| (a + b) * 0.5 + t * (a - b));
+        unpack(spectrum, x);
     }
 }
 
@@ -93,21 +112,34 @@ impl DstPlan {
     /// the first [`DstPlan::transform_axis`], never in later ones).
     pub fn new(n: usize) -> Self {
         let m = n + 1;
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(m);
-        let pair_fft = FftPlanner::<f64>::new().plan_fft_forward(m);
+        let mut planner = FftPlanner::<f64>::new();
+        let pair_fft = planner.plan_fft_forward(m);
         let sines = (0..m)
             .map(|j| libm::sin(j as f64 * core::f64::consts::PI / m as f64))
             .collect();
+        let half = (m % 2 == 0).then(|| {
+            let l = m / 2;
+            let fft = planner.plan_fft_forward(l);
+            let twiddles = (0..l)
+                .map(|k| {
+                    let theta = 2.0 * core::f64::consts::PI * k as f64 / m as f64;
+                    Complex::new(0.0, -0.5) * Complex::new(libm::cos(theta), -libm::sin(theta))
+                })
+                .collect();
+            HalfLength {
+                z: vec![Complex::new(0.0, 0.0); l],
+                scratch: vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()],
+                fft,
+                twiddles,
+            }
+        });
         DstPlan {
             n,
+            half,
             sines,
-            input: fft.make_input_vec(),
-            spectrum: fft.make_output_vec(),
-            scratch: fft.make_scratch_vec(),
             pair_scratch: vec![Complex::new(0.0, 0.0); pair_fft.get_inplace_scratch_len()],
             batch: Vec::new(),
             line: Vec::new(),
-            fft,
             pair_fft,
         }
     }
@@ -124,13 +156,24 @@ impl DstPlan {
 
     /// Transforms one line of length N in place.
     pub fn transform(&mut self, x: &mut [f64]) {
-        mix_line(&mut self.input, &self.sines, x);
-        let done =
-            self.fft
-                .process_with_scratch(&mut self.input, &mut self.spectrum, &mut self.scratch);
-        // The buffers were made by the plan, so their lengths are right.
-        debug_assert!(done.is_ok());
-        unpack_line(&self.spectrum, x);
+        match &mut self.half {
+            Some(h) => {
+                mix_line(bytemuck::cast_slice_mut(&mut h.z), &self.sines, x);
+                h.fft.process_with_scratch(&mut h.z, &mut h.scratch);
+                unpack_half(&h.z, &h.twiddles, x);
+            }
+            None => {
+                let z = &mut self.batch;
+                z.resize(self.n + 1, Complex::new(0.0, 0.0));
+                z[0] = Complex::new(0.0, 0.0);
+                for ((z, s), (a, b)) in z[1..].iter_mut().zip(&self.sines[1..]).zip(ends(x)) {
+                    *z = Complex::new(mix(*s, *a, *b), 0.0);
+                }
+                self.pair_fft
+                    .process_with_scratch(&mut z[..self.n + 1], &mut self.pair_scratch);
+                unpack(z.iter().copied(), x);
+            }
+        }
     }
 
     /// Transforms every line of a tensor array along the dimension with `stride`, whose lines
@@ -176,10 +219,9 @@ impl DstPlan {
             self.pair_fft
                 .process_with_scratch(&mut self.batch, &mut self.pair_scratch);
             for (two, z) in data.chunks_exact_mut(2 * n).zip(self.batch.chunks_exact(m)) {
-                let mirror = |k: usize| if k == 0 { z[0] } else { z[m - k] }.conj();
                 let (la, lb) = two.split_at_mut(n);
-                unpack(|k| (z[k] + mirror(k)) * 0.5, la);
-                unpack(|k| (z[k] - mirror(k)) * Complex::new(0.0, -0.5), lb);
+                unpack(with_mirror(z).map(|(a, b)| (a + b) * 0.5), la);
+                unpack(with_mirror(z).map(|(a, b)| (a - b) * Complex::new(0.0, -0.5)), lb);
             }
         }
         if lines % 2 == 1 {
