@@ -75,6 +75,54 @@ fn with_mirror(z: &[Complex<f64>]) -> impl Iterator<Item = (Complex<f64>, Comple
     z.iter().zip(mirror).map(|(a, b)| (*a, b.conj()))
 }
 
+/// The first value of every pair.
+fn firsts(q: &[f64]) -> impl Iterator<Item = f64> + '_ {
+    q.chunks_exact(2).map(|p| p[0])
+}
+
+/// `x_{2k} ← x_0 + x_2 + … + x_{2k}`, as four interleaved running sums over quarters of the
+/// slots, each started from the total of the quarters before it (a first pass over the first
+/// three): one chain of dependent additions would wait on every addition's latency.
+#[inline(always)]
+fn running_sum_of_even_slots(x: &mut [f64]) {
+    let quarter = x.len().div_ceil(2) / 4;
+    if quarter < 4 {
+        let mut acc = 0.0;
+        for v in x.iter_mut().step_by(2) {
+            acc += *v;
+            *v = acc;
+        }
+        return;
+    }
+    let (q0, rest) = x.split_at_mut(2 * quarter);
+    let (q1, rest) = rest.split_at_mut(2 * quarter);
+    let (q2, q3) = rest.split_at_mut(2 * quarter);
+    let mut totals = [0.0; 3];
+    for ((a, b), c) in firsts(q0).zip(firsts(q1)).zip(firsts(q2)) {
+        totals[0] += a;
+        totals[1] += b;
+        totals[2] += c;
+    }
+    let (mut s0, mut s1, mut s2) = (0.0, totals[0], totals[0] + totals[1]);
+    let mut s3 = s2 + totals[2];
+    let mut last = q3.chunks_mut(2);
+    let first = q0.chunks_exact_mut(2).zip(q1.chunks_exact_mut(2));
+    for ((a, b), (c, d)) in first.zip(q2.chunks_exact_mut(2).zip(&mut last)) {
+        s0 += a[0];
+        a[0] = s0;
+        s1 += b[0];
+        b[0] = s1;
+        s2 += c[0];
+        c[0] = s2;
+        s3 += d[0];
+        d[0] = s3;
+    }
+    for d in last {
+        s3 += d[0];
+        d[0] = s3;
+    }
+}
+
 /// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` from `s = sin(jπ/M)`, `a = x_j`,
 /// `b = x_{M−j}`.
 #[inline(always)]
@@ -101,9 +149,18 @@ crate::linalg::simd::per_node_kernel! {
 crate::linalg::simd::per_node_kernel! {
     /// [`unpack`] of one line's real DFT `Y_k = (Z_k + conj Z_{L−k})/2 + t_k (Z_k − conj Z_{L−k})`
     /// from the half-length FFT Z and the twiddles t (module doc; `Z_L = Z_0`).
+    /// In two passes: first `(x[2k−1], x[2k]) = (−I_k, R_k)` (independent per k, so it
+    /// vectorises), then the running sum over the even slots in four interleaved chains.
     fn unpack_half(z: &[Complex<f64>], twiddles: &[Complex<f64>], x: &mut [f64]) {
-        let spectrum = with_mirror(z).zip(twiddles).map(|((a, b), t)| (a + b) * 0.5 + t * (a - b));
-        unpack(spectrum, x);
+        let mut spectrum =
+            with_mirror(z).zip(twiddles).map(|((a, b), t)| (a + b) * 0.5 + t * (a - b));
+        x[0] = 0.5 * spectrum.next().unwrap_or_default().re;
+        // M even: x[1..] has 2L − 2 slots, whole pairs.
+        for (pair, c) in x[1..].chunks_exact_mut(2).zip(spectrum) {
+            pair[0] = -c.im;
+            pair[1] = c.re;
+        }
+        running_sum_of_even_slots(x);
     }
 }
 
