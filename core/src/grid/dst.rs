@@ -278,7 +278,10 @@ impl DstPlan {
             for (two, z) in data.chunks_exact_mut(2 * n).zip(self.batch.chunks_exact(m)) {
                 let (la, lb) = two.split_at_mut(n);
                 unpack(with_mirror(z).map(|(a, b)| (a + b) * 0.5), la);
-                unpack(with_mirror(z).map(|(a, b)| (a - b) * Complex::new(0.0, -0.5)), lb);
+                unpack(
+                    with_mirror(z).map(|(a, b)| (a - b) * Complex::new(0.0, -0.5)),
+                    lb,
+                );
             }
         }
         if lines % 2 == 1 {

@@ -205,10 +205,8 @@ impl TensorGrid {
         let mut x: Vec<f64> = (0..d).map(|k| self.coordinate(k, 0)).collect();
         let mut counter = vec![0usize; d];
         for (line, values) in u.chunks_exact(n0).enumerate() {
-            let [s0, s1, s2, top] = line_sums(values, &self.first_axis);
+            let ([s0, s1, s2, top], i) = line_sums(values, &self.first_axis);
             if top > best.0 {
-                // The first node that holds the largest value, as a scan with `>` would pick.
-                let i = values.iter().position(|&w| w == top).unwrap_or(0);
                 best = (top, line * n0 + i);
             }
             total += s0;
@@ -327,29 +325,36 @@ impl TensorGrid {
 const LANES: usize = 16;
 
 crate::linalg::simd::per_node_kernel! {
-    /// `[Σ w_i, Σ w_i x_i, Σ w_i x_i², max w_i]` along one grid line, in [`LANES`] interleaved
-    /// partial sums (combined in a fixed order, so the result does not depend on the vector
-    /// width) that the compiler keeps in vector registers — one chain of dependent additions
-    /// would wait on every addition's latency.
-    fn line_sums(w: &[f64], x: &[f64]) -> [f64; 4] {
+    /// `[Σ w_i, Σ w_i x_i, Σ w_i x_i², max w_i]` along one grid line and the first node that
+    /// holds the maximum, in [`LANES`] interleaved partial sums and maxima (combined in a fixed
+    /// order, so the result does not depend on the vector width) that the compiler keeps in
+    /// vector registers — one chain of dependent additions would wait on every addition's
+    /// latency.
+    fn line_sums(w: &[f64], x: &[f64]) -> ([f64; 4], usize) {
         let (mut s0, mut s1, mut s2) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
         let mut top = [f64::NEG_INFINITY; LANES];
+        let mut at = [0usize; LANES];
         let mut w_chunks = w.chunks_exact(LANES);
         let mut x_chunks = x.chunks_exact(LANES);
-        let mut add = |l: usize, w: f64, x: f64| {
+        let mut add = |l: usize, i: usize, w: f64, x: f64| {
             let wx = w * x;
             s0[l] += w;
             s1[l] += wx;
             s2[l] += wx * x;
-            top[l] = top[l].max(w);
+            // Strictly larger: each lane keeps its first maximum.
+            let larger = w > top[l];
+            top[l] = if larger { w } else { top[l] };
+            at[l] = if larger { i } else { at[l] };
         };
+        let mut start = 0;
         for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
             for l in 0..LANES {
-                add(l, w[l], x[l]);
+                add(l, start + l, w[l], x[l]);
             }
+            start += LANES;
         }
         for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
-            add(l, *w, *x);
+            add(l, start + l, *w, *x);
         }
         // Pairwise, in a fixed order.
         let sum = |s: [f64; LANES]| {
@@ -363,8 +368,14 @@ crate::linalg::simd::per_node_kernel! {
             }
             s[0]
         };
-        let max = top.iter().fold(f64::NEG_INFINITY, |m, &t| m.max(t));
-        [sum(s0), sum(s1), sum(s2), max]
+        // The largest value, and among the lanes that hold it the first node.
+        let mut best = (f64::NEG_INFINITY, 0);
+        for (&t, &i) in top.iter().zip(&at) {
+            if t > best.0 || (t == best.0 && i < best.1) {
+                best = (t, i);
+            }
+        }
+        ([sum(s0), sum(s1), sum(s2), best.0], best.1)
     }
 }
 

@@ -177,21 +177,11 @@ per_node_kernel! {
 }
 
 per_node_kernel! {
-    /// The largest value (−∞ for none; NaNs are ignored as by `f64::max`), with eight running
-    /// maxima so that the loop vectorises — the maximum does not depend on the order.
-    pub fn max_value(x: &[f64]) -> f64 {
-        let mut lanes = [f64::NEG_INFINITY; 8];
-        let mut chunks = x.chunks_exact(8);
-        for c in &mut chunks {
-            for (m, v) in lanes.iter_mut().zip(c) {
-                *m = m.max(*v);
-            }
+    /// `u_i ← u_i w_i`.
+    pub fn multiply_in_place(u: &mut [f64], w: &[f64]) {
+        for (u, w) in u.iter_mut().zip(w) {
+            *u *= w;
         }
-        let rest = chunks.remainder().iter().copied();
-        lanes
-            .into_iter()
-            .chain(rest)
-            .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 

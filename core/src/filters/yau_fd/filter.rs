@@ -179,9 +179,7 @@ impl SpectralSolve {
         for (d, plan) in self.plans.iter_mut().enumerate() {
             plan.transform_axis(u, grid.stride(d));
         }
-        for (v, w) in u.iter_mut().zip(&self.divisor) {
-            *v *= w;
-        }
+        linalg::multiply_in_place(u, &self.divisor);
         for (d, plan) in self.plans.iter_mut().enumerate() {
             plan.transform_axis(u, grid.stride(d));
         }
@@ -290,7 +288,8 @@ linalg::simd::per_node_kernel! {
     /// `a_i ← [a_i] + y (S⁻¹h)_i − Δτ (½hᵀS⁻¹h)_i + e_i ln 2` (the bracket only when
     /// `accumulate`) and `u_i ← m_i` for `u_i = m_i 2^{e_i} > 0`; where `u_i` is not positive,
     /// `a_i = −∞` and `u_i = ±0` — except that a NaN stays NaN, for `normalise` to report.
-    /// Without branches, so that it vectorises.
+    /// Without branches, so that it vectorises; returns the largest exponent (−∞ for none),
+    /// kept in eight running maxima on the way.
     fn split_exponents(
         u: &mut [f64],
         a: &mut [f64],
@@ -299,15 +298,30 @@ linalg::simd::per_node_kernel! {
         y: f64,
         dt_obs: f64,
         accumulate: bool,
-    ) {
-        for (((u, a), h), c) in u.iter_mut().zip(a.iter_mut()).zip(s_inv_h).zip(half_hsh) {
+    ) -> f64 {
+        let one = |u: &mut f64, a: &mut f64, h: f64, c: f64| {
             let base = if accumulate { *a } else { 0.0 };
             let (m, e) = linalg::binary_split(*u);
             let positive = *u > 0.0;
             let exponent = base + y * h - dt_obs * c + e * core::f64::consts::LN_2;
             *a = if positive { exponent } else { f64::NEG_INFINITY };
             *u = if positive { m } else { *u * 0.0 };
+            *a
+        };
+        let mut lanes = [f64::NEG_INFINITY; 8];
+        let mut u = u.chunks_exact_mut(8);
+        let mut a = a.chunks_exact_mut(8);
+        let mut h = s_inv_h.chunks_exact(8);
+        let mut c = half_hsh.chunks_exact(8);
+        for ((u, a), (h, c)) in (&mut u).zip(&mut a).zip((&mut h).zip(&mut c)) {
+            for l in 0..8 {
+                lanes[l] = lanes[l].max(one(&mut u[l], &mut a[l], h[l], c[l]));
+            }
         }
+        let (u, a) = (u.into_remainder(), a.into_remainder());
+        let rest = u.iter_mut().zip(a).zip(h.remainder().iter().zip(c.remainder()));
+        let top = lanes.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        rest.fold(top, |m, ((u, a), (h, c))| m.max(one(u, a, *h, *c)))
     }
 }
 
@@ -518,7 +532,7 @@ impl YauYauFilter {
                 *a = if j == 1 { y * h } else { *a + y * h };
             }
         }
-        split_exponents(
+        let shift = split_exponents(
             &mut self.u,
             a,
             &self.op.s_inv_h[0],
@@ -527,7 +541,6 @@ impl YauYauFilter {
             dt_obs,
             dy.len() > 1,
         );
-        let shift = linalg::max_value(a);
         if shift == f64::NEG_INFINITY {
             // No mass left: `normalise` reports it.
             return;

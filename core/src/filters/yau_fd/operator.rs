@@ -188,21 +188,23 @@ fn add_difference<'a>(
     }
 }
 
-/// `o_j = w_j u_j + c p_j (u_{j+1} − u_{j−1})` along one contiguous line, zero beyond its ends.
-fn first_dimension(o: &mut [f64], w: &[f64], p: &[f64], u: &[f64], c: f64) {
-    let n = u.len();
-    let at = |j: usize, l: f64, r: f64| w[j] * u[j] + c * p[j] * (r - l);
-    if n == 1 {
-        o[0] = at(0, 0.0, 0.0);
-        return;
+crate::linalg::simd::per_node_kernel! {
+    /// `o_j = w_j u_j + c p_j (u_{j+1} − u_{j−1})` along one contiguous line, zero beyond its ends.
+    fn first_dimension(o: &mut [f64], w: &[f64], p: &[f64], u: &[f64], c: f64) {
+        let n = u.len();
+        let at = |j: usize, l: f64, r: f64| w[j] * u[j] + c * p[j] * (r - l);
+        if n == 1 {
+            o[0] = at(0, 0.0, 0.0);
+            return;
+        }
+        o[0] = at(0, 0.0, u[1]);
+        let inner = o[1..n - 1]
+            .iter_mut()
+            .zip(w[1..n - 1].iter().zip(&u[1..n - 1]))
+            .zip(p[1..n - 1].iter().zip(u[2..].iter().zip(&u[..n - 2])));
+        for ((o, (w, u)), (p, (r, l))) in inner {
+            *o = w * u + c * p * (r - l);
+        }
+        o[n - 1] = at(n - 1, u[n - 2], 0.0);
     }
-    o[0] = at(0, 0.0, u[1]);
-    let inner = o[1..n - 1]
-        .iter_mut()
-        .zip(w[1..n - 1].iter().zip(&u[1..n - 1]))
-        .zip(p[1..n - 1].iter().zip(u[2..].iter().zip(&u[..n - 2])));
-    for ((o, (w, u)), (p, (r, l))) in inner {
-        *o = w * u + c * p * (r - l);
-    }
-    o[n - 1] = at(n - 1, u[n - 2], 0.0);
 }
