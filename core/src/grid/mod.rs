@@ -384,6 +384,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_map_node_is_the_first_of_equal_maxima() {
+        // 2-D, 53 × 3 nodes: the maximum 5 at (7, 1) and (40, 1) and (2, 2); lane 7 and lane 8
+        // (node 40 = 2·16 + 8) of the first line that has it, then a later line.
+        let g = TensorGrid::new(&[(0.0, 54.0), (0.0, 4.0)], &[53, 3]).unwrap();
+        let mut u = vec![1.0; g.len()];
+        for i in [53 + 7, 53 + 40, 2 * 53 + 2] {
+            u[i] = 5.0;
+        }
+        let map = g.moments(&u).map;
+        assert_eq!((map[0], map[1]), (8.0, 2.0), "node (7, 1) sits at (8, 2)");
+        // Sums against the plain loop.
+        let (w, x): (Vec<f64>, Vec<f64>) =
+            (0..37).map(|i| (i as f64 * 0.3, 1.0 - i as f64)).unzip();
+        let ([s0, s1, s2, top], at) = line_sums(&w, &x);
+        let plain =
+            |f: &dyn Fn(f64, f64) -> f64| w.iter().zip(&x).map(|(w, x)| f(*w, *x)).sum::<f64>();
+        assert!((s0 - plain(&|w, _| w)).abs() < 1e-12);
+        assert!((s1 - plain(&|w, x| w * x)).abs() < 1e-11);
+        assert!((s2 - plain(&|w, x| w * x * x)).abs() < 1e-9);
+        assert_eq!((top, at), (36.0 * 0.3, 36));
+    }
+
+    #[test]
     fn nodes_moments_and_marginals() {
         let g = TensorGrid::new(&[(-5.0, 5.0), (-4.0, 6.0)], &[199, 99]).unwrap();
         assert_eq!(g.len(), 199 * 99);

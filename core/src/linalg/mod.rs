@@ -245,6 +245,21 @@ mod tests {
     }
 
     #[test]
+    fn scale_by_exp_is_the_scalar_product_bit_for_bit() {
+        for len in [0usize, 1, 7, 8, 9, 23, 64] {
+            let a: alloc::vec::Vec<f64> = (0..len).map(|i| 0.5 - i as f64 * 37.1).collect();
+            let u0: alloc::vec::Vec<f64> = (0..len).map(|i| 0.5 + (i % 3) as f64 * 0.1).collect();
+            let mut u = u0.clone();
+            scale_by_exp(&mut u, &a, 0.2, 1e-250);
+            for ((v, u), a) in u.iter().zip(&u0).zip(&a) {
+                let w = u * exp_nonpositive((a - 0.2f64).min(0.0));
+                let expected = if w < 1e-250 { 0.0 } else { w };
+                assert_eq!(v.to_bits(), expected.to_bits(), "{len}: {a}");
+            }
+        }
+    }
+
+    #[test]
     fn binary_split_recombines_exactly() {
         for v in [
             1.0,
