@@ -149,11 +149,17 @@ crate::linalg::simd::per_node_kernel! {
 crate::linalg::simd::per_node_kernel! {
     /// [`unpack`] of one line's real DFT `Y_k = (Z_k + conj Z_{L−k})/2 + t_k (Z_k − conj Z_{L−k})`
     /// from the half-length FFT Z and the twiddles t (module doc; `Z_L = Z_0`).
-    /// In two passes: first `(x[2k−1], x[2k]) = (−I_k, R_k)` (independent per k, so it
-    /// vectorises), then the running sum over the even slots in four interleaved chains.
+    /// On x86-64 in two passes: first `(x[2k−1], x[2k]) = (−I_k, R_k)` (independent per k, so
+    /// it vectorises to AVX2's four lanes), then the running sum over the even slots in four
+    /// interleaved chains; elsewhere (wasm's two lanes) the single pass of [`unpack`] is the
+    /// faster (measured: 1-D QIEM step 12.96 against 13.4 µs natively, 37 against 43 µs in Node).
     fn unpack_half(z: &[Complex<f64>], twiddles: &[Complex<f64>], x: &mut [f64]) {
         let mut spectrum =
             with_mirror(z).zip(twiddles).map(|((a, b), t)| (a + b) * 0.5 + t * (a - b));
+        if cfg!(not(target_arch = "x86_64")) {
+            unpack(spectrum, x);
+            return;
+        }
         x[0] = 0.5 * spectrum.next().unwrap_or_default().re;
         // M even: x[1..] has 2L − 2 slots, whole pairs.
         for (pair, c) in x[1..].chunks_exact_mut(2).zip(spectrum) {
