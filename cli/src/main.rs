@@ -25,6 +25,29 @@ use zakai::reproduction;
 use zakai::scenario::{presets, MethodConfig, ScenarioConfig, METHODS};
 use zakai::Experiment;
 
+/// `print!` to stdout that ends the program quietly when the reader has gone (`zakai show
+/// cubic-sensor-1d | head`) instead of panicking, and with a message on any other write error.
+macro_rules! out {
+    ($($arg:tt)*) => { write_out(format_args!($($arg)*)) };
+}
+
+/// `println!` counterpart of [`out!`].
+macro_rules! outln {
+    ($($arg:tt)*) => { write_out(format_args!("{}\n", format_args!($($arg)*))) };
+}
+
+fn write_out(text: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_fmt(text).and_then(|()| stdout.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write the output: {e}");
+        std::process::exit(1);
+    }
+}
+
 #[derive(Parser)]
 #[command(
     name = "zakai",
@@ -234,7 +257,7 @@ fn run(
             std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
         }
         None => {
-            print!("{text}");
+            out!("{text}");
             Ok(())
         }
     }
@@ -259,19 +282,19 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
     }
     let chosen: Vec<_> = match id {
         None => {
-            println!("Tables and figures (zakai reproduce <id>, or `all`):");
+            outln!("Tables and figures (zakai reproduce <id>, or `all`):");
             for t in &all {
-                println!("  {:<14} {} [{}]", t.id, t.title, t.source);
+                outln!("  {:<14} {} [{}]", t.id, t.title, t.source);
             }
             for f in &figures {
-                println!("  {:<14} {} [{}]", f.id, f.title, f.source);
+                outln!("  {:<14} {} [{}]", f.id, f.title, f.source);
             }
             return Ok(());
         }
         Some("all") => all,
         Some(id) => match figures.iter().find(|f| f.id == id) {
             Some(f) => {
-                println!("{} — {} [{}]", f.id, f.title, f.source);
+                outln!("{} — {} [{}]", f.id, f.title, f.source);
                 return jcurve(
                     f.preset,
                     Some(1),
@@ -301,11 +324,11 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
             );
         }
         bar.finish_and_clear();
-        print!("{}", output::reproduction(table, &results, runs));
+        out!("{}", output::reproduction(table, &results, runs));
     }
     if id == Some("all") {
         for f in &figures {
-            println!("\n{} — {} [{}]", f.id, f.title, f.source);
+            outln!("\n{} — {} [{}]", f.id, f.title, f.source);
             jcurve(
                 f.preset,
                 Some(1),
@@ -393,8 +416,8 @@ fn frontier(a: &FrontierArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot write {}: {e}", csv.display()))?;
     let svg = a.out.join(format!("{}-frontier.svg", config.name));
     frontier_plot::draw(&result, &config.title, &svg)?;
-    print!("{}", output::frontier(&result, check.as_ref(), seed));
-    println!("wrote {} and {}", csv.display(), svg.display());
+    out!("{}", output::frontier(&result, check.as_ref(), seed));
+    outln!("wrote {} and {}", csv.display(), svg.display());
     Ok(())
 }
 
@@ -422,7 +445,7 @@ fn jcurve(
         std::fs::write(&path, output::j_curve_csv(&curves[0]))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
-    print!("{}", output::j_curve(&curves, first));
+    out!("{}", output::j_curve(&curves, first));
     Ok(())
 }
 
@@ -479,13 +502,13 @@ fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
 
 /// A theorem's conditions, one line each, and its note.
 fn print_report(r: &zakai::diagnostics::ConditionReport) {
-    println!(
+    outln!(
         "{}: {}",
         r.theorem,
         if r.holds() { "holds" } else { "does not hold" }
     );
     for c in &r.conditions {
-        println!(
+        outln!(
             "  [{}] {} — {}",
             if c.holds { "ok" } else { "FAILS" },
             c.name,
@@ -493,7 +516,7 @@ fn print_report(r: &zakai::diagnostics::ConditionReport) {
         );
     }
     if let Some(note) = &r.note {
-        println!("  note: {note}");
+        outln!("  note: {note}");
     }
 }
 
@@ -546,7 +569,7 @@ fn simulate(scenario: &str, seed: Option<u64>, estimates: bool) -> Result<(), St
             })
             .collect();
     }
-    println!("{json}");
+    outln!("{json}");
     Ok(())
 }
 
@@ -582,13 +605,13 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::List => {
-            print!("{}", list());
+            out!("{}", list());
             Ok(())
         }
         Command::Show { preset } => presets::preset(&preset)
             .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
             .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
-            .map(|json| println!("{json}")),
+            .map(|json| outln!("{json}")),
         Command::Simulate {
             scenario,
             seed,

@@ -307,3 +307,21 @@ fn the_memory_cap_can_be_changed_natively() {
         stderr(&bad)
     );
 }
+
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::process::Stdio;
+    // The reader goes away at once (as `zakai list | head -1` does after one line): the writes
+    // fail with a broken pipe, which must end the program without a panic.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_zakai"))
+        .arg("list")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starts");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+}
