@@ -499,9 +499,13 @@ impl YauYauFilter {
                 w
             }
             Scheme::Qiem | Scheme::Qiem4 if self.params.potential == PotentialTerm::Explicit => {
-                guarantees::qiem_stability(&self.op, &self.grid, dt)
+                let mut w = guarantees::qiem_stability(&self.op, &self.grid, dt);
+                w.extend(guarantees::transform_length(&self.grid));
+                w
             }
-            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => Vec::new(),
+            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => {
+                guarantees::transform_length(&self.grid)
+            }
         };
         self.solver = Some((dt_obs, substeps, solver));
         Ok(())

@@ -7,6 +7,9 @@
 //! * (31) stability of QIEM: `(Δs)²(2q + q²Δt) + Δt p² ≤ 2`, evaluated per dimension.
 //!
 //! Violations are warnings naming the condition, the worst grid point and the value there.
+//!
+//! Not a guarantee of 000 but reported the same way: a DST length N + 1 with a large prime
+//! factor, which makes every step of the FFT-based schemes several times slower.
 
 use alloc::format;
 use alloc::string::String;
@@ -127,4 +130,106 @@ pub fn qiem_stability(
         }
     }
     out
+}
+
+/// The largest prime rustfft transforms with its own butterflies and mixed-radix algorithms; a
+/// length with a larger prime factor goes through Rader's or Bluestein's algorithm, several
+/// times slower (measured: 3–4× per QIEM step in the browser for N + 1 = 402 = 2·3·67).
+pub const FAST_PRIME_LIMIT: usize = 31;
+
+/// The prime factors of `m` in increasing order, with repetition (none for m ≤ 1).
+fn prime_factors(mut m: usize) -> Vec<usize> {
+    let mut factors = Vec::new();
+    let mut p = 2;
+    while p * p <= m {
+        while m % p == 0 {
+            factors.push(p);
+            m /= p;
+        }
+        p += 1;
+    }
+    if m > 1 {
+        factors.push(m);
+    }
+    factors
+}
+
+/// A point count near `n` whose DST length N + 1 has only the factors 2, 3, 5 and 7, searched
+/// downwards (`up = false`) or upwards from `n`.
+fn smooth_points(n: usize, up: bool) -> Option<usize> {
+    let smooth = |m: usize| prime_factors(m).iter().all(|&p| p <= 7);
+    let mut k = n;
+    loop {
+        k = if up {
+            k.checked_add(1)?
+        } else {
+            k.checked_sub(1)?
+        };
+        if k >= 1 && smooth(k + 1) {
+            return Some(k);
+        }
+    }
+}
+
+/// The FFT-based schemes' transform length: a warning for every dimension whose N + 1 has a
+/// prime factor above [`FAST_PRIME_LIMIT`], with nearby point counts whose N + 1 has only
+/// the factors 2, 3, 5 and 7.
+pub fn transform_length(grid: &TensorGrid) -> Vec<GuaranteeWarning> {
+    let mut out = Vec::new();
+    for (d, &n) in grid.shape().iter().enumerate() {
+        let factors = prime_factors(n + 1);
+        let largest = factors.last().copied().unwrap_or(1);
+        if largest <= FAST_PRIME_LIMIT {
+            continue;
+        }
+        let product: Vec<String> = factors.iter().map(|p| format!("{p}")).collect();
+        let near: Vec<String> = [smooth_points(n, false), smooth_points(n, true)]
+            .into_iter()
+            .flatten()
+            .map(|k| format!("{k}"))
+            .collect();
+        out.push(GuaranteeWarning {
+            condition: "DST length".into(),
+            message: format!(
+                "DST length: {n} points in dimension {} make transforms of length N + 1 = {} = {}, whose prime factor {largest} is computed by Rader's or Bluestein's algorithm — every step several times slower; {} points give N + 1 with the factors 2, 3, 5 and 7 only",
+                d + 1,
+                n + 1,
+                product.join("·"),
+                near.join(" or "),
+            ),
+            worst: Vec::new(),
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_large_prime_in_the_transform_length_is_reported_with_smooth_neighbours() {
+        assert_eq!(prime_factors(402), [2, 3, 67]);
+        assert_eq!(prime_factors(1), [] as [usize; 0]);
+        let warned = |shape: &[usize]| {
+            let bounds: Vec<(f64, f64)> = shape.iter().map(|_| (-1.0, 1.0)).collect();
+            transform_length(&TensorGrid::new(&bounds, shape).unwrap())
+        };
+        // 402 = 2·3·67; 399 + 1 = 400 = 2⁴·5², 404 + 1 = 405 = 3⁴·5.
+        let w = warned(&[401]);
+        assert_eq!(w.len(), 1);
+        assert!(w[0].message.contains("402 = 2·3·67"), "{}", w[0].message);
+        assert!(
+            w[0].message.contains("399 or 404 points"),
+            "{}",
+            w[0].message
+        );
+        // 1999 + 1 = 2000 = 2⁴·5³, 2001 + 1 = 2002 = 2·7·11·13 (11 and 13 have butterflies).
+        assert!(warned(&[399]).is_empty());
+        assert!(warned(&[1999]).is_empty() && warned(&[2001]).is_empty());
+        // Only the dimension that has it: 128 + 1 = 129 = 3·43.
+        let w = warned(&[127, 128]);
+        assert_eq!(w.len(), 1);
+        assert!(w[0].message.contains("dimension 2"), "{}", w[0].message);
+    }
 }
