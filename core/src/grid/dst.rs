@@ -170,6 +170,36 @@ crate::linalg::simd::per_node_kernel! {
     }
 }
 
+crate::linalg::simd::per_node_kernel! {
+    /// The sequences y of consecutive pairs of lines of length n, as the real and imaginary
+    /// parts of one complex sequence of length n + 1 per pair: `z = y_a + i y_b`.
+    fn mix_pairs(batch: &mut [Complex<f64>], sines: &[f64], data: &[f64], n: usize) {
+        for (two, z) in data.chunks_exact(2 * n).zip(batch.chunks_exact_mut(n + 1)) {
+            let (la, lb) = two.split_at(n);
+            z[0] = Complex::new(0.0, 0.0);
+            let both = ends(la).zip(ends(lb));
+            for ((v, s), ((a1, b1), (a2, b2))) in z[1..].iter_mut().zip(&sines[1..]).zip(both) {
+                *v = Complex::new(mix(*s, *a1, *b1), mix(*s, *a2, *b2));
+            }
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// Both lines of every pair from the FFT Z of `z = y_a + i y_b`:
+    /// `Y_a = (Z_k + conj Z_{M−k})/2`, `Y_b = (Z_k − conj Z_{M−k})/(2i)`, then [`unpack`].
+    fn unpack_pairs(data: &mut [f64], batch: &[Complex<f64>], n: usize) {
+        for (two, z) in data.chunks_exact_mut(2 * n).zip(batch.chunks_exact(n + 1)) {
+            let (la, lb) = two.split_at_mut(n);
+            unpack(with_mirror(z).map(|(a, b)| (a + b) * 0.5), la);
+            unpack(
+                with_mirror(z).map(|(a, b)| (a - b) * Complex::new(0.0, -0.5)),
+                lb,
+            );
+        }
+    }
+}
+
 impl DstPlan {
     /// Plans the transform of length `n` (allocates here; a whole-axis batch grows once on
     /// the first [`DstPlan::transform_axis`], never in later ones).
@@ -269,32 +299,18 @@ impl DstPlan {
         let pairs = lines / 2;
         if pairs > 0 {
             self.batch.resize(pairs * m, Complex::new(0.0, 0.0));
-            for (two, z) in data.chunks_exact(2 * n).zip(self.batch.chunks_exact_mut(m)) {
-                let (la, lb) = two.split_at(n);
-                z[0] = Complex::new(0.0, 0.0);
-                let both = ends(la).zip(ends(lb));
-                for ((v, s), ((a1, b1), (a2, b2))) in
-                    z[1..].iter_mut().zip(&self.sines[1..]).zip(both)
-                {
-                    *v = Complex::new(mix(*s, *a1, *b1), mix(*s, *a2, *b2));
-                }
-            }
+            let whole = &mut data[..2 * n * pairs];
+            mix_pairs(&mut self.batch, &self.sines, whole, n);
             self.pair_fft
                 .process_with_scratch(&mut self.batch, &mut self.pair_scratch);
-            for (two, z) in data.chunks_exact_mut(2 * n).zip(self.batch.chunks_exact(m)) {
-                let (la, lb) = two.split_at_mut(n);
-                unpack(with_mirror(z).map(|(a, b)| (a + b) * 0.5), la);
-                unpack(
-                    with_mirror(z).map(|(a, b)| (a - b) * Complex::new(0.0, -0.5)),
-                    lb,
-                );
-            }
+            unpack_pairs(whole, &self.batch, n);
         }
         if lines % 2 == 1 {
             let last = (lines - 1) * n;
             self.transform(&mut data[last..last + n]);
         }
     }
+
 }
 
 /// `dst = srcᵀ` for `src` of `rows × cols` (row-major), in 16 × 16 tiles.
