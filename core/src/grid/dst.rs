@@ -310,7 +310,6 @@ impl DstPlan {
             self.transform(&mut data[last..last + n]);
         }
     }
-
 }
 
 /// `dst = srcᵀ` for `src` of `rows × cols` (row-major), in 16 × 16 tiles.

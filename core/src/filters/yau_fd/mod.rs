@@ -33,8 +33,8 @@
 //! The update (15) is evaluated in the log domain — `u_i ← exp(a_i + ln u_i − max_j(a_j + ln u_j))`
 //! with `a = Δyᵀ S⁻¹ h` — so it neither overflows nor underflows the largest value; the density
 //! is then renormalised. Negative values left by the explicit drift are set to zero there. A
-//! density whose mass vanishes or turns non-finite is a [`FilterError::MassLost`] /
-//! [`FilterError::NonFinite`], never NaN.
+//! density whose mass vanishes or turns non-finite is a [`crate::FilterError::MassLost`] /
+//! [`crate::FilterError::NonFinite`], never NaN.
 
 #[cfg(feature = "std")]
 mod filter;
