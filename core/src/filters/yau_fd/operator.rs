@@ -146,6 +146,8 @@ pub fn explicit_part(
         // whole rows of `stride` values at a time (consecutive lines side by side), so
         // that the loops run over contiguous memory and vectorise.
         if stride == 1 {
+            // Writes `w ⊙ u` too. Only the first dimension has stride 1 — or a later one when
+            // all before it have a single node, whose differences (no neighbours) are zero.
             let lines = out
                 .chunks_exact_mut(n)
                 .zip(weight.chunks_exact(n))
