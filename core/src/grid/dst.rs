@@ -36,7 +36,8 @@ pub struct DstPlan {
     pair_fft: Arc<dyn Fft<f64>>,
     /// `sin(jπ/(N + 1))`, j = 0..N.
     sines: Vec<f64>,
-    /// The batch of paired lines of one axis (grown on first use, then reused).
+    /// The batch of paired lines of one axis, or one line of odd M (grown on first use, then
+    /// reused).
     batch: Vec<Complex<f64>>,
     pair_scratch: Vec<Complex<f64>>,
     /// One block of a strided axis, transposed into consecutive lines.
@@ -264,7 +265,7 @@ impl DstPlan {
                     *z = Complex::new(mix(*s, *a, *b), 0.0);
                 }
                 self.pair_fft
-                    .process_with_scratch(&mut z[..self.n + 1], &mut self.pair_scratch);
+                    .process_with_scratch(z, &mut self.pair_scratch);
                 unpack(z.iter().copied(), x);
             }
         }

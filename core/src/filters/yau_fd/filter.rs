@@ -499,14 +499,15 @@ impl YauYauFilter {
                 w
             }
             Scheme::Qiem | Scheme::Qiem4 if self.params.potential == PotentialTerm::Explicit => {
-                let mut w = guarantees::qiem_stability(&self.op, &self.grid, dt);
-                w.extend(guarantees::transform_length(&self.grid));
-                w
+                guarantees::qiem_stability(&self.op, &self.grid, dt)
             }
-            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => {
-                guarantees::transform_length(&self.grid)
-            }
+            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => Vec::new(),
         };
+        if self.scheme != Scheme::Iem {
+            // Every scheme but IEM solves with the DST.
+            self.warnings
+                .extend(guarantees::transform_length(&self.grid));
+        }
         self.solver = Some((dt_obs, substeps, solver));
         Ok(())
     }
