@@ -11,7 +11,7 @@ use std::fmt::Debug;
 use exmex::prelude::*;
 use exmex::{FloatOpsFactory, MakeOperators, Operator};
 
-use super::expression_error::{normalize_expression, variable_index, ExprError};
+use super::expression_error::{normalize_expression, variable_index, ExprError, LIBM_UNARY};
 use super::function::{numerical_hessian, numerical_jacobian, Derivatives, VectorFunction};
 
 /// exmex's float operators with every transcendental function (and `^`) computed by the
@@ -20,39 +20,6 @@ use super::function::{numerical_hessian, numerical_jacobian, Derivatives, Vector
 /// `erf`, `erfc` and the constant `pi`.
 #[derive(Clone, Debug)]
 pub struct ZakaiOps;
-
-/// A real function of one real variable.
-type RealFn = fn(f64) -> f64;
-
-/// The unary functions, by name, as computed by `libm`.
-const LIBM_UNARY: &[(&str, RealFn)] = &[
-    ("abs", libm::fabs),
-    ("sin", libm::sin),
-    ("cos", libm::cos),
-    ("tan", libm::tan),
-    ("asin", libm::asin),
-    ("acos", libm::acos),
-    ("atan", libm::atan),
-    ("sinh", libm::sinh),
-    ("cosh", libm::cosh),
-    ("tanh", libm::tanh),
-    ("asinh", libm::asinh),
-    ("acosh", libm::acosh),
-    ("atanh", libm::atanh),
-    ("floor", libm::floor),
-    ("round", libm::round),
-    ("ceil", libm::ceil),
-    ("trunc", libm::trunc),
-    ("exp", libm::exp),
-    ("sqrt", libm::sqrt),
-    ("cbrt", libm::cbrt),
-    ("ln", libm::log),
-    ("log", libm::log),
-    ("log2", libm::log2),
-    ("log10", libm::log10),
-    ("erf", libm::erf),
-    ("erfc", libm::erfc),
-];
 
 impl MakeOperators<f64> for ZakaiOps {
     fn make<'a>() -> Vec<Operator<'a, f64>> {
@@ -315,6 +282,9 @@ impl VectorFunction for ExpressionFunction {
                 numerical_hessian(&j, self.n, self.components.len(), i, x, out)
             }
         }
+    }
+    fn expressions(&self) -> Option<&[String]> {
+        Some(&self.texts)
     }
     fn derivatives(&self) -> Derivatives {
         if self.exact.is_some() {

@@ -19,6 +19,40 @@ pub const FUNCTIONS: &[&str] = &[
     "log", "log2", "log10", "erf", "erfc",
 ];
 
+/// A real function of one real variable.
+pub(crate) type RealFn = fn(f64) -> f64;
+
+/// The unary functions, by name, as computed by `libm` (the expression evaluator's, and the
+/// symbolic normal form's for constant arguments; `signum` and `fract` are exmex's own).
+pub(crate) const LIBM_UNARY: &[(&str, RealFn)] = &[
+    ("abs", libm::fabs),
+    ("sin", libm::sin),
+    ("cos", libm::cos),
+    ("tan", libm::tan),
+    ("asin", libm::asin),
+    ("acos", libm::acos),
+    ("atan", libm::atan),
+    ("sinh", libm::sinh),
+    ("cosh", libm::cosh),
+    ("tanh", libm::tanh),
+    ("asinh", libm::asinh),
+    ("acosh", libm::acosh),
+    ("atanh", libm::atanh),
+    ("floor", libm::floor),
+    ("round", libm::round),
+    ("ceil", libm::ceil),
+    ("trunc", libm::trunc),
+    ("exp", libm::exp),
+    ("sqrt", libm::sqrt),
+    ("cbrt", libm::cbrt),
+    ("ln", libm::log),
+    ("log", libm::log),
+    ("log2", libm::log2),
+    ("log10", libm::log10),
+    ("erf", libm::erf),
+    ("erfc", libm::erfc),
+];
+
 /// Named constants an expression may use.
 pub const CONSTANTS: &[&str] = &["PI", "pi", "E", "e", "TAU"];
 
@@ -125,8 +159,9 @@ pub fn variable_index(name: &str, n: usize) -> Option<usize> {
     (i >= 1 && i <= n && !name[1..].starts_with('0')).then(|| i - 1)
 }
 
+/// The kind of a token.
 #[derive(Clone, Copy, PartialEq, Debug)]
-enum Token {
+pub(crate) enum Token {
     Operand,
     Function,
     Open,
@@ -255,10 +290,10 @@ fn is_unary_sign(tokens: &[Token_], i: usize) -> bool {
 
 /// One token with its text (already normalised) and character position.
 #[derive(Clone, Debug)]
-struct Token_ {
-    kind: Token,
-    text: String,
-    position: usize,
+pub(crate) struct Token_ {
+    pub(crate) kind: Token,
+    pub(crate) text: String,
+    pub(crate) position: usize,
 }
 
 /// Index one past the atom starting at `i` (a number, name, `( … )` or `f( … )`), skipping
@@ -304,7 +339,7 @@ fn power_end(tokens: &[Token_], i: usize) -> usize {
 }
 
 /// Splits `text` into tokens, reporting lexical mistakes with their positions.
-fn tokenize(text: &str, n: usize) -> Result<Vec<Token_>, ExprError> {
+pub(crate) fn tokenize(text: &str, n: usize) -> Result<Vec<Token_>, ExprError> {
     let chars: Vec<char> = text.chars().collect();
     let syntax = |position: usize, message: &str| ExprError::Syntax {
         expr: text.to_string(),

@@ -7,6 +7,7 @@
 //! ([`ClosureFunction`]) and text expressions (`expression::ExpressionFunction`, feature `std`).
 
 use alloc::boxed::Box;
+use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
@@ -34,6 +35,12 @@ pub trait VectorFunction: Send + Sync {
     fn hessian(&self, i: usize, x: &[f64], out: &mut [f64]);
     /// Whether derivatives are exact or numerical.
     fn derivatives(&self) -> Derivatives;
+
+    /// The text expressions of the components, when the function was given as text (for
+    /// symbolic checks, [`super::symbolic`]).
+    fn expressions(&self) -> Option<&[String]> {
+        None
+    }
 
     /// The value as a new vector (convenience for non-hot paths).
     fn value(&self, x: &[f64]) -> Vec<f64> {

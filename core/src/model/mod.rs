@@ -15,6 +15,7 @@ pub mod expression_error;
 pub mod function;
 pub mod noise;
 pub mod prior;
+pub mod symbolic;
 
 use alloc::format;
 use alloc::sync::Arc;

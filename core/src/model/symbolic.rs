@@ -1,0 +1,822 @@
+//! Exact normal forms of text expressions, so that structural conditions such as 002's
+//! (C1)–(C3) can be decided symbolically rather than at test points.
+//!
+//! An expression is read — by the lexer of [`super::expression_error`], after the same
+//! normalisation the evaluator sees, so `-x^2` is `−(x²)` here too — into a [`Poly`]: a
+//! polynomial with real coefficients in *atoms*, which are the state variables `x_i` and the
+//! elementary functions sin, cos, tan, sinh, cosh, tanh, exp of such polynomials. Sums,
+//! products, integer powers up to [`MAX_POWER`], division by constants and derivatives stay
+//! in this ring:
+//!
+//! ```text
+//! (sin u)′ = u′ cos u      (cos u)′ = −u′ sin u     (tan u)′ = u′ (1 + tan² u)
+//! (sinh u)′ = u′ cosh u    (cosh u)′ = u′ sinh u    (tanh u)′ = u′ (1 − tanh² u)
+//! (exp u)′ = u′ exp u
+//! ```
+//!
+//! The normal form applies, until none is left: sin² u → 1 − cos² u; cosh² u → 1 + sinh² u;
+//! exp u · exp v → exp(u + v) and exp(u + c) → e^c exp u for a constant c; an odd function of
+//! an argument whose first term is negative becomes minus the function of the negated argument
+//! (an even one, the function of the negated argument); a function of a constant is
+//! evaluated (by `libm`, as the evaluator does). A coefficient that cancels to below 10⁻¹²
+//! of the largest term summed into it is dropped as rounding.
+//!
+//! Soundness: equal normal forms mean equal functions on all of Rⁿ. The converse fails —
+//! sin 2x and 2 sin x cos x have different normal forms — so a normal form that keeps a
+//! function atom proves nothing about the function's shape. A normal form without one is the
+//! polynomial itself, and then its degree is exact. Other functions of a non-constant (sqrt,
+//! ln, atan, abs, erf, …), non-integer or negative powers of a non-constant and division by a
+//! non-constant have no normal form here: [`parse`] returns [`Unsupported`] saying which.
+
+use alloc::boxed::Box;
+use alloc::collections::BTreeMap;
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::vec;
+use alloc::vec::Vec;
+use core::cmp::Ordering;
+use core::fmt;
+
+use super::expression_error::{
+    normalize_expression, tokenize, variable_index, Token, Token_, LIBM_UNARY,
+};
+
+/// Most terms a normal form may have; larger expressions are [`Unsupported`].
+pub const MAX_TERMS: usize = 4096;
+/// Largest integer power of a non-constant expanded.
+pub const MAX_POWER: u32 = 64;
+
+/// Most term-by-term products one multiplication may form.
+const MAX_PRODUCTS: usize = 1 << 18;
+
+/// A sum below this fraction of its largest term is rounding (cancellation to zero).
+const ROUNDING: f64 = 1e-12;
+
+/// Why an expression has no normal form.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unsupported(pub String);
+
+impl fmt::Display for Unsupported {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+type Sym = Result<Poly, Unsupported>;
+
+/// The elementary functions kept as atoms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Elementary {
+    /// sin
+    Sin,
+    /// cos
+    Cos,
+    /// tan
+    Tan,
+    /// sinh
+    Sinh,
+    /// cosh
+    Cosh,
+    /// tanh
+    Tanh,
+    /// exp
+    Exp,
+}
+
+/// Symmetry of a function under `u ↦ −u`.
+enum Parity {
+    Odd,
+    Even,
+    Neither,
+}
+
+impl Elementary {
+    const ALL: [Elementary; 7] = [
+        Elementary::Sin,
+        Elementary::Cos,
+        Elementary::Tan,
+        Elementary::Sinh,
+        Elementary::Cosh,
+        Elementary::Tanh,
+        Elementary::Exp,
+    ];
+
+    /// The name in expressions.
+    pub fn name(self) -> &'static str {
+        match self {
+            Elementary::Sin => "sin",
+            Elementary::Cos => "cos",
+            Elementary::Tan => "tan",
+            Elementary::Sinh => "sinh",
+            Elementary::Cosh => "cosh",
+            Elementary::Tanh => "tanh",
+            Elementary::Exp => "exp",
+        }
+    }
+
+    fn parity(self) -> Parity {
+        match self {
+            Elementary::Cos | Elementary::Cosh => Parity::Even,
+            Elementary::Exp => Parity::Neither,
+            _ => Parity::Odd,
+        }
+    }
+}
+
+/// A variable `x_i` or an elementary function of a normal form.
+#[derive(Clone, Debug)]
+pub enum Atom {
+    /// The state variable `x_{i+1}`.
+    Var(usize),
+    /// `f(u)`, u in normal form and not constant.
+    Apply(Elementary, Box<Poly>),
+}
+
+impl Ord for Atom {
+    fn cmp(&self, other: &Self) -> Ordering {
+        match (self, other) {
+            (Atom::Var(a), Atom::Var(b)) => a.cmp(b),
+            (Atom::Var(_), Atom::Apply(..)) => Ordering::Less,
+            (Atom::Apply(..), Atom::Var(_)) => Ordering::Greater,
+            (Atom::Apply(f, u), Atom::Apply(g, v)) => f.cmp(g).then_with(|| u.cmp(v)),
+        }
+    }
+}
+impl PartialOrd for Atom {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl PartialEq for Atom {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Atom {}
+
+/// A product of atoms with positive exponents, sorted by atom, each atom once.
+pub type Monomial = Vec<(Atom, u32)>;
+
+/// The product of two monomials.
+fn times(a: &[(Atom, u32)], b: &[(Atom, u32)]) -> Monomial {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].0.cmp(&b[j].0) {
+            Ordering::Less => {
+                out.push(a[i].clone());
+                i += 1;
+            }
+            Ordering::Greater => {
+                out.push(b[j].clone());
+                j += 1;
+            }
+            Ordering::Equal => {
+                out.push((a[i].0.clone(), a[i].1 + b[j].1));
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
+/// `m` with the exponent of its `idx`-th atom lowered by `by` (the atom dropped at zero).
+fn lowered(m: &[(Atom, u32)], idx: usize, by: u32) -> Monomial {
+    let mut out = m.to_vec();
+    if out[idx].1 == by {
+        out.remove(idx);
+    } else {
+        out[idx].1 -= by;
+    }
+    out
+}
+
+/// A normal form: terms sorted by monomial, no zero coefficient.
+#[derive(Clone, Debug, Default)]
+pub struct Poly {
+    terms: Vec<(Monomial, f64)>,
+}
+
+impl Ord for Poly {
+    fn cmp(&self, other: &Self) -> Ordering {
+        for ((ma, ca), (mb, cb)) in self.terms.iter().zip(&other.terms) {
+            let o = ma.cmp(mb).then_with(|| ca.total_cmp(cb));
+            if o != Ordering::Equal {
+                return o;
+            }
+        }
+        self.terms.len().cmp(&other.terms.len())
+    }
+}
+impl PartialOrd for Poly {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl PartialEq for Poly {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Poly {}
+
+impl Poly {
+    /// The constant `c`.
+    pub fn constant(c: f64) -> Poly {
+        Poly::monomial(Vec::new(), c)
+    }
+
+    /// The state variable `x_{i+1}`.
+    pub fn variable(i: usize) -> Poly {
+        Poly::monomial(vec![(Atom::Var(i), 1)], 1.0)
+    }
+
+    /// `c · m` for a monomial already in normal form.
+    fn monomial(m: Monomial, c: f64) -> Poly {
+        Poly {
+            terms: if c == 0.0 { Vec::new() } else { vec![(m, c)] },
+        }
+    }
+
+    /// The terms: each monomial with its coefficient.
+    pub fn terms(&self) -> impl Iterator<Item = (&[(Atom, u32)], f64)> {
+        self.terms.iter().map(|(m, c)| (m.as_slice(), *c))
+    }
+
+    /// The value when the normal form is a constant.
+    pub fn as_constant(&self) -> Option<f64> {
+        match self.terms.as_slice() {
+            [] => Some(0.0),
+            [(m, c)] if m.is_empty() => Some(*c),
+            _ => None,
+        }
+    }
+
+    /// True when no function atom is left: the normal form is a polynomial in x.
+    pub fn is_polynomial(&self) -> bool {
+        self.terms
+            .iter()
+            .all(|(m, _)| m.iter().all(|(a, _)| matches!(a, Atom::Var(_))))
+    }
+
+    /// The largest total exponent of a term (0 for constants).
+    pub fn degree(&self) -> u32 {
+        self.terms
+            .iter()
+            .map(|(m, _)| m.iter().map(|(_, k)| k).sum())
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// `self + other`.
+    pub fn add(&self, other: &Poly) -> Poly {
+        let sum = self.terms.iter().chain(&other.terms).cloned();
+        // Sums of normal monomials need no rewriting, so this cannot fail.
+        collect(sum, false).unwrap_or_default()
+    }
+
+    /// `c · self`.
+    pub fn scale(&self, c: f64) -> Poly {
+        if c == 0.0 {
+            return Poly::default();
+        }
+        Poly {
+            terms: self.terms.iter().map(|(m, v)| (m.clone(), v * c)).collect(),
+        }
+    }
+
+    /// `self · other`.
+    pub fn mul(&self, other: &Poly) -> Sym {
+        if self.terms.len().saturating_mul(other.terms.len()) > MAX_PRODUCTS {
+            return Err(too_large());
+        }
+        let products = self.terms.iter().flat_map(|(ma, ca)| {
+            other
+                .terms
+                .iter()
+                .map(move |(mb, cb)| (times(ma, mb), ca * cb))
+        });
+        collect(products, true)
+    }
+
+    /// `selfᵏ`.
+    pub fn pow(&self, k: u32) -> Sym {
+        let mut result = Poly::constant(1.0);
+        let mut square = self.clone();
+        let mut k = k;
+        while k > 0 {
+            if k & 1 == 1 {
+                result = result.mul(&square)?;
+            }
+            k >>= 1;
+            if k > 0 {
+                square = square.mul(&square)?;
+            }
+        }
+        Ok(result)
+    }
+
+    /// `f(arg)` in normal form.
+    pub fn apply(f: Elementary, arg: Poly) -> Sym {
+        if let Some(c) = arg.as_constant() {
+            return finite_constant(call(f.name(), c), f.name());
+        }
+        let negative_lead = arg.terms[0].1 < 0.0;
+        match f.parity() {
+            Parity::Odd if negative_lead => Ok(Poly::apply(f, arg.scale(-1.0))?.scale(-1.0)),
+            Parity::Even if negative_lead => Poly::apply(f, arg.scale(-1.0)),
+            Parity::Neither => {
+                // exp(u + c) = e^c exp(u).
+                let c = arg.terms.iter().find(|(m, _)| m.is_empty()).map(|t| t.1);
+                let c = c.unwrap_or(0.0);
+                let factor = libm::exp(c);
+                if !factor.is_finite() {
+                    return Err(Unsupported(format!("exp({c}) is not finite")));
+                }
+                let atom = Atom::Apply(f, Box::new(arg.add(&Poly::constant(-c))));
+                Ok(Poly::monomial(vec![(atom, 1)], factor))
+            }
+            _ => Ok(Poly::monomial(vec![(Atom::Apply(f, Box::new(arg)), 1)], 1.0)),
+        }
+    }
+
+    /// `∂/∂x_{i+1}`.
+    pub fn derivative(&self, i: usize) -> Sym {
+        let mut total = Poly::default();
+        for (m, c) in &self.terms {
+            for (idx, (atom, k)) in m.iter().enumerate() {
+                let inner = atom_derivative(atom, i)?;
+                if inner.terms.is_empty() {
+                    continue;
+                }
+                let rest = Poly::monomial(lowered(m, idx, 1), c * f64::from(*k));
+                total = total.add(&rest.mul(&inner)?);
+            }
+        }
+        Ok(total)
+    }
+
+    /// The normal form written as an expression in the state variables of an `n`-dimensional
+    /// model (`x` when n = 1), which [`parse`] reads back to the same normal form.
+    pub fn display(&self, n: usize) -> impl fmt::Display + '_ {
+        Shown { poly: self, n }
+    }
+}
+
+/// The derivative of one atom.
+fn atom_derivative(atom: &Atom, i: usize) -> Sym {
+    let (f, u) = match atom {
+        Atom::Var(j) => return Ok(Poly::constant(if *j == i { 1.0 } else { 0.0 })),
+        Atom::Apply(f, u) => (*f, u.as_ref()),
+    };
+    let du = u.derivative(i)?;
+    if du.terms.is_empty() {
+        return Ok(du);
+    }
+    let same = || Poly::apply(f, u.clone());
+    let one = Poly::constant(1.0);
+    let outer = match f {
+        Elementary::Sin => Poly::apply(Elementary::Cos, u.clone())?,
+        Elementary::Cos => Poly::apply(Elementary::Sin, u.clone())?.scale(-1.0),
+        Elementary::Tan => one.add(&same()?.pow(2)?),
+        Elementary::Sinh => Poly::apply(Elementary::Cosh, u.clone())?,
+        Elementary::Cosh => Poly::apply(Elementary::Sinh, u.clone())?,
+        Elementary::Tanh => one.add(&same()?.pow(2)?.scale(-1.0)),
+        Elementary::Exp => same()?,
+    };
+    outer.mul(&du)
+}
+
+fn too_large() -> Unsupported {
+    Unsupported(format!("its normal form exceeds {MAX_TERMS} terms"))
+}
+
+fn finite_constant(v: f64, what: &str) -> Sym {
+    if v.is_finite() {
+        Ok(Poly::constant(v))
+    } else {
+        Err(Unsupported(format!("`{what}` of a constant is not finite")))
+    }
+}
+
+/// Sums like terms, applying the module doc's rewriting when `rewrite`.
+fn collect(terms: impl Iterator<Item = (Monomial, f64)>, rewrite: bool) -> Sym {
+    // Per monomial: the sum and the largest contribution to it.
+    let mut sum: BTreeMap<Monomial, (f64, f64)> = BTreeMap::new();
+    let mut pending: Vec<(Monomial, f64)> = Vec::new();
+    for term in terms {
+        pending.push(term);
+        while let Some((m, c)) = pending.pop() {
+            if c == 0.0 {
+                continue;
+            }
+            match if rewrite { rewritten(&m)? } else { None } {
+                Some(parts) => pending.extend(parts.into_iter().map(|(p, v)| (p, v * c))),
+                None => {
+                    let (total, largest) = sum.entry(m).or_insert((0.0, 0.0));
+                    *total += c;
+                    *largest = largest.max(c.abs());
+                }
+            }
+            if sum.len() + pending.len() > 4 * MAX_TERMS {
+                return Err(too_large());
+            }
+        }
+    }
+    let terms: Vec<(Monomial, f64)> = sum
+        .into_iter()
+        .filter(|(_, (c, largest))| c.abs() > ROUNDING * largest)
+        .map(|(m, (c, _))| (m, c))
+        .collect();
+    if terms.len() > MAX_TERMS {
+        return Err(too_large());
+    }
+    Ok(Poly { terms })
+}
+
+/// One rewriting step of the normal form for monomial `m`, or None when it is normal.
+fn rewritten(m: &[(Atom, u32)]) -> Result<Option<Vec<(Monomial, f64)>>, Unsupported> {
+    let is_exp = |a: &Atom| matches!(a, Atom::Apply(Elementary::Exp, _));
+    let exps: Vec<u32> = m.iter().filter(|(a, _)| is_exp(a)).map(|t| t.1).collect();
+    if exps.len() > 1 || exps.iter().any(|&k| k > 1) {
+        let mut argument = Poly::default();
+        let mut rest = Vec::new();
+        for (a, k) in m {
+            match a {
+                Atom::Apply(Elementary::Exp, u) => argument = argument.add(&u.scale(f64::from(*k))),
+                _ => rest.push((a.clone(), *k)),
+            }
+        }
+        let merged = Poly::apply(Elementary::Exp, argument)?;
+        return Ok(Some(
+            merged.terms.iter().map(|(e, c)| (times(&rest, e), *c)).collect(),
+        ));
+    }
+    for (idx, (a, k)) in m.iter().enumerate() {
+        let (partner, sign) = match a {
+            Atom::Apply(Elementary::Sin, _) if *k >= 2 => (Elementary::Cos, -1.0),
+            Atom::Apply(Elementary::Cosh, _) if *k >= 2 => (Elementary::Sinh, 1.0),
+            _ => continue,
+        };
+        let Atom::Apply(_, u) = a else { continue };
+        let lower = lowered(m, idx, 2);
+        let square = [(Atom::Apply(partner, u.clone()), 2)];
+        return Ok(Some(vec![(times(&lower, &square), sign), (lower, 1.0)]));
+    }
+    Ok(None)
+}
+
+/// A function of the expression language at a constant.
+fn call(name: &str, v: f64) -> f64 {
+    match name {
+        "signum" if v.is_nan() => v,
+        "signum" => {
+            if v.is_sign_negative() {
+                -1.0
+            } else {
+                1.0
+            }
+        }
+        "fract" => v - libm::trunc(v),
+        _ => LIBM_UNARY
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(f64::NAN, |(_, f)| f(v)),
+    }
+}
+
+/// The normal form of the text expression `text` in the state variables of an
+/// `n`-dimensional model.
+pub fn parse(text: &str, n: usize) -> Sym {
+    let normalized = normalize_expression(text, n).map_err(|e| Unsupported(e.to_string()))?;
+    let tokens = tokenize(&normalized, n).map_err(|e| Unsupported(e.to_string()))?;
+    let mut reader = Reader {
+        tokens: &tokens,
+        at: 0,
+        n,
+    };
+    let poly = reader.sum()?;
+    match tokens.get(reader.at) {
+        None => Ok(poly),
+        Some(t) => Err(Unsupported(format!("unexpected `{}`", t.text))),
+    }
+}
+
+/// Recursive descent over the normalised tokens, with exmex's precedence: `+ −` below
+/// `* /` below `^`; a sign right after `^` applies to the exponent's first operand.
+struct Reader<'a> {
+    tokens: &'a [Token_],
+    at: usize,
+    n: usize,
+}
+
+impl Reader<'_> {
+    /// Consumes the next token when it is one of the operators `ops`.
+    fn operator(&mut self, ops: &[&str]) -> Option<char> {
+        let t = self.tokens.get(self.at)?;
+        if t.kind == Token::Operator && ops.contains(&t.text.as_str()) {
+            self.at += 1;
+            t.text.chars().next()
+        } else {
+            None
+        }
+    }
+
+    fn expect(&mut self, kind: Token, what: &str) -> Result<(), Unsupported> {
+        match self.tokens.get(self.at) {
+            Some(t) if t.kind == kind => {
+                self.at += 1;
+                Ok(())
+            }
+            _ => Err(Unsupported(format!("expected {what}"))),
+        }
+    }
+
+    fn sum(&mut self) -> Sym {
+        let mut total = self.product()?;
+        while let Some(op) = self.operator(&["+", "-"]) {
+            let term = self.product()?;
+            total = total.add(&if op == '+' { term } else { term.scale(-1.0) });
+        }
+        Ok(total)
+    }
+
+    fn product(&mut self) -> Sym {
+        let mut total = self.signed()?;
+        while let Some(op) = self.operator(&["*", "/"]) {
+            let factor = self.signed()?;
+            total = if op == '*' {
+                total.mul(&factor)?
+            } else {
+                match factor.as_constant() {
+                    Some(c) if c != 0.0 => total.scale(1.0 / c),
+                    _ => return Err(Unsupported("division by a non-constant".into())),
+                }
+            };
+        }
+        Ok(total)
+    }
+
+    fn signed(&mut self) -> Sym {
+        match self.operator(&["+", "-"]) {
+            Some('-') => Ok(self.signed()?.scale(-1.0)),
+            Some(_) => self.signed(),
+            None => self.power(),
+        }
+    }
+
+    fn power(&mut self) -> Sym {
+        let base = self.primary()?;
+        if self.operator(&["^"]).is_none() {
+            return Ok(base);
+        }
+        let exponent = self.exponent()?;
+        raise(base, exponent)
+    }
+
+    fn exponent(&mut self) -> Sym {
+        match self.operator(&["+", "-"]) {
+            Some('-') => Ok(self.exponent()?.scale(-1.0)),
+            Some(_) => self.exponent(),
+            None => self.primary(),
+        }
+    }
+
+    fn primary(&mut self) -> Sym {
+        let Some(t) = self.tokens.get(self.at) else {
+            return Err(Unsupported("unexpected end".into()));
+        };
+        self.at += 1;
+        match t.kind {
+            Token::Operand => self.operand(&t.text),
+            Token::Function => {
+                self.expect(Token::Open, "`(`")?;
+                let argument = self.sum()?;
+                self.expect(Token::Close, "`)`")?;
+                function(&t.text, argument)
+            }
+            Token::Open => {
+                let inner = self.sum()?;
+                self.expect(Token::Close, "`)`")?;
+                Ok(inner)
+            }
+            _ => Err(Unsupported(format!("unexpected `{}`", t.text))),
+        }
+    }
+
+    fn operand(&self, text: &str) -> Sym {
+        if let Some(i) = variable_index(text, self.n) {
+            return Ok(Poly::variable(i));
+        }
+        let value = match text {
+            "PI" | "pi" => core::f64::consts::PI,
+            "E" | "e" => core::f64::consts::E,
+            "TAU" => core::f64::consts::TAU,
+            number => number
+                .parse()
+                .map_err(|_| Unsupported(format!("unknown operand `{number}`")))?,
+        };
+        Ok(Poly::constant(value))
+    }
+}
+
+/// `name(argument)`.
+fn function(name: &str, argument: Poly) -> Sym {
+    if let Some(f) = Elementary::ALL.iter().find(|f| f.name() == name) {
+        return Poly::apply(*f, argument);
+    }
+    match argument.as_constant() {
+        Some(c) => finite_constant(call(name, c), name),
+        None => Err(Unsupported(format!(
+            "`{name}` of a non-constant has no normal form"
+        ))),
+    }
+}
+
+/// `base ^ exponent`.
+fn raise(base: Poly, exponent: Poly) -> Sym {
+    match (base.as_constant(), exponent.as_constant()) {
+        (Some(b), Some(k)) => finite_constant(libm::pow(b, k), "^"),
+        (_, Some(k)) if k >= 0.0 && k.fract() == 0.0 && k <= f64::from(MAX_POWER) => {
+            base.pow(k as u32)
+        }
+        (_, Some(k)) => Err(Unsupported(format!(
+            "the power {k} of a non-constant has no normal form (integers 0 to {MAX_POWER} have)"
+        ))),
+        (Some(b), None) if b > 0.0 => Poly::apply(Elementary::Exp, exponent.scale(libm::log(b))),
+        _ => Err(Unsupported(
+            "a non-constant power of a non-constant or non-positive base".into(),
+        )),
+    }
+}
+
+/// [`Poly::display`]'s value.
+struct Shown<'a> {
+    poly: &'a Poly,
+    n: usize,
+}
+
+impl fmt::Display for Shown<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.poly.terms.is_empty() {
+            return f.write_str("0");
+        }
+        for (t, (m, c)) in self.poly.terms.iter().enumerate() {
+            let sign = if *c < 0.0 { "-" } else { "+" };
+            match (t, sign) {
+                (0, "-") => f.write_str("-")?,
+                (0, _) => {}
+                _ => write!(f, " {sign} ")?,
+            }
+            let magnitude = c.abs();
+            if m.is_empty() || magnitude != 1.0 {
+                write!(f, "{magnitude}")?;
+                if !m.is_empty() {
+                    f.write_str("*")?;
+                }
+            }
+            for (j, (atom, k)) in m.iter().enumerate() {
+                if j > 0 {
+                    f.write_str("*")?;
+                }
+                match atom {
+                    Atom::Var(i) if self.n == 1 && *i == 0 => f.write_str("x")?,
+                    Atom::Var(i) => write!(f, "x{}", i + 1)?,
+                    Atom::Apply(g, u) => write!(f, "{}({})", g.name(), u.display(self.n))?,
+                }
+                if *k > 1 {
+                    write!(f, "^{k}")?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn form(text: &str, n: usize) -> Poly {
+        parse(text, n).unwrap_or_else(|e| panic!("{text}: {e}"))
+    }
+
+    fn shown(text: &str, n: usize) -> String {
+        form(text, n).display(n).to_string()
+    }
+
+    #[test]
+    fn polynomials_expand_to_their_coefficients() {
+        assert_eq!(shown("(x + 1)^2", 1), "1 + 2*x + x^2");
+        assert_eq!(shown("(x1 - x2)*(x1 + x2)", 2), "x1^2 - x2^2");
+        assert_eq!(shown("-x^2 + 3/2", 1), "1.5 - x^2");
+        assert_eq!(shown("2^3*x - 8*x", 1), "0");
+        assert_eq!(form("(x + 1)^6", 1).degree(), 6);
+        assert_eq!(form("(x + 1)^6", 1).terms().count(), 7);
+    }
+
+    #[test]
+    fn pythagorean_identities_reduce() {
+        assert_eq!(shown("x*sin(x)*x*sin(x) + (x*cos(x))^2", 1), "x^2");
+        assert_eq!(shown("cosh(2*x)^2 - sinh(2*x)^2", 1), "1");
+        assert_eq!(shown("sin(-x)^2 + cos(-x)^2", 1), "1");
+        assert_eq!(shown("sin(-x) + sin(x)", 1), "0");
+        assert_eq!(shown("exp(x)*exp(-x)", 1), "1");
+        let e = form("exp(x + 1)*exp(-x)", 1).as_constant().expect("constant");
+        assert!((e - core::f64::consts::E).abs() < 1e-15);
+        assert_eq!(shown("2^x", 1), form("exp(0.6931471805599453*x)", 1).display(1).to_string());
+    }
+
+    #[test]
+    fn derivatives_follow_the_chain_rule() {
+        // (tanh x)′ + tanh² x = 1: 002's example 4.3 has η = 1 + x².
+        let f = form("tanh(x)", 1);
+        let eta = f.derivative(0).unwrap().add(&f.pow(2).unwrap());
+        assert_eq!(eta.display(1).to_string(), "1");
+        let g = form("x1^2*sin(x2) + exp(x1*x2)", 2);
+        assert_eq!(
+            g.derivative(1).unwrap().display(2).to_string(),
+            "x1*exp(x1*x2) + x1^2*cos(x2)"
+        );
+        assert_eq!(shown("tan(x)", 1), "tan(x)");
+        assert_eq!(
+            form("tan(x)", 1).derivative(0).unwrap().display(1).to_string(),
+            "1 + tan(x)^2"
+        );
+    }
+
+    #[test]
+    fn derivatives_agree_with_central_differences() {
+        // Normal forms evaluated atom by atom, their derivatives against central differences.
+        fn eval(p: &Poly, x: f64) -> f64 {
+            p.terms()
+                .map(|(m, c)| {
+                    c * m
+                        .iter()
+                        .map(|(a, k)| {
+                            let v = match a {
+                                Atom::Var(_) => x,
+                                Atom::Apply(f, u) => call(f.name(), eval(u, x)),
+                            };
+                            libm::pow(v, f64::from(*k))
+                        })
+                        .product::<f64>()
+                })
+                .sum()
+        }
+        for text in [
+            "sin(x)^3*cosh(x/2)",
+            "tanh(x^2 - 1)*exp(-x)",
+            "tan(x/3)^2 + sinh(x)^3",
+        ] {
+            let p = form(text, 1);
+            let d = p.derivative(0).unwrap();
+            for x in [-1.3, -0.2, 0.4, 1.1] {
+                let h = 1e-5;
+                let numeric = (eval(&p, x + h) - eval(&p, x - h)) / (2.0 * h);
+                assert!(
+                    (eval(&d, x) - numeric).abs() < 1e-7 * (1.0 + numeric.abs()),
+                    "{text} at {x}: {} against {numeric}",
+                    eval(&d, x)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn displayed_forms_read_back_unchanged() {
+        for (text, n) in [
+            ("x1^2*tanh(x2 - 0.3*x1) - exp(-x1)*cos(x2)^3 + 1e-3", 2),
+            ("sin(x)^5 - cosh(3*x)^3 + tan(-x)", 1),
+        ] {
+            let p = form(text, n);
+            assert_eq!(form(&p.display(n).to_string(), n), p, "{text}");
+        }
+    }
+
+    #[test]
+    fn what_has_no_normal_form_says_why() {
+        for (text, why) in [
+            ("sqrt(x)", "`sqrt` of a non-constant"),
+            ("1/x", "division by a non-constant"),
+            ("x^0.5", "the power 0.5"),
+            ("x^x", "non-constant power"),
+            ("erfc(0.5 - x)", "`erfc` of a non-constant"),
+        ] {
+            let e = parse(text, 1).expect_err(text);
+            assert!(e.0.contains(why), "{text}: {e}");
+        }
+        // Every monomial of degree ≤ 40 in two variables: C(42, 2) = 861, the smallest
+        // coefficient 1 beside the largest 40!/(13!·13!·14!) ≈ 10¹⁷, none lost as rounding.
+        assert_eq!(form("(x1 + x2 + 1)^40", 2).terms().count(), 861);
+        assert!(parse("(x1 + x2 + x3 + x4 + 1)^40", 4)
+            .expect_err("too many terms")
+            .0
+            .contains("exceeds"));
+        // Constants of any function are evaluated.
+        assert_eq!(shown("sqrt(4)*x + abs(-1)", 1), "1 + 2*x");
+    }
+}
