@@ -367,34 +367,67 @@ mod yau_system {
     }
 
     /// Example 4.3 of 002: f = tanh x, h = (x sin x, x cos x): f² + f′ = 1 and Σh² = x², so
-    /// η = x² + 1 and Σh² = x² exactly (coefficients to 1e-9).
+    /// η = x² + 1 and Σh² = x² — proved from the normal forms (tanh′ = 1 − tanh²,
+    /// sin² + cos² = 1), so the coefficients are exact.
     #[test]
     fn example_4_3_is_a_yau_system_with_eta_x2_plus_1() {
         let s = system(&["tanh(x)"], &["x*sin(x)", "x*cos(x)"], 20.0);
         assert!(s.report.holds(), "{:?}", s.report);
+        let c = &s.report.conditions;
+        assert_eq!(c[1].detail, "Σh² = x^2 (symbolic)");
+        assert_eq!(c[2].detail, "η = 1 + x^2 (symbolic)");
         let eta = s.eta.unwrap();
-        assert!((eta.a[(0, 0)] - 1.0).abs() < 1e-9, "{eta}");
-        assert!(eta.b[0].abs() < 1e-9 && (eta.c - 1.0).abs() < 1e-9, "{eta}");
+        assert_eq!((eta.a[(0, 0)], eta.b[0], eta.c), (1.0, 0.0, 1.0), "{eta}");
         let h2 = s.sum_h2.unwrap();
-        assert!(
-            (h2.a[(0, 0)] - 1.0).abs() < 1e-9 && h2.c.abs() < 1e-9,
-            "{h2}"
-        );
+        assert_eq!((h2.a[(0, 0)], h2.b[0], h2.c), (1.0, 0.0, 0.0), "{h2}");
     }
 
-    /// The cubic sensor: Σh² = x⁶ fails (C2) (and η with it), and the report says where.
+    /// The cubic sensor: Σh² = x⁶ is a polynomial of degree 6, so (C2) fails exactly (and η
+    /// with it).
     #[test]
-    fn cubic_sensor_fails_c2_with_a_location() {
+    fn cubic_sensor_fails_c2_by_its_degree() {
         let s = system(&["0"], &["x^3"], 4.0);
         let c = &s.report.conditions;
         assert!(c[0].holds, "(C1) holds in one dimension");
         assert!(!c[1].holds && c[1].name.starts_with("(C2)"), "{c:?}");
-        assert!(c[1].detail.contains("at x = "), "{}", c[1].detail);
+        assert_eq!(c[1].detail, "Σh² = x^6 has degree 6 (symbolic)");
         assert!(!c[2].holds);
         let message = s.failure().unwrap();
         assert!(
             message.contains("(C2) Σh²") && message.contains("(C3) η"),
             "{message}"
+        );
+    }
+
+    /// Without a normal form (`abs`) the check is numerical and says why; Σh² = x⁴ then fails
+    /// (C2) with the place where the best quadratic misses.
+    #[test]
+    fn functions_without_a_normal_form_are_tested_numerically() {
+        let s = system(&["0"], &["x*abs(x)"], 4.0);
+        let c2 = &s.report.conditions[1];
+        assert!(!c2.holds, "{c2:?}");
+        assert!(c2.detail.contains("at x = "), "{}", c2.detail);
+        assert!(
+            c2.detail
+                .contains("(numerical: h `x*abs(x)`: `abs` of a non-constant has no normal form)"),
+            "{}",
+            c2.detail
+        );
+    }
+
+    /// 2 sin x cos x = sin 2x is beyond the normal form's identities, so Σh² for
+    /// h = (2x sin x cos x, x cos 2x) keeps function atoms and is tested numerically — where
+    /// it is x² (sin² 2x + cos² 2x = 1), and the check says it holds.
+    #[test]
+    fn an_inconclusive_normal_form_falls_back_to_the_numerical_test() {
+        let s = system(&["0"], &["2*x*sin(x)*cos(x)", "x*cos(2*x)"], 3.0);
+        let c2 = &s.report.conditions[1];
+        assert!(c2.holds, "{c2:?}");
+        assert!(c2.detail.contains("keeps a function"), "{}", c2.detail);
+        let h2 = s.sum_h2.unwrap();
+        assert!(
+            (h2.a[(0, 0)] - 1.0).abs() < 1e-9 && h2.b[0].abs() < 1e-9 && h2.c.abs() < 1e-9,
+            "{h2}"
         );
     }
 
@@ -422,13 +455,16 @@ mod yau_system {
     }
 
     /// 2-D with a varying curl: f = (x2², 0) has ∂f2/∂x1 − ∂f1/∂x2 = −2x2, not constant; the
-    /// report names the derivative pair.
+    /// report names the derivative pair and the curl's normal form.
     #[test]
     fn varying_curl_fails_c1() {
         let s = system(&["x2^2", "0"], &["x1"], 2.0);
         let c1 = &s.report.conditions[0];
         assert!(!c1.holds, "{c1:?}");
-        assert!(c1.detail.contains("∂f2/∂x1 − ∂f1/∂x2"), "{}", c1.detail);
+        assert_eq!(
+            c1.detail,
+            "∂f2/∂x1 − ∂f1/∂x2 = -2*x2, not constant (symbolic)"
+        );
     }
 
     /// 3-D linear (Kalman–Bucy) systems are Yau systems; n = 5 is not checked and says so.

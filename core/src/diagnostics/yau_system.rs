@@ -9,14 +9,24 @@
 //! * (C2) `Σ h_i²` is a quadratic polynomial.
 //! * (C3) `η = Σ f_i² + Σ ∂f_i/∂x_i + Σ h_i²` (7) is a quadratic polynomial.
 //!
-//! The test is numerical, on a tensor grid strictly inside the domain (101 points in 1-D,
-//! 21² in 2-D, 11³ in 3-D, 7⁴ in 4-D; n ≥ 5 is not checked): the curl with the Jacobians the
-//! model provides (exact for expressions within the symbolic budget, tolerance
+//! Each condition is decided symbolically when f and h are text expressions with normal forms
+//! ([`crate::model::symbolic`]: polynomials over x and sin, cos, tan, sinh, cosh, tanh, exp of
+//! polynomials, with the Pythagorean and exponential identities): the curl's normal forms must
+//! be the constants l needs, and Σh², η must normalise to polynomials of degree ≤ 2 — a
+//! polynomial normal form of higher degree fails, exactly. So 002's example 4.3 (f = tanh x,
+//! h = (x sin x, x cos x)) is proved to have Σh² = x² and η = 1 + x².
+//!
+//! Otherwise — a closure, a function without a normal form (erfc, sqrt, division by x, …), or
+//! a normal form that keeps a function atom and so proves nothing — the condition is tested
+//! numerically, on a tensor grid strictly inside the domain (101 points in 1-D, 21² in 2-D,
+//! 11³ in 3-D, 7⁴ in 4-D; n ≥ 5 is not checked): the curl with the Jacobians the model
+//! provides (exact for expressions within the symbolic budget, tolerance
 //! `10⁻⁸(1 + max |∂f|)`; central differences otherwise, `10⁻⁵(1 + max |∂f|)`), and for (C2),
 //! (C3) the least-squares quadratic — fitted by SVD in coordinates scaled to [−1, 1]ⁿ — must
-//! reproduce every value to `10⁻⁶(1 + max |value|)`. It is not a symbolic proof: a function
-//! that agrees with a quadratic to that tolerance at every test point passes (a bump narrower
-//! than the test grid's spacing would go unseen).
+//! reproduce every value to `10⁻⁶(1 + max |value|)`. That is not a proof: a function that
+//! agrees with a quadratic to that tolerance at every test point passes (a bump narrower than
+//! the test grid's spacing would go unseen). Each condition's detail says which way it was
+//! decided.
 
 use alloc::format;
 use alloc::string::{String, ToString};
@@ -28,6 +38,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{fmt_point, interior_points, Condition, ConditionReport};
 use crate::model::function::Derivatives;
+use crate::model::symbolic::{self, Atom, Poly};
 use crate::model::Model;
 
 /// Largest state dimension the check runs for.
@@ -174,11 +185,25 @@ pub fn check(model: &Model, bounds: &[(f64, f64)], linear: Option<&Affine>) -> Y
     let t = Tabulated::new(model, &pts);
     let exact = model.drift.derivatives() == Derivatives::Exact;
     let given = linear.is_some();
-    let (c1, linear) = curl_condition(&t, &pts, linear, exact);
-    let (c2, sum_h2) = quadratic_condition("(C2) Σh² is quadratic", "Σh²", &t.sum_h2, &pts, bounds);
-    let (c3, eta) = quadratic_condition("(C3) η (7) is quadratic", "η", &t.eta, &pts, bounds);
+    let forms = Forms::of(model);
+    let (c1, linear) = curl_condition(&t, &pts, linear, exact, forms.jacobian.as_deref());
+    let numbers = Numbers { pts: &pts, bounds };
+    let (c2, sum_h2) = quadratic_condition(
+        "(C2) Σh² is quadratic",
+        "Σh²",
+        forms.sum_h2.as_ref(),
+        &t.sum_h2,
+        &numbers,
+    );
+    let (c3, eta) = quadratic_condition(
+        "(C3) η (7) is quadratic",
+        "η",
+        forms.eta.as_ref(),
+        &t.eta,
+        &numbers,
+    );
     let note = format!(
-        "l(x) = Dx + d with D = {}, d = {} ({}); tested numerically at {per}^{n} points inside the domain",
+        "l(x) = Dx + d with D = {}, d = {} ({}); symbolic: from the expressions' exact normal forms; numerical: tested at {per}^{n} points inside the domain",
         fmt_matrix(&linear.d_mat),
         fmt_point(linear.d_vec.as_slice()),
         if given {
@@ -258,15 +283,195 @@ impl Tabulated {
     }
 }
 
+/// f's Jacobian, Σh² and η in normal form, each when the expressions it needs have one (else
+/// why not).
+struct Forms {
+    /// `jacobian[i * n + j] = ∂f_i/∂x_j`.
+    jacobian: Result<Vec<Poly>, String>,
+    sum_h2: Result<Poly, String>,
+    eta: Result<Poly, String>,
+}
+
+impl Forms {
+    fn of(model: &Model) -> Forms {
+        let n = model.n;
+        let read = |what: &str, texts: Option<&[String]>| -> Result<Vec<Poly>, String> {
+            let texts = texts.ok_or_else(|| format!("{what} is not given as text"))?;
+            texts
+                .iter()
+                .map(|t| symbolic::parse(t, n).map_err(|e| format!("{what} `{t}`: {e}")))
+                .collect()
+        };
+        let f = read("f", model.drift.expressions());
+        let jacobian = f.as_ref().map_err(Clone::clone).and_then(|f| {
+            let mut jacobian = Vec::with_capacity(n * n);
+            for fi in f {
+                for j in 0..n {
+                    jacobian.push(fi.derivative(j).map_err(|e| e.0)?);
+                }
+            }
+            Ok(jacobian)
+        });
+        let sum_h2 = read("h", model.observation.expressions()).and_then(|h| {
+            h.iter().try_fold(Poly::default(), |sum, hi| {
+                Ok(sum.add(&hi.mul(hi).map_err(|e| e.0)?))
+            })
+        });
+        // η = Σ f_i² + Σ ∂f_i/∂x_i + Σh² (7).
+        let eta = match (&f, &jacobian, &sum_h2) {
+            (Ok(f), Ok(jacobian), Ok(sum_h2)) => {
+                f.iter()
+                    .enumerate()
+                    .try_fold(sum_h2.clone(), |eta, (i, fi)| {
+                        let square = fi.mul(fi).map_err(|e| e.0)?;
+                        Ok(eta.add(&square).add(&jacobian[i * n + i]))
+                    })
+            }
+            (Err(why), _, _) | (_, Err(why), _) | (_, _, Err(why)) => Err(why.clone()),
+        };
+        Forms {
+            jacobian,
+            sum_h2,
+            eta,
+        }
+    }
+}
+
+/// What a normal form says about being a quadratic.
+enum Shape {
+    /// A polynomial of degree ≤ 2.
+    Quadratic(Quadratic),
+    /// A polynomial of higher degree (why).
+    Not(String),
+    /// It keeps a function atom (why).
+    Undecided(String),
+}
+
+/// The shape of `p` (named `symbol` in messages) in n variables.
+fn shape(p: &Poly, n: usize, symbol: &str) -> Shape {
+    let shown = p.display(n);
+    if !p.is_polynomial() {
+        return Shape::Undecided(format!(
+            "its normal form {symbol} = {shown} keeps a function"
+        ));
+    }
+    let degree = p.degree();
+    if degree > 2 {
+        return Shape::Not(format!("{symbol} = {shown} has degree {degree}"));
+    }
+    let mut q = Quadratic {
+        a: DMatrix::zeros(n, n),
+        b: DVector::zeros(n),
+        c: 0.0,
+    };
+    for (monomial, c) in p.terms() {
+        let vars: Vec<usize> = monomial
+            .iter()
+            .flat_map(|(atom, k)| match atom {
+                Atom::Var(i) => vec![*i; *k as usize],
+                Atom::Apply(..) => Vec::new(),
+            })
+            .collect();
+        match vars[..] {
+            [] => q.c += c,
+            [i] => q.b[i] += c,
+            [i, j] if i == j => q.a[(i, i)] += c,
+            [i, j] => {
+                q.a[(i, j)] += 0.5 * c;
+                q.a[(j, i)] += 0.5 * c;
+            }
+            _ => {}
+        }
+    }
+    Shape::Quadratic(q)
+}
+
+/// (C1) from the curl's normal forms: `Ok` with the condition and l when they decide it,
+/// `Err(why)` when a curl keeps a function atom.
+fn symbolic_curl(
+    name: &str,
+    jacobian: &[Poly],
+    n: usize,
+    linear: Option<&Affine>,
+) -> Result<(Condition, Affine), String> {
+    let decided = |holds: bool, detail: String, l: Affine| {
+        let condition = Condition {
+            name: name.into(),
+            holds,
+            detail: format!("{detail} (symbolic)"),
+        };
+        Ok((condition, l))
+    };
+    // curl[i][j] = ∂f_j/∂x_i − ∂f_i/∂x_j for i < j.
+    let mut constants = DMatrix::zeros(n, n);
+    let mut undecided = None;
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let curl = jacobian[j * n + i].add(&jacobian[i * n + j].scale(-1.0));
+            let label = format!("∂f{}/∂x{} − ∂f{}/∂x{}", j + 1, i + 1, i + 1, j + 1);
+            match curl.as_constant() {
+                Some(c) => constants[(i, j)] = c,
+                None if curl.is_polynomial() => {
+                    let l = linear.cloned().unwrap_or_else(|| Affine::zero(n));
+                    let detail = format!("{label} = {}, not constant", curl.display(n));
+                    return decided(false, detail, l);
+                }
+                None => {
+                    undecided.get_or_insert(format!(
+                        "the normal form {label} = {} keeps a function",
+                        curl.display(n)
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(why) = undecided {
+        return Err(why);
+    }
+    // D_ij = ½(∂f_i/∂x_j − ∂f_j/∂x_i) = −½ curl[i][j].
+    let inferred = Affine {
+        d_mat: DMatrix::from_fn(n, n, |i, j| 0.5 * (constants[(j, i)] - constants[(i, j)])),
+        d_vec: DVector::zeros(n),
+    };
+    let l = linear.cloned().unwrap_or(inferred);
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let wanted = l.d_mat[(j, i)] - l.d_mat[(i, j)];
+            let found = constants[(i, j)];
+            if (found - wanted).abs() > 1e-12 * (1.0 + wanted.abs()) {
+                let detail = format!(
+                    "∂f{}/∂x{} − ∂f{}/∂x{} = {found}, but l needs {wanted}",
+                    j + 1,
+                    i + 1,
+                    i + 1,
+                    j + 1
+                );
+                return decided(false, detail, l);
+            }
+        }
+    }
+    decided(true, "the curl is constant; f − l is a gradient".into(), l)
+}
+
 /// (C1): the curl of f must be that of l everywhere.
 fn curl_condition(
     t: &Tabulated,
     pts: &[Vec<f64>],
     linear: Option<&Affine>,
     exact: bool,
+    jacobian: Result<&[Poly], &String>,
 ) -> (Condition, Affine) {
     let n = t.n;
     let name = "(C1) f = l + ∇F with l affine (Theorem 2.1: constant curl ∂f_j/∂x_i − ∂f_i/∂x_j)";
+    let why = match jacobian {
+        _ if n == 1 => String::new(),
+        Ok(jacobian) => match symbolic_curl(name, jacobian, n, linear) {
+            Ok(decided) => return decided,
+            Err(why) => why,
+        },
+        Err(why) => why.clone(),
+    };
+    let numerical = format!(" (numerical: {why})");
     let l = linear.cloned().unwrap_or_else(|| Affine {
         d_mat: t.mean_antisymmetric(),
         d_vec: DVector::zeros(n),
@@ -301,13 +506,13 @@ fn curl_condition(
         "holds for every f in one dimension (F = ∫(f − l))".to_string()
     } else if holds {
         format!(
-            "the curl is constant to {:.1e}; f − l is a gradient",
+            "the curl is constant to {:.1e}; f − l is a gradient{numerical}",
             worst.0
         )
     } else {
         let (_, p, i, j, found, wanted) = worst;
         format!(
-            "∂f{}/∂x{} − ∂f{}/∂x{} = {found:.6} at x = {}, but l needs {wanted:.6} everywhere",
+            "∂f{}/∂x{} − ∂f{}/∂x{} = {found:.6} at x = {}, but l needs {wanted:.6} everywhere{numerical}",
             j + 1,
             i + 1,
             i + 1,
@@ -325,24 +530,40 @@ fn curl_condition(
     )
 }
 
-/// (C2)/(C3): `values` must be a quadratic polynomial on the points.
+/// The test points and the domain, for the numerical tests.
+struct Numbers<'a> {
+    pts: &'a [Vec<f64>],
+    bounds: &'a [(f64, f64)],
+}
+
+/// (C2)/(C3): the function named `symbol` must be a quadratic polynomial — decided by its
+/// normal form when that has no function atom, else tested on its `values` at the points.
 fn quadratic_condition(
     name: &str,
     symbol: &str,
+    form: Result<&Poly, &String>,
     values: &[f64],
-    pts: &[Vec<f64>],
-    bounds: &[(f64, f64)],
+    numbers: &Numbers,
 ) -> (Condition, Option<Quadratic>) {
-    let fail = |detail: String| {
-        (
-            Condition {
-                name: name.into(),
-                holds: false,
-                detail,
-            },
-            None,
-        )
+    let (pts, bounds) = (numbers.pts, numbers.bounds);
+    let condition = |holds: bool, detail: String| Condition {
+        name: name.into(),
+        holds,
+        detail,
     };
+    let why = match form.map(|p| (p, shape(p, bounds.len(), symbol))) {
+        Ok((p, Shape::Quadratic(q))) => {
+            let detail = format!("{symbol} = {} (symbolic)", p.display(bounds.len()));
+            return (condition(true, detail), Some(q));
+        }
+        Ok((_, Shape::Not(detail))) => {
+            return (condition(false, format!("{detail} (symbolic)")), None)
+        }
+        Ok((_, Shape::Undecided(why))) => why,
+        Err(why) => why.clone(),
+    };
+    let numerical = format!(" (numerical: {why})");
+    let fail = |detail: String| (condition(false, detail + &numerical), None);
     if let Some(p) = values.iter().position(|v| !v.is_finite()) {
         return fail(format!(
             "not finite at x = {}; shrink the domain",
@@ -360,14 +581,8 @@ fn quadratic_condition(
             scale - 1.0
         ));
     }
-    (
-        Condition {
-            name: name.into(),
-            holds: true,
-            detail: format!("{symbol} = {quadratic}"),
-        },
-        Some(quadratic),
-    )
+    let detail = format!("{symbol} = {quadratic}{numerical}");
+    (condition(true, detail), Some(quadratic))
 }
 
 /// The least-squares quadratic through `(pts, values)`, fitted in `ξ = (x − centre)/half-width`
