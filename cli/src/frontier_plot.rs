@@ -1,5 +1,7 @@
-//! The frontier as an SVG plot (plotters): MSE against time per step on a log axis, one line
-//! per method family through its knob settings, and the optimal MSE as a dashed floor.
+//! The frontier as an SVG plot (plotters): MSE against time per step on a log axis, every
+//! setting as a dot, one line per method family through its best settings (each one more
+//! accurate than every cheaper setting of the family: the family's own frontier), and the
+//! optimal MSE as a dashed floor.
 
 use std::path::Path;
 
@@ -85,13 +87,27 @@ pub fn draw(f: &Frontier, title: &str, path: &Path) -> Result<(), String> {
     families.dedup();
     for (i, family) in families.iter().enumerate() {
         let colour = PALETTE[i % PALETTE.len()];
-        let pts: Vec<(f64, f64)> = usable
+        let mut pts: Vec<(f64, f64)> = usable
             .iter()
             .filter(|(p, _)| p.sweep.family == *family)
-            .map(|(p, m)| (p.seconds_per_step * 1e6, m.min(ytop)))
+            .map(|(p, m)| (p.seconds_per_step * 1e6, *m))
             .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut best = f64::INFINITY;
+        let envelope: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|&&(_, m)| {
+                let better = m < best;
+                best = best.min(m);
+                better
+            })
+            .map(|&(t, m)| (t, m.min(ytop)))
+            .collect();
+        for p in &mut pts {
+            p.1 = p.1.min(ytop);
+        }
         chart
-            .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+            .draw_series(LineSeries::new(envelope, colour.stroke_width(2)))
             .map_err(|e| err(&e))?
             .label(*family)
             .legend(move |(x, y)| {

@@ -317,9 +317,9 @@ pub fn j_curve(curves: &[JCurve], first_seed: u64) -> String {
 
 /// The frontier as CSV: one row per swept point, the reference first.
 pub fn frontier_csv(f: &Frontier) -> String {
-    let mut s = String::from("family,knob,value,mse,mse_stderr,failed,runs,seconds_per_step\n");
+    let mut s = String::from("family,knob,value,dt,mse,mse_stderr,failed,runs,seconds_per_step\n");
     s.push_str(&format!(
-        "{},reference,0,{},{},0,{},{}\n",
+        "{},reference,0,,{},{},0,{},{}\n",
         csv_text(&f.floor.0),
         f.floor.1,
         f.floor.2,
@@ -328,10 +328,11 @@ pub fn frontier_csv(f: &Frontier) -> String {
     ));
     for p in &f.points {
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{}\n",
             p.sweep.family,
             p.sweep.knob,
             p.sweep.value,
+            p.sweep.dt.map_or(String::new(), |v| v.to_string()),
             p.mse.map_or(String::new(), |v| v.to_string()),
             p.mse_stderr.map_or(String::new(), |v| v.to_string()),
             p.failed,
@@ -366,7 +367,7 @@ pub fn frontier(f: &Frontier, check: Option<&ReferenceCheck>, seed: u64) -> Stri
         None => s.push_str("  exact: no discretisation to check\n"),
     }
     s.push_str(&format!(
-        "\n{:<10} {:<13} {:>6} {:>18} {:>7} {:>12} {:>9}\n",
+        "\n{:<10} {:<13} {:>17} {:>18} {:>7} {:>12} {:>9}\n",
         "method", "knob", "value", "MSE ± s.e.", "failed", "µs/step", "vs floor"
     ));
     for p in &f.points {
@@ -381,10 +382,10 @@ pub fn frontier(f: &Frontier, check: Option<&ReferenceCheck>, seed: u64) -> Stri
             _ => "failed".into(),
         };
         s.push_str(&format!(
-            "{:<10} {:<13} {:>6} {:>18} {:>7} {:>12.2} {:>9}\n",
+            "{:<10} {:<13} {:>17} {:>18} {:>7} {:>12.2} {:>9}\n",
             p.sweep.family,
             p.sweep.knob,
-            p.sweep.value,
+            p.sweep.setting(),
             mse,
             format!("{}/{}", p.failed, f.runs),
             p.seconds_per_step * 1e6,
@@ -399,7 +400,7 @@ pub fn frontier(f: &Frontier, check: Option<&ReferenceCheck>, seed: u64) -> Stri
             Some(p) => s.push_str(&format!(
                 "  {family:<10} {} = {} at {:.2} µs per step\n",
                 p.sweep.knob,
-                p.sweep.value,
+                p.sweep.setting(),
                 p.seconds_per_step * 1e6
             )),
             None => s.push_str(&format!("  {family:<10} none of the swept settings\n")),

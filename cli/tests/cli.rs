@@ -268,10 +268,16 @@ fn frontier_writes_csv_and_svg_with_the_floor() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "family,knob,value,mse,mse_stderr,failed,runs,seconds_per_step"
+        "family,knob,value,dt,mse,mse_stderr,failed,runs,seconds_per_step"
     );
-    // The reference, 7 particle counts and 5 grids.
-    assert_eq!(lines.len(), 1 + 1 + 7 + 5);
+    // The reference, 7 particle counts and 5 grids at Δt = Δτ, Δτ/4 and 10⁻³ (Δτ = 0.01).
+    assert_eq!(lines.len(), 1 + 1 + 7 + 5 * 3);
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("QIEM,points,47,0.0025,")),
+        "{csv}"
+    );
     let svg = std::fs::read_to_string(dir.join("cubic-sensor-1d-frontier.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("optimal MSE"));
     let bad = zakai(&["frontier", "cubic-sensor-1d", "--runs", "0"]);

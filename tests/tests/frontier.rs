@@ -67,6 +67,25 @@ fn the_sweep_keeps_only_methods_that_apply() {
     assert!(!sa.contains(&"QIEM") && !sa.contains(&"Spectral"));
 }
 
+/// Each grid is swept at Δt = Δτ, Δτ/4 and min(Δτ, 10⁻³), never finer than that and each once.
+#[test]
+fn grids_are_swept_at_several_steps() {
+    let steps = |c: &zakai::scenario::ScenarioConfig| -> Vec<f64> {
+        default_sweep(c)
+            .unwrap()
+            .iter()
+            .filter(|p| p.family == "QIEM" && p.value == 95)
+            .map(|p| p.dt.expect("grid methods carry their step"))
+            .collect()
+    };
+    let mut c = cubic();
+    assert_eq!(steps(&c), vec![0.01, 0.0025, 1e-3]);
+    c.time.dt_obs = 1e-3;
+    assert_eq!(steps(&c), vec![1e-3]);
+    c.time.dt_obs = 2e-3;
+    assert_eq!(steps(&c), vec![2e-3, 1e-3]);
+}
+
 /// A small frontier end to end: the floor is the reference's MSE and every swept point has
 /// its MSE over the same paired runs; a converged grid filter lands within 5 % of the floor.
 #[test]
@@ -76,7 +95,10 @@ fn a_small_frontier_runs_and_the_grid_filter_reaches_the_floor() {
     let sweep: Vec<SweepPoint> = default_sweep(&c)
         .unwrap()
         .into_iter()
-        .filter(|p| (p.family == "QIEM" && p.value == 191) || (p.family == "PF" && p.value == 50))
+        .filter(|p| {
+            (p.family == "QIEM" && p.value == 191 && p.dt == Some(1e-3))
+                || (p.family == "PF" && p.value == 50)
+        })
         .collect();
     assert_eq!(sweep.len(), 2);
     let f = frontier(&c, &r, &sweep, 4, 1, &|| {}).unwrap();
@@ -93,6 +115,7 @@ fn cheapest_within_ignores_failed_and_too_inaccurate_settings() {
             family: "PF",
             knob: "particles",
             value,
+            dt: None,
             method: MethodConfig::from_key("pf").unwrap(),
         },
         mse: Some(mse),

@@ -35,8 +35,21 @@ pub struct SweepPoint {
     pub knob: &'static str,
     /// Its value.
     pub value: usize,
+    /// The method's own time step, where it is swept as a second knob (the grid methods: a
+    /// coarse grid gains nothing from a fine Δt, so each grid is run at several).
+    pub dt: Option<f64>,
     /// The method with that setting.
     pub method: MethodConfig,
+}
+
+impl SweepPoint {
+    /// The setting in words: `"191"` or `"191, Δt = 0.0025"`.
+    pub fn setting(&self) -> String {
+        match self.dt {
+            Some(dt) => format!("{}, Δt = {dt}", self.value),
+            None => format!("{}", self.value),
+        }
+    }
 }
 
 /// The reference posterior of a scenario and its fine twin (half the steps) for the check.
@@ -146,48 +159,57 @@ pub fn reference_check(
 /// its cost knob.
 pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiError> {
     let n = config.state_dim();
-    let dt = config.time.dt_obs.min(1e-3);
+    let dt_obs = config.time.dt_obs;
+    // The grid methods' steps: one per observation interval, four, and the fine
+    // min(Δτ, 10⁻³) (each at most once).
+    let fine = dt_obs.min(1e-3);
+    let mut grid_steps: Vec<f64> = [dt_obs, dt_obs / 4.0, fine]
+        .into_iter()
+        .filter(|&dt| dt >= fine)
+        .collect();
+    grid_steps.dedup();
     // N + 1 = 3·2^k or 2^k: the DST-I of QIEM runs on FFTs of length N + 1, fast for these.
     let grid_points: &[usize] = match n {
         1 => &[47, 95, 191, 383, 767],
         2 => &[15, 31, 63, 127],
         _ => &[7, 15, 31],
     };
-    let yy = |p: usize| YauYauParams {
-        points: vec![p],
-        dt,
-        ..YauYauParams::default()
-    };
     let mut all: Vec<SweepPoint> = Vec::new();
-    let mut add = |family, knob, values: &[usize], make: &dyn Fn(usize) -> MethodConfig| {
+    let add = |all: &mut Vec<SweepPoint>,
+               family,
+               knob,
+               values: &[usize],
+               make: &dyn Fn(usize) -> MethodConfig| {
         for &value in values {
             all.push(SweepPoint {
                 family,
                 knob,
                 value,
+                dt: None,
                 method: make(value),
             });
         }
     };
-    add("EKF", "substeps", &[1, 4, 16], &|s| {
+    add(&mut all, "EKF", "substeps", &[1, 4, 16], &|s| {
         MethodConfig::Ekf(EkfParams {
             substeps: s,
             ..EkfParams::default()
         })
     });
-    add("UKF", "substeps", &[1, 4, 16], &|s| {
+    add(&mut all, "UKF", "substeps", &[1, 4, 16], &|s| {
         MethodConfig::Ukf(UkfParams {
             substeps: s,
             ..UkfParams::default()
         })
     });
-    add("IEKF", "iterations", &[1, 3, 10], &|i| {
+    add(&mut all, "IEKF", "iterations", &[1, 3, 10], &|i| {
         MethodConfig::Iekf(IekfParams {
             iterations: i,
             ..IekfParams::default()
         })
     });
     add(
+        &mut all,
         "PF",
         "particles",
         &[50, 100, 200, 500, 1000, 2000, 5000],
@@ -198,11 +220,32 @@ pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiEr
             })
         },
     );
-    add("QIEM", "points", grid_points, &|p| {
-        MethodConfig::Qiem(yy(p))
-    });
-    add("IEM", "points", grid_points, &|p| MethodConfig::Iem(yy(p)));
+    for (family, make) in [
+        (
+            "QIEM",
+            MethodConfig::Qiem as fn(YauYauParams) -> MethodConfig,
+        ),
+        ("IEM", MethodConfig::Iem),
+    ] {
+        for &value in grid_points {
+            for &dt in &grid_steps {
+                let params = YauYauParams {
+                    points: vec![value],
+                    dt,
+                    ..YauYauParams::default()
+                };
+                all.push(SweepPoint {
+                    family,
+                    knob: "points",
+                    value,
+                    dt: Some(dt),
+                    method: make(params),
+                });
+            }
+        }
+    }
     add(
+        &mut all,
         "Spectral",
         "online basis",
         &[6, 8, 12, 16, 24, 32, 48, 64, 80, 96, 128],
@@ -214,13 +257,13 @@ pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiEr
             })
         },
     );
-    add("SA", "cells", &[25, 50, 100, 200, 400], &|c| {
+    add(&mut all, "SA", "cells", &[25, 50, 100, 200, 400], &|c| {
         MethodConfig::Separation(FpeParams {
             cells: vec![c],
             dt: 0.01,
         })
     });
-    add("FDM", "cells", &[25, 50, 100, 200, 400], &|c| {
+    add(&mut all, "FDM", "cells", &[25, 50, 100, 200, 400], &|c| {
         MethodConfig::ImplicitFdm(FpeParams {
             cells: vec![c],
             dt: 0.01,
