@@ -1,6 +1,9 @@
 //! Criterion benchmarks of the finite-difference Yau–Yau filters of 000: one scheme step
 //! (prediction over Δt = Δτ with one substep, the robust update and the moments) on the cubic
-//! sensor (1-D, h = x³ on [−10, 10]) and on the 2-D example (33).
+//! sensor (1-D, h = x³ on [−10, 10]) and on the 2-D example (33). At the sizes QIEM
+//! also runs one interval of ten substeps (Δt = Δτ/10): the difference of the two, over nine,
+//! is one pass of Algorithm 3's inner loop (lines 10–15: explicit part, DST, division,
+//! inverse DST) without the once-per-interval update (15) and moments.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use zakai::experiment::Experiment;
@@ -8,6 +11,9 @@ use zakai::filters::yau_fd::YauYauParams;
 use zakai::filters::{Observation, ObservationKind};
 use zakai::grid::dst::DstPlan;
 use zakai::scenario::{presets, MethodConfig};
+
+/// Grid sizes at which QIEM also runs with ten substeps per interval.
+const INNER_LOOP_SIZES: [usize; 3] = [1999, 2001, 256];
 
 fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize], iem: bool) {
     let mut config = presets::preset(preset).expect("preset");
@@ -25,6 +31,13 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
             ..YauYauParams::default()
         };
         let mut methods = vec![("QIEM", MethodConfig::Qiem(params.clone()))];
+        if INNER_LOOP_SIZES.contains(&points) {
+            let inner = YauYauParams {
+                dt: dt / 10.0,
+                ..params.clone()
+            };
+            methods.push(("QIEM-10-substeps", MethodConfig::Qiem(inner)));
+        }
         if iem {
             methods.push(("IEM", MethodConfig::Iem(params)));
         }
