@@ -429,6 +429,11 @@ fn collect(terms: impl Iterator<Item = (Monomial, f64)>, rewrite: bool) -> Sym {
             }
         }
     }
+    if sum.values().any(|(c, _)| !c.is_finite()) {
+        return Err(Unsupported(
+            "a coefficient of its normal form is not finite".into(),
+        ));
+    }
     let terms: Vec<(Monomial, f64)> = sum
         .into_iter()
         .filter(|(_, (c, largest))| c.abs() > ROUNDING * largest)
@@ -559,7 +564,15 @@ impl Reader<'_> {
                 total.mul(&factor)?
             } else {
                 match factor.as_constant() {
-                    Some(c) if c != 0.0 => total.scale(1.0 / c),
+                    Some(c) if c != 0.0 => {
+                        let quotient = total.scale(1.0 / c);
+                        if quotient.terms.iter().any(|(_, v)| !v.is_finite()) {
+                            return Err(Unsupported(
+                                "a coefficient of its normal form is not finite".into(),
+                            ));
+                        }
+                        quotient
+                    }
                     _ => return Err(Unsupported("division by a non-constant".into())),
                 }
             };
@@ -866,6 +879,11 @@ mod tests {
             .expect_err("too many terms")
             .0
             .contains("exceeds"));
+        // Coefficients that overflow are refused, not dropped.
+        for text in ["(1e200*x + 1)^2", "x/1e-320"] {
+            let e = parse(text, 1).expect_err(text);
+            assert!(e.0.contains("not finite"), "{text}: {e}");
+        }
         // Constants of any function are evaluated.
         assert_eq!(shown("sqrt(4)*x + abs(-1)", 1), "1 + 2*x");
     }
