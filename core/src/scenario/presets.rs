@@ -180,7 +180,10 @@ fn cos_xn(power: u32) -> ScenarioConfig {
             from it, T = 5, Δτ = 0.01, and the domain [−6, 8] around the stable point π/2 of f \
             with the paper's Δs = 0.01. Look for: with even n, h cannot tell x from −x, so \
             the grid density (heat strip) can carry two humps where the EKF commits to one; with \
-            odd n both track and the QIEM's error is the smaller.",
+            odd n both track and the QIEM's error is the smaller. The EKF here starts from σ₀, \
+            which makes it nearly optimal for even n; `zakai reproduce 000-table-1` starts it \
+            uninformed at x̂₀ = 0, P₀ = 1 (000 does not say how), and then QIEM's error is the \
+            smaller for every n.",
         drift: &["cos(x)"],
         observation: &[&h],
         noise: continuous(),
