@@ -386,6 +386,11 @@ fn shape(p: &Poly, n: usize, symbol: &str) -> Shape {
     Shape::Quadratic(q)
 }
 
+/// `∂f_j/∂x_i − ∂f_i/∂x_j` with 1-based indices, as the reports write it.
+fn curl_label(i: usize, j: usize) -> String {
+    format!("∂f{}/∂x{} − ∂f{}/∂x{}", j + 1, i + 1, i + 1, j + 1)
+}
+
 /// (C1) from the curl's normal forms: `Ok` with the condition and l when they decide it,
 /// `Err(why)` when a curl keeps a function atom.
 fn symbolic_curl(
@@ -408,7 +413,7 @@ fn symbolic_curl(
     for i in 0..n {
         for j in (i + 1)..n {
             let curl = jacobian[j * n + i].add(&jacobian[i * n + j].scale(-1.0));
-            let label = format!("∂f{}/∂x{} − ∂f{}/∂x{}", j + 1, i + 1, i + 1, j + 1);
+            let label = curl_label(i, j);
             match curl.as_constant() {
                 Some(c) => constants[(i, j)] = c,
                 None if curl.is_polynomial() => {
@@ -439,13 +444,7 @@ fn symbolic_curl(
             let wanted = l.d_mat[(j, i)] - l.d_mat[(i, j)];
             let found = constants[(i, j)];
             if (found - wanted).abs() > 1e-12 * (1.0 + wanted.abs()) {
-                let detail = format!(
-                    "∂f{}/∂x{} − ∂f{}/∂x{} = {found}, but l needs {wanted}",
-                    j + 1,
-                    i + 1,
-                    i + 1,
-                    j + 1
-                );
+                let detail = format!("{} = {found}, but l needs {wanted}", curl_label(i, j));
                 return decided(false, detail, l);
             }
         }
@@ -512,11 +511,8 @@ fn curl_condition(
     } else {
         let (_, p, i, j, found, wanted) = worst;
         format!(
-            "∂f{}/∂x{} − ∂f{}/∂x{} = {found:.6} at x = {}, but l needs {wanted:.6} everywhere{numerical}",
-            j + 1,
-            i + 1,
-            i + 1,
-            j + 1,
+            "{} = {found:.6} at x = {}, but l needs {wanted:.6} everywhere{numerical}",
+            curl_label(i, j),
             fmt_point(&pts[p])
         )
     };

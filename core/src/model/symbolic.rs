@@ -397,6 +397,10 @@ fn too_large() -> Unsupported {
     Unsupported(format!("its normal form exceeds {MAX_TERMS} terms"))
 }
 
+fn overflowed() -> Unsupported {
+    Unsupported("a coefficient of its normal form is not finite".into())
+}
+
 fn finite_constant(v: f64, what: &str) -> Sym {
     if v.is_finite() {
         Ok(Poly::constant(v))
@@ -430,9 +434,7 @@ fn collect(terms: impl Iterator<Item = (Monomial, f64)>, rewrite: bool) -> Sym {
         }
     }
     if sum.values().any(|(c, _)| !c.is_finite()) {
-        return Err(Unsupported(
-            "a coefficient of its normal form is not finite".into(),
-        ));
+        return Err(overflowed());
     }
     let terms: Vec<(Monomial, f64)> = sum
         .into_iter()
@@ -567,9 +569,7 @@ impl Reader<'_> {
                     Some(c) if c != 0.0 => {
                         let quotient = total.scale(1.0 / c);
                         if quotient.terms.iter().any(|(_, v)| !v.is_finite()) {
-                            return Err(Unsupported(
-                                "a coefficient of its normal form is not finite".into(),
-                            ));
+                            return Err(overflowed());
                         }
                         quotient
                     }
