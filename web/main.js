@@ -225,6 +225,20 @@ function showSuitability(s) {
   showRowSuitability();
 }
 
+// Whether the model is a Yau filtering system (002 (C1)–(C3)): one line per condition, as the
+// check decided it (symbolically where the expressions allow, else at test points).
+function showStructure(report) {
+  const box = $('structure');
+  box.hidden = !report;
+  if (!report) return;
+  $('structure-verdict').textContent = report.conditions.every((c) => c.holds) ? 'yes' : 'no';
+  $('structure-list').replaceChildren(...report.conditions.map((c) => el('li', {
+    className: c.holds ? 'holds' : 'fails',
+    textContent: `${c.holds ? '✓' : '✗'} ${c.name}: ${c.detail}`,
+  })));
+  $('structure-note').textContent = report.note ?? '';
+}
+
 function showPriorKind(kind) {
   for (const k of ['gaussian', 'mixture', 'density']) {
     document.querySelectorAll(`.prior-${k}`).forEach((el) => { el.style.display = k === kind ? '' : 'none'; });
@@ -911,6 +925,7 @@ worker.onmessage = ({ data }) => {
       if (data.id === state.validateId) {
         showProblems(data.problems);
         showSuitability(data.suitability);
+        showStructure(data.structure);
       }
       break;
     case 'loaded':

@@ -129,7 +129,8 @@ self.onmessage = async ({ data }) => {
       guard(() => {
         const problems = zakai.validateScenario(data.config);
         const suitability = zakai.methodSuitability({ ...data.config, methods: data.allMethods ?? data.config.methods });
-        post({ type: 'validated', id: data.id, problems, suitability });
+        const structure = zakai.yauSystem(data.config);
+        post({ type: 'validated', id: data.id, problems, suitability, structure });
       });
       break;
     case 'load':

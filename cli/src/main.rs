@@ -521,19 +521,9 @@ fn print_report(r: &zakai::diagnostics::ConditionReport) {
 }
 
 fn yau_system(scenario: &str) -> Result<(), String> {
-    use zakai::diagnostics::yau_system::{check, Affine};
     let config = load(scenario)?;
-    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
-    let model = experiment.model();
-    // The l of the scenario's direct method, if it lists one (1-D).
-    let given = experiment.config().methods.iter().find_map(|m| match m {
-        MethodConfig::Direct(p) if model.n == 1 => Some(Affine {
-            d_mat: nalgebra::DMatrix::from_element(1, 1, p.linear[0]),
-            d_vec: nalgebra::DVector::from_element(1, p.linear[1]),
-        }),
-        _ => None,
-    });
-    let system = check(model, &experiment.config().bounds(), given.as_ref());
+    config.check().map_err(|e| e.to_string())?;
+    let system = config.yau_system().map_err(|e| e.to_string())?;
     print_report(&system.report);
     Ok(())
 }

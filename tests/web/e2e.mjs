@@ -208,6 +208,20 @@ try {
   await page.waitForFunction(() => document.querySelector('#methods .method-row:first-child .row-warnings').textContent.includes('(16)/(23) CFL'), null, { timeout: 10000 });
   console.log('CFL warning in the row:', await page.textContent('#methods .method-row:first-child .row-warnings'));
 
+  // 6b. The model's structure: whether it is a Yau filtering system (002 (C1)–(C3)), decided
+  //     symbolically where the expressions allow it, and updated as f and h are edited.
+  await load(`${url}?preset=direct-4.3`, 'direct-4.3');
+  await page.waitForFunction(() => document.querySelector('#structure-list li'), null, { timeout: 10000 });
+  assert.equal(await page.textContent('#structure-verdict'), 'yes');
+  const structure = await page.$$eval('#structure-list li', (lis) => lis.map((l) => l.textContent));
+  console.log('structure of direct-4.3:', JSON.stringify(structure));
+  assert.ok(structure.some((t) => t.includes('η = 1 + x^2 (symbolic)')), 'η of example 4.3 is proved quadratic');
+  await page.fill('#observation input >> nth=0', 'x^3');
+  await page.fill('#observation input >> nth=1', 'x');
+  await page.waitForFunction(() => document.querySelector('#structure-verdict').textContent === 'no', null, { timeout: 10000 });
+  const edited = await page.$$eval('#structure-list li.fails', (lis) => lis.map((l) => l.textContent));
+  assert.ok(edited.some((t) => t.includes('has degree 6 (symbolic)')), `the edit is re-checked: ${JSON.stringify(edited)}`);
+
   // 7. The memory estimate is shown per method and a too-large grid is refused with the
   //    message before anything is allocated; the running session is untouched.
   await load(`${url}?preset=yau-2d`, 'yau-2d');

@@ -91,6 +91,21 @@ pub fn validate_scenario(config: JsValue) -> Result<JsValue, JsError> {
     to_js(&problems)
 }
 
+/// Whether the scenario's model is a Yau filtering system on its domain (002 (C1)–(C3)):
+/// `{theorem, conditions: [{name, holds, detail}], note}`, each condition decided symbolically
+/// where the expressions allow it (its detail says which way). `null` when the model itself
+/// does not build.
+#[wasm_bindgen(js_name = yauSystem)]
+pub fn yau_system(config: JsValue) -> Result<JsValue, JsError> {
+    let Ok(config) = parse_config(config) else {
+        return Ok(JsValue::NULL);
+    };
+    match config.yau_system() {
+        Ok(system) => to_js(&system.report),
+        Err(_) => Ok(JsValue::NULL),
+    }
+}
+
 /// Whether each method applies to a scenario's model, and what each of its methods would
 /// allocate: `{kinds: [{key, reason}], rows: [{reason, memory}], cap}` where `reason` is null
 /// when the method applies (kinds: every method with default parameters; rows: the scenario's

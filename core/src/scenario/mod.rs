@@ -629,6 +629,22 @@ impl ScenarioConfig {
         Model::new(drift, observation, diffusion, observations)
     }
 
+    /// Whether the model is a Yau filtering system on the domain (002 (C1)–(C3),
+    /// [`crate::diagnostics::yau_system`]), with the l of the scenario's direct method where it
+    /// lists one (one dimension), else l inferred.
+    pub fn yau_system(&self) -> Result<crate::diagnostics::yau_system::YauSystem, ZakaiError> {
+        use crate::diagnostics::yau_system::{check, Affine};
+        let model = self.build_model()?;
+        let given = self.methods.iter().find_map(|m| match m {
+            MethodConfig::Direct(p) if model.n == 1 => Some(Affine {
+                d_mat: DMatrix::from_element(1, 1, p.linear[0]),
+                d_vec: DVector::from_element(1, p.linear[1]),
+            }),
+            _ => None,
+        });
+        Ok(check(&model, &self.bounds(), given.as_ref()))
+    }
+
     /// Builds the prior; density priors are tabulated on the domain.
     pub fn build_prior(&self) -> Result<Prior, ZakaiError> {
         let n = self.state_dim();
