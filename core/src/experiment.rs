@@ -276,7 +276,9 @@ impl Experiment {
         Ok(run)
     }
 
-    /// A whole run, timed with `clock` (none: times are 0), reporting to `observer`.
+    /// A whole run, timed with `clock` (none: times are 0), reporting failures to `observer`.
+    /// The methods run one after the other over all observations ([`ExperimentRun::complete`]),
+    /// so that each is timed on its own rather than right after another method's step.
     pub fn run_with(
         &self,
         seed: u64,
@@ -284,7 +286,7 @@ impl Experiment {
         observer: &mut dyn Observer,
     ) -> Result<RunResult, ZakaiError> {
         let mut run = self.start_timed(seed, clock)?;
-        run.advance(usize::MAX, clock, observer);
+        run.complete(clock, observer);
         Ok(run.finish())
     }
 
@@ -363,6 +365,21 @@ impl ExperimentRun {
 
     /// Gives observation `k` to every live filter and records its estimate or failure.
     fn observe(&mut self, k: usize, clock: Option<&dyn Clock>, observer: &mut dyn Observer) {
+        for i in 0..self.filters.len() {
+            self.observe_by(i, k, clock, observer);
+        }
+        self.next = k + 1;
+    }
+
+    /// Gives observation `k` to method `i` (unless it has failed), timing its step and
+    /// checking its estimate.
+    fn observe_by(
+        &mut self,
+        i: usize,
+        k: usize,
+        clock: Option<&dyn Clock>,
+        observer: &mut dyn Observer,
+    ) {
         let t = &self.trajectory;
         let kind = if t.continuous {
             ObservationKind::Increment
@@ -379,82 +396,96 @@ impl ExperimentRun {
             value: t.observation(k),
             kind,
         };
-        for (i, (filter, track)) in self.filters.iter_mut().zip(&mut self.tracks).enumerate() {
-            if track.failed() {
-                continue;
-            }
-            let start = clock.map(|c| c.now());
-            let stepped = if k == 0 && t.continuous {
-                Ok(())
+        let (filter, track) = (&mut self.filters[i], &mut self.tracks[i]);
+        if track.failed() {
+            return;
+        }
+        let start = clock.map(|c| c.now());
+        let stepped = if k == 0 && t.continuous {
+            Ok(())
+        } else {
+            filter.step(&obs)
+        };
+        if let (Some(c), Some(s)) = (clock, start) {
+            track.seconds += c.now() - s;
+        }
+        if k > 0 {
+            track.steps += 1;
+        }
+        let result = stepped.map_err(|e| e.to_string()).and_then(|_| {
+            let est = filter.estimate();
+            let magnitude = est.mean.amax();
+            if est.mean.iter().any(|v| !v.is_finite()) {
+                Err("the estimate became non-finite".to_string())
+            } else if magnitude > self.bound {
+                Err(crate::error::FilterError::Diverged {
+                    magnitude,
+                    bound: self.bound,
+                }
+                .to_string())
             } else {
-                filter.step(&obs)
-            };
-            if let (Some(c), Some(s)) = (clock, start) {
-                track.seconds += c.now() - s;
+                Ok(est)
             }
-            if k > 0 {
-                track.steps += 1;
-            }
-            let result = stepped.map_err(|e| e.to_string()).and_then(|_| {
-                let est = filter.estimate();
-                let magnitude = est.mean.amax();
-                if est.mean.iter().any(|v| !v.is_finite()) {
-                    Err("the estimate became non-finite".to_string())
-                } else if magnitude > self.bound {
-                    Err(crate::error::FilterError::Diverged {
-                        magnitude,
-                        bound: self.bound,
-                    }
-                    .to_string())
-                } else {
+        });
+        let result = match (result, &self.track_loss) {
+            (Ok(est), Some(rule)) => {
+                let truth = t.state(k);
+                let error = libm::sqrt(
+                    est.mean
+                        .iter()
+                        .zip(truth)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>(),
+                );
+                if error <= rule.error {
+                    track.off_track_since = None;
                     Ok(est)
-                }
-            });
-            let result = match (result, &self.track_loss) {
-                (Ok(est), Some(rule)) => {
-                    let truth = t.state(k);
-                    let error = libm::sqrt(
-                        est.mean
-                            .iter()
-                            .zip(truth)
-                            .map(|(a, b)| (a - b) * (a - b))
-                            .sum::<f64>(),
-                    );
-                    if error <= rule.error {
-                        track.off_track_since = None;
-                        Ok(est)
+                } else {
+                    let since = *track.off_track_since.get_or_insert(t.times[k]);
+                    if t.times[k] - since > rule.duration {
+                        Err(alloc::format!(
+                            "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
+                            rule.error,
+                            t.times[k]
+                        ))
                     } else {
-                        let since = *track.off_track_since.get_or_insert(t.times[k]);
-                        if t.times[k] - since > rule.duration {
-                            Err(alloc::format!(
-                                "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
-                                rule.error,
-                                t.times[k]
-                            ))
-                        } else {
-                            Ok(est)
-                        }
+                        Ok(est)
                     }
                 }
-                (r, _) => r,
-            };
-            match result {
-                Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
-                Err(mut message) => {
-                    // A failure under violated stability or positivity conditions says so:
-                    // the condition is the likely cause (000 (22)/(30)/(31), 001 (16)/(23)).
-                    let warnings = filter.warnings();
-                    if !warnings.is_empty() {
-                        message
-                            .push_str(" — with the chosen steps outside the method's conditions: ");
-                        message.push_str(&warnings.join("; "));
-                    }
-                    observer.on_failure(i, k, &message);
-                    track.failure = Some(Failure { k, message });
+            }
+            (r, _) => r,
+        };
+        match result {
+            Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
+            Err(mut message) => {
+                // A failure under violated stability or positivity conditions says so:
+                // the condition is the likely cause (000 (22)/(30)/(31), 001 (16)/(23)).
+                let warnings = filter.warnings();
+                if !warnings.is_empty() {
+                    message.push_str(" — with the chosen steps outside the method's conditions: ");
+                    message.push_str(&warnings.join("; "));
                 }
+                observer.on_failure(i, k, &message);
+                track.failure = Some(Failure { k, message });
             }
         }
-        self.next = k + 1;
+    }
+
+    /// Processes every remaining observation method by method: each method runs through all
+    /// of them before the next starts. The records are those of [`ExperimentRun::advance`]
+    /// (the methods are independent given the observations), but a method's time is not
+    /// inflated by the caches another method's step left cold — the per-step times of a paired
+    /// job otherwise depend on which method comes after the most expensive one.
+    /// [`Observer::on_step`] is not called.
+    pub fn complete(&mut self, clock: Option<&dyn Clock>, observer: &mut dyn Observer) {
+        // Observations k = next, …, steps (the last index).
+        let (from, last) = (self.next, self.trajectory.steps());
+        for i in 0..self.filters.len() {
+            for k in from..=last {
+                self.observe_by(i, k, clock, observer);
+            }
+        }
+        self.next = self.next.max(last + 1);
     }
 
     /// Processes up to `count` further observations; returns how many were processed.
@@ -539,5 +570,39 @@ mod tests {
             "{}",
             failure.message
         );
+    }
+
+    /// A whole run processed method by method (`run`) records exactly what the same run
+    /// stepped observation by observation (`advance`, the page's Session) records: estimates
+    /// bit for bit, failures at the same observation with the same message, and steps.
+    #[test]
+    fn method_by_method_runs_record_what_stepped_runs_record() {
+        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        config.time.t_final = 1.0;
+        // A tight divergence bound makes methods fail in some runs, so failures are compared
+        // too (checked below).
+        config.failure.divergence_bound = 1.0;
+        let experiment = Experiment::new(config).unwrap();
+        let (mut any_failure, mut any_complete) = (false, false);
+        for seed in 1..=8 {
+            let whole = experiment.run(seed).unwrap();
+            let mut stepped = experiment.start(seed).unwrap();
+            while stepped.advance(7, None, &mut Silent) > 0 {}
+            let stepped = stepped.finish();
+            assert_eq!(whole.methods.len(), stepped.methods.len());
+            for (a, b) in whole.methods.iter().zip(&stepped.methods) {
+                assert_eq!(a.name, b.name);
+                assert_eq!(a.estimates, b.estimates, "{} seed {seed}", a.name);
+                assert_eq!(a.failure, b.failure, "{} seed {seed}", a.name);
+                assert_eq!(a.steps, b.steps, "{} seed {seed}", a.name);
+                any_failure |= a.failure.is_some();
+                any_complete |= a.failure.is_none();
+            }
+        }
+        assert!(
+            any_failure,
+            "some method fails in one of the runs, so failures are compared"
+        );
+        assert!(any_complete, "and some method runs to the end");
     }
 }
