@@ -1,12 +1,14 @@
 // wasm / native time per step of every method, measured in one go: each preset runs once in
-// Node (the playground's SIMD wasm package) and once natively (`zakai run --format json`,
-// one run = one thread), same seed, and the per-method ratio is printed as a Markdown table.
+// Node (the playground's SIMD wasm package, one Monte Carlo run through `MonteCarloJob`) and
+// once natively (`zakai run --format json`, one run = one thread), same seed and the same code
+// path (`Experiment::run_with`: each method over all observations in turn), and the
+// per-method ratio is printed as a Markdown table.
 // Usage: node scripts/wasm-ratio.mjs [preset …]   (after scripts/build-web.sh and
 // `cargo build --release -p zakai-cli`)
 import { readFileSync } from 'node:fs';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { initSync, Session, presets } from '../web/pkg/zakai_wasm.js';
+import { initSync, MonteCarloJob, presets } from '../web/pkg/zakai_wasm.js';
 
 const root = fileURLToPath(new URL('../', import.meta.url));
 initSync({ module: readFileSync(`${root}web/pkg/zakai_wasm_bg.wasm`) });
@@ -20,19 +22,16 @@ for (const name of names) {
   if (!config) throw new Error(`unknown preset ${name}`);
   // Warm-up run (JIT tier-up), then the measured one.
   for (const measured of [false, true]) {
-    const session = new Session(config, config.seed);
-    while (!session.finished()) session.step(50);
-    if (!measured) {
-      session.free();
-      continue;
-    }
-    const wasm = session.diagnostics();
-    session.free();
+    const job = new MonteCarloJob(config, config.seed);
+    job.runNext();
+    const wasm = job.summary().methods;
+    job.free();
+    if (!measured) continue;
     const native = JSON.parse(execFileSync(cli, ['run', name, '--format', 'json'], { maxBuffer: 1 << 26 }));
     for (const m of wasm) {
       const n = native.methods.find((x) => x.name === m.name);
       const nat = n ? n.seconds_per_step * 1e6 : NaN;
-      const w = m.ms_per_step * 1e3;
+      const w = m.seconds_per_step * 1e6;
       console.log(`| ${name} | ${m.name} | ${nat.toFixed(2)} | ${w.toFixed(2)} | ${(w / nat).toFixed(2)} |`);
     }
   }
