@@ -485,7 +485,7 @@ impl ExperimentRun {
                 self.observe_by(i, k, clock, observer);
             }
         }
-        self.next = self.next.max(last + 1);
+        self.next = last + 1;
     }
 
     /// Processes up to `count` further observations; returns how many were processed.

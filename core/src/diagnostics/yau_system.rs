@@ -314,7 +314,7 @@ impl Forms {
         });
         let sum_h2 = read("h", model.observation.expressions()).and_then(|h| {
             h.iter().try_fold(Poly::default(), |sum, hi| {
-                Ok(sum.add(&hi.mul(hi).map_err(|e| e.0)?))
+                sum.add(&hi.mul(hi).map_err(|e| e.0)?).map_err(|e| e.0)
             })
         });
         // η = Σ f_i² + Σ ∂f_i/∂x_i + Σh² (7).
@@ -324,7 +324,8 @@ impl Forms {
                     .enumerate()
                     .try_fold(sum_h2.clone(), |eta, (i, fi)| {
                         let square = fi.mul(fi).map_err(|e| e.0)?;
-                        Ok(eta.add(&square).add(&jacobian[i * n + i]))
+                        let eta = eta.add(&square).map_err(|e| e.0)?;
+                        eta.add(&jacobian[i * n + i]).map_err(|e| e.0)
                     })
             }
             (Err(why), _, _) | (_, Err(why), _) | (_, _, Err(why)) => Err(why.clone()),
@@ -412,7 +413,9 @@ fn symbolic_curl(
     let mut undecided = None;
     for i in 0..n {
         for j in (i + 1)..n {
-            let curl = jacobian[j * n + i].add(&jacobian[i * n + j].scale(-1.0));
+            let curl = jacobian[j * n + i]
+                .add(&jacobian[i * n + j].scale(-1.0))
+                .map_err(|e| e.0)?;
             let label = curl_label(i, j);
             match curl.as_constant() {
                 Some(c) => constants[(i, j)] = c,

@@ -271,11 +271,10 @@ impl Poly {
             .unwrap_or(0)
     }
 
-    /// `self + other`.
-    pub fn add(&self, other: &Poly) -> Poly {
-        let sum = self.terms.iter().chain(&other.terms).cloned();
-        // Sums of normal monomials need no rewriting, so this cannot fail.
-        collect(sum, false).unwrap_or_default()
+    /// `self + other` (sums of normal monomials need no rewriting; the sum can still exceed
+    /// [`MAX_TERMS`] or overflow).
+    pub fn add(&self, other: &Poly) -> Sym {
+        collect(self.terms.iter().chain(&other.terms).cloned(), false)
     }
 
     /// `c · self`.
@@ -336,7 +335,7 @@ impl Poly {
                 if !factor.is_finite() {
                     return Err(Unsupported(format!("exp({c}) is not finite")));
                 }
-                let atom = Atom::Apply(f, Box::new(arg.add(&Poly::constant(-c))));
+                let atom = Atom::Apply(f, Box::new(arg.add(&Poly::constant(-c))?));
                 Ok(Poly::monomial(vec![(atom, 1)], factor))
             }
             _ => Ok(Poly::monomial(
@@ -356,7 +355,7 @@ impl Poly {
                     continue;
                 }
                 let rest = Poly::monomial(lowered(m, idx, 1), c * f64::from(*k));
-                total = total.add(&rest.mul(&inner)?);
+                total = total.add(&rest.mul(&inner)?)?;
             }
         }
         Ok(total)
@@ -384,10 +383,10 @@ fn atom_derivative(atom: &Atom, i: usize) -> Sym {
     let outer = match f {
         Elementary::Sin => Poly::apply(Elementary::Cos, u.clone())?,
         Elementary::Cos => Poly::apply(Elementary::Sin, u.clone())?.scale(-1.0),
-        Elementary::Tan => one.add(&same()?.pow(2)?),
+        Elementary::Tan => one.add(&same()?.pow(2)?)?,
         Elementary::Sinh => Poly::apply(Elementary::Cosh, u.clone())?,
         Elementary::Cosh => Poly::apply(Elementary::Sinh, u.clone())?,
-        Elementary::Tanh => one.add(&same()?.pow(2)?.scale(-1.0)),
+        Elementary::Tanh => one.add(&same()?.pow(2)?.scale(-1.0))?,
         Elementary::Exp => same()?,
     };
     outer.mul(&du)
@@ -456,7 +455,9 @@ fn rewritten(m: &[(Atom, u32)]) -> Result<Option<Vec<(Monomial, f64)>>, Unsuppor
         let mut rest = Vec::new();
         for (a, k) in m {
             match a {
-                Atom::Apply(Elementary::Exp, u) => argument = argument.add(&u.scale(f64::from(*k))),
+                Atom::Apply(Elementary::Exp, u) => {
+                    argument = argument.add(&u.scale(f64::from(*k)))?
+                }
                 _ => rest.push((a.clone(), *k)),
             }
         }
@@ -553,7 +554,7 @@ impl Reader<'_> {
         let mut total = self.product()?;
         while let Some(op) = self.operator(&["+", "-"]) {
             let term = self.product()?;
-            total = total.add(&if op == '+' { term } else { term.scale(-1.0) });
+            total = total.add(&if op == '+' { term } else { term.scale(-1.0) })?;
         }
         Ok(total)
     }
@@ -759,7 +760,7 @@ mod tests {
     fn derivatives_follow_the_chain_rule() {
         // (tanh x)′ + tanh² x = 1: 002's example 4.3 has η = 1 + x².
         let f = form("tanh(x)", 1);
-        let eta = f.derivative(0).unwrap().add(&f.pow(2).unwrap());
+        let eta = f.derivative(0).unwrap().add(&f.pow(2).unwrap()).unwrap();
         assert_eq!(eta.display(1).to_string(), "1");
         let g = form("x1^2*sin(x2) + exp(x1*x2)", 2);
         assert_eq!(
@@ -880,7 +881,13 @@ mod tests {
             .0
             .contains("exceeds"));
         // Coefficients that overflow are refused, not dropped.
-        for text in ["(1e200*x + 1)^2", "x/1e-320"] {
+        // Sums are checked like products: too many terms or an overflowing coefficient is
+        // refused, never a silently wrong sum.
+        assert!(parse("(x1 + x2 + x3 + 1)^24 + (x2 + x3 + x4 + 1)^24", 4)
+            .expect_err("2925 + 2925 − 325 terms")
+            .0
+            .contains("exceeds"));
+        for text in ["(1e200*x + 1)^2", "x/1e-320", "1e308*x + 1e308*x"] {
             let e = parse(text, 1).expect_err(text);
             assert!(e.0.contains("not finite"), "{text}: {e}");
         }
