@@ -214,6 +214,27 @@ fn scale_by_exp_with(
 }
 
 per_node_kernel! {
+    /// `out = Σ_k x_k a_k`: a matrix stored column by column (column k is
+    /// `columns[k·len..(k + 1)·len]`, `len = out.len()`) times the vector x, as a sum of
+    /// columns so that the inner loop runs over contiguous memory; zero entries of x are
+    /// skipped.
+    pub fn combine_columns(out: &mut [f64], columns: &[f64], x: &[f64]) {
+        let len = out.len();
+        out.iter_mut().for_each(|v| *v = 0.0);
+        if len == 0 {
+            return;
+        }
+        for (&c, column) in x.iter().zip(columns.chunks_exact(len)) {
+            if c != 0.0 {
+                for (o, a) in out.iter_mut().zip(column) {
+                    *o += c * a;
+                }
+            }
+        }
+    }
+}
+
+per_node_kernel! {
     /// `u_i ← u_i w_i`.
     pub fn multiply_in_place(u: &mut [f64], w: &[f64]) {
         for (u, w) in u.iter_mut().zip(w) {

@@ -199,23 +199,16 @@ impl SpectralParams {
 }
 
 /// `out = A0 · X · A1ᵀ` for X of shape `rows × cols` stored column-major (first dimension
-/// fastest), A0 `s0 × rows`, A1 `s1 × cols`; `t` is scratch of `s0 · cols`.
+/// fastest), A0 `s0 × rows`, A1 `s1 × cols`; `t` is scratch of `s0 · cols`. For a 1-D model
+/// (A1 the 1 × 1 identity) it is the one product `A0 · x`.
 fn tensor_product(a0: &DMatrix<f64>, a1: &DMatrix<f64>, x: &[f64], t: &mut [f64], out: &mut [f64]) {
     let (s0, rows) = a0.shape();
     let (s1, cols) = a1.shape();
-    // Column-major storage: column k of A0 is a contiguous slice.
-    let columns = a0.as_slice();
-    for j in 0..cols {
-        let tj = &mut t[j * s0..(j + 1) * s0];
-        tj.iter_mut().for_each(|v| *v = 0.0);
-        for k in 0..rows {
-            let w = x[k + rows * j];
-            if w != 0.0 {
-                for (tv, av) in tj.iter_mut().zip(&columns[k * s0..(k + 1) * s0]) {
-                    *tv += w * av;
-                }
-            }
-        }
+    if (s1, cols) == (1, 1) && a1[(0, 0)] == 1.0 {
+        return linalg::combine_columns(&mut out[..s0], a0.as_slice(), &x[..rows]);
+    }
+    for (tj, xj) in t.chunks_exact_mut(s0).zip(x.chunks_exact(rows)) {
+        linalg::combine_columns(tj, a0.as_slice(), xj);
     }
     for i in 0..s1 {
         let oi = &mut out[i * s0..(i + 1) * s0];
@@ -263,13 +256,22 @@ impl Axis {
     }
 }
 
+/// W of Algorithm 1 as the on-line step applies it.
+enum Propagation {
+    /// 1-D: the evaluation at the on-line nodes times W (nodes × N₂), one product per step.
+    Nodal(DMatrix<f64>),
+    /// 2-D: W itself (off-line coefficients × on-line coefficients); the evaluation follows
+    /// as a tensor product (W's rows are not a tensor product, so fusing would cost more).
+    Coefficients(DMatrix<f64>),
+}
+
 /// The spectral Yau–Yau filter of 004.
 pub struct SpectralFilter {
     name: String,
     layout: Layout,
     t0: f64,
-    /// W of Algorithm 1 (off-line coefficients × on-line coefficients).
-    propagation: DMatrix<f64>,
+    /// W of Algorithm 1, in 1-D already followed by the evaluation at the on-line nodes.
+    propagation: Propagation,
     axes: [Axis; 2],
     /// Per on-line node (first dimension fastest): quadrature weight times the Jacobian,
     /// coordinates per dimension, and S⁻¹h per observation component.
@@ -312,10 +314,12 @@ impl SpectralFilter {
             offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);
         let axis = |d: usize| Axis::new(layout.offline[d], layout.online[d], &xi, &w);
-        let axes = if n == 1 {
-            [axis(0), Axis::identity()]
+        let (axes, propagation) = if n == 1 {
+            let a0 = axis(0);
+            let nodal = &a0.evaluate * &propagation;
+            ([a0, Axis::identity()], Propagation::Nodal(nodal))
         } else {
-            [axis(0), axis(1)]
+            ([axis(0), axis(1)], Propagation::Coefficients(propagation))
         };
         let q = layout.online_nodes;
         let len = q.pow(n as u32);
@@ -380,16 +384,28 @@ impl SpectralFilter {
         &self.layout
     }
 
-    /// Normalises the nodal values, takes the estimate (41) from them and projects them onto
-    /// the on-line basis (39).
+    /// Takes the estimate (41) from the nodal values, projects them onto the on-line basis
+    /// (39) and normalises the coefficients (the mass, the moments and the largest node in one
+    /// pass over the nodes; n ≤ 2).
     fn normalise_and_project(&mut self) -> Result<(), FilterError> {
         let n = self.layout.dims();
-        let mass: f64 = self
-            .values
-            .iter()
-            .zip(&self.weight)
-            .map(|(v, w)| v * w)
-            .sum();
+        let (mut mass, mut first, mut second) = (0.0, [0.0; 2], [0.0; 3]);
+        let mut best = (f64::NEG_INFINITY, 0);
+        let x0 = &self.coords[0];
+        let x1 = self.coords.get(1).unwrap_or(x0);
+        for (i, (&v, &w)) in self.values.iter().zip(&self.weight).enumerate() {
+            if v > best.0 {
+                best = (v, i);
+            }
+            let vw = v * w;
+            let (a, b) = (x0[i], x1[i]);
+            mass += vw;
+            first[0] += vw * a;
+            first[1] += vw * b;
+            second[0] += vw * a * a;
+            second[1] += vw * a * b;
+            second[2] += vw * b * b;
+        }
         if !mass.is_finite() {
             return Err(FilterError::NonFinite { what: "density" });
         }
@@ -397,27 +413,9 @@ impl SpectralFilter {
             return Err(FilterError::MassLost);
         }
         let inv = 1.0 / mass;
-        self.values.iter_mut().for_each(|v| *v *= inv);
-        let mut mean = DVector::<f64>::zeros(n);
-        let mut second = DMatrix::<f64>::zeros(n, n);
-        let mut best = (f64::NEG_INFINITY, 0);
-        for (i, (&v, &w)) in self.values.iter().zip(&self.weight).enumerate() {
-            if v > best.0 {
-                best = (v, i);
-            }
-            let vw = v * w;
-            for a in 0..n {
-                let xa = self.coords[a][i];
-                mean[a] += vw * xa;
-                for b in 0..=a {
-                    second[(a, b)] += vw * xa * self.coords[b][i];
-                }
-            }
-        }
-        let covariance = DMatrix::from_fn(n, n, |a, b| {
-            let (a, b) = if a >= b { (a, b) } else { (b, a) };
-            second[(a, b)] - mean[a] * mean[b]
-        });
+        let mean = DVector::from_fn(n, |a, _| first[a] * inv);
+        // second[a + b] is E[x_a x_b] for a, b ∈ {0, 1}.
+        let covariance = DMatrix::from_fn(n, n, |a, b| second[a + b] * inv - mean[a] * mean[b]);
         let map = DVector::from_iterator(n, (0..n).map(|d| self.coords[d][best.1]));
         self.estimate = Estimate {
             mean,
@@ -432,25 +430,19 @@ impl SpectralFilter {
             &mut self.scratch,
             &mut self.coeffs,
         );
+        self.coeffs.iter_mut().for_each(|c| *c *= inv);
         Ok(())
     }
 
     /// Propagation (40) and the density at the on-line nodes.
     fn propagate(&mut self) {
-        let rows = self.offline.len();
-        let columns = self.propagation.as_slice();
-        self.offline.iter_mut().for_each(|v| *v = 0.0);
-        for (k, &c) in self.coeffs.iter().enumerate() {
-            if c != 0.0 {
-                for (g, w) in self
-                    .offline
-                    .iter_mut()
-                    .zip(&columns[k * rows..(k + 1) * rows])
-                {
-                    *g += c * w;
-                }
+        let w = match &self.propagation {
+            Propagation::Nodal(e) => {
+                return linalg::combine_columns(&mut self.values, e.as_slice(), &self.coeffs);
             }
-        }
+            Propagation::Coefficients(w) => w,
+        };
+        linalg::combine_columns(&mut self.offline, w.as_slice(), &self.coeffs);
         let [a0, a1] = &self.axes;
         tensor_product(
             &a0.evaluate,
@@ -476,9 +468,8 @@ impl SpectralFilter {
             }
         }
         let shift = a.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        for (v, &a) in self.values.iter_mut().zip(a.iter()) {
-            *v = v.max(0.0) * linalg::exp_nonpositive(a - shift);
-        }
+        // Flushing products below 0 to 0 clips the negative values.
+        linalg::scale_by_exp(&mut self.values, a, shift, 0.0);
     }
 }
 
