@@ -87,6 +87,39 @@ pub fn binary_split(v: f64) -> (f64, f64) {
     (m, e)
 }
 
+/// `max(m, v)`, ignoring a NaN `v` like `f64::max`, for loops over grid nodes. On wasm as a
+/// comparison and a select: wasm's `f64.max` propagates NaN, so `f64::max` compiles there to a
+/// call of libm's `fmax` per value, which also keeps the loop around it from vectorising (5 %
+/// of the 1-D QIEM's time in Node). Elsewhere `f64::max` itself, which x86-64 vectorises
+/// (there the select form measured 20 % slower in the QIEM step).
+#[inline(always)]
+pub fn larger(m: f64, v: f64) -> f64 {
+    if cfg!(target_arch = "wasm32") {
+        if v > m {
+            v
+        } else {
+            m
+        }
+    } else {
+        m.max(v)
+    }
+}
+
+/// `min(x, 0)`, 0 for a NaN `x` like `x.min(0.0)`; a comparison and a select on wasm (see
+/// [`larger`]).
+#[inline(always)]
+pub fn at_most_zero(x: f64) -> f64 {
+    if cfg!(target_arch = "wasm32") {
+        if x < 0.0 {
+            x
+        } else {
+            0.0
+        }
+    } else {
+        x.min(0.0)
+    }
+}
+
 /// `e^x` for `x ≤ ln 2`, within a few ulp, and 0 (not a subnormal) for `x < −700`. Made for
 /// loops over grid nodes: only additions, multiplications and integer bit operations, so the
 /// compiler vectorises it, and the result is bit-identical on every IEEE-754 target.
@@ -195,7 +228,7 @@ fn scale_by_exp_with(
     let mut a_chunks = a.chunks_exact(8);
     for (u, a) in (&mut u_chunks).zip(&mut a_chunks) {
         for (l, a) in lanes.iter_mut().zip(a) {
-            *l = (a - shift).min(0.0);
+            *l = at_most_zero(a - shift);
         }
         exp_nonpositive_lanes(&mut lanes, madd);
         for (u, &f) in u.iter_mut().zip(&lanes) {
@@ -207,7 +240,7 @@ fn scale_by_exp_with(
         .iter_mut()
         .zip(a_chunks.remainder())
     {
-        let mut lane = [(a - shift).min(0.0)];
+        let mut lane = [at_most_zero(a - shift)];
         exp_nonpositive_lanes(&mut lane, madd);
         scale(u, lane[0]);
     }

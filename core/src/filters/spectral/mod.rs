@@ -467,7 +467,7 @@ impl SpectralFilter {
                 *a += y * h;
             }
         }
-        let shift = a.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
         // Flushing products below 0 to 0 clips the negative values.
         linalg::scale_by_exp(&mut self.values, a, shift, 0.0);
     }

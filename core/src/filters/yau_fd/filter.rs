@@ -259,7 +259,7 @@ impl CellSamples {
                 *v = m;
                 for a in a.iter_mut() {
                     *a += e * core::f64::consts::LN_2;
-                    shift = shift.max(*a);
+                    shift = linalg::larger(shift, *a);
                 }
             }
         }
@@ -274,7 +274,7 @@ impl CellSamples {
             }
             let mean: f64 = a
                 .iter()
-                .map(|a| linalg::exp_nonpositive((a - shift).min(0.0)))
+                .map(|a| linalg::exp_nonpositive(linalg::at_most_zero(a - shift)))
                 .sum::<f64>()
                 * inv;
             let w = *v * mean;
@@ -315,13 +315,13 @@ linalg::simd::per_node_kernel! {
         let mut c = half_hsh.chunks_exact(8);
         for ((u, a), (h, c)) in (&mut u).zip(&mut a).zip((&mut h).zip(&mut c)) {
             for l in 0..8 {
-                lanes[l] = lanes[l].max(one(&mut u[l], &mut a[l], h[l], c[l]));
+                lanes[l] = linalg::larger(lanes[l], one(&mut u[l], &mut a[l], h[l], c[l]));
             }
         }
         let (u, a) = (u.into_remainder(), a.into_remainder());
         let rest = u.iter_mut().zip(a).zip(h.remainder().iter().zip(c.remainder()));
-        let top = lanes.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
-        rest.fold(top, |m, ((u, a), (h, c))| m.max(one(u, a, *h, *c)))
+        let top = lanes.iter().fold(f64::NEG_INFINITY, |m, &v| linalg::larger(m, v));
+        rest.fold(top, |m, ((u, a), (h, c))| linalg::larger(m, one(u, a, *h, *c)))
     }
 }
 
