@@ -95,13 +95,19 @@ pub fn binary_split(v: f64) -> (f64, f64) {
 #[inline(always)]
 pub fn larger(m: f64, v: f64) -> f64 {
     if cfg!(target_arch = "wasm32") {
-        if v > m {
-            v
-        } else {
-            m
-        }
+        select_larger(m, v)
     } else {
         m.max(v)
+    }
+}
+
+/// [`larger`]'s wasm form.
+#[inline(always)]
+fn select_larger(m: f64, v: f64) -> f64 {
+    if v > m {
+        v
+    } else {
+        m
     }
 }
 
@@ -110,13 +116,19 @@ pub fn larger(m: f64, v: f64) -> f64 {
 #[inline(always)]
 pub fn at_most_zero(x: f64) -> f64 {
     if cfg!(target_arch = "wasm32") {
-        if x < 0.0 {
-            x
-        } else {
-            0.0
-        }
+        select_at_most_zero(x)
     } else {
         x.min(0.0)
+    }
+}
+
+/// [`at_most_zero`]'s wasm form.
+#[inline(always)]
+fn select_at_most_zero(x: f64) -> f64 {
+    if x < 0.0 {
+        x
+    } else {
+        0.0
     }
 }
 
@@ -352,6 +364,47 @@ mod tests {
                 );
                 assert_eq!(*v == 0.0, expected == 0.0, "{len}: {a}");
             }
+        }
+    }
+
+    #[test]
+    fn combine_columns_is_the_matrix_vector_product() {
+        for (rows, cols) in [(1usize, 1usize), (3, 5), (35, 16), (9, 1), (0, 4)] {
+            let a = DMatrix::from_fn(rows, cols, |i, j| {
+                libm::sin(1.0 + i as f64 * 0.7 - j as f64)
+            });
+            // Zero entries are skipped: include some.
+            let x = DVector::from_fn(cols, |j, _| {
+                if j % 3 == 1 {
+                    0.0
+                } else {
+                    0.3 * j as f64 - 1.1
+                }
+            });
+            let mut out = alloc::vec![f64::NAN; rows];
+            combine_columns(&mut out, a.as_slice(), x.as_slice());
+            let expected = &a * &x;
+            for (v, e) in out.iter().zip(expected.iter()) {
+                assert!(
+                    (v - e).abs() <= 1e-14 * (1.0 + e.abs()),
+                    "{rows}x{cols}: {v} against {e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_wasm_forms_of_max_and_min_agree_with_f64s() {
+        for (m, v) in [
+            (1.0, 2.0),
+            (2.0, 1.0),
+            (-1.0, f64::NAN),
+            (f64::NEG_INFINITY, -3.0),
+        ] {
+            assert_eq!(select_larger(m, v), m.max(v), "{m} {v}");
+        }
+        for x in [-2.0, 0.0, 3.5, f64::NAN, f64::NEG_INFINITY] {
+            assert_eq!(select_at_most_zero(x), x.min(0.0), "{x}");
         }
     }
 
