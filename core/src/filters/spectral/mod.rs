@@ -23,6 +23,7 @@
 
 pub mod legendre;
 pub mod offline;
+pub mod tensor;
 
 use alloc::format;
 use alloc::string::String;
@@ -199,70 +200,49 @@ impl SpectralParams {
     }
 }
 
-/// `out = A0 · X · A1ᵀ` for X of shape `rows × cols` stored column-major (first dimension
-/// fastest), A0 `s0 × rows`, A1 `s1 × cols`; `t` is scratch of `s0 · cols`. For a 1-D model
-/// (A1 the 1 × 1 identity) it is the one product `A0 · x`.
-fn tensor_product(a0: &DMatrix<f64>, a1: &DMatrix<f64>, x: &[f64], t: &mut [f64], out: &mut [f64]) {
-    let (s0, rows) = a0.shape();
-    let (s1, cols) = a1.shape();
-    if (s1, cols) == (1, 1) && a1[(0, 0)] == 1.0 {
-        return linalg::combine_columns(&mut out[..s0], a0.as_slice(), &x[..rows]);
-    }
-    for (tj, xj) in t.chunks_exact_mut(s0).zip(x.chunks_exact(rows)) {
-        linalg::combine_columns(tj, a0.as_slice(), xj);
-    }
-    for i in 0..s1 {
-        let oi = &mut out[i * s0..(i + 1) * s0];
-        oi.iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..cols {
-            let w = a1[(i, j)];
-            for (ov, tv) in oi.iter_mut().zip(&t[j * s0..(j + 1) * s0]) {
-                *ov += w * tv;
+/// The per-dimension matrices of the on-line step: the off-line basis at the on-line nodes
+/// (nodes × N₁) and the projection `B⁻¹ Φᵀ diag(w)` (39) from nodal values to on-line
+/// coefficients (N₂ × nodes).
+fn axis_matrices(
+    offline: usize,
+    online: usize,
+    nodes: &[f64],
+    weights: &[f64],
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let evaluate = basis_at(nodes, offline);
+    let phi = DMatrix::from_fn(online, nodes.len(), |k, q| {
+        legendre::basis(nodes[q], online)[0][k] * weights[q]
+    });
+    // B is symmetric positive definite (a Gram matrix of independent functions).
+    let b = legendre::mass_matrix(online);
+    let project = b
+        .cholesky()
+        .map(|c| c.solve(&phi))
+        .unwrap_or_else(|| DMatrix::zeros(online, nodes.len()));
+    (evaluate, project)
+}
+
+/// The first `count` basis functions at the points ξ ∈ [−1, 1] (points × count); rows of
+/// points outside [−1, 1] are zero (the density is zero outside the domain).
+fn basis_at(points: &[f64], count: usize) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(points.len(), count);
+    for (q, &xi) in points.iter().enumerate() {
+        if (-1.0..=1.0).contains(&xi) {
+            for (k, v) in legendre::basis(xi, count)[0].iter().enumerate() {
+                m[(q, k)] = *v;
             }
         }
     }
-}
-
-/// Per-dimension matrices of the on-line step, and the 1 × 1 identity for the second
-/// dimension of a 1-D model.
-struct Axis {
-    /// Off-line basis at the on-line nodes (nodes × N₁).
-    evaluate: DMatrix<f64>,
-    /// `B⁻¹ Φᵀ diag(w)`: nodal values to on-line coefficients (N₂ × nodes).
-    project: DMatrix<f64>,
-}
-
-impl Axis {
-    fn identity() -> Self {
-        Axis {
-            evaluate: DMatrix::identity(1, 1),
-            project: DMatrix::identity(1, 1),
-        }
-    }
-
-    fn new(offline: usize, online: usize, nodes: &[f64], weights: &[f64]) -> Self {
-        let evaluate = DMatrix::from_fn(nodes.len(), offline, |q, l| {
-            legendre::basis(nodes[q], offline)[0][l]
-        });
-        let phi = DMatrix::from_fn(online, nodes.len(), |k, q| {
-            legendre::basis(nodes[q], online)[0][k] * weights[q]
-        });
-        // B is symmetric positive definite (a Gram matrix of independent functions).
-        let b = legendre::mass_matrix(online);
-        let project = b
-            .cholesky()
-            .map(|c| c.solve(&phi))
-            .unwrap_or_else(|| DMatrix::zeros(online, nodes.len()));
-        Axis { evaluate, project }
-    }
+    m
 }
 
 /// W of Algorithm 1 as the on-line step applies it.
 enum Propagation {
     /// 1-D: the evaluation at the on-line nodes times W (nodes × N₂), one product per step.
     Nodal(DMatrix<f64>),
-    /// 2-D: W itself (off-line coefficients × on-line coefficients); the evaluation follows
-    /// as a tensor product (W's rows are not a tensor product, so fusing would cost more).
+    /// 2-D and 3-D: W itself (off-line coefficients × on-line coefficients); the evaluation
+    /// follows as a tensor product (W's rows are not a tensor product, so fusing would cost
+    /// more).
     Coefficients(DMatrix<f64>),
 }
 
@@ -273,7 +253,10 @@ pub struct SpectralFilter {
     t0: f64,
     /// W of Algorithm 1, in 1-D already followed by the evaluation at the on-line nodes.
     propagation: Propagation,
-    axes: [Axis; 2],
+    /// Per dimension: the off-line basis at the on-line nodes (nodes × N₁), and
+    /// `B⁻¹ Φᵀ diag(w)`, nodal values to on-line coefficients (N₂ × nodes).
+    evaluate: Vec<DMatrix<f64>>,
+    project: Vec<DMatrix<f64>>,
     /// Per on-line node (first dimension fastest): quadrature weight times the Jacobian,
     /// coordinates per dimension, and S⁻¹h per observation component.
     weight: Vec<f64>,
@@ -285,7 +268,10 @@ pub struct SpectralFilter {
     coeffs: Vec<f64>,
     offline: Vec<f64>,
     values: Vec<f64>,
-    scratch: Vec<f64>,
+    /// The factor's exponents per node.
+    exponents: Vec<f64>,
+    /// Intermediates of the tensor products.
+    scratch: [Vec<f64>; 2],
     estimate: Estimate,
 }
 
@@ -314,13 +300,13 @@ impl SpectralFilter {
         let propagation =
             offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);
-        let axis = |d: usize| Axis::new(layout.offline[d], layout.online[d], &xi, &w);
-        let (axes, propagation) = if n == 1 {
-            let a0 = axis(0);
-            let nodal = &a0.evaluate * &propagation;
-            ([a0, Axis::identity()], Propagation::Nodal(nodal))
+        let (evaluate, project): (Vec<_>, Vec<_>) = (0..n)
+            .map(|d| axis_matrices(layout.offline[d], layout.online[d], &xi, &w))
+            .unzip();
+        let propagation = if n == 1 {
+            Propagation::Nodal(&evaluate[0] * &propagation)
         } else {
-            ([axis(0), axis(1)], Propagation::Coefficients(propagation))
+            Propagation::Coefficients(propagation)
         };
         let q = layout.online_nodes;
         let len = q.pow(n as u32);
@@ -366,14 +352,16 @@ impl SpectralFilter {
             },
             coeffs: vec![0.0; online_len],
             offline: vec![0.0; offline_len],
+            exponents: vec![0.0; values.len()],
             values,
-            scratch: vec![0.0; q * q.max(layout.offline.iter().copied().max().unwrap_or(1))],
+            scratch: [Vec::new(), Vec::new()],
             estimate: Estimate {
                 mean: DVector::zeros(n),
                 covariance: None,
                 map: None,
             },
-            axes,
+            evaluate,
+            project,
             layout,
         };
         filter.normalise_and_project()?;
@@ -386,51 +374,24 @@ impl SpectralFilter {
     }
 
     /// Takes the estimate (41) from the nodal values, projects them onto the on-line basis
-    /// (39) and normalises the coefficients (the mass, the moments and the largest node in one
-    /// pass over the nodes; n ≤ 2).
+    /// (39) and normalises the coefficients.
     fn normalise_and_project(&mut self) -> Result<(), FilterError> {
-        let n = self.layout.dims();
-        let (mut mass, mut first, mut second) = (0.0, [0.0; 2], [0.0; 3]);
-        let mut best = (f64::NEG_INFINITY, 0);
-        let x0 = &self.coords[0];
-        let x1 = self.coords.get(1).unwrap_or(x0);
-        for (i, (&v, &w)) in self.values.iter().zip(&self.weight).enumerate() {
-            if v > best.0 {
-                best = (v, i);
-            }
-            let vw = v * w;
-            let (a, b) = (x0[i], x1[i]);
-            mass += vw;
-            first[0] += vw * a;
-            first[1] += vw * b;
-            second[0] += vw * a * a;
-            second[1] += vw * a * b;
-            second[2] += vw * b * b;
-        }
-        if !mass.is_finite() {
-            return Err(FilterError::NonFinite { what: "density" });
-        }
-        if mass <= 0.0 {
-            return Err(FilterError::MassLost);
-        }
-        let inv = 1.0 / mass;
-        let mean = DVector::from_fn(n, |a, _| first[a] * inv);
-        // second[a + b] is E[x_a x_b] for a, b ∈ {0, 1}.
-        let covariance = DMatrix::from_fn(n, n, |a, b| second[a + b] * inv - mean[a] * mean[b]);
-        let map = DVector::from_iterator(n, (0..n).map(|d| self.coords[d][best.1]));
-        self.estimate = Estimate {
-            mean,
-            covariance: Some(covariance),
-            map: Some(map),
-        };
-        let [a0, a1] = &self.axes;
-        tensor_product(
-            &a0.project,
-            &a1.project,
+        let (values, weight, coords) = (&self.values, &self.weight, &self.coords);
+        let (estimate, mass) = match self.layout.dims() {
+            1 => estimate_at_nodes::<1>(values, weight, coords),
+            2 => estimate_at_nodes::<2>(values, weight, coords),
+            _ => estimate_at_nodes::<3>(values, weight, coords),
+        }?;
+        self.estimate = estimate;
+        let shape = [self.layout.online_nodes; tensor::MAX_DIMS];
+        tensor::multilinear(
+            &self.project,
             &self.values,
+            &shape[..self.project.len()],
             &mut self.scratch,
             &mut self.coeffs,
         );
+        let inv = 1.0 / mass;
         self.coeffs.iter_mut().for_each(|c| *c *= inv);
         Ok(())
     }
@@ -444,14 +405,51 @@ impl SpectralFilter {
             Propagation::Coefficients(w) => w,
         };
         linalg::combine_columns(&mut self.offline, w.as_slice(), &self.coeffs);
-        let [a0, a1] = &self.axes;
-        tensor_product(
-            &a0.evaluate,
-            &a1.evaluate,
+        tensor::multilinear(
+            &self.evaluate,
             &self.offline,
+            &self.layout.offline,
             &mut self.scratch,
             &mut self.values,
         );
+    }
+
+    /// The marginal of the expansion on the on-line basis over the components `kept` (each
+    /// with its points, the first fastest in `out`), clipped at zero: one tensor product with
+    /// the basis at the points for a kept component and the basis' integrals (only φ_0's is
+    /// not zero) for every other one.
+    fn marginal(&self, kept: &[(usize, &[f64])], out: &mut [f64]) {
+        let n = self.layout.dims();
+        let on = &self.layout.online;
+        let factors: Vec<DMatrix<f64>> = (0..n)
+            .map(|d| match kept.iter().find(|(k, _)| *k == d) {
+                Some((_, points)) => {
+                    let (c, r) = (self.layout.centre[d], self.layout.half_width[d]);
+                    let xi: Vec<f64> = points.iter().map(|x| (x - c) / r).collect();
+                    basis_at(&xi, on[d])
+                }
+                None => DMatrix::from_fn(1, on[d], |_, k| {
+                    self.layout.half_width[d] * legendre::basis_integral(k)
+                }),
+            })
+            .collect();
+        let len: usize = kept.iter().map(|(_, p)| p.len()).product();
+        let mut values = vec![0.0; len];
+        let mut scratch = [Vec::new(), Vec::new()];
+        tensor::multilinear(&factors, &self.coeffs, on, &mut scratch, &mut values);
+        // `values` runs over the kept components in increasing order; `out` in `kept`'s order.
+        let swapped = kept.len() == 2 && kept[0].0 > kept[1].0;
+        let (first, second) = (kept[0].1.len(), kept.get(1).map_or(1, |k| k.1.len()));
+        for j in 0..second {
+            for i in 0..first {
+                let v = if swapped {
+                    values[j + second * i]
+                } else {
+                    values[i + first * j]
+                };
+                out[i + first * j] = v.max(0.0);
+            }
+        }
     }
 
     /// The robust-form factor `exp(hᵀS⁻¹Δy)` (42) — times `exp(−½hᵀS⁻¹h T₀)` when the
@@ -459,7 +457,7 @@ impl SpectralFilter {
     /// nodal values (the polynomial's ripples where the density is small) are set to zero
     /// first, so the factor cannot turn them into negative mass.
     fn update(&mut self, dy: &[f64]) {
-        let a = &mut self.scratch[..self.values.len()];
+        let a = &mut self.exponents;
         for (a, p) in a.iter_mut().zip(&self.potential) {
             *a = -p;
         }
@@ -472,6 +470,53 @@ impl SpectralFilter {
         // Flushing products below 0 to 0 clips the negative values.
         linalg::scale_by_exp(&mut self.values, a, shift, 0.0);
     }
+}
+
+/// The estimate (41) from nodal values on the on-line grid of an N-dimensional model: mean
+/// and covariance by the quadrature, the MAP as the largest node, all in one pass; also the
+/// mass. Fails when the mass is not finite or not positive.
+fn estimate_at_nodes<const N: usize>(
+    values: &[f64],
+    weight: &[f64],
+    coords: &[Vec<f64>],
+) -> Result<(Estimate, f64), FilterError> {
+    let x: [&[f64]; N] = core::array::from_fn(|d| coords[d].as_slice());
+    let (mut mass, mut first, mut second) = (0.0, [0.0; N], [[0.0; N]; N]);
+    let mut best = (f64::NEG_INFINITY, 0);
+    for (i, (&v, &w)) in values.iter().zip(weight).enumerate() {
+        if v > best.0 {
+            best = (v, i);
+        }
+        let vw = v * w;
+        mass += vw;
+        let xi: [f64; N] = core::array::from_fn(|d| x[d][i]);
+        for ((f, s), &xa) in first.iter_mut().zip(second.iter_mut()).zip(&xi) {
+            *f += vw * xa;
+            for (s, &xb) in s.iter_mut().zip(&xi) {
+                *s += vw * xa * xb;
+            }
+        }
+    }
+    if !mass.is_finite() {
+        return Err(FilterError::NonFinite { what: "density" });
+    }
+    if mass <= 0.0 {
+        return Err(FilterError::MassLost);
+    }
+    let inv = 1.0 / mass;
+    let mean = DVector::from_fn(N, |a, _| first[a] * inv);
+    // From one triangle, so that the covariance is exactly symmetric.
+    let covariance = DMatrix::from_fn(N, N, |a, b| {
+        let (a, b) = (a.max(b), a.min(b));
+        second[a][b] * inv - mean[a] * mean[b]
+    });
+    let map = DVector::from_fn(N, |d, _| x[d][best.1]);
+    let estimate = Estimate {
+        mean,
+        covariance: Some(covariance),
+        map: Some(map),
+    };
+    Ok((estimate, mass))
 }
 
 impl Filter for SpectralFilter {
@@ -502,34 +547,12 @@ impl Filter for SpectralFilter {
     /// The marginal of the projected density (39) on the on-line basis, clipped at zero;
     /// zero outside the domain.
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        let n = self.layout.dims();
-        let on = &self.layout.online;
-        let (c, r) = (self.layout.centre[dim], self.layout.half_width[dim]);
-        // Integrating out the other dimension keeps only its φ_0 coefficient.
-        let other = if n == 2 {
-            let o = 1 - dim;
-            self.layout.half_width[o] * legendre::basis_integral(0)
-        } else {
-            1.0
-        };
-        for (o, &x) in out.iter_mut().zip(grid) {
-            let xi = (x - c) / r;
-            if !(-1.0..=1.0).contains(&xi) {
-                *o = 0.0;
-                continue;
-            }
-            let phi = &legendre::basis(xi, on[dim])[0];
-            let value: f64 = (0..on[dim])
-                .map(|k| {
-                    let coeff = if n == 2 && dim == 1 {
-                        self.coeffs[on[0] * k]
-                    } else {
-                        self.coeffs[k]
-                    };
-                    coeff * phi[k]
-                })
-                .sum();
-            *o = (value * other).max(0.0);
-        }
+        self.marginal(&[(dim, grid)], out);
+    }
+
+    /// The joint marginal of the projected density on the raster `xs × ys` (`xs` fastest),
+    /// clipped at zero; zero outside the domain.
+    fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        self.marginal(&[(dims.0, xs), (dims.1, ys)], out);
     }
 }

@@ -19,6 +19,7 @@ use alloc::vec::Vec;
 use nalgebra::DMatrix;
 
 use super::legendre;
+use super::tensor;
 use super::Layout;
 use crate::error::FilterError;
 use crate::model::dmz::DmzCoefficients;
@@ -45,15 +46,11 @@ impl Nodes {
         (flat / self.q.pow(d as u32)) % self.q
     }
 
-    /// `out = ∂v/∂ξ_d` (nodal), for values stored with the first dimension fastest.
+    /// `out = ∂v/∂ξ_d` (nodal), for values stored with the first dimension fastest: the
+    /// differentiation matrix along dimension d.
     fn derivative(&self, v: &[f64], d: usize, out: &mut [f64]) {
-        let stride = self.q.pow(d as u32);
-        for (i, o) in out.iter_mut().enumerate() {
-            let (a, base) = (self.index(i, d), i - self.index(i, d) * stride);
-            *o = (0..self.q)
-                .map(|b| self.diff[(a, b)] * v[base + b * stride])
-                .sum();
-        }
+        let shape = [self.q; tensor::MAX_DIMS];
+        tensor::mode_product(&self.diff, v, &shape[..self.dims], d, out);
     }
 }
 
