@@ -1,7 +1,8 @@
 //! Criterion benchmarks of the spectral Yau–Yau filter of 004 with the paper's sizes: one
 //! on-line step (propagation (40), the factor (42), the estimate (41), the projection (39)) on
-//! the cubic sensor (1-D, 16 on-line functions) and on example (46) (2-D, 15 × 15 = 225), the
-//! off-line part (Algorithm 1) of both, and a whole 500-step run of the cubic sensor against
+//! the cubic sensor (1-D, 16 on-line functions), on example (46) (2-D, 15 × 15 = 225) and on
+//! a 3-D model with cubic sensors (8³ = 512, the 3-D default), the off-line part (Algorithm 1)
+//! of each, and a whole 500-step run of the cubic sensor against
 //! PF(200).
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
@@ -9,14 +10,38 @@ use zakai::experiment::Experiment;
 use zakai::filters::{Observation, ObservationKind};
 use zakai::scenario::{presets, MethodConfig};
 
+/// A 3-D model for the tensor-product filter with its default 8³ functions: cubic sensors
+/// on the three components of a stable linear drift, on [−4, 4]³.
+fn three_dimensional() -> zakai::scenario::ScenarioConfig {
+    let mut config = presets::preset("cubic-sensor-2d").expect("preset");
+    config.name = "3-D cubic sensors".into();
+    config.model.drift = ["-0.4*x1 + 0.1*x2", "-0.6*x2", "0.1*x1 - 0.5*x3"]
+        .map(String::from)
+        .to_vec();
+    config.model.observation = ["x1^3", "x2^3", "x3^3"].map(String::from).to_vec();
+    config.prior = zakai::scenario::PriorConfig::Gaussian {
+        mean: vec![1.0; 3],
+        cov: (0..3)
+            .map(|i| (0..3).map(|j| if i == j { 0.1 } else { 0.0 }).collect())
+            .collect(),
+    };
+    config.initial_state = Some(vec![1.0; 3]);
+    config.domain = vec![[-4.0, 4.0]; 3];
+    config
+}
+
 fn spectral(c: &mut Criterion) {
     let mut group = c.benchmark_group("spectral (004)");
-    for preset in ["cubic-sensor-1d", "cubic-sensor-2d"] {
-        let mut config = presets::preset(preset).expect("preset");
+    let configs = ["cubic-sensor-1d", "cubic-sensor-2d"]
+        .map(|name| presets::preset(name).expect("preset"))
+        .into_iter()
+        .chain([three_dimensional()]);
+    for mut config in configs {
+        let preset = config.name.clone();
         config.methods = vec![MethodConfig::from_key("spectral").expect("key")];
         let experiment = Experiment::new(config).expect("valid");
         let method = MethodConfig::from_key("spectral").expect("key");
-        group.sample_size(if preset.ends_with("2d") { 10 } else { 50 });
+        group.sample_size(if preset.ends_with("1d") { 50 } else { 10 });
         group.bench_function(format!("{preset} off-line (Algorithm 1)"), |b| {
             b.iter(|| {
                 experiment

@@ -1,5 +1,5 @@
 //! The off-line/on-line spectral Yau–Yau filter of 004 ("DMZ method"), on the generalized
-//! Legendre basis of its appendix, for n = 1 and 2.
+//! Legendre basis of its appendix, for n = 1, 2 and 3.
 //!
 //! The domain box is mapped affinely onto U = [−1, 1]ⁿ. Off-line ([`offline`], Algorithm 1):
 //! the Kolmogorov equation (17) over one observation interval T₀ becomes a matrix W from the
@@ -49,9 +49,9 @@ pub const MAX_NODES: usize = 512;
 #[serde(default, deny_unknown_fields)]
 pub struct SpectralParams {
     /// N₁ + 1, off-line basis functions per dimension (default: 11 in 1-D, 15 in 2-D, 004's
-    /// examples).
+    /// examples; 8 in 3-D).
     pub offline_basis: Option<usize>,
-    /// N₂ + 1, on-line basis functions per dimension (default: 16 in 1-D, 15 in 2-D).
+    /// N₂ + 1, on-line basis functions per dimension (default: 16 in 1-D, 15 in 2-D, 8 in 3-D).
     pub online_basis: Option<usize>,
     /// N′, Euler steps of the off-line operator `(1 + Δs𝓛)^{N′}` over T₀ (default 1, as 004).
     pub partitions: usize,
@@ -59,7 +59,7 @@ pub struct SpectralParams {
     /// (default: Δτ).
     pub t0: Option<f64>,
     /// Gauss–Legendre nodes per dimension of the off-line computation (default
-    /// 2·max(N₁, N₂) + 24).
+    /// 2·max(N₁, N₂) + 24, in 3-D + 4).
     pub quadrature: Option<usize>,
     /// Gauss–Legendre nodes per dimension on-line (default N₁ + N₂ + 8).
     pub online_nodes: Option<usize>,
@@ -116,20 +116,33 @@ impl SpectralParams {
     /// Off-line and on-line basis counts per dimension (N₁ + 1, N₂ + 1) for an `n`-dimensional
     /// model, the defaults filled in.
     pub fn counts(&self, n: usize) -> (usize, usize) {
-        let (off, on) = if n == 1 { (11, 16) } else { (15, 15) };
+        let (off, on) = match n {
+            1 => (11, 16),
+            2 => (15, 15),
+            _ => (8, 8),
+        };
         (
             self.offline_basis.unwrap_or(off),
             self.online_basis.unwrap_or(on),
         )
     }
 
+    /// Gauss–Legendre nodes per dimension off-line: as set, else `2·max(N₁, N₂) + 24` for
+    /// n ≤ 2 (24 degrees of room for polynomial models) and `2·max(N₁, N₂) + 4` for n = 3
+    /// (whose tensor grid grows with the cube).
+    fn quadrature(&self, n: usize) -> usize {
+        let (off, on) = self.counts(n);
+        let room = if n <= 2 { 24 } else { 4 };
+        self.quadrature.unwrap_or(2 * off.max(on) + room)
+    }
+
     /// Every problem with these parameters for an n-dimensional model, `(field, message)`.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        if !(1..=2).contains(&n) {
+        if !(1..=tensor::MAX_DIMS).contains(&n) {
             p.push((
                 "method",
-                format!("the spectral filter is built for n = 1 and 2; the model has n = {n}"),
+                format!("the spectral filter is built for n = 1, 2 and 3; the model has n = {n}"),
             ));
             return p;
         }
@@ -151,7 +164,7 @@ impl SpectralParams {
             }
         }
         let largest = off.max(on);
-        let quadrature = self.quadrature.unwrap_or(2 * largest + 24);
+        let quadrature = self.quadrature(n);
         if quadrature < largest + 2 || quadrature > MAX_NODES {
             p.push((
                 "quadrature",
@@ -171,8 +184,9 @@ impl SpectralParams {
                 ),
             ));
         }
-        // The off-line matrices: nodes × off-line functions, twice.
-        let columns = off.pow(n as u32) + on.pow(n as u32);
+        // The off-line matrices: nodes × functions, for Z, its weighted copy and the on-line
+        // basis.
+        let columns = 2 * off.pow(n as u32) + on.pow(n as u32);
         let bytes = quadrature.pow(n as u32) * columns * 8;
         if bytes > 256 << 20 {
             p.push((
@@ -192,7 +206,7 @@ impl SpectralParams {
         Layout {
             offline: vec![off; n],
             online: vec![on; n],
-            quadrature: self.quadrature.unwrap_or(2 * off.max(on) + 24),
+            quadrature: self.quadrature(n),
             online_nodes: self.online_nodes.unwrap_or(off + on + 8),
             centre: bounds.iter().map(|b| 0.5 * (b.0 + b.1)).collect(),
             half_width: bounds.iter().map(|b| 0.5 * (b.1 - b.0)).collect(),
