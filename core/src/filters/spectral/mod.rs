@@ -15,11 +15,11 @@
 //! 4. projection (39) of the updated density onto the on-line basis: `c = B⁻¹⟨ρ, φ_k⟩`, the
 //!    mass matrix B of (49) being the tensor product of the closed form.
 //!
-//! Steps 2 and 4 use the tensor structure (two small matrix products per dimension pair); in
-//! 1-D the evaluation of step 2 is folded into W off-line, so steps 1–2 are one product. The
-//! whole step is about a thousand multiply–adds and 35 exponentials in 1-D. The density is a polynomial and can dip below
-//! zero where it is small; those values are kept (as in 004) in the moments and clipped to zero
-//! only in the plotted marginals.
+//! Steps 2 and 4 use the tensor structure: one matrix product per dimension ([`tensor`]); in
+//! 1-D the evaluation of step 2 is folded into W off-line, so steps 1–2 are one product, and
+//! the whole step is about a thousand multiply–adds and 35 exponentials. The density is a
+//! polynomial and can dip below zero where it is small; the factor (42) sets those nodal
+//! values to zero before the update, and the plotted marginals are clipped at zero.
 
 pub mod legendre;
 pub mod offline;
