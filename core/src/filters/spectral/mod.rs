@@ -467,9 +467,9 @@ impl SpectralFilter {
     }
 
     /// The robust-form factor `exp(hᵀS⁻¹Δy)` (42) — times `exp(−½hᵀS⁻¹h T₀)` when the
-    /// likelihood is in the update — at the nodes, shifted by its largest exponent. Negative
-    /// nodal values (the polynomial's ripples where the density is small) are set to zero
-    /// first, so the factor cannot turn them into negative mass.
+    /// likelihood is in the update — at the nodes, shifted by its largest exponent. Products
+    /// below zero (from negative nodal values, the polynomial's ripples where the density is
+    /// small) are flushed to zero, so the factor cannot turn them into negative mass.
     fn update(&mut self, dy: &[f64]) {
         let a = &mut self.exponents;
         for (a, p) in a.iter_mut().zip(&self.potential) {
