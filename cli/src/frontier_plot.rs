@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use plotters::prelude::*;
-use zakai::metrics::frontier::Frontier;
+use zakai::study::frontier::Frontier;
 
 const PALETTE: [RGBColor; 10] = [
     RGBColor(36, 80, 179),

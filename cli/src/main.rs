@@ -20,9 +20,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use zakai::metrics::MonteCarlo;
 use zakai::reproduction;
-use zakai::scenario::{presets, MethodConfig, ScenarioConfig, METHODS};
+use zakai::scenario::methods::catalogue;
+use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai::study::MonteCarlo;
 use zakai::Experiment;
 
 /// `print!` to stdout that ends the program quietly when the reader has gone (`zakai show
@@ -204,7 +205,7 @@ fn select_methods(config: &mut ScenarioConfig, keys: &[String]) -> Result<(), St
             .collect();
         if matching.is_empty() {
             let method = MethodConfig::from_key(&key).ok_or_else(|| {
-                let known: Vec<&str> = METHODS.iter().map(|m| m.0).collect();
+                let known: Vec<String> = catalogue().into_iter().map(|m| m.info.key).collect();
                 format!("unknown method `{key}` (known: {})", known.join(", "))
             })?;
             kept.push(method);
@@ -375,7 +376,7 @@ struct FrontierArgs {
 }
 
 fn frontier(a: &FrontierArgs) -> Result<(), String> {
-    use zakai::metrics::frontier as fr;
+    use zakai::study::frontier as fr;
     if a.runs == 0 {
         return Err("--runs must be at least 1".into());
     }
@@ -437,7 +438,7 @@ fn jcurve(
     let mut curves = Vec::with_capacity(runs);
     for r in 0..runs as u64 {
         curves.push(
-            zakai::metrics::density_error::j_curve(&experiment, first + r, per_interval)
+            zakai::study::density_error::j_curve(&experiment, first + r, per_interval)
                 .map_err(|e| e.to_string())?,
         );
     }
@@ -535,16 +536,16 @@ fn simulate(scenario: &str, seed: Option<u64>, estimates: bool) -> Result<(), St
     let run = experiment.start(seed).map_err(|e| e.to_string())?;
     let (t, tracks) = if estimates {
         let result = run.finish();
-        (result.trajectory, result.methods)
+        (result.recording, result.methods)
     } else {
-        (run.trajectory().clone(), Vec::new())
+        (run.recording().clone(), Vec::new())
     };
     let mut json = serde_json::json!({
         "seed": seed,
         "n": t.n,
         "m": t.m,
         "times": t.times,
-        "states": t.states,
+        "states": t.truth,
         "observations": t.observations,
     });
     if estimates {
@@ -572,8 +573,11 @@ fn list() -> String {
         ));
     }
     s.push_str("\nMethods:\n");
-    for (key, about) in METHODS {
-        s.push_str(&format!("  {key:<18} {about}\n"));
+    for m in catalogue() {
+        s.push_str(&format!(
+            "  {:<18} {} — {}\n",
+            m.info.key, m.info.summary, m.info.paper
+        ));
     }
     s
 }

@@ -3,11 +3,11 @@
 //! field (CSV), never NaN.
 
 use std::fmt::Write;
-use zakai::metrics::density_error::{JCurve, JKind};
-use zakai::metrics::frontier::{Frontier, ReferenceCheck};
+use zakai::study::density_error::{JCurve, JKind};
+use zakai::study::frontier::{Frontier, ReferenceCheck};
 
-use zakai::metrics::MonteCarloSummary;
 use zakai::reproduction::{PaperTable, RowResult};
+use zakai::study::MonteCarloSummary;
 use zakai::Experiment;
 
 use crate::Format;

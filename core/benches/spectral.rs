@@ -55,8 +55,6 @@ fn spectral(c: &mut Criterion) {
             .expect("builds");
         let dy = vec![1e-3; experiment.model().m];
         let obs = Observation {
-            k: 1,
-            t: 0.01,
             dt: 0.01,
             value: &dy,
             kind: ObservationKind::Increment,
@@ -69,9 +67,7 @@ fn spectral(c: &mut Criterion) {
     let mut config = presets::preset("cubic-sensor-1d").expect("preset");
     config.methods = vec![MethodConfig::from_key("spectral").expect("key")];
     let experiment = Experiment::new(config).expect("valid");
-    let run = experiment.start(1).expect("starts");
-    let observations = run.trajectory().clone();
-    drop(run);
+    let observations = experiment.simulate(1);
     for (label, method) in [
         ("spectral", MethodConfig::from_key("spectral").expect("key")),
         (
@@ -95,8 +91,6 @@ fn spectral(c: &mut Criterion) {
                     for k in 1..observations.times.len() {
                         let value = &observations.observations[k..k + 1];
                         let obs = Observation {
-                            k,
-                            t: observations.times[k],
                             dt: observations.dt_obs,
                             value,
                             kind: ObservationKind::Increment,

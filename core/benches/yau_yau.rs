@@ -47,8 +47,6 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
                 .expect("builds");
             let dy = vec![1e-3; experiment.model().m];
             let obs = Observation {
-                k: 1,
-                t: dt,
                 dt,
                 value: &dy,
                 kind: ObservationKind::Increment,
@@ -88,8 +86,6 @@ fn superposition(c: &mut Criterion) {
     });
     let dy = [1e-3];
     let obs = Observation {
-        k: 1,
-        t: 0.01,
         dt: 0.01,
         value: &dy,
         kind: ObservationKind::Increment,

@@ -1,14 +1,14 @@
 //! Errors of the library. Every failure is a typed value with a readable message; nothing in
-//! the library panics on bad input.
+//! the library panics on bad input. This module and [`crate::validate`] are the bottom layer:
+//! they import nothing else of the crate.
 
 use alloc::string::String;
 use alloc::vec::Vec;
 use core::fmt;
 
-use crate::model::expression_error::ExprError;
-use crate::scenario::ConfigProblem;
+use crate::validate::ConfigProblem;
 
-/// Why a filter could not take a step. The [`crate::experiment::Experiment`] driver marks the
+/// Why a filter could not take a step. The `Experiment` driver marks the
 /// method failed for the run (the papers' "—") and never reports its numbers as NaN.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FilterError {
@@ -35,6 +35,15 @@ pub enum FilterError {
     BadObservation(String),
     /// The model does not fit the method (e.g. a nonlinear model given to the Kalman filter).
     Unsuitable(String),
+    /// A filter built for one observation interval was given a step of another length.
+    IntervalMismatch {
+        /// The filter's name.
+        filter: String,
+        /// The interval Δτ it was built for.
+        built_for: f64,
+        /// The step it was given.
+        got: f64,
+    },
 }
 
 impl fmt::Display for FilterError {
@@ -54,6 +63,14 @@ impl fmt::Display for FilterError {
             ),
             FilterError::BadObservation(m) => write!(f, "bad observation: {m}"),
             FilterError::Unsuitable(m) => write!(f, "{m}"),
+            FilterError::IntervalMismatch {
+                filter,
+                built_for,
+                got,
+            } => write!(
+                f,
+                "{filter} was built for observation intervals Δτ = {built_for} and cannot take a step of {got} (its operators are set up for one Δτ); build one filter per interval length or resample the observations"
+            ),
         }
     }
 }
@@ -110,3 +127,88 @@ impl From<FilterError> for ZakaiError {
 impl std::error::Error for ZakaiError {}
 #[cfg(feature = "std")]
 impl std::error::Error for FilterError {}
+
+/// An invalid text expression. `position` counts characters from 0.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExprError {
+    /// The text does not parse.
+    Syntax {
+        /// The expression text.
+        expr: String,
+        /// Character position of the problem, when known.
+        position: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A name that is neither a state variable, a function nor a constant.
+    UnknownVariable {
+        /// The expression text.
+        expr: String,
+        /// The unknown name.
+        name: String,
+        /// Character position where it starts.
+        position: usize,
+        /// The allowed variable names.
+        allowed: String,
+    },
+    /// A vector function has the wrong number of components.
+    WrongComponentCount {
+        /// Which function (e.g. "drift f").
+        what: String,
+        /// Expected count.
+        expected: usize,
+        /// Given count.
+        found: usize,
+    },
+    /// A numeric constant that is not finite (e.g. `1e400`).
+    NonFiniteConstant {
+        /// The expression text.
+        expr: String,
+        /// The literal as written.
+        literal: String,
+        /// Character position where it starts.
+        position: usize,
+    },
+    /// The expression layer is not available (built without the `std` feature).
+    Unavailable,
+}
+
+impl fmt::Display for ExprError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ExprError::Syntax {
+                expr,
+                position: Some(p),
+                message,
+            } => write!(f, "syntax error at position {p} in `{expr}`: {message}"),
+            ExprError::Syntax {
+                expr,
+                position: None,
+                message,
+            } => write!(f, "syntax error in `{expr}`: {message}"),
+            ExprError::UnknownVariable {
+                expr,
+                name,
+                position,
+                allowed,
+            } => write!(
+                f,
+                "unknown variable `{name}` at position {position} in `{expr}` (allowed: {allowed})"
+            ),
+            ExprError::WrongComponentCount {
+                what,
+                expected,
+                found,
+            } => write!(f, "{what} needs {expected} component(s), {found} given"),
+            ExprError::NonFiniteConstant {
+                expr,
+                literal,
+                position,
+            } => write!(
+                f,
+                "constant `{literal}` at position {position} in `{expr}` is not a finite number"
+            ),
+            ExprError::Unavailable => write!(f, "text expressions need the `std` feature of zakai"),
+        }
+    }
+}

@@ -1,12 +1,14 @@
-//! The one driver: simulate the truth once, then feed the same observations to every selected
-//! filter, recording estimates, per-step wall time and failures (in the spirit of argmin's
+//! The one driver: simulate the truth once (or take a user's [`Recording`]), then feed the
+//! same observations to every selected filter, recording estimates, covariances, per-step wall
+//! time and failures (in the spirit of argmin's
 //! `Executor`: the maths never reports progress itself; an [`Observer`] does).
 //!
 //! A run can be driven all at once ([`Experiment::run`]) or stepped
 //! ([`Experiment::start`] then [`ExperimentRun::advance`]), which is what the wasm `Session`
 //! does. A method that fails (non-finite numbers, lost density, divergence beyond the
 //! scenario's bound) is stopped and marked failed for the run — the papers' "—" — and its
-//! numbers never reach a table.
+//! numbers never reach a table. Errors against the truth (MSE, the track-loss rule) exist only
+//! when the truth is known: always for simulated runs, optionally for recordings.
 
 use alloc::boxed::Box;
 use alloc::string::{String, ToString};
@@ -16,9 +18,11 @@ use crate::error::ZakaiError;
 use crate::filters::{Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
+use crate::recording::{Recording, INTERVAL_TOLERANCE};
 use crate::scenario::methods::{BuildContext, MethodConfig};
 use crate::scenario::ScenarioConfig;
 use crate::simulate::{rng_from_seed, simulate, Trajectory};
+use crate::validate::ConfigProblem;
 
 /// A source of wall-clock time in seconds (std: `Instant`; wasm: `performance.now()`).
 pub trait Clock {
@@ -74,6 +78,9 @@ pub struct MethodTrack {
     pub n: usize,
     /// Estimates x̂(τ_k), row-major, for k = 0..(rows − 1); rows stop at a failure.
     pub estimates: Vec<f64>,
+    /// Covariances P(τ_k) (n × n each, row-major) for the rows of `estimates`, when the
+    /// method has them (Kalman family, particle and grid filters); empty otherwise.
+    pub covariances: Vec<f64>,
     /// The failure, if the method failed.
     pub failure: Option<Failure>,
     /// Total wall time spent in `step` (seconds; 0 without a clock).
@@ -129,8 +136,8 @@ impl MethodTrack {
 pub struct RunResult {
     /// The seed of the run.
     pub seed: u64,
-    /// Truth and observations.
-    pub trajectory: Trajectory,
+    /// The observations, with the truth when it is known.
+    pub recording: Recording,
     /// One record per method, in the scenario's order.
     pub methods: Vec<MethodTrack>,
     /// The methods' warnings about their parameters, as `(method, message)`.
@@ -138,9 +145,11 @@ pub struct RunResult {
 }
 
 impl RunResult {
-    /// MSE of 004 (43) of method `index` (`None` when it failed).
+    /// MSE of 004 (43) of method `index` (`None` when it failed or the truth is unknown).
     pub fn mse(&self, index: usize) -> Option<f64> {
-        self.methods.get(index)?.mse(&self.trajectory.states)
+        self.methods
+            .get(index)?
+            .mse(self.recording.truth.as_deref()?)
     }
 }
 
@@ -209,7 +218,7 @@ impl Experiment {
                 seed,
                 probes: &self.probes,
                 bounds: &bounds,
-                dt_obs: self.config.time.dt_obs,
+                dt_obs: Some(self.config.time.dt_obs),
             },
         )
     }
@@ -237,7 +246,96 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
     ) -> Result<ExperimentRun, ZakaiError> {
-        let trajectory = self.simulate(seed);
+        self.start_recorded_timed(self.simulate(seed).into(), seed, clock)
+    }
+
+    /// Every problem with running this experiment's methods on `recording`: its own problems
+    /// ([`Recording::problems`]), dimensions and observation kind against the model, and steps
+    /// other than Δτ when a method is built for one interval length.
+    pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
+        let mut p = recording.problems();
+        let model = &self.model;
+        if recording.n != model.n {
+            p.push(ConfigProblem::new(
+                "recording.n",
+                alloc::format!(
+                    "the recording's state has dimension {}, the model's {}",
+                    recording.n,
+                    model.n
+                ),
+            ));
+        }
+        if recording.m != model.m {
+            p.push(ConfigProblem::new(
+                "observations",
+                alloc::format!(
+                    "rows have {} components, the model observes m = {}",
+                    recording.m,
+                    model.m
+                ),
+            ));
+        }
+        let continuous = matches!(
+            model.observations,
+            crate::model::ObservationModel::Continuous { .. }
+        );
+        if recording.continuous != continuous {
+            let (got, want) = if continuous {
+                ("measurements z_k", "increments Δy of dy = h dt + dw")
+            } else {
+                ("increments Δy", "measurements z_k = h(x_k) + v_k")
+            };
+            p.push(ConfigProblem::new(
+                "observations",
+                alloc::format!("the recording holds {got}, the model observes {want}"),
+            ));
+        }
+        if p.is_empty() && self.config.methods.iter().any(|m| m.needs_interval()) {
+            p.extend(recording.interval_problems(self.config.time.dt_obs));
+        }
+        p
+    }
+
+    /// Builds every filter for the observations in `recording` (a user's data, the truth
+    /// optional); observation 0 is processed and the initial estimates recorded. `seed` seeds
+    /// the methods' random numbers. Every problem with the recording is reported at once.
+    pub fn start_recorded(
+        &self,
+        recording: Recording,
+        seed: u64,
+    ) -> Result<ExperimentRun, ZakaiError> {
+        self.start_recorded_timed(recording, seed, None)
+    }
+
+    /// Every method over the whole `recording`, timed by the standard clock where there is
+    /// one (see [`Experiment::start_recorded`]).
+    pub fn filter_recorded(
+        &self,
+        recording: Recording,
+        seed: u64,
+    ) -> Result<RunResult, ZakaiError> {
+        #[cfg(feature = "std")]
+        let clock = StdClock::default();
+        #[cfg(feature = "std")]
+        let clock: Option<&dyn Clock> = Some(&clock);
+        #[cfg(not(feature = "std"))]
+        let clock: Option<&dyn Clock> = None;
+        let mut run = self.start_recorded_timed(recording, seed, clock)?;
+        run.complete(clock, &mut Silent);
+        Ok(run.finish())
+    }
+
+    /// As [`Experiment::start_recorded`], timing every filter's build with `clock`.
+    pub fn start_recorded_timed(
+        &self,
+        recording: Recording,
+        seed: u64,
+        clock: Option<&dyn Clock>,
+    ) -> Result<ExperimentRun, ZakaiError> {
+        let problems = self.recording_problems(&recording);
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
         let mut filters = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
@@ -255,7 +353,8 @@ impl Experiment {
             .map(|(name, build_seconds)| MethodTrack {
                 name: name.clone(),
                 n: self.model.n,
-                estimates: Vec::with_capacity(trajectory.states.len()),
+                estimates: Vec::with_capacity(recording.times.len() * self.model.n),
+                covariances: Vec::new(),
                 failure: None,
                 seconds: 0.0,
                 steps: 0,
@@ -265,7 +364,8 @@ impl Experiment {
             .collect();
         let mut run = ExperimentRun {
             seed,
-            trajectory,
+            data: recording,
+            dt_obs: self.config.time.dt_obs,
             filters,
             tracks,
             next: 0,
@@ -306,7 +406,9 @@ impl Experiment {
 /// A run in progress (see [`Experiment::start`]).
 pub struct ExperimentRun {
     seed: u64,
-    trajectory: Trajectory,
+    data: Recording,
+    /// Δτ: steps within [`INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
+    dt_obs: f64,
     filters: Vec<Box<dyn Filter>>,
     tracks: Vec<MethodTrack>,
     next: usize,
@@ -315,9 +417,10 @@ pub struct ExperimentRun {
 }
 
 impl ExperimentRun {
-    /// The truth and observations of the whole run (simulated up front).
-    pub fn trajectory(&self) -> &Trajectory {
-        &self.trajectory
+    /// The observations of the whole run (simulated up front or recorded), with the truth
+    /// when it is known.
+    pub fn recording(&self) -> &Recording {
+        &self.data
     }
     /// Per-method records so far.
     pub fn tracks(&self) -> &[MethodTrack] {
@@ -340,13 +443,13 @@ impl ExperimentRun {
         &self.filters
     }
     /// MSE of 004 (43) of method `index` over the observations processed so far (`None`
-    /// once it has failed).
+    /// once it has failed, or without a truth).
     pub fn running_mse(&self, index: usize) -> Option<f64> {
         let track = self.tracks.get(index)?;
         if track.failed() || track.estimates.is_empty() {
             return None;
         }
-        let truth = &self.trajectory.states[..track.estimates.len()];
+        let truth = &self.data.truth.as_ref()?[..track.estimates.len()];
         Some(
             metrics::mse_components(truth, &track.estimates, track.n)
                 .iter()
@@ -360,7 +463,7 @@ impl ExperimentRun {
     }
     /// True when every observation has been processed.
     pub fn is_finished(&self) -> bool {
-        self.next > self.trajectory.steps()
+        self.next > self.data.steps()
     }
 
     /// Gives observation `k` to every live filter and records its estimate or failure.
@@ -380,18 +483,22 @@ impl ExperimentRun {
         clock: Option<&dyn Clock>,
         observer: &mut dyn Observer,
     ) {
-        let t = &self.trajectory;
+        let t = &self.data;
         let kind = if t.continuous {
             ObservationKind::Increment
         } else {
             ObservationKind::Measurement
         };
-        // Exactly Δτ (not τ_k − τ_{k−1}, which rounds differently from step to step and would
-        // make filters that cache per-Δτ operators rebuild them).
-        let dt = if k == 0 { 0.0 } else { t.dt_obs };
+        // Exactly Δτ when the step is Δτ up to rounding (τ_k − τ_{k−1} rounds differently from
+        // step to step, and a recording written from a simulation then filters bit for bit as
+        // the simulation did).
+        let step = t.step_length(k);
+        let dt = if (step - self.dt_obs).abs() <= INTERVAL_TOLERANCE * self.dt_obs {
+            self.dt_obs
+        } else {
+            step
+        };
         let obs = Observation {
-            k,
-            t: t.times[k],
             dt,
             value: t.observation(k),
             kind,
@@ -427,9 +534,8 @@ impl ExperimentRun {
                 Ok(est)
             }
         });
-        let result = match (result, &self.track_loss) {
-            (Ok(est), Some(rule)) => {
-                let truth = t.state(k);
+        let result = match (result, &self.track_loss, t.state(k)) {
+            (Ok(est), Some(rule), Some(truth)) => {
                 let error = libm::sqrt(
                     est.mean
                         .iter()
@@ -453,10 +559,16 @@ impl ExperimentRun {
                     }
                 }
             }
-            (r, _) => r,
+            (r, _, _) => r,
         };
         match result {
-            Ok(est) => track.estimates.extend_from_slice(est.mean.as_slice()),
+            Ok(est) => {
+                track.estimates.extend_from_slice(est.mean.as_slice());
+                if let Some(p) = &est.covariance {
+                    // nalgebra is column-major; P is symmetric, so rows read the same.
+                    track.covariances.extend_from_slice(p.as_slice());
+                }
+            }
             Err(mut message) => {
                 // A failure under violated stability or positivity conditions says so:
                 // the condition is the likely cause (000 (22)/(30)/(31), 001 (16)/(23)).
@@ -479,7 +591,7 @@ impl ExperimentRun {
     /// [`Observer::on_step`] is not called.
     pub fn complete(&mut self, clock: Option<&dyn Clock>, observer: &mut dyn Observer) {
         // Observations k = next, …, steps (the last index).
-        let (from, last) = (self.next, self.trajectory.steps());
+        let (from, last) = (self.next, self.data.steps());
         for i in 0..self.filters.len() {
             for k in from..=last {
                 self.observe_by(i, k, clock, observer);
@@ -495,7 +607,7 @@ impl ExperimentRun {
         clock: Option<&dyn Clock>,
         observer: &mut dyn Observer,
     ) -> usize {
-        let total = self.trajectory.steps();
+        let total = self.data.steps();
         let mut done = 0;
         while done < count && !self.is_finished() {
             let k = self.next;
@@ -514,7 +626,7 @@ impl ExperimentRun {
         RunResult {
             seed: self.seed,
             warnings: self.warnings(),
-            trajectory: self.trajectory,
+            recording: self.data,
             methods: self.tracks,
         }
     }

@@ -7,36 +7,70 @@
 //!     dy = h(x) dt + dw        (continuous)   or   z_k = h(x_k) + v_k   (discrete)
 //! ```
 //!
-//! from its observations, with the methods of the five papers in `shared/papers` (the Yau–Yau
-//! family) and the classic references (Kalman–Bucy, EKF, UKF, particle filter).
+//! from its observations, with the methods of five papers on the Yau–Yau method and its
+//! relatives beside the classic references:
 //!
-//! The pieces are separate and composable (in the spirit of Stone Soup):
+//! | method | type | paper |
+//! |---|---|---|
+//! | Kalman–Bucy | [`Kalman`] | exact for linear Gaussian models |
+//! | extended / unscented Kalman | [`Ekf`], [`Ukf`] | Jazwinski (1970); Julier & Uhlmann (1997) |
+//! | bootstrap particle filter | [`Pf`] | Gordon, Salmond & Smith (1993) |
+//! | Yau–Yau finite differences: IEM, QIEM, superposition, 4th-order QIEM | [`Iem`], [`Qiem`], [`Spt`], [`Qiem4`] | 000: Yueh, Lin & Yau (2014) |
+//! | continuous–discrete Fokker–Planck grid filter (separation approach, implicit FDM) | [`Separation`], [`ImplicitFdm`] | 001: Šimandl & Švácha (2002) |
+//! | direct method: Gaussian approximation and Riccati ODEs | [`Direct`] | 002: Shi, Yang & Yau (2017) |
+//! | MAP updates: iterated EKF, iterated optimisation Kalman filter | [`Iekf`], [`Iokf`] | 003: Kang, Salmon & Yau (2023) |
+//! | off-line/on-line spectral (Legendre) Yau–Yau filter | [`Spectral`] | 004: Shi, Chen & Yau (2021) |
+//! | Gaussian-sum filter (exact for linear models with mixtures) | [`GaussianSum`] | Sorenson & Alspach (1971) |
 //!
-//! * [`model`] — the [`model::Model`] (dimensions, drift, observation, noise), functions from Rust
-//!   closures or from text expressions with exact partial derivatives;
-//! * [`simulate`] — truth and observation generators (000 Algorithm 1, continuous–discrete);
-//! * [`filters`] — one [`filters::Filter`] trait, one module per method family;
-//! * [`scenario`] — the single [`scenario::ScenarioConfig`] and the papers' presets;
-//! * [`experiment`] — the driver that simulates once and feeds every filter the same observations;
-//! * [`metrics`] — MSE, RMS, e_mean and the Monte Carlo runner.
+//! ## Filtering your own observations
 //!
-//! The crate is `no_std` + `alloc`. The default `std` feature adds text expressions (exmex),
-//! FFT plans and wall-clock timing; `parallel` runs Monte Carlo repetitions on rayon.
+//! Every method builds from a [`Model`], a prior and its parameters through one [`Builder`]
+//! (defaults for every parameter; [`Builder::build`] lists every problem at once), and every
+//! filter steps through the same [`Filter`] trait:
 //!
 //! ```
 //! # #[cfg(feature = "std")] {
-//! use zakai::scenario::{presets, ScenarioConfig};
-//! use zakai::experiment::Experiment;
+//! use zakai::{Filter, Model, Noise, Ukf};
 //!
-//! let mut config: ScenarioConfig = presets::preset("cubic-sensor-1d").unwrap();
-//! config.time.t_final = 1.0; // a short run for the doc test
-//! let experiment = Experiment::new(config).unwrap();
-//! let run = experiment.run(7).unwrap();
-//! for (i, method) in run.methods.iter().enumerate() {
-//!     println!("{}: MSE {:?}, failed: {}", method.name, run.mse(i), method.failed());
+//! // dx = −x³ dt + dv, z_k = x_k + v_k with Var v = 0.1, measured every 0.1.
+//! let model = Model::from_text(&["-x^3"], &["x"], Noise::discrete(0.1)).unwrap();
+//! let mut ukf = Ukf::builder(&model).prior_gaussian(&[0.0], &[[1.0]]).build().unwrap();
+//! for z in [0.3, 0.5, 0.4] {
+//!     ukf.step_measurement(0.1, &[z]).unwrap();
 //! }
+//! let estimate = ukf.estimate();
+//! println!("mean {}, variance {}", estimate.mean[0], estimate.covariance.unwrap()[(0, 0)]);
 //! # }
 //! ```
+//!
+//! Grid and spectral methods also need the box they live on and the observation interval
+//! they are built for: `Qiem::builder(&model).prior_gaussian(..).domain(&[(-6.0, 6.0)]).dt(0.01)`.
+//! A step of another length is an error ([`FilterError::IntervalMismatch`]), never a silent
+//! rebuild. Models come from text ([`Model::from_text`]), from Rust closures
+//! ([`Model::from_closures`]) or from the parts ([`Model::new`]). The crate's `examples/`
+//! folder holds complete programs.
+//!
+//! ## Comparing methods
+//!
+//! * [`ScenarioConfig`] — one serde description of a problem (model, prior, domain, times,
+//!   methods); [`scenario::presets`] holds the papers' examples;
+//! * [`Experiment`] — simulates once, or takes a [`Recording`] of observations, and feeds
+//!   every method the same data, with errors against the truth when there is one;
+//! * [`study`] — Monte Carlo tables and accuracy/cost frontiers; [`reproduction`] — the
+//!   papers' tables.
+//!
+//! ## Modules, bottom to top
+//!
+//! [`error`], [`validate`] → [`linalg`], [`grid`], [`model`], [`random`] → [`simulate`],
+//! [`diagnostics`] → [`filters`] (one folder per method family, each registering itself
+//! through [`Method`]) → [`scenario`] → [`experiment`], [`metrics`] → [`study`],
+//! [`reproduction`]. A module uses only modules to its left (tested).
+//!
+//! ## Features
+//!
+//! The crate is `no_std` + `alloc`. The default `std` feature adds text expressions (exmex),
+//! FFT plans (the Yau–Yau schemes) and wall-clock timing; `parallel` runs Monte Carlo
+//! repetitions on rayon.
 #![no_std]
 #![warn(missing_docs)]
 
@@ -52,12 +86,28 @@ pub mod grid;
 pub mod linalg;
 pub mod metrics;
 pub mod model;
+pub mod random;
+pub mod recording;
 pub mod reproduction;
 pub mod scenario;
 pub mod simulate;
+pub mod study;
+pub mod validate;
 
-pub use error::{FilterError, ZakaiError};
+pub use nalgebra;
+
+pub use error::{ExprError, FilterError, ZakaiError};
 pub use experiment::{Experiment, ExperimentRun};
+pub use filters::direct::Direct;
+pub use filters::fpe_split::{ImplicitFdm, Separation};
+pub use filters::gaussian_sum::GaussianSum;
+pub use filters::kalman::{Ekf, Iekf, Iokf, Kalman, Ukf};
+pub use filters::method::{Builder, Method, MethodInfo};
+pub use filters::particle::Pf;
+pub use filters::spectral::Spectral;
+pub use filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
 pub use filters::{Estimate, Filter, Observation};
-pub use model::Model;
-pub use scenario::ScenarioConfig;
+pub use model::{GaussianMixture, Model, Noise, Prior};
+pub use recording::Recording;
+pub use scenario::{MethodConfig, ScenarioConfig};
+pub use validate::ConfigProblem;

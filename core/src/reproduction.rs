@@ -9,8 +9,8 @@ use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
 use crate::experiment::Experiment;
-use crate::metrics::{MethodSummary, MonteCarlo};
 use crate::scenario::{presets, MethodConfig, ScenarioConfig};
+use crate::study::{MethodSummary, MonteCarlo};
 
 /// The error measure a table reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,7 +78,7 @@ fn cells(values: &[(&'static str, Option<&[f64]>)]) -> Vec<(&'static str, Option
 }
 
 /// A figure of J(t) against the exact Gaussian-sum density (001), reproduced by
-/// [`crate::metrics::density_error::j_curve`] over `runs` seeds of `preset`.
+/// [`crate::study::density_error::j_curve`] over `runs` seeds of `preset`.
 #[derive(Clone, Debug)]
 pub struct PaperFigure {
     /// Identifier for `zakai reproduce`, e.g. `001-fig-4`.

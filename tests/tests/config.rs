@@ -76,20 +76,67 @@ fn unknown_fields_and_methods_are_rejected() {
     assert!(serde_json::from_value::<ScenarioConfig>(v).is_err());
 }
 
-/// Every method key is listed (the CLI's `list`, the page's "add method" menu), builds from its
-/// key, and every preset uses only listed methods.
+/// The one registration list: every catalogue entry builds from its key and its aliases, its
+/// serde tag is its key, its schema names real fields of its parameters (and every parameter
+/// that is not a form field is one of the few left to JSON), its defaults are valid, and every
+/// preset uses only registered methods.
 #[test]
-fn every_method_is_listed_and_every_listed_method_exists() {
-    for (key, about) in zakai::scenario::METHODS {
-        let m = zakai::scenario::MethodConfig::from_key(key).expect("listed key builds");
-        assert_eq!(m.key(), *key);
-        assert!(!about.is_empty());
+fn every_registered_method_is_consistent_and_presets_use_only_registered_ones() {
+    use zakai::scenario::methods::catalogue;
+    let entries = catalogue();
+    assert!(entries.len() >= 15, "all families are registered");
+    let mut keys = std::collections::HashSet::new();
+    for e in &entries {
+        let key = e.info.key.as_str();
+        assert!(keys.insert(key.to_string()), "{key} registered twice");
+        let m = MethodConfig::from_key(key).expect("registered key builds");
+        assert_eq!(m.key(), key);
+        assert_eq!(
+            m, e.defaults,
+            "{key}: the catalogue's defaults are the key's"
+        );
+        for alias in &e.aliases {
+            assert_eq!(MethodConfig::from_key(alias).expect("alias").key(), key);
+        }
+        assert!(!e.info.summary.is_empty() && !e.info.paper.is_empty() && !e.info.name.is_empty());
+        let json = serde_json::to_value(&e.defaults).expect("serializes");
+        assert_eq!(json["method"], key, "the serde tag is the key");
+        let fields: Vec<&String> = json
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| *k != "method")
+            .collect();
+        for p in &e.info.params {
+            assert!(
+                fields.contains(&&p.name),
+                "{key}: schema names `{}`, not a parameter",
+                p.name
+            );
+            assert!(
+                !p.label.is_empty() && !p.help.is_empty(),
+                "{key}.{}",
+                p.name
+            );
+        }
+        for f in fields {
+            assert!(
+                e.info.params.iter().any(|p| &p.name == f) != e.info.json_only.contains(f),
+                "{key}: parameter `{f}` must be either a form field or listed as JSON-only"
+            );
+        }
+        let dims: usize = if e.info.dims == "2" { 2 } else { 1 };
+        assert!(
+            e.defaults.problems(dims).is_empty(),
+            "{key}: defaults are valid: {:?}",
+            e.defaults.problems(dims)
+        );
     }
     for p in zakai::scenario::presets::all() {
         for m in &p.methods {
             assert!(
-                zakai::scenario::METHODS.iter().any(|(k, _)| *k == m.key()),
-                "{}: method {} is not listed",
+                keys.contains(m.key()),
+                "{}: method {} is not registered",
                 p.name,
                 m.key()
             );
@@ -145,8 +192,8 @@ fn suitability_names_the_reason_a_method_does_not_apply() {
     for preset in ["cubic-sensor-1d", "sa-example-1"] {
         let c = zakai::scenario::presets::preset(preset).expect("preset");
         let e = zakai::Experiment::new(c.clone()).expect("valid");
-        for (key, _) in zakai::scenario::METHODS {
-            let m = MethodConfig::from_key(key).expect("key");
+        for entry in zakai::scenario::methods::catalogue() {
+            let (key, m) = (entry.info.key, entry.defaults);
             if m.suitability(e.model(), e.prior(), &c.probe_points(), &c.bounds())
                 .is_none()
             {

@@ -214,8 +214,8 @@ mod riccati {
 
 mod filter {
     use zakai::experiment::Experiment;
-    use zakai::metrics::MonteCarlo;
     use zakai::scenario::{presets, MethodConfig};
+    use zakai::study::MonteCarlo;
 
     /// 002 Example 4.3 (f = tanh x, h = (x sin x, x cos x)), 20 runs from the preset's seed:
     /// the direct method tracks the state — MSE at most 0.4 (measured 0.28; 002 Table 3:
@@ -320,7 +320,7 @@ fn example_4_3_reproduces_table_3() {
 /// MSE of every method of `config` over seeds 1..=runs, in the scenario's order.
 fn monte_carlo(config: zakai::scenario::ScenarioConfig, runs: usize) -> Vec<f64> {
     let experiment = zakai::experiment::Experiment::new(config).unwrap();
-    let summary = zakai::metrics::MonteCarlo::new(&experiment)
+    let summary = zakai::study::MonteCarlo::new(&experiment)
         .run(runs, 1, &|| {})
         .unwrap();
     summary

@@ -7,8 +7,8 @@ use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
 use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
 use zakai::filters::kalman::{KalmanBucy, KalmanParams};
 use zakai::filters::{Filter, Observation, ObservationKind};
-use zakai::metrics::density_error::{j_curve, JKind};
 use zakai::scenario::{presets, GaussianComponent, ObservationNoiseConfig, ScenarioConfig};
+use zakai::study::density_error::{j_curve, JKind};
 
 fn experiment(config: ScenarioConfig) -> Experiment {
     Experiment::new(config).expect("valid scenario")
@@ -199,8 +199,6 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
     let traj = e.simulate(4);
     for k in 0..=traj.steps() {
         let obs = Observation {
-            k,
-            t: traj.times[k],
             dt: if k == 0 { 0.0 } else { traj.dt_obs },
             value: traj.observation(k),
             kind: ObservationKind::Measurement,

@@ -1,10 +1,10 @@
 //! The accuracy–cost frontier: the reference posterior, its convergence check, the sweep and
 //! the "cheapest within 5 %" rule.
 
-use zakai::metrics::frontier::{
+use zakai::scenario::{presets, MethodConfig};
+use zakai::study::frontier::{
     default_sweep, frontier, reference, reference_check, Frontier, FrontierPoint, SweepPoint,
 };
-use zakai::scenario::{presets, MethodConfig};
 
 fn cubic() -> zakai::scenario::ScenarioConfig {
     let mut c = presets::preset("cubic-sensor-1d").expect("preset");

@@ -103,7 +103,7 @@ fn kalman_filter_equals_an_independent_scalar_recursion_for_discrete_measurement
     let result = experiment.run(5).unwrap();
     let q = 0.49;
     let (mut m, mut p) = (0.5, p0);
-    let z = &result.trajectory.observations;
+    let z = &result.recording.observations;
     for (k, zk) in z.iter().enumerate() {
         if k > 0 {
             let e = (a * dt).exp();
@@ -203,15 +203,13 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
         seed: 1,
         probes: &[],
         bounds: &bounds,
-        dt_obs: 0.01,
+        dt_obs: Some(0.01),
     };
     let mut filter = experiment.config().methods[1]
         .build("EKF".into(), &ctx)
         .unwrap();
     let bad = [1.0];
     let obs = Observation {
-        k: 1,
-        t: 0.01,
         dt: 0.01,
         value: &bad,
         kind: ObservationKind::Increment,

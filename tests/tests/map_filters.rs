@@ -110,8 +110,6 @@ fn guarded_newton_finds_the_map_point_of_a_cubic_measurement() {
         // A measurement at τ₀ (no prediction): the prior N(0.5, 1) is the predicted density.
         let value = [z];
         f.step(&Observation {
-            k: 0,
-            t: 0.0,
             dt: 0.0,
             value: &value,
             kind: ObservationKind::Measurement,

@@ -3,9 +3,9 @@
 //! presets' own; the tolerances are stated at each assertion.
 
 use zakai::experiment::Experiment;
-use zakai::metrics::{MonteCarlo, MonteCarloSummary};
 use zakai::reproduction;
 use zakai::scenario::presets;
+use zakai::study::{MonteCarlo, MonteCarloSummary};
 
 fn monte_carlo(preset: &str, keys: &[&str], runs: usize) -> MonteCarloSummary {
     let mut config = presets::preset(preset).expect("preset");

@@ -114,8 +114,6 @@ fn every_1d_method_runs_a_million_intervals_without_nan_or_memory_growth() {
             x = x.signum() * (2.0 * REFLECT - x.abs());
         }
         let obs = Observation {
-            k,
-            t: k as f64 * dt,
             dt,
             value: &value,
             kind: ObservationKind::Increment,

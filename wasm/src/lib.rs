@@ -75,10 +75,12 @@ pub fn presets() -> Result<JsValue, JsError> {
     to_js(&zakai::scenario::presets::all())
 }
 
-/// The methods: `[[key, description], …]`.
+/// The method catalogue, the page's one source of method forms: `[{key, name, summary, paper,
+/// takes, dims, params: [{name, label, help, kind, min, max, choices}], aliases,
+/// needs_interval, needs_domain, defaults: {method, …parameters}}, …]`.
 #[wasm_bindgen]
 pub fn methods() -> Result<JsValue, JsError> {
-    to_js(&zakai::scenario::METHODS)
+    to_js(&zakai::scenario::methods::catalogue())
 }
 
 /// Every problem with a scenario, as `[{field, message}, …]` (empty when valid).
@@ -114,7 +116,7 @@ pub fn yau_system(config: JsValue) -> Result<JsValue, JsError> {
 pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
     #[derive(Serialize)]
     struct Kind {
-        key: &'static str,
+        key: String,
         reason: Option<String>,
     }
     #[derive(Serialize)]
@@ -137,14 +139,11 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
     let probes = config.probe_points();
     let bounds = config.bounds();
     let n = model.n;
-    let kinds = zakai::scenario::METHODS
-        .iter()
-        .filter_map(|(key, _)| {
-            let method = zakai::scenario::MethodConfig::from_key(key)?;
-            Some(Kind {
-                key,
-                reason: method.suitability(&model, &prior, &probes, &bounds),
-            })
+    let kinds = zakai::scenario::methods::catalogue()
+        .into_iter()
+        .map(|entry| Kind {
+            reason: entry.defaults.suitability(&model, &prior, &probes, &bounds),
+            key: entry.info.key,
         })
         .collect();
     let rows = config
@@ -201,7 +200,7 @@ impl MonteCarloJob {
     /// The summary of the runs done so far (`MonteCarloSummary`: per method MSE ± s.e.,
     /// failed runs, mean time per run and per step, E_RMS, …).
     pub fn summary(&self) -> Result<JsValue, JsError> {
-        let mc = zakai::metrics::MonteCarlo::new(&self.experiment);
+        let mc = zakai::study::MonteCarlo::new(&self.experiment);
         to_js(&mc.summarise(&self.results, self.seed))
     }
 }
@@ -267,6 +266,7 @@ struct SessionInfo {
     steps: usize,
     dt_obs: f64,
     continuous: bool,
+    has_truth: bool,
     domain: Vec<[f64; 2]>,
     methods: Vec<String>,
     seed: u64,
@@ -315,7 +315,7 @@ impl Session {
         let mut failures = Failures::default();
         let steps = self.run.advance(k, Some(&JsClock), &mut failures);
         let position = self.run.position();
-        let t = &self.run.trajectory().times;
+        let t = &self.run.recording().times;
         to_js(&StepSummary {
             position,
             steps,
@@ -340,9 +340,10 @@ impl Session {
             name: c.name.clone(),
             n: c.state_dim(),
             m: c.obs_dim(),
-            steps: c.steps(),
+            steps: self.run.recording().steps(),
             dt_obs: c.time.dt_obs,
-            continuous: self.run.trajectory().continuous,
+            continuous: self.run.recording().continuous,
+            has_truth: self.run.recording().truth.is_some(),
             domain: c.domain.clone(),
             methods: self.experiment.method_names().to_vec(),
             seed: self.seed,
@@ -362,21 +363,24 @@ impl Session {
     /// Observation times τ_k for rows `from..to` (clamped to the processed rows).
     pub fn times(&self, from: usize, to: usize) -> Vec<f64> {
         let (a, b) = self.clamp(from, to);
-        self.run.trajectory().times[a..b].to_vec()
+        self.run.recording().times[a..b].to_vec()
     }
 
-    /// Truth rows `from..to`, row-major (clamped to the processed rows: no peeking ahead).
+    /// Truth rows `from..to`, row-major (clamped to the processed rows: no peeking ahead);
+    /// empty when the truth is unknown (recorded observations without one).
     pub fn truth(&self, from: usize, to: usize) -> Vec<f64> {
         let (a, b) = self.clamp(from, to);
-        let n = self.run.trajectory().n;
-        self.run.trajectory().states[a * n..b * n].to_vec()
+        let r = self.run.recording();
+        r.truth
+            .as_ref()
+            .map_or_else(Vec::new, |t| t[a * r.n..b * r.n].to_vec())
     }
 
     /// Observation rows `from..to`, row-major: increments Δy (continuous) or z_k (discrete).
     pub fn observations(&self, from: usize, to: usize) -> Vec<f64> {
         let (a, b) = self.clamp(from, to);
-        let m = self.run.trajectory().m;
-        self.run.trajectory().observations[a * m..b * m].to_vec()
+        let m = self.run.recording().m;
+        self.run.recording().observations[a * m..b * m].to_vec()
     }
 
     /// Estimate rows `from..to` of method `index`, row-major (fewer rows after a failure).

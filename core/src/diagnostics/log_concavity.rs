@@ -11,7 +11,7 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::filters::DensityView;
+use crate::grid::DensityView;
 
 /// The result of [`log_concavity`].
 #[derive(Clone, Debug, PartialEq)]

@@ -20,17 +20,23 @@
 
 use alloc::format;
 use alloc::string::String;
+use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use serde::{Deserialize, Serialize};
 
 use super::kalman::linear::{affine_parts, Discretization};
+use super::method::{
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
+    ProblemContext, Takes,
+};
 use super::{marginal, Estimate, Filter, Observation};
 use crate::error::{FilterError, ZakaiError};
 use crate::grid::TensorGrid;
 use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp, symmetrize};
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
+use crate::validate::ConfigProblem;
 
 /// Parameters of [`GaussianSumFilter`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,6 +77,81 @@ impl GaussianSumParams {
             p.push(("merge_cost", "must be nonnegative and finite".into()));
         }
         p
+    }
+}
+
+/// The Gaussian-sum filter registered as a [`Method`].
+pub struct GaussianSum;
+builder_fn!(GaussianSum);
+
+impl Method for GaussianSum {
+    const KEY: &'static str = "gaussian_sum";
+    const ALIASES: &'static [&'static str] = &["gsf"];
+    type Params = GaussianSumParams;
+    type Filter = GaussianSumFilter;
+
+    fn info() -> MethodInfo {
+        MethodInfo {
+            key: Self::KEY.into(),
+            name: "GSF".into(),
+            summary: "Gaussian-sum filter, exact for linear models with mixture prior and noise"
+                .into(),
+            paper: "Sorenson & Alspach (1971); the reference of 001 Šimandl & Švácha (2002), §4"
+                .into(),
+            takes: Takes::Measurements,
+            dims: "any".into(),
+            params: vec![
+                ParamInfo::new(
+                    "max_components",
+                    ParamKind::Int,
+                    "max components",
+                    "most Gaussians kept after a measurement (pairs are merged beyond it)",
+                )
+                .range(1.0, 4096.0),
+                ParamInfo::new(
+                    "prune",
+                    ParamKind::Number,
+                    "prune below",
+                    "drop components lighter than this fraction of the heaviest",
+                )
+                .range(0.0, 1.0),
+                ParamInfo::new(
+                    "merge_cost",
+                    ParamKind::Number,
+                    "merge cost (nats)",
+                    "always merge pairs whose Runnalls bound on the KL discrepancy is below this",
+                )
+                .at_least(0.0),
+            ],
+            json_only: Vec::new(),
+        }
+    }
+    fn display_name(_: &GaussianSumParams) -> String {
+        "GSF".into()
+    }
+    fn problems(p: &GaussianSumParams, _: usize) -> Vec<ConfigProblem> {
+        problems_from(p.problems())
+    }
+    fn suitability(problem: &ProblemContext, _: &GaussianSumParams) -> Result<(), String> {
+        check_model(problem.model, problem.prior, problem.probes)
+            .map(|_| ())
+            .map_err(|e| format!("{e}"))
+    }
+    fn memory(p: &GaussianSumParams, n: usize) -> Option<usize> {
+        // Candidates after an update (noise mixtures of up to 4 components assumed) and their
+        // pairwise merge costs.
+        let k = p.max_components.checked_mul(4)?;
+        let values = k
+            .checked_mul(k)?
+            .checked_add(k.checked_mul(n * n + n + 2)?)?;
+        values.checked_mul(8)
+    }
+    fn build(
+        ctx: &BuildContext,
+        p: &GaussianSumParams,
+        name: String,
+    ) -> Result<GaussianSumFilter, ZakaiError> {
+        GaussianSumFilter::new(name, ctx.model, ctx.prior, p, ctx.probes)
     }
 }
 

@@ -4,17 +4,24 @@
 //! * [`particle`] — the bootstrap particle filter;
 //! * [`yau_fd`] — the finite-difference Yau–Yau filters of 000 (IEM, QIEM; the filters
 //!   need the `std` feature for their FFT plans);
-//! * [`spectral`] — the off-line/on-line spectral Yau–Yau filter of 004 (Legendre basis).
+//! * [`spectral`] — the off-line/on-line spectral Yau–Yau filter of 004 (Legendre basis);
+//! * [`direct`] — the direct method of 002 (Gaussian approximation and Riccati ODEs);
+//! * [`fpe_split`] — the continuous–discrete Fokker–Planck grid filters of 001;
+//! * [`gaussian_sum`] — the exact Gaussian-sum filter of linear models with mixtures;
+//! * [`method`] — the [`method::Method`] trait each family registers itself with, its
+//!   parameter schema and the one [`method::Builder`].
 //!
-//! Every filter is built from a [`crate::model::Model`] plus its own parameters (a serde struct
-//! with defaults and a `validate()`), consumes the same [`Observation`]s, and exposes its
-//! [`Estimate`]; grid methods also expose their density through [`DensityView`].
+//! Every filter is built from a [`crate::model::Model`], a prior and its own parameters (a
+//! serde struct with defaults and a check listing every problem), consumes the same
+//! [`Observation`]s, and exposes its [`Estimate`]; grid methods also expose their density
+//! through [`DensityView`].
 
 pub mod direct;
 pub mod fpe_split;
 pub mod gaussian_sum;
 pub mod kalman;
 pub mod marginal;
+pub mod method;
 pub mod particle;
 pub mod spectral;
 pub mod yau_fd;
@@ -25,6 +32,7 @@ use alloc::vec::Vec;
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::FilterError;
+pub use crate::grid::DensityView;
 
 /// What an observation row means.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,19 +43,36 @@ pub enum ObservationKind {
     Measurement,
 }
 
-/// One observation, handed to every filter in turn.
+/// One observation, handed to every filter in turn: how far to predict, then what to
+/// assimilate.
 #[derive(Clone, Copy, Debug)]
 pub struct Observation<'a> {
-    /// Index k of the observation time τ_k.
-    pub k: usize,
-    /// τ_k.
-    pub t: f64,
-    /// τ_k − τ_{k−1}: how far to predict before using `value` (0 for a measurement at τ_0).
+    /// τ_k − τ_{k−1}: how far to predict before using `value`. 0 assimilates without
+    /// predicting (a measurement at the prior's time τ₀).
     pub dt: f64,
     /// The increment or measurement (length m).
     pub value: &'a [f64],
     /// Increment or measurement.
     pub kind: ObservationKind,
+}
+
+impl<'a> Observation<'a> {
+    /// An increment Δy = y(τ_k) − y(τ_{k−1}) of a continuous observation, after `dt`.
+    pub fn increment(dt: f64, dy: &'a [f64]) -> Self {
+        Observation {
+            dt,
+            value: dy,
+            kind: ObservationKind::Increment,
+        }
+    }
+    /// A measurement z_k = h(x_k) + v_k, `dt` after the previous one (0 at the prior's time).
+    pub fn measurement(dt: f64, z: &'a [f64]) -> Self {
+        Observation {
+            dt,
+            value: z,
+            kind: ObservationKind::Measurement,
+        }
+    }
 }
 
 /// A filter's current estimate.
@@ -59,17 +84,6 @@ pub struct Estimate {
     pub covariance: Option<DMatrix<f64>>,
     /// Maximum a posteriori point, where the method computes one.
     pub map: Option<DVector<f64>>,
-}
-
-/// A read-only view of a grid density (first dimension fastest).
-#[derive(Clone, Copy, Debug)]
-pub struct DensityView<'a> {
-    /// Per-dimension `(lower, upper)` bounds of the grid.
-    pub bounds: &'a [(f64, f64)],
-    /// Points per dimension.
-    pub shape: &'a [usize],
-    /// Normalised density values at the grid points.
-    pub values: &'a [f64],
 }
 
 /// An observation of the `kind` a filter takes, of length m, or the error it returns.
@@ -131,6 +145,20 @@ pub(crate) fn normalise_on_grid(
     })
 }
 
+/// The step length a filter built for one observation interval accepts: `dt` equal to
+/// `built_for` to a relative 1e-9, or the error saying what it was built for.
+pub(crate) fn check_interval(name: &str, built_for: f64, dt: f64) -> Result<(), FilterError> {
+    if (dt - built_for).abs() <= 1e-9 * built_for {
+        Ok(())
+    } else {
+        Err(FilterError::IntervalMismatch {
+            filter: name.into(),
+            built_for,
+            got: dt,
+        })
+    }
+}
+
 /// One count for every dimension, or the per-dimension list as given.
 pub(crate) fn per_dimension(counts: &[usize], n: usize) -> Vec<usize> {
     match counts.len() {
@@ -165,6 +193,16 @@ pub trait Filter {
     fn name(&self) -> &str;
     /// Predicts over `obs.dt` and assimilates `obs.value`.
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError>;
+    /// Predicts over `dt` and assimilates the measurement `z` (discrete observations;
+    /// `dt = 0` assimilates at the prior's time).
+    fn step_measurement(&mut self, dt: f64, z: &[f64]) -> Result<(), FilterError> {
+        self.step(&Observation::measurement(dt, z))
+    }
+    /// Predicts over `dt` and assimilates the increment `dy` = y(t + dt) − y(t) (continuous
+    /// observations).
+    fn step_increment(&mut self, dt: f64, dy: &[f64]) -> Result<(), FilterError> {
+        self.step(&Observation::increment(dt, dy))
+    }
     /// The current estimate.
     fn estimate(&self) -> Estimate;
     /// The current density, for grid methods; `None` otherwise.

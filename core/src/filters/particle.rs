@@ -15,11 +15,15 @@ use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
-use crate::error::FilterError;
+use crate::error::{FilterError, ZakaiError};
+use crate::filters::method::{
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, Takes,
+};
 use crate::filters::{Estimate, Filter, Observation, ObservationKind};
 use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp};
 use crate::model::{Model, ObservationModel, Prior};
-use crate::simulate::{rng_from_seed, standard_normal, SimRng};
+use crate::random::{rng_from_seed, standard_normal, SimRng};
+use crate::validate::ConfigProblem;
 
 /// Parameters of [`ParticleFilter`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -63,6 +67,66 @@ impl PfParams {
             p.push(("substeps", "must be at least 1".into()));
         }
         p
+    }
+}
+
+/// The bootstrap particle filter registered as a [`Method`].
+pub struct Pf;
+builder_fn!(Pf);
+
+impl Method for Pf {
+    const KEY: &'static str = "pf";
+    type Params = PfParams;
+    type Filter = ParticleFilter;
+
+    fn info() -> MethodInfo {
+        MethodInfo {
+            key: Self::KEY.into(),
+            name: "PF".into(),
+            summary: "bootstrap particle filter (systematic resampling on an ESS threshold)".into(),
+            paper: "Gordon, Salmond & Smith (1993); the baseline of 000–004".into(),
+            takes: Takes::Both,
+            dims: "any".into(),
+            params: vec![
+                ParamInfo::new(
+                    "particles",
+                    ParamKind::Int,
+                    "particles N",
+                    "number of particles; the error falls like 1/√N",
+                )
+                .range(1.0, 1e7),
+                ParamInfo::new(
+                    "ess_threshold",
+                    ParamKind::Number,
+                    "resample below ESS/N",
+                    "resample when the effective sample size 1/Σwᵢ² falls below this fraction of N (0 never, 1 every step)",
+                )
+                .range(0.0, 1.0),
+                ParamInfo::new(
+                    "substeps",
+                    ParamKind::Int,
+                    "substeps",
+                    "Euler–Maruyama steps of each particle per observation interval",
+                )
+                .at_least(1.0),
+            ],
+            json_only: Vec::new(),
+        }
+    }
+    fn display_name(p: &PfParams) -> String {
+        format!("PF({})", p.particles)
+    }
+    fn problems(p: &PfParams, _: usize) -> Vec<ConfigProblem> {
+        problems_from(p.problems())
+    }
+    fn memory(p: &PfParams, n: usize) -> Option<usize> {
+        // Particles, their copies while resampling, weights and scratch.
+        p.particles.checked_mul(3 * n + 3)?.checked_mul(8)
+    }
+    fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
+        Ok(ParticleFilter::new(
+            name, ctx.model, ctx.prior, p, ctx.seed,
+        )?)
     }
 }
 

@@ -31,6 +31,17 @@ pub fn for_each_line(len: usize, stride: usize, n: usize, mut f: impl FnMut(usiz
     }
 }
 
+/// A read-only view of a grid density (first dimension fastest).
+#[derive(Clone, Copy, Debug)]
+pub struct DensityView<'a> {
+    /// Per-dimension `(lower, upper)` bounds of the grid.
+    pub bounds: &'a [(f64, f64)],
+    /// Points per dimension.
+    pub shape: &'a [usize],
+    /// Normalised density values at the grid points.
+    pub values: &'a [f64],
+}
+
 /// A tensor grid of interior nodes on a box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TensorGrid {
@@ -248,9 +259,9 @@ impl TensorGrid {
         Some((i as isize, s - i))
     }
 
-    /// A read-only view of `values` on this grid (for [`crate::filters::Filter::density`]).
-    pub fn view<'a>(&'a self, values: &'a [f64]) -> crate::filters::DensityView<'a> {
-        crate::filters::DensityView {
+    /// A read-only view of `values` on this grid (what grid filters return as their density).
+    pub fn view<'a>(&'a self, values: &'a [f64]) -> DensityView<'a> {
+        DensityView {
             bounds: &self.bounds,
             shape: &self.shape,
             values,

@@ -1,18 +1,13 @@
-//! Error measures of the papers and the Monte Carlo runner.
+//! Error measures of the papers (pure functions of truth and estimates; the runners that
+//! repeat experiments to compute them are in [`crate::study`]).
 //!
 //! * MSE of 004 (43): `(1/(N+1)) Σ_{k=0}^N (x_k − x̂_k)²`, per component (Table 2 reports
 //!   x₁ and x₂ separately) and summed;
 //! * E_RMS of 000 §4.2: `√(Σ_{i=1}^{N} (x̂(t_i) − x(t_i))² / N)`;
 //! * e_mean(τ_k) of 004 (43): the mean over runs of `‖x_k − x̂_k‖` at each τ_k.
 
-pub mod density_error;
-pub mod frontier;
-pub mod monte_carlo;
-
 use alloc::vec;
 use alloc::vec::Vec;
-
-pub use monte_carlo::{MethodSummary, MonteCarlo, MonteCarloSummary};
 
 /// Per-component MSE of 004 (43) over all rows k = 0..N of row-major `truth` and `estimate`.
 pub fn mse_components(truth: &[f64], estimate: &[f64], n: usize) -> Vec<f64> {

@@ -9,7 +9,6 @@ use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::vec;
 use alloc::vec::Vec;
-use core::fmt;
 
 /// Functions an expression may call. All have exact derivatives except `abs`, `signum`,
 /// `floor`, `ceil`, `round`, `trunc`, `fract`, `erf`, `erfc` (numerical derivatives).
@@ -56,90 +55,7 @@ pub(crate) const LIBM_UNARY: &[(&str, RealFn)] = &[
 /// Named constants an expression may use.
 pub const CONSTANTS: &[&str] = &["PI", "pi", "E", "e", "TAU"];
 
-/// An invalid text expression. `position` counts characters from 0.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ExprError {
-    /// The text does not parse.
-    Syntax {
-        /// The expression text.
-        expr: String,
-        /// Character position of the problem, when known.
-        position: Option<usize>,
-        /// What is wrong.
-        message: String,
-    },
-    /// A name that is neither a state variable, a function nor a constant.
-    UnknownVariable {
-        /// The expression text.
-        expr: String,
-        /// The unknown name.
-        name: String,
-        /// Character position where it starts.
-        position: usize,
-        /// The allowed variable names.
-        allowed: String,
-    },
-    /// A vector function has the wrong number of components.
-    WrongComponentCount {
-        /// Which function (e.g. "drift f").
-        what: String,
-        /// Expected count.
-        expected: usize,
-        /// Given count.
-        found: usize,
-    },
-    /// A numeric constant that is not finite (e.g. `1e400`).
-    NonFiniteConstant {
-        /// The expression text.
-        expr: String,
-        /// The literal as written.
-        literal: String,
-        /// Character position where it starts.
-        position: usize,
-    },
-    /// The expression layer is not available (built without the `std` feature).
-    Unavailable,
-}
-
-impl fmt::Display for ExprError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ExprError::Syntax {
-                expr,
-                position: Some(p),
-                message,
-            } => write!(f, "syntax error at position {p} in `{expr}`: {message}"),
-            ExprError::Syntax {
-                expr,
-                position: None,
-                message,
-            } => write!(f, "syntax error in `{expr}`: {message}"),
-            ExprError::UnknownVariable {
-                expr,
-                name,
-                position,
-                allowed,
-            } => write!(
-                f,
-                "unknown variable `{name}` at position {position} in `{expr}` (allowed: {allowed})"
-            ),
-            ExprError::WrongComponentCount {
-                what,
-                expected,
-                found,
-            } => write!(f, "{what} needs {expected} component(s), {found} given"),
-            ExprError::NonFiniteConstant {
-                expr,
-                literal,
-                position,
-            } => write!(
-                f,
-                "constant `{literal}` at position {position} in `{expr}` is not a finite number"
-            ),
-            ExprError::Unavailable => write!(f, "text expressions need the `std` feature of zakai"),
-        }
-    }
-}
+pub use crate::error::ExprError;
 
 /// The state variable names of an `n`-dimensional model: `x1..xn`, and `x` when `n = 1`.
 pub fn variable_names(n: usize) -> Vec<String> {

@@ -20,13 +20,69 @@ pub mod symbolic;
 use alloc::format;
 use alloc::sync::Arc;
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 pub use function::{ClosureFunction, Derivatives, VectorFunction};
 pub use noise::GaussianMixture;
 pub use prior::Prior;
 
 use crate::error::ZakaiError;
+
+/// The observation noise of a model built by [`Model::from_text`] or
+/// [`Model::from_closures`].
+#[derive(Clone, Debug)]
+pub enum Noise {
+    /// Continuous observations `dy = h dt + dw` with `E[dw dwᵀ] = S dt`, S given.
+    Continuous(DMatrix<f64>),
+    /// Continuous observations with `S = s·I`.
+    ContinuousScalar(f64),
+    /// Discrete measurements `z_k = h(x_k) + v_k`, `v_k ~ N(0, R)`, R given.
+    Discrete(DMatrix<f64>),
+    /// Discrete measurements with `R = r·I` (r is a variance, as FilterPy's `R`).
+    DiscreteScalar(f64),
+    /// Discrete measurements with `v_k` from a Gaussian mixture.
+    DiscreteMixture(GaussianMixture),
+}
+
+impl Noise {
+    /// Continuous observations `dy = h dt + dw` with intensity `E[dw dwᵀ] = s·I dt`.
+    pub fn continuous(s: f64) -> Self {
+        Noise::ContinuousScalar(s)
+    }
+    /// Discrete measurements `z_k = h(x_k) + v_k` with `v_k ~ N(0, variance·I)`.
+    pub fn discrete(variance: f64) -> Self {
+        Noise::DiscreteScalar(variance)
+    }
+
+    /// The observation model for `m` observation components.
+    pub fn observation_model(self, m: usize) -> Result<ObservationModel, ZakaiError> {
+        let scalar = |v: f64, what: &str| {
+            if v > 0.0 && v.is_finite() {
+                Ok(DMatrix::identity(m, m) * v)
+            } else {
+                Err(ZakaiError::Other(format!(
+                    "{what} must be positive and finite, got {v}"
+                )))
+            }
+        };
+        Ok(match self {
+            Noise::Continuous(s) => ObservationModel::Continuous { noise_cov: s },
+            Noise::ContinuousScalar(s) => ObservationModel::Continuous {
+                noise_cov: scalar(s, "the observation noise intensity")?,
+            },
+            Noise::Discrete(r) => ObservationModel::Discrete {
+                noise: GaussianMixture::gaussian(DVector::zeros(r.nrows()), r)?,
+            },
+            Noise::DiscreteScalar(r) => ObservationModel::Discrete {
+                noise: GaussianMixture::gaussian(
+                    DVector::zeros(m),
+                    scalar(r, "the measurement noise variance")?,
+                )?,
+            },
+            Noise::DiscreteMixture(noise) => ObservationModel::Discrete { noise },
+        })
+    }
+}
 
 /// How the state is observed.
 #[derive(Clone, Debug)]
@@ -107,6 +163,76 @@ impl Model {
             diffusion,
             observations,
         })
+    }
+
+    /// A model from text expressions in `x` (1-D) or `x1..xn`, with G = I:
+    /// `Model::from_text(&["-x^3"], &["x"], Noise::discrete(0.1))`. Every invalid expression is
+    /// reported at once, each with its field and character position.
+    #[cfg(feature = "std")]
+    pub fn from_text(
+        drift: &[&str],
+        observation: &[&str],
+        noise: Noise,
+    ) -> Result<Self, ZakaiError> {
+        use crate::validate::ConfigProblem;
+        use alloc::string::String;
+        use alloc::vec::Vec;
+        let (n, m) = (drift.len(), observation.len());
+        let mut problems = Vec::new();
+        let mut parse = |field: &str, texts: &[&str], out_dim: usize| {
+            let owned: Vec<String> = texts.iter().map(|t| String::from(*t)).collect();
+            for (i, t) in owned.iter().enumerate() {
+                if let Err(e) =
+                    expression::ExpressionFunction::parse(field, core::slice::from_ref(t), n, 1)
+                {
+                    problems.push(ConfigProblem::new(format!("{field}[{i}]"), format!("{e}")));
+                }
+            }
+            expression::ExpressionFunction::parse(field, &owned, n, out_dim).ok()
+        };
+        let f = parse("drift", drift, n);
+        let h = parse("observation", observation, m);
+        if n == 0 {
+            problems.push(ConfigProblem::new("drift", "needs at least one component"));
+        }
+        if m == 0 {
+            problems.push(ConfigProblem::new(
+                "observation",
+                "needs at least one component",
+            ));
+        }
+        match (f, h) {
+            (Some(f), Some(h)) if problems.is_empty() => Model::new(
+                Arc::new(f),
+                Arc::new(h),
+                DMatrix::identity(n, n),
+                noise.observation_model(m)?,
+            ),
+            _ => Err(ZakaiError::Config(problems)),
+        }
+    }
+
+    /// A model from Rust closures `f(x, out)` (n outputs) and `h(x, out)` (m outputs), with
+    /// G = I; derivatives by central differences (use [`ClosureFunction::with_jacobian`] and
+    /// [`Model::new`] to give exact ones).
+    pub fn from_closures(
+        n: usize,
+        m: usize,
+        drift: impl Fn(&[f64], &mut [f64]) + Send + Sync + 'static,
+        observation: impl Fn(&[f64], &mut [f64]) + Send + Sync + 'static,
+        noise: Noise,
+    ) -> Result<Self, ZakaiError> {
+        Model::new(
+            Arc::new(ClosureFunction::new(n, n, drift)),
+            Arc::new(ClosureFunction::new(n, m, observation)),
+            DMatrix::identity(n, n),
+            noise.observation_model(m)?,
+        )
+    }
+
+    /// The same model with diffusion G (n × n; Q = G Gᵀ).
+    pub fn with_diffusion(self, diffusion: DMatrix<f64>) -> Result<Self, ZakaiError> {
+        Model::new(self.drift, self.observation, diffusion, self.observations)
     }
 
     /// Q = G Gᵀ.

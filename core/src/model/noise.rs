@@ -169,7 +169,7 @@ impl GaussianMixture {
                 break;
             }
         }
-        let xi = crate::simulate::standard_normal_vector(rng, self.dim());
+        let xi = crate::random::standard_normal_vector(rng, self.dim());
         &chosen.mean + chosen.chol.l() * xi
     }
 }

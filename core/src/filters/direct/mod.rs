@@ -5,4 +5,6 @@
 
 pub mod filter;
 pub mod gaussian_approximation;
+pub mod methods;
+pub use methods::Direct;
 pub mod riccati;

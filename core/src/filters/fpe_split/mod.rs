@@ -29,7 +29,10 @@
 //! refused rather than silently changed.
 
 pub mod implicit;
+pub mod methods;
 pub mod upwind;
+
+pub use methods::{ImplicitFdm, Separation};
 
 use alloc::format;
 use alloc::string::String;
@@ -258,6 +261,7 @@ impl ContinuousDiscreteGrid {
         };
         let (_, notes) = filter.step_count(dt_obs)?;
         filter.warnings = notes;
+        filter.plan_for(dt_obs)?;
         if scheme == FpeScheme::ImplicitFdm {
             filter.warnings.extend(filter.peclet_warning());
         }
@@ -353,10 +357,9 @@ impl ContinuousDiscreteGrid {
         })
     }
 
+    /// Factorises the implicit step for observation intervals of length `interval` (once, at
+    /// construction: the filter is built for one Δτ).
     fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
-        if self.plan.as_ref().map(|p| p.interval) == Some(interval) {
-            return Ok(());
-        }
         let (substeps, _) = self.step_count(interval)?;
         let dt = interval / substeps as f64;
         let part = match self.scheme {
@@ -388,8 +391,8 @@ impl ContinuousDiscreteGrid {
     /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement. The
     /// density is not renormalised (mass that leaves the grid is lost, as in the scheme).
     pub fn predict(&mut self, interval: f64) -> Result<(), FilterError> {
-        self.plan_for(interval)?;
-        let plan = self.plan.as_ref().expect("planned");
+        let plan = self.plan.as_ref().expect("planned at construction");
+        crate::filters::check_interval(&self.name, plan.interval, interval)?;
         for _ in 0..plan.substeps {
             if self.scheme == FpeScheme::Separation {
                 self.advection

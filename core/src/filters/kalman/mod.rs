@@ -8,12 +8,14 @@ pub mod ekf;
 pub mod linear;
 pub mod map;
 pub mod measurement;
+pub mod methods;
 pub mod propagate;
 pub mod ukf;
 
 pub use ekf::{EkfParams, ExtendedKalman};
 pub use linear::{KalmanBucy, KalmanParams};
 pub use map::{IekfParams, IokfParams, MapKalman, MapSolver};
+pub use methods::{Ekf, Iekf, Iokf, Kalman, Ukf};
 pub use ukf::{UkfParams, UnscentedKalman};
 
 use alloc::vec::Vec;
@@ -147,26 +149,22 @@ impl GaussianState {
 }
 
 /// Validates a [`GaussianInit`] against the state dimension, appending problems.
-pub fn validate_init(
-    init: &GaussianInit,
-    n: usize,
-    field: &str,
-    problems: &mut Vec<crate::scenario::ConfigProblem>,
-) {
-    use crate::scenario::{check_spd, check_vector, ConfigProblem};
-    use alloc::format;
+pub fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::ConfigProblem> {
+    use crate::validate::{check_spd, check_vector, ConfigProblem};
+    let mut problems = Vec::new();
     if let Some(m) = &init.mean {
-        check_vector(m, n, &format!("{field}.init.mean"), problems);
+        check_vector(m, n, "init.mean", &mut problems);
     }
     if let Some(c) = &init.cov {
-        check_spd(c, n, &format!("{field}.init.cov"), problems);
+        check_spd(c, n, "init.cov", &mut problems);
     }
     if let Some(v) = init.variance {
         if !(v > 0.0 && v.is_finite()) {
             problems.push(ConfigProblem::new(
-                format!("{field}.init.variance"),
+                "init.variance",
                 "must be positive and finite",
             ));
         }
     }
+    problems
 }

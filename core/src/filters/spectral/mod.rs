@@ -22,8 +22,11 @@
 //! values to zero before the update, and the plotted marginals are clipped at zero.
 
 pub mod legendre;
+pub mod methods;
 pub mod offline;
 pub mod tensor;
+
+pub use methods::Spectral;
 
 use alloc::format;
 use alloc::string::String;
@@ -543,12 +546,7 @@ impl Filter for SpectralFilter {
         if obs.dt <= 0.0 {
             return Ok(());
         }
-        if (obs.dt - self.t0).abs() > 1e-9 * self.t0 {
-            return Err(FilterError::BadObservation(format!(
-                "{} was built for intervals of T₀ = {}, got {}",
-                self.name, self.t0, obs.dt
-            )));
-        }
+        crate::filters::check_interval(&self.name, self.t0, obs.dt)?;
         self.propagate();
         self.update(obs.value);
         self.normalise_and_project()

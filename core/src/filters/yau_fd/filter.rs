@@ -555,10 +555,8 @@ impl YauYauFilter {
     }
 
     fn predict(&mut self, dt_obs: f64) -> Result<(), FilterError> {
-        if self.solver.as_ref().map(|s| s.0) != Some(dt_obs) {
-            self.prepare(dt_obs)?;
-        }
-        let (_, substeps, solver) = self.solver.as_mut().expect("prepared");
+        let (built_for, substeps, solver) = self.solver.as_mut().expect("prepared in new");
+        crate::filters::check_interval(&self.name, *built_for, dt_obs)?;
         match solver {
             Solver::Iem(tri) => {
                 for _ in 0..*substeps {

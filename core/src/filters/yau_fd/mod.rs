@@ -43,8 +43,29 @@ pub mod operator;
 #[cfg(feature = "std")]
 mod superposition;
 
+pub mod methods;
+
 #[cfg(feature = "std")]
 pub use filter::YauYauFilter;
+pub use methods::{Iem, Qiem, Qiem4, Spt};
+
+/// Without the `std` feature there are no FFT plans and so no Yau–Yau filter: the methods
+/// stay registered (scenarios still parse and validate) and building one is an error.
+#[cfg(not(feature = "std"))]
+pub enum YauYauFilter {}
+
+#[cfg(not(feature = "std"))]
+impl crate::filters::Filter for YauYauFilter {
+    fn name(&self) -> &str {
+        match *self {}
+    }
+    fn step(&mut self, _: &crate::filters::Observation) -> Result<(), crate::error::FilterError> {
+        match *self {}
+    }
+    fn estimate(&self) -> crate::filters::Estimate {
+        match *self {}
+    }
+}
 
 use alloc::format;
 use alloc::string::String;

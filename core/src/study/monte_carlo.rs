@@ -9,9 +9,9 @@ use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
-use super::{abs_errors, mean_and_stderr, mean_error_norm};
 use crate::error::ZakaiError;
 use crate::experiment::{Clock, Experiment, RunResult, Silent};
+use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
 
 /// Summary of one method over a Monte Carlo job.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -159,7 +159,7 @@ impl<'a> MonteCarlo<'a> {
                 let (mut seconds, mut steps, mut build) = (0.0, 0usize, 0.0);
                 for r in results {
                     let track = &r.methods[i];
-                    let truth = &r.trajectory.states;
+                    let truth = r.recording.truth.as_deref().unwrap_or_default();
                     seconds += track.seconds;
                     steps += track.steps;
                     build += track.build_seconds;
@@ -195,7 +195,7 @@ impl<'a> MonteCarlo<'a> {
                     failed,
                     mse: stats.map(|s| s.0),
                     mse_stderr: stats.map(|s| s.1),
-                    mse_quartiles: super::quartiles(&mses),
+                    mse_quartiles: quartiles(&mses),
                     error_norm: norm_stats.map(|s| s.0),
                     error_norm_stderr: norm_stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),

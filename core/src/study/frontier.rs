@@ -15,6 +15,7 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
+use super::MonteCarlo;
 use crate::error::ZakaiError;
 use crate::experiment::Experiment;
 use crate::filters::fpe_split::FpeParams;
@@ -23,7 +24,6 @@ use crate::filters::kalman::{EkfParams, IekfParams, UkfParams};
 use crate::filters::particle::PfParams;
 use crate::filters::spectral::SpectralParams;
 use crate::filters::yau_fd::YauYauParams;
-use crate::metrics::MonteCarlo;
 use crate::scenario::{MethodConfig, ScenarioConfig};
 
 /// One method at one setting of its cost knob.

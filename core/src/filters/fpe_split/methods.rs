@@ -1,0 +1,129 @@
+//! The continuous–discrete grid filters of 001 (Šimandl & Švácha 2002) registered as
+//! [`Method`]s: [`Separation`] (the separation approach, SA) and [`ImplicitFdm`].
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::{check_model, ContinuousDiscreteGrid, FpeParams, FpeScheme};
+use crate::error::ZakaiError;
+use crate::filters::method::{
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
+    ProblemContext, Takes,
+};
+use crate::filters::{per_dimension, product};
+use crate::validate::ConfigProblem;
+
+fn info(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
+    MethodInfo {
+        key: key.into(),
+        name: name.into(),
+        summary: summary.into(),
+        paper: paper.into(),
+        takes: Takes::Measurements,
+        dims: "1–3".into(),
+        params: vec![
+            ParamInfo::new(
+                "cells",
+                ParamKind::IntList,
+                "cells",
+                "cells per dimension over the domain (001 §4: 200 on ⟨−10, 10⟩, 35 × 35 in 2-D)",
+            )
+            .at_least(2.0),
+            ParamInfo::new(
+                "dt",
+                ParamKind::Number,
+                "Δt",
+                "time step of the Fokker–Planck scheme, rounded down to divide Δτ and reduced further when the CFL condition 001 (16) / (23) needs it",
+            )
+            .at_least(0.0),
+        ],
+        json_only: Vec::new(),
+    }
+}
+
+fn memory(p: &FpeParams, n: usize) -> Option<usize> {
+    // The banded factor of the implicit step and, per cell, the density, its copy, the
+    // upwind fluxes and the likelihood.
+    let cells = product(&per_dimension(&p.cells, n))?;
+    p.band_values(n)?
+        .checked_add(cells.checked_mul(6 + 2 * n)?)?
+        .checked_mul(8)
+}
+
+fn build(
+    scheme: FpeScheme,
+    ctx: &BuildContext,
+    p: &FpeParams,
+    name: String,
+) -> Result<ContinuousDiscreteGrid, ZakaiError> {
+    let dt_obs = ctx.interval(&name)?;
+    ContinuousDiscreteGrid::new(name, scheme, ctx.model, ctx.prior, p, ctx.bounds, dt_obs)
+}
+
+macro_rules! fpe_method {
+    ($method:ident, $key:literal, $alias:literal, $name:literal, $scheme:expr, $summary:literal, $paper:literal) => {
+        builder_fn!($method);
+
+        impl Method for $method {
+            const KEY: &'static str = $key;
+            const ALIASES: &'static [&'static str] = &[$alias];
+            const NEEDS_INTERVAL: bool = true;
+            const NEEDS_DOMAIN: bool = true;
+            type Params = FpeParams;
+            type Filter = ContinuousDiscreteGrid;
+
+            fn info() -> MethodInfo {
+                info($key, $name, $summary, $paper)
+            }
+            fn display_name(_: &FpeParams) -> String {
+                $name.into()
+            }
+            fn problems(p: &FpeParams, n: usize) -> Vec<ConfigProblem> {
+                problems_from(p.problems(n))
+            }
+            fn suitability(problem: &ProblemContext, _: &FpeParams) -> Result<(), String> {
+                check_model($name, problem.model)
+                    .map(|_| ())
+                    .map_err(|e| format!("{e}"))
+            }
+            fn memory(p: &FpeParams, n: usize) -> Option<usize> {
+                memory(p, n)
+            }
+            fn build(
+                ctx: &BuildContext,
+                p: &FpeParams,
+                name: String,
+            ) -> Result<ContinuousDiscreteGrid, ZakaiError> {
+                build($scheme, ctx, p, name)
+            }
+        }
+    };
+}
+
+/// The separation approach: upwind finite volumes for the advection, implicit finite
+/// differences for the diffusion (001 §3).
+pub struct Separation;
+fpe_method!(
+    Separation,
+    "separation",
+    "sa",
+    "SA",
+    FpeScheme::Separation,
+    "continuous–discrete Fokker–Planck filter, separation approach: upwind FV + implicit FD",
+    "001 Šimandl & Švácha (2002), §3, (9)–(23)"
+);
+
+/// The classic implicit finite-difference method on the unsplit Fokker–Planck equation (001
+/// §4's comparison).
+pub struct ImplicitFdm;
+fpe_method!(
+    ImplicitFdm,
+    "implicit_fdm",
+    "fdm",
+    "FDM",
+    FpeScheme::ImplicitFdm,
+    "continuous–discrete Fokker–Planck filter, classic implicit FDM on the unsplit FPE",
+    "001 Šimandl & Švácha (2002), §4, (4)"
+);

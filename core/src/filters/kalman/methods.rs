@@ -1,0 +1,300 @@
+//! The Gaussian filters registered as [`Method`]s: [`Kalman`] (Kalman–Bucy), [`Ekf`],
+//! [`Ukf`], [`Iekf`] and [`Iokf`]. Their state is a mean and a covariance, so their memory is
+//! a constant; they apply to every dimension.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::{
+    validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
+    MapKalman, MapSolver, UkfParams, UnscentedKalman,
+};
+use crate::error::ZakaiError;
+use crate::filters::method::builder_fn;
+use crate::filters::method::{
+    problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, ProblemContext, Takes,
+    SMALL_MEMORY,
+};
+use crate::validate::ConfigProblem;
+
+/// The parameter every Gaussian filter has: `init`, a starting Gaussian other than the
+/// prior's moments, is left to JSON and the Rust API (it is not a form field).
+fn substeps_param() -> ParamInfo {
+    ParamInfo::new(
+        "substeps",
+        ParamKind::Int,
+        "substeps",
+        "RK4 steps of the moment equations per observation interval",
+    )
+    .at_least(1.0)
+}
+
+fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo>) -> MethodInfo {
+    MethodInfo {
+        key: key.into(),
+        name: name.into(),
+        summary: summary.into(),
+        paper: paper.into(),
+        takes: Takes::Both,
+        dims: "any".into(),
+        params,
+        json_only: vec!["init".into()],
+    }
+}
+
+/// The Kalman–Bucy filter: exact for linear models with Gaussian noise and prior.
+pub struct Kalman;
+builder_fn!(Kalman);
+
+impl Method for Kalman {
+    const KEY: &'static str = "kalman";
+    const ALIASES: &'static [&'static str] = &["kf"];
+    type Params = KalmanParams;
+    type Filter = KalmanBucy;
+
+    fn info() -> MethodInfo {
+        info(
+            Self::KEY,
+            "KF",
+            "Kalman–Bucy filter, exact for linear Gaussian models",
+            "Kalman & Bucy (1961); the exact reference of every paper",
+            Vec::new(),
+        )
+    }
+    fn display_name(_: &KalmanParams) -> String {
+        "KF".into()
+    }
+    fn problems(p: &KalmanParams, n: usize) -> Vec<ConfigProblem> {
+        validate_init(&p.init, n)
+    }
+    fn suitability(problem: &ProblemContext, _: &KalmanParams) -> Result<(), String> {
+        let affine = |f: &dyn crate::model::VectorFunction, what| {
+            super::linear::affine_parts(f, "the Kalman–Bucy filter", what, problem.probes)
+                .map(|_| ())
+                .map_err(|e| format!("{e}"))
+        };
+        affine(&*problem.model.drift, "drift f")?;
+        affine(&*problem.model.observation, "observation h")
+    }
+    fn memory(_: &KalmanParams, _: usize) -> Option<usize> {
+        Some(SMALL_MEMORY)
+    }
+    fn build(ctx: &BuildContext, p: &KalmanParams, name: String) -> Result<KalmanBucy, ZakaiError> {
+        Ok(KalmanBucy::new(name, ctx.model, ctx.prior, p, ctx.probes)?)
+    }
+}
+
+/// The extended Kalman filter (continuous–discrete, RK4 moment equations).
+pub struct Ekf;
+builder_fn!(Ekf);
+
+impl Method for Ekf {
+    const KEY: &'static str = "ekf";
+    type Params = EkfParams;
+    type Filter = ExtendedKalman;
+
+    fn info() -> MethodInfo {
+        info(
+            Self::KEY,
+            "EKF",
+            "extended Kalman filter (continuous–discrete, RK4 moment equations)",
+            "Jazwinski (1970); the baseline of 000 (Yueh, Lin & Yau 2014) and 002 (Shi, Yang & Yau 2017)",
+            vec![substeps_param()],
+        )
+    }
+    fn display_name(_: &EkfParams) -> String {
+        "EKF".into()
+    }
+    fn problems(p: &EkfParams, n: usize) -> Vec<ConfigProblem> {
+        let mut problems = validate_init(&p.init, n);
+        if p.substeps == 0 {
+            problems.push(ConfigProblem::new("substeps", "must be at least 1"));
+        }
+        problems
+    }
+    fn memory(_: &EkfParams, _: usize) -> Option<usize> {
+        Some(SMALL_MEMORY)
+    }
+    fn build(
+        ctx: &BuildContext,
+        p: &EkfParams,
+        name: String,
+    ) -> Result<ExtendedKalman, ZakaiError> {
+        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p))
+    }
+}
+
+/// The unscented Kalman filter (van der Merwe's scaled sigma points).
+pub struct Ukf;
+builder_fn!(Ukf);
+
+impl Method for Ukf {
+    const KEY: &'static str = "ukf";
+    type Params = UkfParams;
+    type Filter = UnscentedKalman;
+
+    fn info() -> MethodInfo {
+        info(
+            Self::KEY,
+            "UKF",
+            "unscented Kalman filter (van der Merwe scaled sigma points)",
+            "Julier & Uhlmann (1997); Wan & van der Merwe (2000)",
+            vec![
+                ParamInfo::new(
+                    "alpha",
+                    ParamKind::Number,
+                    "α (spread)",
+                    "spread of the sigma points around the mean, 0 < α ≤ 1",
+                )
+                .range(0.0, 1.0),
+                ParamInfo::new(
+                    "beta",
+                    ParamKind::Number,
+                    "β",
+                    "prior knowledge of the distribution; 2 is optimal for Gaussians",
+                )
+                .at_least(0.0),
+                ParamInfo::new(
+                    "kappa",
+                    ParamKind::Number,
+                    "κ",
+                    "secondary scaling; n + κ must stay positive",
+                ),
+                substeps_param(),
+            ],
+        )
+    }
+    fn display_name(_: &UkfParams) -> String {
+        "UKF".into()
+    }
+    fn problems(p: &UkfParams, n: usize) -> Vec<ConfigProblem> {
+        let mut problems = problems_from(p.problems(n));
+        problems.extend(validate_init(&p.init, n));
+        problems
+    }
+    fn memory(_: &UkfParams, _: usize) -> Option<usize> {
+        Some(SMALL_MEMORY)
+    }
+    fn build(
+        ctx: &BuildContext,
+        p: &UkfParams,
+        name: String,
+    ) -> Result<UnscentedKalman, ZakaiError> {
+        Ok(UnscentedKalman::new(name, ctx.model, ctx.prior, p)?)
+    }
+}
+
+/// The iterated EKF: Gauss–Newton on the MAP problem of each update (003 (4.5)).
+pub struct Iekf;
+builder_fn!(Iekf);
+
+impl Method for Iekf {
+    const KEY: &'static str = "iekf";
+    type Params = IekfParams;
+    type Filter = MapKalman;
+
+    fn info() -> MethodInfo {
+        info(
+            Self::KEY,
+            "IEKF",
+            "iterated EKF: Gauss–Newton on the MAP problem of each update",
+            "003 Kang, Salmon & Yau (2023), (4.5)",
+            vec![
+                ParamInfo::new(
+                    "iterations",
+                    ParamKind::Int,
+                    "iterations",
+                    "most Gauss–Newton iterations per update",
+                )
+                .at_least(1.0),
+                ParamInfo::new(
+                    "tolerance",
+                    ParamKind::Number,
+                    "tolerance",
+                    "stop when a Gauss–Newton step is shorter than this",
+                )
+                .at_least(0.0),
+                substeps_param(),
+            ],
+        )
+    }
+    fn display_name(p: &IekfParams) -> String {
+        format!("IEKF({})", p.iterations)
+    }
+    fn problems(p: &IekfParams, n: usize) -> Vec<ConfigProblem> {
+        let mut problems = problems_from(p.problems());
+        problems.extend(validate_init(&p.init, n));
+        problems
+    }
+    fn memory(_: &IekfParams, _: usize) -> Option<usize> {
+        Some(SMALL_MEMORY)
+    }
+    fn build(ctx: &BuildContext, p: &IekfParams, name: String) -> Result<MapKalman, ZakaiError> {
+        let solver = MapSolver::GaussNewton {
+            iterations: p.iterations,
+            tolerance: p.tolerance,
+        };
+        Ok(MapKalman::new(
+            name, ctx.model, ctx.prior, &p.init, p.substeps, solver,
+        ))
+    }
+}
+
+/// The iterated optimisation Kalman filter: a λ-homotopy from the prior to the MAP problem
+/// with guarded Newton steps (003 Algorithm 4.1).
+pub struct Iokf;
+builder_fn!(Iokf);
+
+impl Method for Iokf {
+    const KEY: &'static str = "iokf";
+    type Params = IokfParams;
+    type Filter = MapKalman;
+
+    fn info() -> MethodInfo {
+        info(
+            Self::KEY,
+            "IOKF",
+            "iterated optimisation Kalman filter: λ-homotopy with guarded Newton steps",
+            "003 Kang, Salmon & Yau (2023), Algorithm 4.1",
+            vec![
+                ParamInfo::new(
+                    "splits",
+                    ParamKind::Int,
+                    "l (splits)",
+                    "steps of the homotopy parameter λ from 0 to 1",
+                )
+                .at_least(1.0),
+                ParamInfo::new(
+                    "newton_steps",
+                    ParamKind::Int,
+                    "m (Newton)",
+                    "guarded Newton steps at each λ",
+                )
+                .at_least(1.0),
+                substeps_param(),
+            ],
+        )
+    }
+    fn display_name(p: &IokfParams) -> String {
+        format!("IOKF({}×{})", p.newton_steps, p.splits)
+    }
+    fn problems(p: &IokfParams, n: usize) -> Vec<ConfigProblem> {
+        let mut problems = problems_from(p.problems());
+        problems.extend(validate_init(&p.init, n));
+        problems
+    }
+    fn memory(_: &IokfParams, _: usize) -> Option<usize> {
+        Some(SMALL_MEMORY)
+    }
+    fn build(ctx: &BuildContext, p: &IokfParams, name: String) -> Result<MapKalman, ZakaiError> {
+        let solver = MapSolver::Homotopy {
+            splits: p.splits,
+            newton_steps: p.newton_steps,
+        };
+        Ok(MapKalman::new(
+            name, ctx.model, ctx.prior, &p.init, p.substeps, solver,
+        ))
+    }
+}

@@ -1,0 +1,111 @@
+//! The spectral Yau–Yau filter of 004 (Shi, Chen & Yau 2021) registered as a [`Method`].
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::{SpectralFilter, SpectralParams};
+use crate::error::ZakaiError;
+use crate::filters::method::{
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
+    ProblemContext, Takes,
+};
+use crate::validate::ConfigProblem;
+
+/// The off-line/on-line spectral Yau–Yau filter (generalized Legendre basis).
+pub struct Spectral;
+builder_fn!(Spectral);
+
+impl Method for Spectral {
+    const KEY: &'static str = "spectral";
+    const NEEDS_INTERVAL: bool = true;
+    const NEEDS_DOMAIN: bool = true;
+    type Params = SpectralParams;
+    type Filter = SpectralFilter;
+
+    fn info() -> MethodInfo {
+        let auto = |name, label, help| {
+            ParamInfo::new(name, ParamKind::OptionalInt, label, help).at_least(1.0)
+        };
+        MethodInfo {
+            key: Self::KEY.into(),
+            name: "Spectral".into(),
+            summary: "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis".into(),
+            paper: "004 Shi, Chen & Yau (2021), (17)–(42)".into(),
+            takes: Takes::Increments,
+            dims: "1–3".into(),
+            params: vec![
+                auto(
+                    "offline_basis",
+                    "N₁+1 (off-line)",
+                    "basis functions per dimension of the off-line operator (empty: 11 in 1-D, 15 in 2-D, 8 in 3-D)",
+                ),
+                auto(
+                    "online_basis",
+                    "N₂+1 (on-line)",
+                    "basis functions per dimension of the on-line density (empty: 16 in 1-D, 15 in 2-D, 8 in 3-D)",
+                ),
+                ParamInfo::new(
+                    "partitions",
+                    ParamKind::Int,
+                    "N′ (Euler steps)",
+                    "implicit Euler steps of the off-line operator over one interval, (1 + Δs𝓛)^{N′}",
+                )
+                .at_least(1.0),
+                auto(
+                    "quadrature",
+                    "off-line nodes",
+                    "Gauss–Legendre nodes per dimension off-line (empty: 2·max(N₁, N₂) + 24)",
+                ),
+                auto(
+                    "online_nodes",
+                    "on-line nodes",
+                    "Gauss–Legendre nodes per dimension on-line (empty: N₁ + N₂ + 8)",
+                ),
+                ParamInfo::choice(
+                    "likelihood",
+                    &["in_update", "in_operator"],
+                    "−½hᵀS⁻¹h goes",
+                    "in_update: into the observation factor 004 (42); in_operator: into the operator, as 004 (17)",
+                ),
+            ],
+            json_only: vec!["t0".into()],
+        }
+    }
+    fn display_name(_: &SpectralParams) -> String {
+        "Spectral".into()
+    }
+    fn problems(p: &SpectralParams, n: usize) -> Vec<ConfigProblem> {
+        problems_from(p.problems(n))
+    }
+    fn suitability(problem: &ProblemContext, _: &SpectralParams) -> Result<(), String> {
+        crate::model::dmz::continuous_noise_inverse(
+            problem.model,
+            "the Yau–Yau and spectral DMZ filters",
+        )
+        .map(|_| ())
+        .map_err(|e| format!("{e}"))
+    }
+    fn memory(p: &SpectralParams, n: usize) -> Option<usize> {
+        // The off-line operator W (on × off), its weighted copy and the on-line projection,
+        // and the off-line Gram matrix (off × off).
+        let (off, on) = p.counts(n);
+        let (off, on) = (off.checked_pow(n as u32)?, on.checked_pow(n as u32)?);
+        let values = off
+            .checked_mul(on)?
+            .checked_mul(3)?
+            .checked_add(off.checked_mul(off)?)?;
+        values.checked_mul(8)
+    }
+    fn build(
+        ctx: &BuildContext,
+        p: &SpectralParams,
+        name: String,
+    ) -> Result<SpectralFilter, ZakaiError> {
+        let dt_obs = ctx.interval(&name)?;
+        Ok(SpectralFilter::new(
+            name, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
+        )?)
+    }
+}

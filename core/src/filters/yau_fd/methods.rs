@@ -1,0 +1,257 @@
+//! The four finite-difference Yau–Yau schemes of 000 (Yueh, Lin & Yau 2014) registered as
+//! [`Method`]s: [`Iem`], [`Qiem`], [`Spt`] and [`Qiem4`]. They share [`YauYauParams`] and
+//! [`YauYauFilter`]; each names its scheme, its own parameters and its checks.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::{Scheme, YauYauFilter, YauYauParams};
+use crate::error::ZakaiError;
+use crate::filters::method::{
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
+    ProblemContext, Takes,
+};
+use crate::filters::{per_dimension, product};
+use crate::validate::ConfigProblem;
+
+fn points() -> ParamInfo {
+    ParamInfo::new(
+        "points",
+        ParamKind::IntList,
+        "grid points",
+        "interior grid points per dimension (one number: the same in every dimension)",
+    )
+    .at_least(3.0)
+}
+fn dt() -> ParamInfo {
+    ParamInfo::new(
+        "dt",
+        ParamKind::Number,
+        "Δt",
+        "time step of the scheme, rounded down to divide Δτ",
+    )
+    .at_least(0.0)
+}
+fn potential() -> ParamInfo {
+    ParamInfo::choice(
+        "potential",
+        &["exponential", "explicit"],
+        "potential term",
+        "exponential: e^{Δt q} u, stable for every step; explicit: (1 + Δt q) u as in 000 (18)",
+    )
+}
+fn likelihood() -> ParamInfo {
+    ParamInfo::choice(
+        "likelihood",
+        &["in_update", "in_operator"],
+        "−½hᵀS⁻¹h goes",
+        "in_update: into the observation factor, the bounded Gaussian likelihood of the increment; in_operator: into the potential q, as 000 (4) writes it",
+    )
+}
+fn likelihood_samples() -> ParamInfo {
+    ParamInfo::new(
+        "likelihood_samples",
+        ParamKind::Int,
+        "cell samples",
+        "samples per dimension averaging the observation factor over each cell (1: its value at the node, as 000 (15))",
+    )
+    .range(1.0, 64.0)
+}
+
+/// The description of one scheme: the shared parameters, the scheme's `own`, and the shared
+/// fields it does not use.
+fn info(
+    key: &str,
+    name: &str,
+    summary: &str,
+    paper: &str,
+    dims: &str,
+    own: ParamInfo,
+    unused: &[&str],
+) -> MethodInfo {
+    MethodInfo {
+        key: key.into(),
+        name: name.into(),
+        summary: summary.into(),
+        paper: paper.into(),
+        takes: Takes::Increments,
+        dims: dims.into(),
+        params: vec![points(), dt(), own, likelihood(), likelihood_samples()],
+        json_only: unused.iter().map(|&u| u.into()).collect(),
+    }
+}
+
+/// Bytes of a grid filter: u, scratch, the operator's coefficients (p per dimension, q, ∇·f,
+/// S⁻¹h, ½hᵀS⁻¹h) and the tabulated cell samples of the observation factor, per node.
+fn grid_memory(p: &YauYauParams, n: usize) -> Option<usize> {
+    let nodes = product(&per_dimension(&p.points, n))?;
+    let samples = p.likelihood_samples.checked_pow(n as u32)?;
+    nodes.checked_mul(8 + 2 * n + samples)?.checked_mul(8)
+}
+
+fn dmz_suitability(problem: &ProblemContext) -> Result<(), String> {
+    crate::model::dmz::continuous_noise_inverse(
+        problem.model,
+        "the Yau–Yau and spectral DMZ filters",
+    )
+    .map(|_| ())
+    .map_err(|e| format!("{e}"))
+}
+
+fn build(
+    scheme: Scheme,
+    ctx: &BuildContext,
+    p: &YauYauParams,
+    name: String,
+) -> Result<YauYauFilter, ZakaiError> {
+    let dt_obs = ctx.interval(&name)?;
+    #[cfg(feature = "std")]
+    return Ok(YauYauFilter::new(
+        name, scheme, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
+    )?);
+    #[cfg(not(feature = "std"))]
+    {
+        let _ = (scheme, p, dt_obs);
+        Err(ZakaiError::Other(format!(
+            "{name} needs the `std` feature of zakai (FFT plans)"
+        )))
+    }
+}
+
+/// The implementation every scheme shares; `$own` is its extra problems.
+macro_rules! yau_yau_method {
+    ($method:ident, $key:literal, $name:literal, $scheme:expr, $info:expr, $own:expr, $memory:expr) => {
+        builder_fn!($method);
+
+        impl Method for $method {
+            const KEY: &'static str = $key;
+            const NEEDS_INTERVAL: bool = true;
+            const NEEDS_DOMAIN: bool = true;
+            type Params = YauYauParams;
+            type Filter = YauYauFilter;
+
+            fn info() -> MethodInfo {
+                $info
+            }
+            fn display_name(_: &YauYauParams) -> String {
+                $name.into()
+            }
+            fn problems(p: &YauYauParams, n: usize) -> Vec<ConfigProblem> {
+                let own: fn(&YauYauParams, usize) -> Vec<(&'static str, String)> = $own;
+                problems_from(p.problems(n).into_iter().chain(own(p, n)).collect())
+            }
+            fn suitability(problem: &ProblemContext, _: &YauYauParams) -> Result<(), String> {
+                dmz_suitability(problem)
+            }
+            fn memory(p: &YauYauParams, n: usize) -> Option<usize> {
+                let memory: fn(&YauYauParams, usize) -> Option<usize> = $memory;
+                memory(p, n)
+            }
+            fn build(
+                ctx: &BuildContext,
+                p: &YauYauParams,
+                name: String,
+            ) -> Result<YauYauFilter, ZakaiError> {
+                build($scheme, ctx, p, name)
+            }
+        }
+    };
+}
+
+/// The implicit Euler θ-scheme (000 (12)–(14), Algorithm 2).
+pub struct Iem;
+yau_yau_method!(
+    Iem,
+    "iem",
+    "IEM",
+    Scheme::Iem,
+    info(
+        "iem",
+        "IEM",
+        "Yau–Yau implicit Euler θ-scheme, tridiagonal / split",
+        "000 Yueh, Lin & Yau (2014), (12)–(14), Algorithm 2",
+        "1–3",
+        ParamInfo::new(
+            "alpha",
+            ParamKind::Number,
+            "α (implicit weight)",
+            "weight of the implicit side of the θ-scheme (1: implicit Euler, ½: Crank–Nicolson)",
+        )
+        .range(0.0, 1.0),
+        &["potential", "centres", "eta"],
+    ),
+    |_, _| Vec::new(),
+    grid_memory
+);
+
+/// The quasi-implicit Euler scheme, Laplacian by DST-I (000 (17)–(18), Algorithm 3).
+pub struct Qiem;
+yau_yau_method!(
+    Qiem,
+    "qiem",
+    "QIEM",
+    Scheme::Qiem,
+    info(
+        "qiem",
+        "QIEM",
+        "Yau–Yau quasi-implicit Euler, Laplacian by DST-I",
+        "000 Yueh, Lin & Yau (2014), (17)–(18), Algorithm 3",
+        "1–3",
+        potential(),
+        &["alpha", "centres", "eta"],
+    ),
+    |_, _| Vec::new(),
+    grid_memory
+);
+
+/// The superposition technique over QIEM (000 §2.5).
+pub struct Spt;
+yau_yau_method!(
+    Spt,
+    "spt",
+    "SPT",
+    Scheme::Superposition,
+    info(
+        "spt",
+        "SPT",
+        "Yau–Yau superposition technique over QIEM: bumps carried off-line",
+        "000 Yueh, Lin & Yau (2014), §2.5",
+        "1–3",
+        ParamInfo::new(
+            "centres",
+            ParamKind::IntList,
+            "bump centres",
+            "Gaussian bumps per dimension whose off-line solutions are superposed",
+        )
+        .at_least(1.0),
+        &["alpha", "potential", "eta"],
+    ),
+    YauYauParams::superposition_problems,
+    |p, n| {
+        let nodes = product(&per_dimension(&p.points, n))?;
+        let bumps = product(&per_dimension(&p.centres, n))?;
+        grid_memory(p, n)?.checked_add(nodes.checked_mul(bumps)?.checked_mul(8)?)
+    }
+);
+
+/// The fourth-order 2-D quasi-implicit scheme (000 (20)–(21), Algorithm 4).
+pub struct Qiem4;
+yau_yau_method!(
+    Qiem4,
+    "qiem4",
+    "QIEM-4",
+    Scheme::Qiem4,
+    info(
+        "qiem4",
+        "QIEM-4",
+        "fourth-order 2-D quasi-implicit Euler (9-point Laplacian by DST)",
+        "000 Yueh, Lin & Yau (2014), (20)–(21), Algorithm 4",
+        "2",
+        potential(),
+        &["alpha", "centres", "eta"],
+    ),
+    YauYauParams::fourth_order_problems,
+    grid_memory
+);

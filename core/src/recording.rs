@@ -1,0 +1,230 @@
+//! Recorded observations: what the driver ([`crate::Experiment`]) feeds every filter, whether
+//! Zakai simulated them ([`Trajectory`] converts) or a user recorded them. The truth is
+//! optional: without it a run reports estimates, covariances, failures and timings, with it
+//! also errors against it.
+//!
+//! Layout (the same as [`Trajectory`]'s): times `τ_0 < τ_1 < … < τ_N`, where τ₀ is the time
+//! the prior describes; observation row k is
+//!
+//! * for continuous observations `dy = h dt + dw`: the increment `y(τ_k) − y(τ_{k−1})` (row 0
+//!   is the start and holds zeros);
+//! * for discrete measurements `z_k = h(x_k) + v_k`: the measurement at τ_k (row 0 is a
+//!   measurement at the prior's time, assimilated without a prediction).
+
+use alloc::format;
+use alloc::vec::Vec;
+
+use crate::simulate::Trajectory;
+use crate::validate::ConfigProblem;
+
+/// Observations at known times, with the true states when they are known.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// State dimension n.
+    pub n: usize,
+    /// Observation dimension m.
+    pub m: usize,
+    /// τ_0, …, τ_N.
+    pub times: Vec<f64>,
+    /// Row k at `observations[k*m..(k+1)*m]` (see the module doc; N + 1 rows).
+    pub observations: Vec<f64>,
+    /// Whether rows are increments of a continuous observation (else measurements).
+    pub continuous: bool,
+    /// The true states x(τ_k), row-major (N + 1 rows), when known.
+    pub truth: Option<Vec<f64>>,
+}
+
+/// Relative tolerance within which a step τ_k − τ_{k−1} counts as the interval Δτ (the
+/// driver then steps by Δτ exactly, so a recording written from a simulation filters bit for
+/// bit as the simulation did).
+pub const INTERVAL_TOLERANCE: f64 = 1e-9;
+
+impl Recording {
+    /// Increments of a continuous observation: `times` = τ₀, …, τ_N (τ₀ the prior's time) and
+    /// `dy` the N increments over `(τ_{k−1}, τ_k]`, row-major (N·m values) — observations
+    /// only, the truth unknown. Checks everything at once ([`Recording::problems`]).
+    pub fn increments(
+        n: usize,
+        m: usize,
+        times: Vec<f64>,
+        dy: &[f64],
+    ) -> Result<Self, crate::ZakaiError> {
+        let mut observations = alloc::vec![0.0; m];
+        observations.extend_from_slice(dy);
+        Recording {
+            n,
+            m,
+            times,
+            observations,
+            continuous: true,
+            truth: None,
+        }
+        .checked()
+    }
+
+    /// Measurements `z_k` at `times` (the first at the prior's time), row-major — the truth
+    /// unknown. Checks everything at once ([`Recording::problems`]).
+    pub fn measurements(
+        n: usize,
+        m: usize,
+        times: Vec<f64>,
+        z: &[f64],
+    ) -> Result<Self, crate::ZakaiError> {
+        Recording {
+            n,
+            m,
+            times,
+            observations: z.to_vec(),
+            continuous: false,
+            truth: None,
+        }
+        .checked()
+    }
+
+    /// With the true states (row-major, one row per time).
+    pub fn with_truth(mut self, truth: Vec<f64>) -> Result<Self, crate::ZakaiError> {
+        self.truth = Some(truth);
+        self.checked()
+    }
+
+    fn checked(self) -> Result<Self, crate::ZakaiError> {
+        let problems = self.problems();
+        if problems.is_empty() {
+            Ok(self)
+        } else {
+            Err(crate::ZakaiError::Config(problems))
+        }
+    }
+
+    /// N, the number of observation intervals.
+    pub fn steps(&self) -> usize {
+        self.times.len().saturating_sub(1)
+    }
+    /// Observation row k.
+    pub fn observation(&self, k: usize) -> &[f64] {
+        &self.observations[k * self.m..(k + 1) * self.m]
+    }
+    /// The true state at τ_k, when known.
+    pub fn state(&self, k: usize) -> Option<&[f64]> {
+        self.truth
+            .as_deref()
+            .map(|t| &t[k * self.n..(k + 1) * self.n])
+    }
+    /// τ_k − τ_{k−1} (0 for k = 0).
+    pub fn step_length(&self, k: usize) -> f64 {
+        if k == 0 {
+            0.0
+        } else {
+            self.times[k] - self.times[k - 1]
+        }
+    }
+
+    /// Every problem with the recording: lengths against the dimensions, times not finite
+    /// or not increasing, non-finite values — each with its row (rows count from 1, as in a
+    /// file without its header).
+    pub fn problems(&self) -> Vec<ConfigProblem> {
+        let mut p = Vec::new();
+        let rows = self.times.len();
+        if rows < 2 {
+            p.push(ConfigProblem::new(
+                "times",
+                format!("needs the start τ₀ and at least one observation time, got {rows} time(s)"),
+            ));
+        }
+        if self.m == 0 || self.observations.len() != rows * self.m {
+            p.push(ConfigProblem::new(
+                "observations",
+                format!(
+                    "needs {rows} rows of m = {} values ({} in all), got {}",
+                    self.m,
+                    rows * self.m,
+                    self.observations.len()
+                ),
+            ));
+        }
+        for (k, w) in self.times.windows(2).enumerate() {
+            if w[1].partial_cmp(&w[0]) != Some(core::cmp::Ordering::Greater) {
+                p.push(ConfigProblem::new(
+                    format!("times[{}]", k + 1),
+                    format!(
+                        "row {}: times must increase, got {} after {}",
+                        k + 2,
+                        w[1],
+                        w[0]
+                    ),
+                ));
+                break;
+            }
+        }
+        if let Some(k) = self.times.iter().position(|t| !t.is_finite()) {
+            p.push(ConfigProblem::new(
+                format!("times[{k}]"),
+                format!("row {}: the time is not finite", k + 1),
+            ));
+        }
+        if let Some(i) = self.observations.iter().position(|v| !v.is_finite()) {
+            let (k, j) = (i / self.m.max(1), i % self.m.max(1));
+            p.push(ConfigProblem::new(
+                format!("observations[{k}][{j}]"),
+                format!("row {}, component {}: not finite", k + 1, j + 1),
+            ));
+        }
+        if let Some(truth) = &self.truth {
+            if self.n == 0 || truth.len() != rows * self.n {
+                p.push(ConfigProblem::new(
+                    "truth",
+                    format!(
+                        "needs {rows} rows of n = {} values ({} in all), got {}",
+                        self.n,
+                        rows * self.n,
+                        truth.len()
+                    ),
+                ));
+            } else if let Some(i) = truth.iter().position(|v| !v.is_finite()) {
+                p.push(ConfigProblem::new(
+                    format!("truth[{}][{}]", i / self.n, i % self.n),
+                    format!(
+                        "row {}, component {}: not finite",
+                        i / self.n + 1,
+                        i % self.n + 1
+                    ),
+                ));
+            }
+        }
+        p
+    }
+
+    /// Problems of this recording for a filter built for steps of exactly `dt_obs`: the first
+    /// step of another length, by row.
+    pub fn interval_problems(&self, dt_obs: f64) -> Vec<ConfigProblem> {
+        (1..self.times.len())
+            .find(|&k| {
+                (self.step_length(k) - dt_obs).abs() > INTERVAL_TOLERANCE * dt_obs
+            })
+            .map(|k| {
+                ConfigProblem::new(
+                    format!("times[{k}]"),
+                    format!(
+                        "row {}: the step τ_k − τ_(k−1) = {} differs from Δτ = {dt_obs}, which the scenario's grid and spectral methods are built for (their operators cover one interval length)",
+                        k + 1,
+                        self.step_length(k)
+                    ),
+                )
+            })
+            .into_iter()
+            .collect()
+    }
+}
+
+impl From<Trajectory> for Recording {
+    fn from(t: Trajectory) -> Self {
+        Recording {
+            n: t.n,
+            m: t.m,
+            times: t.times,
+            observations: t.observations,
+            continuous: t.continuous,
+            truth: Some(t.states),
+        }
+    }
+}
