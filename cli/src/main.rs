@@ -5,6 +5,10 @@
 //! zakai show <preset>
 //! zakai run <preset|file.json> [--methods ekf,ukf,pf] [--runs N] [--seed S]
 //!           [--format table|json|csv] [--out FILE]
+//! zakai filter <preset|file.json> --observations obs.csv [--truth truth.csv]
+//!              [--methods …] [--format table|json|csv] [--out FILE]
+//! zakai simulate <preset|file.json> [--seed S] [--format json|csv] [--out FILE]
+//!                [--truth-out FILE]
 //! zakai reproduce [table|figure|all] [--runs N]
 //! zakai jcurve <preset|file.json> [--seed S] [--runs N] [--per-interval K] [--csv FILE]
 //! ```
@@ -13,6 +17,7 @@
 
 mod frontier_plot;
 mod output;
+mod recorded;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -74,14 +79,24 @@ enum Command {
         /// Preset name.
         preset: String,
     },
-    /// Simulate a scenario's truth and observations (no filters) and print them as JSON:
-    /// `{"times": [...], "states": [...], "observations": [...]}` (rows flattened).
+    /// Simulate a scenario's truth and observations (no filters): as JSON
+    /// `{"times": [...], "states": [...], "observations": [...]}` (rows flattened), or as the
+    /// CSV files `zakai filter` reads (observations `t,dy1,…` or `t,z1,…`; truth `t,x1,…`).
     Simulate {
         /// A preset name or a path to a scenario JSON file.
         scenario: String,
         /// Seed (default: the scenario's seed).
         #[arg(long)]
         seed: Option<u64>,
+        /// `json` (default) or `csv` (the observations; the truth goes to --truth-out).
+        #[arg(long, value_enum, default_value_t = SimFormat::Json)]
+        format: SimFormat,
+        /// Write the output (CSV: the observations) to FILE instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// CSV only: write the true states to FILE.
+        #[arg(long)]
+        truth_out: Option<PathBuf>,
         /// Also run the scenario's methods on these observations and add
         /// `"estimates": [{"name", "values", "failure"}]` (rows flattened) — what the
         /// native-vs-wasm determinism test compares.
@@ -139,6 +154,33 @@ enum Command {
     /// and write MSE against time per step to CSV and an SVG plot, with the reference
     /// posterior's MSE (the optimal filter's) as the floor.
     Frontier(FrontierArgs),
+    /// Run the scenario's methods on recorded observations (CSV with header `t,dy1,…` for
+    /// increments of dy = h dt + dw or `t,z1,…` for measurements; the first row is the
+    /// prior's time). The scenario gives the model, prior, domain, Δτ and methods; its
+    /// simulation settings are not used. Without --truth there are no errors, only estimates.
+    Filter {
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// The observations (CSV).
+        #[arg(long)]
+        observations: PathBuf,
+        /// The true states (CSV `t,x1,…` at the observation times), for errors.
+        #[arg(long)]
+        truth: Option<PathBuf>,
+        /// Comma-separated method keys to keep (as for `run`).
+        #[arg(long, value_delimiter = ',')]
+        methods: Option<Vec<String>>,
+        /// Seed of the methods' random numbers (default: the scenario's seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// `table` (summary), `json` (estimates and covariances) or `csv` (estimates and
+        /// standard deviations per time).
+        #[arg(long, value_enum, default_value_t = Format::Table)]
+        format: Format,
+        /// Write the output to FILE instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run {
         /// A preset name or a path to a scenario JSON file.
@@ -160,6 +202,15 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+}
+
+/// Output formats of `zakai simulate`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SimFormat {
+    /// One JSON object.
+    Json,
+    /// CSV files of observations (and truth with --truth-out).
+    Csv,
 }
 
 /// Output formats of `zakai run`.
@@ -192,11 +243,7 @@ fn select_methods(config: &mut ScenarioConfig, keys: &[String]) -> Result<(), St
     let mut kept: Vec<MethodConfig> = Vec::new();
     for key in keys {
         let key = key.trim().to_lowercase();
-        let key = if key == "kf" {
-            "kalman".to_string()
-        } else {
-            key
-        };
+        let key = MethodConfig::from_key(&key).map_or(key, |m| m.key().to_string());
         let matching: Vec<MethodConfig> = config
             .methods
             .iter()
@@ -253,15 +300,41 @@ fn run(
         b.finish_and_clear();
     }
     let text = output::render(&experiment, &summary, format).map_err(|e| e.to_string())?;
-    match out {
+    emit(&text, out.as_deref())
+}
+
+/// Writes `text` to `path`, or to stdout.
+fn emit(text: &str, path: Option<&std::path::Path>) -> Result<(), String> {
+    match path {
         Some(path) => {
-            std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+            std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
         }
         None => {
             out!("{text}");
             Ok(())
         }
     }
+}
+
+struct FilterArgs {
+    scenario: String,
+    observations: PathBuf,
+    truth: Option<PathBuf>,
+    methods: Option<Vec<String>>,
+    seed: Option<u64>,
+    format: Format,
+    out: Option<PathBuf>,
+}
+
+fn filter(a: FilterArgs) -> Result<(), String> {
+    let mut config = load(&a.scenario)?;
+    if let Some(keys) = a.methods {
+        select_methods(&mut config, &keys)?;
+    }
+    let seed = a.seed.unwrap_or(config.seed);
+    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let result = recorded::filter(&experiment, &a.observations, a.truth.as_deref(), seed)?;
+    emit(&recorded::render(&result, a.format), a.out.as_deref())
 }
 
 fn progress_bar(len: usize, what: &str) -> Result<ProgressBar, String> {
@@ -529,8 +602,35 @@ fn yau_system(scenario: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn simulate(scenario: &str, seed: Option<u64>, estimates: bool) -> Result<(), String> {
+struct SimulateArgs {
+    scenario: String,
+    seed: Option<u64>,
+    estimates: bool,
+    format: SimFormat,
+    out: Option<PathBuf>,
+    truth_out: Option<PathBuf>,
+}
+
+fn simulate(a: SimulateArgs) -> Result<(), String> {
+    let (scenario, seed, estimates) = (a.scenario.as_str(), a.seed, a.estimates);
     let config = load(scenario)?;
+    if a.format == SimFormat::Csv {
+        if estimates {
+            return Err(
+                "--estimates belongs to the JSON output (run `zakai filter` on the CSV instead)"
+                    .into(),
+            );
+        }
+        let experiment = Experiment::new(config.clone()).map_err(|e| e.to_string())?;
+        let recording = zakai::Recording::from(experiment.simulate(seed.unwrap_or(config.seed)));
+        if let (Some(path), Some(truth)) = (&a.truth_out, recording.truth_csv()) {
+            emit(&truth, Some(path))?;
+        }
+        return emit(&recording.observations_csv(), a.out.as_deref());
+    }
+    if a.truth_out.is_some() {
+        return Err("--truth-out needs --format csv (the JSON output holds the states)".into());
+    }
     let seed = seed.unwrap_or(config.seed);
     let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
     let run = experiment.start(seed).map_err(|e| e.to_string())?;
@@ -560,8 +660,7 @@ fn simulate(scenario: &str, seed: Option<u64>, estimates: bool) -> Result<(), St
             })
             .collect();
     }
-    outln!("{json}");
-    Ok(())
+    emit(&format!("{json}\n"), a.out.as_deref())
 }
 
 fn list() -> String {
@@ -610,7 +709,34 @@ fn main() -> ExitCode {
             scenario,
             seed,
             estimates,
-        } => simulate(&scenario, seed, estimates),
+            format,
+            out,
+            truth_out,
+        } => simulate(SimulateArgs {
+            scenario,
+            seed,
+            estimates,
+            format,
+            out,
+            truth_out,
+        }),
+        Command::Filter {
+            scenario,
+            observations,
+            truth,
+            methods,
+            seed,
+            format,
+            out,
+        } => filter(FilterArgs {
+            scenario,
+            observations,
+            truth,
+            methods,
+            seed,
+            format,
+            out,
+        }),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::YauSystem { scenario } => yau_system(&scenario),

@@ -331,3 +331,151 @@ fn a_closed_pipe_ends_the_output_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(out.status.success(), "{:?}: {stderr}", out.status);
 }
+
+/// `simulate --format csv` → `filter` gives every method exactly the estimates the simulated
+/// run gives (`simulate --estimates`), bit for bit, for continuous and discrete observations;
+/// without the truth there is no MSE, with it the MSE is the run's.
+#[test]
+fn filtering_a_simulated_csv_reproduces_the_simulated_run_bit_for_bit() {
+    for (preset, methods) in [
+        ("cubic-sensor-1d", "ekf,ukf,pf,qiem,spectral"),
+        ("sa-example-1", "ekf,ukf,pf,separation"),
+    ] {
+        let obs = temp_file(&format!("{preset}-obs.csv"), "");
+        let truth = temp_file(&format!("{preset}-truth.csv"), "");
+        let o = zakai(&[
+            "simulate",
+            preset,
+            "--seed",
+            "4",
+            "--format",
+            "csv",
+            "--out",
+            obs.to_str().unwrap(),
+            "--truth-out",
+            truth.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        // The simulated run, through a scenario file with the same methods.
+        let show = zakai(&["show", preset]);
+        let mut v: serde_json::Value = serde_json::from_slice(&show.stdout).unwrap();
+        v["methods"] = methods
+            .split(',')
+            .map(|k| serde_json::json!({ "method": k }))
+            .collect();
+        let scenario = temp_file(&format!("{preset}.json"), &v.to_string());
+        let scenario = scenario.to_str().unwrap();
+        let sim = zakai(&["simulate", scenario, "--seed", "4", "--estimates"]);
+        assert!(sim.status.success(), "{}", stderr(&sim));
+        let sim: serde_json::Value = serde_json::from_slice(&sim.stdout).unwrap();
+        let filtered = |with_truth: bool| {
+            let mut args = vec![
+                "filter",
+                scenario,
+                "--observations",
+                obs.to_str().unwrap(),
+                "--seed",
+                "4",
+                "--format",
+                "json",
+            ];
+            if with_truth {
+                args.extend(["--truth", truth.to_str().unwrap()]);
+            }
+            let o = zakai(&args);
+            assert!(o.status.success(), "{}", stderr(&o));
+            serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+        };
+        let (blind, known) = (filtered(false), filtered(true));
+        let sim_methods = sim["estimates"].as_array().unwrap();
+        assert_eq!(sim_methods.len(), methods.split(',').count());
+        for (i, s) in sim_methods.iter().enumerate() {
+            let f = &blind["methods"][i];
+            assert_eq!(f["name"], s["name"]);
+            let bits = |v: &serde_json::Value| -> Vec<u64> {
+                v.as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap().to_bits())
+                    .collect()
+            };
+            assert_eq!(
+                bits(&f["estimates"]),
+                bits(&s["values"]),
+                "{preset} {}",
+                s["name"]
+            );
+            assert!(f["mse"].is_null(), "no truth, no MSE");
+            assert!(
+                f["failure"].is_null() || !s["failure"].is_null(),
+                "{preset} {}: {}",
+                s["name"],
+                f["failure"]
+            );
+        }
+        assert!(blind["truth"].is_null());
+        assert_eq!(
+            known["truth"], sim["states"],
+            "the truth file reads back exactly"
+        );
+        // The Kalman-family and particle rows carry covariances (n × n per row).
+        let ukf = &known["methods"][1];
+        assert_eq!(
+            ukf["covariances"].as_array().unwrap().len(),
+            ukf["estimates"].as_array().unwrap().len()
+        );
+        assert!(known["methods"][1]["mse"].as_f64().is_some());
+    }
+}
+
+/// Bad observation files fail with one line naming the file's line and column; a recording
+/// whose steps differ from the Δτ a grid method is built for is refused with the row.
+#[test]
+fn bad_observation_files_name_the_line() {
+    let o = zakai(&[
+        "filter",
+        "cubic-sensor-1d",
+        "--observations",
+        "/no/such.csv",
+    ]);
+    assert_clean_failure(&o, "cannot read /no/such.csv");
+    let bad = temp_file("bad.csv", "t,dy1\n0,0\n0.01,0.1\n0.02,oops\n");
+    let o = zakai(&[
+        "filter",
+        "cubic-sensor-1d",
+        "--observations",
+        bad.to_str().unwrap(),
+    ]);
+    assert_clean_failure(
+        &o,
+        "observations line 4, column dy1: `oops` is not a finite number",
+    );
+    let kind = temp_file("kind.csv", "t,z1\n0,0\n0.01,0.1\n");
+    let o = zakai(&[
+        "filter",
+        "cubic-sensor-1d",
+        "--observations",
+        kind.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&o, "the recording holds measurements");
+    let uneven = temp_file("uneven.csv", "t,dy1\n0,0\n0.01,0.1\n0.03,0.1\n");
+    let o = zakai(&[
+        "filter",
+        "cubic-sensor-1d",
+        "--observations",
+        uneven.to_str().unwrap(),
+        "--methods",
+        "qiem",
+    ]);
+    assert_clean_failure(&o, "row 3: the step");
+    // The same uneven file is fine for methods that take any step.
+    let o = zakai(&[
+        "filter",
+        "cubic-sensor-1d",
+        "--observations",
+        uneven.to_str().unwrap(),
+        "--methods",
+        "ukf,pf",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -17,6 +17,9 @@ use alloc::vec::Vec;
 use crate::simulate::Trajectory;
 use crate::validate::ConfigProblem;
 
+#[cfg(feature = "std")]
+mod csv;
+
 /// Observations at known times, with the true states when they are known.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recording {

@@ -1,0 +1,189 @@
+//! `zakai filter`: the scenario's methods on a user's recorded observations (CSV), and the
+//! CSV side of `zakai simulate`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use zakai::experiment::RunResult;
+use zakai::{Experiment, Recording};
+
+use crate::Format;
+
+/// Reads a file for the recording reader, naming it on failure.
+fn read(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+}
+
+/// Reads the observations (and optional truth) for `experiment`'s model and runs every
+/// method on them.
+pub fn filter(
+    experiment: &Experiment,
+    observations: &Path,
+    truth: Option<&Path>,
+    seed: u64,
+) -> Result<RunResult, String> {
+    let obs = read(observations)?;
+    let truth = truth.map(read).transpose()?;
+    let recording = Recording::from_csv(experiment.model().n, &obs, truth.as_deref())
+        .map_err(|e| e.to_string())?;
+    experiment
+        .filter_recorded(recording, seed)
+        .map_err(|e| e.to_string())
+}
+
+/// Standard deviations from row k's covariance (n × n), when the method records them.
+fn sds(covariances: &[f64], n: usize, k: usize) -> Option<Vec<f64>> {
+    let p = covariances.get(k * n * n..(k + 1) * n * n)?;
+    Some((0..n).map(|i| p[i * n + i].max(0.0).sqrt()).collect())
+}
+
+/// The run's estimates per observation time as CSV: `t`, then per method its estimate
+/// `<name> x1…` and, where it has a covariance, `<name> sd1…`; a failed method's cells are
+/// empty from its failure on.
+pub fn estimates_csv(result: &RunResult) -> String {
+    let r = &result.recording;
+    let n = r.n;
+    let mut s = String::from("t");
+    for m in &result.methods {
+        for i in 1..=n {
+            let _ = write!(s, ",{} x{i}", m.name);
+        }
+        if !m.covariances.is_empty() {
+            for i in 1..=n {
+                let _ = write!(s, ",{} sd{i}", m.name);
+            }
+        }
+    }
+    s.push('\n');
+    for (k, t) in r.times.iter().enumerate() {
+        let _ = write!(s, "{t:?}");
+        for m in &result.methods {
+            let row = m.estimates.get(k * n..(k + 1) * n);
+            for i in 0..n {
+                s.push(',');
+                if let Some(row) = row {
+                    let _ = write!(s, "{:?}", row[i]);
+                }
+            }
+            if !m.covariances.is_empty() {
+                let sd = sds(&m.covariances, n, k);
+                for i in 0..n {
+                    s.push(',');
+                    if let Some(sd) = &sd {
+                        let _ = write!(s, "{:?}", sd[i]);
+                    }
+                }
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The run as JSON: per method its name, estimates, covariances (row-major, n × n per row),
+/// failure, timings and — with a truth — MSE.
+pub fn json(result: &RunResult) -> String {
+    let methods: Vec<serde_json::Value> = result
+        .methods
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            serde_json::json!({
+                "name": m.name,
+                "estimates": m.estimates,
+                "covariances": m.covariances,
+                "failure": m.failure,
+                "seconds_per_step": m.seconds_per_step(),
+                "build_seconds": m.build_seconds,
+                "mse": result.mse(i),
+            })
+        })
+        .collect();
+    let r = &result.recording;
+    let value = serde_json::json!({
+        "n": r.n,
+        "m": r.m,
+        "times": r.times,
+        "truth": r.truth,
+        "methods": methods,
+        "warnings": result.warnings,
+    });
+    format!("{value:#}\n")
+}
+
+/// A one-screen summary: per method the last estimate (± sd), failure, time per step and,
+/// with a truth, MSE.
+pub fn table(result: &RunResult) -> String {
+    let r = &result.recording;
+    let n = r.n;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{} observations ({}) from t = {} to {}; truth {}",
+        r.steps(),
+        if r.continuous {
+            "increments"
+        } else {
+            "measurements"
+        },
+        r.times[0],
+        r.times[r.steps()],
+        if r.truth.is_some() {
+            "given"
+        } else {
+            "not given (no errors)"
+        }
+    );
+    let _ = writeln!(
+        s,
+        "{:<16} {:>28} {:>12} {:>12}  status",
+        "method", "final estimate (± sd)", "µs/step", "MSE"
+    );
+    for (i, m) in result.methods.iter().enumerate() {
+        let rows = m.rows();
+        let last = rows.checked_sub(1);
+        let estimate = last.map_or_else(String::new, |k| {
+            let mean = &m.estimates[k * n..(k + 1) * n];
+            let sd = sds(&m.covariances, n, k);
+            (0..n)
+                .map(|j| match &sd {
+                    Some(sd) => format!("{:.4} ± {:.4}", mean[j], sd[j]),
+                    None => format!("{:.4}", mean[j]),
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        });
+        let status = match &m.failure {
+            Some(f) => format!(
+                "failed at row {} (t = {}): {}",
+                f.k + 1,
+                r.times[f.k],
+                f.message
+            ),
+            None => "ok".into(),
+        };
+        let _ = writeln!(
+            s,
+            "{:<16} {:>28} {:>12.2} {:>12}  {status}",
+            m.name,
+            estimate,
+            m.seconds_per_step() * 1e6,
+            result
+                .mse(i)
+                .map_or_else(|| "—".into(), |v| format!("{v:.5}")),
+        );
+    }
+    for (method, w) in &result.warnings {
+        let _ = writeln!(s, "warning: {method}: {w}");
+    }
+    s
+}
+
+/// Renders a recorded run in `format`.
+pub fn render(result: &RunResult, format: Format) -> String {
+    match format {
+        Format::Table => table(result),
+        Format::Json => json(result),
+        Format::Csv => estimates_csv(result),
+    }
+}

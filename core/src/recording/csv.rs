@@ -1,0 +1,395 @@
+//! Recordings as CSV files (`std` feature; the `csv` crate): what `zakai simulate --format csv`
+//! writes and `zakai filter --observations` reads, bit for bit (values are written in Rust's
+//! shortest round-trip form).
+//!
+//! * Observations: header `t,dy1,…,dym` (increments of a continuous observation) or
+//!   `t,z1,…,zm` (measurements); the first row is the prior's time τ₀ — for increments it
+//!   holds zeros (the increment over `(τ_{k−1}, τ_k]` is on row k), for measurements it is a
+//!   measurement at τ₀.
+//! * Truth (optional): header `t,x1,…,xn`, one row per observation row, at the same times.
+//!
+//! Blank lines and lines starting with `#` are skipped; fields may be padded with spaces. Every
+//! problem names its file, line and column.
+
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::vec::Vec;
+
+use super::{Recording, INTERVAL_TOLERANCE};
+use crate::error::ZakaiError;
+use crate::validate::ConfigProblem;
+
+/// Most problems reported from one file (the rest are counted).
+const MAX_REPORTED: usize = 12;
+
+/// A CSV table of numbers: column names and rows.
+struct Table {
+    columns: Vec<String>,
+    rows: Vec<Vec<f64>>,
+    /// The file line of each row (1 = the header).
+    lines: Vec<u64>,
+}
+
+fn read_table(file: &str, text: &[u8], problems: &mut Vec<ConfigProblem>) -> Option<Table> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_reader(text);
+    let columns: Vec<String> = match reader.headers() {
+        Ok(h) => h.iter().map(str::to_string).collect(),
+        Err(e) => {
+            problems.push(ConfigProblem::new(
+                file,
+                format!("cannot read the header: {e}"),
+            ));
+            return None;
+        }
+    };
+    let (mut rows, mut lines) = (Vec::new(), Vec::new());
+    let before = problems.len();
+    let mut skipped = 0usize;
+    for record in reader.records() {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) => {
+                let line = e.position().map_or(0, |p| p.line());
+                let message = match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => format!(
+                        "has {len} fields, the header {expected_len} ({})",
+                        columns.join(",")
+                    ),
+                    _ => format!("{e}"),
+                };
+                problems.push(ConfigProblem::new(format!("{file} line {line}"), message));
+                if problems.len() - before >= MAX_REPORTED {
+                    break;
+                }
+                continue;
+            }
+        };
+        let line = record.position().map_or(0, |p| p.line());
+        let mut row = Vec::with_capacity(record.len());
+        for (field, column) in record.iter().zip(&columns) {
+            match field.parse::<f64>() {
+                Ok(v) if v.is_finite() => row.push(v),
+                _ => {
+                    if problems.len() - before < MAX_REPORTED {
+                        problems.push(ConfigProblem::new(
+                            format!("{file} line {line}, column {column}"),
+                            format!("`{field}` is not a finite number"),
+                        ));
+                    } else {
+                        skipped += 1;
+                    }
+                    row.push(f64::NAN);
+                }
+            }
+        }
+        rows.push(row);
+        lines.push(line);
+    }
+    if skipped > 0 {
+        problems.push(ConfigProblem::new(
+            file,
+            format!("and {skipped} more values that are not numbers"),
+        ));
+    }
+    if rows.is_empty() && problems.len() == before {
+        problems.push(ConfigProblem::new(file, "has a header but no rows"));
+    }
+    Some(Table {
+        columns,
+        rows,
+        lines,
+    })
+}
+
+/// Whether `name` is `prefix` or `prefix<j>` with j = `index` + 1.
+fn names(name: &str, prefix: &str, index: usize, count: usize) -> bool {
+    name == format!("{prefix}{}", index + 1) || (count == 1 && name == prefix)
+}
+
+/// Checks the header `t,<prefix>1,…`; returns the data column count.
+fn check_header(
+    file: &str,
+    t: &Table,
+    prefixes: &[&str],
+    problems: &mut Vec<ConfigProblem>,
+) -> Option<(usize, usize)> {
+    let cols = &t.columns;
+    if cols.first().map(String::as_str) != Some("t") {
+        problems.push(ConfigProblem::new(
+            format!("{file} line 1"),
+            format!(
+                "the first column must be `t` (the time), got `{}`",
+                cols.first().map_or("", String::as_str)
+            ),
+        ));
+        return None;
+    }
+    let count = cols.len() - 1;
+    if count == 0 {
+        problems.push(ConfigProblem::new(
+            format!("{file} line 1"),
+            "needs data columns after `t`",
+        ));
+        return None;
+    }
+    for (which, prefix) in prefixes.iter().enumerate() {
+        if cols[1..]
+            .iter()
+            .enumerate()
+            .all(|(j, c)| names(c, prefix, j, count))
+        {
+            return Some((which, count));
+        }
+    }
+    let expected: Vec<String> = prefixes.iter().map(|p| format!("t,{p}1,{p}2,…")).collect();
+    problems.push(ConfigProblem::new(
+        format!("{file} line 1"),
+        format!(
+            "the header `{}` is not one of {}",
+            cols.join(","),
+            expected.join(" or ")
+        ),
+    ));
+    None
+}
+
+impl Recording {
+    /// Reads a recording from CSV text: `observations` (header `t,dy1,…` or `t,z1,…`), and
+    /// optionally the `truth` (`t,x1,…`) for an `n`-dimensional state. Every problem — header,
+    /// a field that is not a number (with its line and column), a row of the wrong length,
+    /// times not increasing, truth rows at other times — is reported at once.
+    pub fn from_csv(
+        n: usize,
+        observations: &[u8],
+        truth: Option<&[u8]>,
+    ) -> Result<Self, ZakaiError> {
+        let mut problems = Vec::new();
+        let obs = read_table("observations", observations, &mut problems);
+        let truth = truth.and_then(|t| read_table("truth", t, &mut problems));
+        let kind = obs
+            .as_ref()
+            .and_then(|t| check_header("observations", t, &["dy", "z"], &mut problems));
+        if let Some(t) = &truth {
+            if let Some((_, count)) = check_header("truth", t, &["x"], &mut problems) {
+                if count != n {
+                    problems.push(ConfigProblem::new(
+                        "truth line 1",
+                        format!("has {count} state columns, the model's state has n = {n}"),
+                    ));
+                }
+            }
+        }
+        let (Some(obs), Some((kind, m))) = (obs, kind) else {
+            return Err(ZakaiError::Config(problems));
+        };
+        let continuous = kind == 0;
+        if continuous {
+            if let Some(first) = obs.rows.first() {
+                if first[1..].iter().any(|&v| v != 0.0) {
+                    problems.push(ConfigProblem::new(
+                        format!("observations line {}", obs.lines[0]),
+                        "the first row is the start τ₀ (the prior's time): its increments must be 0 (the increment over (τ₀, τ₁] goes on the next row)",
+                    ));
+                }
+            }
+        }
+        let times: Vec<f64> = obs.rows.iter().map(|r| r[0]).collect();
+        let values: Vec<f64> = obs
+            .rows
+            .iter()
+            .flat_map(|r| r[1..].iter().copied())
+            .collect();
+        let mut recording = Recording {
+            n,
+            m,
+            times,
+            observations: values,
+            continuous,
+            truth: None,
+        };
+        if let Some(t) = truth {
+            if t.rows.len() != obs.rows.len() {
+                problems.push(ConfigProblem::new(
+                    "truth",
+                    format!(
+                        "has {} rows, the observations {}",
+                        t.rows.len(),
+                        obs.rows.len()
+                    ),
+                ));
+            } else if let Some(k) = (0..t.rows.len()).find(|&k| {
+                let (a, b) = (t.rows[k][0], recording.times[k]);
+                (a - b).abs() > INTERVAL_TOLERANCE * a.abs().max(b.abs())
+            }) {
+                problems.push(ConfigProblem::new(
+                    format!("truth line {}", t.lines[k]),
+                    format!(
+                        "time {} differs from the observation time {} on line {}",
+                        t.rows[k][0], recording.times[k], obs.lines[k]
+                    ),
+                ));
+            }
+            recording.truth = Some(t.rows.iter().flat_map(|r| r[1..].iter().copied()).collect());
+        }
+        if problems.is_empty() {
+            // Lengths, increasing times (with lines: row k is file line lines[k]).
+            for p in recording.problems() {
+                problems.push(with_line(p, &obs.lines));
+            }
+        }
+        if problems.is_empty() {
+            Ok(recording)
+        } else {
+            Err(ZakaiError::Config(problems))
+        }
+    }
+
+    /// The observations as CSV (see the module doc), values in shortest round-trip form.
+    pub fn observations_csv(&self) -> String {
+        let prefix = if self.continuous { "dy" } else { "z" };
+        write_table(prefix, self.m, &self.times, &self.observations)
+    }
+
+    /// The truth as CSV (`t,x1,…`), when it is known.
+    pub fn truth_csv(&self) -> Option<String> {
+        self.truth
+            .as_ref()
+            .map(|t| write_table("x", self.n, &self.times, t))
+    }
+}
+
+/// A problem from [`Recording::problems`] ("row k" counting data rows from 1) restated with
+/// the file line.
+fn with_line(p: ConfigProblem, lines: &[u64]) -> ConfigProblem {
+    let row = p
+        .message
+        .strip_prefix("row ")
+        .and_then(|r| r.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|r| r.parse::<usize>().ok());
+    match row.and_then(|r| lines.get(r - 1)) {
+        Some(line) => {
+            let rest = p
+                .message
+                .split_once(": ")
+                .map_or(p.message.as_str(), |(_, r)| r);
+            ConfigProblem::new(format!("observations line {line}"), rest.to_string())
+        }
+        None => p,
+    }
+}
+
+fn write_table(prefix: &str, width: usize, times: &[f64], values: &[f64]) -> String {
+    let mut out = String::from("t");
+    for j in 1..=width {
+        out.push_str(&format!(",{prefix}{j}"));
+    }
+    out.push('\n');
+    for (k, t) in times.iter().enumerate() {
+        out.push_str(&format!("{t:?}"));
+        for v in &values[k * width..(k + 1) * width] {
+            out.push_str(&format!(",{v:?}"));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problems(r: Result<Recording, ZakaiError>) -> Vec<ConfigProblem> {
+        match r {
+            Err(ZakaiError::Config(p)) => p,
+            other => panic!("expected problems, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn csv_round_trip_is_bit_exact() {
+        let r = Recording {
+            n: 2,
+            m: 1,
+            times: alloc::vec![0.0, 0.1, 0.2 + 1e-17, 0.30000000000000004],
+            observations: alloc::vec![0.0, 1e-300, -0.123_456_789_012_345_68, 5e300],
+            continuous: true,
+            truth: Some(alloc::vec![
+                1.0,
+                -2.0,
+                f64::MIN_POSITIVE,
+                3.0,
+                1.0 / 3.0,
+                0.1,
+                7e-9,
+                -0.0
+            ]),
+        };
+        let back = Recording::from_csv(
+            2,
+            r.observations_csv().as_bytes(),
+            r.truth_csv().as_deref().map(str::as_bytes),
+        )
+        .unwrap();
+        assert_eq!(
+            back.times.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            r.times.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(
+            back.observations
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>(),
+            r.observations
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        );
+        let (a, b) = (back.truth.unwrap(), r.truth.unwrap());
+        assert_eq!(
+            a.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            b.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert!(back.continuous);
+    }
+
+    #[test]
+    fn bad_files_name_line_and_column() {
+        let p = problems(Recording::from_csv(
+            1,
+            b"t,z1\n0,1\n0.1,abc\n0.2\n0.1,4\n",
+            None,
+        ));
+        let text = format!("{p:?}");
+        assert!(p.iter().any(|p| p.field == "observations line 3, column z1" && p.message.contains("`abc`")), "{text}");
+        assert!(
+            p.iter()
+                .any(|p| p.field == "observations line 4" && p.message.contains("1 fields")),
+            "{text}"
+        );
+        let p = problems(Recording::from_csv(1, b"t,z1\n0,1\n0.2,2\n0.1,3\n", None));
+        assert_eq!(p[0].field, "observations line 4", "{p:?}");
+        assert!(p[0].message.contains("increase"), "{p:?}");
+        let p = problems(Recording::from_csv(1, b"time,q\n0,1\n", None));
+        assert_eq!(p[0].field, "observations line 1");
+        let p = problems(Recording::from_csv(1, b"t,dy1\n0,0.5\n0.1,1\n", None));
+        assert!(p[0].message.contains("must be 0"), "{p:?}");
+        let p = problems(Recording::from_csv(
+            1,
+            b"t,z1\n0,1\n0.1,2\n",
+            Some(b"t,x1\n0,1\n0.2,2\n"),
+        ));
+        assert_eq!(p[0].field, "truth line 3", "{p:?}");
+        let p = problems(Recording::from_csv(
+            2,
+            b"t,z1\n0,1\n0.1,2\n",
+            Some(b"t,x1\n0,1\n0.1,2\n"),
+        ));
+        assert!(p[0].message.contains("n = 2"), "{p:?}");
+    }
+}
