@@ -23,6 +23,14 @@ cargo clippy -p zakai-wasm --target wasm32-unknown-unknown --all-targets -- -D w
 step "cargo test --workspace"
 cargo test --workspace
 
+step "examples (core/examples: own data, models from text and closures)"
+for example in core/examples/*.rs; do
+  cargo run -q --release -p zakai --example "$(basename "$example" .rs)"
+done
+
+step "cargo doc without warnings"
+RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
+
 step "no_std builds of the core"
 cargo build -p zakai --no-default-features --target wasm32-unknown-unknown
 cargo build -p zakai --no-default-features --target thumbv7em-none-eabihf

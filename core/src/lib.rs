@@ -61,10 +61,10 @@
 //!
 //! ## Modules, bottom to top
 //!
-//! [`error`], [`validate`] → [`linalg`], [`grid`], [`model`], [`random`] → [`simulate`],
-//! [`diagnostics`] → [`filters`] (one folder per method family, each registering itself
-//! through [`Method`]) → [`scenario`] → [`experiment`], [`metrics`] → [`study`],
-//! [`reproduction`]. A module uses only modules to its left (tested).
+//! [`validate`] → [`error`] → [`linalg`], [`random`] → [`grid`], [`model`] → [`simulate`] →
+//! [`recording`], [`diagnostics`] → [`filters`] (one folder per method family, each
+//! registering itself through [`Method`]) → [`scenario`] → [`metrics`] → [`experiment`] →
+//! [`study`] → [`reproduction`]. A module uses only modules to its left (tested).
 //!
 //! ## Features
 //!

@@ -1,4 +1,4 @@
-//! The methods a scenario can run: the one registration list ([`registry!`]) from which the
+//! The methods a scenario can run: the one registration list (`registry!`) from which the
 //! serde-tagged [`MethodConfig`], key lookup, display names, checks, memory estimates,
 //! construction and the method catalogue ([`catalogue`]) are generated. Everything about a
 //! method lives in its family's folder (its [`Method`] implementation); this file only lists
