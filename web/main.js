@@ -20,61 +20,41 @@ const el = (tag, props = {}, ...children) => {
 // Fills a <select> with `[value, text, title?]` options.
 const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
 const COLORS = ['#2450b3', '#d9480f', '#2b8a3e', '#ae3ec9', '#e8590c', '#0b7285', '#c2255c', '#5c940d', '#364fc7', '#862e9c'];
-const PARAMS = {
-  kalman: [],
-  ekf: [['substeps', 'int']],
-  ukf: [['alpha', 'num'], ['beta', 'num'], ['kappa', 'num'], ['substeps', 'int']],
-  pf: [['particles', 'int'], ['ess_threshold', 'num'], ['substeps', 'int']],
-  iekf: [['iterations', 'int'], ['tolerance', 'num'], ['substeps', 'int']],
-  iokf: [['splits', 'int'], ['newton_steps', 'int'], ['substeps', 'int']],
-  qiem: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
-  qiem4: [['points', 'intlist'], ['dt', 'num'], ['potential', 'enum:exponential|explicit'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
-  iem: [['points', 'intlist'], ['dt', 'num'], ['alpha', 'num'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
-  spt: [['points', 'intlist'], ['dt', 'num'], ['centres', 'intlist'], ['likelihood', 'enum:in_update|in_operator'], ['likelihood_samples', 'int']],
-  direct: [['points', 'int'], ['alpha', 'num'], ['max_terms', 'int'], ['substeps', 'int'], ['linear', 'numlist']],
-  separation: [['cells', 'intlist'], ['dt', 'num']],
-  implicit_fdm: [['cells', 'intlist'], ['dt', 'num']],
-  gaussian_sum: [['max_components', 'int'], ['prune', 'num'], ['merge_cost', 'num']],
-  spectral: [['offline_basis', 'optint'], ['online_basis', 'optint'], ['partitions', 'int'], ['quadrature', 'optint'], ['online_nodes', 'optint'], ['likelihood', 'enum:in_update|in_operator']],
-};
-const DEFAULTS = {
-  kalman: {},
-  ekf: { substeps: 4 },
-  ukf: { alpha: 0.5, beta: 2, kappa: 0, substeps: 4 },
-  pf: { particles: 500, ess_threshold: 0.5, substeps: 1 },
-  iekf: { iterations: 6, tolerance: 1e-10, substeps: 4 },
-  iokf: { splits: 3, newton_steps: 2, substeps: 4 },
-  qiem: { points: [201], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
-  iem: { points: [201], dt: 0.001, alpha: 1, likelihood: 'in_update', likelihood_samples: 1 },
-  spt: { points: [201], dt: 0.001, centres: [81], likelihood: 'in_update', likelihood_samples: 1 },
-  qiem4: { points: [128], dt: 0.001, potential: 'exponential', likelihood: 'in_update', likelihood_samples: 1 },
-  spectral: { partitions: 1, likelihood: 'in_update' },
-  direct: { points: 801, alpha: 0.01, max_terms: 60, substeps: 10, linear: [0, 0] },
-  separation: { cells: [200], dt: 0.01 },
-  implicit_fdm: { cells: [200], dt: 0.01 },
-  gaussian_sum: { max_components: 64, prune: 1e-12, merge_cost: 1e-10 },
-};
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
-const PARAM_LABELS = {
-  ess_threshold: 'ESS frac.', points: 'grid points', dt: 'Δt', offline_basis: 'N₁+1 (off-line)', online_basis: 'N₂+1 (on-line)',
-  partitions: 'N′', quadrature: 'off-line nodes', online_nodes: 'on-line nodes', splits: 'l (splits)', likelihood_samples: 'cell samples', max_terms: 'max terms', cells: 'cells', max_components: 'max components', merge_cost: 'merge cost (nats)', linear: 'l = a·x + b (a, b)', newton_steps: 'm (Newton)',
-};
+// The method catalogue from the wasm crate (zakai::scenario::methods::catalogue): keys,
+// names, papers, parameter schema and defaults. The page holds no second copy of them.
+const methodEntry = (key) => state.catalogue.find((m) => m.key === key);
 
-function paramInput(row, i, name, type) {
-  const value = row.config[name];
-  const dataset = { row: String(i), param: name };
-  if (type.startsWith('enum:')) {
-    const options = type.slice(5).split('|');
-    const select = el('select', { dataset });
-    fillOptions(select, options.map((o) => [o, o]));
-    select.value = String(value ?? options[0]);
+// One form field for a parameter described by the schema (ParamInfo: name, label, help,
+// kind, min, max, choices).
+function paramInput(row, i, p) {
+  const value = row.config[p.name];
+  const dataset = { row: String(i), param: p.name };
+  if (p.kind === 'choice') {
+    const select = el('select', { dataset, title: p.help });
+    fillOptions(select, p.choices.map((o) => [o, o.replace(/_/g, ' ')]));
+    select.value = String(value ?? p.choices[0]);
     return select;
   }
-  const list = type === 'intlist' || type === 'numlist';
+  const list = p.kind === 'int_list' || p.kind === 'number_list';
   const shown = list ? (Array.isArray(value) ? value : []).join(', ') : String(value ?? '');
-  const input = el('input', { type: list ? 'text' : 'number', step: 'any', dataset, placeholder: type === 'optint' ? 'auto' : null });
+  const input = el('input', {
+    type: list ? 'text' : 'number', step: p.kind === 'int' || p.kind === 'optional_int' ? '1' : 'any', dataset, title: p.help,
+    min: list ? null : p.min, max: list ? null : p.max, placeholder: p.kind === 'optional_int' ? 'auto' : null,
+  });
   input.value = shown;
   return input;
+}
+
+// A form value of the schema's kind.
+function paramValue(kind, text) {
+  const t = text.trim();
+  if (kind === 'int') return Math.round(Number(t));
+  if (kind === 'optional_int') return t === '' ? null : Math.round(Number(t));
+  if (kind === 'int_list') return t.split(',').map((x) => Math.round(Number(x.trim())));
+  if (kind === 'number_list') return t.split(',').map((x) => Number(x.trim()));
+  if (kind === 'choice') return t;
+  return Number(t);
 }
 
 // The worker learns `?wasm=scalar` (force the fallback build) from its own URL.
@@ -82,7 +62,8 @@ const workerUrl = () => new URL(`./worker.js${location.search.includes('wasm=') 
 const worker = new Worker(workerUrl(), { type: 'module' });
 const state = {
   presets: [],
-  methodKinds: [],
+  catalogue: [],
+  recording: null, // {name, text, truthName, truthText}: the user's observations, when loaded
   base: null, // the preset or loaded scenario the form edits
   methodRows: [], // [{enabled, config}]
   info: null,
@@ -152,15 +133,16 @@ function methodRowsUI() {
   const c = $('methods');
   c.replaceChildren();
   state.methodRows.forEach((row, i) => {
-    const params = PARAMS[row.config.method] ?? [];
+    const entry = methodEntry(row.config.method);
+    const params = entry?.params ?? [];
     const dataset = { row: String(i) };
     c.appendChild(el('div', { className: 'method-row', dataset },
-      el('header', {},
+      el('header', { title: entry ? `${entry.summary} — ${entry.paper}` : '' },
         el('input', { type: 'checkbox', checked: row.enabled, className: 'enable', dataset }),
-        ` ${String(row.config.method).toUpperCase()}`,
+        ` ${entry?.name ?? row.config.method}`,
         el('span', { className: 'memory', title: 'memory this method allocates, estimated before anything is allocated' }),
         el('button', { type: 'button', className: 'remove', title: 'remove', dataset }, '×')),
-      el('div', { className: 'params' }, ...params.map(([p, type]) => el('label', {}, PARAM_LABELS[p] ?? p, paramInput(row, i, p, type)))),
+      el('div', { className: 'params' }, ...params.map((p) => el('label', { title: p.help }, p.label, paramInput(row, i, p)))),
       el('span', { className: 'reason' }),
       el('span', { className: 'warning row-warnings', title: 'conditions of the chosen steps (000 (22), (30), (31); 001 (16), (23))' }),
       el('span', { className: 'error', dataset: { methodRow: String(i) } })));
@@ -203,7 +185,7 @@ function showSuitability(s) {
   for (const opt of $('add-method-kind').options) {
     const reason = reasons.get(opt.value);
     opt.disabled = Boolean(reason);
-    opt.title = reason ?? (state.methodKinds.find(([k]) => k === opt.value)?.[1] ?? '');
+    opt.title = reason ?? (methodEntry(opt.value)?.summary ?? '');
     if (reason) {
       const li = document.createElement('li');
       li.dataset.method = opt.value;
@@ -317,15 +299,8 @@ function readForm() {
   c.seed = Number($('seed').value);
   $('methods').querySelectorAll('[data-param]').forEach((el) => {
     const row = state.methodRows[el.dataset.row];
-    const type = PARAMS[row.config.method].find(([p]) => p === el.dataset.param)[1];
-    let v;
-    if (type === 'int') v = Math.round(Number(el.value));
-    else if (type === 'optint') v = el.value.trim() === '' ? null : Math.round(Number(el.value));
-    else if (type === 'intlist') v = el.value.split(',').map((x) => Math.round(Number(x.trim())));
-    else if (type === 'numlist') v = el.value.split(',').map((x) => Number(x.trim()));
-    else if (type.startsWith('enum:')) v = el.value;
-    else v = Number(el.value);
-    row.config[el.dataset.param] = v;
+    const param = methodEntry(row.config.method).params.find((p) => p.name === el.dataset.param);
+    row.config[el.dataset.param] = paramValue(param.kind, el.value);
   });
   state.enabledRows = state.methodRows.map((r, i) => (r.enabled && !r.reason ? i : -1)).filter((i) => i >= 0);
   c.methods = state.enabledRows.map((i) => state.methodRows[i].config);
@@ -415,7 +390,9 @@ function apply() {
   const config = checkedForm();
   if (!config) return;
   setPlaying(false);
-  worker.postMessage({ type: 'load', config, seed: config.seed });
+  const r = state.recording;
+  if (r) worker.postMessage({ type: 'loadRecording', config, seed: config.seed, observations: r.text, truth: r.truthText });
+  else worker.postMessage({ type: 'load', config, seed: config.seed });
   state.pendingConfig = config;
   state.pendingRows = state.enabledRows.slice();
 }
@@ -452,17 +429,28 @@ function makePlots(info) {
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
   $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
   $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;
-  const empty = () => ({ times: [], truth: Array.from({ length: n }, () => []), est: info.methods.map(() => Array.from({ length: n }, () => [])) });
-  state.data = empty();
+  const perMethod = () => info.methods.map(() => Array.from({ length: n }, () => []));
+  state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), lo: perMethod(), hi: perMethod() };
   state.heatX = 0;
   const width = $('trajectory-plot').clientWidth || 800;
-  const series = [{}, { label: 'truth', stroke: '#111', width: 2 }];
+  const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
   info.methods.forEach((m, i) => series.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
+  // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
+  const bands = [];
+  if (!info.has_truth) {
+    info.methods.forEach((m, i) => {
+      const color = COLORS[i % COLORS.length];
+      series.push({ label: `${m} +2σ`, stroke: color, width: 1, dash: [4, 3] }, { label: `${m} −2σ`, stroke: color, width: 1, dash: [4, 3] });
+      const hi = 2 + info.methods.length + 2 * i;
+      bands.push({ series: [hi, hi + 1], fill: `${color}22` });
+    });
+  }
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
-    width, height: 280, series, scales: { x: { time: false } },
+    width, height: 280, series, bands, scales: { x: { time: false } },
     axes: [{ label: 't' }, { label: 'x' }],
-  }, [[], [], ...info.methods.map(() => [])], $('trajectory-plot'));
+  }, series.map(() => []), $('trajectory-plot'));
+  $('metrics').classList.toggle('no-truth', !info.has_truth);
   const dseries = [{}];
   info.methods.forEach((m, i) => dseries.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
   state.densityPlot?.destroy();
@@ -546,6 +534,7 @@ function drawHeatmap(frame) {
     ctx.fillRect(px(x) - 4, py(y) - 4, 8, 8);
     ctx.strokeRect(px(x) - 4, py(y) - 4, 8, 8);
   });
+  if (!state.info.has_truth) return;
   ctx.beginPath();
   ctx.arc(px(d.truth[0][last]), py(d.truth[1][last]), 5, 0, 2 * Math.PI);
   ctx.fillStyle = '#fff';
@@ -556,7 +545,7 @@ function drawHeatmap(frame) {
 
 function drawTruthMarker(u) {
   const d = state.data;
-  if (!d || d.times.length === 0) return;
+  if (!d || d.times.length === 0 || !state.info.has_truth) return;
   const dim = Number($('component').value) || 0;
   const x = d.truth[dim][d.truth[dim].length - 1];
   const px = u.valToPos(x, 'x', true);
@@ -588,22 +577,24 @@ function drawHeatColumns(frame) {
   const method = Number($('density-method').value) || 0;
   const dens = frame.densities[method];
   if (!dens || dens.length === 0 || frame.to <= frame.from) return;
-  const T = info.steps * info.dt_obs;
+  const span = info.t_end - info.t_start;
+  const at = (t) => ((t - info.t_start) / span) * canvas.width;
   // Columns from the end of the previous frame to this frame's last time: no gaps.
   const x0 = state.heatX ?? 0;
-  const x1 = Math.min(canvas.width, Math.ceil((frame.times[frame.times.length - 1] / T) * canvas.width));
+  const x1 = Math.min(canvas.width, Math.ceil(at(frame.times[frame.times.length - 1])));
   const h = canvas.height;
   if (x1 > x0) {
     state.heatX = x1;
     drawColumns(ctx, dens, x0, x1, h);
   }
   // The truth as white dots.
+  if (!frame.truth.length) return;
   const dim = Number($('component').value) || 0;
   const [lo, hi] = info.domain[dim];
   ctx.fillStyle = '#fff';
   const n = info.n;
   for (let r = 0; r < frame.times.length; r++) {
-    const px = (frame.times[r] / T) * canvas.width;
+    const px = at(frame.times[r]);
     const py = h - ((frame.truth[r * n + dim] - lo) / (hi - lo)) * h;
     ctx.fillRect(px - 1, py - 1, 2, 2);
   }
@@ -643,10 +634,18 @@ function applyFrame(frame) {
   const rows = frame.to - frame.from;
   for (let r = 0; r < rows; r++) {
     d.times.push(frame.times[r]);
-    for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
+    if (frame.truth.length) for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
     frame.estimates.forEach((e, i) => {
       const have = e.length / n;
-      for (let j = 0; j < n; j++) d.est[i][j].push(r < have ? e[r * n + j] : null);
+      const sd = frame.sds?.[i];
+      const haveSd = sd ? sd.length / n : 0;
+      for (let j = 0; j < n; j++) {
+        const mean = r < have ? e[r * n + j] : null;
+        d.est[i][j].push(mean);
+        const s = r < haveSd && mean != null ? sd[r * n + j] : null;
+        d.lo[i][j].push(s == null ? null : mean - 2 * s);
+        d.hi[i][j].push(s == null ? null : mean + 2 * s);
+      }
     });
   }
   state.lastDensity = frame;
@@ -664,11 +663,12 @@ function render() {
   const d = state.data;
   if (!d) return;
   const dim = Number($('component').value) || 0;
-  state.trajPlot.setData([d.times, d.truth[dim], ...d.est.map((e) => e[dim])]);
+  const bands = state.info.has_truth ? [] : d.est.flatMap((_, i) => [d.hi[i][dim], d.lo[i][dim]]);
+  state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...bands]);
   const f = state.lastDensity;
   if (f && f.grid.length) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
   const t = d.times.length ? d.times[d.times.length - 1] : 0;
-  $('clock').textContent = `t = ${t.toFixed(2)} / ${(state.info.steps * state.info.dt_obs).toFixed(2)}`;
+  $('clock').textContent = `t = ${t.toFixed(2)} / ${state.info.t_end.toFixed(2)}`;
   const tbody = $('metrics').querySelector('tbody');
   (state.diagnostics ?? []).forEach((m, i) => {
     const tr = tbody.querySelector(`tr[data-method="${i}"]`);
@@ -776,13 +776,17 @@ function exportCsv() {
   const info = state.info;
   if (!d || !info) return;
   const n = info.n;
-  const head = ['t', ...Array.from({ length: n }, (_, j) => `truth_x${j + 1}`)];
+  const truth = info.has_truth;
+  const head = ['t', ...(truth ? Array.from({ length: n }, (_, j) => `truth_x${j + 1}`) : [])];
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_x${j + 1}`)); });
+  // Without a truth: the standard deviations behind the ±2σ bands.
+  if (!truth) info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_sd${j + 1}`)); });
   const lines = [head.join(',')];
   for (let r = 0; r < d.times.length; r++) {
     const row = [d.times[r]];
-    for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
+    if (truth) for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
     d.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
+    if (!truth) d.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(d.hi[i][j][r] == null ? null : (d.hi[i][j][r] - e[j][r]) / 2); });
     lines.push(row.map(csvCell).join(','));
   }
   download(`zakai-${info.name}-seed${info.seed}.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));
@@ -906,11 +910,11 @@ worker.onmessage = ({ data }) => {
   switch (data.type) {
     case 'ready': {
       state.presets = data.presets;
-      state.methodKinds = data.methods;
+      state.catalogue = data.methods;
       state.build = data.build;
       $('fps').title = `frames per second of this page (wasm build: ${data.build})`;
       fillOptions($('preset'), data.presets.map((p) => [p.name, `${p.name} — ${p.title}`]));
-      fillOptions($('add-method-kind'), data.methods.map(([k, about]) => [k, k, about]));
+      fillOptions($('add-method-kind'), data.methods.map((m) => [m.key, `${m.name} (${m.key})`, `${m.summary} — ${m.paper}`]));
       state.randomSeed = data.seed;
       const shared = configFromAddress();
       const wanted = new URLSearchParams(location.search).get('preset');
@@ -1006,9 +1010,82 @@ $('remove-h').addEventListener('click', () => {
   if (values.length > 1) exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
   scheduleValidate();
 });
+// ---------- the user's files: scenario JSON, observations and truth CSV ----------
+
+function showDataStatus() {
+  const r = state.recording;
+  $('data-status').textContent = r
+    ? `filtering ${r.name}${r.truthText ? ` with the truth from ${r.truthName}` : ' (no truth: estimates and ±2σ bands, no errors)'}`
+    : 'simulated data';
+  $('data-clear').hidden = !r;
+}
+
+async function loadFile(file, as) {
+  const text = await file.text();
+  if (as === 'scenario') {
+    let config;
+    try {
+      config = JSON.parse(text);
+    } catch (e) {
+      $('general-error').textContent = `${file.name}: not valid JSON: ${e.message}`;
+      return;
+    }
+    $('general-error').textContent = '';
+    fillForm(config);
+    apply();
+    return;
+  }
+  // A CSV whose header is t,x1,… is a truth; anything else is observations (the wasm reader
+  // checks the header and says what it expected).
+  const header = text.split('\n', 1)[0].replace(/\s/g, '');
+  if (as === 'truth' || (as === 'auto' && /^t,x1?(,|$)/.test(header))) {
+    if (!state.recording) {
+      $('general-error').textContent = `${file.name} is a truth file: load the observations first`;
+      return;
+    }
+    state.recording.truthName = file.name;
+    state.recording.truthText = text;
+  } else {
+    state.recording = { name: file.name, text, truthName: null, truthText: null };
+  }
+  $('general-error').textContent = '';
+  showDataStatus();
+  apply();
+}
+
+async function loadFiles(files) {
+  // Scenario first, then observations, then truth, whatever order they were dropped in.
+  const rank = (f) => (f.name.endsWith('.json') ? 0 : 1);
+  for (const f of [...files].sort((a, b) => rank(a) - rank(b))) {
+    await loadFile(f, f.name.endsWith('.json') ? 'scenario' : 'auto');
+  }
+}
+
+$('file-scenario').addEventListener('change', (e) => e.target.files[0] && loadFile(e.target.files[0], 'scenario'));
+$('file-observations').addEventListener('change', (e) => e.target.files[0] && loadFile(e.target.files[0], 'observations'));
+$('file-truth').addEventListener('change', (e) => e.target.files[0] && loadFile(e.target.files[0], 'truth'));
+$('data-clear').addEventListener('click', () => {
+  state.recording = null;
+  for (const id of ['file-observations', 'file-truth']) $(id).value = '';
+  showDataStatus();
+  apply();
+});
+document.addEventListener('dragover', (e) => {
+  e.preventDefault();
+  document.body.classList.add('dragging');
+});
+document.addEventListener('dragleave', (e) => {
+  if (!e.relatedTarget) document.body.classList.remove('dragging');
+});
+document.addEventListener('drop', (e) => {
+  e.preventDefault();
+  document.body.classList.remove('dragging');
+  if (e.dataTransfer?.files?.length) loadFiles(e.dataTransfer.files);
+});
+
 $('add-method').addEventListener('click', () => {
   const key = $('add-method-kind').value;
-  state.methodRows.push({ enabled: true, config: { method: key, ...structuredClone(DEFAULTS[key] ?? {}) } });
+  state.methodRows.push({ enabled: true, config: structuredClone(methodEntry(key).defaults) });
   methodRowsUI();
   scheduleValidate();
 });

@@ -28,6 +28,8 @@ function frame(summary) {
   const times = session.times(from, to);
   const truth = session.truth(from, to);
   const estimates = info.methods.map((_, i) => session.estimates(i, from, to));
+  // Without a truth the page plots every estimate with its ±2σ band.
+  const sds = info.has_truth ? null : info.methods.map((_, i) => session.sds(i, from, to));
   const grid = session.densityGrid(view.dim, view.points);
   const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
   const diagnostics = session.diagnostics();
@@ -49,7 +51,8 @@ function frame(summary) {
     ...estimates.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
   if (heat2d) transfer.push(heat2d.values.buffer);
   if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
-  post({ type: 'frame', from, to, times, truth, estimates, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
+  if (sds) transfer.push(...sds.map((s) => s.buffer));
+  post({ type: 'frame', from, to, times, truth, estimates, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 function tick() {
@@ -137,6 +140,15 @@ self.onmessage = async ({ data }) => {
       guard(() => {
         // Build first: an invalid scenario leaves the running session untouched.
         const next = new zakai.Session(data.config, data.seed);
+        session?.free();
+        session = next;
+        restarted();
+      });
+      break;
+    case 'loadRecording':
+      guard(() => {
+        // The user's observations (CSV text) under the scenario's model, prior and methods.
+        const next = zakai.Session.fromRecording(data.config, data.observations, data.truth ?? undefined, data.seed);
         session?.free();
         session = next;
         restarted();

@@ -413,6 +413,64 @@ try {
   await evil.screenshot({ path: `${artifacts}/playground-hostile-link.png` });
   await evil.close();
 
+  // 14. Your own data: observations and truth written by the CLI (`zakai simulate --format
+  //     csv`), loaded through the file pickers, filtered by the scenario's methods. Without a
+  //     truth the MSE column is hidden and every estimate carries its ±2σ band; the estimates
+  //     are the CLI's `zakai filter` estimates; a broken file is refused with its line.
+  {
+    const { execFileSync } = await import('node:child_process');
+    const { writeFileSync } = await import('node:fs');
+    const cli = `${root}target/release/zakai`;
+    const obsPath = `${artifacts}/recorded-obs.csv`;
+    const truthPath = `${artifacts}/recorded-truth.csv`;
+    execFileSync(cli, ['simulate', 'cubic-sensor-1d', '--seed', '3', '--format', 'csv', '--out', obsPath, '--truth-out', truthPath]);
+    const cliRun = JSON.parse(execFileSync(cli, ['filter', 'cubic-sensor-1d', '--observations', obsPath, '--seed', '1', '--format', 'json']));
+    const data = await browser.newPage({ viewport: { width: 1440, height: 1000 } });
+    data.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(`recorded data: ${m.text()}`); });
+    data.on('pageerror', (e) => consoleErrors.push(String(e)));
+    await data.goto(`${url}?preset=cubic-sensor-1d`);
+    await data.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
+    await data.setInputFiles('#file-observations', obsPath);
+    await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
+    assert.match(await data.textContent('#data-status'), /filtering recorded-obs\.csv \(no truth/);
+    await data.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
+    await data.click('#play');
+    await data.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 30000 });
+    await data.waitForTimeout(300);
+    const shown = await data.evaluate(() => {
+      const s = window.zakaiPage;
+      return {
+        methods: s.info.methods,
+        est: s.data.est.map((e) => e[0]),
+        lo: s.data.lo.map((e) => e[0]),
+        hi: s.data.hi.map((e) => e[0]),
+        mseHidden: getComputedStyle(document.querySelector('#metrics thead .mse')).display === 'none',
+      };
+    });
+    assert.ok(shown.mseHidden, 'no truth: the MSE column is hidden');
+    assert.deepEqual(shown.methods, cliRun.methods.map((m) => m.name));
+    shown.est.forEach((e, i) => {
+      const want = cliRun.methods[i].estimates;
+      assert.equal(e.filter((v) => v !== null).length, want.length, `${shown.methods[i]}: rows`);
+      want.forEach((v, k) => assert.ok(Math.abs(e[k] - v) <= 1e-12 * Math.max(1, Math.abs(v)), `${shown.methods[i]} row ${k}: page ${e[k]}, CLI ${v}`));
+      // Bands around every estimate of methods with a covariance (all of this preset's).
+      const banded = e.filter((v, k) => v !== null && shown.lo[i][k] < v && v < shown.hi[i][k]).length;
+      assert.equal(banded, want.length, `${shown.methods[i]}: ±2σ band on every row`);
+    });
+    await data.screenshot({ path: `${artifacts}/playground-recorded-data.png` });
+    // The truth: errors come back.
+    await data.setInputFiles('#file-truth', truthPath);
+    await data.waitForFunction(() => window.zakaiPage.info?.has_truth === true, null, { timeout: 10000 });
+    assert.match(await data.textContent('#data-status'), /with the truth from recorded-truth\.csv/);
+    // A broken file: the message names the line and column; the running session stays.
+    const badPath = `${artifacts}/recorded-bad.csv`;
+    writeFileSync(badPath, 't,dy1\n0,0\n0.01,oops\n');
+    await data.setInputFiles('#file-observations', badPath);
+    await data.waitForFunction(() => document.getElementById('general-error').textContent.includes('line 3'), null, { timeout: 10000 });
+    assert.match(await data.textContent('#general-error'), /observations line 3, column dy1: `oops` is not a finite number/);
+    await data.close();
+  }
+
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);
 } catch (e) {

@@ -267,17 +267,21 @@ struct SessionInfo {
     dt_obs: f64,
     continuous: bool,
     has_truth: bool,
+    t_start: f64,
+    t_end: f64,
     domain: Vec<[f64; 2]>,
     methods: Vec<String>,
     seed: u64,
 }
 
-/// A stepping session over one scenario.
+/// A stepping session over one scenario: simulated, or on recorded observations.
 #[wasm_bindgen]
 pub struct Session {
     experiment: Experiment,
     run: ExperimentRun,
     seed: u64,
+    /// The user's observations (and truth, if given), when the session filters recorded data.
+    recording: Option<zakai::Recording>,
 }
 
 fn seed_from_js(seed: f64) -> Result<u64, JsError> {
@@ -306,6 +310,41 @@ impl Session {
             experiment,
             run,
             seed,
+            recording: None,
+        })
+    }
+
+    /// A session over recorded observations: `observations` is CSV text (header `t,dy1,…` or
+    /// `t,z1,…`, the first row at the prior's time), `truth` optional CSV `t,x1,…`. The
+    /// scenario gives the model, prior, domain, Δτ and methods. Every problem with the files
+    /// is reported at once, each with its line and column.
+    #[wasm_bindgen(js_name = fromRecording)]
+    pub fn from_recording(
+        config: JsValue,
+        observations: &str,
+        truth: Option<String>,
+        seed: Option<f64>,
+    ) -> Result<Session, JsError> {
+        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+        let seed = match seed {
+            Some(s) => seed_from_js(s)?,
+            None => config.seed,
+        };
+        let experiment = Experiment::new(config).map_err(js_error)?;
+        let recording = zakai::Recording::from_csv(
+            experiment.model().n,
+            observations.as_bytes(),
+            truth.as_deref().map(str::as_bytes),
+        )
+        .map_err(js_error)?;
+        let run = experiment
+            .start_recorded(recording.clone(), seed)
+            .map_err(js_error)?;
+        Ok(Session {
+            experiment,
+            run,
+            seed,
+            recording: Some(recording),
         })
     }
 
@@ -328,12 +367,17 @@ impl Session {
     /// Restarts the same scenario with a new seed.
     pub fn reset(&mut self, seed: f64) -> Result<(), JsError> {
         let seed = seed_from_js(seed)?;
-        self.run = self.experiment.start(seed).map_err(js_error)?;
+        self.run = match &self.recording {
+            Some(r) => self.experiment.start_recorded(r.clone(), seed),
+            None => self.experiment.start(seed),
+        }
+        .map_err(js_error)?;
         self.seed = seed;
         Ok(())
     }
 
-    /// `{name, n, m, steps, dt_obs, continuous, domain, methods, seed}`.
+    /// `{name, n, m, steps, dt_obs, continuous, has_truth, t_start, t_end, domain, methods,
+    /// seed}`.
     pub fn info(&self) -> Result<JsValue, JsError> {
         let c = self.experiment.config();
         to_js(&SessionInfo {
@@ -344,6 +388,8 @@ impl Session {
             dt_obs: c.time.dt_obs,
             continuous: self.run.recording().continuous,
             has_truth: self.run.recording().truth.is_some(),
+            t_start: self.run.recording().times[0],
+            t_end: *self.run.recording().times.last().unwrap_or(&0.0),
             domain: c.domain.clone(),
             methods: self.experiment.method_names().to_vec(),
             seed: self.seed,
@@ -381,6 +427,22 @@ impl Session {
         let (a, b) = self.clamp(from, to);
         let m = self.run.recording().m;
         self.run.recording().observations[a * m..b * m].to_vec()
+    }
+
+    /// Standard deviations √P_jj of method `index` for rows `from..to`, row-major (empty for
+    /// a method without a covariance; fewer rows after a failure) — the ±2σ bands.
+    pub fn sds(&self, index: usize, from: usize, to: usize) -> Vec<f64> {
+        let Some(track) = self.run.tracks().get(index) else {
+            return Vec::new();
+        };
+        let n = track.n;
+        let rows = track.covariances.len() / (n * n).max(1);
+        (from.min(rows)..to.min(rows))
+            .flat_map(|k| {
+                let p = &track.covariances[k * n * n..(k + 1) * n * n];
+                (0..n).map(move |j| p[j * n + j].max(0.0).sqrt())
+            })
+            .collect()
     }
 
     /// Estimate rows `from..to` of method `index`, row-major (fewer rows after a failure).

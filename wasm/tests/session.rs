@@ -114,3 +114,50 @@ fn heavy_expressions_build_without_overflowing_the_stack() {
     );
     assert!(e.contains("nests deeper than 32"), "{e}");
 }
+
+/// A session over recorded observations (CSV text, as `zakai simulate --format csv` writes)
+/// gives the simulated session's estimates exactly (as far as the simulated run went); without a truth, `truth` is empty and the
+/// UKF still reports its standard deviations; a bad file is an Error naming the line.
+#[wasm_bindgen_test]
+fn a_session_filters_recorded_observations() {
+    let config = presets::preset("cubic-sensor-1d").unwrap();
+    let experiment = zakai::Experiment::new(config.clone()).unwrap();
+    let recording = zakai::Recording::from(experiment.simulate(5));
+    let mut simulated = Session::new(config_js("cubic-sensor-1d"), Some(5.0)).unwrap();
+    let mut recorded = Session::from_recording(
+        config_js("cubic-sensor-1d"),
+        &recording.observations_csv(),
+        None,
+        Some(5.0),
+    )
+    .unwrap();
+    simulated.step(usize::MAX).unwrap();
+    recorded.step(usize::MAX).unwrap();
+    assert!(recorded.truth(0, usize::MAX).is_empty(), "no truth given");
+    for i in 0..config.methods.len() {
+        // Without a truth there is no track-loss rule, so a method the simulated run stopped
+        // for losing track goes on: the rows both have are equal.
+        let (a, b) = (
+            simulated.estimates(i, 0, usize::MAX),
+            recorded.estimates(i, 0, usize::MAX),
+        );
+        assert!(a.len() <= b.len() && a.len() > 1, "method {i}");
+        assert_eq!(a, b[..a.len()], "method {i}");
+    }
+    let ukf = config
+        .methods
+        .iter()
+        .position(|m| m.key() == "ukf")
+        .unwrap();
+    let sds = recorded.sds(ukf, 0, usize::MAX);
+    assert_eq!(sds.len(), recorded.estimates(ukf, 0, usize::MAX).len());
+    assert!(sds.iter().all(|s| s.is_finite() && *s > 0.0));
+    let bad = Session::from_recording(
+        config_js("cubic-sensor-1d"),
+        "t,dy1\n0,0\n0.01,x\n",
+        None,
+        None,
+    );
+    let err = message(bad.err().expect("a bad file is refused"));
+    assert!(err.contains("observations line 3, column dy1"), "{err}");
+}
