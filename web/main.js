@@ -136,7 +136,7 @@ function methodRowsUI() {
     const entry = methodEntry(row.config.method);
     const params = entry?.params ?? [];
     const dataset = { row: String(i) };
-    c.appendChild(el('div', { className: 'method-row', dataset },
+    c.appendChild(el('div', { className: 'method-row', dataset: { ...dataset, method: row.config.method } },
       el('header', { title: entry ? `${entry.summary} — ${entry.paper}` : '' },
         el('input', { type: 'checkbox', checked: row.enabled, className: 'enable', dataset }),
         ` ${entry?.name ?? row.config.method}`,
@@ -440,15 +440,17 @@ function makePlots(info) {
   if (!info.has_truth) {
     info.methods.forEach((m, i) => {
       const color = COLORS[i % COLORS.length];
-      series.push({ label: `${m} +2σ`, stroke: color, width: 1, dash: [4, 3] }, { label: `${m} −2σ`, stroke: color, width: 1, dash: [4, 3] });
+      series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
       const hi = 2 + info.methods.length + 2 * i;
-      bands.push({ series: [hi, hi + 1], fill: `${color}22` });
+      bands.push({ series: [hi, hi + 1], fill: `${color}26` });
     });
   }
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
     width, height: 280, series, bands, scales: { x: { time: false } },
     axes: [{ label: 't' }, { label: 'x' }],
+    // The band edges are series of their own; the legend lists the estimates only.
+    hooks: { init: [(u) => u.root.querySelectorAll('.u-legend .u-series').forEach((row, k) => { if (k >= 2 + info.methods.length) row.style.display = 'none'; })] },
   }, series.map(() => []), $('trajectory-plot'));
   $('metrics').classList.toggle('no-truth', !info.has_truth);
   const dseries = [{}];
@@ -942,12 +944,19 @@ worker.onmessage = ({ data }) => {
         state.runRows = state.pendingRows;
       }
       $('run-error').textContent = '';
+      $('data-error').textContent = '';
       showProblems([]);
       makePlots(data.info);
       validate();
       break;
     case 'frame':
       state.queue.push(data);
+      break;
+    case 'dataError':
+      state.pendingConfig = null;
+      setPlaying(false);
+      $('data-error').textContent = data.message;
+      $('form-status').textContent = 'not applied';
       break;
     case 'seed':
       $('seed').value = data.seed;
@@ -1027,7 +1036,7 @@ async function loadFile(file, as) {
     try {
       config = JSON.parse(text);
     } catch (e) {
-      $('general-error').textContent = `${file.name}: not valid JSON: ${e.message}`;
+      $('data-error').textContent = `${file.name}: not valid JSON: ${e.message}`;
       return;
     }
     $('general-error').textContent = '';
@@ -1040,7 +1049,7 @@ async function loadFile(file, as) {
   const header = text.split('\n', 1)[0].replace(/\s/g, '');
   if (as === 'truth' || (as === 'auto' && /^t,x1?(,|$)/.test(header))) {
     if (!state.recording) {
-      $('general-error').textContent = `${file.name} is a truth file: load the observations first`;
+      $('data-error').textContent = `${file.name} is a truth file: load the observations first`;
       return;
     }
     state.recording.truthName = file.name;

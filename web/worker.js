@@ -145,15 +145,23 @@ self.onmessage = async ({ data }) => {
         restarted();
       });
       break;
-    case 'loadRecording':
+    case 'loadRecording': {
+      // The user's observations (CSV text) under the scenario's model, prior and methods. A
+      // file's problems go next to the file pickers; the running session stays.
+      let next;
+      try {
+        next = zakai.Session.fromRecording(data.config, data.observations, data.truth ?? undefined, data.seed);
+      } catch (e) {
+        post({ type: 'dataError', message: String(e?.message ?? e) });
+        break;
+      }
       guard(() => {
-        // The user's observations (CSV text) under the scenario's model, prior and methods.
-        const next = zakai.Session.fromRecording(data.config, data.observations, data.truth ?? undefined, data.seed);
         session?.free();
         session = next;
         restarted();
       });
       break;
+    }
     case 'reset':
       guard(() => {
         session.reset(data.seed);
