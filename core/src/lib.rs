@@ -83,6 +83,8 @@ pub mod error;
 pub mod experiment;
 pub mod filters;
 pub mod grid;
+/// Dense and banded kernels the filters share (internal; not part of the chosen surface).
+#[doc(hidden)]
 pub mod linalg;
 pub mod metrics;
 pub mod model;

@@ -6,6 +6,7 @@
 //! are not stored. Values are stored with the first dimension fastest.
 
 #[cfg(feature = "std")]
+#[doc(hidden)]
 pub mod dst;
 
 use alloc::format;
@@ -22,7 +23,7 @@ pub const MAX_NODES: usize = 1 << 24;
 
 /// Calls `f(start)` for the first node of every grid line along the dimension with `stride`
 /// and `n` nodes per line.
-pub fn for_each_line(len: usize, stride: usize, n: usize, mut f: impl FnMut(usize)) {
+pub(crate) fn for_each_line(len: usize, stride: usize, n: usize, mut f: impl FnMut(usize)) {
     let block = stride * n;
     for outer in (0..len).step_by(block) {
         for inner in 0..stride {

@@ -8,7 +8,6 @@ pub mod presets;
 use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::sync::Arc;
-use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
@@ -553,21 +552,10 @@ impl ScenarioConfig {
     /// Points spread over the domain (corners pulled inwards and the centre) where methods
     /// check structural assumptions such as linearity.
     pub fn probe_points(&self) -> Vec<Vec<f64>> {
-        let n = self.state_dim();
-        let bounds = self.bounds();
-        let mut probes = Vec::new();
-        for corner in 0..(1usize << n.min(6)) {
-            let p: Vec<f64> = (0..n)
-                .map(|d| {
-                    let (lo, hi) = bounds.get(d).copied().unwrap_or((-1.0, 1.0));
-                    let f = if (corner >> d) & 1 == 1 { 0.8 } else { 0.15 };
-                    lo + f * (hi - lo)
-                })
-                .collect();
-            probes.push(p);
-        }
-        probes.push(vec![0.37; n]);
-        probes
+        // A domain with too few intervals (an invalid scenario) is padded with [−1, 1].
+        let mut bounds = self.bounds();
+        bounds.resize(self.state_dim(), (-1.0, 1.0));
+        crate::filters::method::probe_points(&bounds)
     }
 
     /// Method display names, made unique (`EKF`, `EKF #2`).

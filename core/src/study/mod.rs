@@ -1,6 +1,6 @@
 //! Studies that repeat the [`crate::experiment::Experiment`] driver: the Monte Carlo runner
 //! (the papers' tables), the accuracy–cost frontier and the density-error curve J(t) of 001.
-//! This is the top layer of the crate.
+//! Only [`crate::reproduction`] sits above it.
 
 pub mod density_error;
 pub mod frontier;

@@ -21,9 +21,14 @@
 //! polynomial and can dip below zero where it is small; the factor (42) sets those nodal
 //! values to zero before the update, and the plotted marginals are clipped at zero.
 
+// The building blocks of the filter, public for the benches and the accuracy tests, not part
+// of the chosen surface.
+#[doc(hidden)]
 pub mod legendre;
 pub mod methods;
+#[doc(hidden)]
 pub mod offline;
+#[doc(hidden)]
 pub mod tensor;
 
 pub use methods::Spectral;
