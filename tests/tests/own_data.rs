@@ -3,9 +3,7 @@
 
 use zakai::scenario::methods::catalogue;
 use zakai::scenario::presets;
-use zakai::{
-    Experiment, Filter, FilterError, Model, Noise, Observation, Qiem, Recording, Ukf, ZakaiError,
-};
+use zakai::{Experiment, FilterError, Model, Noise, Observation, Qiem, Recording, Ukf, ZakaiError};
 
 fn problems(e: ZakaiError) -> Vec<zakai::ConfigProblem> {
     match e {
