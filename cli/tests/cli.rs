@@ -432,50 +432,23 @@ fn filtering_a_simulated_csv_reproduces_the_simulated_run_bit_for_bit() {
 /// whose steps differ from the Δτ a grid method is built for is refused with the row.
 #[test]
 fn bad_observation_files_name_the_line() {
-    let o = zakai(&[
-        "filter",
-        "cubic-sensor-1d",
-        "--observations",
-        "/no/such.csv",
-    ]);
-    assert_clean_failure(&o, "cannot read /no/such.csv");
-    let bad = temp_file("bad.csv", "t,dy1\n0,0\n0.01,0.1\n0.02,oops\n");
-    let o = zakai(&[
-        "filter",
-        "cubic-sensor-1d",
-        "--observations",
-        bad.to_str().unwrap(),
-    ]);
+    let filter = |csv: &str, extra: &[&str]| {
+        let mut args = vec!["filter", "cubic-sensor-1d", "--observations", csv];
+        args.extend_from_slice(extra);
+        zakai(&args)
+    };
+    let file = |name: &str, text: &str| temp_file(name, text).to_str().unwrap().to_string();
+    assert_clean_failure(&filter("/no/such.csv", &[]), "cannot read /no/such.csv");
+    let bad = file("bad.csv", "t,dy1\n0,0\n0.01,0.1\n0.02,oops\n");
     assert_clean_failure(
-        &o,
+        &filter(&bad, &[]),
         "observations line 4, column dy1: `oops` is not a finite number",
     );
-    let kind = temp_file("kind.csv", "t,z1\n0,0\n0.01,0.1\n");
-    let o = zakai(&[
-        "filter",
-        "cubic-sensor-1d",
-        "--observations",
-        kind.to_str().unwrap(),
-    ]);
-    assert_clean_failure(&o, "the recording holds measurements");
-    let uneven = temp_file("uneven.csv", "t,dy1\n0,0\n0.01,0.1\n0.03,0.1\n");
-    let o = zakai(&[
-        "filter",
-        "cubic-sensor-1d",
-        "--observations",
-        uneven.to_str().unwrap(),
-        "--methods",
-        "qiem",
-    ]);
-    assert_clean_failure(&o, "row 3: the step");
+    let kind = file("kind.csv", "t,z1\n0,0\n0.01,0.1\n");
+    assert_clean_failure(&filter(&kind, &[]), "the recording holds measurements");
+    let uneven = file("uneven.csv", "t,dy1\n0,0\n0.01,0.1\n0.03,0.1\n");
+    assert_clean_failure(&filter(&uneven, &["--methods", "qiem"]), "row 3: the step");
     // The same uneven file is fine for methods that take any step.
-    let o = zakai(&[
-        "filter",
-        "cubic-sensor-1d",
-        "--observations",
-        uneven.to_str().unwrap(),
-        "--methods",
-        "ukf,pf",
-    ]);
+    let o = filter(&uneven, &["--methods", "ukf,pf"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }

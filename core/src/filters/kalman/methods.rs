@@ -31,6 +31,30 @@ fn substeps_param() -> ParamInfo {
     .at_least(1.0)
 }
 
+/// A Gaussian filter's own problems and those of its optional starting Gaussian `init`.
+fn with_init(
+    own: Vec<(&'static str, String)>,
+    init: &super::GaussianInit,
+    n: usize,
+) -> Vec<ConfigProblem> {
+    let mut problems = problems_from(own);
+    problems.extend(validate_init(init, n));
+    problems
+}
+
+/// The MAP-update filter of 003 with `solver`.
+fn map_kalman(
+    ctx: &BuildContext,
+    init: &super::GaussianInit,
+    substeps: usize,
+    solver: MapSolver,
+    name: String,
+) -> Result<MapKalman, ZakaiError> {
+    Ok(MapKalman::new(
+        name, ctx.model, ctx.prior, init, substeps, solver,
+    ))
+}
+
 fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo>) -> MethodInfo {
     MethodInfo {
         key: key.into(),
@@ -108,11 +132,12 @@ impl Method for Ekf {
         "EKF".into()
     }
     fn problems(p: &EkfParams, n: usize) -> Vec<ConfigProblem> {
-        let mut problems = validate_init(&p.init, n);
-        if p.substeps == 0 {
-            problems.push(ConfigProblem::new("substeps", "must be at least 1"));
-        }
-        problems
+        let own = if p.substeps == 0 {
+            vec![("substeps", String::from("must be at least 1"))]
+        } else {
+            Vec::new()
+        };
+        with_init(own, &p.init, n)
     }
     fn memory(_: &EkfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -170,9 +195,7 @@ impl Method for Ukf {
         "UKF".into()
     }
     fn problems(p: &UkfParams, n: usize) -> Vec<ConfigProblem> {
-        let mut problems = problems_from(p.problems(n));
-        problems.extend(validate_init(&p.init, n));
-        problems
+        with_init(p.problems(n), &p.init, n)
     }
     fn memory(_: &UkfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -224,9 +247,7 @@ impl Method for Iekf {
         format!("IEKF({})", p.iterations)
     }
     fn problems(p: &IekfParams, n: usize) -> Vec<ConfigProblem> {
-        let mut problems = problems_from(p.problems());
-        problems.extend(validate_init(&p.init, n));
-        problems
+        with_init(p.problems(), &p.init, n)
     }
     fn memory(_: &IekfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -236,9 +257,7 @@ impl Method for Iekf {
             iterations: p.iterations,
             tolerance: p.tolerance,
         };
-        Ok(MapKalman::new(
-            name, ctx.model, ctx.prior, &p.init, p.substeps, solver,
-        ))
+        map_kalman(ctx, &p.init, p.substeps, solver, name)
     }
 }
 
@@ -281,9 +300,7 @@ impl Method for Iokf {
         format!("IOKF({}×{})", p.newton_steps, p.splits)
     }
     fn problems(p: &IokfParams, n: usize) -> Vec<ConfigProblem> {
-        let mut problems = problems_from(p.problems());
-        problems.extend(validate_init(&p.init, n));
-        problems
+        with_init(p.problems(), &p.init, n)
     }
     fn memory(_: &IokfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -293,8 +310,6 @@ impl Method for Iokf {
             splits: p.splits,
             newton_steps: p.newton_steps,
         };
-        Ok(MapKalman::new(
-            name, ctx.model, ctx.prior, &p.init, p.substeps, solver,
-        ))
+        map_kalman(ctx, &p.init, p.substeps, solver, name)
     }
 }
