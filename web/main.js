@@ -1029,7 +1029,9 @@ function showDataStatus() {
   $('data-clear').hidden = !r;
 }
 
-async function loadFile(file, as) {
+// Reads one file into the form or the recording; `then` applies (false while more files of
+// one drop follow).
+async function loadFile(file, as, then = true) {
   const text = await file.text();
   if (as === 'scenario') {
     let config;
@@ -1039,9 +1041,9 @@ async function loadFile(file, as) {
       $('data-error').textContent = `${file.name}: not valid JSON: ${e.message}`;
       return;
     }
-    $('general-error').textContent = '';
+    $('data-error').textContent = '';
     fillForm(config);
-    apply();
+    if (then) apply();
     return;
   }
   // A CSV whose header is t,x1,… is a truth; anything else is observations (the wasm reader
@@ -1057,16 +1059,17 @@ async function loadFile(file, as) {
   } else {
     state.recording = { name: file.name, text, truthName: null, truthText: null };
   }
-  $('general-error').textContent = '';
+  $('data-error').textContent = '';
   showDataStatus();
-  apply();
+  if (then) apply();
 }
 
 async function loadFiles(files) {
   // Scenario first, then observations, then truth, whatever order they were dropped in.
   const rank = (f) => (f.name.endsWith('.json') ? 0 : 1);
-  for (const f of [...files].sort((a, b) => rank(a) - rank(b))) {
-    await loadFile(f, f.name.endsWith('.json') ? 'scenario' : 'auto');
+  const sorted = [...files].sort((a, b) => rank(a) - rank(b));
+  for (const [i, f] of sorted.entries()) {
+    await loadFile(f, f.name.endsWith('.json') ? 'scenario' : 'auto', i === sorted.length - 1);
   }
 }
 

@@ -470,6 +470,18 @@ try {
     await data.waitForFunction(() => document.getElementById('data-error').textContent.includes('line 3'), null, { timeout: 10000 });
     await data.waitForTimeout(500); // the validation that follows must not clear it
     assert.match(await data.textContent('#data-error'), /observations line 3, column dy1: `oops` is not a finite number/);
+    // Drag and drop: a scenario JSON and an observations CSV dropped together load the
+    // scenario first, then filter the observations under it.
+    const scenarioJson = execFileSync(cli, ['show', 'sa-example-1']).toString();
+    const saObs = execFileSync(cli, ['simulate', 'sa-example-1', '--seed', '2', '--format', 'csv']).toString();
+    await data.evaluate(([json, csv]) => {
+      const dt = new DataTransfer();
+      dt.items.add(new File([csv], 'sa-obs.csv', { type: 'text/csv' }));
+      dt.items.add(new File([json], 'sa.json', { type: 'application/json' }));
+      document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    }, [scenarioJson, saObs]);
+    await data.waitForFunction(() => window.zakaiPage.info?.name === 'sa-example-1' && window.zakaiPage.info.has_truth === false, null, { timeout: 15000 });
+    assert.match(await data.textContent('#data-status'), /filtering sa-obs\.csv/);
     await data.close();
   }
 
