@@ -181,6 +181,8 @@ pub struct ContinuousDiscreteGrid {
     /// h at the cell centres, row per cell.
     h_nodes: Vec<f64>,
     target_dt: f64,
+    /// Δτ, the observation interval the filter is built for.
+    dt_obs: f64,
     plan: Option<StepPlan>,
     u: Vec<f64>,
     tmp: Vec<f64>,
@@ -251,6 +253,7 @@ impl ContinuousDiscreteGrid {
             noise,
             h_nodes,
             target_dt: params.dt,
+            dt_obs,
             plan: None,
             u,
             tmp: vec![0.0; len],
@@ -357,9 +360,13 @@ impl ContinuousDiscreteGrid {
         })
     }
 
-    /// Factorises the implicit step for observation intervals of length `interval` (once, at
-    /// construction: the filter is built for one Δτ).
+    /// Factorises the implicit step for intervals of length `interval`: at construction for
+    /// Δτ, and again only when [`ContinuousDiscreteGrid::predict`] is asked for another length
+    /// explicitly (the J(t) curve predicts in parts of an interval).
     fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
+        if self.plan.as_ref().map(|p| p.interval) == Some(interval) {
+            return Ok(());
+        }
         let (substeps, _) = self.step_count(interval)?;
         let dt = interval / substeps as f64;
         let part = match self.scheme {
@@ -389,10 +396,12 @@ impl ContinuousDiscreteGrid {
     }
 
     /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement. The
-    /// density is not renormalised (mass that leaves the grid is lost, as in the scheme).
+    /// density is not renormalised (mass that leaves the grid is lost, as in the scheme). An
+    /// interval other than the last one re-factorises the implicit step (a deliberate call;
+    /// [`Filter::step`] accepts only the Δτ the filter was built for).
     pub fn predict(&mut self, interval: f64) -> Result<(), FilterError> {
-        let plan = self.plan.as_ref().expect("planned at construction");
-        crate::filters::check_interval(&self.name, plan.interval, interval)?;
+        self.plan_for(interval)?;
+        let plan = self.plan.as_ref().expect("planned just above");
         for _ in 0..plan.substeps {
             if self.scheme == FpeScheme::Separation {
                 self.advection
@@ -452,7 +461,9 @@ impl Filter for ContinuousDiscreteGrid {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         crate::filters::check_measurement(&self.name, obs, self.residual.len())?;
         if obs.dt > 0.0 {
-            self.predict(obs.dt)?;
+            crate::filters::check_interval(&self.name, self.dt_obs, obs.dt)?;
+            // Exactly Δτ's plan (not a re-factorisation for a rounding of it).
+            self.predict(self.dt_obs)?;
         }
         self.update(obs.value)
     }
