@@ -154,54 +154,77 @@ enum Command {
     /// and write MSE against time per step to CSV and an SVG plot, with the reference
     /// posterior's MSE (the optimal filter's) as the floor.
     Frontier(FrontierArgs),
-    /// Run the scenario's methods on recorded observations (CSV with header `t,dy1,…` for
-    /// increments of dy = h dt + dw or `t,z1,…` for measurements; the first row is the
-    /// prior's time). The scenario gives the model, prior, domain, Δτ and methods; its
-    /// simulation settings are not used. Without --truth there are no errors, only estimates.
-    Filter {
-        /// A preset name or a path to a scenario JSON file.
-        scenario: String,
-        /// The observations (CSV).
-        #[arg(long)]
-        observations: PathBuf,
-        /// The true states (CSV `t,x1,…` at the observation times), for errors.
-        #[arg(long)]
-        truth: Option<PathBuf>,
-        /// Comma-separated method keys to keep (as for `run`).
-        #[arg(long, value_delimiter = ',')]
-        methods: Option<Vec<String>>,
-        /// Seed of the methods' random numbers (default: the scenario's seed).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// `table` (summary), `json` (estimates and covariances) or `csv` (estimates and
-        /// standard deviations per time).
-        #[arg(long, value_enum, default_value_t = Format::Table)]
-        format: Format,
-        /// Write the output to FILE instead of stdout.
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
+    Filter(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
-    Run {
-        /// A preset name or a path to a scenario JSON file.
-        scenario: String,
-        /// Comma-separated method keys to keep (e.g. ekf,ukf,pf); keys the scenario lacks are
-        /// added with default parameters.
-        #[arg(long, value_delimiter = ',')]
-        methods: Option<Vec<String>>,
-        /// Number of Monte Carlo runs (seeds seed, seed+1, …).
-        #[arg(long, default_value_t = 1)]
-        runs: usize,
-        /// Seed of the first run (default: the scenario's seed).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Output format.
-        #[arg(long, value_enum, default_value_t = Format::Table)]
-        format: Format,
-        /// Write the output to FILE instead of stdout.
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
+    Run(RunArgs),
+}
+
+/// Which methods of the scenario run, and with which seed (`run`, `filter`).
+#[derive(Args)]
+struct Selection {
+    /// A preset name or a path to a scenario JSON file.
+    scenario: String,
+    /// Comma-separated method keys to keep (e.g. ekf,ukf,pf); keys the scenario lacks are
+    /// added with default parameters.
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Seed (default: the scenario's): of the first run (`run`), of the methods' random
+    /// numbers (`filter`).
+    #[arg(long)]
+    seed: Option<u64>,
+}
+
+impl Selection {
+    /// The scenario with the chosen methods, built, and the seed.
+    fn experiment(&self) -> Result<(Experiment, u64), String> {
+        let mut config = load(&self.scenario)?;
+        if let Some(keys) = &self.methods {
+            select_methods(&mut config, keys)?;
+        }
+        let seed = self.seed.unwrap_or(config.seed);
+        Ok((Experiment::new(config).map_err(|e| e.to_string())?, seed))
+    }
+}
+
+/// Where and how results are written (`run`, `filter`).
+#[derive(Args)]
+struct Output {
+    /// Output format: `table`; `json`; `csv` (`run`: one row per method; `filter`: estimates
+    /// and standard deviations per time).
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    format: Format,
+    /// Write the output to FILE instead of stdout.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Run the scenario's methods on recorded observations (CSV with header `t,dy1,…` for
+/// increments of dy = h dt + dw or `t,z1,…` for measurements; the first row is the prior's
+/// time). The scenario gives the model, prior, domain, Δτ and methods; its simulation
+/// settings are not used. Without --truth there are no errors, only estimates.
+#[derive(Args)]
+struct FilterArgs {
+    #[command(flatten)]
+    selection: Selection,
+    /// The observations (CSV).
+    #[arg(long)]
+    observations: PathBuf,
+    /// The true states (CSV `t,x1,…` at the observation times), for errors.
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    #[command(flatten)]
+    output: Output,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    #[command(flatten)]
+    selection: Selection,
+    /// Number of Monte Carlo runs (seeds seed, seed+1, …).
+    #[arg(long, default_value_t = 1)]
+    runs: usize,
+    #[command(flatten)]
+    output: Output,
 }
 
 /// Output formats of `zakai simulate`.
@@ -264,23 +287,12 @@ fn select_methods(config: &mut ScenarioConfig, keys: &[String]) -> Result<(), St
     Ok(())
 }
 
-fn run(
-    scenario: &str,
-    methods: Option<Vec<String>>,
-    runs: usize,
-    seed: Option<u64>,
-    format: Format,
-    out: Option<PathBuf>,
-) -> Result<(), String> {
-    let mut config = load(scenario)?;
-    if let Some(keys) = methods {
-        select_methods(&mut config, &keys)?;
-    }
+fn run(a: &RunArgs) -> Result<(), String> {
+    let runs = a.runs;
     if runs == 0 {
         return Err("--runs must be at least 1".into());
     }
-    let seed = seed.unwrap_or(config.seed);
-    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+    let (experiment, seed) = a.selection.experiment()?;
     let bar = if runs > 1 {
         Some(progress_bar(runs, "runs")?)
     } else {
@@ -299,8 +311,8 @@ fn run(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let text = output::render(&experiment, &summary, format).map_err(|e| e.to_string())?;
-    emit(&text, out.as_deref())
+    let text = output::render(&experiment, &summary, a.output.format).map_err(|e| e.to_string())?;
+    emit(&text, a.output.out.as_deref())
 }
 
 /// Writes `text` to `path`, or to stdout.
@@ -316,25 +328,13 @@ fn emit(text: &str, path: Option<&std::path::Path>) -> Result<(), String> {
     }
 }
 
-struct FilterArgs {
-    scenario: String,
-    observations: PathBuf,
-    truth: Option<PathBuf>,
-    methods: Option<Vec<String>>,
-    seed: Option<u64>,
-    format: Format,
-    out: Option<PathBuf>,
-}
-
-fn filter(a: FilterArgs) -> Result<(), String> {
-    let mut config = load(&a.scenario)?;
-    if let Some(keys) = a.methods {
-        select_methods(&mut config, &keys)?;
-    }
-    let seed = a.seed.unwrap_or(config.seed);
-    let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+fn filter(a: &FilterArgs) -> Result<(), String> {
+    let (experiment, seed) = a.selection.experiment()?;
     let result = recorded::filter(&experiment, &a.observations, a.truth.as_deref(), seed)?;
-    emit(&recorded::render(&result, a.format), a.out.as_deref())
+    emit(
+        &recorded::render(&result, a.output.format),
+        a.output.out.as_deref(),
+    )
 }
 
 fn progress_bar(len: usize, what: &str) -> Result<ProgressBar, String> {
@@ -720,23 +720,7 @@ fn main() -> ExitCode {
             out,
             truth_out,
         }),
-        Command::Filter {
-            scenario,
-            observations,
-            truth,
-            methods,
-            seed,
-            format,
-            out,
-        } => filter(FilterArgs {
-            scenario,
-            observations,
-            truth,
-            methods,
-            seed,
-            format,
-            out,
-        }),
+        Command::Filter(args) => filter(&args),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::YauSystem { scenario } => yau_system(&scenario),
@@ -748,14 +732,7 @@ fn main() -> ExitCode {
             per_interval,
             csv,
         } => jcurve(&scenario, seed, runs, per_interval, csv),
-        Command::Run {
-            scenario,
-            methods,
-            runs,
-            seed,
-            format,
-            out,
-        } => run(&scenario, methods, runs, seed, format, out),
+        Command::Run(args) => run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
