@@ -1,6 +1,5 @@
 //! The Kalman–Bucy reference and its agreement with EKF and UKF on linear models.
 
-use nalgebra::DVector;
 use zakai::experiment::{Experiment, RunResult, Silent};
 use zakai::filters::kalman::{EkfParams, KalmanParams, UkfParams};
 use zakai::filters::{Observation, ObservationKind};
@@ -222,5 +221,9 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
         ..obs
     };
     assert!(filter.step(&obs).is_err());
-    let _: DVector<f64> = before;
+    assert_eq!(
+        filter.estimate().mean,
+        before,
+        "a refused observation leaves the state untouched"
+    );
 }
