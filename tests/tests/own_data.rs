@@ -12,8 +12,18 @@ fn problems(e: ZakaiError) -> Vec<zakai::ConfigProblem> {
     }
 }
 
-/// Every method built for one interval Δτ refuses a step of 2Δτ with `IntervalMismatch`
-/// (never a silent rebuild); every other method takes it and its estimate differs from the
+/// An increment or a measurement, as the model observes.
+fn observation(continuous: bool, dt: f64, value: &[f64]) -> Observation<'_> {
+    if continuous {
+        Observation::increment(dt, value)
+    } else {
+        Observation::measurement(dt, value)
+    }
+}
+
+/// Every method refuses an observation of the wrong length without changing its state; every
+/// method built for one interval Δτ refuses a step of 2Δτ with `IntervalMismatch` (never a
+/// silent rebuild), again without changing its state; every other method takes it and its estimate differs from the
 /// Δτ step's (the step length is used, not ignored).
 #[test]
 fn a_step_of_another_length_is_handled_or_refused() {
@@ -23,11 +33,6 @@ fn a_step_of_another_length_is_handled_or_refused() {
         let e = Experiment::new(config.clone()).unwrap();
         let data = e.simulate(2);
         let dt = config.time.dt_obs;
-        let kind = if data.continuous {
-            Observation::increment
-        } else {
-            Observation::measurement
-        };
         for entry in catalogue() {
             let m = entry.defaults;
             if m.suitability(
@@ -44,7 +49,21 @@ fn a_step_of_another_length_is_handled_or_refused() {
             let build = || e.build_method(&m, m.display_name(), 1).unwrap();
             let (mut a, mut b) = (build(), build());
             let z = data.observation(1);
-            let twice = b.step(&kind(2.0 * dt, z));
+            // A wrong observation (one component too many) is refused and changes nothing.
+            let start = b.estimate();
+            let long: Vec<f64> = z.iter().copied().chain([0.0]).collect();
+            assert!(
+                b.step(&observation(data.continuous, dt, &long)).is_err(),
+                "{preset} {}",
+                entry.info.key
+            );
+            assert_eq!(
+                b.estimate(),
+                start,
+                "{preset} {}: a refused observation changes nothing",
+                entry.info.key
+            );
+            let twice = b.step(&observation(data.continuous, 2.0 * dt, z));
             if entry.needs_interval {
                 match twice {
                     Err(FilterError::IntervalMismatch { built_for, got, .. }) => {
@@ -60,9 +79,15 @@ fn a_step_of_another_length_is_handled_or_refused() {
                         entry.info.key
                     ),
                 }
+                assert_eq!(
+                    b.estimate(),
+                    start,
+                    "{preset} {}: a refused step changes nothing",
+                    entry.info.key
+                );
             } else {
                 twice.unwrap_or_else(|err| panic!("{preset} {}: {err}", entry.info.key));
-                a.step(&kind(dt, z)).unwrap();
+                a.step(&observation(data.continuous, dt, z)).unwrap();
                 assert_ne!(
                     a.estimate().mean,
                     b.estimate().mean,

@@ -114,6 +114,19 @@ pub(crate) fn check_increment(
     check_observation(name, obs, ObservationKind::Increment, m)
 }
 
+/// The observation `model` makes (an increment or a measurement of length m), or the error.
+pub(crate) fn check_for_model(
+    name: &str,
+    model: &crate::model::Model,
+    obs: &Observation,
+) -> Result<(), crate::error::FilterError> {
+    let kind = match model.observations {
+        crate::model::ObservationModel::Continuous { .. } => ObservationKind::Increment,
+        crate::model::ObservationModel::Discrete { .. } => ObservationKind::Measurement,
+    };
+    check_observation(name, obs, kind, model.m)
+}
+
 /// A measurement z_k of length m, or the error a filter for discrete measurements returns.
 pub(crate) fn check_measurement(
     name: &str,

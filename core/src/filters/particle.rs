@@ -285,6 +285,8 @@ impl Filter for ParticleFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        // Checked before anything moves: a refused observation leaves the particles.
+        crate::filters::check_for_model(&self.name, &self.model, obs)?;
         if obs.dt > 0.0 {
             self.predict(obs.dt);
         }

@@ -167,12 +167,13 @@ impl Filter for KalmanBucy {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        // Checked before anything moves: a refused observation leaves the state.
+        let meas = self.form.at(obs)?;
         if obs.dt > 0.0 {
             let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, obs.dt);
             self.state.mean = &d.phi * &self.state.mean + &d.gamma_b;
             self.state.cov = &d.phi * &self.state.cov * d.phi.transpose() + &d.qd;
         }
-        let meas = self.form.at(obs)?;
         if meas.scale == 0.0 {
             return self.state.check();
         }

@@ -125,10 +125,11 @@ impl GaussianState {
         form: &measurement::MeasurementForm,
         obs: &crate::filters::Observation,
     ) -> Result<Option<measurement::Measurement>, FilterError> {
+        // The observation is checked before anything moves: a refused one leaves the state.
+        let meas = form.at(obs)?;
         if obs.dt > 0.0 {
             self.predict_linearized(model, q, obs.dt, substeps)?;
         }
-        let meas = form.at(obs)?;
         Ok((meas.scale != 0.0).then_some(meas))
     }
 

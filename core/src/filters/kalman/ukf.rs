@@ -233,10 +233,11 @@ impl Filter for UnscentedKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        // Checked before anything moves: a refused observation leaves the state.
+        let meas = self.form.at(obs)?;
         if obs.dt > 0.0 {
             self.predict(obs.dt)?;
         }
-        let meas = self.form.at(obs)?;
         if meas.scale == 0.0 {
             return Ok(());
         }
