@@ -13,6 +13,9 @@ for t in wasm32-unknown-unknown thumbv7em-none-eabihf; do
   grep -qx "$t" <<<"$installed" || rustup target add "$t"
 done
 
+step "packaging: rust-version covers the locked dependencies"
+python3 scripts/check-rust-version.py
+
 step "cargo fmt --check"
 cargo fmt --all --check
 
