@@ -201,10 +201,17 @@ pub(crate) fn count_problem(
 }
 
 /// A nonlinear filter: advance over one observation interval, then report.
+///
+/// A step either succeeds or returns an error and leaves the filter as it was: an observation
+/// of the wrong kind or length ([`FilterError::BadObservation`]) or, for the methods built for
+/// one observation interval Δτ (grid and spectral), a step of another length
+/// ([`FilterError::IntervalMismatch`]) is refused before anything moves. Errors found while
+/// computing (non-finite numbers, lost mass) end the filter's usefulness; the driver marks the
+/// method failed.
 pub trait Filter {
     /// Display name, e.g. `"EKF"` or `"PF(200)"`.
     fn name(&self) -> &str;
-    /// Predicts over `obs.dt` and assimilates `obs.value`.
+    /// Predicts over `obs.dt` and assimilates `obs.value` (see the trait doc for errors).
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError>;
     /// Predicts over `dt` and assimilates the measurement `z` (discrete observations;
     /// `dt = 0` assimilates at the prior's time).
