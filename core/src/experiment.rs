@@ -48,6 +48,18 @@ impl Clock for StdClock {
     }
 }
 
+/// Calls `f` with the standard clock where there is one (`std`), else without a clock.
+fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
+    #[cfg(feature = "std")]
+    {
+        f(Some(&StdClock::default()))
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        f(None)
+    }
+}
+
 /// Receives progress from the driver.
 pub trait Observer {
     /// After observation `k` of `total` was given to every live filter.
@@ -316,15 +328,11 @@ impl Experiment {
         recording: Recording,
         seed: u64,
     ) -> Result<RunResult, ZakaiError> {
-        #[cfg(feature = "std")]
-        let clock = StdClock::default();
-        #[cfg(feature = "std")]
-        let clock: Option<&dyn Clock> = Some(&clock);
-        #[cfg(not(feature = "std"))]
-        let clock: Option<&dyn Clock> = None;
-        let mut run = self.start_recorded_timed(recording, seed, clock)?;
-        run.complete(clock, &mut Silent);
-        Ok(run.finish())
+        with_standard_clock(|clock| {
+            let mut run = self.start_recorded_timed(recording, seed, clock)?;
+            run.complete(clock, &mut Silent);
+            Ok(run.finish())
+        })
     }
 
     /// As [`Experiment::start_recorded`], timing every filter's build with `clock`.
@@ -404,14 +412,7 @@ impl Experiment {
 
     /// A whole run, timed by the standard clock where there is one.
     pub fn run(&self, seed: u64) -> Result<RunResult, ZakaiError> {
-        #[cfg(feature = "std")]
-        {
-            self.run_with(seed, Some(&StdClock::default()), &mut Silent)
-        }
-        #[cfg(not(feature = "std"))]
-        {
-            self.run_with(seed, None, &mut Silent)
-        }
+        with_standard_clock(|clock| self.run_with(seed, clock, &mut Silent))
     }
 }
 

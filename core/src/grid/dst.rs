@@ -212,7 +212,7 @@ impl DstPlan {
         let sines = (0..m)
             .map(|j| libm::sin(j as f64 * core::f64::consts::PI / m as f64))
             .collect();
-        let half = (m % 2 == 0).then(|| {
+        let half = m.is_multiple_of(2).then(|| {
             let l = m / 2;
             let fft = planner.plan_fft_forward(l);
             let twiddles = (0..l)

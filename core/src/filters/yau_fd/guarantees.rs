@@ -142,7 +142,7 @@ fn prime_factors(mut m: usize) -> Vec<usize> {
     let mut factors = Vec::new();
     let mut p = 2;
     while p * p <= m {
-        while m % p == 0 {
+        while m.is_multiple_of(p) {
             factors.push(p);
             m /= p;
         }
