@@ -29,4 +29,18 @@ wasm-bindgen --target web --out-dir web/pkg-scalar \
 if [ ! -d web/node_modules/uplot ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
   (cd web && npm ci --no-audit --no-fund)
 fi
-echo "built web/pkg ($(du -h web/pkg/zakai_wasm_bg.wasm | cut -f1) of wasm)"
+# Vendored libraries: the page loads nothing from node_modules at run time.
+mkdir -p web/vendor/uplot
+cp web/node_modules/uplot/dist/uPlot.esm.js web/node_modules/uplot/dist/uPlot.min.css \
+  web/node_modules/uplot/LICENSE web/vendor/uplot/
+
+# The static site: one self-contained folder for any static host.
+rm -rf target/site
+mkdir -p target/site
+cp web/index.html web/main.js web/worker.js web/style.css target/site/
+cp -r web/vendor target/site/
+for pkg in pkg pkg-scalar; do
+  mkdir -p "target/site/$pkg"
+  cp web/$pkg/zakai_wasm.js web/$pkg/zakai_wasm_bg.wasm "target/site/$pkg/"
+done
+echo "built web/pkg ($(du -h web/pkg/zakai_wasm_bg.wasm | cut -f1) of wasm) and the static site target/site ($(du -sh target/site | cut -f1))"

@@ -1,6 +1,6 @@
 // The Zakai playground page: a parameter form over one ScenarioConfig, a Web Worker that owns
 // the wasm Session, and live plots (uPlot) of truth, estimates and posterior densities.
-import uPlot from './node_modules/uplot/dist/uPlot.esm.js';
+import uPlot from './vendor/uplot/uPlot.esm.js';
 
 const $ = (id) => document.getElementById(id);
 // Elements are built with DOM calls only: text (every user string included) goes through

@@ -1,11 +1,12 @@
-// Static file server for the playground: serves this folder on 127.0.0.1 with the MIME types
-// ES modules, workers and WebAssembly need. Usage: node serve.mjs [port]
+// Static file server for the playground: serves a folder (default: this one; scripts/serve.sh
+// gives the built site, target/site) on 127.0.0.1 with the MIME types ES modules, workers and
+// WebAssembly need. Usage: node serve.mjs [port] [folder]
 import { createServer } from 'node:http';
 import { readFile, stat } from 'node:fs/promises';
-import { extname, join, normalize, sep } from 'node:path';
+import { extname, join, normalize, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-const root = fileURLToPath(new URL('.', import.meta.url));
+const root = process.argv[3] ? resolve(process.argv[3]) + sep : fileURLToPath(new URL('.', import.meta.url));
 const port = Number(process.argv[2] ?? process.env.PORT ?? 8080);
 const types = {
   '.html': 'text/html; charset=utf-8',

@@ -14,7 +14,8 @@ mkdirSync(artifacts, { recursive: true });
 
 function serve() {
   return new Promise((resolve, reject) => {
-    const proc = spawn(process.execPath, [`${root}web/serve.mjs`, '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+    // The static site build-web.sh assembles (what a static host would serve).
+    const proc = spawn(process.execPath, [`${root}web/serve.mjs`, '0', `${root}target/site`], { stdio: ['ignore', 'pipe', 'inherit'] });
     proc.stdout.on('data', (chunk) => {
       const m = String(chunk).match(/http:\/\/127\.0\.0\.1:\d+\//);
       if (m) resolve({ proc, url: m[0] });
