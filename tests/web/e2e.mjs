@@ -173,8 +173,27 @@ try {
   console.log('2-D heatmap:', JSON.stringify(h2));
   assert.ok(!h2.hidden && h2.lit > 10000 && h2.colours > 20, `heatmap drawn: ${JSON.stringify(h2)}`);
   await page.check('#lc-layer');
-  await page.waitForTimeout(500);
+  await page.waitForFunction(() => window.zakaiPage.lastDensity?.heat2d?.curvature != null, null, { timeout: 5000 });
+  await page.waitForTimeout(300);
   await page.screenshot({ path: `${artifacts}/playground-2d-heatmap.png` });
+  // The cubic sensor in 2-D: its posterior leaves log-concavity within a few intervals.
+  await load(`${url}?preset=cubic-sensor-2d`, 'cubic-sensor-2d');
+  for (let i = 0; i < 10; i++) await stepOnce();
+  await page.uncheck('#lc-layer');
+  await page.waitForTimeout(300);
+  const plain = await heatmapStats();
+  await page.check('#lc-layer');
+  await page.waitForFunction(() => window.zakaiPage.lastDensity?.heat2d?.curvature != null, null, { timeout: 5000 });
+  await page.waitForTimeout(300);
+  // The layer paints red exactly where the wasm reports a negative curvature of −log p: with
+  // such raster cells the red pixel count grows (each cell is ≥ 2×2 pixels at 300 px / 120
+  // points); without them it stays.
+  const negative = await page.evaluate(() => Array.from(window.zakaiPage.lastDensity.heat2d.curvature).filter((k) => k < -1e-6).length);
+  const layered = await heatmapStats();
+  console.log('log-concavity layer:', negative, 'cells with negative curvature; red pixels', plain.red, '→', layered.red);
+  assert.ok(negative > 0, 'the 2-D cubic sensor posterior is not log-concave after 10 intervals');
+  assert.ok(layered.red >= plain.red + 4 * negative, `red where −log p is not convex: ${negative} cells, ${plain.red} → ${layered.red} red pixels`);
+  await page.uncheck('#lc-layer');
   await load(`${url}?preset=sa-example-2`, 'sa-example-2');
   await page.selectOption('#heatmap-method', { label: 'SA' });
   for (let i = 0; i < 2; i++) await stepOnce();
