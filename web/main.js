@@ -677,9 +677,11 @@ function render() {
     if (!tr) return;
     tr.querySelector('.mse').textContent = m.mse == null ? '—' : m.mse.toFixed(4);
     const status = tr.querySelector('.status');
-    status.textContent = m.failed ? `failed at step ${m.failed_at}` : 'running';
-    status.title = m.failure ?? '';
-    status.className = m.failed ? 'status failed' : 'status';
+    // A self-check that warned: the result may not be trustworthy (not a failure).
+    const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';
+    status.textContent = (m.failed ? `failed at step ${m.failed_at}` : 'running') + checked;
+    status.title = [m.failure, ...(m.concerns ?? [])].filter(Boolean).join('\n');
+    status.className = m.failed ? 'status failed' : (checked ? 'status warned' : 'status');
     tr.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
   });
   const warnings = (state.diagnostics ?? []).flatMap((m) => m.warnings.map((w) => `${m.name}: ${w}`));

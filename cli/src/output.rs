@@ -146,6 +146,20 @@ pub fn render(
                     writeln!(s, "  {}: {f}", m.name)?;
                 }
             }
+            let warned: Vec<_> = summary.methods.iter().filter(|m| m.warned > 0).collect();
+            if !warned.is_empty() {
+                writeln!(s)?;
+                writeln!(
+                    s,
+                    "Self-checks that warned (the result may not be trustworthy; runs, then the first run's findings):"
+                )?;
+                for m in warned {
+                    writeln!(s, "  {}: {}/{} runs", m.name, m.warned, m.runs)?;
+                    for c in &m.first_concerns {
+                        writeln!(s, "    {c}")?;
+                    }
+                }
+            }
         }
     }
     Ok(s)

@@ -93,6 +93,7 @@ pub fn json(result: &RunResult) -> String {
                 "estimates": m.estimates,
                 "covariances": m.covariances,
                 "failure": m.failure,
+                "concerns": m.concerns,
                 "seconds_per_step": m.seconds_per_step(),
                 "build_seconds": m.build_seconds,
                 "mse": result.mse(i),
@@ -175,6 +176,11 @@ pub fn table(result: &RunResult) -> String {
     }
     for (method, w) in &result.warnings {
         let _ = writeln!(s, "warning: {method}: {w}");
+    }
+    for m in &result.methods {
+        for c in &m.concerns {
+            let _ = writeln!(s, "self-check: {}: {}", m.name, c.describe());
+        }
     }
     s
 }

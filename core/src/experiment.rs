@@ -15,7 +15,7 @@ use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
-use crate::filters::{Filter, Observation, ObservationKind};
+use crate::filters::{Concern, Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
 use crate::recording::{Recording, INTERVAL_TOLERANCE};
@@ -81,6 +81,70 @@ pub struct Failure {
     pub message: String,
 }
 
+/// A self-check that warned during a run ([`Filter::self_check`]): when it first crossed its
+/// threshold, on how many steps, and its worst value.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ConcernRecord {
+    /// What is watched.
+    pub check: &'static str,
+    /// The documented threshold.
+    pub threshold: f64,
+    /// Whether values above the threshold are the problem (else below).
+    pub above: bool,
+    /// What it means and what to change.
+    pub advice: &'static str,
+    /// Observation index and time of the first crossing.
+    pub first_k: usize,
+    /// τ at the first crossing.
+    pub first_t: f64,
+    /// Steps on which the threshold was crossed.
+    pub steps: usize,
+    /// The value furthest beyond the threshold.
+    pub worst: f64,
+}
+
+impl ConcernRecord {
+    /// One line: check, worst value against the threshold, since when, how often, advice.
+    pub fn describe(&self) -> String {
+        alloc::format!(
+            "{} {:.3e} {} {:.1e} from t = {:.4} on {} step(s): {}",
+            self.check,
+            self.worst,
+            if self.above { ">" } else { "<" },
+            self.threshold,
+            self.first_t,
+            self.steps,
+            self.advice
+        )
+    }
+
+    fn record(records: &mut Vec<ConcernRecord>, c: &Concern, k: usize, t: f64) {
+        match records.iter_mut().find(|r| r.check == c.check) {
+            Some(r) => {
+                r.steps += 1;
+                let worse = if c.above {
+                    c.value > r.worst
+                } else {
+                    c.value < r.worst
+                };
+                if worse {
+                    r.worst = c.value;
+                }
+            }
+            None => records.push(ConcernRecord {
+                check: c.check,
+                threshold: c.threshold,
+                above: c.above,
+                advice: c.advice,
+                first_k: k,
+                first_t: t,
+                steps: 1,
+                worst: c.value,
+            }),
+        }
+    }
+}
+
 /// One method's record in one run.
 #[derive(Clone, Debug)]
 pub struct MethodTrack {
@@ -95,6 +159,8 @@ pub struct MethodTrack {
     pub covariances: Vec<f64>,
     /// The failure, if the method failed.
     pub failure: Option<Failure>,
+    /// Its self-checks that warned (empty when every check stayed within its threshold).
+    pub concerns: Vec<ConcernRecord>,
     /// Total wall time spent in `step` (seconds; 0 without a clock).
     pub seconds: f64,
     /// Number of steps taken.
@@ -376,6 +442,7 @@ impl Experiment {
                 estimates: Vec::with_capacity(recording.times.len() * self.model.n),
                 covariances: Vec::new(),
                 failure: None,
+                concerns: Vec::new(),
                 seconds: 0.0,
                 steps: 0,
                 build_seconds,
@@ -386,6 +453,7 @@ impl Experiment {
             seed,
             data: recording,
             dt_obs: self.config.time.dt_obs,
+            concerns: Vec::new(),
             filters,
             tracks,
             next: 0,
@@ -422,6 +490,8 @@ pub struct ExperimentRun {
     data: Recording,
     /// Δτ: steps within [`INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
     dt_obs: f64,
+    /// The self-checks' findings of one step (reused: nothing is allocated per step).
+    concerns: Vec<Concern>,
     filters: Vec<Box<dyn Filter>>,
     tracks: Vec<MethodTrack>,
     next: usize,
@@ -576,6 +646,11 @@ impl ExperimentRun {
         };
         match result {
             Ok(est) => {
+                self.concerns.clear();
+                filter.self_check(&mut self.concerns);
+                for c in &self.concerns {
+                    ConcernRecord::record(&mut track.concerns, c, k, t.times[k]);
+                }
                 track.estimates.extend_from_slice(est.mean.as_slice());
                 if let Some(p) = &est.covariance {
                     // nalgebra is column-major; P is symmetric, so rows read the same.

@@ -255,6 +255,8 @@ struct MethodDiagnostics {
     ms_per_step: f64,
     steps: usize,
     warnings: Vec<String>,
+    /// The self-checks that warned so far, one line each.
+    concerns: Vec<String>,
 }
 
 /// Static facts about the session's scenario.
@@ -602,6 +604,7 @@ impl Session {
                 ms_per_step: t.seconds_per_step() * 1e3,
                 steps: t.steps,
                 warnings: self.run.filters()[i].warnings(),
+                concerns: t.concerns.iter().map(|c| c.describe()).collect(),
             })
             .collect();
         to_js(&list)

@@ -75,6 +75,45 @@ impl<'a> Observation<'a> {
     }
 }
 
+/// A self-check's finding: the watched quantity crossed its documented threshold, so the
+/// method's result may not be trustworthy (see [`Filter::self_check`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Concern {
+    /// What is watched, e.g. `"mass near the boundary"`.
+    pub check: &'static str,
+    /// Its value now.
+    pub value: f64,
+    /// The threshold it crossed.
+    pub threshold: f64,
+    /// Whether values above the threshold are the problem (else values below it).
+    pub above: bool,
+    /// What it means and what to change.
+    pub advice: &'static str,
+}
+
+impl Concern {
+    /// `value` is a problem when above `threshold`.
+    pub fn above(check: &'static str, value: f64, threshold: f64, advice: &'static str) -> Self {
+        Concern {
+            check,
+            value,
+            threshold,
+            above: true,
+            advice,
+        }
+    }
+    /// `value` is a problem when below `threshold`.
+    pub fn below(check: &'static str, value: f64, threshold: f64, advice: &'static str) -> Self {
+        Concern {
+            check,
+            value,
+            threshold,
+            above: false,
+            advice,
+        }
+    }
+}
+
 /// A filter's current estimate.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Estimate {
@@ -234,6 +273,10 @@ pub trait Filter {
     fn warnings(&self) -> Vec<String> {
         Vec::new()
     }
+    /// The method's self-checks of its current state, cheap enough to run after every step:
+    /// each check whose documented threshold is crossed pushes a [`Concern`] into `out`
+    /// (nothing is allocated when all is well). A concern is a warning, not a failure.
+    fn self_check(&self, _out: &mut Vec<Concern>) {}
     /// The filter's marginal density of state component `dim` at the points `grid`, written
     /// into `out` (for plots). The default is the Gaussian N(m_d, P_dd) of the estimate.
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {

@@ -130,6 +130,10 @@ impl Method for Pf {
     }
 }
 
+/// The particle filter's self-check: the effective sample size after weighting (before any
+/// resampling) as a share of N. Below 1 % the posterior rests on a handful of particles.
+pub const ESS_SHARE_THRESHOLD: f64 = 0.01;
+
 /// The bootstrap particle filter (see the module doc).
 pub struct ParticleFilter {
     name: String,
@@ -141,6 +145,8 @@ pub struct ParticleFilter {
     log_weights: Vec<f64>,
     scratch: Vec<f64>,
     resamples: usize,
+    /// The effective sample size after the last weighting.
+    last_ess: f64,
 }
 
 impl ParticleFilter {
@@ -170,6 +176,7 @@ impl ParticleFilter {
             log_weights: vec![-libm::log(params.particles as f64); params.particles],
             scratch: Vec::new(),
             resamples: 0,
+            last_ess: params.particles as f64,
         })
     }
 
@@ -291,10 +298,23 @@ impl Filter for ParticleFilter {
             self.predict(obs.dt);
         }
         self.weigh(obs)?;
-        if self.effective_sample_size() < self.params.ess_threshold * self.params.particles as f64 {
+        self.last_ess = self.effective_sample_size();
+        if self.last_ess < self.params.ess_threshold * self.params.particles as f64 {
             self.resample();
         }
         Ok(())
+    }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        let share = self.last_ess / self.params.particles as f64;
+        if share < ESS_SHARE_THRESHOLD {
+            out.push(crate::filters::Concern::below(
+                "effective sample size after weighting, share of N",
+                share,
+                ESS_SHARE_THRESHOLD,
+                "the weights collapsed onto a few particles: use more particles (or substeps)",
+            ));
+        }
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {

@@ -203,6 +203,25 @@ impl TensorGrid {
         u.iter().sum::<f64>() * self.cell_volume()
     }
 
+    /// Mass on the `layers` outermost nodes next to every face of the box (a node near two
+    /// faces counts twice — an upper bound). Only those slabs are visited, so in 1-D it costs
+    /// 2·`layers` additions.
+    pub fn mass_near_boundary(&self, u: &[f64], layers: usize) -> f64 {
+        let mut sum = 0.0;
+        for d in 0..self.dim() {
+            let (len, stride) = (self.shape[d], self.strides[d]);
+            let block = len * stride;
+            let (low, high) = (layers.min(len), len.saturating_sub(layers).max(layers));
+            for outer in (0..u.len()).step_by(block) {
+                for i in (0..low).chain(high..len) {
+                    let start = outer + i * stride;
+                    sum += u[start..start + stride].iter().sum::<f64>();
+                }
+            }
+        }
+        sum * self.cell_volume()
+    }
+
     /// Mass (rectangle rule), mean, covariance and the node of largest value of a density that
     /// need not be normalised. One pass, line by line along the first dimension: each line
     /// contributes its sums `Σw`, `Σw x₀`, `Σw x₀²`, and the other coordinates are constant on it.

@@ -51,6 +51,10 @@ pub struct MethodSummary {
     pub e_mean: Vec<f64>,
     /// First failure message seen, for the report.
     pub first_failure: Option<String>,
+    /// Runs in which one of the method's self-checks warned ([`crate::filters::Filter::self_check`]).
+    pub warned: usize,
+    /// The first run's self-check warnings, one line each, for the report.
+    pub first_concerns: Vec<String>,
 }
 
 /// All methods' summaries.
@@ -156,6 +160,7 @@ impl<'a> MonteCarlo<'a> {
                 let mut errors = Vec::new();
                 let mut failed = 0;
                 let mut first_failure = None;
+                let (mut warned, mut first_concerns) = (0, Vec::new());
                 let (mut seconds, mut steps, mut build) = (0.0, 0usize, 0.0);
                 for r in results {
                     let track = &r.methods[i];
@@ -163,6 +168,16 @@ impl<'a> MonteCarlo<'a> {
                     seconds += track.seconds;
                     steps += track.steps;
                     build += track.build_seconds;
+                    if !track.concerns.is_empty() {
+                        warned += 1;
+                        if first_concerns.is_empty() {
+                            first_concerns = track
+                                .concerns
+                                .iter()
+                                .map(|c| alloc::format!("run seed {}: {}", r.seed, c.describe()))
+                                .collect();
+                        }
+                    }
                     match track.mse_components(truth) {
                         Some(c) => {
                             mses.push(c.iter().sum());
@@ -196,6 +211,8 @@ impl<'a> MonteCarlo<'a> {
                     mse: stats.map(|s| s.0),
                     mse_stderr: stats.map(|s| s.1),
                     mse_quartiles: quartiles(&mses),
+                    warned,
+                    first_concerns,
                     error_norm: norm_stats.map(|s| s.0),
                     error_norm_stderr: norm_stats.map(|s| s.1),
                     mse_components: mean_vectors(&comps),
