@@ -4,7 +4,7 @@
 
 use zakai::filters::Concern;
 use zakai::simulate::{simulate, TimeGrid};
-use zakai::{Filter, Kalman, Model, Noise, Pf, Qiem, Spectral};
+use zakai::{Filter, Kalman, Model, Noise, Pf, Qiem, Separation, Spectral};
 
 fn checks(f: &dyn Filter) -> Vec<&'static str> {
     let mut out: Vec<Concern> = Vec::new();
@@ -78,7 +78,20 @@ fn grid_filters_warn_when_the_box_cuts_the_density_off() {
             .unwrap();
         qiem.step_increment(dt, &[0.02]).unwrap();
         let warned = checks(&qiem).contains(&"mass near the boundary");
-        assert_eq!(warned, should_warn, "box up to {upper}");
+        assert_eq!(warned, should_warn, "QIEM, box up to {upper}");
+    }
+    // The continuous–discrete separation filter of 001 shares the check.
+    let discrete = Model::from_text(&["0"], &["x"], Noise::discrete(0.1)).unwrap();
+    for (upper, should_warn) in [(2.5, true), (8.0, false)] {
+        let mut sa = Separation::builder(&discrete)
+            .prior_gaussian(&[2.0], &[[0.1]])
+            .domain(&[(-4.0, upper)])
+            .dt(0.1)
+            .build()
+            .unwrap();
+        sa.step_measurement(0.1, &[2.0]).unwrap();
+        let warned = checks(&sa).contains(&"mass near the boundary");
+        assert_eq!(warned, should_warn, "SA, box up to {upper}");
     }
 }
 
@@ -97,5 +110,60 @@ fn the_particle_filter_warns_when_its_weights_collapse() {
         pf.step_measurement(0.0, &[1.5]).unwrap();
         let warned = checks(&pf).contains(&"effective sample size after weighting, share of N");
         assert_eq!(warned, should_warn, "measurement variance {variance}");
+    }
+}
+
+/// The innovation check: the exact Kalman filter of a linear model stays inside the χ² band
+/// over 5000 measurements; the same filter told a measurement variance 100× too small (its
+/// covariance then understates its errors) leaves it above, and one told 100× too large
+/// leaves it below.
+#[test]
+fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
+    let truth_model = Model::from_text(&["-x"], &["x"], Noise::discrete(0.1)).unwrap();
+    let dt = 0.1;
+    let grid = TimeGrid {
+        dt_obs: dt,
+        steps: 5000,
+        inner_steps: 10,
+    };
+    let data = simulate(
+        &truth_model,
+        &[0.0],
+        grid,
+        &mut zakai::random::rng_from_seed(11),
+    );
+    let nis = "normalised innovation squared (mean over 50 updates, per component)";
+    for (variance, expect) in [(0.1, None), (0.001, Some(true)), (10.0, Some(false))] {
+        let model = Model::from_text(&["-x"], &["x"], Noise::discrete(variance)).unwrap();
+        let mut kf = Kalman::builder(&model)
+            .prior_gaussian(&[0.0], &[[0.5]])
+            .build()
+            .unwrap();
+        let (mut above, mut below) = (0, 0);
+        let mut out = Vec::new();
+        for (k, z) in data.observations.iter().enumerate() {
+            kf.step_measurement(if k == 0 { 0.0 } else { dt }, &[*z])
+                .unwrap();
+            out.clear();
+            kf.self_check(&mut out);
+            for c in out.iter().filter(|c| c.check == nis) {
+                if c.above {
+                    above += 1;
+                } else {
+                    below += 1;
+                }
+            }
+        }
+        match expect {
+            None => assert_eq!((above, below), (0, 0), "the exact filter is consistent"),
+            Some(true) => assert!(
+                above > 4000 && below == 0,
+                "variance {variance}: {above} above, {below} below"
+            ),
+            Some(false) => assert!(
+                below > 4000 && above == 0,
+                "variance {variance}: {above} above, {below} below"
+            ),
+        }
     }
 }

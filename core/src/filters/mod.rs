@@ -175,6 +175,51 @@ pub(crate) fn check_measurement(
     check_observation(name, obs, ObservationKind::Measurement, m)
 }
 
+/// The grid self-check's first threshold: mass on the two outermost nodes of any face, as a
+/// share of the density's mass. The grid filters' boundary (zero Dirichlet for the Yau–Yau
+/// schemes, outflow for the separation approach) loses mass that reaches the edge of the box,
+/// and the renormalisation after each update hides the loss; a density still this close to
+/// the boundary is being cut off.
+pub const BOUNDARY_MASS_THRESHOLD: f64 = 1e-4;
+
+/// The grid self-check's second threshold: the posterior's smallest standard deviation in
+/// grid spacings, below which the grid cannot resolve it (the observation factor then weighs
+/// nodes, not mass).
+pub const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
+
+/// The self-check of a density `u` on `grid` with its `estimate` (Yau–Yau and
+/// continuous–discrete grid filters): mass near the boundary and width in cells.
+pub(crate) fn grid_self_check(
+    grid: &crate::grid::TensorGrid,
+    u: &[f64],
+    estimate: &Estimate,
+    out: &mut Vec<Concern>,
+) {
+    let mass = grid.mass(u);
+    let near = grid.mass_near_boundary(u, 2) / mass;
+    if near > BOUNDARY_MASS_THRESHOLD {
+        out.push(Concern::above(
+            "mass near the boundary",
+            near,
+            BOUNDARY_MASS_THRESHOLD,
+            "the density reaches the edge of the box and is cut off there: widen the domain",
+        ));
+    }
+    if let Some(p) = &estimate.covariance {
+        let cells = (0..grid.dim())
+            .map(|d| libm::sqrt(p[(d, d)].max(0.0)) / grid.spacing()[d])
+            .fold(f64::INFINITY, f64::min);
+        if cells < WIDTH_IN_CELLS_THRESHOLD {
+            out.push(Concern::below(
+                "posterior width in grid cells",
+                cells,
+                WIDTH_IN_CELLS_THRESHOLD,
+                "the posterior is narrower than the grid resolves: use more points or cells, or a smaller box",
+            ));
+        }
+    }
+}
+
 /// Normalises a grid density to unit mass in place and returns its estimate (mean,
 /// covariance, MAP node); a non-finite or vanished mass is an error, never NaN.
 pub(crate) fn normalise_on_grid(

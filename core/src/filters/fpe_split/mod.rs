@@ -483,4 +483,8 @@ impl Filter for ContinuousDiscreteGrid {
     fn warnings(&self) -> Vec<String> {
         self.warnings.clone()
     }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
+    }
 }

@@ -77,4 +77,8 @@ impl Filter for ExtendedKalman {
     fn estimate(&self) -> Estimate {
         self.state.estimate()
     }
+
+    fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
+        self.state.innovations.check(self.model.m, out);
+    }
 }

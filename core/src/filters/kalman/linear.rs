@@ -183,4 +183,8 @@ impl Filter for KalmanBucy {
     fn estimate(&self) -> Estimate {
         self.state.estimate()
     }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        self.state.innovations.check(self.model.m, out);
+    }
 }

@@ -39,6 +39,65 @@ pub struct GaussianInit {
     pub variance: Option<f64>,
 }
 
+/// Updates over which the innovation self-check averages the normalised innovation squared.
+pub const NIS_WINDOW: usize = 50;
+
+/// The innovation self-check's band: the mean of the last [`NIS_WINDOW`] NIS values
+/// `νᵀ P_zz⁻¹ ν` of a consistent filter is χ²(W·m)/(W·m)-distributed; the band is its
+/// two-sided 1 − 10⁻⁵ interval (Wilson–Hilferty, z = 4.4), so a well-specified Kalman filter
+/// warns on a window about once in 10⁵. Outside it, the filter's covariance does not describe
+/// its errors (too small above the band — the usual way an EKF loses track —, too large below).
+pub fn nis_band(m: usize) -> (f64, f64) {
+    let k = (NIS_WINDOW * m) as f64;
+    let (a, b) = (1.0 - 2.0 / (9.0 * k), 4.4 * libm::sqrt(2.0 / (9.0 * k)));
+    (libm::pow(a - b, 3.0), libm::pow(a + b, 3.0))
+}
+
+/// The last [`NIS_WINDOW`] normalised innovations squared, in a ring (no allocation).
+#[derive(Clone, Debug)]
+pub struct InnovationWindow {
+    values: [f64; NIS_WINDOW],
+    count: usize,
+}
+
+impl InnovationWindow {
+    fn push(&mut self, nis: f64) {
+        self.values[self.count % NIS_WINDOW] = nis;
+        self.count += 1;
+    }
+
+    /// The mean NIS per observation component over the last window, once it is full.
+    pub fn mean(&self, m: usize) -> Option<f64> {
+        (self.count >= NIS_WINDOW)
+            .then(|| self.values.iter().sum::<f64>() / (NIS_WINDOW * m) as f64)
+    }
+
+    /// The innovation self-check: a [`crate::filters::Concern`] when the window's mean is
+    /// outside [`nis_band`].
+    pub fn check(&self, m: usize, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
+        let Some(mean) = self.mean(m) else {
+            return;
+        };
+        let (lo, hi) = nis_band(m);
+        const CHECK: &str = "normalised innovation squared (mean over 50 updates, per component)";
+        if mean > hi {
+            out.push(crate::filters::Concern::above(
+                CHECK,
+                mean,
+                hi,
+                "the innovations are larger than the filter's covariance says: its estimate is overconfident and may have lost track",
+            ));
+        } else if mean < lo {
+            out.push(crate::filters::Concern::below(
+                CHECK,
+                mean,
+                lo,
+                "the innovations are smaller than the filter's covariance says: its covariance is too large",
+            ));
+        }
+    }
+}
+
 /// The Gaussian state `N(m, P)` of the Kalman family.
 #[derive(Clone, Debug)]
 pub struct GaussianState {
@@ -46,6 +105,8 @@ pub struct GaussianState {
     pub mean: DVector<f64>,
     /// Covariance P.
     pub cov: DMatrix<f64>,
+    /// The last normalised innovations squared (the innovation self-check).
+    pub innovations: InnovationWindow,
 }
 
 impl GaussianState {
@@ -64,7 +125,14 @@ impl GaussianState {
         } else {
             prior_cov
         };
-        GaussianState { mean, cov }
+        GaussianState {
+            mean,
+            cov,
+            innovations: InnovationWindow {
+                values: [0.0; NIS_WINDOW],
+                count: 0,
+            },
+        }
     }
 
     /// The linear(ised) update with residual `r = z − ẑ`, gain from the cross covariance
@@ -76,6 +144,7 @@ impl GaussianState {
         pzz: &DMatrix<f64>,
     ) -> Result<(), FilterError> {
         let chol = crate::linalg::cholesky(pzz, "innovation covariance")?;
+        self.innovations.push(residual.dot(&chol.solve(residual)));
         // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ.
         let k = chol.solve(&pxz.transpose()).transpose();
         self.mean += &k * residual;

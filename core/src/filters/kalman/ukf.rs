@@ -210,7 +210,7 @@ impl UnscentedKalman {
     fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
         let (mut m, mut p) = (self.state.mean.clone(), self.state.cov.clone());
         rk4_moments(&mut m, &mut p, dt, self.substeps, |m, p| self.rates(m, p))?;
-        self.state = GaussianState { mean: m, cov: p };
+        (self.state.mean, self.state.cov) = (m, p);
         self.state.check()
     }
 
@@ -246,5 +246,9 @@ impl Filter for UnscentedKalman {
 
     fn estimate(&self) -> Estimate {
         self.state.estimate()
+    }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        self.state.innovations.check(self.model.m, out);
     }
 }

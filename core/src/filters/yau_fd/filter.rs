@@ -575,44 +575,13 @@ impl YauYauFilter {
     }
 }
 
-/// The grid self-check: mass on the two outermost nodes of any face, as a share of the
-/// (normalised) density. The zero boundary condition absorbs mass that reaches the edge of the
-/// box, and the renormalisation after each update hides the loss; a density still this close
-/// to the boundary is being cut off.
-pub const BOUNDARY_MASS_THRESHOLD: f64 = 1e-4;
-
-/// The second grid self-check: the posterior's standard deviation in grid spacings, below
-/// which the grid cannot resolve it (the observation factor then weighs nodes, not mass).
-pub const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
-
 impl Filter for YauYauFilter {
     fn name(&self) -> &str {
         &self.name
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        let near = self.grid.mass_near_boundary(&self.u, 2);
-        if near > BOUNDARY_MASS_THRESHOLD {
-            out.push(crate::filters::Concern::above(
-                "mass near the boundary",
-                near,
-                BOUNDARY_MASS_THRESHOLD,
-                "the density reaches the edge of the box and is cut off there: widen the domain",
-            ));
-        }
-        if let Some(p) = &self.estimate.covariance {
-            let cells = (0..self.grid.dim())
-                .map(|d| p[(d, d)].max(0.0).sqrt() / self.grid.spacing()[d])
-                .fold(f64::INFINITY, f64::min);
-            if cells < WIDTH_IN_CELLS_THRESHOLD {
-                out.push(crate::filters::Concern::below(
-                    "posterior width in grid cells",
-                    cells,
-                    WIDTH_IN_CELLS_THRESHOLD,
-                    "the posterior is narrower than the grid resolves: use more points, a smaller box, or cell samples (likelihood_samples)",
-                ));
-            }
-        }
+        crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
