@@ -958,6 +958,7 @@ worker.onmessage = ({ data }) => {
       state.pendingConfig = null;
       setPlaying(false);
       $('data-error').textContent = data.message;
+      $('data-section').open = true;
       $('form-status').textContent = 'not applied';
       break;
     case 'seed':
@@ -1029,6 +1030,7 @@ function showDataStatus() {
     ? `filtering ${r.name}${r.truthText ? ` with the truth from ${r.truthName}` : ' (no truth: estimates and ±2σ bands, no errors)'}`
     : 'simulated data';
   $('data-clear').hidden = !r;
+  if (r) $('data-section').open = true;
 }
 
 // Reads one file into the form or the recording; `then` applies (false while more files of
