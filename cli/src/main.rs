@@ -82,27 +82,7 @@ enum Command {
     /// Simulate a scenario's truth and observations (no filters): as JSON
     /// `{"times": [...], "states": [...], "observations": [...]}` (rows flattened), or as the
     /// CSV files `zakai filter` reads (observations `t,dy1,…` or `t,z1,…`; truth `t,x1,…`).
-    Simulate {
-        /// A preset name or a path to a scenario JSON file.
-        scenario: String,
-        /// Seed (default: the scenario's seed).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// `json` (default) or `csv` (the observations; the truth goes to --truth-out).
-        #[arg(long, value_enum, default_value_t = SimFormat::Json)]
-        format: SimFormat,
-        /// Write the output (CSV: the observations) to FILE instead of stdout.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// CSV only: write the true states to FILE.
-        #[arg(long)]
-        truth_out: Option<PathBuf>,
-        /// Also run the scenario's methods on these observations and add
-        /// `"estimates": [{"name", "values", "failure"}]` (rows flattened) — what the
-        /// native-vs-wasm determinism test compares.
-        #[arg(long)]
-        estimates: bool,
-    },
+    Simulate(SimulateArgs),
     /// Reproduce a paper's table: run every row's preset as a Monte Carlo job and print our
     /// numbers beside the paper's (`zakai reproduce` lists the tables).
     Reproduce {
@@ -602,13 +582,28 @@ fn yau_system(scenario: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Arguments of `zakai simulate`.
+#[derive(Args)]
 struct SimulateArgs {
+    /// A preset name or a path to a scenario JSON file.
     scenario: String,
+    /// Seed (default: the scenario's seed).
+    #[arg(long)]
     seed: Option<u64>,
-    estimates: bool,
+    /// `json` (default) or `csv` (the observations; the truth goes to --truth-out).
+    #[arg(long, value_enum, default_value_t = SimFormat::Json)]
     format: SimFormat,
+    /// Write the output (CSV: the observations) to FILE instead of stdout.
+    #[arg(long)]
     out: Option<PathBuf>,
+    /// CSV only: write the true states to FILE.
+    #[arg(long)]
     truth_out: Option<PathBuf>,
+    /// Also run the scenario's methods on these observations and add
+    /// `"estimates": [{"name", "values", "failure"}]` (rows flattened) — what the
+    /// native-vs-wasm determinism test compares.
+    #[arg(long)]
+    estimates: bool,
 }
 
 fn simulate(a: SimulateArgs) -> Result<(), String> {
@@ -705,21 +700,7 @@ fn main() -> ExitCode {
             .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
             .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
             .map(|json| outln!("{json}")),
-        Command::Simulate {
-            scenario,
-            seed,
-            estimates,
-            format,
-            out,
-            truth_out,
-        } => simulate(SimulateArgs {
-            scenario,
-            seed,
-            estimates,
-            format,
-            out,
-            truth_out,
-        }),
+        Command::Simulate(args) => simulate(args),
         Command::Filter(args) => filter(&args),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
