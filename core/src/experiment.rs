@@ -18,7 +18,7 @@ use crate::error::ZakaiError;
 use crate::filters::{Concern, Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
-use crate::recording::{Recording, INTERVAL_TOLERANCE};
+use crate::recording::{is_interval, Recording};
 use crate::scenario::methods::{BuildContext, MethodConfig};
 use crate::scenario::ScenarioConfig;
 use crate::simulate::{rng_from_seed, simulate, Trajectory};
@@ -488,7 +488,7 @@ impl Experiment {
 pub struct ExperimentRun {
     seed: u64,
     data: Recording,
-    /// Δτ: steps within [`INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
+    /// Δτ: steps within [`crate::recording::INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
     dt_obs: f64,
     /// The self-checks' findings of one step (reused: nothing is allocated per step).
     concerns: Vec<Concern>,
@@ -576,7 +576,7 @@ impl ExperimentRun {
         // step to step, and a recording written from a simulation then filters bit for bit as
         // the simulation did).
         let step = t.step_length(k);
-        let dt = if (step - self.dt_obs).abs() <= INTERVAL_TOLERANCE * self.dt_obs {
+        let dt = if is_interval(step, self.dt_obs) {
             self.dt_obs
         } else {
             step

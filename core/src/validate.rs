@@ -92,6 +92,26 @@ pub fn memory_cap() -> usize {
     MEMORY_CAP.load(core::sync::atomic::Ordering::Relaxed)
 }
 
+/// The problem at `field` when a method's estimated memory `bytes` (`None`: it overflows)
+/// exceeds the cap; `None` when it fits. One message for scenarios and builders.
+pub(crate) fn memory_problem(
+    field: impl Into<String>,
+    bytes: Option<usize>,
+) -> Option<ConfigProblem> {
+    let cap = memory_cap();
+    match bytes {
+        Some(b) if b <= cap => None,
+        b => Some(ConfigProblem::new(
+            field,
+            format!(
+                "needs ≈ {} of memory, above the cap of {}; use a coarser grid or fewer particles/components",
+                b.map_or_else(|| "more than 2^64 B".into(), format_bytes),
+                format_bytes(cap)
+            ),
+        )),
+    }
+}
+
 /// Sets the process-wide memory cap (bytes) for every later validation — the documented way
 /// to run grids larger than a browser tab allows natively (`zakai --memory-cap 8GiB …` or
 /// `ZAKAI_MEMORY_CAP` in the CLI). Returns the previous cap.

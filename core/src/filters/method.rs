@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use super::Filter;
 use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, Prior};
-use crate::validate::{check_spd, check_vector, format_bytes, memory_cap, ConfigProblem};
+use crate::validate::{check_spd, check_vector, memory_problem, ConfigProblem};
 
 /// What building a filter needs besides its own parameters.
 pub struct BuildContext<'a> {
@@ -449,17 +449,10 @@ impl<'m, M: Method> Builder<'m, M> {
             )),
             _ => {}
         }
-        match memory_estimate::<M>(&self.params, n) {
-            Some(b) if b <= memory_cap() => {}
-            b => problems.push(ConfigProblem::new(
-                "params",
-                format!(
-                    "needs ≈ {} of memory, above the cap of {}",
-                    b.map_or_else(|| "more than 2^64 B".into(), format_bytes),
-                    format_bytes(memory_cap())
-                ),
-            )),
-        }
+        problems.extend(memory_problem(
+            "params",
+            memory_estimate::<M>(&self.params, n),
+        ));
         if problems.is_empty() {
             if let Some(prior) = prior {
                 let bounds = self.bounds(prior);

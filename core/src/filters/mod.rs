@@ -243,9 +243,9 @@ pub(crate) fn normalise_on_grid(
 }
 
 /// The step length a filter built for one observation interval accepts: `dt` equal to
-/// `built_for` to a relative 1e-9, or the error saying what it was built for.
+/// `built_for` to a relative [`crate::recording::INTERVAL_TOLERANCE`], or the error saying what it was built for.
 pub(crate) fn check_interval(name: &str, built_for: f64, dt: f64) -> Result<(), FilterError> {
-    if (dt - built_for).abs() <= 1e-9 * built_for {
+    if crate::recording::is_interval(dt, built_for) {
         Ok(())
     } else {
         Err(FilterError::IntervalMismatch {

@@ -42,6 +42,11 @@ pub struct Recording {
 /// bit as the simulation did).
 pub const INTERVAL_TOLERANCE: f64 = 1e-9;
 
+/// Whether a step of length `step` is the interval `dt_obs` up to [`INTERVAL_TOLERANCE`].
+pub fn is_interval(step: f64, dt_obs: f64) -> bool {
+    (step - dt_obs).abs() <= INTERVAL_TOLERANCE * dt_obs
+}
+
 impl Recording {
     /// Increments of a continuous observation: `times` = τ₀, …, τ_N (τ₀ the prior's time) and
     /// `dy` the N increments over `(τ_{k−1}, τ_k]`, row-major (N·m values) — observations
@@ -201,9 +206,7 @@ impl Recording {
     /// step of another length, by row.
     pub fn interval_problems(&self, dt_obs: f64) -> Vec<ConfigProblem> {
         (1..self.times.len())
-            .find(|&k| {
-                (self.step_length(k) - dt_obs).abs() > INTERVAL_TOLERANCE * dt_obs
-            })
+            .find(|&k| !is_interval(self.step_length(k), dt_obs))
             .map(|k| {
                 ConfigProblem::new(
                     format!("times[{k}]"),

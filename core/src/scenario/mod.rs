@@ -432,16 +432,10 @@ impl ScenarioConfig {
             let before = p.len();
             method.validate(n, &format!("methods[{i}]"), &mut p);
             if p.len() == before && (1..=MAX_STATE_DIM).contains(&n) {
-                match method.memory_bytes(n) {
-                    Some(b) if b <= cap => total = total.saturating_add(b),
-                    b => p.push(ConfigProblem::new(
-                        format!("methods[{i}]"),
-                        format!(
-                            "needs ≈ {} of memory, above the cap of {}; use a coarser grid or fewer particles/components",
-                            b.map_or_else(|| "more than 2^64 B".into(), format_bytes),
-                            format_bytes(cap)
-                        ),
-                    )),
+                let bytes = method.memory_bytes(n);
+                match crate::validate::memory_problem(format!("methods[{i}]"), bytes) {
+                    Some(problem) => p.push(problem),
+                    None => total = total.saturating_add(bytes.unwrap_or(0)),
                 }
             }
             if let MethodConfig::Spectral(s) = method {
