@@ -15,7 +15,7 @@ use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
-use super::{Recording, INTERVAL_TOLERANCE};
+use super::{Part, Recording, INTERVAL_TOLERANCE};
 use crate::error::ZakaiError;
 use crate::validate::ConfigProblem;
 
@@ -213,7 +213,9 @@ impl Recording {
             continuous,
             truth: None,
         };
+        let mut truth_lines = Vec::new();
         if let Some(t) = truth {
+            truth_lines.clone_from(&t.lines);
             if t.rows.len() != obs.rows.len() {
                 problems.push(ConfigProblem::new(
                     "truth",
@@ -238,10 +240,14 @@ impl Recording {
             recording.truth = Some(t.rows.iter().flat_map(|r| r[1..].iter().copied()).collect());
         }
         if problems.is_empty() {
-            // Lengths, increasing times (with lines: row k is file line lines[k]).
-            for p in recording.problems() {
-                problems.push(with_line(p, &obs.lines));
-            }
+            // Lengths and increasing times, each row problem at its file and line.
+            problems = recording.placed_problems(&|part, row, _, text| {
+                let (file, lines) = match part {
+                    Part::Observations => ("observations", &obs.lines),
+                    Part::Truth => ("truth", &truth_lines),
+                };
+                ConfigProblem::new(format!("{file} line {}", lines[row]), text)
+            });
         }
         if problems.is_empty() {
             Ok(recording)
@@ -261,26 +267,6 @@ impl Recording {
         self.truth
             .as_ref()
             .map(|t| write_table("x", self.n, &self.times, t))
-    }
-}
-
-/// A problem from [`Recording::problems`] ("row k" counting data rows from 1) restated with
-/// the file line.
-fn with_line(p: ConfigProblem, lines: &[u64]) -> ConfigProblem {
-    let row = p
-        .message
-        .strip_prefix("row ")
-        .and_then(|r| r.split(|c: char| !c.is_ascii_digit()).next())
-        .and_then(|r| r.parse::<usize>().ok());
-    match row.and_then(|r| lines.get(r - 1)) {
-        Some(line) => {
-            let rest = p
-                .message
-                .split_once(": ")
-                .map_or(p.message.as_str(), |(_, r)| r);
-            ConfigProblem::new(format!("observations line {line}"), rest.to_string())
-        }
-        None => p,
     }
 }
 

@@ -12,6 +12,7 @@
 //!   measurement at the prior's time, assimilated without a prediction).
 
 use alloc::format;
+use alloc::string::String;
 use alloc::vec::Vec;
 
 use crate::simulate::Trajectory;
@@ -19,6 +20,15 @@ use crate::validate::ConfigProblem;
 
 #[cfg(feature = "std")]
 mod csv;
+
+/// Which part of a recording a row problem is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Part {
+    /// Times and observations.
+    Observations,
+    /// The true states.
+    Truth,
+}
 
 /// Observations at known times, with the true states when they are known.
 #[derive(Clone, Debug, PartialEq)]
@@ -131,6 +141,17 @@ impl Recording {
     /// or not increasing, non-finite values — each with its row (rows count from 1, as in a
     /// file without its header).
     pub fn problems(&self) -> Vec<ConfigProblem> {
+        self.placed_problems(&|_, row, field, text| {
+            ConfigProblem::new(field, format!("row {}: {text}", row + 1))
+        })
+    }
+
+    /// Every problem, each one about a row placed by `place(part, row, field, text)` (rows
+    /// from 0): [`Recording::problems`] names the row, the CSV reader the file and line.
+    pub(crate) fn placed_problems(
+        &self,
+        place: &dyn Fn(Part, usize, String, String) -> ConfigProblem,
+    ) -> Vec<ConfigProblem> {
         let mut p = Vec::new();
         let rows = self.times.len();
         if rows < 2 {
@@ -150,33 +171,47 @@ impl Recording {
                 ),
             ));
         }
-        for (k, w) in self.times.windows(2).enumerate() {
-            if w[1].partial_cmp(&w[0]) != Some(core::cmp::Ordering::Greater) {
-                p.push(ConfigProblem::new(
-                    format!("times[{}]", k + 1),
-                    format!(
-                        "row {}: times must increase, got {} after {}",
-                        k + 2,
-                        w[1],
-                        w[0]
-                    ),
-                ));
-                break;
-            }
+        if let Some(k) = self
+            .times
+            .windows(2)
+            .position(|w| w[1].partial_cmp(&w[0]) != Some(core::cmp::Ordering::Greater))
+        {
+            p.push(place(
+                Part::Observations,
+                k + 1,
+                format!("times[{}]", k + 1),
+                format!(
+                    "times must increase, got {} after {}",
+                    self.times[k + 1],
+                    self.times[k]
+                ),
+            ));
         }
         if let Some(k) = self.times.iter().position(|t| !t.is_finite()) {
-            p.push(ConfigProblem::new(
+            p.push(place(
+                Part::Observations,
+                k,
                 format!("times[{k}]"),
-                format!("row {}: the time is not finite", k + 1),
+                "the time is not finite".into(),
             ));
         }
-        if let Some(i) = self.observations.iter().position(|v| !v.is_finite()) {
-            let (k, j) = (i / self.m.max(1), i % self.m.max(1));
-            p.push(ConfigProblem::new(
-                format!("observations[{k}][{j}]"),
-                format!("row {}, component {}: not finite", k + 1, j + 1),
-            ));
-        }
+        let non_finite = |part, values: &[f64], width: usize, name: &str| {
+            values.iter().position(|v| !v.is_finite()).map(|i| {
+                let (k, j) = (i / width.max(1), i % width.max(1));
+                place(
+                    part,
+                    k,
+                    format!("{name}[{k}][{j}]"),
+                    format!("component {}: not finite", j + 1),
+                )
+            })
+        };
+        p.extend(non_finite(
+            Part::Observations,
+            &self.observations,
+            self.m,
+            "observations",
+        ));
         if let Some(truth) = &self.truth {
             if self.n == 0 || truth.len() != rows * self.n {
                 p.push(ConfigProblem::new(
@@ -188,15 +223,8 @@ impl Recording {
                         truth.len()
                     ),
                 ));
-            } else if let Some(i) = truth.iter().position(|v| !v.is_finite()) {
-                p.push(ConfigProblem::new(
-                    format!("truth[{}][{}]", i / self.n, i % self.n),
-                    format!(
-                        "row {}, component {}: not finite",
-                        i / self.n + 1,
-                        i % self.n + 1
-                    ),
-                ));
+            } else {
+                p.extend(non_finite(Part::Truth, truth, self.n, "truth"));
             }
         }
         p
