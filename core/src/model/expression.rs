@@ -12,7 +12,11 @@ use exmex::prelude::*;
 use exmex::{FloatOpsFactory, MakeOperators, Operator};
 
 use super::expression_error::{normalize_expression, variable_index, ExprError, LIBM_UNARY};
-use super::function::{numerical_hessian, numerical_jacobian, Derivatives, VectorFunction};
+use super::function::{
+    numerical_hessian, numerical_jacobian, per_point, BatchScratch, Derivatives, VectorFunction,
+};
+use super::program::{Program, BLOCK, MAX_INPUTS};
+use super::trace;
 
 /// exmex's float operators with every transcendental function (and `^`) computed by the
 /// pure-Rust `libm` crate instead of the platform's maths library, so that an expression gives
@@ -49,29 +53,35 @@ type Ex = FlatEx<f64, ZakaiOps>;
 /// Largest number of distinct variable names one expression may use.
 const MAX_VARS: usize = 16;
 
-/// One compiled scalar expression and, for each of its variables (exmex orders them
-/// alphabetically), the index of the state component it reads.
+/// One scalar expression: exmex's parse (kept for symbolic derivatives), for each of its
+/// variables (exmex orders them alphabetically) the index of the state component it reads, and
+/// the compiled [`Program`] every evaluation runs.
 #[derive(Clone, Debug)]
 struct Scalar {
     ex: Ex,
     state_index: Vec<usize>,
+    program: Program,
 }
 
 impl Scalar {
+    /// Compiles `ex` (whose text exmex accepts) for an `n`-dimensional state.
+    fn new(ex: Ex, state_index: Vec<usize>, n: usize) -> Result<Scalar, String> {
+        let program = trace::compile(ex.unparse(), n)?;
+        Ok(Scalar {
+            ex,
+            state_index,
+            program,
+        })
+    }
+
     #[inline]
     fn eval(&self, x: &[f64]) -> f64 {
-        let mut args = [0.0; MAX_VARS];
-        for (a, &i) in args.iter_mut().zip(&self.state_index) {
-            *a = x[i];
-        }
-        self.ex
-            .eval(&args[..self.state_index.len()])
-            .unwrap_or(f64::NAN)
+        self.program.eval(x)
     }
 
     /// ∂/∂x_j: the sum of exmex partials over every name that maps to state j (`x` and `x1`
     /// both map to 0 in one dimension). `Ok(None)` when the expression does not depend on x_j.
-    fn partial(&self, j: usize) -> Result<Option<Scalar>, ()> {
+    fn partial(&self, j: usize, n: usize) -> Result<Option<Scalar>, ()> {
         let mut total: Option<Ex> = None;
         for (v, &i) in self.state_index.iter().enumerate() {
             if i != j {
@@ -83,10 +93,9 @@ impl Scalar {
                 Some(t) => t.operate_binary(d, "+").map_err(|_| ())?,
             });
         }
-        Ok(total.map(|ex| Scalar {
-            ex,
-            state_index: self.state_index.clone(),
-        }))
+        total
+            .map(|ex| Scalar::new(ex, self.state_index.clone(), n).map_err(|_| ()))
+            .transpose()
     }
 }
 
@@ -224,7 +233,12 @@ fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
             message: alloc::format!("at most {MAX_VARS} distinct variables per expression"),
         });
     }
-    Ok((Scalar { ex, state_index }, operations))
+    let scalar = Scalar::new(ex, state_index, n).map_err(|message| ExprError::Syntax {
+        expr: text.to_string(),
+        position: None,
+        message,
+    })?;
+    Ok((scalar, operations))
 }
 
 fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives> {
@@ -232,10 +246,10 @@ fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives
     let mut hessian = Vec::with_capacity(components.len() * n * n);
     for c in components {
         for j in 0..n {
-            let d = c.partial(j).ok()?;
+            let d = c.partial(j, n).ok()?;
             for l in 0..n {
                 hessian.push(match &d {
-                    Some(dj) => dj.partial(l).ok()?,
+                    Some(dj) => dj.partial(l, n).ok()?,
                     None => None,
                 });
             }
@@ -248,6 +262,51 @@ fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives
 fn eval_table(table: &[Option<Scalar>], x: &[f64], out: &mut [f64]) {
     for (o, d) in out.iter_mut().zip(table) {
         *o = d.as_ref().map_or(0.0, |s| s.eval(x));
+    }
+}
+
+/// Runs each program of `table` (None = identically zero) over the points (structure of
+/// arrays, see [`VectorFunction::eval_batch`]) in blocks of [`BLOCK`] points; output r goes
+/// to `out[r * k..(r + 1) * k]`.
+fn eval_table_batch<'s>(
+    table: impl Iterator<Item = Option<&'s Scalar>> + Clone,
+    n: usize,
+    points: &[f64],
+    out: &mut [f64],
+    scratch: &mut BatchScratch,
+) {
+    let k = points.len() / n;
+    let registers = table
+        .clone()
+        .flatten()
+        .map(|s| s.program.registers())
+        .max()
+        .unwrap_or(0);
+    let registers = scratch.take(registers * BLOCK);
+    let mut start = 0;
+    while start < k {
+        let lanes = BLOCK.min(k - start);
+        let block = |j: usize| &points[j * k + start..j * k + start + lanes];
+        let run = |inputs: &[&[f64]], registers: &mut [f64], out: &mut [f64]| {
+            for (r, s) in table.clone().enumerate() {
+                let o = &mut out[r * k + start..r * k + start + lanes];
+                match s {
+                    Some(s) => s.program.run(inputs, lanes, registers, o),
+                    None => o.fill(0.0),
+                }
+            }
+        };
+        if n <= MAX_INPUTS {
+            let mut inputs = [&[][..]; MAX_INPUTS];
+            for (j, input) in inputs.iter_mut().take(n).enumerate() {
+                *input = block(j);
+            }
+            run(&inputs[..n], registers, out);
+        } else {
+            let inputs: Vec<&[f64]> = (0..n).map(block).collect();
+            run(&inputs, registers, out);
+        }
+        start += lanes;
     }
 }
 
@@ -280,6 +339,27 @@ impl VectorFunction for ExpressionFunction {
             None => {
                 let j = |y: &[f64], o: &mut [f64]| self.jacobian(y, o);
                 numerical_hessian(&j, self.n, self.components.len(), i, x, out)
+            }
+        }
+    }
+    fn eval_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
+        let table = self.components.iter().map(Some);
+        eval_table_batch(table, self.n, points, out, scratch)
+    }
+    fn jacobian_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
+        match &self.exact {
+            Some(d) => eval_table_batch(
+                d.jacobian.iter().map(Option::as_ref),
+                self.n,
+                points,
+                out,
+                scratch,
+            ),
+            None => {
+                let outputs = self.n * self.components.len();
+                per_point(self.n, outputs, points, out, scratch, |x, o| {
+                    self.jacobian(x, o)
+                })
             }
         }
     }
@@ -354,6 +434,48 @@ mod tests {
         assert!((g.value(&[1.5])[0] - (-1.0f64).exp()).abs() < 1e-15);
         let h = ExpressionFunction::parse("h", &strings(&["2*-x^2"]), 1, 1).unwrap();
         assert_eq!(h.value(&[3.0])[0], -18.0);
+    }
+
+    /// Batch values and Jacobians equal the point-wise ones to the last bit, over several
+    /// blocks and a partial one, for exact and numerical derivatives.
+    #[test]
+    fn batches_equal_points_to_the_last_bit() {
+        for (texts, n) in [
+            (&["-cos(x1)-sin(x2)", "x1^3*x2"][..], 2),
+            (&["x^3", "tanh(x)/(1+x^2)", "erf(x)"][..], 1),
+        ] {
+            let f = ExpressionFunction::parse("f", &strings(texts), n, texts.len()).unwrap();
+            let m = texts.len();
+            let k = 2 * BLOCK + 37;
+            let points: Vec<f64> = (0..n * k)
+                .map(|i| -2.5 + 5.0 * ((i as f64 * 0.7548) % 1.0))
+                .collect();
+            let mut values = vec![0.0; m * k];
+            let mut jacobians = vec![0.0; m * n * k];
+            let mut scratch = BatchScratch::default();
+            f.eval_batch(&points, &mut values, &mut scratch);
+            f.jacobian_batch(&points, &mut jacobians, &mut scratch);
+            let (mut v, mut jac) = (vec![0.0; m], vec![0.0; m * n]);
+            for p in 0..k {
+                let x: Vec<f64> = (0..n).map(|j| points[j * k + p]).collect();
+                f.eval(&x, &mut v);
+                f.jacobian(&x, &mut jac);
+                for i in 0..m {
+                    assert_eq!(
+                        values[i * k + p].to_bits(),
+                        v[i].to_bits(),
+                        "{texts:?} value {i} at {x:?}"
+                    );
+                }
+                for e in 0..m * n {
+                    assert_eq!(
+                        jacobians[e * k + p].to_bits(),
+                        jac[e].to_bits(),
+                        "{texts:?} ∂ {e} at {x:?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -48,6 +48,64 @@ pub trait VectorFunction: Send + Sync {
         self.eval(x, &mut out);
         out
     }
+
+    /// `g` at k points at once, structure of arrays: component j of point p is
+    /// `points[j * k + p]` (k = `points.len() / n`), and component i of `g` at point p is
+    /// written to `out[i * k + p]`. `scratch` is grown on first use and then reused, so
+    /// repeated calls allocate nothing.
+    ///
+    /// Text expressions run their compiled programs one pass per operation over the batch;
+    /// this default loops over the points with [`VectorFunction::eval`].
+    fn eval_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
+        let (n, m) = (self.input_dim(), self.output_dim());
+        per_point(n, m, points, out, scratch, |x, o| self.eval(x, o));
+    }
+
+    /// The Jacobian at k points at once (layout as [`VectorFunction::eval_batch`]): entry
+    /// ∂g_i/∂x_j at point p is written to `out[(i * n + j) * k + p]`.
+    fn jacobian_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
+        let (n, m) = (self.input_dim(), self.output_dim());
+        per_point(n, m * n, points, out, scratch, |x, o| self.jacobian(x, o));
+    }
+}
+
+/// Reusable working memory of batch evaluations ([`VectorFunction::eval_batch`]).
+#[derive(Clone, Debug, Default)]
+pub struct BatchScratch {
+    values: Vec<f64>,
+}
+
+impl BatchScratch {
+    /// At least `len` values (grown, never shrunk).
+    pub fn take(&mut self, len: usize) -> &mut [f64] {
+        if self.values.len() < len {
+            self.values.resize(len, 0.0);
+        }
+        &mut self.values[..len]
+    }
+}
+
+/// A batch evaluation by one call of `g(x, out)` per point: gathers each point from the
+/// structure of arrays, scatters its `outputs` values.
+pub(crate) fn per_point(
+    n: usize,
+    outputs: usize,
+    points: &[f64],
+    out: &mut [f64],
+    scratch: &mut BatchScratch,
+    g: impl Fn(&[f64], &mut [f64]),
+) {
+    let k = points.len() / n.max(1);
+    let (x, value) = scratch.take(n + outputs).split_at_mut(n);
+    for p in 0..k {
+        for (j, v) in x.iter_mut().enumerate() {
+            *v = points[j * k + p];
+        }
+        g(x, value);
+        for (i, v) in value.iter().enumerate() {
+            out[i * k + p] = *v;
+        }
+    }
 }
 
 /// Central-difference Jacobian of `eval` at `x` (step ∝ ε^(1/3), error O(ε^(2/3))).
@@ -179,6 +237,36 @@ impl VectorFunction for ClosureFunction {
             Derivatives::Exact
         } else {
             Derivatives::Numerical
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closures_get_a_batch_path_by_their_point_values() {
+        let f = ClosureFunction::new(2, 2, |x, o| {
+            o[0] = x[0] * x[1];
+            o[1] = libm::sin(x[0]) - x[1];
+        });
+        let k = 5;
+        let points: Vec<f64> = (0..2 * k).map(|i| 0.3 * i as f64 - 1.0).collect();
+        let mut values = vec![0.0; 2 * k];
+        let mut jac = vec![0.0; 4 * k];
+        let mut scratch = BatchScratch::default();
+        f.eval_batch(&points, &mut values, &mut scratch);
+        f.jacobian_batch(&points, &mut jac, &mut scratch);
+        for p in 0..k {
+            let x = [points[p], points[k + p]];
+            assert_eq!(values[p], x[0] * x[1]);
+            assert_eq!(values[k + p], libm::sin(x[0]) - x[1]);
+            let mut point_jac = [0.0; 4];
+            f.jacobian(&x, &mut point_jac);
+            for e in 0..4 {
+                assert_eq!(jac[e * k + p], point_jac[e]);
+            }
         }
     }
 }

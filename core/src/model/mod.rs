@@ -15,14 +15,17 @@ pub mod expression_error;
 pub mod function;
 pub mod noise;
 pub mod prior;
+pub mod program;
 pub mod symbolic;
+#[cfg(feature = "std")]
+mod trace;
 
 use alloc::format;
 use alloc::sync::Arc;
 
 use nalgebra::{DMatrix, DVector};
 
-pub use function::{ClosureFunction, Derivatives, VectorFunction};
+pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
 pub use noise::GaussianMixture;
 pub use prior::Prior;
 

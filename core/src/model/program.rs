@@ -1,0 +1,407 @@
+//! Compiled expressions: a flat program of elementwise operations evaluated over whole
+//! batches of points at once.
+//!
+//! A text expression is compiled once (by tracing exmex's own evaluation order, see
+//! `model::trace`) into a list of instructions in static single assignment form, with
+//! registers reused once a value is dead. Evaluation runs one pass per instruction over a
+//! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
+//! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
+//! (`sin`, `exp`, …) are called per element without any interpretation per point.
+//!
+//! The per-point value of an expression is the same program on a block of one point, so the
+//! batch and the point-wise results are equal to the last bit. Against exmex's interpretation
+//! the program differs only where it strength-reduces an integer power `x^k` (0 ≤ k ≤ 4) to
+//! multiplications, which is within 2 ulp of `libm::pow` (tested here and, on whole
+//! expressions, in `model::trace`).
+
+use alloc::vec::Vec;
+
+/// Points per pass: a register holds one block (2 KiB), so a program's registers stay in the
+/// first-level cache.
+pub const BLOCK: usize = 256;
+
+/// A real function of one real variable.
+pub type UnaryFn = fn(f64) -> f64;
+/// A real function of two real variables.
+pub type BinaryFn = fn(f64, f64) -> f64;
+
+/// Where an instruction reads one of its arguments.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Operand {
+    /// State component j of the point.
+    Var(usize),
+    /// A constant.
+    Const(f64),
+    /// A register.
+    Reg(usize),
+}
+
+/// An elementwise operation.
+#[derive(Clone, Copy, Debug)]
+pub enum Operation {
+    /// `-a`.
+    Neg(Operand),
+    /// `f(a)`.
+    Unary(UnaryFn, Operand),
+    /// `a + b`.
+    Add(Operand, Operand),
+    /// `a - b`.
+    Sub(Operand, Operand),
+    /// `a * b`.
+    Mul(Operand, Operand),
+    /// `a / b`.
+    Div(Operand, Operand),
+    /// `a^k` for a small integer k, by repeated multiplication.
+    PowI(Operand, i32),
+    /// `f(a, b)` (`^` with a non-integer exponent, `atan2`, `min`, `max`).
+    Binary(BinaryFn, Operand, Operand),
+}
+
+impl Operation {
+    /// The operation applied to constants (used for constant folding at compile time, so a
+    /// folded constant has the bits the evaluation would have produced).
+    pub fn apply_scalar(&self, a: f64, b: f64) -> f64 {
+        match *self {
+            Operation::Neg(_) => -a,
+            Operation::Unary(f, _) => f(a),
+            Operation::Add(..) => a + b,
+            Operation::Sub(..) => a - b,
+            Operation::Mul(..) => a * b,
+            Operation::Div(..) => a / b,
+            Operation::PowI(_, k) => pow_int(a, k),
+            Operation::Binary(f, ..) => f(a, b),
+        }
+    }
+
+    /// The operands read.
+    pub fn operands(&self) -> [Option<Operand>; 2] {
+        match *self {
+            Operation::Neg(a) | Operation::Unary(_, a) | Operation::PowI(a, _) => [Some(a), None],
+            Operation::Add(a, b)
+            | Operation::Sub(a, b)
+            | Operation::Mul(a, b)
+            | Operation::Div(a, b)
+            | Operation::Binary(_, a, b) => [Some(a), Some(b)],
+        }
+    }
+
+    fn map_operands(self, f: impl Fn(Operand) -> Operand) -> Operation {
+        match self {
+            Operation::Neg(a) => Operation::Neg(f(a)),
+            Operation::Unary(g, a) => Operation::Unary(g, f(a)),
+            Operation::PowI(a, k) => Operation::PowI(f(a), k),
+            Operation::Add(a, b) => Operation::Add(f(a), f(b)),
+            Operation::Sub(a, b) => Operation::Sub(f(a), f(b)),
+            Operation::Mul(a, b) => Operation::Mul(f(a), f(b)),
+            Operation::Div(a, b) => Operation::Div(f(a), f(b)),
+            Operation::Binary(g, a, b) => Operation::Binary(g, f(a), f(b)),
+        }
+    }
+}
+
+/// Largest k of `x^k` that [`Operation::PowI`] computes by multiplication.
+pub const MAX_POWI: i32 = 4;
+
+/// `a^k` by repeated multiplication (0 ≤ k ≤ [`MAX_POWI`]).
+#[inline(always)]
+pub fn pow_int(a: f64, k: i32) -> f64 {
+    match k {
+        0 => 1.0,
+        1 => a,
+        2 => a * a,
+        3 => a * a * a,
+        _ => {
+            let s = a * a;
+            s * s
+        }
+    }
+}
+
+/// One instruction: `registers[dst] = operation`.
+#[derive(Clone, Copy, Debug)]
+struct Instruction {
+    dst: usize,
+    operation: Operation,
+}
+
+/// A compiled scalar function of the state: instructions over registers and the operand that
+/// holds the result.
+#[derive(Clone, Debug)]
+pub struct Program {
+    code: Vec<Instruction>,
+    registers: usize,
+    result: Operand,
+}
+
+impl Program {
+    /// A program from operations in single assignment form (`ssa[i]` defines value i, read as
+    /// `Operand::Reg(i)` by later operations) and the operand holding the result. Registers
+    /// are reused once a value has been read for the last time.
+    pub fn from_ssa(ssa: &[Operation], result: Operand) -> Program {
+        let mut last_use = alloc::vec![usize::MAX; ssa.len()];
+        for (i, op) in ssa.iter().enumerate() {
+            for r in op.operands().into_iter().flatten() {
+                if let Operand::Reg(v) = r {
+                    last_use[v] = i;
+                }
+            }
+        }
+        if let Operand::Reg(v) = result {
+            last_use[v] = usize::MAX - 1;
+        }
+        let mut physical = alloc::vec![0usize; ssa.len()];
+        let mut free: Vec<usize> = Vec::new();
+        let mut registers = 0;
+        let mut code = Vec::with_capacity(ssa.len());
+        for (i, op) in ssa.iter().enumerate() {
+            if last_use[i] == usize::MAX {
+                continue; // never read: dead code
+            }
+            // The destination never aliases an operand of the same instruction.
+            let dst = free.pop().unwrap_or_else(|| {
+                registers += 1;
+                registers - 1
+            });
+            physical[i] = dst;
+            let operation = op.map_operands(|o| match o {
+                Operand::Reg(v) => Operand::Reg(physical[v]),
+                other => other,
+            });
+            code.push(Instruction { dst, operation });
+            for r in op.operands().into_iter().flatten() {
+                if let Operand::Reg(v) = r {
+                    if last_use[v] == i && !free.contains(&physical[v]) {
+                        free.push(physical[v]);
+                    }
+                }
+            }
+        }
+        let result = match result {
+            Operand::Reg(v) => Operand::Reg(physical[v]),
+            other => other,
+        };
+        Program {
+            code,
+            registers,
+            result,
+        }
+    }
+
+    /// Number of registers, each [`BLOCK`] values long during a batch evaluation.
+    pub fn registers(&self) -> usize {
+        self.registers
+    }
+
+    /// Number of instructions.
+    pub fn len(&self) -> usize {
+        self.code.len()
+    }
+
+    /// True for a constant or a bare variable (no instruction).
+    pub fn is_empty(&self) -> bool {
+        self.code.is_empty()
+    }
+
+    /// The constant value, when the program is one.
+    pub fn constant(&self) -> Option<f64> {
+        match self.result {
+            Operand::Const(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// Evaluates at `lanes` points: `inputs[j]` holds component j of every point (at least
+    /// `lanes` values each), `registers` at least `self.registers() * lanes` values; the value
+    /// at point p is written to `out[p]`.
+    pub fn run(&self, inputs: &[&[f64]], lanes: usize, registers: &mut [f64], out: &mut [f64]) {
+        for ins in &self.code {
+            let (dst, a, b) = operands(registers, lanes, ins.dst, &ins.operation, inputs);
+            apply(&ins.operation, dst, a, b);
+        }
+        match self.result {
+            Operand::Const(c) => out[..lanes].fill(c),
+            Operand::Var(j) => out[..lanes].copy_from_slice(&inputs[j][..lanes]),
+            Operand::Reg(r) => out[..lanes].copy_from_slice(&registers[r * lanes..(r + 1) * lanes]),
+        }
+    }
+
+    /// The value at one point `x` (inputs and registers on the stack for up to
+    /// [`MAX_INPUTS`] components and 32 registers).
+    pub fn eval(&self, x: &[f64]) -> f64 {
+        let mut out = [0.0];
+        let mut on_stack = [0.0; 32];
+        let mut on_heap = Vec::new();
+        let registers = if self.registers <= on_stack.len() {
+            &mut on_stack[..]
+        } else {
+            on_heap.resize(self.registers, 0.0);
+            &mut on_heap[..]
+        };
+        if x.len() <= MAX_INPUTS {
+            let mut inputs = [&[][..]; MAX_INPUTS];
+            for (slot, v) in inputs.iter_mut().zip(x.chunks_exact(1)) {
+                *slot = v;
+            }
+            self.run(&inputs[..x.len()], 1, registers, &mut out);
+        } else {
+            let inputs: Vec<&[f64]> = x.chunks_exact(1).collect();
+            self.run(&inputs, 1, registers, &mut out);
+        }
+        out[0]
+    }
+}
+
+/// Most state components whose slices a batch evaluation keeps on the stack (more are
+/// gathered into a vector).
+pub const MAX_INPUTS: usize = 64;
+
+/// An argument of an elementwise operation: a block of values or a constant.
+#[derive(Clone, Copy)]
+enum Arg<'a> {
+    Slice(&'a [f64]),
+    Scalar(f64),
+}
+
+/// The destination block and the argument blocks of one instruction. Two operands in the same
+/// register are one shared borrow; the destination never is an operand (see
+/// [`Program::from_ssa`]).
+fn operands<'a>(
+    registers: &'a mut [f64],
+    lanes: usize,
+    dst: usize,
+    operation: &Operation,
+    inputs: &[&'a [f64]],
+) -> (&'a mut [f64], Arg<'a>, Arg<'a>) {
+    let [a, b] = operation.operands();
+    let block = |r: usize| r * lanes..(r + 1) * lanes;
+    let reg = |o: Option<Operand>| match o {
+        Some(Operand::Reg(r)) => Some(r),
+        _ => None,
+    };
+    let other = |o: Option<Operand>| match o {
+        Some(Operand::Var(j)) => Arg::Slice(&inputs[j][..lanes]),
+        Some(Operand::Const(c)) => Arg::Scalar(c),
+        _ => Arg::Scalar(0.0),
+    };
+    match (reg(a), reg(b)) {
+        (None, None) => (&mut registers[block(dst)], other(a), other(b)),
+        (Some(ra), None) => {
+            let [d, s] = registers
+                .get_disjoint_mut([block(dst), block(ra)])
+                .expect("destination and operand registers are distinct");
+            (d, Arg::Slice(s), other(b))
+        }
+        (None, Some(rb)) => {
+            let [d, s] = registers
+                .get_disjoint_mut([block(dst), block(rb)])
+                .expect("destination and operand registers are distinct");
+            (d, other(a), Arg::Slice(s))
+        }
+        (Some(ra), Some(rb)) if ra == rb => {
+            let [d, s] = registers
+                .get_disjoint_mut([block(dst), block(ra)])
+                .expect("destination and operand registers are distinct");
+            let s: &'a [f64] = s;
+            (d, Arg::Slice(s), Arg::Slice(s))
+        }
+        (Some(ra), Some(rb)) => {
+            let [d, sa, sb] = registers
+                .get_disjoint_mut([block(dst), block(ra), block(rb)])
+                .expect("destination and operand registers are distinct");
+            (d, Arg::Slice(sa), Arg::Slice(sb))
+        }
+    }
+}
+
+#[inline(always)]
+fn map1(dst: &mut [f64], a: Arg, f: impl Fn(f64) -> f64) {
+    match a {
+        Arg::Slice(a) => dst.iter_mut().zip(a).for_each(|(d, &x)| *d = f(x)),
+        Arg::Scalar(x) => dst.fill(f(x)),
+    }
+}
+
+#[inline(always)]
+fn map2(dst: &mut [f64], a: Arg, b: Arg, f: impl Fn(f64, f64) -> f64) {
+    match (a, b) {
+        (Arg::Slice(a), Arg::Slice(b)) => dst
+            .iter_mut()
+            .zip(a.iter().zip(b))
+            .for_each(|(d, (&x, &y))| *d = f(x, y)),
+        (Arg::Slice(a), Arg::Scalar(y)) => dst.iter_mut().zip(a).for_each(|(d, &x)| *d = f(x, y)),
+        (Arg::Scalar(x), Arg::Slice(b)) => dst.iter_mut().zip(b).for_each(|(d, &y)| *d = f(x, y)),
+        (Arg::Scalar(x), Arg::Scalar(y)) => dst.fill(f(x, y)),
+    }
+}
+
+/// One pass of `operation` over the block; the arithmetic arms are monomorphic loops.
+fn apply(operation: &Operation, dst: &mut [f64], a: Arg, b: Arg) {
+    match *operation {
+        Operation::Neg(_) => map1(dst, a, |x| -x),
+        Operation::Unary(f, _) => map1(dst, a, f),
+        Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
+        Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
+        Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
+        Operation::Div(..) => map2(dst, a, b, |x, y| x / y),
+        Operation::PowI(_, k) => match k {
+            2 => map1(dst, a, |x| x * x),
+            3 => map1(dst, a, |x| x * x * x),
+            _ => map1(dst, a, |x| pow_int(x, k)),
+        },
+        Operation::Binary(f, ..) => map2(dst, a, b, f),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// (x + 2)·(x + 2) − 3/x: values shared by two operands, constants on either side.
+    fn sample() -> Program {
+        let ssa = [
+            Operation::Add(Operand::Var(0), Operand::Const(2.0)),
+            Operation::Mul(Operand::Reg(0), Operand::Reg(0)),
+            Operation::Div(Operand::Const(3.0), Operand::Var(0)),
+            Operation::Sub(Operand::Reg(1), Operand::Reg(2)),
+        ];
+        Program::from_ssa(&ssa, Operand::Reg(3))
+    }
+
+    #[test]
+    fn registers_are_reused_and_batches_match_points() {
+        let p = sample();
+        assert!(p.registers() <= 3, "{} registers", p.registers());
+        let xs: Vec<f64> = (0..600).map(|i| 0.37 + i as f64 * 0.011).collect();
+        let mut out = alloc::vec![0.0; xs.len()];
+        let mut regs = alloc::vec![0.0; p.registers() * xs.len()];
+        p.run(&[&xs], xs.len(), &mut regs, &mut out);
+        for (x, v) in xs.iter().zip(&out) {
+            let expected = (x + 2.0) * (x + 2.0) - 3.0 / x;
+            assert_eq!(v.to_bits(), expected.to_bits());
+            assert_eq!(p.eval(&[*x]).to_bits(), expected.to_bits());
+        }
+    }
+
+    #[test]
+    fn dead_values_are_not_computed() {
+        let ssa = [
+            Operation::Unary(libm::exp, Operand::Var(0)),
+            Operation::Neg(Operand::Var(0)),
+        ];
+        let p = Program::from_ssa(&ssa, Operand::Reg(1));
+        assert_eq!(p.len(), 1);
+        assert_eq!(p.eval(&[2.5]), -2.5);
+    }
+
+    #[test]
+    fn integer_powers_by_multiplication() {
+        for k in 0..=MAX_POWI {
+            for &x in &[0.3, -1.7, 2.0, 1e-3, 123.456] {
+                let exact = libm::pow(x, k as f64);
+                let ours = pow_int(x, k);
+                let ulp = (exact.to_bits() as i64 - ours.to_bits() as i64).abs();
+                assert!(ulp <= 2, "x = {x}, k = {k}: {ulp} ulp");
+            }
+        }
+    }
+}
