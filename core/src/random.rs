@@ -26,3 +26,140 @@ pub fn standard_normal<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
 pub fn standard_normal_vector<R: rand::Rng + ?Sized>(rng: &mut R, d: usize) -> DVector<f64> {
     DVector::from_fn(d, |_, _| standard_normal(rng))
 }
+
+/// Layers of the normal ziggurat (Marsaglia & Tsang 2000, "The ziggurat method for generating
+/// random variables", J. Stat. Softw. 5(8)): 256 strips of equal area [`ZIGGURAT_AREA`] under
+/// `f(x) = exp(−x²/2)`, the base strip ending at [`ZIGGURAT_R`].
+const ZIGGURAT_LAYERS: usize = 256;
+/// Start of the tail, r, for 256 layers (Marsaglia & Tsang 2000, §3).
+const ZIGGURAT_R: f64 = 3.654_152_885_361_009;
+/// Area of each strip, v, for 256 layers (Marsaglia & Tsang 2000, §3).
+const ZIGGURAT_AREA: f64 = 4.928_673_233_99e-3;
+
+/// N(0, 1) draws by the ziggurat method (Marsaglia & Tsang 2000): one 64-bit draw and a
+/// comparison for 99 % of the samples, so about five times faster than
+/// [`standard_normal`]'s Box–Muller. Its tables are computed with `libm` in the constructor,
+/// so the stream is the same on every platform. The particle filter draws its noise here; the
+/// simulators keep [`standard_normal`] so that the simulated truth does not depend on it.
+#[derive(Clone, Debug)]
+pub struct NormalZiggurat {
+    /// `x[i]`: right edge of strip i (x[0] = v/f(r) for the base strip, x[1] = r, x[256] = 0).
+    x: [f64; ZIGGURAT_LAYERS + 1],
+    /// `f[i] = exp(−x[i]²/2)`.
+    f: [f64; ZIGGURAT_LAYERS + 1],
+}
+
+impl Default for NormalZiggurat {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl NormalZiggurat {
+    /// Builds the tables: x₁ = r, x_{i+1} = √(−2 ln(v/x_i + f(x_i))).
+    pub fn new() -> Self {
+        let density = |x: f64| libm::exp(-0.5 * x * x);
+        let mut x = [0.0; ZIGGURAT_LAYERS + 1];
+        x[0] = ZIGGURAT_AREA / density(ZIGGURAT_R);
+        x[1] = ZIGGURAT_R;
+        for i in 1..ZIGGURAT_LAYERS - 1 {
+            x[i + 1] = libm::sqrt(-2.0 * libm::log(ZIGGURAT_AREA / x[i] + density(x[i])));
+        }
+        x[ZIGGURAT_LAYERS] = 0.0;
+        let mut f = [0.0; ZIGGURAT_LAYERS + 1];
+        for (fi, xi) in f.iter_mut().zip(&x) {
+            *fi = density(*xi);
+        }
+        NormalZiggurat { x, f }
+    }
+
+    /// One N(0, 1) draw.
+    #[inline]
+    pub fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        loop {
+            let bits = rng.next_u64();
+            let i = (bits & 0xff) as usize;
+            // The top 53 bits as a uniform in [0, 1), mapped to [−1, 1).
+            let u = 2.0 * ((bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)) - 1.0;
+            let x = u * self.x[i];
+            if libm::fabs(x) < self.x[i + 1] {
+                return x;
+            }
+            if i == 0 {
+                return self.tail(rng, u < 0.0);
+            }
+            let y = self.f[i + 1] + (self.f[i] - self.f[i + 1]) * rng.random::<f64>();
+            if y < libm::exp(-0.5 * x * x) {
+                return x;
+            }
+        }
+    }
+
+    /// Marsaglia's tail beyond r: x = −ln(u₁)/r, y = −ln(u₂) until 2y > x².
+    #[cold]
+    fn tail<R: rand::Rng + ?Sized>(&self, rng: &mut R, negative: bool) -> f64 {
+        loop {
+            let x = -libm::log(1.0 - rng.random::<f64>()) / ZIGGURAT_R;
+            let y = -libm::log(1.0 - rng.random::<f64>());
+            if 2.0 * y > x * x {
+                let v = ZIGGURAT_R + x;
+                return if negative { -v } else { v };
+            }
+        }
+    }
+
+    /// Fills `out` with independent N(0, 1) draws.
+    pub fn fill<R: rand::Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        for v in out {
+            *v = self.sample(rng);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ziggurat's strips: the recurrence closes at 0 (the 255th edge is small and positive),
+    /// and every strip has area v.
+    #[test]
+    fn ziggurat_tables_close() {
+        let z = NormalZiggurat::new();
+        assert!(z.x[255] > 0.0 && z.x[255] < 0.3, "x[255] = {}", z.x[255]);
+        for i in 1..ZIGGURAT_LAYERS - 1 {
+            let area = z.x[i] * (z.f[i + 1] - z.f[i]);
+            assert!((area - ZIGGURAT_AREA).abs() < 1e-12, "strip {i}: {area}");
+        }
+    }
+
+    /// 10⁶ draws (seed 7) against N(0, 1): mean and variance within 4 standard errors,
+    /// the share beyond the tail start r within 4 standard errors of 2(1 − Φ(r)), and the
+    /// Kolmogorov–Smirnov distance on a 2001-point grid below 1.95/√N (0.1 % level).
+    #[test]
+    fn ziggurat_draws_are_standard_normal() {
+        let z = NormalZiggurat::new();
+        let mut rng = rng_from_seed(7);
+        let count = 1_000_000;
+        let mut draws: alloc::vec::Vec<f64> = (0..count).map(|_| z.sample(&mut rng)).collect();
+        let n = count as f64;
+        let mean = draws.iter().sum::<f64>() / n;
+        let var = draws.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+        assert!(mean.abs() < 4.0 / n.sqrt(), "mean {mean}");
+        assert!((var - 1.0).abs() < 4.0 * (2.0 / n).sqrt(), "variance {var}");
+        let tail_p = libm::erfc(ZIGGURAT_R / core::f64::consts::SQRT_2);
+        let tail = draws.iter().filter(|x| x.abs() > ZIGGURAT_R).count() as f64 / n;
+        assert!(
+            (tail - tail_p).abs() < 4.0 * (tail_p / n).sqrt(),
+            "tail {tail} vs {tail_p}"
+        );
+        draws.sort_by(f64::total_cmp);
+        let mut worst: f64 = 0.0;
+        for k in 0..=2000 {
+            let t = -5.0 + k as f64 * 0.005;
+            let below = draws.partition_point(|&x| x <= t) as f64 / n;
+            let cdf = 0.5 * libm::erfc(-t / core::f64::consts::SQRT_2);
+            worst = worst.max((below - cdf).abs());
+        }
+        assert!(worst < 1.95 / n.sqrt(), "KS distance {worst}");
+    }
+}

@@ -20,9 +20,9 @@ use crate::filters::method::{
     builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, Takes,
 };
 use crate::filters::{Estimate, Filter, Observation, ObservationKind};
-use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp};
-use crate::model::{Model, ObservationModel, Prior};
-use crate::random::{rng_from_seed, standard_normal, SimRng};
+use crate::linalg::cholesky;
+use crate::model::{BatchScratch, Model, ObservationModel, Prior};
+use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
 use crate::validate::ConfigProblem;
 
 /// Parameters of [`ParticleFilter`].
@@ -120,8 +120,8 @@ impl Method for Pf {
         problems_from(p.problems())
     }
     fn memory(p: &PfParams, n: usize) -> Option<usize> {
-        // Particles, their copies while resampling, weights and scratch.
-        p.particles.checked_mul(3 * n + 3)?.checked_mul(8)
+        // Particles, f, noise, the resampling target and h (n ≥ m assumed), two weights.
+        p.particles.checked_mul(5 * n + 2)?.checked_mul(8)
     }
     fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
         Ok(ParticleFilter::new(
@@ -135,15 +135,35 @@ impl Method for Pf {
 pub const ESS_SHARE_THRESHOLD: f64 = 0.01;
 
 /// The bootstrap particle filter (see the module doc).
+///
+/// Particles are stored as structure of arrays and moved, weighed and resampled one pass per
+/// operation over all of them: f and h are evaluated on the whole population at once
+/// ([`VectorFunction::eval_batch`](crate::model::VectorFunction::eval_batch)), the noise comes
+/// from the ziggurat, weights take one `exp` per particle, and every buffer is allocated in the
+/// constructor, so a step allocates nothing.
 pub struct ParticleFilter {
     name: String,
     model: Model,
     params: PfParams,
     rng: SimRng,
-    /// Particle i at `particles[i*n..(i+1)*n]`.
+    normal: NormalZiggurat,
+    /// Component j of particle i at `particles[j * N + i]`.
     particles: Vec<f64>,
+    /// Normalised log-weights and the same weights in the linear domain.
     log_weights: Vec<f64>,
-    scratch: Vec<f64>,
+    weights: Vec<f64>,
+    /// f (n·N), then the noise draws (n·N); h or the residual (m·N); resampling target (n·N).
+    drift: Vec<f64>,
+    noise: Vec<f64>,
+    predicted: Vec<f64>,
+    resampled: Vec<f64>,
+    /// G (row-major) and, for continuous observations, S⁻¹ (row-major).
+    diffusion: Vec<f64>,
+    noise_inverse: Vec<f64>,
+    /// One residual while a mixture density is evaluated.
+    residual: Vec<f64>,
+    work: Vec<f64>,
+    scratch: BatchScratch,
     resamples: usize,
     /// The effective sample size after the last weighting.
     last_ess: f64,
@@ -162,21 +182,43 @@ impl ParticleFilter {
             return Err(FilterError::Unsuitable(format!("PF {field}: {msg}")));
         }
         let mut rng = rng_from_seed(seed);
-        let n = model.n;
-        let mut particles = Vec::with_capacity(params.particles * n);
-        for _ in 0..params.particles {
-            particles.extend_from_slice(prior.sample(&mut rng).as_slice());
+        let (n, m, count) = (model.n, model.m, params.particles);
+        let mut particles = vec![0.0; count * n];
+        for i in 0..count {
+            let x = prior.sample(&mut rng);
+            for j in 0..n {
+                particles[j * count + i] = x[j];
+            }
         }
+        let noise_inverse = match &model.observations {
+            ObservationModel::Continuous { noise_cov } => cholesky(noise_cov, "observation noise")?
+                .inverse()
+                .transpose()
+                .as_slice()
+                .to_vec(),
+            ObservationModel::Discrete { .. } => Vec::new(),
+        };
+        let uniform = 1.0 / count as f64;
         Ok(ParticleFilter {
             name,
             model: model.clone(),
             params: params.clone(),
             rng,
+            normal: NormalZiggurat::new(),
             particles,
-            log_weights: vec![-libm::log(params.particles as f64); params.particles],
-            scratch: Vec::new(),
+            log_weights: vec![-libm::log(count as f64); count],
+            weights: vec![uniform; count],
+            drift: vec![0.0; count * n],
+            noise: vec![0.0; count * n],
+            predicted: vec![0.0; count * m],
+            resampled: vec![0.0; count * n],
+            diffusion: model.diffusion.transpose().as_slice().to_vec(),
+            noise_inverse,
+            residual: vec![0.0; m],
+            work: vec![0.0; m],
+            scratch: BatchScratch::default(),
             resamples: 0,
-            last_ess: params.particles as f64,
+            last_ess: count as f64,
         })
     }
 
@@ -185,104 +227,156 @@ impl ParticleFilter {
         self.resamples
     }
 
+    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, `substeps` times.
     fn predict(&mut self, dt: f64) {
-        let n = self.model.n;
+        let (n, count) = (self.model.n, self.params.particles);
         let h = dt / self.params.substeps as f64;
         let sqrt_h = libm::sqrt(h);
-        let mut fx = vec![0.0; n];
-        let mut xi = DVector::zeros(n);
-        for p in self.particles.chunks_exact_mut(n) {
-            for _ in 0..self.params.substeps {
-                self.model.drift.eval(p, &mut fx);
-                for v in xi.iter_mut() {
-                    *v = standard_normal(&mut self.rng);
-                }
-                let noise = &self.model.diffusion * &xi;
-                for i in 0..n {
-                    p[i] += fx[i] * h + noise[i] * sqrt_h;
+        for _ in 0..self.params.substeps {
+            self.model
+                .drift
+                .eval_batch(&self.particles, &mut self.drift, &mut self.scratch);
+            self.normal.fill(&mut self.rng, &mut self.noise);
+            for j in 0..n {
+                let x = &mut self.particles[j * count..(j + 1) * count];
+                let f = &self.drift[j * count..(j + 1) * count];
+                x.iter_mut().zip(f).for_each(|(x, f)| *x += f * h);
+                for l in 0..n {
+                    let g = self.diffusion[j * n + l] * sqrt_h;
+                    if g != 0.0 {
+                        let xi = &self.noise[l * count..(l + 1) * count];
+                        x.iter_mut().zip(xi).for_each(|(x, xi)| *x += g * xi);
+                    }
                 }
             }
         }
     }
 
+    /// Multiplies the weights by the likelihood of `obs` (constant factors dropped: they
+    /// cancel in the normalisation) and normalises them.
     fn weigh(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let (n, m) = (self.model.n, self.model.m);
+        let (m, count) = (self.model.m, self.params.particles);
         if obs.value.len() != m {
             return Err(FilterError::BadObservation(format!(
                 "expected length {m}, got {}",
                 obs.value.len()
             )));
         }
-        let z = DVector::from_column_slice(obs.value);
-        let mut hx = DVector::zeros(m);
-        match (&self.model.observations, obs.kind) {
-            (ObservationModel::Continuous { noise_cov }, ObservationKind::Increment) => {
+        let scale = match (&self.model.observations, obs.kind) {
+            (ObservationModel::Continuous { .. }, ObservationKind::Increment) => {
                 if obs.dt == 0.0 {
                     return Ok(());
                 }
-                let chol = cholesky(&(noise_cov * obs.dt), "observation noise")?;
-                for (i, p) in self.particles.chunks_exact(n).enumerate() {
-                    self.model.observation.eval(p, hx.as_mut_slice());
-                    let r = &z - &hx * obs.dt;
-                    self.log_weights[i] += gaussian_log_density(&r, &chol);
-                }
+                obs.dt
             }
-            (ObservationModel::Discrete { noise }, ObservationKind::Measurement) => {
-                for (i, p) in self.particles.chunks_exact(n).enumerate() {
-                    self.model.observation.eval(p, hx.as_mut_slice());
-                    self.log_weights[i] += noise.log_pdf(&(&z - &hx));
-                }
-            }
+            (ObservationModel::Discrete { .. }, ObservationKind::Measurement) => 1.0,
             _ => {
                 return Err(FilterError::BadObservation(
                     "observation kind does not match the model".into(),
                 ))
             }
+        };
+        self.model
+            .observation
+            .eval_batch(&self.particles, &mut self.predicted, &mut self.scratch);
+        // Residuals z − h(x)·scale, in place.
+        for (a, z) in obs.value.iter().enumerate() {
+            self.predicted[a * count..(a + 1) * count]
+                .iter_mut()
+                .for_each(|r| *r = z - *r * scale);
         }
-        let total = log_sum_exp(self.log_weights.iter().copied());
-        if !total.is_finite() {
+        match &self.model.observations {
+            // −½ rᵀ (S Δτ)⁻¹ r.
+            ObservationModel::Continuous { .. } => {
+                let c = -0.5 / obs.dt;
+                for a in 0..m {
+                    for b in 0..m {
+                        let s = c * self.noise_inverse[a * m + b];
+                        let (ra, rb) = (
+                            &self.predicted[a * count..(a + 1) * count],
+                            &self.predicted[b * count..(b + 1) * count],
+                        );
+                        self.log_weights
+                            .iter_mut()
+                            .zip(ra.iter().zip(rb))
+                            .for_each(|(w, (x, y))| *w += s * x * y);
+                    }
+                }
+            }
+            ObservationModel::Discrete { noise } => {
+                for i in 0..count {
+                    for a in 0..m {
+                        self.residual[a] = self.predicted[a * count + i];
+                    }
+                    self.log_weights[i] += noise.log_pdf_slice(&self.residual, &mut self.work);
+                }
+            }
+        }
+        self.normalise()
+    }
+
+    /// Normalises the log-weights and fills the linear weights: one `exp` per particle.
+    fn normalise(&mut self) -> Result<(), FilterError> {
+        let max = self
+            .log_weights
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, &b| crate::linalg::larger(a, b));
+        if !max.is_finite() {
             return Err(FilterError::MassLost);
         }
-        for w in &mut self.log_weights {
-            *w -= total;
+        for (w, lw) in self.weights.iter_mut().zip(&self.log_weights) {
+            *w = libm::exp(lw - max);
         }
+        let total: f64 = self.weights.iter().sum();
+        if !(total.is_finite() && total > 0.0) {
+            return Err(FilterError::MassLost);
+        }
+        let shift = max + libm::log(total);
+        let inv = 1.0 / total;
+        self.weights.iter_mut().for_each(|w| *w *= inv);
+        self.log_weights.iter_mut().for_each(|w| *w -= shift);
         Ok(())
     }
 
     /// Systematic resampling: one uniform u, points (u + i)/N on the weights' CDF.
     fn resample(&mut self) {
-        let n = self.model.n;
-        let count = self.params.particles;
+        let (n, count) = (self.model.n, self.params.particles);
         let u: f64 = self.rng.random();
-        self.scratch.clear();
+        let step = 1.0 / count as f64;
+        let mut target = u * step;
         let mut cumulative = 0.0;
         let mut j = 0;
-        for (i, lw) in self.log_weights.iter().enumerate() {
-            cumulative += libm::exp(*lw);
-            while j < count && (u + j as f64) / count as f64 <= cumulative {
-                self.scratch
-                    .extend_from_slice(&self.particles[i * n..(i + 1) * n]);
+        for (i, w) in self.weights.iter().enumerate() {
+            cumulative += w;
+            while j < count && target <= cumulative {
+                for d in 0..n {
+                    self.resampled[d * count + j] = self.particles[d * count + i];
+                }
                 j += 1;
+                target = (u + j as f64) * step;
             }
         }
         // Round-off may leave the last few slots: fill them with the last particle.
-        while j < count {
-            self.scratch
-                .extend_from_slice(&self.particles[(count - 1) * n..count * n]);
-            j += 1;
+        for slot in j..count {
+            for d in 0..n {
+                self.resampled[d * count + slot] = self.particles[d * count + count - 1];
+            }
         }
-        core::mem::swap(&mut self.particles, &mut self.scratch);
+        core::mem::swap(&mut self.particles, &mut self.resampled);
         let lw = -libm::log(count as f64);
         self.log_weights.iter_mut().for_each(|w| *w = lw);
+        self.weights.iter_mut().for_each(|w| *w = step);
         self.resamples += 1;
     }
 
     fn effective_sample_size(&self) -> f64 {
-        1.0 / self
-            .log_weights
-            .iter()
-            .map(|w| libm::exp(2.0 * w))
-            .sum::<f64>()
+        1.0 / self.weights.iter().map(|w| w * w).sum::<f64>()
+    }
+
+    /// Component `dim` of every particle.
+    fn component(&self, dim: usize) -> &[f64] {
+        let count = self.params.particles;
+        &self.particles[dim * count..(dim + 1) * count]
     }
 }
 
@@ -318,39 +412,36 @@ impl Filter for ParticleFilter {
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        let n = self.model.n;
-        let samples: Vec<f64> = self
-            .particles
-            .iter()
-            .skip(dim)
-            .step_by(n)
-            .copied()
-            .collect();
-        let weights: Vec<f64> = self.log_weights.iter().map(|w| libm::exp(*w)).collect();
-        crate::filters::marginal::kernel_density(&samples, &weights, grid, out);
+        crate::filters::marginal::kernel_density(self.component(dim), &self.weights, grid, out);
     }
 
     fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
-        let n = self.model.n;
         let points = self
-            .particles
-            .chunks_exact(n)
-            .zip(&self.log_weights)
-            .map(|(p, lw)| (p[dims.0], p[dims.1], libm::exp(*lw)));
+            .component(dims.0)
+            .iter()
+            .zip(self.component(dims.1))
+            .zip(&self.weights)
+            .map(|((a, b), w)| (*a, *b, *w));
         crate::filters::marginal::histogram_2d(points, xs, ys, out);
     }
 
     fn estimate(&self) -> Estimate {
         let n = self.model.n;
-        let mut mean = DVector::zeros(n);
-        let mut second = DMatrix::zeros(n, n);
-        for (p, lw) in self.particles.chunks_exact(n).zip(&self.log_weights) {
-            let w = libm::exp(*lw);
-            let x = DVector::from_column_slice(p);
-            mean += &x * w;
-            second += &x * x.transpose() * w;
-        }
-        let cov = second - &mean * mean.transpose();
+        let mean = DVector::from_fn(n, |j, _| {
+            self.component(j)
+                .iter()
+                .zip(&self.weights)
+                .map(|(x, w)| w * x)
+                .sum::<f64>()
+        });
+        let cov = DMatrix::from_fn(n, n, |a, b| {
+            let (xa, xb) = (self.component(a), self.component(b));
+            xa.iter()
+                .zip(xb)
+                .zip(&self.weights)
+                .map(|((x, y), w)| w * (x - mean[a]) * (y - mean[b]))
+                .sum::<f64>()
+        });
         Estimate {
             mean,
             covariance: Some(cov),
