@@ -11,12 +11,12 @@ use std::fmt::Debug;
 use exmex::prelude::*;
 use exmex::{FloatOpsFactory, MakeOperators, Operator};
 
+use super::compile;
 use super::expression_error::{normalize_expression, variable_index, ExprError, LIBM_UNARY};
 use super::function::{
     numerical_hessian, numerical_jacobian, per_point, BatchScratch, Derivatives, VectorFunction,
 };
 use super::program::{Program, BLOCK, MAX_INPUTS};
-use super::trace;
 
 /// exmex's float operators with every transcendental function (and `^`) computed by the
 /// pure-Rust `libm` crate instead of the platform's maths library, so that an expression gives
@@ -66,7 +66,7 @@ struct Scalar {
 impl Scalar {
     /// Compiles `ex` (whose text exmex accepts) for an `n`-dimensional state.
     fn new(ex: Ex, state_index: Vec<usize>, n: usize) -> Result<Scalar, String> {
-        let program = trace::compile(ex.unparse(), n)?;
+        let program = compile::compile(ex.unparse(), n)?;
         Ok(Scalar {
             ex,
             state_index,

@@ -8,6 +8,8 @@
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
 
+#[cfg(feature = "std")]
+mod compile;
 pub mod dmz;
 #[cfg(feature = "std")]
 pub mod expression;
@@ -17,8 +19,6 @@ pub mod noise;
 pub mod prior;
 pub mod program;
 pub mod symbolic;
-#[cfg(feature = "std")]
-mod trace;
 
 use alloc::format;
 use alloc::sync::Arc;

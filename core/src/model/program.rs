@@ -1,8 +1,8 @@
 //! Compiled expressions: a flat program of elementwise operations evaluated over whole
 //! batches of points at once.
 //!
-//! A text expression is compiled once (by tracing exmex's own evaluation order, see
-//! `model::trace`) into a list of instructions in static single assignment form, with
+//! A text expression is compiled once (read with exmex's conventions, see `model::compile`)
+//! into a list of instructions in static single assignment form, with
 //! registers reused once a value is dead. Evaluation runs one pass per instruction over a
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
 //! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
@@ -12,7 +12,7 @@
 //! batch and the point-wise results are equal to the last bit. Against exmex's interpretation
 //! the program differs only where it strength-reduces an integer power `x^k` (0 ≤ k ≤ 4) to
 //! multiplications, which is within 2 ulp of `libm::pow` (tested here and, on whole
-//! expressions, in `model::trace`).
+//! expressions, in `model::compile`).
 
 use alloc::vec::Vec;
 
