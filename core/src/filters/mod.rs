@@ -220,26 +220,35 @@ pub(crate) fn grid_self_check(
     }
 }
 
-/// Normalises a grid density to unit mass in place and returns its estimate (mean,
-/// covariance, MAP node); a non-finite or vanished mass is an error, never NaN.
+/// Normalises a grid density to unit mass in place and writes its estimate (mean,
+/// covariance, MAP node) into `estimate`, through `moments` (storage of the grid's dimension,
+/// so that nothing is allocated once the estimate has its covariance and MAP); a non-finite or
+/// vanished mass is an error, never NaN, and leaves `estimate` as it was.
 pub(crate) fn normalise_on_grid(
     grid: &crate::grid::TensorGrid,
     u: &mut [f64],
-) -> Result<Estimate, crate::error::FilterError> {
-    let m = grid.moments(u);
-    if !m.mass.is_finite() {
+    moments: &mut crate::grid::Moments,
+    estimate: &mut Estimate,
+) -> Result<(), crate::error::FilterError> {
+    grid.moments_into(u, moments);
+    if !moments.mass.is_finite() {
         return Err(crate::error::FilterError::NonFinite { what: "density" });
     }
-    if m.mass <= 0.0 {
+    if moments.mass <= 0.0 {
         return Err(crate::error::FilterError::MassLost);
     }
-    let inv = 1.0 / m.mass;
+    let inv = 1.0 / moments.mass;
     u.iter_mut().for_each(|v| *v *= inv);
-    Ok(Estimate {
-        mean: m.mean,
-        covariance: Some(m.covariance),
-        map: Some(m.map),
-    })
+    estimate.mean.copy_from(&moments.mean);
+    match &mut estimate.covariance {
+        Some(c) => c.copy_from(&moments.covariance),
+        none => *none = Some(moments.covariance.clone()),
+    }
+    match &mut estimate.map {
+        Some(m) => m.copy_from(&moments.map),
+        none => *none = Some(moments.map.clone()),
+    }
+    Ok(())
 }
 
 /// The step length a filter built for one observation interval accepts: `dt` equal to

@@ -68,6 +68,18 @@ pub struct Moments {
     pub map: DVector<f64>,
 }
 
+impl Moments {
+    /// Zero moments of dimension `d`: storage for [`TensorGrid::moments_into`].
+    pub fn zeros(d: usize) -> Moments {
+        Moments {
+            mass: 0.0,
+            mean: DVector::zeros(d),
+            covariance: DMatrix::zeros(d, d),
+            map: DVector::zeros(d),
+        }
+    }
+}
+
 impl TensorGrid {
     /// A grid with `shape[d]` interior nodes on `[bounds[d].0, bounds[d].1]`; refuses grids
     /// beyond [`MAX_NODES`] before allocating anything.
@@ -226,16 +238,29 @@ impl TensorGrid {
     /// need not be normalised. One pass, line by line along the first dimension: each line
     /// contributes its sums `Σw`, `Σw x₀`, `Σw x₀²`, and the other coordinates are constant on it.
     pub fn moments(&self, u: &[f64]) -> Moments {
+        let mut out = Moments::zeros(self.dim());
+        self.moments_into(u, &mut out);
+        out
+    }
+
+    /// [`TensorGrid::moments`] written into `out` (of this grid's dimension), allocating
+    /// nothing: the filters' step calls it on storage made at construction.
+    pub fn moments_into(&self, u: &[f64], out: &mut Moments) {
         let d = self.dim();
         let n0 = self.shape[0];
         let mut total = 0.0;
-        let mut mean = vec![0.0; d];
-        let mut second = vec![0.0; d * d];
         let mut best = (f64::NEG_INFINITY, 0);
-        // Coordinates of the current line in dimensions 1..D (an odometer).
-        let mut x: Vec<f64> = (0..d).map(|k| self.coordinate(k, 0)).collect();
-        let mut counter = vec![0usize; d];
+        let (mean, second) = (out.mean.as_mut_slice(), out.covariance.as_mut_slice());
+        mean.fill(0.0);
+        second.fill(0.0);
+        // Coordinates of the current line in dimensions 1..D, kept in `map` until the end.
+        let x = out.map.as_mut_slice();
         for (line, values) in u.chunks_exact(n0).enumerate() {
+            let mut rest = line;
+            for (k, xk) in x.iter_mut().enumerate().skip(1) {
+                *xk = self.coordinate(k, rest % self.shape[k]);
+                rest /= self.shape[k];
+            }
             let ([s0, s1, s2, top], i) = line_sums(values, &self.first_axis);
             if top > best.0 {
                 best = (top, line * n0 + i);
@@ -250,20 +275,17 @@ impl TensorGrid {
                     second[a * d + b] += s0 * x[a] * x[b];
                 }
             }
-            self.next_node(&mut counter, &mut x, 1);
         }
-        let mean = DVector::from_iterator(d, mean.iter().map(|m| m / total));
-        let covariance = DMatrix::from_fn(d, d, |a, b| {
-            let (a, b) = if a >= b { (a, b) } else { (b, a) };
-            second[a * d + b] / total - mean[a] * mean[b]
-        });
-        self.node(best.1, &mut x);
-        Moments {
-            mass: total * self.cell_volume(),
-            mean,
-            covariance,
-            map: DVector::from_column_slice(&x),
+        mean.iter_mut().for_each(|m| *m /= total);
+        for a in 0..d {
+            for b in 0..=a {
+                let c = second[a * d + b] / total - mean[a] * mean[b];
+                second[a * d + b] = c;
+                second[b * d + a] = c;
+            }
         }
+        self.node(best.1, x);
+        out.mass = total * self.cell_volume();
     }
 
     /// Where `x` falls along dimension `dim`: `(i, f)` with x between node i and i + 1 (0-based,

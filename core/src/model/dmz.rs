@@ -73,25 +73,39 @@ impl DmzCoefficients {
             s_inv_h: vec![vec![0.0; len]; m],
             half_hsh: vec![0.0; len],
         };
+        // Chunks of nodes as structure of arrays, f, ∂f and h over each chunk at once.
+        const CHUNK: usize = 4096;
+        let c = CHUNK.min(len);
         let mut x = vec![0.0; n];
-        let mut f = vec![0.0; n];
-        let mut jac = vec![0.0; n * n];
-        let mut h = vec![0.0; m];
-        for i in 0..len {
-            point(i, &mut x);
-            model.drift.eval(&x, &mut f);
-            model.drift.jacobian(&x, &mut jac);
-            model.observation.eval(&x, &mut h);
-            out.div_f[i] = (0..n).map(|d| jac[d * n + d]).sum();
-            let mut hsh = 0.0;
-            for a in 0..m {
-                let sh: f64 = (0..m).map(|b| s_inv[(a, b)] * h[b]).sum();
-                out.s_inv_h[a][i] = sh;
-                hsh += h[a] * sh;
+        let (mut points, mut f) = (vec![0.0; n * c], vec![0.0; n * c]);
+        let (mut jac, mut h) = (vec![0.0; n * n * c], vec![0.0; m * c]);
+        let mut scratch = crate::model::BatchScratch::default();
+        for start in (0..len).step_by(CHUNK) {
+            let k = CHUNK.min(len - start);
+            for p in 0..k {
+                point(start + p, &mut x);
+                for (j, v) in x.iter().enumerate() {
+                    points[j * k + p] = *v;
+                }
             }
-            out.half_hsh[i] = 0.5 * hsh;
-            for (column, v) in out.f.iter_mut().zip(&f) {
-                column[i] = *v;
+            let (points, f) = (&points[..n * k], &mut f[..n * k]);
+            let (jac, h) = (&mut jac[..n * n * k], &mut h[..m * k]);
+            model.drift.eval_batch(points, f, &mut scratch);
+            model.drift.jacobian_batch(points, jac, &mut scratch);
+            model.observation.eval_batch(points, h, &mut scratch);
+            for (j, column) in out.f.iter_mut().enumerate() {
+                column[start..start + k].copy_from_slice(&f[j * k..(j + 1) * k]);
+            }
+            for p in 0..k {
+                let i = start + p;
+                out.div_f[i] = (0..n).map(|d| jac[(d * n + d) * k + p]).sum();
+                let mut hsh = 0.0;
+                for a in 0..m {
+                    let sh: f64 = (0..m).map(|b| s_inv[(a, b)] * h[b * k + p]).sum();
+                    out.s_inv_h[a][i] = sh;
+                    hsh += h[a * k + p] * sh;
+                }
+                out.half_hsh[i] = 0.5 * hsh;
             }
         }
         let values = out

@@ -115,6 +115,8 @@ pub struct DirectFilter {
     /// The normalised density e^{F} û.
     density: Vec<f64>,
     estimate: Estimate,
+    /// Storage of the estimate's moments.
+    moments: crate::grid::Moments,
     terms: usize,
     /// The grid's node coordinates.
     nodes: Vec<f64>,
@@ -241,6 +243,7 @@ impl DirectFilter {
                 covariance: None,
                 map: None,
             },
+            moments: crate::grid::Moments::zeros(1),
             terms: 0,
             nodes: x,
             grid,
@@ -269,7 +272,12 @@ impl DirectFilter {
             })
             .collect();
         self.density = exp_shifted(&log);
-        self.estimate = crate::filters::normalise_on_grid(&self.grid, &mut self.density)?;
+        crate::filters::normalise_on_grid(
+            &self.grid,
+            &mut self.density,
+            &mut self.moments,
+            &mut self.estimate,
+        )?;
         Ok(())
     }
 }

@@ -189,6 +189,8 @@ pub struct ContinuousDiscreteGrid {
     residual: Vec<f64>,
     work: Vec<f64>,
     estimate: Estimate,
+    /// Storage of the estimate's moments (see [`normalise_on_grid`]).
+    moments: crate::grid::Moments,
     warnings: Vec<String>,
 }
 
@@ -241,7 +243,13 @@ impl ContinuousDiscreteGrid {
             }
             .into());
         }
-        let estimate = normalise_on_grid(&grid, &mut u)?;
+        let mut moments = crate::grid::Moments::zeros(n);
+        let mut estimate = Estimate {
+            mean: nalgebra::DVector::zeros(n),
+            covariance: None,
+            map: None,
+        };
+        normalise_on_grid(&grid, &mut u, &mut moments, &mut estimate)?;
         let len = grid.len();
         let mut filter = ContinuousDiscreteGrid {
             name,
@@ -260,6 +268,7 @@ impl ContinuousDiscreteGrid {
             residual: vec![0.0; m],
             work: vec![0.0; m],
             estimate,
+            moments,
             warnings: Vec::new(),
         };
         let (_, notes) = filter.step_count(dt_obs)?;
@@ -443,7 +452,12 @@ impl ContinuousDiscreteGrid {
         for (u, log) in self.u.iter_mut().zip(&self.tmp) {
             *u = libm::exp(log - max);
         }
-        self.estimate = normalise_on_grid(&self.grid, &mut self.u)?;
+        normalise_on_grid(
+            &self.grid,
+            &mut self.u,
+            &mut self.moments,
+            &mut self.estimate,
+        )?;
         Ok(())
     }
 }

@@ -399,12 +399,12 @@ impl SpectralFilter {
     /// (39) and normalises the coefficients.
     fn normalise_and_project(&mut self) -> Result<(), FilterError> {
         let (values, weight, coords) = (&self.values, &self.weight, &self.coords);
-        let (estimate, mass) = match self.layout.dims() {
-            1 => estimate_at_nodes::<1>(values, weight, coords),
-            2 => estimate_at_nodes::<2>(values, weight, coords),
-            _ => estimate_at_nodes::<3>(values, weight, coords),
+        let out = &mut self.estimate;
+        let mass = match self.layout.dims() {
+            1 => estimate_at_nodes::<1>(values, weight, coords, out),
+            2 => estimate_at_nodes::<2>(values, weight, coords, out),
+            _ => estimate_at_nodes::<3>(values, weight, coords, out),
         }?;
-        self.estimate = estimate;
         let shape = [self.layout.online_nodes; tensor::MAX_DIMS];
         tensor::multilinear(
             &self.project,
@@ -496,12 +496,14 @@ impl SpectralFilter {
 
 /// The estimate (41) from nodal values on the on-line grid of an N-dimensional model: mean
 /// and covariance by the quadrature, the MAP as the largest node, all in one pass; also the
-/// mass. Fails when the mass is not finite or not positive.
+/// mass. Writes into `out` (allocating only a covariance or MAP it does not have yet); fails
+/// when the mass is not finite or not positive, leaving `out` as it was.
 fn estimate_at_nodes<const N: usize>(
     values: &[f64],
     weight: &[f64],
     coords: &[Vec<f64>],
-) -> Result<(Estimate, f64), FilterError> {
+    out: &mut Estimate,
+) -> Result<f64, FilterError> {
     let x: [&[f64]; N] = core::array::from_fn(|d| coords[d].as_slice());
     let (mut mass, mut first, mut second) = (0.0, [0.0; N], [[0.0; N]; N]);
     let mut best = (f64::NEG_INFINITY, 0);
@@ -526,19 +528,21 @@ fn estimate_at_nodes<const N: usize>(
         return Err(FilterError::MassLost);
     }
     let inv = 1.0 / mass;
-    let mean = DVector::from_fn(N, |a, _| first[a] * inv);
+    let mean = &mut out.mean;
+    mean.iter_mut().zip(&first).for_each(|(m, f)| *m = f * inv);
     // From one triangle, so that the covariance is exactly symmetric.
-    let covariance = DMatrix::from_fn(N, N, |a, b| {
-        let (a, b) = (a.max(b), a.min(b));
-        second[a][b] * inv - mean[a] * mean[b]
-    });
-    let map = DVector::from_fn(N, |d, _| x[d][best.1]);
-    let estimate = Estimate {
-        mean,
-        covariance: Some(covariance),
-        map: Some(map),
-    };
-    Ok((estimate, mass))
+    let covariance = out.covariance.get_or_insert_with(|| DMatrix::zeros(N, N));
+    for a in 0..N {
+        for b in 0..N {
+            let (hi, lo) = (a.max(b), a.min(b));
+            covariance[(a, b)] = second[hi][lo] * inv - mean[hi] * mean[lo];
+        }
+    }
+    let map = out.map.get_or_insert_with(|| DVector::zeros(N));
+    map.iter_mut()
+        .enumerate()
+        .for_each(|(d, m)| *m = x[d][best.1]);
+    Ok(mass)
 }
 
 /// The spectral self-check's threshold: the share of the on-line coefficients' energy (Σc²)

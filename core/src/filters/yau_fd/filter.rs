@@ -344,6 +344,8 @@ pub struct YauYauFilter {
     solver: Option<(f64, usize, Solver)>,
     warnings: Vec<GuaranteeWarning>,
     estimate: Estimate,
+    /// Storage of the estimate's moments.
+    moments: crate::grid::Moments,
     /// The observation factor's samples inside every cell, when averaged over the cell.
     cell: Option<CellSamples>,
 }
@@ -457,6 +459,7 @@ impl YauYauFilter {
                 covariance: None,
                 map: None,
             },
+            moments: crate::grid::Moments::zeros(model.n),
         };
         filter.normalise()?;
         filter.prepare(dt_obs)?;
@@ -514,7 +517,12 @@ impl YauYauFilter {
 
     /// Normalises to unit mass and refreshes the estimate.
     fn normalise(&mut self) -> Result<(), FilterError> {
-        self.estimate = crate::filters::normalise_on_grid(&self.grid, &mut self.u)?;
+        crate::filters::normalise_on_grid(
+            &self.grid,
+            &mut self.u,
+            &mut self.moments,
+            &mut self.estimate,
+        )?;
         Ok(())
     }
 

@@ -1,0 +1,115 @@
+//! Per-step costs of the baselines on the work `scripts/bench-peers.sh` gives their Python
+//! peers (NumPy, FilterPy), so the two can be compared number for number:
+//!
+//! * bootstrap PF with 10⁴ particles on the cubic sensor dx = dv, dy = x³ dt + dw, Δτ = 0.01,
+//!   systematic resampling at every step (`ess_threshold = 1`), prior N(1, 0.1);
+//! * UKF on z = x³ + v (Var v = 0.1) with a random-walk state (dx = dv, Δτ = 0.01), one
+//!   predict (one RK4 substep of the sigma-point moment equations) and one update;
+//! * batch evaluation of a compiled text expression against the point-wise path.
+//!
+//! Run: `cargo bench -p zakai --bench per_step`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+use zakai::model::BatchScratch;
+use zakai::simulate::{simulate, TimeGrid};
+use zakai::{Filter, Model, Noise, Pf, Ukf};
+
+const DT: f64 = 0.01;
+
+fn increments(model: &Model, steps: usize) -> Vec<f64> {
+    let grid = TimeGrid {
+        dt_obs: DT,
+        steps,
+        inner_steps: 10,
+    };
+    let data = simulate(model, &[1.0], grid, &mut zakai::random::rng_from_seed(1));
+    data.observations
+}
+
+fn particle_filter(c: &mut Criterion) {
+    let model = Model::from_text(&["0"], &["x^3"], Noise::continuous(1.0)).expect("model");
+    let dy = increments(&model, 500);
+    let mut pf = Pf::builder(&model)
+        .prior_gaussian(&[1.0], &[[0.1]])
+        .seed(2)
+        .with(|p| {
+            p.particles = 10_000;
+            p.ess_threshold = 1.0;
+        })
+        .build()
+        .expect("valid PF");
+    let mut k = 0;
+    c.bench_function("PF(10000) step, cubic sensor, resampling every step", |b| {
+        b.iter(|| {
+            pf.step_increment(DT, &[dy[k % dy.len()]]).expect("steps");
+            k += 1;
+        })
+    });
+}
+
+fn unscented(c: &mut Criterion) {
+    let model = Model::from_text(&["0"], &["x^3"], Noise::discrete(0.1)).expect("model");
+    let grid = TimeGrid {
+        dt_obs: DT,
+        steps: 500,
+        inner_steps: 10,
+    };
+    let z = simulate(&model, &[1.0], grid, &mut zakai::random::rng_from_seed(1)).observations;
+    let mut ukf = Ukf::builder(&model)
+        .prior_gaussian(&[1.0], &[[0.1]])
+        .with(|p| p.substeps = 1)
+        .build()
+        .expect("valid UKF");
+    let mut k = 0;
+    c.bench_function("UKF step 1-D, z = x^3 + v (predict + update)", |b| {
+        b.iter(|| {
+            // Restart before the random walk drifts the filter far from the data.
+            if k % z.len() == 0 {
+                ukf = Ukf::builder(&model)
+                    .prior_gaussian(&[1.0], &[[0.1]])
+                    .with(|p| p.substeps = 1)
+                    .build()
+                    .expect("valid UKF");
+            }
+            ukf.step_measurement(DT, &[z[k % z.len()]]).expect("steps");
+            k += 1;
+        })
+    });
+}
+
+fn batch_evaluation(c: &mut Criterion) {
+    let model = Model::from_text(
+        &["-x1 + 0.1*tanh(x2)", "-0.5*x2"],
+        &["x1^3", "x1*x2"],
+        Noise::continuous(1.0),
+    )
+    .expect("model");
+    let k = 10_000;
+    let points: Vec<f64> = (0..2 * k).map(|i| ((i as f64) * 0.618).sin()).collect();
+    let mut out = vec![0.0; 2 * k];
+    let mut scratch = BatchScratch::default();
+    let mut group = c.benchmark_group("2-D drift at 10^4 points");
+    group.bench_function("batch", |b| {
+        b.iter(|| {
+            model
+                .drift
+                .eval_batch(black_box(&points), &mut out, &mut scratch)
+        })
+    });
+    group.bench_function("point by point", |b| {
+        b.iter(|| {
+            let mut v = [0.0; 2];
+            for p in 0..k {
+                model.drift.eval(&[points[p], points[k + p]], &mut v);
+                out[p] = v[0];
+                out[k + p] = v[1];
+            }
+            black_box(&out);
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, particle_filter, unscented, batch_evaluation);
+criterion_main!(benches);
