@@ -29,6 +29,22 @@ pub fn cholesky(p: &DMatrix<f64>, what: &'static str) -> Result<Cholesky<f64, Dy
     Cholesky::new(p.clone()).ok_or(FilterError::NotPositiveDefinite { what })
 }
 
+/// The Cholesky factorisation of `a` made in `storage` (a matrix of a's shape, moved into
+/// the factorisation): no allocation. Give the storage back with
+/// `*storage = chol.unpack_dirty()` when done; after an error it is left empty.
+pub fn cholesky_in(
+    storage: &mut DMatrix<f64>,
+    a: &DMatrix<f64>,
+    what: &'static str,
+) -> Result<Cholesky<f64, Dyn>, FilterError> {
+    if a.iter().any(|v| !v.is_finite()) {
+        return Err(FilterError::NonFinite { what });
+    }
+    storage.copy_from(a);
+    let owned = core::mem::replace(storage, DMatrix::zeros(0, 0));
+    Cholesky::new(owned).ok_or(FilterError::NotPositiveDefinite { what })
+}
+
 /// Fails when any entry is NaN or infinite.
 pub fn check_finite_vector(v: &DVector<f64>, what: &'static str) -> Result<(), FilterError> {
     if v.iter().all(|x| x.is_finite()) {

@@ -51,7 +51,7 @@ impl ExtendedKalman {
             q: model.process_noise(),
             form: MeasurementForm::new(model),
             substeps: params.substeps.max(1),
-            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
         }
     }
 }
@@ -62,14 +62,16 @@ impl Filter for ExtendedKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        match self.state.predict_then_measure(
-            &self.model,
-            &self.q,
-            self.substeps,
-            &self.form,
-            obs,
-        )? {
-            Some(meas) => self.state.linearized_update(&self.model, &meas),
+        let ExtendedKalman {
+            model,
+            q,
+            form,
+            substeps,
+            state,
+            ..
+        } = self;
+        match state.predict_then_measure(model, q, *substeps, form, obs)? {
+            Some(meas) => state.linearized_update(model, meas),
             None => Ok(()),
         }
     }

@@ -100,6 +100,8 @@ pub struct KalmanBucy {
     state: GaussianState,
     /// The exact discretisation of the last interval, reused while Δτ does not change.
     cached: Option<Discretization>,
+    /// Storage of the prediction: Φ m and Φ P.
+    moved: (DVector<f64>, DMatrix<f64>),
 }
 
 /// `(Δτ, Φ, Γ b, Q_d)` of [`discretize`].
@@ -108,6 +110,8 @@ pub(crate) struct Discretization {
     pub(crate) phi: DMatrix<f64>,
     pub(crate) gamma_b: DVector<f64>,
     pub(crate) qd: DMatrix<f64>,
+    /// Φᵀ.
+    phi_t: DMatrix<f64>,
 }
 
 impl Discretization {
@@ -123,12 +127,29 @@ impl Discretization {
             let (phi, gamma_b, qd) = discretize(a, b, q, dt);
             *cache = Some(Discretization {
                 dt,
+                phi_t: phi.transpose(),
                 phi,
                 gamma_b,
                 qd,
             });
         }
         cache.as_ref().expect("just filled")
+    }
+
+    /// Moves `N(m, P)` over the interval in place: `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d`, with
+    /// `moved` (n, n × n) as storage.
+    pub(crate) fn propagate(
+        &self,
+        m: &mut DVector<f64>,
+        p: &mut DMatrix<f64>,
+        moved: &mut (DVector<f64>, DMatrix<f64>),
+    ) {
+        moved.0.copy_from(&self.gamma_b);
+        moved.0.gemv(1.0, &self.phi, m, 1.0);
+        m.copy_from(&moved.0);
+        moved.1.gemm(1.0, &self.phi, p, 0.0);
+        p.copy_from(&self.qd);
+        p.gemm(1.0, &moved.1, &self.phi_t, 1.0);
     }
 }
 
@@ -155,8 +176,9 @@ impl KalmanBucy {
             b,
             q: model.process_noise(),
             form: MeasurementForm::new(model),
-            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
             cached: None,
+            moved: (DVector::zeros(model.n), DMatrix::zeros(model.n, model.n)),
         })
     }
 }
@@ -171,13 +193,12 @@ impl Filter for KalmanBucy {
         let meas = self.form.at(obs)?;
         if obs.dt > 0.0 {
             let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, obs.dt);
-            self.state.mean = &d.phi * &self.state.mean + &d.gamma_b;
-            self.state.cov = &d.phi * &self.state.cov * d.phi.transpose() + &d.qd;
+            d.propagate(&mut self.state.mean, &mut self.state.cov, &mut self.moved);
         }
         if meas.scale == 0.0 {
             return self.state.check();
         }
-        self.state.linearized_update(&self.model, &meas)
+        self.state.linearized_update(&self.model, meas)
     }
 
     fn estimate(&self) -> Estimate {

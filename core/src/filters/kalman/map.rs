@@ -261,7 +261,7 @@ impl MapKalman {
             form: MeasurementForm::new(model),
             substeps: substeps.max(1),
             solver,
-            state: GaussianState::initial(prior.mean(), prior.covariance(), init),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), init, model.m),
             last_iterations: 0,
         }
     }
@@ -340,12 +340,13 @@ impl Filter for MapKalman {
             &self.model,
             &self.q,
             self.substeps,
-            &self.form,
+            &mut self.form,
             obs,
         )?
         else {
             return Ok(());
         };
+        let meas = meas.clone();
         let x = self.map_point(&meas)?;
         // The Laplace covariance at the MAP point: P − K H P.
         let h = meas.jacobian(&self.model, x.as_slice());

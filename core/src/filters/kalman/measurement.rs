@@ -13,15 +13,18 @@ use crate::error::FilterError;
 use crate::filters::{Observation, ObservationKind};
 use crate::model::{Model, ObservationModel};
 
-/// The measurement equation `z = scale · h(x) + offset + noise(R)` for one observation.
+/// The measurement equation `z = scale · h(x) + offset + noise(R)` for one observation, and
+/// the storage of the current one (written by [`MeasurementForm::at`] without allocating).
 #[derive(Clone, Debug)]
 pub struct MeasurementForm {
     continuous: bool,
     offset: DVector<f64>,
     noise_cov: DMatrix<f64>,
+    current: Measurement,
 }
 
 /// The measurement equation for one observation.
+#[derive(Clone, Debug)]
 pub struct Measurement {
     /// Multiplies h (Δτ for increments, 1 for measurements).
     pub scale: f64,
@@ -34,22 +37,27 @@ pub struct Measurement {
 impl MeasurementForm {
     /// From the model's observation noise.
     pub fn new(model: &Model) -> Self {
-        match &model.observations {
-            ObservationModel::Continuous { noise_cov } => MeasurementForm {
-                continuous: true,
-                offset: DVector::zeros(model.m),
-                noise_cov: noise_cov.clone(),
-            },
-            ObservationModel::Discrete { noise } => MeasurementForm {
-                continuous: false,
-                offset: noise.mean(),
-                noise_cov: noise.covariance(),
-            },
+        let (continuous, offset, noise_cov) = match &model.observations {
+            ObservationModel::Continuous { noise_cov } => {
+                (true, DVector::zeros(model.m), noise_cov.clone())
+            }
+            ObservationModel::Discrete { noise } => (false, noise.mean(), noise.covariance()),
+        };
+        let current = Measurement {
+            scale: 1.0,
+            noise_cov: noise_cov.clone(),
+            value: DVector::zeros(model.m),
+        };
+        MeasurementForm {
+            continuous,
+            offset,
+            noise_cov,
+            current,
         }
     }
 
     /// The equation for `obs`, or an error when its kind or size does not fit the model.
-    pub fn at(&self, obs: &Observation) -> Result<Measurement, FilterError> {
+    pub fn at(&mut self, obs: &Observation) -> Result<&Measurement, FilterError> {
         let expected = if self.continuous {
             ObservationKind::Increment
         } else {
@@ -63,16 +71,16 @@ impl MeasurementForm {
                 obs.value.len()
             )));
         }
-        let (scale, noise_cov) = if self.continuous {
-            (obs.dt, &self.noise_cov * obs.dt)
-        } else {
-            (1.0, self.noise_cov.clone())
-        };
-        Ok(Measurement {
-            scale,
-            noise_cov,
-            value: DVector::from_column_slice(obs.value) - &self.offset,
-        })
+        let current = &mut self.current;
+        current.scale = if self.continuous { obs.dt } else { 1.0 };
+        current.noise_cov.copy_from(&self.noise_cov);
+        if self.continuous {
+            current.noise_cov *= obs.dt;
+        }
+        for ((v, z), o) in current.value.iter_mut().zip(obs.value).zip(&self.offset) {
+            *v = z - o;
+        }
+        Ok(current)
     }
 }
 
@@ -80,14 +88,38 @@ impl Measurement {
     /// `scale · h(x)` (the offset is already taken out of `value`).
     pub fn predict(&self, model: &Model, x: &[f64]) -> DVector<f64> {
         let mut out = DVector::zeros(model.m);
-        model.observation.eval(x, out.as_mut_slice());
-        out * self.scale
+        self.predict_into(model, x, out.as_mut_slice());
+        out
+    }
+
+    /// [`Measurement::predict`] into `out` (length m).
+    pub fn predict_into(&self, model: &Model, x: &[f64], out: &mut [f64]) {
+        model.observation.eval(x, out);
+        out.iter_mut().for_each(|v| *v *= self.scale);
     }
 
     /// `scale · ∂h/∂x` at x (m × n).
     pub fn jacobian(&self, model: &Model, x: &[f64]) -> DMatrix<f64> {
-        let mut jac = alloc::vec![0.0; model.m * model.n];
-        model.observation.jacobian(x, &mut jac);
-        DMatrix::from_row_slice(model.m, model.n, &jac) * self.scale
+        let mut out = DMatrix::zeros(model.m, model.n);
+        let mut rows = alloc::vec![0.0; model.m * model.n];
+        self.jacobian_into(model, x, &mut rows, &mut out);
+        out
+    }
+
+    /// [`Measurement::jacobian`] into `out` (m × n), through `rows` (m·n, row-major).
+    pub fn jacobian_into(
+        &self,
+        model: &Model,
+        x: &[f64],
+        rows: &mut [f64],
+        out: &mut DMatrix<f64>,
+    ) {
+        model.observation.jacobian(x, rows);
+        let n = model.n;
+        for (i, row) in rows.chunks_exact(n).enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                out[(i, j)] = v * self.scale;
+            }
+        }
     }
 }

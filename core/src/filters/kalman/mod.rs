@@ -98,7 +98,8 @@ impl InnovationWindow {
     }
 }
 
-/// The Gaussian state `N(m, P)` of the Kalman family.
+/// The Gaussian state `N(m, P)` of the Kalman family, with the storage its steps work in
+/// (made once: a step allocates nothing).
 #[derive(Clone, Debug)]
 pub struct GaussianState {
     /// Mean m.
@@ -107,11 +108,45 @@ pub struct GaussianState {
     pub cov: DMatrix<f64>,
     /// The last normalised innovations squared (the innovation self-check).
     pub innovations: InnovationWindow,
+    /// What an update is made of: a filter writes the residual `z − ẑ`, `P_xz` and `P_zz`
+    /// here before [`GaussianState::update`].
+    pub parts: UpdateParts,
+    work: UpdateWork,
+    moments: propagate::MomentWork,
+}
+
+/// The residual `r = z − ẑ` (m), the cross covariance `P_xz` (n × m) and the innovation
+/// covariance `P_zz` (m × m) of one update.
+#[derive(Clone, Debug)]
+pub struct UpdateParts {
+    /// r.
+    pub residual: DVector<f64>,
+    /// P_xz.
+    pub pxz: DMatrix<f64>,
+    /// P_zz.
+    pub pzz: DMatrix<f64>,
+}
+
+/// Storage of the update: the Cholesky factor of P_zz, Kᵀ, P_zz⁻¹ r, and the linearised
+/// observation `H` (with its row-major evaluation) at the mean.
+#[derive(Clone, Debug)]
+struct UpdateWork {
+    factor: DMatrix<f64>,
+    gain_t: DMatrix<f64>,
+    whitened: DVector<f64>,
+    h: DMatrix<f64>,
+    rows: Vec<f64>,
 }
 
 impl GaussianState {
-    /// From the prior moments, overridden by `init` where it says so.
-    pub fn initial(prior_mean: DVector<f64>, prior_cov: DMatrix<f64>, init: &GaussianInit) -> Self {
+    /// From the prior moments, overridden by `init` where it says so, for `m` observation
+    /// components.
+    pub fn initial(
+        prior_mean: DVector<f64>,
+        prior_cov: DMatrix<f64>,
+        init: &GaussianInit,
+        m: usize,
+    ) -> Self {
         let n = prior_mean.len();
         let mean = init
             .mean
@@ -132,23 +167,37 @@ impl GaussianState {
                 values: [0.0; NIS_WINDOW],
                 count: 0,
             },
+            parts: UpdateParts {
+                residual: DVector::zeros(m),
+                pxz: DMatrix::zeros(n, m),
+                pzz: DMatrix::zeros(m, m),
+            },
+            work: UpdateWork {
+                factor: DMatrix::zeros(m, m),
+                gain_t: DMatrix::zeros(m, n),
+                whitened: DVector::zeros(m),
+                h: DMatrix::zeros(m, n),
+                rows: alloc::vec![0.0; m * n],
+            },
+            moments: propagate::MomentWork::new(n),
         }
     }
 
-    /// The linear(ised) update with residual `r = z − ẑ`, gain from the cross covariance
-    /// `P_xz` and innovation covariance `P_zz`: `m += K r`, `P −= K P_zz Kᵀ`.
-    pub fn update(
-        &mut self,
-        residual: &DVector<f64>,
-        pxz: &DMatrix<f64>,
-        pzz: &DMatrix<f64>,
-    ) -> Result<(), FilterError> {
-        let chol = crate::linalg::cholesky(pzz, "innovation covariance")?;
-        self.innovations.push(residual.dot(&chol.solve(residual)));
+    /// The linear(ised) update from [`GaussianState::parts`] (residual `r = z − ẑ`, `P_xz`,
+    /// `P_zz`): gain `K = P_xz P_zz⁻¹`, `m += K r`, `P −= K P_zz Kᵀ = P_xz Kᵀ`.
+    pub fn update(&mut self) -> Result<(), FilterError> {
+        let UpdateParts { residual, pxz, pzz } = &self.parts;
+        let work = &mut self.work;
+        let chol = crate::linalg::cholesky_in(&mut work.factor, pzz, "innovation covariance")?;
+        work.whitened.copy_from(residual);
+        chol.solve_mut(&mut work.whitened);
+        self.innovations.push(residual.dot(&work.whitened));
         // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ.
-        let k = chol.solve(&pxz.transpose()).transpose();
-        self.mean += &k * residual;
-        self.cov -= &k * pzz * k.transpose();
+        work.gain_t.tr_copy_from(pxz);
+        chol.solve_mut(&mut work.gain_t);
+        work.factor = chol.unpack_dirty();
+        self.mean.gemv_tr(1.0, &work.gain_t, residual, 1.0);
+        self.cov.gemm(-1.0, pxz, &work.gain_t, 1.0);
         symmetrize(&mut self.cov);
         self.check()
     }
@@ -160,12 +209,21 @@ impl GaussianState {
         model: &crate::model::Model,
         meas: &measurement::Measurement,
     ) -> Result<(), FilterError> {
-        let x = self.mean.as_slice().to_vec();
-        let h = meas.jacobian(model, &x);
-        let residual = &meas.value - meas.predict(model, &x);
-        let pxz = &self.cov * h.transpose();
-        let pzz = &h * &pxz + &meas.noise_cov;
-        self.update(&residual, &pxz, &pzz)
+        let (work, parts) = (&mut self.work, &mut self.parts);
+        let x = self.mean.as_slice();
+        meas.jacobian_into(model, x, &mut work.rows, &mut work.h);
+        meas.predict_into(model, x, parts.residual.as_mut_slice());
+        parts.residual.zip_apply(&meas.value, |r, z| *r = z - *r);
+        // P_xz = P Hᵀ.
+        let (m, n) = work.h.shape();
+        for i in 0..n {
+            for j in 0..m {
+                parts.pxz[(i, j)] = (0..n).map(|k| self.cov[(i, k)] * work.h[(j, k)]).sum();
+            }
+        }
+        parts.pzz.copy_from(&meas.noise_cov);
+        parts.pzz.gemm(1.0, &work.h, &parts.pxz, 1.0);
+        self.update()
     }
 
     /// The EKF prediction over `dt`: the linearised moment equations (Jazwinski) in
@@ -177,24 +235,55 @@ impl GaussianState {
         dt: f64,
         substeps: usize,
     ) -> Result<(), FilterError> {
-        propagate::rk4_moments(&mut self.mean, &mut self.cov, dt, substeps, |m, p| {
-            propagate::linearized_rates(model, q, m, p)
-        })?;
+        propagate::rk4_moments(
+            &mut self.mean,
+            &mut self.cov,
+            dt,
+            substeps,
+            &mut self.moments,
+            |at, rates, jacobian| {
+                propagate::linearized_rates(model, q, jacobian, at, rates);
+                Ok(())
+            },
+        )?;
         self.check()
     }
 
-    /// The common first half of an EKF-type step: the linearised prediction over `obs.dt`,
-    /// then the measurement equation of `obs` (`None` when there is nothing to assimilate,
-    /// e.g. the zero increment at τ₀).
-    pub fn predict_then_measure(
+    /// Integrates moment equations given by `rates` over `dt` in `substeps` RK4 steps (see
+    /// [`propagate::rk4_moments`]), in the state's own storage.
+    pub fn predict_with(
+        &mut self,
+        dt: f64,
+        substeps: usize,
+        rates: impl FnMut(
+            (&DVector<f64>, &DMatrix<f64>),
+            (&mut DVector<f64>, &mut DMatrix<f64>),
+            &mut [f64],
+        ) -> Result<(), FilterError>,
+    ) -> Result<(), FilterError> {
+        propagate::rk4_moments(
+            &mut self.mean,
+            &mut self.cov,
+            dt,
+            substeps,
+            &mut self.moments,
+            rates,
+        )?;
+        self.check()
+    }
+
+    /// The common first half of an EKF-type step: the measurement equation of `obs` (checked
+    /// before anything moves, so a refused one leaves the state), then the linearised
+    /// prediction over `obs.dt`; `None` when there is nothing to assimilate (e.g. the zero
+    /// increment at τ₀).
+    pub fn predict_then_measure<'f>(
         &mut self,
         model: &crate::model::Model,
         q: &DMatrix<f64>,
         substeps: usize,
-        form: &measurement::MeasurementForm,
+        form: &'f mut measurement::MeasurementForm,
         obs: &crate::filters::Observation,
-    ) -> Result<Option<measurement::Measurement>, FilterError> {
-        // The observation is checked before anything moves: a refused one leaves the state.
+    ) -> Result<Option<&'f measurement::Measurement>, FilterError> {
         let meas = form.at(obs)?;
         if obs.dt > 0.0 {
             self.predict_linearized(model, q, obs.dt, substeps)?;

@@ -3,50 +3,107 @@
 //! Mean and covariance follow moment equations `(dm/dt, dP/dt) = rates(m, P)`: the EKF's
 //!   linearised rates (Jazwinski) `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q`,
 //!   `F = ∂f/∂x`, or the UKF's sigma-point rates (Särkkä's continuous–discrete UKF).
+//! Every intermediate lives in a [`MomentWork`] made once per filter: a step allocates nothing.
 
 use alloc::vec;
+use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::FilterError;
 use crate::model::Model;
 
-/// The EKF's moment rates: `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q`.
+/// Storage of one RK4 step of the moment equations for an n-dimensional state.
+#[derive(Clone, Debug)]
+pub struct MomentWork {
+    /// The four stages' rates of m and of P.
+    km: [DVector<f64>; 4],
+    kp: [DMatrix<f64>; 4],
+    /// The point a stage's rates are taken at.
+    mt: DVector<f64>,
+    pt: DMatrix<f64>,
+    /// ∂f/∂x, row-major (the EKF's rates).
+    jacobian: Vec<f64>,
+}
+
+impl MomentWork {
+    /// Storage for an `n`-dimensional state.
+    pub fn new(n: usize) -> Self {
+        MomentWork {
+            km: core::array::from_fn(|_| DVector::zeros(n)),
+            kp: core::array::from_fn(|_| DMatrix::zeros(n, n)),
+            mt: DVector::zeros(n),
+            pt: DMatrix::zeros(n, n),
+            jacobian: vec![0.0; n * n],
+        }
+    }
+}
+
+/// The EKF's moment rates: `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q`, written into
+/// `dm`, `dp`; `jacobian` holds n² values.
 pub fn linearized_rates(
     model: &Model,
     q: &DMatrix<f64>,
-    m: &DVector<f64>,
-    p: &DMatrix<f64>,
-) -> Result<(DVector<f64>, DMatrix<f64>), FilterError> {
+    jacobian: &mut [f64],
+    (m, p): (&DVector<f64>, &DMatrix<f64>),
+    (dm, dp): (&mut DVector<f64>, &mut DMatrix<f64>),
+) {
     let n = model.n;
-    let mut dm = DVector::zeros(n);
     model.drift.eval(m.as_slice(), dm.as_mut_slice());
-    let mut jac = vec![0.0; n * n];
-    model.drift.jacobian(m.as_slice(), &mut jac);
-    let f = DMatrix::from_row_slice(n, n, &jac);
-    let fp = &f * p;
-    Ok((dm, &fp + fp.transpose() + q))
+    model.drift.jacobian(m.as_slice(), jacobian);
+    for i in 0..n {
+        for j in 0..n {
+            let mut fp = 0.0;
+            let mut pf = 0.0;
+            for k in 0..n {
+                fp += jacobian[i * n + k] * p[(k, j)];
+                pf += p[(i, k)] * jacobian[j * n + k];
+            }
+            dp[(i, j)] = fp + pf + q[(i, j)];
+        }
+    }
 }
 
-/// Integrates `(dm/dt, dP/dt) = rates(m, P)` over `dt` in `substeps` RK4 steps, in place.
+/// Integrates `(dm/dt, dP/dt) = rates(m, P)` over `dt` in `substeps` RK4 steps, in place;
+/// `rates((m, P), (dm, dP), jacobian)` writes the rates at (m, P), with n² values of scratch.
 pub fn rk4_moments(
     m: &mut DVector<f64>,
     p: &mut DMatrix<f64>,
     dt: f64,
     substeps: usize,
+    work: &mut MomentWork,
     mut rates: impl FnMut(
-        &DVector<f64>,
-        &DMatrix<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>), FilterError>,
+        (&DVector<f64>, &DMatrix<f64>),
+        (&mut DVector<f64>, &mut DMatrix<f64>),
+        &mut [f64],
+    ) -> Result<(), FilterError>,
 ) -> Result<(), FilterError> {
     let h = dt / substeps as f64;
+    let MomentWork {
+        km,
+        kp,
+        mt,
+        pt,
+        jacobian,
+    } = work;
     for _ in 0..substeps {
-        let (k1m, k1p) = rates(m, p)?;
-        let (k2m, k2p) = rates(&(&*m + &k1m * (0.5 * h)), &(&*p + &k1p * (0.5 * h)))?;
-        let (k3m, k3p) = rates(&(&*m + &k2m * (0.5 * h)), &(&*p + &k2p * (0.5 * h)))?;
-        let (k4m, k4p) = rates(&(&*m + &k3m * h), &(&*p + &k3p * h))?;
-        *m += (k1m + k2m * 2.0 + k3m * 2.0 + k4m) * (h / 6.0);
-        *p += (k1p + k2p * 2.0 + k3p * 2.0 + k4p) * (h / 6.0);
+        for stage in 0..4 {
+            if stage == 0 {
+                rates((m, p), (&mut km[0], &mut kp[0]), jacobian)?;
+                continue;
+            }
+            // Stages 2 and 3 at half a step along the previous rates, stage 4 at a whole one.
+            let along = if stage == 3 { h } else { 0.5 * h };
+            mt.copy_from(m);
+            mt.axpy(along, &km[stage - 1], 1.0);
+            pt.copy_from(p);
+            pt.zip_apply(&kp[stage - 1], |a, b| *a += b * along);
+            rates((mt, pt), (&mut km[stage], &mut kp[stage]), jacobian)?;
+        }
+        for (stage, weight) in [1.0, 2.0, 2.0, 1.0].into_iter().enumerate() {
+            m.axpy(weight * h / 6.0, &km[stage], 1.0);
+            p.zip_apply(&kp[stage], |a, b| *a += b * (weight * h / 6.0));
+        }
         crate::linalg::symmetrize(p);
     }
     Ok(())

@@ -12,18 +12,18 @@
 
 use alloc::format;
 use alloc::string::String;
+use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::measurement::{Measurement, MeasurementForm};
-use super::propagate::rk4_moments;
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
-use crate::linalg::cholesky;
-use crate::model::{Model, Prior};
+use crate::linalg::cholesky_in;
+use crate::model::{BatchScratch, Model, Prior};
 
 /// Parameters of [`UnscentedKalman`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -88,6 +88,102 @@ struct Weights {
     rest: f64,
 }
 
+impl Weights {
+    fn mean(&self, i: usize) -> f64 {
+        if i == 0 {
+            self.mean0
+        } else {
+            self.rest
+        }
+    }
+
+    fn cov(&self, i: usize) -> f64 {
+        if i == 0 {
+            self.cov0
+        } else {
+            self.rest
+        }
+    }
+}
+
+/// The 2n + 1 sigma points and their images under f or h, as structure of arrays (component
+/// j of point i at `[j * count + i]`, the layout of [`crate::model::VectorFunction::eval_batch`]),
+/// with the storage of P's Cholesky factor: made once, so that a step allocates nothing.
+struct SigmaPoints {
+    count: usize,
+    points: Vec<f64>,
+    images: Vec<f64>,
+    factor: DMatrix<f64>,
+    scratch: BatchScratch,
+}
+
+impl SigmaPoints {
+    fn new(n: usize, m: usize) -> Self {
+        let count = 2 * n + 1;
+        SigmaPoints {
+            count,
+            points: vec![0.0; n * count],
+            images: vec![0.0; n.max(m) * count],
+            factor: DMatrix::zeros(n, n),
+            scratch: BatchScratch::default(),
+        }
+    }
+
+    /// The sigma points of `N(m, P)`: `m` and `m ± √(n+λ) Lᵢ`.
+    fn place(
+        &mut self,
+        w: &Weights,
+        m: &DVector<f64>,
+        p: &DMatrix<f64>,
+    ) -> Result<(), FilterError> {
+        let (n, c) = (m.len(), self.count);
+        let chol = cholesky_in(&mut self.factor, p, "covariance")?;
+        let l = chol.l_dirty();
+        for j in 0..n {
+            let row = &mut self.points[j * c..(j + 1) * c];
+            row[0] = m[j];
+            for i in 0..n {
+                // Only the lower triangle of the factor is L.
+                let v = if j >= i { l[(j, i)] * w.spread } else { 0.0 };
+                row[1 + i] = m[j] + v;
+                row[1 + n + i] = m[j] - v;
+            }
+        }
+        self.factor = chol.unpack_dirty();
+        Ok(())
+    }
+
+    /// `out[j] = Σᵢ Wᵢᵐ a[j * count + i]` for the rows of `a`.
+    fn mean(&self, w: &Weights, a: &[f64], out: &mut [f64]) {
+        for (o, row) in out.iter_mut().zip(a.chunks_exact(self.count)) {
+            *o = 0.0;
+            for (i, v) in row.iter().enumerate() {
+                *o += v * w.mean(i);
+            }
+        }
+    }
+
+    /// `out[(r, s)] = Σᵢ Wᵢᶜ (a_r,i − ma_r)(b_s,i − mb_s)`.
+    fn cross_cov(
+        &self,
+        w: &Weights,
+        (a, ma): (&[f64], &[f64]),
+        (b, mb): (&[f64], &[f64]),
+        out: &mut DMatrix<f64>,
+    ) {
+        let c = self.count;
+        out.fill(0.0);
+        for i in 0..c {
+            for (r, mr) in ma.iter().enumerate() {
+                let da = a[r * c + i] - mr;
+                for (s, ms) in mb.iter().enumerate() {
+                    out[(r, s)] += da * (b[s * c + i] - ms) * w.cov(i);
+                }
+            }
+        }
+    }
+}
+
 /// The unscented Kalman filter (see the module doc).
 pub struct UnscentedKalman {
     name: String,
@@ -97,6 +193,7 @@ pub struct UnscentedKalman {
     substeps: usize,
     weights: Weights,
     state: GaussianState,
+    sigma: SigmaPoints,
 }
 
 impl UnscentedKalman {
@@ -125,105 +222,80 @@ impl UnscentedKalman {
             form: MeasurementForm::new(model),
             substeps: params.substeps,
             weights,
-            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
+            sigma: SigmaPoints::new(model.n, model.m),
         })
     }
 
-    /// The 2n + 1 sigma points of `N(m, P)`, as columns.
-    fn sigma_points(
-        &self,
-        m: &DVector<f64>,
-        p: &DMatrix<f64>,
-    ) -> Result<DMatrix<f64>, FilterError> {
-        let n = self.model.n;
-        let l = cholesky(p, "covariance")?.l() * self.weights.spread;
-        let mut pts = DMatrix::zeros(n, 2 * n + 1);
-        pts.set_column(0, m);
-        for i in 0..n {
-            pts.set_column(1 + i, &(m + l.column(i)));
-            pts.set_column(1 + n + i, &(m - l.column(i)));
-        }
-        Ok(pts)
-    }
-
-    /// The sigma-point moment rates (see the module doc).
+    /// The sigma-point moment rates at (m, P) into (dm, dP) (see the module doc): f over all
+    /// sigma points in one batch.
     fn rates(
-        &self,
-        m: &DVector<f64>,
-        p: &DMatrix<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>), FilterError> {
-        let pts = self.sigma_points(m, p)?;
-        let mut fs = DMatrix::zeros(self.model.n, pts.ncols());
-        for (i, c) in pts.column_iter().enumerate() {
-            self.model
-                .drift
-                .eval(c.as_slice(), fs.column_mut(i).as_mut_slice());
+        model: &Model,
+        q: &DMatrix<f64>,
+        w: &Weights,
+        sigma: &mut SigmaPoints,
+        (m, p): (&DVector<f64>, &DMatrix<f64>),
+        (dm, dp): (&mut DVector<f64>, &mut DMatrix<f64>),
+    ) -> Result<(), FilterError> {
+        let n = model.n;
+        sigma.place(w, m, p)?;
+        let c = sigma.count;
+        let images = &mut sigma.images[..n * c];
+        model
+            .drift
+            .eval_batch(&sigma.points, images, &mut sigma.scratch);
+        let images = &sigma.images[..n * c];
+        sigma.mean(w, images, dm.as_mut_slice());
+        sigma.cross_cov(
+            w,
+            (images, dm.as_slice()),
+            (&sigma.points, m.as_slice()),
+            dp,
+        );
+        // dP = C + Cᵀ + Q.
+        for a in 0..n {
+            for b in a..n {
+                let (x, y) = (dp[(a, b)], dp[(b, a)]);
+                dp[(a, b)] = x + y + q[(a, b)];
+                dp[(b, a)] = y + x + q[(b, a)];
+            }
         }
-        let dm = self.mean_of(&fs);
-        let cross = self.cross_cov(&fs, &dm, &pts, m);
-        let dp = &cross + cross.transpose() + &self.q;
-        Ok((dm, dp))
+        Ok(())
     }
 
-    fn weight_mean(&self, i: usize) -> f64 {
-        if i == 0 {
-            self.weights.mean0
-        } else {
-            self.weights.rest
+    /// The update with h over all sigma points in one batch: `ẑ = Σ Wᵐ scale·h(χᵢ)`,
+    /// `P_zz = Σ Wᶜ (zᵢ − ẑ)(zᵢ − ẑ)ᵀ + R`, `P_xz = Σ Wᶜ (χᵢ − m)(zᵢ − ẑ)ᵀ`.
+    fn update(
+        model: &Model,
+        w: &Weights,
+        sigma: &mut SigmaPoints,
+        state: &mut GaussianState,
+        meas: &Measurement,
+    ) -> Result<(), FilterError> {
+        sigma.place(w, &state.mean, &state.cov)?;
+        let c = sigma.count;
+        let zs = &mut sigma.images[..model.m * c];
+        model
+            .observation
+            .eval_batch(&sigma.points, zs, &mut sigma.scratch);
+        zs.iter_mut().for_each(|z| *z *= meas.scale);
+        let zs = &sigma.images[..model.m * c];
+        let parts = &mut state.parts;
+        // ẑ in the residual's storage until the covariances are taken.
+        let zhat = parts.residual.as_mut_slice();
+        sigma.mean(w, zs, zhat);
+        sigma.cross_cov(w, (zs, zhat), (zs, zhat), &mut parts.pzz);
+        parts.pzz += &meas.noise_cov;
+        sigma.cross_cov(
+            w,
+            (&sigma.points, state.mean.as_slice()),
+            (zs, zhat),
+            &mut parts.pxz,
+        );
+        for (r, z) in zhat.iter_mut().zip(meas.value.iter()) {
+            *r = z - *r;
         }
-    }
-
-    fn weight_cov(&self, i: usize) -> f64 {
-        if i == 0 {
-            self.weights.cov0
-        } else {
-            self.weights.rest
-        }
-    }
-
-    /// Weighted mean of the columns of `pts`.
-    fn mean_of(&self, pts: &DMatrix<f64>) -> DVector<f64> {
-        let mut m = DVector::zeros(pts.nrows());
-        for (i, c) in pts.column_iter().enumerate() {
-            m += c * self.weight_mean(i);
-        }
-        m
-    }
-
-    /// Weighted cross covariance of the columns of `a` (mean `ma`) and `b` (mean `mb`).
-    fn cross_cov(
-        &self,
-        a: &DMatrix<f64>,
-        ma: &DVector<f64>,
-        b: &DMatrix<f64>,
-        mb: &DVector<f64>,
-    ) -> DMatrix<f64> {
-        let mut c = DMatrix::zeros(a.nrows(), b.nrows());
-        for i in 0..a.ncols() {
-            let da = a.column(i) - ma;
-            let db = b.column(i) - mb;
-            c += da * db.transpose() * self.weight_cov(i);
-        }
-        c
-    }
-
-    fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
-        let (mut m, mut p) = (self.state.mean.clone(), self.state.cov.clone());
-        rk4_moments(&mut m, &mut p, dt, self.substeps, |m, p| self.rates(m, p))?;
-        (self.state.mean, self.state.cov) = (m, p);
-        self.state.check()
-    }
-
-    fn update(&mut self, meas: &Measurement) -> Result<(), FilterError> {
-        let pts = self.sigma_points(&self.state.mean, &self.state.cov)?;
-        let mut zs = DMatrix::zeros(self.model.m, pts.ncols());
-        for (i, c) in pts.column_iter().enumerate() {
-            zs.set_column(i, &meas.predict(&self.model, c.as_slice()));
-        }
-        let zhat = self.mean_of(&zs);
-        let pzz = self.cross_cov(&zs, &zhat, &zs, &zhat) + &meas.noise_cov;
-        let pxz = self.cross_cov(&pts, &self.state.mean, &zs, &zhat);
-        self.state.update(&(&meas.value - zhat), &pxz, &pzz)
+        state.update()
     }
 }
 
@@ -233,15 +305,27 @@ impl Filter for UnscentedKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        let UnscentedKalman {
+            model,
+            q,
+            form,
+            substeps,
+            weights,
+            state,
+            sigma,
+            ..
+        } = self;
         // Checked before anything moves: a refused observation leaves the state.
-        let meas = self.form.at(obs)?;
+        let meas = form.at(obs)?;
         if obs.dt > 0.0 {
-            self.predict(obs.dt)?;
+            state.predict_with(obs.dt, *substeps, |at, rates, _| {
+                Self::rates(model, q, weights, sigma, at, rates)
+            })?;
         }
         if meas.scale == 0.0 {
             return Ok(());
         }
-        self.update(&meas)
+        Self::update(model, weights, sigma, state, meas)
     }
 
     fn estimate(&self) -> Estimate {
