@@ -1,7 +1,8 @@
 //! Functions from text: `f` and `h` typed as expressions in `x1..xn` (and `x` when n = 1),
-//! parsed once by the `exmex` crate, with exact partial derivatives computed symbolically at
-//! construction (exmex's `Differentiate`). Functions exmex cannot differentiate (`abs`, `erf`,
-//! rounding) make the whole function fall back to central differences, reported as
+//! checked by the `exmex` crate's parser, read into a tree and compiled once
+//! ([`super::compile`]), with exact partial derivatives computed symbolically on that tree at
+//! construction. Functions without a derivative rule there (`abs`, `erf`, rounding, `min`,
+//! `max`, …) make the whole function fall back to central differences, reported as
 //! [`Derivatives::Numerical`].
 
 use alloc::string::{String, ToString};
@@ -11,7 +12,7 @@ use std::fmt::Debug;
 use exmex::prelude::*;
 use exmex::{FloatOpsFactory, MakeOperators, Operator};
 
-use super::compile;
+use super::compile::Expression;
 use super::expression_error::{normalize_expression, variable_index, ExprError, LIBM_UNARY};
 use super::function::{
     numerical_hessian, numerical_jacobian, per_point, BatchScratch, Derivatives, VectorFunction,
@@ -53,25 +54,18 @@ type Ex = FlatEx<f64, ZakaiOps>;
 /// Largest number of distinct variable names one expression may use.
 const MAX_VARS: usize = 16;
 
-/// One scalar expression: exmex's parse (kept for symbolic derivatives), for each of its
-/// variables (exmex orders them alphabetically) the index of the state component it reads, and
-/// the compiled [`Program`] every evaluation runs.
+/// One scalar expression: its tree (for exact derivatives) and the compiled [`Program`]
+/// every evaluation runs.
 #[derive(Clone, Debug)]
 struct Scalar {
-    ex: Ex,
-    state_index: Vec<usize>,
+    expr: Expression,
     program: Program,
 }
 
 impl Scalar {
-    /// Compiles `ex` (whose text exmex accepts) for an `n`-dimensional state.
-    fn new(ex: Ex, state_index: Vec<usize>, n: usize) -> Result<Scalar, String> {
-        let program = compile::compile(ex.unparse(), n)?;
-        Ok(Scalar {
-            ex,
-            state_index,
-            program,
-        })
+    fn new(expr: Expression) -> Scalar {
+        let program = expr.program(expr.root());
+        Scalar { expr, program }
     }
 
     #[inline]
@@ -79,23 +73,10 @@ impl Scalar {
         self.program.eval(x)
     }
 
-    /// ∂/∂x_j: the sum of exmex partials over every name that maps to state j (`x` and `x1`
-    /// both map to 0 in one dimension). `Ok(None)` when the expression does not depend on x_j.
-    fn partial(&self, j: usize, n: usize) -> Result<Option<Scalar>, ()> {
-        let mut total: Option<Ex> = None;
-        for (v, &i) in self.state_index.iter().enumerate() {
-            if i != j {
-                continue;
-            }
-            let d = self.ex.clone().partial(v).map_err(|_| ())?;
-            total = Some(match total {
-                None => d,
-                Some(t) => t.operate_binary(d, "+").map_err(|_| ())?,
-            });
-        }
-        total
-            .map(|ex| Scalar::new(ex, self.state_index.clone(), n).map_err(|_| ()))
-            .transpose()
+    /// ∂/∂x_j (`x` and `x1` are the same variable in one dimension): `Err` when some function
+    /// has no exact derivative, `Ok(None)` when the expression does not depend on x_j.
+    fn partial(&self, j: usize) -> Result<Option<Scalar>, ()> {
+        self.expr.partial(j).ok_or(()).map(|d| d.map(Scalar::new))
     }
 }
 
@@ -212,10 +193,9 @@ fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
         position: None,
         message: e.msg().to_string(),
     })?;
-    let mut state_index = Vec::new();
     for name in ex.var_names() {
         match variable_index(name, n) {
-            Some(i) => state_index.push(i),
+            Some(_) => {}
             None => {
                 return Err(ExprError::UnknownVariable {
                     expr: text.to_string(),
@@ -226,19 +206,19 @@ fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
             }
         }
     }
-    if state_index.len() > MAX_VARS {
+    if ex.var_names().len() > MAX_VARS {
         return Err(ExprError::Syntax {
             expr: text.to_string(),
             position: None,
             message: alloc::format!("at most {MAX_VARS} distinct variables per expression"),
         });
     }
-    let scalar = Scalar::new(ex, state_index, n).map_err(|message| ExprError::Syntax {
+    let expr = Expression::parse(&normalized, n).map_err(|message| ExprError::Syntax {
         expr: text.to_string(),
         position: None,
         message,
     })?;
-    Ok((scalar, operations))
+    Ok((Scalar::new(expr), operations))
 }
 
 fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives> {
@@ -246,10 +226,10 @@ fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives
     let mut hessian = Vec::with_capacity(components.len() * n * n);
     for c in components {
         for j in 0..n {
-            let d = c.partial(j, n).ok()?;
+            let d = c.partial(j).ok()?;
             for l in 0..n {
                 hessian.push(match &d {
-                    Some(dj) => dj.partial(l, n).ok()?,
+                    Some(dj) => dj.partial(l).ok()?,
                     None => None,
                 });
             }
