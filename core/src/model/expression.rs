@@ -1,6 +1,6 @@
 //! Functions from text: `f` and `h` typed as expressions in `x1..xn` (and `x` when n = 1),
 //! checked by the `exmex` crate's parser, read into a tree and compiled once
-//! ([`super::compile`]), with exact partial derivatives computed symbolically on that tree at
+//! (`model::compile`), with exact partial derivatives computed symbolically on that tree at
 //! construction. Functions without a derivative rule there (`abs`, `erf`, rounding, `min`,
 //! `max`, …) make the whole function fall back to central differences, reported as
 //! [`Derivatives::Numerical`].
