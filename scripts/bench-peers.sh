@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Zakai's baselines against their Python peers, the same work in one run (issue 22):
+# a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
+# nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included).
+# Installs NumPy, SciPy and FilterPy into target/peers-venv on first use. Prints a table.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+venv=target/peers-venv
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q numpy scipy filterpy
+fi
+cargo build -q --release -p zakai-cli
+zakai=target/release/zakai
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The scenarios: the cubic-sensor preset changed to the peers' work.
+"$zakai" show cubic-sensor-1d > "$work/preset.json"
+"$venv/bin/python" - "$work" <<'PY'
+import json, sys
+work = sys.argv[1]
+base = json.load(open(f"{work}/preset.json"))
+def scenario(name, change):
+    s = json.loads(json.dumps(base))
+    s["failure"]["track_loss"] = None
+    change(s)
+    json.dump(s, open(f"{work}/{name}.json", "w"))
+def pf(s):
+    s["methods"] = [{"method": "pf", "particles": 10000, "ess_threshold": 1.0, "substeps": 1}]
+def ukf(s):
+    s["model"]["noise"] = {"kind": "discrete",
+                           "mixture": [{"weight": 1.0, "mean": [0.0], "cov": [[0.1]]}]}
+    s["methods"] = [{"method": "ukf", "alpha": 0.5, "beta": 2.0, "kappa": 0.0, "substeps": 1}]
+def qiem(s):
+    s["time"].update(t_final=0.2, dt_obs=1e-4)
+    s["methods"] = [{"method": "qiem", "points": [2001], "dt": 1e-4}]
+for name, change in [("pf", pf), ("ukf", ukf), ("qiem", qiem)]:
+    scenario(name, change)
+PY
+
+# Zakai: the least seconds per step of three runs (as for the peers).
+zakai_step() {
+  for _ in 1 2 3; do
+    "$zakai" run "$work/$1.json" --format json | "$venv/bin/python" -c \
+      'import json,sys; print(json.load(sys.stdin)["methods"][0]["seconds_per_step"])'
+  done | sort -g | head -n 1
+}
+declare -A ours
+for w in pf ukf qiem; do ours[$w]=$(zakai_step "$w"); done
+peers=$("$venv/bin/python" scripts/peers/peers.py)
+
+"$venv/bin/python" - "$peers" "${ours[pf]}" "${ours[ukf]}" "${ours[qiem]}" <<'PY'
+import json, sys
+peers = json.loads(sys.argv[1])
+ours = dict(zip(["pf", "ukf", "qiem"], map(float, sys.argv[2:5])))
+names = {
+    "pf": ("bootstrap PF, 10^4 particles, resampling every step", "NumPy"),
+    "ukf": ("UKF 1-D, z = x^3 + v, predict + update", "FilterPy"),
+    "qiem": ("QIEM 1-D, 2001 nodes, dt = 1e-4", "SciPy DST"),
+}
+print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':>8}")
+for k, (work, peer) in names.items():
+    p, z = peers[k], ours[k]
+    print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {z * 1e6:>10.2f}µs {p / z:>7.1f}×")
+PY
