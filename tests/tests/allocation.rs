@@ -6,7 +6,6 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use zakai::scenario::methods::catalogue;
 use zakai::scenario::presets;
 use zakai::{Experiment, Observation};
 
@@ -39,19 +38,8 @@ fn allocations_per_step(preset: &str, steps: usize, warm_up: usize) -> Vec<(Stri
     let data = e.simulate(3);
     let dt = config.time.dt_obs;
     let mut out = Vec::new();
-    for entry in catalogue() {
+    for entry in zakai_tests::applicable_methods(&config, &e) {
         let m = entry.defaults;
-        if m.suitability(
-            e.model(),
-            e.prior(),
-            &config.probe_points(),
-            &config.bounds(),
-        )
-        .is_some()
-            || m.memory_bytes(e.model().n).is_none_or(|b| b > 64 << 20)
-        {
-            continue;
-        }
         let mut filter = e.build_method(&m, m.display_name(), 1).unwrap();
         let observe = |k: usize| {
             let z = data.observation(1 + k % data.steps());

@@ -1,7 +1,6 @@
 //! The own-data API: builders check everything at once, filters built for one interval refuse
 //! another, and the driver runs on recorded observations with the truth optional.
 
-use zakai::scenario::methods::catalogue;
 use zakai::scenario::presets;
 use zakai::{Experiment, FilterError, Model, Noise, Observation, Qiem, Recording, Ukf, ZakaiError};
 
@@ -33,19 +32,8 @@ fn a_step_of_another_length_is_handled_or_refused() {
         let e = Experiment::new(config.clone()).unwrap();
         let data = e.simulate(2);
         let dt = config.time.dt_obs;
-        for entry in catalogue() {
+        for entry in zakai_tests::applicable_methods(&config, &e) {
             let m = entry.defaults;
-            if m.suitability(
-                e.model(),
-                e.prior(),
-                &config.probe_points(),
-                &config.bounds(),
-            )
-            .is_some()
-                || m.memory_bytes(e.model().n).is_none_or(|b| b > 64 << 20)
-            {
-                continue;
-            }
             let build = || e.build_method(&m, m.display_name(), 1).unwrap();
             let (mut a, mut b) = (build(), build());
             let z = data.observation(1);

@@ -235,18 +235,10 @@ impl GaussianState {
         dt: f64,
         substeps: usize,
     ) -> Result<(), FilterError> {
-        propagate::rk4_moments(
-            &mut self.mean,
-            &mut self.cov,
-            dt,
-            substeps,
-            &mut self.moments,
-            |at, rates, jacobian| {
-                propagate::linearized_rates(model, q, jacobian, at, rates);
-                Ok(())
-            },
-        )?;
-        self.check()
+        self.predict_with(dt, substeps, |at, rates, jacobian| {
+            propagate::linearized_rates(model, q, jacobian, at, rates);
+            Ok(())
+        })
     }
 
     /// Integrates moment equations given by `rates` over `dt` in `substeps` RK4 steps (see
