@@ -23,7 +23,7 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::kalman::linear::{affine_parts, Discretization};
@@ -34,7 +34,7 @@ use super::method::{
 use super::{marginal, Estimate, Filter, Observation};
 use crate::error::{FilterError, ZakaiError};
 use crate::grid::TensorGrid;
-use crate::linalg::{cholesky, gaussian_log_density, log_sum_exp, symmetrize};
+use crate::linalg::{cholesky_in, gaussian_log_density_factored, log_sum_exp, symmetrize};
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
 use crate::validate::ConfigProblem;
 
@@ -155,38 +155,58 @@ impl Method for GaussianSum {
     }
 }
 
-/// One weighted Gaussian `w N(m, P)` with `log det P`.
+/// One weighted Gaussian `w N(m, P)` with the Cholesky factor and `log det` of P (for its
+/// density), in storage that is rewritten in place.
 #[derive(Clone, Debug)]
 struct Component {
     w: f64,
     m: DVector<f64>,
     p: DMatrix<f64>,
-    /// Cholesky factor of `p`, kept for evaluating the density.
-    chol: Cholesky<f64, Dyn>,
+    /// `L` with `P = L Lᵀ` in the lower triangle (the upper is not read).
+    l: DMatrix<f64>,
     log_det: f64,
 }
 
 impl Component {
-    fn new(w: f64, m: DVector<f64>, mut p: DMatrix<f64>) -> Result<Self, FilterError> {
-        symmetrize(&mut p);
-        let chol = cholesky(&p, "Gaussian-sum component covariance")?;
-        let log_det = 2.0
-            * chol
-                .l_dirty()
-                .diagonal()
-                .iter()
-                .map(|d| libm::log(*d))
+    fn zeros(n: usize) -> Self {
+        Component {
+            w: 0.0,
+            m: DVector::zeros(n),
+            p: DMatrix::zeros(n, n),
+            l: DMatrix::zeros(n, n),
+            log_det: 0.0,
+        }
+    }
+
+    fn new(w: f64, m: &DVector<f64>, p: &DMatrix<f64>) -> Result<Self, FilterError> {
+        let mut c = Component::zeros(m.len());
+        c.w = w;
+        c.m.copy_from(m);
+        c.p.copy_from(p);
+        c.refactor()?;
+        Ok(c)
+    }
+
+    /// Symmetrises P and factors it again in place.
+    fn refactor(&mut self) -> Result<(), FilterError> {
+        symmetrize(&mut self.p);
+        let chol = cholesky_in(&mut self.l, &self.p, "Gaussian-sum component covariance")?;
+        self.l = chol.unpack_dirty();
+        self.log_det = 2.0
+            * (0..self.m.len())
+                .map(|i| libm::log(self.l[(i, i)]))
                 .sum::<f64>();
-        Ok(Component {
-            w,
-            m,
-            p,
-            chol,
-            log_det,
-        })
+        Ok(())
+    }
+
+    /// `log N(x; m, P)`, with `r` (n) as storage.
+    fn log_density(&self, x: &[f64], r: &mut DVector<f64>) -> f64 {
+        for ((r, x), m) in r.iter_mut().zip(x).zip(&self.m) {
+            *r = x - m;
+        }
+        gaussian_log_density_factored(&self.l, self.log_det, r)
     }
 }
-
 /// A model the Gaussian-sum filter fits: `dx = (A x + b) dt + G dw`, `z = C x + c + v`.
 pub struct LinearMixtureModel<'p> {
     a: DMatrix<f64>,
@@ -249,9 +269,31 @@ pub struct GaussianSumFilter {
     c0: DVector<f64>,
     noise: GaussianMixture,
     params: GaussianSumParams,
+    /// The mixture: the first `len` slots of `components`.
     components: Vec<Component>,
+    len: usize,
     cached: Option<Discretization>,
     reduction: Reduction,
+    work: UpdateWork,
+}
+
+/// Storage of a step, made once (the update writes the next mixture into `next`; the merge
+/// cost table and liveness marks grow to their working size once).
+struct UpdateWork {
+    next: Vec<Component>,
+    merged: Component,
+    moved: (DVector<f64>, DMatrix<f64>),
+    z: DVector<f64>,
+    predicted: DVector<f64>,
+    nu: DVector<f64>,
+    /// C P (m × n), P Cᵀ (n × m), S (m × m) with its factor's storage, Kᵀ (m × n).
+    cp: DMatrix<f64>,
+    pct: DMatrix<f64>,
+    s: DMatrix<f64>,
+    s_factor: DMatrix<f64>,
+    gain_t: DMatrix<f64>,
+    cost: Vec<f64>,
+    alive: Vec<bool>,
 }
 
 impl GaussianSumFilter {
@@ -275,16 +317,36 @@ impl GaussianSumFilter {
             noise,
             prior: mixture,
         } = check_model(model, prior, probes)?;
-        let components = mixture
-            .components()
-            .iter()
-            .map(|c| Component::new(c.weight, c.mean.clone(), c.cov.clone()))
-            .collect::<Result<Vec<_>, _>>()?;
+        let n = a.nrows();
+        let m = c.nrows();
+        let j = noise.components().len();
+        let slots = mixture.components().len().max(params.max_components) * j;
+        let mut components = (0..slots).map(|_| Component::zeros(n)).collect::<Vec<_>>();
+        for (slot, c) in components.iter_mut().zip(mixture.components()) {
+            *slot = Component::new(c.weight, &c.mean, &c.cov)?;
+        }
         Ok(GaussianSumFilter {
             name,
+            q: model.process_noise(),
+            len: mixture.components().len(),
+            work: UpdateWork {
+                next: (0..slots).map(|_| Component::zeros(n)).collect(),
+                merged: Component::zeros(n),
+                moved: (DVector::zeros(n), DMatrix::zeros(n, n)),
+                z: DVector::zeros(m),
+                predicted: DVector::zeros(m),
+                nu: DVector::zeros(m),
+                cp: DMatrix::zeros(m, n),
+                pct: DMatrix::zeros(n, m),
+                s: DMatrix::zeros(m, m),
+                s_factor: DMatrix::zeros(m, m),
+                gain_t: DMatrix::zeros(m, n),
+                // Their working size, as the method's memory estimate counts it.
+                cost: Vec::with_capacity(slots * slots),
+                alive: Vec::with_capacity(slots),
+            },
             a,
             b,
-            q: model.process_noise(),
             c,
             c0,
             noise,
@@ -297,12 +359,17 @@ impl GaussianSumFilter {
 
     /// Number of components.
     pub fn len(&self) -> usize {
-        self.components.len()
+        self.len
     }
 
     /// True when there are no components (never, after a successful build).
     pub fn is_empty(&self) -> bool {
-        self.components.is_empty()
+        self.len == 0
+    }
+
+    /// The mixture's components.
+    fn mixture(&self) -> &[Component] {
+        &self.components[..self.len]
     }
 
     /// How far the reduction moved the mixture from the exact one.
@@ -313,70 +380,130 @@ impl GaussianSumFilter {
     /// Predicts every component over `dt` (exact).
     pub fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
         let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, dt);
-        for comp in &mut self.components {
-            let m = &d.phi * &comp.m + &d.gamma_b;
-            let p = &d.phi * &comp.p * d.phi.transpose() + &d.qd;
-            *comp = Component::new(comp.w, m, p)?;
+        for comp in &mut self.components[..self.len] {
+            d.propagate(&mut comp.m, &mut comp.p, &mut self.work.moved);
+            comp.refactor()?;
         }
         Ok(())
     }
 
     /// The Bayes update with measurement `z`, then the mixture reduction.
     pub fn update(&mut self, z: &[f64]) -> Result<(), FilterError> {
-        let z = DVector::from_column_slice(z);
-        let mut next = Vec::with_capacity(self.components.len() * self.noise.components().len());
-        let mut log_w = Vec::with_capacity(next.capacity());
-        for comp in &self.components {
-            let pct = &comp.p * self.c.transpose();
-            let predicted = &self.c * &comp.m + &self.c0;
-            for v in self.noise.components() {
-                let mut s = &self.c * &pct + &v.cov;
-                symmetrize(&mut s);
-                let chol = cholesky(&s, "innovation covariance")?;
-                let nu = &z - &predicted - &v.mean;
-                let gain = chol.solve(&pct.transpose()).transpose();
-                let m = &comp.m + &gain * &nu;
-                let p = &comp.p - &gain * &s * gain.transpose();
-                log_w.push(
-                    libm::log(comp.w) + libm::log(v.weight) + gaussian_log_density(&nu, &chol),
-                );
-                next.push(Component::new(0.0, m, p)?);
+        let GaussianSumFilter {
+            c,
+            c0,
+            noise,
+            components,
+            len,
+            work,
+            ..
+        } = self;
+        let count = *len * noise.components().len();
+        work.z.copy_from_slice(z);
+        // The bank holds max(prior, cap) × J; more only when merges failed to keep the cap.
+        let n = c.ncols();
+        work.next
+            .resize_with(work.next.len().max(count), || Component::zeros(n));
+        let mut slots = work.next.iter_mut();
+        for comp in &components[..*len] {
+            // P Cᵀ = (C P)ᵀ, P being symmetric.
+            work.cp.gemm(1.0, c, &comp.p, 0.0);
+            work.pct.tr_copy_from(&work.cp);
+            work.predicted.copy_from(c0);
+            work.predicted.gemv(1.0, c, &comp.m, 1.0);
+            for v in noise.components() {
+                work.s.copy_from(&v.cov);
+                work.s.gemm(1.0, c, &work.pct, 1.0);
+                symmetrize(&mut work.s);
+                let chol = cholesky_in(&mut work.s_factor, &work.s, "innovation covariance")?;
+                work.nu.copy_from(&work.z);
+                work.nu -= &work.predicted;
+                work.nu -= &v.mean;
+                // Kᵀ = S⁻¹ (P Cᵀ)ᵀ.
+                work.gain_t.tr_copy_from(&work.pct);
+                chol.solve_mut(&mut work.gain_t);
+                let slot = slots.next().expect("slots for every pair");
+                slot.m.copy_from(&comp.m);
+                slot.m.gemv_tr(1.0, &work.gain_t, &work.nu, 1.0);
+                // P − K S Kᵀ = P − (P Cᵀ) Kᵀ.
+                slot.p.copy_from(&comp.p);
+                slot.p.gemm(-1.0, &work.pct, &work.gain_t, 1.0);
+                slot.refactor()?;
+                // The log weight for now, normalised below.
+                let log_det = 2.0
+                    * (0..work.nu.len())
+                        .map(|i| libm::log(chol.l_dirty()[(i, i)]))
+                        .sum::<f64>();
+                slot.w = libm::log(comp.w)
+                    + libm::log(v.weight)
+                    + gaussian_log_density_factored(chol.l_dirty(), log_det, &mut work.nu);
+                work.s_factor = chol.unpack_dirty();
             }
         }
-        let total = log_sum_exp(log_w.iter().copied());
+        let next = &mut work.next[..count];
+        let total = log_sum_exp(next.iter().map(|c| c.w));
         if !total.is_finite() {
             return Err(FilterError::MassLost);
         }
-        for (c, lw) in next.iter_mut().zip(&log_w) {
-            c.w = libm::exp(lw - total);
+        for c in next.iter_mut() {
+            c.w = libm::exp(c.w - total);
         }
-        self.components = next;
+        core::mem::swap(components, &mut work.next);
+        *len = count;
         self.reduce();
         Ok(())
     }
 
+    /// Keeps the slots among the first `len` that `keep` says (in order) at the front;
+    /// returns how many.
+    fn compact(
+        components: &mut [Component],
+        mut keep: impl FnMut(usize, &Component) -> bool,
+    ) -> usize {
+        let mut kept = 0;
+        for i in 0..components.len() {
+            if keep(i, &components[i]) {
+                components.swap(kept, i);
+                kept += 1;
+            }
+        }
+        kept
+    }
+
     /// Pruning, then merging by Runnalls' cost (see the module doc).
     fn reduce(&mut self) {
-        let largest = self.components.iter().map(|c| c.w).fold(0.0, f64::max);
-        let before: f64 = self.components.iter().map(|c| c.w).sum();
-        self.components
-            .retain(|c| c.w >= self.params.prune * largest);
-        let kept: f64 = self.components.iter().map(|c| c.w).sum();
-        self.reduction.pruned_weight += before - kept;
-        for c in &mut self.components {
+        let GaussianSumFilter {
+            params,
+            components,
+            len,
+            work,
+            reduction,
+            ..
+        } = self;
+        let comps = &mut components[..*len];
+        let largest = comps.iter().map(|c| c.w).fold(0.0, f64::max);
+        let before: f64 = comps.iter().map(|c| c.w).sum();
+        *len = Self::compact(comps, |_, c| c.w >= params.prune * largest);
+        let comps = &mut components[..*len];
+        let kept: f64 = comps.iter().map(|c| c.w).sum();
+        reduction.pruned_weight += before - kept;
+        for c in comps.iter_mut() {
             c.w /= kept;
         }
-        let k = self.components.len();
+        let k = comps.len();
         if k < 2 {
             return;
         }
-        let mut cost = alloc::vec![f64::INFINITY; k * k];
+        let (cost, alive, merged) = (&mut work.cost, &mut work.alive, &mut work.merged);
+        cost.clear();
+        cost.resize(k * k, f64::INFINITY);
         for i in 0..k {
             for j in i + 1..k {
-                cost[i * k + j] = merge(&self.components[i], &self.components[j]).1;
+                cost[i * k + j] = merge(&comps[i], &comps[j], merged);
             }
         }
-        let mut alive = alloc::vec![true; k];
+        alive.clear();
+        alive.resize(k, true);
         let mut count = k;
         while count > 1 {
             let (mut best, mut bi, mut bj) = (f64::INFINITY, 0, 0);
@@ -387,48 +514,41 @@ impl GaussianSumFilter {
                     }
                 }
             }
-            let forced = count > self.params.max_components;
-            if !(forced || best <= self.params.merge_cost) || !best.is_finite() {
+            let forced = count > params.max_components;
+            if !(forced || best <= params.merge_cost) || !best.is_finite() {
                 break;
             }
-            if forced && best > self.params.merge_cost {
-                self.reduction.forced_cost = self.reduction.forced_cost.max(best);
+            if forced && best > params.merge_cost {
+                reduction.forced_cost = reduction.forced_cost.max(best);
             }
-            self.components[bi] = merge(&self.components[bi], &self.components[bj]).0;
+            merge(&comps[bi], &comps[bj], merged);
+            core::mem::swap(&mut comps[bi], merged);
             alive[bj] = false;
             count -= 1;
             for j in (0..k).filter(|&j| alive[j] && j != bi) {
                 let (lo, hi) = (bi.min(j), bi.max(j));
-                cost[lo * k + hi] = merge(&self.components[lo], &self.components[hi]).1;
+                cost[lo * k + hi] = merge(&comps[lo], &comps[hi], merged);
             }
         }
-        let mut i = 0;
-        self.components.retain(|_| {
-            i += 1;
-            alive[i - 1]
-        });
+        *len = Self::compact(comps, |i, _| alive[i]);
     }
 
     /// The filtering density at `x`.
     pub fn pdf(&self, x: &[f64]) -> f64 {
-        let x = DVector::from_column_slice(x);
-        self.components
+        let mut r = DVector::zeros(x.len());
+        self.mixture()
             .iter()
-            .map(|c| c.w * libm::exp(gaussian_log_density(&(&x - &c.m), &c.chol)))
+            .map(|c| c.w * libm::exp(c.log_density(x, &mut r)))
             .sum()
     }
 
     /// The filtering density at every node of `grid`, into `out`.
     pub fn tabulate(&self, grid: &TensorGrid, out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
-        let n = grid.dim();
-        let mut r = DVector::zeros(n);
-        for c in &self.components {
+        let mut r = DVector::zeros(grid.dim());
+        for c in self.mixture() {
             grid.for_each_node(|idx, x| {
-                for d in 0..n {
-                    r[d] = x[d] - c.m[d];
-                }
-                out[idx] += c.w * libm::exp(gaussian_log_density(&r, &c.chol));
+                out[idx] += c.w * libm::exp(c.log_density(x, &mut r));
             });
         }
     }
@@ -436,11 +556,11 @@ impl GaussianSumFilter {
     fn mixture_moments(&self) -> (DVector<f64>, DMatrix<f64>) {
         let n = self.a.nrows();
         let mut mean = DVector::zeros(n);
-        for c in &self.components {
+        for c in self.mixture() {
             mean += &c.m * c.w;
         }
         let mut cov = DMatrix::zeros(n, n);
-        for c in &self.components {
+        for c in self.mixture() {
             let dm = &c.m - &mean;
             cov += (&c.p + &dm * dm.transpose()) * c.w;
         }
@@ -448,18 +568,26 @@ impl GaussianSumFilter {
     }
 }
 
-/// The moment-preserving merge of two components and its Runnalls cost.
-fn merge(a: &Component, b: &Component) -> (Component, f64) {
+/// The moment-preserving merge of two components into `out`, returning its Runnalls cost
+/// (infinite when the merged covariance cannot be factored).
+fn merge(a: &Component, b: &Component, out: &mut Component) -> f64 {
     let w = a.w + b.w;
-    let dm = &a.m - &b.m;
-    let m = (&a.m * a.w + &b.m * b.w) / w;
-    let p = (&a.p * a.w + &b.p * b.w) / w + &dm * dm.transpose() * (a.w * b.w / (w * w));
-    match Component::new(w, m, p) {
-        Ok(c) => {
-            let cost = 0.5 * (w * c.log_det - a.w * a.log_det - b.w * b.log_det);
-            (c, cost.max(0.0))
-        }
-        Err(_) => (a.clone(), f64::INFINITY),
+    out.w = w;
+    // The spread of the means first (in out.m), then the mean.
+    out.m.copy_from(&a.m);
+    out.m -= &b.m;
+    out.p.copy_from(&a.p);
+    out.p *= a.w;
+    out.p.zip_apply(&b.p, |o, p| *o += p * b.w);
+    out.p /= w;
+    out.p.ger(a.w * b.w / (w * w), &out.m, &out.m, 1.0);
+    out.m.copy_from(&a.m);
+    out.m *= a.w;
+    out.m.axpy(b.w, &b.m, 1.0);
+    out.m /= w;
+    match out.refactor() {
+        Ok(()) => (0.5 * (w * out.log_det - a.w * a.log_det - b.w * b.log_det)).max(0.0),
+        Err(_) => f64::INFINITY,
     }
 }
 
@@ -489,7 +617,7 @@ impl Filter for GaussianSumFilter {
         out.iter_mut().for_each(|v| *v = 0.0);
         let mut one = alloc::vec![0.0; out.len()];
         let (a, b) = dims;
-        for c in &self.components {
+        for c in self.mixture() {
             let cov = [[c.p[(a, a)], c.p[(a, b)]], [c.p[(b, a)], c.p[(b, b)]]];
             marginal::gaussian_2d([c.m[a], c.m[b]], cov, xs, ys, &mut one);
             for (o, v) in out.iter_mut().zip(&one) {
@@ -501,7 +629,7 @@ impl Filter for GaussianSumFilter {
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         let mut one = alloc::vec![0.0; grid.len()];
-        for c in &self.components {
+        for c in self.mixture() {
             marginal::gaussian(c.m[dim], c.p[(dim, dim)], grid, &mut one);
             for (o, v) in out.iter_mut().zip(&one) {
                 *o += c.w * v;

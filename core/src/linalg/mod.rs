@@ -31,7 +31,9 @@ pub fn cholesky(p: &DMatrix<f64>, what: &'static str) -> Result<Cholesky<f64, Dy
 
 /// The Cholesky factorisation of `a` made in `storage` (a matrix of a's shape, moved into
 /// the factorisation): no allocation. Give the storage back with
-/// `*storage = chol.unpack_dirty()` when done; after an error it is left empty.
+/// `*storage = chol.unpack_dirty()` when done. A matrix that is not positive definite
+/// leaves `storage` with a's shape again (allocated anew: only on that path), so the caller
+/// may retry, e.g. damped.
 pub fn cholesky_in(
     storage: &mut DMatrix<f64>,
     a: &DMatrix<f64>,
@@ -42,7 +44,44 @@ pub fn cholesky_in(
     }
     storage.copy_from(a);
     let owned = core::mem::replace(storage, DMatrix::zeros(0, 0));
-    Cholesky::new(owned).ok_or(FilterError::NotPositiveDefinite { what })
+    Cholesky::new(owned).ok_or_else(|| {
+        *storage = DMatrix::zeros(a.nrows(), a.ncols());
+        FilterError::NotPositiveDefinite { what }
+    })
+}
+
+/// The lower Cholesky factor `L` (`A = L Lᵀ`) of a symmetric `a` written into the lower
+/// triangle of `l` (same shape; the upper triangle is not touched), or false when `a` is not
+/// positive definite — `l` is then partly written but keeps its storage, so a caller that
+/// damps and retries (the IOKF's Levenberg loop) allocates nothing.
+pub fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
+    let n = a.nrows();
+    for j in 0..n {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        let d = libm::sqrt(d);
+        l[(j, j)] = d;
+        for i in j + 1..n {
+            let mut v = a[(i, j)];
+            for k in 0..j {
+                v -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = v / d;
+        }
+    }
+    true
+}
+
+/// `x ← (L Lᵀ)⁻¹ x` with L from [`lower_cholesky_into`].
+pub fn lower_cholesky_solve(l: &DMatrix<f64>, x: &mut DVector<f64>) {
+    // A Cholesky factor has a positive diagonal: neither substitution can fail.
+    let _ = l.solve_lower_triangular_mut(x);
+    let _ = l.tr_solve_lower_triangular_mut(x);
 }
 
 /// Fails when any entry is NaN or infinite.
@@ -66,16 +105,22 @@ pub fn check_finite_matrix(m: &DMatrix<f64>, what: &'static str) -> Result<(), F
 /// `log N(r; 0, Σ)` from the Cholesky factor of Σ.
 pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> f64 {
     let l = chol.l_dirty();
-    let n = residual.len();
-    let mut log_det = 0.0;
-    for i in 0..n {
-        log_det += libm::log(l[(i, i)]);
-    }
-    let z = chol
-        .l()
-        .solve_lower_triangular(residual)
-        .unwrap_or_else(|| residual.clone());
-    -0.5 * z.norm_squared() - log_det - 0.5 * (n as f64) * libm::log(2.0 * core::f64::consts::PI)
+    let log_det = 2.0
+        * (0..residual.len())
+            .map(|i| libm::log(l[(i, i)]))
+            .sum::<f64>();
+    gaussian_log_density_factored(l, log_det, &mut residual.clone())
+}
+
+/// `log N(r; 0, Σ)` from `L` (lower triangle of `l`; the upper is not read) with `Σ = L Lᵀ`
+/// and `log det Σ`, overwriting `r` with `L⁻¹ r`: no allocation.
+pub fn gaussian_log_density_factored(l: &DMatrix<f64>, log_det: f64, r: &mut DVector<f64>) -> f64 {
+    let n = r.len();
+    // A Cholesky factor has a positive diagonal, so the substitution cannot fail.
+    let _ = l.solve_lower_triangular_mut(r);
+    -0.5 * r.norm_squared()
+        - 0.5 * log_det
+        - 0.5 * (n as f64) * libm::log(2.0 * core::f64::consts::PI)
 }
 
 /// `v = m · 2^e` with `m ∈ [½, 1)` for finite `v > 0` (subnormals included), e as a float: the
@@ -348,6 +393,30 @@ pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lower_cholesky_matches_nalgebra_and_refuses_indefinite_matrices() {
+        let b = DMatrix::from_fn(4, 4, |i, j| {
+            libm::sin(1.0 + 2.0 * i as f64 + 0.3 * j as f64)
+        });
+        let a = &b * b.transpose() + DMatrix::identity(4, 4) * 0.1;
+        let mut l = DMatrix::from_element(4, 4, f64::NAN);
+        assert!(lower_cholesky_into(&a, &mut l));
+        let expected = Cholesky::new(a.clone()).unwrap().l();
+        for i in 0..4 {
+            for j in 0..=i {
+                assert!((l[(i, j)] - expected[(i, j)]).abs() < 1e-12, "L[{i},{j}]");
+            }
+        }
+        let rhs = DVector::from_fn(4, |i, _| i as f64 - 1.5);
+        let mut x = rhs.clone();
+        lower_cholesky_solve(&l, &mut x);
+        assert!((&a * &x - &rhs).amax() < 1e-10);
+        let mut indefinite = a.clone();
+        indefinite[(2, 2)] = -1.0;
+        assert!(!lower_cholesky_into(&indefinite, &mut l));
+        assert_eq!(l.shape(), (4, 4));
+    }
 
     #[test]
     fn exp_nonpositive_matches_libm() {

@@ -26,8 +26,8 @@ use alloc::vec::Vec;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use super::gaussian_approximation::decompose;
-use super::riccati::{KolmogorovCoefficients, QuadraticExponent};
+use super::gaussian_approximation::Decomposition;
+use super::riccati::{propagate_scalar_term, KolmogorovCoefficients};
 use crate::diagnostics::yau_system::{self, Affine};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
@@ -120,6 +120,20 @@ pub struct DirectFilter {
     terms: usize,
     /// The grid's node coordinates.
     nodes: Vec<f64>,
+    work: StepWork,
+}
+
+/// Storage of a step, made once (a step allocates nothing).
+struct StepWork {
+    decomposition: Decomposition,
+    /// Δyᵀh at every node.
+    factor: Vec<f64>,
+    /// Every propagated term: (sign, a, b, c) of `± exp(a x² + b x + c)`.
+    quadratics: Vec<(f64, f64, f64, f64)>,
+    /// The nodes where each term can matter.
+    windows: Vec<(usize, usize)>,
+    /// The log of the carried residual, then of the density.
+    log: Vec<f64>,
 }
 
 /// The model fits the direct method as 002 writes it: continuous observations, G = I, S = I.
@@ -236,8 +250,15 @@ impl DirectFilter {
             coefficients,
             potential,
             h,
-            u_hat: exp_shifted(&log_u),
+            u_hat: vec![0.0; x.len()],
             density: vec![0.0; x.len()],
+            work: StepWork {
+                decomposition: Decomposition::with_capacity(x.len(), params.max_terms),
+                factor: vec![0.0; x.len()],
+                quadratics: Vec::with_capacity(params.max_terms),
+                windows: Vec::with_capacity(params.max_terms),
+                log: vec![0.0; x.len()],
+            },
             estimate: Estimate {
                 mean: DVector::zeros(1),
                 covariance: None,
@@ -248,6 +269,7 @@ impl DirectFilter {
             nodes: x,
             grid,
         };
+        exp_shifted(&log_u, &mut filter.u_hat);
         filter.refresh()?;
         Ok(filter)
     }
@@ -259,19 +281,20 @@ impl DirectFilter {
 
     /// The density `e^{F} û` normalised on the grid, and the estimate.
     fn refresh(&mut self) -> Result<(), FilterError> {
-        let log: Vec<f64> = self
-            .u_hat
-            .iter()
+        for ((l, &u), &big_f) in self
+            .work
+            .log
+            .iter_mut()
+            .zip(&self.u_hat)
             .zip(&self.potential)
-            .map(|(&u, &big_f)| {
-                if u > 0.0 {
-                    libm::log(u) + big_f
-                } else {
-                    f64::NEG_INFINITY
-                }
-            })
-            .collect();
-        self.density = exp_shifted(&log);
+        {
+            *l = if u > 0.0 {
+                libm::log(u) + big_f
+            } else {
+                f64::NEG_INFINITY
+            };
+        }
+        exp_shifted(&self.work.log, &mut self.density);
         crate::filters::normalise_on_grid(
             &self.grid,
             &mut self.density,
@@ -282,18 +305,16 @@ impl DirectFilter {
     }
 }
 
-/// `exp(v − max v)` (all zero when every value is −∞).
-fn exp_shifted(log: &[f64]) -> Vec<f64> {
+/// `out = exp(log − max log)` (all zero when no value is finite).
+fn exp_shifted(log: &[f64], out: &mut [f64]) {
     let shift = log.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    log.iter()
-        .map(|&v| {
-            if shift.is_finite() {
-                libm::exp(v - shift)
-            } else {
-                0.0
-            }
-        })
-        .collect()
+    for (o, &v) in out.iter_mut().zip(log) {
+        *o = if shift.is_finite() {
+            libm::exp(v - shift)
+        } else {
+            0.0
+        };
+    }
 }
 
 impl Filter for DirectFilter {
@@ -307,25 +328,28 @@ impl Filter for DirectFilter {
             return Ok(());
         }
         let len = self.u_hat.len();
+        let StepWork {
+            decomposition,
+            factor,
+            quadratics,
+            windows,
+            log: carried,
+        } = &mut self.work;
         let x = &self.nodes;
-        // Algorithm 1 leaves what is below α·max; dropping it at every step loses more the
-        // more steps there are (Table 4's MSE grew as Δt shrank). The residual is carried over
-        // the interval with the zeroth-order part of (32) only, e^{q(x)Δt} — an O(Δt) error
-        // from the neglected diffusion and drift.
-        let (terms, residual) = decompose(x, &self.u_hat, self.params.alpha, self.params.max_terms);
+        decomposition.run(x, &self.u_hat, self.params.alpha, self.params.max_terms);
+        let (terms, residual) = (&decomposition.terms, &decomposition.residual);
         self.terms = terms.len();
         if terms.is_empty() {
             return Err(FilterError::MassLost);
         }
         // Exponents of every propagated term plus the observation factor, one common shift.
-        let factor: Vec<f64> = (0..len)
-            .map(|j| obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum())
-            .collect();
-        let mut quadratics = Vec::with_capacity(terms.len());
-        for t in &terms {
-            let mut e = QuadraticExponent::from_term(t);
-            e.propagate(&self.coefficients, obs.dt, self.params.substeps);
-            let (a, b, c) = (e.a[(0, 0)], e.b[0], e.c);
+        for (j, g) in factor.iter_mut().enumerate() {
+            *g = obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum();
+        }
+        quadratics.clear();
+        for t in terms {
+            let [a, b, c] =
+                propagate_scalar_term(t, &self.coefficients, obs.dt, self.params.substeps);
             if !(a.is_finite() && b.is_finite() && c.is_finite()) {
                 return Err(FilterError::NonFinite {
                     what: "Riccati solution",
@@ -338,6 +362,7 @@ impl Filter for DirectFilter {
         // shift − 800, where exp underflows to 0 anyway — the same sums as over the whole grid.
         let (x0, h) = (x[0], self.grid.spacing()[0]);
         let node = |v: f64| ((v - x0) / h).clamp(0.0, (len - 1) as f64);
+        let factor = &*factor;
         let value = |(_, a, b, c): (f64, f64, f64, f64), j: usize| {
             a * x[j] * x[j] + b * x[j] + c + factor[j]
         };
@@ -352,48 +377,41 @@ impl Filter for DirectFilter {
                 value(q, j)
             })
             .fold(f64::NEG_INFINITY, f64::max);
-        let windows: Vec<(usize, usize)> = quadratics
-            .iter()
-            .map(|&q| match peak(q) {
-                Some((centre, top)) => {
-                    let reach = libm::sqrt((800.0 + top + g_max - lower) / -q.1);
-                    if reach.is_finite() {
-                        let from = libm::floor(node(centre - reach)) as usize;
-                        let to = libm::ceil(node(centre + reach)) as usize + 1;
-                        (from, to.min(len))
-                    } else {
-                        (0, len)
-                    }
+        windows.clear();
+        windows.extend(quadratics.iter().map(|&q| match peak(q) {
+            Some((centre, top)) => {
+                let reach = libm::sqrt((800.0 + top + g_max - lower) / -q.1);
+                if reach.is_finite() {
+                    let from = libm::floor(node(centre - reach)) as usize;
+                    let to = libm::ceil(node(centre + reach)) as usize + 1;
+                    (from, to.min(len))
+                } else {
+                    (0, len)
                 }
-                None => (0, len),
-            })
-            .collect();
+            }
+            None => (0, len),
+        }));
         let k = &self.coefficients;
         let (qq, qp, qr) = (k.q[(0, 0)], k.p[0], k.r);
-        let carried: Vec<f64> = residual
-            .iter()
-            .zip(&factor)
-            .zip(x)
-            .map(|((&r, &g), &xj)| {
-                if r != 0.0 {
-                    libm::log(r.abs()) + g + (qq * xj * xj + qp * xj + qr) * obs.dt
-                } else {
-                    f64::NEG_INFINITY
-                }
-            })
-            .collect();
+        for (((e, &r), &g), &xj) in carried.iter_mut().zip(residual).zip(factor).zip(x) {
+            *e = if r != 0.0 {
+                libm::log(r.abs()) + g + (qq * xj * xj + qp * xj + qr) * obs.dt
+            } else {
+                f64::NEG_INFINITY
+            };
+        }
         let mut shift = carried.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        for (&q, &(from, to)) in quadratics.iter().zip(&windows) {
+        for (&q, &(from, to)) in quadratics.iter().zip(windows.iter()) {
             shift = (from..to).map(|j| value(q, j)).fold(shift, f64::max);
         }
-        for ((u, &r), &e) in self.u_hat.iter_mut().zip(&residual).zip(&carried) {
+        for ((u, &r), &e) in self.u_hat.iter_mut().zip(residual).zip(carried.iter()) {
             *u = if e > f64::NEG_INFINITY {
                 r.signum() * crate::linalg::exp_nonpositive(e - shift)
             } else {
                 0.0
             };
         }
-        for (&q, &(from, to)) in quadratics.iter().zip(&windows) {
+        for (&q, &(from, to)) in quadratics.iter().zip(windows.iter()) {
             for j in from..to {
                 self.u_hat[j] += q.0 * crate::linalg::exp_nonpositive(value(q, j) - shift);
             }

@@ -9,7 +9,6 @@
 //! of the residual reaches E, the same is done for the peaks of its negative (negative
 //! weights); the method stops when neither has a peak above E, or at `max_terms`.
 
-use alloc::vec;
 use alloc::vec::Vec;
 
 /// One term `c exp(−(x − μ)²/(2σ²))`.
@@ -38,24 +37,21 @@ pub fn evaluate(terms: &[GaussianTerm], grid: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Indices of the grid's local maxima of `f` that reach `threshold`.
-fn peaks(f: &[f64], threshold: f64) -> Vec<usize> {
+/// Indices of the grid's local maxima of `f` that reach `threshold`, into `found`.
+fn peaks(f: &[f64], threshold: f64, found: &mut Vec<usize>) {
     let n = f.len();
-    (0..n)
-        .filter(|&i| {
-            let left = if i > 0 { f[i - 1] } else { f64::NEG_INFINITY };
-            let right = if i + 1 < n {
-                f[i + 1]
-            } else {
-                f64::NEG_INFINITY
-            };
-            f[i] >= threshold && f[i] > left && f[i] >= right
-        })
-        .collect()
+    found.clear();
+    found.extend((0..n).filter(|&i| {
+        let left = if i > 0 { f[i - 1] } else { f64::NEG_INFINITY };
+        let right = if i + 1 < n {
+            f[i + 1]
+        } else {
+            f64::NEG_INFINITY
+        };
+        f[i] >= threshold && f[i] > left && f[i] >= right
+    }));
 }
 
-/// The neighbourhood of peak i free of other peaks: the monotone descent on both sides, while
-/// `f` stays positive.
 fn neighbourhood(f: &[f64], i: usize) -> (usize, usize) {
     let mut lo = i;
     while lo > 0 && f[lo - 1] < f[lo] && f[lo - 1] > 0.0 {
@@ -74,12 +70,18 @@ fn spacing(grid: &[f64]) -> f64 {
 }
 
 /// The least-squares width of a Gaussian of height `f[i]` at `grid[i]` on `lo..=hi`.
-fn fit_sigma(grid: &[f64], f: &[f64], i: usize, (lo, hi): (usize, usize)) -> f64 {
+fn fit_sigma(
+    grid: &[f64],
+    f: &[f64],
+    i: usize,
+    (lo, hi): (usize, usize),
+    tail: &mut Vec<f64>,
+) -> f64 {
     let (x0, y0) = (grid[i], f[i]);
     let h = spacing(grid);
     // Beyond 9σ from the peak the Gaussian is below e^{−40.5} of its height: there the
     // residual is y itself, summed once by prefix sums of y² instead of evaluating exp.
-    let mut tail = Vec::with_capacity(hi - lo + 2);
+    tail.clear();
     tail.push(0.0);
     for &y in &f[lo..=hi] {
         tail.push(tail[tail.len() - 1] + y * y);
@@ -195,49 +197,90 @@ pub fn decompose(
     alpha: f64,
     max_terms: usize,
 ) -> (Vec<GaussianTerm>, Vec<f64>) {
-    let threshold = alpha * phi.iter().copied().fold(0.0, f64::max);
-    let mut terms: Vec<GaussianTerm> = Vec::new();
-    let mut residual = phi.to_vec();
-    let mut flipped = vec![0.0; phi.len()];
-    let h = spacing(grid);
-    while terms.len() < max_terms {
-        // Step 2 on the residual, else step 4 on its negative.
-        let mut sign = 1.0;
-        let mut found = peaks(&residual, threshold);
-        if found.is_empty() {
-            for (f, r) in flipped.iter_mut().zip(&residual) {
-                *f = -r;
-            }
-            found = peaks(&flipped, threshold);
-            sign = -1.0;
+    let mut work = Decomposition::with_capacity(phi.len(), max_terms);
+    work.run(grid, phi, alpha, max_terms);
+    (work.terms, work.residual)
+}
+
+/// Algorithm 1 in storage made once: [`Decomposition::run`] leaves the terms and the
+/// residual in `terms` and `residual` and allocates nothing once its buffers have reached
+/// their working size.
+#[derive(Clone, Debug, Default)]
+pub struct Decomposition {
+    /// The Gaussians found.
+    pub terms: Vec<GaussianTerm>,
+    /// `phi − Σ terms` on the grid.
+    pub residual: Vec<f64>,
+    flipped: Vec<f64>,
+    found: Vec<usize>,
+    tail: Vec<f64>,
+}
+
+impl Decomposition {
+    /// Storage for `points` grid values and up to `max_terms` terms.
+    pub fn with_capacity(points: usize, max_terms: usize) -> Self {
+        Decomposition {
+            terms: Vec::with_capacity(max_terms),
+            residual: Vec::with_capacity(points),
+            flipped: Vec::with_capacity(points),
+            found: Vec::with_capacity(points),
+            tail: Vec::with_capacity(points + 1),
         }
-        if found.is_empty() {
-            break;
-        }
-        let f = if sign > 0.0 { &residual } else { &flipped };
-        let new: Vec<GaussianTerm> = found
-            .iter()
-            .take(max_terms - terms.len())
-            .map(|&i| GaussianTerm {
-                weight: sign * f[i],
-                mean: grid[i],
-                sigma: fit_sigma(grid, f, i, neighbourhood(f, i)),
-            })
-            .collect();
-        // Each term only within 9σ of its mean (beyond, below e^{−40.5} of its height).
-        for t in &new {
-            let index = |x: f64| {
-                libm::floor((x - grid[0]) / h).clamp(0.0, (grid.len() - 1) as f64) as usize
-            };
-            let (l, r) = (
-                index(t.mean - 9.0 * t.sigma),
-                index(t.mean + 9.0 * t.sigma) + 1,
-            );
-            for (res, &x) in residual[l..r.min(grid.len())].iter_mut().zip(&grid[l..]) {
-                *res -= t.value(x);
-            }
-        }
-        terms.extend(new);
     }
-    (terms, residual)
+
+    /// Algorithm 1 on the uniform grid `grid` (ascending) for the values `phi`.
+    pub fn run(&mut self, grid: &[f64], phi: &[f64], alpha: f64, max_terms: usize) {
+        let Decomposition {
+            terms,
+            residual,
+            flipped,
+            found,
+            tail,
+        } = self;
+        let threshold = alpha * phi.iter().copied().fold(0.0, f64::max);
+        terms.clear();
+        residual.clear();
+        residual.extend_from_slice(phi);
+        flipped.clear();
+        flipped.resize(phi.len(), 0.0);
+        let h = spacing(grid);
+        while terms.len() < max_terms {
+            // Step 2 on the residual, else step 4 on its negative.
+            let mut sign = 1.0;
+            peaks(residual, threshold, found);
+            if found.is_empty() {
+                for (f, r) in flipped.iter_mut().zip(residual.iter()) {
+                    *f = -r;
+                }
+                peaks(flipped, threshold, found);
+                sign = -1.0;
+            }
+            if found.is_empty() {
+                break;
+            }
+            let f = if sign > 0.0 { &*residual } else { &*flipped };
+            let first = terms.len();
+            for &i in found.iter().take(max_terms - first) {
+                let sigma = fit_sigma(grid, f, i, neighbourhood(f, i), tail);
+                terms.push(GaussianTerm {
+                    weight: sign * f[i],
+                    mean: grid[i],
+                    sigma,
+                });
+            }
+            // Each term only within 9σ of its mean (beyond, below e^{−40.5} of its height).
+            for t in &terms[first..] {
+                let index = |x: f64| {
+                    libm::floor((x - grid[0]) / h).clamp(0.0, (grid.len() - 1) as f64) as usize
+                };
+                let (l, r) = (
+                    index(t.mean - 9.0 * t.sigma),
+                    index(t.mean + 9.0 * t.sigma) + 1,
+                );
+                for (res, &x) in residual[l..r.min(grid.len())].iter_mut().zip(&grid[l..]) {
+                    *res -= t.value(x);
+                }
+            }
+        }
+    }
 }

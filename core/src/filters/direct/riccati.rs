@@ -43,11 +43,11 @@ impl QuadraticExponent {
     /// A 1-D Gaussian term `|c| exp(−(x − μ)²/(2σ²))` (the sign of c is kept by the caller):
     /// `A = −1/(2σ²)`, `B = μ/σ²`, `C = ln|c| − μ²/(2σ²)`.
     pub fn from_term(term: &GaussianTerm) -> Self {
-        let s2 = term.sigma * term.sigma;
+        let [a, b, c] = scalar_exponent(term);
         QuadraticExponent {
-            a: DMatrix::from_element(1, 1, -0.5 / s2),
-            b: DVector::from_element(1, term.mean / s2),
-            c: libm::log(term.weight.abs()) - 0.5 * term.mean * term.mean / s2,
+            a: DMatrix::from_element(1, 1, a),
+            b: DVector::from_element(1, b),
+            c,
         }
     }
 
@@ -70,35 +70,6 @@ impl QuadraticExponent {
         }
     }
 
-    /// (35)–(37) for n = 1 in plain numbers (no matrix allocations: this is the direct
-    /// filter's inner loop): `a' = 2a² − 2Da + Q`, `b' = 2ab − Db − 2ad + p`,
-    /// `c' = a + ½b² − db + r`; `steps` RK4 steps of length h.
-    fn propagate_scalar(&mut self, k: &KolmogorovCoefficients, h: f64, steps: usize) {
-        let (dm, dv, q, p, r) = (k.d_mat[(0, 0)], k.d_vec[0], k.q[(0, 0)], k.p[0], k.r);
-        let rates = |[a, b, _]: [f64; 3]| {
-            [
-                2.0 * a * a - 2.0 * dm * a + q,
-                2.0 * a * b - dm * b - 2.0 * a * dv + p,
-                a + 0.5 * b * b - dv * b + r,
-            ]
-        };
-        let step =
-            |u: [f64; 3], k: [f64; 3], s: f64| [u[0] + s * k[0], u[1] + s * k[1], u[2] + s * k[2]];
-        let mut u = [self.a[(0, 0)], self.b[0], self.c];
-        for _ in 0..steps {
-            let k1 = rates(u);
-            let k2 = rates(step(u, k1, 0.5 * h));
-            let k3 = rates(step(u, k2, 0.5 * h));
-            let k4 = rates(step(u, k3, h));
-            for i in 0..3 {
-                u[i] += (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) * (h / 6.0);
-            }
-        }
-        self.a[(0, 0)] = u[0];
-        self.b[0] = u[1];
-        self.c = u[2];
-    }
-
     fn plus(&self, rate: &QuadraticExponent, h: f64) -> QuadraticExponent {
         QuadraticExponent {
             a: &self.a + &rate.a * h,
@@ -111,11 +82,13 @@ impl QuadraticExponent {
     /// (35) behaves like `dA/dt = 2A²`, whose explicit steps are stable only for
     /// `h · 4‖A‖ ≲ 2.7`, so a narrow Gaussian (‖A‖ = 1/(2σ²)) gets `h ≤ 1/(4‖A‖)`.
     pub fn propagate(&mut self, k: &KolmogorovCoefficients, dt: f64, substeps: usize) {
-        let stiff = libm::ceil(4.0 * dt * self.a.amax().max(k.d_mat.amax())).min(1e6) as usize;
-        let steps = substeps.max(stiff).max(1);
+        let steps = steps_for(dt, self.a.amax().max(k.d_mat.amax()), substeps);
         let h = dt / steps as f64;
         if self.a.nrows() == 1 {
-            self.propagate_scalar(k, h, steps);
+            let u = rk4_scalar([self.a[(0, 0)], self.b[0], self.c], k, h, steps);
+            self.a[(0, 0)] = u[0];
+            self.b[0] = u[1];
+            self.c = u[2];
             return;
         }
         for _ in 0..steps {
@@ -129,4 +102,61 @@ impl QuadraticExponent {
             symmetrize(&mut self.a);
         }
     }
+}
+
+/// `(a, b, c)` with `exp(a x² + b x + c)` the 1-D Gaussian term (the scalar
+/// [`QuadraticExponent::from_term`]).
+pub fn scalar_exponent(term: &GaussianTerm) -> [f64; 3] {
+    let s2 = term.sigma * term.sigma;
+    [
+        -0.5 / s2,
+        term.mean / s2,
+        libm::log(term.weight.abs()) - 0.5 * term.mean * term.mean / s2,
+    ]
+}
+
+/// The 1-D term carried over `dt` by (35)–(37): [`QuadraticExponent::propagate`] on
+/// scalars, without allocating.
+pub fn propagate_scalar_term(
+    term: &GaussianTerm,
+    k: &KolmogorovCoefficients,
+    dt: f64,
+    substeps: usize,
+) -> [f64; 3] {
+    let u = scalar_exponent(term);
+    let steps = steps_for(dt, libm::fabs(u[0]).max(k.d_mat.amax()), substeps);
+    rk4_scalar(u, k, dt / steps as f64, steps)
+}
+
+/// RK4 steps over `dt`: at least `substeps`, and enough that `h·max(|A|, |D|) ≤ ¼` (the
+/// Riccati equation (35) is stiff for narrow terms).
+fn steps_for(dt: f64, scale: f64, substeps: usize) -> usize {
+    let stiff = libm::ceil(4.0 * dt * scale).min(1e6) as usize;
+    substeps.max(stiff).max(1)
+}
+
+/// (35)–(37) for n = 1 in plain numbers (the direct filter's inner loop):
+/// `a' = 2a² − 2Da + Q`, `b' = 2ab − Db − 2ad + p`, `c' = a + ½b² − db + r`; `steps` RK4
+/// steps of length h from `u = (a, b, c)`.
+fn rk4_scalar(mut u: [f64; 3], k: &KolmogorovCoefficients, h: f64, steps: usize) -> [f64; 3] {
+    let (dm, dv, q, p, r) = (k.d_mat[(0, 0)], k.d_vec[0], k.q[(0, 0)], k.p[0], k.r);
+    let rates = |[a, b, _]: [f64; 3]| {
+        [
+            2.0 * a * a - 2.0 * dm * a + q,
+            2.0 * a * b - dm * b - 2.0 * a * dv + p,
+            a + 0.5 * b * b - dv * b + r,
+        ]
+    };
+    let step =
+        |u: [f64; 3], k: [f64; 3], s: f64| [u[0] + s * k[0], u[1] + s * k[1], u[2] + s * k[2]];
+    for _ in 0..steps {
+        let k1 = rates(u);
+        let k2 = rates(step(u, k1, 0.5 * h));
+        let k3 = rates(step(u, k2, 0.5 * h));
+        let k4 = rates(step(u, k3, h));
+        for i in 0..3 {
+            u[i] += (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) * (h / 6.0);
+        }
+    }
+    u
 }

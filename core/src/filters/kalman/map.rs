@@ -22,6 +22,8 @@
 
 use alloc::format;
 use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -30,7 +32,7 @@ use super::measurement::{Measurement, MeasurementForm};
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
-use crate::linalg::{cholesky, symmetrize};
+use crate::linalg::{cholesky_in, lower_cholesky_into, lower_cholesky_solve, symmetrize};
 use crate::model::{Model, Prior};
 
 /// Parameters of the IEKF.
@@ -148,66 +150,151 @@ pub enum MapSolver {
     },
 }
 
-/// `L_λ(x)` of (4.8) and what its derivatives need at one point.
+/// `L_λ(x)` of (4.8): what stays fixed during one update.
 struct Objective<'a> {
     model: &'a Model,
     meas: &'a Measurement,
     mean: &'a DVector<f64>,
-    p_inv: DMatrix<f64>,
-    r_inv: DMatrix<f64>,
+    p_inv: &'a DMatrix<f64>,
+    r_inv: &'a DMatrix<f64>,
+}
+
+/// Storage of the IOKF's Newton steps (made once: an update allocates nothing).
+#[derive(Clone, Debug)]
+struct NewtonWork {
+    /// x − m, or m − x for the IEKF (n).
+    d: DVector<f64>,
+    /// z − scale·h(x) (m).
+    r: DVector<f64>,
+    /// R⁻¹ r (m).
+    w: DVector<f64>,
+    /// ∇L_λ (n).
+    g: DVector<f64>,
+    /// The Newton step (n).
+    step: DVector<f64>,
+    /// scale · ∂h/∂x (m × n) and its row-major evaluation.
+    h: DMatrix<f64>,
+    rows: Vec<f64>,
+    /// Hᵀ R⁻¹ (n × m).
+    ht_r_inv: DMatrix<f64>,
+    /// ∇²L_λ, its damped copy and the latter's Cholesky factor (n × n).
+    hessian: DMatrix<f64>,
+    damped: DMatrix<f64>,
+    factor: DMatrix<f64>,
+    /// ∇²h_i, row-major (n²).
+    second: Vec<f64>,
+}
+
+impl NewtonWork {
+    fn new(n: usize, m: usize) -> Self {
+        NewtonWork {
+            d: DVector::zeros(n),
+            r: DVector::zeros(m),
+            w: DVector::zeros(m),
+            g: DVector::zeros(n),
+            step: DVector::zeros(n),
+            h: DMatrix::zeros(m, n),
+            rows: vec![0.0; m * n],
+            ht_r_inv: DMatrix::zeros(n, m),
+            hessian: DMatrix::zeros(n, n),
+            damped: DMatrix::zeros(n, n),
+            factor: DMatrix::zeros(n, n),
+            second: vec![0.0; n * n],
+        }
+    }
+}
+
+/// `vᵀ A v`.
+fn quadratic_form(a: &DMatrix<f64>, v: &DVector<f64>) -> f64 {
+    let n = v.len();
+    (0..n)
+        .map(|j| v[j] * (0..n).map(|i| v[i] * a[(i, j)]).sum::<f64>())
+        .sum()
 }
 
 impl Objective<'_> {
-    fn residual(&self, x: &DVector<f64>) -> DVector<f64> {
-        &self.meas.value - self.meas.predict(self.model, x.as_slice())
+    /// `r = z − scale · h(x)`.
+    fn residual_into(&self, x: &DVector<f64>, r: &mut DVector<f64>) {
+        self.meas
+            .predict_into(self.model, x.as_slice(), r.as_mut_slice());
+        r.zip_apply(&self.meas.value, |r, z| *r = z - *r);
     }
 
-    fn value(&self, x: &DVector<f64>, lambda: f64) -> f64 {
-        let d = x - self.mean;
-        let r = self.residual(x);
-        (d.transpose() * &self.p_inv * &d)[(0, 0)]
-            + lambda * (r.transpose() * &self.r_inv * &r)[(0, 0)]
+    fn value(&self, x: &DVector<f64>, lambda: f64, work: &mut NewtonWork) -> f64 {
+        work.d.copy_from(x);
+        work.d -= self.mean;
+        self.residual_into(x, &mut work.r);
+        quadratic_form(self.p_inv, &work.d) + lambda * quadratic_form(self.r_inv, &work.r)
     }
 
-    /// Gradient and exact Hessian of `L_λ` at x.
-    fn newton_terms(&self, x: &DVector<f64>, lambda: f64) -> (DVector<f64>, DMatrix<f64>) {
+    /// Gradient (`work.g`) and exact Hessian (`work.hessian`) of `L_λ` at x.
+    fn newton_terms(&self, x: &DVector<f64>, lambda: f64, work: &mut NewtonWork) {
         let n = x.len();
-        let h = self.meas.jacobian(self.model, x.as_slice());
-        let weighted = &self.r_inv * self.residual(x);
-        let gradient = (&self.p_inv * (x - self.mean) - h.transpose() * &weighted * lambda) * 2.0;
-        let mut hessian = (&self.p_inv + h.transpose() * &self.r_inv * &h * lambda) * 2.0;
-        let mut second = alloc::vec![0.0; n * n];
-        for (i, w) in weighted.iter().enumerate() {
-            self.model.observation.hessian(i, x.as_slice(), &mut second);
+        self.meas
+            .jacobian_into(self.model, x.as_slice(), &mut work.rows, &mut work.h);
+        self.residual_into(x, &mut work.r);
+        work.w.gemv(1.0, self.r_inv, &work.r, 0.0);
+        // ∇L = 2P⁻¹(x − m) − 2λ Hᵀ R⁻¹ r.
+        work.d.copy_from(x);
+        work.d -= self.mean;
+        work.g.gemv(2.0, self.p_inv, &work.d, 0.0);
+        work.g.gemv_tr(-2.0 * lambda, &work.h, &work.w, 1.0);
+        // ∇²L = 2P⁻¹ + 2λ HᵀR⁻¹H − 2λ Σ_i (R⁻¹ r)_i ∇²(scale·h_i).
+        work.ht_r_inv.gemm_tr(1.0, &work.h, self.r_inv, 0.0);
+        work.hessian.copy_from(self.p_inv);
+        work.hessian
+            .gemm(2.0 * lambda, &work.ht_r_inv, &work.h, 2.0);
+        for (i, w) in work.w.iter().enumerate() {
+            self.model
+                .observation
+                .hessian(i, x.as_slice(), &mut work.second);
             let c = 2.0 * lambda * w * self.meas.scale;
             for a in 0..n {
                 for b in 0..n {
-                    hessian[(a, b)] -= c * second[a * n + b];
+                    work.hessian[(a, b)] -= c * work.second[a * n + b];
                 }
             }
         }
-        symmetrize(&mut hessian);
-        (gradient, hessian)
+        symmetrize(&mut work.hessian);
     }
 }
 
 /// One guarded Newton step on `L_λ` from x: damped until the Hessian is positive definite,
-/// then cut back until L decreases (Armijo). Returns false when no decrease was possible
-/// (x is already a minimiser to rounding).
-fn newton_step(obj: &Objective, x: &mut DVector<f64>, lambda: f64) -> Result<bool, FilterError> {
-    let (g, hess) = obj.newton_terms(x, lambda);
-    if g.iter().chain(hess.iter()).any(|v| !v.is_finite()) {
+/// then cut back until L decreases (Armijo), trying points in `trial`. Returns false when no
+/// decrease was possible (x is already a minimiser to rounding).
+fn newton_step(
+    obj: &Objective,
+    x: &mut DVector<f64>,
+    trial: &mut DVector<f64>,
+    lambda: f64,
+    work: &mut NewtonWork,
+) -> Result<bool, FilterError> {
+    obj.newton_terms(x, lambda, work);
+    if work
+        .g
+        .iter()
+        .chain(work.hessian.iter())
+        .any(|v| !v.is_finite())
+    {
         return Err(FilterError::NonFinite {
             what: "Newton step of the IOKF",
         });
     }
-    let n = x.len();
-    let scale = hess.diagonal().abs().max().max(1e-300);
+    let scale = (0..x.len())
+        .map(|i| libm::fabs(work.hessian[(i, i)]))
+        .fold(1e-300, f64::max);
     let mut mu = 0.0;
-    let step = loop {
-        let damped = &hess + DMatrix::identity(n, n) * mu;
-        if let Some(c) = damped.cholesky() {
-            break -c.solve(&g);
+    loop {
+        work.damped.copy_from(&work.hessian);
+        for i in 0..x.len() {
+            work.damped[(i, i)] += mu;
+        }
+        if lower_cholesky_into(&work.damped, &mut work.factor) {
+            // step = −(∇²L + μI)⁻¹ ∇L.
+            work.step.copy_from(&work.g);
+            lower_cholesky_solve(&work.factor, &mut work.step);
+            work.step.neg_mut();
+            break;
         }
         mu = if mu == 0.0 { 1e-8 * scale } else { mu * 10.0 };
         if mu > 1e8 * scale {
@@ -215,20 +302,64 @@ fn newton_step(obj: &Objective, x: &mut DVector<f64>, lambda: f64) -> Result<boo
                 "IOKF: the Hessian of L_λ (λ = {lambda}) stays indefinite even damped by {mu:.3e}; the approximate posterior has no minimum here"
             )));
         }
-    };
-    let l0 = obj.value(x, lambda);
-    let slope = g.dot(&step);
+    }
+    let l0 = obj.value(x, lambda, work);
+    let slope = work.g.dot(&work.step);
     let mut alpha = 1.0;
     for _ in 0..40 {
-        let trial = &*x + &step * alpha;
-        let l = obj.value(&trial, lambda);
+        trial.copy_from(x);
+        trial.axpy(alpha, &work.step, 1.0);
+        let l = obj.value(trial, lambda, work);
         if l.is_finite() && l <= l0 + 1e-4 * alpha * slope {
-            *x = trial;
+            core::mem::swap(x, trial);
             return Ok(true);
         }
         alpha *= 0.5;
     }
     Ok(false)
+}
+
+/// Storage of the MAP update (made once).
+#[derive(Clone, Debug)]
+struct MapWork {
+    /// The iterate and the next one (n).
+    x: DVector<f64>,
+    trial: DVector<f64>,
+    /// P⁻¹ (n × n) with the storage of P's Cholesky factor.
+    p_inv: DMatrix<f64>,
+    p_factor: DMatrix<f64>,
+    /// R⁻¹ (m × m) with the storage of R's Cholesky factor.
+    r_inv: DMatrix<f64>,
+    r_factor: DMatrix<f64>,
+    newton: NewtonWork,
+}
+
+impl MapWork {
+    fn new(n: usize, m: usize) -> Self {
+        MapWork {
+            x: DVector::zeros(n),
+            trial: DVector::zeros(n),
+            p_inv: DMatrix::zeros(n, n),
+            p_factor: DMatrix::zeros(n, n),
+            r_inv: DMatrix::zeros(m, m),
+            r_factor: DMatrix::zeros(m, m),
+            newton: NewtonWork::new(n, m),
+        }
+    }
+}
+
+/// `A⁻¹` of a symmetric positive-definite `a` into `out`, factorising in `factor`.
+fn spd_inverse_into(
+    a: &DMatrix<f64>,
+    factor: &mut DMatrix<f64>,
+    out: &mut DMatrix<f64>,
+    what: &'static str,
+) -> Result<(), FilterError> {
+    let c = cholesky_in(factor, a, what)?;
+    out.fill_with_identity();
+    c.solve_mut(out);
+    *factor = c.unpack_dirty();
+    Ok(())
 }
 
 /// A Gaussian filter whose update is the MAP point of 003 §4 (IEKF or IOKF).
@@ -240,6 +371,7 @@ pub struct MapKalman {
     substeps: usize,
     solver: MapSolver,
     state: GaussianState,
+    work: MapWork,
     /// Iterations (Gauss–Newton) or Newton steps taken in the last update.
     last_iterations: usize,
 }
@@ -262,6 +394,7 @@ impl MapKalman {
             substeps: substeps.max(1),
             solver,
             state: GaussianState::initial(prior.mean(), prior.covariance(), init, model.m),
+            work: MapWork::new(model.n, model.m),
             last_iterations: 0,
         }
     }
@@ -270,64 +403,92 @@ impl MapKalman {
     pub fn last_iterations(&self) -> usize {
         self.last_iterations
     }
+}
 
-    /// The MAP point of (4.5) by the chosen solver, from the predicted mean.
-    fn map_point(&mut self, meas: &Measurement) -> Result<DVector<f64>, FilterError> {
-        let mean = &self.state.mean;
-        let p = &self.state.cov;
-        let mut x = mean.clone();
-        self.last_iterations = 0;
-        match self.solver {
-            MapSolver::GaussNewton {
-                iterations,
-                tolerance,
-            } => {
-                for _ in 0..iterations {
-                    let h = meas.jacobian(&self.model, x.as_slice());
-                    let r = &meas.value - meas.predict(&self.model, x.as_slice());
-                    let pht = p * h.transpose();
-                    let s = &h * &pht + &meas.noise_cov;
-                    let k = cholesky(&s, "IEKF innovation covariance")?
-                        .solve(&pht.transpose())
-                        .transpose();
-                    let next = mean + k * (r - &h * (mean - &x));
-                    let moved = (&next - &x).norm();
-                    x = next;
-                    self.last_iterations += 1;
-                    if !x.iter().all(|v| v.is_finite()) {
-                        return Err(FilterError::NonFinite {
-                            what: "IEKF iterate",
-                        });
-                    }
-                    if moved <= tolerance * (1.0 + x.norm()) {
+/// The MAP point of (4.5) by `solver`, from the predicted mean, into `work.x`; records the
+/// normalised innovation squared at the predicted mean (the innovation self-check, as for the
+/// EKF). Returns the iterations or Newton steps taken.
+fn map_point(
+    solver: MapSolver,
+    model: &Model,
+    meas: &Measurement,
+    state: &mut GaussianState,
+    work: &mut MapWork,
+) -> Result<usize, FilterError> {
+    work.x.copy_from(&state.mean);
+    let mut taken = 0;
+    match solver {
+        MapSolver::GaussNewton {
+            iterations,
+            tolerance,
+        } => {
+            for k in 0..iterations {
+                // x ← m + K(x)(z − h(x) − H(x)(m − x)).
+                state.linearize(model, meas, Some(&work.x));
+                let nis = state.gain()?;
+                if k == 0 {
+                    state.innovations.push(nis);
+                }
+                let d = &mut work.newton.d;
+                d.copy_from(&state.mean);
+                *d -= &work.x;
+                state.parts.residual.gemv(-1.0, &state.work.h, d, 1.0);
+                work.trial.copy_from(&state.mean);
+                work.trial
+                    .gemv_tr(1.0, &state.work.gain_t, &state.parts.residual, 1.0);
+                work.newton.d.copy_from(&work.trial);
+                work.newton.d -= &work.x;
+                let moved = work.newton.d.norm();
+                core::mem::swap(&mut work.x, &mut work.trial);
+                taken += 1;
+                if !work.x.iter().all(|v| v.is_finite()) {
+                    return Err(FilterError::NonFinite {
+                        what: "IEKF iterate",
+                    });
+                }
+                if moved <= tolerance * (1.0 + work.x.norm()) {
+                    break;
+                }
+            }
+        }
+        MapSolver::Homotopy {
+            splits,
+            newton_steps,
+        } => {
+            state.linearize(model, meas, None);
+            let nis = state.gain()?;
+            state.innovations.push(nis);
+            spd_inverse_into(
+                &state.cov,
+                &mut work.p_factor,
+                &mut work.p_inv,
+                "predicted covariance",
+            )?;
+            spd_inverse_into(
+                &meas.noise_cov,
+                &mut work.r_factor,
+                &mut work.r_inv,
+                "measurement noise covariance",
+            )?;
+            let obj = Objective {
+                model,
+                meas,
+                mean: &state.mean,
+                p_inv: &work.p_inv,
+                r_inv: &work.r_inv,
+            };
+            for j in 1..=splits {
+                let lambda = j as f64 / splits as f64;
+                for _ in 0..newton_steps {
+                    taken += 1;
+                    if !newton_step(&obj, &mut work.x, &mut work.trial, lambda, &mut work.newton)? {
                         break;
                     }
                 }
             }
-            MapSolver::Homotopy {
-                splits,
-                newton_steps,
-            } => {
-                let obj = Objective {
-                    model: &self.model,
-                    meas,
-                    mean,
-                    p_inv: cholesky(p, "predicted covariance")?.inverse(),
-                    r_inv: cholesky(&meas.noise_cov, "measurement noise covariance")?.inverse(),
-                };
-                for j in 1..=splits {
-                    let lambda = j as f64 / splits as f64;
-                    for _ in 0..newton_steps {
-                        self.last_iterations += 1;
-                        if !newton_step(&obj, &mut x, lambda)? {
-                            break;
-                        }
-                    }
-                }
-            }
         }
-        Ok(x)
     }
+    Ok(taken)
 }
 
 impl Filter for MapKalman {
@@ -336,34 +497,36 @@ impl Filter for MapKalman {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let Some(meas) = self.state.predict_then_measure(
-            &self.model,
-            &self.q,
-            self.substeps,
-            &mut self.form,
-            obs,
-        )?
-        else {
+        let MapKalman {
+            model,
+            q,
+            form,
+            substeps,
+            solver,
+            state,
+            work,
+            last_iterations,
+            ..
+        } = self;
+        let Some(meas) = state.predict_then_measure(model, q, *substeps, form, obs)? else {
             return Ok(());
         };
-        let meas = meas.clone();
-        let x = self.map_point(&meas)?;
-        // The Laplace covariance at the MAP point: P − K H P.
-        let h = meas.jacobian(&self.model, x.as_slice());
-        let pht = &self.state.cov * h.transpose();
-        let s = &h * &pht + &meas.noise_cov;
-        let k = cholesky(&s, "innovation covariance")?
-            .solve(&pht.transpose())
-            .transpose();
-        self.state.cov -= &k * &s * k.transpose();
-        symmetrize(&mut self.state.cov);
-        self.state.mean = x;
-        self.state.check()
+        *last_iterations = map_point(*solver, model, meas, state, work)?;
+        // The Laplace covariance at the MAP point: P − K H P with H at x.
+        state.linearize(model, meas, Some(&work.x));
+        state.gain()?;
+        state.downdate_covariance()?;
+        state.mean.copy_from(&work.x);
+        state.check()
     }
 
     fn estimate(&self) -> Estimate {
         let mut e = self.state.estimate();
         e.map = Some(self.state.mean.clone());
         e
+    }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        self.state.innovations.check(self.model.m, out);
     }
 }

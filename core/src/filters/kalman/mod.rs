@@ -61,7 +61,8 @@ pub struct InnovationWindow {
 }
 
 impl InnovationWindow {
-    fn push(&mut self, nis: f64) {
+    /// Records one normalised innovation squared.
+    pub fn push(&mut self, nis: f64) {
         self.values[self.count % NIS_WINDOW] = nis;
         self.count += 1;
     }
@@ -186,31 +187,47 @@ impl GaussianState {
     /// The linear(ised) update from [`GaussianState::parts`] (residual `r = z − ẑ`, `P_xz`,
     /// `P_zz`): gain `K = P_xz P_zz⁻¹`, `m += K r`, `P −= K P_zz Kᵀ = P_xz Kᵀ`.
     pub fn update(&mut self) -> Result<(), FilterError> {
+        let nis = self.gain()?;
+        self.innovations.push(nis);
+        self.mean
+            .gemv_tr(1.0, &self.work.gain_t, &self.parts.residual, 1.0);
+        self.downdate_covariance()
+    }
+
+    /// The gain of the update in [`GaussianState::parts`]: `Kᵀ = P_zz⁻¹ P_xzᵀ` into the
+    /// state's storage; returns the normalised
+    /// innovation squared `rᵀ P_zz⁻¹ r`.
+    pub fn gain(&mut self) -> Result<f64, FilterError> {
         let UpdateParts { residual, pxz, pzz } = &self.parts;
         let work = &mut self.work;
         let chol = crate::linalg::cholesky_in(&mut work.factor, pzz, "innovation covariance")?;
         work.whitened.copy_from(residual);
         chol.solve_mut(&mut work.whitened);
-        self.innovations.push(residual.dot(&work.whitened));
         // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ.
         work.gain_t.tr_copy_from(pxz);
         chol.solve_mut(&mut work.gain_t);
         work.factor = chol.unpack_dirty();
-        self.mean.gemv_tr(1.0, &work.gain_t, residual, 1.0);
-        self.cov.gemm(-1.0, pxz, &work.gain_t, 1.0);
+        Ok(residual.dot(&work.whitened))
+    }
+
+    /// `P −= P_xz Kᵀ` with the gain of the last [`GaussianState::gain`], kept symmetric.
+    pub fn downdate_covariance(&mut self) -> Result<(), FilterError> {
+        self.cov.gemm(-1.0, &self.parts.pxz, &self.work.gain_t, 1.0);
         symmetrize(&mut self.cov);
         self.check()
     }
 
-    /// The Kalman update with h linearised at the current mean (KF, EKF):
-    /// `H = scale · ∂h/∂x(m)`, `P_xz = P Hᵀ`, `P_zz = H P Hᵀ + R`.
-    pub fn linearized_update(
+    /// Writes into [`GaussianState::parts`] the update with h linearised at `at` (the mean
+    /// when `None`): `H = scale · ∂h/∂x`, `r = z − scale · h`, `P_xz = P Hᵀ`,
+    /// `P_zz = H P Hᵀ + R`.
+    pub fn linearize(
         &mut self,
         model: &crate::model::Model,
         meas: &measurement::Measurement,
-    ) -> Result<(), FilterError> {
+        at: Option<&DVector<f64>>,
+    ) {
         let (work, parts) = (&mut self.work, &mut self.parts);
-        let x = self.mean.as_slice();
+        let x = at.unwrap_or(&self.mean).as_slice();
         meas.jacobian_into(model, x, &mut work.rows, &mut work.h);
         meas.predict_into(model, x, parts.residual.as_mut_slice());
         parts.residual.zip_apply(&meas.value, |r, z| *r = z - *r);
@@ -223,6 +240,16 @@ impl GaussianState {
         }
         parts.pzz.copy_from(&meas.noise_cov);
         parts.pzz.gemm(1.0, &work.h, &parts.pxz, 1.0);
+    }
+
+    /// The Kalman update with h linearised at the current mean (KF, EKF):
+    /// [`GaussianState::linearize`] then [`GaussianState::update`].
+    pub fn linearized_update(
+        &mut self,
+        model: &crate::model::Model,
+        meas: &measurement::Measurement,
+    ) -> Result<(), FilterError> {
+        self.linearize(model, meas, None);
         self.update()
     }
 
