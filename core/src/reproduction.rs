@@ -275,7 +275,7 @@ pub fn tables() -> Vec<PaperTable> {
 /// 000 Table 1's rows: the EKF starts uninformed, at x̂₀ = 0 with P₀ = 1. 000 does not say how
 /// its EKF was started, and its EKF is far worse than one started from σ₀ like the grid filter
 /// (0.64–1.33 against our 0.31–0.54); started uninformed ours gives 0.61 for h = x², the paper's
-/// 0.64. The README gives both.
+/// 0.64. docs/reproduction.md gives both.
 fn uninformed_ekf(config: &mut ScenarioConfig) {
     for m in &mut config.methods {
         if let MethodConfig::Ekf(p) = m {

@@ -4,7 +4,6 @@
 use zakai::experiment::Experiment;
 use zakai::filters::kalman::{IekfParams, IokfParams};
 use zakai::filters::{Filter, Observation, ObservationKind};
-use zakai::reproduction;
 use zakai::scenario::{
     presets, FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
     PriorConfig, ScenarioConfig, TimeConfig,
@@ -125,21 +124,165 @@ fn guarded_newton_finds_the_map_point_of_a_cubic_measurement() {
     }
 }
 
-/// 003 Table 1 (100 runs of 1000 steps, seeds 1–100): IOKF with 2 × 3 Newton steps is at least
-/// as good as IEKF with 6 iterations (tolerance: 0.1 %) and on par with the UKF (within 5 %),
-/// with no failed run. The absolute numbers depend on the h that 003 omits (see the preset).
+/// 003 Table 1 (100 runs of 1000 steps from the preset's seed), each cell against the
+/// paper's with k = 3 standard errors of the difference: none reproduces (listed). 003 omits
+/// the measurement function of (5.2); with the standard two-sensor bearings of the preset the
+/// MAP update is almost linear, so what this table can check is weaker and is what is
+/// asserted: the three filters tie (within 0.1 % of each other) with no failed run. Where
+/// the IOKF does beat the IEKF is shown by the large-residual test below.
 #[test]
-fn table_1_of_003_ordering() {
-    let table = reproduction::table("003-table-1").expect("table");
-    let r = reproduction::reproduce_row(&table, &table.rows[0], table.runs, &|| {}).expect("runs");
+fn table_1_of_003_cells_and_the_tie() {
+    const H_OMITTED: &str = "003 omits h of (5.2); with the preset's two-sensor bearings in degrees the three filters tie at 1.430, about twice 003's values";
+    let deviation = |method| zakai_tests::Deviation {
+        row: "BOT",
+        method,
+        why: H_OMITTED,
+    };
+    let rows = zakai_tests::compare_with_paper(
+        "003-table-1",
+        100,
+        &[
+            deviation("IOKF(2×3)"),
+            deviation("IEKF(6)"),
+            deviation("UKF"),
+        ],
+    );
     let value = |name: &str| {
-        let c = r.cells.iter().find(|c| c.name == name).expect("cell");
+        let c = rows[0].cells.iter().find(|c| c.name == name).expect("cell");
         assert_eq!(c.failed, 0, "{name}");
         c.ours.as_ref().expect("value")[0]
     };
     let (iokf, iekf, ukf) = (value("IOKF(2×3)"), value("IEKF(6)"), value("UKF"));
-    assert!(iokf <= iekf * 1.001, "IOKF {iokf} vs IEKF {iekf}");
-    assert!((iokf - ukf).abs() <= 0.05 * ukf, "IOKF {iokf} vs UKF {ukf}");
+    for (name, v) in [("IEKF", iekf), ("UKF", ukf)] {
+        assert!((iokf - v).abs() <= 1e-3 * iokf, "IOKF {iokf} vs {name} {v}");
+    }
     let preset = presets::preset("bearings-only").unwrap();
     assert_eq!(preset.time.t_final / preset.time.dt_obs, 1000.0);
+}
+
+/// The MAP point of `L(x) = (x − m)²/P + (z − h(x))²/R`: the best point of a 10⁻⁴ grid on
+/// [−5, 5], refined by golden-section search on its two neighbouring cells (to 10⁻¹²).
+fn map_point(h: fn(f64) -> f64, m: f64, p: f64, z: f64, r: f64) -> f64 {
+    let l = |x: f64| (x - m).powi(2) / p + (z - h(x)).powi(2) / r;
+    let grid = (0..=100_000).map(|i| -5.0 + i as f64 * 1e-4);
+    let start = grid.min_by(|a, b| l(*a).total_cmp(&l(*b))).unwrap();
+    let (mut a, mut b) = (start - 1e-4, start + 1e-4);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    while b - a > 1e-12 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if l(c) < l(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// Single MAP updates at τ₀ of the prediction N(0.5, P) by a measurement z = h(x) + v,
+/// v ~ N(0, R), over `draws` draws of (x, z) (seed 7): for the IEKF and the IOKF with 003
+/// Table 1's budgets (6 Gauss–Newton iterations; l = 3 splits × m = 2 Newton steps), the mean
+/// distance to the exact MAP point (capped at 10 per draw) and how many draws land within
+/// 10⁻³ of it.
+fn map_updates(
+    expression: &str,
+    h: fn(f64) -> f64,
+    p: f64,
+    r: f64,
+    draws: usize,
+) -> ([f64; 2], [usize; 2]) {
+    use zakai::simulate::{rng_from_seed, standard_normal};
+    let m = 0.5;
+    let mut config = scalar(expression, vec![MethodConfig::from_key("ekf").unwrap()], p);
+    config.model.noise = ObservationNoiseConfig::Discrete {
+        mixture: vec![GaussianComponent {
+            weight: 1.0,
+            mean: vec![0.0],
+            cov: vec![vec![r]],
+        }],
+    };
+    let experiment = Experiment::new(config).unwrap();
+    let methods = [
+        MethodConfig::Iekf(IekfParams::default()),
+        MethodConfig::Iokf(IokfParams::default()),
+    ];
+    let mut rng = rng_from_seed(7);
+    let (mut distance, mut close) = ([0.0f64; 2], [0usize; 2]);
+    for _ in 0..draws {
+        let x = m + p.sqrt() * standard_normal(&mut rng);
+        let z = h(x) + r.sqrt() * standard_normal(&mut rng);
+        let exact = map_point(h, m, p, z, r);
+        for (k, method) in methods.iter().enumerate() {
+            let mut f: Box<dyn Filter> = experiment
+                .build_method(method, method.display_name(), 1)
+                .unwrap();
+            let value = [z];
+            let d = match f.step(&Observation {
+                dt: 0.0,
+                value: &value,
+                kind: ObservationKind::Measurement,
+            }) {
+                Ok(()) => (f.estimate().mean[0] - exact).abs(),
+                Err(_) => f64::INFINITY,
+            };
+            distance[k] += d.min(10.0) / draws as f64;
+            close[k] += usize::from(d < 1e-3);
+        }
+    }
+    println!(
+        "h = {expression}, P = {p}, R = {r}: mean distance to the MAP point IEKF {:.4}, IOKF {:.4}; within 1e-3: IEKF {}, IOKF {} of {draws}",
+        distance[0], distance[1], close[0], close[1]
+    );
+    (distance, close)
+}
+
+/// Where 003's IOKF wins (§4: "IOKF outperforms IEKF when we fix the total number of
+/// iteration steps"): a large-residual update, h = sin x with R = 1 = P, where the term that
+/// Gauss–Newton drops from the Hessian, `−2λ (R⁻¹r) h″`, is as large as the one it keeps, so
+/// six Gauss–Newton iterations stop short while Newton's steps on the exact Hessian along the
+/// homotopy converge. Over 200 draws the IOKF is within 10⁻³ of the MAP point in every draw
+/// and its mean distance is below a tenth of the IEKF's (the stated margin; measured 0.050
+/// against below 10⁻⁴, the IEKF within 10⁻³ in 165 draws).
+#[test]
+fn the_iokf_beats_the_iekf_on_a_large_residual_update() {
+    assert_eq!(
+        (
+            IekfParams::default().iterations,
+            IokfParams::default().splits * IokfParams::default().newton_steps
+        ),
+        (6, 6),
+        "the same budget of six iterations"
+    );
+    let (distance, close) = map_updates("sin(x)", f64::sin, 1.0, 1.0, 200);
+    assert!(
+        distance[1] < 0.1 * distance[0],
+        "IOKF {} vs IEKF {}",
+        distance[1],
+        distance[0]
+    );
+    assert_eq!(close[1], 200, "IOKF within 1e-3 of the MAP point");
+    assert!(
+        close[0] < 190,
+        "the IEKF stops short in {} draws",
+        200 - close[0]
+    );
+}
+
+/// Where it does not — stated, not hidden: a sharp cubic measurement (h = x³, R = 0.2) of a
+/// wide prediction (P = 4). L then has a second local minimum near 0, where h′ = 0 flattens
+/// the measurement term; Newton's steps on the exact Hessian, a local method, settle there
+/// (or short of the far minimum with 2 steps per split), while Gauss–Newton's longer steps
+/// more often reach the global one. The IEKF's mean distance is the smaller here (measured
+/// 0.78 against 1.24; 102 against 39 draws within 10⁻³), and this test keeps that finding
+/// true until the IOKF is improved (docs/reproduction.md, 003).
+#[test]
+fn the_iekf_is_closer_on_a_sharp_cubic_measurement_of_a_wide_prediction() {
+    let (distance, close) = map_updates("x^3", |x| x * x * x, 4.0, 0.2, 200);
+    assert!(
+        distance[0] < distance[1],
+        "IEKF {} vs IOKF {}",
+        distance[0],
+        distance[1]
+    );
+    assert!(close[0] > close[1], "{close:?}");
 }

@@ -3,7 +3,6 @@
 //! presets' own; the tolerances are stated at each assertion.
 
 use zakai::experiment::Experiment;
-use zakai::reproduction;
 use zakai::scenario::presets;
 use zakai::study::{MonteCarlo, MonteCarloSummary};
 
@@ -61,24 +60,41 @@ fn the_2d_example_33_is_tracked() {
     }
 }
 
-/// 000 Table 1 over 100 runs per row. What holds: QIEM's E_RMS is in or below the paper's band
-/// 0.36–0.56 for every n (tolerance 0.02 above the band's top, about one standard error), and
-/// below the EKF's for every n with the EKF started uninformed (x̂₀ = 0, P₀ = 1; 000 does not
-/// say how its EKF started). Started from σ₀ like QIEM, the EKF ties QIEM for even n — see the
-/// README.
+/// Why the EKF column of 000 Table 1 does not reproduce.
+const EKF_START: &str = "000 does not say how its EKF started; ours starts uninformed (x̂₀ = 0, P₀ = 1) and is carried by cos x to π/2, where it tracks: it does not grow with n as 000's does";
+
+/// Why QIEM's x⁴–x⁶ rows do not reproduce.
+const QIEM_BELOW: &str = "ours is below (better than) 000's; 000 gives neither σ₀, x₀ nor T, and the presets average the likelihood over each cell (000's point values leave the mirror mode of even n to discretisation noise)";
+
+/// 000 Table 1, 100 runs per row, each cell against the paper's value with k = 3 standard
+/// errors of the difference ([`zakai_tests::compare_with_paper`]): QIEM reproduces for
+/// h = x² and x³; the EKF for x². The other cells are listed with the reason (and in
+/// docs/reproduction.md). What holds throughout: QIEM's E_RMS is below the uninformed EKF's
+/// for every n.
 #[test]
-fn table_1_of_000_band_and_below_the_ekf() {
-    let table = reproduction::table("000-table-1").expect("table");
-    for row in &table.rows {
-        let r = reproduction::reproduce_row(&table, row, table.runs, &|| {}).expect("runs");
+fn table_1_of_000_row_by_row() {
+    use zakai_tests::Deviation;
+    let deviation = |row, method, why| Deviation { row, method, why };
+    let rows = zakai_tests::compare_with_paper(
+        "000-table-1",
+        100,
+        &[
+            deviation("h = x^3", "EKF", EKF_START),
+            deviation("h = x^4", "EKF", EKF_START),
+            deviation("h = x^5", "EKF", EKF_START),
+            deviation("h = x^6", "EKF", EKF_START),
+            deviation("h = x^4", "QIEM", QIEM_BELOW),
+            deviation("h = x^5", "QIEM", QIEM_BELOW),
+            deviation("h = x^6", "QIEM", QIEM_BELOW),
+        ],
+    );
+    for r in &rows {
         let cell = |name: &str| {
             let c = r.cells.iter().find(|c| c.name == name).expect("cell");
-            c.ours.as_ref().map(|v| v[0])
+            assert_eq!(c.failed, 0, "{} {name} failed", r.label);
+            c.ours.as_ref().expect("a value")[0]
         };
-        assert_eq!(r.cells[1].failed, 0, "{}", row.label);
-        let q = cell("QIEM").expect("QIEM value");
-        assert!(q <= 0.56 + 0.02, "{}: QIEM E_RMS {q}", row.label);
-        let e = cell("EKF").expect("EKF value");
-        assert!(q < e, "{}: QIEM {q} vs EKF {e}", row.label);
+        let (q, e) = (cell("QIEM"), cell("EKF"));
+        assert!(q < e, "{}: QIEM {q} vs EKF {e}", r.label);
     }
 }

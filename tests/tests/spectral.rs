@@ -51,13 +51,17 @@ fn against_fine_qiem(basis: Option<usize>) -> (f64, f64) {
 }
 
 /// With 004's sizes (11 off-line, 16 on-line functions on [−4, 4]) the spectral posterior
-/// differs from the fine-grid one by 0.20 in the mean and 0.37 in L1 on average (measured);
-/// refining the basis converges to it: 40 functions give 0.005 and 0.015. Tolerances:
-/// 0.3 / 0.5 for 004's sizes, 0.02 / 0.05 with 40 functions.
+/// differs from the fine-grid one by 0.20 in the mean and 0.37 in L1 on average (measured:
+/// 004's basis is coarse for this posterior, which the test pins at 20 % above the measured
+/// values, 0.24 / 0.45); refining the basis converges to it: 40 functions give 0.005 and
+/// 0.015 (tolerances 0.02 / 0.05), at least five times closer.
 #[test]
 fn the_spectral_posterior_converges_to_the_fine_qiem_posterior() {
     let (mean, l1) = against_fine_qiem(None);
-    assert!(mean < 0.3 && l1 < 0.5, "004 sizes: |Δmean| {mean}, L1 {l1}");
+    assert!(
+        mean < 0.24 && l1 < 0.45,
+        "004 sizes: |Δmean| {mean}, L1 {l1}"
+    );
     let (mean40, l1_40) = against_fine_qiem(Some(40));
     assert!(
         mean40 < 0.02 && l1_40 < 0.05,
@@ -70,34 +74,41 @@ fn cell<'a>(r: &'a reproduction::RowResult, name: &str) -> &'a reproduction::Cel
     r.cells.iter().find(|c| c.name == name).expect("cell")
 }
 
-/// 004 Table 1 (100 runs, seeds 1–100): the spectral method's MSE is 0.4317 in the paper;
-/// ours must lie within 15 % of it (measured 0.441 ± 0.018) with no failed run, and the EKF
-/// and UKF lose the state in some runs, as 004 reports.
-#[test]
-fn table_1_of_004() {
-    let table = reproduction::table("004-table-1").expect("table");
-    let r = reproduction::reproduce_row(&table, &table.rows[0], table.runs, &|| {}).expect("runs");
-    let spectral = cell(&r, "Spectral");
-    assert_eq!(spectral.failed, 0);
-    let mse = spectral.ours.as_ref().expect("value")[0];
-    assert!((mse - 0.4317).abs() < 0.15 * 0.4317, "spectral MSE {mse}");
-    assert!(cell(&r, "EKF").failed > 0 && cell(&r, "UKF").failed > 0);
+/// Why 004's particle-filter rows do not reproduce.
+const PF_WORSE: &str = "004's particle filters are three to five times worse than ours, which reach the optimal filter's level (QIEM, the spectral filter) from 50 particles; 004 does not say how its PF resamples or how many runs failed";
+
+fn pf_rows(row: &'static str) -> Vec<zakai_tests::Deviation> {
+    ["PF(50)", "PF(100)", "PF(150)", "PF(200)"]
+        .into_iter()
+        .map(|method| zakai_tests::Deviation {
+            row,
+            method,
+            why: PF_WORSE,
+        })
+        .collect()
 }
 
-/// 004 Table 2 (20 runs, seeds 1–20): MSE of x₁ and x₂ 0.4081 / 0.3646 in the paper; ours
-/// within 0.1 of each (about two standard errors; measured 0.390 / 0.448), no failed run, and
-/// the EKF and UKF lose the state in some runs.
+/// 004 Table 1 (100 runs, seeds 1–100), each cell against the paper's with k = 3 standard
+/// errors of the difference: the spectral filter reproduces 004's 0.4317 (measured 0.441 ±
+/// 0.018) with no failed run; the particle filters do not (listed); the EKF and UKF lose the
+/// state in some runs, as 004 reports ("failed").
+#[test]
+fn table_1_of_004() {
+    let rows = zakai_tests::compare_with_paper("004-table-1", 100, &pf_rows("cubic sensor"));
+    let r = &rows[0];
+    assert_eq!(cell(r, "Spectral").failed, 0);
+    assert!(cell(r, "EKF").failed > 0 && cell(r, "UKF").failed > 0);
+}
+
+/// 004 Table 2 (20 runs, seeds 1–20), per component, as Table 1: the spectral filter
+/// reproduces 004's 0.4081 / 0.3646 (measured 0.390 / 0.448) with no failed run; the
+/// particle filters do not (listed); the EKF and UKF lose the state in some runs.
 #[test]
 fn table_2_of_004() {
-    let table = reproduction::table("004-table-2").expect("table");
-    let r = reproduction::reproduce_row(&table, &table.rows[0], table.runs, &|| {}).expect("runs");
-    let spectral = cell(&r, "Spectral");
-    assert_eq!(spectral.failed, 0);
-    let ours = spectral.ours.as_ref().expect("values");
-    for (o, p) in ours.iter().zip([0.4081, 0.3646]) {
-        assert!((o - p).abs() < 0.1, "spectral MSE {ours:?}");
-    }
-    assert!(cell(&r, "EKF").failed > 0 && cell(&r, "UKF").failed > 0);
+    let rows = zakai_tests::compare_with_paper("004-table-2", 20, &pf_rows("example 2"));
+    let r = &rows[0];
+    assert_eq!(cell(r, "Spectral").failed, 0);
+    assert!(cell(r, "EKF").failed > 0 && cell(r, "UKF").failed > 0);
 }
 
 /// Impossible parameter combinations are refused by validation, each with its field.

@@ -127,6 +127,9 @@ try {
   const perStep = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[3].textContent}`));
   console.log('frame rate while stepping EKF + UKF + PF(1000):', JSON.stringify(samples), perStep.join(', '));
   assert.ok(samples.every((s, i) => i === 0 || s.rows > samples[i - 1].rows), 'the run kept stepping while measured');
+  // A loose floor, not a benchmark (BENCHMARKS.md records the measured rates, 61 frames/s):
+  // the page must keep drawing while the worker steps, at least 15 frames per second.
+  assert.ok(samples.slice(1).every((s) => s.fps >= 15), `frame rate while stepping: ${JSON.stringify(samples)}`);
   const isolated = await page.evaluate(() => self.crossOriginIsolated);
   assert.ok(isolated, 'cross-origin isolated (fine timer resolution)');
   await page.screenshot({ path: `${artifacts}/playground-pf1000.png` });
@@ -375,6 +378,10 @@ try {
   }
   const perStep2d = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[3].textContent}`));
   console.log('frame rate of yau-2d with QIEM 127² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
+  // Loose floors (measured: 61 frames/s, about 60 new intervals per second): the page keeps
+  // drawing at ≥ 15 frames/s and the worker delivers ≥ 5 new intervals per second.
+  assert.ok(fps2d.every((s) => s.fps >= 15), `2-D frame rate: ${JSON.stringify(fps2d)}`);
+  assert.ok(fps2d.every((s, i) => i === 0 || s.rows - fps2d[i - 1].rows >= 5 || s.rows >= 201), `2-D new intervals per second: ${JSON.stringify(fps2d)}`);
 
   // 13. Web safety: hostile strings in every text field and in a shared link's config are
   //     shown as text — nothing is parsed as HTML or run (and the CSP would refuse inline

@@ -12,7 +12,7 @@
 //! 2. carry every Gaussian through (32) by the Riccati ODEs (35)–(37), and — a deviation
 //!    from the paper, whose Algorithm 1 drops it — the residual that Algorithm 1 leaves below
 //!    α·max with the zeroth-order factor `e^{q(x)Δt}` of (32) only (an O(Δt) error; dropping
-//!    it at every step made the MSE grow as Δt shrank, README "002 Tables 3 and 4");
+//!    it at every step made the MSE grow as Δt shrank, docs/reproduction.md, "002 Tables 3 and 4");
 //! 3. recombine and apply the observation factor `exp(Δyᵀh)` (30), in the log domain with one
 //!    common shift so that nothing overflows; negative values of the recombined sum (from the
 //!    negative terms) are set to zero;
