@@ -134,6 +134,11 @@ enum Command {
     /// and write MSE against time per step to CSV and an SVG plot, with the reference
     /// posterior's MSE (the optimal filter's) as the floor.
     Frontier(FrontierArgs),
+    /// The convergence check: rerun each approximate method of the scenario at doubled
+    /// resolution (grid points and time step, basis size, particles, substeps) on the same
+    /// observations and report how far its estimate moved against its own posterior standard
+    /// deviation — converged when by at most a tenth of it.
+    Check(Selection),
     Filter(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
@@ -391,6 +396,70 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
                 None,
             )?;
         }
+    }
+    Ok(())
+}
+
+/// `zakai check`: the convergence check of every method of the selection (see
+/// [`zakai::study::convergence`]).
+fn check(selection: &Selection) -> Result<(), String> {
+    use zakai::study::convergence::{convergence_check, CONVERGED_SHARE};
+    let (experiment, seed) = selection.experiment()?;
+    let methods = experiment.config().methods.clone();
+    eprintln!(
+        "convergence check of {} on the observations of seed {seed}: each method against itself at doubled resolution",
+        experiment.config().name
+    );
+    let rows = convergence_check(&experiment, &methods, seed, zakai::validate::memory_cap());
+    outln!(
+        "{:<14} {:>11} {:>11} {:>11}  {:<13} doubled",
+        "method",
+        "RMS moved",
+        "max moved",
+        "posterior sd",
+        "verdict"
+    );
+    let mut unconverged = Vec::new();
+    for r in &rows {
+        let verdict = match (&r.failure, r.converged, &r.refined) {
+            (Some(_), _, _) => "not checked",
+            (None, _, None) => "exact",
+            (None, Some(true), _) => "converged",
+            (None, Some(false), _) => {
+                unconverged.push(r.method.as_str());
+                "NOT converged"
+            }
+            (None, None, _) => "no covariance",
+        };
+        let number = |v: f64, shown: bool| {
+            if shown {
+                format!("{v:.3e}")
+            } else {
+                "—".into()
+            }
+        };
+        let checked = r.refined.is_some() && r.failure.is_none();
+        outln!(
+            "{:<14} {:>11} {:>11} {:>11}  {:<13} {}",
+            r.method,
+            number(r.rms_change, checked),
+            number(r.max_change, checked),
+            r.spread.map_or("—".into(), |s| format!("{s:.3e}")),
+            verdict,
+            r.failure
+                .as_deref()
+                .or(r.refined.as_deref())
+                .unwrap_or("(exact filter: nothing to refine)")
+        );
+    }
+    outln!(
+        "converged: the estimate moved by at most {CONVERGED_SHARE} of the posterior standard deviation (RMS over time) when the resolution was doubled"
+    );
+    if !unconverged.is_empty() {
+        outln!(
+            "not converged for this scenario: {} — raise its resolution (or narrow the domain) and check again",
+            unconverged.join(", ")
+        );
     }
     Ok(())
 }
@@ -706,6 +775,7 @@ fn main() -> ExitCode {
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::YauSystem { scenario } => yau_system(&scenario),
         Command::Frontier(args) => frontier(&args),
+        Command::Check(selection) => check(&selection),
         Command::Jcurve {
             scenario,
             seed,

@@ -452,3 +452,28 @@ fn bad_observation_files_name_the_line() {
     let o = filter(&uneven, &["--methods", "ukf,pf"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// `zakai check`: each method against itself at doubled resolution, with a verdict per row;
+/// on the cubic sensor QIEM (399 points, Δt = 10⁻³) is converged and PF(50) is not (its
+/// estimate moves by 0.22 against a posterior sd of 0.72 when the particles double).
+#[test]
+fn check_reports_which_methods_are_converged() {
+    let o = zakai(&["check", "cubic-sensor-1d", "--methods", "qiem,pf"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let row = |name: &str| {
+        text.lines()
+            .find(|l| l.starts_with(name))
+            .unwrap_or_else(|| panic!("no row {name} in\n{text}"))
+            .to_string()
+    };
+    assert!(
+        row("QIEM").contains(" converged") && row("QIEM").contains("[399] → [799]"),
+        "{text}"
+    );
+    assert!(row("PF(50)").contains("NOT converged"), "{text}");
+    assert!(
+        text.contains("not converged for this scenario: PF(50)"),
+        "{text}"
+    );
+}

@@ -145,3 +145,24 @@ fn every_method_is_near_the_exact_benes_mean_or_warns() {
         assert!(keys.contains(&key), "{key} applies to the Beneš model");
     }
 }
+
+/// The convergence check (`zakai check`, [`zakai::study::convergence`]) agrees with the exact
+/// filter on the Beneš model (seed 1): the grid filters, within 0.005 of the exact mean, are
+/// judged converged, and the spectral filter with its default basis, off by more than 1, is
+/// judged not converged — the check a user without an exact filter can make.
+#[test]
+fn the_convergence_check_agrees_with_the_exact_filter() {
+    use zakai::study::convergence::convergence_check;
+    let config = benes_scenario();
+    let e = Experiment::new(config.clone()).expect("valid");
+    let methods: Vec<_> = ["qiem", "spectral"]
+        .iter()
+        .map(|k| zakai::scenario::MethodConfig::from_key(k).unwrap())
+        .collect();
+    let rows = convergence_check(&e, &methods, 1, 1 << 30);
+    for r in &rows {
+        println!("{r:?}");
+    }
+    assert_eq!(rows[0].converged, Some(true), "QIEM: {:?}", rows[0]);
+    assert_eq!(rows[1].converged, Some(false), "spectral: {:?}", rows[1]);
+}

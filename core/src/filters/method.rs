@@ -215,6 +215,20 @@ pub trait Method {
         params: &Self::Params,
         name: String,
     ) -> Result<Self::Filter, ZakaiError>;
+    /// The same method at doubled resolution (grid points, basis, particles, substeps) with
+    /// what was doubled (`"particles 200 → 400"`), for the convergence check
+    /// ([`crate::study::convergence`]); `None` for exact filters or when the doubled
+    /// resolution is past the method's limits.
+    fn refined(_params: &Self::Params, _n: usize) -> Option<(Self::Params, String)> {
+        None
+    }
+}
+
+/// `value` doubled when that stays within `max`, with the description `"{what} v → 2v"`
+/// (for [`Method::refined`]).
+pub(crate) fn double(what: &str, value: usize, max: usize) -> Option<(usize, String)> {
+    let doubled = value.checked_mul(2).filter(|&d| d <= max)?;
+    Some((doubled, format!("{what} {value} → {doubled}")))
 }
 
 /// `impl X { pub fn builder(model) -> Builder<X> }` for a method type `X`.

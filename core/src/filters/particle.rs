@@ -128,6 +128,17 @@ impl Method for Pf {
             name, ctx.model, ctx.prior, p, ctx.seed,
         )?)
     }
+    fn refined(p: &PfParams, _: usize) -> Option<(PfParams, String)> {
+        let (particles, what) =
+            crate::filters::method::double("particles", p.particles, 10_000_000)?;
+        Some((
+            PfParams {
+                particles,
+                ..p.clone()
+            },
+            what,
+        ))
+    }
 }
 
 /// The particle filter's self-check: the effective sample size after weighting (before any

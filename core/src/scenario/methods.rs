@@ -109,6 +109,12 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => memory_estimate::<$method>(p, n),)* }
             }
 
+            /// The method at doubled resolution with what was doubled, or `None` (exact
+            /// filters; sizes past the method's limits), see [`Method::refined`].
+            pub fn refined(&self, n: usize) -> Option<(MethodConfig, String)> {
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::refined(p, n).map(|(p, what)| (MethodConfig::$variant(p), what)),)* }
+            }
+
             /// Builds the filter.
             pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
                 Ok(match self {

@@ -94,4 +94,29 @@ impl Method for Direct {
             name, ctx.model, ctx.prior, p, ctx.bounds,
         )?)
     }
+    /// Half the grid spacing (`2N − 1` points keep the old ones), half Algorithm 1's
+    /// threshold α and twice the Riccati substeps.
+    fn refined(p: &DirectParams, n: usize) -> Option<(DirectParams, String)> {
+        let refined = DirectParams {
+            points: 2 * p.points - 1,
+            alpha: 0.5 * p.alpha,
+            max_terms: 2 * p.max_terms,
+            substeps: 2 * p.substeps,
+            ..p.clone()
+        };
+        refined.problems(n).is_empty().then(|| {
+            let what = format!(
+                "points {} → {}, α {} → {}, terms {} → {}, substeps {} → {}",
+                p.points,
+                refined.points,
+                p.alpha,
+                refined.alpha,
+                p.max_terms,
+                refined.max_terms,
+                p.substeps,
+                refined.substeps
+            );
+            (refined, what)
+        })
+    }
 }

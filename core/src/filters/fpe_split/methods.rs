@@ -98,8 +98,30 @@ macro_rules! fpe_method {
             ) -> Result<ContinuousDiscreteGrid, ZakaiError> {
                 build($scheme, ctx, p, name)
             }
+            fn refined(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
+                refined_cells(p, n)
+            }
         }
     };
+}
+
+/// Twice the cells per dimension and half the time step.
+fn refined_cells(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
+    let cells: Vec<usize> = crate::filters::per_dimension(&p.cells, n)
+        .iter()
+        .map(|&c| 2 * c)
+        .collect();
+    let refined = FpeParams {
+        cells: cells.clone(),
+        dt: 0.5 * p.dt,
+    };
+    refined.problems(n).is_empty().then(|| {
+        let what = format!(
+            "cells {:?} → {cells:?}, Δt {} → {}",
+            p.cells, p.dt, refined.dt
+        );
+        (refined, what)
+    })
 }
 
 /// The separation approach: upwind finite volumes for the advection, implicit finite

@@ -12,7 +12,7 @@ use super::{
     MapKalman, MapSolver, UkfParams, UnscentedKalman,
 };
 use crate::error::ZakaiError;
-use crate::filters::method::builder_fn;
+use crate::filters::method::{builder_fn, double};
 use crate::filters::method::{
     problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, ProblemContext, Takes,
     SMALL_MEMORY,
@@ -21,6 +21,9 @@ use crate::validate::ConfigProblem;
 
 /// The parameter every Gaussian filter has: `init`, a starting Gaussian other than the
 /// prior's moments, is left to JSON and the Rust API (it is not a form field).
+/// Most RK4 substeps per interval the convergence check doubles to.
+const MAX_SUBSTEPS: usize = 4096;
+
 fn substeps_param() -> ParamInfo {
     ParamInfo::new(
         "substeps",
@@ -149,6 +152,16 @@ impl Method for Ekf {
     ) -> Result<ExtendedKalman, ZakaiError> {
         Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p))
     }
+    fn refined(p: &EkfParams, _: usize) -> Option<(EkfParams, String)> {
+        let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
+        Some((
+            EkfParams {
+                substeps,
+                ..p.clone()
+            },
+            what,
+        ))
+    }
 }
 
 /// The unscented Kalman filter (van der Merwe's scaled sigma points).
@@ -207,6 +220,16 @@ impl Method for Ukf {
     ) -> Result<UnscentedKalman, ZakaiError> {
         Ok(UnscentedKalman::new(name, ctx.model, ctx.prior, p)?)
     }
+    fn refined(p: &UkfParams, _: usize) -> Option<(UkfParams, String)> {
+        let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
+        Some((
+            UkfParams {
+                substeps,
+                ..p.clone()
+            },
+            what,
+        ))
+    }
 }
 
 /// The iterated EKF: Gauss–Newton on the MAP problem of each update (003 (4.5)).
@@ -258,6 +281,16 @@ impl Method for Iekf {
             tolerance: p.tolerance,
         };
         map_kalman(ctx, &p.init, p.substeps, solver, name)
+    }
+    fn refined(p: &IekfParams, _: usize) -> Option<(IekfParams, String)> {
+        let (substeps, s) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
+        let (iterations, i) = double("iterations", p.iterations, 1000)?;
+        let params = IekfParams {
+            substeps,
+            iterations,
+            ..p.clone()
+        };
+        Some((params, format!("{s}, {i}")))
     }
 }
 
@@ -311,5 +344,15 @@ impl Method for Iokf {
             newton_steps: p.newton_steps,
         };
         map_kalman(ctx, &p.init, p.substeps, solver, name)
+    }
+    fn refined(p: &IokfParams, _: usize) -> Option<(IokfParams, String)> {
+        let (substeps, s) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
+        let (newton_steps, m) = double("Newton steps", p.newton_steps, 100)?;
+        let params = IokfParams {
+            substeps,
+            newton_steps,
+            ..p.clone()
+        };
+        Some((params, format!("{s}, {m}")))
     }
 }

@@ -108,4 +108,22 @@ impl Method for Spectral {
             name, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
         )?)
     }
+    fn refined(p: &SpectralParams, n: usize) -> Option<(SpectralParams, String)> {
+        use crate::filters::method::double;
+        let (off, on) = p.counts(n);
+        let (offline, a) = double("off-line basis", off, super::MAX_BASIS)?;
+        let (online, b) = double("on-line basis", on, super::MAX_BASIS)?;
+        let refined = SpectralParams {
+            offline_basis: Some(offline),
+            online_basis: Some(online),
+            // Node counts follow the basis (their defaults).
+            quadrature: None,
+            online_nodes: None,
+            ..p.clone()
+        };
+        refined
+            .problems(n)
+            .is_empty()
+            .then(|| (refined, format!("{a}, {b}")))
+    }
 }
