@@ -137,7 +137,7 @@ enum Command {
     /// The convergence check: rerun each approximate method of the scenario at doubled
     /// resolution (grid points and time step, basis size, particles, substeps) on the same
     /// observations and report how far its estimate moved against its own posterior standard
-    /// deviation — converged when by at most a tenth of it.
+    /// deviation — converged when by at most a twentieth of it.
     Check(Selection),
     Filter(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
@@ -167,7 +167,11 @@ impl Selection {
             select_methods(&mut config, keys)?;
         }
         let seed = self.seed.unwrap_or(config.seed);
-        Ok((Experiment::new(config).map_err(|e| e.to_string())?, seed))
+        let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+        for note in experiment.chosen_defaults() {
+            eprintln!("default from the problem — {note}");
+        }
+        Ok((experiment, seed))
     }
 }
 

@@ -238,6 +238,7 @@ pub struct Experiment {
     prior: Prior,
     names: Vec<String>,
     probes: Vec<Vec<f64>>,
+    chosen: Vec<String>,
 }
 
 /// The seed of method `index` in the run with seed `seed` (independent of the truth's stream).
@@ -246,8 +247,11 @@ pub fn method_seed(seed: u64, index: usize) -> u64 {
 }
 
 impl Experiment {
-    /// Validates the scenario (all problems at once) and builds its model and prior.
-    pub fn new(config: ScenarioConfig) -> Result<Self, ZakaiError> {
+    /// Chooses the sizes the methods left unset from the problem
+    /// ([`ScenarioConfig::choose_problem_defaults`]; see [`Experiment::chosen_defaults`]),
+    /// validates the scenario (all problems at once) and builds its model and prior.
+    pub fn new(mut config: ScenarioConfig) -> Result<Self, ZakaiError> {
+        let chosen = config.choose_problem_defaults();
         config.check()?;
         let model = config.build_model()?;
         let prior = config.build_prior()?;
@@ -259,7 +263,14 @@ impl Experiment {
             prior,
             names,
             probes,
+            chosen,
         })
+    }
+
+    /// What [`Experiment::new`] chose for the sizes the methods left unset, one note per
+    /// choice (the scenario, [`Experiment::config`], holds the chosen values).
+    pub fn chosen_defaults(&self) -> &[String] {
+        &self.chosen
     }
 
     /// The scenario.
@@ -288,6 +299,7 @@ impl Experiment {
         seed: u64,
     ) -> Result<Box<dyn Filter>, ZakaiError> {
         let bounds = self.config.bounds();
+        let method = &self.with_problem_defaults(method);
         method.build(
             name,
             &BuildContext {
@@ -299,6 +311,21 @@ impl Experiment {
                 dt_obs: Some(self.config.time.dt_obs),
             },
         )
+    }
+
+    /// `method` with the sizes it left unset chosen from this experiment's problem (domain,
+    /// prior), as [`Experiment::new`] does for the scenario's own methods.
+    pub fn with_problem_defaults(&self, method: &MethodConfig) -> MethodConfig {
+        let bounds = self.config.bounds();
+        let problem = crate::filters::method::ProblemContext {
+            model: &self.model,
+            prior: &self.prior,
+            probes: &self.probes,
+            bounds: &bounds,
+        };
+        method
+            .problem_defaults(&problem)
+            .map_or_else(|| method.clone(), |(m, _)| m)
     }
 
     /// The truth and observations of the run with `seed` (x₀ from the scenario or drawn from

@@ -222,6 +222,16 @@ pub trait Method {
     fn refined(_params: &Self::Params, _n: usize) -> Option<(Self::Params, String)> {
         None
     }
+    /// The sizes the user left unset, chosen from the problem (model, prior, domain) instead
+    /// of fixed numbers, with a note of what was chosen and why; `None` when nothing is
+    /// chosen this way. Applied by [`crate::Experiment::new`] and by the builders before the
+    /// filter is built, so a default follows the domain and the prior.
+    fn problem_defaults(
+        _params: &Self::Params,
+        _problem: &ProblemContext,
+    ) -> Option<(Self::Params, String)> {
+        None
+    }
 }
 
 /// `value` doubled when that stays within `max`, with the description `"{what} v → 2v"`
@@ -502,6 +512,15 @@ impl<'m, M: Method> Builder<'m, M> {
             .name
             .clone()
             .unwrap_or_else(|| M::display_name(&self.params));
+        let problem = ProblemContext {
+            model: self.model,
+            prior,
+            probes: &probes,
+            bounds: &bounds,
+        };
+        let params = M::problem_defaults(&self.params, &problem)
+            .map(|(p, _)| p)
+            .unwrap_or_else(|| self.params.clone());
         M::build(
             &BuildContext {
                 model: self.model,
@@ -511,7 +530,7 @@ impl<'m, M: Method> Builder<'m, M> {
                 bounds: &bounds,
                 dt_obs: self.dt,
             },
-            &self.params,
+            &params,
             name,
         )
     }

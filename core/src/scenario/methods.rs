@@ -115,6 +115,12 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::refined(p, n).map(|(p, what)| (MethodConfig::$variant(p), what)),)* }
             }
 
+            /// The method with the sizes left unset chosen from the problem, and a note of
+            /// what was chosen, or `None` (see [`Method::problem_defaults`]).
+            pub fn problem_defaults(&self, problem: &ProblemContext) -> Option<(MethodConfig, String)> {
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::problem_defaults(p, problem).map(|(p, note)| (MethodConfig::$variant(p), note)),)* }
+            }
+
             /// Builds the filter.
             pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
                 Ok(match self {

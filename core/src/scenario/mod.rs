@@ -552,6 +552,35 @@ impl ScenarioConfig {
         crate::filters::method::probe_points(&bounds)
     }
 
+    /// Fills in the sizes each method left unset that its family chooses from the problem
+    /// (domain, prior; see [`crate::filters::method::Method::problem_defaults`]) and returns
+    /// a note per choice, `"Spectral: basis 51 per dimension, chosen from …"`. Nothing changes
+    /// when the model or the prior does not build (validation then reports why).
+    pub fn choose_problem_defaults(&mut self) -> Vec<String> {
+        let (Ok(model), Ok(prior)) = (self.build_model(), self.build_prior()) else {
+            return Vec::new();
+        };
+        if self.domain.len() != model.n {
+            return Vec::new();
+        }
+        let bounds = self.bounds();
+        let probes = self.probe_points();
+        let problem = crate::filters::method::ProblemContext {
+            model: &model,
+            prior: &prior,
+            probes: &probes,
+            bounds: &bounds,
+        };
+        let mut notes = Vec::new();
+        for m in &mut self.methods {
+            if let Some((chosen, note)) = m.problem_defaults(&problem) {
+                notes.push(format!("{}: {note}", m.display_name()));
+                *m = chosen;
+            }
+        }
+        notes
+    }
+
     /// Method display names, made unique (`EKF`, `EKF #2`).
     pub fn method_names(&self) -> Vec<String> {
         let mut names: Vec<String> = Vec::new();

@@ -234,7 +234,13 @@ pub fn all() -> Vec<ScenarioConfig> {
                 pf(100),
                 pf(150),
                 pf(200),
-                MethodConfig::Spectral(SpectralParams::default()),
+                // 004's sizes (N₁ = 10, N₂ = 15), which Table 1 reproduces; left unset the
+                // basis would follow the domain (51 functions here).
+                MethodConfig::Spectral(SpectralParams {
+                    offline_basis: Some(11),
+                    online_basis: Some(16),
+                    ..SpectralParams::default()
+                }),
                 qiem(&[399], 1e-3),
                 iem(399, 1e-3),
                 spt(399, 1e-3, 101),

@@ -6,10 +6,10 @@
 //!
 //! Verdict: a method is converged when its estimate moves by at most
 //! [`CONVERGED_SHARE`] of the refined run's posterior standard deviation, time-averaged:
-//! `RMS_t ‖x̂ − x̂_refined‖ ≤ 0.1 · RMS_t √(tr P_refined / n)`. Doubling then changes the
-//! answer by less than a tenth of the uncertainty the method itself reports. (A particle
-//! filter's Monte Carlo error alone moves it by about `σ √(3/(2N))`, so it passes from a few
-//! hundred particles up.)
+//! `RMS_t ‖x̂ − x̂_refined‖ ≤ 0.05 · RMS_t √(tr P_refined / n)`. Doubling then changes the
+//! answer by less than a twentieth of the uncertainty the method itself reports. (A particle
+//! filter's Monte Carlo error alone moves it by about `σ √(3/(2N))`, so it passes from about
+//! 600 particles up.)
 
 use alloc::format;
 use alloc::string::String;
@@ -23,7 +23,7 @@ use crate::simulate::Trajectory;
 
 /// The share of the posterior standard deviation by which a converged method's estimate may
 /// move when its resolution is doubled.
-pub const CONVERGED_SHARE: f64 = 0.1;
+pub const CONVERGED_SHARE: f64 = 0.05;
 
 /// One method's convergence check.
 #[derive(Clone, Debug, PartialEq)]
@@ -84,6 +84,7 @@ pub fn convergence_check(
         .iter()
         .enumerate()
         .map(|(i, method)| {
+            let method = &experiment.with_problem_defaults(method);
             let name = method.display_name();
             let mut row = Convergence {
                 method: name.clone(),

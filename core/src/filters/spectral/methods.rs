@@ -108,6 +108,31 @@ impl Method for Spectral {
             name, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
         )?)
     }
+    /// In 1-D an unset basis size follows the domain against the prior's width (see
+    /// [`super::FUNCTIONS_PER_SD`]); in 2-D and 3-D, whose off-line operator grows with the
+    /// fourth and sixth power of the size, 004's sizes stay.
+    fn problem_defaults(
+        p: &SpectralParams,
+        problem: &ProblemContext,
+    ) -> Option<(SpectralParams, String)> {
+        if problem.model.n != 1 || (p.online_basis.is_some() && p.offline_basis.is_some()) {
+            return None;
+        }
+        let (lo, hi) = problem.bounds[0];
+        let sd = libm::sqrt(problem.prior.covariance()[(0, 0)]);
+        let size = super::basis_for(0.5 * (hi - lo), sd)?;
+        let chosen = SpectralParams {
+            offline_basis: Some(p.offline_basis.unwrap_or(size)),
+            online_basis: Some(p.online_basis.unwrap_or(size)),
+            ..p.clone()
+        };
+        let note = format!(
+            "basis {size} per dimension, chosen from the domain's half-width {:.3} against the prior's standard deviation {sd:.3} ({} functions per sd, at least 16)",
+            0.5 * (hi - lo),
+            super::FUNCTIONS_PER_SD
+        );
+        Some((chosen, note))
+    }
     fn refined(p: &SpectralParams, n: usize) -> Option<(SpectralParams, String)> {
         use crate::filters::method::double;
         let (off, on) = p.counts(n);

@@ -52,6 +52,20 @@ pub const MAX_BASIS: usize = 128;
 /// Largest number of quadrature nodes per dimension.
 pub const MAX_NODES: usize = 512;
 
+/// Legendre functions per prior standard deviation across the domain's half-width that a
+/// 1-D basis left unset gets: `N = ⌈4 L / σ₀⌉`, at least 004's 16 and at most [`MAX_BASIS`].
+/// On the cubic sensor's [−4, 4] with σ₀ = 0.32 that is 51 (004 used 16, whose self-check
+/// warns there); on [−12, 12] with σ₀ ≈ 1.1 it is 44.
+pub const FUNCTIONS_PER_SD: f64 = 4.0;
+
+/// The basis size [`FUNCTIONS_PER_SD`] gives for half-width `half` and prior sd `sd`, or
+/// `None` when either is not positive and finite.
+pub fn basis_for(half: f64, sd: f64) -> Option<usize> {
+    let ratio = half / sd;
+    (ratio.is_finite() && ratio > 0.0)
+        .then(|| (libm::ceil(FUNCTIONS_PER_SD * ratio) as usize).clamp(16, MAX_BASIS))
+}
+
 /// Parameters of the spectral filter (004 Algorithm 1–2). Counts are per dimension.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
