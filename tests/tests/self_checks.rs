@@ -167,3 +167,37 @@ fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
         }
     }
 }
+
+/// The direct method's self-check: with 002's threshold α = 0.01 Algorithm 1 leaves at most
+/// 2 % of û to the residual on example 4.3 and the check is quiet; with α = 0.4 it leaves up
+/// to 47 % (carried to first order only) and the check warns (seed 1, the preset's 300
+/// intervals).
+#[test]
+fn the_direct_method_warns_when_its_residual_carries_much_of_the_density() {
+    let config = zakai::scenario::presets::preset("direct-4.3").unwrap();
+    let e = zakai::Experiment::new(config.clone()).unwrap();
+    let data = e.simulate(1);
+    for (alpha, should_warn) in [(0.01, false), (0.4, true)] {
+        let method = zakai::scenario::MethodConfig::Direct(zakai::scenario::DirectParams {
+            alpha,
+            ..Default::default()
+        });
+        let mut f = e.build_method(&method, "Direct".into(), 1).unwrap();
+        let mut warned = 0;
+        for k in 1..=data.steps() {
+            f.step(&zakai::Observation::increment(
+                data.dt_obs,
+                data.observation(k),
+            ))
+            .unwrap();
+            warned += usize::from(checks(f.as_ref()).contains(
+                &"share of û left to Algorithm 1's residual (carried with e^{qΔt} only)",
+            ));
+        }
+        assert_eq!(
+            warned > 0,
+            should_warn,
+            "α = {alpha}: warned on {warned} steps"
+        );
+    }
+}
