@@ -848,6 +848,14 @@ function mcWorker() {
         $('mc-cancel').disabled = true;
         $('mc-status').textContent = `error: ${data.message}`;
         break;
+      case 'checkDone':
+        $('check-start').disabled = false;
+        showConvergence(data.result);
+        break;
+      case 'checkError':
+        $('check-start').disabled = false;
+        $('check-status').textContent = `error: ${data.message}`;
+        break;
     }
   };
   mc.worker.postMessage({ type: 'init' });
@@ -870,6 +878,55 @@ function startMonteCarlo() {
   const w = mcWorker();
   if (mc.ready) w.postMessage(msg);
   else mc.pending = msg;
+}
+
+// The convergence check (`zakai check`), in the Monte Carlo worker: each method against itself
+// at doubled resolution on the observations of the first seed.
+function startConvergenceCheck() {
+  const config = checkedForm();
+  if (!config) return;
+  const seed = Math.max(0, Number($('mc-seed').value) | 0);
+  $('check-start').disabled = true;
+  $('check-status').textContent = `checking on the observations of seed ${seed}…`;
+  const msg = { type: 'check', config, seed };
+  const w = mcWorker();
+  if (mc.ready) w.postMessage(msg);
+  else mc.pending = msg;
+}
+
+function showConvergence({ rows, share }) {
+  const table = $('check-table');
+  const tbody = table.querySelector('tbody');
+  tbody.replaceChildren();
+  const fmt = (v) => (v < 1e-3 && v > 0 ? v.toExponential(2) : v.toFixed(4));
+  const notConverged = [];
+  for (const r of rows) {
+    const checked = r.refined != null && r.failure == null;
+    let verdict = 'exact filter';
+    if (r.failure != null) verdict = 'not checked';
+    else if (r.converged === true) verdict = 'converged';
+    else if (r.converged === false) { verdict = 'NOT converged'; notConverged.push(r.method); }
+    else if (checked) verdict = 'no covariance';
+    const cells = [
+      r.method,
+      checked ? fmt(r.rms_change) : '—',
+      r.spread != null ? fmt(r.spread) : '—',
+      verdict,
+      r.failure ?? r.refined ?? 'nothing to refine',
+    ];
+    const tr = document.createElement('tr');
+    tr.className = r.converged === false ? 'not-converged' : '';
+    for (const c of cells) {
+      const td = document.createElement('td');
+      td.textContent = c;
+      tr.appendChild(td);
+    }
+    tbody.appendChild(tr);
+  }
+  table.hidden = false;
+  $('check-status').textContent = notConverged.length
+    ? `not converged here: ${notConverged.join(', ')} (estimate moved by more than ${share} of the posterior sd when the resolution was doubled)`
+    : `every method checked moved by at most ${share} of its posterior sd when its resolution was doubled`;
 }
 
 function showMonteCarlo(summary) {
@@ -987,6 +1044,7 @@ $('export-png').addEventListener('click', exportPng);
 $('mc-start').addEventListener('click', startMonteCarlo);
 $('mc-cancel').addEventListener('click', () => mc.worker?.postMessage({ type: 'mcCancel' }));
 $('mc-csv').addEventListener('click', exportMonteCarloCsv);
+$('check-start').addEventListener('click', startConvergenceCheck);
 $('play').addEventListener('click', () => setPlaying(!state.playing));
 $('step').addEventListener('click', () => { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); });
 $('reset').addEventListener('click', apply);

@@ -124,6 +124,13 @@ self.onmessage = async ({ data }) => {
     case 'mcCancel':
       mcCancelled = true;
       break;
+    case 'check':
+      try {
+        post({ type: 'checkDone', result: zakai.convergenceCheck(data.config, data.seed) });
+      } catch (e) {
+        post({ type: 'checkError', message: String(e?.message ?? e) });
+      }
+      break;
     case 'init':
       await zakai.default();
       post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed(), build });

@@ -342,6 +342,17 @@ try {
   const cancelled = await page.textContent('#mc-status');
   console.log('Monte Carlo cancel:', cancelled);
   assert.ok(Number(cancelled.match(/after (\d+)/)[1]) < 2000);
+  // 11b. The convergence check (`zakai check`) on the page: every method against itself at
+  //      doubled resolution on the first seed's observations, one row each with a verdict.
+  await page.click('#check-start');
+  await page.waitForFunction(() => !document.getElementById('check-table').hidden, null, { timeout: 120000 });
+  const checkRows = await page.$$eval('#check-table tbody tr', (rows) => rows.map((r) => [...r.children].map((c) => c.textContent)));
+  console.log('convergence check:', JSON.stringify(checkRows), await page.textContent('#check-status'));
+  assert.equal(checkRows.length, (await page.evaluate(() => window.zakaiPage.info.methods.length)));
+  const verdicts = ['converged', 'NOT converged', 'exact filter', 'not checked', 'no covariance'];
+  assert.ok(checkRows.every((r) => verdicts.includes(r[3])), 'every row has a verdict');
+  assert.ok(checkRows.some((r) => r[0] === 'QIEM' && r[3] === 'converged'), 'QIEM converged on the cubic sensor');
+  await page.screenshot({ path: `${artifacts}/playground-convergence-check.png`, fullPage: true });
   await page.screenshot({ path: `${artifacts}/playground-monte-carlo.png`, fullPage: true });
 
   // 12a. The SIMD build is used where the engine has wasm SIMD; the scalar fallback build

@@ -205,6 +205,34 @@ impl MonteCarloJob {
     }
 }
 
+/// The convergence check of `zakai check` (`zakai::study::convergence`): every method of the
+/// scenario against itself at doubled resolution on the observations of `seed`, as
+/// `[{method, refined, rms_change, max_change, spread, converged, failure}]` (`converged`
+/// null for exact filters and failed checks), plus the verdict's share of the posterior
+/// standard deviation: `{rows, share}`.
+#[wasm_bindgen(js_name = convergenceCheck)]
+pub fn convergence_check(config: JsValue, seed: f64) -> Result<JsValue, JsError> {
+    #[derive(Serialize)]
+    struct Check {
+        rows: Vec<zakai::study::convergence::Convergence>,
+        share: f64,
+    }
+    let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+    let seed = seed_from_js(seed)?;
+    let experiment = Experiment::new(config).map_err(js_error)?;
+    let methods = experiment.config().methods.clone();
+    let rows = zakai::study::convergence::convergence_check(
+        &experiment,
+        &methods,
+        seed,
+        zakai::scenario::memory_cap(),
+    );
+    to_js(&Check {
+        rows,
+        share: zakai::study::convergence::CONVERGED_SHARE,
+    })
+}
+
 /// A random seed from the browser's generator (getrandom, JS backend), below 2⁵³.
 #[wasm_bindgen(js_name = randomSeed)]
 pub fn random_seed() -> Result<f64, JsError> {

@@ -26,7 +26,7 @@ use crate::simulate::Trajectory;
 pub const CONVERGED_SHARE: f64 = 0.05;
 
 /// One method's convergence check.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Convergence {
     /// The method's display name.
     pub method: String,
