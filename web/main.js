@@ -421,6 +421,9 @@ function changeDimension() {
 
 function makePlots(info) {
   const n = info.n;
+  // Sizes the scenario left unset, chosen from the problem (domain, prior): say what they are.
+  $('chosen-defaults').hidden = !(info.chosen?.length);
+  $('chosen-defaults').textContent = (info.chosen ?? []).map((c) => `default from the problem — ${c}`).join(' · ');
   $('heatmap-figure').hidden = n < 2;
   fillOptions($('component'), Array.from({ length: n }, (_, i) => [i, `x${i + 1}`]));
   fillOptions($('density-method'), info.methods.map((m, i) => [i, m]));

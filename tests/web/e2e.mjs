@@ -134,6 +134,16 @@ try {
   assert.ok(isolated, 'cross-origin isolated (fine timer resolution)');
   await page.screenshot({ path: `${artifacts}/playground-pf1000.png` });
 
+  // 3b. A spectral filter added with its sizes left unset gets them from the problem, and the
+  //     page says so: 4 functions per prior sd across the half-width (σ₀ = 0.32 on [−4, 4]: 51).
+  await page.selectOption('#add-method-kind', 'spectral');
+  await page.click('#add-method');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.info?.methods.includes('Spectral'), null, { timeout: 20000 });
+  const chosen = await page.textContent('#chosen-defaults');
+  console.log('chosen defaults:', chosen);
+  assert.match(chosen, /Spectral: basis 51 per dimension/);
+
   // 4. Every preset loads and steps without a page error.
   const names = await page.$$eval('#preset option', (os) => os.map((o) => o.value));
   for (const name of names) {

@@ -301,6 +301,8 @@ struct SessionInfo {
     t_end: f64,
     domain: Vec<[f64; 2]>,
     methods: Vec<String>,
+    /// Sizes chosen from the problem for what the scenario left unset, one note each.
+    chosen: Vec<String>,
     seed: u64,
 }
 
@@ -422,6 +424,7 @@ impl Session {
             t_end: *self.run.recording().times.last().unwrap_or(&0.0),
             domain: c.domain.clone(),
             methods: self.experiment.method_names().to_vec(),
+            chosen: self.experiment.chosen_defaults().to_vec(),
             seed: self.seed,
         })
     }
