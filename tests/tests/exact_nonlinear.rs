@@ -169,3 +169,144 @@ fn the_convergence_check_agrees_with_the_exact_filter() {
     assert_eq!(rows[0].converged, Some(true), "QIEM: {:?}", rows[0]);
     assert_eq!(rows[1].converged, Some(false), "spectral: {:?}", rows[1]);
 }
+
+/// An independent reference for a bimodal posterior: the DMZ equation of `dx = −½x dt + dv`,
+/// `dy = x² dt + dw` solved on a fine uniform grid by explicit finite differences (central
+/// in space, forward Euler in time, steps within the stability bound Δt ≤ Δs²/2) and the
+/// likelihood `exp(h Δy − ½h² Δτ)` of each increment — written here, sharing no code with
+/// the filters. h = x² cannot tell x from −x, so the posterior of a prior straddling 0 keeps
+/// two modes.
+struct FineGrid {
+    x: Vec<f64>,
+    p: Vec<f64>,
+    ds: f64,
+}
+
+impl FineGrid {
+    fn new(lo: f64, hi: f64, points: usize, mean: f64, var: f64) -> Self {
+        let ds = (hi - lo) / (points - 1) as f64;
+        let x: Vec<f64> = (0..points).map(|i| lo + i as f64 * ds).collect();
+        let mut p: Vec<f64> = x
+            .iter()
+            .map(|&x| (-(x - mean) * (x - mean) / (2.0 * var)).exp())
+            .collect();
+        let total: f64 = p.iter().sum::<f64>() * ds;
+        p.iter_mut().for_each(|v| *v /= total);
+        FineGrid { x, p, ds }
+    }
+
+    fn step(&mut self, dt: f64, dy: f64) {
+        let substeps = (dt / (0.4 * self.ds * self.ds)).ceil() as usize;
+        let h = dt / substeps as f64;
+        let n = self.x.len();
+        let mut next = vec![0.0; n];
+        for _ in 0..substeps {
+            for (i, out) in next.iter_mut().enumerate().take(n - 1).skip(1) {
+                // ∂p/∂t = ½ p″ − ∂(f p)/∂x with f = −½x.
+                let diffusion =
+                    0.5 * (self.p[i + 1] - 2.0 * self.p[i] + self.p[i - 1]) / (self.ds * self.ds);
+                let flux = |j: usize| -0.5 * self.x[j] * self.p[j];
+                let drift = (flux(i + 1) - flux(i - 1)) / (2.0 * self.ds);
+                *out = self.p[i] + h * (diffusion - drift);
+            }
+            next[0] = 0.0;
+            next[n - 1] = 0.0;
+            std::mem::swap(&mut self.p, &mut next);
+        }
+        for (p, &x) in self.p.iter_mut().zip(&self.x) {
+            let hx = x * x;
+            *p *= (hx * dy - 0.5 * hx * hx * dt).exp();
+        }
+        let total: f64 = self.p.iter().sum::<f64>() * self.ds;
+        self.p.iter_mut().for_each(|v| *v /= total);
+    }
+
+    fn mean(&self) -> f64 {
+        self.x.iter().zip(&self.p).map(|(x, p)| x * p).sum::<f64>() * self.ds
+    }
+}
+
+fn bimodal_scenario() -> ScenarioConfig {
+    let json = serde_json::json!({
+        "name": "bimodal",
+        "title": "h = x²: dx = −½x dt + dv, dy = x² dt + dw",
+        "reference": "",
+        "description": "",
+        "model": {
+            "drift": ["-0.5*x"],
+            "observation": ["x^2"],
+            "diffusion": null,
+            "noise": { "kind": "continuous", "cov": null }
+        },
+        "prior": { "kind": "gaussian", "mean": [0.3], "cov": [[1.0]] },
+        "initial_state": [1.2],
+        "domain": [[-6.0, 6.0]],
+        "time": { "t_final": 3.0, "dt_obs": 0.01, "inner_steps": 10 },
+        "seed": 5,
+        "methods": [{ "method": "ekf" }]
+    });
+    serde_json::from_value(json).expect("a valid scenario")
+}
+
+/// Against the independent fine grid on the bimodal posterior (seeds 1–2, 300 intervals):
+/// every method lands within its tolerance (as for Beneš's filter) of the conditional mean or
+/// warns. The grid filters agree with the independent grid to 10⁻⁴ (measured 7·10⁻⁵), which
+/// also checks the reference; EKF 0.083, UKF 0.038, PF 0.070 (the posterior mean drifts to 0
+/// between the modes, and so do they). The MAP filters are the exception, stated: IEKF and
+/// IOKF estimate the posterior's *mode* (003 §4), and here they follow one of the two modes
+/// (RMS 0.56 from the mean, the modes being ±0.6 apart from it), without a warning — neither
+/// their innovations nor their update's distance from the prediction (at most 0.6 sd) show a
+/// second mode. The test pins that gap (open in issue 23) by asserting they are further from
+/// the mean than the EKF.
+#[test]
+fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
+    let config = bimodal_scenario();
+    let e = Experiment::new(config.clone()).expect("valid");
+    let dt = config.time.dt_obs;
+    let mut rms_of = std::collections::HashMap::new();
+    for entry in zakai_tests::applicable_methods(&config, &e) {
+        let m = entry.defaults;
+        let (mut sum, mut steps, mut warned) = (0.0, 0, 0);
+        for seed in [1u64, 2] {
+            let data = e.simulate(seed);
+            let mut filter = e.build_method(&m, m.display_name(), seed).unwrap();
+            let mut reference = FineGrid::new(-6.0, 6.0, 1201, 0.3, 1.0);
+            let mut concerns: Vec<Concern> = Vec::new();
+            for k in 1..=data.steps() {
+                let dy = data.observation(k);
+                reference.step(dt, dy[0]);
+                if filter.step(&Observation::increment(dt, dy)).is_err() {
+                    warned += 1;
+                    break;
+                }
+                let d = filter.estimate().mean[0] - reference.mean();
+                sum += d * d;
+                steps += 1;
+                concerns.clear();
+                filter.self_check(&mut concerns);
+                warned += usize::from(!concerns.is_empty());
+            }
+        }
+        let key = entry.info.key.to_string();
+        let rms = (sum / steps.max(1) as f64).sqrt();
+        let tol = tolerance(&key);
+        println!("{key:<10} RMS {rms:.5} (tolerance {tol})  warned on {warned} steps");
+        match key.as_str() {
+            "iekf" | "iokf" => {}
+            "qiem" | "iem" | "spt" => assert!(rms <= 1e-4, "{key}: RMS {rms} from the fine grid"),
+            _ => assert!(
+                rms <= tol || warned > 0,
+                "{key}: RMS {rms} from the fine-grid mean (tolerance {tol}) and no warning"
+            ),
+        }
+        rms_of.insert(key, rms);
+    }
+    for key in ["iekf", "iokf"] {
+        assert!(
+            rms_of[key] > 3.0 * rms_of["ekf"],
+            "{key} follows one mode: {} against the EKF's {}",
+            rms_of[key],
+            rms_of["ekf"]
+        );
+    }
+}
