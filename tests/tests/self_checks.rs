@@ -108,8 +108,15 @@ fn the_particle_filter_warns_when_its_weights_collapse() {
             .build()
             .unwrap();
         pf.step_measurement(0.0, &[1.5]).unwrap();
-        let warned = checks(&pf).contains(&"effective sample size after weighting, share of N");
+        let found = checks(&pf);
+        let warned = found.contains(&"effective sample size after weighting, share of N");
         assert_eq!(warned, should_warn, "measurement variance {variance}");
+        // A collapse also leaves few distinct particles after resampling.
+        let few = found.contains(&"distinct particles after resampling, share of N");
+        assert_eq!(
+            few, should_warn,
+            "measurement variance {variance}: {found:?}"
+        );
     }
 }
 

@@ -145,6 +145,11 @@ impl Method for Pf {
 /// resampling) as a share of N. Below 1 % the posterior rests on a handful of particles.
 pub const ESS_SHARE_THRESHOLD: f64 = 0.01;
 
+/// The particle filter's second self-check: distinct particles kept by the last resampling as
+/// a share of N (N when the last step did not resample). Below 1 % the cloud is a few points
+/// repeated: its spread, and the density drawn from it, say little about the posterior.
+pub const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
+
 /// The bootstrap particle filter (see the module doc).
 ///
 /// Particles are stored as structure of arrays and moved, weighed and resampled one pass per
@@ -178,6 +183,8 @@ pub struct ParticleFilter {
     resamples: usize,
     /// The effective sample size after the last weighting.
     last_ess: f64,
+    /// Distinct particles kept by the last resampling (N when the last step did not resample).
+    last_unique: usize,
 }
 
 impl ParticleFilter {
@@ -230,6 +237,7 @@ impl ParticleFilter {
             scratch: BatchScratch::default(),
             resamples: 0,
             last_ess: count as f64,
+            last_unique: count,
         })
     }
 
@@ -357,8 +365,10 @@ impl ParticleFilter {
         let mut target = u * step;
         let mut cumulative = 0.0;
         let mut j = 0;
+        let mut unique = 0;
         for (i, w) in self.weights.iter().enumerate() {
             cumulative += w;
+            unique += usize::from(j < count && target <= cumulative);
             while j < count && target <= cumulative {
                 for d in 0..n {
                     self.resampled[d * count + j] = self.particles[d * count + i];
@@ -374,6 +384,7 @@ impl ParticleFilter {
             }
         }
         core::mem::swap(&mut self.particles, &mut self.resampled);
+        self.last_unique = unique.max(1);
         let lw = -libm::log(count as f64);
         self.log_weights.iter_mut().for_each(|w| *w = lw);
         self.weights.iter_mut().for_each(|w| *w = step);
@@ -404,6 +415,7 @@ impl Filter for ParticleFilter {
         }
         self.weigh(obs)?;
         self.last_ess = self.effective_sample_size();
+        self.last_unique = self.params.particles;
         if self.last_ess < self.params.ess_threshold * self.params.particles as f64 {
             self.resample();
         }
@@ -418,6 +430,15 @@ impl Filter for ParticleFilter {
                 share,
                 ESS_SHARE_THRESHOLD,
                 "the weights collapsed onto a few particles: use more particles (or substeps)",
+            ));
+        }
+        let unique = self.last_unique as f64 / self.params.particles as f64;
+        if unique < UNIQUE_SHARE_THRESHOLD {
+            out.push(crate::filters::Concern::below(
+                "distinct particles after resampling, share of N",
+                unique,
+                UNIQUE_SHARE_THRESHOLD,
+                "resampling kept copies of a few particles: the cloud has collapsed; use more particles",
             ));
         }
     }
