@@ -251,10 +251,17 @@ impl Experiment {
     /// ([`ScenarioConfig::choose_problem_defaults`]; see [`Experiment::chosen_defaults`]),
     /// validates the scenario (all problems at once) and builds its model and prior.
     pub fn new(mut config: ScenarioConfig) -> Result<Self, ZakaiError> {
-        let chosen = config.choose_problem_defaults();
+        // Model and prior are built once; a scenario whose model or prior does not build gets
+        // no chosen defaults, and validation reports why.
+        let built = config
+            .build_model()
+            .and_then(|model| Ok((model, config.build_prior()?)));
+        let chosen = match &built {
+            Ok((model, prior)) => config.choose_problem_defaults(model, prior),
+            Err(_) => Vec::new(),
+        };
         config.check()?;
-        let model = config.build_model()?;
-        let prior = config.build_prior()?;
+        let (model, prior) = built?;
         let names = config.method_names();
         let probes = config.probe_points();
         Ok(Experiment {

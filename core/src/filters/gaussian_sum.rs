@@ -34,7 +34,9 @@ use super::method::{
 use super::{marginal, Estimate, Filter, Observation};
 use crate::error::{FilterError, ZakaiError};
 use crate::grid::TensorGrid;
-use crate::linalg::{cholesky_in, gaussian_log_density_factored, log_sum_exp, symmetrize};
+use crate::linalg::{
+    cholesky_in, gaussian_log_density_factored, log_det_from_factor, log_sum_exp, symmetrize,
+};
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
 use crate::validate::ConfigProblem;
 
@@ -192,10 +194,7 @@ impl Component {
         symmetrize(&mut self.p);
         let chol = cholesky_in(&mut self.l, &self.p, "Gaussian-sum component covariance")?;
         self.l = chol.unpack_dirty();
-        self.log_det = 2.0
-            * (0..self.m.len())
-                .map(|i| libm::log(self.l[(i, i)]))
-                .sum::<f64>();
+        self.log_det = log_det_from_factor(&self.l);
         Ok(())
     }
 
@@ -430,13 +429,10 @@ impl GaussianSumFilter {
                 slot.p.gemm(-1.0, &work.pct, &work.gain_t, 1.0);
                 slot.refactor()?;
                 // The log weight for now, normalised below.
-                let log_det = 2.0
-                    * (0..work.nu.len())
-                        .map(|i| libm::log(chol.l_dirty()[(i, i)]))
-                        .sum::<f64>();
+                let l = chol.l_dirty();
                 slot.w = libm::log(comp.w)
                     + libm::log(v.weight)
-                    + gaussian_log_density_factored(chol.l_dirty(), log_det, &mut work.nu);
+                    + gaussian_log_density_factored(l, log_det_from_factor(l), &mut work.nu);
                 work.s_factor = chol.unpack_dirty();
             }
         }

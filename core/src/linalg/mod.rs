@@ -105,11 +105,12 @@ pub fn check_finite_matrix(m: &DMatrix<f64>, what: &'static str) -> Result<(), F
 /// `log N(r; 0, Σ)` from the Cholesky factor of Σ.
 pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> f64 {
     let l = chol.l_dirty();
-    let log_det = 2.0
-        * (0..residual.len())
-            .map(|i| libm::log(l[(i, i)]))
-            .sum::<f64>();
-    gaussian_log_density_factored(l, log_det, &mut residual.clone())
+    gaussian_log_density_factored(l, log_det_from_factor(l), &mut residual.clone())
+}
+
+/// `log det Σ = 2 Σᵢ log Lᵢᵢ` from the Cholesky factor L of Σ (the diagonal of `l`).
+pub fn log_det_from_factor(l: &DMatrix<f64>) -> f64 {
+    2.0 * (0..l.nrows()).map(|i| libm::log(l[(i, i)])).sum::<f64>()
 }
 
 /// `log N(r; 0, Σ)` from `L` (lower triangle of `l`; the upper is not read) with `Σ = L Lᵀ`

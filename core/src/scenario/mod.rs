@@ -554,20 +554,18 @@ impl ScenarioConfig {
 
     /// Fills in the sizes each method left unset that its family chooses from the problem
     /// (domain, prior; see [`crate::filters::method::Method::problem_defaults`]) and returns
-    /// a note per choice, `"Spectral: basis 51 per dimension, chosen from …"`. Nothing changes
-    /// when the model or the prior does not build (validation then reports why).
-    pub fn choose_problem_defaults(&mut self) -> Vec<String> {
-        let (Ok(model), Ok(prior)) = (self.build_model(), self.build_prior()) else {
-            return Vec::new();
-        };
+    /// a note per choice, `"Spectral: basis 51 per dimension, chosen from …"`, for the
+    /// scenario's `model` and `prior` as built. Nothing changes when the domain does not fit
+    /// the model (validation then reports why).
+    pub fn choose_problem_defaults(&mut self, model: &Model, prior: &Prior) -> Vec<String> {
         if self.domain.len() != model.n {
             return Vec::new();
         }
         let bounds = self.bounds();
         let probes = self.probe_points();
         let problem = crate::filters::method::ProblemContext {
-            model: &model,
-            prior: &prior,
+            model,
+            prior,
             probes: &probes,
             bounds: &bounds,
         };

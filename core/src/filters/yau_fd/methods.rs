@@ -166,18 +166,14 @@ macro_rules! yau_yau_method {
 /// The grid at half the spacing — `2N + 1` interior points per dimension keep the old nodes
 /// — and half the time step (the schemes' error is O(Δs² + Δt)).
 fn refined_grid(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
-    let points: Vec<usize> = crate::filters::per_dimension(&p.points, n)
-        .iter()
-        .map(|&k| 2 * k + 1)
-        .collect();
+    let from = crate::filters::per_dimension(&p.points, n);
+    let points: Vec<usize> = from.iter().map(|&k| 2 * k + 1).collect();
     let refined = YauYauParams {
         points: points.clone(),
         dt: 0.5 * p.dt,
         ..p.clone()
     };
-    let problems = refined.problems(n);
-    problems.is_empty().then(|| {
-        let from = crate::filters::per_dimension(&p.points, n);
+    refined.problems(n).is_empty().then(|| {
         (
             refined,
             format!("points {from:?} → {points:?}, Δt {} → {}", p.dt, 0.5 * p.dt),
