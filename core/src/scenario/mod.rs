@@ -185,6 +185,38 @@ pub struct ScenarioConfig {
     pub methods: Vec<MethodConfig>,
 }
 
+impl PriorConfig {
+    /// The box `mean ± sds · sd` per component around a Gaussian prior, or around every
+    /// component of a mixture (the default domain for a model given without one); `None` for
+    /// a density prior, which is only defined on a domain, or a malformed prior.
+    pub fn covering_box(&self, sds: f64) -> Option<Vec<[f64; 2]>> {
+        let components: Vec<(&[f64], &[Vec<f64>])> = match self {
+            PriorConfig::Gaussian { mean, cov } => alloc::vec![(&mean[..], &cov[..])],
+            PriorConfig::Mixture { components } => components
+                .iter()
+                .map(|c| (&c.mean[..], &c.cov[..]))
+                .collect(),
+            PriorConfig::Density { .. } => return None,
+        };
+        let n = components.first()?.0.len();
+        let mut bounds = alloc::vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
+        for (mean, cov) in components {
+            if mean.len() != n || cov.len() != n {
+                return None;
+            }
+            for (d, b) in bounds.iter_mut().enumerate() {
+                let sd = cov[d].get(d).copied().filter(|v| *v > 0.0)?.sqrt();
+                b[0] = b[0].min(mean[d] - sds * sd);
+                b[1] = b[1].max(mean[d] + sds * sd);
+            }
+        }
+        bounds
+            .iter()
+            .all(|b| b[0].is_finite() && b[1].is_finite())
+            .then_some(bounds)
+    }
+}
+
 fn check_mixture(
     comps: &[GaussianComponent],
     n: usize,

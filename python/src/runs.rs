@@ -1,0 +1,338 @@
+//! Scenarios, simulation, whole runs (simulated or on a user's recording) and Monte Carlo
+//! jobs: the core's [`Experiment`] driver and [`MonteCarlo`] runner, with NumPy arrays in and
+//! out. Long computations release the GIL.
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use zakai::experiment::{ConcernRecord, RunResult};
+use zakai::model::ObservationModel;
+use zakai::scenario::methods::catalogue;
+use zakai::scenario::presets as preset_list;
+use zakai::study::monte_carlo::MonteCarlo;
+use zakai::scenario::PriorConfig;
+use zakai::{Experiment, MethodConfig, Recording, ScenarioConfig};
+
+use crate::arrays::{padded, rows, shaped};
+use crate::errors;
+
+/// A scenario from its JSON text, with serde's message (line, column, field) on failure.
+pub fn parse(json: &str) -> PyResult<ScenarioConfig> {
+    serde_json::from_str(json)
+        .map_err(|e| errors::config("scenario", format!("invalid scenario JSON: {e}")))
+}
+
+/// A validated experiment (every problem of the scenario at once).
+pub fn experiment(json: &str) -> PyResult<Experiment> {
+    Experiment::new(parse(json)?).map_err(errors::from_core)
+}
+
+/// The box `mean ± sds · sd` around a Gaussian or mixture prior (JSON), or `None`
+/// ([`zakai::scenario::PriorConfig::covering_box`]).
+#[pyfunction]
+pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>> {
+    let prior: PriorConfig = serde_json::from_str(prior)
+        .map_err(|e| errors::config("prior", format!("invalid prior: {e}")))?;
+    Ok(prior.covering_box(sds))
+}
+
+/// Sets the largest memory a scenario's methods may need together (bytes, or text such as
+/// `"8GiB"`), checked before anything is allocated; returns the previous cap in bytes.
+#[pyfunction]
+pub fn set_memory_cap(cap: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let bytes = match cap.extract::<usize>() {
+        Ok(b) => b,
+        Err(_) => {
+            let text: String = cap.extract().map_err(|_| {
+                errors::config("memory_cap", "must be a byte count or text such as \"8GiB\"")
+            })?;
+            zakai::scenario::parse_bytes(&text).map_err(|e| errors::config("memory_cap", e))?
+        }
+    };
+    if bytes == 0 {
+        return Err(errors::config("memory_cap", "must be positive"));
+    }
+    Ok(zakai::scenario::set_memory_cap(bytes))
+}
+
+/// The presets as `(name, title)` pairs.
+#[pyfunction]
+pub fn presets() -> Vec<(String, String)> {
+    preset_list::all().into_iter().map(|p| (p.name, p.title)).collect()
+}
+
+/// The preset `name` as scenario JSON.
+#[pyfunction]
+pub fn preset_json(name: &str) -> PyResult<String> {
+    let p = preset_list::preset(name).ok_or_else(|| {
+        let known: Vec<String> = preset_list::all().into_iter().map(|p| p.name).collect();
+        errors::config(
+            "preset",
+            format!("unknown preset `{name}` (known: {})", known.join(", ")),
+        )
+    })?;
+    Ok(to_json(&p))
+}
+
+fn to_json<T: serde::Serialize>(value: &T) -> String {
+    // The core's configs and summaries are plain data: serialising them cannot fail.
+    serde_json::to_string(value).unwrap_or_default()
+}
+
+/// Every method: key, names, paper, parameters and defaults, as JSON.
+#[pyfunction]
+pub fn catalogue_json() -> String {
+    to_json(&catalogue())
+}
+
+/// Validates a scenario and returns `(normalised JSON, method display names, notes of the
+/// sizes chosen from the problem)`.
+#[pyfunction]
+pub fn check_scenario(json: &str) -> PyResult<(String, Vec<String>, Vec<String>)> {
+    let e = experiment(json)?;
+    Ok((
+        to_json(&parse(json)?),
+        e.method_names().to_vec(),
+        e.chosen_defaults().to_vec(),
+    ))
+}
+
+/// The method `key` (or an alias) with its defaults overridden by the JSON object `params`,
+/// as the full method JSON; unknown keys and parameters are errors naming what is known.
+#[pyfunction]
+pub fn method_defaults_json(key: &str, params: &str) -> PyResult<String> {
+    let field = format!("methods[{key}]");
+    let base = MethodConfig::from_key(&key.trim().to_lowercase()).ok_or_else(|| {
+        let known: Vec<String> = catalogue().into_iter().map(|m| m.info.key).collect();
+        errors::config(
+            "method",
+            format!("unknown method `{key}` (known: {})", known.join(", ")),
+        )
+    })?;
+    let mut value = serde_json::to_value(&base).unwrap_or_default();
+    let params: serde_json::Map<String, serde_json::Value> = serde_json::from_str(params)
+        .map_err(|e| errors::config(&field, format!("parameters are not a JSON object: {e}")))?;
+    if let Some(object) = value.as_object_mut() {
+        for (name, v) in params {
+            if name == "method" {
+                continue;
+            }
+            if !object.contains_key(&name) {
+                let known: Vec<&String> = object.keys().filter(|k| *k != "method").collect();
+                let known: Vec<&str> = known.iter().map(|k| k.as_str()).collect();
+                return Err(errors::config(
+                    &format!("{field}.{name}"),
+                    format!(
+                        "`{}` has no parameter `{name}` (its parameters: {})",
+                        base.key(),
+                        known.join(", ")
+                    ),
+                ));
+            }
+            object.insert(name, v);
+        }
+    }
+    let method: MethodConfig = serde_json::from_value(value)
+        .map_err(|e| errors::config(&field, format!("invalid parameters: {e}")))?;
+    Ok(to_json(&method))
+}
+
+/// `(times, states, observations)` of the run with `seed`: times τ₀…τ_N, the true states
+/// (N + 1, n) and the observation rows (N + 1, m; for continuous observations row 0 is the
+/// start and holds zeros, row k the increment over (τ_{k−1}, τ_k]).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn simulate<'py>(
+    py: Python<'py>,
+    json: &str,
+    seed: u64,
+) -> PyResult<(
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+)> {
+    let e = experiment(json)?;
+    let trajectory = py.detach(|| e.simulate(seed));
+    let rows = trajectory.times.len();
+    let (n, m) = (e.model().n, e.model().m);
+    Ok((
+        shaped(py, trajectory.times, &[rows])?.into_any(),
+        shaped(py, trajectory.states, &[rows, n])?.into_any(),
+        shaped(py, trajectory.observations, &[rows, m])?.into_any(),
+    ))
+}
+
+/// Every method of the scenario on the run with `seed` (simulated truth), as a dict.
+#[pyfunction]
+pub fn run<'py>(py: Python<'py>, json: &str, seed: u64) -> PyResult<Bound<'py, PyDict>> {
+    let e = experiment(json)?;
+    let result = py.detach(|| e.run(seed)).map_err(errors::from_core)?;
+    result_dict(py, &result, e.chosen_defaults())
+}
+
+/// The times of a recording given without them: τ_k = k Δτ for `count` times.
+fn regular_times(count: usize, dt_obs: f64) -> Vec<f64> {
+    (0..count).map(|k| k as f64 * dt_obs).collect()
+}
+
+/// Every method of the scenario on a user's observations (rows of m values; increments for
+/// continuous models, measurements for discrete ones), at `times` (τ₀…τ_N; every Δτ from 0
+/// when absent), with the true states when known; `seed` seeds the methods' random numbers.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, truth, seed))]
+pub fn filter_recorded<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    truth: Option<PyReadonlyArrayDyn<'py, f64>>,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let e = experiment(json)?;
+    let model = e.model();
+    let continuous = matches!(model.observations, ObservationModel::Continuous { .. });
+    let (values, count, width) = rows(&observations, "observations")?;
+    if width != model.m {
+        return Err(errors::dimension(format!(
+            "observations have {width} column(s), the model observes m = {}",
+            model.m
+        )));
+    }
+    let dt_obs = e.config().time.dt_obs;
+    let times = match times {
+        Some(t) => rows(&t, "times")?.0,
+        None if continuous => regular_times(count + 1, dt_obs),
+        None => regular_times(count, dt_obs),
+    };
+    let recording = if continuous {
+        let dy = if count == times.len() {
+            // The layout `simulate` returns: row 0 is the start.
+            if values[..width].iter().any(|v| *v != 0.0) {
+                return Err(errors::dimension(
+                    "continuous observations with one row per time start with a row of zeros \
+                     (the start); pass the N increments for N + 1 times otherwise",
+                ));
+            }
+            &values[width..]
+        } else if count + 1 == times.len() {
+            &values[..]
+        } else {
+            return Err(errors::dimension(format!(
+                "{count} increment rows for {} times: continuous observations need one row \
+                 per interval (N rows for N + 1 times)",
+                times.len()
+            )));
+        };
+        Recording::increments(model.n, model.m, times, dy)
+    } else {
+        if count != times.len() {
+            return Err(errors::dimension(format!(
+                "{count} measurement rows for {} times: discrete observations need one row \
+                 per time (the first at the prior's time)",
+                times.len()
+            )));
+        }
+        Recording::measurements(model.n, model.m, times, &values)
+    }
+    .map_err(errors::from_core)?;
+    let recording = match truth {
+        Some(t) => {
+            let (states, r, w) = rows(&t, "truth")?;
+            if r != recording.times.len() || w != model.n {
+                return Err(errors::dimension(format!(
+                    "truth has shape ({r}, {w}); it needs one row of n = {} per time ({} rows)",
+                    model.n,
+                    recording.times.len()
+                )));
+            }
+            recording.with_truth(states).map_err(errors::from_core)?
+        }
+        None => recording,
+    };
+    let result = py
+        .detach(|| e.filter_recorded(recording, seed))
+        .map_err(errors::from_core)?;
+    result_dict(py, &result, e.chosen_defaults())
+}
+
+/// The Monte Carlo summary of `runs` runs with seeds `seed, seed + 1, …` (every core, the GIL
+/// released), as JSON.
+#[pyfunction]
+pub fn monte_carlo_json(py: Python<'_>, json: &str, runs: usize, seed: u64) -> PyResult<String> {
+    if runs == 0 {
+        return Err(errors::config("runs", "must be at least 1"));
+    }
+    let e = experiment(json)?;
+    let summary = py
+        .detach(|| MonteCarlo::new(&e).run(runs, seed, &|| {}))
+        .map_err(errors::from_core)?;
+    Ok(to_json(&summary))
+}
+
+/// A self-check record as a dict (its fields and the one-line description).
+fn concern_dict<'py>(py: Python<'py>, c: &ConcernRecord) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("check", c.check)?;
+    d.set_item("threshold", c.threshold)?;
+    d.set_item("above", c.above)?;
+    d.set_item("advice", c.advice)?;
+    d.set_item("first_k", c.first_k)?;
+    d.set_item("first_t", c.first_t)?;
+    d.set_item("steps", c.steps)?;
+    d.set_item("worst", c.worst)?;
+    d.set_item("text", c.describe())?;
+    Ok(d)
+}
+
+/// A finished run as a dict of arrays; every method's rows padded with NaN after a failure.
+fn result_dict<'py>(
+    py: Python<'py>,
+    result: &RunResult,
+    chosen: &[String],
+) -> PyResult<Bound<'py, PyDict>> {
+    let r = &result.recording;
+    let (n, m, count) = (r.n, r.m, r.times.len());
+    let d = PyDict::new(py);
+    d.set_item("seed", result.seed)?;
+    d.set_item("continuous", r.continuous)?;
+    d.set_item("times", shaped(py, r.times.clone(), &[count])?)?;
+    d.set_item("observations", shaped(py, r.observations.clone(), &[count, m])?)?;
+    match &r.truth {
+        Some(t) => d.set_item("truth", shaped(py, t.clone(), &[count, n])?)?,
+        None => d.set_item("truth", py.None())?,
+    }
+    let methods = PyList::empty(py);
+    for (i, track) in result.methods.iter().enumerate() {
+        let md = PyDict::new(py);
+        md.set_item("name", &track.name)?;
+        md.set_item("estimates", padded(py, track.estimates.clone(), count, &[n])?)?;
+        if track.covariances.is_empty() {
+            md.set_item("covariances", py.None())?;
+        } else {
+            md.set_item(
+                "covariances",
+                padded(py, track.covariances.clone(), count, &[n, n])?,
+            )?;
+        }
+        match &track.failure {
+            Some(f) => md.set_item(
+                "failure",
+                (f.k, r.times.get(f.k).copied().unwrap_or(f64::NAN), &f.message),
+            )?,
+            None => md.set_item("failure", py.None())?,
+        }
+        let concerns = PyList::empty(py);
+        for c in &track.concerns {
+            concerns.append(concern_dict(py, c)?)?;
+        }
+        md.set_item("concerns", concerns)?;
+        md.set_item("mse", result.mse(i))?;
+        md.set_item("seconds_per_step", track.seconds_per_step())?;
+        md.set_item("build_seconds", track.build_seconds)?;
+        methods.append(md)?;
+    }
+    d.set_item("methods", methods)?;
+    d.set_item("warnings", result.warnings.clone())?;
+    d.set_item("chosen_defaults", chosen.to_vec())?;
+    Ok(d)
+}

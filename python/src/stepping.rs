@@ -1,0 +1,280 @@
+//! One filter stepped from Python (`zakai.Filter`): observations arrive one at a time, the
+//! estimate, covariance, self-checks and density are read between steps.
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use zakai::experiment::method_seed;
+use zakai::filters::Concern;
+use zakai::model::ObservationModel;
+use zakai::Filter;
+
+use crate::arrays::{rows, shaped};
+use crate::errors;
+use crate::runs::experiment;
+
+/// A filter built from a one-method scenario (model, prior, domain, Δτ and the method).
+#[pyclass(unsendable, module = "zakai._zakai")]
+pub struct Stepper {
+    filter: Box<dyn Filter>,
+    n: usize,
+    m: usize,
+    continuous: bool,
+    chosen: Vec<String>,
+    concerns: Vec<Concern>,
+}
+
+impl Stepper {
+    /// One observation row of length m, or a dimension error.
+    fn observation(&self, values: &[f64]) -> PyResult<()> {
+        if values.len() != self.m {
+            return Err(errors::dimension(format!(
+                "an observation has {} value(s), the model observes m = {}",
+                values.len(),
+                self.m
+            )));
+        }
+        Ok(())
+    }
+
+    fn step_values(&mut self, values: &[f64], dt: f64) -> PyResult<()> {
+        if !(dt.is_finite() && dt >= 0.0) || (self.continuous && dt == 0.0) {
+            return Err(errors::config(
+                "dt",
+                format!(
+                    "must be finite and {} (got {dt})",
+                    if self.continuous {
+                        "positive"
+                    } else {
+                        "nonnegative (0 assimilates at the current time)"
+                    }
+                ),
+            ));
+        }
+        let stepped = if self.continuous {
+            self.filter.step_increment(dt, values)
+        } else {
+            self.filter.step_measurement(dt, values)
+        };
+        stepped.map_err(errors::from_filter)
+    }
+
+    fn check_dim(&self, dim: usize) -> PyResult<()> {
+        if dim >= self.n {
+            return Err(errors::dimension(format!(
+                "component {dim} of an n = {} state (components are 0..{})",
+                self.n, self.n
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Finite values of a 1-D array (`what` names it in errors).
+fn points(array: &PyReadonlyArrayDyn<'_, f64>, what: &str) -> PyResult<Vec<f64>> {
+    let (values, _, width) = rows(array, what)?;
+    if width != 1 || values.iter().any(|v| !v.is_finite()) {
+        return Err(errors::config(
+            what,
+            "must be a 1-D array of finite numbers",
+        ));
+    }
+    Ok(values)
+}
+
+#[pymethods]
+impl Stepper {
+    /// Builds the only method of `scenario` (JSON) with the random numbers of `seed` (those
+    /// it would get as the first method of a run with that seed).
+    #[new]
+    fn new(scenario: &str, seed: u64) -> PyResult<Self> {
+        let e = experiment(scenario)?;
+        let methods = &e.config().methods;
+        if methods.len() != 1 {
+            return Err(errors::config(
+                "methods",
+                format!("a Filter is one method, {} given", methods.len()),
+            ));
+        }
+        let filter = e
+            .build_method(&methods[0], e.method_names()[0].clone(), method_seed(seed, 0))
+            .map_err(errors::from_core)?;
+        let model = e.model();
+        Ok(Stepper {
+            filter,
+            n: model.n,
+            m: model.m,
+            continuous: matches!(model.observations, ObservationModel::Continuous { .. }),
+            chosen: e.chosen_defaults().to_vec(),
+            concerns: Vec::new(),
+        })
+    }
+
+    /// Predicts over `dt` and assimilates one observation (an increment dy for continuous
+    /// models, a measurement z for discrete ones).
+    fn step(&mut self, observation: PyReadonlyArrayDyn<'_, f64>, dt: f64) -> PyResult<()> {
+        let (values, _, _) = rows(&observation, "observation")?;
+        self.observation(&values)?;
+        self.step_values(&values, dt)
+    }
+
+    /// Steps through every row of `observations` with the step lengths `dts` and returns the
+    /// means (rows, n) and, where the method has them, covariances (rows, n, n) after each.
+    #[allow(clippy::type_complexity)]
+    fn run<'py>(
+        &mut self,
+        py: Python<'py>,
+        observations: PyReadonlyArrayDyn<'py, f64>,
+        dts: PyReadonlyArrayDyn<'py, f64>,
+    ) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>)> {
+        let (values, count, width) = rows(&observations, "observations")?;
+        let dts = points(&dts, "dts")?;
+        if width != self.m || dts.len() != count {
+            return Err(errors::dimension(format!(
+                "observations of shape ({count}, {width}) with {} step lengths: needs \
+                 (rows, m = {}) and one step length per row",
+                dts.len(),
+                self.m
+            )));
+        }
+        let (n, m) = (self.n, self.m);
+        let mut means = Vec::with_capacity(count * n);
+        let mut covs = Vec::new();
+        for (k, dt) in dts.iter().enumerate() {
+            self.step_values(&values[k * m..(k + 1) * m], *dt)
+                .map_err(|e| errors::raise("FilterError", format!("row {k}: {e}"), &[]))?;
+            let est = self.filter.estimate();
+            means.extend_from_slice(est.mean.as_slice());
+            if let Some(p) = est.covariance {
+                // nalgebra is column-major; rows of a symmetric P are its columns.
+                covs.extend(p.transpose().iter().copied());
+            }
+        }
+        let covs = if covs.len() == count * n * n && count > 0 {
+            Some(shaped(py, covs, &[count, n, n])?.into_any())
+        } else {
+            None
+        };
+        Ok((shaped(py, means, &[count, n])?.into_any(), covs))
+    }
+
+    /// The method's display name, e.g. `"PF(200)"`.
+    #[getter]
+    fn name(&self) -> String {
+        self.filter.name().to_string()
+    }
+
+    /// State dimension n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Observation dimension m.
+    #[getter]
+    fn m(&self) -> usize {
+        self.m
+    }
+
+    /// Whether observations are increments of a continuous y.
+    #[getter]
+    fn continuous(&self) -> bool {
+        self.continuous
+    }
+
+    /// Notes of the sizes chosen from the problem.
+    #[getter]
+    fn chosen_defaults(&self) -> Vec<String> {
+        self.chosen.clone()
+    }
+
+    /// Warnings about the parameters, known before the first step.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.filter.warnings()
+    }
+
+    /// The conditional mean (or the method's point estimate), shape (n,).
+    #[getter]
+    fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let est = self.filter.estimate();
+        Ok(shaped(py, est.mean.as_slice().to_vec(), &[self.n])?.into_any())
+    }
+
+    /// The conditional covariance, shape (n, n), or `None`.
+    #[getter]
+    fn cov<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        match self.filter.estimate().covariance {
+            Some(p) => Ok(Some(
+                shaped(py, p.transpose().iter().copied().collect(), &[self.n, self.n])?.into_any(),
+            )),
+            None => Ok(None),
+        }
+    }
+
+    /// The maximum a posteriori point where the method computes one, else `None`.
+    #[getter]
+    fn map<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        match self.filter.estimate().map {
+            Some(x) => Ok(Some(shaped(py, x.as_slice().to_vec(), &[self.n])?.into_any())),
+            None => Ok(None),
+        }
+    }
+
+    /// The self-checks that cross their thresholds now, as dicts (empty when all is well).
+    fn self_check<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        self.concerns.clear();
+        self.filter.self_check(&mut self.concerns);
+        let list = PyList::empty(py);
+        for c in &self.concerns {
+            let d = PyDict::new(py);
+            d.set_item("check", c.check)?;
+            d.set_item("value", c.value)?;
+            d.set_item("threshold", c.threshold)?;
+            d.set_item("above", c.above)?;
+            d.set_item("advice", c.advice)?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    /// The marginal density of component `dim` at the points `grid`.
+    #[pyo3(signature = (grid, dim = 0))]
+    fn density<'py>(
+        &self,
+        py: Python<'py>,
+        grid: PyReadonlyArrayDyn<'py, f64>,
+        dim: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.check_dim(dim)?;
+        let grid = points(&grid, "grid")?;
+        let mut out = vec![0.0; grid.len()];
+        self.filter.marginal_density(dim, &grid, &mut out);
+        Ok(shaped(py, out, &[grid.len()])?.into_any())
+    }
+
+    /// The joint marginal density of components `dims` on the raster `xs × ys`, shape
+    /// (len(ys), len(xs)).
+    #[pyo3(signature = (xs, ys, dims = (0, 1)))]
+    fn density2d<'py>(
+        &self,
+        py: Python<'py>,
+        xs: PyReadonlyArrayDyn<'py, f64>,
+        ys: PyReadonlyArrayDyn<'py, f64>,
+        dims: (usize, usize),
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.check_dim(dims.0)?;
+        self.check_dim(dims.1)?;
+        if dims.0 == dims.1 {
+            return Err(errors::config("dims", "needs two different components"));
+        }
+        let (x, y) = (points(&xs, "xs")?, points(&ys, "ys")?);
+        let mut out = vec![0.0; x.len() * y.len()];
+        self.filter.marginal_density_2d(dims, &x, &y, &mut out);
+        Ok(shaped(py, out, &[y.len(), x.len()])?.into_any())
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Filter({}, n={}, m={})", self.filter.name(), self.n, self.m)
+    }
+}

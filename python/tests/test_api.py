@@ -1,0 +1,123 @@
+"""The Python surface: scenarios, own models, stepping filters, Monte Carlo tables."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import zakai
+
+
+def test_presets_and_scenario_round_trip():
+    names = zakai.presets()
+    assert "cubic-sensor-1d" in names and len(names) >= 10
+    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+    again = zakai.Scenario.from_json(sc.to_json())
+    assert again.config == sc.config
+    sc.dt_obs, sc.t_final = 0.02, 1.0
+    sc.methods = ["ukf", {"method": "pf", "particles": 321}]
+    assert sc.method_names == ["UKF", "PF(321)"]
+    times, states, obs = zakai.simulate(sc, seed=2)
+    assert times.shape == (51,) and states.shape == (51, 1) and obs.shape == (51, 1)
+    assert np.allclose(np.diff(times), 0.02) and obs[0, 0] == 0.0
+
+
+def test_own_linear_model_grid_filter_matches_kalman_bucy():
+    """QIEM on the domain chosen from the prior (mean ± 8 sd) against the exact filter."""
+    model = zakai.Model.continuous("-x", "x", diffusion=0.8)
+    prior = zakai.Prior.gaussian(0.5, 0.2)
+    sc = zakai.Scenario(model, prior, ["kalman", {"method": "qiem", "points": [801]}],
+                        dt_obs=0.01, t_final=2.0, initial_state=[0.5])
+    lo, hi = sc.domain[0]
+    assert lo == pytest.approx(0.5 - 8 * np.sqrt(0.2)) and hi == pytest.approx(0.5 + 8 * np.sqrt(0.2))
+    result = zakai.run(sc, seed=4)
+    kb, qiem = result.methods["KF"], result.methods["QIEM"]
+    assert qiem.failure is None and not qiem.concerns
+    # Grid filters agree with exact filters to about 1e-3 (README); stated tolerance 2e-3.
+    assert np.max(np.abs(kb.estimates - qiem.estimates)) < 2e-3
+    assert np.max(np.abs(kb.sds - qiem.sds)) < 2e-3
+
+
+def test_stepping_filter_mean_cov_density_and_batch_run():
+    model = zakai.Model.continuous("0", "x^3")
+    prior = zakai.Prior.gaussian(1.0, 0.1)
+    sc = zakai.Scenario(model, prior, ["qiem"], dt_obs=0.01, t_final=1.0, domain=[(-4, 4)])
+    times, states, obs = zakai.simulate(sc, seed=3)
+    one = zakai.Filter("qiem", model, prior, dt=0.01, domain=[(-4, 4)])
+    for dy in obs[1:]:
+        one.step(dy)
+    batch = zakai.Filter("qiem", model, prior, dt=0.01, domain=[(-4, 4)])
+    means, covs = batch.run(obs[1:])
+    assert np.array_equal(means[-1], one.mean) and np.array_equal(covs[-1], one.cov)
+    grid = np.linspace(-4, 4, 2001)
+    p = one.density(grid)
+    assert p.shape == grid.shape and np.all(p >= 0)
+    assert np.trapezoid(p, grid) == pytest.approx(1.0, abs=1e-3)
+    assert np.trapezoid(grid * p, grid) == pytest.approx(one.mean[0], abs=1e-3)
+    assert one.name == "QIEM" and one.self_check() == []
+
+
+def test_density2d_shape_and_mass():
+    model = zakai.Model.continuous(["0", "0"], ["x1", "x2"])
+    f = zakai.Filter("ukf", model, zakai.Prior.gaussian([0, 1], [[1, 0.3], [0.3, 0.5]]), dt=0.1)
+    xs, ys = np.linspace(-6, 6, 241), np.linspace(-5, 7, 121)
+    d = f.density2d(xs, ys)
+    assert d.shape == (121, 241)
+    assert np.trapezoid(np.trapezoid(d, xs, axis=1), ys) == pytest.approx(1.0, abs=1e-3)
+
+
+def test_spectral_default_basis_is_chosen_from_the_problem_and_reported():
+    model = zakai.Model.continuous("tanh(x)", "x")
+    prior = zakai.Prior.gaussian(0.0, 0.25)
+    f = zakai.Filter("spectral", model, prior, dt=0.01, domain=[(-12, 12)])
+    assert any("basis" in note for note in f.chosen_defaults)
+
+
+def test_self_checks_warn_with_the_number():
+    """A particle filter measuring sharply (R = 1e-6 against a prior sd of 2) collapses onto a
+    few particles: its effective-sample-size check says so, with the value."""
+    sc = zakai.Scenario(zakai.Model.discrete("0", "x", noise_cov=1e-6), zakai.Prior.gaussian(0, 4),
+                        [{"method": "pf", "particles": 1000}],
+                        dt_obs=0.1, t_final=1.0, initial_state=[1.0])
+    result = zakai.run(sc, seed=1)
+    pf = result.methods["PF(1000)"]
+    assert pf.warned
+    c = pf.concerns[0]
+    assert c["steps"] > 0 and c["worst"] < c["threshold"] and c["check"] in c["text"]
+
+
+def test_monte_carlo_table_pandas_and_parallel():
+    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+    sc.t_final = 1.0
+    sc.methods = ["ukf", {"method": "pf", "particles": 200}]
+    table = zakai.monte_carlo(sc, runs=8, seed=10)
+    assert [r["name"] for r in table.rows] == ["UKF", "PF(200)"]
+    assert all(r["runs"] == 8 for r in table.rows)
+    # the table's MSE is the mean over the runs of each run's MSE
+    single = [zakai.run(sc, seed=s).methods["PF(200)"].mse for s in range(10, 18)]
+    assert table.rows[1]["mse"] == pytest.approx(np.mean(single), rel=1e-12)
+    assert "PF(200)" in str(table)
+    pd = pytest.importorskip("pandas")
+    frame = table.to_pandas()
+    assert isinstance(frame, pd.DataFrame) and frame.loc["PF(200)", "runs"] == 8
+
+
+def test_monte_carlo_releases_the_gil():
+    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+    sc.methods = [{"method": "pf", "particles": 2000}]
+    ticks = []
+    done = threading.Event()
+
+    def job():
+        zakai.monte_carlo(sc, runs=6, seed=1)
+        done.set()
+
+    worker = threading.Thread(target=job)
+    worker.start()
+    while not done.is_set():
+        ticks.append(time.perf_counter())
+        time.sleep(0.001)
+    worker.join()
+    # Python kept running beside the Rust job (with the GIL held there would be ~1 tick).
+    assert len(ticks) > 20, len(ticks)
