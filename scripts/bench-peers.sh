@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Zakai's baselines against their Python peers, the same work in one run (issue 22):
 # a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
-# nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included).
-# Installs NumPy, SciPy and FilterPy into target/peers-venv on first use. Prints a table.
+# nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
+# from Python (the `zakai` package, per step() call and per run() call, issue 24).
+# Installs NumPy, SciPy, FilterPy and this checkout's wheel into target/peers-venv. Prints tables.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,6 +12,10 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q numpy scipy filterpy
 fi
+# Zakai's Python package (issue 24) into the same environment, built from this checkout.
+"$venv/bin/pip" install -q maturin
+"$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
+"$venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 cargo build -q --release -p zakai-cli
 zakai=target/release/zakai
 work=$(mktemp -d)
@@ -50,11 +55,13 @@ zakai_step() {
 declare -A ours
 for w in pf ukf qiem; do ours[$w]=$(zakai_step "$w"); done
 peers=$("$venv/bin/python" scripts/peers/peers.py)
+from_python=$(cd scripts/peers && "../../$venv/bin/python" from_python.py)
 
-"$venv/bin/python" - "$peers" "${ours[pf]}" "${ours[ukf]}" "${ours[qiem]}" <<'PY'
+"$venv/bin/python" - "$peers" "$from_python" "${ours[pf]}" "${ours[ukf]}" "${ours[qiem]}" <<'PY'
 import json, sys
 peers = json.loads(sys.argv[1])
-ours = dict(zip(["pf", "ukf", "qiem"], map(float, sys.argv[2:5])))
+from_python = json.loads(sys.argv[2])
+ours = dict(zip(["pf", "ukf", "qiem"], map(float, sys.argv[3:6])))
 names = {
     "pf": ("bootstrap PF, 10^4 particles, resampling every step", "NumPy"),
     "ukf": ("UKF 1-D, z = x^3 + v, predict + update", "FilterPy"),
@@ -64,4 +71,10 @@ print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':
 for k, (work, peer) in names.items():
     p, z = peers[k], ours[k]
     print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {z * 1e6:>10.2f}µs {p / z:>7.1f}×")
+print()
+print("Zakai called from Python (zakai.Filter): a step() call per observation, or run() over all")
+print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'step()':>10} {'ratio':>7} {'run()':>10} {'ratio':>7}")
+for k, (work, peer) in names.items():
+    p, s, r = peers[k], from_python[k]["step"], from_python[k]["run"]
+    print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {s * 1e6:>8.2f}µs {p / s:>6.1f}× {r * 1e6:>8.2f}µs {p / r:>6.1f}×")
 PY

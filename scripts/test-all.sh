@@ -5,7 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> %s\n' "$*"; }
+# Each step prints its title and, when it ends, the seconds it took (the budget is 30 min).
+last=$SECONDS
+step() {
+  [ -n "${title:-}" ] && printf '    (%s: %d s)\n' "$title" $((SECONDS - last))
+  title=$*; last=$SECONDS
+  printf '\n==> %s\n' "$*"
+}
 
 step "toolchain targets"
 installed=$(rustup target list --installed)
@@ -27,8 +33,9 @@ step "cargo test --workspace"
 cargo test --workspace
 
 step "examples (core/examples: own data, models from text and closures)"
+# The test profile: `cargo test` above has built them already.
 for example in core/examples/*.rs; do
-  cargo run -q --release -p zakai --example "$(basename "$example" .rs)"
+  cargo run -q --profile test -p zakai --example "$(basename "$example" .rs)"
 done
 
 step "cargo doc without warnings"
@@ -48,6 +55,16 @@ CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
 step "same seed, same truth: native CLI vs wasm"
 cargo build --release -p zakai-cli
 node tests/web/determinism.mjs
+
+step "Python package: abi3 wheel (maturin) in a virtual environment, pytest, the example"
+venv=target/py-venv
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas
+rm -f target/wheels/zakai-*.whl
+"$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
+"$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
+ZAKAI_CLI=target/release/zakai "$venv/bin/python" -m pytest -q python/tests
+"$venv/bin/python" python/examples/tour.py > /dev/null
 
 step "browser end-to-end tests (headless chromium)"
 if ! command -v chromium >/dev/null 2>&1; then

@@ -9,8 +9,8 @@ use zakai::experiment::{ConcernRecord, RunResult};
 use zakai::model::ObservationModel;
 use zakai::scenario::methods::catalogue;
 use zakai::scenario::presets as preset_list;
-use zakai::study::monte_carlo::MonteCarlo;
 use zakai::scenario::PriorConfig;
+use zakai::study::monte_carlo::MonteCarlo;
 use zakai::{Experiment, MethodConfig, Recording, ScenarioConfig};
 
 use crate::arrays::{padded, rows, shaped};
@@ -44,7 +44,10 @@ pub fn set_memory_cap(cap: &Bound<'_, PyAny>) -> PyResult<usize> {
         Ok(b) => b,
         Err(_) => {
             let text: String = cap.extract().map_err(|_| {
-                errors::config("memory_cap", "must be a byte count or text such as \"8GiB\"")
+                errors::config(
+                    "memory_cap",
+                    "must be a byte count or text such as \"8GiB\"",
+                )
             })?;
             zakai::scenario::parse_bytes(&text).map_err(|e| errors::config("memory_cap", e))?
         }
@@ -58,7 +61,10 @@ pub fn set_memory_cap(cap: &Bound<'_, PyAny>) -> PyResult<usize> {
 /// The presets as `(name, title)` pairs.
 #[pyfunction]
 pub fn presets() -> Vec<(String, String)> {
-    preset_list::all().into_iter().map(|p| (p.name, p.title)).collect()
+    preset_list::all()
+        .into_iter()
+        .map(|p| (p.name, p.title))
+        .collect()
 }
 
 /// The preset `name` as scenario JSON.
@@ -146,11 +152,7 @@ pub fn simulate<'py>(
     py: Python<'py>,
     json: &str,
     seed: u64,
-) -> PyResult<(
-    Bound<'py, PyAny>,
-    Bound<'py, PyAny>,
-    Bound<'py, PyAny>,
-)> {
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let e = experiment(json)?;
     let trajectory = py.detach(|| e.simulate(seed));
     let rows = trajectory.times.len();
@@ -296,7 +298,10 @@ fn result_dict<'py>(
     d.set_item("seed", result.seed)?;
     d.set_item("continuous", r.continuous)?;
     d.set_item("times", shaped(py, r.times.clone(), &[count])?)?;
-    d.set_item("observations", shaped(py, r.observations.clone(), &[count, m])?)?;
+    d.set_item(
+        "observations",
+        shaped(py, r.observations.clone(), &[count, m])?,
+    )?;
     match &r.truth {
         Some(t) => d.set_item("truth", shaped(py, t.clone(), &[count, n])?)?,
         None => d.set_item("truth", py.None())?,
@@ -305,7 +310,10 @@ fn result_dict<'py>(
     for (i, track) in result.methods.iter().enumerate() {
         let md = PyDict::new(py);
         md.set_item("name", &track.name)?;
-        md.set_item("estimates", padded(py, track.estimates.clone(), count, &[n])?)?;
+        md.set_item(
+            "estimates",
+            padded(py, track.estimates.clone(), count, &[n])?,
+        )?;
         if track.covariances.is_empty() {
             md.set_item("covariances", py.None())?;
         } else {
@@ -317,7 +325,11 @@ fn result_dict<'py>(
         match &track.failure {
             Some(f) => md.set_item(
                 "failure",
-                (f.k, r.times.get(f.k).copied().unwrap_or(f64::NAN), &f.message),
+                (
+                    f.k,
+                    r.times.get(f.k).copied().unwrap_or(f64::NAN),
+                    &f.message,
+                ),
             )?,
             None => md.set_item("failure", py.None())?,
         }

@@ -97,7 +97,11 @@ impl Stepper {
             ));
         }
         let filter = e
-            .build_method(&methods[0], e.method_names()[0].clone(), method_seed(seed, 0))
+            .build_method(
+                &methods[0],
+                e.method_names()[0].clone(),
+                method_seed(seed, 0),
+            )
             .map_err(errors::from_core)?;
         let model = e.model();
         Ok(Stepper {
@@ -206,7 +210,12 @@ impl Stepper {
     fn cov<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         match self.filter.estimate().covariance {
             Some(p) => Ok(Some(
-                shaped(py, p.transpose().iter().copied().collect(), &[self.n, self.n])?.into_any(),
+                shaped(
+                    py,
+                    p.transpose().iter().copied().collect(),
+                    &[self.n, self.n],
+                )?
+                .into_any(),
             )),
             None => Ok(None),
         }
@@ -216,7 +225,9 @@ impl Stepper {
     #[getter]
     fn map<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         match self.filter.estimate().map {
-            Some(x) => Ok(Some(shaped(py, x.as_slice().to_vec(), &[self.n])?.into_any())),
+            Some(x) => Ok(Some(
+                shaped(py, x.as_slice().to_vec(), &[self.n])?.into_any(),
+            )),
             None => Ok(None),
         }
     }

@@ -44,10 +44,10 @@ def test_stepping_filter_mean_cov_density_and_batch_run():
     prior = zakai.Prior.gaussian(1.0, 0.1)
     sc = zakai.Scenario(model, prior, ["qiem"], dt_obs=0.01, t_final=1.0, domain=[(-4, 4)])
     times, states, obs = zakai.simulate(sc, seed=3)
-    one = zakai.Filter("qiem", model, prior, dt=0.01, domain=[(-4, 4)])
+    one = zakai.Filter("qiem", model, prior, dt_obs=0.01, domain=[(-4, 4)])
     for dy in obs[1:]:
         one.step(dy)
-    batch = zakai.Filter("qiem", model, prior, dt=0.01, domain=[(-4, 4)])
+    batch = zakai.Filter("qiem", model, prior, dt_obs=0.01, domain=[(-4, 4)])
     means, covs = batch.run(obs[1:])
     assert np.array_equal(means[-1], one.mean) and np.array_equal(covs[-1], one.cov)
     grid = np.linspace(-4, 4, 2001)
@@ -60,7 +60,7 @@ def test_stepping_filter_mean_cov_density_and_batch_run():
 
 def test_density2d_shape_and_mass():
     model = zakai.Model.continuous(["0", "0"], ["x1", "x2"])
-    f = zakai.Filter("ukf", model, zakai.Prior.gaussian([0, 1], [[1, 0.3], [0.3, 0.5]]), dt=0.1)
+    f = zakai.Filter("ukf", model, zakai.Prior.gaussian([0, 1], [[1, 0.3], [0.3, 0.5]]), dt_obs=0.1)
     xs, ys = np.linspace(-6, 6, 241), np.linspace(-5, 7, 121)
     d = f.density2d(xs, ys)
     assert d.shape == (121, 241)
@@ -70,7 +70,7 @@ def test_density2d_shape_and_mass():
 def test_spectral_default_basis_is_chosen_from_the_problem_and_reported():
     model = zakai.Model.continuous("tanh(x)", "x")
     prior = zakai.Prior.gaussian(0.0, 0.25)
-    f = zakai.Filter("spectral", model, prior, dt=0.01, domain=[(-12, 12)])
+    f = zakai.Filter("spectral", model, prior, dt_obs=0.01, domain=[(-12, 12)])
     assert any("basis" in note for note in f.chosen_defaults)
 
 

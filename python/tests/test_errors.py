@@ -20,7 +20,7 @@ def test_expression_error_names_the_field_and_position():
 
 def test_unknown_variable_is_an_expression_error():
     with pytest.raises(ExpressionError, match="unknown variable `y`"):
-        zakai.Filter("ukf", zakai.Model.continuous("y", "x"), zakai.Prior.gaussian(0, 1), dt=0.1)
+        zakai.Filter("ukf", zakai.Model.continuous("y", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1)
 
 
 def test_every_config_problem_at_once_with_field_paths():
@@ -37,9 +37,9 @@ def test_unknown_preset_method_and_parameter():
     with pytest.raises(ConfigError, match="unknown preset `nope`"):
         zakai.Scenario.from_preset("nope")
     with pytest.raises(ConfigError, match="unknown method `kf2`"):
-        zakai.Filter("kf2", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt=0.1)
+        zakai.Filter("kf2", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1)
     with pytest.raises(ConfigError, match="has no parameter `particle`"):
-        zakai.Filter("pf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt=0.1,
+        zakai.Filter("pf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1,
                      particle=10)
 
 
@@ -62,7 +62,7 @@ def test_wrong_shapes_are_dimension_errors():
         zakai.filter(sc, obs[2:], times=times)
     with pytest.raises(DimensionError, match="truth"):
         zakai.filter(sc, obs, times=times, truth=states[1:])
-    f = zakai.Filter("ukf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt=0.1)
+    f = zakai.Filter("ukf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1)
     with pytest.raises(DimensionError, match="m = 1"):
         f.step([0.1, 0.2])
     with pytest.raises(DimensionError, match="component 1"):
@@ -76,7 +76,7 @@ def test_bad_times_and_steps_are_config_errors():
     bad[3] = bad[2]
     with pytest.raises(ConfigError, match="times"):
         zakai.filter(sc, obs, times=bad)
-    f = zakai.Filter("ukf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt=0.1)
+    f = zakai.Filter("ukf", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1)
     with pytest.raises(ConfigError, match="dt"):
         f.step([0.1], float("nan"))
     with pytest.raises(ConfigError, match="seed"):
@@ -85,7 +85,7 @@ def test_bad_times_and_steps_are_config_errors():
 
 def test_a_grid_filter_refuses_another_interval_and_keeps_its_state():
     f = zakai.Filter("qiem", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1),
-                     dt=0.01, points=[201])
+                     dt_obs=0.01, points=[201])
     f.step([0.01])
     before = f.mean.copy()
     with pytest.raises(FilterError):
@@ -98,7 +98,7 @@ def test_grids_beyond_the_memory_cap_are_refused_before_allocating():
     try:
         with pytest.raises(ConfigError, match="memory"):
             zakai.Filter("qiem", zakai.Model.continuous(["0", "0"], ["x1", "x2"]),
-                         zakai.Prior.gaussian([0, 0], np.eye(2)), dt=0.01, points=[2001, 2001])
+                         zakai.Prior.gaussian([0, 0], np.eye(2)), dt_obs=0.01, points=[2001, 2001])
     finally:
         zakai.set_memory_cap(previous)
     with pytest.raises(ConfigError, match="memory_cap"):

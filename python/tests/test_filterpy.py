@@ -48,7 +48,7 @@ def test_ukf_agrees_with_filterpy(case):
     dt, steps = 0.1, 60
     model = zakai.Model.discrete(c["drift"], c["observation"], noise_cov=c["r"], diffusion=c["g"])
     prior = zakai.Prior.gaussian(c["x0"], c["p0"])
-    ours = zakai.Filter("ukf", model, prior, dt=dt, alpha=ALPHA, beta=BETA, kappa=KAPPA, substeps=1)
+    ours = zakai.Filter("ukf", model, prior, dt_obs=dt, alpha=ALPHA, beta=BETA, kappa=KAPPA, substeps=1)
 
     rng = np.random.default_rng(11)
     n, m = len(c["x0"]), len(c["observation"])

@@ -73,7 +73,7 @@ def test_stepping_filter_equals_the_driver():
     run = zakai.run(sc, seed=SEED)
     model = zakai.Model(sc.config["model"])
     prior = zakai.Prior(sc.config["prior"])
-    f = zakai.Filter("pf", model, prior, dt=sc.dt_obs, domain=sc.domain, seed=SEED, particles=300)
+    f = zakai.Filter("pf", model, prior, dt_obs=sc.dt_obs, domain=sc.domain, seed=SEED, particles=300)
     means, covs = f.run(observations[1:])
     assert np.array_equal(means, run.methods["PF(300)"].estimates[1:])
     assert np.array_equal(covs, run.methods["PF(300)"].covariances[1:])

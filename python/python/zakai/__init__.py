@@ -673,8 +673,10 @@ class Filter:
         ``"direct"``, ``"separation"``, ``"implicit_fdm"``, ``"gaussian_sum"``.
     model : Model
     prior : Prior
-    dt : float
-        The observation interval Δτ the grid and spectral methods are built for.
+    dt_obs : float
+        The observation interval Δτ (the default step; grid and spectral methods are built
+        for it and refuse other steps). A method's own ``dt`` (the grid filters' time step)
+        is one of ``params``.
     domain : list of (low, high), optional
         The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent.
     seed : int
@@ -686,7 +688,7 @@ class Filter:
     Examples
     --------
     >>> model = Model.continuous("0", "x^3")
-    >>> f = Filter("qiem", model, Prior.gaussian(1.0, 0.1), dt=0.01, points=[401])
+    >>> f = Filter("qiem", model, Prior.gaussian(1.0, 0.1), dt_obs=0.01, points=[401])
     >>> f.step([0.012], 0.01)
     >>> float(f.mean[0])  # doctest: +SKIP
     """
@@ -697,7 +699,7 @@ class Filter:
         model: Model,
         prior: Prior,
         *,
-        dt: float,
+        dt_obs: float,
         domain: Optional[Sequence[Sequence[float]]] = None,
         seed: int = 0,
         **params: Any,
@@ -706,8 +708,8 @@ class Filter:
             model,
             prior,
             [{"method": method, **params}],
-            dt_obs=dt,
-            t_final=dt,
+            dt_obs=dt_obs,
+            t_final=dt_obs,
             domain=domain,
             seed=seed,
         )
