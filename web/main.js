@@ -877,6 +877,8 @@ function startMonteCarlo() {
   $('mc-progress').value = 0;
   $('mc-status').textContent = `0 / ${runs} runs`;
   $('mc-table').querySelector('tbody').replaceChildren();
+  $('mc-notes').replaceChildren();
+  $('mc-rule').hidden = true;
   const msg = { type: 'mcStart', config, seed, runs };
   const w = mcWorker();
   if (mc.ready) w.postMessage(msg);
@@ -932,6 +934,13 @@ function showConvergence({ rows, share }) {
     : `every method checked moved by at most ${share} of its posterior sd when its resolution was doubled`;
 }
 
+/** The paper's value of a Monte Carlo row: "0.9115 (MSE)", "reported failed", or "—". */
+function paperCell(p) {
+  if (!p) return '—';
+  if (p.values == null) return `reported failed (${p.metric})`;
+  return `${p.values.map((v) => v.toFixed(4)).join(' / ')} (${p.metric})`;
+}
+
 function showMonteCarlo(summary) {
   mc.summary = summary;
   const tbody = $('mc-table').querySelector('tbody');
@@ -940,10 +949,10 @@ function showMonteCarlo(summary) {
     const tr = document.createElement('tr');
     const cells = [
       m.name,
-      m.mse == null ? '—' : `${m.mse.toFixed(4)} ± ${(m.mse_stderr ?? 0).toFixed(4)}`,
+      m.mse_text,
       m.mse_quartiles ? `${m.mse_quartiles[1].toFixed(4)} [${m.mse_quartiles[0].toFixed(4)}, ${m.mse_quartiles[2].toFixed(4)}]` : '—',
       m.rms_components ? m.rms_components.map((v) => v.toFixed(4)).join(' / ') : '—',
-      `${m.failed} / ${m.runs}`,
+      paperCell(m.paper),
       (m.seconds_per_run * 1000).toFixed(1),
     ];
     for (const c of cells) {
@@ -951,8 +960,21 @@ function showMonteCarlo(summary) {
       td.textContent = c;
       tr.appendChild(td);
     }
+    if (m.failed > 0) tr.classList.add('partial');
     tbody.appendChild(tr);
   }
+  // How the means are taken, where the paper's numbers come from, and rows that coincide.
+  const paper = summary.methods.find((m) => m.paper)?.paper;
+  $('mc-rule').hidden = false;
+  $('mc-rule').textContent = `${summary.how_means_are_taken}.` +
+    (paper ? ` Paper: ${paper.source}, ${paper.runs} runs.` : '');
+  $('mc-notes').replaceChildren(...summary.methods.filter((m) => m.coincides_with).map((m) => {
+    const c = m.coincides_with;
+    const li = document.createElement('li');
+    li.textContent = `${m.name} = ${c.method} in every run (largest relative difference ${c.largest_relative_difference.toExponential(1)})` +
+      (c.why ? `: ${c.why}` : '');
+    return li;
+  }));
   $('mc-csv').disabled = summary.methods.length === 0;
 }
 

@@ -12,10 +12,6 @@ use zakai::Experiment;
 
 use crate::Format;
 
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map_or_else(|| "failed".to_string(), |x| format!("{x:.4}"))
-}
-
 /// Per-component values joined by `sep`, each written by `cell`; `missing` when the method
 /// failed in every run.
 fn join_components(
@@ -85,44 +81,75 @@ pub fn render(
                 "{} run(s) from seed {}, T = {}, Δτ = {}  [{}]",
                 summary.runs, summary.seed, c.time.t_final, c.time.dt_obs, c.reference
             )?;
+            writeln!(s, "{}.", summary.how_means_are_taken)?;
+            let with_paper = summary.methods.iter().any(|m| m.paper.is_some());
             writeln!(s)?;
             writeln!(
                 s,
-                "{:<12} {:>18} {:>26} {:>8} {:>22} {:>16} {:>12} {:>12} {:>10}",
+                "{:<12} {:>30} {:>26} {:>22} {:>16} {:>12} {:>12} {:>10}{}",
                 "method",
-                "MSE (004 (43))",
+                "MSE (runs finished)",
                 "median [q₁, q₃] of runs",
-                "failed",
                 "MSE per component",
                 "RMS (000 §4.2)",
                 "ms/run",
                 "µs/step",
-                "build ms"
+                "build ms",
+                if with_paper { "   paper" } else { "" }
             )?;
             for m in &summary.methods {
-                let mse = match (m.mse, m.mse_stderr) {
-                    (Some(v), Some(se)) if summary.runs > 1 => format!("{v:.4} ± {se:.4}"),
-                    (v, _) => fmt_opt(v),
-                };
                 let spread = m.mse_quartiles.map_or_else(
                     || "—".to_string(),
                     |[q1, med, q3]| format!("{med:.4} [{q1:.4}, {q3:.4}]"),
                 );
                 let comps = per_component(&m.mse_components);
                 let rms = per_component(&m.rms_components);
+                let paper = m.paper.as_ref().map_or_else(String::new, |p| {
+                    let value = p.values.as_ref().map_or_else(
+                        || "reported failed".to_string(),
+                        |v| slash(v),
+                    );
+                    format!("   {value} ({})", p.metric)
+                });
                 writeln!(
                     s,
-                    "{:<12} {:>18} {:>26} {:>8} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}",
+                    "{:<12} {:>30} {:>26} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}{}",
                     m.name,
-                    mse,
+                    m.mse_text,
                     spread,
-                    format!("{}/{}", m.failed, m.runs),
                     comps,
                     rms,
                     m.seconds_per_run * 1e3,
                     m.seconds_per_step * 1e6,
-                    m.build_seconds * 1e3
+                    m.build_seconds * 1e3,
+                    paper
                 )?;
+            }
+            if let Some(p) = summary.methods.iter().find_map(|m| m.paper.as_ref()) {
+                writeln!(
+                    s,
+                    "paper: {} over {} runs, for the methods this scenario runs as the paper did",
+                    p.source, p.runs
+                )?;
+            }
+            let same: Vec<_> = summary
+                .methods
+                .iter()
+                .filter_map(|m| m.coincides_with.as_ref().map(|c| (m, c)))
+                .collect();
+            if !same.is_empty() {
+                writeln!(s)?;
+                writeln!(s, "Rows that are the same numbers (per-run MSE):")?;
+                for (m, c) in same {
+                    writeln!(
+                        s,
+                        "  {} = {} in every run (largest relative difference {:.1e}){}",
+                        m.name,
+                        c.method,
+                        c.largest_relative_difference,
+                        c.why.as_ref().map_or_else(String::new, |w| format!(": {w}"))
+                    )?;
+                }
             }
             if !summary.warnings.is_empty() {
                 writeln!(s)?;
@@ -140,7 +167,7 @@ pub fn render(
                 writeln!(s)?;
                 writeln!(
                     s,
-                    "Failures (first per method; MSE is over the runs that did not fail):"
+                    "Failures (the first per method):"
                 )?;
                 for (m, f) in notes {
                     writeln!(s, "  {}: {f}", m.name)?;

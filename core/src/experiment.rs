@@ -323,16 +323,25 @@ impl Experiment {
     /// `method` with the sizes it left unset chosen from this experiment's problem (domain,
     /// prior), as [`Experiment::new`] does for the scenario's own methods.
     pub fn with_problem_defaults(&self, method: &MethodConfig) -> MethodConfig {
+        self.with_problem(|problem| {
+            method
+                .problem_defaults(problem)
+                .map_or_else(|| method.clone(), |(m, _)| m)
+        })
+    }
+
+    /// `f` of this experiment's problem (model, prior, probe points, domain).
+    pub(crate) fn with_problem<T>(
+        &self,
+        f: impl FnOnce(&crate::filters::method::ProblemContext) -> T,
+    ) -> T {
         let bounds = self.config.bounds();
-        let problem = crate::filters::method::ProblemContext {
+        f(&crate::filters::method::ProblemContext {
             model: &self.model,
             prior: &self.prior,
             probes: &self.probes,
             bounds: &bounds,
-        };
-        method
-            .problem_defaults(&problem)
-            .map_or_else(|| method.clone(), |(m, _)| m)
+        })
     }
 
     /// The truth and observations of the run with `seed` (x₀ from the scenario or drawn from

@@ -5,6 +5,7 @@
 //! `zakai reproduce <table>` prints them; the reproduction tests assert the papers' claims on
 //! the same data.
 
+use alloc::string::String;
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
@@ -303,6 +304,77 @@ fn direct_time_step(config: &mut ScenarioConfig, dt: f64) {
 /// The table with identifier `id`.
 pub fn table(id: &str) -> Option<PaperTable> {
     tables().into_iter().find(|t| t.id == id)
+}
+
+/// A paper's number for one method of a scenario: shown beside our Monte Carlo mean.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PaperValue {
+    /// Paper, table and row, e.g. `"004 §IV, Table 1 (cubic sensor)"`.
+    pub source: String,
+    /// The error measure the paper reports (`"MSE"`, `"E_RMS"`, …).
+    pub metric: String,
+    /// The paper's values (one per state component for per-component tables); `None` where
+    /// the paper reports the method as failed.
+    pub values: Option<Vec<f64>>,
+    /// The paper's number of runs behind the value.
+    pub runs: usize,
+}
+
+/// The papers' numbers that apply to `config`'s methods, as `(method index, value)`: a cell
+/// applies when `config` is the row's preset (after the row's adjustment) in model, prior,
+/// truth, domain and time, and the method is the preset's method of that name with the same
+/// parameters (sizes left unset chosen from the problem as [`Experiment::new`] does, with
+/// the experiment's `model` and `prior`) — a scenario changed anywhere that matters gets no
+/// paper value.
+pub fn paper_values(
+    config: &ScenarioConfig,
+    model: &crate::Model,
+    prior: &crate::Prior,
+) -> Vec<(usize, PaperValue)> {
+    let mut found = Vec::new();
+    for table in tables() {
+        for row in &table.rows {
+            if row.preset != config.name {
+                continue;
+            }
+            let Some(mut preset) = presets::preset(row.preset) else {
+                continue;
+            };
+            if let Some(adjust) = row.adjust {
+                adjust(&mut preset);
+            }
+            let same_problem = preset.model == config.model
+                && preset.prior == config.prior
+                && preset.initial_state == config.initial_state
+                && preset.domain == config.domain
+                && preset.time == config.time;
+            if !same_problem {
+                continue;
+            }
+            preset.choose_problem_defaults(model, prior);
+            for (name, values) in &row.paper {
+                let Some(theirs) = preset.methods.iter().find(|m| m.display_name() == *name)
+                else {
+                    continue;
+                };
+                for (i, ours) in config.methods.iter().enumerate() {
+                    let taken = found.iter().any(|(j, _)| *j == i);
+                    if ours == theirs && !taken {
+                        found.push((
+                            i,
+                            PaperValue {
+                                source: alloc::format!("{} ({})", table.source, row.label),
+                                metric: table.metric.label().into(),
+                                values: values.clone(),
+                                runs: table.runs,
+                            },
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    found
 }
 
 /// Our result for one method of one row.

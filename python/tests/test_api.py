@@ -97,7 +97,10 @@ def test_monte_carlo_table_pandas_and_parallel():
     # the table's MSE is the mean over the runs of each run's MSE
     single = [zakai.run(sc, seed=s).methods["PF(200)"].mse for s in range(10, 18)]
     assert table.rows[1]["mse"] == pytest.approx(np.mean(single), rel=1e-12)
-    assert "PF(200)" in str(table)
+    assert "PF(200)" in str(table) and table.how_means_are_taken in str(table)
+    # failed runs sit beside the MSE (the UKF loses the cubic sensor in some runs)
+    for r in table.rows:
+        assert ("†" in r["mse_text"]) == (0 < r["failed"] < r["runs"]), r["mse_text"]
     pd = pytest.importorskip("pandas")
     frame = table.to_pandas()
     assert isinstance(frame, pd.DataFrame) and frame.loc["PF(200)", "runs"] == 8
@@ -121,3 +124,13 @@ def test_monte_carlo_releases_the_gil():
     worker.join()
     # Python kept running beside the Rust job (with the GIL held there would be ~1 tick).
     assert len(ticks) > 20, len(ticks)
+
+
+def test_monte_carlo_table_names_coinciding_rows_and_paper_values():
+    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+    sc.methods = [m for m in sc.methods if m["method"] in ("qiem", "iem", "pf")]
+    table = zakai.monte_carlo(sc, runs=2, seed=1)
+    assert any(n.startswith("IEM = QIEM in every run") for n in table.notes())
+    frame = pytest.importorskip("pandas") and table.to_pandas()
+    assert frame.loc["PF(200)", "paper"] == "0.9115 (MSE)"
+    assert frame.loc["QIEM", "paper"] == ""

@@ -232,6 +232,17 @@ pub trait Method {
     ) -> Option<(Self::Params, String)> {
         None
     }
+    /// Why this method and `other` compute the same estimates on `problem` up to rounding,
+    /// when the family knows (a Monte Carlo table that finds two rows equal says why, so that
+    /// identical rows are not mistaken for a bug or for independent confirmation); `None`
+    /// otherwise.
+    fn coincidence(
+        _params: &Self::Params,
+        _other: &crate::scenario::MethodConfig,
+        _problem: &ProblemContext,
+    ) -> Option<String> {
+        None
+    }
 }
 
 /// `value` doubled when that stays within `max`, with the description `"{what} v → 2v"`

@@ -121,6 +121,12 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::problem_defaults(p, problem).map(|(p, note)| (MethodConfig::$variant(p), note)),)* }
             }
 
+            /// Why this method and `other` compute the same estimates on `problem`, when
+            /// the family knows ([`Method::coincidence`]).
+            pub fn coincidence(&self, other: &MethodConfig, problem: &ProblemContext) -> Option<String> {
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::coincidence(p, other, problem),)* }
+            }
+
             /// Builds the filter.
             pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
                 Ok(match self {

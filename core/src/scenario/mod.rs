@@ -186,34 +186,32 @@ pub struct ScenarioConfig {
 }
 
 impl PriorConfig {
-    /// The box `mean ± sds · sd` per component around a Gaussian prior, or around every
-    /// component of a mixture (the default domain for a model given without one); `None` for
-    /// a density prior, which is only defined on a domain, or a malformed prior.
-    pub fn covering_box(&self, sds: f64) -> Option<Vec<[f64; 2]>> {
-        let components: Vec<(&[f64], &[Vec<f64>])> = match self {
-            PriorConfig::Gaussian { mean, cov } => alloc::vec![(&mean[..], &cov[..])],
-            PriorConfig::Mixture { components } => components
-                .iter()
-                .map(|c| (&c.mean[..], &c.cov[..]))
-                .collect(),
-            PriorConfig::Density { .. } => return None,
-        };
-        let n = components.first()?.0.len();
-        let mut bounds = alloc::vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
-        for (mean, cov) in components {
-            if mean.len() != n || cov.len() != n {
-                return None;
-            }
-            for (d, b) in bounds.iter_mut().enumerate() {
-                let sd = cov[d].get(d).copied().filter(|v| *v > 0.0)?.sqrt();
-                b[0] = b[0].min(mean[d] - sds * sd);
-                b[1] = b[1].max(mean[d] + sds * sd);
-            }
+    /// The Gaussian components of a Gaussian or mixture prior (`None` for a density).
+    fn components(&self) -> Option<Vec<GaussianComponent>> {
+        match self {
+            PriorConfig::Gaussian { mean, cov } => Some(alloc::vec![GaussianComponent {
+                weight: 1.0,
+                mean: mean.clone(),
+                cov: cov.clone(),
+            }]),
+            PriorConfig::Mixture { components } => Some(components.clone()),
+            PriorConfig::Density { .. } => None,
         }
+    }
+
+    /// The box `mean ± sds · sd` of a Gaussian or mixture prior (its overall mean and
+    /// covariance, [`crate::filters::method::prior_box`]): the default domain for a model given
+    /// without one. `None` for a density prior, which is only defined on a domain, or a
+    /// prior too malformed to give a box.
+    pub fn covering_box(&self, sds: f64) -> Option<Vec<[f64; 2]>> {
+        let components = self.components()?;
+        let n = components.first()?.mean.len();
+        let prior = Prior::Mixture(mixture(&components, n).ok()?);
+        let bounds = crate::filters::method::prior_box(&prior, sds);
         bounds
             .iter()
-            .all(|b| b[0].is_finite() && b[1].is_finite())
-            .then_some(bounds)
+            .all(|(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
+            .then(|| bounds.iter().map(|&(lo, hi)| [lo, hi]).collect())
     }
 }
 
@@ -549,15 +547,10 @@ impl ScenarioConfig {
     pub fn build_prior(&self) -> Result<Prior, ZakaiError> {
         let n = self.state_dim();
         match &self.prior {
-            PriorConfig::Gaussian { mean, cov } => Ok(Prior::Mixture(mixture(
-                &[GaussianComponent {
-                    weight: 1.0,
-                    mean: mean.clone(),
-                    cov: cov.clone(),
-                }],
-                n,
-            )?)),
-            PriorConfig::Mixture { components } => Ok(Prior::Mixture(mixture(components, n)?)),
+            PriorConfig::Gaussian { .. } | PriorConfig::Mixture { .. } => {
+                let components = self.prior.components().unwrap_or_default();
+                Ok(Prior::Mixture(mixture(&components, n)?))
+            }
             PriorConfig::Density { expression } => {
                 let f = parse_function("prior density", core::slice::from_ref(expression), n, 1)?;
                 let cells = match n {

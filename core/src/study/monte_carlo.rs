@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ZakaiError;
 use crate::experiment::{Clock, Experiment, RunResult, Silent};
+use crate::reproduction::{paper_values, PaperValue};
 use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
 
 /// Summary of one method over a Monte Carlo job.
@@ -55,6 +56,79 @@ pub struct MethodSummary {
     pub warned: usize,
     /// The first run's self-check warnings, one line each, for the report.
     pub first_concerns: Vec<String>,
+    /// The paper's number for this method, when the scenario is the preset of a paper's
+    /// table row with this method unchanged ([`crate::reproduction::paper_values`]).
+    #[serde(default)]
+    pub paper: Option<PaperValue>,
+    /// An earlier method of the table that gave this one's MSE in every run.
+    #[serde(default)]
+    pub coincides_with: Option<Coincidence>,
+    /// The MSE cell as every table shows it ([`MethodSummary::mse_cell`]).
+    #[serde(default)]
+    pub mse_text: String,
+}
+
+/// How a Monte Carlo table's means are taken, said above every rendering of it (CLI, page,
+/// Python).
+pub const HOW_MEANS_ARE_TAKEN: &str = "MSE (Shi, Chen & Yau 2021, (43)): mean ± standard \
+error over the runs each method finished; † marks a method that failed in some runs — its \
+mean covers only the runs it survived (the easier ones), so it is not comparable with a \
+complete row";
+
+impl MethodSummary {
+    /// The MSE with its standard error and, beside it, the failed runs: `0.4012 ± 0.1066`,
+    /// `0.2773 ± 0.0933 † 2/6 failed`, `failed in 6/6 runs`.
+    pub fn mse_cell(&self) -> String {
+        let mean = match (self.mse, self.mse_stderr) {
+            (Some(v), Some(se)) if self.runs > 1 => alloc::format!("{v:.4} ± {se:.4}"),
+            (Some(v), _) => alloc::format!("{v:.4}"),
+            (None, _) => return alloc::format!("failed in {}/{} runs", self.failed, self.runs),
+        };
+        if self.failed > 0 {
+            alloc::format!("{mean} † {}/{} failed", self.failed, self.runs)
+        } else {
+            mean
+        }
+    }
+}
+
+/// Two rows of a Monte Carlo table that are the same numbers: the same runs failed and every
+/// other run's MSE agrees within [`COINCIDENCE_TOLERANCE`] (relative).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Coincidence {
+    /// The earlier method's display name.
+    pub method: String,
+    /// The largest relative difference of the per-run MSEs.
+    pub largest_relative_difference: f64,
+    /// Why the two compute the same estimates, when their family knows
+    /// ([`crate::filters::method::Method::coincidence`]).
+    pub why: Option<String>,
+}
+
+/// Relative tolerance within which two methods' per-run MSEs count as the same numbers: rows
+/// that agree this closely in every run print alike at the table's four digits, while two
+/// methods that compute different estimates differ by far more in some run (their per-run
+/// MSEs differ at the order of the posterior's own error).
+pub const COINCIDENCE_TOLERANCE: f64 = 1e-4;
+
+/// The largest relative difference of two methods' per-run MSEs when the same runs finished
+/// (at least one), else `None`.
+fn same_numbers(a: &[Option<f64>], b: &[Option<f64>]) -> Option<f64> {
+    let mut largest = 0.0f64;
+    let mut finished = 0;
+    for (x, y) in a.iter().zip(b) {
+        match (x, y) {
+            (Some(x), Some(y)) => {
+                let scale = x.abs().max(y.abs());
+                let d = if scale == 0.0 { 0.0 } else { (x - y).abs() / scale };
+                largest = largest.max(d);
+                finished += 1;
+            }
+            (None, None) => {}
+            _ => return None,
+        }
+    }
+    (finished > 0 && a.len() == b.len()).then_some(largest)
 }
 
 /// All methods' summaries.
@@ -70,6 +144,9 @@ pub struct MonteCarloSummary {
     pub methods: Vec<MethodSummary>,
     /// The methods' warnings about their parameters (from the first run), `(method, message)`.
     pub warnings: Vec<(String, String)>,
+    /// [`HOW_MEANS_ARE_TAKEN`], for renderers that only see the JSON.
+    #[serde(default)]
+    pub how_means_are_taken: String,
 }
 
 /// The Monte Carlo runner.
@@ -144,6 +221,38 @@ impl<'a> MonteCarlo<'a> {
         let results: Vec<Result<RunResult, ZakaiError>> = seeds.iter().map(job).collect();
         let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
         Ok(self.summarise(&results, seed))
+    }
+
+    /// Sets each summary's paper value and the earlier method it coincides with.
+    fn mark_paper_values_and_coincidences(
+        &self,
+        methods: &mut [MethodSummary],
+        results: &[RunResult],
+    ) {
+        let e = self.experiment;
+        for (i, value) in paper_values(e.config(), e.model(), e.prior()) {
+            if let Some(m) = methods.get_mut(i) {
+                m.paper = Some(value);
+            }
+        }
+        let per_run: Vec<Vec<Option<f64>>> = (0..methods.len())
+            .map(|i| results.iter().map(|r| r.mse(i)).collect())
+            .collect();
+        let configs = &e.config().methods;
+        for i in 0..methods.len() {
+            let found = (0..i).find_map(|j| {
+                let d = same_numbers(&per_run[i], &per_run[j])?;
+                (d <= COINCIDENCE_TOLERANCE).then_some((j, d))
+            });
+            if let Some((j, d)) = found {
+                let why = e.with_problem(|problem| configs[i].coincidence(&configs[j], problem));
+                methods[i].coincides_with = Some(Coincidence {
+                    method: methods[j].name.clone(),
+                    largest_relative_difference: d,
+                    why,
+                });
+            }
+        }
     }
 
     /// Summarises finished runs.
@@ -236,9 +345,17 @@ impl<'a> MonteCarlo<'a> {
                     },
                     e_mean: mean_vectors(&errors).unwrap_or_default(),
                     first_failure,
+                    paper: None,
+                    coincides_with: None,
+                    mse_text: String::new(),
                 }
             })
             .collect();
+        let mut methods: Vec<MethodSummary> = methods;
+        self.mark_paper_values_and_coincidences(&mut methods, results);
+        for m in &mut methods {
+            m.mse_text = m.mse_cell();
+        }
         MonteCarloSummary {
             scenario: self.experiment.config().name.clone(),
             runs: results.len(),
@@ -248,6 +365,7 @@ impl<'a> MonteCarlo<'a> {
                 .first()
                 .map(|r| r.warnings.clone())
                 .unwrap_or_default(),
+            how_means_are_taken: HOW_MEANS_ARE_TAKEN.into(),
         }
     }
 }

@@ -513,7 +513,8 @@ class RunResult:
 
 class MonteCarloTable:
     """The papers' table over many runs: per method the MSE (mean ± standard error over the
-    runs it finished), failures, warned runs and time per step.
+    runs it finished, with the failed runs beside it), the paper's number where the scenario
+    is a paper's table row, warned runs and time per step.
 
     Attributes
     ----------
@@ -522,8 +523,11 @@ class MonteCarloTable:
     seed : int
         Seed of the first run (runs use ``seed, seed + 1, …``).
     rows : list of dict
-        One dict per method (``name``, ``mse``, ``mse_stderr``, ``mse_quartiles``,
-        ``failed``, ``warned``, ``seconds_per_step``, ``build_seconds``, ``e_mean`` …).
+        One dict per method (``name``, ``mse``, ``mse_stderr``, ``mse_text``,
+        ``mse_quartiles``, ``failed``, ``warned``, ``paper``, ``coincides_with``,
+        ``seconds_per_step``, ``build_seconds``, ``e_mean`` …).
+    how_means_are_taken : str
+        The rule behind every mean, said above the table.
     """
 
     def __init__(self, summary: dict[str, Any]) -> None:
@@ -532,9 +536,19 @@ class MonteCarloTable:
         self.seed: int = summary["seed"]
         self.rows: list[dict[str, Any]] = summary["methods"]
         self.warnings: list[tuple[str, str]] = [tuple(w) for w in summary["warnings"]]
+        self.how_means_are_taken: str = summary["how_means_are_taken"]
 
-    _COLUMNS = ("name", "mse", "mse_stderr", "failed", "warned", "runs", "seconds_per_step",
-                "build_seconds")
+    _COLUMNS = ("name", "mse", "mse_stderr", "failed", "runs", "mse_text", "warned",
+                "seconds_per_step", "build_seconds")
+
+    @staticmethod
+    def _paper(row: dict[str, Any]) -> str:
+        p = row.get("paper")
+        if p is None:
+            return ""
+        if p["values"] is None:
+            return f"reported failed ({p['metric']})"
+        return " / ".join(f"{v:.4f}" for v in p["values"]) + f" ({p['metric']})"
 
     def to_pandas(self) -> Any:
         """The table as a pandas DataFrame indexed by method (needs pandas)."""
@@ -542,23 +556,34 @@ class MonteCarloTable:
             import pandas as pd
         except ImportError as e:  # pragma: no cover - depends on the environment
             raise ImportError("MonteCarloTable.to_pandas needs pandas (pip install pandas)") from e
-        frame = pd.DataFrame([{c: r[c] for c in self._COLUMNS} for r in self.rows])
+        frame = pd.DataFrame(
+            [{**{c: r[c] for c in self._COLUMNS}, "paper": self._paper(r)} for r in self.rows]
+        )
         return frame.set_index("name")
+
+    def notes(self) -> list[str]:
+        """Rows that are the same numbers as an earlier row, with the reason when known."""
+        out = []
+        for r in self.rows:
+            c = r.get("coincides_with")
+            if c is not None:
+                why = f": {c['why']}" if c.get("why") else ""
+                out.append(f"{r['name']} = {c['method']} in every run (largest relative "
+                           f"difference {c['largest_relative_difference']:.1e}){why}")
+        return out
 
     def __str__(self) -> str:
         lines = [
-            f"{self.scenario}: {self.runs} runs from seed {self.seed} "
-            "(MSE over the runs a method finished)",
-            f"{'method':<14} {'MSE':>10} {'± s.e.':>9} {'failed':>7} {'warned':>7} {'µs/step':>9}",
+            f"{self.scenario}: {self.runs} runs from seed {self.seed}",
+            f"{self.how_means_are_taken}.",
+            f"{'method':<14} {'MSE (runs finished)':>30} {'warned':>7} {'µs/step':>9}  paper",
         ]
         for r in self.rows:
-            mse = "—" if r["mse"] is None else f"{r['mse']:.4g}"
-            se = "" if r["mse_stderr"] is None else f"{r['mse_stderr']:.2g}"
             lines.append(
-                f"{r['name']:<14} {mse:>10} {se:>9} {r['failed']:>3}/{r['runs']:<3} "
-                f"{r['warned']:>7} {r['seconds_per_step'] * 1e6:>9.2f}"
+                f"{r['name']:<14} {r['mse_text']:>30} {r['warned']:>7} "
+                f"{r['seconds_per_step'] * 1e6:>9.2f}  {self._paper(r)}"
             )
-        return "\n".join(lines)
+        return "\n".join(lines + self.notes())
 
     def __repr__(self) -> str:
         return f"MonteCarloTable({self.scenario!r}, runs={self.runs})"

@@ -1,0 +1,135 @@
+//! The Monte Carlo table says how its means are taken and cannot mislead: failed runs sit
+//! beside the MSE (marked †), the paper's number appears where the scenario is the paper's
+//! row, and rows that are the same numbers are named with the reason. Short runs (T = 1) of
+//! the presets, seeds stated.
+
+use zakai::experiment::Experiment;
+use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai::study::monte_carlo::{MonteCarloSummary, COINCIDENCE_TOLERANCE, HOW_MEANS_ARE_TAKEN};
+use zakai::study::MonteCarlo;
+
+fn summary(config: ScenarioConfig, runs: usize, seed: u64) -> MonteCarloSummary {
+    let experiment = Experiment::new(config).expect("valid scenario");
+    MonteCarlo::new(&experiment)
+        .run(runs, seed, &|| {})
+        .expect("runs")
+}
+
+fn keep(mut config: ScenarioConfig, keys: &[&str]) -> ScenarioConfig {
+    config.methods.retain(|m| keys.contains(&m.key()));
+    config
+}
+
+fn row<'a>(s: &'a MonteCarloSummary, name: &str) -> &'a zakai::study::MethodSummary {
+    s.methods.iter().find(|m| m.name == name).expect("method")
+}
+
+/// The cubic sensor as 004 Table 1 runs it: the PF rows and the spectral row carry the
+/// paper's numbers, the EKF and UKF the paper's "failed"; QIEM (not in the table) none.
+#[test]
+fn paper_values_appear_where_the_scenario_is_the_papers_row() {
+    let mut config = presets::preset("cubic-sensor-1d").unwrap();
+    config.methods.retain(|m| matches!(m.key(), "ekf" | "pf" | "spectral" | "qiem"));
+    let s = summary(config.clone(), 2, 1);
+    let pf200 = row(&s, "PF(200)").paper.as_ref().expect("PF(200) is in Table 1");
+    assert_eq!(pf200.values, Some(vec![0.9115]));
+    assert_eq!(pf200.metric, "MSE");
+    assert!(pf200.source.contains("Table 1"));
+    assert_eq!(pf200.runs, 100);
+    assert_eq!(
+        row(&s, "Spectral").paper.as_ref().unwrap().values,
+        Some(vec![0.4317])
+    );
+    assert_eq!(row(&s, "EKF").paper.as_ref().unwrap().values, None);
+    assert!(row(&s, "QIEM").paper.is_none());
+
+    // A method changed from the paper's gets no paper value; nor does any method once the
+    // problem itself is changed.
+    for m in &mut config.methods {
+        if let MethodConfig::Pf(p) = m {
+            if p.particles == 200 {
+                p.particles = 300;
+            }
+        }
+    }
+    let s = summary(config.clone(), 2, 1);
+    assert!(row(&s, "PF(300)").paper.is_none());
+    assert!(row(&s, "PF(150)").paper.is_some());
+    config.time.dt_obs = 0.02;
+    let s = summary(config, 2, 1);
+    assert!(s.methods.iter().all(|m| m.paper.is_none()));
+}
+
+/// 000 Table 1 starts its EKF uninformed: the preset's own EKF is not the paper's, its QIEM
+/// is (the paper's E_RMS).
+#[test]
+fn a_row_adjusted_for_one_method_keeps_the_others_paper_values() {
+    let mut config = keep(presets::preset("cos-x3").unwrap(), &["ekf", "qiem"]);
+    config.time.t_final = 1.0;
+    let s = summary(config, 2, 1);
+    assert!(s.methods.iter().all(|m| m.paper.is_none()), "T changed");
+    let s = summary(keep(presets::preset("cos-x3").unwrap(), &["ekf", "qiem"]), 1, 1);
+    assert!(row(&s, "EKF").paper.is_none());
+    let qiem = row(&s, "QIEM").paper.as_ref().expect("000 Table 1 QIEM");
+    assert_eq!((qiem.metric.as_str(), qiem.values.clone()), ("E_RMS", Some(vec![0.3600])));
+}
+
+/// Without drift QIEM, IEM and SPT are the same numbers (000's schemes invert the same
+/// matrix); the table names the earlier row and says why. With a drift (cos x) they differ.
+#[test]
+fn coinciding_rows_are_named_with_the_reason() {
+    let mut config = keep(
+        presets::preset("cubic-sensor-1d").unwrap(),
+        &["qiem", "iem", "spt", "pf"],
+    );
+    config.time.t_final = 1.0;
+    let s = summary(config, 4, 3);
+    for name in ["IEM", "SPT"] {
+        let c = row(&s, name).coincides_with.as_ref().expect("coincides");
+        assert_eq!(c.method, "QIEM");
+        assert!(c.largest_relative_difference <= COINCIDENCE_TOLERANCE);
+        assert!(c.why.as_ref().expect("the family says why").contains("f = 0"));
+    }
+    assert!(row(&s, "QIEM").coincides_with.is_none());
+    for pf in s.methods.iter().filter(|m| m.name.starts_with("PF")) {
+        assert!(pf.coincides_with.is_none(), "{}", pf.name);
+    }
+
+    // cos-x3 runs QIEM only: IEM joins with QIEM's grid and step.
+    let mut config = keep(presets::preset("cos-x3").unwrap(), &["qiem"]);
+    let MethodConfig::Qiem(grid) = config.methods[0].clone() else {
+        panic!("cos-x3 runs QIEM")
+    };
+    config.methods.push(MethodConfig::Iem(grid));
+    config.time.t_final = 1.0;
+    let s = summary(config, 4, 3);
+    assert!(row(&s, "IEM").coincides_with.is_none());
+}
+
+/// A method that failed in some runs shows it beside its MSE with †, and the table states
+/// how means are taken; a complete row has no mark.
+#[test]
+fn failed_runs_sit_beside_the_mse() {
+    let mut config = keep(presets::preset("cubic-sensor-1d").unwrap(), &["ekf", "qiem"]);
+    config.time.t_final = 3.0;
+    let s = summary(config, 12, 1);
+    assert_eq!(s.how_means_are_taken, HOW_MEANS_ARE_TAKEN);
+    let ekf = row(&s, "EKF");
+    assert!(
+        ekf.failed > 0 && ekf.failed < ekf.runs,
+        "seed 1..12 should fail some EKF runs: {}",
+        ekf.failed
+    );
+    assert!(
+        ekf.mse_text
+            .ends_with(&format!("† {}/{} failed", ekf.failed, ekf.runs)),
+        "{}",
+        ekf.mse_text
+    );
+    assert!(ekf
+        .mse_text
+        .starts_with(&format!("{:.4} ± ", ekf.mse.unwrap())));
+    let qiem = row(&s, "QIEM");
+    assert_eq!(qiem.failed, 0);
+    assert!(!qiem.mse_text.contains('†'), "{}", qiem.mse_text);
+}
