@@ -14,6 +14,7 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 # Zakai's Python package (issue 24) into the same environment, built from this checkout.
 "$venv/bin/pip" install -q maturin
+rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 cargo build -q --release -p zakai-cli

@@ -105,10 +105,10 @@ pub fn render(
                 let comps = per_component(&m.mse_components);
                 let rms = per_component(&m.rms_components);
                 let paper = m.paper.as_ref().map_or_else(String::new, |p| {
-                    let value = p.values.as_ref().map_or_else(
-                        || "reported failed".to_string(),
-                        |v| slash(v),
-                    );
+                    let value = p
+                        .values
+                        .as_ref()
+                        .map_or_else(|| "reported failed".to_string(), |v| slash(v));
                     format!("   {value} ({})", p.metric)
                 });
                 writeln!(
@@ -147,7 +147,9 @@ pub fn render(
                         m.name,
                         c.method,
                         c.largest_relative_difference,
-                        c.why.as_ref().map_or_else(String::new, |w| format!(": {w}"))
+                        c.why
+                            .as_ref()
+                            .map_or_else(String::new, |w| format!(": {w}"))
                     )?;
                 }
             }
@@ -165,10 +167,7 @@ pub fn render(
                 .collect();
             if !notes.is_empty() {
                 writeln!(s)?;
-                writeln!(
-                    s,
-                    "Failures (the first per method):"
-                )?;
+                writeln!(s, "Failures (the first per method):")?;
                 for (m, f) in notes {
                     writeln!(s, "  {}: {f}", m.name)?;
                 }

@@ -353,8 +353,7 @@ pub fn paper_values(
             }
             preset.choose_problem_defaults(model, prior);
             for (name, values) in &row.paper {
-                let Some(theirs) = preset.methods.iter().find(|m| m.display_name() == *name)
-                else {
+                let Some(theirs) = preset.methods.iter().find(|m| m.display_name() == *name) else {
                     continue;
                 };
                 for (i, ours) in config.methods.iter().enumerate() {

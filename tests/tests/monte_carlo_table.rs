@@ -29,9 +29,14 @@ fn row<'a>(s: &'a MonteCarloSummary, name: &str) -> &'a zakai::study::MethodSumm
 #[test]
 fn paper_values_appear_where_the_scenario_is_the_papers_row() {
     let mut config = presets::preset("cubic-sensor-1d").unwrap();
-    config.methods.retain(|m| matches!(m.key(), "ekf" | "pf" | "spectral" | "qiem"));
+    config
+        .methods
+        .retain(|m| matches!(m.key(), "ekf" | "pf" | "spectral" | "qiem"));
     let s = summary(config.clone(), 2, 1);
-    let pf200 = row(&s, "PF(200)").paper.as_ref().expect("PF(200) is in Table 1");
+    let pf200 = row(&s, "PF(200)")
+        .paper
+        .as_ref()
+        .expect("PF(200) is in Table 1");
     assert_eq!(pf200.values, Some(vec![0.9115]));
     assert_eq!(pf200.metric, "MSE");
     assert!(pf200.source.contains("Table 1"));
@@ -68,10 +73,17 @@ fn a_row_adjusted_for_one_method_keeps_the_others_paper_values() {
     config.time.t_final = 1.0;
     let s = summary(config, 2, 1);
     assert!(s.methods.iter().all(|m| m.paper.is_none()), "T changed");
-    let s = summary(keep(presets::preset("cos-x3").unwrap(), &["ekf", "qiem"]), 1, 1);
+    let s = summary(
+        keep(presets::preset("cos-x3").unwrap(), &["ekf", "qiem"]),
+        1,
+        1,
+    );
     assert!(row(&s, "EKF").paper.is_none());
     let qiem = row(&s, "QIEM").paper.as_ref().expect("000 Table 1 QIEM");
-    assert_eq!((qiem.metric.as_str(), qiem.values.clone()), ("E_RMS", Some(vec![0.3600])));
+    assert_eq!(
+        (qiem.metric.as_str(), qiem.values.clone()),
+        ("E_RMS", Some(vec![0.3600]))
+    );
 }
 
 /// Without drift QIEM, IEM and SPT are the same numbers (000's schemes invert the same
@@ -88,7 +100,11 @@ fn coinciding_rows_are_named_with_the_reason() {
         let c = row(&s, name).coincides_with.as_ref().expect("coincides");
         assert_eq!(c.method, "QIEM");
         assert!(c.largest_relative_difference <= COINCIDENCE_TOLERANCE);
-        assert!(c.why.as_ref().expect("the family says why").contains("f = 0"));
+        assert!(c
+            .why
+            .as_ref()
+            .expect("the family says why")
+            .contains("f = 0"));
     }
     assert!(row(&s, "QIEM").coincides_with.is_none());
     for pf in s.methods.iter().filter(|m| m.name.starts_with("PF")) {
@@ -110,7 +126,10 @@ fn coinciding_rows_are_named_with_the_reason() {
 /// how means are taken; a complete row has no mark.
 #[test]
 fn failed_runs_sit_beside_the_mse() {
-    let mut config = keep(presets::preset("cubic-sensor-1d").unwrap(), &["ekf", "qiem"]);
+    let mut config = keep(
+        presets::preset("cubic-sensor-1d").unwrap(),
+        &["ekf", "qiem"],
+    );
     config.time.t_final = 3.0;
     let s = summary(config, 12, 1);
     assert_eq!(s.how_means_are_taken, HOW_MEANS_ARE_TAKEN);

@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ZakaiError;
 use crate::experiment::{Clock, Experiment, RunResult, Silent};
-use crate::reproduction::{paper_values, PaperValue};
 use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
+use crate::reproduction::{paper_values, PaperValue};
 
 /// Summary of one method over a Monte Carlo job.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -76,11 +76,15 @@ mean covers only the runs it survived (the easier ones), so it is not comparable
 complete row";
 
 impl MethodSummary {
-    /// The MSE with its standard error and, beside it, the failed runs: `0.4012 ± 0.1066`,
-    /// `0.2773 ± 0.0933 † 2/6 failed`, `failed in 6/6 runs`.
+    /// The MSE with its standard error (when two or more runs finished) and, beside it, the
+    /// failed runs: `0.4012 ± 0.1066`, `0.2773 ± 0.0933 † 2/6 failed`, `0.4730 † 2/3 failed`,
+    /// `failed in 6/6 runs`.
     pub fn mse_cell(&self) -> String {
         let mean = match (self.mse, self.mse_stderr) {
-            (Some(v), Some(se)) if self.runs > 1 => alloc::format!("{v:.4} ± {se:.4}"),
+            // A standard error needs two finished runs.
+            (Some(v), Some(se)) if self.runs - self.failed > 1 => {
+                alloc::format!("{v:.4} ± {se:.4}")
+            }
             (Some(v), _) => alloc::format!("{v:.4}"),
             (None, _) => return alloc::format!("failed in {}/{} runs", self.failed, self.runs),
         };
@@ -120,7 +124,11 @@ fn same_numbers(a: &[Option<f64>], b: &[Option<f64>]) -> Option<f64> {
         match (x, y) {
             (Some(x), Some(y)) => {
                 let scale = x.abs().max(y.abs());
-                let d = if scale == 0.0 { 0.0 } else { (x - y).abs() / scale };
+                let d = if scale == 0.0 {
+                    0.0
+                } else {
+                    (x - y).abs() / scale
+                };
                 largest = largest.max(d);
                 finished += 1;
             }
