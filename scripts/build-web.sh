@@ -26,18 +26,23 @@ RUSTFLAGS='--cfg getrandom_backend="wasm_js" -C link-arg=-zstack-size=8388608' c
 wasm-bindgen --target web --out-dir web/pkg-scalar \
   target/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
 
-if [ ! -d web/node_modules/uplot ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
+if [ ! -d web/node_modules/uplot ] || [ ! -d web/node_modules/temml ] \
+  || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
   (cd web && npm ci --no-audit --no-fund)
 fi
 # Vendored libraries: the page loads nothing from node_modules at run time.
 mkdir -p web/vendor/uplot
 cp web/node_modules/uplot/dist/uPlot.esm.js web/node_modules/uplot/dist/uPlot.min.css \
   web/node_modules/uplot/LICENSE web/vendor/uplot/
+# Temml renders the lessons' equations to MathML (Learn mode loads it on first use).
+mkdir -p web/vendor/temml
+cp web/node_modules/temml/dist/temml.mjs web/node_modules/temml/dist/Temml-Local.css \
+  web/node_modules/temml/dist/Temml.woff2 web/node_modules/temml/LICENSE web/vendor/temml/
 
 # The static site: one self-contained folder for any static host.
 rm -rf target/site
 mkdir -p target/site
-cp web/index.html web/main.js web/worker.js web/style.css target/site/
+cp web/index.html web/main.js web/worker.js web/learn.js web/lessons.js web/style.css target/site/
 cp -r web/vendor target/site/
 for pkg in pkg pkg-scalar; do
   mkdir -p "target/site/$pkg"

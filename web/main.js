@@ -2,6 +2,8 @@
 // the wasm Session, and live plots (uPlot) of truth, estimates and posterior densities.
 import uPlot from './vendor/uplot/uPlot.esm.js';
 
+import { setupLearn } from './learn.js';
+
 const $ = (id) => document.getElementById(id);
 // Elements are built with DOM calls only: text (every user string included) goes through
 // textContent/value/attributes, never through innerHTML, eval or Function (issue 11; the page's
@@ -73,6 +75,7 @@ const state = {
   data: null,
   fps: 0,
   lastFrameTimes: [],
+  loadSeq: 0,
 };
 window.zakaiPage = state; // for the end-to-end tests
 
@@ -391,8 +394,12 @@ function apply() {
   if (!config) return;
   setPlaying(false);
   const r = state.recording;
-  if (r) worker.postMessage({ type: 'loadRecording', config, seed: config.seed, observations: r.text, truth: r.truthText });
-  else worker.postMessage({ type: 'load', config, seed: config.seed });
+  // Each load has an id: when the page applies twice before the worker answers, what the
+  // first session sends is dropped instead of drawn with the second's rows.
+  state.loadSeq += 1;
+  const id = state.loadSeq;
+  if (r) worker.postMessage({ type: 'loadRecording', id, config, seed: config.seed, observations: r.text, truth: r.truthText });
+  else worker.postMessage({ type: 'load', id, config, seed: config.seed });
   state.pendingConfig = config;
   state.pendingRows = state.enabledRows.slice();
 }
@@ -418,6 +425,21 @@ function changeDimension() {
 }
 
 // ---------- plots ----------
+
+// A scale's range with a margin. A single value (the first frame: one time, every estimate
+// at the prior mean, some a rounding error away), a range within rounding of one, or a
+// non-finite one gets a unit range around it: uPlot's axis would otherwise divide a range of
+// 1e-16 into ticks it cannot step through.
+function safeRange(u, min, max) {
+  const wide = (a, b) => Number.isFinite(a) && Number.isFinite(b) && b - a > 1e-6 * Math.max(1, Math.abs(a), Math.abs(b));
+  if (wide(min, max)) {
+    // rangeNum snaps to round numbers, which can fold a narrow range back onto one value.
+    const [lo, hi] = uPlot.rangeNum(min, max, 0.1, true);
+    if (wide(lo, hi)) return [lo, hi];
+  }
+  const mid = Number.isFinite(min) ? (Number.isFinite(max) ? (min + max) / 2 : min) : Number.isFinite(max) ? max : 0;
+  return [mid - 1, mid + 1];
+}
 
 function makePlots(info) {
   const n = info.n;
@@ -450,7 +472,7 @@ function makePlots(info) {
   }
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
-    width, height: 280, series, bands, scales: { x: { time: false } },
+    width, height: 280, series, bands, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     axes: [{ label: 't' }, { label: 'x' }],
     // The band edges are series of their own; the legend lists the estimates only.
     hooks: { init: [(u) => u.root.querySelectorAll('.u-legend .u-series').forEach((row, k) => { if (k >= 2 + info.methods.length) row.style.display = 'none'; })] },
@@ -460,7 +482,7 @@ function makePlots(info) {
   info.methods.forEach((m, i) => dseries.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
   state.densityPlot?.destroy();
   state.densityPlot = new uPlot({
-    width: ($('density-plot').clientWidth || 360), height: 200, series: dseries, scales: { x: { time: false } },
+    width: ($('density-plot').clientWidth || 360), height: 200, series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     legend: { show: false },
     axes: [{ label: 'x' }, {}],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
@@ -934,13 +956,6 @@ function showConvergence({ rows, share }) {
     : `every method checked moved by at most ${share} of its posterior sd when its resolution was doubled`;
 }
 
-/** The paper's value of a Monte Carlo row: "0.9115 (MSE)", "reported failed", or "—". */
-function paperCell(p) {
-  if (!p) return '—';
-  if (p.values == null) return `reported failed (${p.metric})`;
-  return `${p.values.map((v) => v.toFixed(4)).join(' / ')} (${p.metric})`;
-}
-
 function showMonteCarlo(summary) {
   mc.summary = summary;
   const tbody = $('mc-table').querySelector('tbody');
@@ -952,7 +967,7 @@ function showMonteCarlo(summary) {
       m.mse_text,
       m.mse_quartiles ? `${m.mse_quartiles[1].toFixed(4)} [${m.mse_quartiles[0].toFixed(4)}, ${m.mse_quartiles[2].toFixed(4)}]` : '—',
       m.rms_components ? m.rms_components.map((v) => v.toFixed(4)).join(' / ') : '—',
-      paperCell(m.paper),
+      m.paper_text || '—',
       (m.seconds_per_run * 1000).toFixed(1),
     ];
     for (const c of cells) {
@@ -1009,6 +1024,7 @@ worker.onmessage = ({ data }) => {
       fillForm(shared ?? preset);
       if (location.hash && !shared) $('general-error').textContent = 'the link\'s configuration could not be read; showing a preset';
       apply();
+      setupLearn(learnHooks);
       break;
     }
     case 'validated':
@@ -1019,8 +1035,11 @@ worker.onmessage = ({ data }) => {
       }
       break;
     case 'loaded':
-      // Frames of the previous session still waiting to be drawn belong to another run.
+      if (data.id !== state.loadSeq) break; // an older load, superseded
+      // Frames of the previous session still waiting to be drawn belong to another run, and
+      // so does the last density drawn (it has that run's number of methods).
       state.queue.length = 0;
+      state.lastDensity = null;
       state.info = data.info;
       if (state.pendingConfig) {
         state.base = state.pendingConfig;
@@ -1032,11 +1051,17 @@ worker.onmessage = ({ data }) => {
       showProblems([]);
       makePlots(data.info);
       validate();
+      if (state.playAfterLoad) {
+        state.playAfterLoad = false;
+        setPlaying(true);
+      }
       break;
     case 'frame':
-      state.queue.push(data);
+      if (data.load === state.loadSeq) state.queue.push(data);
       break;
     case 'dataError':
+      // The load was refused and the worker's session is the one before: draw its frames.
+      state.loadSeq = data.load;
       state.pendingConfig = null;
       setPlaying(false);
       $('data-error').textContent = data.message;
@@ -1047,7 +1072,9 @@ worker.onmessage = ({ data }) => {
       $('seed').value = data.seed;
       break;
     case 'error':
-      // The previous session (if any) keeps running; the message goes next to the form.
+      // The previous session (if any) keeps running, and its frames are drawn again; the
+      // message goes next to the form.
+      state.loadSeq = data.load;
       state.pendingConfig = null;
       setPlaying(false);
       $('general-error').textContent = data.message;
@@ -1105,6 +1132,33 @@ $('remove-h').addEventListener('click', () => {
   if (values.length > 1) exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
   scheduleValidate();
 });
+// ---------- Learn mode's view of the page ----------
+
+const learnHooks = {
+  presets: () => state.presets,
+  method: (key, params = {}) => ({ ...structuredClone(methodEntry(key).defaults), ...params }),
+  current: () => readForm(),
+  run(config) {
+    if (state.presets.some((p) => p.name === config.name)) $('preset').value = config.name;
+    fillForm(config);
+    state.playAfterLoad = true;
+    apply();
+  },
+  monteCarlo(runs) {
+    $('mc-panel').open = true;
+    $('mc-runs').value = String(runs);
+    startMonteCarlo();
+    $('mc-panel').scrollIntoView({ block: 'start' });
+  },
+  view(name) {
+    const box = $(name);
+    if (box && !box.checked) {
+      box.checked = true;
+      box.dispatchEvent(new Event('change'));
+    }
+  },
+};
+
 // ---------- the user's files: scenario JSON, observations and truth CSV ----------
 
 function showDataStatus() {

@@ -19,6 +19,8 @@ let speed = 5;
 let awaitingAck = false;
 let view = { dim: 0, points: 200, densityMethod: 0, heatmapMethod: 0, heatmapPoints: 120, lcLayer: false };
 let sent = 0; // rows already sent to the page
+// Which load of the page the session answers (the page drops what an older load sends).
+let loadId = 0;
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
 
@@ -52,7 +54,7 @@ function frame(summary) {
   if (heat2d) transfer.push(heat2d.values.buffer);
   if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
   if (sds) transfer.push(...sds.map((s) => s.buffer));
-  post({ type: 'frame', from, to, times, truth, estimates, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
+  post({ type: 'frame', load: loadId, from, to, times, truth, estimates, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 function tick() {
@@ -71,7 +73,7 @@ function restarted() {
   playing = false;
   awaitingAck = false;
   sent = 0;
-  post({ type: 'loaded', info });
+  post({ type: 'loaded', id: loadId, info });
   frame(session.step(0));
 }
 
@@ -80,7 +82,7 @@ function guard(fn) {
     fn();
   } catch (e) {
     playing = false;
-    post({ type: 'error', message: String(e?.message ?? e) });
+    post({ type: 'error', load: loadId, message: String(e?.message ?? e) });
   }
 }
 
@@ -92,7 +94,7 @@ async function monteCarlo({ config, seed, runs }) {
   try {
     job = new zakai.MonteCarloJob(config, seed);
   } catch (e) {
-    post({ type: 'error', message: String(e?.message ?? e) });
+    post({ type: 'error', load: loadId, message: String(e?.message ?? e) });
     return;
   }
   let done = 0;
@@ -109,7 +111,7 @@ async function monteCarlo({ config, seed, runs }) {
     }
     post({ type: 'mcDone', done, runs, cancelled: mcCancelled, summary: done > 0 ? job.summary() : null });
   } catch (e) {
-    post({ type: 'error', message: String(e?.message ?? e) });
+    post({ type: 'error', load: loadId, message: String(e?.message ?? e) });
   } finally {
     job.free();
   }
@@ -149,6 +151,7 @@ self.onmessage = async ({ data }) => {
         const next = new zakai.Session(data.config, data.seed);
         session?.free();
         session = next;
+        loadId = data.id ?? 0;
         restarted();
       });
       break;
@@ -159,12 +162,13 @@ self.onmessage = async ({ data }) => {
       try {
         next = zakai.Session.fromRecording(data.config, data.observations, data.truth ?? undefined, data.seed);
       } catch (e) {
-        post({ type: 'dataError', message: String(e?.message ?? e) });
+        post({ type: 'dataError', load: loadId, message: String(e?.message ?? e) });
         break;
       }
       guard(() => {
         session?.free();
         session = next;
+        loadId = data.id ?? 0;
         restarted();
       });
       break;

@@ -104,13 +104,11 @@ pub fn render(
                 );
                 let comps = per_component(&m.mse_components);
                 let rms = per_component(&m.rms_components);
-                let paper = m.paper.as_ref().map_or_else(String::new, |p| {
-                    let value = p
-                        .values
-                        .as_ref()
-                        .map_or_else(|| "reported failed".to_string(), |v| slash(v));
-                    format!("   {value} ({})", p.metric)
-                });
+                let paper = if m.paper_text.is_empty() {
+                    String::new()
+                } else {
+                    format!("   {}", m.paper_text)
+                };
                 writeln!(
                     s,
                     "{:<12} {:>30} {:>26} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}{}",

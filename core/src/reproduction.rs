@@ -320,6 +320,20 @@ pub struct PaperValue {
     pub runs: usize,
 }
 
+impl PaperValue {
+    /// The value as the tables show it: `0.9115 (MSE)`, `0.4081 / 0.3646 (MSE per
+    /// component)`, `reported failed (MSE)`.
+    pub fn cell(&self) -> String {
+        match &self.values {
+            Some(v) => {
+                let values: Vec<String> = v.iter().map(|x| alloc::format!("{x:.4}")).collect();
+                alloc::format!("{} ({})", values.join(" / "), self.metric)
+            }
+            None => alloc::format!("reported failed ({})", self.metric),
+        }
+    }
+}
+
 /// The papers' numbers that apply to `config`'s methods, as `(method index, value)`: a cell
 /// applies when `config` is the row's preset (after the row's adjustment) in model, prior,
 /// truth, domain and time, and the method is the preset's method of that name with the same

@@ -70,7 +70,7 @@ scenario.t_final = 2.0
 table = zakai.monte_carlo(scenario, runs=16, seed=100)
 print(table)
 try:
-    print(table.to_pandas()[["mse_text", "paper"]])
+    print(table.to_pandas()[["mse_text", "paper_text"]])
 except ImportError:
     pass
 

@@ -132,5 +132,5 @@ def test_monte_carlo_table_names_coinciding_rows_and_paper_values():
     table = zakai.monte_carlo(sc, runs=2, seed=1)
     assert any(n.startswith("IEM = QIEM in every run") for n in table.notes())
     frame = pytest.importorskip("pandas") and table.to_pandas()
-    assert frame.loc["PF(200)", "paper"] == "0.9115 (MSE)"
-    assert frame.loc["QIEM", "paper"] == ""
+    assert frame.loc["PF(200)", "paper_text"] == "0.9115 (MSE)"
+    assert frame.loc["QIEM", "paper_text"] == ""

@@ -47,6 +47,10 @@ fn paper_values_appear_where_the_scenario_is_the_papers_row() {
     );
     assert_eq!(row(&s, "EKF").paper.as_ref().unwrap().values, None);
     assert!(row(&s, "QIEM").paper.is_none());
+    // The cells every table prints.
+    assert_eq!(row(&s, "PF(200)").paper_text, "0.9115 (MSE)");
+    assert_eq!(row(&s, "EKF").paper_text, "reported failed (MSE)");
+    assert_eq!(row(&s, "QIEM").paper_text, "");
 
     // A method changed from the paper's gets no paper value; nor does any method once the
     // problem itself is changed.

@@ -556,6 +556,87 @@ try {
     await data.close();
   }
 
+  // 15. Learn mode: every lesson loads its scenario and seed, renders its equations (Temml's
+  //     MathML, under the page's Content-Security-Policy), plays, and the run shows what its
+  //     text says; "try this" changes one parameter and replays.
+  await page.setViewportSize({ width: 1440, height: 900 });
+  const finished = () => page.waitForFunction(() => {
+    const s = window.zakaiPage;
+    const t = s.data?.times;
+    return !s.playing && t?.length > 1 && t[t.length - 1] >= s.info.t_end - 1e-9;
+  }, null, { timeout: 90000 });
+  const openLesson = async (id) => {
+    await page.goto(`${url}?lesson=${id}`);
+    await page.waitForFunction((l) => document.getElementById('lesson-select').value === l && document.querySelectorAll('#lesson math').length > 0, id, { timeout: 30000 });
+    await finished();
+    return page.$$eval('#metrics tbody tr', (rows) => Object.fromEntries(rows.map((r) => [r.children[0].textContent, r.children[2].textContent])));
+  };
+  const tryThis = async (label) => {
+    const before = await page.evaluate(() => window.zakaiPage.loadSeq);
+    await page.click(`#lesson button.try:has-text("${label}")`);
+    await page.waitForFunction((b) => window.zakaiPage.loadSeq > b && window.zakaiPage.info, before, { timeout: 30000 });
+    await finished();
+  };
+  let status = await openLesson('zakai-equation');
+  assert.ok(!(await page.isVisible('#form')) && (await page.isVisible('#learn')), 'Learn mode hides the form');
+  const lessonIds = await page.$$eval('#lesson-select option', (o) => o.map((x) => x.value));
+  assert.ok(lessonIds.length >= 6, `${lessonIds.length} lessons`);
+  assert.ok((await page.$$eval('#lesson math', (m) => m.length)) >= 5, 'equations rendered as MathML');
+  assert.ok((await page.$$eval('#lesson [style]', (m) => m.length)) === 0, 'no inline styles (CSP)');
+  const refs = await page.$$eval('#reference-list li', (li) => li.map((x) => x.textContent));
+  for (const id of ['000', '001', '002', '003', '004']) assert.ok(refs.some((r) => r.startsWith(`${id} — `)), `reference ${id}`);
+  assert.ok(refs.some((r) => r.includes('Communications in Information and Systems 14(2), 2014')));
+  assert.deepEqual(Object.keys(status), ['QIEM']);
+  await page.screenshot({ path: `${artifacts}/learn-zakai-equation.png` });
+  await tryThis('observe linearly');
+  assert.deepEqual(await page.evaluate(() => window.zakaiPage.base.model.observation), ['x']);
+  // Kalman–Bucy: the grid filter agrees with the exact filter (README: about 1e-3; stated 5e-3).
+  status = await openLesson('kalman-bucy');
+  const gap = await page.evaluate(() => {
+    const { info, data } = window.zakaiPage;
+    const kf = data.est[info.methods.indexOf('KF')][0];
+    const grid = data.est[info.methods.indexOf('QIEM')][0];
+    return Math.max(...kf.map((v, k) => Math.abs(v - grid[k])));
+  });
+  console.log('lesson kalman-bucy: |KF − QIEM| ≤', gap);
+  assert.ok(gap < 5e-3, `KF and QIEM differ by ${gap}`);
+  // The cubic sensor with seed 3: the EKF and the UKF lose the state, QIEM and the PF do not.
+  status = await openLesson('cubic-sensor');
+  console.log('lesson cubic-sensor:', JSON.stringify(status));
+  assert.match(status.EKF, /failed/);
+  assert.match(status.UKF, /failed/);
+  assert.doesNotMatch(status.QIEM, /failed/);
+  assert.doesNotMatch(status['PF(200)'], /failed/);
+  await page.screenshot({ path: `${artifacts}/learn-cubic-sensor.png` });
+  // Particles against grids: the Monte Carlo action runs 20 runs of the lesson's methods.
+  status = await openLesson('particles-grids');
+  assert.deepEqual(Object.keys(status), ['PF(50)', 'PF(500)', 'PF(5000)', 'QIEM']);
+  await page.click('#lesson button.try:has-text("Monte Carlo")');
+  await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('finished: 20'), null, { timeout: 120000 });
+  assert.equal((await page.$$('#mc-table tbody tr')).length, 4);
+  // The grid lesson: IEM's condition (22) is violated at Δt = 1e-3 and holds at 4e-4.
+  await openLesson('yau-yau-grid');
+  assert.match(await page.textContent('#warnings'), /IEM: \(22\) violated/);
+  await tryThis('shrink IEM');
+  assert.doesNotMatch(await page.textContent('#warnings'), /\(22\)/);
+  // 2-D: the heatmap, and the log-concavity layer turned on by the lesson's action.
+  await openLesson('two-d');
+  assert.ok(await page.isVisible('#heatmap-figure'));
+  await page.click('#lesson button.try:has-text("log-concavity")');
+  assert.ok(await page.isChecked('#lc-layer'));
+  // Spectral: the basis of 16 warns on this box, and the action changes it and replays.
+  status = await openLesson('spectral');
+  assert.match(status.Spectral, /self-check/);
+  await tryThis('a smaller basis');
+  assert.equal(await page.evaluate(() => window.zakaiPage.base.methods.find((m) => m.method === 'spectral').online_basis), 8);
+  // Explore mode comes back with the form.
+  await page.click('#mode-explore');
+  assert.ok(await page.isVisible('#form') && !(await page.isVisible('#learn')));
+  // The projector size: the lesson and the main plot side by side.
+  await page.setViewportSize({ width: 1280, height: 720 });
+  await openLesson('cubic-sensor');
+  await page.screenshot({ path: `${artifacts}/learn-1280x720.png` });
+
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);
 } catch (e) {

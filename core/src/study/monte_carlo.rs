@@ -66,6 +66,9 @@ pub struct MethodSummary {
     /// The MSE cell as every table shows it ([`MethodSummary::mse_cell`]).
     #[serde(default)]
     pub mse_text: String,
+    /// The paper's cell as every table shows it ([`PaperValue::cell`]; empty without one).
+    #[serde(default)]
+    pub paper_text: String,
 }
 
 /// How a Monte Carlo table's means are taken, said above every rendering of it (CLI, page,
@@ -356,6 +359,7 @@ impl<'a> MonteCarlo<'a> {
                     paper: None,
                     coincides_with: None,
                     mse_text: String::new(),
+                    paper_text: String::new(),
                 }
             })
             .collect();
@@ -363,6 +367,7 @@ impl<'a> MonteCarlo<'a> {
         self.mark_paper_values_and_coincidences(&mut methods, results);
         for m in &mut methods {
             m.mse_text = m.mse_cell();
+            m.paper_text = m.paper.as_ref().map_or_else(String::new, PaperValue::cell);
         }
         MonteCarloSummary {
             scenario: self.experiment.config().name.clone(),

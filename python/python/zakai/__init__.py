@@ -538,17 +538,8 @@ class MonteCarloTable:
         self.warnings: list[tuple[str, str]] = [tuple(w) for w in summary["warnings"]]
         self.how_means_are_taken: str = summary["how_means_are_taken"]
 
-    _COLUMNS = ("name", "mse", "mse_stderr", "failed", "runs", "mse_text", "warned",
-                "seconds_per_step", "build_seconds")
-
-    @staticmethod
-    def _paper(row: dict[str, Any]) -> str:
-        p = row.get("paper")
-        if p is None:
-            return ""
-        if p["values"] is None:
-            return f"reported failed ({p['metric']})"
-        return " / ".join(f"{v:.4f}" for v in p["values"]) + f" ({p['metric']})"
+    _COLUMNS = ("name", "mse", "mse_stderr", "failed", "runs", "mse_text", "paper_text",
+                "warned", "seconds_per_step", "build_seconds")
 
     def to_pandas(self) -> Any:
         """The table as a pandas DataFrame indexed by method (needs pandas)."""
@@ -557,7 +548,7 @@ class MonteCarloTable:
         except ImportError as e:  # pragma: no cover - depends on the environment
             raise ImportError("MonteCarloTable.to_pandas needs pandas (pip install pandas)") from e
         frame = pd.DataFrame(
-            [{**{c: r[c] for c in self._COLUMNS}, "paper": self._paper(r)} for r in self.rows]
+            [{c: r[c] for c in self._COLUMNS} for r in self.rows]
         )
         return frame.set_index("name")
 
@@ -581,7 +572,7 @@ class MonteCarloTable:
         for r in self.rows:
             lines.append(
                 f"{r['name']:<14} {r['mse_text']:>30} {r['warned']:>7} "
-                f"{r['seconds_per_step'] * 1e6:>9.2f}  {self._paper(r)}"
+                f"{r['seconds_per_step'] * 1e6:>9.2f}  {r['paper_text']}"
             )
         return "\n".join(lines + self.notes())
 

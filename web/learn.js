@@ -1,0 +1,112 @@
+// Learn mode: the lessons of lessons.js beside the running plots. A lesson loads its scenario
+// and seed and plays it; "try this" buttons change one thing and replay; equations are
+// rendered by Temml (vendored, loaded on first use) into MathML.
+
+import { LESSONS, REFERENCES } from './lessons.js';
+
+const $ = (id) => document.getElementById(id);
+const el = (tag, props = {}, ...children) => {
+  const node = Object.assign(document.createElement(tag), props);
+  node.append(...children);
+  return node;
+};
+
+let temml = null;
+const loadTemml = async () => {
+  temml ??= (await import('./vendor/temml/temml.mjs')).default;
+  return temml;
+};
+
+// Temml writes a few inline styles, which the page's Content-Security-Policy (style-src
+// 'self') refuses: they become data attributes that style.css styles the same way.
+const INLINE_STYLES = { 'display:blockmath;': '', 'math-depth:0;': ' data-tml="depth0"' };
+function mathml(tex, display) {
+  const markup = temml.renderToString(tex, { displayMode: display, throwOnError: false });
+  return markup.replace(/ style="([^"]*)"/g, (_, decl) => INLINE_STYLES[decl.replace(/\s+/g, '')] ?? '');
+}
+
+/** Text with `$…$` (inline) and `$$…$$` (displayed) TeX as DOM nodes. The lessons are the
+ *  page's own static text; only Temml's MathML is parsed as markup. */
+function richText(text) {
+  const nodes = [];
+  for (const part of text.split(/(\$\$[^$]+\$\$|\$[^$]+\$)/)) {
+    if (!part) continue;
+    const display = part.startsWith('$$');
+    if (part.startsWith('$')) {
+      const tex = part.slice(display ? 2 : 1, display ? -2 : -1);
+      const t = document.createElement('template');
+      t.innerHTML = mathml(tex, display);
+      nodes.push(...t.content.childNodes);
+    } else {
+      nodes.push(document.createTextNode(part));
+    }
+  }
+  return nodes;
+}
+
+/**
+ * Sets up Learn mode. `page` is the playground's side: `presets()`, `method(key, params)`,
+ * `run(config)` (load and play), `current()` (the running config), `monteCarlo(runs)`,
+ * `view(name)` (turn on a view such as the log-concavity layer).
+ */
+export function setupLearn(page) {
+  const select = $('lesson-select');
+  select.replaceChildren(...LESSONS.map((l) => el('option', { value: l.id }, l.title)));
+  $('reference-list').replaceChildren(...REFERENCES.map(([id, text]) => el('li', {}, id ? `${id} — ${text}` : text)));
+  select.addEventListener('change', () => openLesson(page, select.value));
+  $('mode-learn').addEventListener('click', () => setMode(page, 'learn'));
+  $('mode-explore').addEventListener('click', () => setMode(page, 'explore'));
+  const wanted = new URLSearchParams(location.search).get('lesson');
+  if (wanted) setMode(page, 'learn', wanted);
+}
+
+function setMode(page, mode, lesson) {
+  const learn = mode === 'learn';
+  document.body.classList.toggle('learn', learn);
+  $('learn').hidden = !learn;
+  $('form').hidden = learn;
+  $('mode-learn').setAttribute('aria-pressed', String(learn));
+  $('mode-explore').setAttribute('aria-pressed', String(!learn));
+  if (learn) openLesson(page, lesson ?? $('lesson-select').value ?? LESSONS[0].id);
+}
+
+/** The lesson's scenario from its preset, with its seed. */
+function lessonConfig(page, lesson) {
+  const preset = page.presets().find((p) => p.name === lesson.preset);
+  const config = lesson.scenario(structuredClone(preset), page.method);
+  config.seed = lesson.seed;
+  return config;
+}
+
+async function openLesson(page, id) {
+  const lesson = LESSONS.find((l) => l.id === id) ?? LESSONS[0];
+  $('lesson-select').value = lesson.id;
+  const url = new URL(location.href);
+  url.searchParams.set('lesson', lesson.id);
+  url.searchParams.delete('preset');
+  history.replaceState(null, '', url);
+  await loadTemml();
+  const action = (label, act) => {
+    const b = el('button', { type: 'button', className: 'try' }, label);
+    b.addEventListener('click', () => { act(); $('lesson-status').textContent = `changed: ${label}`; });
+    return b;
+  };
+  const replay = action('▶ run the lesson again', () => page.run(lessonConfig(page, lesson)));
+  const tries = lesson.tryThis.map((t) => action(t.label, () => {
+    if (t.mc) return page.monteCarlo(t.mc);
+    if (t.view) return page.view(t.view);
+    const config = page.current();
+    t.change(config, page.method);
+    page.run(config);
+  }));
+  $('lesson').replaceChildren(
+    el('h2', {}, lesson.title),
+    ...lesson.body.map((p) => el(p.startsWith('$$') ? 'div' : 'p', { className: 'lesson-text' }, ...richText(p))),
+    el('h3', {}, 'Try this'),
+    el('div', { className: 'tries' }, ...tries, replay),
+    el('p', { id: 'lesson-status', className: 'hint', role: 'status' }, `scenario: ${lesson.preset} with seed ${lesson.seed}`),
+    el('h3', {}, 'What to look for'),
+    el('ul', {}, ...lesson.lookFor.map((t) => el('li', {}, ...richText(t)))),
+  );
+  page.run(lessonConfig(page, lesson));
+}
