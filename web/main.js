@@ -21,7 +21,13 @@ const el = (tag, props = {}, ...children) => {
 };
 // Fills a <select> with `[value, text, title?]` options.
 const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
-const COLORS = ['#2450b3', '#d9480f', '#2b8a3e', '#ae3ec9', '#e8590c', '#0b7285', '#c2255c', '#5c940d', '#364fc7', '#862e9c'];
+// Okabe & Ito's colour-blind-safe palette (black is the truth's) with four line styles that
+// cycle with it, so no two of the first 28 methods share a look — also under colour-vision
+// deficiency, where some of the colours come close (checked by the browser tests).
+const COLORS = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#C9B400'];
+const DASHES = [[], [7, 3], [2, 3], [9, 3, 2, 3]];
+const color = (i) => COLORS[i % COLORS.length];
+const dash = (i) => DASHES[i % DASHES.length];
 const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
 // The method catalogue from the wasm crate (zakai::scenario::methods::catalogue): keys,
 // names, papers, parameter schema and defaults. The page holds no second copy of them.
@@ -76,8 +82,10 @@ const state = {
   fps: 0,
   lastFrameTimes: [],
   loadSeq: 0,
+  failures: new Map(), // method index → its failure line, for the run on screen
 };
 window.zakaiPage = state; // for the end-to-end tests
+state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), dash: dash(i) }));
 
 // ---------- form <-> ScenarioConfig ----------
 
@@ -362,7 +370,29 @@ function showProblems(problems) {
     }
   }
   $('general-error').textContent = general.join('\n');
-  $('form-status').textContent = problems.length ? `${problems.length} problem(s)` : 'valid';
+  showFormStatus(problems.length);
+}
+
+// Whether the form differs from the run on screen (edits not applied yet).
+function formChanged() {
+  return state.base != null && JSON.stringify(readForm()) !== JSON.stringify(state.base);
+}
+
+function showFormStatus(problems = 0) {
+  const changed = formChanged();
+  $('form-status').textContent = problems ? `${problems} problem(s) — not applied` : changed ? 'changed — not applied (▶ play applies)' : 'applied';
+  $('form-status').classList.toggle('changed', changed || problems > 0);
+}
+
+// ▶ play (and space) applies edits first, so a run never silently ignores them.
+function togglePlay() {
+  if (!state.playing && formChanged()) {
+    if (!checkedForm()) return;
+    state.playAfterLoad = true;
+    apply();
+    return;
+  }
+  setPlaying(!state.playing);
 }
 
 let validateTimer = null;
@@ -459,15 +489,15 @@ function makePlots(info) {
   state.heatX = 0;
   const width = $('trajectory-plot').clientWidth || 800;
   const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
-  info.methods.forEach((m, i) => series.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
+  info.methods.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
   const bands = [];
   if (!info.has_truth) {
     info.methods.forEach((m, i) => {
-      const color = COLORS[i % COLORS.length];
+      const fill = color(i);
       series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
       const hi = 2 + info.methods.length + 2 * i;
-      bands.push({ series: [hi, hi + 1], fill: `${color}26` });
+      bands.push({ series: [hi, hi + 1], fill: `${fill}26` });
     });
   }
   state.trajPlot?.destroy();
@@ -479,7 +509,7 @@ function makePlots(info) {
   }, series.map(() => []), $('trajectory-plot'));
   $('metrics').classList.toggle('no-truth', !info.has_truth);
   const dseries = [{}];
-  info.methods.forEach((m, i) => dseries.push({ label: m, stroke: COLORS[i % COLORS.length], width: 1.5 }));
+  info.methods.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   state.densityPlot?.destroy();
   state.densityPlot = new uPlot({
     width: ($('density-plot').clientWidth || 360), height: 200, series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
@@ -499,7 +529,7 @@ function makePlots(info) {
   };
   if (n >= 2) {
     entry('#fff', 'truth', true);
-    info.methods.forEach((m, i) => entry(COLORS[i % COLORS.length], m, false));
+    info.methods.forEach((m, i) => entry(color(i), m, false));
   }
   const heat = $('heat');
   heat.getContext('2d').clearRect(0, 0, heat.width, heat.height);
@@ -507,7 +537,7 @@ function makePlots(info) {
   $('heat-legend').title = '0 → maximum density at each time';
   $('metrics').querySelector('tbody').replaceChildren(...info.methods.map((m, i) => {
     const swatch = el('span', { className: 'swatch' });
-    swatch.style.background = COLORS[i % COLORS.length];
+    swatch.style.background = color(i);
     return el('tr', { dataset: { method: String(i) } },
       el('td', {}, swatch, m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'), el('td', { className: 'time' }, '–'));
   }));
@@ -556,7 +586,7 @@ function drawHeatmap(frame) {
     const x = e[0][last];
     const y = e[1][last];
     if (x == null || y == null) return;
-    ctx.fillStyle = COLORS[i % COLORS.length];
+    ctx.fillStyle = color(i);
     ctx.strokeStyle = '#000';
     ctx.fillRect(px(x) - 4, py(y) - 4, 8, 8);
     ctx.strokeRect(px(x) - 4, py(y) - 4, 8, 8);
@@ -651,7 +681,8 @@ function showLogConcavity(c) {
   }
   const at = c.worst ? ` (smallest curvature of −log p ${c.worst[1].toFixed(2)} at x = ${c.worst[0].map((v) => v.toFixed(2)).join(', ')})` : '';
   el.textContent = c.logConcave ? `log-concave${at}` : `not log-concave${at}`;
-  el.className = c.logConcave ? 'hint' : 'hint warning-text';
+  // A research diagnostic, not a fault of the run: neutral in colour.
+  el.className = c.logConcave ? 'hint' : 'hint diagnostic';
 }
 
 function applyFrame(frame) {
@@ -681,9 +712,12 @@ function applyFrame(frame) {
   showLogConcavity(frame.logConcave);
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
+  // Every failure stays listed (one line per method, with its time), not only the last.
   for (const f of frame.summary.failures) {
-    $('run-error').textContent = `${info.methods[f.method]} failed at step ${f.k}: ${f.message}. The other methods continue; reset (r) starts the run again.`;
+    const t = state.data.times[f.k];
+    state.failures.set(f.method, `${info.methods[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
   }
+  if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again.`;
 }
 
 function render() {
@@ -704,7 +738,8 @@ function render() {
     const status = tr.querySelector('.status');
     // A self-check that warned: the result may not be trustworthy (not a failure).
     const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';
-    status.textContent = (m.failed ? `failed at step ${m.failed_at}` : 'running') + checked;
+    const failedAt = d.times[m.failed_at];
+    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}` : 'running') + checked;
     status.title = [m.failure, ...(m.concerns ?? [])].filter(Boolean).join('\n');
     status.className = m.failed ? 'status failed' : (checked ? 'status warned' : 'status');
     tr.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
@@ -1047,6 +1082,7 @@ worker.onmessage = ({ data }) => {
         state.runRows = state.pendingRows;
       }
       $('run-error').textContent = '';
+      state.failures = new Map();
       $('data-error').textContent = '';
       showProblems([]);
       makePlots(data.info);
@@ -1097,7 +1133,7 @@ $('mc-start').addEventListener('click', startMonteCarlo);
 $('mc-cancel').addEventListener('click', () => mc.worker?.postMessage({ type: 'mcCancel' }));
 $('mc-csv').addEventListener('click', exportMonteCarloCsv);
 $('check-start').addEventListener('click', startConvergenceCheck);
-$('play').addEventListener('click', () => setPlaying(!state.playing));
+$('play').addEventListener('click', togglePlay);
 $('step').addEventListener('click', () => { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); });
 $('reset').addEventListener('click', apply);
 $('speed').addEventListener('input', () => {
@@ -1247,7 +1283,7 @@ for (const id of ['diffusion', 'noise-cov', 'noise-mix', 'prior-mean', 'prior-co
 }
 document.addEventListener('keydown', (e) => {
   if (['INPUT', 'TEXTAREA', 'SELECT'].includes(document.activeElement?.tagName)) return;
-  if (e.key === ' ') { e.preventDefault(); setPlaying(!state.playing); }
+  if (e.key === ' ') { e.preventDefault(); togglePlay(); }
   if (e.key === 'ArrowRight') { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); }
   if (e.key === 'r') apply();
 });

@@ -57,9 +57,19 @@ function frame(summary) {
   post({ type: 'frame', load: loadId, from, to, times, truth, estimates, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
+// Intervals owed to the playback: below one interval per frame (speeds down to 0.1) the
+// credit builds up over frames and a step is taken when it reaches one.
+let credit = 0;
 function tick() {
   if (!playing || !session || awaitingAck) return;
-  const summary = session.step(speed);
+  credit += speed;
+  const k = Math.floor(credit);
+  if (k === 0) {
+    setTimeout(() => guard(tick), 1000 / 60);
+    return;
+  }
+  credit -= k;
+  const summary = session.step(k);
   awaitingAck = true;
   frame(summary);
   if (summary.finished) {
@@ -72,6 +82,7 @@ function restarted() {
   info = session.info();
   playing = false;
   awaitingAck = false;
+  credit = 0;
   sent = 0;
   post({ type: 'loaded', id: loadId, info });
   frame(session.step(0));
@@ -194,7 +205,8 @@ self.onmessage = async ({ data }) => {
       });
       break;
     case 'speed':
-      speed = Math.max(1, Math.min(10000, data.value | 0));
+      speed = Math.max(0.1, Math.min(10000, Number(data.value) || 1));
+      credit = Math.min(credit, 1);
       break;
     case 'view':
       view = { ...view, ...data.view };

@@ -56,15 +56,16 @@
 //!   methods); [`scenario::presets`] holds the papers' examples;
 //! * [`Experiment`] — simulates once, or takes a [`Recording`] of observations, and feeds
 //!   every method the same data, with errors against the truth when there is one;
-//! * [`study`] — Monte Carlo tables and accuracy/cost frontiers; [`reproduction`] — the
-//!   papers' tables.
+//! * [`study`] — Monte Carlo tables and accuracy/cost frontiers; [`papers`] — the papers'
+//!   tables as data; [`reproduction`] — those tables rerun.
 //!
 //! ## Modules, bottom to top
 //!
 //! [`validate`] → [`error`] → [`linalg`], [`random`] → [`grid`], [`model`] → [`simulate`] →
 //! [`recording`], [`diagnostics`] → [`filters`] (one folder per method family, each
-//! registering itself through [`Method`]) → [`scenario`] → [`metrics`] → [`experiment`] →
-//! [`study`] → [`reproduction`]. A module uses only modules to its left (tested).
+//! registering itself through [`Method`]) → [`scenario`] → [`metrics`], [`papers`] →
+//! [`experiment`] → [`study`] → [`reproduction`]. A module uses only modules to its left
+//! (tested).
 //!
 //! ## Features
 //!
@@ -88,6 +89,7 @@ pub mod grid;
 pub mod linalg;
 pub mod metrics;
 pub mod model;
+pub mod papers;
 pub mod random;
 pub mod recording;
 pub mod reproduction;

@@ -2,7 +2,7 @@
 //! (or its own). Read from the source: every `crate::<module>` path outside comments and test
 //! modules. Order, bottom to top (as the crate doc lists it):
 //! validate → error → linalg, random → grid, model → simulate → recording, diagnostics →
-//! filters → scenario → metrics → experiment → study → reproduction.
+//! filters → scenario → metrics, papers → experiment → study → reproduction.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -16,7 +16,7 @@ const LAYERS: &[&[&str]] = &[
     &["recording", "diagnostics"],
     &["filters"],
     &["scenario"],
-    &["metrics"],
+    &["metrics", "papers"],
     &["experiment"],
     &["study"],
     &["reproduction"],

@@ -64,10 +64,21 @@ try {
   // offers the reset (the EKF fails on the cubic sensor in most runs, 004 Table 1).
   if (run.estimateRows.some((r) => r < run.rows)) {
     const runError = await page.textContent('#run-error');
-    assert.match(runError, /failed at step \d+: .+ The other methods continue; reset \(r\)/, runError);
+    assert.match(runError, /failed at step \d+ \(t = [\d.]+\): .+\nThe other methods continue; reset \(r\)/, runError);
     assert.ok(run.estimateRows.some((r) => r === run.rows), 'the other methods continued');
   }
   assert.deepEqual(run.methods.slice(0, 3), ['EKF', 'UKF', 'PF(50)']);
+  // The preset's description holds for its default seed (issue 25 §2): the EKF fails, the
+  // UKF holds on, the particle filters' error falls as particles are added.
+  await page.waitForFunction(() => window.zakaiPage.data.times.length === window.zakaiPage.info.steps + 1, null, { timeout: 60000 });
+  const told = await page.evaluate(() => ({
+    rows: window.zakaiPage.data.est.map((e) => e[0].filter((v) => v !== null).length),
+    mse: [...document.querySelectorAll('#metrics tbody tr')].map((r) => Number(r.children[1].textContent)),
+  }));
+  assert.ok(told.rows[0] < told.rows[2], 'the EKF failed');
+  assert.equal(told.rows[1], told.rows[2], 'the UKF held on');
+  assert.ok(told.mse[5] < told.mse[2], `PF(200) ${told.mse[5]} below PF(50) ${told.mse[2]}`);
+  assert.match(await page.textContent('#description'), /EKF losing the state[^.]*UKF holds on in this run/);
   assert.equal(run.densityPoints, 200);
   assert.ok(run.densityMass > 0, 'the density curve is not blank');
   const cells = await page.$$eval('#metrics tbody tr', (rows) => rows.map((r) => [...r.children].map((c) => c.textContent)));
@@ -607,6 +618,10 @@ try {
   assert.match(status.UKF, /failed/);
   assert.doesNotMatch(status.QIEM, /failed/);
   assert.doesNotMatch(status['PF(200)'], /failed/);
+  // Both failures stay listed, each with its time (issue 25 §2).
+  const failures = await page.textContent('#run-error');
+  assert.match(failures, /EKF failed at step \d+ \(t = [\d.]+\)/);
+  assert.match(failures, /UKF failed at step \d+ \(t = [\d.]+\)/);
   await page.screenshot({ path: `${artifacts}/learn-cubic-sensor.png` });
   // Particles against grids: the Monte Carlo action runs 20 runs of the lesson's methods.
   status = await openLesson('particles-grids');
@@ -636,6 +651,68 @@ try {
   await page.setViewportSize({ width: 1280, height: 720 });
   await openLesson('cubic-sensor');
   await page.screenshot({ path: `${artifacts}/learn-1280x720.png` });
+
+  // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods
+  //     share colour and style, and methods that share a style stay apart in colour (CIE76
+  //     ΔE ≥ 12) for normal vision and simulated deuteranopia, protanopia and tritanopia
+  //     (Machado, Oliveira & Fernandes 2009, severity 1). A screenshot under Chromium's own
+  //     deuteranopia emulation is kept to look at.
+  const looks = await page.evaluate(() => window.zakaiPage.looks(28));
+  assert.equal(new Set(looks.map((l) => `${l.color}/${l.dash.join(',')}`)).size, 28, 'every look distinct');
+  const CVD = {
+    normal: [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    deuteranopia: [[0.367322, 0.860646, -0.227968], [0.280085, 0.672501, 0.047413], [-0.011820, 0.042940, 0.968881]],
+    protanopia: [[0.152286, 1.052583, -0.204868], [0.114503, 0.786281, 0.099216], [-0.003882, -0.048116, 1.051998]],
+    tritanopia: [[1.255528, -0.076749, -0.178779], [-0.078411, 0.930809, 0.147602], [0.004733, 0.691367, 0.303900]],
+  };
+  const linear = (hex) => [1, 3, 5].map((k) => { const c = parseInt(hex.slice(k, k + 2), 16) / 255; return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4; });
+  const toLab = ([r, g, b]) => {
+    const f = (t) => (t > 216 / 24389 ? Math.cbrt(t) : (24389 / 27 * t + 16) / 116);
+    const [x, y, z] = [(0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047, 0.2126 * r + 0.7152 * g + 0.0722 * b, (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883];
+    return [116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z))];
+  };
+  const seen = (m, hex) => toLab(m.map((row) => Math.min(1, Math.max(0, row.reduce((a, w, k) => a + w * linear(hex)[k], 0)))));
+  for (const [vision, m] of Object.entries(CVD)) {
+    let worst = Infinity;
+    for (let i = 0; i < 12; i++) {
+      for (let j = i + 1; j < 12; j++) {
+        if (looks[i].dash.join() !== looks[j].dash.join()) continue;
+        const [a, b] = [seen(m, looks[i].color), seen(m, looks[j].color)];
+        worst = Math.min(worst, Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+      }
+    }
+    console.log(`looks, ${vision}: smallest ΔE between same-style methods ${worst.toFixed(1)}`);
+    assert.ok(worst >= 12, `${vision}: ΔE ${worst}`);
+  }
+  await page.setViewportSize({ width: 1440, height: 900 });
+  await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
+  await page.click('#play');
+  await finished();
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send('Emulation.setEmulatedVisionDeficiency', { type: 'deuteranopia' });
+  await page.screenshot({ path: `${artifacts}/playground-deuteranopia.png` });
+  await cdp.send('Emulation.setEmulatedVisionDeficiency', { type: 'none' });
+
+  // 16b. Slow playback for a lecture: 0.1 interval per frame advances one interval about
+  //      every ten frames.
+  await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
+  await page.evaluate(() => { const s = document.getElementById('speed'); s.value = '0.1'; s.dispatchEvent(new Event('input')); });
+  assert.equal(await page.textContent('#speed-value'), '0.1');
+  await page.click('#play');
+  await page.waitForTimeout(1000);
+  await page.click('#play');
+  const slow = await page.evaluate(() => window.zakaiPage.data.times.length - 1);
+  console.log('intervals in 1 s at 0.1 per frame:', slow);
+  assert.ok(slow >= 1 && slow <= 12, `${slow} intervals in one second`);
+
+  // 17. Edits are never silently ignored: the status says "changed — not applied", and
+  //     ▶ play applies them before playing.
+  await page.fill('#methods .method-row:nth-child(3) input[data-param="particles"]', '321');
+  await page.waitForFunction(() => document.getElementById('form-status').textContent.startsWith('changed — not applied'), null, { timeout: 5000 });
+  await page.click('#play');
+  await page.waitForFunction(() => window.zakaiPage.info.methods.includes('PF(321)'), null, { timeout: 15000 });
+  await finished();
+  assert.equal(await page.textContent('#form-status'), 'applied');
 
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);

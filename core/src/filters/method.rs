@@ -232,13 +232,14 @@ pub trait Method {
     ) -> Option<(Self::Params, String)> {
         None
     }
-    /// Why this method and `other` compute the same estimates on `problem` up to rounding,
-    /// when the family knows (a Monte Carlo table that finds two rows equal says why, so that
-    /// identical rows are not mistaken for a bug or for independent confirmation); `None`
-    /// otherwise.
+    /// Why this method and another — `other_key` with parameters `other` (its `Params`, to
+    /// downcast) — compute the same estimates on `problem` up to rounding, when the family
+    /// knows (a Monte Carlo table that finds two rows equal says why, so that identical rows
+    /// are not mistaken for a bug or for independent confirmation); `None` otherwise.
     fn coincidence(
         _params: &Self::Params,
-        _other: &crate::scenario::MethodConfig,
+        _other_key: &str,
+        _other: &dyn core::any::Any,
         _problem: &ProblemContext,
     ) -> Option<String> {
         None

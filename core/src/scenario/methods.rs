@@ -124,7 +124,8 @@ macro_rules! registry {
             /// Why this method and `other` compute the same estimates on `problem`, when
             /// the family knows ([`Method::coincidence`]).
             pub fn coincidence(&self, other: &MethodConfig, problem: &ProblemContext) -> Option<String> {
-                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::coincidence(p, other, problem),)* }
+                let other_params: &dyn core::any::Any = match other { $($(#[$attr])* MethodConfig::$variant(q) => q,)* };
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::coincidence(p, other.key(), other_params, problem),)* }
             }
 
             /// Builds the filter.

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::ZakaiError;
 use crate::experiment::{Clock, Experiment, RunResult, Silent};
 use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
-use crate::reproduction::{paper_values, PaperValue};
+use crate::papers::{paper_values, PaperValue};
 
 /// Summary of one method over a Monte Carlo job.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -57,7 +57,7 @@ pub struct MethodSummary {
     /// The first run's self-check warnings, one line each, for the report.
     pub first_concerns: Vec<String>,
     /// The paper's number for this method, when the scenario is the preset of a paper's
-    /// table row with this method unchanged ([`crate::reproduction::paper_values`]).
+    /// table row with this method unchanged ([`crate::papers::paper_values`]).
     #[serde(default)]
     pub paper: Option<PaperValue>,
     /// An earlier method of the table that gave this one's MSE in every run.

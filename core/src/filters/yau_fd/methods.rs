@@ -14,7 +14,6 @@ use crate::filters::method::{
     ProblemContext, Takes,
 };
 use crate::filters::{per_dimension, product};
-use crate::scenario::MethodConfig;
 use crate::validate::ConfigProblem;
 
 fn points() -> ParamInfo {
@@ -162,10 +161,11 @@ macro_rules! yau_yau_method {
             }
             fn coincidence(
                 p: &YauYauParams,
-                other: &MethodConfig,
+                other_key: &str,
+                other: &dyn core::any::Any,
                 problem: &ProblemContext,
             ) -> Option<String> {
-                coincidence($scheme, p, other, problem)
+                coincidence($scheme, p, other_key, other, problem)
             }
         }
     };
@@ -180,15 +180,17 @@ macro_rules! yau_yau_method {
 fn coincidence(
     scheme: Scheme,
     p: &YauYauParams,
-    other: &MethodConfig,
+    other_key: &str,
+    other: &dyn core::any::Any,
     problem: &ProblemContext,
 ) -> Option<String> {
-    let (other_scheme, q) = match other {
-        MethodConfig::Qiem(q) => (Scheme::Qiem, q),
-        MethodConfig::Iem(q) => (Scheme::Iem, q),
-        MethodConfig::Spt(q) => (Scheme::Superposition, q),
+    let other_scheme = match other_key {
+        k if k == Qiem::KEY => Scheme::Qiem,
+        k if k == Iem::KEY => Scheme::Iem,
+        k if k == Spt::KEY => Scheme::Superposition,
         _ => return None,
     };
+    let q = other.downcast_ref::<YauYauParams>()?;
     let n = problem.model.n;
     let implicit_euler = |s: Scheme, q: &YauYauParams| s != Scheme::Iem || q.alpha == 1.0;
     let same_discretisation = per_dimension(&p.points, n) == per_dimension(&q.points, n)
