@@ -430,7 +430,7 @@ function apply() {
   const id = state.loadSeq;
   if (r) worker.postMessage({ type: 'loadRecording', id, config, seed: config.seed, observations: r.text, truth: r.truthText });
   else worker.postMessage({ type: 'load', id, config, seed: config.seed });
-  state.pendingConfig = config;
+  state.pendingConfig = structuredClone(config); // the form keeps editing its own rows
   state.pendingRows = state.enabledRows.slice();
 }
 

@@ -216,7 +216,7 @@ pub fn all() -> Vec<ScenarioConfig> {
             description: "The cubic sensor of 004 (44): σ₀ ∝ exp(−(x−1)²/(2·0.1)), x₀ = 1, \
                 T = 5, Δτ = 0.01; EKF, UKF (α = 0.05, β = 2, κ = 0) and PF with 50–200 \
                 particles as in Table 1 (DMZ method MSE 0.4317, PF(200) 0.9115, EKF/UKF fail). Look \
-                for, with the default seed 1: the EKF losing the state once x nears 0 (x³ is flat \
+                for: with the default seed 1, the EKF losing the state once x nears 0 (x³ is flat \
                 there) and marked failed at t ≈ 1.4, while the UKF holds on in this run (with seed 3 \
                 both fail; the Monte Carlo panel says how often); the grid and spectral densities \
                 widening and recovering; the particle filters' error falling as particles are \
