@@ -33,9 +33,10 @@ step "cargo test --workspace"
 cargo test --workspace
 
 step "examples (core/examples: own data, models from text and closures)"
-# The test profile: `cargo test` above has built them already.
+# The binaries `cargo test --workspace` above has built (same profile, same features; a
+# `cargo run -p zakai` would rebuild the core with the package's own feature set).
 for example in core/examples/*.rs; do
-  cargo run -q --profile test -p zakai --example "$(basename "$example" .rs)"
+  "target/debug/examples/$(basename "$example" .rs)"
 done
 
 step "cargo doc without warnings"
