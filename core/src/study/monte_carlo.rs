@@ -234,11 +234,12 @@ impl<'a> MonteCarlo<'a> {
         Ok(self.summarise(&results, seed))
     }
 
-    /// Sets each summary's paper value and the earlier method it coincides with.
+    /// Sets each summary's paper value and the earlier method it coincides with;
+    /// `per_run[i]` holds method i's MSE in every run (`None` where it failed).
     fn mark_paper_values_and_coincidences(
         &self,
         methods: &mut [MethodSummary],
-        results: &[RunResult],
+        per_run: &[Vec<Option<f64>>],
     ) {
         let e = self.experiment;
         for (i, value) in paper_values(e.config(), e.model(), e.prior()) {
@@ -246,9 +247,6 @@ impl<'a> MonteCarlo<'a> {
                 m.paper = Some(value);
             }
         }
-        let per_run: Vec<Vec<Option<f64>>> = (0..methods.len())
-            .map(|i| results.iter().map(|r| r.mse(i)).collect())
-            .collect();
         let configs = &e.config().methods;
         for i in 0..methods.len() {
             let found = (0..i).find_map(|j| {
@@ -269,10 +267,11 @@ impl<'a> MonteCarlo<'a> {
     /// Summarises finished runs.
     pub fn summarise(&self, results: &[RunResult], seed: u64) -> MonteCarloSummary {
         let names = self.experiment.method_names();
-        let methods = names
+        let (mut methods, per_run): (Vec<MethodSummary>, Vec<Vec<Option<f64>>>) = names
             .iter()
             .enumerate()
             .map(|(i, name)| {
+                let mut per_run = Vec::with_capacity(results.len());
                 let mut mses = Vec::new();
                 let mut comps = Vec::new();
                 let mut rms = Vec::new();
@@ -300,7 +299,9 @@ impl<'a> MonteCarlo<'a> {
                     }
                     match track.mse_components(truth) {
                         Some(c) => {
-                            mses.push(c.iter().sum());
+                            let mse: f64 = c.iter().sum();
+                            per_run.push(Some(mse));
+                            mses.push(mse);
                             comps.push(c);
                             rms.push(track.rms_components(truth).unwrap_or_default());
                             let e = abs_errors(truth, &track.estimates, track.n);
@@ -308,6 +309,7 @@ impl<'a> MonteCarlo<'a> {
                             errors.push(e);
                         }
                         None => {
+                            per_run.push(None);
                             failed += 1;
                             if first_failure.is_none() {
                                 first_failure = track.failure.as_ref().map(|f| {
@@ -324,7 +326,7 @@ impl<'a> MonteCarlo<'a> {
                 }
                 let stats = mean_and_stderr(&mses);
                 let norm_stats = mean_and_stderr(&norms);
-                MethodSummary {
+                let summary = MethodSummary {
                     name: name.clone(),
                     runs: results.len(),
                     failed,
@@ -360,11 +362,11 @@ impl<'a> MonteCarlo<'a> {
                     coincides_with: None,
                     mse_text: String::new(),
                     paper_text: String::new(),
-                }
+                };
+                (summary, per_run)
             })
-            .collect();
-        let mut methods: Vec<MethodSummary> = methods;
-        self.mark_paper_values_and_coincidences(&mut methods, results);
+            .unzip();
+        self.mark_paper_values_and_coincidences(&mut methods, &per_run);
         for m in &mut methods {
             m.mse_text = m.mse_cell();
             m.paper_text = m.paper.as_ref().map_or_else(String::new, PaperValue::cell);
