@@ -2,14 +2,8 @@
 // and seed and plays it; "try this" buttons change one thing and replay; equations are
 // rendered by Temml (vendored, loaded on first use) into MathML.
 
+import { $, el } from './dom.js';
 import { LESSONS, REFERENCES } from './lessons.js';
-
-const $ = (id) => document.getElementById(id);
-const el = (tag, props = {}, ...children) => {
-  const node = Object.assign(document.createElement(tag), props);
-  node.append(...children);
-  return node;
-};
 
 let temml = null;
 const loadTemml = async () => {

@@ -2,23 +2,9 @@
 // the wasm Session, and live plots (uPlot) of truth, estimates and posterior densities.
 import uPlot from './vendor/uplot/uPlot.esm.js';
 
+import { $, el } from './dom.js';
 import { setupLearn } from './learn.js';
 
-const $ = (id) => document.getElementById(id);
-// Elements are built with DOM calls only: text (every user string included) goes through
-// textContent/value/attributes, never through innerHTML, eval or Function (issue 11; the page's
-// Content-Security-Policy forbids the latter two anyway).
-const el = (tag, props = {}, ...children) => {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(props)) {
-    if (v == null || v === false) continue;
-    if (k === 'dataset') Object.assign(e.dataset, v);
-    else if (k in e && k !== 'list') e[k] = v;
-    else e.setAttribute(k, v === true ? '' : String(v));
-  }
-  e.append(...children.filter((c) => c != null));
-  return e;
-};
 // Fills a <select> with `[value, text, title?]` options.
 const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
 // Okabe & Ito's colour-blind-safe palette (black is the truth's) with four line styles that
