@@ -54,8 +54,9 @@ CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
   cargo test -p zakai-wasm --target wasm32-unknown-unknown
 
 step "same seed, same truth: native CLI vs wasm"
-cargo build --release -p zakai-cli
-node tests/web/determinism.mjs
+# The CLI binary `cargo test --workspace` built (its test profile is optimised; a release
+# build would compile the core a further time for the same results).
+ZAKAI_CLI=target/debug/zakai node tests/web/determinism.mjs
 
 step "Python package: abi3 wheel (maturin) in a virtual environment, pytest, the example"
 venv=target/py-venv
@@ -64,7 +65,7 @@ venv=target/py-venv
 rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
-ZAKAI_CLI=target/release/zakai "$venv/bin/python" -m pytest -q python/tests
+ZAKAI_CLI=target/debug/zakai "$venv/bin/python" -m pytest -q python/tests
 "$venv/bin/python" python/examples/tour.py > /dev/null
 
 step "browser end-to-end tests (headless chromium)"
@@ -75,7 +76,7 @@ if ! command -v chromium >/dev/null 2>&1; then
     sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
   fi
 fi
-node tests/web/e2e.mjs
+ZAKAI_CLI=target/debug/zakai node tests/web/e2e.mjs
 
 if [ "${ZAKAI_SOAK:-0}" = 1 ]; then
   step "soak: every 1-D method, 10^6 intervals of the cubic sensor (ZAKAI_SOAK=1)"

@@ -4,6 +4,8 @@ import uPlot from './vendor/uplot/uPlot.esm.js';
 
 import { $, el } from './dom.js';
 import { setupLearn } from './learn.js';
+import { HeatStrip, drawHeatmap2d, markerShape } from './canvas-plots.js';
+import { matrixEditor, readMatrix, resizeMatrix, setMatrix } from './matrix.js';
 
 // Fills a <select> with `[value, text, title?]` options.
 const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
@@ -69,6 +71,9 @@ const state = {
   lastFrameTimes: [],
   loadSeq: 0,
   failures: new Map(), // method index → its failure line, for the run on screen
+  history: [], // per drawn frame: {row, t, grid, densities, heat2d} — what the time slider shows
+  scrub: null, // the row the time slider looks at, or null (live)
+  hidden: new Set(), // methods switched off by their chips
 };
 window.zakaiPage = state; // for the end-to-end tests
 state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), dash: dash(i) }));
@@ -235,16 +240,17 @@ function fillForm(config) {
   $('dim').value = n;
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
-  $('diffusion').value = config.model.diffusion ? JSON.stringify(config.model.diffusion) : '';
+  matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, onInput: scheduleValidate });
   const noise = config.model.noise;
   $('noise-kind').value = noise.kind;
-  $('noise-cov').value = noise.kind === 'continuous' && noise.cov ? JSON.stringify(noise.cov) : '';
+  const m = config.model.observation.length;
+  matrixEditor($('noise-cov'), { value: noise.kind === 'continuous' ? noise.cov ?? null : null, rows: m, identityAllowed: true, onInput: scheduleValidate });
   $('noise-mix').value = noise.kind === 'discrete' ? JSON.stringify(noise.mixture) : '[{"weight": 1, "mean": [0], "cov": [[1]]}]';
   showNoiseKind(noise.kind);
   const prior = config.prior;
   $('prior-kind').value = prior.kind;
   $('prior-mean').value = prior.kind === 'gaussian' ? prior.mean.join(', ') : Array(n).fill(0).join(', ');
-  $('prior-cov').value = prior.kind === 'gaussian' ? JSON.stringify(prior.cov) : JSON.stringify(identity(n));
+  matrixEditor($('prior-cov'), { value: prior.kind === 'gaussian' ? prior.cov : identity(n), rows: n, onInput: scheduleValidate });
   $('prior-mix').value = prior.kind === 'mixture' ? JSON.stringify(prior.components) : '';
   $('prior-expr').value = prior.kind === 'density' ? prior.expression : '';
   showPriorKind(prior.kind);
@@ -255,6 +261,10 @@ function fillForm(config) {
   $('inner').value = config.time.inner_steps;
   $('seed').value = config.seed;
   $('mc-seed').value = config.seed;
+  const failure = config.failure ?? {};
+  $('fail-bound').value = String(failure.divergence_bound ?? 1000);
+  $('fail-error').value = failure.track_loss ? String(failure.track_loss.error) : '';
+  $('fail-duration').value = failure.track_loss ? String(failure.track_loss.duration) : '';
   state.methodRows = config.methods.map((m) => ({ enabled: true, config: structuredClone(m) }));
   methodRowsUI();
   $('description').textContent = config.description;
@@ -270,15 +280,15 @@ function readForm() {
   const values = (id) => [...$(id).querySelectorAll('input')].map((el) => el.value);
   c.model.drift = values('drift');
   c.model.observation = values('observation');
-  c.model.diffusion = parseJSONField($('diffusion').value, null);
+  c.model.diffusion = readMatrix($('diffusion'));
   if ($('noise-kind').value === 'continuous') {
-    c.model.noise = { kind: 'continuous', cov: parseJSONField($('noise-cov').value, null) };
+    c.model.noise = { kind: 'continuous', cov: readMatrix($('noise-cov')) };
   } else {
     c.model.noise = { kind: 'discrete', mixture: parseJSONField($('noise-mix').value, []) };
   }
   const kind = $('prior-kind').value;
   if (kind === 'gaussian') {
-    c.prior = { kind, mean: parseList($('prior-mean').value) ?? [], cov: parseJSONField($('prior-cov').value, []) };
+    c.prior = { kind, mean: parseList($('prior-mean').value) ?? [], cov: readMatrix($('prior-cov')) ?? [] };
   } else if (kind === 'mixture') {
     c.prior = { kind, components: parseJSONField($('prior-mix').value, []) };
   } else {
@@ -294,6 +304,12 @@ function readForm() {
   c.domain = domain;
   c.time = { t_final: Number($('t-final').value), dt_obs: Number($('dt-obs').value), inner_steps: Number($('inner').value) };
   c.seed = Number($('seed').value);
+  // The failure rule: the bound always, the track-loss rule when both its numbers are given.
+  const [lossError, lossDuration] = [$('fail-error').value.trim(), $('fail-duration').value.trim()];
+  c.failure = {
+    divergence_bound: Number($('fail-bound').value),
+    track_loss: lossError === '' && lossDuration === '' ? null : { error: Number(lossError === '' ? NaN : lossError), duration: Number(lossDuration === '' ? NaN : lossDuration) },
+  };
   $('methods').querySelectorAll('[data-param]').forEach((el) => {
     const row = state.methodRows[el.dataset.row];
     const param = methodEntry(row.config.method).params.find((p) => p.name === el.dataset.param);
@@ -324,6 +340,10 @@ function localProblems(config) {
   if (!Number.isInteger(config.seed) || config.seed < 0) {
     problems.push({ field: 'seed', message: 'must be a nonnegative integer' });
   }
+  const loss = config.failure.track_loss;
+  if (loss && !(Number.isFinite(loss.error) && Number.isFinite(loss.duration))) {
+    problems.push({ field: 'failure.track_loss', message: 'the track-loss rule needs both numbers: the error and how long it lasts (or neither, for no rule)' });
+  }
   return problems;
 }
 
@@ -338,7 +358,11 @@ function showProblems(problems) {
       const row = state.enabledRows[Number(m[1])];
       const el = document.querySelector(`[data-method-row="${row}"]`);
       if (el) {
-        el.textContent += `${field.slice(m[0].length + 1) || 'method'}: ${p.message}\n`;
+        const param = field.slice(m[0].length + 1).split(/[.[]/)[0];
+        const input = param ? document.querySelector(`#methods [data-row="${row}"][data-param="${CSS.escape(param)}"]`) : null;
+        input?.classList.add('invalid');
+        const label = input?.closest('label')?.firstChild?.textContent?.trim() || param || 'method';
+        el.textContent += `${label}: ${plainWords(p.message)}\n`;
         continue;
       }
     }
@@ -349,7 +373,7 @@ function showProblems(problems) {
       if (!target) field = field.replace(/(\[\d+\]|\.[^.[\]]+)$/, '');
     }
     if (target) {
-      target.textContent += (target.textContent ? '\n' : '') + p.message;
+      target.textContent += (target.textContent ? '\n' : '') + plainWords(p.message);
       document.querySelectorAll(`[data-field="${CSS.escape(field)}"]`).forEach((el) => el.classList.add('invalid'));
     } else {
       general.push(`${p.field || 'scenario'}: ${p.message}`);
@@ -359,6 +383,19 @@ function showProblems(problems) {
   showFormStatus(problems.length);
 }
 
+// serde's wording of a value of the wrong shape, in the page's words.
+function plainWords(message) {
+  const m = message.match(/invalid type: (.+?), expected (.+?)(?: at line \d+ column \d+)?$/);
+  if (m) return `expected ${m[2].replace(/^a sequence$/, 'a list')}, got ${m[1].replace(/`/g, '')}`;
+  return message;
+}
+
+// After apply or play: the first problem scrolled into view, so its message is never out of sight.
+function revealFirstProblem() {
+  const first = [...document.querySelectorAll('#form .error, #form .invalid')].find((e) => e.textContent || e.classList.contains('invalid'));
+  first?.scrollIntoView({ block: 'center' });
+}
+
 // Whether the form differs from the run on screen (edits not applied yet).
 function formChanged() {
   return state.base != null && JSON.stringify(readForm()) !== JSON.stringify(state.base);
@@ -366,14 +403,14 @@ function formChanged() {
 
 function showFormStatus(problems = 0) {
   const changed = formChanged();
-  $('form-status').textContent = problems ? `${problems} problem(s) — not applied` : changed ? 'changed — not applied (▶ play applies)' : 'applied';
+  $('form-status').textContent = problems ? `${problems === 1 ? 'a problem' : `${problems} problems`} at the marked field${problems === 1 ? '' : 's'} — not applied` : changed ? 'changed — not applied (▶ play applies)' : 'applied';
   $('form-status').classList.toggle('changed', changed || problems > 0);
 }
 
 // ▶ play (and space) applies edits first, so a run never silently ignores them.
 function togglePlay() {
   if (!state.playing && formChanged()) {
-    if (!checkedForm()) return;
+    if (!checkedForm(true)) return;
     state.playAfterLoad = true;
     apply();
     return;
@@ -388,11 +425,12 @@ function scheduleValidate() {
 }
 
 // The form's scenario, or null after showing the problems only the page can see.
-function checkedForm() {
+function checkedForm(reveal = false) {
   const config = readForm();
   const local = localProblems(config);
   if (local.length) {
     showProblems(local);
+    if (reveal) revealFirstProblem();
     return null;
   }
   return config;
@@ -406,7 +444,7 @@ function validate() {
 }
 
 function apply() {
-  const config = checkedForm();
+  const config = checkedForm(true);
   if (!config) return;
   setPlaying(false);
   const r = state.recording;
@@ -457,140 +495,222 @@ function safeRange(u, min, max) {
   return [mid - 1, mid + 1];
 }
 
+// The methods' labels with their resolution (QIEM(399), PF(2000)) for legends and rows.
+const labels = () => state.info.labels ?? state.info.methods;
+// uPlot series of the trajectory plot: x, truth, one per method, one per method after its
+// failure (dashed, lighter), then the ±2σ band edges when there is no truth.
+const ghostSeries = (i) => 2 + state.info.methods.length + i;
+
 function makePlots(info) {
   const n = info.n;
+  const names = info.labels ?? info.methods;
+  const M = names.length;
   // Sizes the scenario left unset, chosen from the problem (domain, prior): say what they are.
   $('chosen-defaults').hidden = !(info.chosen?.length);
   $('chosen-defaults').textContent = (info.chosen ?? []).map((c) => `default from the problem — ${c}`).join(' · ');
   $('heatmap-figure').hidden = n < 2;
   fillOptions($('component'), Array.from({ length: n }, (_, i) => [i, `x${i + 1}`]));
-  fillOptions($('density-method'), info.methods.map((m, i) => [i, m]));
+  fillOptions($('density-method'), names.map((m, i) => [i, m]));
   // The richest density by default: a grid filter, else the last particle filter, else the first.
   const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT|SA|FDM|Direct)/.test(m));
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
   $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
-  $('heat-range').textContent = `x${1} ∈ [${info.domain[0][0]}, ${info.domain[0][1]}] bottom → top`;
   const perMethod = () => info.methods.map(() => Array.from({ length: n }, () => []));
-  state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), lo: perMethod(), hi: perMethod() };
-  state.heatX = 0;
-  const width = $('trajectory-plot').clientWidth || 800;
+  state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), ghost: perMethod(), lo: perMethod(), hi: perMethod() };
+  state.history = [];
+  state.scrub = null;
+  state.diagnostics = null;
+  // The methods hidden by their chips stay hidden over a reset of the same methods.
+  if (state.hiddenFor !== names.join('|')) state.hidden = new Set();
+  state.hiddenFor = names.join('|');
   const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
-  info.methods.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  names.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  names.forEach((m, i) => series.push({ label: `${m} after failure`, stroke: `${color(i)}99`, dash: [3, 4], width: 1.5 }));
   // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
   const bands = [];
   if (!info.has_truth) {
-    info.methods.forEach((m, i) => {
-      const fill = color(i);
+    names.forEach((m, i) => {
       series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
-      const hi = 2 + info.methods.length + 2 * i;
-      bands.push({ series: [hi, hi + 1], fill: `${fill}26` });
+      const hi = 2 + 2 * M + 2 * i;
+      bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
     });
   }
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
-    width, height: 280, series, bands, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
+    ...plotSize('trajectory-plot', 'trajectory'), series, bands, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     axes: [{ label: 't' }, { label: 'x' }],
-    // The band edges are series of their own; the legend lists the estimates only.
-    hooks: { init: [(u) => u.root.querySelectorAll('.u-legend .u-series').forEach((row, k) => { if (k >= 2 + info.methods.length) row.style.display = 'none'; })] },
+    // The failed-part and band series are drawn but not listed; failures get a ✕ and the
+    // time slider's cursor a red line.
+    hooks: {
+      init: [(u) => u.root.querySelectorAll('.u-legend .u-series').forEach((row, k) => { if (k >= 2 + M) row.style.display = 'none'; })],
+      draw: [drawFailureMarks, (u) => drawCursor(u)],
+    },
   }, series.map(() => []), $('trajectory-plot'));
   $('metrics').classList.toggle('no-truth', !info.has_truth);
   const dseries = [{}];
-  info.methods.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   state.densityPlot?.destroy();
   state.densityPlot = new uPlot({
-    width: ($('density-plot').clientWidth || 360), height: 200, series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
+    ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     legend: { show: false },
-    axes: [{ label: 'x' }, {}],
+    axes: [{ label: 'x' }, { label: 'density' }],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
-  }, [[], ...info.methods.map(() => [])], $('density-plot'));
-  fillOptions($('heatmap-method'), info.methods.map((m, i) => [i, m]));
+  }, [[], ...names.map(() => [])], $('density-plot'));
+  fillOptions($('heatmap-method'), names.map((m, i) => [i, m]));
   $('heatmap-method').value = $('density-method').value;
-  $('heatmap-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
   const key = $('heatmap-key');
   key.replaceChildren();
-  const entry = (color, text, round) => {
-    const mark = el('span', { className: round ? 'swatch round' : 'swatch' });
-    mark.style.background = color;
-    key.appendChild(el('span', {}, mark, text));
-  };
   if (n >= 2) {
-    entry('#fff', 'truth', true);
-    info.methods.forEach((m, i) => entry(color(i), m, false));
+    const swatch = (c, round) => {
+      const mark = el('span', { className: round ? 'swatch round' : 'swatch' });
+      mark.style.background = c;
+      return mark;
+    };
+    key.append(el('span', {}, swatch('#fff', true), 'truth'),
+      ...names.map((m, i) => el('span', { dataset: { method: String(i) } }, swatch(color(i)), `${markerSymbol(i)} ${m}`)));
   }
-  const heat = $('heat');
-  heat.getContext('2d').clearRect(0, 0, heat.width, heat.height);
-  $('heat-legend').style.background = `linear-gradient(to right, ${[0, 0.25, 0.5, 0.75, 1].map((v) => rgb(colormap(v))).join(',')})`;
-  $('heat-legend').title = '0 → maximum density at each time';
-  $('metrics').querySelector('tbody').replaceChildren(...info.methods.map((m, i) => {
+  state.heatStrip ??= new HeatStrip($('heat'));
+  resetHeatStrip();
+  $('metrics').querySelector('tbody').replaceChildren(...names.map((m, i) => {
     const swatch = el('span', { className: 'swatch' });
     swatch.style.background = color(i);
     return el('tr', { dataset: { method: String(i) } },
-      el('td', {}, swatch, m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'), el('td', { className: 'time' }, '–'));
+      el('td', {}, swatch, m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'));
   }));
+  $('timing').querySelector('tbody').replaceChildren(...names.map((m, i) => el('tr', { dataset: { method: String(i) } },
+    el('td', {}, m), el('td', { className: 'time' }, '–'), el('td', { className: 'concerns' }, '—'))));
+  methodChips(names);
+  updateScrub();
   worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
 }
 
-// The 2-D heatmap: the chosen method's joint density of x1, x2 on a raster over the domain
-// (drawn from the typed array into the canvas), the truth and every estimate on top, and the
-// log-concavity layer in red where ∇²(−log p) has a negative eigenvalue.
-function drawHeatmap(frame) {
-  const h2 = frame.heat2d;
-  const canvas = $('heatmap');
-  const ctx = canvas.getContext('2d');
-  if (!h2 || !h2.values.length) {
-    ctx.fillStyle = '#eee';
-    ctx.fillRect(0, 0, canvas.width, canvas.height);
-    return;
-  }
-  const P = h2.points;
-  let max = 0;
-  for (const v of h2.values) if (v > max) max = v;
-  const img = ctx.createImageData(P, P);
-  for (let j = 0; j < P; j++) {
-    for (let i = 0; i < P; i++) {
-      // Row j of the raster is x2 = ys[j]; the canvas has x2 growing upwards.
-      const v = h2.values[i + P * j];
-      let c = colormap(max > 0 ? v / max : 0);
-      const k = h2.curvature ? h2.curvature[i + P * j] : NaN;
-      if (k < -1e-6) c = [Math.round(0.45 * c[0] + 0.55 * 230), Math.round(0.45 * c[1] + 0.55 * 30), Math.round(0.45 * c[2] + 0.55 * 40)];
-      const o = 4 * (i + P * (P - 1 - j));
-      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
+// Plot sizes follow the panel (and presentation mode's larger type).
+function plotSize(id, which) {
+  const present = document.body.classList.contains('present');
+  const width = $(id).clientWidth || (which === 'trajectory' ? 800 : 360);
+  const height = which === 'trajectory' ? (present ? 380 : 260) : (present ? 300 : 200);
+  return { width: width - 2, height };
+}
+
+const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', diamond: '◇' })[markerShape(i)];
+
+// One chip per method: the methods shown in every plot (a lecture's chosen subset).
+function methodChips(names) {
+  $('method-chips').replaceChildren(...names.map((m, i) => {
+    const swatch = el('span', { className: 'swatch' });
+    swatch.style.background = color(i);
+    const chip = el('button', { type: 'button', className: 'chip', dataset: { method: String(i) }, ariaPressed: String(!state.hidden.has(i)), title: `show or hide ${m} in every plot` }, swatch, m);
+    chip.addEventListener('click', () => {
+      if (state.hidden.has(i)) state.hidden.delete(i); else state.hidden.add(i);
+      chip.setAttribute('aria-pressed', String(!state.hidden.has(i)));
+      showMethods();
+    });
+    return chip;
+  }));
+  showMethods();
+}
+
+function showMethods() {
+  const M = state.info.methods.length;
+  for (let i = 0; i < M; i++) {
+    const show = !state.hidden.has(i);
+    state.trajPlot.setSeries(2 + i, { show });
+    state.trajPlot.setSeries(ghostSeries(i), { show });
+    if (!state.info.has_truth) {
+      state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
+      state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
     }
+    state.densityPlot.setSeries(1 + i, { show });
+    document.querySelectorAll(`#metrics tr[data-method="${i}"], #heatmap-key [data-method="${i}"]`).forEach((r) => r.classList.toggle('hidden-method', !show));
   }
-  const off = new OffscreenCanvas(P, P);
-  off.getContext('2d').putImageData(img, 0, 0);
-  ctx.imageSmoothingEnabled = false;
-  ctx.drawImage(off, 0, 0, canvas.width, canvas.height);
+  render();
+}
+
+// The heat strip for the shown component and method, redrawn from the frames kept so far.
+function resetHeatStrip() {
   const info = state.info;
-  const [[x0, x1], [y0, y1]] = info.domain;
-  const px = (x) => ((x - x0) / (x1 - x0)) * canvas.width;
-  const py = (y) => canvas.height - ((y - y0) / (y1 - y0)) * canvas.height;
+  const dim = Number($('component').value) || 0;
+  const [lo, hi] = info.domain[dim];
+  state.heatStrip.reset({ t0: info.t_start, t1: info.t_end, lo, hi, label: `x${dim + 1}` });
+  const method = Number($('density-method').value) || 0;
+  for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
+}
+
+// The row on screen: the time slider's, or the latest.
+const shownRow = () => (state.scrub ?? state.data.times.length - 1);
+// The kept frame at or before the shown row (its densities).
+function shownFrame() {
+  if (state.scrub == null) return state.lastDensity;
+  let best = null;
+  for (const h of state.history) if (h.row <= state.scrub) best = h;
+  return best;
+}
+
+// ✕ where a method failed, at its estimate there, in its colour.
+function drawFailureMarks(u) {
   const d = state.data;
-  const last = d.times.length - 1;
-  if (last < 0) return;
-  d.est.forEach((e, i) => {
-    const x = e[0][last];
-    const y = e[1][last];
-    if (x == null || y == null) return;
-    ctx.fillStyle = color(i);
-    ctx.strokeStyle = '#000';
-    ctx.fillRect(px(x) - 4, py(y) - 4, 8, 8);
-    ctx.strokeRect(px(x) - 4, py(y) - 4, 8, 8);
+  if (!d || !state.diagnostics) return;
+  const dim = Number($('component').value) || 0;
+  const ctx = u.ctx;
+  const r = 6 * (window.devicePixelRatio || 1);
+  state.diagnostics.forEach((m, i) => {
+    if (!m.failed || state.hidden.has(i)) return;
+    const k = m.failed_at;
+    const t = d.times[k];
+    const y = d.ghost[i][dim][k] ?? d.est[i][dim][k - 1];
+    if (t == null || y == null) return;
+    const [px, py] = [u.valToPos(t, 'x', true), u.valToPos(y, 'y', true)];
+    ctx.save();
+    ctx.lineWidth = 3 * (window.devicePixelRatio || 1);
+    for (const [c, w] of [['#fff', 5], [color(i), 3]]) {
+      ctx.strokeStyle = c;
+      ctx.lineWidth = w * (window.devicePixelRatio || 1);
+      ctx.beginPath();
+      ctx.moveTo(px - r, py - r); ctx.lineTo(px + r, py + r);
+      ctx.moveTo(px + r, py - r); ctx.lineTo(px - r, py + r);
+      ctx.stroke();
+    }
+    ctx.restore();
   });
-  if (!state.info.has_truth) return;
+}
+
+// The time slider's cursor: a red vertical line at the time looked at.
+function drawCursor(u) {
+  if (state.scrub == null) return;
+  const t = state.data.times[state.scrub];
+  if (t == null) return;
+  const px = u.valToPos(t, 'x', true);
+  const ctx = u.ctx;
+  ctx.save();
+  ctx.strokeStyle = '#e00';
+  ctx.lineWidth = 2 * (window.devicePixelRatio || 1);
   ctx.beginPath();
-  ctx.arc(px(d.truth[0][last]), py(d.truth[1][last]), 5, 0, 2 * Math.PI);
-  ctx.fillStyle = '#fff';
-  ctx.fill();
-  ctx.strokeStyle = '#000';
+  ctx.moveTo(px, u.bbox.top);
+  ctx.lineTo(px, u.bbox.top + u.bbox.height);
   ctx.stroke();
+  ctx.restore();
+}
+
+// The 2-D heatmap of the shown frame, with the truth and every shown estimate then.
+function drawHeatmap() {
+  const f = shownFrame();
+  const h2 = f?.heat2d;
+  const d = state.data;
+  const row = f?.row ?? shownRow();
+  const marks = d.est.map((e, i) => ({ x: e[0][row] ?? d.ghost[i][0][row], y: e[1][row] ?? d.ghost[i][1][row], color: color(i), i }))
+    .filter((m, i) => m.x != null && m.y != null && !state.hidden.has(i));
+  drawHeatmap2d($('heatmap'), {
+    values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
+    truth: state.info.has_truth && d.truth[0][row] != null ? [d.truth[0][row], d.truth[1][row]] : null,
+  });
 }
 
 function drawTruthMarker(u) {
   const d = state.data;
   if (!d || d.times.length === 0 || !state.info.has_truth) return;
   const dim = Number($('component').value) || 0;
-  const x = d.truth[dim][d.truth[dim].length - 1];
+  const x = d.truth[dim][shownFrame()?.row ?? shownRow()];
+  if (x == null) return;
   const px = u.valToPos(x, 'x', true);
   const ctx = u.ctx;
   ctx.save();
@@ -603,73 +723,22 @@ function drawTruthMarker(u) {
   ctx.restore();
 }
 
-// A perceptually ordered blue → green → yellow scale (viridis-like stops).
-const STOPS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-function colormap(v) {
-  const x = Math.max(0, Math.min(1, v)) * (STOPS.length - 1);
-  const i = Math.min(STOPS.length - 2, Math.floor(x));
-  const f = x - i;
-  return STOPS[i].map((c, k) => Math.round(c + f * (STOPS[i + 1][k] - c)));
-}
-const rgb = (c) => `rgb(${c[0]},${c[1]},${c[2]})`;
-
-function drawHeatColumns(frame) {
-  const canvas = $('heat');
-  const ctx = canvas.getContext('2d');
-  const info = state.info;
-  const method = Number($('density-method').value) || 0;
-  const dens = frame.densities[method];
-  if (!dens || dens.length === 0 || frame.to <= frame.from) return;
-  const span = info.t_end - info.t_start;
-  const at = (t) => ((t - info.t_start) / span) * canvas.width;
-  // Columns from the end of the previous frame to this frame's last time: no gaps.
-  const x0 = state.heatX ?? 0;
-  const x1 = Math.min(canvas.width, Math.ceil(at(frame.times[frame.times.length - 1])));
-  const h = canvas.height;
-  if (x1 > x0) {
-    state.heatX = x1;
-    drawColumns(ctx, dens, x0, x1, h);
-  }
-  // The truth as white dots.
-  if (!frame.truth.length) return;
-  const dim = Number($('component').value) || 0;
-  const [lo, hi] = info.domain[dim];
-  ctx.fillStyle = '#fff';
-  const n = info.n;
-  for (let r = 0; r < frame.times.length; r++) {
-    const px = at(frame.times[r]);
-    const py = h - ((frame.truth[r * n + dim] - lo) / (hi - lo)) * h;
-    ctx.fillRect(px - 1, py - 1, 2, 2);
-  }
-}
-
-function drawColumns(ctx, dens, x0, x1, h) {
-  let max = 0;
-  for (const v of dens) max = Math.max(max, v);
-  const img = ctx.createImageData(x1 - x0, h);
-  for (let y = 0; y < h; y++) {
-    const gi = Math.min(dens.length - 1, Math.floor(((h - 1 - y) / (h - 1)) * (dens.length - 1) + 0.5));
-    const c = colormap(max > 0 ? dens[gi] / max : 0);
-    for (let x = 0; x < x1 - x0; x++) {
-      const o = 4 * (y * (x1 - x0) + x);
-      img.data[o] = c[0]; img.data[o + 1] = c[1]; img.data[o + 2] = c[2]; img.data[o + 3] = 255;
-    }
-  }
-  ctx.putImageData(img, x0, 0);
-}
-
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
 function showLogConcavity(c) {
   const el = $('log-concavity');
   if (!c) {
-    el.textContent = '';
+    el.textContent = 'log-concavity (003 §3): shown for grid methods';
     return;
   }
   const at = c.worst ? ` (smallest curvature of −log p ${c.worst[1].toFixed(2)} at x = ${c.worst[0].map((v) => v.toFixed(2)).join(', ')})` : '';
-  el.textContent = c.logConcave ? `log-concave${at}` : `not log-concave${at}`;
+  el.textContent = `${c.logConcave ? 'log-concave' : 'not log-concave'}${at}`;
+  el.title = `003 §3, of ${labels()[Number($('density-method').value) || 0]}'s density: the Hessian of −log p is positive semidefinite wherever the density is above 10⁻⁸ of its maximum`;
   // A research diagnostic, not a fault of the run: neutral in colour.
   el.className = c.logConcave ? 'hint' : 'hint diagnostic';
 }
+
+// Frames kept for the time slider: thinned (every other of the older half) past this many.
+const HISTORY_LIMIT = 600;
 
 function applyFrame(frame) {
   const d = state.data;
@@ -683,27 +752,43 @@ function applyFrame(frame) {
       const have = e.length / n;
       const sd = frame.sds?.[i];
       const haveSd = sd ? sd.length / n : 0;
+      // A failed method followed after its failure: its rows from max(from, k_fail) on.
+      const failedAt = frame.diagnostics[i]?.failed_at;
+      const g = frame.followed?.[i];
+      const gFrom = failedAt == null ? Infinity : Math.max(frame.from, failedAt) - frame.from;
       for (let j = 0; j < n; j++) {
         const mean = r < have ? e[r * n + j] : null;
         d.est[i][j].push(mean);
+        const gr = r - gFrom;
+        const ghost = g && gr >= 0 && gr < g.length / n ? g[gr * n + j] : null;
+        d.ghost[i][j].push(ghost);
+        // The dashed part starts where the solid one ends.
+        const row = d.times.length - 1;
+        if (ghost != null && row > 0 && d.ghost[i][j][row - 1] == null) d.ghost[i][j][row - 1] = d.est[i][j][row - 1];
         const s = r < haveSd && mean != null ? sd[r * n + j] : null;
         d.lo[i][j].push(s == null ? null : mean - 2 * s);
         d.hi[i][j].push(s == null ? null : mean + 2 * s);
       }
     });
   }
-  state.lastDensity = frame;
-  drawHeatColumns(frame);
-  if (info.n >= 2) drawHeatmap(frame);
+  const dim = Number($('component').value) || 0;
+  const entry = { row: d.times.length - 1, t: d.times[d.times.length - 1], dim, grid: frame.grid, densities: frame.densities, heat2d: frame.heat2d };
+  state.lastDensity = entry;
+  if (rows > 0 || state.history.length === 0) state.history.push(entry);
+  if (state.history.length > HISTORY_LIMIT) {
+    const half = Math.floor(state.history.length / 2);
+    state.history = [...state.history.slice(0, half).filter((_, k) => k % 2 === 0), ...state.history.slice(half)];
+  }
+  if (entry.dim === dim) state.heatStrip.column(entry.t, frame.densities[Number($('density-method').value) || 0]);
   showLogConcavity(frame.logConcave);
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
   // Every failure stays listed (one line per method, with its time), not only the last.
   for (const f of frame.summary.failures) {
     const t = state.data.times[f.k];
-    state.failures.set(f.method, `${info.methods[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
+    state.failures.set(f.method, `${labels()[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
   }
-  if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again.`;
+  if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again. A failed method whose state is intact is drawn on, dashed, from its ✕.`;
 }
 
 function render() {
@@ -711,26 +796,36 @@ function render() {
   if (!d) return;
   const dim = Number($('component').value) || 0;
   const bands = state.info.has_truth ? [] : d.est.flatMap((_, i) => [d.hi[i][dim], d.lo[i][dim]]);
-  state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...bands]);
-  const f = state.lastDensity;
-  if (f && f.grid.length) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
-  const t = d.times.length ? d.times[d.times.length - 1] : 0;
-  $('clock').textContent = `t = ${t.toFixed(2)} / ${state.info.t_end.toFixed(2)}`;
+  state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands]);
+  const f = shownFrame();
+  if (f && f.grid.length && f.dim === dim) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
+  const last = d.times.length ? d.times[d.times.length - 1] : 0;
+  const row = shownRow();
+  $('clock').textContent = state.scrub == null ? `t = ${last.toFixed(2)} / ${state.info.t_end.toFixed(2)}` : `t = ${(d.times[row] ?? 0).toFixed(2)} (looking back; live at ${last.toFixed(2)})`;
+  state.heatStrip.compose({ times: d.times, truth: state.info.has_truth ? d.truth[dim] : null, cursor: state.scrub == null ? null : d.times[row] });
+  if (state.info.n >= 2) drawHeatmap();
   const tbody = $('metrics').querySelector('tbody');
+  const timing = $('timing').querySelector('tbody');
   (state.diagnostics ?? []).forEach((m, i) => {
     const tr = tbody.querySelector(`tr[data-method="${i}"]`);
     if (!tr) return;
-    tr.querySelector('.mse').textContent = m.mse == null ? '—' : m.mse.toFixed(4);
+    const mse = tr.querySelector('.mse');
+    mse.textContent = m.mse != null ? m.mse.toFixed(4) : m.mse_followed != null ? `— [${m.mse_followed.toFixed(4)}]` : '—';
+    mse.title = m.mse_followed != null ? 'failed: no MSE counts; in brackets, the MSE including what it estimated after failing' : '';
     const status = tr.querySelector('.status');
     // A self-check that warned: the result may not be trustworthy (not a failure).
     const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';
     const failedAt = d.times[m.failed_at];
-    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}` : 'running') + checked;
+    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}${m.failure?.startsWith('lost track') ? ': lost track' : ''}` : 'running') + checked;
     status.title = [m.failure, ...(m.concerns ?? [])].filter(Boolean).join('\n');
     status.className = m.failed ? 'status failed' : (checked ? 'status warned' : 'status');
-    tr.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
+    const t = timing.querySelector(`tr[data-method="${i}"]`);
+    if (t) {
+      t.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
+      t.querySelector('.concerns').textContent = m.concerns?.length ? m.concerns.join('\n') : 'within thresholds';
+    }
   });
-  const warnings = (state.diagnostics ?? []).flatMap((m) => m.warnings.map((w) => `${m.name}: ${w}`));
+  const warnings = (state.diagnostics ?? []).flatMap((m, i) => m.warnings.map((w) => `${labels()[i]}: ${w}`));
   $('warnings').textContent = warnings.join('\n');
   // The same warnings next to the parameters they concern, in the method's own row.
   document.querySelectorAll('#methods .row-warnings').forEach((el) => { el.textContent = ''; });
@@ -739,11 +834,33 @@ function render() {
     const el = row == null ? null : document.querySelector(`#methods .method-row[data-row="${row}"] .row-warnings`);
     if (el) el.textContent = m.warnings.join('\n');
   });
+  updateScrub();
   if (state.summary?.finished) setPlaying(false);
+}
+
+// The time slider spans the rows so far; live, it sits at the end.
+function updateScrub() {
+  const rows = state.data?.times.length ?? 0;
+  const s = $('scrub');
+  s.max = String(Math.max(0, rows - 1));
+  s.value = String(state.scrub ?? Math.max(0, rows - 1));
+  $('scrub-live').hidden = state.scrub == null;
+  $('scrub-time').textContent = state.scrub == null ? 'live' : `t = ${(state.data.times[state.scrub] ?? 0).toFixed(3)}`;
+}
+
+function scrubTo(row) {
+  const last = state.data.times.length - 1;
+  if (state.playing) setPlaying(false);
+  state.scrub = row >= last ? null : Math.max(0, row);
+  render();
 }
 
 function setPlaying(p) {
   state.playing = p;
+  if (p && state.scrub != null) {
+    state.scrub = null;
+    render();
+  }
   $('play').textContent = p ? '❚❚ pause' : '▶ play';
   worker.postMessage({ type: p ? 'play' : 'pause' });
 }
@@ -842,25 +959,83 @@ function exportCsv() {
   download(`zakai-${info.name}-seed${info.seed}.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));
 }
 
-// Every visible plot canvas stacked into one PNG.
+// The plots as one PNG: a title, the legend (colours and line styles), then every visible
+// plot with its caption; the plots carry their own axes.
 function exportPng() {
-  const canvases = [...document.querySelectorAll('#trajectory-plot canvas, #heat, #density-plot canvas, #heatmap')]
-    .filter((c) => c.offsetParent !== null && c.width > 0 && c.height > 0);
-  if (!canvases.length) return;
-  const width = Math.max(...canvases.map((c) => c.width));
-  const height = canvases.reduce((h, c) => h + c.height + 10, 10);
+  const info = state.info;
+  if (!info) return;
+  const dpr = window.devicePixelRatio || 1;
+  const panels = [
+    ['#trajectory-plot canvas', `estimates of x${(Number($('component').value) || 0) + 1} against time`],
+    ['#heat', `posterior density over time of ${$('density-method').selectedOptions[0]?.textContent ?? ''}`],
+    ['#density-plot canvas', 'posterior densities at the time shown (dashed: truth)'],
+    ['#heatmap', `joint density of x1, x2 of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
+  ].map(([sel, caption]) => [document.querySelector(sel), caption])
+    .filter(([c]) => c && c.offsetParent !== null && c.width > 0 && c.height > 0);
+  if (!panels.length) return;
+  const font = (px, weight = 400) => `${weight} ${px * dpr}px system-ui, sans-serif`;
+  const pad = 12 * dpr;
+  const width = Math.max(...panels.map(([c]) => c.width)) + 2 * pad;
+  // Legend entries: the truth, then every shown method (with its failure time).
+  const names = labels();
+  const entries = [];
+  if (info.has_truth) entries.push({ label: 'truth', color: '#111', dash: [] });
+  names.forEach((m, i) => {
+    if (state.hidden.has(i)) return;
+    const dm = state.diagnostics?.[i];
+    const failed = dm?.failed ? ` (✕ failed at t = ${(state.data.times[dm.failed_at] ?? 0).toFixed(2)})` : '';
+    entries.push({ label: `${m}${failed}`, color: color(i), dash: dash(i) });
+  });
+  const measure = document.createElement('canvas').getContext('2d');
+  measure.font = font(13);
+  const entryWidth = Math.max(...entries.map((e) => measure.measureText(e.label).width)) + 46 * dpr;
+  const perRow = Math.max(1, Math.floor((width - 2 * pad) / entryWidth));
+  const legendHeight = Math.ceil(entries.length / perRow) * 20 * dpr;
+  const captionHeight = 20 * dpr;
+  const titleHeight = 46 * dpr;
+  const height = titleHeight + legendHeight + pad + panels.reduce((h, [c]) => h + captionHeight + c.height + pad, 0);
   const out = document.createElement('canvas');
   out.width = width;
   out.height = height;
   const ctx = out.getContext('2d');
   ctx.fillStyle = '#fff';
   ctx.fillRect(0, 0, width, height);
-  let y = 10;
-  for (const c of canvases) {
-    ctx.drawImage(c, 0, y);
-    y += c.height + 10;
+  ctx.fillStyle = '#111';
+  ctx.textBaseline = 'top';
+  ctx.font = font(18, 600);
+  const title = state.base?.title ? `${info.name} — ${state.base.title}` : info.name;
+  ctx.fillText(title, pad, pad);
+  ctx.font = font(13);
+  ctx.fillStyle = '#444';
+  const row = shownRow();
+  ctx.fillText(`seed ${info.seed} · t = ${(state.data.times[row] ?? 0).toFixed(2)} of ${info.t_end.toFixed(2)} · Δτ = ${info.dt_obs} · ${info.has_truth ? 'simulated truth' : 'recorded observations'} · Zakai`, pad, pad + 24 * dpr);
+  let y = titleHeight;
+  entries.forEach((e, k) => {
+    const x = pad + (k % perRow) * entryWidth;
+    const yy = y + Math.floor(k / perRow) * 20 * dpr + 10 * dpr;
+    ctx.strokeStyle = e.color;
+    ctx.lineWidth = 2.5 * dpr;
+    ctx.setLineDash(e.dash.map((v) => v * dpr));
+    ctx.beginPath();
+    ctx.moveTo(x, yy);
+    ctx.lineTo(x + 34 * dpr, yy);
+    ctx.stroke();
+    ctx.setLineDash([]);
+    ctx.fillStyle = '#111';
+    ctx.textBaseline = 'middle';
+    ctx.fillText(e.label, x + 40 * dpr, yy);
+  });
+  y += legendHeight + pad;
+  for (const [c, caption] of panels) {
+    ctx.fillStyle = '#333';
+    ctx.textBaseline = 'top';
+    ctx.font = font(13, 600);
+    ctx.fillText(caption, pad, y);
+    y += captionHeight;
+    ctx.drawImage(c, pad, y);
+    y += c.height + pad;
   }
-  out.toBlob((blob) => blob && download(`zakai-${state.info?.name ?? 'plots'}.png`, blob), 'image/png');
+  out.toBlob((blob) => blob && download(`zakai-${info.name}-seed${info.seed}.png`, blob), 'image/png');
 }
 
 // ---------- Monte Carlo (its own worker, so the live run keeps going) ----------
@@ -1053,6 +1228,8 @@ worker.onmessage = ({ data }) => {
         showProblems(data.problems);
         showSuitability(data.suitability);
         showStructure(data.structure);
+        if (state.revealAfterValidate) revealFirstProblem();
+        state.revealAfterValidate = false;
       }
       break;
     case 'loaded':
@@ -1101,6 +1278,7 @@ worker.onmessage = ({ data }) => {
       setPlaying(false);
       $('general-error').textContent = data.message;
       $('form-status').textContent = 'not applied';
+      state.revealAfterValidate = true;
       validate();
       break;
   }
@@ -1120,7 +1298,13 @@ $('mc-cancel').addEventListener('click', () => mc.worker?.postMessage({ type: 'm
 $('mc-csv').addEventListener('click', exportMonteCarloCsv);
 $('check-start').addEventListener('click', startConvergenceCheck);
 $('play').addEventListener('click', togglePlay);
-$('step').addEventListener('click', () => { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); });
+// One interval forward (back to the present first when the time slider looks back).
+function stepOnce() {
+  setPlaying(false);
+  if (state.scrub != null) scrubTo(Infinity);
+  worker.postMessage({ type: 'step', k: 1 });
+}
+$('step').addEventListener('click', stepOnce);
 $('reset').addEventListener('click', apply);
 $('speed').addEventListener('input', () => {
   $('speed-value').textContent = $('speed').value;
@@ -1128,14 +1312,43 @@ $('speed').addEventListener('input', () => {
 });
 $('component').addEventListener('change', () => {
   const dim = Number($('component').value);
-  worker.postMessage({ type: 'view', view: { dim } });
-  const [lo, hi] = state.info.domain[dim];
-  $('heat-range').textContent = `x${dim + 1} ∈ [${lo}, ${hi}] bottom → top`;
+  worker.postMessage({ type: 'view', view: { dim }, redraw: !state.playing });
+  resetHeatStrip();
   render();
 });
 $('density-method').addEventListener('change', () => {
   worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
+  resetHeatStrip();
   render();
+});
+$('scrub').addEventListener('input', () => scrubTo(Number($('scrub').value)));
+$('scrub-live').addEventListener('click', () => scrubTo(Infinity));
+$('present').addEventListener('click', () => setPresent(!document.body.classList.contains('present')));
+
+// Presentation mode: the plots alone, in large type, with the methods the chips leave on.
+function setPresent(on) {
+  document.body.classList.toggle('present', on);
+  $('present').setAttribute('aria-pressed', String(on));
+  $('present').textContent = on ? 'end presentation' : 'present';
+  const url = new URL(location.href);
+  if (on) url.searchParams.set('present', '1'); else url.searchParams.delete('present');
+  history.replaceState(null, '', url);
+  fitPlots();
+}
+
+// Plots follow their panels' sizes (window resized, presentation mode).
+function fitPlots() {
+  if (!state.info) return;
+  state.trajPlot?.setSize(plotSize('trajectory-plot', 'trajectory'));
+  state.densityPlot?.setSize(plotSize('density-plot', 'density'));
+  state.heatStrip.fit();
+  resetHeatStrip();
+  render();
+}
+let resizeTimer = null;
+window.addEventListener('resize', () => {
+  clearTimeout(resizeTimer);
+  resizeTimer = setTimeout(fitPlots, 100);
 });
 $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
 $('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
@@ -1147,11 +1360,15 @@ $('dim').addEventListener('change', changeDimension);
 $('add-h').addEventListener('click', () => {
   const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
   exprInputs($('observation'), 'h', 'model.observation', [...values, 'x1']);
+  resizeMatrix($('noise-cov'), values.length + 1);
   scheduleValidate();
 });
 $('remove-h').addEventListener('click', () => {
   const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
-  if (values.length > 1) exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
+  if (values.length > 1) {
+    exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
+    resizeMatrix($('noise-cov'), values.length - 1);
+  }
   scheduleValidate();
 });
 // ---------- Learn mode's view of the page ----------
@@ -1264,15 +1481,24 @@ $('add-method').addEventListener('click', () => {
   methodRowsUI();
   scheduleValidate();
 });
-for (const id of ['diffusion', 'noise-cov', 'noise-mix', 'prior-mean', 'prior-cov', 'prior-mix', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed']) {
+for (const id of ['noise-mix', 'prior-mean', 'prior-mix', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed', 'fail-bound', 'fail-error', 'fail-duration']) {
   $(id).addEventListener('input', scheduleValidate);
 }
+// Shortcuts work wherever the focus is, except where keys type text.
+const typesText = (t) => t && (t.tagName === 'TEXTAREA' || t.isContentEditable
+  || (t.tagName === 'INPUT' && !['checkbox', 'radio', 'range', 'button', 'submit', 'reset', 'color', 'file'].includes(t.type)));
 document.addEventListener('keydown', (e) => {
-  if (['INPUT', 'TEXTAREA', 'SELECT'].includes(document.activeElement?.tagName)) return;
+  const t = document.activeElement;
+  if (typesText(t) || e.ctrlKey || e.metaKey || e.altKey) return;
+  // A slider keeps its arrow keys.
+  const arrows = t?.type !== 'range';
   if (e.key === ' ') { e.preventDefault(); togglePlay(); }
-  if (e.key === 'ArrowRight') { setPlaying(false); worker.postMessage({ type: 'step', k: 1 }); }
-  if (e.key === 'r') apply();
+  else if (e.key === 'ArrowRight' && arrows) { e.preventDefault(); stepOnce(); }
+  else if (e.key === 'ArrowLeft' && arrows) { e.preventDefault(); scrubTo(shownRow() - 1); }
+  else if (e.key === 'r') { e.preventDefault(); apply(); }
+  else if (e.key === 'p') { e.preventDefault(); setPresent(!document.body.classList.contains('present')); }
 });
 
+if (new URLSearchParams(location.search).get('present') === '1') document.body.classList.add('present');
 worker.postMessage({ type: 'init' });
 requestAnimationFrame(loop);

@@ -30,6 +30,8 @@ function frame(summary) {
   const times = session.times(from, to);
   const truth = session.truth(from, to);
   const estimates = info.methods.map((_, i) => session.estimates(i, from, to));
+  // What failed methods with an intact state went on estimating (drawn dashed).
+  const followed = info.methods.map((_, i) => session.followed(i, from, to));
   // Without a truth the page plots every estimate with its ±2σ band.
   const sds = info.has_truth ? null : info.methods.map((_, i) => session.sds(i, from, to));
   const grid = session.densityGrid(view.dim, view.points);
@@ -50,11 +52,11 @@ function frame(summary) {
   }
   sent = to;
   const transfer = [times.buffer, truth.buffer, grid.buffer,
-    ...estimates.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
+    ...estimates.map((e) => e.buffer), ...followed.map((e) => e.buffer), ...densities.map((d) => d.buffer)];
   if (heat2d) transfer.push(heat2d.values.buffer);
   if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
   if (sds) transfer.push(...sds.map((s) => s.buffer));
-  post({ type: 'frame', load: loadId, from, to, times, truth, estimates, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
+  post({ type: 'frame', load: loadId, from, to, times, truth, estimates, followed, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 // Intervals owed to the playback: below one interval per frame (speeds down to 0.1) the

@@ -74,10 +74,15 @@ struct Cli {
 enum Command {
     /// List the presets and the methods.
     List,
-    /// Print a preset's scenario as JSON (edit it and pass the file to `run`).
+    /// Print a scenario (a preset or a scenario file) as JSON (edit it and pass the file to
+    /// `run`).
     Show {
-        /// Preset name.
-        preset: String,
+        /// A preset name or a path to a scenario JSON file.
+        scenario: String,
+        /// With the sizes the methods leave unset chosen from the problem (domain, prior),
+        /// as every run chooses them; one note per choice on stderr.
+        #[arg(long)]
+        chosen: bool,
     },
     /// Simulate a scenario's truth and observations (no filters): as JSON
     /// `{"times": [...], "states": [...], "observations": [...]}` (rows flattened), or as the
@@ -142,6 +147,23 @@ enum Command {
     Filter(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
+}
+
+/// `zakai show`: the scenario as JSON, with the sizes chosen from the problem on request.
+fn show(scenario: &str, chosen: bool) -> Result<(), String> {
+    let config = load(scenario)?;
+    let config = if chosen {
+        let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
+        for note in experiment.chosen_defaults() {
+            eprintln!("default from the problem — {note}");
+        }
+        experiment.config().clone()
+    } else {
+        config
+    };
+    let json = serde_json::to_string_pretty(&config).map_err(|e| e.to_string())?;
+    outln!("{json}");
+    Ok(())
 }
 
 /// Which methods of the scenario run, and with which seed (`run`, `filter`).
@@ -769,10 +791,7 @@ fn main() -> ExitCode {
             out!("{}", list());
             Ok(())
         }
-        Command::Show { preset } => presets::preset(&preset)
-            .ok_or_else(|| format!("unknown preset `{preset}` (see `zakai list`)"))
-            .and_then(|p| serde_json::to_string_pretty(&p).map_err(|e| e.to_string()))
-            .map(|json| outln!("{json}")),
+        Command::Show { scenario, chosen } => show(&scenario, chosen),
         Command::Simulate(args) => simulate(args),
         Command::Filter(args) => filter(&args),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),

@@ -60,7 +60,7 @@ fn malformed_files_fail_cleanly() {
 
 #[test]
 fn bad_arguments_fail_cleanly() {
-    assert_clean_failure(&zakai(&["show", "nope"]), "unknown preset `nope`");
+    assert_clean_failure(&zakai(&["show", "nope"]), "`nope` is neither a preset");
     assert_clean_failure(
         &zakai(&["run", "cubic-sensor-1d", "--methods", "ekf,magic"]),
         "unknown method `magic`",
@@ -480,5 +480,32 @@ fn check_reports_which_methods_are_converged() {
     assert!(
         text.contains("not converged for this scenario: PF(50)"),
         "{text}"
+    );
+}
+
+/// `zakai show --chosen` prints the scenario as a run builds it: sizes the methods left unset
+/// chosen from the problem (the 1-D spectral basis from the domain against the prior's sd),
+/// with a note per choice on stderr; without the flag the file's own (unset) values.
+#[test]
+fn show_chosen_prints_the_sizes_chosen_from_the_problem() {
+    let show = zakai(&["show", "cubic-sensor-1d"]);
+    let mut v: serde_json::Value = serde_json::from_slice(&show.stdout).unwrap();
+    v["methods"] = serde_json::json!([{ "method": "spectral" }]);
+    let path = temp_file("spectral-unset.json", &v.to_string());
+    let plain = zakai(&["show", path.to_str().unwrap()]);
+    assert!(plain.status.success(), "{}", stderr(&plain));
+    let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert!(plain["methods"][0]["online_basis"].is_null());
+    let chosen = zakai(&["show", path.to_str().unwrap(), "--chosen"]);
+    assert!(chosen.status.success(), "{}", stderr(&chosen));
+    let json: serde_json::Value = serde_json::from_slice(&chosen.stdout).unwrap();
+    let basis = json["methods"][0]["online_basis"]
+        .as_u64()
+        .expect("a basis size chosen");
+    let note = stderr(&chosen);
+    assert!(
+        note.contains("default from the problem — Spectral: basis")
+            && note.contains(&basis.to_string()),
+        "{note}"
     );
 }

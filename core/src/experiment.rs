@@ -167,8 +167,16 @@ pub struct MethodTrack {
     pub steps: usize,
     /// Wall time spent building the filter — its off-line part (seconds; 0 without a clock).
     pub build_seconds: f64,
+    /// Estimates the method went on giving after a failure that left its state intact (the
+    /// track-loss rule or the divergence bound, not a failed step or non-finite numbers),
+    /// rows `failure.k ..`, row-major — for display only (a failed run's numbers never reach a
+    /// table). Empty unless the run follows failed methods
+    /// ([`ExperimentRun::follow_failed_methods`]).
+    pub after_failure: Vec<f64>,
     /// Since when the error has been above the track-loss threshold.
     off_track_since: Option<f64>,
+    /// Whether the method is still stepped after its failure (see `after_failure`).
+    following: bool,
 }
 
 impl MethodTrack {
@@ -489,7 +497,9 @@ impl Experiment {
                 seconds: 0.0,
                 steps: 0,
                 build_seconds,
+                after_failure: Vec::new(),
                 off_track_since: None,
+                following: false,
             })
             .collect();
         let mut run = ExperimentRun {
@@ -502,6 +512,7 @@ impl Experiment {
             next: 0,
             bound: self.config.failure.divergence_bound,
             track_loss: self.config.failure.track_loss,
+            follow_failed: false,
         };
         run.observe(0, None, &mut Silent);
         Ok(run)
@@ -540,6 +551,8 @@ pub struct ExperimentRun {
     next: usize,
     bound: f64,
     track_loss: Option<crate::scenario::TrackLoss>,
+    /// Whether methods declared failed with their state intact keep being stepped.
+    follow_failed: bool,
 }
 
 impl ExperimentRun {
@@ -562,6 +575,16 @@ impl ExperimentRun {
                 f.warnings().into_iter().map(move |w| (name.clone(), w))
             })
             .collect()
+    }
+
+    /// Keeps stepping a method after a failure that left its state intact — the track-loss
+    /// rule or the divergence bound — recording what it estimates in
+    /// [`MethodTrack::after_failure`], so that a teaching view can show a filter that lost the
+    /// state staying lost. The failure, MSE and tables are unchanged; a failed step or a
+    /// non-finite estimate still ends the method. Off by default (a Monte Carlo run does not
+    /// spend time on failed methods).
+    pub fn follow_failed_methods(&mut self, follow: bool) {
+        self.follow_failed = follow;
     }
 
     /// The live filters (for densities and estimates).
@@ -631,6 +654,15 @@ impl ExperimentRun {
         };
         let (filter, track) = (&mut self.filters[i], &mut self.tracks[i]);
         if track.failed() {
+            if self.follow_failed && track.following {
+                let followed = filter.step(&obs).ok().map(|_| filter.estimate());
+                match followed {
+                    Some(est) if est.mean.iter().all(|v| v.is_finite()) => {
+                        track.after_failure.extend_from_slice(est.mean.as_slice());
+                    }
+                    _ => track.following = false,
+                }
+            }
             return;
         }
         let start = clock.map(|c| c.now());
@@ -645,12 +677,15 @@ impl ExperimentRun {
         if k > 0 {
             track.steps += 1;
         }
+        // Whether a failure below leaves the filter's state intact (the estimate was finite).
+        let mut intact = None;
         let result = stepped.map_err(|e| e.to_string()).and_then(|_| {
             let est = filter.estimate();
             let magnitude = est.mean.amax();
             if est.mean.iter().any(|v| !v.is_finite()) {
                 Err("the estimate became non-finite".to_string())
             } else if magnitude > self.bound {
+                intact = Some(est.mean.clone());
                 Err(crate::error::FilterError::Diverged {
                     magnitude,
                     bound: self.bound,
@@ -675,6 +710,7 @@ impl ExperimentRun {
                 } else {
                     let since = *track.off_track_since.get_or_insert(t.times[k]);
                     if t.times[k] - since > rule.duration {
+                        intact = Some(est.mean.clone());
                         Err(alloc::format!(
                             "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
                             rule.error,
@@ -710,6 +746,12 @@ impl ExperimentRun {
                 }
                 observer.on_failure(i, k, &message);
                 track.failure = Some(Failure { k, message });
+                if let Some(mean) = intact {
+                    track.following = true;
+                    if self.follow_failed {
+                        track.after_failure.extend_from_slice(mean.as_slice());
+                    }
+                }
             }
         }
     }
@@ -847,5 +889,44 @@ mod tests {
             "some method fails in one of the runs, so failures are compared"
         );
         assert!(any_complete, "and some method runs to the end");
+    }
+
+    /// A method declared lost by the track-loss rule and followed goes on estimating exactly
+    /// what it would without the rule (its state was intact), its failure and MSE unchanged;
+    /// a run that does not follow records nothing after the failure.
+    #[test]
+    fn a_followed_method_after_track_loss_estimates_what_it_would_without_the_rule() {
+        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
+        config.time.t_final = 2.0;
+        let free = Experiment::new(config.clone()).unwrap().run(3).unwrap();
+        config.failure.track_loss = Some(crate::scenario::TrackLoss {
+            error: 1e-3,
+            duration: 0.0,
+        });
+        let experiment = Experiment::new(config).unwrap();
+        let mut followed = experiment.start(3).unwrap();
+        followed.follow_failed_methods(true);
+        while followed.advance(9, None, &mut Silent) > 0 {}
+        let followed = followed.finish();
+        let plain = experiment.run(3).unwrap();
+        let (f, p, whole) = (&followed.methods[0], &plain.methods[0], &free.methods[0]);
+        let k = f
+            .failure
+            .as_ref()
+            .expect("lost at once with a 1e-3 threshold")
+            .k;
+        assert_eq!(f.failure, p.failure);
+        assert!(
+            p.after_failure.is_empty(),
+            "not followed: nothing after the failure"
+        );
+        assert_eq!(f.estimates, p.estimates);
+        assert_eq!(f.estimates.len(), k, "rows before the failure");
+        assert_eq!(
+            [&f.estimates[..], &f.after_failure[..]].concat(),
+            whole.estimates,
+            "followed rows are the rows of the run without the rule"
+        );
     }
 }

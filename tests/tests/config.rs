@@ -234,3 +234,59 @@ fn memory_cap_refuses_too_large_grids_before_allocation() {
     assert!(message.contains("above the cap of 1.00 GiB"), "{message}");
     assert!(zakai::Experiment::new(c).is_err());
 }
+
+/// Legends and rows carry the resolution a reader compares methods by: grid points per
+/// dimension, particles, spectral basis sizes — read from the methods' own parameters.
+#[test]
+fn method_labels_carry_the_resolution() {
+    let mut config = presets::preset("yau-2d").unwrap();
+    let mut qiem = MethodConfig::from_key("qiem").unwrap();
+    if let MethodConfig::Qiem(p) = &mut qiem {
+        p.points = vec![63, 127];
+    }
+    config.methods = vec![
+        MethodConfig::from_key("qiem").unwrap(),
+        qiem,
+        MethodConfig::from_key("pf").unwrap(),
+        MethodConfig::from_key("ekf").unwrap(),
+        MethodConfig::from_key("ekf").unwrap(),
+    ];
+    let labels = config.method_labels();
+    let MethodConfig::Qiem(default) = &config.methods[0] else {
+        unreachable!()
+    };
+    let points = default.shape(2)[0];
+    let MethodConfig::Pf(pf) = &config.methods[2] else {
+        unreachable!()
+    };
+    assert_eq!(
+        labels,
+        [
+            format!("QIEM({points}²)"),
+            "QIEM(63×127)".to_string(),
+            format!("PF({})", pf.particles),
+            "EKF".to_string(),
+            "EKF #2".to_string(),
+        ]
+    );
+    // The plain names are unchanged (tables and files key on them).
+    assert_eq!(config.method_names()[0], "QIEM");
+    let spectral = presets::preset("cubic-sensor-1d").unwrap();
+    let labels = spectral.method_labels();
+    let i = spectral
+        .methods
+        .iter()
+        .position(|m| m.key() == "spectral")
+        .unwrap();
+    let MethodConfig::Spectral(s) = &spectral.methods[i] else {
+        unreachable!()
+    };
+    assert_eq!(
+        labels[i],
+        format!(
+            "Spectral({}/{})",
+            s.offline_basis.unwrap(),
+            s.online_basis.unwrap()
+        )
+    );
+}

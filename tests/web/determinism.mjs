@@ -8,7 +8,8 @@
 // not compared: the grid filters' posterior is then an artefact of the zero boundary, flat
 // along the edge, and last-bit rounding decides which end its mean goes to (seen: direct-4.3,
 // seed 123456789, QIEM at row 297, x = 46 outside [−45, 45]).
-// Usage: node tests/web/determinism.mjs  (after scripts/build-web.sh and a release CLI build)
+// Usage: node tests/web/determinism.mjs  (after scripts/build-web.sh and a CLI build; ZAKAI_CLI
+// names the binary, by default the one `cargo test` builds, target/debug/zakai)
 import { readFileSync } from 'node:fs';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
@@ -17,7 +18,7 @@ import { initSync, Session, presets } from '../../web/pkg/zakai_wasm.js';
 
 const root = fileURLToPath(new URL('../../', import.meta.url));
 initSync({ module: readFileSync(`${root}web/pkg/zakai_wasm_bg.wasm`) });
-const cli = `${root}target/release/zakai`;
+const cli = process.env.ZAKAI_CLI ?? `${root}target/debug/zakai`;
 
 const all = presets();
 const names = all.map((p) => p.name);

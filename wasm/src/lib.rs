@@ -280,6 +280,9 @@ struct MethodDiagnostics {
     failure: Option<String>,
     failed_at: Option<usize>,
     mse: Option<f64>,
+    /// For a failed method that is still followed: 004 (43) over every row so far, those
+    /// before and after its failure (what the failure rule hides; display only).
+    mse_followed: Option<f64>,
     ms_per_step: f64,
     steps: usize,
     warnings: Vec<String>,
@@ -301,6 +304,8 @@ struct SessionInfo {
     t_end: f64,
     domain: Vec<[f64; 2]>,
     methods: Vec<String>,
+    /// The methods' labels with their resolution (`QIEM(399)`, `PF(2000)`) for legends and rows.
+    labels: Vec<String>,
     /// Sizes chosen from the problem for what the scenario left unset, one note each.
     chosen: Vec<String>,
     seed: u64,
@@ -337,7 +342,8 @@ impl Session {
             None => config.seed,
         };
         let experiment = Experiment::new(config).map_err(js_error)?;
-        let run = experiment.start(seed).map_err(js_error)?;
+        let mut run = experiment.start(seed).map_err(js_error)?;
+        run.follow_failed_methods(true);
         Ok(Session {
             experiment,
             run,
@@ -369,9 +375,10 @@ impl Session {
             truth.as_deref().map(str::as_bytes),
         )
         .map_err(js_error)?;
-        let run = experiment
+        let mut run = experiment
             .start_recorded(recording.clone(), seed)
             .map_err(js_error)?;
+        run.follow_failed_methods(true);
         Ok(Session {
             experiment,
             run,
@@ -404,6 +411,7 @@ impl Session {
             None => self.experiment.start(seed),
         }
         .map_err(js_error)?;
+        self.run.follow_failed_methods(true);
         self.seed = seed;
         Ok(())
     }
@@ -424,6 +432,7 @@ impl Session {
             t_end: *self.run.recording().times.last().unwrap_or(&0.0),
             domain: c.domain.clone(),
             methods: self.experiment.method_names().to_vec(),
+            labels: c.method_labels(),
             chosen: self.experiment.chosen_defaults().to_vec(),
             seed: self.seed,
         })
@@ -489,6 +498,25 @@ impl Session {
             return Vec::new();
         }
         track.estimates[a * track.n..b * track.n].to_vec()
+    }
+
+    /// What method `index` went on estimating after a failure that left its state intact
+    /// (the track-loss rule, the divergence bound): rows `max(from, k_fail)..to`, row-major,
+    /// where `k_fail` is the failure's row (`failed_at` in [`Session::diagnostics`]); empty
+    /// before a failure or once the method could not go on. The page draws them dashed.
+    pub fn followed(&self, index: usize, from: usize, to: usize) -> Vec<f64> {
+        let Some(track) = self.run.tracks().get(index) else {
+            return Vec::new();
+        };
+        let Some(k) = track.failure.as_ref().map(|f| f.k) else {
+            return Vec::new();
+        };
+        let rows = track.after_failure.len() / track.n;
+        let (a, b) = (from.max(k).min(k + rows), to.min(k + rows));
+        if a >= b {
+            return Vec::new();
+        }
+        track.after_failure[(a - k) * track.n..(b - k) * track.n].to_vec()
     }
 
     /// `points` equally spaced points over the domain of component `dim`.
@@ -632,6 +660,7 @@ impl Session {
                 failure: t.failure.as_ref().map(|f| f.message.clone()),
                 failed_at: t.failure.as_ref().map(|f| f.k),
                 mse: self.run.running_mse(i),
+                mse_followed: self.mse_followed(i),
                 ms_per_step: t.seconds_per_step() * 1e3,
                 steps: t.steps,
                 warnings: self.run.filters()[i].warnings(),
@@ -643,6 +672,21 @@ impl Session {
 }
 
 impl Session {
+    fn mse_followed(&self, index: usize) -> Option<f64> {
+        let track = &self.run.tracks()[index];
+        let truth = self.run.recording().truth.as_ref()?;
+        if !track.failed() || track.after_failure.is_empty() {
+            return None;
+        }
+        let rows = [&track.estimates[..], &track.after_failure[..]].concat();
+        let truth = truth.get(..rows.len())?;
+        Some(
+            zakai::metrics::mse_components(truth, &rows, track.n)
+                .iter()
+                .sum(),
+        )
+    }
+
     fn clamp(&self, from: usize, to: usize) -> (usize, usize) {
         let done = self.run.position();
         let b = to.min(done);

@@ -198,6 +198,12 @@ pub trait Method {
     fn info() -> MethodInfo;
     /// Display name with the sizes that matter (`"PF(200)"`).
     fn display_name(params: &Self::Params) -> String;
+    /// The name a reader compares methods by in legends and table rows: the display name
+    /// with the resolution of an `n`-dimensional run (`"QIEM(399)"`, `"QIEM(127²)"`,
+    /// `"Spectral(11/16)"`). Defaults to [`Method::display_name`].
+    fn label(params: &Self::Params, _n: usize) -> String {
+        Self::display_name(params)
+    }
     /// Every problem with `params` for an `n`-dimensional state; fields are relative to the
     /// method (`"particles"`, `"init.mean"`; `"method"` when the method does not apply in n
     /// dimensions).
@@ -550,4 +556,26 @@ impl<'m, M: Method> Builder<'m, M> {
 
 fn round3(v: f64) -> f64 {
     libm::round(v * 1e3) / 1e3
+}
+
+/// A grid's shape as a reader writes it: `399`, `127²`, `31³`, or `63×127` when the
+/// dimensions differ.
+pub(crate) fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [] => String::new(),
+        [one] => format!("{one}"),
+        [first, rest @ ..] if rest.iter().all(|s| s == first) => {
+            let power = match shape.len() {
+                2 => "²",
+                3 => "³",
+                _ => return format!("{first}^{}", shape.len()),
+            };
+            format!("{first}{power}")
+        }
+        _ => shape
+            .iter()
+            .map(|s| format!("{s}"))
+            .collect::<Vec<_>>()
+            .join("×"),
+    }
 }

@@ -82,6 +82,12 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::display_name(p),)* }
             }
 
+            /// The name with the resolution of an `n`-dimensional run (`"QIEM(399)"`), see
+            /// [`Method::label`].
+            pub fn label(&self, n: usize) -> String {
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::label(p, n),)* }
+            }
+
             /// The method's description.
             pub fn info(&self) -> MethodInfo {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::info(),)* }

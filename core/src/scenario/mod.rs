@@ -606,19 +606,30 @@ impl ScenarioConfig {
 
     /// Method display names, made unique (`EKF`, `EKF #2`).
     pub fn method_names(&self) -> Vec<String> {
-        let mut names: Vec<String> = Vec::new();
-        for m in &self.methods {
-            let base = m.display_name();
-            let count = names
-                .iter()
-                .filter(|n| *n == &base || n.starts_with(&format!("{base} #")))
-                .count();
-            names.push(if count == 0 {
-                base
-            } else {
-                format!("{base} #{}", count + 1)
-            });
-        }
-        names
+        unique_names(self.methods.iter().map(MethodConfig::display_name))
     }
+
+    /// Method labels with their resolution for legends and rows, made unique
+    /// (`QIEM(399)`, `PF(2000)`, `EKF #2`; see [`MethodConfig::label`]).
+    pub fn method_labels(&self) -> Vec<String> {
+        let n = self.state_dim();
+        unique_names(self.methods.iter().map(|m| m.label(n)))
+    }
+}
+
+/// Names made unique by numbering repeats (`EKF`, `EKF #2`).
+fn unique_names(bases: impl Iterator<Item = String>) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for base in bases {
+        let count = names
+            .iter()
+            .filter(|n| *n == &base || n.starts_with(&format!("{base} #")))
+            .count();
+        names.push(if count == 0 {
+            base
+        } else {
+            format!("{base} #{}", count + 1)
+        });
+    }
+    names
 }

@@ -80,6 +80,13 @@ macro_rules! fpe_method {
             fn display_name(_: &FpeParams) -> String {
                 $name.into()
             }
+            fn label(p: &FpeParams, n: usize) -> String {
+                format!(
+                    "{}({})",
+                    $name,
+                    crate::filters::method::shape_text(&p.shape(n))
+                )
+            }
             fn problems(p: &FpeParams, n: usize) -> Vec<ConfigProblem> {
                 problems_from(p.problems(n))
             }

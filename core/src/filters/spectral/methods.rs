@@ -76,6 +76,14 @@ impl Method for Spectral {
     fn display_name(_: &SpectralParams) -> String {
         "Spectral".into()
     }
+    /// `Spectral(N/N′)`: the off-line and on-line basis sizes (004 Alg. 1, 2), when set.
+    fn label(p: &SpectralParams, _: usize) -> String {
+        match (p.offline_basis, p.online_basis) {
+            (Some(a), Some(b)) => format!("Spectral({a}/{b})"),
+            (Some(a), None) | (None, Some(a)) => format!("Spectral({a})"),
+            (None, None) => "Spectral".into(),
+        }
+    }
     fn problems(p: &SpectralParams, n: usize) -> Vec<ConfigProblem> {
         problems_from(p.problems(n))
     }

@@ -138,6 +138,13 @@ macro_rules! yau_yau_method {
             fn display_name(_: &YauYauParams) -> String {
                 $name.into()
             }
+            fn label(p: &YauYauParams, n: usize) -> String {
+                format!(
+                    "{}({})",
+                    $name,
+                    crate::filters::method::shape_text(&p.shape(n))
+                )
+            }
             fn problems(p: &YauYauParams, n: usize) -> Vec<ConfigProblem> {
                 let own: fn(&YauYauParams, usize) -> Vec<(&'static str, String)> = $own;
                 problems_from(p.problems(n).into_iter().chain(own(p, n)).collect())

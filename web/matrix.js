@@ -1,0 +1,106 @@
+// A small editable matrix: one number field per entry (a 1 × 1 matrix is one plain number),
+// an optional "identity" switch for matrices whose absence means the identity (G, S), and the
+// rows as JSON under "advanced" for shapes the grid does not offer.
+import { el } from './dom.js';
+
+const identity = (n) => Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
+
+/**
+ * Fills `box` (a `.matrix` element with `data-field`) with an editor of `value` (rows of
+ * numbers, or null for the identity when `identityAllowed`), `rows × cols` when the value
+ * does not say. `onInput` runs after every edit.
+ */
+export function matrixEditor(box, { value, rows, cols, identityAllowed = false, onInput }) {
+  box._matrix = { identityAllowed, onInput, rows, cols };
+  setMatrix(box, value);
+}
+
+/** Replaces the editor's value (null: the identity of the editor's size, when allowed). */
+export function setMatrix(box, value) {
+  const m = box._matrix;
+  const isIdentity = value == null;
+  const shown = isIdentity ? identity(m.rows) : value;
+  m.rows = shown.length;
+  m.cols = shown[0]?.length ?? m.rows;
+  const field = box.dataset.field;
+  const cells = shown.map((row, i) => el('tr', {}, ...row.map((v, j) => el('td', {}, el('input', {
+    type: 'number', step: 'any', value: String(v), disabled: isIdentity && m.identityAllowed,
+    ariaLabel: `${field} row ${i + 1}, column ${j + 1}`, dataset: { cell: `${i},${j}` },
+  })))));
+  const parts = [];
+  if (m.identityAllowed) {
+    parts.push(el('label', { className: 'inline identity' }, el('input', { type: 'checkbox', className: 'identity-box', checked: isIdentity }), 'identity'));
+  }
+  parts.push(el('table', { className: 'matrix-grid' }, ...cells));
+  const json = el('input', { className: 'matrix-json', value: isIdentity ? '' : JSON.stringify(value), placeholder: m.identityAllowed ? 'identity' : '[[1]]', ariaLabel: `${field} as JSON rows` });
+  parts.push(el('details', { className: 'advanced' }, el('summary', {}, 'advanced: rows as JSON'), json));
+  box.replaceChildren(...parts);
+  box.querySelectorAll('[data-cell]').forEach((input) => input.addEventListener('input', () => {
+    json.value = JSON.stringify(gridValues(box));
+    m.onInput?.();
+  }));
+  box.querySelector('.identity-box')?.addEventListener('change', (e) => {
+    setMatrix(box, e.target.checked ? null : identity(m.rows));
+    m.onInput?.();
+  });
+  json.addEventListener('change', () => {
+    const text = json.value.trim();
+    let parsed;
+    try {
+      parsed = text === '' && m.identityAllowed ? null : JSON.parse(text);
+    } catch (e) {
+      box._matrix.jsonError = `the rows as JSON are not valid JSON: ${e.message}`;
+      m.onInput?.();
+      return;
+    }
+    // A plain number is a 1 × 1 matrix; rows must be arrays of numbers of one length.
+    if (typeof parsed === 'number') parsed = [[parsed]];
+    const ok = parsed === null || (Array.isArray(parsed) && parsed.length > 0
+      && parsed.every((r) => Array.isArray(r) && r.length === parsed[0].length && r.every((v) => typeof v === 'number')));
+    box._matrix.jsonError = ok ? null : 'the rows as JSON must be a list of equally long lists of numbers, e.g. [[1, 0], [0, 1]]';
+    if (ok) setMatrix(box, parsed);
+    m.onInput?.();
+  });
+  box._matrix.jsonError = null;
+}
+
+function gridValues(box) {
+  const m = box._matrix;
+  const out = Array.from({ length: m.rows }, () => Array(m.cols).fill(NaN));
+  box.querySelectorAll('[data-cell]').forEach((input) => {
+    const [i, j] = input.dataset.cell.split(',').map(Number);
+    out[i][j] = input.value.trim() === '' ? NaN : Number(input.value);
+  });
+  return out;
+}
+
+/**
+ * The editor's value: null (the identity), rows of numbers, or `{__invalid: message}` naming
+ * the first entry that is not a number.
+ */
+export function readMatrix(box) {
+  const m = box._matrix;
+  if (!m) return null;
+  if (m.jsonError) return { __invalid: m.jsonError };
+  if (m.identityAllowed && box.querySelector('.identity-box')?.checked) return null;
+  const rows = gridValues(box);
+  for (const [i, row] of rows.entries()) {
+    const j = row.findIndex((v) => !Number.isFinite(v));
+    if (j >= 0) return { __invalid: `row ${i + 1}, column ${j + 1} needs a number` };
+  }
+  return rows;
+}
+
+/** Resizes to `rows × cols`, keeping the entries that fit and the identity elsewhere. */
+export function resizeMatrix(box, rows, cols = rows) {
+  const m = box._matrix;
+  const current = readMatrix(box);
+  m.rows = rows;
+  m.cols = cols;
+  if (current === null) {
+    setMatrix(box, null);
+    return;
+  }
+  const old = Array.isArray(current) ? current : [];
+  setMatrix(box, Array.from({ length: rows }, (_, i) => Array.from({ length: cols }, (_, j) => old[i]?.[j] ?? (i === j ? 1 : 0))));
+}
