@@ -33,7 +33,7 @@ export function ticks(lo, hi, count = 5) {
   if (!(hi > lo)) return [lo];
   const raw = (hi - lo) / count;
   const mag = 10 ** Math.floor(Math.log10(raw));
-  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= raw) ?? 10 * mag;
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= 0.7 * raw) ?? 10 * mag;
   const out = [];
   for (let v = Math.ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) out.push(Math.abs(v) < 1e-12 * step ? 0 : v);
   return out;
@@ -58,7 +58,7 @@ function axes(ctx, b, [x0, x1], [y0, y1], xLabel, yLabel, scale) {
   ctx.strokeRect(b.x, b.y, b.w, b.h);
   ctx.textAlign = 'center';
   ctx.textBaseline = 'top';
-  for (const v of ticks(x0, x1, Math.max(2, Math.floor(b.w / (70 * scale))))) {
+  for (const v of ticks(x0, x1, Math.max(3, Math.floor(b.w / (60 * scale))))) {
     const px = b.x + ((v - x0) / (x1 - x0)) * b.w;
     ctx.beginPath();
     ctx.moveTo(px, b.y + b.h);
@@ -69,7 +69,7 @@ function axes(ctx, b, [x0, x1], [y0, y1], xLabel, yLabel, scale) {
   ctx.fillText(xLabel, b.x + b.w / 2, b.y + b.h + (7 + FONT) * scale);
   ctx.textAlign = 'right';
   ctx.textBaseline = 'middle';
-  for (const v of ticks(y0, y1, Math.max(2, Math.floor(b.h / (40 * scale))))) {
+  for (const v of ticks(y0, y1, Math.max(3, Math.floor(b.h / (36 * scale))))) {
     const py = b.y + b.h - ((v - y0) / (y1 - y0)) * b.h;
     ctx.beginPath();
     ctx.moveTo(b.x - 4 * scale, py);
@@ -142,15 +142,19 @@ export class HeatStrip {
   /** A new run or component: clears the columns. */
   reset(range) {
     this.range = range;
-    this.fit();
+    this.clear();
   }
 
-  /** Fits the canvas to its panel's width (clears the columns: the caller redraws them). */
-  fit(cssHeight = document.body.classList.contains('present') ? 300 : 220) {
+  /** Fits the canvas to its panel's width and `cssHeight` (clears the columns). */
+  fit(cssHeight) {
     const width = this.canvas.parentElement.clientWidth - 8;
     sizeCanvas(this.canvas, Math.max(200, width), cssHeight);
     this.box = layout(this.canvas);
-    this.off = new OffscreenCanvas(Math.round(this.box.plot.w), Math.round(this.box.plot.h));
+    this.clear();
+  }
+
+  clear() {
+    this.off = new OffscreenCanvas(Math.max(1, Math.round(this.box.plot.w)), Math.max(1, Math.round(this.box.plot.h)));
     this.x = 0;
   }
 
@@ -228,14 +232,15 @@ export const markerShape = (i) => MARKERS[i % MARKERS.length];
 
 /**
  * The 2-D heatmap: `values` on a `P × P` raster over `domain` (first component fastest),
- * coloured against its maximum with a numeric colour bar; `curvature` (optional) tints in
+ * coloured against its maximum with a numeric colour bar, at most `height` CSS pixels high; `curvature` (optional) tints in
  * red where ∇²(−log p) is not positive semidefinite; `marks` are estimates `{x, y, color, i}`
  * (hollow markers growing with the method's index, so coinciding ones stay visible) and
  * `truth` a white disc.
  */
-export function drawHeatmap2d(canvas, { values, P, domain, curvature = null, marks = [], truth = null }) {
-  const width = Math.max(220, Math.min(canvas.parentElement.clientWidth - 8, document.body.classList.contains('present') ? 560 : 420));
-  sizeCanvas(canvas, width, width * 0.86);
+export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = null, marks = [], truth = null }) {
+  // The plot box square: the canvas is a little wider than high (colour bar on the right).
+  const width = Math.max(260, Math.min(canvas.parentElement.clientWidth - 8, height * 1.16));
+  sizeCanvas(canvas, width, width / 1.16);
   const { plot: b, bar, scale } = layout(canvas);
   const ctx = canvas.getContext('2d');
   ctx.fillStyle = '#fff';

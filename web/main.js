@@ -340,6 +340,21 @@ function localProblems(config) {
   if (!Number.isInteger(config.seed) || config.seed < 0) {
     problems.push({ field: 'seed', message: 'must be a nonnegative integer' });
   }
+  // Method parameters against their schema (kind, range), in plain words at their field —
+  // before the wasm's reader, which can only say that a number does not fit its type.
+  config.methods.forEach((m, j) => {
+    for (const p of methodEntry(m.method)?.params ?? []) {
+      const v = m[p.name];
+      const values = p.kind === 'int_list' || p.kind === 'number_list' ? v : p.kind === 'optional_int' && v == null ? [] : [v];
+      if (!Array.isArray(values) || p.kind === 'choice') continue;
+      const whole = p.kind.includes('int');
+      // Whole-number parameters are counts: never below 0, whatever the schema leaves open.
+      const min = p.min ?? (whole ? 0 : null);
+      const range = [min != null ? `≥ ${min}` : null, p.max != null ? `≤ ${p.max}` : null].filter(Boolean).join(' and ');
+      const bad = values.some((x) => !Number.isFinite(x) || (whole && !Number.isInteger(x)) || (min != null && x < min) || (p.max != null && x > p.max));
+      if (bad) problems.push({ field: `methods[${j}].${p.name}`, message: `needs ${whole ? 'a whole number' : 'a number'}${range ? ` ${range}` : ''}${values.length > 1 ? ' (each, comma separated)' : ''}` });
+    }
+  });
   const loss = config.failure.track_loss;
   if (loss && !(Number.isFinite(loss.error) && Number.isFinite(loss.duration))) {
     problems.push({ field: 'failure.track_loss', message: 'the track-loss rule needs both numbers: the error and how long it lasts (or neither, for no rule)' });
@@ -523,39 +538,8 @@ function makePlots(info) {
   // The methods hidden by their chips stay hidden over a reset of the same methods.
   if (state.hiddenFor !== names.join('|')) state.hidden = new Set();
   state.hiddenFor = names.join('|');
-  const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
-  names.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
-  names.forEach((m, i) => series.push({ label: `${m} after failure`, stroke: `${color(i)}99`, dash: [3, 4], width: 1.5 }));
-  // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
-  const bands = [];
-  if (!info.has_truth) {
-    names.forEach((m, i) => {
-      series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
-      const hi = 2 + 2 * M + 2 * i;
-      bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
-    });
-  }
-  state.trajPlot?.destroy();
-  state.trajPlot = new uPlot({
-    ...plotSize('trajectory-plot', 'trajectory'), series, bands, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
-    axes: [{ label: 't' }, { label: 'x' }],
-    // The failed-part and band series are drawn but not listed; failures get a ✕ and the
-    // time slider's cursor a red line.
-    hooks: {
-      init: [(u) => u.root.querySelectorAll('.u-legend .u-series').forEach((row, k) => { if (k >= 2 + M) row.style.display = 'none'; })],
-      draw: [drawFailureMarks, (u) => drawCursor(u)],
-    },
-  }, series.map(() => []), $('trajectory-plot'));
+  makeCharts();
   $('metrics').classList.toggle('no-truth', !info.has_truth);
-  const dseries = [{}];
-  names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
-  state.densityPlot?.destroy();
-  state.densityPlot = new uPlot({
-    ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
-    legend: { show: false },
-    axes: [{ label: 'x' }, { label: 'density' }],
-    hooks: { draw: [(u) => drawTruthMarker(u)] },
-  }, [[], ...names.map(() => [])], $('density-plot'));
   fillOptions($('heatmap-method'), names.map((m, i) => [i, m]));
   $('heatmap-method').value = $('density-method').value;
   const key = $('heatmap-key');
@@ -570,12 +554,11 @@ function makePlots(info) {
       ...names.map((m, i) => el('span', { dataset: { method: String(i) } }, swatch(color(i)), `${markerSymbol(i)} ${m}`)));
   }
   state.heatStrip ??= new HeatStrip($('heat'));
+  state.heatStrip.fit(densityHeight());
   resetHeatStrip();
   $('metrics').querySelector('tbody').replaceChildren(...names.map((m, i) => {
-    const swatch = el('span', { className: 'swatch' });
-    swatch.style.background = color(i);
     return el('tr', { dataset: { method: String(i) } },
-      el('td', {}, swatch, m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'));
+      el('td', {}, lineSample(color(i), dash(i)), m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'));
   }));
   $('timing').querySelector('tbody').replaceChildren(...names.map((m, i) => el('tr', { dataset: { method: String(i) } },
     el('td', {}, m), el('td', { className: 'time' }, '–'), el('td', { className: 'concerns' }, '—'))));
@@ -584,22 +567,87 @@ function makePlots(info) {
   worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
 }
 
+// The uPlot charts of the run on screen (rebuilt, keeping the data, when presentation mode
+// changes the type size).
+function makeCharts() {
+  const info = state.info;
+  const names = labels();
+  const M = names.length;
+  const px = presenting() ? 17 : 12;
+  const axisFont = { font: `${px}px system-ui, sans-serif`, labelFont: `bold ${px + 1}px system-ui, sans-serif`, size: presenting() ? 64 : 50 };
+  const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
+  names.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  names.forEach((m, i) => series.push({ label: `${m} after failure`, stroke: `${color(i)}99`, dash: [3, 4], width: 1.5 }));
+  // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
+  const bands = [];
+  if (!info.has_truth) {
+    names.forEach((m, i) => {
+      series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
+      const hi = 2 + 2 * M + 2 * i;
+      bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
+    });
+  }
+  state.trajPlot?.destroy();
+  state.trajPlot = new uPlot({
+    ...plotSize('trajectory-plot', 'trajectory'), series, bands,
+    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
+    axes: [{ label: 't', ...axisFont }, { label: `x${Number($('component').value || 0) + 1}`, ...axisFont }],
+    // The method chips under the plot are its legend (line style, colour, show/hide).
+    legend: { show: false },
+    // The failed-part and band series are drawn but not listed; failures get a ✕ and the
+    // time slider's cursor a red line.
+    hooks: { draw: [drawFailureMarks, (u) => drawCursor(u)] },
+  }, series.map(() => []), $('trajectory-plot'));
+  // The chips stay below the plot.
+  $('trajectory-plot').appendChild($('method-chips'));
+  const dseries = [{}];
+  names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  state.densityPlot?.destroy();
+  state.densityPlot = new uPlot({
+    ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
+    legend: { show: false },
+    axes: [{ label: `x${Number($('component').value || 0) + 1}`, ...axisFont }, { label: 'density', ...axisFont }],
+    hooks: { draw: [(u) => drawTruthMarker(u)] },
+  }, [[], ...names.map(() => [])], $('density-plot'));
+  showMethods();
+}
+
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
-  const present = document.body.classList.contains('present');
   const width = $(id).clientWidth || (which === 'trajectory' ? 800 : 360);
-  const height = which === 'trajectory' ? (present ? 380 : 260) : (present ? 300 : 200);
-  return { width: width - 2, height };
+  return { width: width - 2, height: which === 'trajectory' ? trajectoryHeight() : densityHeight() };
 }
+// Heights from the window's: the main plot and a density panel fit a 1280 × 720 projector.
+const clamp = (v, lo, hi) => Math.max(lo, Math.min(hi, v));
+const presenting = () => document.body.classList.contains('present');
+const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.34 : 0.3), 180, presenting() ? 520 : 340));
+const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', diamond: '◇' })[markerShape(i)];
 
-// One chip per method: the methods shown in every plot (a lecture's chosen subset).
+// A short line in a method's colour and style (legend entries, chips).
+function lineSample(stroke, pattern, width = 2) {
+  const dpr = window.devicePixelRatio || 1;
+  const c = el('canvas', { width: 26 * dpr, height: 10 * dpr });
+  c.style.width = '26px';
+  c.style.height = '10px';
+  const ctx = c.getContext('2d');
+  ctx.strokeStyle = stroke;
+  ctx.lineWidth = width * dpr;
+  ctx.setLineDash(pattern.map((v) => v * dpr));
+  ctx.beginPath();
+  ctx.moveTo(0, 5 * dpr);
+  ctx.lineTo(26 * dpr, 5 * dpr);
+  ctx.stroke();
+  return c;
+}
+
+// The trajectory plot's legend: one chip per method with its line, which also chooses the
+// methods every plot shows (a lecture's subset).
 function methodChips(names) {
-  $('method-chips').replaceChildren(...names.map((m, i) => {
-    const swatch = el('span', { className: 'swatch' });
-    swatch.style.background = color(i);
-    const chip = el('button', { type: 'button', className: 'chip', dataset: { method: String(i) }, ariaPressed: String(!state.hidden.has(i)), title: `show or hide ${m} in every plot` }, swatch, m);
+  const truth = state.info.has_truth ? [el('span', { className: 'chip truth' }, lineSample('#111', []), 'truth')] : [];
+  $('method-chips').replaceChildren(...truth, ...names.map((m, i) => {
+    const chip = el('button', { type: 'button', className: 'chip', dataset: { method: String(i) }, ariaPressed: String(!state.hidden.has(i)), title: `show or hide ${m} in every plot (dashed and lighter after a failure ✕)` }, lineSample(color(i), dash(i)), m);
     chip.addEventListener('click', () => {
       if (state.hidden.has(i)) state.hidden.delete(i); else state.hidden.add(i);
       chip.setAttribute('aria-pressed', String(!state.hidden.has(i)));
@@ -682,6 +730,7 @@ function drawCursor(u) {
   const px = u.valToPos(t, 'x', true);
   const ctx = u.ctx;
   ctx.save();
+  ctx.setLineDash([]);
   ctx.strokeStyle = '#e00';
   ctx.lineWidth = 2 * (window.devicePixelRatio || 1);
   ctx.beginPath();
@@ -700,7 +749,7 @@ function drawHeatmap() {
   const marks = d.est.map((e, i) => ({ x: e[0][row] ?? d.ghost[i][0][row], y: e[1][row] ?? d.ghost[i][1][row], color: color(i), i }))
     .filter((m, i) => m.x != null && m.y != null && !state.hidden.has(i));
   drawHeatmap2d($('heatmap'), {
-    values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
+    height: densityHeight() + 60, values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
     truth: state.info.has_truth && d.truth[0][row] != null ? [d.truth[0][row], d.truth[1][row]] : null,
   });
 }
@@ -793,7 +842,7 @@ function applyFrame(frame) {
 
 function render() {
   const d = state.data;
-  if (!d) return;
+  if (!d || !state.heatStrip) return;
   const dim = Number($('component').value) || 0;
   const bands = state.info.has_truth ? [] : d.est.flatMap((_, i) => [d.hi[i][dim], d.lo[i][dim]]);
   state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands]);
@@ -1313,6 +1362,7 @@ $('speed').addEventListener('input', () => {
 $('component').addEventListener('change', () => {
   const dim = Number($('component').value);
   worker.postMessage({ type: 'view', view: { dim }, redraw: !state.playing });
+  makeCharts();
   resetHeatStrip();
   render();
 });
@@ -1339,9 +1389,8 @@ function setPresent(on) {
 // Plots follow their panels' sizes (window resized, presentation mode).
 function fitPlots() {
   if (!state.info) return;
-  state.trajPlot?.setSize(plotSize('trajectory-plot', 'trajectory'));
-  state.densityPlot?.setSize(plotSize('density-plot', 'density'));
-  state.heatStrip.fit();
+  makeCharts();
+  state.heatStrip.fit(densityHeight());
   resetHeatStrip();
   render();
 }

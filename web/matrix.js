@@ -32,7 +32,7 @@ export function setMatrix(box, value) {
     parts.push(el('label', { className: 'inline identity' }, el('input', { type: 'checkbox', className: 'identity-box', checked: isIdentity }), 'identity'));
   }
   parts.push(el('table', { className: 'matrix-grid' }, ...cells));
-  const json = el('input', { className: 'matrix-json', value: isIdentity ? '' : JSON.stringify(value), placeholder: m.identityAllowed ? 'identity' : '[[1]]', ariaLabel: `${field} as JSON rows` });
+  const json = el('input', { className: 'matrix-json', value: isIdentity ? '' : JSON.stringify(value), placeholder: m.identityAllowed ? 'identity' : '[[1]]', ariaLabel: `${field} as JSON rows`, dataset: { field: `${field}.json` } });
   parts.push(el('details', { className: 'advanced' }, el('summary', {}, 'advanced: rows as JSON'), json));
   box.replaceChildren(...parts);
   box.querySelectorAll('[data-cell]').forEach((input) => input.addEventListener('input', () => {

@@ -213,13 +213,13 @@ try {
   await page.waitForFunction(() => window.zakaiPage.lastDensity?.heat2d?.curvature != null, null, { timeout: 5000 });
   await page.waitForTimeout(300);
   // The layer paints red exactly where the wasm reports a negative curvature of −log p: with
-  // such raster cells the red pixel count grows (each cell is ≥ 2×2 pixels at 300 px / 120
-  // points); without them it stays.
+  // such raster cells the red pixel count grows (each cell covers at least one pixel of the
+  // plot box, which is sized to the panel: 120 points on ≥ 120 pixels); without them it stays.
   const negative = await page.evaluate(() => Array.from(window.zakaiPage.lastDensity.heat2d.curvature).filter((k) => k < -1e-6).length);
   const layered = await heatmapStats();
   console.log('log-concavity layer:', negative, 'cells with negative curvature; red pixels', plain.red, '→', layered.red);
   assert.ok(negative > 0, 'the 2-D cubic sensor posterior is not log-concave after 10 intervals');
-  assert.ok(layered.red >= plain.red + 4 * negative, `red where −log p is not convex: ${negative} cells, ${plain.red} → ${layered.red} red pixels`);
+  assert.ok(layered.red >= plain.red + negative, `red where −log p is not convex: ${negative} cells, ${plain.red} → ${layered.red} red pixels`);
   await page.uncheck('#lc-layer');
   await load(`${url}?preset=sa-example-2`, 'sa-example-2');
   await page.selectOption('#heatmap-method', String(await page.evaluate(() => window.zakaiPage.info.methods.indexOf('SA'))));
@@ -635,7 +635,7 @@ try {
   assert.equal((await page.$$('#mc-table tbody tr')).length, 4);
   // The grid lesson: IEM's condition (22) is violated at Δt = 1e-3 and holds at 4e-4.
   await openLesson('yau-yau-grid');
-  assert.match(await page.textContent('#warnings'), /IEM: \(22\) violated/);
+  assert.match(await page.textContent('#warnings'), /IEM\(\d+\): \(22\) violated/);
   await tryThis('shrink IEM');
   assert.doesNotMatch(await page.textContent('#warnings'), /\(22\)/);
   // 2-D: the heatmap, and the log-concavity layer turned on by the lesson's action.
@@ -785,7 +785,7 @@ try {
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   const labelled = await page.evaluate(() => ({
     labels: window.zakaiPage.info.labels,
-    legend: [...document.querySelectorAll('#trajectory-plot .u-legend .u-series')].filter((r) => r.style.display !== 'none').map((r) => r.textContent.trim()),
+    legend: [...document.querySelectorAll('#method-chips button.chip')].map((r) => r.textContent.trim()),
     rows: [...document.querySelectorAll('#metrics tbody tr')].map((r) => r.children[0].textContent),
     config: window.zakaiPage.base.methods,
   }));
@@ -824,7 +824,7 @@ try {
   const fieldError = await page.textContent('[data-method-row="2"]');
   const status19 = await page.textContent('#form-status');
   console.log('−5 particles:', fieldError.trim(), '|', status19);
-  assert.match(fieldError, /particles: /);
+  assert.match(fieldError, /particles N: needs a whole number ≥ 1/);
   assert.match(status19, /at the marked field/);
   assert.ok(await page.isVisible('[data-method-row="2"]') && await page.evaluate(() => {
     const r = document.querySelector('[data-method-row="2"]').getBoundingClientRect();
@@ -893,7 +893,7 @@ try {
   });
   console.log('heat strip:', JSON.stringify(strip));
   assert.ok(Math.abs(strip.cssWidth - (strip.panel - 8)) <= 2, 'the heat strip fills its panel');
-  assert.ok(strip.dark > 100, 'tick labels on the left axis');
+  assert.ok(strip.dark > 30, 'tick labels on the left axis');
   assert.ok(strip.top[0] > 200 && strip.top[1] > 200 && strip.bottom[0] < 100 && strip.bottom[2] > 60, `colour bar from dark to yellow: ${strip.top} / ${strip.bottom}`);
   assert.ok(!(await page.evaluate(() => document.getElementById('diagnostics-panel').open)), 'diagnostics closed');
   const lcColour = await page.$eval('#log-concavity', (e) => getComputedStyle(e).color);
@@ -903,7 +903,8 @@ try {
   const pngPath = `${artifacts}/export.png`;
   await png2.saveAs(pngPath);
   const pngSize = await page.evaluate(async (b64) => {
-    const blob = await (await fetch(`data:image/png;base64,${b64}`)).blob();
+    // Decoded in the page (the CSP keeps fetch to the page's own origin).
+    const blob = new Blob([Uint8Array.from(atob(b64), (ch) => ch.charCodeAt(0))], { type: 'image/png' });
     const img = await createImageBitmap(blob);
     const c = new OffscreenCanvas(img.width, img.height);
     const ctx = c.getContext('2d');
@@ -940,9 +941,11 @@ try {
   await page.waitForTimeout(300);
   const hm = await page.evaluate(() => {
     const c = document.getElementById('heatmap');
-    return { width: c.getBoundingClientRect().width, panel: c.parentElement.clientWidth };
+    const r = c.getBoundingClientRect();
+    return { width: r.width, height: r.height, panel: c.parentElement.clientWidth, density: document.getElementById('heat').getBoundingClientRect().height };
   });
-  assert.ok(hm.width >= Math.min(hm.panel - 10, 400) - 2, `heatmap sized to its panel: ${JSON.stringify(hm)}`);
+  // As wide as the panel allows, or as high as the density row (the plot box square).
+  assert.ok(hm.width <= hm.panel && (hm.width >= hm.panel - 10 || hm.height >= hm.density), `heatmap sized to its panel: ${JSON.stringify(hm)}`);
   await page.screenshot({ path: `${artifacts}/playground-2d-axes.png` });
 
   assert.deepEqual(consoleErrors, [], 'no console errors');
