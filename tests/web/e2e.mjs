@@ -948,6 +948,98 @@ try {
   assert.ok(hm.width <= hm.panel && (hm.width >= hm.panel - 10 || hm.height >= hm.density), `heatmap sized to its panel: ${JSON.stringify(hm)}`);
   await page.screenshot({ path: `${artifacts}/playground-2d-axes.png` });
 
+  // 21. Every preset's description holds for its default seed (issue 25 §2): the browser
+  //     plays it to the end and reads the run. (cubic-sensor-1d is checked in section 1.)
+  {
+    const playToEnd = async (name, speed = '5') => {
+      await load(`${url}?preset=${name}`, name);
+      await page.evaluate((v) => { const s = document.getElementById('speed'); s.value = v; s.dispatchEvent(new Event('input')); }, speed);
+      await page.click('#play');
+      await finished();
+      return page.evaluate(() => {
+        const s = window.zakaiPage;
+        const { info, data } = s;
+        const mse = Object.fromEntries(s.diagnostics.map((d, i) => [info.methods[i], d.mse]));
+        const failed = s.diagnostics.filter((d) => d.failed).map((d) => d.name);
+        // Largest error of each method's first component over t ≤ 1 (or of x₁ in 2-D).
+        const early = Object.fromEntries(info.methods.map((m, i) => {
+          let worst = 0;
+          for (let k = 0; k < data.times.length && data.times[k] <= 1; k++) {
+            const e = data.est[i][0][k];
+            if (e != null) worst = Math.max(worst, Math.abs(e - data.truth[0][k]));
+          }
+          return [m, worst];
+        }));
+        const firstOff = Object.fromEntries(info.methods.map((m, i) => {
+          const k = data.est[i][0].findIndex((e, r) => e != null && Math.abs(e - data.truth[0][r]) > 2);
+          return [m, k < 0 ? null : data.times[k]];
+        }));
+        // 2-D: the heatmap method's local maxima above 0.2 of its maximum, and the ratio of
+        // its variances along the two axes, in every kept frame.
+        const frames2d = s.history.filter((h) => h.heat2d?.values?.length).map((h) => {
+          const { points: P, values: v } = h.heat2d;
+          let max = 0;
+          for (const x of v) max = Math.max(max, x);
+          let peaks = 0;
+          for (let j = 1; j < P - 1; j++) {
+            for (let i = 1; i < P - 1; i++) {
+              const c = v[i + P * j];
+              if (c < 0.2 * max) continue;
+              let top = true;
+              for (let dj = -1; dj <= 1; dj++) for (let di = -1; di <= 1; di++) if ((di || dj) && v[i + di + P * (j + dj)] >= c) top = false;
+              if (top) peaks += 1;
+            }
+          }
+          let m = 0; let mx = 0; let my = 0; let sx = 0; let sy = 0;
+          for (let j = 0; j < P; j++) for (let i = 0; i < P; i++) { const w = v[i + P * j]; m += w; mx += w * i; my += w * j; }
+          mx /= m; my /= m;
+          for (let j = 0; j < P; j++) for (let i = 0; i < P; i++) { const w = v[i + P * j]; sx += w * (i - mx) ** 2; sy += w * (j - my) ** 2; }
+          return { t: h.t, peaks, stretch: Math.max(sx / sy, sy / sx) };
+        });
+        return { mse, failed, early, firstOff, frames2d, description: document.getElementById('description').textContent };
+      });
+    };
+    const ratio = (mse) => { const v = Object.values(mse); return Math.max(...v) / Math.min(...v); };
+    let r = await playToEnd('yau-cubic-sensor');
+    console.log('yau-cubic-sensor:', JSON.stringify({ mse: r.mse, firstOff: r.firstOff }));
+    assert.match(r.description, /EKF off the truth from its first steps/);
+    assert.ok(r.firstOff.EKF != null && r.firstOff.EKF <= 0.3, 'the EKF is off by more than 2 by t ≈ 0.2');
+    assert.ok(r.mse.QIEM < r.mse.EKF / 4 && r.mse['PF(500)'] < r.mse.EKF / 4, 'QIEM and the PF with about a fifth of its MSE');
+    r = await playToEnd('direct-4.3');
+    console.log('direct-4.3:', JSON.stringify(r.mse));
+    assert.ok(r.mse.EKF > 10 * Math.max(r.mse.Direct, r.mse.QIEM), 'the EKF leaves the truth, the direct method and QIEM stay on it');
+    r = await playToEnd('direct-4.4');
+    console.log('direct-4.4 errors over t ≤ 1:', JSON.stringify(r.early));
+    assert.ok(r.early.EKF > 3 * Math.max(r.early.Direct, r.early.QIEM), 'the EKF blows up within the first second');
+    assert.ok(r.mse.Direct < 0.5 && r.mse.QIEM < 0.5, 'the direct method and QIEM follow the truth');
+    r = await playToEnd('bearings-only');
+    const map = { IOKF: r.mse['IOKF(2×3)'], IEKF: r.mse['IEKF(6)'], UKF: r.mse.UKF, EKF: r.mse.EKF };
+    console.log('bearings-only:', JSON.stringify(map));
+    assert.ok(ratio(map) < 1.01, 'IOKF, IEKF and UKF nearly coincide, the EKF next to them');
+    for (const n of [2, 3, 4, 5, 6]) {
+      r = await playToEnd(`cos-x${n}`);
+      console.log(`cos-x${n}:`, JSON.stringify(r.mse));
+      assert.deepEqual(r.failed, [], 'every filter on the truth');
+      assert.ok(ratio(r.mse) < 4 / 3, `cos-x${n}: errors within a third of each other (${ratio(r.mse).toFixed(3)})`);
+    }
+    r = await playToEnd('cubic-sensor-2d');
+    const stretch = Math.max(...r.frames2d.map((f) => f.stretch));
+    console.log('cubic-sensor-2d: largest variance ratio of the heatmap density', stretch.toFixed(2));
+    assert.ok(stretch > 2, 'the density stretches along an axis');
+    r = await playToEnd('yau-2d');
+    console.log('yau-2d:', JSON.stringify(r.mse));
+    assert.ok(ratio({ EKF: r.mse.EKF, UKF: r.mse.UKF, PF: r.mse['PF(500)'], QIEM: r.mse.QIEM }) < 1.1, 'EKF, UKF, PF and QIEM nearly agree');
+    r = await playToEnd('sa-example-1');
+    console.log('sa-example-1:', JSON.stringify(r.mse));
+    assert.ok(Math.abs(r.mse.SA / r.mse.GSF - 1) < 0.01 && Math.abs(r.mse.FDM / r.mse.GSF - 1) < 0.01 && Math.abs(r.mse.KF / r.mse.GSF - 1) < 0.05, 'SA and FDM at the exact GSF, the KF next to them');
+    // Every measurement kept as a frame (speed 1): two modes after the first measurements,
+    // one at the end.
+    r = await playToEnd('sa-example-2', '1');
+    console.log('sa-example-2: heatmap modes per frame', JSON.stringify(r.frames2d.map((f) => [Number(f.t.toFixed(2)), f.peaks])));
+    assert.ok(r.frames2d.some((f) => f.t <= 0.4 && f.peaks >= 2), 'two modes after the first measurements');
+    assert.equal(r.frames2d[r.frames2d.length - 1].peaks, 1, 'merged by the end');
+  }
+
   assert.deepEqual(consoleErrors, [], 'no console errors');
   console.log(`screenshots in ${artifacts}`);
 } catch (e) {
