@@ -36,7 +36,7 @@ function paramInput(row, i, p) {
   const shown = list ? (Array.isArray(value) ? value : []).join(', ') : String(value ?? '');
   const input = el('input', {
     type: list ? 'text' : 'number', step: p.kind === 'int' || p.kind === 'optional_int' ? '1' : 'any', dataset, title: p.help,
-    min: list ? null : p.min, max: list ? null : p.max, placeholder: p.kind === 'optional_int' ? 'auto' : null,
+    min: list ? null : p.min, max: list ? null : p.max, placeholder: p.kind === 'optional_int' || p.kind === 'int_list' ? 'auto' : null,
   });
   input.value = shown;
   return input;
@@ -47,8 +47,9 @@ function paramValue(kind, text) {
   const t = text.trim();
   if (kind === 'int') return Math.round(Number(t));
   if (kind === 'optional_int') return t === '' ? null : Math.round(Number(t));
-  if (kind === 'int_list') return t.split(',').map((x) => Math.round(Number(x.trim())));
-  if (kind === 'number_list') return t.split(',').map((x) => Number(x.trim()));
+  // An empty list: chosen by the method (e.g. a 1-D grid from the problem).
+  if (kind === 'int_list') return t === '' ? [] : t.split(',').map((x) => Math.round(Number(x.trim())));
+  if (kind === 'number_list') return t === '' ? [] : t.split(',').map((x) => Number(x.trim()));
   if (kind === 'choice') return t;
   return Number(t);
 }

@@ -418,3 +418,100 @@ fn the_cell_averaged_factor_resolves_likelihoods_narrower_than_the_grid() {
         );
     }
 }
+
+/// A 1-D grid left unset is chosen from the problem: 10 points per the narrowest posterior sd
+/// to expect — the prior's, or the linearised filter's steady state √(√(GGᵀS)/|c|) — on a
+/// transform length with small factors, reported as a chosen default; it then tracks the
+/// exact filter as the pinned grids do, and on a steep sensor its width self-check stays quiet.
+#[test]
+fn an_unset_grid_is_chosen_from_the_problem() {
+    let mut config = linear(400, 1e-3);
+    for m in &mut config.methods[1..] {
+        if let MethodConfig::Qiem(p) | MethodConfig::Iem(p) = m {
+            p.points.clear();
+        }
+    }
+    let experiment = Experiment::new(config).unwrap();
+    let MethodConfig::Qiem(chosen) = &experiment.config().methods[1] else {
+        unreachable!()
+    };
+    let points = chosen.points[0];
+    // h = 1.5x, G = S = 1: steady P = 1/1.5, sd 0.816; the prior's sd √0.3 = 0.548 is smaller.
+    let width = 0.3f64.sqrt();
+    let spacing = 12.0 / (points + 1) as f64;
+    assert!(
+        spacing <= width / 10.0,
+        "spacing {spacing} for width {width}"
+    );
+    assert!(
+        spacing > width / 10.0 * 0.9,
+        "not finer than asked: {points} points"
+    );
+    let mut m = points + 1;
+    for p in [2, 3, 5, 7] {
+        while m % p == 0 {
+            m /= p;
+        }
+    }
+    assert_eq!(
+        m,
+        1,
+        "N + 1 = {} has only the factors 2, 3, 5, 7",
+        points + 1
+    );
+    assert!(
+        experiment
+            .chosen_defaults()
+            .iter()
+            .any(|n| n.starts_with(&format!("QIEM: points {points}"))),
+        "{:?}",
+        experiment.chosen_defaults()
+    );
+    let mut run = experiment.start(4).unwrap();
+    let mut worst = 0.0f64;
+    while !run.is_finished() {
+        run.advance(1, None, &mut zakai::experiment::Silent);
+        let kf = run.filters()[0].estimate().mean[0];
+        for g in 1..3 {
+            worst = worst.max((run.filters()[g].estimate().mean[0] - kf).abs());
+        }
+    }
+    assert!(
+        worst < 0.02,
+        "chosen grids against the exact filter: {worst}"
+    );
+
+    // The cubic sensor (h = x³, prior N(1, 0.1) on [−4, 4]): the steady state at the prior's
+    // +3 sd, b = 1.95, is the narrower (1/√(3b²) = 0.296), and the grid resolves it.
+    let mut cubic = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    cubic.methods = vec![MethodConfig::from_key("qiem").unwrap()];
+    let experiment = Experiment::new(cubic).unwrap();
+    let MethodConfig::Qiem(chosen) = &experiment.config().methods[0] else {
+        unreachable!()
+    };
+    let b = 1.0 + 3.0 * 0.1f64.sqrt();
+    let steady = 1.0 / (3.0 * b * b).sqrt();
+    let spacing = 8.0 / (chosen.points[0] + 1) as f64;
+    // 1 %: the prior is a density expression, its variance computed on a grid.
+    assert!(
+        spacing <= steady / 10.0 * 1.01,
+        "spacing {spacing}, steady sd {steady}"
+    );
+    for seed in 1..=3 {
+        let result = experiment.run(seed).unwrap();
+        let track = &result.methods[0];
+        assert!(!track.failed(), "seed {seed}: {:?}", track.failure);
+        assert!(
+            track
+                .concerns
+                .iter()
+                .all(|c| !c.describe().contains("width in grid cells")),
+            "seed {seed}: {:?}",
+            track
+                .concerns
+                .iter()
+                .map(|c| c.describe())
+                .collect::<Vec<_>>()
+        );
+    }
+}

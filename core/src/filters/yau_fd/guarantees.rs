@@ -156,7 +156,7 @@ fn prime_factors(mut m: usize) -> Vec<usize> {
 
 /// A point count near `n` whose DST length N + 1 has only the factors 2, 3, 5 and 7, searched
 /// downwards (`up = false`) or upwards from `n`.
-fn smooth_points(n: usize, up: bool) -> Option<usize> {
+pub(crate) fn smooth_points(n: usize, up: bool) -> Option<usize> {
     let smooth = |m: usize| prime_factors(m).iter().all(|&p| p <= 7);
     let mut k = n;
     loop {

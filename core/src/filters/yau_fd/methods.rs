@@ -21,7 +21,7 @@ fn points() -> ParamInfo {
         "points",
         ParamKind::IntList,
         "grid points",
-        "interior grid points per dimension (one number: the same in every dimension)",
+        "interior grid points per dimension (one number: the same in every dimension; empty: chosen from the problem in 1-D, 201 per dimension else)",
     )
     .at_least(3.0)
 }
@@ -86,7 +86,7 @@ fn info(
 /// Bytes of a grid filter: u, scratch, the operator's coefficients (p per dimension, q, ∇·f,
 /// S⁻¹h, ½hᵀS⁻¹h) and the tabulated cell samples of the observation factor, per node.
 fn grid_memory(p: &YauYauParams, n: usize) -> Option<usize> {
-    let nodes = product(&per_dimension(&p.points, n))?;
+    let nodes = product(&p.shape(n))?;
     let samples = p.likelihood_samples.checked_pow(n as u32)?;
     nodes.checked_mul(8 + 2 * n + samples)?.checked_mul(8)
 }
@@ -163,6 +163,12 @@ macro_rules! yau_yau_method {
             ) -> Result<YauYauFilter, ZakaiError> {
                 build($scheme, ctx, p, name)
             }
+            fn problem_defaults(
+                p: &YauYauParams,
+                problem: &ProblemContext,
+            ) -> Option<(YauYauParams, String)> {
+                grid_from_problem(p, problem)
+            }
             fn refined(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
                 refined_grid(p, n)
             }
@@ -200,7 +206,7 @@ fn coincidence(
     let q = other.downcast_ref::<YauYauParams>()?;
     let n = problem.model.n;
     let implicit_euler = |s: Scheme, q: &YauYauParams| s != Scheme::Iem || q.alpha == 1.0;
-    let same_discretisation = per_dimension(&p.points, n) == per_dimension(&q.points, n)
+    let same_discretisation = p.shape(n) == q.shape(n)
         && p.dt == q.dt
         && p.potential == q.potential
         && p.likelihood == q.likelihood
@@ -224,7 +230,7 @@ fn coincidence(
 /// The grid at half the spacing — `2N + 1` interior points per dimension keep the old nodes
 /// — and half the time step (the schemes' error is O(Δs² + Δt)).
 fn refined_grid(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
-    let from = crate::filters::per_dimension(&p.points, n);
+    let from = p.shape(n);
     let points: Vec<usize> = from.iter().map(|&k| 2 * k + 1).collect();
     let refined = YauYauParams {
         points: points.clone(),
@@ -309,7 +315,7 @@ yau_yau_method!(
     ),
     YauYauParams::superposition_problems,
     |p, n| {
-        let nodes = product(&per_dimension(&p.points, n))?;
+        let nodes = product(&p.shape(n))?;
         let bumps = product(&per_dimension(&p.centres, n))?;
         grid_memory(p, n)?.checked_add(nodes.checked_mul(bumps)?.checked_mul(8)?)
     }
@@ -334,3 +340,75 @@ yau_yau_method!(
     YauYauParams::fourth_order_problems,
     grid_memory
 );
+
+/// Points per posterior standard deviation a 1-D grid gets when its size is left unset: the
+/// self-check warns below [`crate::filters::WIDTH_IN_CELLS_THRESHOLD`] cells per sd, and 000's
+/// second-order schemes are within about 10⁻³ of the exact filter at this resolution (the
+/// Kalman–Bucy comparison in the tests).
+pub const POINTS_PER_SD: f64 = 10.0;
+
+/// Bounds of a grid chosen from the problem.
+const CHOSEN_POINTS: (usize, usize) = (101, 4001);
+
+/// An unset 1-D grid from the problem (rounded up to a fast transform length): spacing a tenth ([`POINTS_PER_SD`]) of the narrowest
+/// posterior standard deviation to expect — the prior's, or the steady state of the filter
+/// linearised at the narrowest point of the prior's ±3 sd within the box, whichever is
+/// smaller. For dx = G dv, dy = c x dt + dw with E[dw²] = S dt the Riccati equation
+/// P' = GGᵀ − c²P²/S settles at P = √(GGᵀ S)/|c|; with several observations c²/S becomes
+/// Σ_i (∂h_i/∂x)²/S_ii.
+fn grid_from_problem(p: &YauYauParams, problem: &ProblemContext) -> Option<(YauYauParams, String)> {
+    let model = problem.model;
+    if !p.points.is_empty() || model.n != 1 {
+        return None;
+    }
+    let crate::model::ObservationModel::Continuous { noise_cov } = &model.observations else {
+        return None;
+    };
+    let (lo, hi) = problem.bounds[0];
+    let prior_sd = libm::sqrt(problem.prior.covariance()[(0, 0)]);
+    let centre = problem.prior.mean()[0];
+    let (a, b) = (
+        (centre - 3.0 * prior_sd).max(lo),
+        (centre + 3.0 * prior_sd).min(hi),
+    );
+    let q = model.process_noise()[(0, 0)];
+    let mut jacobian = vec![0.0; model.m];
+    let mut steady = f64::INFINITY;
+    const SAMPLES: usize = 64;
+    for k in 0..=SAMPLES {
+        let x = a + (b - a) * k as f64 / SAMPLES as f64;
+        model.observation.jacobian(&[x], &mut jacobian);
+        let information: f64 = jacobian
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c * c / noise_cov[(i, i)])
+            .sum();
+        if information > 0.0 && information.is_finite() {
+            steady = steady.min(libm::sqrt(libm::sqrt(q / information)));
+        }
+    }
+    let width = prior_sd.min(steady);
+    if !(width > 0.0 && width.is_finite()) {
+        return None;
+    }
+    let wanted = libm::ceil((hi - lo) * POINTS_PER_SD / width);
+    let wanted = (wanted.min(CHOSEN_POINTS.1 as f64) as usize).max(CHOSEN_POINTS.0);
+    // The first count from there whose DST length N + 1 is fast (factors 2, 3, 5, 7 only).
+    let points = super::guarantees::smooth_points(wanted - 1, true)?;
+    let steady_text = if steady.is_finite() {
+        format!("{steady:.3}")
+    } else {
+        "none (h is flat there)".into()
+    };
+    let note = format!(
+        "points {points}, {POINTS_PER_SD} per the narrowest posterior sd to expect on the prior's ±3 sd: the smaller of the prior's {prior_sd:.3} and the linearised filter's steady state {steady_text} (within {}–{})",
+        CHOSEN_POINTS.0, CHOSEN_POINTS.1
+    );
+    Some((
+        YauYauParams {
+            points: vec![points],
+            ..p.clone()
+        },
+        note,
+    ))
+}

@@ -105,6 +105,10 @@ pub enum PotentialTerm {
 /// an update: they carry no information and, once subnormal, make every later operation slow.
 pub const FLUSH_BELOW: f64 = 1e-250;
 
+/// Interior points per dimension of a grid whose size is neither given nor chosen from the
+/// problem (2-D and 3-D).
+pub const DEFAULT_POINTS: usize = 201;
+
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
 pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
@@ -114,7 +118,9 @@ pub use crate::model::dmz::Likelihood;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct YauYauParams {
-    /// Interior grid points per dimension (one number: the same in every dimension).
+    /// Interior grid points per dimension (one number: the same in every dimension). Empty:
+    /// chosen from the problem in 1-D ([`methods::POINTS_PER_SD`] points per the narrowest
+    /// posterior standard deviation the model allows), [`DEFAULT_POINTS`] per dimension else.
     pub points: Vec<usize>,
     /// Time step Δt of the scheme (rounded down so that it divides Δτ).
     pub dt: f64,
@@ -141,7 +147,7 @@ pub struct YauYauParams {
 impl Default for YauYauParams {
     fn default() -> Self {
         YauYauParams {
-            points: vec![201],
+            points: Vec::new(),
             dt: 1e-3,
             alpha: 1.0,
             potential: PotentialTerm::Exponential,
@@ -154,9 +160,14 @@ impl Default for YauYauParams {
 }
 
 impl YauYauParams {
-    /// Points per dimension for an `n`-dimensional model.
+    /// Points per dimension for an `n`-dimensional model ([`DEFAULT_POINTS`] each when unset
+    /// and not chosen from the problem).
     pub fn shape(&self, n: usize) -> Vec<usize> {
-        per_dimension(&self.points, n)
+        if self.points.is_empty() {
+            alloc::vec![DEFAULT_POINTS; n]
+        } else {
+            per_dimension(&self.points, n)
+        }
     }
 
     /// Bump centres per dimension for an `n`-dimensional model (superposition technique).
@@ -203,7 +214,9 @@ impl YauYauParams {
     /// Problems with the parameters for an `n`-dimensional model.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        count_problem("points", &self.points, n, &mut p);
+        if !self.points.is_empty() {
+            count_problem("points", &self.points, n, &mut p);
+        }
         if self.points.iter().any(|&k| k < 3) {
             p.push(("points", "at least 3 per dimension".into()));
         }
