@@ -175,7 +175,8 @@ pub struct MethodTrack {
     pub after_failure: Vec<f64>,
     /// Since when the error has been above the track-loss threshold.
     off_track_since: Option<f64>,
-    /// Whether the method is still stepped after its failure (see `after_failure`).
+    /// Whether the method is still stepped after its failure (a followed run, the state
+    /// intact; see `after_failure`).
     following: bool,
 }
 
@@ -654,7 +655,7 @@ impl ExperimentRun {
         };
         let (filter, track) = (&mut self.filters[i], &mut self.tracks[i]);
         if track.failed() {
-            if self.follow_failed && track.following {
+            if track.following {
                 let followed = filter.step(&obs).ok().map(|_| filter.estimate());
                 match followed {
                     Some(est) if est.mean.iter().all(|v| v.is_finite()) => {
@@ -746,11 +747,9 @@ impl ExperimentRun {
                 }
                 observer.on_failure(i, k, &message);
                 track.failure = Some(Failure { k, message });
-                if let Some(mean) = intact {
+                if let (true, Some(mean)) = (self.follow_failed, intact) {
                     track.following = true;
-                    if self.follow_failed {
-                        track.after_failure.extend_from_slice(mean.as_slice());
-                    }
+                    track.after_failure.extend_from_slice(mean.as_slice());
                 }
             }
         }
