@@ -82,7 +82,7 @@ export const LESSONS = [
       'The extended Kalman filter linearises $h$ at its own estimate and runs the Kalman–Bucy equations with $H = h\'(\\hat x)$. For the cubic sensor $h(x) = x^3$:',
       '$$K = P\\,h\'(\\hat x)\\,S^{-1} = 3\\hat x^2 P, \\qquad \\dot P = GG^\\top - \\big(3\\hat x^2\\big)^2 P^2 .$$',
       'When $\\hat x$ nears 0 the gain $3\\hat x^2 P$ vanishes: the EKF stops listening to the observations, keeps the sign it had, and its covariance grows only by $GG^\\top$ — it does not know it is lost. The unscented filter replaces the derivative by sigma points but keeps one Gaussian, and fails the same way. The true posterior near 0 is wide and skewed; the grid and particle filters carry it.',
-      'A method is marked failed when its error stays above 1 for one time unit (the scenario\'s track-loss rule, in its JSON as failure.track_loss), or when its numbers stop being finite.',
+      'A method is marked failed when its error stays above 1 for one time unit (the failure rule, under Time in Explore mode, where it can be changed), or when its numbers stop being finite. A method marked failed by the rule still has its Gaussian: the page draws it on, dashed, from a ✕ at its failure: with this seed the EKF stays near 0, where it was lost, to the end.',
     ],
     lookFor: [
       'The truth crosses 0 at $t \\approx 1$; the EKF and the UKF stay on the old side, and once their error has stayed above 1 for a time unit they are marked failed (at $t \\approx 2.3$–$2.5$), while QIEM and PF(200) follow.',

@@ -626,6 +626,14 @@ try {
   const failures = await page.textContent('#run-error');
   assert.match(failures, /EKF failed at step \d+ \(t = [\d.]+\)/);
   assert.match(failures, /UKF failed at step \d+ \(t = [\d.]+\)/);
+  // Drawn on after failing: the EKF stays near 0, where it was lost, to the end (the lesson's text).
+  const stuck = await page.evaluate(() => {
+    const { info, data } = window.zakaiPage;
+    const ghost = data.ghost[info.methods.indexOf('EKF')][0];
+    return { rows: ghost.filter((v) => v != null).length, last: ghost[ghost.length - 1], truth: data.truth[0][data.truth[0].length - 1] };
+  });
+  console.log('lesson cubic-sensor: the EKF after failing', JSON.stringify(stuck));
+  assert.ok(stuck.rows > 200 && Math.abs(stuck.last) < 0.5 && stuck.truth < -1.5, `the EKF stays lost: ${JSON.stringify(stuck)}`);
   await page.screenshot({ path: `${artifacts}/learn-cubic-sensor.png` });
   // Particles against grids: the Monte Carlo action runs 20 runs of the lesson's methods.
   status = await openLesson('particles-grids');
