@@ -49,9 +49,9 @@ cargo build -p zakai --no-default-features --target thumbv7em-none-eabihf
 step "playground build (wasm package, npm packages)"
 bash scripts/build-web.sh
 
-step "wasm tests in node (wasm-bindgen-test-runner)"
-CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
-  cargo test -p zakai-wasm --target wasm32-unknown-unknown
+step "wasm tests in node (wasm-pack test --node, as a user of the wasm crate runs them)"
+command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
+(cd wasm && wasm-pack test --node)
 
 step "same seed, same truth: native CLI vs wasm"
 # The CLI binary `cargo test --workspace` built (its test profile is optimised; a release
