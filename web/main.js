@@ -592,7 +592,7 @@ function makeCharts() {
   state.trajPlot = new uPlot({
     ...plotSize('trajectory-plot', 'trajectory'), series, bands,
     scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
-    axes: [{ label: 't', ...axisFont }, { label: `x${Number($('component').value || 0) + 1}`, ...axisFont }],
+    axes: [{ label: 't', ...axisFont }, { label: `x${shownDim() + 1}`, ...axisFont }],
     // The method chips under the plot are its legend (line style, colour, show/hide).
     legend: { show: false },
     // The failed-part and band series are drawn but not listed; failures get a ✕ and the
@@ -607,7 +607,7 @@ function makeCharts() {
   state.densityPlot = new uPlot({
     ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     legend: { show: false },
-    axes: [{ label: `x${Number($('component').value || 0) + 1}`, ...axisFont }, { label: 'density', ...axisFont }],
+    axes: [{ label: `x${shownDim() + 1}`, ...axisFont }, { label: 'density', ...axisFont }],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
   }, [[], ...names.map(() => [])], $('density-plot'));
   showMethods();
@@ -678,13 +678,15 @@ function showMethods() {
 // The heat strip for the shown component and method, redrawn from the frames kept so far.
 function resetHeatStrip() {
   const info = state.info;
-  const dim = Number($('component').value) || 0;
+  const dim = shownDim();
   const [lo, hi] = info.domain[dim];
   state.heatStrip.reset({ t0: info.t_start, t1: info.t_end, lo, hi, label: `x${dim + 1}` });
   const method = Number($('density-method').value) || 0;
   for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
 }
 
+// The state component on screen.
+const shownDim = () => Number($('component').value) || 0;
 // The row on screen: the time slider's, or the latest.
 const shownRow = () => (state.scrub ?? state.data.times.length - 1);
 // The kept frame at or before the shown row (its densities).
@@ -699,7 +701,7 @@ function shownFrame() {
 function drawFailureMarks(u) {
   const d = state.data;
   if (!d || !state.diagnostics) return;
-  const dim = Number($('component').value) || 0;
+  const dim = shownDim();
   const ctx = u.ctx;
   const r = 6 * (window.devicePixelRatio || 1);
   state.diagnostics.forEach((m, i) => {
@@ -710,7 +712,6 @@ function drawFailureMarks(u) {
     if (t == null || y == null) return;
     const [px, py] = [u.valToPos(t, 'x', true), u.valToPos(y, 'y', true)];
     ctx.save();
-    ctx.lineWidth = 3 * (window.devicePixelRatio || 1);
     for (const [c, w] of [['#fff', 5], [color(i), 3]]) {
       ctx.strokeStyle = c;
       ctx.lineWidth = w * (window.devicePixelRatio || 1);
@@ -758,7 +759,7 @@ function drawHeatmap() {
 function drawTruthMarker(u) {
   const d = state.data;
   if (!d || d.times.length === 0 || !state.info.has_truth) return;
-  const dim = Number($('component').value) || 0;
+  const dim = shownDim();
   const x = d.truth[dim][shownFrame()?.row ?? shownRow()];
   if (x == null) return;
   const px = u.valToPos(x, 'x', true);
@@ -821,7 +822,7 @@ function applyFrame(frame) {
       }
     });
   }
-  const dim = Number($('component').value) || 0;
+  const dim = shownDim();
   const entry = { row: d.times.length - 1, t: d.times[d.times.length - 1], dim, grid: frame.grid, densities: frame.densities, heat2d: frame.heat2d };
   state.lastDensity = entry;
   if (rows > 0 || state.history.length === 0) state.history.push(entry);
@@ -844,7 +845,7 @@ function applyFrame(frame) {
 function render() {
   const d = state.data;
   if (!d || !state.heatStrip) return;
-  const dim = Number($('component').value) || 0;
+  const dim = shownDim();
   const bands = state.info.has_truth ? [] : d.est.flatMap((_, i) => [d.hi[i][dim], d.lo[i][dim]]);
   state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands]);
   const f = shownFrame();
@@ -1016,7 +1017,7 @@ function exportPng() {
   if (!info) return;
   const dpr = window.devicePixelRatio || 1;
   const panels = [
-    ['#trajectory-plot canvas', `estimates of x${(Number($('component').value) || 0) + 1} against time`],
+    ['#trajectory-plot canvas', `estimates of x${shownDim() + 1} against time`],
     ['#heat', `posterior density over time of ${$('density-method').selectedOptions[0]?.textContent ?? ''}`],
     ['#density-plot canvas', 'posterior densities at the time shown (dashed: truth)'],
     ['#heatmap', `joint density of x1, x2 of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
