@@ -27,7 +27,7 @@ cargo fmt --all --check
 
 step "cargo clippy --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
-cargo clippy -p zakai-wasm --target wasm32-unknown-unknown --all-targets -- -D warnings
+cargo clippy -p zakai-wasm -p zakai -p zakai-tests --target wasm32-unknown-unknown --all-targets -- -D warnings
 
 step "cargo test --workspace"
 cargo test --workspace
@@ -49,9 +49,13 @@ cargo build -p zakai --no-default-features --target thumbv7em-none-eabihf
 step "playground build (wasm package, npm packages)"
 bash scripts/build-web.sh
 
-step "wasm tests in node (wasm-pack test --node, as a user of the wasm crate runs them)"
+step "the tests in WebAssembly under node (wasm-pack test --node, as a user runs them)"
+# The wasm adapter's tests, the core's unit tests and the integration tests of tests/ (all
+# but those that read files or start threads), compiled to wasm32 and run in node.
 command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 (cd wasm && wasm-pack test --node)
+(cd core && wasm-pack test --node)
+(cd tests && wasm-pack test --node)
 
 step "same seed, same truth: native CLI vs wasm"
 # The CLI binary `cargo test --workspace` built (its test profile is optimised; a release

@@ -30,31 +30,48 @@ pub trait Clock {
     fn now(&self) -> f64;
 }
 
-/// [`Clock`] on `std::time::Instant` (not on wasm32-unknown-unknown, where `Instant` panics).
-#[cfg(feature = "std")]
+/// [`Clock`] on `std::time::Instant`. Not on wasm32-unknown-unknown, where `Instant` panics:
+/// there the driver times nothing unless it is given a clock (the wasm crate's reads
+/// `performance.now()`).
+#[cfg(all(
+    feature = "std",
+    not(all(target_arch = "wasm32", target_os = "unknown"))
+))]
 pub struct StdClock(std::time::Instant);
 
-#[cfg(feature = "std")]
+#[cfg(all(
+    feature = "std",
+    not(all(target_arch = "wasm32", target_os = "unknown"))
+))]
 impl Default for StdClock {
     fn default() -> Self {
         StdClock(std::time::Instant::now())
     }
 }
 
-#[cfg(feature = "std")]
+#[cfg(all(
+    feature = "std",
+    not(all(target_arch = "wasm32", target_os = "unknown"))
+))]
 impl Clock for StdClock {
     fn now(&self) -> f64 {
         self.0.elapsed().as_secs_f64()
     }
 }
 
-/// Calls `f` with the standard clock where there is one (`std`), else without a clock.
-fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
-    #[cfg(feature = "std")]
+/// Calls `f` with the standard clock where there is one ([`StdClock`]), else without a clock.
+pub(crate) fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
+    #[cfg(all(
+        feature = "std",
+        not(all(target_arch = "wasm32", target_os = "unknown"))
+    ))]
     {
         f(Some(&StdClock::default()))
     }
-    #[cfg(not(feature = "std"))]
+    #[cfg(not(all(
+        feature = "std",
+        not(all(target_arch = "wasm32", target_os = "unknown"))
+    )))]
     {
         f(None)
     }
@@ -809,6 +826,7 @@ mod tests {
     use super::*;
     use crate::error::FilterError;
     use crate::filters::Estimate;
+    use crate::testing::test;
 
     /// A filter whose chosen steps break a condition and whose density then vanishes.
     struct Unstable;

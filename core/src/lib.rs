@@ -96,6 +96,8 @@ pub mod reproduction;
 pub mod scenario;
 pub mod simulate;
 pub mod study;
+#[cfg(test)]
+mod testing;
 pub mod validate;
 
 pub use nalgebra;

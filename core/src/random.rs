@@ -119,6 +119,7 @@ impl NormalZiggurat {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     /// The ziggurat's strips: the recurrence closes at 0 (the 255th edge is small and positive),
     /// and every strip has area v.

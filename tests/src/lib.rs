@@ -1,4 +1,59 @@
 //! Helpers shared by the integration tests (most live in the test files themselves).
+//!
+//! The same tests run natively (`cargo test`) and in WebAssembly (`wasm-pack test --node` in
+//! `tests/`): each file imports [`test`], the standard attribute natively and
+//! `wasm_bindgen_test` on wasm32. Files that need the file system or threads are native only.
+
+#[cfg(not(target_arch = "wasm32"))]
+pub use core::prelude::v1::test;
+#[cfg(target_arch = "wasm32")]
+pub use wasm_bindgen_test::wasm_bindgen_test as test;
+
+/// The `.rs` files under `path` (or `path` itself), for the tests that read sources.
+pub fn rust_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    if path.is_dir() {
+        for entry in std::fs::read_dir(path).unwrap() {
+            out.extend(rust_files(&entry.unwrap().path()));
+        }
+    } else if path.extension().is_some_and(|e| e == "rs") {
+        out.push(path.to_path_buf());
+    }
+    out
+}
+
+/// Wall-clock milliseconds since `start` (`Instant` natively; `Date.now()` on wasm32, where
+/// `Instant` panics).
+pub struct Stopwatch {
+    #[cfg(not(target_arch = "wasm32"))]
+    start: std::time::Instant,
+    #[cfg(target_arch = "wasm32")]
+    start: f64,
+}
+
+impl Stopwatch {
+    /// Starts now.
+    pub fn start() -> Self {
+        Stopwatch {
+            #[cfg(not(target_arch = "wasm32"))]
+            start: std::time::Instant::now(),
+            #[cfg(target_arch = "wasm32")]
+            start: js_sys::Date::now(),
+        }
+    }
+
+    /// Milliseconds since [`Stopwatch::start`].
+    pub fn elapsed_ms(&self) -> f64 {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            self.start.elapsed().as_secs_f64() * 1e3
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            js_sys::Date::now() - self.start
+        }
+    }
+}
 
 use zakai::scenario::methods::{catalogue, CatalogueEntry};
 use zakai::scenario::ScenarioConfig;

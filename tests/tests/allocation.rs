@@ -5,6 +5,7 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use zakai_tests::test;
 
 use zakai::scenario::presets;
 use zakai::{Experiment, Observation};
@@ -59,12 +60,12 @@ fn allocations_per_step(
             filter.step(&observe(k)).unwrap();
         }
         let before = ALLOCATIONS.load(Ordering::Relaxed);
-        let started = std::time::Instant::now();
+        let started = zakai_tests::Stopwatch::start();
         let mut taken = 0;
         // Every method steps `steps` times; those whose first `steps` took under 50 ms (all
         // but the 2-D grid filters and the Gaussian-sum reference) go on to `long`.
         for k in warm_up..warm_up + long.max(steps) {
-            if taken == steps && started.elapsed().as_millis() >= 50 {
+            if taken == steps && started.elapsed_ms() >= 50.0 {
                 break;
             }
             if filter.step(&observe(k)).is_err() {

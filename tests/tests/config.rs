@@ -2,6 +2,7 @@
 
 use zakai::experiment::Experiment;
 use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai_tests::test;
 
 #[test]
 fn every_preset_is_valid_and_round_trips_through_json() {

@@ -3,6 +3,7 @@
 //! against Tables 3 and 4 (example 4.3) and example 4.4.
 
 use zakai::filters::direct::gaussian_approximation::{evaluate, gaussian_approximation};
+use zakai_tests::test;
 
 /// Runs Algorithm 1 on `[lo, hi]` with step 0.01; returns the terms and the fit's MSE over
 /// the grid points.
@@ -109,6 +110,7 @@ mod riccati {
     use nalgebra::{DMatrix, DVector};
     use zakai::filters::direct::gaussian_approximation::GaussianTerm;
     use zakai::filters::direct::riccati::{KolmogorovCoefficients, QuadraticExponent};
+    use zakai_tests::test;
 
     /// Pure diffusion (l = 0, q = 0): a Gaussian of variance s₀ and mass 1 stays a Gaussian of
     /// variance s₀ + t and mass 1 (1000 RK4 steps; tolerance 1e-10).
@@ -216,6 +218,7 @@ mod filter {
     use zakai::experiment::Experiment;
     use zakai::scenario::{presets, MethodConfig};
     use zakai::study::MonteCarlo;
+    use zakai_tests::test;
 
     /// 002 Example 4.3 (f = tanh x, h = (x sin x, x cos x)), 20 runs from the preset's seed:
     /// the direct method tracks the state — MSE at most 0.4 (measured 0.28; 002 Table 3:
@@ -432,6 +435,7 @@ fn example_4_4_direct_method_tracks_where_the_ekf_fails() {
 /// The (C1)–(C3) check of 002 on models whose answer is known by hand.
 mod yau_system {
     use std::sync::Arc;
+    use zakai_tests::test;
 
     use nalgebra::DMatrix;
     use zakai::diagnostics::yau_system::{check, YauSystem};

@@ -17,6 +17,7 @@
 use zakai::filters::Concern;
 use zakai::scenario::ScenarioConfig;
 use zakai::{Experiment, Filter, Kalman, Model, Noise, Observation};
+use zakai_tests::test;
 
 const MU0: f64 = 0.5;
 const P0: f64 = 1.0;

@@ -9,6 +9,7 @@ use zakai::filters::kalman::{KalmanBucy, KalmanParams};
 use zakai::filters::{Filter, Observation, ObservationKind};
 use zakai::scenario::{presets, GaussianComponent, ObservationNoiseConfig, ScenarioConfig};
 use zakai::study::density_error::{j_curve, JKind};
+use zakai_tests::test;
 
 fn experiment(config: ScenarioConfig) -> Experiment {
     Experiment::new(config).expect("valid scenario")

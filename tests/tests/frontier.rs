@@ -5,6 +5,7 @@ use zakai::scenario::{presets, MethodConfig};
 use zakai::study::frontier::{
     default_sweep, frontier, reference, reference_check, Frontier, FrontierPoint, SweepPoint,
 };
+use zakai_tests::test;
 
 fn cubic() -> zakai::scenario::ScenarioConfig {
     let mut c = presets::preset("cubic-sensor-1d").expect("preset");

@@ -7,6 +7,7 @@ use zakai::scenario::{
     FailureRule, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig, ScenarioConfig,
     TimeConfig,
 };
+use zakai_tests::test;
 
 fn scalar_linear(
     a: f64,

@@ -1,13 +1,18 @@
 //! The core's modules form layers without cycles: a module uses only modules of lower layers
 //! (or its own). Read from the source: every `crate::<module>` path outside comments and test
-//! modules. Order, bottom to top (as the crate doc lists it):
-//! validate → error → linalg, random → grid, model → simulate → recording, diagnostics →
-//! filters → scenario → metrics, papers → experiment → study → reproduction.
+//! modules. Order, bottom to top (as the crate doc lists it; `testing`, the unit tests'
+//! attribute, sits below them all): validate → error → linalg, random → grid, model →
+//! simulate → recording, diagnostics → filters → scenario → metrics, papers → experiment →
+//! study → reproduction.
+// Reads the core's sources from the file system: native only.
+#![cfg(not(target_arch = "wasm32"))]
 
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use zakai_tests::test;
 
 const LAYERS: &[&[&str]] = &[
+    &["testing"],
     &["validate"],
     &["error"],
     &["linalg", "random"],
@@ -24,16 +29,6 @@ const LAYERS: &[&[&str]] = &[
 
 fn layer(module: &str) -> Option<usize> {
     LAYERS.iter().position(|l| l.contains(&module))
-}
-
-fn files(path: &Path, out: &mut Vec<PathBuf>) {
-    if path.is_dir() {
-        for entry in std::fs::read_dir(path).unwrap() {
-            files(&entry.unwrap().path(), out);
-        }
-    } else if path.extension().is_some_and(|e| e == "rs") {
-        out.push(path.to_path_buf());
-    }
 }
 
 /// The crate modules `file` uses outside comments and `#[cfg(test)]` modules.
@@ -78,9 +73,7 @@ fn core_modules_use_only_lower_layers() {
             panic!("core module `{module}` is not placed in a layer of this test")
         });
         seen.insert(module.clone());
-        let mut all = Vec::new();
-        files(&path, &mut all);
-        for file in all {
+        for file in zakai_tests::rust_files(&path) {
             for used in uses(&file) {
                 let Some(l) = layer(&used) else {
                     continue; // an item of lib.rs (a re-export), not a module

@@ -2,6 +2,7 @@
 
 use zakai::diagnostics::log_concavity::log_concavity;
 use zakai::filters::DensityView;
+use zakai_tests::test;
 
 /// 003 (3.15) at t = 1: `U(x₀) = 1/Var₀ − (9/2) y (y/10)^{1/3}` with x₀ = (y/10)^{1/3}.
 fn bound(var0: f64, y: f64) -> f64 {
@@ -110,6 +111,7 @@ mod convex_filter_conditions {
     use zakai::experiment::Experiment;
     use zakai::model::expression::ExpressionFunction;
     use zakai::scenario::{presets, PriorConfig, ScenarioConfig};
+    use zakai_tests::test;
 
     fn check(config: ScenarioConfig, phi_j: Option<(&str, f64)>) -> ConditionReport {
         let e = Experiment::new(config).unwrap();

@@ -8,6 +8,7 @@ use zakai::scenario::{
     presets, FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
     PriorConfig, ScenarioConfig, TimeConfig,
 };
+use zakai_tests::test;
 
 fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> ScenarioConfig {
     ScenarioConfig {

@@ -7,6 +7,7 @@ use zakai::experiment::Experiment;
 use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
 use zakai::study::monte_carlo::{MonteCarloSummary, COINCIDENCE_TOLERANCE, HOW_MEANS_ARE_TAKEN};
 use zakai::study::MonteCarlo;
+use zakai_tests::test;
 
 fn summary(config: ScenarioConfig, runs: usize, seed: u64) -> MonteCarloSummary {
     let experiment = Experiment::new(config).expect("valid scenario");

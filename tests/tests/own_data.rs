@@ -3,6 +3,7 @@
 
 use zakai::scenario::presets;
 use zakai::{Experiment, FilterError, Model, Noise, Observation, Qiem, Recording, Ukf, ZakaiError};
+use zakai_tests::test;
 
 fn problems(e: ZakaiError) -> Vec<zakai::ConfigProblem> {
     match e {

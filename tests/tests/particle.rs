@@ -4,6 +4,7 @@ use zakai::experiment::Experiment;
 use zakai::filters::kalman::KalmanParams;
 use zakai::filters::particle::PfParams;
 use zakai::scenario::{presets, MethodConfig, PriorConfig, TimeConfig};
+use zakai_tests::test;
 
 fn mean_square_gap(particles: usize, seed: u64) -> f64 {
     let mut config = presets::preset("sa-example-1").unwrap();

@@ -15,6 +15,7 @@
 //! from the printed minimal case.
 
 use std::cell::Cell;
+use zakai_tests::test;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};

@@ -5,6 +5,7 @@
 use zakai::experiment::Experiment;
 use zakai::scenario::presets;
 use zakai::study::{MonteCarlo, MonteCarloSummary};
+use zakai_tests::test;
 
 fn monte_carlo(preset: &str, keys: &[&str], runs: usize) -> MonteCarloSummary {
     let mut config = presets::preset(preset).expect("preset");

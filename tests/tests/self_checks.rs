@@ -5,6 +5,7 @@
 use zakai::filters::Concern;
 use zakai::simulate::{simulate, TimeGrid};
 use zakai::{Filter, Kalman, Model, Noise, Pf, Qiem, Separation, Spectral};
+use zakai_tests::test;
 
 fn checks(f: &dyn Filter) -> Vec<&'static str> {
     let mut out: Vec<Concern> = Vec::new();

@@ -2,6 +2,7 @@
 
 use zakai::model::{ClosureFunction, GaussianMixture, Model, ObservationModel};
 use zakai::simulate::{rng_from_seed, simulate, TimeGrid};
+use zakai_tests::test;
 
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;

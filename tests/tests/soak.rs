@@ -18,6 +18,7 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
+use zakai_tests::test;
 
 use zakai::experiment::{method_seed, Experiment};
 use zakai::filters::kalman::{IekfParams, IokfParams};

@@ -6,6 +6,7 @@ use zakai::experiment::{Experiment, Silent};
 use zakai::filters::yau_fd::YauYauParams;
 use zakai::reproduction;
 use zakai::scenario::{presets, MethodConfig, SpectralParams};
+use zakai_tests::test;
 
 /// Time-averaged |mean difference| and the mean L1 distance of the densities at t = 1..5,
 /// spectral filter with `offline`/`online` basis functions against QIEM on 1599 points (Δs = 0.005,

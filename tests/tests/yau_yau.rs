@@ -8,6 +8,7 @@ use zakai::scenario::{
     FailureRule, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig, ScenarioConfig,
     TimeConfig,
 };
+use zakai_tests::test;
 
 fn linear(points: usize, dt: f64) -> ScenarioConfig {
     let grid = YauYauParams {

@@ -136,6 +136,7 @@ pub fn histogram_2d(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
     use alloc::vec::Vec;
 
     #[test]

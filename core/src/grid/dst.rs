@@ -331,6 +331,7 @@ fn transpose(src: &[f64], rows: usize, cols: usize, dst: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     fn naive(x: &[f64]) -> Vec<f64> {
         let n = x.len();

@@ -435,6 +435,7 @@ crate::linalg::simd::per_node_kernel! {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn the_map_node_is_the_first_of_equal_maxima() {

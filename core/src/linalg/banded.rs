@@ -176,6 +176,7 @@ impl BandedLu {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
     use nalgebra::{DMatrix, DVector};
 
     /// A pseudo-random banded matrix whose leading entries are small, so that partial pivoting

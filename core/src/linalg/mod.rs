@@ -394,6 +394,7 @@ pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn lower_cholesky_matches_nalgebra_and_refuses_indefinite_matrices() {

@@ -88,6 +88,7 @@ pub fn quartiles(values: &[f64]) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn quartiles_interpolate_between_order_statistics() {

@@ -358,6 +358,7 @@ impl VectorFunction for ExpressionFunction {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
     use alloc::vec;
 
     fn strings(v: &[&str]) -> Vec<String> {

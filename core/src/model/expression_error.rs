@@ -395,6 +395,7 @@ fn check_adjacent(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     fn position(e: ExprError) -> Option<usize> {
         match e {

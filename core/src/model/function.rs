@@ -244,6 +244,7 @@ impl VectorFunction for ClosureFunction {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn closures_get_a_batch_path_by_their_point_values() {

@@ -355,6 +355,7 @@ fn apply(operation: &Operation, dst: &mut [f64], a: Arg, b: Arg) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     /// (x + 2)·(x + 2) − 3/x: values shared by two operands, constants on either side.
     fn sample() -> Program {

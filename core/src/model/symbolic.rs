@@ -720,6 +720,7 @@ impl fmt::Display for Shown<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     fn form(text: &str, n: usize) -> Poly {
         parse(text, n).unwrap_or_else(|e| panic!("{text}: {e}"))

@@ -289,6 +289,7 @@ fn write_table(prefix: &str, width: usize, times: &[f64], values: &[f64]) -> Str
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     fn problems(r: Result<Recording, ZakaiError>) -> Vec<ConfigProblem> {
         match r {

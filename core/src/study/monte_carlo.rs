@@ -10,7 +10,7 @@ use alloc::vec::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ZakaiError;
-use crate::experiment::{Clock, Experiment, RunResult, Silent};
+use crate::experiment::{Experiment, RunResult, Silent};
 use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
 use crate::papers::{paper_values, PaperValue};
 
@@ -196,17 +196,9 @@ impl<'a> MonteCarlo<'a> {
     }
 
     fn one(&self, seed: u64) -> Result<RunResult, ZakaiError> {
-        #[cfg(feature = "std")]
-        {
-            let clock = crate::experiment::StdClock::default();
-            self.experiment
-                .run_with(seed, Some(&clock as &dyn Clock), &mut Silent)
-        }
-        #[cfg(not(feature = "std"))]
-        {
-            self.experiment
-                .run_with(seed, None::<&dyn Clock>, &mut Silent)
-        }
+        crate::experiment::with_standard_clock(|clock| {
+            self.experiment.run_with(seed, clock, &mut Silent)
+        })
     }
 
     /// Runs `runs` repetitions with seeds `seed..seed + runs`; `progress` is called after

@@ -138,6 +138,7 @@ pub fn differentiation_matrix(nodes: &[f64]) -> DMatrix<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn quadrature_is_exact_to_degree_2n_minus_1() {

@@ -208,14 +208,25 @@ impl SpectralParams {
         }
         // The off-line matrices: nodes × functions, for Z, its weighted copy and the on-line
         // basis.
-        let columns = 2 * off.pow(n as u32) + on.pow(n as u32);
-        let bytes = quadrature.pow(n as u32) * columns * 8;
-        if bytes > 256 << 20 {
+        // Checked: impossible sizes overflow a 32-bit `usize` (wasm32).
+        let n32 = n as u32;
+        let bytes = off
+            .checked_pow(n32)
+            .and_then(|z| z.checked_mul(2)?.checked_add(on.checked_pow(n32)?))
+            .and_then(|columns| {
+                quadrature
+                    .checked_pow(n32)?
+                    .checked_mul(columns)?
+                    .checked_mul(8)
+            });
+        if bytes.is_none_or(|b| b > 256 << 20) {
+            let size = bytes.map_or("more than the address space".into(), |b| {
+                format!("{} MiB", b >> 20)
+            });
             p.push((
                 "quadrature",
                 format!(
-                    "the off-line matrices would take {} MiB (cap 256 MiB); use fewer nodes or basis functions",
-                    bytes >> 20
+                    "the off-line matrices would take {size} (cap 256 MiB); use fewer nodes or basis functions"
                 ),
             ));
         }

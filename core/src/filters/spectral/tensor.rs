@@ -90,6 +90,7 @@ pub fn multilinear(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
     use alloc::vec;
     use alloc::vec::Vec;
 

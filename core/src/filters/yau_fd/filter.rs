@@ -622,6 +622,7 @@ impl Filter for YauYauFilter {
 mod tests {
     use super::*;
     use crate::scenario::presets;
+    use crate::testing::test;
 
     /// A model with a strong drift f = 3 sin 2x and h = x on [−3, 3], its operator on `points`
     /// nodes, and the (22) warnings for `dt`.

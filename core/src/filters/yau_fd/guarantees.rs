@@ -206,6 +206,7 @@ pub fn transform_length(grid: &TensorGrid) -> Vec<GuaranteeWarning> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     #[test]
     fn a_large_prime_in_the_transform_length_is_reported_with_smooth_neighbours() {
