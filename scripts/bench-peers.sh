@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Zakai's baselines against their Python peers, the same work in one run (issue 22):
+# Zakai's baselines against their Python peers, the same work in one run:
 # a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
 # nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
-# from Python (the `zakai` package, per step() call and per run() call, issue 24).
+# from Python (the `zakai` package, per step() call and per run() call).
 # Installs NumPy, SciPy, FilterPy and this checkout's wheel into target/peers-venv. Prints tables.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +12,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q numpy scipy filterpy
 fi
-# Zakai's Python package (issue 24) into the same environment, built from this checkout.
+# Zakai's Python package into the same environment, built from this checkout.
 "$venv/bin/pip" install -q maturin
 rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels

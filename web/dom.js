@@ -3,7 +3,7 @@
 export const $ = (id) => document.getElementById(id);
 
 // Elements are built with DOM calls only: text (every user string included) goes through
-// textContent/value/attributes, never through innerHTML, eval or Function (issue 11; the page's
+// textContent/value/attributes, never through innerHTML, eval or Function (the page's
 // Content-Security-Policy forbids the latter two anyway).
 export const el = (tag, props = {}, ...children) => {
   const e = document.createElement(tag);

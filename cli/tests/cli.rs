@@ -289,7 +289,7 @@ fn frontier_writes_csv_and_svg_with_the_floor() {
     assert!(!bad.status.success());
 }
 
-/// The memory cap (issue 11): 1 GiB by default, raised or lowered natively with
+/// The memory cap: 1 GiB by default, raised or lowered natively with
 /// `--memory-cap` / `ZAKAI_MEMORY_CAP`; checked before anything is allocated.
 #[test]
 fn the_memory_cap_can_be_changed_natively() {

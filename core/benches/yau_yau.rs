@@ -103,7 +103,7 @@ fn superposition(c: &mut Criterion) {
 }
 
 /// The bare transforms of a QIEM step: forward and inverse DST-I along every dimension, the
-/// denominator of the step-to-transform ratio of issue 4.
+/// denominator of the step-to-transform ratio (a QIEM step against its two transforms).
 fn bare_dst(c: &mut Criterion) {
     let mut group = c.benchmark_group("bare forward + inverse DST-I");
     for shape in [vec![1999usize], vec![2001], vec![254, 254], vec![256, 256]] {

@@ -16,8 +16,8 @@
 //! | extended / unscented Kalman | [`Ekf`], [`Ukf`] | Jazwinski (1970); Julier & Uhlmann (1997) |
 //! | bootstrap particle filter | [`Pf`] | Gordon, Salmond & Smith (1993) |
 //! | Yau–Yau finite differences: IEM, QIEM, superposition, 4th-order QIEM | [`Iem`], [`Qiem`], [`Spt`], [`Qiem4`] | 000: Yueh, Lin & Yau (2014) |
-//! | continuous–discrete Fokker–Planck grid filter (separation approach, implicit FDM) | [`Separation`], [`ImplicitFdm`] | 001: Šimandl & Švácha (2002) |
-//! | direct method: Gaussian approximation and Riccati ODEs | [`Direct`] | 002: Shi, Yang & Yau (2017) |
+//! | continuous–discrete Fokker–Planck grid filter (separation approach, implicit FDM) | [`Separation`], [`ImplicitFdm`] | 001: Šimandl & Švácha (2005) |
+//! | direct method: Gaussian approximation and Riccati ODEs | [`Direct`] | 002: Shi, Yang & Yau (2018) |
 //! | MAP updates: iterated EKF, iterated optimisation Kalman filter | [`Iekf`], [`Iokf`] | 003: Kang, Salmon & Yau (2023) |
 //! | off-line/on-line spectral (Legendre) Yau–Yau filter | [`Spectral`] | 004: Shi, Chen & Yau (2021) |
 //! | Gaussian-sum filter (exact for linear models with mixtures) | [`GaussianSum`] | Sorenson & Alspach (1971) |

@@ -1,4 +1,4 @@
-//! No allocation in a filter's step (issue 22): a counting global allocator watches every
+//! No allocation in a filter's step: a counting global allocator watches every
 //! method of the catalogue step through simulated observations after construction and a few
 //! warm-up steps (buffers that grow to their working size once, such as a resampling index,
 //! may do so then).

@@ -257,7 +257,7 @@ fn bimodal_scenario() -> ScenarioConfig {
 /// IOKF estimate the posterior's *mode* (003 §4), and here they follow one of the two modes
 /// (RMS 0.56 from the mean, the modes being ±0.6 apart from it), without a warning — neither
 /// their innovations nor their update's distance from the prediction (at most 0.6 sd) show a
-/// second mode. The test pins that gap (open in issue 23) by asserting they are further from
+/// second mode. The test pins that gap (still open) by asserting they are further from
 /// the mean than the EKF.
 #[test]
 fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {

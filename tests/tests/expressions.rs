@@ -93,7 +93,7 @@ fn errors_are_typed_and_readable() {
     assert_eq!(e.to_string(), "drift f needs 2 component(s), 1 given");
 }
 
-/// Regression for the fuzzer's first find (issue 11): a power followed by a hundred stacked
+/// Regression for the fuzzer's first find: a power followed by a hundred stacked
 /// minus signs overflowed the stack in exmex's recursive differentiation. Such input is now a
 /// syntax error with its position; everything the limits accept — up to 32 levels of nesting
 /// and 1000 characters, with exact derivatives only within the symbolic budget (16 operations,

@@ -1,4 +1,4 @@
-//! Long runs (issue 11): every method that applies to the 1-D cubic sensor (004 (44):
+//! Long runs: every method that applies to the 1-D cubic sensor (004 (44):
 //! dx = dv, dy = x³ dt + dw, Δτ = 0.01) steps 10⁶ observation intervals with no NaN and no
 //! memory growth. Ignored by default (about two minutes in release); run it with
 //!

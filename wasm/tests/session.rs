@@ -94,7 +94,7 @@ fn log_concavity_of_a_grid_density() {
         .any(|v| v.as_f64().is_some_and(f64::is_finite)));
 }
 
-/// Issue 11's fuzzing found expressions whose symbolic derivatives overflowed wasm's default
+/// Fuzzing found expressions whose symbolic derivatives overflowed wasm's default
 /// 1 MiB stack; the build links 8 MiB and the expression limits keep within 2 MiB natively.
 /// The heaviest shapes the limits accept build and step here; the fuzzer's input is an error.
 #[wasm_bindgen_test]

@@ -1,6 +1,6 @@
 //! The Gaussian-sum filter: the exact filtering density of a linear model with a
 //! Gaussian-mixture prior and Gaussian-mixture measurement noise — the reference density of
-//! 001 §4 (Šimandl & Švácha, 2002) against which J(t) is measured.
+//! 001 §4 (Šimandl & Švácha, 2005) against which J(t) is measured.
 //!
 //! Model: `dx = (A x + b) dt + G dw`, `z_k = C x_k + c + v_k`,
 //! `p(v_k) = Σ_j β_j N(μ_j, R_j)`, `p(x_0) = Σ_i α_i N(m_i, P_i)`.
@@ -98,7 +98,7 @@ impl Method for GaussianSum {
             name: "GSF".into(),
             summary: "Gaussian-sum filter, exact for linear models with mixture prior and noise"
                 .into(),
-            paper: "Sorenson & Alspach (1971); the reference of 001 Šimandl & Švácha (2002), §4"
+            paper: "Sorenson & Alspach (1971); the reference of 001 Šimandl & Švácha (2005), §4"
                 .into(),
             takes: Takes::Measurements,
             dims: "any".into(),

@@ -121,7 +121,7 @@ impl ExpressionFunction {
         // exmex differentiates recursively with large frames, and nested functions or
         // quotients grow the derivative trees fast: beyond the budget the derivatives are
         // numerical instead, so that parsing never overflows a 2 MiB thread stack (found by
-        // fuzzing, issue 11; the budget is measured by the test
+        // fuzzing; the budget is measured by the test
         // `deep_or_long_expressions_are_refused_or_handled_on_a_small_stack`).
         let exact = if operations <= MAX_SYMBOLIC_OPERATIONS {
             exact_derivatives(&components, n)

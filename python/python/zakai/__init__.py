@@ -1,7 +1,7 @@
 """Continuous-time nonlinear filtering on NumPy arrays, at Rust speed.
 
 Zakai puts the Yau–Yau grid solvers (Yueh, Lin & Yau 2014), the spectral off-line/on-line
-filter (Shi, Chen & Yau 2021), the direct method (Shi, Yang & Yau 2017), the Fokker–Planck
+filter (Shi, Chen & Yau 2021), the direct method (Shi, Yang & Yau 2018), the Fokker–Planck
 separation filter (Šimandl & Švácha 2005) and the MAP / IOKF framework (Kang, Salmon & Yau
 2023) side by side with the Kalman–Bucy, EKF, UKF, particle and Gaussian-sum filters, on the
 same truth and the same observations — simulated or yours.

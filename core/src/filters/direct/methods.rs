@@ -1,4 +1,4 @@
-//! The direct method of 002 (Shi, Yang & Yau 2017) registered as a [`Method`].
+//! The direct method of 002 (Shi, Yang & Yau 2018) registered as a [`Method`].
 
 use alloc::format;
 use alloc::string::String;
@@ -30,7 +30,7 @@ impl Method for Direct {
             name: "Direct".into(),
             summary: "direct method for Yau filtering systems: Gaussian approximation + Riccati ODEs"
                 .into(),
-            paper: "002 Shi, Yang & Yau (2017), Algorithm 1, (35)–(37)".into(),
+            paper: "002 Shi, Yang & Yau (2018), Algorithm 1, (35)–(37)".into(),
             takes: Takes::Increments,
             dims: "1".into(),
             params: vec![

@@ -1,4 +1,4 @@
-//! The continuous–discrete grid filters of 001 (Šimandl & Švácha 2002) registered as
+//! The continuous–discrete grid filters of 001 (Šimandl & Švácha 2005) registered as
 //! [`Method`]s: [`Separation`] (the separation approach, SA) and [`ImplicitFdm`].
 
 use alloc::format;
@@ -141,7 +141,7 @@ fpe_method!(
     "SA",
     FpeScheme::Separation,
     "continuous–discrete Fokker–Planck filter, separation approach: upwind FV + implicit FD",
-    "001 Šimandl & Švácha (2002), §3, (9)–(23)"
+    "001 Šimandl & Švácha (2005), §3, (9)–(23)"
 );
 
 /// The classic implicit finite-difference method on the unsplit Fokker–Planck equation (001
@@ -154,5 +154,5 @@ fpe_method!(
     "FDM",
     FpeScheme::ImplicitFdm,
     "continuous–discrete Fokker–Planck filter, classic implicit FDM on the unsplit FPE",
-    "001 Šimandl & Švácha (2002), §4, (4)"
+    "001 Šimandl & Švácha (2005), §4, (4)"
 );

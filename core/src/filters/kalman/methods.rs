@@ -127,7 +127,7 @@ impl Method for Ekf {
             Self::KEY,
             "EKF",
             "extended Kalman filter (continuous–discrete, RK4 moment equations)",
-            "Jazwinski (1970); the baseline of 000 (Yueh, Lin & Yau 2014) and 002 (Shi, Yang & Yau 2017)",
+            "Jazwinski (1970); the baseline of 000 (Yueh, Lin & Yau 2014) and 002 (Shi, Yang & Yau 2018)",
             vec![substeps_param()],
         )
     }
