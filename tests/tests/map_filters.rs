@@ -2,12 +2,14 @@
 //! on a nonlinear one, guarded Newton steps, and 003 Table 1 with the preset's seeds.
 
 use zakai::experiment::Experiment;
+use zakai::filters::kalman::map::MAP_UNCONVERGED_THRESHOLD;
 use zakai::filters::kalman::{IekfParams, IokfParams};
-use zakai::filters::{Filter, Observation, ObservationKind};
+use zakai::filters::{Concern, Filter, Observation, ObservationKind};
 use zakai::scenario::{
     presets, FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
     PriorConfig, ScenarioConfig, TimeConfig,
 };
+use zakai::{Iekf, Iokf, Model, Noise};
 use zakai_tests::test;
 
 fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> ScenarioConfig {
@@ -180,18 +182,50 @@ fn map_point(h: fn(f64) -> f64, m: f64, p: f64, z: f64, r: f64) -> f64 {
     0.5 * (a + b)
 }
 
+/// What [`map_updates`] found, per method (IEKF, IOKF).
+struct Updates {
+    /// Mean distance to the exact MAP point (capped at 10 per draw).
+    distance: [f64; 2],
+    /// Draws within 10⁻³ of it.
+    close: [usize; 2],
+    /// Draws where the convergence self-check disagreed with an independent evaluation of
+    /// the Gauss–Newton step left at the returned point (in posterior standard deviations,
+    /// from L′ and h′ at that point), away from the threshold (outside ±10 % of it).
+    check_disagrees: [usize; 2],
+    /// Draws where that check warned.
+    warned: [usize; 2],
+}
+
+/// The Gauss–Newton step left at x of `L(x) = (x − m)²/P + (z − h(x))²/R`, in standard
+/// deviations of the Laplace covariance there: with g = L′(x) and H = 2/P + 2h′(x)²/R (the
+/// Gauss–Newton Hessian), the step is g/H and the standard deviation √(2/H).
+fn step_left_in_sd(
+    x: f64,
+    h: fn(f64) -> f64,
+    dh: fn(f64) -> f64,
+    m: f64,
+    p: f64,
+    z: f64,
+    r: f64,
+) -> f64 {
+    let g = 2.0 * (x - m) / p - 2.0 * (z - h(x)) * dh(x) / r;
+    let hessian = 2.0 / p + 2.0 * dh(x).powi(2) / r;
+    (g / hessian).abs() / (2.0 / hessian).sqrt()
+}
+
 /// Single MAP updates at τ₀ of the prediction N(0.5, P) by a measurement z = h(x) + v,
 /// v ~ N(0, R), over `draws` draws of (x, z) (seed 7): for the IEKF and the IOKF with 003
 /// Table 1's budgets (6 Gauss–Newton iterations; l = 3 splits × m = 2 Newton steps), the mean
-/// distance to the exact MAP point (capped at 10 per draw) and how many draws land within
-/// 10⁻³ of it.
+/// distance to the exact MAP point (capped at 10 per draw), how many draws land within 10⁻³
+/// of it, and how the convergence self-check fared (`dh` = h′).
 fn map_updates(
     expression: &str,
     h: fn(f64) -> f64,
+    dh: fn(f64) -> f64,
     p: f64,
     r: f64,
     draws: usize,
-) -> ([f64; 2], [usize; 2]) {
+) -> Updates {
     use zakai::simulate::{rng_from_seed, standard_normal};
     let m = 0.5;
     let mut config = scalar(expression, vec![MethodConfig::from_key("ekf").unwrap()], p);
@@ -209,6 +243,7 @@ fn map_updates(
     ];
     let mut rng = rng_from_seed(7);
     let (mut distance, mut close) = ([0.0f64; 2], [0usize; 2]);
+    let (mut check_disagrees, mut warned) = ([0usize; 2], [0usize; 2]);
     for _ in 0..draws {
         let x = m + p.sqrt() * standard_normal(&mut rng);
         let z = h(x) + r.sqrt() * standard_normal(&mut rng);
@@ -228,13 +263,34 @@ fn map_updates(
             };
             distance[k] += d.min(10.0) / draws as f64;
             close[k] += usize::from(d < 1e-3);
+            if d.is_finite() {
+                let left = step_left_in_sd(f.estimate().mean[0], h, dh, m, p, z, r);
+                let warns = unconverged(&*f).is_some();
+                warned[k] += usize::from(warns);
+                let edge = (left / MAP_UNCONVERGED_THRESHOLD - 1.0).abs() < 0.1;
+                check_disagrees[k] +=
+                    usize::from(!edge && warns != (left > MAP_UNCONVERGED_THRESHOLD));
+            }
         }
     }
     println!(
-        "h = {expression}, P = {p}, R = {r}: mean distance to the MAP point IEKF {:.4}, IOKF {:.4}; within 1e-3: IEKF {}, IOKF {} of {draws}",
-        distance[0], distance[1], close[0], close[1]
+        "h = {expression}, P = {p}, R = {r}: mean distance to the MAP point IEKF {:.4}, IOKF {:.4}; within 1e-3: IEKF {}, IOKF {} of {draws}; convergence check warned IEKF {}, IOKF {}",
+        distance[0], distance[1], close[0], close[1], warned[0], warned[1]
     );
-    (distance, close)
+    Updates {
+        distance,
+        close,
+        check_disagrees,
+        warned,
+    }
+}
+
+/// The convergence self-check's concern of a filter, if it warns.
+fn unconverged(f: &dyn Filter) -> Option<Concern> {
+    let mut out = Vec::new();
+    f.self_check(&mut out);
+    out.into_iter()
+        .find(|c| c.check.starts_with("Gauss–Newton step left"))
 }
 
 /// Where 003's IOKF wins (§4: "IOKF outperforms IEKF when we fix the total number of
@@ -254,7 +310,12 @@ fn the_iokf_beats_the_iekf_on_a_large_residual_update() {
         (6, 6),
         "the same budget of six iterations"
     );
-    let (distance, close) = map_updates("sin(x)", f64::sin, 1.0, 1.0, 200);
+    let Updates {
+        distance,
+        close,
+        check_disagrees,
+        warned,
+    } = map_updates("sin(x)", f64::sin, f64::cos, 1.0, 1.0, 200);
     assert!(
         distance[1] < 0.1 * distance[0],
         "IOKF {} vs IEKF {}",
@@ -267,6 +328,9 @@ fn the_iokf_beats_the_iekf_on_a_large_residual_update() {
         "the IEKF stops short in {} draws",
         200 - close[0]
     );
+    // Where the IEKF stops short, its convergence check says so when the step it left is
+    // above the threshold, and is silent otherwise.
+    assert_eq!(check_disagrees, [0, 0], "warned {warned:?}");
 }
 
 /// Where it does not — stated, not hidden: a sharp cubic measurement (h = x³, R = 0.2) of a
@@ -278,7 +342,13 @@ fn the_iokf_beats_the_iekf_on_a_large_residual_update() {
 /// true until the IOKF is improved (docs/reproduction.md, 003).
 #[test]
 fn the_iekf_is_closer_on_a_sharp_cubic_measurement_of_a_wide_prediction() {
-    let (distance, close) = map_updates("x^3", |x| x * x * x, 4.0, 0.2, 200);
+    let Updates {
+        distance,
+        close,
+        check_disagrees,
+        warned,
+    } = map_updates("x^3", |x| x * x * x, |x| 3.0 * x * x, 4.0, 0.2, 200);
+    assert_eq!(check_disagrees, [0, 0], "warned {warned:?}");
     assert!(
         distance[0] < distance[1],
         "IEKF {} vs IOKF {}",
@@ -286,4 +356,54 @@ fn the_iekf_is_closer_on_a_sharp_cubic_measurement_of_a_wide_prediction() {
         distance[1]
     );
     assert!(close[0] > close[1], "{close:?}");
+}
+
+/// The convergence self-check on one sharp update: z = 1.44 of h = x² with R = 0.01 against
+/// the prediction N(0.3, 1). The posterior has modes near ±1.2; the MAP point (found by
+/// search) is the one near +1.2. The IEKF's Gauss–Newton iteration reaches it (within 10⁻³)
+/// and its check is silent; the IOKF with 003's l = 3, m = 2 stops at about 0.51 — no
+/// stationary point of L, 7 of its own reported standard deviations from the MAP point — and
+/// its check warns with the Gauss–Newton step left, in posterior standard deviations (about
+/// 12; the independent evaluation agrees within 1 %); given m = 20 Newton steps per split it
+/// reaches the MAP point and is silent.
+#[test]
+fn a_map_update_that_stops_short_of_its_map_point_says_so() {
+    let (m, p, z, r) = (0.3, 1.0, 1.44, 0.01);
+    let h: fn(f64) -> f64 = |x| x * x;
+    let dh: fn(f64) -> f64 = |x| 2.0 * x;
+    let exact = map_point(h, m, p, z, r);
+    assert!((exact - 1.2).abs() < 0.01, "MAP point {exact}");
+    let model = Model::from_text(&["0"], &["x^2"], Noise::discrete(r)).unwrap();
+    let update = |mut f: Box<dyn Filter>| {
+        f.step_measurement(0.0, &[z]).unwrap();
+        let x = f.estimate().mean[0];
+        (x, unconverged(&*f))
+    };
+    let iekf = Iekf::builder(&model).prior_gaussian(&[m], &[[p]]);
+    let (iekf, iekf_concern) = update(Box::new(iekf.build().unwrap()));
+    assert!((iekf - exact).abs() < 1e-3, "IEKF {iekf} vs {exact}");
+    assert!(iekf_concern.is_none(), "{iekf_concern:?}");
+
+    let iokf = Iokf::builder(&model).prior_gaussian(&[m], &[[p]]);
+    let (iokf, concern) = update(Box::new(iokf.build().unwrap()));
+    assert!((iokf - exact).abs() > 0.5, "IOKF {iokf} reached {exact}");
+    let concern = concern.expect("the IOKF warns");
+    let left = step_left_in_sd(iokf, h, dh, m, p, z, r);
+    assert!(left > 5.0, "{left}");
+    assert!(
+        (concern.value / left - 1.0).abs() < 0.01,
+        "reported {} against {left}",
+        concern.value
+    );
+    assert_eq!(concern.threshold, MAP_UNCONVERGED_THRESHOLD);
+
+    let longer = Iokf::builder(&model)
+        .prior_gaussian(&[m], &[[p]])
+        .with(|q| q.newton_steps = 20);
+    let (iokf, concern) = update(Box::new(longer.build().unwrap()));
+    assert!(
+        (iokf - exact).abs() < 1e-3,
+        "IOKF(3 × 20) {iokf} vs {exact}"
+    );
+    assert!(concern.is_none(), "{concern:?}");
 }
