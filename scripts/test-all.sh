@@ -55,7 +55,21 @@ step "the tests in WebAssembly under node (wasm-pack test --node, as a user runs
 command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 (cd wasm && wasm-pack test --node)
 (cd core && wasm-pack test --node)
-(cd tests && wasm-pack test --node)
+# The integration tests in two halves at once: node runs one test binary at a time on one
+# core, and the two Monte Carlo reproductions alone take half of the whole.
+first_half=(--test reproduction_000 --test allocation)
+second_half=()
+for file in tests/tests/*.rs; do
+  name=$(basename "$file" .rs)
+  [[ "$name" == reproduction_000 || "$name" == allocation ]] || second_half+=(--test "$name")
+done
+(cd tests && wasm-pack test --node -- "${first_half[@]}") > target/wasm-tests-first-half.log 2>&1 &
+first=$!
+status=0
+(cd tests && wasm-pack test --node -- --lib "${second_half[@]}") || status=$?
+wait "$first" || status=$?
+cat target/wasm-tests-first-half.log
+[ "$status" = 0 ]
 
 step "same seed, same truth: native CLI vs wasm"
 # The CLI binary `cargo test --workspace` built (its test profile is optimised; a release

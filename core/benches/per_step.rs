@@ -5,7 +5,12 @@
 //!   systematic resampling at every step (`ess_threshold = 1`), prior N(1, 0.1);
 //! * UKF on z = x³ + v (Var v = 0.1) with a random-walk state (dx = dv, Δτ = 0.01), one
 //!   predict (one RK4 substep of the sigma-point moment equations) and one update;
-//! * batch evaluation of a compiled text expression against the point-wise path.
+//! * batch evaluation of a compiled text expression against the point-wise path;
+//! * the experiment driver's own cost per step: the cubic sensor's 500 observations given to
+//!   the cheapest methods (the 1-D spectral filter at 004's sizes, the EKF) by
+//!   `ExperimentRun::complete` — which times each step, checks the estimate, asks the
+//!   self-check and records the estimate — against the same filter stepped in a bare loop
+//!   that reads its estimate after every step.
 //!
 //! Run: `cargo bench -p zakai --bench per_step`.
 
@@ -111,5 +116,75 @@ fn batch_evaluation(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, particle_filter, unscented, batch_evaluation);
+fn driver_overhead(c: &mut Criterion) {
+    use criterion::BatchSize;
+    use zakai::experiment::{with_standard_clock, Silent};
+    use zakai::filters::spectral::SpectralParams;
+    use zakai::scenario::{presets, MethodConfig};
+    use zakai::{Experiment, Observation};
+
+    let mut group = c.benchmark_group("driver, 500 steps of the cubic sensor");
+    let spectral = MethodConfig::Spectral(SpectralParams {
+        offline_basis: Some(11),
+        online_basis: Some(16),
+        ..SpectralParams::default()
+    });
+    let ekf = MethodConfig::from_key("ekf").expect("key");
+    for (label, method) in [("spectral (11, 16)", spectral), ("EKF", ekf)] {
+        let mut config = presets::preset("cubic-sensor-1d").expect("preset");
+        config.methods = vec![method.clone()];
+        // Every method runs all 500 steps (the preset's track-loss rule stops an EKF that
+        // loses the state).
+        config.failure.track_loss = None;
+        let experiment = Experiment::new(config).expect("valid");
+        let data = experiment.simulate(1);
+        group.bench_function(format!("{label}, bare loop with estimates"), |b| {
+            let fresh = || {
+                experiment
+                    .build_method(&method, label.into(), 1)
+                    .expect("builds")
+            };
+            b.iter_batched(
+                fresh,
+                |mut filter| {
+                    for k in 1..data.times.len() {
+                        let value = &data.observations[k..k + 1];
+                        filter
+                            .step(&Observation::increment(data.dt_obs, value))
+                            .expect("steps");
+                        black_box(filter.estimate());
+                    }
+                    filter
+                },
+                BatchSize::LargeInput,
+            )
+        });
+        group.bench_function(format!("{label}, through the driver"), |b| {
+            let fresh = || {
+                experiment
+                    .start_recorded(data.clone().into(), 1)
+                    .expect("starts")
+            };
+            with_standard_clock(|clock| {
+                b.iter_batched(
+                    fresh,
+                    |mut run| {
+                        run.complete(clock, &mut Silent);
+                        run
+                    },
+                    BatchSize::LargeInput,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    particle_filter,
+    unscented,
+    batch_evaluation,
+    driver_overhead
+);
 criterion_main!(benches);

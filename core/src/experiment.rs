@@ -59,8 +59,9 @@ impl Clock for StdClock {
     }
 }
 
-/// Calls `f` with the standard clock where there is one ([`StdClock`]), else without a clock.
-pub(crate) fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
+/// Calls `f` with the standard clock where there is one (`StdClock`: with `std`, except on
+/// wasm32-unknown-unknown), else without a clock (the driver then times nothing).
+pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
     #[cfg(all(
         feature = "std",
         not(all(target_arch = "wasm32", target_os = "unknown"))
