@@ -14,6 +14,8 @@
 //!
 //! Run: `cargo bench -p zakai --bench per_step`.
 
+mod common;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use zakai::model::BatchScratch;
@@ -119,16 +121,11 @@ fn batch_evaluation(c: &mut Criterion) {
 fn driver_overhead(c: &mut Criterion) {
     use criterion::BatchSize;
     use zakai::experiment::{with_standard_clock, Silent};
-    use zakai::filters::spectral::SpectralParams;
     use zakai::scenario::{presets, MethodConfig};
-    use zakai::{Experiment, Observation};
+    use zakai::Experiment;
 
     let mut group = c.benchmark_group("driver, 500 steps of the cubic sensor");
-    let spectral = MethodConfig::Spectral(SpectralParams {
-        offline_basis: Some(11),
-        online_basis: Some(16),
-        ..SpectralParams::default()
-    });
+    let spectral = common::spectral_004(1);
     let ekf = MethodConfig::from_key("ekf").expect("key");
     for (label, method) in [("spectral (11, 16)", spectral), ("EKF", ekf)] {
         let mut config = presets::preset("cubic-sensor-1d").expect("preset");
@@ -139,25 +136,7 @@ fn driver_overhead(c: &mut Criterion) {
         let experiment = Experiment::new(config).expect("valid");
         let data = experiment.simulate(1);
         group.bench_function(format!("{label}, bare loop with estimates"), |b| {
-            let fresh = || {
-                experiment
-                    .build_method(&method, label.into(), 1)
-                    .expect("builds")
-            };
-            b.iter_batched(
-                fresh,
-                |mut filter| {
-                    for k in 1..data.times.len() {
-                        let value = &data.observations[k..k + 1];
-                        filter
-                            .step(&Observation::increment(data.dt_obs, value))
-                            .expect("steps");
-                        black_box(filter.estimate());
-                    }
-                    filter
-                },
-                BatchSize::LargeInput,
-            )
+            common::time_bare_runs(b, &experiment, &method, &data, true)
         });
         group.bench_function(format!("{label}, through the driver"), |b| {
             let fresh = || {

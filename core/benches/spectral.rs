@@ -5,9 +5,10 @@
 //! of each, and a whole 500-step run of the cubic sensor against
 //! PF(200).
 
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+mod common;
+
+use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::experiment::Experiment;
-use zakai::filters::spectral::SpectralParams;
 use zakai::filters::{Observation, ObservationKind};
 use zakai::scenario::{presets, MethodConfig};
 
@@ -31,18 +32,6 @@ fn three_dimensional() -> zakai::scenario::ScenarioConfig {
     config
 }
 
-/// The spectral filter with 004's sizes: in 1-D 11 off-line and 16 on-line functions (the
-/// cubic sensor (44)); in 2-D and 3-D the defaults (15², 004's example (46), and 8³). A 1-D
-/// basis left unset would be chosen from the problem instead (51 functions on the cubic
-/// sensor), which is not what this bench compares.
-fn spectral_004(n: usize) -> MethodConfig {
-    MethodConfig::Spectral(SpectralParams {
-        offline_basis: (n == 1).then_some(11),
-        online_basis: (n == 1).then_some(16),
-        ..SpectralParams::default()
-    })
-}
-
 fn spectral(c: &mut Criterion) {
     let mut group = c.benchmark_group("spectral (004)");
     let configs = ["cubic-sensor-1d", "cubic-sensor-2d"]
@@ -51,7 +40,7 @@ fn spectral(c: &mut Criterion) {
         .chain([three_dimensional()]);
     for mut config in configs {
         let preset = config.name.clone();
-        let method = spectral_004(config.domain.len());
+        let method = common::spectral_004(config.domain.len());
         config.methods = vec![method.clone()];
         let experiment = Experiment::new(config).expect("valid");
         group.sample_size(if preset.ends_with("1d") { 50 } else { 10 });
@@ -78,11 +67,11 @@ fn spectral(c: &mut Criterion) {
     }
     // Whole runs of the cubic sensor (500 steps, same truth), spectral against PF(200).
     let mut config = presets::preset("cubic-sensor-1d").expect("preset");
-    config.methods = vec![spectral_004(1)];
+    config.methods = vec![common::spectral_004(1)];
     let experiment = Experiment::new(config).expect("valid");
     let observations = experiment.simulate(1);
     for (label, method) in [
-        ("spectral", spectral_004(1)),
+        ("spectral", common::spectral_004(1)),
         (
             "PF(200)",
             MethodConfig::Pf(zakai::filters::particle::PfParams {
@@ -92,27 +81,7 @@ fn spectral(c: &mut Criterion) {
         ),
     ] {
         group.bench_function(format!("cubic-sensor-1d whole on-line run, {label}"), |b| {
-            // A fresh filter per run (its build is not timed here: see the off-line rows).
-            let fresh = || {
-                experiment
-                    .build_method(&method, label.into(), 1)
-                    .expect("builds")
-            };
-            b.iter_batched(
-                fresh,
-                |mut filter| {
-                    for k in 1..observations.times.len() {
-                        let value = &observations.observations[k..k + 1];
-                        let obs = Observation {
-                            dt: observations.dt_obs,
-                            value,
-                            kind: ObservationKind::Increment,
-                        };
-                        filter.step(&obs).expect("steps");
-                    }
-                },
-                BatchSize::SmallInput,
-            )
+            common::time_bare_runs(b, &experiment, &method, &observations, false)
         });
     }
     group.finish();

@@ -1,0 +1,58 @@
+//! What several benches share: 004's spectral sizes and a filter stepped through a simulated
+//! run without the experiment driver.
+
+use criterion::{BatchSize, Bencher};
+use std::hint::black_box;
+use zakai::filters::spectral::SpectralParams;
+use zakai::scenario::MethodConfig;
+use zakai::simulate::Trajectory;
+use zakai::{Experiment, Filter, Observation};
+
+/// The spectral filter with 004's sizes: in 1-D 11 off-line and 16 on-line functions (the
+/// cubic sensor (44)); in 2-D and 3-D the defaults (15², 004's example (46), and 8³). A 1-D
+/// basis left unset would be chosen from the problem instead (51 functions on the cubic
+/// sensor), which is not what the benches compare.
+pub fn spectral_004(n: usize) -> MethodConfig {
+    MethodConfig::Spectral(SpectralParams {
+        offline_basis: (n == 1).then_some(11),
+        online_basis: (n == 1).then_some(16),
+        ..SpectralParams::default()
+    })
+}
+
+/// Steps `filter` through every increment of the 1-D continuous-observation run `data` after
+/// the first, reading the estimate after each step when `estimates` is set.
+pub fn bare_run(filter: &mut dyn Filter, data: &Trajectory, estimates: bool) {
+    for k in 1..data.times.len() {
+        let value = &data.observations[k..k + 1];
+        filter
+            .step(&Observation::increment(data.dt_obs, value))
+            .expect("steps");
+        if estimates {
+            black_box(filter.estimate());
+        }
+    }
+}
+
+/// Times [`bare_run`] of `method` of `experiment`, freshly built for every run (the build,
+/// its off-line part, is not timed, nor is dropping the filter).
+pub fn time_bare_runs(
+    b: &mut Bencher,
+    experiment: &Experiment,
+    method: &MethodConfig,
+    data: &Trajectory,
+    estimates: bool,
+) {
+    b.iter_batched(
+        || {
+            experiment
+                .build_method(method, "bench".into(), 1)
+                .expect("builds")
+        },
+        |mut filter| {
+            bare_run(filter.as_mut(), data, estimates);
+            filter
+        },
+        BatchSize::LargeInput,
+    )
+}
