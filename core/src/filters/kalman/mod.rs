@@ -50,7 +50,8 @@ pub const NIS_WINDOW: usize = 50;
 pub fn nis_band(m: usize) -> (f64, f64) {
     let k = (NIS_WINDOW * m) as f64;
     let (a, b) = (1.0 - 2.0 / (9.0 * k), 4.4 * libm::sqrt(2.0 / (9.0 * k)));
-    (libm::pow(a - b, 3.0), libm::pow(a + b, 3.0))
+    let cube = |x: f64| x * x * x;
+    (cube(a - b), cube(a + b))
 }
 
 /// The last [`NIS_WINDOW`] normalised innovations squared, in a ring (no allocation).
@@ -58,19 +59,42 @@ pub fn nis_band(m: usize) -> (f64, f64) {
 pub struct InnovationWindow {
     values: [f64; NIS_WINDOW],
     count: usize,
+    /// Σ values, kept as each value enters and leaves (the check runs every step) and summed
+    /// afresh each time the ring wraps, so rounding cannot build up.
+    sum: f64,
+}
+
+impl Default for InnovationWindow {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl InnovationWindow {
+    /// An empty window.
+    pub fn new() -> Self {
+        InnovationWindow {
+            values: [0.0; NIS_WINDOW],
+            count: 0,
+            sum: 0.0,
+        }
+    }
+
     /// Records one normalised innovation squared.
     pub fn push(&mut self, nis: f64) {
-        self.values[self.count % NIS_WINDOW] = nis;
+        let slot = self.count % NIS_WINDOW;
+        let old = core::mem::replace(&mut self.values[slot], nis);
         self.count += 1;
+        self.sum = if slot + 1 == NIS_WINDOW || !(old.is_finite() && self.sum.is_finite()) {
+            self.values.iter().sum()
+        } else {
+            self.sum - old + nis
+        };
     }
 
     /// The mean NIS per observation component over the last window, once it is full.
     pub fn mean(&self, m: usize) -> Option<f64> {
-        (self.count >= NIS_WINDOW)
-            .then(|| self.values.iter().sum::<f64>() / (NIS_WINDOW * m) as f64)
+        (self.count >= NIS_WINDOW).then(|| self.sum / (NIS_WINDOW * m) as f64)
     }
 
     /// The innovation self-check: a [`crate::filters::Concern`] when the window's mean is
@@ -164,10 +188,7 @@ impl GaussianState {
         GaussianState {
             mean,
             cov,
-            innovations: InnovationWindow {
-                values: [0.0; NIS_WINDOW],
-                count: 0,
-            },
+            innovations: InnovationWindow::new(),
             parts: UpdateParts {
                 residual: DVector::zeros(m),
                 pxz: DMatrix::zeros(n, m),
@@ -345,4 +366,43 @@ pub fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::Conf
         }
     }
     problems
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{InnovationWindow, NIS_WINDOW};
+    use crate::testing::test;
+
+    /// The running sum against the window's values summed afresh, over 10 windows with an
+    /// infinite value among them (which leaves the window after 50 pushes).
+    #[test]
+    fn the_window_mean_is_the_mean_of_its_last_values() {
+        let mut window = InnovationWindow::new();
+        let mut pushed = alloc::vec::Vec::new();
+        for k in 0..10 * NIS_WINDOW + 7 {
+            let nis = if k == 123 {
+                f64::INFINITY
+            } else {
+                libm::exp(libm::sin(k as f64 * 1.3))
+            };
+            window.push(nis);
+            pushed.push(nis);
+            let got = window.mean(2);
+            if pushed.len() < NIS_WINDOW {
+                assert_eq!(got, None);
+                continue;
+            }
+            let last = &pushed[pushed.len() - NIS_WINDOW..];
+            let expected = last.iter().sum::<f64>() / (2 * NIS_WINDOW) as f64;
+            let got = got.unwrap();
+            if expected.is_finite() {
+                assert!(
+                    (got - expected).abs() <= 1e-12 * expected,
+                    "step {k}: {got} vs {expected}"
+                );
+            } else {
+                assert_eq!(got, expected, "step {k}");
+            }
+        }
+    }
 }
