@@ -78,6 +78,19 @@ pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
     }
 }
 
+/// Timed steps that averaged less than this (seconds) are sampled: only one step in
+/// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step cost about 54 ns natively
+/// (`Instant::now` through the vDSO; BENCHMARKS.md, "The driver's own cost per step") — 13 %
+/// of the cheapest step, the 1-D spectral filter's 0.4 µs, and 1 % at this threshold — and the
+/// mean over one step in eight of a few hundred is as good an estimate of the mean step.
+pub const SAMPLED_BELOW: f64 = 5e-6;
+
+/// See [`SAMPLED_BELOW`].
+pub const SAMPLE_EVERY: usize = 8;
+
+/// Steps of each method always timed, before their mean decides whether to sample.
+const TIMED_FIRST: usize = 16;
+
 /// Receives progress from the driver.
 pub trait Observer {
     /// After observation `k` of `total` was given to every live filter.
@@ -179,10 +192,14 @@ pub struct MethodTrack {
     pub failure: Option<Failure>,
     /// Its self-checks that warned (empty when every check stayed within its threshold).
     pub concerns: Vec<ConcernRecord>,
-    /// Total wall time spent in `step` (seconds; 0 without a clock).
+    /// Wall time spent in the timed steps' `step` (seconds; 0 without a clock). Every step is
+    /// timed, except that a method whose timed steps average under [`SAMPLED_BELOW`] is timed
+    /// on one step in [`SAMPLE_EVERY`] (see there).
     pub seconds: f64,
     /// Number of steps taken.
     pub steps: usize,
+    /// Number of steps whose wall time is in [`MethodTrack::seconds`].
+    pub timed_steps: usize,
     /// Wall time spent building the filter — its off-line part (seconds; 0 without a clock).
     pub build_seconds: f64,
     /// Estimates the method went on giving after a failure that left its state intact (the
@@ -207,13 +224,21 @@ impl MethodTrack {
     pub fn failed(&self) -> bool {
         self.failure.is_some()
     }
-    /// Mean wall time per step in seconds.
+    /// Mean wall time per step in seconds (over the timed steps).
     pub fn seconds_per_step(&self) -> f64 {
-        if self.steps == 0 {
+        if self.timed_steps == 0 {
             0.0
         } else {
-            self.seconds / self.steps as f64
+            self.seconds / self.timed_steps as f64
         }
+    }
+
+    /// Whether the driver times this method's next step: the first [`TIMED_FIRST`], then all
+    /// when they average [`SAMPLED_BELOW`] or more, else one in [`SAMPLE_EVERY`].
+    fn times_next_step(&self) -> bool {
+        self.timed_steps < TIMED_FIRST
+            || self.steps.is_multiple_of(SAMPLE_EVERY)
+            || self.seconds_per_step() >= SAMPLED_BELOW
     }
     /// The estimates when the method finished the run against `truth`, else `None`.
     fn complete(&self, truth: &[f64]) -> Option<&[f64]> {
@@ -515,6 +540,7 @@ impl Experiment {
                 concerns: Vec::new(),
                 seconds: 0.0,
                 steps: 0,
+                timed_steps: 0,
                 build_seconds,
                 after_failure: Vec::new(),
                 off_track_since: None,
@@ -684,7 +710,10 @@ impl ExperimentRun {
             }
             return;
         }
-        let start = clock.map(|c| c.now());
+        // Observation 0 is no step of the recursion (nothing, or the update at τ₀): untimed.
+        let start = clock
+            .filter(|_| k > 0 && track.times_next_step())
+            .map(|c| c.now());
         let stepped = if k == 0 && t.continuous {
             Ok(())
         } else {
@@ -692,6 +721,7 @@ impl ExperimentRun {
         };
         if let (Some(c), Some(s)) = (clock, start) {
             track.seconds += c.now() - s;
+            track.timed_steps += 1;
         }
         if k > 0 {
             track.steps += 1;
@@ -849,6 +879,46 @@ mod tests {
         fn warnings(&self) -> Vec<String> {
             alloc::vec!["(31) fails at x = 9.9 with Δt = 0.1".to_string()]
         }
+    }
+
+    /// A clock that advances by `tick` seconds at every reading.
+    struct Ticking {
+        tick: f64,
+        reads: core::cell::Cell<usize>,
+    }
+
+    impl Clock for Ticking {
+        fn now(&self) -> f64 {
+            let r = self.reads.get();
+            self.reads.set(r + 1);
+            r as f64 * self.tick
+        }
+    }
+
+    /// Steps that take 0.1 µs by the clock are timed on the first 16 and then on one in 8
+    /// (the steps numbered 16, 24, …, 496 of 500: 61 more); steps of 10 µs on all 500. Either
+    /// way the mean is the clock's tick, the two readings around a step being one apart.
+    #[test]
+    fn cheap_steps_are_timed_on_a_sample_and_dear_ones_on_every_step() {
+        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
+        config.failure.track_loss = None;
+        let experiment = Experiment::new(config).unwrap();
+        for (tick, timed) in [(1e-7, 16 + 61), (1e-5, 500)] {
+            let clock = Ticking {
+                tick,
+                reads: core::cell::Cell::new(0),
+            };
+            let result = experiment.run_with(1, Some(&clock), &mut Silent).unwrap();
+            let track = &result.methods[0];
+            assert_eq!(
+                (track.steps, track.timed_steps),
+                (500, timed),
+                "tick {tick}"
+            );
+            assert!((track.seconds_per_step() / tick - 1.0).abs() < 1e-9);
+        }
+        const { assert!(SAMPLE_EVERY == 8 && 1e-7 < SAMPLED_BELOW && SAMPLED_BELOW <= 1e-5) };
     }
 
     #[test]

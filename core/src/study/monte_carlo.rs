@@ -42,7 +42,8 @@ pub struct MethodSummary {
     pub rms_components: Option<Vec<f64>>,
     /// Standard error of that mean per component.
     pub rms_stderr: Option<Vec<f64>>,
-    /// Mean wall time per run (seconds).
+    /// Mean wall time per run spent in the method's steps (seconds): the mean step times the
+    /// steps taken.
     pub seconds_per_run: f64,
     /// Mean wall time per step (seconds).
     pub seconds_per_step: f64,
@@ -273,11 +274,13 @@ impl<'a> MonteCarlo<'a> {
                 let mut first_failure = None;
                 let (mut warned, mut first_concerns) = (0, Vec::new());
                 let (mut seconds, mut steps, mut build) = (0.0, 0usize, 0.0);
+                let mut timed = 0usize;
                 for r in results {
                     let track = &r.methods[i];
                     let truth = r.recording.truth.as_deref().unwrap_or_default();
                     seconds += track.seconds;
                     steps += track.steps;
+                    timed += track.timed_steps;
                     build += track.build_seconds;
                     if !track.concerns.is_empty() {
                         warned += 1;
@@ -333,15 +336,17 @@ impl<'a> MonteCarlo<'a> {
                     rms_components: mean_vectors(&rms),
                     rms_stderr: stderr_vectors(&rms),
                     mse_component_stderr: stderr_vectors(&comps),
-                    seconds_per_run: if results.is_empty() {
+                    // Per step over the timed steps (cheap steps are sampled, see
+                    // `experiment::SAMPLED_BELOW`); per run that mean times the steps taken.
+                    seconds_per_run: if results.is_empty() || timed == 0 {
                         0.0
                     } else {
-                        seconds / results.len() as f64
+                        seconds / timed as f64 * steps as f64 / results.len() as f64
                     },
-                    seconds_per_step: if steps == 0 {
+                    seconds_per_step: if timed == 0 {
                         0.0
                     } else {
-                        seconds / steps as f64
+                        seconds / timed as f64
                     },
                     build_seconds: if results.is_empty() {
                         0.0
