@@ -57,11 +57,12 @@ command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 (cd core && wasm-pack test --node)
 # The integration tests in two halves at once: node runs one test binary at a time on one
 # core, and the two Monte Carlo reproductions alone take half of the whole.
-first_half=(--test reproduction_000 --test allocation)
+heavy=" reproduction_000 allocation "
+first_half=()
 second_half=()
 for file in tests/tests/*.rs; do
   name=$(basename "$file" .rs)
-  [[ "$name" == reproduction_000 || "$name" == allocation ]] || second_half+=(--test "$name")
+  if [[ "$heavy" == *" $name "* ]]; then first_half+=(--test "$name"); else second_half+=(--test "$name"); fi
 done
 (cd tests && wasm-pack test --node -- "${first_half[@]}") > target/wasm-tests-first-half.log 2>&1 &
 first=$!

@@ -30,53 +30,52 @@ pub trait Clock {
     fn now(&self) -> f64;
 }
 
-/// [`Clock`] on `std::time::Instant`. Not on wasm32-unknown-unknown, where `Instant` panics:
-/// there the driver times nothing unless it is given a clock (the wasm crate's reads
-/// `performance.now()`).
+/// The standard clock where `std::time::Instant` works: with `std`, except on
+/// wasm32-unknown-unknown, where `Instant` panics — there the driver times nothing unless it
+/// is given a clock (the wasm crate's reads `performance.now()`).
 #[cfg(all(
     feature = "std",
     not(all(target_arch = "wasm32", target_os = "unknown"))
 ))]
-pub struct StdClock(std::time::Instant);
+mod standard_clock {
+    use super::Clock;
 
-#[cfg(all(
-    feature = "std",
-    not(all(target_arch = "wasm32", target_os = "unknown"))
-))]
-impl Default for StdClock {
-    fn default() -> Self {
-        StdClock(std::time::Instant::now())
+    /// [`Clock`] on `std::time::Instant`.
+    pub struct StdClock(std::time::Instant);
+
+    impl Default for StdClock {
+        fn default() -> Self {
+            StdClock(std::time::Instant::now())
+        }
     }
-}
 
-#[cfg(all(
-    feature = "std",
-    not(all(target_arch = "wasm32", target_os = "unknown"))
-))]
-impl Clock for StdClock {
-    fn now(&self) -> f64 {
-        self.0.elapsed().as_secs_f64()
+    impl Clock for StdClock {
+        fn now(&self) -> f64 {
+            self.0.elapsed().as_secs_f64()
+        }
     }
-}
 
-/// Calls `f` with the standard clock where there is one (`StdClock`: with `std`, except on
-/// wasm32-unknown-unknown), else without a clock (the driver then times nothing).
-pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
-    #[cfg(all(
-        feature = "std",
-        not(all(target_arch = "wasm32", target_os = "unknown"))
-    ))]
-    {
+    /// Calls `f` with the standard clock ([`StdClock`]).
+    pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
         f(Some(&StdClock::default()))
     }
-    #[cfg(not(all(
-        feature = "std",
-        not(all(target_arch = "wasm32", target_os = "unknown"))
-    )))]
-    {
+}
+
+/// Without `std`, or on wasm32-unknown-unknown: no standard clock.
+#[cfg(not(all(
+    feature = "std",
+    not(all(target_arch = "wasm32", target_os = "unknown"))
+)))]
+mod standard_clock {
+    use super::Clock;
+
+    /// Calls `f` without a clock (the driver then times nothing).
+    pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
         f(None)
     }
 }
+
+pub use standard_clock::*;
 
 /// Timed steps that averaged less than this (seconds) are sampled: only one step in
 /// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step cost about 54 ns natively

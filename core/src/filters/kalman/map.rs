@@ -379,6 +379,22 @@ fn gauss_newton_point(
     out.gemv_tr(1.0, &state.work.gain_t, &state.parts.residual, 1.0);
 }
 
+/// `√(vᵀ P⁻¹ v)`, the length of `v` in standard deviations of the covariance `p` (infinite
+/// when `p` is not positive definite), by the Cholesky factor `P = L Lᵀ` in `factor`; `v` is
+/// overwritten by `L⁻¹ v`.
+fn in_standard_deviations(
+    p: &DMatrix<f64>,
+    factor: &mut DMatrix<f64>,
+    v: &mut DVector<f64>,
+) -> f64 {
+    if lower_cholesky_into(p, factor) {
+        let _ = factor.solve_lower_triangular_mut(v);
+        v.norm()
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// The MAP filters' convergence self-check threshold: the Gauss–Newton step still left at the
 /// point an update returns, in standard deviations of the Laplace covariance there. At a MAP
 /// point the step is zero; the IEKF stops when its step falls below its tolerance, the IOKF
@@ -558,12 +574,7 @@ impl Filter for MapKalman {
         let d = &mut work.newton.d;
         d.copy_from(&work.x);
         *d -= &state.mean;
-        *last_jump = if lower_cholesky_into(&state.cov, &mut work.p_factor) {
-            let _ = work.p_factor.solve_lower_triangular_mut(d);
-            d.norm()
-        } else {
-            f64::INFINITY
-        };
+        *last_jump = in_standard_deviations(&state.cov, &mut work.p_factor, d);
         // The Laplace covariance at the MAP point: P − K H P with H at x; and the Gauss–Newton
         // step still left there, in the standard deviations of that covariance (the
         // convergence self-check).
@@ -572,12 +583,7 @@ impl Filter for MapKalman {
         gauss_newton_point(state, &work.x, &mut work.newton.d, &mut work.trial);
         work.trial -= &work.x;
         state.downdate_covariance()?;
-        *last_unconverged = if lower_cholesky_into(&state.cov, &mut work.p_factor) {
-            let _ = work.p_factor.solve_lower_triangular_mut(&mut work.trial);
-            work.trial.norm()
-        } else {
-            f64::INFINITY
-        };
+        *last_unconverged = in_standard_deviations(&state.cov, &mut work.p_factor, &mut work.trial);
         state.mean.copy_from(&work.x);
         state.check()
     }
