@@ -117,3 +117,61 @@ fn filters_allocate_nothing_per_step() {
     assert!(held >= 41, "only {held} filters held to zero");
     assert!(long >= 30, "only {long} filters ran 10⁴ steps");
 }
+
+/// The MAP filters allocate nothing per step while their second-mode watch searches and
+/// follows a second mode either: h = x² with a prior straddling 0 (the bimodal case of
+/// `exact_nonlinear.rs`, T = 20), every step after 5 warm-up steps, with the watch's concern raised
+/// on some of them (so that the second mode was followed).
+#[test]
+fn map_filters_following_a_second_mode_allocate_nothing() {
+    let config: zakai::scenario::ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "bimodal",
+        "title": "h = x²",
+        "reference": "",
+        "description": "",
+        "model": {
+            "drift": ["-0.5*x"],
+            "observation": ["x^2"],
+            "diffusion": null,
+            "noise": { "kind": "continuous", "cov": null }
+        },
+        "prior": { "kind": "gaussian", "mean": [0.3], "cov": [[1.0]] },
+        "initial_state": [1.2],
+        "domain": [[-6.0, 6.0]],
+        "time": { "t_final": 20.0, "dt_obs": 0.01, "inner_steps": 10 },
+        "seed": 5,
+        "methods": [{ "method": "iekf" }, { "method": "iokf" }]
+    }))
+    .unwrap();
+    let e = Experiment::new(config.clone()).unwrap();
+    let data = e.simulate(1);
+    for m in &config.methods {
+        let mut filter = e.build_method(m, m.display_name(), 1).unwrap();
+        let observe = |k: usize| Observation::increment(0.01, data.observation(k));
+        for k in 1..=5 {
+            filter.step(&observe(k)).unwrap();
+        }
+        let mut concerns = Vec::with_capacity(8);
+        let mut warned = 0;
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for k in 6..=data.steps() {
+            filter.step(&observe(k)).unwrap();
+            concerns.clear();
+            filter.self_check(&mut concerns);
+            warned += usize::from(concerns.iter().any(|c| c.check.contains("second mode")));
+        }
+        let count = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        assert!(
+            warned > 0,
+            "{}: the second mode was never followed",
+            m.display_name()
+        );
+        assert_eq!(
+            count,
+            0,
+            "{}: allocations in {} steps",
+            m.display_name(),
+            data.steps() - 5
+        );
+    }
+}

@@ -253,21 +253,21 @@ fn bimodal_scenario() -> ScenarioConfig {
 /// every method lands within its tolerance (as for Beneš's filter) of the conditional mean or
 /// warns. The grid filters agree with the independent grid to 10⁻⁴ (measured 7·10⁻⁵), which
 /// also checks the reference; EKF 0.083, UKF 0.038, PF 0.070 (the posterior mean drifts to 0
-/// between the modes, and so do they). The MAP filters are the exception, stated: IEKF and
-/// IOKF estimate the posterior's *mode* (003 §4), and here they follow one of the two modes
-/// (RMS 0.56 from the mean, the modes being ±0.6 apart from it), without a warning — neither
-/// their innovations nor their update's distance from the prediction (at most 0.6 sd) show a
-/// second mode. The test pins that gap (still open) by asserting they are further from
-/// the mean than the EKF.
+/// between the modes, and so do they). The MAP filters estimate a *mode* (003 §4) and follow
+/// one of the two (RMS 0.56 from the mean): they must say so, by their second-mode watch,
+/// on at least half of the steps where they are off by more than the tolerance (measured 458
+/// of 586 for the IEKF, 457 of 585 for the IOKF; the steps left are the first 30, before the
+/// watch has found and followed the second mode, and those where the two modes have nearly
+/// merged, less than a quarter of a standard deviation from the mean).
 #[test]
 fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
     let config = bimodal_scenario();
     let e = Experiment::new(config.clone()).expect("valid");
     let dt = config.time.dt_obs;
-    let mut rms_of = std::collections::HashMap::new();
     for entry in zakai_tests::applicable_methods(&config, &e) {
         let m = entry.defaults;
         let (mut sum, mut steps, mut warned) = (0.0, 0, 0);
+        let (mut off, mut off_warned) = (0, 0);
         for seed in [1u64, 2] {
             let data = e.simulate(seed);
             let mut filter = e.build_method(&m, m.display_name(), seed).unwrap();
@@ -286,28 +286,26 @@ fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
                 concerns.clear();
                 filter.self_check(&mut concerns);
                 warned += usize::from(!concerns.is_empty());
+                if d.abs() > tolerance(&entry.info.key) {
+                    off += 1;
+                    off_warned += usize::from(!concerns.is_empty());
+                }
             }
         }
         let key = entry.info.key.to_string();
         let rms = (sum / steps.max(1) as f64).sqrt();
         let tol = tolerance(&key);
-        println!("{key:<10} RMS {rms:.5} (tolerance {tol})  warned on {warned} steps");
+        println!("{key:<10} RMS {rms:.5} (tolerance {tol})  warned on {warned} steps, on {off_warned} of the {off} steps off by more");
         match key.as_str() {
-            "iekf" | "iokf" => {}
+            "iekf" | "iokf" => assert!(
+                2 * off_warned >= off,
+                "{key}: warned on {off_warned} of the {off} steps it is off by more than {tol}"
+            ),
             "qiem" | "iem" | "spt" => assert!(rms <= 1e-4, "{key}: RMS {rms} from the fine grid"),
             _ => assert!(
                 rms <= tol || warned > 0,
                 "{key}: RMS {rms} from the fine-grid mean (tolerance {tol}) and no warning"
             ),
         }
-        rms_of.insert(key, rms);
-    }
-    for key in ["iekf", "iokf"] {
-        assert!(
-            rms_of[key] > 3.0 * rms_of["ekf"],
-            "{key} follows one mode: {} against the EKF's {}",
-            rms_of[key],
-            rms_of["ekf"]
-        );
     }
 }

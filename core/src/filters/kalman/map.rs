@@ -29,6 +29,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::measurement::{Measurement, MeasurementForm};
+use super::second_mode::ModeWatch;
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
@@ -151,17 +152,17 @@ pub enum MapSolver {
 }
 
 /// `L_λ(x)` of (4.8): what stays fixed during one update.
-struct Objective<'a> {
-    model: &'a Model,
-    meas: &'a Measurement,
-    mean: &'a DVector<f64>,
-    p_inv: &'a DMatrix<f64>,
-    r_inv: &'a DMatrix<f64>,
+pub(super) struct Objective<'a> {
+    pub model: &'a Model,
+    pub meas: &'a Measurement,
+    pub mean: &'a DVector<f64>,
+    pub p_inv: &'a DMatrix<f64>,
+    pub r_inv: &'a DMatrix<f64>,
 }
 
 /// Storage of the IOKF's Newton steps (made once: an update allocates nothing).
 #[derive(Clone, Debug)]
-struct NewtonWork {
+pub(super) struct NewtonWork {
     /// x − m, or m − x for the IEKF (n).
     d: DVector<f64>,
     /// z − scale·h(x) (m).
@@ -205,7 +206,7 @@ impl NewtonWork {
 }
 
 /// `vᵀ A v`.
-fn quadratic_form(a: &DMatrix<f64>, v: &DVector<f64>) -> f64 {
+pub(super) fn quadratic_form(a: &DMatrix<f64>, v: &DVector<f64>) -> f64 {
     let n = v.len();
     (0..n)
         .map(|j| v[j] * (0..n).map(|i| v[i] * a[(i, j)]).sum::<f64>())
@@ -262,7 +263,7 @@ impl Objective<'_> {
 /// One guarded Newton step on `L_λ` from x: damped until the Hessian is positive definite,
 /// then cut back until L decreases (Armijo), trying points in `trial`. Returns false when no
 /// decrease was possible (x is already a minimiser to rounding).
-fn newton_step(
+pub(super) fn newton_step(
     obj: &Objective,
     x: &mut DVector<f64>,
     trial: &mut DVector<f64>,
@@ -321,21 +322,21 @@ fn newton_step(
 
 /// Storage of the MAP update (made once).
 #[derive(Clone, Debug)]
-struct MapWork {
+pub(super) struct MapWork {
     /// The iterate and the next one (n).
-    x: DVector<f64>,
-    trial: DVector<f64>,
+    pub x: DVector<f64>,
+    pub trial: DVector<f64>,
     /// P⁻¹ (n × n) with the storage of P's Cholesky factor.
-    p_inv: DMatrix<f64>,
-    p_factor: DMatrix<f64>,
+    pub p_inv: DMatrix<f64>,
+    pub p_factor: DMatrix<f64>,
     /// R⁻¹ (m × m) with the storage of R's Cholesky factor.
-    r_inv: DMatrix<f64>,
-    r_factor: DMatrix<f64>,
-    newton: NewtonWork,
+    pub r_inv: DMatrix<f64>,
+    pub r_factor: DMatrix<f64>,
+    pub newton: NewtonWork,
 }
 
 impl MapWork {
-    fn new(n: usize, m: usize) -> Self {
+    pub(super) fn new(n: usize, m: usize) -> Self {
         MapWork {
             x: DVector::zeros(n),
             trial: DVector::zeros(n),
@@ -349,7 +350,7 @@ impl MapWork {
 }
 
 /// `A⁻¹` of a symmetric positive-definite `a` into `out`, factorising in `factor`.
-fn spd_inverse_into(
+pub(super) fn spd_inverse_into(
     a: &DMatrix<f64>,
     factor: &mut DMatrix<f64>,
     out: &mut DMatrix<f64>,
@@ -382,7 +383,7 @@ fn gauss_newton_point(
 /// `√(vᵀ P⁻¹ v)`, the length of `v` in standard deviations of the covariance `p` (infinite
 /// when `p` is not positive definite), by the Cholesky factor `P = L Lᵀ` in `factor`; `v` is
 /// overwritten by `L⁻¹ v`.
-fn in_standard_deviations(
+pub(super) fn in_standard_deviations(
     p: &DMatrix<f64>,
     factor: &mut DMatrix<f64>,
     v: &mut DVector<f64>,
@@ -427,12 +428,10 @@ pub struct MapKalman {
     solver: MapSolver,
     state: GaussianState,
     work: MapWork,
-    /// Iterations (Gauss–Newton) or Newton steps taken in the last update.
-    last_iterations: usize,
-    /// The last update's MAP point from the predicted mean, in predicted standard deviations.
-    last_jump: f64,
-    /// The Gauss–Newton step left at the last update's point, in posterior standard deviations.
-    last_unconverged: f64,
+    /// What the last update reported.
+    last: UpdateReport,
+    /// The watch for a second posterior mode.
+    watch: ModeWatch,
 }
 
 impl MapKalman {
@@ -445,6 +444,7 @@ impl MapKalman {
         substeps: usize,
         solver: MapSolver,
     ) -> Self {
+        let state = GaussianState::initial(prior.mean(), prior.covariance(), init, model.m);
         MapKalman {
             name,
             model: model.clone(),
@@ -452,32 +452,38 @@ impl MapKalman {
             form: MeasurementForm::new(model),
             substeps: substeps.max(1),
             solver,
-            state: GaussianState::initial(prior.mean(), prior.covariance(), init, model.m),
+            watch: ModeWatch::new(&state, model.m),
+            state,
             work: MapWork::new(model.n, model.m),
-            last_iterations: 0,
-            last_jump: 0.0,
-            last_unconverged: 0.0,
+            last: UpdateReport {
+                iterations: 0,
+                jump: 0.0,
+                unconverged: 0.0,
+                log_density: 0.0,
+            },
         }
     }
 
     /// Iterations or Newton steps of the last update.
     pub fn last_iterations(&self) -> usize {
-        self.last_iterations
+        self.last.iterations
     }
 }
 
 /// The MAP point of (4.5) by `solver`, from the predicted mean, into `work.x`; records the
 /// normalised innovation squared at the predicted mean (the innovation self-check, as for the
-/// EKF). Returns the iterations or Newton steps taken.
+/// EKF). Returns the iterations or Newton steps taken and the log-density of the innovation at
+/// the predicted mean ([`GaussianState::innovation_log_density`]).
 fn map_point(
     solver: MapSolver,
     model: &Model,
     meas: &Measurement,
     state: &mut GaussianState,
     work: &mut MapWork,
-) -> Result<usize, FilterError> {
+) -> Result<(usize, f64), FilterError> {
     work.x.copy_from(&state.mean);
     let mut taken = 0;
+    let mut log_density = f64::NAN;
     match solver {
         MapSolver::GaussNewton {
             iterations,
@@ -489,6 +495,7 @@ fn map_point(
                 let nis = state.gain()?;
                 if k == 0 {
                     state.innovations.push(nis);
+                    log_density = state.innovation_log_density(nis);
                 }
                 gauss_newton_point(state, &work.x, &mut work.newton.d, &mut work.trial);
                 work.newton.d.copy_from(&work.trial);
@@ -513,6 +520,7 @@ fn map_point(
             state.linearize(model, meas, None);
             let nis = state.gain()?;
             state.innovations.push(nis);
+            log_density = state.innovation_log_density(nis);
             spd_inverse_into(
                 &state.cov,
                 &mut work.p_factor,
@@ -543,7 +551,55 @@ fn map_point(
             }
         }
     }
-    Ok(taken)
+    Ok((taken, log_density))
+}
+
+/// What one MAP update reports for the self-checks.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct UpdateReport {
+    /// Iterations (Gauss–Newton) or Newton steps taken.
+    pub iterations: usize,
+    /// The MAP point from the predicted mean, in predicted standard deviations.
+    pub jump: f64,
+    /// The Gauss–Newton step left at the MAP point, in posterior standard deviations.
+    pub unconverged: f64,
+    /// `ln N(z − h(m); 0, H P Hᵀ + R)` at the predicted mean m, up to the constant.
+    pub log_density: f64,
+}
+
+/// One MAP update of the predicted `state` for `meas` (003 §4): the MAP point by `solver`,
+/// then the Laplace covariance there, `P ← P − K H P` with H at the point.
+pub(super) fn map_update(
+    solver: MapSolver,
+    model: &Model,
+    meas: &Measurement,
+    state: &mut GaussianState,
+    work: &mut MapWork,
+) -> Result<UpdateReport, FilterError> {
+    let (iterations, log_density) = map_point(solver, model, meas, state, work)?;
+    // How far the MAP point lies from the prediction, in predicted standard deviations
+    // (the self-check): √((x − m)ᵀ P⁻¹ (x − m)) with P = L Lᵀ.
+    let d = &mut work.newton.d;
+    d.copy_from(&work.x);
+    *d -= &state.mean;
+    let jump = in_standard_deviations(&state.cov, &mut work.p_factor, d);
+    // The Laplace covariance at the MAP point: P − K H P with H at x; and the Gauss–Newton
+    // step still left there, in the standard deviations of that covariance (the
+    // convergence self-check).
+    state.linearize(model, meas, Some(&work.x));
+    state.gain()?;
+    gauss_newton_point(state, &work.x, &mut work.newton.d, &mut work.trial);
+    work.trial -= &work.x;
+    state.downdate_covariance()?;
+    let unconverged = in_standard_deviations(&state.cov, &mut work.p_factor, &mut work.trial);
+    state.mean.copy_from(&work.x);
+    state.check()?;
+    Ok(UpdateReport {
+        iterations,
+        jump,
+        unconverged,
+        log_density,
+    })
 }
 
 impl Filter for MapKalman {
@@ -560,32 +616,26 @@ impl Filter for MapKalman {
             solver,
             state,
             work,
-            last_iterations,
-            last_jump,
-            last_unconverged,
+            watch,
+            last,
             ..
         } = self;
         let Some(meas) = state.predict_then_measure(model, q, *substeps, form, obs)? else {
+            watch.elapse(obs.dt);
             return Ok(());
         };
-        *last_iterations = map_point(*solver, model, meas, state, work)?;
-        // How far the MAP point lies from the prediction, in predicted standard deviations
-        // (the self-check): √((x − m)ᵀ P⁻¹ (x − m)) with P = L Lᵀ.
-        let d = &mut work.newton.d;
-        d.copy_from(&work.x);
-        *d -= &state.mean;
-        *last_jump = in_standard_deviations(&state.cov, &mut work.p_factor, d);
-        // The Laplace covariance at the MAP point: P − K H P with H at x; and the Gauss–Newton
-        // step still left there, in the standard deviations of that covariance (the
-        // convergence self-check).
-        state.linearize(model, meas, Some(&work.x));
-        state.gain()?;
-        gauss_newton_point(state, &work.x, &mut work.newton.d, &mut work.trial);
-        work.trial -= &work.x;
-        state.downdate_covariance()?;
-        *last_unconverged = in_standard_deviations(&state.cov, &mut work.p_factor, &mut work.trial);
-        state.mean.copy_from(&work.x);
-        state.check()
+        *last = map_update(*solver, model, meas, state, work)?;
+        watch.after_update(
+            *solver,
+            model,
+            q,
+            *substeps,
+            obs.dt,
+            meas,
+            state,
+            last.log_density,
+        );
+        Ok(())
     }
 
     fn estimate(&self) -> Estimate {
@@ -596,18 +646,19 @@ impl Filter for MapKalman {
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.state.innovations.check(self.model.m, out);
-        if self.last_jump > MAP_JUMP_THRESHOLD {
+        self.watch.check(out);
+        if self.last.jump > MAP_JUMP_THRESHOLD {
             out.push(crate::filters::Concern::above(
                 "MAP point from the predicted mean, in predicted standard deviations",
-                self.last_jump,
+                self.last.jump,
                 MAP_JUMP_THRESHOLD,
                 "one update moved the estimate far outside the predicted Gaussian: the posterior is far from Gaussian (possibly two modes) and the Laplace approximation cannot describe it",
             ));
         }
-        if self.last_unconverged > MAP_UNCONVERGED_THRESHOLD {
+        if self.last.unconverged > MAP_UNCONVERGED_THRESHOLD {
             out.push(crate::filters::Concern::above(
                 "Gauss–Newton step left at the update's point, in posterior standard deviations",
-                self.last_unconverged,
+                self.last.unconverged,
                 MAP_UNCONVERGED_THRESHOLD,
                 "the update's iterations ended before the MAP point: the estimate and covariance are not the MAP filter's; raise iterations (IEKF) or newton_steps and splits (IOKF)",
             ));

@@ -10,6 +10,7 @@ pub mod map;
 pub mod measurement;
 pub mod methods;
 pub mod propagate;
+pub mod second_mode;
 pub mod ukf;
 
 pub use ekf::{EkfParams, ExtendedKalman};
@@ -213,6 +214,18 @@ impl GaussianState {
         self.mean
             .gemv_tr(1.0, &self.work.gain_t, &self.parts.residual, 1.0);
         self.downdate_covariance()
+    }
+
+    /// After [`GaussianState::gain`] returned `nis`: the log-density of the innovation
+    /// `r ~ N(0, P_zz)`, `−½ rᵀP_zz⁻¹r − ½ ln det P_zz` (without the constant `−(m/2) ln 2π`),
+    /// from the Cholesky factor of `P_zz` that the gain left — the weight of one observation in
+    /// a comparison of Gaussian hypotheses, as in the Gaussian-sum filter.
+    pub fn innovation_log_density(&self, nis: f64) -> f64 {
+        let factor = &self.work.factor;
+        -0.5 * nis
+            - (0..factor.nrows())
+                .map(|i| libm::log(factor[(i, i)]))
+                .sum::<f64>()
     }
 
     /// The gain of the update in [`GaussianState::parts`]: `Kᵀ = P_zz⁻¹ P_xzᵀ` into the
