@@ -59,6 +59,31 @@ use zakai::scenario::methods::{catalogue, CatalogueEntry};
 use zakai::scenario::ScenarioConfig;
 use zakai::Experiment;
 
+/// A model whose posterior keeps two modes: `dx = −½x dt + dv`, `dy = x² dt + dw` (h = x²
+/// cannot tell x from −x) with the prior N(0.3, 1) straddling 0 and the state starting at 1.2,
+/// on [−6, 6], Δτ = 0.01, running the EKF (tests choose their methods).
+pub fn bimodal_scenario(t_final: f64) -> ScenarioConfig {
+    let json = serde_json::json!({
+        "name": "bimodal",
+        "title": "h = x²: dx = −½x dt + dv, dy = x² dt + dw",
+        "reference": "",
+        "description": "",
+        "model": {
+            "drift": ["-0.5*x"],
+            "observation": ["x^2"],
+            "diffusion": null,
+            "noise": { "kind": "continuous", "cov": null }
+        },
+        "prior": { "kind": "gaussian", "mean": [0.3], "cov": [[1.0]] },
+        "initial_state": [1.2],
+        "domain": [[-6.0, 6.0]],
+        "time": { "t_final": t_final, "dt_obs": 0.01, "inner_steps": 10 },
+        "seed": 5,
+        "methods": [{ "method": "ekf" }]
+    });
+    serde_json::from_value(json).expect("a valid scenario")
+}
+
 /// The catalogue's methods that apply, with their default parameters, to the scenario
 /// `config` (built as `experiment`) and need at most 64 MiB.
 pub fn applicable_methods(config: &ScenarioConfig, experiment: &Experiment) -> Vec<CatalogueEntry> {

@@ -32,6 +32,16 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// The tests of this file one at a time: the counter is global, so another test's
+/// allocations would count in this one's.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 /// Allocations of every applicable method on each preset over `steps` steps (`long` for the
 /// methods that are cheap enough) after `warm_up` steps: `(key, allocations, steps taken)`.
 fn allocations_per_step(
@@ -89,6 +99,7 @@ fn allocations_per_step(
 /// step of about 1 ms): printed, not held to zero.
 #[test]
 fn filters_allocate_nothing_per_step() {
+    let _serial = one_at_a_time();
     let mut held = 0;
     let mut long = 0;
     for preset in [
@@ -124,25 +135,12 @@ fn filters_allocate_nothing_per_step() {
 /// on some of them (so that the second mode was followed).
 #[test]
 fn map_filters_following_a_second_mode_allocate_nothing() {
-    let config: zakai::scenario::ScenarioConfig = serde_json::from_value(serde_json::json!({
-        "name": "bimodal",
-        "title": "h = x²",
-        "reference": "",
-        "description": "",
-        "model": {
-            "drift": ["-0.5*x"],
-            "observation": ["x^2"],
-            "diffusion": null,
-            "noise": { "kind": "continuous", "cov": null }
-        },
-        "prior": { "kind": "gaussian", "mean": [0.3], "cov": [[1.0]] },
-        "initial_state": [1.2],
-        "domain": [[-6.0, 6.0]],
-        "time": { "t_final": 20.0, "dt_obs": 0.01, "inner_steps": 10 },
-        "seed": 5,
-        "methods": [{ "method": "iekf" }, { "method": "iokf" }]
-    }))
-    .unwrap();
+    let _serial = one_at_a_time();
+    let mut config = zakai_tests::bimodal_scenario(20.0);
+    config.methods = vec![
+        zakai::scenario::MethodConfig::Iekf(Default::default()),
+        zakai::scenario::MethodConfig::Iokf(Default::default()),
+    ];
     let e = Experiment::new(config.clone()).unwrap();
     let data = e.simulate(1);
     for m in &config.methods {

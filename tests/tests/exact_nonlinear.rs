@@ -227,28 +227,6 @@ impl FineGrid {
     }
 }
 
-fn bimodal_scenario() -> ScenarioConfig {
-    let json = serde_json::json!({
-        "name": "bimodal",
-        "title": "h = x²: dx = −½x dt + dv, dy = x² dt + dw",
-        "reference": "",
-        "description": "",
-        "model": {
-            "drift": ["-0.5*x"],
-            "observation": ["x^2"],
-            "diffusion": null,
-            "noise": { "kind": "continuous", "cov": null }
-        },
-        "prior": { "kind": "gaussian", "mean": [0.3], "cov": [[1.0]] },
-        "initial_state": [1.2],
-        "domain": [[-6.0, 6.0]],
-        "time": { "t_final": 3.0, "dt_obs": 0.01, "inner_steps": 10 },
-        "seed": 5,
-        "methods": [{ "method": "ekf" }]
-    });
-    serde_json::from_value(json).expect("a valid scenario")
-}
-
 /// Against the independent fine grid on the bimodal posterior (seeds 1–2, 300 intervals):
 /// every method lands within its tolerance (as for Beneš's filter) of the conditional mean or
 /// warns. The grid filters agree with the independent grid to 10⁻⁴ (measured 7·10⁻⁵), which
@@ -261,7 +239,7 @@ fn bimodal_scenario() -> ScenarioConfig {
 /// merged, less than a quarter of a standard deviation from the mean).
 #[test]
 fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
-    let config = bimodal_scenario();
+    let config = zakai_tests::bimodal_scenario(3.0);
     let e = Experiment::new(config.clone()).expect("valid");
     let dt = config.time.dt_obs;
     for entry in zakai_tests::applicable_methods(&config, &e) {

@@ -29,7 +29,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::measurement::{Measurement, MeasurementForm};
-use super::second_mode::ModeWatch;
+use super::second_mode::{Interval, ModeWatch};
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
@@ -625,16 +625,15 @@ impl Filter for MapKalman {
             return Ok(());
         };
         *last = map_update(*solver, model, meas, state, work)?;
-        watch.after_update(
-            *solver,
+        let interval = Interval {
+            solver: *solver,
             model,
             q,
-            *substeps,
-            obs.dt,
+            substeps: *substeps,
+            dt: obs.dt,
             meas,
-            state,
-            last.log_density,
-        );
+        };
+        watch.after_update(&interval, state, last.log_density);
         Ok(())
     }
 

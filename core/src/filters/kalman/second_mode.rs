@@ -73,6 +73,18 @@ pub const MATCH: f64 = 1e-6;
 /// Levenberg–Marquardt steps of one search.
 const SEARCH_STEPS: usize = 30;
 
+/// What the filter's step used, for the second mode to go through the same interval.
+pub(super) struct Interval<'a> {
+    pub solver: MapSolver,
+    pub model: &'a Model,
+    /// The process noise covariance.
+    pub q: &'a DMatrix<f64>,
+    /// RK4 steps of the moment equations per interval.
+    pub substeps: usize,
+    pub dt: f64,
+    pub meas: &'a Measurement,
+}
+
 /// The second-mode watch of one MAP filter (module doc). Allocates only when built.
 #[derive(Clone, Debug)]
 pub struct ModeWatch {
@@ -129,50 +141,41 @@ impl ModeWatch {
         self.free_elapsed += dt;
     }
 
-    /// After the filter's update of `state` (its MAP point and Laplace covariance) for `meas`
-    /// over an interval `dt`, with `log_density` its innovation's: follows the second mode
-    /// through the same interval and update, or searches for one when it is time.
-    #[allow(clippy::too_many_arguments)]
+    /// After the filter's update of `state` (its MAP point and Laplace covariance) over
+    /// `interval`, with `log_density` its innovation's: follows the second mode through the
+    /// same interval and update, or searches for one when it is time.
     pub(super) fn after_update(
         &mut self,
-        solver: MapSolver,
-        model: &Model,
-        q: &DMatrix<f64>,
-        substeps: usize,
-        dt: f64,
-        meas: &Measurement,
+        interval: &Interval,
         state: &GaussianState,
         log_density: f64,
     ) {
-        self.free_elapsed += dt;
+        self.free_elapsed += interval.dt;
         self.free_intervals += 1;
         if self.stopped {
             return;
         }
         if self.following {
-            self.follow(solver, model, q, substeps, dt, meas, state, log_density);
+            self.follow(interval, state, log_density);
             return;
         }
         self.since_search += 1;
         if self.since_search >= SEARCH_EVERY {
             self.since_search = 0;
-            self.search(model, q, meas, state);
+            self.search(interval.model, interval.q, interval.meas, state);
         }
     }
 
     /// One interval of the second mode; dropped when it fails, fades or merges.
-    #[allow(clippy::too_many_arguments)]
-    fn follow(
-        &mut self,
-        solver: MapSolver,
-        model: &Model,
-        q: &DMatrix<f64>,
-        substeps: usize,
-        dt: f64,
-        meas: &Measurement,
-        state: &GaussianState,
-        log_density: f64,
-    ) {
+    fn follow(&mut self, interval: &Interval, state: &GaussianState, log_density: f64) {
+        let Interval {
+            solver,
+            model,
+            q,
+            substeps,
+            dt,
+            meas,
+        } = *interval;
         let shadow = &mut self.shadow;
         let stepped = if dt > 0.0 {
             shadow.predict_linearized(model, q, dt, substeps)
