@@ -155,6 +155,45 @@ fn driver_overhead(c: &mut Criterion) {
                 )
             })
         });
+        // The two back to back in every iteration, so that the machine's drift between two
+        // benchmark groups (several per cent on a shared VM) cancels: the time reported is
+        // the driver's run less the bare run (zero when the bare run was the slower).
+        group.bench_function(format!("{label}, driver less bare, interleaved"), |b| {
+            with_standard_clock(|clock| {
+                b.iter_custom(|iters| {
+                    let mut extra = std::time::Duration::ZERO;
+                    for i in 0..iters {
+                        let mut filter = experiment
+                            .build_method(&method, "bench".into(), 1)
+                            .expect("builds");
+                        let mut run = experiment
+                            .start_recorded(data.clone().into(), 1)
+                            .expect("starts");
+                        let mut bare = || {
+                            let started = std::time::Instant::now();
+                            common::bare_run(filter.as_mut(), &data, true);
+                            started.elapsed()
+                        };
+                        let mut driven = || {
+                            let started = std::time::Instant::now();
+                            run.complete(clock, &mut Silent);
+                            started.elapsed()
+                        };
+                        // Alternately first and second, so that neither always finds the
+                        // caches the other left.
+                        let (b, d) = if i % 2 == 0 {
+                            let b = bare();
+                            (b, driven())
+                        } else {
+                            let d = driven();
+                            (bare(), d)
+                        };
+                        extra += d.saturating_sub(b);
+                    }
+                    extra
+                })
+            })
+        });
     }
     group.finish();
 }

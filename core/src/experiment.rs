@@ -526,15 +526,22 @@ impl Experiment {
                 _ => 0.0,
             });
         }
+        let latest: Vec<_> = filters.iter().map(|f| f.estimate()).collect();
+        let (rows, n) = (recording.times.len(), self.model.n);
         let tracks = self
             .names
             .iter()
             .zip(build_seconds)
-            .map(|(name, build_seconds)| MethodTrack {
+            .zip(&latest)
+            .map(|((name, build_seconds), estimate)| MethodTrack {
                 name: name.clone(),
-                n: self.model.n,
-                estimates: Vec::with_capacity(recording.times.len() * self.model.n),
-                covariances: Vec::new(),
+                n,
+                estimates: Vec::with_capacity(rows * n),
+                covariances: Vec::with_capacity(if estimate.covariance.is_some() {
+                    rows * n * n
+                } else {
+                    0
+                }),
                 failure: None,
                 concerns: Vec::new(),
                 seconds: 0.0,
@@ -551,6 +558,7 @@ impl Experiment {
             data: recording,
             dt_obs: self.config.time.dt_obs,
             concerns: Vec::new(),
+            latest,
             filters,
             tracks,
             next: 0,
@@ -591,6 +599,8 @@ pub struct ExperimentRun {
     /// The self-checks' findings of one step (reused: nothing is allocated per step).
     concerns: Vec<Concern>,
     filters: Vec<Box<dyn Filter>>,
+    /// Each method's latest estimate ([`Filter::estimate_into`]: reused, not reallocated).
+    latest: Vec<crate::filters::Estimate>,
     tracks: Vec<MethodTrack>,
     next: usize,
     bound: f64,
@@ -726,25 +736,29 @@ impl ExperimentRun {
             track.steps += 1;
         }
         // Whether a failure below leaves the filter's state intact (the estimate was finite).
-        let mut intact = None;
-        let result = stepped.map_err(|e| e.to_string()).and_then(|_| {
-            let est = filter.estimate();
-            let magnitude = est.mean.amax();
-            if est.mean.iter().any(|v| !v.is_finite()) {
-                Err("the estimate became non-finite".to_string())
-            } else if magnitude > self.bound {
-                intact = Some(est.mean.clone());
-                Err(crate::error::FilterError::Diverged {
-                    magnitude,
-                    bound: self.bound,
+        let mut intact = false;
+        let est = &mut self.latest[i];
+        let result = match stepped {
+            Err(e) => Err(e.to_string()),
+            Ok(()) => {
+                filter.estimate_into(est);
+                let magnitude = est.mean.amax();
+                if est.mean.iter().any(|v| !v.is_finite()) {
+                    Err("the estimate became non-finite".to_string())
+                } else if magnitude > self.bound {
+                    intact = true;
+                    Err(crate::error::FilterError::Diverged {
+                        magnitude,
+                        bound: self.bound,
+                    }
+                    .to_string())
+                } else {
+                    Ok(())
                 }
-                .to_string())
-            } else {
-                Ok(est)
             }
-        });
+        };
         let result = match (result, &self.track_loss, t.state(k)) {
-            (Ok(est), Some(rule), Some(truth)) => {
+            (Ok(()), Some(rule), Some(truth)) => {
                 let error = libm::sqrt(
                     est.mean
                         .iter()
@@ -754,25 +768,25 @@ impl ExperimentRun {
                 );
                 if error <= rule.error {
                     track.off_track_since = None;
-                    Ok(est)
+                    Ok(())
                 } else {
                     let since = *track.off_track_since.get_or_insert(t.times[k]);
                     if t.times[k] - since > rule.duration {
-                        intact = Some(est.mean.clone());
+                        intact = true;
                         Err(alloc::format!(
                             "lost track: ‖x̂ − x‖ > {} from t = {since:.3} to t = {:.3}",
                             rule.error,
                             t.times[k]
                         ))
                     } else {
-                        Ok(est)
+                        Ok(())
                     }
                 }
             }
             (r, _, _) => r,
         };
         match result {
-            Ok(est) => {
+            Ok(()) => {
                 self.concerns.clear();
                 filter.self_check(&mut self.concerns);
                 for c in &self.concerns {
@@ -794,9 +808,9 @@ impl ExperimentRun {
                 }
                 observer.on_failure(i, k, &message);
                 track.failure = Some(Failure { k, message });
-                if let (true, Some(mean)) = (self.follow_failed, intact) {
+                if self.follow_failed && intact {
                     track.following = true;
-                    track.after_failure.extend_from_slice(mean.as_slice());
+                    track.after_failure.extend_from_slice(est.mean.as_slice());
                 }
             }
         }

@@ -59,6 +59,25 @@ use zakai::scenario::methods::{catalogue, CatalogueEntry};
 use zakai::scenario::ScenarioConfig;
 use zakai::Experiment;
 
+/// Presets that between them apply every method of the catalogue.
+pub const PRESETS_FOR_EVERY_METHOD: [&str; 5] = [
+    "cubic-sensor-1d",
+    "sa-example-1",
+    "direct-4.3",
+    "yau-2d",
+    "bearings-only",
+];
+
+/// Observation row k of a simulated run, as the increment or measurement its model takes.
+pub fn observation_of(data: &zakai::simulate::Trajectory, k: usize) -> zakai::Observation<'_> {
+    let z = data.observation(k);
+    if data.continuous {
+        zakai::Observation::increment(data.dt_obs, z)
+    } else {
+        zakai::Observation::measurement(data.dt_obs, z)
+    }
+}
+
 /// A model whose posterior keeps two modes: `dx = −½x dt + dv`, `dy = x² dt + dw` (h = x²
 /// cannot tell x from −x) with the prior N(0.3, 1) straddling 0 and the state starting at 1.2,
 /// on [−6, 6], Δτ = 0.01, running the EKF (tests choose their methods).

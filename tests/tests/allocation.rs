@@ -42,8 +42,9 @@ fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Allocations of every applicable method on each preset over `steps` steps (`long` for the
-/// methods that are cheap enough) after `warm_up` steps: `(key, allocations, steps taken)`.
+/// Allocations of every applicable method on each preset over `steps` steps, each followed by
+/// reading the estimate into a reused `Estimate` (`long` for the methods that are cheap
+/// enough) after `warm_up` steps: `(key, allocations, steps taken)`.
 fn allocations_per_step(
     preset: &str,
     steps: usize,
@@ -66,6 +67,7 @@ fn allocations_per_step(
                 Observation::measurement(dt, z)
             }
         };
+        let mut estimate = filter.estimate();
         for k in 0..warm_up {
             filter.step(&observe(k)).unwrap();
         }
@@ -81,6 +83,7 @@ fn allocations_per_step(
             if filter.step(&observe(k)).is_err() {
                 break;
             }
+            filter.estimate_into(&mut estimate);
             taken += 1;
         }
         let count = ALLOCATIONS.load(Ordering::Relaxed) - before;
@@ -91,7 +94,8 @@ fn allocations_per_step(
 
 /// Every filter of the catalogue (the Kalman–Bucy filter, EKF, UKF, IEKF, IOKF, PF, the
 /// Gaussian-sum reference, every Yau–Yau and SA/FDM grid filter, the direct method and the
-/// spectral filter) allocates nothing per step after 5 warm-up steps, on five presets that
+/// spectral filter) allocates nothing per step — the step and reading its estimate with
+/// `Filter::estimate_into` into one reused `Estimate` — after 5 warm-up steps, on five presets that
 /// between them apply every method: 10⁴ steps each, or 200 for the few whose step takes
 /// over 0.25 ms here (the 2-D grid filters, the Gaussian sum). The one exception is the
 /// 2-D spectral filter, whose tensor products go through nalgebra's `gemm` to
@@ -102,13 +106,7 @@ fn filters_allocate_nothing_per_step() {
     let _serial = one_at_a_time();
     let mut held = 0;
     let mut long = 0;
-    for preset in [
-        "cubic-sensor-1d",
-        "sa-example-1",
-        "direct-4.3",
-        "yau-2d",
-        "bearings-only",
-    ] {
+    for preset in zakai_tests::PRESETS_FOR_EVERY_METHOD {
         for (key, count, steps) in allocations_per_step(preset, 200, 10_000, 5) {
             if key == "spectral" && preset == "yau-2d" {
                 println!("{preset} {key}: {count} allocations in {steps} steps (matrixmultiply's packing)");

@@ -430,13 +430,9 @@ fn the_second_mode_watch_is_quiet_where_the_model_tells_the_mirror_apart() {
                 let mut filter = e.build_method(m, m.display_name(), seed).unwrap();
                 let mut concerns: Vec<Concern> = Vec::new();
                 for k in 1..=data.steps() {
-                    let (dt, z) = (data.dt_obs, data.observation(k));
-                    let obs = if data.continuous {
-                        Observation::increment(dt, z)
-                    } else {
-                        Observation::measurement(dt, z)
-                    };
-                    filter.step(&obs).expect("steps");
+                    filter
+                        .step(&zakai_tests::observation_of(&data, k))
+                        .expect("steps");
                     concerns.clear();
                     filter.self_check(&mut concerns);
                     let second = concerns.iter().find(|c| c.check.contains("second mode"));

@@ -551,16 +551,28 @@ impl GaussianSumFilter {
 
     fn mixture_moments(&self) -> (DVector<f64>, DMatrix<f64>) {
         let n = self.a.nrows();
-        let mut mean = DVector::zeros(n);
-        for c in self.mixture() {
-            mean += &c.m * c.w;
-        }
-        let mut cov = DMatrix::zeros(n, n);
-        for c in self.mixture() {
-            let dm = &c.m - &mean;
-            cov += (&c.p + &dm * dm.transpose()) * c.w;
-        }
+        let (mut mean, mut cov) = (DVector::zeros(n), DMatrix::zeros(n, n));
+        self.mixture_moments_into(&mut mean, &mut cov);
         (mean, cov)
+    }
+
+    /// [`Self::mixture_moments`] into `mean` (n) and `cov` (n × n), without allocating:
+    /// `m = Σ w_i m_i`, `P = Σ w_i (P_i + (m_i − m)(m_i − m)ᵀ)`.
+    fn mixture_moments_into(&self, mean: &mut DVector<f64>, cov: &mut DMatrix<f64>) {
+        mean.fill(0.0);
+        for c in self.mixture() {
+            mean.axpy(c.w, &c.m, 1.0);
+        }
+        cov.fill(0.0);
+        let n = mean.len();
+        for c in self.mixture() {
+            for b in 0..n {
+                for a in 0..n {
+                    let spread = (c.m[a] - mean[a]) * (c.m[b] - mean[b]);
+                    cov[(a, b)] += c.w * (c.p[(a, b)] + spread);
+                }
+            }
+        }
     }
 }
 
@@ -607,6 +619,11 @@ impl Filter for GaussianSumFilter {
             covariance: Some(cov),
             map: None,
         }
+    }
+
+    fn estimate_into(&self, out: &mut Estimate) {
+        let (mean, cov) = out.mean_and_covariance(self.a.nrows());
+        self.mixture_moments_into(mean, cov);
     }
 
     fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {

@@ -125,6 +125,56 @@ pub struct Estimate {
     pub map: Option<DVector<f64>>,
 }
 
+impl Estimate {
+    /// The mean (n) and covariance (n × n) to be written in place, reallocated only when
+    /// their shapes differ; no MAP point.
+    pub(crate) fn mean_and_covariance(
+        &mut self,
+        n: usize,
+    ) -> (&mut DVector<f64>, &mut DMatrix<f64>) {
+        if self.mean.len() != n {
+            self.mean = DVector::zeros(n);
+        }
+        if !matches!(&self.covariance, Some(c) if c.shape() == (n, n)) {
+            self.covariance = Some(DMatrix::zeros(n, n));
+        }
+        self.map = None;
+        let cov = self.covariance.as_mut().expect("set just above");
+        (&mut self.mean, cov)
+    }
+
+    /// Makes this a copy of `src`, reusing this estimate's storage where the shapes agree (no
+    /// allocation when they do).
+    pub fn copy_from(&mut self, src: &Estimate) {
+        copy_vector(&mut self.mean, &src.mean);
+        match &src.covariance {
+            Some(from) => copy_matrix(&mut self.covariance, from),
+            None => self.covariance = None,
+        }
+        match (&mut self.map, &src.map) {
+            (Some(to), Some(from)) => copy_vector(to, from),
+            (to, from) => *to = from.clone(),
+        }
+    }
+}
+
+/// `to ← Some(from)`, in place when `to` holds a matrix of the same shape.
+pub(crate) fn copy_matrix(to: &mut Option<DMatrix<f64>>, from: &DMatrix<f64>) {
+    match to {
+        Some(m) if m.shape() == from.shape() => m.copy_from(from),
+        other => *other = Some(from.clone()),
+    }
+}
+
+/// `to ← from`, in place when the lengths agree.
+pub(crate) fn copy_vector(to: &mut DVector<f64>, from: &DVector<f64>) {
+    if to.len() == from.len() {
+        to.copy_from(from);
+    } else {
+        *to = from.clone();
+    }
+}
+
 /// An observation of the `kind` a filter takes, of length m, or the error it returns.
 fn check_observation(
     name: &str,
@@ -318,6 +368,12 @@ pub trait Filter {
     }
     /// The current estimate.
     fn estimate(&self) -> Estimate;
+    /// [`Filter::estimate`] into `out`, reusing its storage: a loop that reads the estimate
+    /// after every step passes the same `out` each time, and allocates nothing for it (every
+    /// filter of the catalogue writes it in place; this default builds it afresh).
+    fn estimate_into(&self, out: &mut Estimate) {
+        *out = self.estimate();
+    }
     /// The current density, for grid methods; `None` otherwise.
     fn density(&self) -> Option<DensityView<'_>> {
         None

@@ -459,25 +459,37 @@ impl Filter for ParticleFilter {
 
     fn estimate(&self) -> Estimate {
         let n = self.model.n;
-        let mean = DVector::from_fn(n, |j, _| {
-            self.component(j)
+        let mut out = Estimate {
+            mean: DVector::zeros(n),
+            covariance: Some(DMatrix::zeros(n, n)),
+            map: None,
+        };
+        self.estimate_into(&mut out);
+        out
+    }
+
+    /// The weighted mean and covariance of the particles, written into `out`.
+    fn estimate_into(&self, out: &mut Estimate) {
+        let n = self.model.n;
+        let (mean, cov) = out.mean_and_covariance(n);
+        for j in 0..n {
+            mean[j] = self
+                .component(j)
                 .iter()
                 .zip(&self.weights)
                 .map(|(x, w)| w * x)
-                .sum::<f64>()
-        });
-        let cov = DMatrix::from_fn(n, n, |a, b| {
-            let (xa, xb) = (self.component(a), self.component(b));
-            xa.iter()
-                .zip(xb)
-                .zip(&self.weights)
-                .map(|((x, y), w)| w * (x - mean[a]) * (y - mean[b]))
-                .sum::<f64>()
-        });
-        Estimate {
-            mean,
-            covariance: Some(cov),
-            map: None,
+                .sum::<f64>();
+        }
+        for a in 0..n {
+            for b in 0..n {
+                let (xa, xb) = (self.component(a), self.component(b));
+                cov[(a, b)] = xa
+                    .iter()
+                    .zip(xb)
+                    .zip(&self.weights)
+                    .map(|((x, y), w)| w * (x - mean[a]) * (y - mean[b]))
+                    .sum::<f64>();
+            }
         }
     }
 }

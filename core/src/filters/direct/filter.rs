@@ -444,6 +444,10 @@ impl Filter for DirectFilter {
         self.estimate.clone()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        out.copy_from(&self.estimate);
+    }
+
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         if self.residual_share > RESIDUAL_SHARE_THRESHOLD {
             out.push(crate::filters::Concern::above(

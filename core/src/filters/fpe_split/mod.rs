@@ -486,6 +486,10 @@ impl Filter for ContinuousDiscreteGrid {
         self.estimate.clone()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        out.copy_from(&self.estimate);
+    }
+
     fn density(&self) -> Option<DensityView<'_>> {
         Some(self.grid.view(&self.u))
     }

@@ -80,6 +80,10 @@ impl Filter for ExtendedKalman {
         self.state.estimate()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        self.state.estimate_into(out);
+    }
+
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
         self.state.innovations.check(self.model.m, out);
     }

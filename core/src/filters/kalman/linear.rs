@@ -205,6 +205,10 @@ impl Filter for KalmanBucy {
         self.state.estimate()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        self.state.estimate_into(out);
+    }
+
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.state.innovations.check(self.model.m, out);
     }

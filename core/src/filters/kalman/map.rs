@@ -643,6 +643,16 @@ impl Filter for MapKalman {
         e
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        let map = out.map.take();
+        self.state.estimate_into(out);
+        out.map = map;
+        match &mut out.map {
+            Some(map) => crate::filters::copy_vector(map, &self.state.mean),
+            none => *none = Some(self.state.mean.clone()),
+        }
+    }
+
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.state.innovations.check(self.model.m, out);
         self.watch.check(out);

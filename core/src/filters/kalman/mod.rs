@@ -353,6 +353,13 @@ impl GaussianState {
         }
     }
 
+    /// [`GaussianState::estimate`] into `out`, reusing its storage (no MAP point).
+    pub fn estimate_into(&self, out: &mut crate::filters::Estimate) {
+        crate::filters::copy_vector(&mut out.mean, &self.mean);
+        crate::filters::copy_matrix(&mut out.covariance, &self.cov);
+        out.map = None;
+    }
+
     /// Fails when m or P is non-finite.
     pub fn check(&self) -> Result<(), FilterError> {
         check_finite_vector(&self.mean, "mean")?;

@@ -332,6 +332,10 @@ impl Filter for UnscentedKalman {
         self.state.estimate()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        self.state.estimate_into(out);
+    }
+
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.state.innovations.check(self.model.m, out);
     }

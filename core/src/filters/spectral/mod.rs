@@ -643,6 +643,10 @@ impl Filter for SpectralFilter {
         self.estimate.clone()
     }
 
+    fn estimate_into(&self, out: &mut Estimate) {
+        out.copy_from(&self.estimate);
+    }
+
     /// The marginal of the projected density (39) on the on-line basis, clipped at zero;
     /// zero outside the domain.
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
