@@ -26,15 +26,16 @@ fn main() -> Result<(), zakai::ZakaiError> {
         .prior_gaussian(&[1.0], &[[0.5]])
         .build()?;
     let mut squared = 0.0;
+    // Read after every step into one estimate kept here: no allocation per step.
+    let mut last = ukf.estimate();
     for (k, zk) in z.iter().enumerate() {
         // The first measurement is at the prior's time: no prediction before it.
         let step = if k == 0 { 0.0 } else { dt };
         ukf.step_measurement(step, &[*zk])?;
-        let e = ukf.estimate();
-        squared += (e.mean[0] - truth[k]).powi(2);
+        ukf.estimate_into(&mut last);
+        squared += (last.mean[0] - truth[k]).powi(2);
     }
     let rmse = (squared / z.len() as f64).sqrt();
-    let last = ukf.estimate();
     let sd = last.covariance.expect("the UKF has a covariance")[(0, 0)].sqrt();
     println!(
         "UKF over {} measurements: RMSE {rmse:.3}, last estimate {:.3} ± {sd:.3}",

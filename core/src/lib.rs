@@ -43,6 +43,9 @@
 //! # }
 //! ```
 //!
+//! A loop that reads the estimate after every step can keep one [`Estimate`] and pass it to
+//! [`Filter::estimate_into`], which writes into its storage instead of allocating a new one.
+//!
 //! Grid and spectral methods also need the box they live on and the observation interval
 //! they are built for: `Qiem::builder(&model).prior_gaussian(..).domain(&[(-6.0, 6.0)]).dt(0.01)`.
 //! A step of another length is an error ([`FilterError::IntervalMismatch`]), never a silent
