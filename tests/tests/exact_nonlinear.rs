@@ -233,8 +233,8 @@ impl FineGrid {
 /// also checks the reference; EKF 0.083, UKF 0.038, PF 0.070 (the posterior mean drifts to 0
 /// between the modes, and so do they). The MAP filters estimate a *mode* (003 §4) and follow
 /// one of the two (RMS 0.56 from the mean): they must say so, by their second-mode watch,
-/// on at least half of the steps where they are off by more than the tolerance (measured 458
-/// of 586 for the IEKF, 457 of 585 for the IOKF; the steps left are the first 30, before the
+/// on at least half of the steps where they are off by more than the tolerance (measured 493
+/// of 586 for the IEKF, 492 of 585 for the IOKF; the steps left are the first 20, before the
 /// watch has found and followed the second mode, and those where the two modes have nearly
 /// merged, less than a quarter of a standard deviation from the mean).
 #[test]
