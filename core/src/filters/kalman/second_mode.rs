@@ -7,8 +7,8 @@
 //! explains every observation just as well. This watch looks for such a mode and follows it:
 //!
 //! 1. **Search** (at the first update, then every [`SEARCH_EVERY`] while no second mode is
-//!    followed): starting
-//!    from the reflection `2m_f − x̂` of the estimate x̂ through the mean `m_f` of the *free*
+//!    followed): starting from the reflection `2m_f − x̂` of the estimate x̂ through the mean
+//!    `m_f` of the *free*
 //!    distribution (the filter's initial Gaussian carried by the model alone, without
 //!    observations), Levenberg–Marquardt steps on `(z − h(x))ᵀR⁻¹(z − h(x))` with `z = h(x̂)`,
 //!    over the points `x̂ + P Hᵀ α` (the directions the observation informs), look for a second
@@ -202,8 +202,7 @@ impl ModeWatch {
     }
 
     /// Brings the free distribution to the present, one RK4 step per [`SEARCH_EVERY`]
-    /// observation intervals;
-    /// false (and the watch stops) when it cannot be propagated.
+    /// observation intervals; false (and the watch stops) when it cannot be propagated.
     fn bring_free_up_to_date(&mut self, model: &Model, q: &DMatrix<f64>) -> bool {
         if self.free_elapsed > 0.0 {
             let steps = self.free_intervals.div_ceil(SEARCH_EVERY).max(1);
