@@ -8,11 +8,10 @@
 //!
 //! 1. **Search** (at the first update, then every [`SEARCH_EVERY`] while no second mode is
 //!    followed): starting from the reflection `2m_f − x̂` of the estimate x̂ through the mean
-//!    `m_f` of the *free*
-//!    distribution (the filter's initial Gaussian carried by the model alone, without
-//!    observations), Levenberg–Marquardt steps on `(z − h(x))ᵀR⁻¹(z − h(x))` with `z = h(x̂)`,
-//!    over the points `x̂ + P Hᵀ α` (the directions the observation informs), look for a second
-//!    root of `h(x) = h(x̂)`. A root is a candidate when it matches to [`MATCH`] and lies at
+//!    `m_f` of the *free* distribution (the filter's initial Gaussian carried by the model
+//!    alone, without observations), Levenberg–Marquardt steps on `(z − h(x))ᵀR⁻¹(z − h(x))`
+//!    with `z = h(x̂)`, over the points `x̂ + P Hᵀ α` (the directions the observation
+//!    informs), look for a second root of `h(x) = h(x̂)`. A root is a candidate when it matches to [`MATCH`] and lies at
 //!    least [`SECOND_MODE_THRESHOLD`] posterior standard deviations from x̂ (closer, it could
 //!    not move the mean that far).
 //! 2. **Weight at discovery**: the ratio Λ of the free density at the candidate and at the
