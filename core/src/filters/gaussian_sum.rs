@@ -549,15 +549,8 @@ impl GaussianSumFilter {
         }
     }
 
-    fn mixture_moments(&self) -> (DVector<f64>, DMatrix<f64>) {
-        let n = self.a.nrows();
-        let (mut mean, mut cov) = (DVector::zeros(n), DMatrix::zeros(n, n));
-        self.mixture_moments_into(&mut mean, &mut cov);
-        (mean, cov)
-    }
-
-    /// [`Self::mixture_moments`] into `mean` (n) and `cov` (n × n), without allocating:
-    /// `m = Σ w_i m_i`, `P = Σ w_i (P_i + (m_i − m)(m_i − m)ᵀ)`.
+    /// The mixture's mean and covariance into `mean` (n) and `cov` (n × n), without
+    /// allocating: `m = Σ w_i m_i`, `P = Σ w_i (P_i + (m_i − m)(m_i − m)ᵀ)`.
     fn mixture_moments_into(&self, mean: &mut DVector<f64>, cov: &mut DMatrix<f64>) {
         mean.fill(0.0);
         for c in self.mixture() {
@@ -613,12 +606,9 @@ impl Filter for GaussianSumFilter {
     }
 
     fn estimate(&self) -> Estimate {
-        let (mean, cov) = self.mixture_moments();
-        Estimate {
-            mean,
-            covariance: Some(cov),
-            map: None,
-        }
+        let mut out = Estimate::zeros(self.a.nrows());
+        self.estimate_into(&mut out);
+        out
     }
 
     fn estimate_into(&self, out: &mut Estimate) {

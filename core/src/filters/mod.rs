@@ -126,6 +126,16 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// Zero mean (n) and covariance (n × n), no MAP point: the storage a filter that computes
+    /// its estimate in place ([`Filter::estimate_into`]) fills for [`Filter::estimate`].
+    pub(crate) fn zeros(n: usize) -> Self {
+        Estimate {
+            mean: DVector::zeros(n),
+            covariance: Some(DMatrix::zeros(n, n)),
+            map: None,
+        }
+    }
+
     /// The mean (n) and covariance (n × n) to be written in place, reallocated only when
     /// their shapes differ; no MAP point.
     pub(crate) fn mean_and_covariance(
@@ -151,10 +161,15 @@ impl Estimate {
             Some(from) => copy_matrix(&mut self.covariance, from),
             None => self.covariance = None,
         }
-        match (&mut self.map, &src.map) {
-            (Some(to), Some(from)) => copy_vector(to, from),
-            (to, from) => *to = from.clone(),
-        }
+        copy_optional_vector(&mut self.map, src.map.as_ref());
+    }
+}
+
+/// `to ← from.cloned()`, in place when both hold vectors of the same length.
+pub(crate) fn copy_optional_vector(to: &mut Option<DVector<f64>>, from: Option<&DVector<f64>>) {
+    match (to, from) {
+        (Some(to), Some(from)) => copy_vector(to, from),
+        (to, from) => *to = from.cloned(),
     }
 }
 

@@ -11,7 +11,6 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
@@ -458,12 +457,7 @@ impl Filter for ParticleFilter {
     }
 
     fn estimate(&self) -> Estimate {
-        let n = self.model.n;
-        let mut out = Estimate {
-            mean: DVector::zeros(n),
-            covariance: Some(DMatrix::zeros(n, n)),
-            map: None,
-        };
+        let mut out = Estimate::zeros(self.model.n);
         self.estimate_into(&mut out);
         out
     }

@@ -81,7 +81,7 @@ impl Filter for ExtendedKalman {
     }
 
     fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out);
+        self.state.estimate_into(out, None);
     }
 
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {

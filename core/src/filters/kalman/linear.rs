@@ -206,7 +206,7 @@ impl Filter for KalmanBucy {
     }
 
     fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out);
+        self.state.estimate_into(out, None);
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

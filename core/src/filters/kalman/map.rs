@@ -644,13 +644,7 @@ impl Filter for MapKalman {
     }
 
     fn estimate_into(&self, out: &mut Estimate) {
-        let map = out.map.take();
-        self.state.estimate_into(out);
-        out.map = map;
-        match &mut out.map {
-            Some(map) => crate::filters::copy_vector(map, &self.state.mean),
-            none => *none = Some(self.state.mean.clone()),
-        }
+        self.state.estimate_into(out, Some(&self.state.mean));
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -353,11 +353,12 @@ impl GaussianState {
         }
     }
 
-    /// [`GaussianState::estimate`] into `out`, reusing its storage (no MAP point).
-    pub fn estimate_into(&self, out: &mut crate::filters::Estimate) {
+    /// [`GaussianState::estimate`] into `out`, reusing its storage, with `map` as its MAP
+    /// point.
+    pub fn estimate_into(&self, out: &mut crate::filters::Estimate, map: Option<&DVector<f64>>) {
         crate::filters::copy_vector(&mut out.mean, &self.mean);
         crate::filters::copy_matrix(&mut out.covariance, &self.cov);
-        out.map = None;
+        crate::filters::copy_optional_vector(&mut out.map, map);
     }
 
     /// Fails when m or P is non-finite.

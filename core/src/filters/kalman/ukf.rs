@@ -333,7 +333,7 @@ impl Filter for UnscentedKalman {
     }
 
     fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out);
+        self.state.estimate_into(out, None);
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
