@@ -78,14 +78,16 @@ mod standard_clock {
 pub use standard_clock::*;
 
 /// Timed steps that averaged less than this (seconds) are sampled: only one step in
-/// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step cost about 54 ns natively
-/// (`Instant::now` through the vDSO; BENCHMARKS.md, "The driver's own cost per step") — 13 %
-/// of the cheapest step, the 1-D spectral filter's 0.4 µs, and 1 % at this threshold — and the
-/// mean over one step in eight of a few hundred is as good an estimate of the mean step.
+/// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step cost about 50 ns natively
+/// (`Instant::now` through the vDSO; BENCHMARKS.md, "The driver's own cost per step") — 15 %
+/// of the cheapest step, the 1-D spectral filter's 0.33 µs, and 1 % at this threshold. Timing
+/// one step in 32 brings that to 0.5 %, and the mean over 16 + 15 of a 500-step run is as good
+/// an estimate of the mean step as over all of them (one in 8, 2 % of the cheapest step, kept
+/// the driver above a tenth of it).
 pub const SAMPLED_BELOW: f64 = 5e-6;
 
 /// See [`SAMPLED_BELOW`].
-pub const SAMPLE_EVERY: usize = 8;
+pub const SAMPLE_EVERY: usize = 32;
 
 /// Steps of each method always timed, before their mean decides whether to sample.
 const TIMED_FIRST: usize = 16;
@@ -235,9 +237,10 @@ impl MethodTrack {
     /// Whether the driver times this method's next step: the first [`TIMED_FIRST`], then all
     /// when they average [`SAMPLED_BELOW`] or more, else one in [`SAMPLE_EVERY`].
     fn times_next_step(&self) -> bool {
+        // The mean's test multiplies instead of dividing: it runs on every step.
         self.timed_steps < TIMED_FIRST
             || self.steps.is_multiple_of(SAMPLE_EVERY)
-            || self.seconds_per_step() >= SAMPLED_BELOW
+            || self.seconds >= SAMPLED_BELOW * self.timed_steps as f64
     }
     /// The estimates when the method finished the run against `truth`, else `None`.
     fn complete(&self, truth: &[f64]) -> Option<&[f64]> {
@@ -908,8 +911,8 @@ mod tests {
         }
     }
 
-    /// Steps that take 0.1 µs by the clock are timed on the first 16 and then on one in 8
-    /// (the steps numbered 16, 24, …, 496 of 500: 61 more); steps of 10 µs on all 500. Either
+    /// Steps that take 0.1 µs by the clock are timed on the first 16 and then on one in 32
+    /// (the steps numbered 32, 64, …, 480 of 500: 15 more); steps of 10 µs on all 500. Either
     /// way the mean is the clock's tick, the two readings around a step being one apart.
     #[test]
     fn cheap_steps_are_timed_on_a_sample_and_dear_ones_on_every_step() {
@@ -917,7 +920,7 @@ mod tests {
         config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
         config.failure.track_loss = None;
         let experiment = Experiment::new(config).unwrap();
-        for (tick, timed) in [(1e-7, 16 + 61), (1e-5, 500)] {
+        for (tick, timed) in [(1e-7, 16 + 15), (1e-5, 500)] {
             let clock = Ticking {
                 tick,
                 reads: core::cell::Cell::new(0),
@@ -931,7 +934,7 @@ mod tests {
             );
             assert!((track.seconds_per_step() / tick - 1.0).abs() < 1e-9);
         }
-        const { assert!(SAMPLE_EVERY == 8 && 1e-7 < SAMPLED_BELOW && SAMPLED_BELOW <= 1e-5) };
+        const { assert!(SAMPLE_EVERY == 32 && 1e-7 < SAMPLED_BELOW && SAMPLED_BELOW <= 1e-5) };
     }
 
     #[test]
