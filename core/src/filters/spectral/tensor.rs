@@ -9,11 +9,11 @@
 //! `(x ×_d A)[…, k, …] = Σ_j A[k, j] x[…, j, …]`. For d = 0 that is the matrix product `A X`
 //! with X the `s_0 × (s_1⋯s_{n−1})` unfolding; for d ≥ 1 it is, for every index of the
 //! dimensions after d, the product `X_slab Aᵀ` of the `(s_0⋯s_{d−1}) × s_d` slab — both as
-//! one general matrix product, [`product`]: register tiles of 8 rows by 4 columns, compiled
-//! with AVX2 and FMA where the CPU has them. The matrices here are small (tens of rows and columns), and
-//! a general library's product (`matrixmultiply`, behind nalgebra's `gemm`) allocates its
-//! packing buffers on every call; this one allocates nothing, so the spectral filter's step does
-//! not either, in any dimension.
+//! one general matrix product (`product` below): register tiles of 8 rows by 4 columns,
+//! compiled with AVX2 and FMA where the CPU has them. The matrices here are small (tens of rows
+//! and columns), and a general library's product (`matrixmultiply`, behind nalgebra's `gemm`)
+//! allocates its packing buffers on every call; this one allocates nothing, so the spectral
+//! filter's step does not either, in any dimension.
 
 use nalgebra::DMatrix;
 
