@@ -89,6 +89,15 @@ pub const SAMPLED_BELOW: f64 = 5e-6;
 /// See [`SAMPLED_BELOW`].
 pub const SAMPLE_EVERY: usize = 32;
 
+/// `records.extend_from_slice(values)` as a loop of pushes: the driver appends an estimate's
+/// few values after every step, and the copy's call to `memcpy` cost more than the values.
+fn append(records: &mut Vec<f64>, values: &[f64]) {
+    records.reserve(values.len());
+    for &v in values {
+        records.push(v);
+    }
+}
+
 /// Steps of each method always timed, before their mean decides whether to sample.
 const TIMED_FIRST: usize = 16;
 
@@ -745,8 +754,12 @@ impl ExperimentRun {
             Err(e) => Err(e.to_string()),
             Ok(()) => {
                 filter.estimate_into(est);
-                let magnitude = est.mean.amax();
-                if est.mean.iter().any(|v| !v.is_finite()) {
+                // |x̂|_∞ and finiteness in one pass (NaN fails `is_finite` where `max` would
+                // skip it).
+                let (magnitude, finite) = est.mean.iter().fold((0.0, true), |(m, f), v| {
+                    (crate::linalg::larger(m, v.abs()), f && v.is_finite())
+                });
+                if !finite {
                     Err("the estimate became non-finite".to_string())
                 } else if magnitude > self.bound {
                     intact = true;
@@ -795,10 +808,10 @@ impl ExperimentRun {
                 for c in &self.concerns {
                     ConcernRecord::record(&mut track.concerns, c, k, t.times[k]);
                 }
-                track.estimates.extend_from_slice(est.mean.as_slice());
+                append(&mut track.estimates, est.mean.as_slice());
                 if let Some(p) = &est.covariance {
                     // nalgebra is column-major; P is symmetric, so rows read the same.
-                    track.covariances.extend_from_slice(p.as_slice());
+                    append(&mut track.covariances, p.as_slice());
                 }
             }
             Err(mut message) => {
