@@ -208,9 +208,10 @@ pub fn exp_nonpositive(x: f64) -> f64 {
     lane[0]
 }
 
-/// `p r + c` with two roundings (the portable multiply–add of the Horner steps).
+/// `p r + c` with two roundings (the portable multiply–add of the Horner steps and of the
+/// spectral filter's tensor products where the CPU has no FMA).
 #[inline(always)]
-fn separate(p: f64, r: f64, c: f64) -> f64 {
+pub(crate) fn separate(p: f64, r: f64, c: f64) -> f64 {
     p * r + c
 }
 

@@ -11,8 +11,9 @@
 //! The two copies do the same arithmetic in the same order — FMA is not enabled and Rust never
 //! fuses a multiply and an add by itself — so their results are bit-identical; only the
 //! vector width differs. Without `std` or on other architectures (wasm32 builds with
-//! `+simd128` instead) there is one copy. (The one loop that also uses FMA, and so may differ
-//! in the last bit, dispatches by hand: [`super::scale_by_exp`].)
+//! `+simd128` instead) there is one copy. (The two loops that also use FMA, and so may differ
+//! in the last bit, dispatch by hand: [`super::scale_by_exp`] and the spectral filter's tensor
+//! products, `filters::spectral::tensor`.)
 
 /// Defines a function whose body is compiled for the target and, on x86-64 with `std`, once
 /// more with AVX2 enabled, and runs the AVX2 copy when the CPU has it (see the module doc).

@@ -76,7 +76,7 @@ fn product(out: &mut [f64], p: &[f64], rows: usize, q: &[f64], q_row: usize, q_c
         // SAFETY: the CPU supports AVX2 and FMA, checked just above.
         return unsafe { product_fused(shape, out, p, q) };
     }
-    shape.product(out, p, q, |a, b, c| a * b + c);
+    shape.product(out, p, q, linalg::separate);
 }
 
 /// [`product`] compiled with AVX2 and FMA, its terms as `f64::mul_add`.
