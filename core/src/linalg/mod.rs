@@ -358,7 +358,8 @@ per_node_kernel! {
             }
             done += 4;
         }
-        one_by_one(out, &columns[(done * len).min(columns.len())..], &x[done.min(x.len())..]);
+        // `done` columns went in whole blocks, so both slices start within their inputs.
+        one_by_one(out, &columns[done * len..], &x[done..]);
     }
 }
 

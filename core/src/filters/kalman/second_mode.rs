@@ -11,9 +11,9 @@
 //!    `m_f` of the *free* distribution (the filter's initial Gaussian carried by the model
 //!    alone, without observations), Levenberg–Marquardt steps on `(z − h(x))ᵀR⁻¹(z − h(x))`
 //!    with `z = h(x̂)`, over the points `x̂ + P Hᵀ α` (the directions the observation
-//!    informs), look for a second root of `h(x) = h(x̂)`. A root is a candidate when it matches to [`MATCH`] and lies at
-//!    least [`SECOND_MODE_THRESHOLD`] posterior standard deviations from x̂ (closer, it could
-//!    not move the mean that far).
+//!    informs), look for a second root of `h(x) = h(x̂)`. A root is a candidate when it
+//!    matches to [`MATCH`] and lies at least [`SECOND_MODE_THRESHOLD`] posterior standard
+//!    deviations from x̂ (closer, it could not move the mean that far).
 //! 2. **Weight at discovery**: the ratio Λ of the free density at the candidate and at the
 //!    estimate — how plausible the model alone makes the two states, the past observations
 //!    being (by the search) explained alike. Below [`DROP_BELOW`] the candidate is not taken.
