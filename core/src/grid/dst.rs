@@ -163,8 +163,13 @@ crate::linalg::simd::per_node_kernel! {
             return;
         }
         x[0] = 0.5 * spectrum.next().unwrap_or_default().re;
-        // M even: x[1..] has 2L − 2 slots, whole pairs.
-        for (pair, c) in x[1..].chunks_exact_mut(2).zip(spectrum) {
+        // M even: x[1..] has 2L − 2 slots, whole pairs. k ≥ 1 as a forward and a backward
+        // walk (`Z_{L−k}` for k = 1..L−1 is z[1..] reversed), without `with_mirror`'s chained
+        // iterator, which kept this loop from vectorising well.
+        let mirrored = z[1..].iter().zip(z[1..].iter().rev());
+        for ((pair, (a, b)), t) in x[1..].chunks_exact_mut(2).zip(mirrored).zip(&twiddles[1..]) {
+            let (a, b) = (*a, b.conj());
+            let c = (a + b) * 0.5 + t * (a - b);
             pair[0] = -c.im;
             pair[1] = c.re;
         }

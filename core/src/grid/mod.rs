@@ -249,6 +249,7 @@ impl TensorGrid {
         let d = self.dim();
         let n0 = self.shape[0];
         let mut total = 0.0;
+        // The largest value and the first line that holds it.
         let mut best = (f64::NEG_INFINITY, 0);
         let (mean, second) = (out.mean.as_mut_slice(), out.covariance.as_mut_slice());
         mean.fill(0.0);
@@ -261,9 +262,9 @@ impl TensorGrid {
                 *xk = self.coordinate(k, rest % self.shape[k]);
                 rest /= self.shape[k];
             }
-            let ([s0, s1, s2, top], i) = line_sums(values, &self.first_axis);
+            let [s0, s1, s2, top] = line_sums(values, &self.first_axis);
             if top > best.0 {
-                best = (top, line * n0 + i);
+                best = (top, line);
             }
             total += s0;
             mean[0] += s1;
@@ -284,7 +285,11 @@ impl TensorGrid {
                 second[b * d + a] = c;
             }
         }
-        self.node(best.1, x);
+        // The first node of that line that holds the largest value (the first node of the
+        // grid when no value is larger than −∞).
+        let line = &u[best.1 * n0..(best.1 + 1) * n0];
+        let i = first_index_of(line, best.0).unwrap_or(0);
+        self.node(best.1 * n0 + i, x);
         out.mass = total * self.cell_volume();
     }
 
@@ -373,41 +378,50 @@ impl TensorGrid {
     }
 }
 
+/// The first position of `value` in `line`: [`LANES`] values compared at a time without a
+/// branch (a loop that vectorises), then the one block that holds it searched value by value.
+fn first_index_of(line: &[f64], value: f64) -> Option<usize> {
+    let block = line
+        .chunks(LANES)
+        .position(|c| c.iter().fold(false, |found, &w| found | (w == value)))?;
+    let start = block * LANES;
+    line[start..]
+        .iter()
+        .position(|&w| w == value)
+        .map(|i| start + i)
+}
+
 /// Partial sums per lane in [`line_sums`]: four vectors of four, so that no chain of dependent
 /// additions waits on another's latency.
 const LANES: usize = 16;
 
 crate::linalg::simd::per_node_kernel! {
-    /// `[Σ w_i, Σ w_i x_i, Σ w_i x_i², max w_i]` along one grid line and the first node that
-    /// holds the maximum, in [`LANES`] interleaved partial sums and maxima (combined in a fixed
-    /// order, so the result does not depend on the vector width) that the compiler keeps in
-    /// vector registers — one chain of dependent additions would wait on every addition's
-    /// latency.
-    fn line_sums(w: &[f64], x: &[f64]) -> ([f64; 4], usize) {
+    /// `[Σ w_i, Σ w_i x_i, Σ w_i x_i², max w_i]` along one grid line, in [`LANES`] interleaved
+    /// partial sums and maxima (combined in a fixed order, so the result does not depend on the
+    /// vector width) that the compiler keeps in vector registers — one chain of dependent
+    /// additions would wait on every addition's latency.
+    fn line_sums(w: &[f64], x: &[f64]) -> [f64; 4] {
         let (mut s0, mut s1, mut s2) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
         let mut top = [f64::NEG_INFINITY; LANES];
-        let mut at = [0usize; LANES];
         let mut w_chunks = w.chunks_exact(LANES);
         let mut x_chunks = x.chunks_exact(LANES);
-        let mut add = |l: usize, i: usize, w: f64, x: f64| {
+        for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
+            let w: &[f64; LANES] = w.try_into().expect("chunks of LANES");
+            let x: &[f64; LANES] = x.try_into().expect("chunks of LANES");
+            for l in 0..LANES {
+                let wx = w[l] * x[l];
+                s0[l] += w[l];
+                s1[l] += wx;
+                s2[l] += wx * x[l];
+                top[l] = if w[l] > top[l] { w[l] } else { top[l] };
+            }
+        }
+        for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
             let wx = w * x;
             s0[l] += w;
             s1[l] += wx;
             s2[l] += wx * x;
-            // Strictly larger: each lane keeps its first maximum.
-            let larger = w > top[l];
-            top[l] = if larger { w } else { top[l] };
-            at[l] = if larger { i } else { at[l] };
-        };
-        let mut start = 0;
-        for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
-            for l in 0..LANES {
-                add(l, start + l, w[l], x[l]);
-            }
-            start += LANES;
-        }
-        for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
-            add(l, start + l, *w, *x);
+            top[l] = if *w > top[l] { *w } else { top[l] };
         }
         // Pairwise, in a fixed order.
         let sum = |s: [f64; LANES]| {
@@ -421,14 +435,8 @@ crate::linalg::simd::per_node_kernel! {
             }
             s[0]
         };
-        // The largest value, and among the lanes that hold it the first node.
-        let mut best = (f64::NEG_INFINITY, 0);
-        for (&t, &i) in top.iter().zip(&at) {
-            if t > best.0 || (t == best.0 && i < best.1) {
-                best = (t, i);
-            }
-        }
-        ([sum(s0), sum(s1), sum(s2), best.0], best.1)
+        let largest = top.iter().fold(f64::NEG_INFINITY, |m, &t| if t > m { t } else { m });
+        [sum(s0), sum(s1), sum(s2), largest]
     }
 }
 
@@ -439,8 +447,8 @@ mod tests {
 
     #[test]
     fn the_map_node_is_the_first_of_equal_maxima() {
-        // 2-D, 53 × 3 nodes: the maximum 5 at (7, 1) and (40, 1) and (2, 2); lane 7 and lane 8
-        // (node 40 = 2·16 + 8) of the first line that has it, then a later line.
+        // 2-D, 53 × 3 nodes: the maximum 5 at (7, 1) and (40, 1) and (2, 2): lane 7 and lane 0
+        // (node 40 = 5·8) of the first line that has it, then a later line.
         let g = TensorGrid::new(&[(0.0, 54.0), (0.0, 4.0)], &[53, 3]).unwrap();
         let mut u = vec![1.0; g.len()];
         for i in [53 + 7, 53 + 40, 2 * 53 + 2] {
@@ -451,13 +459,13 @@ mod tests {
         // Sums against the plain loop.
         let (w, x): (Vec<f64>, Vec<f64>) =
             (0..37).map(|i| (i as f64 * 0.3, 1.0 - i as f64)).unzip();
-        let ([s0, s1, s2, top], at) = line_sums(&w, &x);
+        let [s0, s1, s2, top] = line_sums(&w, &x);
         let plain =
             |f: &dyn Fn(f64, f64) -> f64| w.iter().zip(&x).map(|(w, x)| f(*w, *x)).sum::<f64>();
         assert!((s0 - plain(&|w, _| w)).abs() < 1e-12);
         assert!((s1 - plain(&|w, x| w * x)).abs() < 1e-11);
         assert!((s2 - plain(&|w, x| w * x * x)).abs() < 1e-9);
-        assert_eq!((top, at), (36.0 * 0.3, 36));
+        assert_eq!(top, 36.0 * 0.3);
     }
 
     #[test]
