@@ -333,7 +333,7 @@ impl ParticleFilter {
         self.normalise()
     }
 
-    /// Normalises the log-weights and fills the linear weights: one `exp` per particle.
+    /// Normalises the log-weights and fills the linear weights: one exponential per particle.
     fn normalise(&mut self) -> Result<(), FilterError> {
         let max = self
             .log_weights
@@ -342,10 +342,7 @@ impl ParticleFilter {
         if !max.is_finite() {
             return Err(FilterError::MassLost);
         }
-        for (w, lw) in self.weights.iter_mut().zip(&self.log_weights) {
-            *w = libm::exp(lw - max);
-        }
-        let total: f64 = self.weights.iter().sum();
+        let total = exponentiate_shifted(&mut self.weights, &self.log_weights, max);
         if !(total.is_finite() && total > 0.0) {
             return Err(FilterError::MassLost);
         }
@@ -391,13 +388,34 @@ impl ParticleFilter {
     }
 
     fn effective_sample_size(&self) -> f64 {
-        1.0 / self.weights.iter().map(|w| w * w).sum::<f64>()
+        1.0 / sum_of_squares(&self.weights)
     }
 
     /// Component `dim` of every particle.
     fn component(&self, dim: usize) -> &[f64] {
         let count = self.params.particles;
         &self.particles[dim * count..(dim + 1) * count]
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `w_i = e^{lw_i − max}` for every particle (all exponents ≤ 0, so
+    /// [`linalg::exp_nonpositive`](crate::linalg::exp_nonpositive), which vectorises, where
+    /// `libm::exp` does not) and their sum, in lanes. No
+    /// FMA, so the weights, and the resampling decisions that follow from them, are the same
+    /// bits on every target.
+    fn exponentiate_shifted(w: &mut [f64], lw: &[f64], max: f64) -> f64 {
+        for (w, lw) in w.iter_mut().zip(lw) {
+            *w = crate::linalg::exp_nonpositive(lw - max);
+        }
+        crate::linalg::sum_in_lanes(w, |w| w)
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `Σ w_i²`.
+    fn sum_of_squares(w: &[f64]) -> f64 {
+        crate::linalg::sum_in_lanes(w, |w| w * w)
     }
 }
 

@@ -370,6 +370,33 @@ per_node_kernel! {
     }
 }
 
+/// `Σ f(x_i)` in eight interleaved partial sums, combined pairwise in a fixed order: a loop the
+/// compiler vectorises (one running sum waits on every addition's latency: for the particle
+/// filter's 10⁴ weights, about 10 µs of a 150 µs step), whose result does not depend on the
+/// vector width.
+#[inline(always)]
+pub fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
+    const LANES: usize = 8;
+    let mut s = [0.0; LANES];
+    let mut chunks = x.chunks_exact(LANES);
+    for c in &mut chunks {
+        for l in 0..LANES {
+            s[l] += f(c[l]);
+        }
+    }
+    for (l, &v) in chunks.remainder().iter().enumerate() {
+        s[l] += f(v);
+    }
+    let mut width = LANES;
+    while width > 1 {
+        width /= 2;
+        for l in 0..width {
+            s[l] += s[l + width];
+        }
+    }
+    s[0]
+}
+
 /// `log Σ exp(a_i)` without overflow; `-∞` for an empty or all `-∞` input.
 pub fn log_sum_exp(a: impl Iterator<Item = f64> + Clone) -> f64 {
     let max = a.clone().fold(f64::NEG_INFINITY, f64::max);
@@ -438,6 +465,26 @@ mod tests {
         indefinite[(2, 2)] = -1.0;
         assert!(!lower_cholesky_into(&indefinite, &mut l));
         assert_eq!(l.shape(), (4, 4));
+    }
+
+    #[test]
+    fn sum_in_lanes_is_the_sum() {
+        for len in [0usize, 1, 7, 8, 9, 23, 64, 1001] {
+            let x: alloc::vec::Vec<f64> = (0..len).map(|i| 1.0 + (i % 7) as f64 * 0.25).collect();
+            let plain: f64 = x.iter().map(|v| v * v).sum();
+            let lanes = sum_in_lanes(&x, |v| v * v);
+            assert!(
+                (lanes - plain).abs() <= 1e-14 * plain.max(1.0),
+                "{len}: {lanes} against {plain}"
+            );
+        }
+        // Partial sums: fifteen halves of an ulp after a 1 vanish one by one from a single
+        // running sum; in lanes only the one added to the 1 is lost (1 + 14 · ε/2).
+        let tiny = f64::EPSILON / 2.0;
+        let mut x = alloc::vec![tiny; 16];
+        x[0] = 1.0;
+        assert_eq!(x.iter().sum::<f64>(), 1.0);
+        assert_eq!(sum_in_lanes(&x, |v| v), 1.0 + 14.0 * tiny);
     }
 
     #[test]
