@@ -423,18 +423,7 @@ crate::linalg::simd::per_node_kernel! {
             s2[l] += wx * x;
             top[l] = if *w > top[l] { *w } else { top[l] };
         }
-        // Pairwise, in a fixed order.
-        let sum = |s: [f64; LANES]| {
-            let mut s = s;
-            let mut width = LANES;
-            while width > 1 {
-                width /= 2;
-                for l in 0..width {
-                    s[l] += s[l + width];
-                }
-            }
-            s[0]
-        };
+        let sum = crate::linalg::lanes_total::<LANES>;
         let largest = top.iter().fold(f64::NEG_INFINITY, |m, &t| if t > m { t } else { m });
         [sum(s0), sum(s1), sum(s2), largest]
     }

@@ -387,7 +387,14 @@ pub fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
     for (l, &v) in chunks.remainder().iter().enumerate() {
         s[l] += f(v);
     }
-    let mut width = LANES;
+    lanes_total(s)
+}
+
+/// The total of partial sums kept in lanes, added pairwise in a fixed order (lane l with lane
+/// l + L/2, and so on), so that it does not depend on the vector width. L a power of two.
+#[inline(always)]
+pub(crate) fn lanes_total<const L: usize>(mut s: [f64; L]) -> f64 {
+    let mut width = L;
     while width > 1 {
         width /= 2;
         for l in 0..width {
