@@ -434,9 +434,8 @@ fn systematic_ancestors(
 crate::linalg::simd::per_node_kernel! {
     /// `w_i = e^{lw_i − max}` for every particle (all exponents ≤ 0, so
     /// [`linalg::exp_nonpositive`](crate::linalg::exp_nonpositive), which vectorises, where
-    /// `libm::exp` does not) and their sum, in lanes. No
-    /// FMA, so the weights, and the resampling decisions that follow from them, are the same
-    /// bits on every target.
+    /// `libm::exp` does not) and their sum, in lanes. No FMA, so the weights, and the
+    /// resampling decisions that follow from them, are the same bits on every target.
     fn exponentiate_shifted(w: &mut [f64], lw: &[f64], max: f64) -> f64 {
         for (w, lw) in w.iter_mut().zip(lw) {
             *w = crate::linalg::exp_nonpositive(lw - max);
