@@ -405,23 +405,20 @@ crate::linalg::simd::per_node_kernel! {
         let mut top = [f64::NEG_INFINITY; LANES];
         let mut w_chunks = w.chunks_exact(LANES);
         let mut x_chunks = x.chunks_exact(LANES);
-        for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
-            let w: &[f64; LANES] = w.try_into().expect("chunks of LANES");
-            let x: &[f64; LANES] = x.try_into().expect("chunks of LANES");
-            for l in 0..LANES {
-                let wx = w[l] * x[l];
-                s0[l] += w[l];
-                s1[l] += wx;
-                s2[l] += wx * x[l];
-                top[l] = if w[l] > top[l] { w[l] } else { top[l] };
-            }
-        }
-        for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
+        let mut add = |l: usize, w: f64, x: f64| {
             let wx = w * x;
             s0[l] += w;
             s1[l] += wx;
             s2[l] += wx * x;
-            top[l] = if *w > top[l] { *w } else { top[l] };
+            top[l] = if w > top[l] { w } else { top[l] };
+        };
+        for (w, x) in (&mut w_chunks).zip(&mut x_chunks) {
+            for l in 0..LANES {
+                add(l, w[l], x[l]);
+            }
+        }
+        for (l, (w, x)) in w_chunks.remainder().iter().zip(x_chunks.remainder()).enumerate() {
+            add(l, *w, *x);
         }
         let sum = crate::linalg::lanes_total::<LANES>;
         let largest = top.iter().fold(f64::NEG_INFINITY, |m, &t| if t > m { t } else { m });

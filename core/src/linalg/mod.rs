@@ -204,13 +204,11 @@ fn select_at_most_zero(x: f64) -> f64 {
 /// into the exponent bits.
 #[inline]
 pub fn exp_nonpositive(x: f64) -> f64 {
-    let mut lane = [x];
-    exp_nonpositive_lanes(&mut lane, separate);
-    lane[0]
+    exp_nonpositive_with(x, separate)
 }
 
-/// `p r + c` with two roundings (the portable multiply–add of the Horner steps and of the
-/// spectral filter's tensor products where the CPU has no FMA).
+/// `p r + c` with two roundings (the portable multiply–add of the exponential's polynomial and
+/// of the spectral filter's tensor products where the CPU has no FMA).
 #[inline(always)]
 pub(crate) fn separate(p: f64, r: f64, c: f64) -> f64 {
     p * r + c
@@ -248,41 +246,35 @@ fn taylor_by_estrin(r: f64, madd: &impl Fn(f64, f64, f64) -> f64) -> f64 {
     madd(high, r8, low)
 }
 
-/// [`exp_nonpositive`] on N values at once, written lane by lane; with [`separate`] the same
-/// operations per value as the scalar function.
+/// [`exp_nonpositive`] with the polynomial's multiply–adds `madd`; with [`separate`] the
+/// scalar function itself.
 #[inline(always)]
-fn exp_nonpositive_lanes<const N: usize>(x: &mut [f64; N], madd: impl Fn(f64, f64, f64) -> f64) {
+fn exp_nonpositive_with(x: f64, madd: impl Fn(f64, f64, f64) -> f64) -> f64 {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     // ln 2 = LN2_HI + LN2_LO, the high part with 32 trailing zero bits so that k·LN2_HI is exact.
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
     const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-    let mut below = [false; N];
-    let mut t = [0.0; N];
-    let mut r = [0.0; N];
-    for i in 0..N {
-        below[i] = x[i] < -700.0;
-        let xi = if below[i] { -700.0 } else { x[i] };
-        t[i] = xi * core::f64::consts::LOG2_E + ROUND;
-        let k = t[i] - ROUND;
-        r[i] = (xi - k * LN2_HI) - k * LN2_LO;
-    }
-    let mut p = [0.0; N];
-    for i in 0..N {
-        p[i] = taylor_by_estrin(r[i], &madd);
-    }
-    for i in 0..N {
-        // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
-        let scale = f64::from_bits(t[i].to_bits().wrapping_add(1023) << 52);
-        x[i] = if below[i] { 0.0 } else { p[i] * scale };
+    let below = x < -700.0;
+    let x = if below { -700.0 } else { x };
+    let t = x * core::f64::consts::LOG2_E + ROUND;
+    let k = t - ROUND;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let p = taylor_by_estrin(r, &madd);
+    // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
+    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
+    if below {
+        0.0
+    } else {
+        p * scale
     }
 }
 
 /// `u_i ← u_i e^{min(a_i − shift, 0)}`, and 0 where that falls below `flush`: the
 /// exponentials of [`exp_nonpositive`] fused with the product so that the
 /// values are read and written once. On x86-64 CPUs with AVX2 and FMA (chosen at run time, as
-/// for the other per-node loops) the Horner steps are fused multiply–adds — half the
-/// operations of the update's most expensive loop, and one rounding instead of two per step,
-/// so the factors can differ from [`exp_nonpositive`]'s in the last bit; elsewhere they are
+/// for the other per-node loops) the polynomial's multiply–adds are fused — fewer operations
+/// in the update's most expensive loop, and one rounding instead of two per step, so the
+/// factors can differ from [`exp_nonpositive`]'s in the last bit; elsewhere they are
 /// its bits exactly.
 pub fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
@@ -293,7 +285,7 @@ pub fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
     scale_by_exp_with(u, a, shift, flush, separate);
 }
 
-/// [`scale_by_exp`] compiled with AVX2 and FMA, its Horner steps as `f64::mul_add`.
+/// [`scale_by_exp`] compiled with AVX2 and FMA, its multiply–adds as `f64::mul_add`.
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn scale_by_exp_fused(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
@@ -313,9 +305,7 @@ fn scale_by_exp_with(
         *u = if w < flush { 0.0 } else { w };
     };
     for (u, a) in u.iter_mut().zip(a) {
-        let mut lane = [at_most_zero(a - shift)];
-        exp_nonpositive_lanes(&mut lane, madd);
-        scale(u, lane[0]);
+        scale(u, exp_nonpositive_with(at_most_zero(a - shift), madd));
     }
 }
 
@@ -518,7 +508,7 @@ mod tests {
             for ((v, u), a) in u.iter().zip(&u0).zip(&a) {
                 let w = u * exp_nonpositive((a - 0.2f64).min(0.0));
                 let expected = if w < 1e-250 { 0.0 } else { w };
-                // Bit for bit without FMA; with it, a Horner step rounds once instead of twice.
+                // Bit for bit without FMA; with it, a multiply–add rounds once instead of twice.
                 assert!(
                     (v - expected).abs() <= 4.0 * f64::EPSILON * expected,
                     "{len}: {a}: {v} against {expected}"
