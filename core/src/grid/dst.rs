@@ -76,54 +76,6 @@ fn with_mirror(z: &[Complex<f64>]) -> impl Iterator<Item = (Complex<f64>, Comple
     z.iter().zip(mirror).map(|(a, b)| (*a, b.conj()))
 }
 
-/// The first value of every pair.
-fn firsts(q: &[f64]) -> impl Iterator<Item = f64> + '_ {
-    q.chunks_exact(2).map(|p| p[0])
-}
-
-/// `x_{2k} ← x_0 + x_2 + … + x_{2k}`, as four interleaved running sums over quarters of the
-/// slots, each started from the total of the quarters before it (a first pass over the first
-/// three): one chain of dependent additions would wait on every addition's latency.
-#[inline(always)]
-fn running_sum_of_even_slots(x: &mut [f64]) {
-    let quarter = x.len().div_ceil(2) / 4;
-    if quarter < 4 {
-        let mut acc = 0.0;
-        for v in x.iter_mut().step_by(2) {
-            acc += *v;
-            *v = acc;
-        }
-        return;
-    }
-    let (q0, rest) = x.split_at_mut(2 * quarter);
-    let (q1, rest) = rest.split_at_mut(2 * quarter);
-    let (q2, q3) = rest.split_at_mut(2 * quarter);
-    let mut totals = [0.0; 3];
-    for ((a, b), c) in firsts(q0).zip(firsts(q1)).zip(firsts(q2)) {
-        totals[0] += a;
-        totals[1] += b;
-        totals[2] += c;
-    }
-    let (mut s0, mut s1, mut s2) = (0.0, totals[0], totals[0] + totals[1]);
-    let mut s3 = s2 + totals[2];
-    let mut last = q3.chunks_mut(2);
-    let first = q0.chunks_exact_mut(2).zip(q1.chunks_exact_mut(2));
-    for ((a, b), (c, d)) in first.zip(q2.chunks_exact_mut(2).zip(&mut last)) {
-        s0 += a[0];
-        a[0] = s0;
-        s1 += b[0];
-        b[0] = s1;
-        s2 += c[0];
-        c[0] = s2;
-        s3 += d[0];
-        d[0] = s3;
-    }
-    for d in last {
-        s3 += d[0];
-        d[0] = s3;
-    }
-}
-
 /// `y_j = sin(jπ/M)(x_j + x_{M−j}) + ½(x_j − x_{M−j})` from `s = sin(jπ/M)`, `a = x_j`,
 /// `b = x_{M−j}`.
 #[inline(always)]
@@ -150,30 +102,48 @@ crate::linalg::simd::per_node_kernel! {
 crate::linalg::simd::per_node_kernel! {
     /// [`unpack`] of one line's real DFT `Y_k = (Z_k + conj Z_{L−k})/2 + t_k (Z_k − conj Z_{L−k})`
     /// from the half-length FFT Z and the twiddles t (module doc; `Z_L = Z_0`).
-    /// On x86-64 in two passes: first `(x[2k−1], x[2k]) = (−I_k, R_k)` (independent per k, so
-    /// it vectorises to AVX2's four lanes), then the running sum over the even slots in four
-    /// interleaved chains; elsewhere (wasm's two lanes) the single pass of [`unpack`] is the
-    /// faster (measured once each: 1-D QIEM step 12.96 against 13.4 µs natively; in Node 37 against
-    /// 43–45 µs per interval of `cubic-sensor-1d`).
+    /// k and L − k together: with `E = (Z_k + conj Z_{L−k})/2` and `D = Z_k − conj Z_{L−k}`,
+    /// `Y_k = E + t_k D` and, since `t_{L−k} = conj t_k` (M = 2L), `Y_{L−k} = conj(E − t_k D)` —
+    /// one complex product for two coefficients. Then the odd coefficients' running sum.
     fn unpack_half(z: &[Complex<f64>], twiddles: &[Complex<f64>], x: &mut [f64]) {
-        let mut spectrum =
-            with_mirror(z).zip(twiddles).map(|((a, b), t)| (a + b) * 0.5 + t * (a - b));
-        if cfg!(not(target_arch = "x86_64")) {
-            unpack(spectrum, x);
-            return;
-        }
-        x[0] = 0.5 * spectrum.next().unwrap_or_default().re;
-        // M even: x[1..] has 2L − 2 slots, whole pairs. k ≥ 1 as a forward and a backward
-        // walk (`Z_{L−k}` for k = 1..L−1 is z[1..] reversed), without `with_mirror`'s chained
-        // iterator, which kept this loop from vectorising well.
-        let mirrored = z[1..].iter().zip(z[1..].iter().rev());
-        for ((pair, (a, b)), t) in x[1..].chunks_exact_mut(2).zip(mirrored).zip(&twiddles[1..]) {
+        let l = z.len();
+        // Y_0 = E_0 + O_0, the sums of the even and of the odd samples: X_1 = Y_0 / 2.
+        let mut odd = 0.5 * (z[0].re + z[0].im);
+        x[0] = odd;
+        // x[1..] has 2L − 2 slots: k = 1..=half forward, L − k backward from the end, and for
+        // even L the middle k = L/2 alone. The odd coefficients `X_{2k+1} = X_1 + R_1 + … + R_k`
+        // as a prefix sum in the front and, in the back, as `total − (R_{k+1} + … + R_{L−1})`:
+        // two independent chains in the same loop, the total added once both are known.
+        let half = (l - 1) / 2;
+        let (front, rest) = x[1..].split_at_mut(2 * half);
+        let (middle, back) = rest.split_at_mut(rest.len() - 2 * half);
+        let upper = z[l - half..].iter().rev();
+        let pairs = front.chunks_exact_mut(2).zip(back.rchunks_exact_mut(2));
+        let mut later = 0.0;
+        for (((p, q), (a, b)), t) in pairs.zip(z[1..=half].iter().zip(upper)).zip(&twiddles[1..]) {
             let (a, b) = (*a, b.conj());
-            let c = (a + b) * 0.5 + t * (a - b);
-            pair[0] = -c.im;
-            pair[1] = c.re;
+            let e = (a + b) * 0.5;
+            let td = t * (a - b);
+            let (lo, hi) = (e + td, e - td);
+            p[0] = -lo.im;
+            odd += lo.re;
+            p[1] = odd;
+            q[0] = hi.im;
+            q[1] = -later;
+            later += hi.re;
         }
-        running_sum_of_even_slots(x);
+        if let [im, re] = middle {
+            // k = L/2: Z_k and Z_{L−k} are the same.
+            let a = z[l / 2];
+            let c = (a + a.conj()) * 0.5 + twiddles[l / 2] * (a - a.conj());
+            *im = -c.im;
+            odd += c.re;
+            *re = odd;
+        }
+        let total = odd + later;
+        for q in back.chunks_exact_mut(2) {
+            q[1] += total;
+        }
     }
 }
 
