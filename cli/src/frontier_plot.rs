@@ -69,7 +69,7 @@ pub fn draw(f: &Frontier, title: &str, path: &Path) -> Result<(), String> {
     chart
         .configure_mesh()
         .x_desc("µs per observation interval (log scale)")
-        .y_desc("MSE (004 (43)); points above 1.5× the optimum sit on the top edge")
+        .y_desc("MSE (Shi, Chen & Yau 2021 [004], (43)); above 1.5× the optimum: on the top edge")
         .draw()
         .map_err(|e| err(&e))?;
     let (x0, x1) = (tmin * 1e6 / 1.5, tmax * 1e6 * 1.5);
