@@ -169,7 +169,7 @@ const SIGMA0_002_MODE: f64 = 3.321;
 fn cos_xn(power: u32) -> ScenarioConfig {
     let name = alloc::format!("cos-x{power}");
     let h = alloc::format!("x^{power}");
-    let title = alloc::format!("f = cos x, h = x^{power} (000 Table 1)");
+    let title = alloc::format!("f = cos x, h = x^{power} (Yueh, Lin & Yau 2014 [000], Table 1)");
     let mut s = build(Spec {
         name: &name,
         title: &title,
@@ -212,7 +212,7 @@ pub fn all() -> Vec<ScenarioConfig> {
     let mut v = vec![
         build(Spec {
             name: "cubic-sensor-1d",
-            title: "Cubic sensor dx = dv, dy = x³ dt + dw (004 Example 1)",
+            title: "Cubic sensor dx = dv, dy = x³ dt + dw (Shi, Chen & Yau 2021 [004], Example 1)",
             reference: "004 (44), Table 1",
             description: "The cubic sensor of 004 (44): σ₀ ∝ exp(−(x−1)²/(2·0.1)), x₀ = 1, \
                 T = 5, Δτ = 0.01; EKF, UKF (α = 0.05, β = 2, κ = 0) and PF with 50–200 \
@@ -251,7 +251,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "cubic-sensor-2d",
-            title: "2-D linear drift, cubic sensors (004 Example 2)",
+            title: "2-D linear drift, cubic sensors (Shi, Chen & Yau 2021 [004], Example 2)",
             reference: "004 (46), Table 2",
             description:
                 "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
@@ -281,7 +281,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "yau-cubic-sensor",
-            title: "Cubic sensor f = 0, h = x³ on [−10, 10] (000)",
+            title: "Cubic sensor f = 0, h = x³ on [−10, 10] (Yueh, Lin & Yau 2014 [000])",
             reference: "000 (32), Fig. 1",
             description: "000 (32) with the paper's domain R = 10. 000 does not state σ₀ or T \
                 for this figure: we take σ₀ = N(0, 1) with x₀ drawn from it, T = 5 and Δτ = 0.01. \
@@ -308,7 +308,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "yau-2d",
-            title: "2-D example f = (−cos x₁ − sin x₂, cos x₁ + sin x₂) (000)",
+            title: "2-D example f = (−cos x₁ − sin x₂, cos x₁ + sin x₂) (Yueh, Lin & Yau 2014 [000])",
             reference: "000 (33), Figs. 2–3",
             description: "000 (33): h = (x₁ − x₂, x₁ + x₂). σ₀ = N(0, 0.1 I), the Gaussian \
                 e^{−5(x₁² + x₂²)} 000 §4.3 uses as initial density; T = 2, Δτ = 0.01 and the \
@@ -333,7 +333,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "direct-4.3",
-            title: "f = tanh x, h = (x sin x, x cos x) (002 Example 4.3)",
+            title: "f = tanh x, h = (x sin x, x cos x) (Shi, Yang & Yau 2018 [002], Example 4.3)",
             reference: "002 (38), Example 4.3, Table 3",
             description: "002 (38) with f = tanh x (the drift form dx = f dt + dw is meant), \
                 σ₀ ∝ e^{−x sin x − ½ x cos x − x² + 3x + 2} (two peaks, at 0.84 and 3.32), \
@@ -372,7 +372,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "direct-4.4",
-            title: "f = x + 1 + F'(x) with F defined by an integral (002 Example 4.4)",
+            title: "f = x + 1 + F'(x) with F defined by an integral (Shi, Yang & Yau 2018 [002], Example 4.4)",
             reference: "002 (38), Example 4.4, Fig. 3",
             description: "002 Example 4.4: f = x + 1 + dF/dx with \
                 dF/dx = e^{−(x−½)²} / ∫_{−∞}^x e^{−(y−½)²} dy − 3/2 = \
@@ -406,7 +406,7 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "bearings-only",
-            title: "Bearings-only tracking, constant velocity (003 §5)",
+            title: "Bearings-only tracking, constant velocity (Kang, Salmon & Yau 2023 [003], §5)",
             reference: "003 (5.2), Table 1",
             description: "003 (5.2): x = (p₁, p₂, v₁, v₂), dx = F x dt + dw with F the \
                 constant-velocity matrix, z_k = h(x_k) + B_k, B_k ~ N(0, I₂), 1000 steps. 003 \
@@ -458,7 +458,7 @@ fn fpe(cells: usize, dt: f64) -> FpeParams {
 fn fpe_examples() -> Vec<ScenarioConfig> {
     let mut one = build(Spec {
         name: "sa-example-1",
-        title: "Linear non-Gaussian: separation approach vs implicit FDM (001 §4, Fig. 4)",
+        title: "Linear non-Gaussian: separation approach vs implicit FDM (Šimandl & Švácha 2005 [001], §4, Fig. 4)",
         reference: "001 §4 example 1, Fig. 4",
         description: "001 §4: dx = 0.1 x dt + dw, z_k = 2 x_k + v_k every 0.1 s, \
             p(x₀) = N(−2, 1), p(v_k) = ½ N(0.5, 0.1) + ½ N(2, 0.2) (variances). The separation \
@@ -492,7 +492,7 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
     one.time.inner_steps = 10;
     let mut two = build(Spec {
         name: "sa-example-2",
-        title: "2-D separation approach with mixture prior and noise (001 §4.1, Figs. 5–6)",
+        title: "2-D separation approach with mixture prior and noise (Šimandl & Švácha 2005 [001], §4.1, Figs. 5–6)",
         reference: "001 §4.1 example 2, Figs. 5–6",
         description: "001 §4.1: dx₁ = (−0.05 x₁ + x₂) dt + dw₁, dx₂ = (0.7 x₁ − 0.4 x₂) dt + dw₂, \
             z = (x₁ + x₂, x₂) + v every 0.2 s, p(x₀) = ½ N((0, 0), 0.1 I) + ½ N((1, 1), 0.1 I), \
