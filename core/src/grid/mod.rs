@@ -210,9 +210,11 @@ impl TensorGrid {
         out
     }
 
-    /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero).
+    /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero). The sum runs in eight
+    /// lanes ([`crate::linalg::sum_in_lanes`]): the drivers' self-check takes it after every
+    /// step, and one chain of dependent additions cost 4.5 % of a 2001-node QIEM step.
     pub fn mass(&self, u: &[f64]) -> f64 {
-        u.iter().sum::<f64>() * self.cell_volume()
+        crate::linalg::sum_in_lanes(u, |v| v) * self.cell_volume()
     }
 
     /// Mass on the `layers` outermost nodes next to every face of the box (a node near two
