@@ -6,6 +6,7 @@ import { $, el } from './dom.js';
 import { setupLearn } from './learn.js';
 import { HeatStrip, drawHeatmap2d, markerShape } from './canvas-plots.js';
 import { matrixEditor, readMatrix, resizeMatrix, setMatrix } from './matrix.js';
+import { mixtureEditor, readMixture, resizeMixture } from './mixture.js';
 
 // Fills a <select> with `[value, text, title?]` options.
 const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));
@@ -80,16 +81,6 @@ window.zakaiPage = state; // for the end-to-end tests
 state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), dash: dash(i) }));
 
 // ---------- form <-> ScenarioConfig ----------
-
-function parseJSONField(text, fallback) {
-  const t = text.trim();
-  if (t === '') return fallback;
-  try {
-    return JSON.parse(t);
-  } catch (e) {
-    return { __invalid: `not valid JSON: ${e.message}` };
-  }
-}
 
 function parseList(text) {
   const t = text.trim();
@@ -246,13 +237,16 @@ function fillForm(config) {
   $('noise-kind').value = noise.kind;
   const m = config.model.observation.length;
   matrixEditor($('noise-cov'), { value: noise.kind === 'continuous' ? noise.cov ?? null : null, rows: m, identityAllowed: true, onInput: scheduleValidate });
-  $('noise-mix').value = noise.kind === 'discrete' ? JSON.stringify(noise.mixture) : '[{"weight": 1, "mean": [0], "cov": [[1]]}]';
+  mixtureEditor($('noise-mix'), { value: noise.kind === 'discrete' ? noise.mixture : null, dim: m, onInput: scheduleValidate });
   showNoiseKind(noise.kind);
   const prior = config.prior;
   $('prior-kind').value = prior.kind;
   $('prior-mean').value = prior.kind === 'gaussian' ? prior.mean.join(', ') : Array(n).fill(0).join(', ');
   matrixEditor($('prior-cov'), { value: prior.kind === 'gaussian' ? prior.cov : identity(n), rows: n, onInput: scheduleValidate });
-  $('prior-mix').value = prior.kind === 'mixture' ? JSON.stringify(prior.components) : '';
+  // A switch from a Gaussian prior to a mixture starts from that Gaussian as one component.
+  const components = prior.kind === 'mixture' ? prior.components
+    : prior.kind === 'gaussian' ? [{ weight: 1, mean: prior.mean, cov: prior.cov }] : null;
+  mixtureEditor($('prior-mix'), { value: components, dim: n, onInput: scheduleValidate });
   $('prior-expr').value = prior.kind === 'density' ? prior.expression : '';
   showPriorKind(prior.kind);
   $('x0').value = config.initial_state ? config.initial_state.join(', ') : '';
@@ -285,13 +279,13 @@ function readForm() {
   if ($('noise-kind').value === 'continuous') {
     c.model.noise = { kind: 'continuous', cov: readMatrix($('noise-cov')) };
   } else {
-    c.model.noise = { kind: 'discrete', mixture: parseJSONField($('noise-mix').value, []) };
+    c.model.noise = { kind: 'discrete', mixture: readMixture($('noise-mix')) };
   }
   const kind = $('prior-kind').value;
   if (kind === 'gaussian') {
     c.prior = { kind, mean: parseList($('prior-mean').value) ?? [], cov: readMatrix($('prior-cov')) ?? [] };
   } else if (kind === 'mixture') {
-    c.prior = { kind, components: parseJSONField($('prior-mix').value, []) };
+    c.prior = { kind, components: readMixture($('prior-mix')) };
   } else {
     c.prior = { kind, expression: $('prior-expr').value };
   }
@@ -478,11 +472,16 @@ function changeDimension() {
   const n = Math.max(1, Math.min(8, Number($('dim').value) | 0));
   const c = readForm();
   const resize = (arr, fill) => Array.from({ length: n }, (_, i) => arr[i] ?? fill(i));
+  // A covariance's entries that fit, the identity's elsewhere.
+  const embed = (cov) => identity(n).map((row, i) => row.map((v, j) => cov?.[i]?.[j] ?? v));
   c.model.drift = resize(c.model.drift, () => '0');
   c.domain = resize(c.domain, () => [-5, 5]);
   if (c.prior.kind === 'gaussian') {
     c.prior.mean = resize(c.prior.mean, () => 0);
-    c.prior.cov = identity(n).map((row, i) => row.map((v, j) => c.prior.cov?.[i]?.[j] ?? v));
+    c.prior.cov = embed(c.prior.cov);
+  }
+  if (c.prior.kind === 'mixture' && Array.isArray(c.prior.components)) {
+    c.prior.components = c.prior.components.map((comp) => ({ ...comp, mean: resize(comp.mean, () => 0), cov: embed(comp.cov) }));
   }
   if (c.initial_state) c.initial_state = resize(c.initial_state, () => 0);
   c.model.diffusion = null;
@@ -1412,6 +1411,7 @@ $('add-h').addEventListener('click', () => {
   const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
   exprInputs($('observation'), 'h', 'model.observation', [...values, 'x1']);
   resizeMatrix($('noise-cov'), values.length + 1);
+  resizeMixture($('noise-mix'), values.length + 1);
   scheduleValidate();
 });
 $('remove-h').addEventListener('click', () => {
@@ -1419,6 +1419,7 @@ $('remove-h').addEventListener('click', () => {
   if (values.length > 1) {
     exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
     resizeMatrix($('noise-cov'), values.length - 1);
+    resizeMixture($('noise-mix'), values.length - 1);
   }
   scheduleValidate();
 });
@@ -1532,7 +1533,7 @@ $('add-method').addEventListener('click', () => {
   methodRowsUI();
   scheduleValidate();
 });
-for (const id of ['noise-mix', 'prior-mean', 'prior-mix', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed', 'fail-bound', 'fail-error', 'fail-duration']) {
+for (const id of ['prior-mean', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed', 'fail-bound', 'fail-error', 'fail-duration']) {
   $(id).addEventListener('input', scheduleValidate);
 }
 // Shortcuts work wherever the focus is, except where keys type text.

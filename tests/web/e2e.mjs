@@ -824,6 +824,33 @@ try {
   await load(`${url}?preset=yau-2d`, 'yau-2d');
   assert.equal((await page.$$('#prior-cov input[data-cell]')).length, 4);
   assert.ok(await page.isChecked('#diffusion .identity-box') === (await page.evaluate(() => window.zakaiPage.base.model.diffusion == null)));
+  // Mixtures (001's prior and noise) as controls, not JSON: the preset's components read back
+  // unchanged; a bad mean is named at the mixture; a third component is added, one removed,
+  // and a weight changed, all applied; "+ state component" resizes every component.
+  await load(`${url}?preset=sa-example-2`, 'sa-example-2');
+  const mixRows = await page.$$eval('#prior-mix .mixture-component', (rows) => rows.length);
+  const presetPrior = await page.evaluate(() => window.zakaiPage.base.prior.components);
+  assert.equal(mixRows, presetPrior.length, 'one row per prior component');
+  assert.equal(await page.$$eval('#noise-mix .mixture-component', (rows) => rows.length),
+    await page.evaluate(() => window.zakaiPage.base.model.noise.mixture.length), 'one row per noise component');
+  assert.equal((await page.$$('textarea')).length, 0, 'no JSON text areas');
+  await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', '1, x');
+  await page.waitForFunction(() => document.querySelector('[data-error="prior.components"]').textContent.includes('component 1: the mean needs 2 comma-separated numbers'), null, { timeout: 5000 });
+  await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', String(presetPrior[0].mean.join(', ')));
+  await page.click('#prior-mix .add-component');
+  assert.equal(await page.$$eval('#prior-mix .mixture-component', (rows) => rows.length), presetPrior.length + 1);
+  await page.click('#prior-mix .mixture-component:nth-child(2) .remove-component');
+  await page.fill('#prior-mix .mixture-component:nth-child(3) .mixture-weight', '3');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.base.prior.components[1]?.weight === 3, null, { timeout: 10000 });
+  const applied = await page.evaluate(() => window.zakaiPage.base.prior.components);
+  console.log('mixture prior applied:', JSON.stringify(applied));
+  assert.deepEqual(applied[0], presetPrior[1], 'the first component removed, the second kept as it was');
+  assert.deepEqual(applied[1], { weight: 3, mean: [0, 0], cov: [[1, 0], [0, 1]] }, 'the added component, its weight changed');
+  await page.fill('#dim', '3');
+  await page.$eval('#dim', (e) => e.dispatchEvent(new Event('change')));
+  await page.waitForFunction(() => document.querySelectorAll('#prior-mix .mixture-component:first-of-type input[data-cell]').length === 9, null, { timeout: 5000 });
+  assert.equal(await page.inputValue('#prior-mix .mixture-component:nth-child(2) .mixture-mean'), `${presetPrior[1].mean.join(', ')}, 0`);
   // −5 particles: the field is marked, the message is next to it in plain words.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   await page.fill('#methods .method-row:nth-child(3) input[data-param="particles"]', '-5');
