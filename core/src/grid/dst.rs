@@ -323,7 +323,9 @@ mod tests {
 
     #[test]
     fn matches_the_definition_and_inverts_itself() {
-        for n in [1usize, 2, 3, 4, 5, 16, 31, 100, 1999, 2000] {
+        // M = N + 1 odd (one full-length FFT: 2, 4, 16, 100, 2000) and even, its half L odd
+        // (pairs k, L − k only: 1, 5, 25, 1001) or even (a middle k = L/2 too: 3, 31, 1999).
+        for n in [1usize, 2, 3, 4, 5, 16, 25, 31, 100, 1001, 1999, 2000] {
             let a: Vec<f64> = (0..n).map(|i| ((i * 7 + 3) % 11) as f64 - 4.5).collect();
             let b: Vec<f64> = (0..n).map(|i| ((i * 5 + 1) % 13) as f64 * 0.3).collect();
             let mut plan = DstPlan::new(n);
