@@ -69,7 +69,10 @@ pub fn draw(f: &Frontier, title: &str, path: &Path) -> Result<(), String> {
     chart
         .configure_mesh()
         .x_desc("µs per observation interval (log scale)")
-        .y_desc("MSE (Shi, Chen & Yau 2021 [004], (43)); above 1.5× the optimum: on the top edge")
+        .y_desc(format!(
+            "MSE ({}, (43)); above 1.5× the optimum: on the top edge",
+            zakai::papers::cite("004")
+        ))
         .draw()
         .map_err(|e| err(&e))?;
     let (x0, x1) = (tmin * 1e6 / 1.5, tmax * 1e6 * 1.5);

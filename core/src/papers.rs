@@ -10,6 +10,8 @@ use alloc::vec::Vec;
 use crate::model::{Model, Prior};
 use crate::scenario::{presets, MethodConfig, ScenarioConfig};
 
+pub use crate::scenario::presets::{cite, AUTHORS};
+
 /// The error measure a table reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Metric {

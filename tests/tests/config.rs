@@ -15,6 +15,16 @@ fn every_preset_is_valid_and_round_trips_through_json() {
             "{}",
             p.name
         );
+        // Papers cited by authors and year as well as number, in the title and the reference.
+        for text in [&p.title, &p.reference] {
+            assert!(
+                zakai::papers::AUTHORS
+                    .iter()
+                    .any(|(n, who)| text.contains(&format!("{who} [{n}]"))),
+                "{}: {text}",
+                p.name
+            );
+        }
         // The page's explanation panel: every preset says what to look for when played.
         assert!(p.description.contains("Look for:"), "{}", p.name);
         let json = serde_json::to_string(&p).unwrap();

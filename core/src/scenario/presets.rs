@@ -105,9 +105,33 @@ fn ekf_from(mean: f64, variance: f64) -> MethodConfig {
     })
 }
 
+/// The five papers by number with their authors and year (`shared/papers/README.md`).
+pub const AUTHORS: [(&str, &str); 5] = [
+    ("000", "Yueh, Lin & Yau 2014"),
+    ("001", "Šimandl & Švácha 2005"),
+    ("002", "Shi, Yang & Yau 2018"),
+    ("003", "Kang, Salmon & Yau 2023"),
+    ("004", "Shi, Chen & Yau 2021"),
+];
+
+/// A paper cited by authors and year as well as number: `"Shi, Chen & Yau 2021 [004]"` for
+/// `"004"`; an unknown number stays as it is.
+pub fn cite(paper: &str) -> alloc::string::String {
+    match AUTHORS.iter().find(|(n, _)| *n == paper) {
+        Some((n, who)) => alloc::format!("{who} [{n}]"),
+        None => paper.into(),
+    }
+}
+
 struct Spec<'a> {
     name: &'a str,
+    /// The paper's number ("004"), cited with its authors and year in the title and reference.
+    paper: &'a str,
+    /// The problem; the title adds the paper and `place`.
     title: &'a str,
+    /// Where in the paper the example is ("Example 1"; empty for the paper as a whole).
+    place: &'a str,
+    /// Equations, tables and figures of the paper this preset follows.
     reference: &'a str,
     description: &'a str,
     drift: &'a [&'a str],
@@ -124,8 +148,11 @@ struct Spec<'a> {
 fn build(s: Spec) -> ScenarioConfig {
     ScenarioConfig {
         name: s.name.into(),
-        title: s.title.into(),
-        reference: s.reference.into(),
+        title: match (cite(s.paper), s.place) {
+            (cite, "") => alloc::format!("{} ({cite})", s.title),
+            (cite, place) => alloc::format!("{} ({cite}, {place})", s.title),
+        },
+        reference: alloc::format!("{}, {}", cite(s.paper), s.reference),
         description: s.description.into(),
         model: ModelConfig {
             drift: strings(s.drift),
@@ -169,11 +196,13 @@ const SIGMA0_002_MODE: f64 = 3.321;
 fn cos_xn(power: u32) -> ScenarioConfig {
     let name = alloc::format!("cos-x{power}");
     let h = alloc::format!("x^{power}");
-    let title = alloc::format!("f = cos x, h = x^{power} (Yueh, Lin & Yau 2014 [000], Table 1)");
+    let title = alloc::format!("f = cos x, h = x^{power}");
     let mut s = build(Spec {
         name: &name,
+        paper: "000",
         title: &title,
-        reference: "000 §4.2, Table 1",
+        place: "Table 1",
+        reference: "§4.2, Table 1",
         description: "EKF against the Yau–Yau filters for f(x) = cos x and h(x) = xⁿ, n = 2..6. \
             000 gives neither σ₀ nor the horizon: we take σ₀ = N(1, 0.25) (a prior centred \
             away from 0, because for even n the observation cannot tell x from −x), x₀ drawn \
@@ -212,8 +241,10 @@ pub fn all() -> Vec<ScenarioConfig> {
     let mut v = vec![
         build(Spec {
             name: "cubic-sensor-1d",
-            title: "Cubic sensor dx = dv, dy = x³ dt + dw (Shi, Chen & Yau 2021 [004], Example 1)",
-            reference: "004 (44), Table 1",
+            paper: "004",
+            title: "Cubic sensor dx = dv, dy = x³ dt + dw",
+            place: "Example 1",
+            reference: "(44), Table 1",
             description: "The cubic sensor of 004 (44): σ₀ ∝ exp(−(x−1)²/(2·0.1)), x₀ = 1, \
                 T = 5, Δτ = 0.01; EKF, UKF (α = 0.05, β = 2, κ = 0) and PF with 50–200 \
                 particles as in Table 1 (DMZ method MSE 0.4317, PF(200) 0.9115, EKF/UKF fail). Look \
@@ -251,8 +282,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "cubic-sensor-2d",
-            title: "2-D linear drift, cubic sensors (Shi, Chen & Yau 2021 [004], Example 2)",
-            reference: "004 (46), Table 2",
+            paper: "004",
+            title: "2-D linear drift, cubic sensors",
+            place: "Example 2",
+            reference: "(46), Table 2",
             description:
                 "004 (46): dx = [[−0.4, 0.1], [0, −0.6]] x dt + dv, dy = (x₁³, x₂³) dt + dw, \
                 σ₀ ∝ exp(−((x₁−1)² + (x₂−1)²)/(2·0.1)), x₀ = (1, 1), T = 5, Δτ = 0.01, UKF \
@@ -281,8 +314,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "yau-cubic-sensor",
-            title: "Cubic sensor f = 0, h = x³ on [−10, 10] (Yueh, Lin & Yau 2014 [000])",
-            reference: "000 (32), Fig. 1",
+            paper: "000",
+            title: "Cubic sensor f = 0, h = x³ on [−10, 10]",
+            place: "",
+            reference: "(32), Fig. 1",
             description: "000 (32) with the paper's domain R = 10. 000 does not state σ₀ or T \
                 for this figure: we take σ₀ = N(0, 1) with x₀ drawn from it, T = 5 and Δτ = 0.01. \
                 Look for: the EKF off the truth from its first steps (by more than 2 at t ≈ 0.2 \
@@ -308,8 +343,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "yau-2d",
-            title: "2-D example f = (−cos x₁ − sin x₂, cos x₁ + sin x₂) (Yueh, Lin & Yau 2014 [000])",
-            reference: "000 (33), Figs. 2–3",
+            paper: "000",
+            title: "2-D example f = (−cos x₁ − sin x₂, cos x₁ + sin x₂)",
+            place: "",
+            reference: "(33), Figs. 2–3",
             description: "000 (33): h = (x₁ − x₂, x₁ + x₂). σ₀ = N(0, 0.1 I), the Gaussian \
                 e^{−5(x₁² + x₂²)} 000 §4.3 uses as initial density; T = 2, Δτ = 0.01 and the \
                 domain [−6, 6]² are our choice (the paper's figures run to t ≈ 2). Look \
@@ -333,8 +370,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "direct-4.3",
-            title: "f = tanh x, h = (x sin x, x cos x) (Shi, Yang & Yau 2018 [002], Example 4.3)",
-            reference: "002 (38), Example 4.3, Table 3",
+            paper: "002",
+            title: "f = tanh x, h = (x sin x, x cos x)",
+            place: "Example 4.3",
+            reference: "(38), Example 4.3, Table 3",
             description: "002 (38) with f = tanh x (the drift form dx = f dt + dw is meant), \
                 σ₀ ∝ e^{−x sin x − ½ x cos x − x² + 3x + 2} (two peaks, at 0.84 and 3.32), \
                 T = 30, Δτ = 0.1; the EKF starts at x̂₀ = 1, P₀ = 1 (Table 3 also uses P₀ = 5, \
@@ -372,8 +411,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "direct-4.4",
-            title: "f = x + 1 + F'(x) with F defined by an integral (Shi, Yang & Yau 2018 [002], Example 4.4)",
-            reference: "002 (38), Example 4.4, Fig. 3",
+            paper: "002",
+            title: "f = x + 1 + F'(x) with F defined by an integral",
+            place: "Example 4.4",
+            reference: "(38), Example 4.4, Fig. 3",
             description: "002 Example 4.4: f = x + 1 + dF/dx with \
                 dF/dx = e^{−(x−½)²} / ∫_{−∞}^x e^{−(y−½)²} dy − 3/2 = \
                 e^{−(x−½)²} / ((√π/2) erfc(½ − x)) − 3/2, h = (x sin x, x cos x), σ₀ and \
@@ -406,8 +447,10 @@ pub fn all() -> Vec<ScenarioConfig> {
         }),
         build(Spec {
             name: "bearings-only",
-            title: "Bearings-only tracking, constant velocity (Kang, Salmon & Yau 2023 [003], §5)",
-            reference: "003 (5.2), Table 1",
+            paper: "003",
+            title: "Bearings-only tracking, constant velocity",
+            place: "§5",
+            reference: "(5.2), Table 1",
             description: "003 (5.2): x = (p₁, p₂, v₁, v₂), dx = F x dt + dw with F the \
                 constant-velocity matrix, z_k = h(x_k) + B_k, B_k ~ N(0, I₂), 1000 steps. 003 \
                 omits h: R⁴ → R². We use the standard two-sensor bearings-only model: the \
@@ -458,8 +501,10 @@ fn fpe(cells: usize, dt: f64) -> FpeParams {
 fn fpe_examples() -> Vec<ScenarioConfig> {
     let mut one = build(Spec {
         name: "sa-example-1",
-        title: "Linear non-Gaussian: separation approach vs implicit FDM (Šimandl & Švácha 2005 [001], §4, Fig. 4)",
-        reference: "001 §4 example 1, Fig. 4",
+        paper: "001",
+        title: "Linear non-Gaussian: separation approach vs implicit FDM",
+        place: "§4, Fig. 4",
+        reference: "§4 example 1, Fig. 4",
         description: "001 §4: dx = 0.1 x dt + dw, z_k = 2 x_k + v_k every 0.1 s, \
             p(x₀) = N(−2, 1), p(v_k) = ½ N(0.5, 0.1) + ½ N(2, 0.2) (variances). The separation \
             approach (SA: upwind finite volumes for −f ∂p/∂x, implicit differences for the rest) \
@@ -492,8 +537,10 @@ fn fpe_examples() -> Vec<ScenarioConfig> {
     one.time.inner_steps = 10;
     let mut two = build(Spec {
         name: "sa-example-2",
-        title: "2-D separation approach with mixture prior and noise (Šimandl & Švácha 2005 [001], §4.1, Figs. 5–6)",
-        reference: "001 §4.1 example 2, Figs. 5–6",
+        paper: "001",
+        title: "2-D separation approach with mixture prior and noise",
+        place: "§4.1, Figs. 5–6",
+        reference: "§4.1 example 2, Figs. 5–6",
         description: "001 §4.1: dx₁ = (−0.05 x₁ + x₂) dt + dw₁, dx₂ = (0.7 x₁ − 0.4 x₂) dt + dw₂, \
             z = (x₁ + x₂, x₂) + v every 0.2 s, p(x₀) = ½ N((0, 0), 0.1 I) + ½ N((1, 1), 0.1 I), \
             p(v) = ½ N((0, 0), 0.1 I) + ½ N((−1, 1), 0.1 I). The SA on 35 × 35 cells of \
