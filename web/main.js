@@ -5,7 +5,7 @@ import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el } from './dom.js';
 import { setupLearn } from './learn.js';
 import { HeatStrip, drawHeatmap2d, markerShape } from './canvas-plots.js';
-import { matrixEditor, readMatrix, resizeMatrix, setMatrix } from './matrix.js';
+import { identity, matrixEditor, readMatrix, resizeMatrix, setMatrix } from './matrix.js';
 import { mixtureEditor, readMixture, resizeMixture } from './mixture.js';
 
 // Fills a <select> with `[value, text, title?]` options.
@@ -264,10 +264,6 @@ function fillForm(config) {
   methodRowsUI();
   $('description').textContent = config.description;
   $('reference').textContent = config.reference ? `Source: ${config.reference}` : '';
-}
-
-function identity(n) {
-  return Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
 }
 
 function readForm() {

@@ -3,7 +3,8 @@
 // rows as JSON under "advanced" for shapes the grid does not offer.
 import { el } from './dom.js';
 
-const identity = (n) => Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
+/** The n × n identity, as rows. */
+export const identity = (n) => Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
 
 /**
  * Fills `box` (a `.matrix` element with `data-field`) with an editor of `value` (rows of

@@ -3,9 +3,7 @@
 // the prior σ₀ and the discrete measurement noise v of 001 (Šimandl & Švácha 2005) are
 // mixtures, and a lecturer changes them here instead of typing JSON.
 import { el } from './dom.js';
-import { matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
-
-const identity = (n) => Array.from({ length: n }, (_, i) => Array.from({ length: n }, (_, j) => (i === j ? 1 : 0)));
+import { identity, matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
 
 /** A new component of dimension `dim`: weight 1, mean 0, covariance I. */
 const standard = (dim) => ({ weight: 1, mean: Array(dim).fill(0), cov: identity(dim) });
@@ -21,7 +19,7 @@ export function mixtureEditor(box, { value, dim, onInput }) {
 }
 
 /** Replaces the editor's components. */
-export function setMixture(box, components) {
+function setMixture(box, components) {
   const m = box._mixture;
   const field = box.dataset.field;
   const rows = components.map((c, i) => componentRow(box, field, i, c, components.length));

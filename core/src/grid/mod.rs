@@ -212,7 +212,8 @@ impl TensorGrid {
 
     /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero). The sum runs in eight
     /// lanes ([`crate::linalg::sum_in_lanes`]): the drivers' self-check takes it after every
-    /// step, and one chain of dependent additions cost 4.5 % of a 2001-node QIEM step.
+    /// step, and as one chain of dependent additions it was 9.7 % of a 40 000-step QIEM run on
+    /// 2001 nodes.
     pub fn mass(&self, u: &[f64]) -> f64 {
         crate::linalg::sum_in_lanes(u, |v| v) * self.cell_volume()
     }

@@ -146,13 +146,14 @@ struct Spec<'a> {
 }
 
 fn build(s: Spec) -> ScenarioConfig {
+    let citation = cite(s.paper);
     ScenarioConfig {
         name: s.name.into(),
-        title: match (cite(s.paper), s.place) {
-            (cite, "") => alloc::format!("{} ({cite})", s.title),
-            (cite, place) => alloc::format!("{} ({cite}, {place})", s.title),
+        title: match s.place {
+            "" => alloc::format!("{} ({citation})", s.title),
+            place => alloc::format!("{} ({citation}, {place})", s.title),
         },
-        reference: alloc::format!("{}, {}", cite(s.paper), s.reference),
+        reference: alloc::format!("{citation}, {}", s.reference),
         description: s.description.into(),
         model: ModelConfig {
             drift: strings(s.drift),
