@@ -201,12 +201,30 @@ impl Selection {
 #[derive(Args)]
 struct Output {
     /// Output format: `table`; `json`; `csv` (`run`: one row per method; `filter`: estimates
-    /// and standard deviations per time).
-    #[arg(long, value_enum, default_value_t = Format::Table)]
-    format: Format,
+    /// and standard deviations per time). Default: from the extension of --out (`.json`,
+    /// `.csv`), else `table`.
+    #[arg(long, value_enum)]
+    format: Option<Format>,
     /// Write the output to FILE instead of stdout.
     #[arg(long)]
     out: Option<PathBuf>,
+}
+
+impl Output {
+    /// The format asked for, else the one the --out file's extension names, else a table.
+    fn format(&self) -> Format {
+        self.format
+            .unwrap_or_else(|| match extension(self.out.as_deref()).as_deref() {
+                Some("json") => Format::Json,
+                Some("csv") => Format::Csv,
+                _ => Format::Table,
+            })
+    }
+}
+
+/// The lower-case extension of `path`, if any.
+fn extension(path: Option<&std::path::Path>) -> Option<String> {
+    path?.extension()?.to_str().map(str::to_ascii_lowercase)
 }
 
 /// Run the scenario's methods on recorded observations (CSV with header `t,dy1,…` for
@@ -322,7 +340,8 @@ fn run(a: &RunArgs) -> Result<(), String> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let text = output::render(&experiment, &summary, a.output.format).map_err(|e| e.to_string())?;
+    let text =
+        output::render(&experiment, &summary, a.output.format()).map_err(|e| e.to_string())?;
     emit(&text, a.output.out.as_deref())
 }
 
@@ -343,7 +362,7 @@ fn filter(a: &FilterArgs) -> Result<(), String> {
     let (experiment, seed) = a.selection.experiment()?;
     let result = recorded::filter(&experiment, &a.observations, a.truth.as_deref(), seed)?;
     emit(
-        &recorded::render(&result, a.output.format),
+        &recorded::render(&result, a.output.format()),
         a.output.out.as_deref(),
     )
 }
@@ -685,9 +704,10 @@ struct SimulateArgs {
     /// Seed (default: the scenario's seed).
     #[arg(long)]
     seed: Option<u64>,
-    /// `json` (default) or `csv` (the observations; the truth goes to --truth-out).
-    #[arg(long, value_enum, default_value_t = SimFormat::Json)]
-    format: SimFormat,
+    /// `json` or `csv` (the observations; the truth goes to --truth-out). Default: `csv`
+    /// when --out ends in `.csv`, else `json`.
+    #[arg(long, value_enum)]
+    format: Option<SimFormat>,
     /// Write the output (CSV: the observations) to FILE instead of stdout.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -704,7 +724,13 @@ struct SimulateArgs {
 fn simulate(a: SimulateArgs) -> Result<(), String> {
     let (scenario, seed, estimates) = (a.scenario.as_str(), a.seed, a.estimates);
     let config = load(scenario)?;
-    if a.format == SimFormat::Csv {
+    let format = a
+        .format
+        .unwrap_or(match extension(a.out.as_deref()).as_deref() {
+            Some("csv") => SimFormat::Csv,
+            _ => SimFormat::Json,
+        });
+    if format == SimFormat::Csv {
         if estimates {
             return Err(
                 "--estimates belongs to the JSON output (run `zakai filter` on the CSV instead)"
@@ -719,7 +745,7 @@ fn simulate(a: SimulateArgs) -> Result<(), String> {
         return emit(&recording.observations_csv(), a.out.as_deref());
     }
     if a.truth_out.is_some() {
-        return Err("--truth-out needs --format csv (the JSON output holds the states)".into());
+        return Err("--truth-out needs CSV output (--format csv, or --out FILE.csv; the JSON output holds the states)".into());
     }
     let seed = seed.unwrap_or(config.seed);
     let experiment = Experiment::new(config).map_err(|e| e.to_string())?;

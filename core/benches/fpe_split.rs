@@ -9,6 +9,7 @@ use zakai::experiment::Experiment;
 use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
 use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
 use zakai::scenario::presets;
+use zakai::Filter;
 
 /// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
 /// measurement `z0` at τ₀.

@@ -14,7 +14,7 @@ use alloc::boxed::Box;
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
-use crate::error::ZakaiError;
+use crate::error::{FilterError, ZakaiError};
 use crate::filters::{Concern, Filter, Observation, ObservationKind};
 use crate::metrics;
 use crate::model::{Model, Prior};
@@ -430,6 +430,12 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
     ) -> Result<ExperimentRun, ZakaiError> {
+        if self.config.time.t_final <= 0.0 {
+            return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                "time.t_final",
+                "a simulated run needs a final time T > 0 (only a run over recorded observations goes without)",
+            )]));
+        }
         // The simulator's output fits the model by construction (and a truth that blew up is
         // the methods' problem to meet, not an input error).
         self.start_checked(self.simulate(seed).into(), seed, clock)
@@ -437,7 +443,7 @@ impl Experiment {
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
     /// ([`Recording::problems`]), dimensions and observation kind against the model, and steps
-    /// other than Δτ when a method is built for one interval length.
+    /// that are not whole multiples of Δτ when a method takes only those (the spectral filter).
     pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
         let mut p = recording.problems();
         let model = &self.model;
@@ -476,7 +482,7 @@ impl Experiment {
                 alloc::format!("the recording holds {got}, the model observes {want}"),
             ));
         }
-        if p.is_empty() && self.config.methods.iter().any(|m| m.needs_interval()) {
+        if p.is_empty() && self.config.methods.iter().any(|m| m.whole_intervals_only()) {
             p.extend(recording.interval_problems(self.config.time.dt_obs));
         }
         p
@@ -528,11 +534,27 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
     ) -> Result<ExperimentRun, ZakaiError> {
-        let mut filters = Vec::with_capacity(self.config.methods.len());
+        let mut filters: Vec<Box<dyn Filter>> = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
+        // A method that does not apply to the model (a nonlinear model for the exact linear
+        // filters, …) is recorded as such; the others still run.
+        let mut not_applicable = Vec::new();
+        let bounds = self.config.bounds();
         for (i, (method, name)) in self.config.methods.iter().zip(&self.names).enumerate() {
             let start = clock.map(|c| c.now());
-            filters.push(self.build_method(method, name.clone(), method_seed(seed, i))?);
+            let reason = method.suitability(&self.model, &self.prior, &self.probes, &bounds);
+            let built = match reason {
+                Some(reason) => Err(reason),
+                None => match self.build_method(method, name.clone(), method_seed(seed, i)) {
+                    Ok(filter) => Ok(filter),
+                    Err(ZakaiError::Filter(FilterError::Unsuitable(reason))) => Err(reason),
+                    Err(e) => return Err(e),
+                },
+            };
+            filters.push(built.unwrap_or_else(|reason| {
+                not_applicable.push((i, reason));
+                Box::new(NotApplicable::new(name, self.model.n))
+            }));
             build_seconds.push(match (clock, start) {
                 (Some(c), Some(s)) => c.now() - s,
                 _ => 0.0,
@@ -540,7 +562,7 @@ impl Experiment {
         }
         let latest: Vec<_> = filters.iter().map(|f| f.estimate()).collect();
         let (rows, n) = (recording.times.len(), self.model.n);
-        let tracks = self
+        let mut tracks: Vec<MethodTrack> = self
             .names
             .iter()
             .zip(build_seconds)
@@ -565,6 +587,12 @@ impl Experiment {
                 following: false,
             })
             .collect();
+        for (i, reason) in not_applicable {
+            tracks[i].failure = Some(Failure {
+                k: 0,
+                message: alloc::format!("{NOT_APPLICABLE}: {reason}"),
+            });
+        }
         let mut run = ExperimentRun {
             seed,
             data: recording,
@@ -574,7 +602,7 @@ impl Experiment {
             filters,
             tracks,
             next: 0,
-            bound: self.config.failure.divergence_bound,
+            bound: self.config.divergence_bound(&self.prior),
             track_loss: self.config.failure.track_loss,
             follow_failed: false,
         };
@@ -599,6 +627,42 @@ impl Experiment {
     /// A whole run, timed by the standard clock where there is one.
     pub fn run(&self, seed: u64) -> Result<RunResult, ZakaiError> {
         with_standard_clock(|clock| self.run_with(seed, clock, &mut Silent))
+    }
+}
+
+/// How the failure of a method that does not apply to the model starts (the run records it
+/// at observation 0 and steps the others).
+pub const NOT_APPLICABLE: &str = "does not apply here";
+
+/// The stand-in for a method that does not apply to the model: never stepped (its track is
+/// failed from the start).
+#[derive(Clone, Debug)]
+struct NotApplicable {
+    name: String,
+    n: usize,
+}
+
+impl NotApplicable {
+    fn new(name: &str, n: usize) -> Self {
+        NotApplicable {
+            name: name.to_string(),
+            n,
+        }
+    }
+}
+
+impl Filter for NotApplicable {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn step(&mut self, _: &Observation) -> Result<(), FilterError> {
+        Err(FilterError::Unsuitable(alloc::format!(
+            "{}: {NOT_APPLICABLE}",
+            self.name
+        )))
+    }
+    fn estimate(&self) -> crate::filters::Estimate {
+        crate::filters::Estimate::zeros(self.n)
     }
 }
 
@@ -884,11 +948,11 @@ impl ExperimentRun {
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
-    use crate::error::FilterError;
     use crate::filters::Estimate;
     use crate::testing::test;
 
     /// A filter whose chosen steps break a condition and whose density then vanishes.
+    #[derive(Clone, Debug)]
     struct Unstable;
 
     impl Filter for Unstable {
@@ -983,7 +1047,7 @@ mod tests {
         config.time.t_final = 1.0;
         // A tight divergence bound makes methods fail in some runs, so failures are compared
         // too (checked below).
-        config.failure.divergence_bound = 1.0;
+        config.failure.divergence_bound = Some(1.0);
         let experiment = Experiment::new(config).unwrap();
         let (mut any_failure, mut any_complete) = (false, false);
         for seed in 1..=8 {

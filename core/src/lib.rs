@@ -46,10 +46,14 @@
 //! A loop that reads the estimate after every step can keep one [`Estimate`] and pass it to
 //! [`Filter::estimate_into`], which writes into its storage instead of allocating a new one.
 //!
-//! Grid and spectral methods also need the box they live on and the observation interval
+//! Grid and spectral methods also need the box they live on and the observation interval Δτ
 //! they are built for: `Qiem::builder(&model).prior_gaussian(..).domain(&[(-6.0, 6.0)]).dt(0.01)`.
-//! A step of another length is an error ([`FilterError::IntervalMismatch`]), never a silent
-//! rebuild. Models come from text ([`Model::from_text`]), from Rust closures
+//! Any positive step is taken (the grid filters as whole Δτ plus a remainder with an operator
+//! of its own; the spectral filter only whole multiples of Δτ, else
+//! [`FilterError::IntervalMismatch`]). [`Filter::predict`] moves a filter without an
+//! observation, [`Filter::update`] assimilates one at the current time, a NaN component is a
+//! missing value, and [`Fork::fork`] / [`Filter::forecast`] look ahead without moving the
+//! filter; a step that fails leaves it exactly as it was. Models come from text ([`Model::from_text`]), from Rust closures
 //! ([`Model::from_closures`]) or from the parts ([`Model::new`]). The crate's `examples/`
 //! folder holds complete programs.
 //!
@@ -115,7 +119,7 @@ pub use filters::method::{Builder, Method, MethodInfo};
 pub use filters::particle::Pf;
 pub use filters::spectral::Spectral;
 pub use filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
-pub use filters::{Estimate, Filter, Observation};
+pub use filters::{Estimate, Filter, Fork, Observation};
 pub use model::{GaussianMixture, Model, Noise, Prior};
 pub use recording::Recording;
 pub use scenario::{MethodConfig, ScenarioConfig};

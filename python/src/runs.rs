@@ -135,12 +135,54 @@ pub fn method_defaults_json(key: &str, params: &str) -> PyResult<String> {
                     ),
                 ));
             }
+            let kind = base
+                .info()
+                .params
+                .iter()
+                .find(|p| p.name == name)
+                .map(|p| p.kind);
+            let v = whole_numbers(kind, v)
+                .map_err(|message| errors::config(&format!("{field}.{name}"), message))?;
             object.insert(name, v);
         }
     }
     let method: MethodConfig = serde_json::from_value(value)
         .map_err(|e| errors::config(&field, format!("invalid parameters: {e}")))?;
     Ok(to_json(&method))
+}
+
+/// A parameter value as its kind wants it: Python's `1e3` or `400.0` where a count is
+/// expected is the whole number it equals; a fraction there is refused in words.
+fn whole_numbers(
+    kind: Option<zakai::filters::method::ParamKind>,
+    v: serde_json::Value,
+) -> Result<serde_json::Value, String> {
+    use zakai::filters::method::ParamKind;
+    let whole = |v: serde_json::Value| -> Result<serde_json::Value, String> {
+        match v.as_f64() {
+            Some(x) if v.is_f64() => {
+                if x.fract() == 0.0 && (0.0..=9.007_199_254_740_992e15).contains(&x) {
+                    Ok(serde_json::Value::from(x as u64))
+                } else {
+                    Err(format!("must be a whole nonnegative number, got {x}"))
+                }
+            }
+            _ => Ok(v),
+        }
+    };
+    match (kind, v) {
+        (Some(ParamKind::Int | ParamKind::OptionalInt), v) => whole(v),
+        (Some(ParamKind::IntList), serde_json::Value::Array(items)) => items
+            .into_iter()
+            .map(whole)
+            .collect::<Result<Vec<_>, _>>()
+            .map(serde_json::Value::Array),
+        // One count for every dimension, given as a number.
+        (Some(ParamKind::IntList), v) if v.is_number() => {
+            whole(v).map(|v| serde_json::Value::Array(vec![v]))
+        }
+        (_, v) => Ok(v),
+    }
 }
 
 /// `(times, states, observations)` of the run with `seed`: times τ₀…τ_N, the true states

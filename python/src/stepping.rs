@@ -115,11 +115,47 @@ impl Stepper {
     }
 
     /// Predicts over `dt` and assimilates one observation (an increment dy for continuous
-    /// models, a measurement z for discrete ones).
+    /// models, a measurement z for discrete ones); NaN components are missing.
     fn step(&mut self, observation: PyReadonlyArrayDyn<'_, f64>, dt: f64) -> PyResult<()> {
         let (values, _, _) = rows(&observation, "observation")?;
         self.observation(&values)?;
         self.step_values(&values, dt)
+    }
+
+    /// Predicts over `dt` without an observation.
+    fn predict(&mut self, dt: f64) -> PyResult<()> {
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(errors::config(
+                "dt",
+                format!("must be finite and nonnegative (got {dt})"),
+            ));
+        }
+        self.filter.predict(dt).map_err(errors::from_filter)
+    }
+
+    /// Assimilates the measurement `z` at the current time (discrete models).
+    fn update(&mut self, z: PyReadonlyArrayDyn<'_, f64>) -> PyResult<()> {
+        if self.continuous {
+            return Err(errors::config(
+                "observation",
+                "a continuous observation comes as an increment dy over an interval: use step(dy, dt)",
+            ));
+        }
+        let (values, _, _) = rows(&z, "z")?;
+        self.observation(&values)?;
+        self.filter.update(&values).map_err(errors::from_filter)
+    }
+
+    /// An independent copy in the current state (stepping one does not move the other).
+    fn fork(&self) -> Stepper {
+        Stepper {
+            filter: self.filter.fork(),
+            n: self.n,
+            m: self.m,
+            continuous: self.continuous,
+            chosen: self.chosen.clone(),
+            concerns: Vec::new(),
+        }
     }
 
     /// Steps through every row of `observations` with the step lengths `dts` and returns the

@@ -169,3 +169,83 @@ fn map_filters_following_a_second_mode_allocate_nothing() {
         );
     }
 }
+
+/// A model from Rust closures — derivatives by central differences — costs no allocation per
+/// step either (EKF, IEKF, IOKF, UKF, PF on a 2-D pendulum observed by two sensors), nor do
+/// steps with one component missing, nothing observed, or an irregular step, once each of
+/// them has been met in the warm-up (the particle filter builds the marginal noise of a new
+/// pattern of missing components the first time it meets it).
+#[test]
+fn closure_models_and_missing_data_allocate_nothing() {
+    use zakai::{Ekf, Filter, Iekf, Iokf, Model, Noise, Pf, Ukf};
+    let model = Model::from_closures(
+        2,
+        2,
+        |x, o| {
+            o[0] = x[1];
+            o[1] = -4.0 * x[0].sin() - 0.2 * x[1];
+        },
+        |x, o| {
+            o[0] = x[0].sin();
+            o[1] = x[1];
+        },
+        Noise::discrete(0.05),
+    )
+    .unwrap();
+    let (mean, cov) = ([0.5, 0.0], [[0.2, 0.0], [0.0, 0.2]]);
+    let filters: Vec<Box<dyn Filter>> = vec![
+        Box::new(
+            Ekf::builder(&model)
+                .prior_gaussian(&mean, &cov)
+                .build()
+                .unwrap(),
+        ),
+        Box::new(
+            Iekf::builder(&model)
+                .prior_gaussian(&mean, &cov)
+                .build()
+                .unwrap(),
+        ),
+        Box::new(
+            Iokf::builder(&model)
+                .prior_gaussian(&mean, &cov)
+                .build()
+                .unwrap(),
+        ),
+        Box::new(
+            Ukf::builder(&model)
+                .prior_gaussian(&mean, &cov)
+                .build()
+                .unwrap(),
+        ),
+        Box::new(
+            Pf::builder(&model)
+                .prior_gaussian(&mean, &cov)
+                .build()
+                .unwrap(),
+        ),
+    ];
+    let nan = f64::NAN;
+    // (Δτ, z): both sensors, one missing, none (a prediction), an irregular step.
+    let rows = [
+        (0.1, [0.45, 0.1]),
+        (0.1, [0.40, nan]),
+        (0.1, [nan, nan]),
+        (0.37, [nan, -0.2]),
+    ];
+    for mut filter in filters {
+        for (dt, z) in &rows {
+            filter.step(&Observation::measurement(*dt, z)).unwrap();
+        }
+        let mut estimate = filter.estimate();
+        let before = allocations();
+        for k in 0..400 {
+            let (dt, z) = rows[k % rows.len()];
+            filter.step(&Observation::measurement(dt, &z)).unwrap();
+            filter.predict(0.05).unwrap();
+            filter.estimate_into(&mut estimate);
+        }
+        let count = allocations() - before;
+        assert_eq!(count, 0, "{}: allocations in 400 steps", filter.name());
+    }
+}

@@ -246,19 +246,31 @@ mod filter {
         assert!(ekf > 10.0 * direct, "EKF {ekf}");
     }
 
-    /// Models outside (C1)–(C3) are refused with the failing condition named: the cubic
-    /// sensor's Σh² = x⁶ is not quadratic (C2); f = x² makes η = x⁴ + 2x + … not quadratic
-    /// (C3).
+    /// Models outside (C1)–(C3) are refused with the failing condition named — the run goes
+    /// on and marks the method as not applying: the cubic sensor's Σh² = x⁶ is not quadratic
+    /// (C2); f = x² makes η = x⁴ + 2x + … not quadratic (C3).
     #[test]
     fn non_yau_systems_are_refused_with_the_condition() {
         let mut c = presets::preset("cubic-sensor-1d").unwrap();
         c.methods = vec![MethodConfig::from_key("direct").unwrap()];
-        let e = Experiment::new(c.clone()).unwrap().start(1).err().unwrap();
-        assert!(e.to_string().contains("(C2) Σh²"), "{e}");
+        // The run goes on; the method is marked as not applying, with the condition.
+        let failure = |c: &zakai::ScenarioConfig| {
+            let run = Experiment::new(c.clone()).unwrap().run(1).unwrap();
+            let f = run.methods[0].failure.clone().expect("marked");
+            assert_eq!(f.k, 0);
+            assert!(
+                f.message.starts_with(zakai::experiment::NOT_APPLICABLE),
+                "{}",
+                f.message
+            );
+            f.message
+        };
+        let e = failure(&c);
+        assert!(e.contains("(C2) Σh²"), "{e}");
         c.model.observation = vec!["x".into()];
         c.model.drift = vec!["x^2".into()];
-        let e = Experiment::new(c).unwrap().start(1).err().unwrap();
-        assert!(e.to_string().contains("(C3) η"), "{e}");
+        let e = failure(&c);
+        assert!(e.contains("(C3) η"), "{e}");
     }
 }
 

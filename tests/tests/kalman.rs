@@ -188,8 +188,13 @@ fn ekf_and_ukf_equal_the_kalman_filter_on_linear_models() {
 fn the_kalman_filter_refuses_a_nonlinear_model() {
     let mut config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
     config.methods = vec![MethodConfig::Kalman(KalmanParams::default())];
-    let err = Experiment::new(config).unwrap().start(1).err().unwrap();
-    assert!(err.to_string().contains("needs a linear model"), "{err}");
+    // The run goes on; the filter is marked as not applying, with the reason.
+    let run = Experiment::new(config).unwrap().run(1).unwrap();
+    let err = run.methods[0].failure.clone().expect("marked").message;
+    assert!(
+        err.contains("does not apply here") && err.contains("needs a linear model"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -145,7 +145,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
         seed: c.seed,
         // Divergence is not what is tested here: the grid bounds the estimate anyway.
         failure: FailureRule {
-            divergence_bound: 1e300,
+            divergence_bound: Some(1e300),
             track_loss: None,
         },
         methods: vec![method(key, c.points, c.dt_fraction * c.dt_obs, 1)],
@@ -357,7 +357,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                 },
                 seed,
                 failure: FailureRule {
-                    divergence_bound: 1e300,
+                    divergence_bound: Some(1e300),
                     track_loss: None,
                 },
                 methods: vec![method("qiem4", points, 0.001, 2)],

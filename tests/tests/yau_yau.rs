@@ -184,9 +184,11 @@ fn grid_limits_are_reported_before_allocation() {
             cov: vec![vec![1.0]],
         }],
     };
-    let e = Experiment::new(c).unwrap().start(1).err().unwrap();
+    // Not applying to discrete measurements: marked so in the run, with the reason.
+    let run = Experiment::new(c).unwrap().run(1).unwrap();
+    let e = run.methods[0].failure.clone().expect("marked").message;
     assert!(
-        e.to_string().contains("need continuous observations"),
+        e.contains("does not apply here") && e.contains("need continuous observations"),
         "{e}"
     );
 }

@@ -504,7 +504,7 @@ try {
   //     are the CLI's `zakai filter` estimates; a broken file is refused with its line.
   {
     const { execFileSync } = await import('node:child_process');
-    const { writeFileSync } = await import('node:fs');
+    const { writeFileSync, readFileSync } = await import('node:fs');
     const cli = process.env.ZAKAI_CLI ?? `${root}target/debug/zakai`;
     const obsPath = `${artifacts}/recorded-obs.csv`;
     const truthPath = `${artifacts}/recorded-truth.csv`;
@@ -567,6 +567,34 @@ try {
     }, [scenarioJson, saObs]);
     await data.waitForFunction(() => window.zakaiPage.info?.name === 'sa-example-1' && window.zakaiPage.info.has_truth === false, null, { timeout: 15000 });
     assert.match(await data.textContent('#data-status'), /filtering sa-obs\.csv/);
+    // A recording with gaps and an irregular step: increments 10–14 missing (an empty field,
+    // then NaN), row 20 dropped (its increment added to row 21's: a step of 2Δτ). Every
+    // method runs through it, the grid filter included, and the page's estimates are the
+    // CLI's on the same file.
+    {
+      const lines = readFileSync(obsPath, 'utf8').trim().split('\n');
+      const rows = lines.slice(1).map((l) => l.split(','));
+      rows.forEach((r, k) => { if (k >= 10 && k <= 14) r[1] = k % 2 ? '' : 'NaN'; });
+      rows[21][1] = String(Number(rows[20][1]) + Number(rows[21][1]));
+      rows.splice(20, 1);
+      const gapPath = `${artifacts}/recorded-gaps.csv`;
+      writeFileSync(gapPath, [lines[0], ...rows.map((r) => r.join(','))].join('\n') + '\n');
+      const gapRun = JSON.parse(execFileSync(cli, ['filter', 'cubic-sensor-1d', '--observations', gapPath, '--seed', '1', '--format', 'json']));
+      await data.goto(`${url}?preset=cubic-sensor-1d`);
+      await data.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
+      await data.setInputFiles('#file-observations', gapPath);
+      await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
+      await data.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
+      await data.click('#play');
+      await data.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 30000 });
+      await data.waitForTimeout(300);
+      const gapShown = await data.evaluate(() => window.zakaiPage.data.est.map((e) => e[0]));
+      gapRun.methods.forEach((m, i) => {
+        assert.equal(m.failure ?? null, null, `${m.name} crosses the gaps`);
+        assert.equal(gapShown[i].filter((v) => v !== null).length, rows.length, `${m.name}: a row per time`);
+        m.estimates.forEach((v, k) => assert.ok(Math.abs(gapShown[i][k] - v) <= 1e-9 * Math.max(1, Math.abs(v)), `${m.name} row ${k} with gaps: page ${gapShown[i][k]}, CLI ${v}`));
+      });
+    }
     await data.close();
   }
 

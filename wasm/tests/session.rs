@@ -161,3 +161,33 @@ fn a_session_filters_recorded_observations() {
     let err = message(bad.err().expect("a bad file is refused"));
     assert!(err.contains("observations line 3, column dy1"), "{err}");
 }
+
+/// A forecast from the middle of a run: every method of the cubic sensor predicts 20 steps
+/// of Δτ on a fork (the run does not move: its estimates and position stay), the spread grows
+/// from the first step to the last, and bad requests are errors, not panics.
+#[wasm_bindgen_test]
+fn a_forecast_forks_each_method() {
+    let mut s = Session::new(config_js("cubic-sensor-1d"), Some(3.0)).unwrap();
+    s.step(30).unwrap();
+    let (position, before) = (s.position(), s.estimates(0, 0, 100));
+    let mut forecast = 0;
+    for i in 0..6 {
+        if s.estimates(i, 0, 100).len() < position {
+            // Failed (the track-loss rule): no forecast, an error.
+            assert!(s.forecast(i, 0.01, 20).is_err(), "method {i}");
+            continue;
+        }
+        forecast += 1;
+        let f = s.forecast(i, 0.01, 20).unwrap();
+        assert_eq!(f.len(), 40, "method {i}: 20 means and 20 sds");
+        assert!(f.iter().all(|v| v.is_finite()), "method {i}");
+        let (first_sd, last_sd) = (f[20], f[39]);
+        assert!(last_sd >= first_sd, "method {i}: {first_sd} then {last_sd}");
+    }
+    assert!(forecast >= 4, "{forecast} methods forecast");
+    assert_eq!(s.position(), position);
+    assert_eq!(s.estimates(0, 0, 100), before);
+    assert!(s.forecast(0, -1.0, 3).is_err());
+    assert!(s.forecast(0, f64::NAN, 3).is_err());
+    assert!(s.forecast(99, 0.01, 3).is_err());
+}

@@ -31,7 +31,7 @@ use super::method::{
     builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
     ProblemContext, Takes,
 };
-use super::{marginal, Estimate, Filter, Observation};
+use super::{marginal, Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::error::{FilterError, ZakaiError};
 use crate::grid::TensorGrid;
 use crate::linalg::{
@@ -189,6 +189,15 @@ impl Component {
         Ok(c)
     }
 
+    /// Makes this a copy of `from` in place (same dimension).
+    fn copy_from(&mut self, from: &Component) {
+        self.w = from.w;
+        self.m.copy_from(&from.m);
+        self.p.copy_from(&from.p);
+        self.l.copy_from(&from.l);
+        self.log_det = from.log_det;
+    }
+
     /// Symmetrises P and factors it again in place.
     fn refactor(&mut self) -> Result<(), FilterError> {
         symmetrize(&mut self.p);
@@ -259,6 +268,7 @@ pub struct Reduction {
 }
 
 /// The Gaussian-sum filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct GaussianSumFilter {
     name: String,
     a: DMatrix<f64>,
@@ -274,10 +284,13 @@ pub struct GaussianSumFilter {
     cached: Option<Discretization>,
     reduction: Reduction,
     work: UpdateWork,
+    /// The mixture a step started from (its first `.1` slots), restored when the step fails.
+    saved: (Vec<Component>, usize, Reduction),
 }
 
 /// Storage of a step, made once (the update writes the next mixture into `next`; the merge
 /// cost table and liveness marks grow to their working size once).
+#[derive(Clone, Debug)]
 struct UpdateWork {
     next: Vec<Component>,
     merged: Component,
@@ -353,6 +366,11 @@ impl GaussianSumFilter {
             components,
             cached: None,
             reduction: Reduction::default(),
+            saved: (
+                (0..slots).map(|_| Component::zeros(n)).collect(),
+                0,
+                Reduction::default(),
+            ),
         })
     }
 
@@ -367,6 +385,34 @@ impl GaussianSumFilter {
     }
 
     /// The mixture's components.
+    /// Keeps the mixture (storage grown once to its working size).
+    fn save(&mut self) {
+        let (saved, len, reduction) = &mut self.saved;
+        let n = self.a.nrows();
+        if saved.len() < self.len {
+            saved.resize_with(self.len, || Component::zeros(n));
+        }
+        for (to, from) in saved.iter_mut().zip(&self.components[..self.len]) {
+            to.copy_from(from);
+        }
+        *len = self.len;
+        *reduction = self.reduction;
+    }
+
+    /// Back to the mixture [`GaussianSumFilter::save`] kept.
+    fn restore(&mut self) {
+        let (saved, len, reduction) = &self.saved;
+        let n = self.a.nrows();
+        if self.components.len() < *len {
+            self.components.resize_with(*len, || Component::zeros(n));
+        }
+        for (to, from) in self.components.iter_mut().zip(&saved[..*len]) {
+            to.copy_from(from);
+        }
+        self.len = *len;
+        self.reduction = *reduction;
+    }
+
     fn mixture(&self) -> &[Component] {
         &self.components[..self.len]
     }
@@ -377,7 +423,7 @@ impl GaussianSumFilter {
     }
 
     /// Predicts every component over `dt` (exact).
-    pub fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
+    fn propagate(&mut self, dt: f64) -> Result<(), FilterError> {
         let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, dt);
         for comp in &mut self.components[..self.len] {
             d.propagate(&mut comp.m, &mut comp.p, &mut self.work.moved);
@@ -386,17 +432,81 @@ impl GaussianSumFilter {
         Ok(())
     }
 
-    /// The Bayes update with measurement `z`, then the mixture reduction.
-    pub fn update(&mut self, z: &[f64]) -> Result<(), FilterError> {
-        let GaussianSumFilter {
-            c,
-            c0,
-            noise,
-            components,
-            len,
-            work,
-            ..
-        } = self;
+    /// The Bayes update with the observed components of `z`, then the mixture reduction. A
+    /// missing component (NaN) is taken out as in the Kalman filters: its row of C and its
+    /// entries of c, z and every noise mean read 0, its rows and columns of every noise
+    /// covariance those of the identity — the same update as with the observed rows alone
+    /// (a constant factor in every pair's weight, which the normalisation removes). The
+    /// masked model is made for each update with a missing component.
+    fn assimilate(&mut self, z: &[f64]) -> Result<(), FilterError> {
+        if z.iter().any(|v| Observation::is_missing(*v)) {
+            let seen: Vec<bool> = z.iter().map(|v| !Observation::is_missing(*v)).collect();
+            let mut c = self.c.clone();
+            let mut c0 = self.c0.clone();
+            for (i, seen) in seen.iter().enumerate() {
+                if !seen {
+                    c.row_mut(i).fill(0.0);
+                    c0[i] = 0.0;
+                }
+            }
+            let noise = GaussianMixture::new(
+                self.noise
+                    .components()
+                    .iter()
+                    .map(|v| {
+                        let mut mean = v.mean.clone();
+                        let mut cov = v.cov.clone();
+                        for (i, seen) in seen.iter().enumerate() {
+                            if !seen {
+                                mean[i] = 0.0;
+                                cov.row_mut(i).fill(0.0);
+                                cov.column_mut(i).fill(0.0);
+                                cov[(i, i)] = 1.0;
+                            }
+                        }
+                        (v.weight, mean, cov)
+                    })
+                    .collect(),
+            )
+            .map_err(|_| FilterError::NotPositiveDefinite {
+                what: "noise covariance of the observed components",
+            })?;
+            let z: Vec<f64> = z
+                .iter()
+                .map(|v| if Observation::is_missing(*v) { 0.0 } else { *v })
+                .collect();
+            let GaussianSumFilter {
+                components,
+                len,
+                work,
+                ..
+            } = self;
+            Self::update_with(components, len, work, (&c, &c0, &noise), &z)?;
+        } else {
+            let GaussianSumFilter {
+                c,
+                c0,
+                noise,
+                components,
+                len,
+                work,
+                ..
+            } = self;
+            Self::update_with(components, len, work, (c, c0, noise), z)?;
+        }
+        self.reduce();
+        Ok(())
+    }
+
+    /// The Bayes update of every pair (component, noise component) with `z = C x + c + v`
+    /// into the mixture's storage (`components`, `len`).
+    fn update_with(
+        components: &mut Vec<Component>,
+        len: &mut usize,
+        work: &mut UpdateWork,
+        (c, c0, noise): (&DMatrix<f64>, &DVector<f64>, &GaussianMixture),
+        z: &[f64],
+    ) -> Result<(), FilterError> {
         let count = *len * noise.components().len();
         work.z.copy_from_slice(z);
         // The bank holds max(prior, cap) × J; more only when merges failed to keep the cap.
@@ -446,7 +556,6 @@ impl GaussianSumFilter {
         }
         core::mem::swap(components, &mut work.next);
         *len = count;
-        self.reduce();
         Ok(())
     }
 
@@ -598,11 +707,21 @@ impl Filter for GaussianSumFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        crate::filters::check_measurement(&self.name, obs, self.c.nrows())?;
-        if obs.dt > 0.0 {
-            self.predict(obs.dt)?;
+        let observed = obs.check(&self.name, ObservationKind::Measurement, self.c.nrows())?;
+        self.save();
+        let stepped = (|| {
+            if obs.dt > 0.0 {
+                self.propagate(obs.dt)?;
+            }
+            match observed {
+                Observed::Nothing => Ok(()),
+                Observed::All | Observed::Some => self.assimilate(obs.value),
+            }
+        })();
+        if stepped.is_err() {
+            self.restore();
         }
-        self.update(obs.value)
+        stepped
     }
 
     fn estimate(&self) -> Estimate {

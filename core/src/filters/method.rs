@@ -185,8 +185,12 @@ pub trait Method {
     /// Other keys accepted on the command line (`"kf"` for `"kalman"`).
     const ALIASES: &'static [&'static str] = &[];
     /// True for methods built for one observation interval Δτ (grid and spectral methods):
-    /// they need Δτ at construction and refuse steps of another length.
+    /// they need Δτ at construction (their operators are made for it; other step lengths
+    /// are whole Δτ plus a remainder with an operator of its own).
     const NEEDS_INTERVAL: bool = false;
+    /// True for methods that take only steps of whole multiples of Δτ (the spectral filter,
+    /// whose operator is made off-line for Δτ alone).
+    const WHOLE_INTERVALS_ONLY: bool = false;
     /// True for methods that live on a box (the domain must be given).
     const NEEDS_DOMAIN: bool = false;
     /// The method's parameters (serde, with defaults).

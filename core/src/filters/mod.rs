@@ -190,54 +190,191 @@ pub(crate) fn copy_vector(to: &mut DVector<f64>, from: &DVector<f64>) {
     }
 }
 
-/// An observation of the `kind` a filter takes, of length m, or the error it returns.
-fn check_observation(
-    name: &str,
-    obs: &Observation,
-    kind: ObservationKind,
-    m: usize,
-) -> Result<(), crate::error::FilterError> {
-    if obs.kind != kind || obs.value.len() != m {
-        let what = match kind {
-            ObservationKind::Increment => "increments",
-            ObservationKind::Measurement => "measurements z_k",
-        };
-        return Err(crate::error::FilterError::BadObservation(alloc::format!(
-            "{name} needs {what} of length {m}"
-        )));
+/// Which components of an [`Observation`] were observed (see [`Observation::check`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Observed {
+    /// None: the step is a prediction only (an empty value, or every component missing).
+    Nothing,
+    /// Every component.
+    All,
+    /// Some components are missing (NaN) and the others observed.
+    Some,
+}
+
+impl Observation<'_> {
+    /// A prediction over `dt` with nothing to assimilate (a gap in the recording, or a
+    /// forecast): what [`Filter::predict`] steps with.
+    pub fn nothing(dt: f64) -> Observation<'static> {
+        Observation {
+            dt,
+            value: &[],
+            kind: ObservationKind::Measurement,
+        }
     }
-    Ok(())
+
+    /// Whether a component's value marks it missing: NaN is the missing marker (as in
+    /// pandas and statsmodels); ±∞ is an error, never a marker.
+    pub fn is_missing(value: f64) -> bool {
+        value.is_nan()
+    }
+
+    /// Checks this observation for a filter `name` that takes observations of `kind` with `m`
+    /// components, before anything moves: `dt` must be finite and nonnegative; the value must
+    /// be empty (nothing observed) or of the filter's kind and length m, each component finite
+    /// or NaN (missing). Returns which components were observed.
+    pub fn check(
+        &self,
+        name: &str,
+        kind: ObservationKind,
+        m: usize,
+    ) -> Result<Observed, FilterError> {
+        if !(self.dt.is_finite() && self.dt >= 0.0) {
+            return Err(FilterError::BadObservation(alloc::format!(
+                "{name}: the step Δτ must be finite and nonnegative, got {}",
+                self.dt
+            )));
+        }
+        if self.value.is_empty() {
+            return Ok(Observed::Nothing);
+        }
+        if self.kind != kind || self.value.len() != m {
+            let what = match kind {
+                ObservationKind::Increment => "increments",
+                ObservationKind::Measurement => "measurements z_k",
+            };
+            return Err(FilterError::BadObservation(alloc::format!(
+                "{name} needs {what} of length {m}"
+            )));
+        }
+        if let Some(i) = self.value.iter().position(|v| v.is_infinite()) {
+            return Err(FilterError::BadObservation(alloc::format!(
+                "{name}: component {} of the observation is {} (NaN marks a missing component; infinities are not values)",
+                i + 1,
+                self.value[i]
+            )));
+        }
+        let missing = self.value.iter().filter(|v| Self::is_missing(**v)).count();
+        Ok(if missing == 0 {
+            Observed::All
+        } else if missing == m {
+            Observed::Nothing
+        } else {
+            Observed::Some
+        })
+    }
 }
 
-/// An increment Δy of length m, or the error a filter for continuous observations returns.
-pub(crate) fn check_increment(
-    name: &str,
-    obs: &Observation,
-    m: usize,
-) -> Result<(), crate::error::FilterError> {
-    check_observation(name, obs, ObservationKind::Increment, m)
-}
-
-/// The observation `model` makes (an increment or a measurement of length m), or the error.
-pub(crate) fn check_for_model(
-    name: &str,
-    model: &crate::model::Model,
-    obs: &Observation,
-) -> Result<(), crate::error::FilterError> {
-    let kind = match model.observations {
+/// The observation kind `model` makes (increments or measurements).
+pub(crate) fn kind_of(model: &crate::model::Model) -> ObservationKind {
+    match model.observations {
         crate::model::ObservationModel::Continuous { .. } => ObservationKind::Increment,
         crate::model::ObservationModel::Discrete { .. } => ObservationKind::Measurement,
-    };
-    check_observation(name, obs, kind, model.m)
+    }
 }
 
-/// A measurement z_k of length m, or the error a filter for discrete measurements returns.
-pub(crate) fn check_measurement(
-    name: &str,
-    obs: &Observation,
-    m: usize,
-) -> Result<(), crate::error::FilterError> {
-    check_observation(name, obs, ObservationKind::Measurement, m)
+/// The error of a filter that cannot assimilate an observation with only some components
+/// missing.
+pub(crate) fn partial_unsupported(name: &str) -> FilterError {
+    FilterError::BadObservation(alloc::format!(
+        "{name} cannot assimilate an observation with only some components missing (NaN); give all components, or none for a prediction only"
+    ))
+}
+
+/// The observation noise density of the components an observation has (001's mixtures, or a
+/// Gaussian), with the marginal of each pattern of missing components met so far: built the
+/// first time a pattern occurs, so a recording with gaps allocates only then.
+#[derive(Clone, Debug)]
+pub(crate) struct ObservedNoise {
+    full: crate::model::GaussianMixture,
+    marginals: Vec<(Vec<bool>, crate::model::GaussianMixture)>,
+}
+
+impl ObservedNoise {
+    /// Over the density of every component.
+    pub(crate) fn new(full: crate::model::GaussianMixture) -> Self {
+        ObservedNoise {
+            full,
+            marginals: Vec::new(),
+        }
+    }
+
+    /// The density of the components of `value` that are not missing.
+    pub(crate) fn of(
+        &mut self,
+        value: &[f64],
+    ) -> Result<&crate::model::GaussianMixture, FilterError> {
+        let seen = |v: &f64| !Observation::is_missing(*v);
+        if value.iter().all(seen) {
+            return Ok(&self.full);
+        }
+        let found = self
+            .marginals
+            .iter()
+            .position(|(pattern, _)| pattern.iter().zip(value).all(|(p, v)| *p == seen(v)));
+        let index = match found {
+            Some(i) => i,
+            None => {
+                let pattern: Vec<bool> = value.iter().map(seen).collect();
+                let marginal =
+                    self.full
+                        .marginal(&pattern)
+                        .map_err(|_| FilterError::NotPositiveDefinite {
+                            what: "noise covariance of the observed components",
+                        })?;
+                self.marginals.push((pattern, marginal));
+                self.marginals.len() - 1
+            }
+        };
+        Ok(&self.marginals[index].1)
+    }
+}
+
+/// Writes `residual(a)` of the observed components `a` of `value` (NaN = missing) one after
+/// another into `out`; returns how many.
+pub(crate) fn observed_residual(
+    value: &[f64],
+    mut residual: impl FnMut(usize) -> f64,
+    out: &mut [f64],
+) -> usize {
+    let mut k = 0;
+    for (a, v) in value.iter().enumerate() {
+        if !Observation::is_missing(*v) {
+            out[k] = residual(a);
+            k += 1;
+        }
+    }
+    k
+}
+
+/// The state a grid filter's step starts from — its density and estimate —, kept so that a
+/// step that fails can be undone (the [`Filter`] contract): one copy of the density per step,
+/// into storage made once.
+#[derive(Clone, Debug)]
+pub(crate) struct SavedDensity {
+    u: Vec<f64>,
+    estimate: Estimate,
+}
+
+impl SavedDensity {
+    /// Storage for a density of `len` values and an estimate like `estimate`.
+    pub(crate) fn new(len: usize, estimate: &Estimate) -> Self {
+        SavedDensity {
+            u: alloc::vec![0.0; len],
+            estimate: estimate.clone(),
+        }
+    }
+
+    /// Keeps `u` and `estimate`.
+    pub(crate) fn save(&mut self, u: &[f64], estimate: &Estimate) {
+        self.u.copy_from_slice(u);
+        self.estimate.copy_from(estimate);
+    }
+
+    /// Puts back what [`SavedDensity::save`] kept.
+    pub(crate) fn restore(&self, u: &mut [f64], estimate: &mut Estimate) {
+        u.copy_from_slice(&self.u);
+        estimate.copy_from(&self.estimate);
+    }
 }
 
 /// The grid self-check's first threshold: mass on the two outermost nodes of any face, as a
@@ -316,18 +453,22 @@ pub(crate) fn normalise_on_grid(
     Ok(())
 }
 
-/// The step length a filter built for one observation interval accepts: `dt` equal to
-/// `built_for` to a relative [`crate::recording::INTERVAL_TOLERANCE`], or the error saying what it was built for.
-pub(crate) fn check_interval(name: &str, built_for: f64, dt: f64) -> Result<(), FilterError> {
-    if crate::recording::is_interval(dt, built_for) {
-        Ok(())
-    } else {
-        Err(FilterError::IntervalMismatch {
-            filter: name.into(),
-            built_for,
-            got: dt,
-        })
+/// How many plans for interval lengths other than Δτ a grid filter keeps (the remainders of
+/// irregular intervals): each is one factorisation or spectral solve of the grid's size.
+pub const REMAINDER_PLANS: usize = 4;
+
+/// `interval` as whole intervals Δτ = `dt_obs` and a remainder in (0, Δτ) (0 when the
+/// interval is a multiple of Δτ up to [`crate::recording::INTERVAL_TOLERANCE`]): how a grid
+/// filter built for Δτ crosses an interval of any length with the operators it has.
+pub(crate) fn whole_intervals(interval: f64, dt_obs: f64) -> (usize, f64) {
+    let tolerance = crate::recording::INTERVAL_TOLERANCE;
+    let ratio = interval / dt_obs;
+    let nearest = libm::round(ratio);
+    if (ratio - nearest).abs() <= tolerance * ratio.max(1.0) {
+        return (nearest as usize, 0.0);
     }
+    let whole = libm::floor(ratio);
+    (whole as usize, interval - whole * dt_obs)
 }
 
 /// One count for every dimension, or the per-dimension list as given.
@@ -358,19 +499,70 @@ pub(crate) fn count_problem(
     }
 }
 
-/// A nonlinear filter: advance over one observation interval, then report.
+/// A nonlinear filter: predict over an interval, assimilate what was observed, report.
 ///
-/// A step either succeeds or returns an error and leaves the filter as it was: an observation
-/// of the wrong kind or length ([`FilterError::BadObservation`]) or, for the methods built for
-/// one observation interval Δτ (grid and spectral), a step of another length
-/// ([`FilterError::IntervalMismatch`]) is refused before anything moves. Errors found while
-/// computing (non-finite numbers, lost mass) end the filter's usefulness; the driver marks the
-/// method failed.
-pub trait Filter {
+/// A step either succeeds or returns an error and leaves the filter exactly as it was:
+/// bad input — a step Δτ that is negative or not finite, an observation of the wrong kind
+/// or length, an infinite component ([`FilterError::BadObservation`]), or, for the methods
+/// built for one observation interval Δτ (grid and spectral), a step of another length
+/// ([`FilterError::IntervalMismatch`]) — is refused before anything moves; a numeric failure
+/// found while computing (non-finite numbers, lost mass, a failed factorisation) restores
+/// the state the step started from. The driver marks the method failed for the run.
+///
+/// Missing data: a component whose value is NaN ([`Observation::is_missing`]) was not
+/// observed; an observation with every component missing, or an empty one
+/// ([`Observation::nothing`]), is a prediction only ([`Filter::predict`]). Where only some
+/// components are missing, the Gaussian and particle filters and the grid filters of discrete
+/// measurements use the observed rows of h and of the noise; a method that cannot says so
+/// with an error.
+///
+/// Every filter is [`Clone`] and [`Debug`]; [`Filter::fork`] clones one behind a
+/// `Box<dyn Filter>`, e.g. to forecast from the current state while the original goes on:
+///
+/// ```
+/// use zakai::{Filter, Fork, Model, Noise, Ukf};
+/// let model = Model::from_text(&["-x"], &["x"], Noise::discrete(0.1))?;
+/// let mut ukf = Ukf::builder(&model).prior_gaussian(&[0.0], &[[1.0]]).build()?;
+/// ukf.step_measurement(0.1, &[0.4])?;
+/// let mut ahead = ukf.fork();
+/// for _ in 0..10 {
+///     ahead.predict(0.1)?; // no measurement: the predictive distribution one Δτ further
+/// }
+/// assert!(ahead.estimate().mean[0].abs() < ukf.estimate().mean[0].abs());
+/// ukf.update(&[f64::NAN])?; // a missing value: nothing to assimilate
+/// # Ok::<(), zakai::ZakaiError>(())
+/// ```
+pub trait Filter: core::fmt::Debug + Fork {
     /// Display name, e.g. `"EKF"` or `"PF(200)"`.
     fn name(&self) -> &str;
-    /// Predicts over `obs.dt` and assimilates `obs.value` (see the trait doc for errors).
+    /// Predicts over `obs.dt`, then assimilates the components of `obs.value` that were
+    /// observed (see the trait doc for missing components and errors).
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError>;
+    /// Predicts over `dt` without an observation: a gap, or a forecast (on a
+    /// [`fork`](Filter::fork) of the filter). For continuous observations this is an interval
+    /// whose increment was not recorded.
+    fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
+        self.step(&Observation::nothing(dt))
+    }
+    /// Assimilates the measurement `z` at the current time, without predicting (discrete
+    /// measurements; NaN components are missing). Continuous observations come as increments
+    /// over an interval: step with them ([`Filter::step_increment`]).
+    fn update(&mut self, z: &[f64]) -> Result<(), FilterError> {
+        self.step(&Observation::measurement(0.0, z))
+    }
+    /// The predictive estimates `dt`, `2 dt`, … `steps · dt` ahead, from a fork of the filter
+    /// (the filter itself does not move): the forecast with its spread. For the density ahead
+    /// (grid methods), step a [`fork`](Fork::fork) with [`Filter::predict`] and read
+    /// [`Filter::density`].
+    fn forecast(&self, dt: f64, steps: usize) -> Result<Vec<Estimate>, FilterError> {
+        let mut ahead = self.fork();
+        (0..steps)
+            .map(|_| {
+                ahead.predict(dt)?;
+                Ok(ahead.estimate())
+            })
+            .collect()
+    }
     /// Predicts over `dt` and assimilates the measurement `z` (discrete observations;
     /// `dt = 0` assimilates at the prior's time).
     fn step_measurement(&mut self, dt: f64, z: &[f64]) -> Result<(), FilterError> {
@@ -425,5 +617,25 @@ pub trait Filter {
             [[p[(a, a)], p[(a, b)]], [p[(b, a)], p[(b, b)]]]
         });
         marginal::gaussian_2d([est.mean[a], est.mean[b]], cov, xs, ys, out);
+    }
+}
+
+/// Cloning a filter behind `Box<dyn Filter>`: implemented for every [`Filter`] that is
+/// [`Clone`] (all of the catalogue's are).
+pub trait Fork {
+    /// An independent copy of the filter in its current state: stepping one does not move the
+    /// other.
+    fn fork(&self) -> alloc::boxed::Box<dyn Filter>;
+}
+
+impl<F: Filter + Clone + 'static> Fork for F {
+    fn fork(&self) -> alloc::boxed::Box<dyn Filter> {
+        alloc::boxed::Box::new(self.clone())
+    }
+}
+
+impl Clone for alloc::boxed::Box<dyn Filter> {
+    fn clone(&self) -> Self {
+        self.fork()
     }
 }

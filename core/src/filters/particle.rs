@@ -18,7 +18,7 @@ use crate::error::{FilterError, ZakaiError};
 use crate::filters::method::{
     builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, Takes,
 };
-use crate::filters::{Estimate, Filter, Observation, ObservationKind};
+use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
 use crate::model::{BatchScratch, Model, ObservationModel, Prior};
 use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
@@ -157,6 +157,7 @@ pub const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
 /// ([`VectorFunction::eval_batch`](crate::model::VectorFunction::eval_batch)), the noise comes
 /// from the ziggurat, weights take one `exp` per particle, and every buffer is allocated in the
 /// constructor, so a step allocates nothing.
+#[derive(Clone, Debug)]
 pub struct ParticleFilter {
     name: String,
     model: Model,
@@ -172,7 +173,16 @@ pub struct ParticleFilter {
     drift: Vec<f64>,
     noise: Vec<f64>,
     predicted: Vec<f64>,
+    /// The moved particles until a step succeeds (then swapped with `particles`), and the
+    /// resampling target.
     resampled: Vec<f64>,
+    /// The log-weights and weights a step computes, swapped in when it succeeds: a failed
+    /// step leaves the filter as it was.
+    next_log_weights: Vec<f64>,
+    next_weights: Vec<f64>,
+    /// The noise density of the observed rows: the measurement noise, or `N(0, S)` for
+    /// increments (whose residuals are then scaled by 1/√Δτ).
+    observed_noise: crate::filters::ObservedNoise,
     /// Resampling: the last particle whose copies start at each slot (N + 1), and the
     /// particle each slot copies (N).
     starts: Vec<usize>,
@@ -220,6 +230,16 @@ impl ParticleFilter {
                 .to_vec(),
             ObservationModel::Discrete { .. } => Vec::new(),
         };
+        let observed_noise = crate::filters::ObservedNoise::new(match &model.observations {
+            ObservationModel::Continuous { noise_cov } => crate::model::GaussianMixture::gaussian(
+                nalgebra::DVector::zeros(m),
+                noise_cov.clone(),
+            )
+            .map_err(|_| FilterError::NotPositiveDefinite {
+                what: "observation noise",
+            })?,
+            ObservationModel::Discrete { noise } => noise.clone(),
+        });
         let uniform = 1.0 / count as f64;
         Ok(ParticleFilter {
             name,
@@ -234,6 +254,9 @@ impl ParticleFilter {
             noise: vec![0.0; count * n],
             predicted: vec![0.0; count * m],
             resampled: vec![0.0; count * n],
+            next_log_weights: vec![0.0; count],
+            next_weights: vec![0.0; count],
+            observed_noise,
             starts: vec![0; count + 1],
             ancestors: vec![0; count],
             diffusion: model.diffusion.transpose().as_slice().to_vec(),
@@ -252,18 +275,27 @@ impl ParticleFilter {
         self.resamples
     }
 
-    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, `substeps` times.
-    fn predict(&mut self, dt: f64) {
+    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, `substeps` times, from
+    /// `particles` into `resampled` (the particles move only when the step succeeds).
+    fn predict_into_spare(&mut self, dt: f64) {
         let (n, count) = (self.model.n, self.params.particles);
         let h = dt / self.params.substeps as f64;
         let sqrt_h = libm::sqrt(h);
-        for _ in 0..self.params.substeps {
+        for substep in 0..self.params.substeps {
+            let from = if substep == 0 {
+                &self.particles
+            } else {
+                &self.resampled
+            };
             self.model
                 .drift
-                .eval_batch(&self.particles, &mut self.drift, &mut self.scratch);
+                .eval_batch(from, &mut self.drift, &mut self.scratch);
+            if substep == 0 {
+                self.resampled.copy_from_slice(&self.particles);
+            }
             self.normal.fill(&mut self.rng, &mut self.noise);
             for j in 0..n {
-                let x = &mut self.particles[j * count..(j + 1) * count];
+                let x = &mut self.resampled[j * count..(j + 1) * count];
                 let f = &self.drift[j * count..(j + 1) * count];
                 x.iter_mut().zip(f).for_each(|(x, f)| *x += f * h);
                 for l in 0..n {
@@ -277,42 +309,55 @@ impl ParticleFilter {
         }
     }
 
-    /// Multiplies the weights by the likelihood of `obs` (constant factors dropped: they
-    /// cancel in the normalisation) and normalises them.
-    fn weigh(&mut self, obs: &Observation) -> Result<(), FilterError> {
+    /// Into `next_log_weights`: the log-weights times the likelihood of the observed
+    /// components of `obs` at the particles (the moved ones in `resampled` when `moved`;
+    /// constant factors dropped: they cancel in the normalisation); then normalised, with
+    /// the linear weights in `next_weights`.
+    fn weigh(
+        &mut self,
+        obs: &Observation,
+        observed: Observed,
+        moved: bool,
+    ) -> Result<(), FilterError> {
         let (m, count) = (self.model.m, self.params.particles);
-        if obs.value.len() != m {
-            return Err(FilterError::BadObservation(format!(
-                "expected length {m}, got {}",
-                obs.value.len()
-            )));
-        }
-        let scale = match (&self.model.observations, obs.kind) {
-            (ObservationModel::Continuous { .. }, ObservationKind::Increment) => {
-                if obs.dt == 0.0 {
-                    return Ok(());
-                }
-                obs.dt
-            }
-            (ObservationModel::Discrete { .. }, ObservationKind::Measurement) => 1.0,
-            _ => {
-                return Err(FilterError::BadObservation(
-                    "observation kind does not match the model".into(),
-                ))
-            }
+        let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });
+        let scale = if continuous { obs.dt } else { 1.0 };
+        let particles = if moved {
+            &self.resampled
+        } else {
+            &self.particles
         };
         self.model
             .observation
-            .eval_batch(&self.particles, &mut self.predicted, &mut self.scratch);
-        // Residuals z − h(x)·scale, in place.
+            .eval_batch(particles, &mut self.predicted, &mut self.scratch);
+        // Residuals z − h(x)·scale, in place (NaN in missing rows, which are not read).
         for (a, z) in obs.value.iter().enumerate() {
             self.predicted[a * count..(a + 1) * count]
                 .iter_mut()
                 .for_each(|r| *r = z - *r * scale);
         }
-        match &self.model.observations {
+        let lw = &mut self.next_log_weights;
+        lw.copy_from_slice(&self.log_weights);
+        match (observed, &self.model.observations) {
+            (Observed::Some, _) => {
+                let noise = self.observed_noise.of(obs.value)?;
+                let unscale = if continuous {
+                    1.0 / libm::sqrt(obs.dt)
+                } else {
+                    1.0
+                };
+                let predicted = &self.predicted;
+                for (i, w) in lw.iter_mut().enumerate() {
+                    let k = crate::filters::observed_residual(
+                        obs.value,
+                        |a| predicted[a * count + i] * unscale,
+                        &mut self.residual,
+                    );
+                    *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
+                }
+            }
             // −½ rᵀ (S Δτ)⁻¹ r.
-            ObservationModel::Continuous { .. } => {
+            (_, ObservationModel::Continuous { .. }) => {
                 let c = -0.5 / obs.dt;
                 for a in 0..m {
                     for b in 0..m {
@@ -321,43 +366,22 @@ impl ParticleFilter {
                             &self.predicted[a * count..(a + 1) * count],
                             &self.predicted[b * count..(b + 1) * count],
                         );
-                        self.log_weights
-                            .iter_mut()
+                        lw.iter_mut()
                             .zip(ra.iter().zip(rb))
                             .for_each(|(w, (x, y))| *w += s * x * y);
                     }
                 }
             }
-            ObservationModel::Discrete { noise } => {
-                for i in 0..count {
+            (_, ObservationModel::Discrete { noise }) => {
+                for (i, w) in lw.iter_mut().enumerate() {
                     for a in 0..m {
                         self.residual[a] = self.predicted[a * count + i];
                     }
-                    self.log_weights[i] += noise.log_pdf_slice(&self.residual, &mut self.work);
+                    *w += noise.log_pdf_slice(&self.residual, &mut self.work);
                 }
             }
         }
-        self.normalise()
-    }
-
-    /// Normalises the log-weights and fills the linear weights: one exponential per particle.
-    fn normalise(&mut self) -> Result<(), FilterError> {
-        let max = self
-            .log_weights
-            .iter()
-            .fold(f64::NEG_INFINITY, |a, &b| crate::linalg::larger(a, b));
-        if !max.is_finite() {
-            return Err(FilterError::MassLost);
-        }
-        let total = exponentiate_shifted(&mut self.weights, &self.log_weights, max);
-        if !(total.is_finite() && total > 0.0) {
-            return Err(FilterError::MassLost);
-        }
-        let shift = max + libm::log(total);
-        let inv = 1.0 / total;
-        self.weights.iter_mut().for_each(|w| *w *= inv);
-        self.log_weights.iter_mut().for_each(|w| *w -= shift);
-        Ok(())
+        normalise(&mut self.next_log_weights, &mut self.next_weights)
     }
 
     /// Systematic resampling with one uniform u ([`systematic_ancestors`]), the particles
@@ -392,6 +416,26 @@ impl ParticleFilter {
         let count = self.params.particles;
         &self.particles[dim * count..(dim + 1) * count]
     }
+}
+
+/// Normalises `log_weights` and fills the linear `weights`: one exponential per particle;
+/// [`FilterError::MassLost`] when no weight is left (nothing finite, or NaN).
+fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<(), FilterError> {
+    let max = log_weights
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, &b| crate::linalg::larger(a, b));
+    if !max.is_finite() {
+        return Err(FilterError::MassLost);
+    }
+    let total = exponentiate_shifted(weights, log_weights, max);
+    if !(total.is_finite() && total > 0.0) {
+        return Err(FilterError::MassLost);
+    }
+    let shift = max + libm::log(total);
+    let inv = 1.0 / total;
+    weights.iter_mut().for_each(|w| *w *= inv);
+    log_weights.iter_mut().for_each(|w| *w -= shift);
+    Ok(())
 }
 
 /// Systematic resampling's ancestors: points `t_j = (u + j)/N` on the CDF `c_i` of the
@@ -458,11 +502,33 @@ impl Filter for ParticleFilter {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the particles.
-        crate::filters::check_for_model(&self.name, &self.model, obs)?;
-        if obs.dt > 0.0 {
-            self.predict(obs.dt);
+        let mut observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;
+        let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });
+        if continuous && obs.dt == 0.0 {
+            // An increment over no time: nothing to assimilate.
+            observed = Observed::Nothing;
         }
-        self.weigh(obs)?;
+        let moved = obs.dt > 0.0;
+        // The particles move into the spare buffer and the weights into the next ones; only
+        // a step that succeeds swaps them in (and keeps the generator's advance).
+        let rng = self.rng.clone();
+        if moved {
+            self.predict_into_spare(obs.dt);
+        }
+        if observed != Observed::Nothing {
+            if let Err(e) = self.weigh(obs, observed, moved) {
+                self.rng = rng;
+                return Err(e);
+            }
+            core::mem::swap(&mut self.log_weights, &mut self.next_log_weights);
+            core::mem::swap(&mut self.weights, &mut self.next_weights);
+        }
+        if moved {
+            core::mem::swap(&mut self.particles, &mut self.resampled);
+        }
+        if observed == Observed::Nothing {
+            return Ok(());
+        }
         self.last_ess = self.effective_sample_size();
         self.last_unique = self.params.particles;
         if self.last_ess < self.params.ess_threshold * self.params.particles as f64 {

@@ -27,6 +27,7 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 /// A planned DST-I of one length with its scratch buffers.
+#[derive(Clone)]
 pub struct DstPlan {
     n: usize,
     /// One line's real DFT through a complex FFT of half the length (M even).
@@ -44,7 +45,17 @@ pub struct DstPlan {
     line: Vec<f64>,
 }
 
+impl core::fmt::Debug for DstPlan {
+    /// The length (the FFT plans are opaque).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("DstPlan")
+            .field("n", &self.n)
+            .finish_non_exhaustive()
+    }
+}
+
 /// The real DFT of one line of even length M = 2L by a complex FFT of length L (module doc).
+#[derive(Clone)]
 struct HalfLength {
     fft: Arc<dyn Fft<f64>>,
     /// `z_j = y_{2j} + i y_{2j+1}`, transformed in place.

@@ -323,6 +323,11 @@ pub(crate) fn tokenize(text: &str, n: usize) -> Result<Vec<Token_>, ExprError> {
                     allowed: variable_names(n).join(", "),
                 });
             }
+        } else if c == '*' && chars.get(i + 1) == Some(&'*') {
+            return Err(syntax(
+                start,
+                "`**` is not an operator here: write powers with `^`, e.g. x^3",
+            ));
         } else {
             i += 1;
             let kind = match c {
@@ -404,6 +409,14 @@ mod tests {
             ExprError::NonFiniteConstant { position, .. } => Some(position),
             _ => None,
         }
+    }
+
+    /// Python's power operator gets a hint at its position.
+    #[test]
+    fn double_star_suggests_the_caret() {
+        let e = normalize_expression("2*x**3", 1).unwrap_err();
+        assert!(e.to_string().contains("write powers with `^`"), "{e}");
+        assert_eq!(position(e), Some(3));
     }
 
     #[test]

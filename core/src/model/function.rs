@@ -108,6 +108,20 @@ pub(crate) fn per_point(
     }
 }
 
+/// Values a numerical derivative keeps on the stack (beyond, it allocates): the Jacobians
+/// and Hessians of every model within the scenarios' dimension limits.
+const STACK_VALUES: usize = 512;
+
+/// `f` on `len` zeros: on the stack when `len` ≤ [`STACK_VALUES`] (so a filter's step through
+/// a closure model's numerical derivatives allocates nothing), else on the heap.
+fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    if len <= STACK_VALUES {
+        f(&mut [0.0; STACK_VALUES][..len])
+    } else {
+        f(&mut vec![0.0; len])
+    }
+}
+
 /// Central-difference Jacobian of `eval` at `x` (step ∝ ε^(1/3), error O(ε^(2/3))).
 pub fn numerical_jacobian(
     eval: &dyn Fn(&[f64], &mut [f64]),
@@ -116,20 +130,22 @@ pub fn numerical_jacobian(
     x: &[f64],
     out: &mut [f64],
 ) {
-    let mut xp = x.to_vec();
-    let mut fp = vec![0.0; m];
-    let mut fm = vec![0.0; m];
-    for j in 0..n {
-        let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[j]));
-        xp[j] = x[j] + h;
-        eval(&xp, &mut fp);
-        xp[j] = x[j] - h;
-        eval(&xp, &mut fm);
-        xp[j] = x[j];
-        for i in 0..m {
-            out[i * n + j] = (fp[i] - fm[i]) / (2.0 * h);
+    with_scratch(n + 2 * m, |buf| {
+        let (xp, rest) = buf.split_at_mut(n);
+        let (fp, fm) = rest.split_at_mut(m);
+        xp.copy_from_slice(&x[..n]);
+        for j in 0..n {
+            let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[j]));
+            xp[j] = x[j] + h;
+            eval(xp, fp);
+            xp[j] = x[j] - h;
+            eval(xp, fm);
+            xp[j] = x[j];
+            for i in 0..m {
+                out[i * n + j] = (fp[i] - fm[i]) / (2.0 * h);
+            }
         }
-    }
+    })
 }
 
 /// Central-difference Hessian of component `i` built from a Jacobian (step ∝ ε^(1/3)).
@@ -141,20 +157,22 @@ pub fn numerical_hessian(
     x: &[f64],
     out: &mut [f64],
 ) {
-    let mut xp = x.to_vec();
-    let mut jp = vec![0.0; m * n];
-    let mut jm = vec![0.0; m * n];
-    for l in 0..n {
-        let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[l]));
-        xp[l] = x[l] + h;
-        jacobian(&xp, &mut jp);
-        xp[l] = x[l] - h;
-        jacobian(&xp, &mut jm);
-        xp[l] = x[l];
-        for j in 0..n {
-            out[j * n + l] = (jp[i * n + j] - jm[i * n + j]) / (2.0 * h);
+    with_scratch(n + 2 * m * n, |buf| {
+        let (xp, rest) = buf.split_at_mut(n);
+        let (jp, jm) = rest.split_at_mut(m * n);
+        xp.copy_from_slice(&x[..n]);
+        for l in 0..n {
+            let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[l]));
+            xp[l] = x[l] + h;
+            jacobian(xp, jp);
+            xp[l] = x[l] - h;
+            jacobian(xp, jm);
+            xp[l] = x[l];
+            for j in 0..n {
+                out[j * n + l] = (jp[i * n + j] - jm[i * n + j]) / (2.0 * h);
+            }
         }
-    }
+    });
     // Symmetrise: the exact Hessian is symmetric.
     for j in 0..n {
         for l in (j + 1)..n {

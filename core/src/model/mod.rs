@@ -119,6 +119,18 @@ pub struct Model {
     pub observations: ObservationModel,
 }
 
+impl core::fmt::Debug for Model {
+    /// Dimensions, diffusion and observation noise (the functions f and h are opaque).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Model")
+            .field("n", &self.n)
+            .field("m", &self.m)
+            .field("diffusion", &self.diffusion)
+            .field("observations", &self.observations)
+            .finish_non_exhaustive()
+    }
+}
+
 impl Model {
     /// Builds a model, checking that all dimensions agree.
     pub fn new(

@@ -136,6 +136,29 @@ impl GaussianMixture {
         max + libm::log(sum)
     }
 
+    /// The marginal density of the components where `kept` is true: the mixture of the
+    /// components' marginals with the same weights (a Gaussian's marginal keeps the rows and
+    /// columns of the kept components). Used for observations with missing components.
+    pub fn marginal(&self, kept: &[bool]) -> Result<Self, ZakaiError> {
+        let rows: Vec<usize> = (0..self.dim()).filter(|&i| kept[i]).collect();
+        let k = rows.len();
+        self.new_like(|c| {
+            (
+                c.weight,
+                DVector::from_fn(k, |i, _| c.mean[rows[i]]),
+                DMatrix::from_fn(k, k, |i, j| c.cov[(rows[i], rows[j])]),
+            )
+        })
+    }
+
+    /// A mixture with a component made by `f` from each of these.
+    fn new_like(
+        &self,
+        f: impl Fn(&Component) -> (f64, DVector<f64>, DMatrix<f64>),
+    ) -> Result<Self, ZakaiError> {
+        Self::new(self.components.iter().map(f).collect())
+    }
+
     /// The mixture mean Σ α_i μ_i.
     pub fn mean(&self) -> DVector<f64> {
         let mut m = DVector::zeros(self.dim());

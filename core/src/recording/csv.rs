@@ -8,8 +8,10 @@
 //!   measurement at τ₀.
 //! * Truth (optional): header `t,x1,…,xn`, one row per observation row, at the same times.
 //!
-//! Blank lines and lines starting with `#` are skipped; fields may be padded with spaces. Every
-//! problem names its file, line and column.
+//! Blank lines and lines starting with `#` are skipped; fields may be padded with spaces. In
+//! the observations, an empty field or `NaN`/`NA` (any case) is a missing component (written
+//! back as `NaN`); a row with every component missing is a prediction only. Times must be
+//! numbers. Every problem names its file, line and column.
 
 use alloc::format;
 use alloc::string::{String, ToString};
@@ -30,7 +32,19 @@ struct Table {
     lines: Vec<u64>,
 }
 
-fn read_table(file: &str, text: &[u8], problems: &mut Vec<ConfigProblem>) -> Option<Table> {
+/// Whether a field marks a missing value: empty, `NaN` or `NA` in any case.
+fn is_missing_field(field: &str) -> bool {
+    field.is_empty() || field.eq_ignore_ascii_case("nan") || field.eq_ignore_ascii_case("na")
+}
+
+/// Reads a table of numbers; with `missing` the data columns (all but the first, the time)
+/// may hold missing values, read as NaN.
+fn read_table(
+    file: &str,
+    text: &[u8],
+    missing: bool,
+    problems: &mut Vec<ConfigProblem>,
+) -> Option<Table> {
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .comment(Some(b'#'))
@@ -72,14 +86,19 @@ fn read_table(file: &str, text: &[u8], problems: &mut Vec<ConfigProblem>) -> Opt
         };
         let line = record.position().map_or(0, |p| p.line());
         let mut row = Vec::with_capacity(record.len());
-        for (field, column) in record.iter().zip(&columns) {
+        for (j, (field, column)) in record.iter().zip(&columns).enumerate() {
             match field.parse::<f64>() {
                 Ok(v) if v.is_finite() => row.push(v),
+                _ if missing && j > 0 && is_missing_field(field) => row.push(f64::NAN),
                 _ => {
                     if problems.len() - before < MAX_REPORTED {
                         problems.push(ConfigProblem::new(
                             format!("{file} line {line}, column {column}"),
-                            format!("`{field}` is not a finite number"),
+                            if missing && j > 0 {
+                                format!("`{field}` is not a finite number (a missing value is an empty field or NaN)")
+                            } else {
+                                format!("`{field}` is not a finite number")
+                            },
                         ));
                     } else {
                         skipped += 1;
@@ -170,8 +189,8 @@ impl Recording {
         truth: Option<&[u8]>,
     ) -> Result<Self, ZakaiError> {
         let mut problems = Vec::new();
-        let obs = read_table("observations", observations, &mut problems);
-        let truth = truth.and_then(|t| read_table("truth", t, &mut problems));
+        let obs = read_table("observations", observations, true, &mut problems);
+        let truth = truth.and_then(|t| read_table("truth", t, false, &mut problems));
         let kind = obs
             .as_ref()
             .and_then(|t| check_header("observations", t, &["dy", "z"], &mut problems));
@@ -191,7 +210,7 @@ impl Recording {
         let continuous = kind == 0;
         if continuous {
             if let Some(first) = obs.rows.first() {
-                if first[1..].iter().any(|&v| v != 0.0) {
+                if first[1..].iter().any(|&v| v != 0.0 && !v.is_nan()) {
                     problems.push(ConfigProblem::new(
                         format!("observations line {}", obs.lines[0]),
                         "the first row is the start τ₀ (the prior's time): its increments must be 0 (the increment over (τ₀, τ₁] goes on the next row)",
@@ -343,6 +362,44 @@ mod tests {
             b.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
         );
         assert!(back.continuous);
+    }
+
+    /// Empty fields, `NaN` and `NA` in the observations are missing components (NaN), a row
+    /// may miss them all, and they are written back as `NaN`; a missing time is an error, and
+    /// so is an infinity.
+    #[test]
+    fn missing_values_are_nan() {
+        let r = Recording::from_csv(
+            1,
+            b"t,z1,z2\n0,1,2\n0.1,,3\n0.3, NA ,nan\n0.4,5,NaN\n",
+            None,
+        )
+        .unwrap();
+        assert_eq!(r.times, alloc::vec![0.0, 0.1, 0.3, 0.4]);
+        let o = &r.observations;
+        assert_eq!((o[0], o[1], o[3], o[6]), (1.0, 2.0, 3.0, 5.0));
+        assert!(o[2].is_nan() && o[4].is_nan() && o[5].is_nan() && o[7].is_nan());
+        let back = Recording::from_csv(1, r.observations_csv().as_bytes(), None).unwrap();
+        assert_eq!(
+            back.observations
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>(),
+            o.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        let p = problems(Recording::from_csv(1, b"t,z1\n0,1\n,2\n", None));
+        assert_eq!(p[0].field, "observations line 3, column t", "{p:?}");
+        let p = problems(Recording::from_csv(1, b"t,z1\n0,1\n0.1,inf\n", None));
+        assert!(
+            p[0].message.contains("missing value is an empty field"),
+            "{p:?}"
+        );
+        let p = problems(Recording::from_csv(
+            1,
+            b"t,z1\n0,1\n0.1,2\n",
+            Some(b"t,x1\n0,\n0.1,2\n"),
+        ));
+        assert_eq!(p[0].field, "truth line 2, column x1", "{p:?}");
     }
 
     #[test]

@@ -10,6 +10,12 @@
 //!   is the start and holds zeros);
 //! * for discrete measurements `z_k = h(x_k) + v_k`: the measurement at τ_k (row 0 is a
 //!   measurement at the prior's time, assimilated without a prediction).
+//!
+//! Missing data: a NaN component was not observed (an empty cell in a CSV file); a row whose
+//! components are all NaN is a prediction to τ_k only. Times may be irregular: every method
+//! predicts over τ_k − τ_{k−1} whatever its length (the grid filters as whole Δτ plus one
+//! remainder; the spectral filter over whole multiples of Δτ only, see
+//! [`Recording::interval_problems`]).
 
 use alloc::format;
 use alloc::string::String;
@@ -206,12 +212,24 @@ impl Recording {
                 )
             })
         };
-        p.extend(non_finite(
-            Part::Observations,
-            &self.observations,
-            self.m,
-            "observations",
-        ));
+        // NaN marks a missing component; infinities are errors.
+        p.extend(
+            self.observations
+                .iter()
+                .position(|v| v.is_infinite())
+                .map(|i| {
+                    let (k, j) = (i / self.m.max(1), i % self.m.max(1));
+                    place(
+                        Part::Observations,
+                        k,
+                        format!("observations[{k}][{j}]"),
+                        format!(
+                            "component {}: infinite (a missing value is NaN or an empty cell)",
+                            j + 1
+                        ),
+                    )
+                }),
+        );
         if let Some(truth) = &self.truth {
             if self.n == 0 || truth.len() != rows * self.n {
                 p.push(ConfigProblem::new(
@@ -230,16 +248,20 @@ impl Recording {
         p
     }
 
-    /// Problems of this recording for a filter built for steps of exactly `dt_obs`: the first
-    /// step of another length, by row.
+    /// Problems of this recording for a filter that takes only whole multiples of `dt_obs`
+    /// (the spectral filter): the first step of another length, by row.
     pub fn interval_problems(&self, dt_obs: f64) -> Vec<ConfigProblem> {
+        let whole = |step: f64| {
+            let k = libm::round(step / dt_obs);
+            k >= 1.0 && is_interval(step, k * dt_obs)
+        };
         (1..self.times.len())
-            .find(|&k| !is_interval(self.step_length(k), dt_obs))
+            .find(|&k| !whole(self.step_length(k)))
             .map(|k| {
                 ConfigProblem::new(
                     format!("times[{k}]"),
                     format!(
-                        "row {}: the step τ_k − τ_(k−1) = {} differs from Δτ = {dt_obs}, which the scenario's grid and spectral methods are built for (their operators cover one interval length)",
+                        "row {}: the step τ_k − τ_(k−1) = {} is not a whole multiple of Δτ = {dt_obs}, which the spectral filter's off-line operator is made for; set time.dt_obs to a step that divides every interval, or leave the spectral method out",
                         k + 1,
                         self.step_length(k)
                     ),

@@ -104,7 +104,9 @@ pub enum PriorConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeConfig {
-    /// Final time T.
+    /// Final time T of a simulated run. A run over recorded observations needs none: 0 (the
+    /// default when absent) means no simulation horizon.
+    #[serde(default)]
     pub t_final: f64,
     /// Δτ between observations.
     pub dt_obs: f64,
@@ -118,11 +120,15 @@ fn one_usize() -> usize {
 }
 
 /// When a method's run counts as failed, besides non-finite numbers and lost mass.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Default, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FailureRule {
-    /// A run fails when any component of the estimate exceeds this in absolute value.
-    pub divergence_bound: f64,
+    /// A run fails when any component of the estimate exceeds this in absolute value. `None`
+    /// (the default): from the problem — [`DIVERGENCE_SCALES`] half-widths of the domain
+    /// from its centre, or prior standard deviations from the prior mean when the scenario
+    /// has no domain, in the component where that reaches furthest
+    /// ([`ScenarioConfig::divergence_bound`]); data far from 0 never trips it.
+    pub divergence_bound: Option<f64>,
     /// Optional track-loss rule — the papers' "fails tracking the real state" (004 Table 1)
     /// made mechanical: a run fails when `‖x̂ − x‖` stays above `error` for longer than
     /// `duration`. Applies to every method alike.
@@ -139,14 +145,10 @@ pub struct TrackLoss {
     pub duration: f64,
 }
 
-impl Default for FailureRule {
-    fn default() -> Self {
-        FailureRule {
-            divergence_bound: 1.0e3,
-            track_loss: None,
-        }
-    }
-}
+/// How many half-widths of the domain (or prior standard deviations) from its centre (or the
+/// prior mean) the estimate may go before the run counts as diverged, when the scenario does
+/// not set `failure.divergence_bound`: 200 (1000 on the box [−5, 5]).
+pub const DIVERGENCE_SCALES: f64 = 200.0;
 
 /// The single description of a filtering experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -311,6 +313,31 @@ impl ScenarioConfig {
         }
     }
 
+    /// The divergence bound of the failure rule: `failure.divergence_bound` when set, else
+    /// from the problem (see [`FailureRule::divergence_bound`]), with `prior` the scenario's.
+    pub fn divergence_bound(&self, prior: &crate::model::Prior) -> f64 {
+        if let Some(b) = self.failure.divergence_bound {
+            return b;
+        }
+        let reach = |centre: f64, scale: f64| centre.abs() + DIVERGENCE_SCALES * scale;
+        let bound = if self.domain.is_empty() {
+            let (mean, cov) = (prior.mean(), prior.covariance());
+            (0..mean.len())
+                .map(|i| reach(mean[i], libm::sqrt(cov[(i, i)].max(0.0))))
+                .fold(0.0, f64::max)
+        } else {
+            self.domain
+                .iter()
+                .map(|b| reach(0.5 * (b[0] + b[1]), 0.5 * (b[1] - b[0])))
+                .fold(0.0, f64::max)
+        };
+        if bound > 0.0 && bound.is_finite() {
+            bound
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// The domain as `(lower, upper)` pairs.
     pub fn bounds(&self) -> Vec<(f64, f64)> {
         self.domain.iter().map(|b| (b[0], b[1])).collect()
@@ -405,10 +432,10 @@ impl ScenarioConfig {
             }
         }
         let t = &self.time;
-        if !(t.t_final > 0.0 && t.t_final.is_finite()) {
+        if !(t.t_final >= 0.0 && t.t_final.is_finite()) {
             p.push(ConfigProblem::new(
                 "time.t_final",
-                "must be positive and finite",
+                "must be positive and finite (or 0/absent for recorded observations only)",
             ));
         }
         if !(t.dt_obs > 0.0 && t.dt_obs.is_finite()) {
@@ -416,7 +443,7 @@ impl ScenarioConfig {
                 "time.dt_obs",
                 "must be positive and finite",
             ));
-        } else if t.t_final.is_finite() && t.dt_obs > t.t_final {
+        } else if t.t_final > 0.0 && t.t_final.is_finite() && t.dt_obs > t.t_final {
             p.push(ConfigProblem::new("time.dt_obs", "must not exceed t_final"));
         } else if self.steps() > MAX_STEPS {
             p.push(ConfigProblem::new(
@@ -433,10 +460,10 @@ impl ScenarioConfig {
                 "must be in 1..=100000",
             ));
         }
-        if self.failure.divergence_bound.is_nan() || self.failure.divergence_bound <= 0.0 {
+        if matches!(self.failure.divergence_bound, Some(b) if b.is_nan() || b <= 0.0) {
             p.push(ConfigProblem::new(
                 "failure.divergence_bound",
-                "must be positive",
+                "must be positive (or absent: from the problem)",
             ));
         }
         if let Some(tl) = &self.failure.track_loss {

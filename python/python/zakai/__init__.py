@@ -93,20 +93,57 @@ def _method_config(spec: MethodSpec) -> dict[str, Any]:
     return _json.loads(_zakai.method_defaults_json(key, _json.dumps(params)))
 
 
+def _numbers(value: Any, name: str) -> np.ndarray:
+    """``value`` as a float array of finite numbers, or a :class:`ConfigError` naming it."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ConfigError(f"{name}: must be numbers ({e})") from e
+    if not np.isfinite(a).all():
+        raise ConfigError(f"{name}: must be finite numbers, got {value!r}")
+    return a
+
+
 def _matrix(value: Any, name: str) -> list[list[float]]:
     """A square matrix as rows; a scalar is the 1 × 1 matrix."""
-    a = np.atleast_2d(np.asarray(value, dtype=float))
+    a = np.atleast_2d(_numbers(value, name))
     if a.ndim != 2:
         raise DimensionError(f"{name} must be a matrix, got shape {a.shape}")
     return a.tolist()
 
 
-def _vector(value: Any) -> list[float]:
-    return np.atleast_1d(np.asarray(value, dtype=float)).ravel().tolist()
+def _vector(value: Any, name: str = "vector") -> list[float]:
+    return np.atleast_1d(_numbers(value, name)).ravel().tolist()
 
 
-def _strings(value: Union[str, Iterable[str]]) -> list[str]:
-    return [value] if isinstance(value, str) else [str(v) for v in value]
+def _strings(value: Union[str, Iterable[str]], name: str = "expression") -> list[str]:
+    """Expressions as a list of text; a Python function is refused in words."""
+    if isinstance(value, str):
+        return [value]
+    if callable(value):
+        raise ExpressionError(
+            f"{name}: expressions are text such as 'x - x^3', compiled in Rust; a Python "
+            "function cannot be called there (Model.from_closures in the Rust crate takes closures)"
+        )
+    items = list(value)
+    for v in items:
+        if callable(v) or not isinstance(v, str):
+            raise ExpressionError(
+                f"{name}: each component is a text expression such as 'x - x^3', got {v!r}"
+            )
+    return items
+
+
+def _domain(value: Any) -> list[list[float]]:
+    """A (low, high) pair per dimension; one pair alone is the 1-D domain."""
+    a = _numbers(value, "domain")
+    if a.shape == (2,):
+        a = a.reshape(1, 2)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise ConfigError(
+            f"domain: needs a (low, high) pair per dimension, e.g. [(-4, 4)] in 1-D, got {value!r}"
+        )
+    return a.tolist()
 
 
 @dataclass(frozen=True)
@@ -142,8 +179,8 @@ class Model:
         """
         return cls(
             {
-                "drift": _strings(drift),
-                "observation": _strings(observation),
+                "drift": _strings(drift, "drift"),
+                "observation": _strings(observation, "observation"),
                 "diffusion": None if diffusion is None else _matrix(diffusion, "diffusion"),
                 "noise": {
                     "kind": "continuous",
@@ -167,11 +204,11 @@ class Model:
         noise_cov : array_like
             R (m × m; a scalar when m = 1).
         """
-        m = len(_strings(observation))
+        m = len(_strings(observation, "observation"))
         return cls(
             {
-                "drift": _strings(drift),
-                "observation": _strings(observation),
+                "drift": _strings(drift, "drift"),
+                "observation": _strings(observation, "observation"),
                 "diffusion": None if diffusion is None else _matrix(diffusion, "diffusion"),
                 "noise": {
                     "kind": "discrete",
@@ -183,6 +220,18 @@ class Model:
         )
 
 
+def _positive_definite(rows: list[list[float]], name: str) -> list[list[float]]:
+    """``rows`` when they are a symmetric positive definite matrix, else a ConfigError that
+    says so (a variance must be positive)."""
+    a = np.asarray(rows)
+    if a.shape[0] != a.shape[1] or not np.allclose(a, a.T):
+        raise ConfigError(f"{name}: must be a symmetric matrix, got {rows!r}")
+    if np.linalg.eigvalsh(a).min() <= 0.0:
+        what = "a variance" if a.shape == (1, 1) else "a covariance"
+        raise ConfigError(f"{name}: {what} must be positive definite (> 0), got {rows!r}")
+    return rows
+
+
 @dataclass(frozen=True)
 class Prior:
     """The density of x₀: :meth:`gaussian`, :meth:`mixture` or :meth:`density` (text)."""
@@ -192,7 +241,9 @@ class Prior:
     @classmethod
     def gaussian(cls, mean: ArrayLike, cov: ArrayLike) -> "Prior":
         """N(mean, cov); a scalar cov is a variance when n = 1."""
-        return cls({"kind": "gaussian", "mean": _vector(mean), "cov": _matrix(cov, "cov")})
+        c = _matrix(cov, "prior cov")
+        _positive_definite(c, "prior cov")
+        return cls({"kind": "gaussian", "mean": _vector(mean, "prior mean"), "cov": c})
 
     @classmethod
     def mixture(cls, components: Iterable[tuple[float, ArrayLike, ArrayLike]]) -> "Prior":
@@ -201,8 +252,14 @@ class Prior:
             {
                 "kind": "mixture",
                 "components": [
-                    {"weight": float(w), "mean": _vector(m), "cov": _matrix(c, "cov")}
-                    for w, m, c in components
+                    {
+                        "weight": float(w),
+                        "mean": _vector(m, f"prior component {i} mean"),
+                        "cov": _positive_definite(
+                            _matrix(c, f"prior component {i} cov"), f"prior component {i} cov"
+                        ),
+                    }
+                    for i, (w, m, c) in enumerate(components)
                 ],
             }
         )
@@ -259,16 +316,20 @@ class Scenario:
         if domain is None:
             domain = prior.covering_domain()
             if domain is None:
-                raise ConfigError("domain: a density prior needs the domain it lives on")
+                raise ConfigError(
+                    "domain: a density prior needs the domain it lives on"
+                    if prior.config.get("kind") == "density"
+                    else "domain: none given, and none can be set around this prior"
+                )
         self.config: dict[str, Any] = {
             "name": name,
             "model": dict(model.config),
             "prior": dict(prior.config),
-            "initial_state": None if initial_state is None else _vector(initial_state),
-            "domain": [[float(a), float(b)] for a, b in domain],
+            "initial_state": None if initial_state is None else _vector(initial_state, "initial_state"),
+            "domain": _domain(domain),
             "time": {"t_final": float(t_final), "dt_obs": float(dt_obs), "inner_steps": 1},
             "seed": int(seed),
-            "failure": {"divergence_bound": 1e3, "track_loss": None},
+            "failure": {"divergence_bound": None, "track_loss": None},
             "methods": [_method_config(m) for m in methods],
         }
 
@@ -340,7 +401,7 @@ class Scenario:
 
     @domain.setter
     def domain(self, value: Sequence[Sequence[float]]) -> None:
-        self.config["domain"] = [[float(a), float(b)] for a, b in value]
+        self.config["domain"] = _domain(value)
 
     @property
     def initial_state(self) -> Optional[list[float]]:
@@ -349,7 +410,7 @@ class Scenario:
 
     @initial_state.setter
     def initial_state(self, value: Optional[ArrayLike]) -> None:
-        self.config["initial_state"] = None if value is None else _vector(value)
+        self.config["initial_state"] = None if value is None else _vector(value, "initial_state")
 
     @property
     def methods(self) -> list[dict[str, Any]]:
@@ -459,6 +520,33 @@ class RunResult:
     methods: dict[str, MethodResult]
     warnings: list[tuple[str, str]] = field(default_factory=list)
     chosen_defaults: list[str] = field(default_factory=list)
+    #: The index of the pandas object the observations came in (labels :meth:`to_pandas`).
+    index: Any = None
+
+    def to_pandas(self) -> Any:
+        """The run as a pandas DataFrame, one row per time, indexed like the observations
+        given to :func:`filter` (else by ``t``): the time ``t``, the observations (NaN where
+        missing), the truth when known, then per method its estimate ``<method> x<i>`` and,
+        where it has a covariance, its standard deviation ``<method> sd x<i>`` (NaN after a
+        failure)."""
+        import pandas as pd
+
+        n = next(iter(self.methods.values())).estimates.shape[1] if self.methods else 0
+        columns: dict[str, Any] = {"t": self.times}
+        prefix = "dy" if self.continuous else "z"
+        for j in range(self.observations.shape[1]):
+            columns[f"{prefix}{j + 1}"] = self.observations[:, j]
+        if self.truth is not None:
+            for j in range(self.truth.shape[1]):
+                columns[f"x{j + 1}"] = self.truth[:, j]
+        for key, m in self.methods.items():
+            sds = m.sds
+            for j in range(n):
+                columns[f"{key} x{j + 1}"] = m.estimates[:, j]
+                if sds is not None:
+                    columns[f"{key} sd x{j + 1}"] = sds[:, j]
+        index = self.index if self.index is not None else pd.Index(self.times, name="t")
+        return pd.DataFrame(columns, index=index)
 
     @classmethod
     def _from_dict(cls, d: dict[str, Any]) -> "RunResult":
@@ -630,6 +718,40 @@ def _array(value: Optional[ArrayLike], name: str) -> Optional[np.ndarray]:
     return a
 
 
+def _times(value: Any) -> Optional[np.ndarray]:
+    """Times as seconds: numbers as they are; datetimes (NumPy ``datetime64``, pandas
+    ``DatetimeIndex`` or ``Series``, ``datetime`` objects) as seconds since the first;
+    ``timedelta64`` as seconds."""
+    if value is None:
+        return None
+    a = np.asarray(value)
+    if a.dtype.kind == "O" and a.size and all(hasattr(v, "timestamp") for v in a.ravel()):
+        a = np.asarray(a, dtype="datetime64[ns]")
+    if a.dtype.kind == "M":
+        if np.isnat(a).any():
+            raise ConfigError("times: a time is missing (NaT); every row needs its time")
+        return np.ascontiguousarray((a - a.ravel()[0]) / np.timedelta64(1, "s"), dtype=np.float64)
+    if a.dtype.kind == "m":
+        return np.ascontiguousarray(a / np.timedelta64(1, "s"), dtype=np.float64)
+    if a.dtype.kind not in "biuf":
+        raise ConfigError(
+            f"times: must be numbers or datetimes, got an array of {a.dtype} "
+            "(convert text with pandas.to_datetime first)"
+        )
+    return _array(a, "times")
+
+
+def _index_times(observations: Any) -> tuple[Optional[np.ndarray], Any]:
+    """A pandas object's index as times (datetimes or numbers; a default ``RangeIndex``
+    gives none), and the index itself to label the result."""
+    index = getattr(observations, "index", None)
+    if index is None or not hasattr(observations, "to_numpy"):
+        return None, None
+    if type(index).__name__ == "RangeIndex":
+        return None, index
+    return _times(index), index
+
+
 def filter(
     scenario: Union[Scenario, str],
     observations: ArrayLike,
@@ -643,25 +765,43 @@ def filter(
     ----------
     scenario : Scenario or str
         Model, prior, domain and methods (a preset name works).
-    observations : array_like, shape (rows, m) or (rows,) when m = 1
+    observations : array_like or pandas Series/DataFrame, shape (rows, m) or (rows,) when m = 1
         Continuous models: the increments Δy over each interval (N rows for N + 1 times), or
         the layout :func:`simulate` returns (N + 1 rows, row 0 zeros). Discrete models: the
-        measurements z_k at every time, the first at the prior's time.
+        measurements z_k at every time, the first at the prior's time. **NaN is a missing
+        value**: only the observed components of a row are used, and a row of NaN is a
+        prediction only. A pandas object's index gives the times (unless ``times`` does),
+        and :meth:`RunResult.to_pandas` keeps it.
     times : array_like, optional
-        τ₀ … τ_N (τ₀ the prior's time); every Δτ from 0 when absent. Grid and spectral
-        methods are built for one interval length Δτ and refuse other steps.
+        τ₀ … τ_N (τ₀ the prior's time), increasing, possibly irregular: every method predicts
+        over each step whatever its length (the spectral filter only over whole multiples of
+        Δτ). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
+        converted to **seconds since the first**, so Δτ and the model's rates are per
+        second. Every Δτ from 0 when absent.
     truth : array_like, shape (N + 1, n), optional
         The true states, for errors (MSE) against them.
     seed : int, optional
         Seeds the methods' random numbers (particle filter); the scenario's seed when absent.
     """
     sc = _scenario(scenario)
-    obs = _array(observations, "observations")
-    return RunResult._from_dict(
+    index_times, index = _index_times(observations)
+    obs = _array(
+        observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
+        "observations",
+    )
+    given = _times(times)
+    result = RunResult._from_dict(
         _zakai.filter_recorded(
-            sc._text(), obs, _array(times, "times"), _array(truth, "truth"), _seed(sc, seed)
+            sc._text(),
+            obs,
+            given if given is not None else index_times,
+            _array(truth, "truth"),
+            _seed(sc, seed),
         )
     )
+    if index is not None and len(index) == len(result.times):
+        result.index = index
+    return result
 
 
 def monte_carlo(
@@ -691,8 +831,9 @@ class Filter:
     prior : Prior
     dt_obs : float
         The observation interval Δτ (the default step; grid and spectral methods are built
-        for it and refuse other steps). A method's own ``dt`` (the grid filters' time step)
-        is one of ``params``.
+        for it and cross other steps as whole Δτ and a remainder — the spectral filter only
+        whole multiples). A method's own ``dt`` (the grid filters' time step) is one of
+        ``params``.
     domain : list of (low, high), optional
         The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent.
     seed : int
@@ -731,28 +872,81 @@ class Filter:
         )
         self.scenario: Scenario = scenario
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
+        # Whether the filter is still at the prior's time (no step taken yet).
+        self._at_prior = True
+
+    def _dt(self, dt: Optional[float]) -> float:
+        if dt is None:
+            return self.scenario.dt_obs
+        if not isinstance(dt, (int, float, np.integer, np.floating)):
+            raise ConfigError(f"dt: must be a number of time units (got {type(dt).__name__})")
+        return float(dt)
 
     def step(self, observation: ArrayLike, dt: Optional[float] = None) -> None:
         """Predicts over ``dt`` (Δτ when absent) and assimilates one observation: the
         increment dy for continuous models, the measurement z for discrete ones (``dt = 0``
-        assimilates at the current time)."""
-        step = self.scenario.dt_obs if dt is None else float(dt)
-        self._inner.step(_array(observation, "observation"), step)
+        assimilates at the current time). NaN components are missing: only the observed
+        ones are used, and an all-NaN observation is a prediction only. A step that fails
+        raises :class:`FilterError` and leaves the filter as it was."""
+        self._inner.step(_array(observation, "observation"), self._dt(dt))
+        self._at_prior = False
+
+    def predict(self, dt: Optional[float] = None) -> None:
+        """Predicts over ``dt`` (Δτ when absent) without an observation: a gap in the data,
+        or a forecast (on a :meth:`copy`, to keep the filter itself at the present)."""
+        self._inner.predict(self._dt(dt))
+        self._at_prior = False
+
+    def update(self, z: ArrayLike) -> None:
+        """Assimilates the measurement ``z`` at the current time, without predicting
+        (discrete models; NaN components are missing)."""
+        self._inner.update(_array(z, "z"))
+        self._at_prior = False
+
+    def copy(self) -> "Filter":
+        """An independent copy of the filter in its current state: stepping one does not
+        move the other (e.g. to forecast from here)."""
+        twin = Filter.__new__(Filter)
+        twin.scenario = self.scenario.copy()
+        twin._inner = self._inner.fork()
+        twin._at_prior = self._at_prior
+        return twin
+
+    def __copy__(self) -> "Filter":
+        return self.copy()
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> "Filter":
+        return self.copy()
+
+    def __reduce__(self) -> Any:
+        raise TypeError(
+            "a zakai.Filter holds its state in native memory and cannot be pickled; "
+            "keep its scenario (f.scenario.to_json()) and the observations, and step a new "
+            "Filter through them, or copy it in the same process with f.copy()"
+        )
 
     def run(
         self, observations: ArrayLike, dts: Optional[ArrayLike] = None
     ) -> tuple[np.ndarray, Optional[np.ndarray]]:
-        """Steps through every row of ``observations`` (step lengths ``dts``, Δτ each when
-        absent) in Rust and returns the means (rows, n) and covariances (rows, n, n) or
-        ``None``, after each step."""
+        """Steps through every row of ``observations`` (step lengths ``dts``) in Rust and
+        returns the means (rows, n) and covariances (rows, n, n) or ``None``, after each
+        step. NaN components are missing.
+
+        Without ``dts`` every row comes Δτ after the one before — and, as in
+        :func:`filter`, a discrete model's first row is a measurement at the prior's time
+        (step 0) when the filter has not stepped yet."""
         obs = _array(observations, "observations")
         assert obs is not None
         rows = obs.shape[0]
         if dts is None:
             steps = np.full(rows, self.scenario.dt_obs)
+            if rows and self._at_prior and not self._inner.continuous:
+                steps[0] = 0.0
         else:
             steps = _array(dts, "dts")
-        return self._inner.run(obs, steps)
+        result = self._inner.run(obs, steps)
+        self._at_prior = self._at_prior and rows == 0
+        return result
 
     @property
     def name(self) -> str:

@@ -30,7 +30,7 @@ use super::gaussian_approximation::Decomposition;
 use super::riccati::{propagate_scalar_term, KolmogorovCoefficients};
 use crate::diagnostics::yau_system::{self, Affine};
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation};
+use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
 use crate::model::{Model, ObservationModel, Prior};
 
@@ -110,6 +110,7 @@ impl DirectParams {
 pub const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
 
 /// The direct method of 002 (see the module doc).
+#[derive(Clone, Debug)]
 pub struct DirectFilter {
     name: String,
     grid: TensorGrid,
@@ -132,9 +133,12 @@ pub struct DirectFilter {
     /// The grid's node coordinates.
     nodes: Vec<f64>,
     work: StepWork,
+    /// What a step starts from: û and the estimate, the density, the terms and the share.
+    saved: (crate::filters::SavedDensity, Vec<f64>, usize, f64),
 }
 
 /// Storage of a step, made once (a step allocates nothing).
+#[derive(Clone, Debug)]
 struct StepWork {
     decomposition: Decomposition,
     /// Δyᵀh at every node.
@@ -278,6 +282,12 @@ impl DirectFilter {
             moments: crate::grid::Moments::zeros(1),
             terms: 0,
             residual_share: 0.0,
+            saved: (
+                crate::filters::SavedDensity::new(x.len(), &Estimate::zeros(1)),
+                vec![0.0; x.len()],
+                0,
+                0.0,
+            ),
             nodes: x,
             grid,
         };
@@ -329,16 +339,10 @@ fn exp_shifted(log: &[f64], out: &mut [f64]) {
     }
 }
 
-impl Filter for DirectFilter {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        crate::filters::check_increment(&self.name, obs, self.h.len())?;
-        if obs.dt <= 0.0 {
-            return Ok(());
-        }
+impl DirectFilter {
+    /// One interval of Algorithm 2 with a checked increment over Δτ > 0 (it may fail
+    /// half-way).
+    fn advance(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let len = self.u_hat.len();
         let StepWork {
             decomposition,
@@ -438,6 +442,41 @@ impl Filter for DirectFilter {
         }
         self.u_hat.iter_mut().for_each(|u| *u /= top);
         self.refresh()
+    }
+}
+
+impl Filter for DirectFilter {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        let observed = obs.check(&self.name, ObservationKind::Increment, self.h.len())?;
+        if obs.dt <= 0.0 {
+            return Ok(());
+        }
+        match observed {
+            Observed::All => {}
+            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
+            Observed::Nothing => {
+                return Err(FilterError::BadObservation(format!(
+                    "{}: the direct method's Riccati equations carry −½h² (η of (7)), so an interval without an increment cannot be predicted",
+                    self.name
+                )))
+            }
+        }
+        let (saved, density, terms, share) = &mut self.saved;
+        saved.save(&self.u_hat, &self.estimate);
+        density.copy_from_slice(&self.density);
+        (*terms, *share) = (self.terms, self.residual_share);
+        let stepped = self.advance(obs);
+        if stepped.is_err() {
+            let (saved, density, terms, share) = &self.saved;
+            saved.restore(&mut self.u_hat, &mut self.estimate);
+            self.density.copy_from_slice(density);
+            (self.terms, self.residual_share) = (*terms, *share);
+        }
+        stepped
     }
 
     fn estimate(&self) -> Estimate {

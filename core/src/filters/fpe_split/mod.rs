@@ -46,7 +46,7 @@ use self::upwind::UpwindAdvection;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::{
     count_problem, normalise_on_grid, per_dimension, product, DensityView, Estimate, Filter,
-    Observation,
+    Observation, ObservationKind, Observed, REMAINDER_PLANS,
 };
 use crate::grid::TensorGrid;
 use crate::linalg::banded::{BandedLu, BandedMatrix};
@@ -162,6 +162,7 @@ pub fn check_model(name: &str, model: &Model) -> Result<GaussianMixture, FilterE
 }
 
 /// How an observation interval is cut into FPE steps.
+#[derive(Clone, Debug)]
 struct StepPlan {
     interval: f64,
     substeps: usize,
@@ -170,6 +171,7 @@ struct StepPlan {
 }
 
 /// The continuous–discrete grid filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct ContinuousDiscreteGrid {
     name: String,
     scheme: FpeScheme,
@@ -177,14 +179,19 @@ pub struct ContinuousDiscreteGrid {
     advection: UpwindAdvection,
     divergence: Vec<f64>,
     diffusion: Vec<f64>,
-    noise: GaussianMixture,
+    noise: crate::filters::ObservedNoise,
     /// h at the cell centres, row per cell.
     h_nodes: Vec<f64>,
     target_dt: f64,
     /// Δτ, the observation interval the filter is built for.
     dt_obs: f64,
+    /// The plan for Δτ, and for up to [`REMAINDER_PLANS`] other lengths (the remainders of
+    /// irregular intervals after whole Δτ), the most recently used first.
     plan: Option<StepPlan>,
+    remainders: Vec<StepPlan>,
     u: Vec<f64>,
+    /// The density and estimate a step started from.
+    saved: crate::filters::SavedDensity,
     tmp: Vec<f64>,
     residual: Vec<f64>,
     work: Vec<f64>,
@@ -258,11 +265,13 @@ impl ContinuousDiscreteGrid {
             advection,
             divergence,
             diffusion,
-            noise,
+            noise: crate::filters::ObservedNoise::new(noise),
             h_nodes,
             target_dt: params.dt,
             dt_obs,
             plan: None,
+            remainders: Vec::new(),
+            saved: crate::filters::SavedDensity::new(len, &estimate),
             u,
             tmp: vec![0.0; len],
             residual: vec![0.0; m],
@@ -369,13 +378,8 @@ impl ContinuousDiscreteGrid {
         })
     }
 
-    /// Factorises the implicit step for intervals of length `interval`: at construction for
-    /// Δτ, and again only when [`ContinuousDiscreteGrid::predict`] is asked for another length
-    /// explicitly (the J(t) curve predicts in parts of an interval).
-    fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
-        if self.plan.as_ref().map(|p| p.interval) == Some(interval) {
-            return Ok(());
-        }
+    /// The plan of the implicit step for intervals of length `interval`.
+    fn plan_of(&self, interval: f64) -> Result<StepPlan, FilterError> {
         let (substeps, _) = self.step_count(interval)?;
         let dt = interval / substeps as f64;
         let part = match self.scheme {
@@ -390,12 +394,17 @@ impl ContinuousDiscreteGrid {
             dt,
             part,
         )?;
-        self.plan = Some(StepPlan {
+        Ok(StepPlan {
             interval,
             substeps,
             dt,
             lu,
-        });
+        })
+    }
+
+    /// Factorises the implicit step for Δτ (at construction).
+    fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
+        self.plan = Some(self.plan_of(interval)?);
         Ok(())
     }
 
@@ -404,20 +413,27 @@ impl ContinuousDiscreteGrid {
         self.plan.as_ref().map(|p| (p.substeps, p.dt))
     }
 
-    /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement. The
-    /// density is not renormalised (mass that leaves the grid is lost, as in the scheme). An
-    /// interval other than the last one re-factorises the implicit step (a deliberate call;
-    /// [`Filter::step`] accepts only the Δτ the filter was built for).
-    pub fn predict(&mut self, interval: f64) -> Result<(), FilterError> {
-        self.plan_for(interval)?;
-        let plan = self.plan.as_ref().expect("planned just above");
-        for _ in 0..plan.substeps {
-            if self.scheme == FpeScheme::Separation {
-                self.advection
-                    .step(&self.grid, plan.dt, &self.u, &mut self.tmp);
-                core::mem::swap(&mut self.u, &mut self.tmp);
+    /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement, as
+    /// whole intervals Δτ with the plan made for Δτ and the rest with a plan for its length
+    /// (made the first time that length occurs and kept among the last [`REMAINDER_PLANS`]).
+    /// The density is not renormalised (mass that leaves the grid is lost, as in the scheme).
+    fn propagate(&mut self, interval: f64) -> Result<(), FilterError> {
+        let (whole, rest) = crate::filters::whole_intervals(interval, self.dt_obs);
+        for _ in 0..whole {
+            let plan = self.plan.as_ref().expect("planned in new");
+            self.run_plan(plan.substeps, plan.dt, None);
+        }
+        if rest > 0.0 {
+            match self.remainders.iter().position(|p| p.interval == rest) {
+                Some(i) => self.remainders[..=i].rotate_right(1),
+                None => {
+                    let plan = self.plan_of(rest)?;
+                    self.remainders.truncate(REMAINDER_PLANS - 1);
+                    self.remainders.insert(0, plan);
+                }
             }
-            plan.lu.solve(&mut self.u);
+            let (substeps, dt) = (self.remainders[0].substeps, self.remainders[0].dt);
+            self.run_plan(substeps, dt, Some(0));
         }
         if self.u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -427,20 +443,32 @@ impl ContinuousDiscreteGrid {
         Ok(())
     }
 
-    /// The Bayes update (6)–(7) with measurement `z`, then the normalisation by `c'_k`.
-    pub fn update(&mut self, z: &[f64]) -> Result<(), FilterError> {
+    /// `substeps` FPE steps of `dt` with the Δτ plan (`None`) or remainder plan `remainder`.
+    fn run_plan(&mut self, substeps: usize, dt: f64, remainder: Option<usize>) {
+        for _ in 0..substeps {
+            if self.scheme == FpeScheme::Separation {
+                self.advection.step(&self.grid, dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
+            let plan = match remainder {
+                Some(i) => &self.remainders[i],
+                None => self.plan.as_ref().expect("planned in new"),
+            };
+            plan.lu.solve(&mut self.u);
+        }
+    }
+
+    /// The Bayes update (6)–(7) with the observed components of `z` (NaN = missing: the
+    /// noise density of the observed ones, its marginal), then the normalisation by `c'_k`.
+    fn assimilate(&mut self, z: &[f64]) -> Result<(), FilterError> {
         let m = self.residual.len();
+        let noise = self.noise.of(z)?;
         let mut max = f64::NEG_INFINITY;
         for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
             if *u > 0.0 {
-                for (r, (zj, hj)) in self
-                    .residual
-                    .iter_mut()
-                    .zip(z.iter().zip(&self.h_nodes[idx * m..(idx + 1) * m]))
-                {
-                    *r = zj - hj;
-                }
-                *log = self.noise.log_pdf_slice(&self.residual, &mut self.work) + libm::log(*u);
+                let h = &self.h_nodes[idx * m..(idx + 1) * m];
+                let k = crate::filters::observed_residual(z, |a| z[a] - h[a], &mut self.residual);
+                *log = noise.log_pdf_slice(&self.residual[..k], &mut self.work) + libm::log(*u);
                 max = max.max(*log);
             } else {
                 *log = f64::NEG_INFINITY;
@@ -452,13 +480,28 @@ impl ContinuousDiscreteGrid {
         for (u, log) in self.u.iter_mut().zip(&self.tmp) {
             *u = libm::exp(log - max);
         }
+        self.normalise()
+    }
+
+    /// Normalises the density and refreshes the estimate.
+    fn normalise(&mut self) -> Result<(), FilterError> {
         normalise_on_grid(
             &self.grid,
             &mut self.u,
             &mut self.moments,
             &mut self.estimate,
-        )?;
-        Ok(())
+        )
+    }
+
+    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            self.propagate(obs.dt)?;
+        }
+        match observed {
+            Observed::Nothing => self.normalise(),
+            Observed::All | Observed::Some => self.assimilate(obs.value),
+        }
     }
 }
 
@@ -473,13 +516,17 @@ impl Filter for ContinuousDiscreteGrid {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        crate::filters::check_measurement(&self.name, obs, self.residual.len())?;
-        if obs.dt > 0.0 {
-            crate::filters::check_interval(&self.name, self.dt_obs, obs.dt)?;
-            // Exactly Δτ's plan (not a re-factorisation for a rounding of it).
-            self.predict(self.dt_obs)?;
+        let observed = obs.check(
+            &self.name,
+            ObservationKind::Measurement,
+            self.residual.len(),
+        )?;
+        self.saved.save(&self.u, &self.estimate);
+        let stepped = self.advance(obs, observed);
+        if stepped.is_err() {
+            self.saved.restore(&mut self.u, &mut self.estimate);
         }
-        self.update(obs.value)
+        stepped
     }
 
     fn estimate(&self) -> Estimate {

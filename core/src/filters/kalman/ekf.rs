@@ -33,6 +33,7 @@ impl Default for EkfParams {
 }
 
 /// The extended Kalman filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct ExtendedKalman {
     name: String,
     model: Model,
@@ -63,17 +64,19 @@ impl Filter for ExtendedKalman {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let ExtendedKalman {
+            name,
             model,
             q,
             form,
             substeps,
             state,
-            ..
         } = self;
-        match state.predict_then_measure(model, q, *substeps, form, obs)? {
-            Some(meas) => state.linearized_update(model, meas),
-            None => Ok(()),
-        }
+        state.transaction(|state| {
+            match state.predict_then_measure(name, model, q, *substeps, form, obs)? {
+                Some(meas) => state.linearized_update(model, meas),
+                None => Ok(()),
+            }
+        })
     }
 
     fn estimate(&self) -> Estimate {
@@ -85,6 +88,6 @@ impl Filter for ExtendedKalman {
     }
 
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
-        self.state.innovations.check(self.model.m, out);
+        self.state.innovations.check(out);
     }
 }

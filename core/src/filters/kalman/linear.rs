@@ -90,6 +90,7 @@ pub fn discretize(
 }
 
 /// The Kalman–Bucy filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct KalmanBucy {
     name: String,
     model: Model,
@@ -105,6 +106,7 @@ pub struct KalmanBucy {
 }
 
 /// `(Δτ, Φ, Γ b, Q_d)` of [`discretize`].
+#[derive(Clone, Debug)]
 pub(crate) struct Discretization {
     pub(crate) dt: f64,
     pub(crate) phi: DMatrix<f64>,
@@ -190,15 +192,28 @@ impl Filter for KalmanBucy {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the state.
-        let meas = self.form.at(obs)?;
-        if obs.dt > 0.0 {
-            let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, obs.dt);
-            d.propagate(&mut self.state.mean, &mut self.state.cov, &mut self.moved);
-        }
-        if meas.scale == 0.0 {
-            return self.state.check();
-        }
-        self.state.linearized_update(&self.model, meas)
+        let KalmanBucy {
+            name,
+            model,
+            a,
+            b,
+            q,
+            form,
+            state,
+            cached,
+            moved,
+        } = self;
+        let meas = form.at(name, obs)?;
+        state.transaction(|state| {
+            if obs.dt > 0.0 {
+                let d = Discretization::for_step(cached, a, b, q, obs.dt);
+                d.propagate(&mut state.mean, &mut state.cov, moved);
+            }
+            match meas {
+                Some(meas) => state.linearized_update(model, meas),
+                None => state.check(),
+            }
+        })
     }
 
     fn estimate(&self) -> Estimate {
@@ -210,6 +225,6 @@ impl Filter for KalmanBucy {
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        self.state.innovations.check(self.model.m, out);
+        self.state.innovations.check(out);
     }
 }

@@ -419,6 +419,7 @@ pub const MAP_UNCONVERGED_THRESHOLD: f64 = 1.0;
 pub const MAP_JUMP_THRESHOLD: f64 = 3.0;
 
 /// A Gaussian filter whose update is the MAP point of 003 §4 (IEKF or IOKF).
+#[derive(Clone, Debug)]
 pub struct MapKalman {
     name: String,
     model: Model,
@@ -494,7 +495,7 @@ fn map_point(
                 state.linearize(model, meas, Some(&work.x));
                 let nis = state.gain()?;
                 if k == 0 {
-                    state.innovations.push(nis);
+                    state.innovations.push(nis, meas.count);
                     log_density = state.innovation_log_density(nis);
                 }
                 gauss_newton_point(state, &work.x, &mut work.newton.d, &mut work.trial);
@@ -519,7 +520,7 @@ fn map_point(
         } => {
             state.linearize(model, meas, None);
             let nis = state.gain()?;
-            state.innovations.push(nis);
+            state.innovations.push(nis, meas.count);
             log_density = state.innovation_log_density(nis);
             spd_inverse_into(
                 &state.cov,
@@ -609,6 +610,7 @@ impl Filter for MapKalman {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let MapKalman {
+            name,
             model,
             q,
             form,
@@ -618,13 +620,19 @@ impl Filter for MapKalman {
             work,
             watch,
             last,
-            ..
         } = self;
-        let Some(meas) = state.predict_then_measure(model, q, *substeps, form, obs)? else {
+        let stepped = state.transaction(|state| {
+            let Some(meas) = state.predict_then_measure(name, model, q, *substeps, form, obs)?
+            else {
+                return Ok(None);
+            };
+            map_update(*solver, model, meas, state, work).map(|report| Some((report, meas)))
+        })?;
+        let Some((report, meas)) = stepped else {
             watch.elapse(obs.dt);
             return Ok(());
         };
-        *last = map_update(*solver, model, meas, state, work)?;
+        *last = report;
         let interval = Interval {
             solver: *solver,
             model,
@@ -648,7 +656,7 @@ impl Filter for MapKalman {
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        self.state.innovations.check(self.model.m, out);
+        self.state.innovations.check(out);
         self.watch.check(out);
         if self.last.jump > MAP_JUMP_THRESHOLD {
             out.push(crate::filters::Concern::above(

@@ -4,13 +4,17 @@
 //!   (the Euler form of the Kalman–Bucy update that 000 and 002 compare against);
 //! * Discrete `z = h(x) + v`: `v` replaced by its first two moments (exact for Gaussian noise;
 //!   the best linear update for 001's mixtures).
-
-use alloc::format;
+//!
+//! A missing component (NaN) is taken out without changing the dimension: its row of h and
+//! of the Jacobian reads 0, its value 0, its row and column of R those of the identity. Then
+//! `P_zz = H P Hᵀ + R` is block diagonal with an identity block for the missing rows, the
+//! gain's columns for them vanish and they add nothing to `rᵀP_zz⁻¹r` or to `ln det P_zz`:
+//! the update is exactly the one with the observed rows of h and R alone.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::FilterError;
-use crate::filters::{Observation, ObservationKind};
+use crate::filters::{Observation, ObservationKind, Observed};
 use crate::model::{Model, ObservationModel};
 
 /// The measurement equation `z = scale · h(x) + offset + noise(R)` for one observation, and
@@ -30,8 +34,12 @@ pub struct Measurement {
     pub scale: f64,
     /// R.
     pub noise_cov: DMatrix<f64>,
-    /// z.
+    /// z (0 where missing).
     pub value: DVector<f64>,
+    /// Which components were observed.
+    pub observed: alloc::vec::Vec<bool>,
+    /// How many were (the innovation's degrees of freedom).
+    pub count: usize,
 }
 
 impl MeasurementForm {
@@ -47,6 +55,8 @@ impl MeasurementForm {
             scale: 1.0,
             noise_cov: noise_cov.clone(),
             value: DVector::zeros(model.m),
+            observed: alloc::vec![true; model.m],
+            count: model.m,
         };
         MeasurementForm {
             continuous,
@@ -56,20 +66,20 @@ impl MeasurementForm {
         }
     }
 
-    /// The equation for `obs`, or an error when its kind or size does not fit the model.
-    pub fn at(&mut self, obs: &Observation) -> Result<&Measurement, FilterError> {
-        let expected = if self.continuous {
+    /// The equation for `obs` (`name` is the filter's, for errors), or an error when `obs` is
+    /// bad (see [`Observation::check`]); `None` when nothing was observed (a prediction only).
+    pub fn at(
+        &mut self,
+        name: &str,
+        obs: &Observation,
+    ) -> Result<Option<&Measurement>, FilterError> {
+        let kind = if self.continuous {
             ObservationKind::Increment
         } else {
             ObservationKind::Measurement
         };
-        if obs.kind != expected || obs.value.len() != self.offset.len() {
-            return Err(FilterError::BadObservation(format!(
-                "expected a {expected:?} of length {}, got a {:?} of length {}",
-                self.offset.len(),
-                obs.kind,
-                obs.value.len()
-            )));
+        if obs.check(name, kind, self.offset.len())? == Observed::Nothing {
+            return Ok(None);
         }
         let current = &mut self.current;
         current.scale = if self.continuous { obs.dt } else { 1.0 };
@@ -77,15 +87,29 @@ impl MeasurementForm {
         if self.continuous {
             current.noise_cov *= obs.dt;
         }
-        for ((v, z), o) in current.value.iter_mut().zip(obs.value).zip(&self.offset) {
-            *v = z - o;
+        current.count = 0;
+        for (i, (z, o)) in obs.value.iter().zip(&self.offset).enumerate() {
+            let seen = !Observation::is_missing(*z);
+            current.observed[i] = seen;
+            current.value[i] = if seen { z - o } else { 0.0 };
+            if seen {
+                current.count += 1;
+            } else {
+                current.noise_cov.row_mut(i).fill(0.0);
+                current.noise_cov.column_mut(i).fill(0.0);
+                current.noise_cov[(i, i)] = 1.0;
+            }
         }
-        Ok(current)
+        if current.scale == 0.0 {
+            // An increment over no time: nothing to assimilate.
+            return Ok(None);
+        }
+        Ok(Some(current))
     }
 }
 
 impl Measurement {
-    /// `scale · h(x)` (the offset is already taken out of `value`).
+    /// `scale · h(x)` (the offset is already taken out of `value`; 0 in missing rows).
     pub fn predict(&self, model: &Model, x: &[f64]) -> DVector<f64> {
         let mut out = DVector::zeros(model.m);
         self.predict_into(model, x, out.as_mut_slice());
@@ -95,10 +119,12 @@ impl Measurement {
     /// [`Measurement::predict`] into `out` (length m).
     pub fn predict_into(&self, model: &Model, x: &[f64], out: &mut [f64]) {
         model.observation.eval(x, out);
-        out.iter_mut().for_each(|v| *v *= self.scale);
+        for (v, seen) in out.iter_mut().zip(&self.observed) {
+            *v = if *seen { *v * self.scale } else { 0.0 };
+        }
     }
 
-    /// `scale · ∂h/∂x` at x (m × n).
+    /// `scale · ∂h/∂x` at x (m × n; 0 in missing rows).
     pub fn jacobian(&self, model: &Model, x: &[f64]) -> DMatrix<f64> {
         let mut out = DMatrix::zeros(model.m, model.n);
         let mut rows = alloc::vec![0.0; model.m * model.n];
@@ -117,8 +143,9 @@ impl Measurement {
         model.observation.jacobian(x, rows);
         let n = model.n;
         for (i, row) in rows.chunks_exact(n).enumerate() {
+            let seen = self.observed[i];
             for (j, v) in row.iter().enumerate() {
-                out[(i, j)] = v * self.scale;
+                out[(i, j)] = if seen { v * self.scale } else { 0.0 };
             }
         }
     }

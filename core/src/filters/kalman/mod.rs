@@ -43,26 +43,31 @@ pub struct GaussianInit {
 /// Updates over which the innovation self-check averages the normalised innovation squared.
 pub const NIS_WINDOW: usize = 50;
 
-/// The innovation self-check's band: the mean of the last [`NIS_WINDOW`] NIS values
-/// `νᵀ P_zz⁻¹ ν` of a consistent filter is χ²(W·m)/(W·m)-distributed; the band is its
+/// The innovation self-check's band: the mean per observed component of the last
+/// [`NIS_WINDOW`] NIS values `νᵀ P_zz⁻¹ ν` of a consistent filter is χ²(k)/k-distributed, with
+/// k the components observed over the window (W·m when none is missing); the band is its
 /// two-sided 1 − 10⁻⁵ interval (Wilson–Hilferty, z = 4.4), so a well-specified Kalman filter
 /// warns on a window about once in 10⁵. Outside it, the filter's covariance does not describe
 /// its errors (too small above the band — the usual way an EKF loses track —, too large below).
-pub fn nis_band(m: usize) -> (f64, f64) {
-    let k = (NIS_WINDOW * m) as f64;
+pub fn nis_band(k: usize) -> (f64, f64) {
+    let k = k as f64;
     let (a, b) = (1.0 - 2.0 / (9.0 * k), 4.4 * libm::sqrt(2.0 / (9.0 * k)));
     let cube = |x: f64| x * x * x;
     (cube(a - b), cube(a + b))
 }
 
-/// The last [`NIS_WINDOW`] normalised innovations squared, in a ring (no allocation).
+/// The last [`NIS_WINDOW`] normalised innovations squared with the number of components
+/// each had observed, in a ring (no allocation).
 #[derive(Clone, Debug)]
 pub struct InnovationWindow {
     values: [f64; NIS_WINDOW],
+    components: [usize; NIS_WINDOW],
     count: usize,
     /// Σ values, kept as each value enters and leaves (the check runs every step) and summed
     /// afresh each time the ring wraps, so rounding cannot build up.
     sum: f64,
+    /// Σ components.
+    observed: usize,
 }
 
 impl Default for InnovationWindow {
@@ -76,15 +81,19 @@ impl InnovationWindow {
     pub fn new() -> Self {
         InnovationWindow {
             values: [0.0; NIS_WINDOW],
+            components: [0; NIS_WINDOW],
             count: 0,
             sum: 0.0,
+            observed: 0,
         }
     }
 
-    /// Records one normalised innovation squared.
-    pub fn push(&mut self, nis: f64) {
+    /// Records one normalised innovation squared of an update that observed `components`.
+    pub fn push(&mut self, nis: f64, components: usize) {
         let slot = self.count % NIS_WINDOW;
         let old = core::mem::replace(&mut self.values[slot], nis);
+        let old_components = core::mem::replace(&mut self.components[slot], components);
+        self.observed = self.observed + components - old_components;
         self.count += 1;
         self.sum = if slot + 1 == NIS_WINDOW || !(old.is_finite() && self.sum.is_finite()) {
             self.values.iter().sum()
@@ -93,18 +102,20 @@ impl InnovationWindow {
         };
     }
 
-    /// The mean NIS per observation component over the last window, once it is full.
-    pub fn mean(&self, m: usize) -> Option<f64> {
-        (self.count >= NIS_WINDOW).then(|| self.sum / (NIS_WINDOW * m) as f64)
+    /// The mean NIS per observed component over the last window, once it is full, with the
+    /// number of components observed over it.
+    pub fn mean(&self) -> Option<(f64, usize)> {
+        (self.count >= NIS_WINDOW && self.observed > 0)
+            .then(|| (self.sum / self.observed as f64, self.observed))
     }
 
     /// The innovation self-check: a [`crate::filters::Concern`] when the window's mean is
     /// outside [`nis_band`].
-    pub fn check(&self, m: usize, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
-        let Some(mean) = self.mean(m) else {
+    pub fn check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
+        let Some((mean, observed)) = self.mean() else {
             return;
         };
-        let (lo, hi) = nis_band(m);
+        let (lo, hi) = nis_band(observed);
         const CHECK: &str = "normalised innovation squared (mean over 50 updates, per component)";
         if mean > hi {
             out.push(crate::filters::Concern::above(
@@ -139,6 +150,8 @@ pub struct GaussianState {
     pub parts: UpdateParts,
     work: UpdateWork,
     moments: propagate::MomentWork,
+    /// The state a step started from ([`GaussianState::save`]).
+    saved: (DVector<f64>, DMatrix<f64>, InnovationWindow),
 }
 
 /// The residual `r = z − ẑ` (m), the cross covariance `P_xz` (n × m) and the innovation
@@ -151,6 +164,8 @@ pub struct UpdateParts {
     pub pxz: DMatrix<f64>,
     /// P_zz.
     pub pzz: DMatrix<f64>,
+    /// The components observed (the others' rows are neutral: see [`measurement`]).
+    pub observed: usize,
 }
 
 /// Storage of the update: the Cholesky factor of P_zz, Kᵀ, P_zz⁻¹ r, and the linearised
@@ -194,6 +209,7 @@ impl GaussianState {
                 residual: DVector::zeros(m),
                 pxz: DMatrix::zeros(n, m),
                 pzz: DMatrix::zeros(m, m),
+                observed: m,
             },
             work: UpdateWork {
                 factor: DMatrix::zeros(m, m),
@@ -203,14 +219,48 @@ impl GaussianState {
                 rows: alloc::vec![0.0; m * n],
             },
             moments: propagate::MomentWork::new(n),
+            saved: (
+                DVector::zeros(n),
+                DMatrix::zeros(n, n),
+                InnovationWindow::new(),
+            ),
         }
+    }
+
+    /// Keeps the mean, covariance and innovation window (no allocation), so that
+    /// [`GaussianState::restore`] can undo a step that fails.
+    pub fn save(&mut self) {
+        self.saved.0.copy_from(&self.mean);
+        self.saved.1.copy_from(&self.cov);
+        self.saved.2.clone_from(&self.innovations);
+    }
+
+    /// Back to the state of the last [`GaussianState::save`].
+    pub fn restore(&mut self) {
+        self.mean.copy_from(&self.saved.0);
+        self.cov.copy_from(&self.saved.1);
+        self.innovations.clone_from(&self.saved.2);
+    }
+
+    /// Runs `step` on the state; when it fails, the state is restored to what it was before
+    /// (the [`crate::filters::Filter`] contract).
+    pub fn transaction<T>(
+        &mut self,
+        step: impl FnOnce(&mut Self) -> Result<T, FilterError>,
+    ) -> Result<T, FilterError> {
+        self.save();
+        let result = step(self);
+        if result.is_err() {
+            self.restore();
+        }
+        result
     }
 
     /// The linear(ised) update from [`GaussianState::parts`] (residual `r = z − ẑ`, `P_xz`,
     /// `P_zz`): gain `K = P_xz P_zz⁻¹`, `m += K r`, `P −= K P_zz Kᵀ = P_xz Kᵀ`.
     pub fn update(&mut self) -> Result<(), FilterError> {
         let nis = self.gain()?;
-        self.innovations.push(nis);
+        self.innovations.push(nis, self.parts.observed);
         self.mean
             .gemv_tr(1.0, &self.work.gain_t, &self.parts.residual, 1.0);
         self.downdate_covariance()
@@ -232,7 +282,9 @@ impl GaussianState {
     /// state's storage; returns the normalised
     /// innovation squared `rᵀ P_zz⁻¹ r`.
     pub fn gain(&mut self) -> Result<f64, FilterError> {
-        let UpdateParts { residual, pxz, pzz } = &self.parts;
+        let UpdateParts {
+            residual, pxz, pzz, ..
+        } = &self.parts;
         let work = &mut self.work;
         let chol = crate::linalg::cholesky_in(&mut work.factor, pzz, "innovation covariance")?;
         work.whitened.copy_from(residual);
@@ -264,6 +316,7 @@ impl GaussianState {
         let x = at.unwrap_or(&self.mean).as_slice();
         meas.jacobian_into(model, x, &mut work.rows, &mut work.h);
         meas.predict_into(model, x, parts.residual.as_mut_slice());
+        parts.observed = meas.count;
         parts.residual.zip_apply(&meas.value, |r, z| *r = z - *r);
         // P_xz = P Hᵀ.
         let (m, n) = work.h.shape();
@@ -326,22 +379,23 @@ impl GaussianState {
     }
 
     /// The common first half of an EKF-type step: the measurement equation of `obs` (checked
-    /// before anything moves, so a refused one leaves the state), then the linearised
-    /// prediction over `obs.dt`; `None` when there is nothing to assimilate (e.g. the zero
-    /// increment at τ₀).
+    /// before anything moves, so a refused one leaves the state; `name` is the filter's, for
+    /// errors), then the linearised prediction over `obs.dt`; `None` when there is nothing to
+    /// assimilate (a prediction only, or the zero increment at τ₀).
     pub fn predict_then_measure<'f>(
         &mut self,
+        name: &str,
         model: &crate::model::Model,
         q: &DMatrix<f64>,
         substeps: usize,
         form: &'f mut measurement::MeasurementForm,
         obs: &crate::filters::Observation,
     ) -> Result<Option<&'f measurement::Measurement>, FilterError> {
-        let meas = form.at(obs)?;
+        let meas = form.at(name, obs)?;
         if obs.dt > 0.0 {
             self.predict_linearized(model, q, obs.dt, substeps)?;
         }
-        Ok((meas.scale != 0.0).then_some(meas))
+        Ok(meas)
     }
 
     /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).
@@ -406,9 +460,12 @@ mod tests {
             } else {
                 libm::exp(libm::sin(k as f64 * 1.3))
             };
-            window.push(nis);
+            window.push(nis, 2);
             pushed.push(nis);
-            let got = window.mean(2);
+            let got = window.mean().map(|(mean, observed)| {
+                assert_eq!(observed, 2 * NIS_WINDOW);
+                mean
+            });
             if pushed.len() < NIS_WINDOW {
                 assert_eq!(got, None);
                 continue;

@@ -504,6 +504,8 @@ mod tests {
                 scale: 0.01,
                 noise_cov: DMatrix::from_element(1, 1, 0.01),
                 value: DVector::from_element(1, 0.0),
+                observed: alloc::vec![true],
+                count: 1,
             };
             let found = watch.candidate(&model, &meas, &state);
             match mirror {

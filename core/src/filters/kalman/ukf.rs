@@ -109,6 +109,7 @@ impl Weights {
 /// The 2n + 1 sigma points and their images under f or h, as structure of arrays (component
 /// j of point i at `[j * count + i]`, the layout of [`crate::model::VectorFunction::eval_batch`]),
 /// with the storage of P's Cholesky factor: made once, so that a step allocates nothing.
+#[derive(Clone, Debug)]
 struct SigmaPoints {
     count: usize,
     points: Vec<f64>,
@@ -185,6 +186,7 @@ impl SigmaPoints {
 }
 
 /// The unscented Kalman filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct UnscentedKalman {
     name: String,
     model: Model,
@@ -278,9 +280,15 @@ impl UnscentedKalman {
         model
             .observation
             .eval_batch(&sigma.points, zs, &mut sigma.scratch);
-        zs.iter_mut().for_each(|z| *z *= meas.scale);
+        // Missing components read 0 at every point (see [`super::measurement`]).
+        for (z, seen) in zs.chunks_exact_mut(c).zip(&meas.observed) {
+            let scale = meas.scale;
+            z.iter_mut()
+                .for_each(|z| *z = if *seen { *z * scale } else { 0.0 });
+        }
         let zs = &sigma.images[..model.m * c];
         let parts = &mut state.parts;
+        parts.observed = meas.count;
         // ẑ in the residual's storage until the covariances are taken.
         let zhat = parts.residual.as_mut_slice();
         sigma.mean(w, zs, zhat);
@@ -306,6 +314,7 @@ impl Filter for UnscentedKalman {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let UnscentedKalman {
+            name,
             model,
             q,
             form,
@@ -313,19 +322,20 @@ impl Filter for UnscentedKalman {
             weights,
             state,
             sigma,
-            ..
         } = self;
         // Checked before anything moves: a refused observation leaves the state.
-        let meas = form.at(obs)?;
-        if obs.dt > 0.0 {
-            state.predict_with(obs.dt, *substeps, |at, rates, _| {
-                Self::rates(model, q, weights, sigma, at, rates)
-            })?;
-        }
-        if meas.scale == 0.0 {
-            return Ok(());
-        }
-        Self::update(model, weights, sigma, state, meas)
+        let meas = form.at(name, obs)?;
+        state.transaction(|state| {
+            if obs.dt > 0.0 {
+                state.predict_with(obs.dt, *substeps, |at, rates, _| {
+                    Self::rates(model, q, weights, sigma, at, rates)
+                })?;
+            }
+            match meas {
+                Some(meas) => Self::update(model, weights, sigma, state, meas),
+                None => Ok(()),
+            }
+        })
     }
 
     fn estimate(&self) -> Estimate {
@@ -337,6 +347,6 @@ impl Filter for UnscentedKalman {
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        self.state.innovations.check(self.model.m, out);
+        self.state.innovations.check(out);
     }
 }

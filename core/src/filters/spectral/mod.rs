@@ -42,7 +42,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation};
+use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::linalg;
 use crate::model::dmz::{DmzCoefficients, Likelihood};
 use crate::model::{Model, Prior};
@@ -284,6 +284,7 @@ fn basis_at(points: &[f64], count: usize) -> DMatrix<f64> {
 }
 
 /// W of Algorithm 1 as the on-line step applies it.
+#[derive(Clone, Debug)]
 enum Propagation {
     /// 1-D: the evaluation at the on-line nodes times W (nodes × N₂), one product per step.
     Nodal(DMatrix<f64>),
@@ -294,6 +295,7 @@ enum Propagation {
 }
 
 /// The spectral Yau–Yau filter of 004.
+#[derive(Clone, Debug)]
 pub struct SpectralFilter {
     name: String,
     layout: Layout,
@@ -323,6 +325,11 @@ pub struct SpectralFilter {
     /// Σc² and its top-degree part, measured as the coefficients are normalised (the
     /// self-check's numbers).
     energy: Energy,
+    /// The coefficients, estimate and energy a step started from.
+    saved: (crate::filters::SavedDensity, Energy),
+    /// Whether `−½hᵀS⁻¹h` is in the off-line operator (then an interval cannot be predicted
+    /// without its increment).
+    likelihood_in_operator: bool,
 }
 
 impl SpectralFilter {
@@ -411,6 +418,11 @@ impl SpectralFilter {
                 covariance: None,
                 map: None,
             },
+            saved: (
+                crate::filters::SavedDensity::new(online_len, &Estimate::zeros(n)),
+                Energy::default(),
+            ),
+            likelihood_in_operator: in_operator,
             evaluate,
             project,
             layout,
@@ -506,10 +518,10 @@ impl SpectralFilter {
     /// likelihood is in the update — at the nodes, shifted by its largest exponent. Products
     /// below zero (from negative nodal values, the polynomial's ripples where the density is
     /// small) are flushed to zero, so the factor cannot turn them into negative mass.
-    fn update(&mut self, dy: &[f64]) {
+    fn update(&mut self, dy: &[f64], intervals: f64) {
         let a = &mut self.exponents;
         for (a, p) in a.iter_mut().zip(&self.potential) {
-            *a = -p;
+            *a = -p * intervals;
         }
         for (y, sh) in dy.iter().zip(&self.s_inv_h) {
             for (a, h) in a.iter_mut().zip(sh) {
@@ -671,15 +683,50 @@ impl Filter for SpectralFilter {
         }
     }
 
+    /// Steps of whole intervals T₀: an interval of k T₀ is k propagations with the off-line
+    /// operator (the increment's factor after the last, with `½hᵀS⁻¹h k T₀`); another length
+    /// is an [`FilterError::IntervalMismatch`] (the operator is made off-line for T₀ alone).
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        crate::filters::check_increment(&self.name, obs, self.s_inv_h.len())?;
+        let observed = obs.check(&self.name, ObservationKind::Increment, self.s_inv_h.len())?;
         if obs.dt <= 0.0 {
             return Ok(());
         }
-        crate::filters::check_interval(&self.name, self.t0, obs.dt)?;
-        self.propagate();
-        self.update(obs.value);
-        self.normalise_and_project()
+        let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
+        if rest > 0.0 || whole == 0 {
+            return Err(FilterError::IntervalMismatch {
+                filter: self.name.clone(),
+                built_for: self.t0,
+                got: obs.dt,
+            });
+        }
+        match observed {
+            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
+            Observed::Nothing if self.likelihood_in_operator => {
+                return Err(FilterError::BadObservation(format!(
+                    "{}: with −½hᵀS⁻¹h in the operator (likelihood = in_operator) an interval without an increment cannot be predicted; use likelihood = in_update",
+                    self.name
+                )));
+            }
+            _ => {}
+        }
+        self.saved.0.save(&self.coeffs, &self.estimate);
+        self.saved.1 = self.energy;
+        let mut stepped = Ok(());
+        for k in 1..=whole {
+            self.propagate();
+            if k == whole && observed == Observed::All {
+                self.update(obs.value, whole as f64);
+            }
+            stepped = self.normalise_and_project();
+            if stepped.is_err() {
+                break;
+            }
+        }
+        if stepped.is_err() {
+            self.saved.0.restore(&mut self.coeffs, &mut self.estimate);
+            self.energy = self.saved.1;
+        }
+        stepped
     }
 
     fn estimate(&self) -> Estimate {

@@ -12,7 +12,7 @@ use super::operator::{explicit_part, KolmogorovOperator};
 use super::superposition::Superposition;
 use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
-use crate::filters::{DensityView, Estimate, Filter, Observation};
+use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::dst::DstPlan;
 use crate::grid::{for_each_line, TensorGrid};
 use crate::linalg;
@@ -24,11 +24,13 @@ use crate::model::{Model, Prior};
 /// grid line, LU-factored once (Thomas algorithm, coefficients stored per node). In one
 /// dimension this is exactly (14); in more it adds an O(Δt) splitting error, the order of the
 /// scheme itself (tested against QIEM in 2-D).
+#[derive(Clone, Debug)]
 struct SplitIem {
     axes: Vec<AxisSystem>,
 }
 
 /// The factored tridiagonal systems along one dimension.
+#[derive(Clone, Debug)]
 struct AxisSystem {
     stride: usize,
     n: usize,
@@ -115,6 +117,7 @@ impl SplitIem {
 }
 
 /// The spectral solve of QIEM: DST plans per dimension and the eigenvalue divisors.
+#[derive(Clone, Debug)]
 struct SpectralSolve {
     plans: Vec<DstPlan>,
     /// `1 / (1 + Δt Σ_d Q_dd (2/Δs_d²) sin²(j_d π / (2(N_d + 1))))` times the inverse-DST
@@ -187,6 +190,7 @@ impl SpectralSolve {
 }
 
 /// One QIEM step (18): explicit drift and potential, then the spectral implicit Laplacian.
+#[derive(Clone, Debug)]
 struct QiemStep {
     spectral: SpectralSolve,
     fourth_order: bool,
@@ -325,6 +329,7 @@ linalg::simd::per_node_kernel! {
     }
 }
 
+#[derive(Clone, Debug)]
 enum Solver {
     Iem(SplitIem),
     Qiem(QiemStep),
@@ -332,6 +337,7 @@ enum Solver {
 }
 
 /// A Yau–Yau finite-difference filter (see the module doc).
+#[derive(Clone, Debug)]
 pub struct YauYauFilter {
     name: String,
     scheme: Scheme,
@@ -341,7 +347,14 @@ pub struct YauYauFilter {
     /// The density, normalised to unit mass.
     u: Vec<f64>,
     tmp: Vec<f64>,
+    /// Δτ, its substeps and solver.
     solver: Option<(f64, usize, Solver)>,
+    /// Solvers for other interval lengths (the remainders of irregular intervals after whole
+    /// Δτ), with their substeps; the most recently used first, at most
+    /// [`crate::filters::REMAINDER_PLANS`].
+    remainders: Vec<(f64, usize, Solver)>,
+    /// The density and estimate a step started from.
+    saved: crate::filters::SavedDensity,
     warnings: Vec<GuaranteeWarning>,
     estimate: Estimate,
     /// Storage of the estimate's moments.
@@ -352,6 +365,7 @@ pub struct YauYauFilter {
 
 /// `S⁻¹h` and `½hᵀS⁻¹h` at K^D points inside every cell (node-major), for the cell average
 /// of the observation factor, and scratch for their exponents.
+#[derive(Clone, Debug)]
 struct CellSamples {
     per_node: usize,
     s_inv_h: Vec<Vec<f64>>,
@@ -450,8 +464,10 @@ impl YauYauFilter {
             tmp: vec![0.0; grid.len()],
             grid,
             op,
+            saved: crate::filters::SavedDensity::new(u.len(), &Estimate::zeros(model.n)),
             u,
             solver: None,
+            remainders: Vec::new(),
             warnings: Vec::new(),
             cell,
             estimate: Estimate {
@@ -474,17 +490,10 @@ impl YauYauFilter {
     /// Builds the solver for observation interval `dt_obs` (Δt rounded so that it divides it)
     /// and evaluates the guarantees for that step.
     fn prepare(&mut self, dt_obs: f64) -> Result<(), FilterError> {
-        let substeps = libm::ceil(dt_obs / self.params.dt - 1e-9).max(1.0) as usize;
+        let substeps = self.substeps_for(dt_obs);
         let dt = dt_obs / substeps as f64;
         let solver = match self.scheme {
-            Scheme::Iem => Solver::Iem(SplitIem::new(&self.op, &self.grid, dt, self.params.alpha)),
-            Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
-                &self.op,
-                &self.grid,
-                dt,
-                self.params.potential,
-                self.scheme == Scheme::Qiem4,
-            )),
+            Scheme::Iem | Scheme::Qiem | Scheme::Qiem4 => self.stepper(dt),
             Scheme::Superposition => {
                 let mut qiem =
                     QiemStep::new(&self.op, &self.grid, dt, PotentialTerm::Exponential, false);
@@ -513,6 +522,33 @@ impl YauYauFilter {
         }
         self.solver = Some((dt_obs, substeps, solver));
         Ok(())
+    }
+
+    /// Substeps of at most the scheme's Δt over `interval`.
+    fn substeps_for(&self, interval: f64) -> usize {
+        libm::ceil(interval / self.params.dt - 1e-9).max(1.0) as usize
+    }
+
+    /// The scheme's step of length `dt` (the superposition technique's remainders: QIEM with
+    /// the exponential potential, which its bumps are carried with).
+    fn stepper(&self, dt: f64) -> Solver {
+        match self.scheme {
+            Scheme::Iem => Solver::Iem(SplitIem::new(&self.op, &self.grid, dt, self.params.alpha)),
+            Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
+                &self.op,
+                &self.grid,
+                dt,
+                self.params.potential,
+                self.scheme == Scheme::Qiem4,
+            )),
+            Scheme::Superposition => Solver::Qiem(QiemStep::new(
+                &self.op,
+                &self.grid,
+                dt,
+                PotentialTerm::Exponential,
+                false,
+            )),
+        }
     }
 
     /// Normalises to unit mass and refreshes the estimate.
@@ -562,24 +598,61 @@ impl YauYauFilter {
         linalg::scale_by_exp(&mut self.u, a, shift, super::FLUSH_BELOW);
     }
 
-    fn predict(&mut self, dt_obs: f64) -> Result<(), FilterError> {
-        let (built_for, substeps, solver) = self.solver.as_mut().expect("prepared in new");
-        crate::filters::check_interval(&self.name, *built_for, dt_obs)?;
-        match solver {
+    /// Carries the density over `interval`: whole intervals Δτ with the solver made for Δτ,
+    /// the rest with a solver for its length (made the first time that length occurs and kept
+    /// among the last [`crate::filters::REMAINDER_PLANS`]).
+    fn propagate(&mut self, interval: f64) {
+        let (built_for, _, _) = self.solver.as_ref().expect("prepared in new");
+        let (whole, rest) = crate::filters::whole_intervals(interval, *built_for);
+        for _ in 0..whole {
+            let (_, substeps, solver) = self.solver.as_mut().expect("prepared in new");
+            solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
+        }
+        if rest > 0.0 {
+            match self.remainders.iter().position(|r| r.0 == rest) {
+                Some(i) => self.remainders[..=i].rotate_right(1),
+                None => {
+                    let substeps = self.substeps_for(rest);
+                    let solver = self.stepper(rest / substeps as f64);
+                    self.remainders
+                        .truncate(crate::filters::REMAINDER_PLANS - 1);
+                    self.remainders.insert(0, (rest, substeps, solver));
+                }
+            }
+            let (_, substeps, solver) = &mut self.remainders[0];
+            solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
+        }
+    }
+
+    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            self.propagate(obs.dt);
+            if observed == Observed::All {
+                self.update(obs.value, obs.dt);
+            }
+        }
+        self.normalise()
+    }
+}
+
+impl Solver {
+    /// `substeps` steps (the superposition technique: its whole interval at once).
+    fn run(&mut self, substeps: usize, grid: &TensorGrid, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+        match self {
             Solver::Iem(tri) => {
-                for _ in 0..*substeps {
-                    tri.step(&mut self.u, &mut self.tmp);
+                for _ in 0..substeps {
+                    tri.step(u, tmp);
                 }
             }
             Solver::Qiem(qiem) => {
-                for _ in 0..*substeps {
-                    qiem.step(&self.grid, &mut self.u, &mut self.tmp);
+                for _ in 0..substeps {
+                    qiem.step(grid, u, tmp);
                 }
             }
             // The whole interval at once: project onto the bumps, combine their solutions.
-            Solver::Superposition(spt) => spt.apply(&mut self.u),
+            Solver::Superposition(spt) => spt.apply(u),
         }
-        Ok(())
     }
 }
 
@@ -593,12 +666,29 @@ impl Filter for YauYauFilter {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        crate::filters::check_increment(&self.name, obs, self.op.s_inv_h.len())?;
-        if obs.dt > 0.0 {
-            self.predict(obs.dt)?;
-            self.update(obs.value, obs.dt);
+        let observed = obs.check(
+            &self.name,
+            ObservationKind::Increment,
+            self.op.s_inv_h.len(),
+        )?;
+        match observed {
+            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
+            Observed::Nothing
+                if obs.dt > 0.0 && self.params.likelihood == Likelihood::InOperator =>
+            {
+                return Err(FilterError::BadObservation(format!(
+                    "{}: with −½hᵀS⁻¹h in the operator (likelihood = in_operator) an interval without an increment cannot be predicted; use likelihood = in_update",
+                    self.name
+                )));
+            }
+            _ => {}
         }
-        self.normalise()
+        self.saved.save(&self.u, &self.estimate);
+        let stepped = self.advance(obs, observed);
+        if stepped.is_err() {
+            self.saved.restore(&mut self.u, &mut self.estimate);
+        }
+        stepped
     }
 
     fn estimate(&self) -> Estimate {

@@ -52,6 +52,7 @@ pub use methods::{Iem, Qiem, Qiem4, Spt};
 /// Without the `std` feature there are no FFT plans and so no Yau–Yau filter: the methods
 /// stay registered (scenarios still parse and validate) and building one is an error.
 #[cfg(not(feature = "std"))]
+#[derive(Clone, Debug)]
 pub enum YauYauFilter {}
 
 #[cfg(not(feature = "std"))]

@@ -18,6 +18,7 @@ use crate::error::FilterError;
 use crate::grid::TensorGrid;
 
 /// The stored bumps, their solutions and the factored normal matrix.
+#[derive(Clone, Debug)]
 pub struct Superposition {
     /// Bᵀ (N_δ × nodes).
     bumps_t: DMatrix<f64>,

@@ -1,0 +1,144 @@
+"""Real recordings from Python: NaN as missing values, irregular and datetime times, pandas in
+and out, and the stepping filter's predict / update / copy."""
+
+import copy
+import pickle
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import zakai
+from zakai.errors import ConfigError, ExpressionError, FilterError
+
+
+def local_level(methods):
+    """A random walk x observed with noise (a local-level model) at its data's scale."""
+    model = zakai.Model.discrete("0", "x", noise_cov=400.0, diffusion=20.0)
+    return zakai.Scenario(model, zakai.Prior.gaussian(1000.0, 400.0), methods, dt_obs=1.0)
+
+
+def kalman_reference(z, times, q=400.0, r=400.0, m=1000.0, p=400.0):
+    """A scalar Kalman filter written here: x_k = x_{k-1} + w (Var q·Δt), z = x + v."""
+    means = []
+    for k, zk in enumerate(z):
+        if k:
+            p += q * (times[k] - times[k - 1])
+        if not np.isnan(zk):
+            gain = p / (p + r)
+            m += gain * (zk - m)
+            p *= 1 - gain
+        means.append(m)
+    return np.array(means)
+
+
+def flow_series():
+    """A river-flow-like series around 1000 with gaps (values written here, not simulated
+    by Zakai): annual values, two missing years, one dropped year (an irregular step)."""
+    rng = np.random.default_rng(4)
+    years = np.array([1871 + k for k in range(40) if k != 17], dtype=float)
+    level = 1100 + np.cumsum(rng.normal(0, 20, len(years)))
+    z = level + rng.normal(0, 20, len(years))
+    z[[5, 6]] = np.nan
+    return years, z
+
+
+def test_data_near_1000_with_gaps_and_an_irregular_step():
+    years, z = flow_series()
+    sc = local_level(["kalman", "ukf", {"method": "separation", "cells": [800]}, "pf"])
+    sc.domain = [(600, 1600)]
+    result = zakai.filter(sc, z, times=years - years[0])
+    ref = kalman_reference(z, years - years[0])
+    for name, m in result.methods.items():
+        assert m.failure is None, f"{name}: {m.failure}"
+    np.testing.assert_allclose(result.methods["KF"].estimates[:, 0], ref, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(result.methods["UKF"].estimates[:, 0], ref, rtol=0, atol=1e-6)
+    grid = [m for n, m in result.methods.items() if n.startswith("SA")][0]
+    assert np.abs(grid.estimates[:, 0] - ref).max() < 2.0  # a fraction of the sd of ~12
+
+
+def test_pandas_series_with_a_datetime_index():
+    years, z = flow_series()
+    index = pd.to_datetime([f"{int(y)}-07-01" for y in years])
+    series = pd.Series(z, index=index, name="flow")
+    sc = local_level(["kalman"])
+    # Times are seconds since the first: a year is ~3.16e7 s, so rates are per second.
+    sc.config["model"]["diffusion"] = [[20.0 / np.sqrt(365.25 * 86400)]]
+    result = zakai.filter(sc, series)
+    seconds = (index - index[0]).total_seconds().to_numpy()
+    np.testing.assert_allclose(result.times, seconds)
+    df = result.to_pandas()
+    assert (df.index == index).all()
+    assert np.isnan(df["z1"].iloc[5]) and df["KF x1"].notna().all()
+    ref = kalman_reference(z, seconds, q=400.0 / (365.25 * 86400))
+    np.testing.assert_allclose(df["KF x1"].to_numpy(), ref, rtol=1e-9)
+
+
+def test_datetime_times_are_converted_and_text_times_refused():
+    years, z = flow_series()
+    dates = np.array([f"{int(y)}-01-01" for y in years], dtype="datetime64[D]")
+    sc = local_level(["kalman"])
+    result = zakai.filter(sc, z, times=dates)
+    assert result.times[0] == 0.0 and result.times[1] == 365 * 86400
+    with pytest.raises(ConfigError, match="numbers or datetimes"):
+        zakai.filter(sc, z, times=[str(d) for d in dates])
+
+
+def test_a_method_that_does_not_apply_is_marked_and_the_others_run():
+    model = zakai.Model.discrete("-x^3", "x", noise_cov=0.1)
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["gaussian_sum", "ukf"], dt_obs=0.1)
+    z = np.array([0.1, 0.2, np.nan, 0.1])
+    result = zakai.filter(sc, z)
+    gsf, ukf = result.methods.values()
+    assert gsf.failure is not None and "does not apply here" in gsf.failure[2]
+    assert ukf.failure is None and np.isfinite(ukf.estimates).all()
+
+
+def test_filter_predicts_updates_and_copies():
+    model = zakai.Model.discrete("-x", "x", noise_cov=0.1)
+    f = zakai.Filter("ukf", model, zakai.Prior.gaussian(0.0, 1.0), dt_obs=0.1)
+    f.update([0.5])
+    g = copy.copy(f)
+    h = copy.deepcopy(f)
+    before = f.mean.copy()
+    g.predict(1.0)
+    g.step([np.nan], 0.1)  # a missing value: a prediction
+    np.testing.assert_array_equal(f.mean, before)
+    assert abs(g.mean[0]) < abs(before[0]) and g.cov[0, 0] > f.cov[0, 0]
+    h.step([0.4], 0.1)
+    np.testing.assert_array_equal(f.mean, before)
+    with pytest.raises(TypeError, match="cannot be pickled"):
+        pickle.dumps(f)
+    with pytest.raises(FilterError):
+        f.step([np.inf], 0.1)
+    np.testing.assert_array_equal(f.mean, before)
+    with pytest.raises(ConfigError):
+        f.predict(-1.0)
+
+
+def test_run_and_filter_agree_on_the_first_row():
+    model = zakai.Model.discrete("-x", "x", noise_cov=0.1)
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["kalman"], dt_obs=0.1)
+    z = np.array([0.3, 0.2, np.nan, 0.1, 0.4])
+    whole = zakai.filter(sc, z).methods["KF"].estimates
+    f = zakai.Filter("kalman", model, zakai.Prior.gaussian(0.0, 1.0), dt_obs=0.1)
+    means, _ = f.run(z)
+    np.testing.assert_allclose(means, whole, rtol=0, atol=1e-14)
+
+
+def test_python_mistakes_are_explained():
+    with pytest.raises(ExpressionError, match="expressions are text"):
+        zakai.Model.continuous(lambda x: -x, "x")
+    with pytest.raises(ExpressionError, match="write powers with `\\^`"):
+        zakai.Scenario(zakai.Model.continuous("x**3", "x"), zakai.Prior.gaussian(0, 1)).validate()
+    with pytest.raises(ConfigError, match="noise_cov: must be finite"):
+        zakai.Model.discrete("0", "x", noise_cov=np.nan)
+    with pytest.raises(ConfigError, match="variance must be positive"):
+        zakai.Prior.gaussian(0.0, 0.0)
+    model = zakai.Model.continuous("0", "x")
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0, 1), ["qiem"], domain=(-4, 4))
+    assert sc.domain == [[-4.0, 4.0]]
+    f = zakai.Filter("pf", model, zakai.Prior.gaussian(0, 1), dt_obs=0.1, particles=1e3)
+    assert f.name == "PF(1000)"
+    with pytest.raises(ConfigError, match="whole nonnegative number"):
+        zakai.Filter("pf", model, zakai.Prior.gaussian(0, 1), dt_obs=0.1, particles=10.5)

@@ -1,0 +1,520 @@
+//! Real recordings: missing components, gaps, irregular times and multi-rate sensors, the
+//! predict / update / fork API, and failed steps that leave every filter as it was.
+//!
+//! The references are written here, independently of Zakai's own filters: a scalar Kalman
+//! filter with the exact discretisation of an Ornstein–Uhlenbeck drift, and a point-mass
+//! filter on a fine grid whose transition is a Gaussian kernel of many small Euler steps.
+
+use zakai::experiment::Experiment;
+use zakai::filters::{Estimate, Filter, Observation};
+use zakai::scenario::ScenarioConfig;
+use zakai::{FilterError, Recording};
+use zakai_tests::test;
+use zakai_tests::{applicable_methods, observation_of, PRESETS_FOR_EVERY_METHOD};
+
+/// Every number a filter exposes, as bits: mean, covariance, MAP and density.
+fn fingerprint(f: &dyn Filter) -> Vec<u64> {
+    let Estimate {
+        mean,
+        covariance,
+        map,
+    } = f.estimate();
+    let mut bits: Vec<u64> = mean.iter().map(|v| v.to_bits()).collect();
+    bits.extend(
+        covariance
+            .iter()
+            .flat_map(|p| p.iter().map(|v| v.to_bits())),
+    );
+    bits.extend(map.iter().flat_map(|x| x.iter().map(|v| v.to_bits())));
+    if let Some(d) = f.density() {
+        bits.extend(d.values.iter().map(|v| v.to_bits()));
+    }
+    bits
+}
+
+/// Every registered method, on the presets that between them apply all of them: each bad
+/// input — a step Δτ that is NaN, negative or infinite, a component that is ±∞, the wrong
+/// length — is refused, and the filter is bit for bit what it was, also in the step after
+/// (compared with a fork made before the bad input, so hidden state such as a particle
+/// filter's random numbers counts too). Inputs that may blow a method up numerically (a
+/// measurement of 10²⁰⁰, a step of 20 intervals) either succeed or fail the same way; at
+/// least some methods do fail on them, so the restoring path is exercised.
+#[test]
+fn failed_steps_leave_every_filter_as_it_was() {
+    let (mut methods, mut blowups) = (0, 0);
+    for preset in PRESETS_FOR_EVERY_METHOD {
+        let config = zakai::scenario::presets::preset(preset).unwrap();
+        let e = Experiment::new(config.clone()).unwrap();
+        let data = e.simulate(4);
+        let dt = config.time.dt_obs;
+        for entry in applicable_methods(&config, &e) {
+            let key = entry.info.key.clone();
+            let mut f = e
+                .build_method(&entry.defaults, entry.defaults.display_name(), 3)
+                .unwrap();
+            for k in 1..=2 {
+                f.step(&observation_of(&data, k)).unwrap();
+            }
+            let z = data.observation(3);
+            let m = z.len();
+            let with = |value: f64| -> Vec<f64> { z.iter().map(|_| value).collect() };
+            let (inf, minus_inf, huge) =
+                (with(f64::INFINITY), with(f64::NEG_INFINITY), with(1e200));
+            let long: Vec<f64> = z.iter().copied().chain([0.0]).collect();
+            let bad: [(&str, f64, Vec<f64>, bool); 8] = [
+                ("NaN Δτ", f64::NAN, z.to_vec(), true),
+                ("negative Δτ", -dt, z.to_vec(), true),
+                ("infinite Δτ", f64::INFINITY, z.to_vec(), true),
+                ("+∞ component", dt, inf, true),
+                ("−∞ component", dt, minus_inf, true),
+                ("wrong length", dt, long, true),
+                ("10²⁰⁰", dt, huge, false),
+                ("Δτ = 20 intervals", 20.0 * dt, z.to_vec(), false),
+            ];
+            assert_eq!(bad[5].2.len(), m + 1);
+            for (what, step, value, must_fail) in bad {
+                let before = f.fork();
+                let obs = if data.continuous {
+                    Observation::increment(step, &value)
+                } else {
+                    Observation::measurement(step, &value)
+                };
+                let result = f.step(&obs);
+                if must_fail {
+                    assert!(result.is_err(), "{preset} {key}: {what} was accepted");
+                }
+                if let Err(e) = &result {
+                    if !must_fail {
+                        blowups += 1;
+                        eprintln!("{preset} {key}: {what}: {e}");
+                    }
+                    assert_eq!(
+                        fingerprint(&*f),
+                        fingerprint(&*before),
+                        "{preset} {key}: {what} changed the filter"
+                    );
+                    let mut twin = before.fork();
+                    f.step(&observation_of(&data, 3)).unwrap();
+                    twin.step(&observation_of(&data, 3)).unwrap();
+                    assert_eq!(
+                        fingerprint(&*f),
+                        fingerprint(&*twin),
+                        "{preset} {key}: after {what} the next step differs"
+                    );
+                    f = before;
+                } else {
+                    // It took the input: go on from where it was.
+                    f = before;
+                }
+            }
+            methods += 1;
+        }
+    }
+    assert!(methods >= 15, "every method was tried ({methods})");
+    assert!(blowups >= 3, "the numeric failures restored ({blowups})");
+}
+
+/// A fork is independent: stepping it leaves the original bit for bit as it was, and the two
+/// then agree again after the same step. A prediction is an observation with every
+/// component missing (bit for bit), and a prediction over Δτ followed by an update at that
+/// time is the step (bit for bit for the Kalman family; to round-off for the grid filters,
+/// which renormalise after the prediction).
+#[test]
+fn forks_predictions_and_updates() {
+    let mut tried = 0;
+    for preset in ["sa-example-1", "sa-example-2", "cubic-sensor-1d"] {
+        let config = zakai::scenario::presets::preset(preset).unwrap();
+        let e = Experiment::new(config.clone()).unwrap();
+        let data = e.simulate(6);
+        let dt = config.time.dt_obs;
+        for entry in applicable_methods(&config, &e) {
+            let key = entry.info.key.clone();
+            let build = || {
+                e.build_method(&entry.defaults, entry.defaults.display_name(), 2)
+                    .unwrap()
+            };
+            let mut f = build();
+            f.step(&observation_of(&data, 1)).unwrap();
+            let fork = f.fork();
+            let kept = fingerprint(&*f);
+            let mut moved = f.fork();
+            moved.step(&observation_of(&data, 2)).unwrap();
+            assert_eq!(fingerprint(&*f), kept, "{preset} {key}: the fork moved it");
+            assert_eq!(fingerprint(&*fork), kept, "{preset} {key}");
+            // Nothing observed = a prediction.
+            let (mut p, mut q) = (f.fork(), f.fork());
+            p.predict(dt).unwrap();
+            let missing = vec![f64::NAN; data.m];
+            let obs = if data.continuous {
+                Observation::increment(dt, &missing)
+            } else {
+                Observation::measurement(dt, &missing)
+            };
+            q.step(&obs).unwrap();
+            assert_eq!(fingerprint(&*p), fingerprint(&*q), "{preset} {key}");
+            assert_ne!(
+                fingerprint(&*p),
+                kept,
+                "{preset} {key}: the prediction moved"
+            );
+            if !data.continuous {
+                let mut r = f.fork();
+                r.step(&observation_of(&data, 2)).unwrap();
+                p.update(data.observation(2)).unwrap();
+                let (a, b) = (p.estimate().mean, r.estimate().mean);
+                if ["kalman", "ekf", "ukf"].contains(&key.as_str()) {
+                    assert_eq!(a, b, "{preset} {key}: predict + update = step");
+                } else {
+                    let sd = r.estimate().covariance.map_or(1.0, |c| c[(0, 0)].sqrt());
+                    assert!(
+                        (a[0] - b[0]).abs() <= 1e-9 * sd.max(1.0),
+                        "{preset} {key}: predict + update {a} against step {b}"
+                    );
+                }
+            } else {
+                let refused = f.fork().update(data.observation(2));
+                assert!(
+                    matches!(refused, Err(FilterError::BadObservation(_))),
+                    "{preset} {key}: an increment needs its interval"
+                );
+            }
+            tried += 1;
+        }
+    }
+    assert!(tried >= 14, "{tried} methods tried");
+}
+
+/// The linear-Gaussian test model: `dx = (−½x + 0.2) dt + 0.8 dv`, two sensors
+/// `z₁ = x + v₁`, `z₂ = ½x + 1 + v₂` with correlated noise R = [[0.2, 0.05], [0.05, 0.3]],
+/// prior N(1, 0.5), domain [−6, 8], Δτ = 0.1.
+fn linear_two_sensor(methods: serde_json::Value) -> ScenarioConfig {
+    serde_json::from_value(serde_json::json!({
+        "name": "linear-two-sensor",
+        "model": {
+            "drift": ["-0.5*x + 0.2"],
+            "observation": ["x", "0.5*x + 1"],
+            "diffusion": [[0.8]],
+            "noise": { "kind": "discrete", "mixture": [
+                { "weight": 1.0, "mean": [0.0, 0.0], "cov": [[0.2, 0.05], [0.05, 0.3]] }
+            ] }
+        },
+        "prior": { "kind": "gaussian", "mean": [1.0], "cov": [[0.5]] },
+        "initial_state": null,
+        "domain": [[-6.0, 8.0]],
+        "time": { "dt_obs": 0.1 },
+        "seed": 1,
+        "methods": methods
+    }))
+    .expect("a valid scenario")
+}
+
+/// A small generator of its own (64-bit LCG, Box–Muller), so the data owe nothing to Zakai.
+struct Lcg(u64);
+
+impl Lcg {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// A recording of the two-sensor model with irregular times (steps of 0.1, 0.25, 0.03,
+/// 0.4 …, whole multiples of Δτ and not), sensor 2 reporting on every third row only
+/// (multi-rate), a gap of three rows with nothing observed, and the truth.
+fn two_sensor_recording() -> Recording {
+    let steps: [f64; 15] = [
+        0.1, 0.25, 0.03, 0.1, 0.4, 0.1, 0.2, 0.17, 0.1, 0.1, 0.3, 0.05, 0.1, 0.6, 0.1,
+    ];
+    let mut rng = Lcg(17);
+    let (mut t, mut x) = (0.0, 1.0 + 0.5f64.sqrt() * rng.normal());
+    let (mut times, mut z, mut truth) = (vec![0.0], Vec::new(), vec![x]);
+    let measure = |x: f64, rng: &mut Lcg, k: usize, z: &mut Vec<f64>| {
+        // R = L Lᵀ with L = [[√0.2, 0], [0.05/√0.2, √(0.3 − 0.05²/0.2)]].
+        let (a, b) = (rng.normal(), rng.normal());
+        let l11 = 0.2f64.sqrt();
+        let (l21, l22) = (0.05 / l11, (0.3 - 0.05 * 0.05 / 0.2f64).sqrt());
+        let z1 = x + l11 * a;
+        let z2 = 0.5 * x + 1.0 + l21 * a + l22 * b;
+        let gap = (5..=7).contains(&k);
+        z.push(if gap { f64::NAN } else { z1 });
+        z.push(if gap || !k.is_multiple_of(3) {
+            f64::NAN
+        } else {
+            z2
+        });
+    };
+    measure(x, &mut rng, 0, &mut z);
+    for (k, dt) in steps.iter().enumerate() {
+        // The exact transition of the OU process over dt.
+        let phi = (-0.5 * dt).exp();
+        let var = 0.64 * (1.0 - phi * phi) / (2.0 * 0.5);
+        x = phi * x + 0.4 * (1.0 - phi) + var.sqrt() * rng.normal();
+        t += dt;
+        times.push(t);
+        truth.push(x);
+        measure(x, &mut rng, k + 1, &mut z);
+    }
+    Recording::measurements(1, 2, times, &z)
+        .unwrap()
+        .with_truth(truth)
+        .unwrap()
+}
+
+/// The exact filter of [`linear_two_sensor`] on `r`, written out for a scalar state: the
+/// mean and variance after each row.
+fn reference_kalman(r: &Recording) -> Vec<(f64, f64)> {
+    let (mut m, mut p) = (1.0, 0.5);
+    let (h, c) = ([1.0, 0.5], [0.0, 1.0]);
+    let rr = [[0.2, 0.05], [0.05, 0.3]];
+    let mut out = Vec::new();
+    for k in 0..r.times.len() {
+        let dt = r.step_length(k);
+        if dt > 0.0 {
+            let phi = (-0.5 * dt).exp();
+            m = phi * m + 0.4 * (1.0 - phi);
+            p = phi * phi * p + 0.64 * (1.0 - phi * phi);
+        }
+        let z = r.observation(k);
+        let seen: Vec<usize> = (0..2).filter(|&i| !z[i].is_nan()).collect();
+        match seen.len() {
+            0 => {}
+            1 => {
+                let i = seen[0];
+                let s = h[i] * p * h[i] + rr[i][i];
+                let gain = p * h[i] / s;
+                m += gain * (z[i] - h[i] * m - c[i]);
+                p -= gain * s * gain;
+            }
+            _ => {
+                let s = [
+                    [h[0] * p * h[0] + rr[0][0], h[0] * p * h[1] + rr[0][1]],
+                    [h[1] * p * h[0] + rr[1][0], h[1] * p * h[1] + rr[1][1]],
+                ];
+                let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+                let inv = [
+                    [s[1][1] / det, -s[0][1] / det],
+                    [-s[1][0] / det, s[0][0] / det],
+                ];
+                let g = [
+                    p * (h[0] * inv[0][0] + h[1] * inv[1][0]),
+                    p * (h[0] * inv[0][1] + h[1] * inv[1][1]),
+                ];
+                let nu = [z[0] - h[0] * m - c[0], z[1] - h[1] * m - c[1]];
+                m += g[0] * nu[0] + g[1] * nu[1];
+                p *= 1.0 - (g[0] * h[0] + g[1] * h[1]);
+            }
+        }
+        out.push((m, p));
+    }
+    out
+}
+
+/// Every method over a recording with irregular times, a two-sensor multi-rate layout and a
+/// gap, against the independent exact Kalman filter: the Kalman family and the Gaussian-sum
+/// filter to 10⁻⁹ (their moment ODEs on 64 RK4 steps per interval; measured 2·10⁻¹¹); the
+/// grid filters of 001 within 4 % of the posterior standard deviation in the mean and 3 % in
+/// the variance on 800 cells (Δx = 0.0175, Δt = 10⁻³; measured: SA 2.6 % and 1.5 %, FDM
+/// 0.12 % and 0.25 %), and first-order convergent — on 1600 cells (Δt halved) both errors
+/// at most 0.6 times those (measured 0.5); the particle filter (20 000 particles, 50 Euler
+/// steps per interval) within 5 Monte Carlo standard errors of the mean (measured 0.021 sd
+/// against 0.071) and 10 % in the variance.
+#[test]
+fn gaps_irregular_times_and_multi_rate_sensors_against_an_exact_kalman_filter() {
+    let recording = two_sensor_recording();
+    let reference = reference_kalman(&recording);
+    assert!(recording.observations.iter().any(|v| v.is_nan()));
+    let methods = serde_json::json!([
+        { "method": "kalman" },
+        { "method": "gaussian_sum" },
+        { "method": "ekf", "substeps": 64 },
+        { "method": "ukf", "substeps": 64 },
+        { "method": "iekf", "substeps": 64 },
+        { "method": "iokf", "substeps": 64 },
+        { "method": "separation", "cells": [800], "dt": 0.001 },
+        { "method": "implicit_fdm", "cells": [800], "dt": 0.001 },
+        { "method": "separation", "cells": [1600], "dt": 0.0005 },
+        { "method": "implicit_fdm", "cells": [1600], "dt": 0.0005 },
+        { "method": "pf", "particles": 20000, "substeps": 50 }
+    ]);
+    let e = Experiment::new(linear_two_sensor(methods)).unwrap();
+    let run = e.filter_recorded(recording.clone(), 5).unwrap();
+    let mut worst = Vec::new();
+    for m in &run.methods {
+        assert!(m.failure.is_none(), "{}: {:?}", m.name, m.failure);
+        assert_eq!(m.estimates.len(), reference.len(), "{}", m.name);
+        let (mut mean_err, mut var_err) = (0.0f64, 0.0f64);
+        for (k, &(mk, pk)) in reference.iter().enumerate() {
+            let sd = pk.sqrt();
+            mean_err = mean_err.max((m.estimates[k] - mk).abs() / sd);
+            if !m.covariances.is_empty() {
+                var_err = var_err.max((m.covariances[k] - pk).abs() / pk);
+            }
+        }
+        worst.push((m.name.clone(), mean_err, var_err));
+        let (mean_tol, var_tol) = if m.name.starts_with("PF") {
+            // Standard error of a weighted mean ≈ sd/√(ESS); ESS ≥ N/4 here.
+            (5.0 / (20000.0f64 / 4.0).sqrt(), 0.1)
+        } else if m.name.starts_with("SA") || m.name.starts_with("FDM") {
+            (0.04, 0.03)
+        } else {
+            (1e-9, 1e-9)
+        };
+        assert!(
+            mean_err <= mean_tol && var_err <= var_tol,
+            "{}: mean off by {mean_err:.3e} sd, variance by {var_err:.3e} (tolerances {mean_tol:.1e}, {var_tol:.1e})",
+            m.name
+        );
+    }
+    eprintln!("worst relative errors (mean in sd, variance): {worst:?}");
+    for scheme in ["SA", "FDM"] {
+        let error = |name: &str| worst.iter().find(|w| w.0 == name).unwrap().clone();
+        let (coarse, fine) = (error(scheme), error(&format!("{scheme} #2")));
+        assert!(
+            fine.1 <= 0.6 * coarse.1 && fine.2 <= 0.6 * coarse.2,
+            "{scheme}: not first order: {coarse:?} then {fine:?}"
+        );
+    }
+}
+
+/// The nonlinear model of the gap test: `dx = (x − x³) dt + 0.7 dv` (two wells at ±1),
+/// `z = x + v`, R = 0.04, prior N(0.2, 0.3).
+fn double_well(methods: serde_json::Value) -> ScenarioConfig {
+    serde_json::from_value(serde_json::json!({
+        "name": "double-well",
+        "model": {
+            "drift": ["x - x^3"],
+            "observation": ["x"],
+            "diffusion": [[0.7]],
+            "noise": { "kind": "discrete", "mixture": [
+                { "weight": 1.0, "mean": [0.0], "cov": [[0.04]] }
+            ] }
+        },
+        "prior": { "kind": "gaussian", "mean": [0.2], "cov": [[0.3]] },
+        "initial_state": null,
+        "domain": [[-3.0, 3.0]],
+        "time": { "dt_obs": 0.1 },
+        "seed": 1,
+        "methods": methods
+    }))
+    .expect("a valid scenario")
+}
+
+/// The point-mass reference on `nodes` points of [−3, 3]: each interval is carried by
+/// `micro`-long Euler–Maruyama steps, each the Gaussian kernel N(x + f(x)h, g²h) between
+/// nodes (normalised per column), then multiplied by the likelihood where observed. Returns
+/// the mean and variance after each row.
+fn reference_point_mass(r: &Recording, nodes: usize, micro: f64) -> Vec<(f64, f64)> {
+    let dx = 6.0 / (nodes - 1) as f64;
+    let xs: Vec<f64> = (0..nodes).map(|i| -3.0 + i as f64 * dx).collect();
+    let kernel = |h: f64| -> Vec<Vec<(usize, f64)>> {
+        xs.iter()
+            .map(|&x| {
+                let (mu, var) = (x + (x - x * x * x) * h, 0.49 * h);
+                let reach = (8.0 * var.sqrt() / dx).ceil() as isize + 1;
+                let centre = ((mu + 3.0) / dx).round() as isize;
+                let mut row: Vec<(usize, f64)> = (centre - reach..=centre + reach)
+                    .filter(|&j| j >= 0 && (j as usize) < nodes)
+                    .map(|j| {
+                        let d = xs[j as usize] - mu;
+                        (j as usize, (-d * d / (2.0 * var)).exp())
+                    })
+                    .collect();
+                let total: f64 = row.iter().map(|e| e.1).sum();
+                row.iter_mut().for_each(|e| e.1 /= total);
+                row
+            })
+            .collect()
+    };
+    let mut p: Vec<f64> = xs
+        .iter()
+        .map(|x| (-(x - 0.2) * (x - 0.2) / 0.6).exp())
+        .collect();
+    let mut out = Vec::new();
+    for k in 0..r.times.len() {
+        let dt = r.step_length(k);
+        if dt > 0.0 {
+            let steps = (dt / micro).ceil() as usize;
+            let step = kernel(dt / steps as f64);
+            for _ in 0..steps {
+                let mut next = vec![0.0; nodes];
+                for (i, row) in step.iter().enumerate() {
+                    for &(j, w) in row {
+                        next[j] += p[i] * w;
+                    }
+                }
+                p = next;
+            }
+        }
+        let z = r.observation(k)[0];
+        if !z.is_nan() {
+            for (v, x) in p.iter_mut().zip(&xs) {
+                *v *= (-(z - x) * (z - x) / (2.0 * 0.04)).exp();
+            }
+        }
+        let total: f64 = p.iter().sum();
+        p.iter_mut().for_each(|v| *v /= total);
+        let mean: f64 = p.iter().zip(&xs).map(|(v, x)| v * x).sum();
+        let var: f64 = p
+            .iter()
+            .zip(&xs)
+            .map(|(v, x)| v * (x - mean) * (x - mean))
+            .sum();
+        out.push((mean, var));
+    }
+    out
+}
+
+/// A nonlinear model whose posterior spreads over both wells during a gap of 1.5 time units
+/// (15 Δτ, no measurement) and one step of 0.37: the separation filter crosses it with its Δτ
+/// operator and a remainder and matches the independent point-mass reference (1201 nodes,
+/// Euler steps of 10⁻³) within 2 % of the posterior sd in the mean and 5 % in the variance
+/// after every row (measured 1.0 % and 0.2 %); the UKF, a Gaussian approximation, is further
+/// from it after the gap (measured 0.76 sd; shown, not bounded).
+#[test]
+fn a_gap_is_crossed_by_the_grid_filter_as_by_a_fine_point_mass_filter() {
+    let mut times = vec![0.0];
+    let mut z = vec![0.9];
+    for k in 1..=6 {
+        times.push(0.1 * k as f64);
+        z.push(0.8 + 0.05 * k as f64);
+    }
+    // The gap: one row 1.5 later with nothing observed, then a step of 0.37.
+    times.push(times[times.len() - 1] + 1.5);
+    z.push(f64::NAN);
+    times.push(times[times.len() - 1] + 0.37);
+    z.push(-0.9);
+    for k in 1..=4 {
+        times.push(times[times.len() - 1] + 0.1);
+        z.push(-0.95 + 0.02 * k as f64);
+    }
+    let recording = Recording::measurements(1, 1, times, &z).unwrap();
+    let reference = reference_point_mass(&recording, 1201, 1e-3);
+    let e = Experiment::new(double_well(serde_json::json!([
+        { "method": "separation", "cells": [1200], "dt": 0.001 },
+        { "method": "ukf", "substeps": 64 }
+    ])))
+    .unwrap();
+    let run = e.filter_recorded(recording, 1).unwrap();
+    let grid = &run.methods[0];
+    assert!(grid.failure.is_none(), "{:?}", grid.failure);
+    let (mut mean_err, mut var_err) = (0.0f64, 0.0f64);
+    for (k, &(m, v)) in reference.iter().enumerate() {
+        mean_err = mean_err.max((grid.estimates[k] - m).abs() / v.sqrt());
+        var_err = var_err.max((grid.covariances[k] - v).abs() / v);
+    }
+    let ukf = &run.methods[1];
+    let after_gap = reference.len() - 5;
+    let ukf_err =
+        (ukf.estimates[after_gap] - reference[after_gap].0).abs() / reference[after_gap].1.sqrt();
+    eprintln!(
+        "grid: mean within {mean_err:.2e} sd, variance within {var_err:.2e}; UKF after the gap {ukf_err:.2e} sd"
+    );
+    assert!(mean_err < 0.02 && var_err < 0.05, "{mean_err} {var_err}");
+}
