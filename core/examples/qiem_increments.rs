@@ -2,7 +2,8 @@
 //! increments of a continuous observation — the cubic sensor dx = dv, dy = x³ dt + dw.
 //!
 //! A grid method lives on a box and is built for one observation interval: the builder asks
-//! for both (`.domain`, `.dt`), and a step of another length is an error. The cubic sensor's
+//! for both (`.domain`, `.dt`); a step of another length is crossed as whole intervals plus a
+//! remainder with an operator of its own (`examples/recording_with_gaps.rs`). The cubic sensor's
 //! posterior is often bimodal, so no filter tracks the state closely; what the example checks
 //! is that the grid is fine enough: doubling the points moves the conditional mean by little.
 //!
@@ -47,10 +48,12 @@ fn main() -> Result<(), zakai::ZakaiError> {
     );
     assert!(moved < 0.02, "not converged: {moved}");
 
-    // Another interval length is refused, with the reason.
-    match qiem.step_increment(2.0 * dt, &[0.0]) {
-        Err(e @ FilterError::IntervalMismatch { .. }) => println!("as expected: {e}"),
-        other => panic!("a step of 2Δτ must be refused, got {other:?}"),
+    // A bad step is refused before anything moves, with the reason.
+    let before = qiem.estimate();
+    match qiem.step_increment(-dt, &[0.0]) {
+        Err(e @ FilterError::BadObservation(_)) => println!("as expected: {e}"),
+        other => panic!("a negative step must be refused, got {other:?}"),
     }
+    assert_eq!(qiem.estimate(), before, "a refused step changes nothing");
     Ok(())
 }

@@ -404,6 +404,7 @@ impl Experiment {
             prior: &self.prior,
             probes: &self.probes,
             bounds: &bounds,
+            dt_obs: Some(self.config.time.dt_obs),
         })
     }
 

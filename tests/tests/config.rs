@@ -301,3 +301,47 @@ fn method_labels_carry_the_resolution() {
         )
     );
 }
+
+/// A scenario for recorded data needs neither a domain (when no method lives on a grid) nor
+/// a final time: it validates and runs over a recording, a simulation asks for T, and a grid
+/// method asks for the domain with the reason. Without a divergence bound the failure rule
+/// takes one from the problem (here 200 prior sds from the prior mean 1000).
+#[test]
+fn recorded_data_needs_no_domain_and_no_final_time() {
+    let mut config: zakai::ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "flow",
+        "model": {
+            "drift": ["0"], "observation": ["x"], "diffusion": [[30.0]],
+            "noise": { "kind": "discrete", "mixture": [
+                { "weight": 1.0, "mean": [0.0], "cov": [[400.0]] } ] }
+        },
+        "prior": { "kind": "gaussian", "mean": [1000.0], "cov": [[100.0]] },
+        "time": { "dt_obs": 1.0 },
+        "seed": 1,
+        "methods": [{ "method": "kalman" }, { "method": "ukf" }, { "method": "pf" }]
+    }))
+    .unwrap();
+    assert!(config.validate().is_empty(), "{:?}", config.validate());
+    let prior = config.build_prior().unwrap();
+    assert_eq!(config.divergence_bound(&prior), 1000.0 + 200.0 * 10.0);
+    let e = zakai::Experiment::new(config.clone()).unwrap();
+    let z = [1010.0, f64::NAN, 990.0, 1005.0];
+    let recording = zakai::Recording::measurements(1, 1, vec![0.0, 1.0, 2.0, 4.0], &z).unwrap();
+    let run = e.filter_recorded(recording, 1).unwrap();
+    assert!(run.methods.iter().all(|m| m.failure.is_none()));
+    let simulated = e.start(1).err().expect("a simulation needs T");
+    assert!(
+        simulated.to_string().contains("time.t_final"),
+        "{simulated}"
+    );
+    config
+        .methods
+        .push(zakai::MethodConfig::from_key("qiem").unwrap());
+    let problems = config.validate();
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.field == "domain" && p.message.contains("grid")),
+        "{problems:?}"
+    );
+}

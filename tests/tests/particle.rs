@@ -29,7 +29,7 @@ fn mean_square_gap(particles: usize, seed: u64) -> f64 {
         MethodConfig::Kalman(KalmanParams::default()),
         MethodConfig::Pf(PfParams {
             particles,
-            substeps: 10,
+            substeps: Some(10),
             ..PfParams::default()
         }),
     ];
@@ -60,4 +60,64 @@ fn particle_mean_approaches_the_kalman_mean_as_particles_grow() {
         "gap {large} with 20000 vs {small} with 50 particles"
     );
     assert!(large < 1e-3, "gap {large}");
+}
+
+/// The particle filter's substeps, left unset, follow the model's time scale against Δτ: on a
+/// lightly damped pendulum (dθ = ω dt, dω = (−16 sin θ − 0.2 ω) dt + 0.3 dv, θ measured every
+/// 0.1 s) ‖∂f/∂x‖∞ reaches about 16, so 16–17 Euler steps per interval are chosen and reported; a
+/// filter with the one step per interval of the old default is far worse against the truth
+/// over the same 10 seeded runs (1000 particles; mean θ RMSE measured 0.051 chosen against 3.6
+/// with one step, whose Euler scheme is unstable at ωΔτ = 0.4), and the chosen one is within
+/// 10 % of a filter with 100 steps (measured 0.052).
+#[test]
+fn substeps_follow_the_models_time_scale() {
+    let config: zakai::ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "pendulum",
+        "model": {
+            "drift": ["x2", "-16*sin(x1) - 0.2*x2"],
+            "observation": ["x1"],
+            "diffusion": [[0.0, 0.0], [0.0, 0.3]],
+            "noise": { "kind": "discrete", "mixture": [
+                { "weight": 1.0, "mean": [0.0], "cov": [[0.01]] } ] }
+        },
+        "prior": { "kind": "gaussian", "mean": [1.0, 0.0], "cov": [[0.05, 0.0], [0.0, 0.05]] },
+        "domain": [[-1.0, 1.0], [-4.0, 4.0]],
+        "time": { "t_final": 6.0, "dt_obs": 0.1, "inner_steps": 100 },
+        "seed": 1,
+        "methods": [
+            { "method": "pf", "particles": 1000 },
+            { "method": "pf", "particles": 1000, "substeps": 1 },
+            { "method": "pf", "particles": 1000, "substeps": 100 }
+        ]
+    }))
+    .unwrap();
+    let e = Experiment::new(config).unwrap();
+    let MethodConfig::Pf(chosen) = &e.config().methods[0] else {
+        panic!("a PF")
+    };
+    // ‖∂f/∂x‖∞ = 16|cos θ| + 0.2 at most: ⌈16.2 × 0.1 / 0.1⌉ = 17 where the domain's probes
+    // reach θ = 0, 16 where they straddle it.
+    let chosen = chosen.substeps.expect("chosen");
+    assert!((16..=17).contains(&chosen), "{chosen}");
+    let note = format!("{chosen} Euler–Maruyama substep");
+    assert!(
+        e.chosen_defaults().iter().any(|n| n.contains(&note)),
+        "{:?}",
+        e.chosen_defaults()
+    );
+    let mut rmse = [0.0; 3];
+    for seed in 1..=10 {
+        let run = e.run(seed).unwrap();
+        let truth = run.recording.truth.as_ref().unwrap();
+        for (r, m) in rmse.iter_mut().zip(&run.methods) {
+            let rows = m.estimates.len() / 2;
+            let se: f64 = (0..rows)
+                .map(|k| (m.estimates[2 * k] - truth[2 * k]).powi(2))
+                .sum();
+            *r += (se / rows as f64).sqrt() / 10.0;
+        }
+    }
+    eprintln!("θ RMSE chosen, 1 step, 100 steps: {rmse:?}");
+    assert!(rmse[1] > 1.5 * rmse[0], "{rmse:?}");
+    assert!(rmse[0] < 1.1 * rmse[2], "{rmse:?}");
 }

@@ -71,6 +71,8 @@ pub struct ProblemContext<'a> {
     pub probes: &'a [Vec<f64>],
     /// The domain.
     pub bounds: &'a [(f64, f64)],
+    /// Δτ, the observation interval, where it is known.
+    pub dt_obs: Option<f64>,
 }
 
 /// Which observations a method takes.
@@ -508,6 +510,7 @@ impl<'m, M: Method> Builder<'m, M> {
                     prior,
                     probes: &probes,
                     bounds: &bounds,
+                    dt_obs: self.dt,
                 };
                 if let Err(why) = M::suitability(&ctx, &self.params) {
                     problems.push(ConfigProblem::new("method", why));
@@ -539,6 +542,7 @@ impl<'m, M: Method> Builder<'m, M> {
             prior,
             probes: &probes,
             bounds: &bounds,
+            dt_obs: self.dt,
         };
         let params = M::problem_defaults(&self.params, &problem)
             .map(|(p, _)| p)

@@ -16,7 +16,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, Takes,
+    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
+    ProblemContext, Takes,
 };
 use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
@@ -32,8 +33,10 @@ pub struct PfParams {
     pub particles: usize,
     /// Resample when ESS < ess_threshold · N (0 = never, 1 = always).
     pub ess_threshold: f64,
-    /// Euler–Maruyama steps per observation interval.
-    pub substeps: usize,
+    /// Euler–Maruyama steps per observation interval Δτ (a step of another length takes as
+    /// many steps of at most Δτ/substeps as it needs). `None`: chosen from the model's time
+    /// scale against Δτ ([`substeps_for`]).
+    pub substeps: Option<usize>,
 }
 
 impl Default for PfParams {
@@ -41,7 +44,7 @@ impl Default for PfParams {
         PfParams {
             particles: 200,
             ess_threshold: 0.5,
-            substeps: 1,
+            substeps: None,
         }
     }
 }
@@ -62,7 +65,7 @@ impl PfParams {
                 format!("must be in [0, 1], got {}", self.ess_threshold),
             ));
         }
-        if self.substeps == 0 {
+        if self.substeps == Some(0) {
             p.push(("substeps", "must be at least 1".into()));
         }
         p
@@ -103,9 +106,9 @@ impl Method for Pf {
                 .range(0.0, 1.0),
                 ParamInfo::new(
                     "substeps",
-                    ParamKind::Int,
+                    ParamKind::OptionalInt,
                     "substeps",
-                    "Euler–Maruyama steps of each particle per observation interval",
+                    "Euler–Maruyama steps of each particle per observation interval; empty: chosen so that ‖∂f/∂x‖∞ times the step is at most 0.1 over the domain",
                 )
                 .at_least(1.0),
             ],
@@ -124,9 +127,25 @@ impl Method for Pf {
         p.particles.checked_mul(5 * n + 4)?.checked_mul(8)
     }
     fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
-        Ok(ParticleFilter::new(
-            name, ctx.model, ctx.prior, p, ctx.seed,
-        )?)
+        let mut pf = ParticleFilter::new(name, ctx.model, ctx.prior, p, ctx.seed)?;
+        pf.longest_substep = ctx.dt_obs.map(|dt| dt / p.substeps.unwrap_or(1) as f64);
+        Ok(pf)
+    }
+    fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
+        if p.substeps.is_some() {
+            return None;
+        }
+        let dt = problem.dt_obs?;
+        let (substeps, rate) = substeps_for(problem.model, problem.probes, dt);
+        Some((
+            PfParams {
+                substeps: Some(substeps),
+                ..p.clone()
+            },
+            format!(
+                "{substeps} Euler–Maruyama substep(s) per interval, chosen so that ‖∂f/∂x‖∞ Δt ≤ {EULER_RATE_STEP} (‖∂f/∂x‖∞ up to {rate:.3} over the domain, Δτ = {dt})"
+            ),
+        ))
     }
     fn refined(p: &PfParams, _: usize) -> Option<(PfParams, String)> {
         let (particles, what) =
@@ -139,6 +158,34 @@ impl Method for Pf {
             what,
         ))
     }
+}
+
+/// The largest `‖∂f/∂x‖∞ · Δt` of an Euler–Maruyama step chosen from the problem: the drift
+/// then changes by at most a tenth over a step, where the scheme's bias (first order in Δt) is
+/// small against the particles' own error.
+pub const EULER_RATE_STEP: f64 = 0.1;
+
+/// Most Euler–Maruyama substeps per interval chosen from the problem.
+pub const MAX_CHOSEN_SUBSTEPS: usize = 1000;
+
+/// Substeps per interval `dt` for the particle filter on `model`, and the rate they follow:
+/// the largest `‖∂f/∂x‖∞` (row sums of |∂f/∂x|, at least the spectral radius) over `probes`,
+/// L, gives `⌈L dt / 0.1⌉` steps ([`EULER_RATE_STEP`]; 1 to [`MAX_CHOSEN_SUBSTEPS`]).
+pub fn substeps_for(model: &Model, probes: &[Vec<f64>], dt: f64) -> (usize, f64) {
+    let n = model.n;
+    let mut jacobian = vec![0.0; n * n];
+    let mut rate: f64 = 0.0;
+    for x in probes {
+        model.drift.jacobian(x, &mut jacobian);
+        for row in jacobian.chunks_exact(n) {
+            let sum: f64 = row.iter().map(|v| v.abs()).sum();
+            if sum.is_finite() {
+                rate = rate.max(sum);
+            }
+        }
+    }
+    let steps = libm::ceil(rate * dt / EULER_RATE_STEP - 1e-9).max(1.0);
+    ((steps as usize).min(MAX_CHOSEN_SUBSTEPS), rate)
 }
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
@@ -199,6 +246,8 @@ pub struct ParticleFilter {
     last_ess: f64,
     /// Distinct particles kept by the last resampling (N when the last step did not resample).
     last_unique: usize,
+    /// Δτ/substeps when built for Δτ: the longest Euler–Maruyama step of any prediction.
+    longest_substep: Option<f64>,
 }
 
 impl ParticleFilter {
@@ -267,6 +316,7 @@ impl ParticleFilter {
             resamples: 0,
             last_ess: count as f64,
             last_unique: count,
+            longest_substep: None,
         })
     }
 
@@ -275,13 +325,24 @@ impl ParticleFilter {
         self.resamples
     }
 
-    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, `substeps` times, from
-    /// `particles` into `resampled` (the particles move only when the step succeeds).
+    /// Euler–Maruyama steps over `dt`: `substeps`, or — built for Δτ — as many steps of at
+    /// most Δτ/substeps as `dt` needs (the same count for a step of Δτ).
+    fn substeps(&self, dt: f64) -> usize {
+        match self.longest_substep {
+            Some(h) => libm::ceil(dt / h - 1e-9).max(1.0) as usize,
+            None => self.params.substeps.unwrap_or(1),
+        }
+    }
+
+    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, [`ParticleFilter::substeps`]
+    /// times, from `particles` into `resampled` (the particles move only when the step
+    /// succeeds).
     fn predict_into_spare(&mut self, dt: f64) {
         let (n, count) = (self.model.n, self.params.particles);
-        let h = dt / self.params.substeps as f64;
+        let substeps = self.substeps(dt);
+        let h = dt / substeps as f64;
         let sqrt_h = libm::sqrt(h);
-        for substep in 0..self.params.substeps {
+        for substep in 0..substeps {
             let from = if substep == 0 {
                 &self.particles
             } else {

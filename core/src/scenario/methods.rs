@@ -100,6 +100,11 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::NEEDS_INTERVAL,)* }
             }
 
+            /// Whether the method lives on the scenario's domain.
+            pub fn needs_domain(&self) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::NEEDS_DOMAIN,)* }
+            }
+
             /// Whether the method takes only steps that are whole multiples of Δτ.
             pub fn whole_intervals_only(&self) -> bool {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::WHOLE_INTERVALS_ONLY,)* }
@@ -217,6 +222,7 @@ impl MethodConfig {
             prior,
             probes,
             bounds,
+            dt_obs: None,
         };
         self.check_suitability(&problem).err()
     }

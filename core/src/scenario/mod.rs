@@ -173,7 +173,9 @@ pub struct ScenarioConfig {
     #[serde(default)]
     pub initial_state: Option<Vec<f64>>,
     /// The box `[lower, upper]` per dimension where grid methods live and density priors are
-    /// tabulated.
+    /// tabulated. A scenario whose methods need no grid (and whose prior is not a density)
+    /// may leave it out.
+    #[serde(default)]
     pub domain: Vec<[f64; 2]>,
     /// Time steps.
     pub time: TimeConfig,
@@ -417,7 +419,14 @@ impl ScenarioConfig {
         if let Some(x0) = &self.initial_state {
             check_vector(x0, n, "initial_state", &mut p);
         }
-        if self.domain.len() != n {
+        let needs_domain = matches!(self.prior, PriorConfig::Density { .. })
+            || self.methods.iter().any(MethodConfig::needs_domain);
+        if self.domain.is_empty() && needs_domain {
+            p.push(ConfigProblem::new(
+                "domain",
+                format!("needs {n} intervals: the grid, spectral and direct methods and a density prior live on it"),
+            ));
+        } else if !self.domain.is_empty() && self.domain.len() != n {
             p.push(ConfigProblem::new(
                 "domain",
                 format!("needs {n} intervals, {} given", self.domain.len()),
@@ -598,8 +607,12 @@ impl ScenarioConfig {
     /// Points spread over the domain (corners pulled inwards and the centre) where methods
     /// check structural assumptions such as linearity.
     pub fn probe_points(&self) -> Vec<Vec<f64>> {
-        // A domain with too few intervals (an invalid scenario) is padded with [−1, 1].
-        let mut bounds = self.bounds();
+        // Without a domain, the box the prior covers; a domain with too few intervals (an
+        // invalid scenario) is padded with [−1, 1].
+        let mut bounds = match self.prior.covering_box(6.0) {
+            Some(b) if self.domain.is_empty() => b.iter().map(|b| (b[0], b[1])).collect(),
+            _ => self.bounds(),
+        };
         bounds.resize(self.state_dim(), (-1.0, 1.0));
         crate::filters::method::probe_points(&bounds)
     }
@@ -607,12 +620,10 @@ impl ScenarioConfig {
     /// Fills in the sizes each method left unset that its family chooses from the problem
     /// (domain, prior; see [`crate::filters::method::Method::problem_defaults`]) and returns
     /// a note per choice, `"Spectral: basis 51 per dimension, chosen from …"`, for the
-    /// scenario's `model` and `prior` as built. Nothing changes when the domain does not fit
-    /// the model (validation then reports why).
+    /// scenario's `model` and `prior` as built. Methods that live on the domain get nothing
+    /// chosen when it does not fit the model (validation then reports why).
     pub fn choose_problem_defaults(&mut self, model: &Model, prior: &Prior) -> Vec<String> {
-        if self.domain.len() != model.n {
-            return Vec::new();
-        }
+        let fits = self.domain.len() == model.n;
         let bounds = self.bounds();
         let probes = self.probe_points();
         let problem = crate::filters::method::ProblemContext {
@@ -620,9 +631,13 @@ impl ScenarioConfig {
             prior,
             probes: &probes,
             bounds: &bounds,
+            dt_obs: Some(self.time.dt_obs).filter(|dt| *dt > 0.0 && dt.is_finite()),
         };
         let mut notes = Vec::new();
         for m in &mut self.methods {
+            if !fits && m.needs_domain() {
+                continue;
+            }
             if let Some((chosen, note)) = m.problem_defaults(&problem) {
                 notes.push(format!("{}: {note}", m.display_name()));
                 *m = chosen;

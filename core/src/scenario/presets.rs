@@ -65,8 +65,10 @@ fn ukf(alpha: f64, beta: f64, kappa: f64) -> MethodConfig {
 }
 
 fn pf(particles: usize) -> MethodConfig {
+    // The papers' runs: one Euler–Maruyama step per interval, as they were run.
     MethodConfig::Pf(PfParams {
         particles,
+        substeps: Some(1),
         ..PfParams::default()
     })
 }
