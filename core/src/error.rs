@@ -35,15 +35,6 @@ pub enum FilterError {
     BadObservation(String),
     /// The model does not fit the method (e.g. a nonlinear model given to the Kalman filter).
     Unsuitable(String),
-    /// A filter built for one observation interval was given a step of another length.
-    IntervalMismatch {
-        /// The filter's name.
-        filter: String,
-        /// The interval Δτ it was built for.
-        built_for: f64,
-        /// The step it was given.
-        got: f64,
-    },
 }
 
 impl fmt::Display for FilterError {
@@ -63,14 +54,6 @@ impl fmt::Display for FilterError {
             ),
             FilterError::BadObservation(m) => write!(f, "bad observation: {m}"),
             FilterError::Unsuitable(m) => write!(f, "{m}"),
-            FilterError::IntervalMismatch {
-                filter,
-                built_for,
-                got,
-            } => write!(
-                f,
-                "{filter} was built for observation intervals Δτ = {built_for} and cannot take a step of {got} (its operators are set up for one Δτ); build one filter per interval length or resample the observations"
-            ),
         }
     }
 }

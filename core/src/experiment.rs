@@ -443,8 +443,8 @@ impl Experiment {
     }
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
-    /// ([`Recording::problems`]), dimensions and observation kind against the model, and steps
-    /// that are not whole multiples of Δτ when a method takes only those (the spectral filter).
+    /// ([`Recording::problems`]), and its dimensions and observation kind against the model
+    /// (every method takes steps of any positive length).
     pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
         let mut p = recording.problems();
         let model = &self.model;
@@ -482,9 +482,6 @@ impl Experiment {
                 "observations",
                 alloc::format!("the recording holds {got}, the model observes {want}"),
             ));
-        }
-        if p.is_empty() && self.config.methods.iter().any(|m| m.whole_intervals_only()) {
-            p.extend(recording.interval_problems(self.config.time.dt_obs));
         }
         p
     }

@@ -48,9 +48,8 @@
 //!
 //! Grid and spectral methods also need the box they live on and the observation interval Δτ
 //! they are built for: `Qiem::builder(&model).prior_gaussian(..).domain(&[(-6.0, 6.0)]).dt(0.01)`.
-//! Any positive step is taken (the grid filters as whole Δτ plus a remainder with an operator
-//! of its own; the spectral filter only whole multiples of Δτ, else
-//! [`FilterError::IntervalMismatch`]). [`Filter::predict`] moves a filter without an
+//! Any positive step is taken (the grid and spectral filters as whole Δτ plus a remainder with
+//! an operator of its own). [`Filter::predict`] moves a filter without an
 //! observation, [`Filter::update`] assimilates one at the current time, a NaN component is a
 //! missing value, and [`Fork::fork`] / [`Filter::forecast`] look ahead without moving the
 //! filter; a step that fails leaves it exactly as it was. Models come from text ([`Model::from_text`]), from Rust closures

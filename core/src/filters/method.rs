@@ -190,9 +190,6 @@ pub trait Method {
     /// they need Δτ at construction (their operators are made for it; other step lengths
     /// are whole Δτ plus a remainder with an operator of its own).
     const NEEDS_INTERVAL: bool = false;
-    /// True for methods that take only steps of whole multiples of Δτ (the spectral filter,
-    /// whose operator is made off-line for Δτ alone).
-    const WHOLE_INTERVALS_ONLY: bool = false;
     /// True for methods that live on a box (the domain must be given).
     const NEEDS_DOMAIN: bool = false;
     /// The method's parameters (serde, with defaults).

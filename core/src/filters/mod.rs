@@ -503,9 +503,8 @@ pub(crate) fn count_problem(
 ///
 /// A step either succeeds or returns an error and leaves the filter exactly as it was:
 /// bad input — a step Δτ that is negative or not finite, an observation of the wrong kind
-/// or length, an infinite component ([`FilterError::BadObservation`]), or, for the methods
-/// built for one observation interval Δτ (grid and spectral), a step of another length
-/// ([`FilterError::IntervalMismatch`]) — is refused before anything moves; a numeric failure
+/// or length, an infinite component ([`FilterError::BadObservation`]) — is refused before
+/// anything moves; a numeric failure
 /// found while computing (non-finite numbers, lost mass, a failed factorisation) restores
 /// the state the step started from. The driver marks the method failed for the run.
 ///
@@ -516,7 +515,7 @@ pub(crate) fn count_problem(
 /// measurements use the observed rows of h and of the noise; a method that cannot says so
 /// with an error.
 ///
-/// Every filter is [`Clone`] and [`Debug`]; [`Filter::fork`] clones one behind a
+/// Every filter is [`Clone`] and [`Debug`]; [`Fork::fork`] clones one behind a
 /// `Box<dyn Filter>`, e.g. to forecast from the current state while the original goes on:
 ///
 /// ```
@@ -539,7 +538,7 @@ pub trait Filter: core::fmt::Debug + Fork {
     /// observed (see the trait doc for missing components and errors).
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError>;
     /// Predicts over `dt` without an observation: a gap, or a forecast (on a
-    /// [`fork`](Filter::fork) of the filter). For continuous observations this is an interval
+    /// [`fork`](Fork::fork) of the filter). For continuous observations this is an interval
     /// whose increment was not recorded.
     fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
         self.step(&Observation::nothing(dt))

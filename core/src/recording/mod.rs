@@ -13,9 +13,8 @@
 //!
 //! Missing data: a NaN component was not observed (an empty cell in a CSV file); a row whose
 //! components are all NaN is a prediction to τ_k only. Times may be irregular: every method
-//! predicts over τ_k − τ_{k−1} whatever its length (the grid filters as whole Δτ plus one
-//! remainder; the spectral filter over whole multiples of Δτ only, see
-//! [`Recording::interval_problems`]).
+//! predicts over τ_k − τ_{k−1} whatever its length (the grid and spectral filters as whole Δτ
+//! with the operator made for Δτ, plus one remainder with an operator of its own).
 
 use alloc::format;
 use alloc::string::String;
@@ -246,29 +245,6 @@ impl Recording {
             }
         }
         p
-    }
-
-    /// Problems of this recording for a filter that takes only whole multiples of `dt_obs`
-    /// (the spectral filter): the first step of another length, by row.
-    pub fn interval_problems(&self, dt_obs: f64) -> Vec<ConfigProblem> {
-        let whole = |step: f64| {
-            let k = libm::round(step / dt_obs);
-            k >= 1.0 && is_interval(step, k * dt_obs)
-        };
-        (1..self.times.len())
-            .find(|&k| !whole(self.step_length(k)))
-            .map(|k| {
-                ConfigProblem::new(
-                    format!("times[{k}]"),
-                    format!(
-                        "row {}: the step τ_k − τ_(k−1) = {} is not a whole multiple of Δτ = {dt_obs}, which the spectral filter's off-line operator is made for; set time.dt_obs to a step that divides every interval, or leave the spectral method out",
-                        k + 1,
-                        self.step_length(k)
-                    ),
-                )
-            })
-            .into_iter()
-            .collect()
     }
 }
 

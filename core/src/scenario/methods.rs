@@ -44,8 +44,6 @@ pub struct CatalogueEntry {
     pub aliases: Vec<&'static str>,
     /// Whether the method is built for one observation interval Δτ.
     pub needs_interval: bool,
-    /// Whether it takes only steps that are whole multiples of Δτ (else any positive step).
-    pub whole_intervals_only: bool,
     /// Whether the method lives on the scenario's domain.
     pub needs_domain: bool,
     /// The default parameters.
@@ -105,11 +103,6 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::NEEDS_DOMAIN,)* }
             }
 
-            /// Whether the method takes only steps that are whole multiples of Δτ.
-            pub fn whole_intervals_only(&self) -> bool {
-                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::WHOLE_INTERVALS_ONLY,)* }
-            }
-
             /// Every problem with the parameters for an `n`-dimensional model, fields
             /// relative to the method (`"particles"`, `"init.mean"`, `"method"`).
             pub fn problems(&self, n: usize) -> Vec<ConfigProblem> {
@@ -161,7 +154,6 @@ macro_rules! registry {
                 info: <$method>::info(),
                 aliases: <$method>::ALIASES.to_vec(),
                 needs_interval: <$method>::NEEDS_INTERVAL,
-                whole_intervals_only: <$method>::WHOLE_INTERVALS_ONLY,
                 needs_domain: <$method>::NEEDS_DOMAIN,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]

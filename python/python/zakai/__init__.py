@@ -774,8 +774,8 @@ def filter(
         and :meth:`RunResult.to_pandas` keeps it.
     times : array_like, optional
         τ₀ … τ_N (τ₀ the prior's time), increasing, possibly irregular: every method predicts
-        over each step whatever its length (the spectral filter only over whole multiples of
-        Δτ). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
+        over each step whatever its length (grid and spectral methods as whole Δτ and a
+        remainder). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
         converted to **seconds since the first**, so Δτ and the model's rates are per
         second. Every Δτ from 0 when absent.
     truth : array_like, shape (N + 1, n), optional
@@ -831,8 +831,7 @@ class Filter:
     prior : Prior
     dt_obs : float
         The observation interval Δτ (the default step; grid and spectral methods are built
-        for it and cross other steps as whole Δτ and a remainder — the spectral filter only
-        whole multiples). A method's own ``dt`` (the grid filters' time step) is one of
+        for it and cross other steps as whole Δτ and a remainder). A method's own ``dt`` (the grid filters' time step) is one of
         ``params``.
     domain : list of (low, high), optional
         The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent.

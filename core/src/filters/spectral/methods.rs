@@ -20,7 +20,6 @@ builder_fn!(Spectral);
 impl Method for Spectral {
     const KEY: &'static str = "spectral";
     const NEEDS_INTERVAL: bool = true;
-    const WHOLE_INTERVALS_ONLY: bool = true;
     const NEEDS_DOMAIN: bool = true;
     type Params = SpectralParams;
     type Filter = SpectralFilter;

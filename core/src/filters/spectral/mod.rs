@@ -283,6 +283,18 @@ fn basis_at(points: &[f64], count: usize) -> DMatrix<f64> {
     m
 }
 
+impl Propagation {
+    /// W as the on-line step applies it: in 1-D already followed by the evaluation at the
+    /// on-line nodes (`evaluate`).
+    fn new(w: DMatrix<f64>, evaluate: &[DMatrix<f64>]) -> Self {
+        if evaluate.len() == 1 {
+            Propagation::Nodal(&evaluate[0] * &w)
+        } else {
+            Propagation::Coefficients(w)
+        }
+    }
+}
+
 /// W of Algorithm 1 as the on-line step applies it.
 #[derive(Clone, Debug)]
 enum Propagation {
@@ -330,6 +342,15 @@ pub struct SpectralFilter {
     /// Whether `−½hᵀS⁻¹h` is in the off-line operator (then an interval cannot be predicted
     /// without its increment).
     likelihood_in_operator: bool,
+    /// What the off-line part needs to make the operator of another interval length: the
+    /// model and N′ partitions of T₀.
+    model: Model,
+    partitions: usize,
+    /// Operators for interval lengths other than T₀ (the remainders of irregular intervals
+    /// after whole T₀), the most recently used first, at most
+    /// [`crate::filters::REMAINDER_PLANS`]: each is one off-line computation of Algorithm 1
+    /// and one matrix of W's size.
+    remainders: Vec<(f64, Propagation)>,
 }
 
 impl SpectralFilter {
@@ -360,11 +381,7 @@ impl SpectralFilter {
         let (evaluate, project): (Vec<_>, Vec<_>) = (0..n)
             .map(|d| axis_matrices(layout.offline[d], layout.online[d], &xi, &w))
             .unzip();
-        let propagation = if n == 1 {
-            Propagation::Nodal(&evaluate[0] * &propagation)
-        } else {
-            Propagation::Coefficients(propagation)
-        };
+        let propagation = Propagation::new(propagation, &evaluate);
         let q = layout.online_nodes;
         let len = q.pow(n as u32);
         let index = |i: usize, d: usize| (i / q.pow(d as u32)) % q;
@@ -423,6 +440,9 @@ impl SpectralFilter {
                 Energy::default(),
             ),
             likelihood_in_operator: in_operator,
+            model: model.clone(),
+            partitions: params.partitions,
+            remainders: Vec::new(),
             evaluate,
             project,
             layout,
@@ -458,9 +478,36 @@ impl SpectralFilter {
         Ok(())
     }
 
-    /// Propagation (40) and the density at the on-line nodes.
-    fn propagate(&mut self) {
-        let w = match &self.propagation {
+    /// The remainder operator for intervals of length `rest` (< T₀): made off-line the first
+    /// time that length occurs (N′ partitions scaled down with it), kept among the last
+    /// [`crate::filters::REMAINDER_PLANS`]; moved to the front of the list.
+    fn remainder(&mut self, rest: f64) -> Result<(), FilterError> {
+        if let Some(i) = self.remainders.iter().position(|r| r.0 == rest) {
+            self.remainders[..=i].rotate_right(1);
+            return Ok(());
+        }
+        let partitions = libm::ceil(self.partitions as f64 * rest / self.t0).max(1.0) as usize;
+        let w = offline::propagation_matrix(
+            &self.model,
+            &self.layout,
+            (rest, partitions),
+            self.likelihood_in_operator,
+        )?;
+        self.remainders
+            .truncate(crate::filters::REMAINDER_PLANS - 1);
+        self.remainders
+            .insert(0, (rest, Propagation::new(w, &self.evaluate)));
+        Ok(())
+    }
+
+    /// Propagation (40) over T₀ (`remainder` `None`) or with remainder operator `i`, and the
+    /// density at the on-line nodes.
+    fn propagate(&mut self, remainder: Option<usize>) {
+        let propagation = match remainder {
+            Some(i) => &self.remainders[i].1,
+            None => &self.propagation,
+        };
+        let w = match propagation {
             Propagation::Nodal(e) => {
                 return linalg::combine_columns(&mut self.values, e.as_slice(), &self.coeffs);
             }
@@ -683,21 +730,13 @@ impl Filter for SpectralFilter {
         }
     }
 
-    /// Steps of whole intervals T₀: an interval of k T₀ is k propagations with the off-line
-    /// operator (the increment's factor after the last, with `½hᵀS⁻¹h k T₀`); another length
-    /// is an [`FilterError::IntervalMismatch`] (the operator is made off-line for T₀ alone).
+    /// An interval of length `k T₀ + r` (0 ≤ r < T₀) is k propagations with the off-line
+    /// operator and one with the remainder's (made the first time its length occurs), the
+    /// increment's factor after the last with `½hᵀS⁻¹h (k T₀ + r)`.
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Increment, self.s_inv_h.len())?;
         if obs.dt <= 0.0 {
             return Ok(());
-        }
-        let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
-        if rest > 0.0 || whole == 0 {
-            return Err(FilterError::IntervalMismatch {
-                filter: self.name.clone(),
-                built_for: self.t0,
-                got: obs.dt,
-            });
         }
         match observed {
             Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
@@ -709,13 +748,19 @@ impl Filter for SpectralFilter {
             }
             _ => {}
         }
+        let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
+        if rest > 0.0 {
+            // Off-line, before anything moves (it fails only on a degenerate basis).
+            self.remainder(rest)?;
+        }
         self.saved.0.save(&self.coeffs, &self.estimate);
         self.saved.1 = self.energy;
+        let legs = whole + usize::from(rest > 0.0);
         let mut stepped = Ok(());
-        for k in 1..=whole {
-            self.propagate();
-            if k == whole && observed == Observed::All {
-                self.update(obs.value, whole as f64);
+        for leg in 1..=legs {
+            self.propagate((leg > whole).then_some(0));
+            if leg == legs && observed == Observed::All {
+                self.update(obs.value, obs.dt / self.t0);
             }
             stepped = self.normalise_and_project();
             if stepped.is_err() {
