@@ -83,14 +83,20 @@ def test_bad_times_and_steps_are_config_errors():
         zakai.run(sc, seed=-1)
 
 
-def test_a_grid_filter_refuses_another_interval_and_keeps_its_state():
+def test_a_grid_filter_takes_another_interval_and_refuses_a_bad_one_keeping_its_state():
     f = zakai.Filter("qiem", zakai.Model.continuous("0", "x"), zakai.Prior.gaussian(0, 1),
                      dt_obs=0.01, points=[201])
     f.step([0.01])
     before = f.mean.copy()
+    for bad in (-0.01, float("nan"), float("inf")):
+        with pytest.raises((FilterError, ConfigError)):
+            f.step([0.01], bad)
+        assert np.array_equal(f.mean, before)
     with pytest.raises(FilterError):
-        f.step([0.01], 0.02)
+        f.step([float("inf")], 0.01)
     assert np.array_equal(f.mean, before)
+    f.step([0.01], 0.025)  # two Δτ and a remainder
+    assert not np.array_equal(f.mean, before)
 
 
 def test_grids_beyond_the_memory_cap_are_refused_before_allocating():

@@ -192,38 +192,20 @@ fn closure_models_and_missing_data_allocate_nothing() {
         Noise::discrete(0.05),
     )
     .unwrap();
-    let (mean, cov) = ([0.5, 0.0], [[0.2, 0.0], [0.0, 0.2]]);
-    let filters: Vec<Box<dyn Filter>> = vec![
-        Box::new(
-            Ekf::builder(&model)
-                .prior_gaussian(&mean, &cov)
-                .build()
-                .unwrap(),
-        ),
-        Box::new(
-            Iekf::builder(&model)
-                .prior_gaussian(&mean, &cov)
-                .build()
-                .unwrap(),
-        ),
-        Box::new(
-            Iokf::builder(&model)
-                .prior_gaussian(&mean, &cov)
-                .build()
-                .unwrap(),
-        ),
-        Box::new(
-            Ukf::builder(&model)
-                .prior_gaussian(&mean, &cov)
-                .build()
-                .unwrap(),
-        ),
-        Box::new(
-            Pf::builder(&model)
-                .prior_gaussian(&mean, &cov)
-                .build()
-                .unwrap(),
-        ),
+    fn built<M: zakai::Method>(model: &Model) -> Box<dyn Filter> {
+        let (mean, cov) = ([0.5, 0.0], [[0.2, 0.0], [0.0, 0.2]]);
+        let filter = zakai::Builder::<M>::new(model)
+            .prior_gaussian(&mean, &cov)
+            .build()
+            .unwrap();
+        Box::new(filter)
+    }
+    let filters = [
+        built::<Ekf>(&model),
+        built::<Iekf>(&model),
+        built::<Iokf>(&model),
+        built::<Ukf>(&model),
+        built::<Pf>(&model),
     ];
     let nan = f64::NAN;
     // (Δτ, z): both sensors, one missing, none (a prediction), an irregular step.

@@ -37,7 +37,8 @@ fn fingerprint(f: &dyn Filter) -> Vec<u64> {
 /// length — is refused, and the filter is bit for bit what it was, also in the step after
 /// (compared with a fork made before the bad input, so hidden state such as a particle
 /// filter's random numbers counts too). Inputs that may blow a method up numerically (a
-/// measurement of 10²⁰⁰, a step of 20 intervals) either succeed or fail the same way; at
+/// measurement of 10²⁰⁰, a step of 20 intervals) or that it may not take (one component of
+/// several missing, for a continuous-observation grid filter) either succeed or fail the same way; at
 /// least some methods do fail on them, so the restoring path is exercised.
 #[test]
 fn failed_steps_leave_every_filter_as_it_was() {
@@ -61,7 +62,11 @@ fn failed_steps_leave_every_filter_as_it_was() {
             let (inf, minus_inf, huge) =
                 (with(f64::INFINITY), with(f64::NEG_INFINITY), with(1e200));
             let long: Vec<f64> = z.iter().copied().chain([0.0]).collect();
-            let bad: [(&str, f64, Vec<f64>, bool); 8] = [
+            // The first component missing: taken by the methods that use the observed rows,
+            // refused before anything moves by those that take a whole increment or none.
+            let mut partial = z.to_vec();
+            partial[0] = f64::NAN;
+            let bad: [(&str, f64, Vec<f64>, bool); 9] = [
                 ("NaN Δτ", f64::NAN, z.to_vec(), true),
                 ("negative Δτ", -dt, z.to_vec(), true),
                 ("infinite Δτ", f64::INFINITY, z.to_vec(), true),
@@ -70,6 +75,7 @@ fn failed_steps_leave_every_filter_as_it_was() {
                 ("wrong length", dt, long, true),
                 ("10²⁰⁰", dt, huge, false),
                 ("Δτ = 20 intervals", 20.0 * dt, z.to_vec(), false),
+                ("one component missing", dt, partial, false),
             ];
             assert_eq!(bad[5].2.len(), m + 1);
             for (what, step, value, must_fail) in bad {

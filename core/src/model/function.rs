@@ -122,6 +122,32 @@ fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
     }
 }
 
+/// Central differences of `g` (k outputs) at `x` along each of the n coordinates: calls
+/// `take(j, g(x + h e_j), g(x − h e_j), h)` for every j, with the step h ∝ ε^(1/3) scaled to
+/// |x_j| (error O(ε^(2/3))). The shifted points and values live on the stack.
+fn central_differences(
+    g: &dyn Fn(&[f64], &mut [f64]),
+    n: usize,
+    k: usize,
+    x: &[f64],
+    mut take: impl FnMut(usize, &[f64], &[f64], f64),
+) {
+    with_scratch(n + 2 * k, |buf| {
+        let (xp, rest) = buf.split_at_mut(n);
+        let (gp, gm) = rest.split_at_mut(k);
+        xp.copy_from_slice(&x[..n]);
+        for j in 0..n {
+            let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[j]));
+            xp[j] = x[j] + h;
+            g(xp, gp);
+            xp[j] = x[j] - h;
+            g(xp, gm);
+            xp[j] = x[j];
+            take(j, gp, gm, h);
+        }
+    })
+}
+
 /// Central-difference Jacobian of `eval` at `x` (step ∝ ε^(1/3), error O(ε^(2/3))).
 pub fn numerical_jacobian(
     eval: &dyn Fn(&[f64], &mut [f64]),
@@ -130,20 +156,9 @@ pub fn numerical_jacobian(
     x: &[f64],
     out: &mut [f64],
 ) {
-    with_scratch(n + 2 * m, |buf| {
-        let (xp, rest) = buf.split_at_mut(n);
-        let (fp, fm) = rest.split_at_mut(m);
-        xp.copy_from_slice(&x[..n]);
-        for j in 0..n {
-            let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[j]));
-            xp[j] = x[j] + h;
-            eval(xp, fp);
-            xp[j] = x[j] - h;
-            eval(xp, fm);
-            xp[j] = x[j];
-            for i in 0..m {
-                out[i * n + j] = (fp[i] - fm[i]) / (2.0 * h);
-            }
+    central_differences(eval, n, m, x, |j, fp, fm, h| {
+        for i in 0..m {
+            out[i * n + j] = (fp[i] - fm[i]) / (2.0 * h);
         }
     })
 }
@@ -157,20 +172,9 @@ pub fn numerical_hessian(
     x: &[f64],
     out: &mut [f64],
 ) {
-    with_scratch(n + 2 * m * n, |buf| {
-        let (xp, rest) = buf.split_at_mut(n);
-        let (jp, jm) = rest.split_at_mut(m * n);
-        xp.copy_from_slice(&x[..n]);
-        for l in 0..n {
-            let h = 6.0e-6 * libm::fmax(1.0, libm::fabs(x[l]));
-            xp[l] = x[l] + h;
-            jacobian(xp, jp);
-            xp[l] = x[l] - h;
-            jacobian(xp, jm);
-            xp[l] = x[l];
-            for j in 0..n {
-                out[j * n + l] = (jp[i * n + j] - jm[i * n + j]) / (2.0 * h);
-            }
+    central_differences(jacobian, n, m * n, x, |l, jp, jm, h| {
+        for j in 0..n {
+            out[j * n + l] = (jp[i * n + j] - jm[i * n + j]) / (2.0 * h);
         }
     });
     // Symmetrise: the exact Hessian is symmetric.
