@@ -543,11 +543,7 @@ impl Experiment {
             let reason = method.suitability(&self.model, &self.prior, &self.probes, &bounds);
             let built = match reason {
                 Some(reason) => Err(reason),
-                None => match self.build_method(method, name.clone(), method_seed(seed, i)) {
-                    Ok(filter) => Ok(filter),
-                    Err(ZakaiError::Filter(FilterError::Unsuitable(reason))) => Err(reason),
-                    Err(e) => return Err(e),
-                },
+                None => Ok(self.build_method(method, name.clone(), method_seed(seed, i))?),
             };
             filters.push(built.unwrap_or_else(|reason| {
                 not_applicable.push((i, reason));

@@ -571,3 +571,52 @@ fn remainders_predict_as_the_schemes_own_steps() {
     }
     assert_eq!(tried, 4);
 }
+
+/// A gap of ten intervals on a stiff model (dx = −20x dt + dv, z = x + v, R = 0.01, Δτ = 0.1):
+/// the Gaussian filters integrate their moment equations over it in as many RK4 steps of at
+/// most Δτ/substeps as it needs (four over the whole gap would have |hλ| = 5, where RK4
+/// amplifies by 13.7 a step), and the particle filter in Euler steps of its chosen length; all
+/// stay within 2 % of the exact filter's posterior sd (RK4 at hλ = −0.5; measured 0.06 %), the
+/// particle filter within 5 Monte Carlo standard errors (measured 0.037 sd against 0.071).
+#[test]
+fn a_long_gap_on_a_stiff_model_is_crossed_in_short_steps() {
+    let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "stiff",
+        "model": {
+            "drift": ["-20*x"], "observation": ["x"], "diffusion": [[1.0]],
+            "noise": { "kind": "discrete", "mixture": [
+                { "weight": 1.0, "mean": [0.0], "cov": [[0.01]] } ] }
+        },
+        "prior": { "kind": "gaussian", "mean": [1.0], "cov": [[0.1]] },
+        "time": { "dt_obs": 0.1 },
+        "seed": 1,
+        "methods": [
+            { "method": "kalman" }, { "method": "ekf" }, { "method": "ukf" },
+            { "method": "iekf" }, { "method": "iokf" }, { "method": "pf", "particles": 20000 }
+        ]
+    }))
+    .unwrap();
+    let e = Experiment::new(config).unwrap();
+    let z = [1.0, 0.2, 0.1, 0.0, -0.05];
+    let times = vec![0.0, 0.1, 0.2, 1.2, 1.3];
+    let recording = Recording::measurements(1, 1, times, &z).unwrap();
+    let run = e.filter_recorded(recording, 2).unwrap();
+    let exact = &run.methods[0];
+    for m in &run.methods[1..] {
+        assert!(m.failure.is_none(), "{}: {:?}", m.name, m.failure);
+        let worst = (0..z.len())
+            .map(|k| (m.estimates[k] - exact.estimates[k]).abs() / exact.covariances[k].sqrt())
+            .fold(0.0, f64::max);
+        let tolerance = if m.name.starts_with("PF") {
+            5.0 / (20000.0f64 / 4.0).sqrt()
+        } else {
+            0.02
+        };
+        eprintln!("{}: {worst:.2e} sd", m.name);
+        assert!(
+            worst < tolerance,
+            "{}: {worst} sd from the exact filter",
+            m.name
+        );
+    }
+}

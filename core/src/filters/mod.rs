@@ -453,6 +453,38 @@ pub(crate) fn normalise_on_grid(
     Ok(())
 }
 
+/// Steps of an integrator (the Kalman family's RK4 moment equations, the particle filter's
+/// Euler–Maruyama) over one filter step: `per_interval` over Δτ, and over a step of another
+/// length as many steps of at most Δτ/`per_interval` as it needs — so a gap of many intervals
+/// is not one long, inaccurate or unstable step. Without Δτ, `per_interval` whatever the
+/// step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Substeps {
+    per_interval: usize,
+    longest: Option<f64>,
+}
+
+impl Substeps {
+    /// `per_interval` (at least 1) steps per Δτ = `dt_obs`, when known.
+    pub(crate) fn new(per_interval: usize, dt_obs: Option<f64>) -> Self {
+        let per_interval = per_interval.max(1);
+        Substeps {
+            per_interval,
+            longest: dt_obs
+                .filter(|dt| *dt > 0.0 && dt.is_finite())
+                .map(|dt| dt / per_interval as f64),
+        }
+    }
+
+    /// The steps over `dt` (exactly `per_interval` over Δτ).
+    pub(crate) fn over(&self, dt: f64) -> usize {
+        match self.longest {
+            Some(h) => libm::ceil(dt / h - 1e-9).max(1.0) as usize,
+            None => self.per_interval,
+        }
+    }
+}
+
 /// How many plans for interval lengths other than Δτ a grid filter keeps (the remainders of
 /// irregular intervals): each is one factorisation or spectral solve of the grid's size.
 pub const REMAINDER_PLANS: usize = 4;
@@ -464,7 +496,7 @@ pub(crate) fn whole_intervals(interval: f64, dt_obs: f64) -> (usize, f64) {
     let tolerance = crate::recording::INTERVAL_TOLERANCE;
     let ratio = interval / dt_obs;
     let nearest = libm::round(ratio);
-    if (ratio - nearest).abs() <= tolerance * ratio.max(1.0) {
+    if nearest >= 1.0 && (ratio - nearest).abs() <= tolerance * ratio {
         return (nearest as usize, 0.0);
     }
     let whole = libm::floor(ratio);

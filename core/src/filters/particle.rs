@@ -128,7 +128,7 @@ impl Method for Pf {
     }
     fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
         let mut pf = ParticleFilter::new(name, ctx.model, ctx.prior, p, ctx.seed)?;
-        pf.longest_substep = ctx.dt_obs.map(|dt| dt / p.substeps.unwrap_or(1) as f64);
+        pf.substeps = crate::filters::Substeps::new(p.substeps.unwrap_or(1), ctx.dt_obs);
         Ok(pf)
     }
     fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
@@ -246,8 +246,8 @@ pub struct ParticleFilter {
     last_ess: f64,
     /// Distinct particles kept by the last resampling (N when the last step did not resample).
     last_unique: usize,
-    /// Δτ/substeps when built for Δτ: the longest Euler–Maruyama step of any prediction.
-    longest_substep: Option<f64>,
+    /// Euler–Maruyama steps per prediction (per Δτ when built for it).
+    substeps: crate::filters::Substeps,
 }
 
 impl ParticleFilter {
@@ -316,7 +316,7 @@ impl ParticleFilter {
             resamples: 0,
             last_ess: count as f64,
             last_unique: count,
-            longest_substep: None,
+            substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), None),
         })
     }
 
@@ -325,21 +325,12 @@ impl ParticleFilter {
         self.resamples
     }
 
-    /// Euler–Maruyama steps over `dt`: `substeps`, or — built for Δτ — as many steps of at
-    /// most Δτ/substeps as `dt` needs (the same count for a step of Δτ).
-    fn substeps(&self, dt: f64) -> usize {
-        match self.longest_substep {
-            Some(h) => libm::ceil(dt / h - 1e-9).max(1.0) as usize,
-            None => self.params.substeps.unwrap_or(1),
-        }
-    }
-
-    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, [`ParticleFilter::substeps`]
-    /// times, from `particles` into `resampled` (the particles move only when the step
-    /// succeeds).
+    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, in the steps
+    /// [`crate::filters::Substeps`] gives for `dt`, from `particles` into `resampled` (the
+    /// particles move only when the step succeeds).
     fn predict_into_spare(&mut self, dt: f64) {
         let (n, count) = (self.model.n, self.params.particles);
-        let substeps = self.substeps(dt);
+        let substeps = self.substeps.over(dt);
         let h = dt / substeps as f64;
         let sqrt_h = libm::sqrt(h);
         for substep in 0..substeps {

@@ -39,7 +39,7 @@ pub struct ExtendedKalman {
     model: Model,
     q: nalgebra::DMatrix<f64>,
     form: MeasurementForm,
-    substeps: usize,
+    substeps: crate::filters::Substeps,
     state: GaussianState,
 }
 
@@ -51,9 +51,18 @@ impl ExtendedKalman {
             model: model.clone(),
             q: model.process_noise(),
             form: MeasurementForm::new(model),
-            substeps: params.substeps.max(1),
+            substeps: crate::filters::Substeps::new(params.substeps, None),
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
         }
+    }
+}
+
+impl ExtendedKalman {
+    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
+    /// steps of at most Δτ/substeps as it needs.
+    pub(crate) fn with_interval(mut self, params: &EkfParams, dt_obs: Option<f64>) -> Self {
+        self.substeps = crate::filters::Substeps::new(params.substeps, dt_obs);
+        self
     }
 }
 
@@ -72,7 +81,8 @@ impl Filter for ExtendedKalman {
             state,
         } = self;
         state.transaction(|state| {
-            match state.predict_then_measure(name, model, q, *substeps, form, obs)? {
+            let steps = substeps.over(obs.dt);
+            match state.predict_then_measure(name, model, q, steps, form, obs)? {
                 Some(meas) => state.linearized_update(model, meas),
                 None => Ok(()),
             }

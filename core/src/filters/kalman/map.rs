@@ -246,6 +246,10 @@ impl Objective<'_> {
         work.hessian
             .gemm(2.0 * lambda, &work.ht_r_inv, &work.h, 2.0);
         for (i, w) in work.w.iter().enumerate() {
+            if !self.meas.observed[i] {
+                // A missing component (w = 0) adds nothing, whatever its Hessian is.
+                continue;
+            }
             self.model
                 .observation
                 .hessian(i, x.as_slice(), &mut work.second);
@@ -425,7 +429,7 @@ pub struct MapKalman {
     model: Model,
     q: DMatrix<f64>,
     form: MeasurementForm,
-    substeps: usize,
+    substeps: crate::filters::Substeps,
     solver: MapSolver,
     state: GaussianState,
     work: MapWork,
@@ -451,7 +455,7 @@ impl MapKalman {
             model: model.clone(),
             q: model.process_noise(),
             form: MeasurementForm::new(model),
-            substeps: substeps.max(1),
+            substeps: crate::filters::Substeps::new(substeps, None),
             solver,
             watch: ModeWatch::new(&state, model.m),
             state,
@@ -463,6 +467,13 @@ impl MapKalman {
                 log_density: 0.0,
             },
         }
+    }
+
+    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
+    /// steps of at most Δτ/substeps as it needs.
+    pub(crate) fn with_interval(mut self, substeps: usize, dt_obs: Option<f64>) -> Self {
+        self.substeps = crate::filters::Substeps::new(substeps, dt_obs);
+        self
     }
 
     /// Iterations or Newton steps of the last update.
@@ -621,15 +632,15 @@ impl Filter for MapKalman {
             watch,
             last,
         } = self;
+        let steps = substeps.over(obs.dt);
         let stepped = state.transaction(|state| {
-            let Some(meas) = state.predict_then_measure(name, model, q, *substeps, form, obs)?
-            else {
+            let Some(meas) = state.predict_then_measure(name, model, q, steps, form, obs)? else {
                 return Ok(None);
             };
             map_update(*solver, model, meas, state, work).map(|report| Some((report, meas)))
         })?;
         let Some((report, meas)) = stepped else {
-            watch.elapse(obs.dt);
+            watch.elapse(model, q, steps, obs.dt);
             return Ok(());
         };
         *last = report;
@@ -637,7 +648,7 @@ impl Filter for MapKalman {
             solver: *solver,
             model,
             q,
-            substeps: *substeps,
+            substeps: steps,
             dt: obs.dt,
             meas,
         };

@@ -53,9 +53,10 @@ fn map_kalman(
     solver: MapSolver,
     name: String,
 ) -> Result<MapKalman, ZakaiError> {
-    Ok(MapKalman::new(
-        name, ctx.model, ctx.prior, init, substeps, solver,
-    ))
+    Ok(
+        MapKalman::new(name, ctx.model, ctx.prior, init, substeps, solver)
+            .with_interval(substeps, ctx.dt_obs),
+    )
 }
 
 fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo>) -> MethodInfo {
@@ -150,7 +151,7 @@ impl Method for Ekf {
         p: &EkfParams,
         name: String,
     ) -> Result<ExtendedKalman, ZakaiError> {
-        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p))
+        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p).with_interval(p, ctx.dt_obs))
     }
     fn refined(p: &EkfParams, _: usize) -> Option<(EkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
@@ -218,7 +219,7 @@ impl Method for Ukf {
         p: &UkfParams,
         name: String,
     ) -> Result<UnscentedKalman, ZakaiError> {
-        Ok(UnscentedKalman::new(name, ctx.model, ctx.prior, p)?)
+        Ok(UnscentedKalman::new(name, ctx.model, ctx.prior, p)?.with_interval(p, ctx.dt_obs))
     }
     fn refined(p: &UkfParams, _: usize) -> Option<(UkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;

@@ -137,9 +137,21 @@ impl ModeWatch {
         }
     }
 
-    /// Time passing without an observation.
-    pub fn elapse(&mut self, dt: f64) {
+    /// Time passing without an observation (`substeps` RK4 steps over `dt`): the free
+    /// distribution's clock runs on, and a followed second mode is predicted as the filter is.
+    pub(super) fn elapse(&mut self, model: &Model, q: &DMatrix<f64>, substeps: usize, dt: f64) {
         self.free_elapsed += dt;
+        self.free_intervals += 1;
+        if self.following
+            && !self.stopped
+            && dt > 0.0
+            && self
+                .shadow
+                .predict_linearized(model, q, dt, substeps)
+                .is_err()
+        {
+            self.following = false;
+        }
     }
 
     /// After the filter's update of `state` (its MAP point and Laplace covariance) over

@@ -192,7 +192,7 @@ pub struct UnscentedKalman {
     model: Model,
     q: DMatrix<f64>,
     form: MeasurementForm,
-    substeps: usize,
+    substeps: crate::filters::Substeps,
     weights: Weights,
     state: GaussianState,
     sigma: SigmaPoints,
@@ -222,7 +222,7 @@ impl UnscentedKalman {
             model: model.clone(),
             q: model.process_noise(),
             form: MeasurementForm::new(model),
-            substeps: params.substeps,
+            substeps: crate::filters::Substeps::new(params.substeps, None),
             weights,
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
             sigma: SigmaPoints::new(model.n, model.m),
@@ -307,6 +307,15 @@ impl UnscentedKalman {
     }
 }
 
+impl UnscentedKalman {
+    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
+    /// steps of at most Δτ/substeps as it needs.
+    pub(crate) fn with_interval(mut self, params: &UkfParams, dt_obs: Option<f64>) -> Self {
+        self.substeps = crate::filters::Substeps::new(params.substeps, dt_obs);
+        self
+    }
+}
+
 impl Filter for UnscentedKalman {
     fn name(&self) -> &str {
         &self.name
@@ -327,7 +336,7 @@ impl Filter for UnscentedKalman {
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
             if obs.dt > 0.0 {
-                state.predict_with(obs.dt, *substeps, |at, rates, _| {
+                state.predict_with(obs.dt, substeps.over(obs.dt), |at, rates, _| {
                     Self::rates(model, q, weights, sigma, at, rates)
                 })?;
             }
