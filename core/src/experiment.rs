@@ -431,10 +431,17 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
     ) -> Result<ExperimentRun, ZakaiError> {
-        if self.config.time.t_final <= 0.0 {
+        let time = &self.config.time;
+        if time.t_final <= 0.0 {
             return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
                 "time.t_final",
                 "a simulated run needs a final time T > 0 (only a run over recorded observations goes without)",
+            )]));
+        }
+        if time.dt_obs > time.t_final {
+            return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                "time.dt_obs",
+                "a simulated run's interval must not exceed t_final",
             )]));
         }
         // The simulator's output fits the model by construction (and a truth that blew up is
@@ -447,6 +454,21 @@ impl Experiment {
     /// (every method takes steps of any positive length).
     pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
         let mut p = recording.problems();
+        let dt_obs = self.config.time.dt_obs;
+        // A step of very many Δτ is a mis-set Δτ (datetimes read as seconds against a Δτ of
+        // 1, say): every method would take that many of its steps, for minutes or hours.
+        if let Some(k) = (1..recording.times.len())
+            .find(|&k| recording.step_length(k) > MAX_INTERVALS_PER_STEP * dt_obs)
+        {
+            p.push(ConfigProblem::new(
+                alloc::format!("times[{k}]"),
+                alloc::format!(
+                    "row {}: the step τ_k − τ_(k−1) = {:e} is more than {MAX_INTERVALS_PER_STEP:e} observation intervals Δτ = {dt_obs} (time.dt_obs), which the methods' time steps are made for; set time.dt_obs to the data's typical step (times given as datetimes are seconds: a day is 86400, a year about 3.156e7)",
+                    k + 1,
+                    recording.step_length(k)
+                ),
+            ));
+        }
         let model = &self.model;
         if recording.n != model.n {
             p.push(ConfigProblem::new(
@@ -623,6 +645,10 @@ impl Experiment {
         with_standard_clock(|clock| self.run_with(seed, clock, &mut Silent))
     }
 }
+
+/// The longest step of a recording, in observation intervals Δτ: a longer one is refused
+/// before the run (see [`Experiment::recording_problems`]).
+pub const MAX_INTERVALS_PER_STEP: f64 = 1.0e4;
 
 /// How the failure of a method that does not apply to the model starts (the run records it
 /// at observation 0 and steps the others).

@@ -62,7 +62,8 @@ def test_pandas_series_with_a_datetime_index():
     index = pd.to_datetime([f"{int(y)}-07-01" for y in years])
     series = pd.Series(z, index=index, name="flow")
     sc = local_level(["kalman"])
-    # Times are seconds since the first: a year is ~3.16e7 s, so rates are per second.
+    # Times are seconds since the first: a year is ~3.16e7 s, so Δτ and rates are per second.
+    sc.dt_obs = 365.25 * 86400
     sc.config["model"]["diffusion"] = [[20.0 / np.sqrt(365.25 * 86400)]]
     result = zakai.filter(sc, series)
     seconds = (index - index[0]).total_seconds().to_numpy()
@@ -78,6 +79,9 @@ def test_datetime_times_are_converted_and_text_times_refused():
     years, z = flow_series()
     dates = np.array([f"{int(y)}-01-01" for y in years], dtype="datetime64[D]")
     sc = local_level(["kalman"])
+    with pytest.raises(ConfigError, match="set time.dt_obs"):
+        zakai.filter(sc, z, times=dates)  # Δτ = 1 s against yearly steps
+    sc.dt_obs = 365.25 * 86400
     result = zakai.filter(sc, z, times=dates)
     assert result.times[0] == 0.0 and result.times[1] == 365 * 86400
     with pytest.raises(ConfigError, match="numbers or datetimes"):

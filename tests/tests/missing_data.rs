@@ -620,3 +620,20 @@ fn a_long_gap_on_a_stiff_model_is_crossed_in_short_steps() {
         );
     }
 }
+
+/// A step of more than 10⁴ observation intervals is a mis-set Δτ (here yearly data whose
+/// times are seconds, against Δτ = 1 s): the run is refused before it starts, with the row and
+/// what to set, instead of every method taking 3·10⁷ of its steps.
+#[test]
+fn a_step_of_very_many_intervals_is_refused_before_the_run() {
+    let e = Experiment::new(linear_two_sensor(serde_json::json!([{ "method": "ukf" }]))).unwrap();
+    let year = 3.156e7;
+    let z = [1.0, 2.0, 1.5, f64::NAN, 1.2, 1.1];
+    let recording = Recording::measurements(1, 2, vec![0.0, year, 2.0 * year], &z).unwrap();
+    let err = e.filter_recorded(recording, 1).expect_err("refused");
+    let text = err.to_string();
+    assert!(
+        text.contains("times[1]") && text.contains("set time.dt_obs"),
+        "{text}"
+    );
+}

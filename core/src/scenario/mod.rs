@@ -452,8 +452,6 @@ impl ScenarioConfig {
                 "time.dt_obs",
                 "must be positive and finite",
             ));
-        } else if t.t_final > 0.0 && t.t_final.is_finite() && t.dt_obs > t.t_final {
-            p.push(ConfigProblem::new("time.dt_obs", "must not exceed t_final"));
         } else if self.steps() > MAX_STEPS {
             p.push(ConfigProblem::new(
                 "time.dt_obs",

@@ -777,7 +777,7 @@ def filter(
         over each step whatever its length (grid and spectral methods as whole Δτ and a
         remainder). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
         converted to **seconds since the first**, so Δτ and the model's rates are per
-        second. Every Δτ from 0 when absent.
+        second (a step of more than 10⁴ Δτ is refused as a mis-set Δτ). Every Δτ from 0 when absent.
     truth : array_like, shape (N + 1, n), optional
         The true states, for errors (MSE) against them.
     seed : int, optional
