@@ -115,5 +115,36 @@ fn scaling(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, fpe_split, scaling);
+/// Cost against grid size in 2-D: one prediction interval of example 2 (Δτ = 0.2, Δt = 0.005
+/// before the CFL sub-stepping) on 35² … 200² cells, for the growth exponent per FPE step in
+/// BENCHMARKS.md (the benchmark's name gives the steps the interval takes).
+fn scaling_2d(c: &mut Criterion) {
+    let experiment =
+        Experiment::new(presets::preset("sa-example-2").expect("preset")).expect("valid");
+    let dt_obs = experiment.config().time.dt_obs;
+    let traj = experiment.simulate(1);
+    let mut group = c.benchmark_group("fpe_split scaling 2-D (001 example 2)");
+    group.sample_size(10);
+    for cells in [35, 50, 70, 100, 140, 200] {
+        for (scheme, label) in [
+            (FpeScheme::Separation, "SA"),
+            (FpeScheme::ImplicitFdm, "FDM"),
+        ] {
+            let mut filter = grid_filter(
+                &experiment,
+                (scheme, label),
+                cells,
+                0.005,
+                traj.observation(0),
+            );
+            let (substeps, _) = filter.step_count(dt_obs).expect("steps");
+            group.bench_function(format!("{label} {cells}² cells ({substeps} steps)"), |b| {
+                b.iter(|| filter.predict(dt_obs).expect("predict"))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, fpe_split, scaling, scaling_2d);
 criterion_main!(benches);

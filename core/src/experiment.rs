@@ -620,6 +620,7 @@ impl Experiment {
             next: 0,
             bound: self.config.divergence_bound(&self.prior),
             track_loss: self.config.failure.track_loss,
+            exact: self.config.methods.iter().map(|m| m.is_exact()).collect(),
             follow_failed: false,
         };
         run.observe(0, None, &mut Silent);
@@ -701,6 +702,8 @@ pub struct ExperimentRun {
     next: usize,
     bound: f64,
     track_loss: Option<crate::scenario::TrackLoss>,
+    /// Per method: an exact reference, which the track-loss test does not apply to.
+    exact: Vec<bool>,
     /// Whether methods declared failed with their state intact keep being stepped.
     follow_failed: bool,
 }
@@ -857,7 +860,8 @@ impl ExperimentRun {
                 }
             }
         };
-        let result = match (result, &self.track_loss, t.state(k)) {
+        let rule = self.track_loss.filter(|_| !self.exact[i]);
+        let result = match (result, &rule, t.state(k)) {
             (Ok(()), Some(rule), Some(truth)) => {
                 let error = libm::sqrt(
                     est.mean
@@ -1129,5 +1133,28 @@ mod tests {
             whole.estimates,
             "followed rows are the rows of the run without the rule"
         );
+    }
+
+    /// The track-loss test never marks an exact reference failed: with a 10⁻³ threshold on
+    /// a linear model the EKF is lost at once and the Kalman–Bucy filter (the same numbers)
+    /// runs to the end.
+    #[test]
+    fn exact_references_are_never_lost_by_the_track_loss_rule() {
+        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        config.model.observation = alloc::vec!["x".into()];
+        config.methods = alloc::vec![
+            MethodConfig::Kalman(Default::default()),
+            MethodConfig::Ekf(Default::default()),
+        ];
+        config.time.t_final = 1.0;
+        config.failure.track_loss = Some(crate::scenario::TrackLoss {
+            error: 1e-3,
+            duration: 0.0,
+        });
+        let result = Experiment::new(config).unwrap().run(3).unwrap();
+        let (kf, ekf) = (&result.methods[0], &result.methods[1]);
+        assert!(kf.failure.is_none(), "{:?}", kf.failure);
+        let lost = ekf.failure.as_ref().expect("the EKF is lost");
+        assert!(lost.message.starts_with("lost track"), "{}", lost.message);
     }
 }

@@ -88,6 +88,7 @@ builder_fn!(GaussianSum);
 
 impl Method for GaussianSum {
     const KEY: &'static str = "gaussian_sum";
+    const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["gsf"];
     type Params = GaussianSumParams;
     type Filter = GaussianSumFilter;

@@ -192,6 +192,12 @@ pub trait Method {
     const NEEDS_INTERVAL: bool = false;
     /// True for methods that live on a box (the domain must be given).
     const NEEDS_DOMAIN: bool = false;
+    /// True for the exact references: filters whose estimate is the conditional mean itself
+    /// on every problem they apply to (the Kalman–Bucy and Kalman filters on linear-Gaussian
+    /// models, the Gaussian-sum filter on linear models with mixture noise, up to its
+    /// reported mixture reduction). The failure rule's track-loss test never marks them
+    /// failed: an exact filter far from the truth is the problem's uncertainty, not a fault.
+    const EXACT: bool = false;
     /// The method's parameters (serde, with defaults).
     type Params: Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.

@@ -389,6 +389,9 @@ pub const BOUNDARY_MASS_THRESHOLD: f64 = 1e-4;
 /// nodes, not mass).
 pub const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
 
+/// The name of the grid filters' boundary-mass self-check.
+pub(crate) const BOUNDARY_MASS_CHECK: &str = "mass near the boundary";
+
 /// The self-check of a density `u` on `grid` with its `estimate` (Yau–Yau and
 /// continuous–discrete grid filters): mass near the boundary and width in cells.
 pub(crate) fn grid_self_check(
@@ -401,7 +404,7 @@ pub(crate) fn grid_self_check(
     let near = grid.mass_near_boundary(u, 2) / mass;
     if near > BOUNDARY_MASS_THRESHOLD {
         out.push(Concern::above(
-            "mass near the boundary",
+            BOUNDARY_MASS_CHECK,
             near,
             BOUNDARY_MASS_THRESHOLD,
             "the density reaches the edge of the box and is cut off there: widen the domain",

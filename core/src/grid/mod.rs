@@ -8,6 +8,8 @@
 #[cfg(feature = "std")]
 #[doc(hidden)]
 pub mod dst;
+/// Tridiagonal systems along grid lines (the dimension-split implicit steps).
+pub(crate) mod lines;
 
 use alloc::format;
 use alloc::vec;

@@ -1,6 +1,5 @@
 //! Small dense linear-algebra helpers on nalgebra shared by the filters.
 
-pub mod banded;
 pub(crate) mod simd;
 
 use simd::per_node_kernel;

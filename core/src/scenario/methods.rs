@@ -46,6 +46,8 @@ pub struct CatalogueEntry {
     pub needs_interval: bool,
     /// Whether the method lives on the scenario's domain.
     pub needs_domain: bool,
+    /// Whether the method is an exact reference (never marked failed by the track-loss test).
+    pub exact: bool,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -103,6 +105,11 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::NEEDS_DOMAIN,)* }
             }
 
+            /// Whether the method is an exact reference ([`Method::EXACT`]).
+            pub fn is_exact(&self) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::EXACT,)* }
+            }
+
             /// Every problem with the parameters for an `n`-dimensional model, fields
             /// relative to the method (`"particles"`, `"init.mean"`, `"method"`).
             pub fn problems(&self, n: usize) -> Vec<ConfigProblem> {
@@ -155,6 +162,7 @@ macro_rules! registry {
                 aliases: <$method>::ALIASES.to_vec(),
                 needs_interval: <$method>::NEEDS_INTERVAL,
                 needs_domain: <$method>::NEEDS_DOMAIN,
+                exact: <$method>::EXACT,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }

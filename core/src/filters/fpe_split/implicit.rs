@@ -1,5 +1,5 @@
-//! The implicit finite-difference steps of 001, assembled as banded matrices and factorised
-//! once per time step length:
+//! The implicit finite-difference steps of 001, split per axis into tridiagonal systems and
+//! factored once per time step length:
 //!
 //! * the parabolic part (10) of the separation approach, (17) / (24):
 //!   `(1 + Δt ∇·f(x[i])) P[i] − ½ Δt Σ_l Q_ll (P[i_l+1] − 2P[i] + P[i_l−1]) / Δx_l² = P*[i]`;
@@ -7,20 +7,28 @@
 //!   the same with the advection `Δt f_l(x[i]) (P[i_l+1] − P[i_l−1]) / (2Δx_l)` added on the
 //!   left.
 //!
-//! The density is zero outside the grid. With `1 + Δt min ∇·f > 0` the separation matrix is
-//! a strictly diagonally dominant M-matrix (its inverse is nonnegative); the FDM matrix is one
-//! only while the cell Péclet number `|f_l| Δx_l / Q_ll` stays below 1.
+//! Writing the left-hand side as `(I + Δt Σ_l B_l) P`, where `B_l` holds axis `l`'s
+//! differences and `∇·f / n`, the step solves `Π_l (I + Δt B_l) P = P*` instead — one
+//! tridiagonal system per grid line of each axis in turn (Thomas algorithm), so a step costs a
+//! fixed number of operations per cell in any dimension. In 1-D this is (17) exactly; in n-D
+//! the product differs from (24)'s matrix by `Δt² Σ_{l<k} B_l B_k + …`, an O(Δt²) change per
+//! step and O(Δt) over an interval — the order of the implicit Euler step itself (the
+//! "locally one-dimensional" splitting; 001's 2-D example is tested against the exact
+//! conditional mean in `tests/fpe_split.rs`).
+//!
+//! The density is zero outside the grid. With `1 + Δt min ∇·f > 0` every parabolic factor is a
+//! strictly diagonally dominant M-matrix, so its inverse, and their product, are nonnegative;
+//! the FDM factors are M-matrices only while the cell Péclet number `|f_l| Δx_l / Q_ll` stays
+//! below 1.
+
+use alloc::format;
+use alloc::vec::Vec;
 
 use crate::error::FilterError;
+use crate::grid::lines::LineSystems;
 use crate::grid::TensorGrid;
-use crate::linalg::banded::{BandedLu, BandedMatrix};
 
 use super::upwind::UpwindAdvection;
-
-/// Half-bandwidth of a nearest-neighbour operator on `grid`: the stride of the last axis.
-pub fn half_bandwidth(shape: &[usize]) -> usize {
-    shape[..shape.len() - 1].iter().product()
-}
 
 /// Which equation the implicit step discretises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,38 +39,152 @@ pub enum ImplicitPart {
     Unsplit,
 }
 
-/// Assembles and factorises the implicit matrix of `part` for the step `dt`.
-pub fn factorise(
-    grid: &TensorGrid,
-    advection: &UpwindAdvection,
-    divergence: &[f64],
-    diffusion: &[f64],
-    dt: f64,
-    part: ImplicitPart,
-) -> Result<BandedLu, FilterError> {
-    let bw = half_bandwidth(grid.shape());
-    let mut a = BandedMatrix::zeros(grid.len(), bw, bw);
-    for (idx, div) in divergence.iter().enumerate() {
-        a.add(idx, idx, 1.0 + dt * div);
-        for (l, q) in diffusion.iter().enumerate() {
-            let (stride, dx) = (grid.stride(l), grid.spacing()[l]);
-            let i = grid.index_in(idx, l);
-            let diff = 0.5 * dt * q / (dx * dx);
-            let adv = match part {
-                ImplicitPart::Parabolic => 0.0,
-                ImplicitPart::Unsplit => dt * advection.velocity(l)[idx] / (2.0 * dx),
-            };
-            a.add(idx, idx, 2.0 * diff);
-            if i + 1 < grid.shape()[l] {
-                a.add(idx, idx + stride, -diff + adv);
-            }
-            if i > 0 {
-                a.add(idx, idx - stride, -diff - adv);
-            }
+/// The factored implicit step: the tridiagonal systems of each axis, solved in turn.
+#[derive(Clone, Debug)]
+pub struct ImplicitStep {
+    axes: Vec<LineSystems>,
+}
+
+impl ImplicitStep {
+    /// Assembles and factors the implicit step of `part` for the time step `dt`; a vanishing
+    /// pivot (a matrix far from diagonal dominance) is an error.
+    pub fn new(
+        grid: &TensorGrid,
+        advection: &UpwindAdvection,
+        divergence: &[f64],
+        diffusion: &[f64],
+        dt: f64,
+        part: ImplicitPart,
+    ) -> Result<Self, FilterError> {
+        let dims = grid.dim() as f64;
+        let axes = diffusion
+            .iter()
+            .enumerate()
+            .map(|(l, q)| {
+                let dx = grid.spacing()[l];
+                let diff = 0.5 * dt * q / (dx * dx);
+                let adv = |idx: usize| match part {
+                    ImplicitPart::Parabolic => 0.0,
+                    ImplicitPart::Unsplit => dt * advection.velocity(l)[idx] / (2.0 * dx),
+                };
+                let lower: Vec<f64> = (0..grid.len()).map(|i| -diff - adv(i)).collect();
+                let upper = (0..grid.len()).map(|i| -diff + adv(i)).collect();
+                let diag = divergence
+                    .iter()
+                    .map(|div| 1.0 + dt * div / dims + 2.0 * diff)
+                    .collect();
+                let axis = LineSystems::factor(grid.stride(l), grid.shape()[l], &lower, diag, upper);
+                match axis.vanishing_pivot() {
+                    None => Ok(axis),
+                    Some(idx) => Err(FilterError::Unsuitable(format!(
+                        "the {} along x{} has a vanishing pivot at cell {idx} (too far from diagonal dominance; use more cells or a smaller dt)",
+                        match part {
+                            ImplicitPart::Parabolic => "implicit matrix of the parabolic step (24)",
+                            ImplicitPart::Unsplit => "implicit FDM matrix",
+                        },
+                        l + 1
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(ImplicitStep { axes })
+    }
+
+    /// Solves the step for the density `u` in place, with `tmp` as scratch.
+    pub fn solve(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+        for axis in &self.axes {
+            axis.solve(u, tmp);
+            core::mem::swap(u, tmp);
         }
     }
-    a.factor(match part {
-        ImplicitPart::Parabolic => "implicit matrix of the parabolic step (24)",
-        ImplicitPart::Unsplit => "implicit FDM matrix",
-    })
+
+    /// Values the factors store.
+    pub fn values(cells: usize, dims: usize) -> Option<usize> {
+        cells.checked_mul(3 * dims)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::presets;
+    use crate::testing::test;
+    use alloc::vec;
+    use nalgebra::{DMatrix, DVector};
+
+    /// 001 (24) (and the unsplit FDM) assembled whole as a dense matrix, solved by nalgebra.
+    fn dense_step(
+        grid: &TensorGrid,
+        advection: &UpwindAdvection,
+        divergence: &[f64],
+        diffusion: &[f64],
+        dt: f64,
+        part: ImplicitPart,
+        rhs: &[f64],
+    ) -> DVector<f64> {
+        let len = grid.len();
+        let mut a = DMatrix::zeros(len, len);
+        for idx in 0..len {
+            a[(idx, idx)] += 1.0 + dt * divergence[idx];
+            for (l, q) in diffusion.iter().enumerate() {
+                let (stride, dx) = (grid.stride(l), grid.spacing()[l]);
+                let i = grid.index_in(idx, l);
+                let diff = 0.5 * dt * q / (dx * dx);
+                let adv = match part {
+                    ImplicitPart::Parabolic => 0.0,
+                    ImplicitPart::Unsplit => dt * advection.velocity(l)[idx] / (2.0 * dx),
+                };
+                a[(idx, idx)] += 2.0 * diff;
+                if i + 1 < grid.shape()[l] {
+                    a[(idx, idx + stride)] += -diff + adv;
+                }
+                if i > 0 {
+                    a[(idx, idx - stride)] += -diff - adv;
+                }
+            }
+        }
+        a.lu()
+            .solve(&DVector::from_column_slice(rhs))
+            .expect("regular")
+    }
+
+    /// On 001's 2-D example (a 9 × 8 grid), the axis-split step differs from the whole (24)
+    /// (and FDM) matrix by O(Δt²): halving Δt divides the largest difference by 4 (between 3
+    /// and 5 allowed; 3.86 measured), and it is below 10⁻⁴ of the density's scale (1) at
+    /// Δt = 0.01 (1.7·10⁻⁵ parabolic, 4.9·10⁻⁵ FDM measured).
+    #[test]
+    fn the_split_step_is_24_to_second_order() {
+        let config = presets::preset("sa-example-2").expect("preset");
+        let model = config.build_model().expect("model");
+        let grid = TensorGrid::new(&[(-2.0, 5.0), (-2.0, 5.0)], &[9, 8]).expect("grid");
+        let advection = UpwindAdvection::new(&grid, &*model.drift);
+        let n = 2;
+        let mut jac = vec![0.0; n * n];
+        let mut divergence = Vec::new();
+        grid.for_each_node(|_, x| {
+            model.drift.jacobian(x, &mut jac);
+            divergence.push(jac[0] + jac[3]);
+        });
+        let q = model.process_noise();
+        let diffusion = [q[(0, 0)], q[(1, 1)]];
+        let rhs: Vec<f64> =
+            grid.tabulate(|x| libm::exp(-(x[0] - 1.0) * (x[0] - 1.0) - x[1] * x[1]));
+        for part in [ImplicitPart::Parabolic, ImplicitPart::Unsplit] {
+            let gap = |dt: f64| {
+                let step = ImplicitStep::new(&grid, &advection, &divergence, &diffusion, dt, part)
+                    .expect("factors");
+                let (mut u, mut tmp) = (rhs.clone(), vec![0.0; rhs.len()]);
+                step.solve(&mut u, &mut tmp);
+                let exact = dense_step(&grid, &advection, &divergence, &diffusion, dt, part, &rhs);
+                u.iter()
+                    .zip(exact.iter())
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            };
+            let (coarse, fine) = (gap(0.01), gap(0.005));
+            assert!(coarse < 1e-4, "{part:?}: difference {coarse} at Δt = 0.01");
+            let ratio = coarse / fine;
+            assert!((3.0..5.0).contains(&ratio), "{part:?}: ratio {ratio}");
+        }
+    }
 }

@@ -44,10 +44,10 @@ fn info(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
 }
 
 fn memory(p: &FpeParams, n: usize) -> Option<usize> {
-    // The banded factor of the implicit step and, per cell, the density, its copy, the
+    // The factors of the implicit step and, per cell, the density, its copy, the
     // upwind fluxes and the likelihood.
     let cells = product(&per_dimension(&p.cells, n))?;
-    p.band_values(n)?
+    p.factor_values(n)?
         .checked_add(cells.checked_mul(6 + 2 * n)?)?
         .checked_mul(8)
 }

@@ -13,8 +13,9 @@
 //!   schemes ([`FpeScheme`]):
 //!   - the **separation approach** (SA, 001 §3): per step, the hyperbolic part (9) by the
 //!     explicit upwind finite-volume scheme (12)–(14) / (19)–(22) ([`upwind`]), then the
-//!     parabolic part (10) by the implicit scheme (17) / (24) ([`implicit`]) — a banded direct
-//!     solve (tridiagonal in 1-D), factorised once per step length;
+//!     parabolic part (10) by the implicit scheme (17) / (24) ([`implicit`]) — tridiagonal
+//!     solves along the grid lines of each axis in turn (exactly (17) in 1-D, a
+//!     locally one-dimensional splitting of (24) in more), factored once per step length;
 //!   - the **classic implicit FDM** on the unsplit FPE (the comparator of 001 §4).
 //!
 //! **Step choice.** `Δt` is the parameter `dt` rounded down to divide the observation interval
@@ -41,7 +42,7 @@ use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
-use self::implicit::ImplicitPart;
+use self::implicit::{ImplicitPart, ImplicitStep};
 use self::upwind::UpwindAdvection;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::{
@@ -49,12 +50,7 @@ use crate::filters::{
     Observation, ObservationKind, Observed, REMAINDER_PLANS,
 };
 use crate::grid::TensorGrid;
-use crate::linalg::banded::{BandedLu, BandedMatrix};
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
-
-/// Largest number of values the banded factor of the implicit step may hold (2²⁴ ≈ 16.8
-/// million, 128 MiB).
-pub const MAX_BAND_VALUES: usize = 1 << 24;
 
 /// Largest number of FPE steps per observation interval the automatic sub-stepping may take.
 pub const MAX_SUBSTEPS: usize = 1_000_000;
@@ -95,14 +91,9 @@ impl FpeParams {
         per_dimension(&self.cells, n)
     }
 
-    /// Values stored by the banded factor of the implicit step (`None` on overflow).
-    pub fn band_values(&self, n: usize) -> Option<usize> {
-        let shape = self.shape(n);
-        let len = product(&shape)?;
-        let bw = shape[..shape.len().saturating_sub(1)]
-            .iter()
-            .try_fold(1usize, |a, &k| a.checked_mul(k))?;
-        BandedMatrix::storage(len, bw, bw)
+    /// Values stored by the factors of the implicit step (`None` on overflow).
+    pub fn factor_values(&self, n: usize) -> Option<usize> {
+        ImplicitStep::values(product(&self.shape(n))?, n)
     }
 
     /// Every problem with the parameters for an `n`-dimensional model.
@@ -115,19 +106,15 @@ impl FpeParams {
         if !(self.dt > 0.0 && self.dt.is_finite()) {
             p.push(("dt", "must be positive and finite".into()));
         }
-        if p.is_empty() {
-            match self.band_values(n) {
-                Some(v) if v <= MAX_BAND_VALUES => {}
-                v => p.push((
-                    "cells",
-                    format!(
-                        "the banded factor of the implicit step for {:?} cells needs {} MiB, above the cap of {} MiB",
-                        self.shape(n),
-                        v.map_or(String::from("more than 2^64 B"), |v| format!("{}", (v * 8) >> 20)),
-                        (MAX_BAND_VALUES * 8) >> 20
-                    ),
-                )),
-            }
+        if p.is_empty() && product(&self.shape(n)).is_none_or(|c| c > crate::grid::MAX_NODES) {
+            p.push((
+                "cells",
+                format!(
+                    "{:?} cells are more than the {} a grid may have",
+                    self.shape(n),
+                    crate::grid::MAX_NODES
+                ),
+            ));
         }
         p
     }
@@ -167,7 +154,7 @@ struct StepPlan {
     interval: f64,
     substeps: usize,
     dt: f64,
-    lu: BandedLu,
+    implicit: ImplicitStep,
 }
 
 /// The continuous–discrete grid filter (see the module doc).
@@ -386,7 +373,7 @@ impl ContinuousDiscreteGrid {
             FpeScheme::Separation => ImplicitPart::Parabolic,
             FpeScheme::ImplicitFdm => ImplicitPart::Unsplit,
         };
-        let lu = implicit::factorise(
+        let implicit = ImplicitStep::new(
             &self.grid,
             &self.advection,
             &self.divergence,
@@ -398,7 +385,7 @@ impl ContinuousDiscreteGrid {
             interval,
             substeps,
             dt,
-            lu,
+            implicit,
         })
     }
 
@@ -454,7 +441,7 @@ impl ContinuousDiscreteGrid {
                 Some(i) => &self.remainders[i],
                 None => self.plan.as_ref().expect("planned in new"),
             };
-            plan.lu.solve(&mut self.u);
+            plan.implicit.solve(&mut self.u, &mut self.tmp);
         }
     }
 

@@ -78,6 +78,7 @@ builder_fn!(Kalman);
 
 impl Method for Kalman {
     const KEY: &'static str = "kalman";
+    const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
     type Params = KalmanParams;
     type Filter = KalmanBucy;

@@ -1,8 +1,9 @@
 //! The guarantees of 000 §3 checked over the actual grid before a run:
 //!
-//! * (22) nonnegativity (M-matrix) of IEM: `|p_d(s)| < Q_dd/Δs_d` and `|q(s)| < 1/Δt`
-//!   (000 states it for Q = I; the proof's off-diagonal entries `−Δt(Q_dd/(2Δs²) ± p_d/(2Δs))`
-//!   give the Q_dd factor);
+//! * (22) nonnegativity (M-matrix) of IEM: `|p_d(s)| < Q_dd/Δs_d` and `q(s) < 1/Δt`
+//!   (000 states it for Q = I and with `|q|`; the proof's off-diagonal entries
+//!   `−Δt(Q_dd/(2Δs²) ± p_d/(2Δs))` give the Q_dd factor, and its row sum (24) uses the
+//!   second half only as `1 − Δt q(s) > 0`, which a negative q never breaks);
 //! * (30) stability of IEM: `∇·f ≥ 0`;
 //! * (31) stability of QIEM: `(Δs)²(2q + q²Δt) + Δt p² ≤ 2`, evaluated per dimension.
 //!
@@ -70,13 +71,16 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
             });
         }
     }
-    let (ratio, idx) = worst_node(grid, |i| libm::fabs(op.q[i]) * dt);
+    // 000 states (22) as |q| Δt < 1, but its proof (24) uses it only through 1 − Δt q(s) > 0:
+    // a negative q (an observation term −½hᵀS⁻¹h in the operator, a positive ∇·f) adds to the
+    // diagonal and never breaks the M-matrix property. The check is that sharper condition.
+    let (ratio, idx) = worst_node(grid, |i| op.q[i] * dt);
     if ratio.is_nan() || ratio >= 1.0 {
         let x = point(grid, idx);
         out.push(GuaranteeWarning {
             condition: "(22) nonnegativity (M-matrix)".into(),
             message: format!(
-                "(22) violated: |q(s)| Δt = {ratio:.3e} ≥ 1 at s = {x:.3?} (q = {:.3e}, Δt = {dt:.2e}); shrink Δt or the domain",
+                "(22) violated: q(s) Δt = {ratio:.3e} ≥ 1 at s = {x:.3?} (q = {:.3e}, Δt = {dt:.2e}; the M-matrix proof (24) needs 1 − Δt q(s) > 0); shrink Δt",
                 op.q[idx]
             ),
             worst: x,
