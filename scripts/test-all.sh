@@ -96,6 +96,8 @@ if ! command -v chromium >/dev/null 2>&1; then
   fi
 fi
 ZAKAI_CLI=target/debug/zakai node tests/web/e2e.mjs
+step "the lessons' claims against their own runs (headless chromium)"
+node tests/web/lessons.mjs
 
 if [ "${ZAKAI_SOAK:-0}" = 1 ]; then
   step "soak: every 1-D method, 10^6 intervals of the cubic sensor (ZAKAI_SOAK=1)"

@@ -40,8 +40,9 @@ function richText(text) {
 
 /**
  * Sets up Learn mode. `page` is the playground's side: `presets()`, `method(key, params)`,
- * `run(config)` (load and play), `current()` (the running config), `monteCarlo(runs)`,
- * `view(name)` (turn on a view such as the log-concavity layer).
+ * `run(config)` (load and play; resolves to the reason when the page refuses the run, else
+ * null), `current()` (the running config), `monteCarlo(runs)`, `checkConvergence()` (on the
+ * running scenario's seed), `view(name)` (turn on a view such as the log-concavity layer).
  */
 export function setupLearn(page) {
   const select = $('lesson-select');
@@ -64,11 +65,13 @@ function setMode(page, mode, lesson) {
   if (learn) openLesson(page, lesson ?? $('lesson-select').value ?? LESSONS[0].id);
 }
 
-/** The lesson's scenario from its preset, with its seed. */
+/** The lesson's scenario from its preset, with its seed; the failure rule's track-loss test
+ *  only in a lesson about it (it would mark converged filters failed on a hard path). */
 function lessonConfig(page, lesson) {
   const preset = page.presets().find((p) => p.name === lesson.preset);
   const config = lesson.scenario(structuredClone(preset), page.method);
   config.seed = lesson.seed;
+  if (!lesson.trackLoss) config.failure = { ...config.failure, track_loss: null };
   return config;
 }
 
@@ -80,27 +83,46 @@ async function openLesson(page, id) {
   url.searchParams.delete('preset');
   history.replaceState(null, '', url);
   await loadTemml();
-  const action = (label, act) => {
+  // The status line names every change made since the lesson was opened, in order, and what
+  // the last one should show; a run the page refuses says so there, with the reason.
+  const applied = [];
+  const status = (text, expect) => {
+    const line = $('lesson-status');
+    line.replaceChildren(text, ...(expect ? [el('br'), el('span', { className: 'expect' }, 'What you should see: ', ...richText(expect))] : []));
+  };
+  const action = (label, act, expect) => {
     const b = el('button', { type: 'button', className: 'try' }, label);
-    b.addEventListener('click', () => { act(); $('lesson-status').textContent = `changed: ${label}`; });
+    b.addEventListener('click', async () => {
+      const refused = await act();
+      if (refused) return status(`not run (${label}): ${refused}`);
+      status(applied.length ? `changed: ${applied.join('; then ')}` : `scenario: ${lesson.preset} with seed ${lesson.seed}`, expect);
+    });
     return b;
   };
-  const replay = action('▶ run the lesson again', () => page.run(lessonConfig(page, lesson)));
+  const replay = action('▶ run the lesson again', () => {
+    applied.length = 0;
+    return page.run(lessonConfig(page, lesson));
+  });
   const tries = lesson.tryThis.map((t) => action(t.label, () => {
     if (t.mc) return page.monteCarlo(t.mc);
+    if (t.check) return page.checkConvergence();
     if (t.view) return page.view(t.view);
     const config = page.current();
     t.change(config, page.method);
-    page.run(config);
-  }));
+    return page.run(config).then((refused) => {
+      if (!refused) applied.push(t.label);
+      return refused;
+    });
+  }, t.expect));
   $('lesson').replaceChildren(
     el('h2', {}, lesson.title),
-    ...lesson.body.map((p) => el(p.startsWith('$$') ? 'div' : 'p', { className: 'lesson-text' }, ...richText(p))),
+    ...lesson.body.map((p) => el(p.startsWith('$$') ? 'div' : 'p', { className: p.startsWith('$$') ? 'lesson-text equation' : 'lesson-text' }, ...richText(p))),
+    el('h3', {}, 'What to look for'),
+    el('ul', {}, ...lesson.lookFor.map((t) => el('li', {}, ...richText(t)))),
     el('h3', {}, 'Try this'),
     el('div', { className: 'tries' }, ...tries, replay),
     el('p', { id: 'lesson-status', className: 'hint', role: 'status' }, `scenario: ${lesson.preset} with seed ${lesson.seed}`),
-    el('h3', {}, 'What to look for'),
-    el('ul', {}, ...lesson.lookFor.map((t) => el('li', {}, ...richText(t)))),
   );
-  page.run(lessonConfig(page, lesson));
+  const refused = await page.run(lessonConfig(page, lesson));
+  if (refused) status(`not run: ${refused}`);
 }

@@ -5,9 +5,11 @@
 // is at the end.
 //
 // A lesson's `scenario(preset, method)` returns the config to run from a preset (a deep copy)
-// and `method(key, params)` (the catalogue's defaults with `params` over them). A "try this"
-// action's `change(config, method)` edits the running config in place; `mc` runs the Monte
-// Carlo panel instead.
+// and `method(key, params)` (the catalogue's defaults with `params` over them). The failure
+// rule's track-loss test is off unless the lesson is about it (`trackLoss: true`). A "try
+// this" action's `change(config, method)` edits the running config in place; `mc` runs the
+// Monte Carlo panel and `check` the convergence check instead, `view` turns on a view; its
+// `expect` says what the changed run shows (asserted by tests/web/lessons.mjs).
 
 const methodsOf = (method, list) => list.map(([key, params]) => method(key, params ?? {}));
 
@@ -29,17 +31,24 @@ export const LESSONS = [
       '$$d\\sigma = \\mathcal L^*\\sigma\\,dt + \\sigma\\,h^\\top S^{-1}\\,dy,$$',
       '$$\\mathcal L^*\\sigma = \\tfrac12 \\sum_{i,j} \\partial_i \\partial_j \\big((GG^\\top)_{ij}\\,\\sigma\\big) - \\sum_i \\partial_i (f_i\\,\\sigma).$$',
       'The Fokker–Planck operator $\\mathcal L^*$ spreads the density between observations; the observation term reweights it. The estimate is $\\hat x(t) = \\int x\\,\\sigma(t,x)\\,dx \\big/ \\int \\sigma(t,x)\\,dx$.',
-      'The Yau–Yau method splits time at the observation instants $\\tau_k$. On each interval a deterministic equation is solved, $\\partial_t u = \\big(\\mathcal L^* - \\tfrac12 h^\\top S^{-1} h\\big) u$, and at $\\tau_k$ the density is multiplied by the observation factor $\\exp\\!\\big(h^\\top S^{-1}\\,(y(\\tau_k) - y(\\tau_{k-1}))\\big)$. The equation on each interval does not involve the observations, so it can be prepared off-line; the observations enter only through the multiplication, and nothing is assumed Gaussian. Yueh, Lin & Yau (2014) give fast schemes for it (lesson 5).',
-      'Here: the cubic sensor $f = 0$, $h = x^3$ (Shi, Chen & Yau 2021, Example 1), solved on a grid of 399 points by QIEM.',
+      'The Yau–Yau method splits time at the observation instants $\\tau_k$. On each interval a deterministic equation is solved, $\\partial_t u = \\big(\\mathcal L^* - \\tfrac12 h^\\top S^{-1} h\\big) u$ (the Kolmogorov equation (2)–(4) of Yueh, Lin & Yau 2014, written there for $G = S = I$), and at each $\\tau_k$ the density is multiplied by the observation factor $\\exp\\!\\big(h^\\top S^{-1}\\,(y(\\tau_k) - y(\\tau_{k-1}))\\big)$. The equation on each interval does not involve the observations, so it can be prepared off-line; the observations enter only through the multiplication, and nothing is assumed Gaussian. Yueh, Lin & Yau (2014) give fast schemes for it (lesson 5).',
+      'Here: the cubic sensor $f = 0$, $G = S = 1$, $h = x^3$ (Shi, Chen & Yau 2021, Example 1), solved on a grid of 399 points by QIEM.',
     ],
     lookFor: [
       'The heat strip under the plot is $\\sigma(t,\\cdot)$ over time: bright where $x(t)$ is likely. Its width is the filter\'s uncertainty.',
-      'Near $x = 0$ the observation $x^3$ is flat, so it says little: when the truth crosses 0 (at $t \\approx 1$) the strip widens and the estimate lags until $t \\approx 2$, then narrows again once $|x|$ is large.',
-      'The current density (right) is not always a bell curve.',
+      'Near $x = 0$ the observation $x^3$ is flat, so it says little. The truth crosses 0 at $t \\approx 1.1$; the strip widens (the posterior standard deviation grows from 0.32 at the start to about 0.9 at $t \\approx 1.9$), and from $t = 1.5$ to $1.85$ the estimate stays within 0.35 of 0 while the truth is already below $-1$; only then does it follow the truth down. Once $|x|$ is large the strip narrows again (standard deviation about 0.25 around $t = 3$).',
     ],
     tryThis: [
-      { label: 'observe 10× more accurately: S = 0.1', change: (c) => { c.model.noise = { kind: 'continuous', cov: [[0.1]] }; } },
-      { label: 'observe linearly: h(x) = x', change: (c) => { c.model.observation = ['x']; } },
+      {
+        label: 'less observation noise: S = 0.1',
+        change: (c) => { c.model.noise = { kind: 'continuous', cov: [[0.1]] }; },
+        expect: 'a tenth of the noise variance is a third of its standard deviation ($1/\\sqrt{10}$): the strip is narrower all along (mean posterior standard deviation about 0.29 against 0.47).',
+      },
+      {
+        label: 'observe linearly: h(x) = x',
+        change: (c) => { c.model.observation = ['x']; },
+        expect: 'the strip no longer pinches at 0, but it stays wide everywhere: with $f = 0$ and $h = x$ the posterior is Gaussian with the Kalman–Bucy variance (lesson 2), which tends to $P_\\infty = G\\sqrt S = 1$; the grid\'s standard deviation stays between 0.85 and 1 after $t = 1$ (a little below 1 where the box $[-4, 4]$ cuts the tail). Away from 0 the cubic sensor, with slope $3x^2 = 12$ at $|x| = 2$, said far more than a sensor of slope 1.',
+      },
     ],
   },
   {
@@ -50,23 +59,34 @@ export const LESSONS = [
     scenario: (c, method) => {
       c.model.drift = ['-x'];
       c.model.observation = ['x'];
+      c.model.noise = { kind: 'continuous', cov: [[0.01]] };
       c.methods = methodsOf(method, [['kalman'], ['ekf'], ['pf', { particles: 200 }], ['qiem', { points: [399], dt: 0.001 }]]);
       return c;
     },
     body: [
       'When the drift and the observation are linear, $f(x) = Ax$ and $h(x) = Hx$, and the prior is Gaussian, the conditional density stays Gaussian for ever. Its mean and covariance follow the Kalman–Bucy filter (Kalman & Bucy 1961):',
-      '$$d\\hat x = A\\hat x\\,dt + P H^\\top S^{-1}\\big(dy - H\\hat x\\,dt\\big), \\qquad \\dot P = AP + PA^\\top + GG^\\top - P H^\\top S^{-1} H P.$$',
-      'The gain $K = P H^\\top S^{-1}$ weighs the innovation $dy - H\\hat x\\,dt$ — the part of the observation the filter did not expect. Two ordinary differential equations replace the Zakai equation: this is the exact answer, at microseconds per step.',
-      'Here $A = -1$, $H = 1$: an Ornstein–Uhlenbeck signal observed directly. The grid filter (QIEM) solves the Zakai equation without knowing the answer is Gaussian, so agreeing with the Kalman–Bucy filter is a test of the grid: they agree to about $10^{-3}$.',
+      '$$d\\hat x = A\\hat x\\,dt + P H^\\top S^{-1}\\big(dy - H\\hat x\\,dt\\big),$$',
+      '$$\\dot P = AP + PA^\\top + GG^\\top - P H^\\top S^{-1} H P.$$',
+      'The gain $K = P H^\\top S^{-1}$ weighs the innovation $dy - H\\hat x\\,dt$ — the part of the observation the filter did not expect. The mean follows a stochastic differential equation driven by the observations; the covariance follows a Riccati equation, an ordinary differential equation that does not involve them, so $P$ can be computed before any observation arrives. Together they replace the Zakai equation. Zakai\'s Kalman filter (KF) takes the observations as increments $\\Delta y$ over each interval $\\Delta\\tau$ and applies the update once per interval — the Euler form of these equations, which converges to them as $\\Delta\\tau \\to 0$ — at microseconds per step.',
+      'Here $A = -1$, $G = 1$, $H = 1$ and $S = 0.01$: an Ornstein–Uhlenbeck signal, whose own variance settles at $G^2/(2|A|) = 0.5$, seen through an accurate sensor. Setting $\\dot P = 0$ gives $P_\\infty = S\\big(\\sqrt{1 + G^2/S} - 1\\big) \\approx 0.090$: a posterior standard deviation of 0.30 against the signal\'s 0.71, so the estimate tracks the signal. (Updating once every $\\Delta\\tau = 0.01$, the KF settles a little lower, at 0.29.)',
+      'The grid filter (QIEM) solves the Zakai equation without knowing that the answer is Gaussian, so agreeing with the Kalman–Bucy filter is a test of the grid: on this run they agree to within $5\\cdot 10^{-3}$.',
     ],
     lookFor: [
-      'KF, EKF and QIEM on top of each other in the main plot (the EKF is exact for a linear model); the particle filter jitters around them.',
-      'In the densities panel every curve is the same bell curve.',
-      'The table: the Kalman filter costs microseconds per step, the grid filter tens of microseconds, for the same answer.',
+      'KF, EKF and QIEM on top of each other in the main plot (the EKF is the Kalman–Bucy filter when the model is linear); the particle filter jitters around them.',
+      'In the densities panel every curve is the same bell curve; the KF\'s standard deviation settles at 0.29, near $\\sqrt{P_\\infty} = 0.30$.',
+      'The table: the KF takes less time per step than the grid filter, for the same answer (in this browser\'s timer, steps of a few microseconds are measured only roughly).',
     ],
     tryThis: [
-      { label: 'make the sensor cubic: h(x) = x³', change: (c) => { c.model.observation = ['x^3']; } },
-      { label: 'a noisier signal: G = 2', change: (c) => { c.model.diffusion = [[2]]; } },
+      {
+        label: 'a less accurate sensor: S = 1',
+        change: (c) => { c.model.noise = { kind: 'continuous', cov: [[1]] }; },
+        expect: '$P_\\infty = \\sqrt 2 - 1 \\approx 0.41$ (standard deviation 0.64, near the signal\'s own 0.71): the estimate now follows the signal only loosely. The sensor is still linear, so the filter is still exact.',
+      },
+      {
+        label: 'a noisier signal: G = 2',
+        change: (c) => { c.model.diffusion = [[2]]; },
+        expect: '$P_\\infty = 0.01(\\sqrt{401} - 1) \\approx 0.19$ (standard deviation 0.44; the KF, updating once per interval, settles at 0.42) while the signal\'s own variance grows to 2; KF, EKF and QIEM still agree.',
+      },
     ],
   },
   {
@@ -74,23 +94,33 @@ export const LESSONS = [
     title: '3. The cubic sensor: why the EKF\'s gain vanishes',
     preset: 'cubic-sensor-1d',
     seed: 3,
+    trackLoss: true,
     scenario: (c, method) => {
       c.methods = methodsOf(method, [['ekf', { substeps: 4 }], ['ukf', { alpha: 0.05, beta: 2, kappa: 0, substeps: 4 }], ['pf', { particles: 200 }], ['qiem', { points: [399], dt: 0.001 }]]);
       return c;
     },
     body: [
-      'The extended Kalman filter linearises $h$ at its own estimate and runs the Kalman–Bucy equations with $H = h\'(\\hat x)$. For the cubic sensor $h(x) = x^3$:',
-      '$$K = P\\,h\'(\\hat x)\\,S^{-1} = 3\\hat x^2 P, \\qquad \\dot P = GG^\\top - \\big(3\\hat x^2\\big)^2 P^2 .$$',
-      'When $\\hat x$ nears 0 the gain $3\\hat x^2 P$ vanishes: the EKF stops listening to the observations, keeps the sign it had, and its covariance grows only by $GG^\\top$ — it does not know it is lost. The unscented filter replaces the derivative by sigma points but keeps one Gaussian, and fails the same way. The true posterior near 0 is wide and skewed; the grid and particle filters carry it.',
+      'The extended Kalman filter linearises $h$ at its own estimate and runs the Kalman–Bucy equations with $H = h\'(\\hat x)$. For the cubic sensor $h(x) = x^3$, with $f = 0$:',
+      '$$K = P\\,h\'(\\hat x)\\,S^{-1} = \\frac{3\\hat x^2 P}{S}, \\qquad \\dot P = GG^\\top - \\frac{\\big(3\\hat x^2\\big)^2 P^2}{S}$$',
+      '(here $G = S = 1$). When $\\hat x$ nears 0 the gain vanishes: the EKF stops listening to the observations, keeps the sign it had, and its covariance grows only by $GG^\\top$ — it does not know it is lost. The true posterior near 0 is wide; the grid and particle filters carry it.',
+      'The unscented filter (Julier & Uhlmann 2004) evaluates $h$ at sigma points $\\hat x \\pm \\sqrt{(n + \\lambda) P}$ with $\\lambda = \\alpha^2 (n + \\kappa) - n$; in one dimension with $\\kappa = 0$ that is $\\hat x \\pm \\alpha \\sqrt P$. With $\\alpha = 0.05$, the setting of Shi, Chen & Yau (2021)\'s Table 1, the points sit so close to $\\hat x$ that the UKF sees the same flat slope as the EKF, and on this path it is lost the same way.',
       'A method is marked failed when its error stays above 1 for one time unit (the failure rule, under Time in Explore mode, where it can be changed), or when its numbers stop being finite. A method marked failed by the rule still has its Gaussian: the page draws it on, dashed, from a ✕ at its failure: with this seed the EKF stays near 0, where it was lost, to the end.',
     ],
     lookFor: [
-      'The truth crosses 0 at $t \\approx 1$; the EKF and the UKF stay on the old side, and once their error has stayed above 1 for a time unit they are marked failed (at $t \\approx 2.3$–$2.5$), while QIEM and PF(200) follow.',
-      'The innovation self-check of the EKF: its normalised innovations leave their χ² band — the filter is overconfident.',
+      'The truth crosses 0 at $t \\approx 1.1$; the EKF and the UKF stay on the old side, and once their error has stayed above 1 for a time unit they are marked failed (at $t \\approx 2.3$–$2.5$), while QIEM and PF(200) follow.',
+      'The EKF\'s own self-checks stay quiet (the diagnostics list nothing for it): over an interval of 0.01 its innovations $dy - \\hat x^3 dt$ are mostly observation noise, so nothing in them tells the EKF it is lost. Only the truth, which real data does not have, or a filter that carries the whole density shows it.',
     ],
     tryThis: [
-      { label: 'another path: seed 1', change: (c) => { c.seed = 1; } },
-      { label: 'more particles: PF(2000)', change: (c) => { for (const m of c.methods) if (m.method === 'pf') m.particles = 2000; } },
+      {
+        label: 'wider sigma points: UKF with α = 1',
+        change: (c) => { for (const m of c.methods) if (m.method === 'ukf') m.alpha = 1; },
+        expect: 'the sigma points spread to $\\hat x \\pm \\sqrt P$ and see the curve of $x^3$: on this path the UKF follows the truth across 0 and is not marked failed.',
+      },
+      {
+        label: 'another path: seed 1',
+        change: (c) => { c.seed = 1; },
+        expect: 'the EKF is lost again (marked failed at $t \\approx 1.4$); the UKF with α = 0.05 holds on this time. One path proves little: the Monte Carlo panel says how often each fails.',
+      },
     ],
   },
   {
@@ -105,20 +135,29 @@ export const LESSONS = [
     body: [
       'A particle filter carries $N$ samples $x_i$ with weights $w_i$ (Gordon, Salmond & Smith 1993): each interval moves every sample by the signal\'s own equation and reweights it by the likelihood of the new observation,',
       '$$w_i \\leftarrow w_i \\exp\\!\\Big(h(x_i)^\\top S^{-1} \\Delta y - \\tfrac12\\, h(x_i)^\\top S^{-1} h(x_i)\\, \\Delta\\tau\\Big), \\qquad \\hat x \\approx \\frac{\\sum_i w_i x_i}{\\sum_i w_i},$$',
-      'then resamples when the weights collapse. Its error falls like $1/\\sqrt N$ in any dimension. A grid filter\'s error falls like $\\Delta s^2 + \\Delta t$, but its cost grows like $(1/\\Delta s)^n$ in $n$ dimensions. In one dimension the grid wins; the question in each problem is which reaches a given accuracy for less time.',
+      'then resamples when the weights collapse. The Monte Carlo error of its estimate of the conditional mean falls like $1/\\sqrt N$, at a rate that does not depend on the dimension (its constant does). A grid filter\'s error falls like $\\Delta t + \\Delta s^2$ (Yueh, Lin & Yau 2014, Theorem 2), but its cost grows like $(1/\\Delta s)^n$ in $n$ dimensions.',
+      'Which filter is more accurate cannot be read off the error against the truth: all four here are close to the optimal filter, and the optimal estimate\'s own distance to the truth (the posterior\'s spread, a standard deviation of about 0.5) dwarfs their differences. What ranks them is the distance to the exact conditional mean. None is known here, so the convergence check estimates it: it reruns each method at doubled resolution on the same observations and measures how far the estimate moves.',
     ],
     lookFor: [
-      'The table\'s time per step: PF(50) is cheapest, PF(5000) costs about as much as the grid filter.',
-      'The error of one run is noisy; run the Monte Carlo panel to compare means over many runs (and see how the table takes them).',
+      'The table\'s time per step: the particle filter\'s grows with $N$, and PF(5000) costs about as much as the grid filter.',
+      'The four estimates are hard to tell apart by their MSE on one run; the Monte Carlo and the convergence check below tell them apart, or show that they cannot.',
     ],
     tryThis: [
-      { label: 'Monte Carlo: 20 runs', mc: 20 },
-      { label: 'a coarser grid: 51 points', change: (c) => { for (const m of c.methods) if (m.method === 'qiem') m.points = [51]; } },
+      {
+        label: 'Monte Carlo: 20 runs',
+        mc: 20,
+        expect: 'over 20 runs the four mean MSEs lie within about one standard error of each other (all near 0.31, with standard errors near 0.05): the error against the truth cannot rank filters that are all near the optimum.',
+      },
+      {
+        label: 'check convergence',
+        check: true,
+        expect: 'doubling the particles moves PF(50)\'s estimate by about 0.12 (RMS over time, a quarter of the posterior standard deviation): not converged. Doubling QIEM\'s grid and halving its step moves it by about $10^{-4}$: converged. That, not the MSE, says the grid filter is the more accurate here, for about PF(5000)\'s time per step.',
+      },
     ],
   },
   {
     id: 'yau-yau-grid',
-    title: '5. The Yau–Yau method on a grid and its stability conditions',
+    title: '5. The Yau–Yau method on a grid: nonnegativity and accuracy',
     preset: 'cubic-sensor-1d',
     seed: 3,
     scenario: (c, method) => {
@@ -129,17 +168,32 @@ export const LESSONS = [
       return c;
     },
     body: [
-      'On a grid with spacing $\\Delta s$ and time step $\\Delta t$, Yueh, Lin & Yau (2014) propose two schemes for $\\partial_t u = \\tfrac12 \\Delta u - f\\cdot\\nabla u + q\\,u$ with $q = -\\nabla\\!\\cdot f - \\tfrac12 h^\\top S^{-1} h$. The implicit Euler scheme (IEM) treats everything implicitly; the quasi-implicit scheme (QIEM) keeps the Laplacian implicit, solved by a sine transform, and the rest explicit:',
+      'On a grid with spacing $\\Delta s$ and time step $\\Delta t$, Yueh, Lin & Yau (2014) solve the Kolmogorov equation (2), $\\partial_t u = \\tfrac12 \\Delta u - f\\cdot\\nabla u + q\\,u$ with $q = -\\nabla\\!\\cdot f - \\tfrac12 h^\\top S^{-1} h$ (their (3)–(4), with $S = I$). The implicit Euler scheme IEM (14) treats the whole operator implicitly; the quasi-implicit scheme QIEM (18) keeps only the Laplacian implicit, solved by a sine transform, and the rest explicit:',
       '$$\\Big(I - \\tfrac{\\Delta t}{2}\\,\\Delta_h\\Big)\\, u^{k+1} = u^k + \\Delta t\\,\\big(q\\,u^k - f\\cdot\\nabla_h u^k\\big).$$',
-      'Their guarantees are conditions on the steps. IEM keeps the density nonnegative (an M-matrix) only if $|q(s)|\\,\\Delta t < 1$ at every node, condition (22). With the observation term inside $q$ (the row IEM here: $q = -\\tfrac12 x^6$) and the box $[-4, 4]$, $|q| = 2048$ at the edge, so $\\Delta t = 10^{-3}$ violates it and the page says so. Zakai\'s default moves $-\\tfrac12 h^2$ into the observation factor, where it is a bounded Gaussian likelihood, and the condition holds for any step.',
+      'Their Theorem 1 guarantees that IEM keeps the density nonnegative — its matrix $I - \\Delta t\\,\\mathbb A$ is an M-matrix — when condition (22), $|p_d|\\,\\Delta s < 1$ and $|q|\\,\\Delta t < 1$, holds at every node. The proof uses the second half only as $1 - \\Delta t\\, q > 0$ (the row sums (24)), so a negative $q$ never breaks it. In the IEM row here the observation term is inside the operator: $f = 0$ and $q = -\\tfrac12 x^6 \\le 0$, so IEM is nonnegative for every $\\Delta t$. Zakai checks the condition as the proof uses it, and has no warning here.',
+      'What the time step costs here is accuracy. Each implicit step multiplies by $(1 - q\\,\\Delta t)^{-1}$ where the equation multiplies by $e^{q\\,\\Delta t}$. Near the box\'s edge ($x = \\pm 4$) $q \\approx -2000$, so the ten steps of one interval $\\Delta\\tau = 0.01$ damp by about $(1 + 2)^{-10} \\approx 2\\cdot 10^{-5}$ instead of $e^{-20} \\approx 2\\cdot 10^{-9}$: the tails stay far too heavy. Zakai\'s default, which the QIEM row uses, takes $-\\tfrac12 h^\\top S^{-1} h$ out of the operator and applies it at each observation as part of the factor $\\exp\\!\\big(h^\\top S^{-1}\\Delta y - \\tfrac12 h^\\top S^{-1} h\\,\\Delta\\tau\\big)$, exactly rather than by steps.',
     ],
     lookFor: [
-      'The warning above the plot: IEM\'s condition (22) is violated, with the grid point and the value (in Explore mode it also sits in the IEM row of the form).',
-      'QIEM and IEM give nearly the same estimate here: both are consistent discretisations of the same equation.',
+      'The two estimates agree (within 0.04) until $t \\approx 1.8$ and part once the state is far from 0 ($|x| > 2$), where $q = -\\tfrac12 x^6$ is large: IEM\'s estimate lies further out, pulled by its heavy tails, by more than 0.3 at the worst (near $t \\approx 2.8$).',
+      'IEM\'s self-check finds mass near the boundary — the heavy tails — and its advice says why a wider box would make it worse.',
+      'No warning of condition (22): it holds.',
     ],
     tryThis: [
-      { label: 'shrink IEM\'s step: Δt = 4·10⁻⁴', change: (c) => { for (const m of c.methods) if (m.method === 'iem') m.dt = 0.0004; } },
-      { label: 'a coarse grid: 41 points for QIEM', change: (c) => { for (const m of c.methods) if (m.method === 'qiem') m.points = [41]; } },
+      {
+        label: 'check convergence',
+        check: true,
+        expect: 'QIEM moves by less than a thousandth of its posterior standard deviation when its grid is doubled and its step halved: converged. IEM with the likelihood in the operator moves by more than a twentieth: not converged at $\\Delta t = 10^{-3}$.',
+      },
+      {
+        label: 'IEM with the likelihood in the update',
+        change: (c) => { for (const m of c.methods) if (m.method === 'iem') m.likelihood = 'in_update'; },
+        expect: 'with the same grid and step, IEM now agrees with QIEM to within $10^{-2}$: where the observation term goes mattered, not the scheme.',
+      },
+      {
+        label: 'shrink IEM\'s step: Δt = 10⁻⁴',
+        change: (c) => { for (const m of c.methods) if (m.method === 'iem') m.dt = 0.0001; },
+        expect: 'ten times the steps, and IEM is still more than 0.08 away from QIEM at the worst: with $q$ in the operator the step must resolve $|q| \\approx 2000$.',
+      },
     ],
   },
   {
@@ -149,18 +203,18 @@ export const LESSONS = [
     seed: 1,
     scenario: (c) => c,
     body: [
-      'In two dimensions the grid filter\'s density is an image: the heatmap shows the joint posterior of $(x_1, x_2)$ with the truth and every estimate marked. The example is Yueh, Lin & Yau (2014), (33): $f(x) = (-\\cos x_1 - \\sin x_2,\\ \\cos x_1 + \\sin x_2)$ observed through cubic sensors.',
+      'In two dimensions the grid filter\'s density is an image: the heatmap shows the joint posterior of $(x_1, x_2)$ with the truth and every estimate marked. The example is (33) of Yueh, Lin & Yau (2014): the nonlinear drift $f(x) = (-\\cos x_1 - \\sin x_2,\\ \\cos x_1 + \\sin x_2)$ observed linearly, $h(x) = (x_1 - x_2,\\ x_1 + x_2)$.',
       'Gaussian filters (EKF, UKF) and the MAP filters of Kang, Salmon & Yau (2023) work best when the posterior is log-concave, that is when',
       '$$-\\nabla^2 \\log p(x) \\succeq 0$$',
-      'everywhere: then it has one mode and the MAP update is a convex problem. Where the Hessian of $-\\log p$ has a negative eigenvalue the density can bend into a banana or split into modes.',
+      'everywhere: then it has one mode and the MAP update is a convex problem (their §3). Where the Hessian of $-\\log p$ has a negative eigenvalue the density can bend into a banana or split into modes. With a linear $h$ only the drift can bend the posterior, and here it does so little.',
     ],
     lookFor: [
-      'The heatmap: the posterior is not an ellipse when the sensors are flat (near $x_i = 0$).',
-      'Turn on the log-concavity layer: the region where $-\\nabla^2 \\log p$ is not positive semidefinite is marked.',
+      'The heatmap: one compact blob following the truth; EKF, UKF, the particle filter and QIEM nearly agree.',
+      'The log-concavity note under the plot and, turned on, its layer: where the density is above $10^{-3}$ of its maximum, is $-\\nabla^2 \\log p$ positive semidefinite?',
     ],
     tryThis: [
-      { label: 'show the log-concavity layer', view: 'lc-layer' },
-      { label: 'another path: seed 4', change: (c) => { c.seed = 4; } },
+      { label: 'show the log-concavity layer', view: 'lc-layer', expect: 'the layer marks the cells where $-\\nabla^2 \\log p$ has a negative eigenvalue.' },
+      { label: 'another path: seed 4', change: (c) => { c.seed = 4; }, expect: 'another truth and other observations: the blob follows them.' },
     ],
   },
   {
@@ -177,15 +231,18 @@ export const LESSONS = [
       '$$\\sigma(t, x) \\approx \\sum_{k=0}^{N-1} c_k(t)\\, \\phi_k(x),$$',
       'and split the work. Off-line, before any observation, the Kolmogorov step is solved once for every basis function and stored as a matrix $A$: over one interval $c \\mapsto A c$. On-line, at each observation, the coefficients are multiplied by the observation factor and projected back onto the basis:',
       '$$c(\\tau_k) = \\Pi\\Big[\\exp\\!\\big(h\\,\\Delta y_k - \\tfrac12 h^2\\, \\Delta\\tau\\big)\\, \\textstyle\\sum_j (A\\,c(\\tau_{k-1}))_j\\, \\phi_j\\Big],$$',
-      'a few small matrix products per step and no partial differential equation solved on-line. The price: the basis must resolve the posterior on the whole box. The filter checks the energy in its highest degrees after every step and warns when it exceeds $10^{-3}$.',
+      'a few small matrix products per step and no partial differential equation solved on-line. The price: the basis must resolve the posterior everywhere on the box, and a narrow posterior on a wide box needs many functions. The filter checks the share of energy in its highest degrees after every step and warns when it exceeds $10^{-3}$.',
     ],
     lookFor: [
-      'The table: the spectral filter\'s time per step against QIEM\'s.',
-      'Its self-check: with 16 functions on $[-4, 4]$ the energy in the highest degrees exceeds the threshold while the posterior is narrow, and the row says so.',
+      'Its self-check: with 16 functions on $[-4, 4]$ it fires from $t = 0$ — already the prior, with standard deviation 0.32, is too narrow for them — and the estimate strays far from QIEM\'s (by more than 1 at the worst).',
+      'The table: the spectral filter\'s time per step is a fraction of QIEM\'s.',
     ],
     tryThis: [
-      { label: 'a larger basis: 32 on-line functions', change: (c) => { for (const m of c.methods) if (m.method === 'spectral') { m.online_basis = 32; m.offline_basis = 24; } } },
-      { label: 'a smaller basis: 8 functions', change: (c) => { for (const m of c.methods) if (m.method === 'spectral') { m.online_basis = 8; m.offline_basis = 8; } } },
+      {
+        label: 'enough functions: 64 on-line, 48 off-line',
+        change: (c) => { for (const m of c.methods) if (m.method === 'spectral') { m.online_basis = 64; m.offline_basis = 48; } },
+        expect: 'the self-check is (nearly) silent and the estimate stays within 0.15 of QIEM\'s, still at a fraction of QIEM\'s time per step: the off-line work bought a cheap on-line filter.',
+      },
     ],
   },
 ];
@@ -199,5 +256,6 @@ export const REFERENCES = [
   ['004', 'J. Shi, X. Chen and S. S.-T. Yau, “A novel real-time filtering method to general nonlinear filtering problem without memory”, IEEE Access 9, 2021.'],
   ['', 'M. Zakai, “On the optimal filtering of diffusion processes”, Zeitschrift für Wahrscheinlichkeitstheorie und verwandte Gebiete 11, 1969.'],
   ['', 'R. E. Kalman and R. S. Bucy, “New results in linear filtering and prediction theory”, Journal of Basic Engineering 83, 1961.'],
+  ['', 'S. J. Julier and J. K. Uhlmann, “Unscented filtering and nonlinear estimation”, Proceedings of the IEEE 92(3), 2004.'],
   ['', 'N. J. Gordon, D. J. Salmond and A. F. M. Smith, “Novel approach to nonlinear/non-Gaussian Bayesian state estimation”, IEE Proceedings F 140(2), 1993.'],
 ];

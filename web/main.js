@@ -73,6 +73,8 @@ const state = {
   lastFrameTimes: [],
   loadSeq: 0,
   failures: new Map(), // method index → its failure line, for the run on screen
+  problems: [], // the form's problems last shown at their fields
+  loadWaiter: null, // Learn mode's run, waiting for the worker's answer to the last load
   history: [], // per drawn frame: {row, t, grid, densities, heat2d} — what the time slider shows
   scrub: null, // the row the time slider looks at, or null (live)
   hidden: new Set(), // methods switched off by their chips
@@ -354,6 +356,7 @@ function localProblems(config) {
 }
 
 function showProblems(problems) {
+  state.problems = problems;
   document.querySelectorAll('[data-error], [data-method-row]').forEach((el) => { el.textContent = ''; });
   document.querySelectorAll('.invalid').forEach((el) => el.classList.remove('invalid'));
   const general = [];
@@ -449,9 +452,10 @@ function validate() {
   worker.postMessage({ type: 'validate', id: state.validateId, config, allMethods: state.methodRows.map((r) => r.config) });
 }
 
+// Applies the form: true when a load was sent to the worker, false when the form has problems.
 function apply() {
   const config = checkedForm(true);
-  if (!config) return;
+  if (!config) return false;
   setPlaying(false);
   const r = state.recording;
   // Each load has an id: when the page applies twice before the worker answers, what the
@@ -462,6 +466,17 @@ function apply() {
   else worker.postMessage({ type: 'load', id, config, seed: config.seed });
   state.pendingConfig = structuredClone(config); // the form keeps editing its own rows
   state.pendingRows = state.enabledRows.slice();
+  return true;
+}
+
+// Who waits for the answer to a load (Learn mode's `run`): `{ id, resolve }`, resolved with
+// null when the worker loaded it, with the reason when it refused it (or a later load
+// superseded it). `id` undefined settles whatever waits.
+function settleLoad(id, refused) {
+  const waiting = state.loadWaiter;
+  if (!waiting || (id !== undefined && id !== waiting.id)) return;
+  state.loadWaiter = null;
+  waiting.resolve(refused);
 }
 
 function changeDimension() {
@@ -574,15 +589,14 @@ function makeCharts() {
   const series = [{}, { label: 'truth', stroke: '#111', width: 2, show: info.has_truth }];
   names.forEach((m, i) => series.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   names.forEach((m, i) => series.push({ label: `${m} after failure`, stroke: `${color(i)}99`, dash: [3, 4], width: 1.5 }));
-  // Without a truth: every estimate's ±2σ band (mean ± 2√P_jj), shaded between dashed edges.
+  // Every estimate's ±2σ band (mean ± 2√P_jj), shaded: always without a truth, else when
+  // the "±2σ bands" box is ticked (render gives the edges no data otherwise).
   const bands = [];
-  if (!info.has_truth) {
-    names.forEach((m, i) => {
-      series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
-      const hi = 2 + 2 * M + 2 * i;
-      bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
-    });
-  }
+  names.forEach((m, i) => {
+    series.push({ label: `${m} +2σ`, stroke: 'transparent', width: 0 }, { label: `${m} −2σ`, stroke: 'transparent', width: 0 });
+    const hi = 2 + 2 * M + 2 * i;
+    bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
+  });
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
     ...plotSize('trajectory-plot', 'trajectory'), series, bands,
@@ -607,6 +621,10 @@ function makeCharts() {
   }, [[], ...names.map(() => [])], $('density-plot'));
   showMethods();
 }
+
+// The ±2σ bands: always without a truth (they are then the only measure of error), on request
+// with one.
+const bandsShown = () => !state.info.has_truth || $('bands').checked;
 
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
@@ -660,10 +678,8 @@ function showMethods() {
     const show = !state.hidden.has(i);
     state.trajPlot.setSeries(2 + i, { show });
     state.trajPlot.setSeries(ghostSeries(i), { show });
-    if (!state.info.has_truth) {
-      state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
-      state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
-    }
+    state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
+    state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
     state.densityPlot.setSeries(1 + i, { show });
     document.querySelectorAll(`#metrics tr[data-method="${i}"], #heatmap-key [data-method="${i}"]`).forEach((r) => r.classList.toggle('hidden-method', !show));
   }
@@ -841,7 +857,8 @@ function render() {
   const d = state.data;
   if (!d || !state.heatStrip) return;
   const dim = shownDim();
-  const bands = state.info.has_truth ? [] : d.est.flatMap((_, i) => [d.hi[i][dim], d.lo[i][dim]]);
+  const none = d.times.map(() => null);
+  const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
   state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands]);
   const f = shownFrame();
   if (f && f.grid.length && f.dim === dim) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
@@ -862,7 +879,10 @@ function render() {
     // A self-check that warned: the result may not be trustworthy (not a failure).
     const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';
     const failedAt = d.times[m.failed_at];
-    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}${m.failure?.startsWith('lost track') ? ': lost track' : ''}` : 'running') + checked;
+    // Every failure says why in the row (its first clause; the whole message on hover).
+    const why = m.failure ? `: ${m.failure.split(/ — |: /)[0]}` : '';
+    const live = state.summary?.finished ? 'done' : 'running';
+    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}${why}` : live) + checked;
     status.title = [m.failure, ...(m.concerns ?? [])].filter(Boolean).join('\n');
     status.className = m.failed ? 'status failed' : (checked ? 'status warned' : 'status');
     const t = timing.querySelector(`tr[data-method="${i}"]`);
@@ -992,14 +1012,14 @@ function exportCsv() {
   const truth = info.has_truth;
   const head = ['t', ...(truth ? Array.from({ length: n }, (_, j) => `truth_x${j + 1}`) : [])];
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_x${j + 1}`)); });
-  // Without a truth: the standard deviations behind the ±2σ bands.
-  if (!truth) info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_sd${j + 1}`)); });
+  // The standard deviations behind the ±2σ bands (empty for a method without a covariance).
+  info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_sd${j + 1}`)); });
   const lines = [head.join(',')];
   for (let r = 0; r < d.times.length; r++) {
     const row = [d.times[r]];
     if (truth) for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
     d.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
-    if (!truth) d.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(d.hi[i][j][r] == null ? null : (d.hi[i][j][r] - e[j][r]) / 2); });
+    d.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(d.hi[i][j][r] == null ? null : (d.hi[i][j][r] - e[j][r]) / 2); });
     lines.push(row.map(csvCell).join(','));
   }
   download(`zakai-${info.name}-seed${info.seed}.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));
@@ -1300,6 +1320,7 @@ worker.onmessage = ({ data }) => {
         state.playAfterLoad = false;
         setPlaying(true);
       }
+      settleLoad(data.id, null);
       break;
     case 'frame':
       if (data.load === state.loadSeq) state.queue.push(data);
@@ -1312,6 +1333,7 @@ worker.onmessage = ({ data }) => {
       $('data-error').textContent = data.message;
       $('data-section').open = true;
       $('form-status').textContent = 'not applied';
+      settleLoad(data.refused, data.message);
       break;
     case 'seed':
       $('seed').value = data.seed;
@@ -1326,6 +1348,7 @@ worker.onmessage = ({ data }) => {
       $('form-status').textContent = 'not applied';
       state.revealAfterValidate = true;
       validate();
+      if (data.refused !== undefined) settleLoad(data.refused, data.message);
       break;
   }
 };
@@ -1397,6 +1420,7 @@ window.addEventListener('resize', () => {
   resizeTimer = setTimeout(fitPlots, 100);
 });
 $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
+$('bands').addEventListener('change', () => render());
 $('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
 $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
@@ -1429,7 +1453,19 @@ const learnHooks = {
     if (state.presets.some((p) => p.name === config.name)) $('preset').value = config.name;
     fillForm(config);
     state.playAfterLoad = true;
-    apply();
+    settleLoad(undefined, 'superseded by another run');
+    if (!apply()) {
+      state.playAfterLoad = false;
+      const problems = (state.problems ?? []).map((p) => `${p.field}: ${plainWords(p.message)}`);
+      return Promise.resolve(problems.length ? problems.join('; ') : $('form-status').textContent);
+    }
+    return new Promise((resolve) => { state.loadWaiter = { id: state.loadSeq, resolve }; });
+  },
+  checkConvergence() {
+    $('mc-panel').open = true;
+    $('mc-seed').value = String(state.info?.seed ?? readForm().seed ?? 1);
+    startConvergenceCheck();
+    $('mc-panel').scrollIntoView({ block: 'start' });
   },
   monteCarlo(runs) {
     $('mc-panel').open = true;
@@ -1445,6 +1481,8 @@ const learnHooks = {
     }
   },
 };
+
+state.learnRun = (config) => learnHooks.run(config); // for the lessons' browser test
 
 // ---------- the user's files: scenario JSON, observations and truth CSV ----------
 

@@ -33,7 +33,7 @@ function frame(summary) {
   // What failed methods with an intact state went on estimating (drawn dashed).
   const followed = info.methods.map((_, i) => session.followed(i, from, to));
   // Without a truth the page plots every estimate with its ±2σ band.
-  const sds = info.has_truth ? null : info.methods.map((_, i) => session.sds(i, from, to));
+  const sds = info.methods.map((_, i) => session.sds(i, from, to));
   const grid = session.densityGrid(view.dim, view.points);
   const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
   const diagnostics = session.diagnostics();
@@ -158,16 +158,24 @@ self.onmessage = async ({ data }) => {
         post({ type: 'validated', id: data.id, problems, suitability, structure });
       });
       break;
-    case 'load':
+    case 'load': {
+      // Build first: an invalid scenario leaves the running session untouched. A refusal
+      // names the load it answers (`refused`) and the session still running (`load`).
+      let next;
+      try {
+        next = new zakai.Session(data.config, data.seed);
+      } catch (e) {
+        post({ type: 'error', load: loadId, refused: data.id, message: String(e?.message ?? e) });
+        break;
+      }
       guard(() => {
-        // Build first: an invalid scenario leaves the running session untouched.
-        const next = new zakai.Session(data.config, data.seed);
         session?.free();
         session = next;
         loadId = data.id ?? 0;
         restarted();
       });
       break;
+    }
     case 'loadRecording': {
       // The user's observations (CSV text) under the scenario's model, prior and methods. A
       // file's problems go next to the file pickers; the running session stays.
@@ -175,7 +183,7 @@ self.onmessage = async ({ data }) => {
       try {
         next = zakai.Session.fromRecording(data.config, data.observations, data.truth ?? undefined, data.seed);
       } catch (e) {
-        post({ type: 'dataError', load: loadId, message: String(e?.message ?? e) });
+        post({ type: 'dataError', load: loadId, refused: data.id, message: String(e?.message ?? e) });
         break;
       }
       guard(() => {

@@ -2,40 +2,15 @@
 // playwright-core). Serves web/ locally, runs presets, checks plots and metrics, enters a
 // broken expression, measures the page's frame rate, and saves screenshots.
 // Usage: node tests/web/e2e.mjs   (after scripts/build-web.sh)
-import { spawn } from 'node:child_process';
-import { mkdirSync } from 'node:fs';
-import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
-import { chromium } from '../../web/node_modules/playwright-core/index.mjs';
-
-const root = fileURLToPath(new URL('../../', import.meta.url));
-const artifacts = `${root}target/e2e`;
-mkdirSync(artifacts, { recursive: true });
-
-function serve() {
-  return new Promise((resolve, reject) => {
-    // The static site build-web.sh assembles (what a static host would serve).
-    const proc = spawn(process.execPath, [`${root}web/serve.mjs`, '0', `${root}target/site`], { stdio: ['ignore', 'pipe', 'inherit'] });
-    proc.stdout.on('data', (chunk) => {
-      const m = String(chunk).match(/http:\/\/127\.0\.0\.1:\d+\//);
-      if (m) resolve({ proc, url: m[0] });
-    });
-    proc.on('exit', (code) => reject(new Error(`server exited with ${code}`)));
-  });
-}
+import { artifacts, launch, root, serve, watchedPage } from './harness.mjs';
 
 const { proc, url } = await serve();
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-quic'],
-});
+const browser = await launch();
 const consoleErrors = [];
 let failed = false;
 try {
-  const page = await browser.newPage({ viewport: { width: 1440, height: 1000 } });
-  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
-  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  const page = await watchedPage(browser, { width: 1440, height: 1000 }, consoleErrors);
 
   // 1. The cubic sensor with EKF, UKF and particle filters runs live.
   await page.goto(`${url}?preset=cubic-sensor-1d`);
@@ -598,99 +573,13 @@ try {
     await data.close();
   }
 
-  // 15. Learn mode: every lesson loads its scenario and seed, renders its equations (Temml's
-  //     MathML, under the page's Content-Security-Policy), plays, and the run shows what its
-  //     text says; "try this" changes one parameter and replays.
+  // 15. Learn mode: tests/web/lessons.mjs (every lesson's claims against its own run).
   await page.setViewportSize({ width: 1440, height: 900 });
   const finished = () => page.waitForFunction(() => {
     const s = window.zakaiPage;
     const t = s.data?.times;
     return !s.playing && t?.length > 1 && t[t.length - 1] >= s.info.t_end - 1e-9;
   }, null, { timeout: 90000 });
-  const openLesson = async (id) => {
-    await page.goto(`${url}?lesson=${id}`);
-    await page.waitForFunction((l) => document.getElementById('lesson-select').value === l && document.querySelectorAll('#lesson math').length > 0, id, { timeout: 30000 });
-    await finished();
-    // Keyed by the methods' names (the rows show their labels with sizes, e.g. QIEM(399)).
-    return page.$$eval('#metrics tbody tr', (rows) => Object.fromEntries(rows.map((r) => [window.zakaiPage.info.methods[Number(r.dataset.method)], r.children[2].textContent])));
-  };
-  const tryThis = async (label) => {
-    const before = await page.evaluate(() => window.zakaiPage.loadSeq);
-    await page.click(`#lesson button.try:has-text("${label}")`);
-    await page.waitForFunction((b) => window.zakaiPage.loadSeq > b && window.zakaiPage.info, before, { timeout: 30000 });
-    await finished();
-  };
-  let status = await openLesson('zakai-equation');
-  assert.ok(!(await page.isVisible('#form')) && (await page.isVisible('#learn')), 'Learn mode hides the form');
-  const lessonIds = await page.$$eval('#lesson-select option', (o) => o.map((x) => x.value));
-  assert.ok(lessonIds.length >= 6, `${lessonIds.length} lessons`);
-  assert.ok((await page.$$eval('#lesson math', (m) => m.length)) >= 5, 'equations rendered as MathML');
-  assert.ok((await page.$$eval('#lesson [style]', (m) => m.length)) === 0, 'no inline styles (CSP)');
-  const refs = await page.$$eval('#reference-list li', (li) => li.map((x) => x.textContent));
-  for (const id of ['000', '001', '002', '003', '004']) assert.ok(refs.some((r) => r.startsWith(`${id} — `)), `reference ${id}`);
-  assert.ok(refs.some((r) => r.includes('Communications in Information and Systems 14(2), 2014')));
-  assert.deepEqual(Object.keys(status), ['QIEM']);
-  await page.screenshot({ path: `${artifacts}/learn-zakai-equation.png` });
-  await tryThis('observe linearly');
-  assert.deepEqual(await page.evaluate(() => window.zakaiPage.base.model.observation), ['x']);
-  // Kalman–Bucy: the grid filter agrees with the exact filter (README: about 1e-3; stated 5e-3).
-  status = await openLesson('kalman-bucy');
-  const gap = await page.evaluate(() => {
-    const { info, data } = window.zakaiPage;
-    const kf = data.est[info.methods.indexOf('KF')][0];
-    const grid = data.est[info.methods.indexOf('QIEM')][0];
-    return Math.max(...kf.map((v, k) => Math.abs(v - grid[k])));
-  });
-  console.log('lesson kalman-bucy: |KF − QIEM| ≤', gap);
-  assert.ok(gap < 5e-3, `KF and QIEM differ by ${gap}`);
-  // The cubic sensor with seed 3: the EKF and the UKF lose the state, QIEM and the PF do not.
-  status = await openLesson('cubic-sensor');
-  console.log('lesson cubic-sensor:', JSON.stringify(status));
-  assert.match(status.EKF, /failed/);
-  assert.match(status.UKF, /failed/);
-  assert.doesNotMatch(status.QIEM, /failed/);
-  assert.doesNotMatch(status['PF(200)'], /failed/);
-  // Both failures stay listed, each with its time (issue 25 §2).
-  const failures = await page.textContent('#run-error');
-  assert.match(failures, /EKF failed at step \d+ \(t = [\d.]+\)/);
-  assert.match(failures, /UKF failed at step \d+ \(t = [\d.]+\)/);
-  // Drawn on after failing: the EKF stays near 0, where it was lost, to the end (the lesson's text).
-  const stuck = await page.evaluate(() => {
-    const { info, data } = window.zakaiPage;
-    const ghost = data.ghost[info.methods.indexOf('EKF')][0];
-    return { rows: ghost.filter((v) => v != null).length, last: ghost[ghost.length - 1], truth: data.truth[0][data.truth[0].length - 1] };
-  });
-  console.log('lesson cubic-sensor: the EKF after failing', JSON.stringify(stuck));
-  assert.ok(stuck.rows > 200 && Math.abs(stuck.last) < 0.5 && stuck.truth < -1.5, `the EKF stays lost: ${JSON.stringify(stuck)}`);
-  await page.screenshot({ path: `${artifacts}/learn-cubic-sensor.png` });
-  // Particles against grids: the Monte Carlo action runs 20 runs of the lesson's methods.
-  status = await openLesson('particles-grids');
-  assert.deepEqual(Object.keys(status), ['PF(50)', 'PF(500)', 'PF(5000)', 'QIEM']);
-  await page.click('#lesson button.try:has-text("Monte Carlo")');
-  await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('finished: 20'), null, { timeout: 120000 });
-  assert.equal((await page.$$('#mc-table tbody tr')).length, 4);
-  // The grid lesson: IEM's condition (22) is violated at Δt = 1e-3 and holds at 4e-4.
-  await openLesson('yau-yau-grid');
-  assert.match(await page.textContent('#warnings'), /IEM\(\d+\): \(22\) violated/);
-  await tryThis('shrink IEM');
-  assert.doesNotMatch(await page.textContent('#warnings'), /\(22\)/);
-  // 2-D: the heatmap, and the log-concavity layer turned on by the lesson's action.
-  await openLesson('two-d');
-  assert.ok(await page.isVisible('#heatmap-figure'));
-  await page.click('#lesson button.try:has-text("log-concavity")');
-  assert.ok(await page.isChecked('#lc-layer'));
-  // Spectral: the basis of 16 warns on this box, and the action changes it and replays.
-  status = await openLesson('spectral');
-  assert.match(status.Spectral, /self-check/);
-  await tryThis('a smaller basis');
-  assert.equal(await page.evaluate(() => window.zakaiPage.base.methods.find((m) => m.method === 'spectral').online_basis), 8);
-  // Explore mode comes back with the form.
-  await page.click('#mode-explore');
-  assert.ok(await page.isVisible('#form') && !(await page.isVisible('#learn')));
-  // The projector size: the lesson and the main plot side by side.
-  await page.setViewportSize({ width: 1280, height: 720 });
-  await openLesson('cubic-sensor');
-  await page.screenshot({ path: `${artifacts}/learn-1280x720.png` });
 
   // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods
   //     share colour and style, and methods that share a style stay apart in colour (CIE76

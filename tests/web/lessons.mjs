@@ -1,0 +1,303 @@
+// The lessons' claims against their own runs, in headless Chromium: every lesson loads its
+// scenario and seed, renders its equations (Temml's MathML under the page's CSP), fits them in
+// their column at a projector's 1280 × 720, and each sentence of "What to look for" and each
+// "try this" expectation that says something about the run is read back from the run the
+// page shows (window.zakaiPage) and asserted here, with the tolerance the sentence states.
+// Usage: node tests/web/lessons.mjs   (after scripts/build-web.sh)
+import assert from 'node:assert/strict';
+import { artifacts, launch, serve, watchedPage } from './harness.mjs';
+
+const { proc, url } = await serve();
+const browser = await launch();
+const consoleErrors = [];
+let failed = false;
+try {
+  const page = await watchedPage(browser, { width: 1280, height: 720 }, consoleErrors);
+  const finished = () => page.waitForFunction(() => {
+    const s = window.zakaiPage;
+    const t = s.data?.times;
+    return !s.playing && t?.length > 1 && t[t.length - 1] >= s.info.t_end - 1e-9 && s.diagnostics;
+  }, null, { timeout: 120000 });
+  const openLesson = async (id) => {
+    await page.goto(`${url}?lesson=${id}`);
+    await page.waitForFunction((l) => document.getElementById('lesson-select').value === l && document.querySelectorAll('#lesson math').length > 0, id, { timeout: 30000 });
+    await finished();
+  };
+  // A "try this" that reruns: the status names it once the page has loaded the changed run.
+  const tryThis = async (label) => {
+    await page.click(`#lesson button.try:has-text("${label}")`);
+    await page.waitForFunction((l) => { const t = document.getElementById('lesson-status').textContent; return t.includes(l) || t.startsWith('not run'); }, label, { timeout: 60000 });
+    await finished();
+    return page.textContent('#lesson-status');
+  };
+  const replay = async () => {
+    await page.click('#lesson button.try:has-text("run the lesson again")');
+    await page.waitForFunction(() => document.getElementById('lesson-status').textContent.startsWith('scenario:'), null, { timeout: 60000 });
+    await finished();
+  };
+  // The run on screen: per method (by name) its estimates of x1, their standard deviations,
+  // failure, self-check findings and time per step; the truth and the times.
+  const run = () => page.evaluate(() => {
+    const { info, data, diagnostics } = window.zakaiPage;
+    const methods = {};
+    info.methods.forEach((name, i) => {
+      const est = data.est[i][0];
+      methods[name] = {
+        est,
+        sd: est.map((v, k) => (v == null || data.hi[i][0][k] == null ? null : (data.hi[i][0][k] - v) / 2)),
+        failed: diagnostics[i].failed,
+        failedAt: diagnostics[i].failed_at,
+        failure: diagnostics[i].failure,
+        concerns: diagnostics[i].concerns,
+        msPerStep: diagnostics[i].ms_per_step,
+      };
+    });
+    return { times: data.times, truth: data.truth[0], methods, warnings: document.getElementById('warnings').textContent };
+  });
+  const maxGap = (a, b) => Math.max(...a.map((v, k) => Math.abs(v - b[k])));
+  const mean = (a) => { const v = a.filter((x) => x != null); return v.reduce((s, x) => s + x, 0) / v.length; };
+  const between = (r, t0, t1, series) => series.filter((_, k) => r.times[k] >= t0 && r.times[k] <= t1);
+  // The first time after `from` at which `series` changes sign.
+  const crossing = (r, series, from = 0) => r.times.find((t, k) => k > 0 && t > from && Math.sign(series[k]) !== Math.sign(series[k - 1]));
+  // The convergence check's table: method → { moved, verdict }.
+  const convergence = async () => {
+    await page.waitForFunction(() => !document.getElementById('check-table').hidden && document.getElementById('check-start').disabled === false, null, { timeout: 120000 });
+    return page.$$eval('#check-table tbody tr', (rows) => Object.fromEntries(rows.map((r) => [r.children[0].textContent, { moved: Number(r.children[1].textContent), sd: Number(r.children[2].textContent), verdict: r.children[3].textContent }])));
+  };
+
+  // Every lesson: equations rendered, no inline styles (CSP), displayed equations inside their
+  // column (scrolling there when wider), the About box of the preset hidden.
+  const ids = await (async () => {
+    await openLesson('zakai-equation');
+    return page.$$eval('#lesson-select option', (o) => o.map((x) => x.value));
+  })();
+  assert.ok(ids.length >= 7, `${ids.length} lessons`);
+  const refs = await page.$$eval('#reference-list li', (li) => li.map((x) => x.textContent));
+  for (const id of ['000', '001', '002', '003', '004']) assert.ok(refs.some((r) => r.startsWith(`${id} — `)), `reference ${id}`);
+  assert.ok(!(await page.isVisible('#form')) && (await page.isVisible('#learn')), 'Learn mode hides the form');
+  assert.ok(!(await page.isVisible('#about')), 'the preset\'s About box is hidden in Learn mode');
+  const layout = async () => page.evaluate(() => {
+    const column = document.getElementById('learn').getBoundingClientRect();
+    return [...document.querySelectorAll('#lesson .equation')].map((e) => {
+      const box = e.getBoundingClientRect();
+      return { inside: box.left >= column.left - 1 && box.right <= column.right + 1, scrolls: getComputedStyle(e).overflowX === 'auto', wide: e.scrollWidth > e.clientWidth + 1 };
+    });
+  });
+  for (const id of ids) {
+    if (id !== 'zakai-equation') await openLesson(id);
+    assert.ok((await page.$$eval('#lesson math', (m) => m.length)) >= 2, `${id}: equations rendered as MathML`);
+    assert.equal(await page.$$eval('#lesson [style]', (m) => m.length), 0, `${id}: no inline styles (CSP)`);
+    for (const [k, eq] of (await layout()).entries()) {
+      assert.ok(eq.inside && eq.scrolls, `${id}: displayed equation ${k} fits its column or scrolls inside it (${JSON.stringify(eq)})`);
+    }
+    assert.deepEqual(consoleErrors, [], `${id}: no console errors`);
+    await page.screenshot({ path: `${artifacts}/lesson-${id}-1280x720.png` });
+  }
+
+  // 1. The Zakai equation: the cubic sensor, QIEM, seed 3.
+  await openLesson('zakai-equation');
+  let r = await run();
+  let q = r.methods.QIEM;
+  const cross = crossing(r, r.truth);
+  console.log('lesson 1: truth crosses 0 at', cross);
+  assert.ok(cross > 1.0 && cross < 1.2, `the truth crosses 0 at t ≈ 1.1 (${cross})`);
+  const first = q.sd.find((v) => v != null);
+  assert.ok(Math.abs(first - 0.316) < 0.02, `starts at sd 0.32 (${first})`);
+  const widest = Math.max(...between(r, 1, 2.25, q.sd));
+  const widestAt = r.times[q.sd.indexOf(widest)];
+  const lingering = Math.max(...between(r, 1.5, 1.85, q.est).map(Math.abs));
+  const truthThen = Math.max(...between(r, 1.5, 1.85, r.truth));
+  const down = r.times.find((t, k) => t > 1.1 && q.est[k] < -0.5);
+  console.log('lesson 1: widest sd', widest, 'at', widestAt, '; |estimate| ≤', lingering, 'on [1.5, 1.85] with the truth ≤', truthThen, '; below −0.5 from', down);
+  assert.ok(Math.abs(widest - 0.9) < 0.05 && Math.abs(widestAt - 1.9) < 0.1, 'sd about 0.9 at t ≈ 1.9');
+  assert.ok(lingering < 0.35 && truthThen < -1, 'the estimate stays within 0.35 of 0 while the truth is below −1');
+  assert.ok(down > 1.85 && down < 2.0, 'then follows the truth down');
+  const narrow = mean(between(r, 2.75, 3.25, q.sd));
+  assert.ok(narrow > 0.2 && narrow < 0.3, `sd about 0.25 around t = 3 (${narrow})`);
+  assert.ok(!q.failed, 'no failure');
+  const meanSd = mean(q.sd);
+  let status = await tryThis('less observation noise');
+  assert.match(status, /changed: less observation noise/);
+  assert.match(status, /What you should see/);
+  r = await run();
+  const lessNoise = mean(r.methods.QIEM.sd);
+  console.log('lesson 1: mean sd', meanSd, '→ with S = 0.1', lessNoise);
+  assert.ok(Math.abs(meanSd - 0.47) < 0.02 && Math.abs(lessNoise - 0.29) < 0.02, 'mean sd about 0.47 → 0.29');
+  status = await tryThis('observe linearly');
+  assert.match(status, /changed: less observation noise[^;]*; then observe linearly/, 'stacked tries are named');
+  // Applied to the running scenario (S = 0.1 still): the lesson's statement is for S = 1.
+  await replay();
+  status = await tryThis('observe linearly');
+  assert.match(status, /^changed: observe linearly/);
+  r = await run();
+  q = r.methods.QIEM;
+  const linearSd = mean(between(r, 1, 5, q.sd));
+  const linearMin = Math.min(...between(r, 1, 5, q.sd));
+  console.log('lesson 1, linear sensor: mean sd on [1, 5]', linearSd, 'min', linearMin);
+  const linearMax = Math.max(...between(r, 1, 5, q.sd));
+  assert.ok(linearMin > 0.85 && linearMax <= 1, `the sd stays between 0.85 and 1 after t = 1 (${linearMin}, ${linearMax})`);
+  assert.ok(!q.failed, 'the exact-in-effect grid filter is not marked failed');
+
+  // 2. Kalman–Bucy: S = 0.01, P∞ = S(√(1 + G²/S) − 1).
+  const pInf = (S, G) => S * (Math.sqrt(1 + G * G / S) - 1);
+  await openLesson('kalman-bucy');
+  r = await run();
+  const kf = r.methods.KF;
+  const gap = maxGap(kf.est, r.methods.QIEM.est);
+  const ekfGap = maxGap(kf.est, r.methods.EKF.est);
+  const pfGap = maxGap(kf.est, r.methods['PF(200)'].est);
+  console.log('lesson 2: |KF − QIEM| ≤', gap, '|KF − EKF| ≤', ekfGap, '|KF − PF| ≤', pfGap, 'sd at the end', kf.sd.at(-1));
+  assert.ok(gap < 5e-3, `KF and QIEM within 5e-3 (${gap})`);
+  assert.ok(ekfGap < 1e-8, 'the EKF is the Kalman–Bucy filter on a linear model');
+  assert.ok(pfGap > 1e-3 && pfGap < 0.3, 'the particle filter jitters around them');
+  assert.ok(Math.abs(kf.sd.at(-1) - 0.29) < 0.006 && kf.sd.at(-1) < Math.sqrt(pInf(0.01, 1)) && Math.abs(Math.sqrt(pInf(0.01, 1)) - 0.30) < 0.005, 'the KF settles at 0.29, a little below √P∞ = 0.30');
+  assert.ok(Math.abs(pInf(0.01, 1) - 0.090) < 5e-4, 'P∞ ≈ 0.090 as the text says');
+  assert.ok(kf.msPerStep < r.methods.QIEM.msPerStep, `the KF takes less time per step than QIEM (${kf.msPerStep}, ${r.methods.QIEM.msPerStep} ms)`);
+  assert.ok(Object.values(r.methods).every((m) => !m.failed), 'nothing failed');
+  await tryThis('a less accurate sensor');
+  r = await run();
+  assert.ok(Math.abs(r.methods.KF.sd.at(-1) - Math.sqrt(Math.SQRT2 - 1)) < 0.01 && Math.abs(Math.sqrt(Math.SQRT2 - 1) - 0.64) < 0.005, `S = 1: sd ends at 0.64 (${r.methods.KF.sd.at(-1)})`);
+  await replay();
+  await tryThis('a noisier signal');
+  r = await run();
+  console.log('lesson 2, G = 2: sd at the end', r.methods.KF.sd.at(-1), '|KF − QIEM|', maxGap(r.methods.KF.est, r.methods.QIEM.est));
+  assert.ok(Math.abs(r.methods.KF.sd.at(-1) - 0.42) < 0.006 && Math.abs(pInf(0.01, 2) - 0.19) < 0.005 && Math.abs(Math.sqrt(pInf(0.01, 2)) - 0.44) < 0.005, 'G = 2: P∞ ≈ 0.19 (sd 0.44), the KF at 0.42');
+  assert.ok(maxGap(r.methods.KF.est, r.methods.QIEM.est) < 1e-2 && maxGap(r.methods.KF.est, r.methods.EKF.est) < 1e-8, 'KF, EKF and QIEM still agree');
+  assert.ok(Object.values(r.methods).every((m) => !m.failed), 'nothing failed with G = 2');
+
+  // 3. The cubic sensor with seed 3 and the track-loss rule.
+  await openLesson('cubic-sensor');
+  r = await run();
+  const failedAt = (m) => r.times[r.methods[m].failedAt];
+  console.log('lesson 3: EKF failed at', failedAt('EKF'), 'UKF at', failedAt('UKF'));
+  assert.ok(failedAt('EKF') >= 2.2 && failedAt('EKF') <= 2.6 && failedAt('UKF') >= 2.2 && failedAt('UKF') <= 2.6, 'EKF and UKF marked failed at t ≈ 2.3–2.5');
+  assert.ok(!r.methods.QIEM.failed && !r.methods['PF(200)'].failed, 'QIEM and PF(200) follow');
+  assert.deepEqual(r.methods.EKF.concerns, [], 'the EKF\'s self-checks stay quiet');
+  const failures = await page.textContent('#run-error');
+  assert.match(failures, /EKF failed at step \d+ \(t = [\d.]+\): lost track/);
+  assert.match(failures, /UKF failed at step \d+ \(t = [\d.]+\): lost track/);
+  const stuck = await page.evaluate(() => {
+    const { info, data } = window.zakaiPage;
+    const ghost = data.ghost[info.methods.indexOf('EKF')][0];
+    return { rows: ghost.filter((v) => v != null).length, last: ghost[ghost.length - 1], truth: data.truth[0][data.truth[0].length - 1] };
+  });
+  assert.ok(stuck.rows > 200 && Math.abs(stuck.last) < 0.5 && stuck.truth < -1.5, `the EKF stays near 0 to the end: ${JSON.stringify(stuck)}`);
+  await tryThis('wider sigma points');
+  r = await run();
+  assert.ok(!r.methods.UKF.failed && r.methods.EKF.failed, 'α = 1: the UKF follows, the EKF is still lost');
+  await replay();
+  await tryThis('another path: seed 1');
+  r = await run();
+  console.log('lesson 3, seed 1: EKF failed at', r.times[r.methods.EKF.failedAt]);
+  assert.ok(r.methods.EKF.failed && Math.abs(r.times[r.methods.EKF.failedAt] - 1.4) < 0.1 && !r.methods.UKF.failed, 'seed 1: the EKF fails at t ≈ 1.4, the UKF holds on');
+
+  // 4. Particles against grids: costs, the Monte Carlo and the convergence check.
+  await openLesson('particles-grids');
+  r = await run();
+  const ms = Object.fromEntries(Object.entries(r.methods).map(([k, m]) => [k, m.msPerStep]));
+  console.log('lesson 4: ms per step', JSON.stringify(ms));
+  assert.ok(ms['PF(5000)'] > 3 * Math.max(ms['PF(50)'], ms['PF(500)']), 'the particle filter\'s time grows with N');
+  assert.ok(ms['PF(5000)'] > 0.5 * ms.QIEM && ms['PF(5000)'] < 2 * ms.QIEM, 'PF(5000) costs about as much as the grid filter');
+  await page.click('#lesson button.try:has-text("Monte Carlo")');
+  await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('finished: 20'), null, { timeout: 180000 });
+  const mc = await page.$$eval('#mc-table tbody tr', (rows) => rows.map((row) => {
+    const [m, se] = row.children[1].textContent.split('±').map((v) => Number(v.replace(/[^\d.e-]/g, '')));
+    return { name: row.children[0].textContent, mse: m, se };
+  }));
+  console.log('lesson 4: Monte Carlo', JSON.stringify(mc));
+  assert.equal(mc.length, 4);
+  for (const a of mc) {
+    assert.ok(Math.abs(a.mse - 0.31) < 0.03 && Math.abs(a.se - 0.05) < 0.01, `${a.name}: near 0.31, standard error near 0.05`);
+    for (const b of mc) assert.ok(Math.abs(a.mse - b.mse) <= Math.max(a.se, b.se), `${a.name} and ${b.name} within one standard error`);
+  }
+  await page.click('#lesson button.try:has-text("check convergence")');
+  let check = await convergence();
+  console.log('lesson 4: convergence', JSON.stringify(check));
+  assert.equal(check['PF(50)'].verdict, 'NOT converged');
+  assert.equal(check.QIEM.verdict, 'converged');
+  assert.ok(Math.abs(check['PF(50)'].moved - 0.12) < 0.02 && Math.abs(check['PF(50)'].moved / check['PF(50)'].sd - 0.25) < 0.05, 'PF(50) moves by about 0.12, a quarter of the posterior sd');
+  assert.ok(check.QIEM.moved < 1e-3, 'QIEM moves by about 1e-4');
+
+  // 5. The Yau–Yau grid: QIEM (likelihood in the update) against IEM (in the operator).
+  await openLesson('yau-yau-grid');
+  r = await run();
+  const split = maxGap(r.methods.QIEM.est, r.methods.IEM.est);
+  const splitAt = r.times[r.methods.QIEM.est.findIndex((v, k) => Math.abs(v - r.methods.IEM.est[k]) === split)];
+  console.log('lesson 5: QIEM and IEM apart by', split, 'at t =', splitAt);
+  const kSplit = r.times.indexOf(splitAt);
+  const early = maxGap(between(r, 0, 1.8, r.methods.QIEM.est), between(r, 0, 1.8, r.methods.IEM.est));
+  assert.ok(early < 0.04, `within 0.04 until t ≈ 1.8 (${early})`);
+  assert.ok(split > 0.3 && Math.abs(splitAt - 2.8) < 0.15 && Math.abs(r.truth[kSplit]) > 2, 'apart by more than 0.3 near t ≈ 2.8, the state far from 0');
+  assert.ok(Math.abs(r.methods.IEM.est[kSplit]) > Math.abs(r.methods.QIEM.est[kSplit]), 'IEM further out');
+  assert.ok(r.methods.IEM.concerns.some((c) => c.startsWith('mass near the boundary') && /widening the box/.test(c)), `IEM's boundary self-check with its advice: ${JSON.stringify(r.methods.IEM.concerns)}`);
+  assert.doesNotMatch(r.warnings, /\(22\)/, 'no warning of (22)');
+  await page.click('#lesson button.try:has-text("check convergence")');
+  check = await convergence();
+  console.log('lesson 5: convergence', JSON.stringify(check));
+  assert.ok(check.QIEM.verdict === 'converged' && check.QIEM.moved < 1e-3 * check.QIEM.sd, 'QIEM converged, by less than a thousandth of its sd');
+  assert.ok(check.IEM.verdict === 'NOT converged' && check.IEM.moved > 0.05 * check.IEM.sd, 'IEM not converged');
+  await tryThis('IEM with the likelihood in the update');
+  r = await run();
+  assert.ok(maxGap(r.methods.QIEM.est, r.methods.IEM.est) < 1e-2, 'IEM in the update agrees with QIEM within 1e-2');
+  await replay();
+  await tryThis('shrink IEM');
+  r = await run();
+  console.log('lesson 5, Δt = 1e-4: apart by', maxGap(r.methods.QIEM.est, r.methods.IEM.est));
+  assert.ok(maxGap(r.methods.QIEM.est, r.methods.IEM.est) > 0.08, 'still more than 0.08 apart');
+
+  // 7. The spectral method: 16 functions warn from t = 0 and stray; 64 do not.
+  await openLesson('spectral');
+  r = await run();
+  const spectral = Object.keys(r.methods).find((k) => k.startsWith('Spectral'));
+  const energy = r.methods[spectral].concerns.find((c) => c.startsWith('energy in the highest Legendre degrees'));
+  console.log('lesson 7:', energy, 'apart by', maxGap(r.methods[spectral].est, r.methods.QIEM.est));
+  assert.match(energy ?? '', /from t = 0\.0000/);
+  assert.ok(maxGap(r.methods[spectral].est, r.methods.QIEM.est) > 1, 'strays by more than 1');
+  assert.ok(r.methods[spectral].msPerStep < r.methods.QIEM.msPerStep / 2, 'a fraction of QIEM\'s time');
+  await tryThis('enough functions');
+  r = await run();
+  const big = r.methods[Object.keys(r.methods).find((k) => k.startsWith('Spectral'))];
+  console.log('lesson 7, 64 functions: apart by', maxGap(big.est, r.methods.QIEM.est), JSON.stringify(big.concerns), big.msPerStep, r.methods.QIEM.msPerStep);
+  assert.ok(maxGap(big.est, r.methods.QIEM.est) < 0.15, 'within 0.15 of QIEM');
+  assert.ok(big.concerns.every((c) => /on [12] step/.test(c)), 'the self-check (nearly) silent');
+  assert.ok(big.msPerStep < r.methods.QIEM.msPerStep / 2, 'still a fraction of QIEM\'s time');
+
+  // A run the page refuses reports why (a broken drift expression, with its position); the
+  // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
+  await openLesson('kalman-bucy');
+  const good = await page.evaluate(() => structuredClone(window.zakaiPage.base));
+  const refused = await page.evaluate(async (base) => {
+    const config = structuredClone(base);
+    config.model.drift = ['-x +'];
+    return window.zakaiPage.learnRun(config);
+  }, good);
+  console.log('refused in Learn mode:', refused);
+  assert.match(refused ?? '', /drift/);
+  const cubic = await page.evaluate(async (base) => {
+    const config = structuredClone(base);
+    config.model.observation = ['x^3'];
+    return window.zakaiPage.learnRun(config);
+  }, good);
+  assert.equal(cubic, null, 'the cubic sensor runs');
+  await finished();
+  r = await run();
+  assert.match(r.methods.KF.failure ?? '', /does not apply here/);
+  assert.ok(!r.methods.QIEM.failed && !r.methods.EKF.failed, 'the others run');
+
+  // Presentation mode keeps the lesson and its buttons beside the plots.
+  await page.keyboard.press('p');
+  await page.waitForTimeout(300);
+  assert.ok(await page.isVisible('#learn') && await page.isVisible('#lesson button.try'), 'the lesson stays in presentation mode');
+  await page.screenshot({ path: `${artifacts}/lesson-present-1280x720.png` });
+  await page.keyboard.press('p');
+
+  assert.deepEqual(consoleErrors, [], 'no console errors');
+  console.log(`screenshots in ${artifacts}`);
+} catch (e) {
+  failed = true;
+  console.error(e);
+} finally {
+  await browser.close();
+  proc.kill();
+}
+process.exit(failed ? 1 : 0);
