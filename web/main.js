@@ -542,7 +542,13 @@ function makePlots(info) {
   const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
   $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
   const perMethod = () => info.methods.map(() => Array.from({ length: n }, () => []));
-  state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), ghost: perMethod(), lo: perMethod(), hi: perMethod() };
+  // obs: per component, z_k (discrete) or the observation path y(τ_k) = Σ Δy (continuous),
+  // null where the recording has no value (a gap); ySum: the path's running sums.
+  state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), ghost: perMethod(), lo: perMethod(), hi: perMethod(),
+    obs: Array.from({ length: info.m }, () => []), ySum: new Array(info.m).fill(0) };
+  $('observations-caption').textContent = info.continuous
+    ? 'observation path y(t) = Σ Δy (a break: increments missing from the recording)'
+    : 'measurements z_k (a break: values missing from the recording)';
   state.history = [];
   state.scrub = null;
   state.diagnostics = null;
@@ -607,9 +613,20 @@ function makeCharts() {
     // The failed-part and band series are drawn but not listed; failures get a ✕ and the
     // time slider's cursor a red line.
     hooks: { draw: [drawFailureMarks, (u) => drawCursor(u)] },
-  }, series.map(() => []), $('trajectory-plot'));
+    // Made with the data on screen, if any: a chart made empty and given its data in the same
+    // task keeps the empty chart's y range (a resize or presentation mode would clip the truth).
+  }, state.data?.times.length ? trajectoryData() : series.map(() => []), $('trajectory-plot'));
   // The chips stay below the plot.
   $('trajectory-plot').appendChild($('method-chips'));
+  // The observations under the trajectory, on the same time axis; missing values break the line.
+  const oseries = [{}, ...Array.from({ length: info.m }, (_, j) => ({ label: `${info.continuous ? 'y' : 'z'}${j + 1}`, stroke: OBS_COLORS[j % OBS_COLORS.length], width: 1.5, points: { show: !info.continuous, size: 3 } }))];
+  state.obsPlot?.destroy();
+  state.obsPlot = new uPlot({
+    ...plotSize('observations-plot', 'observations'), series: oseries,
+    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
+    axes: [{ ...axisFont, label: '' }, { label: info.continuous ? 'y' : 'z', ...axisFont, space: 24 }],
+    legend: { show: info.m > 1 },
+  }, state.data?.times.length ? [state.data.times, ...state.data.obs] : oseries.map(() => []), $('observations-plot'));
   const dseries = [{}];
   names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   state.densityPlot?.destroy();
@@ -618,7 +635,7 @@ function makeCharts() {
     legend: { show: false },
     axes: [{ label: `x${shownDim() + 1}`, ...axisFont }, { label: 'density', ...axisFont }],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
-  }, [[], ...names.map(() => [])], $('density-plot'));
+  }, (state.data && densityData()) ?? [[], ...names.map(() => [])], $('density-plot'));
   showMethods();
 }
 
@@ -626,15 +643,20 @@ function makeCharts() {
 // with one.
 const bandsShown = () => !state.info.has_truth || $('bands').checked;
 
+// Greys and a dark blue for the observation components (the methods' colours are for estimates).
+const OBS_COLORS = ['#444', '#1f4e8c', '#888', '#6a3d9a'];
+
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
-  const width = $(id).clientWidth || (which === 'trajectory' ? 800 : 360);
-  return { width: width - 2, height: which === 'trajectory' ? trajectoryHeight() : densityHeight() };
+  const width = $(id).clientWidth || (which === 'density' ? 360 : 800);
+  const height = { trajectory: trajectoryHeight, density: densityHeight, observations: observationsHeight }[which]();
+  return { width: width - 2, height };
 }
 // Heights from the window's: the main plot and a density panel fit a 1280 × 720 projector.
 const clamp = (v, lo, hi) => Math.max(lo, Math.min(hi, v));
 const presenting = () => document.body.classList.contains('present');
 const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.34 : 0.3), 180, presenting() ? 520 : 340));
+const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.12, 90, presenting() ? 200 : 150));
 const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', diamond: '◇' })[markerShape(i)];
@@ -794,7 +816,7 @@ function showLogConcavity(c) {
   }
   const at = c.worst ? ` (smallest curvature of −log p ${c.worst[1].toFixed(2)} at x = ${c.worst[0].map((v) => v.toFixed(2)).join(', ')})` : '';
   el.textContent = `${c.logConcave ? 'log-concave' : 'not log-concave'}${at}`;
-  el.title = `003 §3, of ${labels()[Number($('density-method').value) || 0]}'s density: the Hessian of −log p is positive semidefinite wherever the density is above 10⁻⁸ of its maximum`;
+  el.title = `003 §3, of ${labels()[Number($('density-method').value) || 0]}'s density: the Hessian of −log p is positive semidefinite wherever the density is above 10⁻³ of its maximum`;
   // A research diagnostic, not a fault of the run: neutral in colour.
   el.className = c.logConcave ? 'hint' : 'hint diagnostic';
 }
@@ -810,6 +832,12 @@ function applyFrame(frame) {
   for (let r = 0; r < rows; r++) {
     d.times.push(frame.times[r]);
     if (frame.truth.length) for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
+    for (let j = 0; j < info.m; j++) {
+      const v = frame.observations[r * info.m + j];
+      if (!Number.isFinite(v)) d.obs[j].push(null);
+      else if (info.continuous) d.obs[j].push(d.ySum[j] += v);
+      else d.obs[j].push(v);
+    }
     frame.estimates.forEach((e, i) => {
       const have = e.length / n;
       const sd = frame.sds?.[i];
@@ -853,15 +881,32 @@ function applyFrame(frame) {
   if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again. A failed method whose state is intact is drawn on, dashed, from its ✕.`;
 }
 
+// The trajectory plot's series for the shown component: times, truth, estimates, what failed
+// methods went on estimating, the ±2σ band edges.
+function trajectoryData() {
+  const d = state.data;
+  const dim = shownDim();
+  const none = d.times.map(() => null);
+  const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
+  return [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
+}
+
+// The density plot's series at the time shown, or null when no density of the shown
+// component is kept for it.
+function densityData() {
+  const f = shownFrame();
+  if (!f || !f.grid.length || f.dim !== shownDim()) return null;
+  return [Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))];
+}
+
 function render() {
   const d = state.data;
   if (!d || !state.heatStrip) return;
   const dim = shownDim();
-  const none = d.times.map(() => null);
-  const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
-  state.trajPlot.setData([d.times, state.info.has_truth ? d.truth[dim] : d.times.map(() => null), ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands]);
-  const f = shownFrame();
-  if (f && f.grid.length && f.dim === dim) state.densityPlot.setData([Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))]);
+  state.trajPlot.setData(trajectoryData());
+  state.obsPlot.setData([d.times, ...d.obs]);
+  const density = densityData();
+  if (density) state.densityPlot.setData(density);
   const last = d.times.length ? d.times[d.times.length - 1] : 0;
   const row = shownRow();
   $('clock').textContent = state.scrub == null ? `t = ${last.toFixed(2)} / ${state.info.t_end.toFixed(2)}` : `t = ${(d.times[row] ?? 0).toFixed(2)} (looking back; live at ${last.toFixed(2)})`;
@@ -1010,13 +1055,14 @@ function exportCsv() {
   if (!d || !info) return;
   const n = info.n;
   const truth = info.has_truth;
-  const head = ['t', ...(truth ? Array.from({ length: n }, (_, j) => `truth_x${j + 1}`) : [])];
+  const obsName = info.continuous ? 'y' : 'z';
+  const head = ['t', ...Array.from({ length: info.m }, (_, j) => `${obsName}${j + 1}`), ...(truth ? Array.from({ length: n }, (_, j) => `truth_x${j + 1}`) : [])];
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_x${j + 1}`)); });
   // The standard deviations behind the ±2σ bands (empty for a method without a covariance).
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_sd${j + 1}`)); });
   const lines = [head.join(',')];
   for (let r = 0; r < d.times.length; r++) {
-    const row = [d.times[r]];
+    const row = [d.times[r], ...d.obs.map((o) => o[r])];
     if (truth) for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
     d.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
     d.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(d.hi[i][j][r] == null ? null : (d.hi[i][j][r] - e[j][r]) / 2); });

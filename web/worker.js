@@ -24,21 +24,27 @@ let loadId = 0;
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
 
+// Log-concavity (003 §3) is judged where the density is above this share of its maximum, the
+// region that carries the posterior's mass: in the far tails a grid density's relative error
+// is large, and second differences of its logarithm would judge the error, not the posterior.
+const LOG_CONCAVITY_FLOOR = 1e-3;
+
 function frame(summary) {
   const to = session.position();
   const from = sent;
   const times = session.times(from, to);
   const truth = session.truth(from, to);
+  const observations = session.observations(from, to);
   const estimates = info.methods.map((_, i) => session.estimates(i, from, to));
   // What failed methods with an intact state went on estimating (drawn dashed).
   const followed = info.methods.map((_, i) => session.followed(i, from, to));
-  // Without a truth the page plots every estimate with its ±2σ band.
+  // Every estimate's standard deviations (the ±2σ bands, the CSV).
   const sds = info.methods.map((_, i) => session.sds(i, from, to));
   const grid = session.densityGrid(view.dim, view.points);
   const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
   const diagnostics = session.diagnostics();
   // Log-concavity (003 §3) of the density shown in the heat strip, for grid methods.
-  const concavity = session.logConcavity(view.densityMethod, 1e-8);
+  const concavity = session.logConcavity(view.densityMethod, LOG_CONCAVITY_FLOOR);
   const logConcave = concavity ? { logConcave: concavity.log_concave, worst: concavity.worst } : null;
   // 2-D models: the heatmap's joint density of x1, x2 and, on request, its log-concavity map.
   let heat2d = null;
@@ -47,7 +53,7 @@ function frame(summary) {
     heat2d = {
       points: P,
       values: session.density2d(view.heatmapMethod, P),
-      curvature: view.lcLayer ? session.logConcavity2d(view.heatmapMethod, P, 1e-6) : null,
+      curvature: view.lcLayer ? session.logConcavity2d(view.heatmapMethod, P, LOG_CONCAVITY_FLOOR) : null,
     };
   }
   sent = to;
@@ -56,7 +62,8 @@ function frame(summary) {
   if (heat2d) transfer.push(heat2d.values.buffer);
   if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
   if (sds) transfer.push(...sds.map((s) => s.buffer));
-  post({ type: 'frame', load: loadId, from, to, times, truth, estimates, followed, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
+  transfer.push(observations.buffer);
+  post({ type: 'frame', load: loadId, from, to, times, truth, observations, estimates, followed, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 // Intervals owed to the playback: below one interval per frame (speeds down to 0.1) the

@@ -245,6 +245,30 @@ try {
   console.log('lesson 5, Δt = 1e-4: apart by', maxGap(r.methods.QIEM.est, r.methods.IEM.est));
   assert.ok(maxGap(r.methods.QIEM.est, r.methods.IEM.est) > 0.08, 'still more than 0.08 apart');
 
+  // 6. 2-D: the blob, the methods' MSEs within 10 %, and the log-concavity note over the run
+  //    (read while it plays: positive until t ≈ 1.3, never below −0.5).
+  await page.goto(`${url}?lesson=two-d`);
+  await page.waitForFunction(() => window.zakaiPage?.info?.name === 'yau-2d', null, { timeout: 30000 });
+  const notes = [];
+  for (;;) {
+    const s = await page.evaluate(() => ({ note: document.getElementById('log-concavity').textContent, t: window.zakaiPage.data?.times?.at(-1), end: window.zakaiPage.info.t_end, playing: window.zakaiPage.playing }));
+    const m = s.note.match(/smallest curvature of −log p (-?[\d.]+)/);
+    if (m) notes.push({ t: s.t, curvature: Number(m[1]) });
+    if (!s.playing && s.t >= s.end - 1e-9) break;
+    await page.waitForTimeout(100);
+  }
+  await finished();
+  const firstNegative = notes.find((n) => n.curvature < 0)?.t;
+  const lowest = Math.min(...notes.map((n) => n.curvature));
+  console.log('lesson 6: curvature first negative at', firstNegative, 'lowest', lowest, 'over', notes.length, 'readings');
+  assert.ok(notes.length >= 5 && firstNegative > 1.1 && firstNegative < 1.6 && lowest > -0.5, 'log-concave until t ≈ 1.3, never below −0.5');
+  r = await run();
+  const mses = await page.$$eval('#metrics tbody tr', (rows) => rows.map((row) => Number(row.children[1].textContent)));
+  assert.ok(Math.max(...mses) / Math.min(...mses) < 1.1, `MSEs within 10 % (${mses})`);
+  assert.ok(await page.isVisible('#heatmap-figure'));
+  await page.click('#lesson button.try:has-text("log-concavity")');
+  assert.ok(await page.isChecked('#lc-layer'));
+
   // 7. The spectral method: 16 functions warn from t = 0 and stray; 64 do not.
   await openLesson('spectral');
   r = await run();
