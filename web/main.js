@@ -71,6 +71,8 @@ const state = {
   data: null,
   fps: 0,
   lastFrameTimes: [],
+  intervalTimes: [], // [time, intervals] of the frames applied in the last second
+  lastIntervalAt: null, // when the last interval arrived (the busy state)
   loadSeq: 0,
   failures: new Map(), // method index → its failure line, for the run on screen
   problems: [], // the form's problems last shown at their fields
@@ -79,6 +81,8 @@ const state = {
   scrub: null, // the row the time slider looks at, or null (live)
   hidden: new Set(), // methods switched off by their chips
 };
+// Served: the note on how to serve the page (all a file:// visitor sees) goes.
+$('served-note')?.remove();
 window.zakaiPage = state; // for the end-to-end tests
 state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), dash: dash(i) }));
 
@@ -112,7 +116,7 @@ function domainInputs(domain) {
   c.replaceChildren(el('label', {}, 'domain (lower, upper per component; grid methods and density plots live here)'));
   domain.forEach((b, i) => {
     const bound = (j) => {
-      const input = el('input', { type: 'number', step: 'any', dataset: { field: `domain[${i}]`, bound: String(j) } });
+      const input = el('input', { type: 'number', step: 'any', 'aria-label': `${j ? 'upper' : 'lower'} bound of x${i + 1}`, dataset: { field: `domain[${i}]`, bound: String(j) } });
       input.value = String(b?.[j] ?? '');
       return input;
     };
@@ -134,7 +138,7 @@ function methodRowsUI() {
     const dataset = { row: String(i) };
     c.appendChild(el('div', { className: 'method-row', dataset: { ...dataset, method: row.config.method } },
       el('header', { title: entry ? `${entry.summary} — ${entry.paper}` : '' },
-        el('input', { type: 'checkbox', checked: row.enabled, className: 'enable', dataset }),
+        el('input', { type: 'checkbox', checked: row.enabled, className: 'enable', 'aria-label': `run ${entry?.name ?? row.config.method}`, dataset }),
         ` ${entry?.name ?? row.config.method}`,
         el('span', { className: 'memory', title: 'memory this method allocates, estimated before anything is allocated' }),
         el('button', { type: 'button', className: 'remove', title: 'remove', dataset }, '×')),
@@ -664,7 +668,8 @@ const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', di
 // A short line in a method's colour and style (legend entries, chips).
 function lineSample(stroke, pattern, width = 2) {
   const dpr = window.devicePixelRatio || 1;
-  const c = el('canvas', { width: 26 * dpr, height: 10 * dpr });
+  // A sample of a method's line style beside its name: decoration, hidden from screen readers.
+  const c = el('canvas', { width: 26 * dpr, height: 10 * dpr, 'aria-hidden': 'true' });
   c.style.width = '26px';
   c.style.height = '10px';
   const ctx = c.getContext('2d');
@@ -899,6 +904,38 @@ function densityData() {
   return [Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))];
 }
 
+// The plots' text alternatives: what each shows and its values at the time shown, on the
+// canvases (role img) that draw them.
+function describePlots(row) {
+  const d = state.data;
+  const info = state.info;
+  const dim = shownDim();
+  const names = labels();
+  const t = d.times[row];
+  const num = (v) => (v == null || !Number.isFinite(v) ? 'none' : Number(v).toPrecision(3));
+  const said = (u, text) => {
+    const canvas = u?.ctx?.canvas;
+    if (!canvas) return;
+    canvas.setAttribute('role', 'img');
+    canvas.setAttribute('aria-label', text);
+  };
+  if (t == null) return;
+  const estimates = names.map((m, i) => `${m} ${num(d.est[i][dim][row])}`).join(', ');
+  said(state.trajPlot, `x${dim + 1} against t from ${info.t_start} to ${info.t_end}; at t = ${t.toFixed(2)}: ${info.has_truth ? `truth ${num(d.truth[dim][row])}, ` : ''}${estimates}`);
+  const f = shownFrame();
+  if (f?.grid?.length) {
+    const peaks = names.map((m, i) => {
+      const v = f.densities[i];
+      if (!v?.length) return `${m} none`;
+      let k = 0;
+      for (let j = 1; j < v.length; j++) if (v[j] > v[k]) k = j;
+      return `${m} peaks at ${num(f.grid[k])}`;
+    }).join(', ');
+    said(state.densityPlot, `posterior densities of x${dim + 1} at t = ${f.t.toFixed(2)}: ${peaks}`);
+  }
+  said(state.obsPlot, `${info.continuous ? 'observation path y' : 'measurements z'} against t; at t = ${t.toFixed(2)}: ${d.obs.map((o, j) => `component ${j + 1} ${num(o[row])}`).join(', ')}`);
+}
+
 function render() {
   const d = state.data;
   if (!d || !state.heatStrip) return;
@@ -909,6 +946,7 @@ function render() {
   if (density) state.densityPlot.setData(density);
   const last = d.times.length ? d.times[d.times.length - 1] : 0;
   const row = shownRow();
+  describePlots(row);
   $('clock').textContent = state.scrub == null ? `t = ${last.toFixed(2)} / ${state.info.t_end.toFixed(2)}` : `t = ${(d.times[row] ?? 0).toFixed(2)} (looking back; live at ${last.toFixed(2)})`;
   state.heatStrip.compose({ times: d.times, truth: state.info.has_truth ? d.truth[dim] : null, cursor: state.scrub == null ? null : d.times[row] });
   if (state.info.n >= 2) drawHeatmap();
@@ -968,6 +1006,7 @@ function scrubTo(row) {
 
 function setPlaying(p) {
   state.playing = p;
+  state.lastIntervalAt = performance.now();
   if (p && state.scrub != null) {
     state.scrub = null;
     render();
@@ -976,17 +1015,26 @@ function setPlaying(p) {
   worker.postMessage({ type: p ? 'play' : 'pause' });
 }
 
+// The busy state: while playing, the intervals computed per second (over the last second)
+// beside the page's frame rate, and "computing…" when no interval has arrived for half a
+// second (a large grid's step) — the frame rate alone would show 60 while nothing advances.
 function loop(ts) {
   state.lastFrameTimes.push(ts);
   while (state.lastFrameTimes.length && ts - state.lastFrameTimes[0] > 1000) state.lastFrameTimes.shift();
   state.fps = state.lastFrameTimes.length;
-  $('fps').textContent = `${state.fps} fps`;
   if (state.queue.length) {
     const frames = state.queue.splice(0);
     frames.forEach(applyFrame);
+    state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
+    state.lastIntervalAt = ts;
     render();
     worker.postMessage({ type: 'ack' });
   }
+  while (state.intervalTimes.length && ts - state.intervalTimes[0][0] > 1000) state.intervalTimes.shift();
+  const perSecond = state.intervalTimes.reduce((a, [, k]) => a + k, 0);
+  const busy = state.playing && ts - (state.lastIntervalAt ?? ts) > 500;
+  $('fps').textContent = busy ? `computing… · ${state.fps} fps` : state.playing ? `${perSecond} intervals/s · ${state.fps} fps` : `${state.fps} fps`;
+  $('fps').classList.toggle('busy', busy);
   requestAnimationFrame(loop);
 }
 

@@ -86,28 +86,32 @@ fn fpe_split(c: &mut Criterion) {
     group.finish();
 }
 
-/// Cost against grid size: one prediction interval of example 1 (Δτ = 0.1, Δt = 0.01 before
-/// the CFL sub-stepping) on 100…1600 cells, for the scaling exponents in BENCHMARKS.md.
-fn scaling(c: &mut Criterion) {
-    let experiment =
-        Experiment::new(presets::preset("sa-example-1").expect("preset")).expect("valid");
+/// One prediction interval of `preset` (Δt = `dt` before the CFL sub-stepping) on each of
+/// `sizes` cells per dimension, SA and FDM, in the benchmark group `group`; the benchmark's
+/// name gives the FPE steps the interval takes, for the cost per step.
+fn scaling_group(c: &mut Criterion, group: &str, preset: &str, dt: f64, sizes: &[usize]) {
+    let experiment = Experiment::new(presets::preset(preset).expect("preset")).expect("valid");
     let dt_obs = experiment.config().time.dt_obs;
     let traj = experiment.simulate(1);
-    let mut group = c.benchmark_group("fpe_split scaling (001 example 1)");
-    for cells in [100, 200, 400, 800, 1600] {
+    let n = experiment.model().n;
+    let mut group = c.benchmark_group(group);
+    if n > 1 {
+        group.sample_size(10);
+    }
+    for &cells in sizes {
         for (scheme, label) in [
             (FpeScheme::Separation, "SA"),
             (FpeScheme::ImplicitFdm, "FDM"),
         ] {
-            let mut filter = grid_filter(
-                &experiment,
-                (scheme, label),
-                cells,
-                0.01,
-                traj.observation(0),
-            );
+            let mut filter =
+                grid_filter(&experiment, (scheme, label), cells, dt, traj.observation(0));
             let (substeps, _) = filter.step_count(dt_obs).expect("steps");
-            group.bench_function(format!("{label} {cells} cells ({substeps} steps)"), |b| {
+            let size = if n > 1 {
+                format!("{cells}²")
+            } else {
+                format!("{cells}")
+            };
+            group.bench_function(format!("{label} {size} cells ({substeps} steps)"), |b| {
                 b.iter(|| filter.predict(dt_obs).expect("predict"))
             });
         }
@@ -115,35 +119,29 @@ fn scaling(c: &mut Criterion) {
     group.finish();
 }
 
+/// Cost against grid size: one prediction interval of example 1 (Δτ = 0.1, Δt = 0.01 before
+/// the CFL sub-stepping) on 100…1600 cells, for the scaling exponents in BENCHMARKS.md.
+fn scaling(c: &mut Criterion) {
+    scaling_group(
+        c,
+        "fpe_split scaling (001 example 1)",
+        "sa-example-1",
+        0.01,
+        &[100, 200, 400, 800, 1600],
+    );
+}
+
 /// Cost against grid size in 2-D: one prediction interval of example 2 (Δτ = 0.2, Δt = 0.005
 /// before the CFL sub-stepping) on 35² … 200² cells, for the growth exponent per FPE step in
-/// BENCHMARKS.md (the benchmark's name gives the steps the interval takes).
+/// BENCHMARKS.md.
 fn scaling_2d(c: &mut Criterion) {
-    let experiment =
-        Experiment::new(presets::preset("sa-example-2").expect("preset")).expect("valid");
-    let dt_obs = experiment.config().time.dt_obs;
-    let traj = experiment.simulate(1);
-    let mut group = c.benchmark_group("fpe_split scaling 2-D (001 example 2)");
-    group.sample_size(10);
-    for cells in [35, 50, 70, 100, 140, 200] {
-        for (scheme, label) in [
-            (FpeScheme::Separation, "SA"),
-            (FpeScheme::ImplicitFdm, "FDM"),
-        ] {
-            let mut filter = grid_filter(
-                &experiment,
-                (scheme, label),
-                cells,
-                0.005,
-                traj.observation(0),
-            );
-            let (substeps, _) = filter.step_count(dt_obs).expect("steps");
-            group.bench_function(format!("{label} {cells}² cells ({substeps} steps)"), |b| {
-                b.iter(|| filter.predict(dt_obs).expect("predict"))
-            });
-        }
-    }
-    group.finish();
+    scaling_group(
+        c,
+        "fpe_split scaling 2-D (001 example 2)",
+        "sa-example-2",
+        0.005,
+        &[35, 50, 70, 100, 140, 200],
+    );
 }
 
 criterion_group!(benches, fpe_split, scaling, scaling_2d);

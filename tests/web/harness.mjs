@@ -37,3 +37,28 @@ export async function watchedPage(browser, viewport, errors) {
   page.on('pageerror', (e) => errors.push(String(e)));
   return page;
 }
+
+/**
+ * Runs `body({ browser, url, consoleErrors })` against a served site in a fresh browser,
+ * then asserts that nothing was logged as an error; exits 0 when every assertion held, 1
+ * otherwise (printing the first failure), after closing the browser and the server.
+ */
+export async function browserTest(body) {
+  const { proc, url } = await serve();
+  const browser = await launch();
+  const consoleErrors = [];
+  let failed = false;
+  try {
+    await body({ browser, url, consoleErrors });
+    const { deepEqual } = (await import('node:assert/strict')).default;
+    deepEqual(consoleErrors, [], 'no console errors');
+    console.log(`screenshots in ${artifacts}`);
+  } catch (e) {
+    failed = true;
+    console.error(e);
+  } finally {
+    await browser.close();
+    proc.kill();
+  }
+  process.exit(failed ? 1 : 0);
+}

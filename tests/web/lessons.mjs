@@ -5,13 +5,9 @@
 // page shows (window.zakaiPage) and asserted here, with the tolerance the sentence states.
 // Usage: node tests/web/lessons.mjs   (after scripts/build-web.sh)
 import assert from 'node:assert/strict';
-import { artifacts, launch, serve, watchedPage } from './harness.mjs';
+import { artifacts, browserTest, watchedPage } from './harness.mjs';
 
-const { proc, url } = await serve();
-const browser = await launch();
-const consoleErrors = [];
-let failed = false;
-try {
+await browserTest(async ({ browser, url, consoleErrors }) => {
   const page = await watchedPage(browser, { width: 1280, height: 720 }, consoleErrors);
   const finished = () => page.waitForFunction(() => {
     const s = window.zakaiPage;
@@ -314,14 +310,4 @@ try {
   assert.ok(await page.isVisible('#learn') && await page.isVisible('#lesson button.try'), 'the lesson stays in presentation mode');
   await page.screenshot({ path: `${artifacts}/lesson-present-1280x720.png` });
   await page.keyboard.press('p');
-
-  assert.deepEqual(consoleErrors, [], 'no console errors');
-  console.log(`screenshots in ${artifacts}`);
-} catch (e) {
-  failed = true;
-  console.error(e);
-} finally {
-  await browser.close();
-  proc.kill();
-}
-process.exit(failed ? 1 : 0);
+});

@@ -90,11 +90,6 @@ impl LineSystems {
             self.solve_line(start, rhs, x)
         });
     }
-
-    /// The stride of the axis and the nodes per line.
-    pub fn line(&self) -> (usize, usize) {
-        (self.stride, self.n)
-    }
 }
 
 #[cfg(test)]

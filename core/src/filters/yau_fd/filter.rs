@@ -33,6 +33,8 @@ struct SplitIem {
 /// The explicit rows and factored implicit systems along one dimension.
 #[derive(Clone, Debug)]
 struct AxisSystem {
+    stride: usize,
+    n: usize,
     /// Rows of `I + βΔt A_d` (sub, diag, super), per node.
     explicit: [Vec<f64>; 3],
     /// `I − αΔt A_d` along every line of the dimension.
@@ -71,7 +73,12 @@ impl SplitIem {
                     dia.iter().map(|a| 1.0 - alpha * dt * a).collect(),
                     sup.iter().map(|a| -alpha * dt * a).collect(),
                 );
-                AxisSystem { explicit, implicit }
+                AxisSystem {
+                    stride,
+                    n,
+                    explicit,
+                    implicit,
+                }
             })
             .collect();
         SplitIem { axes }
@@ -80,7 +87,7 @@ impl SplitIem {
     /// One θ-step per dimension, using `tmp`.
     fn step(&self, u: &mut [f64], tmp: &mut [f64]) {
         for ax in &self.axes {
-            let (stride, n) = ax.implicit.line();
+            let (stride, n) = (ax.stride, ax.n);
             let [s, d, p] = &ax.explicit;
             for_each_line(u.len(), stride, n, |start| {
                 for j in 0..n {
