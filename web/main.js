@@ -72,6 +72,7 @@ const state = {
   fps: 0,
   lastFrameTimes: [],
   intervalTimes: [], // [time, intervals] of the frames applied in the last second
+  preview: null, // the step in two halves: {phase: 'predicted' | 'updated', t, predicted, likelihood}
   lastIntervalAt: null, // when the last interval arrived (the busy state)
   loadSeq: 0,
   failures: new Map(), // method index → its failure line, for the run on screen
@@ -556,6 +557,8 @@ function makePlots(info) {
   state.history = [];
   state.scrub = null;
   state.diagnostics = null;
+  state.preview = null;
+  showStepPhase();
   // The methods hidden by their chips stay hidden over a reset of the same methods.
   if (state.hiddenFor !== names.join('|')) state.hidden = new Set();
   state.hiddenFor = names.join('|');
@@ -633,13 +636,17 @@ function makeCharts() {
   }, state.data?.times.length ? [state.data.times, ...state.data.obs] : oseries.map(() => []), $('observations-plot'));
   const dseries = [{}];
   names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
+  // The step in two halves: each method's prediction (thin, dashed) and the likelihood of the
+  // observation (grey, scaled to the plot).
+  names.forEach((m, i) => dseries.push({ label: `${m} predicted`, stroke: color(i), dash: [5, 4], width: 1.2 }));
+  dseries.push({ label: 'likelihood (scaled)', stroke: '#98a2b3', width: 2 });
   state.densityPlot?.destroy();
   state.densityPlot = new uPlot({
     ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
     legend: { show: false },
     axes: [{ label: `x${shownDim() + 1}`, ...axisFont }, { label: 'density', ...axisFont }],
     hooks: { draw: [(u) => drawTruthMarker(u)] },
-  }, (state.data && densityData()) ?? [[], ...names.map(() => [])], $('density-plot'));
+  }, (state.data && densityData()) ?? dseries.map(() => []), $('density-plot'));
   showMethods();
 }
 
@@ -708,6 +715,7 @@ function showMethods() {
     state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
     state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
     state.densityPlot.setSeries(1 + i, { show });
+    state.densityPlot.setSeries(1 + M + i, { show });
     document.querySelectorAll(`#metrics tr[data-method="${i}"], #heatmap-key [data-method="${i}"]`).forEach((r) => r.classList.toggle('hidden-method', !show));
   }
   render();
@@ -901,7 +909,39 @@ function trajectoryData() {
 function densityData() {
   const f = shownFrame();
   if (!f || !f.grid.length || f.dim !== shownDim()) return null;
-  return [Array.from(f.grid), ...f.densities.map((v) => (v.length ? Array.from(v) : f.grid.map(() => null)))];
+  const none = f.grid.map(() => null);
+  const own = f.densities.map((v) => (v.length ? Array.from(v) : none));
+  const p = state.scrub == null ? state.preview : null;
+  const predicted = f.densities.map((_, i) => (p?.predicted[i]?.length ? p.predicted[i] : none));
+  let likelihood = none;
+  if (p?.likelihood) {
+    let top = 0;
+    for (const v of [...own, ...predicted]) for (const x of v) if (x > top) top = x;
+    likelihood = p.likelihood.map((l) => l * (top || 1));
+  }
+  return [Array.from(f.grid), ...own, ...predicted, likelihood];
+}
+
+// The step in two halves (the "predict / update" box): a press with no prediction shown asks
+// the worker for the predict half; the next press takes the step, and the prediction and the
+// likelihood stay drawn beside the posterior they made.
+function stepInHalves() {
+  if (state.preview?.phase === 'predicted') {
+    state.preview.phase = 'updated';
+    worker.postMessage({ type: 'step', k: 1 });
+    return;
+  }
+  state.preview = null;
+  worker.postMessage({ type: 'preview' });
+}
+
+function showStepPhase() {
+  const p = state.preview;
+  $('step-phase').textContent = !p ? ''
+    : p.phase === 'predicted'
+      ? `predict: every method moved to t = ${p.t.toFixed(3)} without the observation (dashed)${p.likelihood ? '; grey: the likelihood of the observation there' : ''}. Step again to update.`
+      : `update at t = ${p.t.toFixed(3)}: the posterior (solid) is the prediction (dashed) times the likelihood${p.likelihood ? ' (grey)' : ''}, normalised.`;
+  $('step').textContent = p?.phase === 'predicted' ? 'update' : 'step';
 }
 
 // The plots' text alternatives: what each shows and its values at the time shown, on the
@@ -1006,6 +1046,10 @@ function scrubTo(row) {
 
 function setPlaying(p) {
   state.playing = p;
+  if (p && state.preview) {
+    state.preview = null;
+    showStepPhase();
+  }
   state.lastIntervalAt = performance.now();
   if (p && state.scrub != null) {
     state.scrub = null;
@@ -1025,6 +1069,7 @@ function loop(ts) {
   if (state.queue.length) {
     const frames = state.queue.splice(0);
     frames.forEach(applyFrame);
+    if (state.preview?.phase === 'updated') showStepPhase();
     state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
     state.lastIntervalAt = ts;
     render();
@@ -1419,6 +1464,12 @@ worker.onmessage = ({ data }) => {
     case 'frame':
       if (data.load === state.loadSeq) state.queue.push(data);
       break;
+    case 'preview':
+      if (data.load !== state.loadSeq) break;
+      state.preview = data.preview && { ...data.preview, phase: 'predicted' };
+      showStepPhase();
+      render();
+      break;
     case 'dataError':
       // The load was refused and the worker's session is the one before: draw its frames.
       state.loadSeq = data.load;
@@ -1465,6 +1516,7 @@ $('play').addEventListener('click', togglePlay);
 function stepOnce() {
   setPlaying(false);
   if (state.scrub != null) scrubTo(Infinity);
+  if ($('split-step').checked) return stepInHalves();
   worker.postMessage({ type: 'step', k: 1 });
 }
 $('step').addEventListener('click', stepOnce);

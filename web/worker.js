@@ -221,6 +221,10 @@ self.onmessage = async ({ data }) => {
         frame(session.step(data.k ?? 1));
       });
       break;
+    case 'preview':
+      // The next step's predict half (and the next observation's likelihood), the run unmoved.
+      guard(() => post({ type: 'preview', load: loadId, preview: session.preview(view.dim, view.points) }));
+      break;
     case 'speed':
       speed = Math.max(0.1, Math.min(10000, Number(data.value) || 1));
       credit = Math.min(credit, 1);

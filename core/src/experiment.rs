@@ -708,11 +708,38 @@ pub struct ExperimentRun {
     follow_failed: bool,
 }
 
+/// Row `k` of `data` as the observation a filter steps with: exactly Δτ when the step is Δτ up
+/// to rounding (τ_k − τ_{k−1} rounds differently from step to step, and a recording written
+/// from a simulation then filters bit for bit as the simulation did).
+fn observation_at(data: &Recording, k: usize, dt_obs: f64) -> Observation<'_> {
+    let step = data.step_length(k);
+    Observation {
+        dt: if is_interval(step, dt_obs) {
+            dt_obs
+        } else {
+            step
+        },
+        value: data.observation(k),
+        kind: if data.continuous {
+            ObservationKind::Increment
+        } else {
+            ObservationKind::Measurement
+        },
+    }
+}
+
 impl ExperimentRun {
     /// The observations of the whole run (simulated up front or recorded), with the truth
     /// when it is known.
     pub fn recording(&self) -> &Recording {
         &self.data
+    }
+    /// The observation the next step gives every method (`None` once the run is finished, and
+    /// at τ₀, which is no step): what to predict over and assimilate — for a preview of the
+    /// step's two halves on forks of [`ExperimentRun::filters`].
+    pub fn next_observation(&self) -> Option<Observation<'_>> {
+        (self.next > 0 && !self.is_finished())
+            .then(|| observation_at(&self.data, self.next, self.dt_obs))
     }
     /// Per-method records so far.
     pub fn tracks(&self) -> &[MethodTrack] {
@@ -786,25 +813,7 @@ impl ExperimentRun {
         observer: &mut dyn Observer,
     ) {
         let t = &self.data;
-        let kind = if t.continuous {
-            ObservationKind::Increment
-        } else {
-            ObservationKind::Measurement
-        };
-        // Exactly Δτ when the step is Δτ up to rounding (τ_k − τ_{k−1} rounds differently from
-        // step to step, and a recording written from a simulation then filters bit for bit as
-        // the simulation did).
-        let step = t.step_length(k);
-        let dt = if is_interval(step, self.dt_obs) {
-            self.dt_obs
-        } else {
-            step
-        };
-        let obs = Observation {
-            dt,
-            value: t.observation(k),
-            kind,
-        };
+        let obs = observation_at(t, k, self.dt_obs);
         let (filter, track) = (&mut self.filters[i], &mut self.tracks[i]);
         if track.failed() {
             if track.following {

@@ -641,6 +641,48 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await file.close();
   }
 
+  // 15d. A step in two halves ("predict / update"): the first press moves every method to the
+  //      next time on a fork (the run does not advance) and draws the observation's
+  //      likelihood; the second takes the step, and the grid filter's posterior is the
+  //      prediction times the likelihood, normalised (to 10⁻³ of its peak: the display grid
+  //      interpolates both).
+  {
+    await page.setViewportSize({ width: 1440, height: 900 });
+    await page.goto(`${url}?preset=cubic-sensor-1d`);
+    await page.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
+    for (let i = 0; i < 3; i++) {
+      const b = await page.evaluate(() => window.zakaiPage.data.times.length);
+      await page.click('#step');
+      await page.waitForFunction((n) => window.zakaiPage.data.times.length > n, b, { timeout: 10000 });
+    }
+    await page.check('#split-step');
+    const rows = await page.evaluate(() => window.zakaiPage.data.times.length);
+    await page.click('#step');
+    await page.waitForFunction(() => window.zakaiPage.preview?.phase === 'predicted', null, { timeout: 10000 });
+    assert.equal(await page.evaluate(() => window.zakaiPage.data.times.length), rows, 'the predict half does not advance the run');
+    assert.equal(await page.textContent('#step'), 'update');
+    await page.screenshot({ path: `${artifacts}/playground-predict-half.png` });
+    assert.match(await page.textContent('#step-phase'), /^predict: every method moved to t = 0\.040/);
+    await page.click('#step');
+    await page.waitForFunction((n) => window.zakaiPage.data.times.length === n + 1 && window.zakaiPage.preview?.phase === 'updated', rows, { timeout: 10000 });
+    await page.waitForTimeout(200);
+    const bayes = await page.evaluate(() => {
+      const s = window.zakaiPage;
+      const q = s.info.methods.indexOf('QIEM');
+      const { grid, densities } = s.lastDensity;
+      const post = Array.from(densities[q]);
+      const prod = s.preview.predicted[q].map((p, k) => p * s.preview.likelihood[k]);
+      const norm = (v) => { const a = v.reduce((x, y) => x + y, 0) * (grid[1] - grid[0]); return v.map((x) => x / a); };
+      const [a, b] = [norm(post), norm(prod)];
+      const peak = Math.max(...a);
+      return { gap: Math.max(...a.map((v, k) => Math.abs(v - b[k]))) / peak, drawn: s.densityPlot.data.length, priorDrawn: s.densityPlot.data[1 + s.info.methods.length + q].some((v) => v != null) };
+    });
+    console.log('predict / update: |posterior − prediction × likelihood| / peak =', bayes.gap);
+    assert.ok(bayes.gap < 1e-3 && bayes.priorDrawn, `posterior = prediction × likelihood: ${JSON.stringify(bayes)}`);
+    assert.match(await page.textContent('#step-phase'), /^update at t = 0\.040/);
+    await page.uncheck('#split-step');
+  }
+
   // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods
   //     share colour and style, and methods that share a style stay apart in colour (CIE76
   //     ΔE ≥ 12) for normal vision and simulated deuteranopia, protanopia and tritanopia

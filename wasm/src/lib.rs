@@ -271,6 +271,15 @@ impl Observer for Failures {
     }
 }
 
+/// The two halves of the next step ([`Session::preview`]).
+#[derive(Serialize)]
+struct Preview {
+    t: f64,
+    dt: f64,
+    predicted: Vec<Vec<f64>>,
+    likelihood: Option<Vec<f64>>,
+}
+
 /// Per-method diagnostics.
 #[derive(Serialize)]
 struct MethodDiagnostics {
@@ -579,6 +588,58 @@ impl Session {
         let mut out = vec![0.0; grid.len()];
         filter.marginal_density(dim, &grid, &mut out);
         out
+    }
+
+    /// The next step in two halves, without moving the run: every method's density of
+    /// component `dim` on [`Session::density_grid`] after the predict half (a fork of each
+    /// filter predicted to the next observation time; empty for a failed method or a failed
+    /// prediction), and, for a 1-D model, the likelihood of the next observation on the same
+    /// grid scaled to a maximum of 1 (what multiplies the prediction into the posterior; null
+    /// in more dimensions or with a component missing). `{t, dt, predicted, likelihood}`, or
+    /// null when there is no next step.
+    pub fn preview(&self, dim: usize, points: usize) -> Result<JsValue, JsError> {
+        let Some(obs) = self.run.next_observation() else {
+            return Ok(JsValue::NULL);
+        };
+        let grid = self.density_grid(dim, points);
+        let predicted: Vec<Vec<f64>> = self
+            .run
+            .filters()
+            .iter()
+            .zip(self.run.tracks())
+            .map(|(filter, track)| {
+                if track.failed() || dim >= track.n {
+                    return Vec::new();
+                }
+                let mut ahead = filter.fork();
+                if ahead.predict(obs.dt).is_err() {
+                    return Vec::new();
+                }
+                let mut out = vec![0.0; grid.len()];
+                ahead.marginal_density(dim, &grid, &mut out);
+                out
+            })
+            .collect();
+        let model = self.experiment.model();
+        let likelihood = (model.n == 1)
+            .then(|| {
+                let states: Vec<Vec<f64>> = grid.iter().map(|&x| vec![x]).collect();
+                zakai::filters::observation_log_likelihoods(model, &states, &obs)
+            })
+            .flatten()
+            .and_then(|log| {
+                let top = log.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                top.is_finite()
+                    .then(|| log.iter().map(|l| (l - top).exp()).collect::<Vec<f64>>())
+            });
+        let r = self.run.recording();
+        let k = self.run.position();
+        to_js(&Preview {
+            t: r.times[k],
+            dt: obs.dt,
+            predicted,
+            likelihood,
+        })
     }
 
     /// Method `index`'s current joint density of components 1 and 2 on the raster
