@@ -4,8 +4,11 @@
 //! `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` with `Φ = e^{AΔτ}`, `Γ = ∫₀^Δτ e^{As} ds` and
 //! `Q_d = ∫₀^Δτ e^{As} Q e^{Aᵀs} ds` (Van Loan's block exponential). The update uses the
 //! observation as a measurement ([`super::measurement`]): exact for discrete linear
-//! measurements, and the Euler form of Kalman–Bucy's `dm = P Cᵀ S⁻¹ (dy − C m dt)` for
-//! increments, which converges to the Kalman–Bucy filter as Δτ → 0.
+//! measurements; for increments, the discrete Kalman filter of the sampled model
+//! `Δy = C x Δτ + w`, `w ~ N(0, S Δτ)` (the observation integral `∫ C x dt` by its value at the
+//! interval's end), which converges to the Kalman–Bucy filter as Δτ → 0 — its variance after
+//! an update sits O(Δτ) below the Riccati equation's (lesson 2 of the playground: 0.0865
+//! against P∞ = 0.0905 with S = 0.01, Δτ = 0.01).
 //!
 //! The model must be affine: A, b, C, c are read off at the origin and the Jacobians are
 //! checked at probe points spread over the domain; a nonlinear model is refused with an error.

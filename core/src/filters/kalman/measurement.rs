@@ -1,7 +1,8 @@
 //! Both observation kinds as one measurement equation for the Gaussian filters.
 //!
 //! * Continuous `dy = h dt + dw` over one interval: `Δy = h(x) Δτ + w`, `w ~ N(0, S Δτ)`
-//!   (the Euler form of the Kalman–Bucy update that 000 and 002 compare against);
+//!   (the observation integral by its value at the interval's end: the sampled-model update
+//!   that 000 and 002 compare against, which tends to Kalman–Bucy's as Δτ → 0);
 //! * Discrete `z = h(x) + v`: `v` replaced by its first two moments (exact for Gaussian noise;
 //!   the best linear update for 001's mixtures).
 //!
