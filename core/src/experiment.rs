@@ -234,6 +234,11 @@ impl MethodTrack {
     pub fn failed(&self) -> bool {
         self.failure.is_some()
     }
+    /// True while the method's filter holds a state to show: it has not failed, or it failed
+    /// with its state intact and the run still steps it (a followed run; display only).
+    pub fn has_state(&self) -> bool {
+        self.failure.is_none() || self.following
+    }
     /// Mean wall time per step in seconds (over the timed steps).
     pub fn seconds_per_step(&self) -> f64 {
         if self.timed_steps == 0 {

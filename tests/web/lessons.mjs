@@ -178,6 +178,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     return { rows: ghost.filter((v) => v != null).length, last: ghost[ghost.length - 1], truth: data.truth[0][data.truth[0].length - 1] };
   });
   assert.ok(stuck.rows > 200 && Math.abs(stuck.last) < 0.5 && stuck.truth < -1.5, `the EKF stays near 0 to the end: ${JSON.stringify(stuck)}`);
+  // Its density is drawn on too (the state is intact): the density panel and the heat strip
+  // do not go blank at the ✕.
+  const ekfDensity = await page.evaluate(() => { const s = window.zakaiPage; return Array.from(s.lastDensity.densities[s.info.methods.indexOf('EKF')]).reduce((a, b) => a + b, 0); });
+  assert.ok(ekfDensity > 0, 'the lost EKF\'s density is still drawn');
   await tryThis('wider sigma points');
   r = await run();
   assert.ok(!r.methods.UKF.failed && r.methods.EKF.failed, 'α = 1: the UKF follows, the EKF is still lost');

@@ -574,14 +574,15 @@ impl Session {
     }
 
     /// Method `index`'s current marginal density of component `dim` on
-    /// [`Session::density_grid`] (empty once the method has failed).
+    /// [`Session::density_grid`] (empty once the method has failed, unless the failure left
+    /// its state intact and the session follows it: then its density is drawn on).
     pub fn density(&self, index: usize, dim: usize, points: usize) -> Vec<f64> {
         let (Some(filter), Some(track)) =
             (self.run.filters().get(index), self.run.tracks().get(index))
         else {
             return Vec::new();
         };
-        if track.failed() || dim >= track.n {
+        if !track.has_state() || dim >= track.n {
             return Vec::new();
         }
         let grid = self.density_grid(dim, points);
@@ -608,7 +609,7 @@ impl Session {
             .iter()
             .zip(self.run.tracks())
             .map(|(filter, track)| {
-                if track.failed() || dim >= track.n {
+                if !track.has_state() || dim >= track.n {
                     return Vec::new();
                 }
                 let mut ahead = filter.fork();
@@ -651,7 +652,7 @@ impl Session {
         else {
             return Vec::new();
         };
-        if track.failed() || track.n < 2 {
+        if !track.has_state() || track.n < 2 {
             return Vec::new();
         }
         let (xs, ys) = (self.density_grid(0, points), self.density_grid(1, points));
