@@ -637,3 +637,69 @@ fn a_step_of_very_many_intervals_is_refused_before_the_run() {
         "{text}"
     );
 }
+
+/// With the likelihood in the operator, an interval without an increment is predicted by the
+/// Fokker–Planck part alone (q = −∇·f): after the same updates, a Δτ gap moves the density
+/// exactly as the likelihood-in-update filter predicts it (bit for bit: the same operator and
+/// steps), and over a gap of 3.5 Δτ (one operator for the whole gap) the cubic sensor's
+/// f = 0, G = 1 leaves the mean where it was and adds 3.5 Δτ to the variance, as the
+/// Fokker–Planck equation does (to 10⁻³ of it; measured 3.500·10⁻² in both). Before, such a
+/// gap was refused.
+#[test]
+fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
+    let config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let e = Experiment::new(config.clone()).unwrap();
+    let data = e.simulate(3);
+    let dt = config.time.dt_obs;
+    for key in ["qiem", "iem"] {
+        let built = |likelihood: &str| {
+            let m: zakai::MethodConfig = serde_json::from_value(serde_json::json!({
+                "method": key, "points": [399], "dt": 0.001, "likelihood": likelihood
+            }))
+            .unwrap();
+            e.build_method(&m, key.into(), 1).unwrap()
+        };
+        let (mut operator, mut update) = (built("in_operator"), built("in_update"));
+        // Both start from the prior: predict first, so that the two densities are the same.
+        operator
+            .predict(dt)
+            .unwrap_or_else(|e| panic!("{key}: {e}"));
+        update.predict(dt).unwrap();
+        let (a, b) = (
+            operator.density().unwrap().values.to_vec(),
+            update.density().unwrap().values.to_vec(),
+        );
+        assert_eq!(a, b, "{key}: a Δτ gap is the Fokker–Planck step");
+        for k in 2..=10 {
+            operator.step(&observation_of(&data, k)).unwrap();
+            update.step(&observation_of(&data, k)).unwrap();
+        }
+        let mut o2 = operator.fork();
+        let mut u2 = update.fork();
+        o2.predict(3.5 * dt).unwrap();
+        u2.predict(3.5 * dt).unwrap();
+        // From different posteriors (the two filters' updates differ): each against its own
+        // start, through the change in mean and variance over the gap.
+        let moved = |f: &dyn Filter, g: &dyn Filter| {
+            let (x, y) = (f.estimate(), g.estimate());
+            let (vx, vy) = (x.covariance.unwrap()[(0, 0)], y.covariance.unwrap()[(0, 0)]);
+            (y.mean[0] - x.mean[0], vy - vx, vx.sqrt())
+        };
+        let (dm_o, dv_o, sd) = moved(&*operator, &*o2);
+        let (dm_u, dv_u, _) = moved(&*update, &*u2);
+        eprintln!("{key}: gap of 3.5Δτ: mean moved {dm_o:.3e} / {dm_u:.3e}, variance {dv_o:.3e} / {dv_u:.3e}");
+        let added = 3.5 * dt;
+        assert!(
+            (dv_o - added).abs() < 1e-3 * added,
+            "{key}: variance grew by {dv_o}"
+        );
+        assert!(
+            (dv_u - added).abs() < 1e-3 * added,
+            "{key}: in update, {dv_u}"
+        );
+        assert!(
+            dm_o.abs() < 1e-6 * sd && dm_u.abs() < 1e-6 * sd,
+            "{key}: {dm_o} {dm_u}"
+        );
+    }
+}

@@ -322,6 +322,9 @@ enum Solver {
     Superposition(Superposition),
 }
 
+/// A solver with the interval length it is made for and its substeps.
+type SolverFor = (f64, usize, Solver);
+
 /// A Yau–Yau finite-difference filter (see the module doc).
 #[derive(Clone, Debug)]
 pub struct YauYauFilter {
@@ -334,11 +337,16 @@ pub struct YauYauFilter {
     u: Vec<f64>,
     tmp: Vec<f64>,
     /// Δτ, its substeps and solver.
-    solver: Option<(f64, usize, Solver)>,
+    solver: Option<SolverFor>,
     /// Solvers for other interval lengths (the remainders of irregular intervals after whole
     /// Δτ), with their substeps; the most recently used first, at most
     /// [`crate::filters::REMAINDER_PLANS`].
-    remainders: Vec<(f64, usize, Solver)>,
+    remainders: Vec<SolverFor>,
+    /// With the likelihood in the operator, an interval without an increment is the
+    /// Fokker–Planck part alone: its operator (q = −∇·f, built on the first such interval)
+    /// and its solvers per interval length (the most recent first, at most
+    /// [`crate::filters::REMAINDER_PLANS`] + 1).
+    prediction: Option<(KolmogorovOperator, Vec<SolverFor>)>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
     warnings: Vec<GuaranteeWarning>,
@@ -454,6 +462,7 @@ impl YauYauFilter {
             u,
             solver: None,
             remainders: Vec::new(),
+            prediction: None,
             warnings: Vec::new(),
             cell,
             estimate: Estimate {
@@ -518,17 +527,22 @@ impl YauYauFilter {
     /// The scheme's step of length `dt` (the superposition technique's remainders: QIEM with
     /// the exponential potential, which its bumps are carried with).
     fn stepper(&self, dt: f64) -> Solver {
+        self.stepper_for(&self.op, dt)
+    }
+
+    /// [`Self::stepper`] for the operator `op`.
+    fn stepper_for(&self, op: &KolmogorovOperator, dt: f64) -> Solver {
         match self.scheme {
-            Scheme::Iem => Solver::Iem(SplitIem::new(&self.op, &self.grid, dt, self.params.alpha)),
+            Scheme::Iem => Solver::Iem(SplitIem::new(op, &self.grid, dt, self.params.alpha)),
             Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
-                &self.op,
+                op,
                 &self.grid,
                 dt,
                 self.params.potential,
                 self.scheme == Scheme::Qiem4,
             )),
             Scheme::Superposition => Solver::Qiem(QiemStep::new(
-                &self.op,
+                op,
                 &self.grid,
                 dt,
                 PotentialTerm::Exponential,
@@ -610,9 +624,41 @@ impl YauYauFilter {
         }
     }
 
+    /// Carries the density over `interval` without an increment when the likelihood is in
+    /// the operator: the Kolmogorov equation (2) of 000 with q = −∇·f alone (the term
+    /// −½hᵀS⁻¹h belongs to the observation, which did not come), in steps of at most the
+    /// scheme's Δt, with the scheme's solver for that operator (made the first time the
+    /// length occurs).
+    fn predict_without_likelihood(&mut self, interval: f64) {
+        if self.prediction.is_none() {
+            self.prediction = Some((self.op.without_observation_term(), Vec::new()));
+        }
+        let (op, cache) = self.prediction.as_ref().expect("made above");
+        let i = match cache.iter().position(|c| c.0 == interval) {
+            Some(i) => i,
+            None => {
+                let substeps = self.substeps_for(interval);
+                let solver = self.stepper_for(op, interval / substeps as f64);
+                let (_, cache) = self.prediction.as_mut().expect("made above");
+                cache.truncate(crate::filters::REMAINDER_PLANS);
+                cache.insert(0, (interval, substeps, solver));
+                0
+            }
+        };
+        let (_, cache) = self.prediction.as_mut().expect("made above");
+        cache[..=i].rotate_right(1);
+        let (_, substeps, solver) = &mut cache[0];
+        solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
+    }
+
     /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
     fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
+        if obs.dt > 0.0
+            && observed == Observed::Nothing
+            && self.params.likelihood == Likelihood::InOperator
+        {
+            self.predict_without_likelihood(obs.dt);
+        } else if obs.dt > 0.0 {
             self.propagate(obs.dt);
             if observed == Observed::All {
                 self.update(obs.value, obs.dt);
@@ -669,17 +715,8 @@ impl Filter for YauYauFilter {
             ObservationKind::Increment,
             self.op.s_inv_h.len(),
         )?;
-        match observed {
-            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
-            Observed::Nothing
-                if obs.dt > 0.0 && self.params.likelihood == Likelihood::InOperator =>
-            {
-                return Err(FilterError::BadObservation(format!(
-                    "{}: with −½hᵀS⁻¹h in the operator (likelihood = in_operator) an interval without an increment cannot be predicted; use likelihood = in_update",
-                    self.name
-                )));
-            }
-            _ => {}
+        if observed == Observed::Some {
+            return Err(crate::filters::partial_unsupported(&self.name));
         }
         self.saved.save(&self.u, &self.estimate);
         let stepped = self.advance(obs, observed);

@@ -89,6 +89,16 @@ impl KolmogorovOperator {
             diffusion,
         })
     }
+
+    /// The operator of an interval without an observation: the Fokker–Planck part alone,
+    /// `q = −∇·f` (000 (4) without the term −½Σh_j², which belongs to the observation).
+    pub fn without_observation_term(&self) -> Self {
+        KolmogorovOperator {
+            q: self.div_f.iter().map(|d| -d).collect(),
+            half_hsh: vec![0.0; self.div_f.len()],
+            ..self.clone()
+        }
+    }
 }
 
 /// `out = w ⊙ u + Δt Σ_d p̃_d K_d u` (central differences, zero Dirichlet boundary): the explicit
