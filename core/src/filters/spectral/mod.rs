@@ -339,8 +339,8 @@ pub struct SpectralFilter {
     energy: Energy,
     /// The coefficients, estimate and energy a step started from.
     saved: (crate::filters::SavedDensity, Energy),
-    /// Whether `−½hᵀS⁻¹h` is in the off-line operator (then an interval cannot be predicted
-    /// without its increment).
+    /// Whether `−½hᵀS⁻¹h` is in the off-line operator (then an interval without its
+    /// increment has an operator of its own, without that term: `gaps`).
     likelihood_in_operator: bool,
     /// What the off-line part needs to make the operator of another interval length: the
     /// model and N′ partitions of T₀.
@@ -351,6 +351,21 @@ pub struct SpectralFilter {
     /// [`crate::filters::REMAINDER_PLANS`]: each is one off-line computation of Algorithm 1
     /// and one matrix of W's size.
     remainders: Vec<(f64, Propagation)>,
+    /// With the likelihood in the operator: the operators of intervals without an increment
+    /// (the Fokker–Planck part alone: T₀'s and the remainders', one off-line computation per
+    /// length), at most [`crate::filters::REMAINDER_PLANS`] + 1.
+    gaps: Vec<(f64, Propagation)>,
+}
+
+/// Which off-line operator a propagation uses.
+#[derive(Clone, Copy, Debug)]
+enum Leg {
+    /// The operator of T₀.
+    Whole,
+    /// Remainder operator `i`.
+    Remainder(usize),
+    /// Gap operator `i` (likelihood in the operator, no increment).
+    Gap(usize),
 }
 
 impl SpectralFilter {
@@ -443,6 +458,7 @@ impl SpectralFilter {
             model: model.clone(),
             partitions: params.partitions,
             remainders: Vec::new(),
+            gaps: Vec::new(),
             evaluate,
             project,
             layout,
@@ -500,12 +516,40 @@ impl SpectralFilter {
         Ok(())
     }
 
-    /// Propagation (40) over T₀ (`remainder` `None`) or with remainder operator `i`, and the
-    /// density at the on-line nodes.
-    fn propagate(&mut self, remainder: Option<usize>) {
-        let propagation = match remainder {
-            Some(i) => &self.remainders[i].1,
-            None => &self.propagation,
+    /// The operator over `interval` (T₀ or a remainder below it) without an increment when
+    /// the likelihood is in the operator: Algorithm 1 for the Fokker–Planck part alone (N′
+    /// partitions scaled with the length), made the first time that length occurs and kept
+    /// among the last [`crate::filters::REMAINDER_PLANS`] + 1. A gap is whole T₀ legs and a
+    /// remainder, as an interval with an increment is: the off-line method is made for short
+    /// intervals, and one operator over a long gap is not accurate.
+    fn gap(&mut self, interval: f64) -> Result<(), FilterError> {
+        if self.gaps.iter().any(|g| g.0 == interval) {
+            return Ok(());
+        }
+        let partitions = libm::ceil(self.partitions as f64 * interval / self.t0).max(1.0) as usize;
+        let w =
+            offline::propagation_matrix(&self.model, &self.layout, (interval, partitions), false)?;
+        self.gaps.truncate(crate::filters::REMAINDER_PLANS);
+        self.gaps
+            .insert(0, (interval, Propagation::new(w, &self.evaluate)));
+        Ok(())
+    }
+
+    /// The position of the gap operator of `interval` (made by [`Self::gap`]).
+    fn gap_index(&self, interval: f64) -> usize {
+        self.gaps
+            .iter()
+            .position(|g| g.0 == interval)
+            .expect("made before the step")
+    }
+
+    /// Propagation (40) over T₀ (`Leg::Whole`), with remainder operator `i` or gap operator
+    /// `i`, and the density at the on-line nodes.
+    fn propagate(&mut self, leg: Leg) {
+        let propagation = match leg {
+            Leg::Remainder(i) => &self.remainders[i].1,
+            Leg::Gap(i) => &self.gaps[i].1,
+            Leg::Whole => &self.propagation,
         };
         let w = match propagation {
             Propagation::Nodal(e) => {
@@ -738,19 +782,20 @@ impl Filter for SpectralFilter {
         if obs.dt <= 0.0 {
             return Ok(());
         }
-        match observed {
-            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
-            Observed::Nothing if self.likelihood_in_operator => {
-                return Err(FilterError::BadObservation(format!(
-                    "{}: with −½hᵀS⁻¹h in the operator (likelihood = in_operator) an interval without an increment cannot be predicted; use likelihood = in_update",
-                    self.name
-                )));
-            }
-            _ => {}
+        if observed == Observed::Some {
+            return Err(crate::filters::partial_unsupported(&self.name));
         }
         let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
-        if rest > 0.0 {
-            // Off-line, before anything moves (it fails only on a degenerate basis).
+        // Off-line, before anything moves (it fails only on a degenerate basis). A gap with
+        // the likelihood in the operator has operators of its own (T₀'s first: the
+        // remainder's is then the most recent).
+        let gap = observed == Observed::Nothing && self.likelihood_in_operator;
+        if gap && whole > 0 {
+            self.gap(self.t0)?;
+        }
+        if gap && rest > 0.0 {
+            self.gap(rest)?;
+        } else if rest > 0.0 {
             self.remainder(rest)?;
         }
         self.saved.0.save(&self.coeffs, &self.estimate);
@@ -758,7 +803,12 @@ impl Filter for SpectralFilter {
         let legs = whole + usize::from(rest > 0.0);
         let mut stepped = Ok(());
         for leg in 1..=legs {
-            self.propagate((leg > whole).then_some(0));
+            self.propagate(match (gap, leg > whole) {
+                (false, false) => Leg::Whole,
+                (false, true) => Leg::Remainder(0),
+                (true, false) => Leg::Gap(self.gap_index(self.t0)),
+                (true, true) => Leg::Gap(self.gap_index(rest)),
+            });
             if leg == legs && observed == Observed::All {
                 self.update(obs.value, obs.dt / self.t0);
             }
