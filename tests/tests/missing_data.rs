@@ -638,6 +638,22 @@ fn a_step_of_very_many_intervals_is_refused_before_the_run() {
     );
 }
 
+/// The method `params` (JSON, with its key) built twice on `e`: with the likelihood in the
+/// operator and in the update.
+fn both_likelihoods(
+    e: &Experiment,
+    params: serde_json::Value,
+) -> (Box<dyn Filter>, Box<dyn Filter>) {
+    let key = params["method"].as_str().unwrap().to_string();
+    let built = |likelihood: &str| {
+        let mut p = params.clone();
+        p["likelihood"] = likelihood.into();
+        let m: zakai::MethodConfig = serde_json::from_value(p).unwrap();
+        e.build_method(&m, key.clone(), 1).unwrap()
+    };
+    (built("in_operator"), built("in_update"))
+}
+
 /// With the likelihood in the operator, an interval without an increment is predicted by the
 /// Fokker–Planck part alone (q = −∇·f): after the same updates, a Δτ gap moves the density
 /// exactly as the likelihood-in-update filter predicts it (bit for bit: the same operator and
@@ -652,14 +668,10 @@ fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
     let data = e.simulate(3);
     let dt = config.time.dt_obs;
     for key in ["qiem", "iem"] {
-        let built = |likelihood: &str| {
-            let m: zakai::MethodConfig = serde_json::from_value(serde_json::json!({
-                "method": key, "points": [399], "dt": 0.001, "likelihood": likelihood
-            }))
-            .unwrap();
-            e.build_method(&m, key.into(), 1).unwrap()
-        };
-        let (mut operator, mut update) = (built("in_operator"), built("in_update"));
+        let (mut operator, mut update) = both_likelihoods(
+            &e,
+            serde_json::json!({ "method": key, "points": [399], "dt": 0.001 }),
+        );
         // Both start from the prior: predict first, so that the two densities are the same.
         operator
             .predict(dt)
@@ -716,14 +728,10 @@ fn the_spectral_filter_crosses_a_gap_with_the_likelihood_in_its_operator() {
     let e = Experiment::new(config.clone()).unwrap();
     let data = e.simulate(3);
     let dt = config.time.dt_obs;
-    let built = |likelihood: &str| {
-        let m: zakai::MethodConfig = serde_json::from_value(serde_json::json!({
-            "method": "spectral", "offline_basis": 48, "online_basis": 64, "likelihood": likelihood
-        }))
-        .unwrap();
-        e.build_method(&m, "spectral".into(), 1).unwrap()
-    };
-    let (mut operator, mut update) = (built("in_operator"), built("in_update"));
+    let (mut operator, mut update) = both_likelihoods(
+        &e,
+        serde_json::json!({ "method": "spectral", "offline_basis": 48, "online_basis": 64 }),
+    );
     operator.predict(dt).unwrap();
     update.predict(dt).unwrap();
     let (a, b) = (operator.estimate(), update.estimate());
@@ -744,4 +752,16 @@ fn the_spectral_filter_crosses_a_gap_with_the_likelihood_in_its_operator() {
         ((after - before) - added).abs() < 0.01 * added,
         "{before} → {after}"
     );
+    // More distinct gap lengths than the cache keeps: T₀'s operator stays with each new
+    // remainder's (it was once dropped for the fifth, and the step panicked).
+    for tenths in 1..=6 {
+        let before = operator.estimate().covariance.unwrap()[(0, 0)];
+        let gap = (1.0 + 0.1 * tenths as f64) * dt;
+        operator.predict(gap).unwrap();
+        let grew = operator.estimate().covariance.unwrap()[(0, 0)] - before;
+        assert!(
+            (grew - gap).abs() < 0.01 * gap,
+            "gap {gap}: variance grew by {grew}"
+        );
+    }
 }

@@ -498,40 +498,57 @@ impl SpectralFilter {
     /// time that length occurs (N′ partitions scaled down with it), kept among the last
     /// [`crate::filters::REMAINDER_PLANS`]; moved to the front of the list.
     fn remainder(&mut self, rest: f64) -> Result<(), FilterError> {
-        if let Some(i) = self.remainders.iter().position(|r| r.0 == rest) {
-            self.remainders[..=i].rotate_right(1);
-            return Ok(());
-        }
-        let partitions = libm::ceil(self.partitions as f64 * rest / self.t0).max(1.0) as usize;
-        let w = offline::propagation_matrix(
-            &self.model,
-            &self.layout,
-            (rest, partitions),
-            self.likelihood_in_operator,
-        )?;
-        self.remainders
-            .truncate(crate::filters::REMAINDER_PLANS - 1);
-        self.remainders
-            .insert(0, (rest, Propagation::new(w, &self.evaluate)));
-        Ok(())
+        let with_likelihood = self.likelihood_in_operator;
+        self.recent_first(
+            |f| &mut f.remainders,
+            rest,
+            with_likelihood,
+            crate::filters::REMAINDER_PLANS,
+        )
     }
 
     /// The operator over `interval` (T₀ or a remainder below it) without an increment when
     /// the likelihood is in the operator: Algorithm 1 for the Fokker–Planck part alone (N′
-    /// partitions scaled with the length), made the first time that length occurs and kept
-    /// among the last [`crate::filters::REMAINDER_PLANS`] + 1. A gap is whole T₀ legs and a
-    /// remainder, as an interval with an increment is: the off-line method is made for short
-    /// intervals, and one operator over a long gap is not accurate.
+    /// partitions scaled with the length), made the first time that length occurs, kept among
+    /// the last [`crate::filters::REMAINDER_PLANS`] + 1 and moved to the front (so that T₀'s,
+    /// made just before a remainder's, stays). A gap is whole T₀ legs and a remainder, as an
+    /// interval with an increment is: the off-line method is made for short intervals, and one
+    /// operator over a long gap is not accurate.
     fn gap(&mut self, interval: f64) -> Result<(), FilterError> {
-        if self.gaps.iter().any(|g| g.0 == interval) {
+        self.recent_first(
+            |f| &mut f.gaps,
+            interval,
+            false,
+            crate::filters::REMAINDER_PLANS + 1,
+        )
+    }
+
+    /// Moves the off-line operator over `length` to the front of the cache `pick` selects,
+    /// making it the first time that length occurs — Algorithm 1 with N′ partitions scaled
+    /// with the length, −½hᵀS⁻¹h in it when `with_likelihood` — and then dropping the least
+    /// recently used past `keep`.
+    fn recent_first(
+        &mut self,
+        pick: fn(&mut Self) -> &mut Vec<(f64, Propagation)>,
+        length: f64,
+        with_likelihood: bool,
+        keep: usize,
+    ) -> Result<(), FilterError> {
+        if let Some(i) = pick(self).iter().position(|c| c.0 == length) {
+            pick(self)[..=i].rotate_right(1);
             return Ok(());
         }
-        let partitions = libm::ceil(self.partitions as f64 * interval / self.t0).max(1.0) as usize;
-        let w =
-            offline::propagation_matrix(&self.model, &self.layout, (interval, partitions), false)?;
-        self.gaps.truncate(crate::filters::REMAINDER_PLANS);
-        self.gaps
-            .insert(0, (interval, Propagation::new(w, &self.evaluate)));
+        let partitions = libm::ceil(self.partitions as f64 * length / self.t0).max(1.0) as usize;
+        let w = offline::propagation_matrix(
+            &self.model,
+            &self.layout,
+            (length, partitions),
+            with_likelihood,
+        )?;
+        let made = Propagation::new(w, &self.evaluate);
+        let cache = pick(self);
+        cache.truncate(keep - 1);
+        cache.insert(0, (length, made));
         Ok(())
     }
 
