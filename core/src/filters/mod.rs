@@ -272,14 +272,6 @@ pub(crate) fn kind_of(model: &crate::model::Model) -> ObservationKind {
     }
 }
 
-/// The error of a filter that cannot assimilate an observation with only some components
-/// missing.
-pub(crate) fn partial_unsupported(name: &str) -> FilterError {
-    FilterError::BadObservation(alloc::format!(
-        "{name} cannot assimilate an observation with only some components missing (NaN); give all components, or none for a prediction only"
-    ))
-}
-
 /// The observation noise density of the components an observation has (001's mixtures, or a
 /// Gaussian), with the marginal of each pattern of missing components met so far: built the
 /// first time a pattern occurs, so a recording with gaps allocates only then.

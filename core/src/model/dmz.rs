@@ -123,3 +123,117 @@ impl DmzCoefficients {
         Ok(out)
     }
 }
+
+/// How many patterns of missing components [`PartialIncrements`] keeps (the most recently used).
+pub const PARTIAL_PATTERNS: usize = 8;
+
+/// The likelihood terms of an increment of which only some components are observed (the
+/// others NaN): with O the observed components, `dy_O ~ N(h_O Δτ, S_OO Δτ)` given the state,
+/// so the factor of 000 (15) / 004 (42) becomes
+/// `exp(Δy_Oᵀ S_OO⁻¹ h_O − ½ h_Oᵀ S_OO⁻¹ h_O Δτ)` — only the observed rows of h and S, with the
+/// correlation of the missing components with the observed ones accounted for by taking the
+/// marginal S_OO (not by dropping rows of S⁻¹).
+#[derive(Clone, Debug)]
+pub struct PartialIncrements {
+    noise_cov: DMatrix<f64>,
+    /// The patterns met so far, the most recently used first: which components are observed,
+    /// `gain[j][i] = (S_OO⁻¹ h_O(x_i))_j` and `half[i] = ½ h_Oᵀ S_OO⁻¹ h_O(x_i)`.
+    parts: Vec<(Vec<bool>, Vec<Vec<f64>>, Vec<f64>)>,
+    /// The observed components of the last increment, in order.
+    values: Vec<f64>,
+}
+
+/// The terms of one partially observed increment (see [`PartialIncrements::terms`]).
+pub struct ObservedTerms<'a> {
+    /// `Δy_O`, the observed components in order.
+    pub dy: &'a [f64],
+    /// `(S_OO⁻¹ h_O)_j` at every point, one row per observed component.
+    pub gain: &'a [Vec<f64>],
+    /// `½ h_Oᵀ S_OO⁻¹ h_O` at every point.
+    pub half: &'a [f64],
+}
+
+impl PartialIncrements {
+    /// For the observation noise covariance S (positive definite).
+    pub fn new(noise_cov: DMatrix<f64>) -> Self {
+        PartialIncrements {
+            noise_cov,
+            parts: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    /// For `model`'s continuous observations; refuses discrete ones (`who` names the method,
+    /// plural, as in [`continuous_noise_inverse`]).
+    pub fn of(model: &Model, who: &str) -> Result<Self, FilterError> {
+        match &model.observations {
+            ObservationModel::Continuous { noise_cov } => Ok(Self::new(noise_cov.clone())),
+            ObservationModel::Discrete { .. } => Err(FilterError::Unsuitable(alloc::format!(
+                "{who} need continuous observations dy = h dt + dw"
+            ))),
+        }
+    }
+
+    /// The terms for the pattern of missing components (NaN) of `dy`, from `S⁻¹h` at the points
+    /// (`s_inv_h[j][i]`, as [`DmzCoefficients`] tabulates it): made the first time the pattern
+    /// occurs (h is recovered as `S (S⁻¹h)`), kept among the last [`PARTIAL_PATTERNS`].
+    pub fn terms(
+        &mut self,
+        s_inv_h: &[Vec<f64>],
+        dy: &[f64],
+    ) -> Result<ObservedTerms<'_>, FilterError> {
+        let observed = |p: &[bool]| p.iter().zip(dy).all(|(&o, v)| o == !v.is_nan());
+        let i = match self.parts.iter().position(|(p, _, _)| observed(p)) {
+            Some(i) => i,
+            None => {
+                let pattern: Vec<bool> = dy.iter().map(|v| !v.is_nan()).collect();
+                let part = self.make(s_inv_h, pattern)?;
+                self.parts.truncate(PARTIAL_PATTERNS - 1);
+                self.parts.insert(0, part);
+                0
+            }
+        };
+        self.parts[..=i].rotate_right(1);
+        self.values.clear();
+        self.values.extend(dy.iter().copied().filter(|v| !v.is_nan()));
+        let (_, gain, half) = &self.parts[0];
+        Ok(ObservedTerms {
+            dy: &self.values,
+            gain,
+            half,
+        })
+    }
+
+    fn make(
+        &self,
+        s_inv_h: &[Vec<f64>],
+        pattern: Vec<bool>,
+    ) -> Result<(Vec<bool>, Vec<Vec<f64>>, Vec<f64>), FilterError> {
+        let rows: Vec<usize> = (0..pattern.len()).filter(|&j| pattern[j]).collect();
+        let s = &self.noise_cov;
+        let s_oo = DMatrix::from_fn(rows.len(), rows.len(), |a, b| s[(rows[a], rows[b])]);
+        let s_oo_inv = s_oo.try_inverse().ok_or(FilterError::NotPositiveDefinite {
+            what: "observed block of the observation noise covariance",
+        })?;
+        let len = s_inv_h.first().map_or(0, Vec::len);
+        let (m, k) = (pattern.len(), rows.len());
+        let mut gain = vec![vec![0.0; len]; k];
+        let mut half = vec![0.0; len];
+        let (mut sh, mut h_o) = (vec![0.0; m], vec![0.0; k]);
+        for i in 0..len {
+            for (v, column) in sh.iter_mut().zip(s_inv_h) {
+                *v = column[i];
+            }
+            for (h, &r) in h_o.iter_mut().zip(&rows) {
+                *h = (0..m).map(|b| s[(r, b)] * sh[b]).sum();
+            }
+            let mut hgh = 0.0;
+            for (a, g) in gain.iter_mut().enumerate() {
+                g[i] = (0..k).map(|b| s_oo_inv[(a, b)] * h_o[b]).sum();
+                hgh += h_o[a] * g[i];
+            }
+            half[i] = 0.5 * hgh;
+        }
+        Ok((pattern, gain, half))
+    }
+}

@@ -32,6 +32,7 @@ use crate::diagnostics::yau_system::{self, Affine};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
+use crate::model::dmz::PartialIncrements;
 use crate::model::{Model, ObservationModel, Prior};
 
 /// Parameters of the direct method.
@@ -115,7 +116,11 @@ pub struct DirectFilter {
     name: String,
     grid: TensorGrid,
     params: DirectParams,
-    coefficients: KolmogorovCoefficients,
+    /// The coefficients of (32) over an interval with its increment, and without the
+    /// observation's −½Σh² (a gap, or the missing components' share of it).
+    coefficients: [KolmogorovCoefficients; 2],
+    /// The observation factor's terms for increments with some components missing.
+    partial: PartialIncrements,
     /// F at the grid nodes.
     potential: Vec<f64>,
     /// h at the grid nodes, per component.
@@ -169,12 +174,14 @@ pub fn check_model(model: &Model) -> Result<(), FilterError> {
 
 /// The (C1)–(C3) check of [`crate::diagnostics::yau_system`] with the given 1-D
 /// `l = slope · x + offset`: the Kolmogorov quadratic `q(x) = Q x² + p x + r` of (32),
-/// `q = ½(l² − l′ − η)`, or the report of the failing conditions.
+/// `q = ½(l² − l′ − η)`, and that of an interval without an observation, `q + ½Σh²` (η of
+/// (7) without its Σh², quadratic since (C2) makes Σh² so) — or the report of the failing
+/// conditions.
 fn kolmogorov_quadratic(
     model: &Model,
     bounds: &[(f64, f64)],
     linear: [f64; 2],
-) -> Result<[f64; 3], FilterError> {
+) -> Result<[[f64; 3]; 2], FilterError> {
     let [slope, offset] = linear;
     let l = Affine {
         d_mat: DMatrix::from_element(1, 1, slope),
@@ -184,12 +191,21 @@ fn kolmogorov_quadratic(
     if let Some(message) = system.failure() {
         return Err(FilterError::Unsuitable(message));
     }
-    let eta = system.eta.expect("(C3) holds");
-    Ok([
+    let (eta, h2) = (
+        system.eta.expect("(C3) holds"),
+        system.sum_h2.expect("(C2) holds"),
+    );
+    let q = [
         0.5 * (slope * slope - eta.a[(0, 0)]),
         0.5 * (2.0 * slope * offset - eta.b[0]),
         0.5 * (offset * offset - slope - eta.c),
-    ])
+    ];
+    let without_h2 = [
+        q[0] + 0.5 * h2.a[(0, 0)],
+        q[1] + 0.5 * h2.b[0],
+        q[2] + 0.5 * h2.c,
+    ];
+    Ok([q, without_h2])
 }
 
 /// Whether the direct method applies to `model` on `bounds` with `params` — the model checks
@@ -221,7 +237,7 @@ impl DirectFilter {
         let x: Vec<f64> = (0..params.points).map(|i| grid.coordinate(0, i)).collect();
         let dx = grid.spacing()[0];
         let [slope, offset] = params.linear;
-        let [qq, p, r] = kolmogorov_quadratic(model, bounds, params.linear)?;
+        let [full, without_h2] = kolmogorov_quadratic(model, bounds, params.linear)?;
         let (mut fv, mut hv) = ([0.0], vec![0.0; model.m]);
         let mut h = vec![Vec::with_capacity(x.len()); model.m];
         let mut rest = Vec::with_capacity(x.len());
@@ -247,7 +263,7 @@ impl DirectFilter {
         for i in 1..x.len() {
             potential[i] = potential[i - 1] + 0.5 * dx * (rest[i - 1] + rest[i]);
         }
-        let coefficients = KolmogorovCoefficients {
+        let coefficients = |[qq, p, r]: [f64; 3]| KolmogorovCoefficients {
             d_mat: DMatrix::from_element(1, 1, slope),
             d_vec: DVector::from_element(1, offset),
             q: DMatrix::from_element(1, 1, qq),
@@ -262,7 +278,8 @@ impl DirectFilter {
         let mut filter = DirectFilter {
             name,
             params: params.clone(),
-            coefficients,
+            coefficients: [coefficients(full), coefficients(without_h2)],
+            partial: PartialIncrements::new(DMatrix::identity(model.m, model.m)),
             potential,
             h,
             u_hat: vec![0.0; x.len()],
@@ -341,8 +358,11 @@ fn exp_shifted(log: &[f64], out: &mut [f64]) {
 
 impl DirectFilter {
     /// One interval of Algorithm 2 with a checked increment over Δτ > 0 (it may fail
-    /// half-way).
-    fn advance(&mut self, obs: &Observation) -> Result<(), FilterError> {
+    /// half-way). With every component observed, (32) carries η's Σh² and the factor is
+    /// `exp(Δyᵀh)` (30); otherwise (32) carries no observation term and the factor is the
+    /// observed components' likelihood `exp(Δy_Oᵀh_O − ½|h_O|²Δτ)` (S = I) — exact for a gap,
+    /// and for a partial increment the splitting of the in-update form (first order in Δτ).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
         let len = self.u_hat.len();
         let StepWork {
             decomposition,
@@ -362,13 +382,25 @@ impl DirectFilter {
             return Err(FilterError::MassLost);
         }
         // Exponents of every propagated term plus the observation factor, one common shift.
-        for (j, g) in factor.iter_mut().enumerate() {
-            *g = obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum();
+        let k = &self.coefficients[usize::from(observed != Observed::All)];
+        match observed {
+            Observed::All => {
+                for (j, g) in factor.iter_mut().enumerate() {
+                    *g = obs.value.iter().zip(&self.h).map(|(y, h)| y * h[j]).sum();
+                }
+            }
+            Observed::Some => {
+                let t = self.partial.terms(&self.h, obs.value)?;
+                for (j, g) in factor.iter_mut().enumerate() {
+                    let fit: f64 = t.dy.iter().zip(t.gain).map(|(y, h)| y * h[j]).sum();
+                    *g = fit - t.half[j] * obs.dt;
+                }
+            }
+            Observed::Nothing => factor.iter_mut().for_each(|g| *g = 0.0),
         }
         quadratics.clear();
         for t in terms {
-            let [a, b, c] =
-                propagate_scalar_term(t, &self.coefficients, obs.dt, self.params.substeps);
+            let [a, b, c] = propagate_scalar_term(t, k, obs.dt, self.params.substeps);
             if !(a.is_finite() && b.is_finite() && c.is_finite()) {
                 return Err(FilterError::NonFinite {
                     what: "Riccati solution",
@@ -410,7 +442,6 @@ impl DirectFilter {
             }
             None => (0, len),
         }));
-        let k = &self.coefficients;
         let (qq, qp, qr) = (k.q[(0, 0)], k.p[0], k.r);
         for (((e, &r), &g), &xj) in carried.iter_mut().zip(residual).zip(factor).zip(x) {
             *e = if r != 0.0 {
@@ -455,21 +486,11 @@ impl Filter for DirectFilter {
         if obs.dt <= 0.0 {
             return Ok(());
         }
-        match observed {
-            Observed::All => {}
-            Observed::Some => return Err(crate::filters::partial_unsupported(&self.name)),
-            Observed::Nothing => {
-                return Err(FilterError::BadObservation(format!(
-                    "{}: the direct method's Riccati equations carry −½h² (η of (7)), so an interval without an increment cannot be predicted",
-                    self.name
-                )))
-            }
-        }
         let (saved, density, terms, share) = &mut self.saved;
         saved.save(&self.u_hat, &self.estimate);
         density.copy_from_slice(&self.density);
         (*terms, *share) = (self.terms, self.residual_share);
-        let stepped = self.advance(obs);
+        let stepped = self.advance(obs, observed);
         if stepped.is_err() {
             let (saved, density, terms, share) = &self.saved;
             saved.restore(&mut self.u_hat, &mut self.estimate);

@@ -44,7 +44,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::linalg;
-use crate::model::dmz::{DmzCoefficients, Likelihood};
+use crate::model::dmz::{DmzCoefficients, Likelihood, PartialIncrements};
 use crate::model::{Model, Prior};
 
 /// Largest number of basis functions per dimension.
@@ -325,6 +325,8 @@ pub struct SpectralFilter {
     s_inv_h: Vec<Vec<f64>>,
     /// `½hᵀS⁻¹h T₀` per node when the likelihood is applied in the update, else zero.
     potential: Vec<f64>,
+    /// The factor's terms for increments with some components missing.
+    partial: PartialIncrements,
     /// On-line coefficients c (N₂ per dimension, first dimension fastest).
     coeffs: Vec<f64>,
     offline: Vec<f64>,
@@ -434,6 +436,7 @@ impl SpectralFilter {
             weight,
             coords,
             s_inv_h: c.s_inv_h,
+            partial: PartialIncrements::of(model, "the spectral filters of 004")?,
             potential: if in_operator {
                 vec![0.0; len]
             } else {
@@ -622,24 +625,45 @@ impl SpectralFilter {
         }
     }
 
-    /// The robust-form factor `exp(hᵀS⁻¹Δy)` (42) — times `exp(−½hᵀS⁻¹h T₀)` when the
-    /// likelihood is in the update — at the nodes, shifted by its largest exponent. Products
-    /// below zero (from negative nodal values, the polynomial's ripples where the density is
-    /// small) are flushed to zero, so the factor cannot turn them into negative mass.
-    fn update(&mut self, dy: &[f64], intervals: f64) {
-        let a = &mut self.exponents;
-        for (a, p) in a.iter_mut().zip(&self.potential) {
-            *a = -p * intervals;
+    /// The robust-form factor `exp(hᵀS⁻¹Δy)` (42) — times `exp(−½hᵀS⁻¹h T₀)` per interval T₀
+    /// when the likelihood is in the update — at the nodes, shifted by its largest exponent;
+    /// an increment with some components missing gets the factor of the observed ones,
+    /// `exp(Δy_Oᵀ S_OO⁻¹ h_O − ½ h_Oᵀ S_OO⁻¹ h_O Δτ)` ([`PartialIncrements`]). Products below
+    /// zero (from negative nodal values, the polynomial's ripples where the density is small)
+    /// are flushed to zero, so the factor cannot turn them into negative mass.
+    fn update(&mut self, dy: &[f64], dt: f64) -> Result<(), FilterError> {
+        let (values, a) = (&mut self.values, &mut self.exponents);
+        if dy.iter().any(|v| v.is_nan()) {
+            let t = self.partial.terms(&self.s_inv_h, dy)?;
+            observation_factor(values, a, t.gain, (t.half, dt), t.dy);
+        } else {
+            let intervals = dt / self.t0;
+            observation_factor(values, a, &self.s_inv_h, (&self.potential, intervals), dy);
         }
-        for (y, sh) in dy.iter().zip(&self.s_inv_h) {
-            for (a, h) in a.iter_mut().zip(sh) {
-                *a += y * h;
-            }
-        }
-        let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
-        // Flushing products below 0 to 0 clips the negative values.
-        linalg::scale_by_exp(&mut self.values, a, shift, 0.0);
+        Ok(())
     }
+}
+
+/// `values ← values · exp(Δyᵀg − scale · potential − shift)` at the nodes, with `shift` the
+/// largest exponent (see [`SpectralFilter::update`]); `a` is scratch.
+fn observation_factor(
+    values: &mut [f64],
+    a: &mut [f64],
+    gain: &[Vec<f64>],
+    (potential, scale): (&[f64], f64),
+    dy: &[f64],
+) {
+    for (a, p) in a.iter_mut().zip(potential) {
+        *a = -p * scale;
+    }
+    for (y, sh) in dy.iter().zip(gain) {
+        for (a, h) in a.iter_mut().zip(sh) {
+            *a += y * h;
+        }
+    }
+    let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
+    // Flushing products below 0 to 0 clips the negative values.
+    linalg::scale_by_exp(values, a, shift, 0.0);
 }
 
 /// The estimate (41) from nodal values on the on-line grid of an N-dimensional model: mean
@@ -799,14 +823,13 @@ impl Filter for SpectralFilter {
         if obs.dt <= 0.0 {
             return Ok(());
         }
-        if observed == Observed::Some {
-            return Err(crate::filters::partial_unsupported(&self.name));
-        }
         let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
         // Off-line, before anything moves (it fails only on a degenerate basis). A gap with
         // the likelihood in the operator has operators of its own (T₀'s first: the
         // remainder's is then the most recent).
-        let gap = observed == Observed::Nothing && self.likelihood_in_operator;
+        // An increment with some components missing is the same prediction, then the observed
+        // components' factor.
+        let gap = observed != Observed::All && self.likelihood_in_operator;
         if gap && whole > 0 {
             self.gap(self.t0)?;
         }
@@ -826,10 +849,10 @@ impl Filter for SpectralFilter {
                 (true, false) => Leg::Gap(self.gap_index(self.t0)),
                 (true, true) => Leg::Gap(self.gap_index(rest)),
             });
-            if leg == legs && observed == Observed::All {
-                self.update(obs.value, obs.dt / self.t0);
+            if leg == legs && observed != Observed::Nothing {
+                stepped = self.update(obs.value, obs.dt);
             }
-            stepped = self.normalise_and_project();
+            stepped = stepped.and_then(|()| self.normalise_and_project());
             if stepped.is_err() {
                 break;
             }

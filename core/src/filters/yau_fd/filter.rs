@@ -17,6 +17,7 @@ use crate::grid::dst::DstPlan;
 use crate::grid::lines::LineSystems;
 use crate::grid::{for_each_line, TensorGrid};
 use crate::linalg;
+use crate::model::dmz::PartialIncrements;
 use crate::model::{Model, Prior};
 
 /// IEM in D dimensions by Lie operator splitting: `A = Σ_d A_d` with
@@ -229,47 +230,68 @@ impl QiemStep {
 }
 
 impl CellSamples {
-    /// [`YauYauFilter::update`] with the factor averaged over each cell's samples: every
-    /// exponent `a_is + e_i ln 2` is shifted by the largest, so the mean of the exponentials
-    /// is at most 1 and no intermediate overflows.
-    fn update(&mut self, u: &mut [f64], dy: &[f64], dt_obs: f64) {
+    /// [`YauYauFilter::update`] with the factor averaged over each cell's samples (only the
+    /// observed components of a partly missing increment, [`PartialIncrements`]).
+    fn update(&mut self, u: &mut [f64], dy: &[f64], dt_obs: f64) -> Result<(), FilterError> {
         let k = self.per_node;
-        for (a, h) in self.exponents.iter_mut().zip(&self.half_hsh) {
-            *a = -dt_obs * h;
+        if dy.iter().any(|v| v.is_nan()) {
+            let t = self.partial.terms(&self.s_inv_h, dy)?;
+            cell_factor(k, &mut self.exponents, u, t.gain, t.half, t.dy, dt_obs);
+        } else {
+            let (gain, half) = (&self.s_inv_h, &self.half_hsh);
+            cell_factor(k, &mut self.exponents, u, gain, half, dy, dt_obs);
         }
-        for (y, sh) in dy.iter().zip(&self.s_inv_h) {
-            for (a, h) in self.exponents.iter_mut().zip(sh) {
-                *a += y * h;
+        Ok(())
+    }
+}
+
+/// The factor `exp(Δyᵀg − ½hᵀS⁻¹h Δτ)` (with `g = S⁻¹h`, `half = ½hᵀS⁻¹h`) averaged over the
+/// `k` samples of each cell: every exponent `a_is + e_i ln 2` is shifted by the largest, so the
+/// mean of the exponentials is at most 1 and no intermediate overflows.
+fn cell_factor(
+    k: usize,
+    exponents: &mut [f64],
+    u: &mut [f64],
+    gain: &[Vec<f64>],
+    half: &[f64],
+    dy: &[f64],
+    dt_obs: f64,
+) {
+    for (a, h) in exponents.iter_mut().zip(half) {
+        *a = -dt_obs * h;
+    }
+    for (y, sh) in dy.iter().zip(gain) {
+        for (a, h) in exponents.iter_mut().zip(sh) {
+            *a += y * h;
+        }
+    }
+    let mut shift = f64::NEG_INFINITY;
+    for (v, a) in u.iter_mut().zip(exponents.chunks_exact_mut(k)) {
+        if *v > 0.0 {
+            let (m, e) = linalg::binary_split(*v);
+            *v = m;
+            for a in a.iter_mut() {
+                *a += e * core::f64::consts::LN_2;
+                shift = linalg::larger(shift, *a);
             }
         }
-        let mut shift = f64::NEG_INFINITY;
-        for (v, a) in u.iter_mut().zip(self.exponents.chunks_exact_mut(k)) {
-            if *v > 0.0 {
-                let (m, e) = linalg::binary_split(*v);
-                *v = m;
-                for a in a.iter_mut() {
-                    *a += e * core::f64::consts::LN_2;
-                    shift = linalg::larger(shift, *a);
-                }
-            }
+    }
+    if shift == f64::NEG_INFINITY {
+        return;
+    }
+    let inv = 1.0 / k as f64;
+    for (v, a) in u.iter_mut().zip(exponents.chunks_exact(k)) {
+        if *v <= 0.0 {
+            *v = 0.0;
+            continue;
         }
-        if shift == f64::NEG_INFINITY {
-            return;
-        }
-        let inv = 1.0 / k as f64;
-        for (v, a) in u.iter_mut().zip(self.exponents.chunks_exact(k)) {
-            if *v <= 0.0 {
-                *v = 0.0;
-                continue;
-            }
-            let mean: f64 = a
-                .iter()
-                .map(|a| linalg::exp_nonpositive(linalg::at_most_zero(a - shift)))
-                .sum::<f64>()
-                * inv;
-            let w = *v * mean;
-            *v = if w < super::FLUSH_BELOW { 0.0 } else { w };
-        }
+        let mean: f64 = a
+            .iter()
+            .map(|a| linalg::exp_nonpositive(linalg::at_most_zero(a - shift)))
+            .sum::<f64>()
+            * inv;
+        let w = *v * mean;
+        *v = if w < super::FLUSH_BELOW { 0.0 } else { w };
     }
 }
 
@@ -355,6 +377,8 @@ pub struct YauYauFilter {
     moments: crate::grid::Moments,
     /// The observation factor's samples inside every cell, when averaged over the cell.
     cell: Option<CellSamples>,
+    /// The factor's terms for increments with some components missing.
+    partial: PartialIncrements,
 }
 
 /// `S⁻¹h` and `½hᵀS⁻¹h` at K^D points inside every cell (node-major), for the cell average
@@ -365,6 +389,8 @@ struct CellSamples {
     s_inv_h: Vec<Vec<f64>>,
     half_hsh: Vec<f64>,
     exponents: Vec<f64>,
+    /// The factor's terms for increments with some components missing.
+    partial: PartialIncrements,
 }
 
 impl CellSamples {
@@ -403,6 +429,7 @@ impl CellSamples {
                 alloc::vec![0.0; len]
             },
             exponents: alloc::vec![0.0; len],
+            partial: PartialIncrements::of(model, "the Yau–Yau filters")?,
         })
     }
 }
@@ -465,6 +492,7 @@ impl YauYauFilter {
             prediction: None,
             warnings: Vec::new(),
             cell,
+            partial: PartialIncrements::of(model, "the Yau–Yau filters")?,
             estimate: Estimate {
                 mean: DVector::zeros(model.n),
                 covariance: None,
@@ -562,40 +590,21 @@ impl YauYauFilter {
         Ok(())
     }
 
-    /// The robust-DMZ factor (15) in the log domain (see the module doc), without a logarithm:
-    /// each value is split as `u_i = m_i 2^{e_i}` with `m_i ∈ [½, 1)`, the exponent
-    /// `a_i + e_i ln 2` (with `a_i = Δyᵀ S⁻¹ h(s_i)`, less `½ hᵀS⁻¹h(s_i) Δτ` when the likelihood
-    /// is in the update) is within ln 2 of `a_i + ln u_i`, and the new value is
-    /// `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value is at
-    /// most 1, the largest at least ½, and no intermediate overflows.
-    fn update(&mut self, dy: &[f64], dt_obs: f64) {
+    /// The robust-DMZ factor (15) in the log domain (see [`observation_factor`]); an increment
+    /// with some components missing gets the factor of the observed ones
+    /// ([`PartialIncrements`]).
+    fn update(&mut self, dy: &[f64], dt_obs: f64) -> Result<(), FilterError> {
         if let Some(cell) = &mut self.cell {
-            cell.update(&mut self.u, dy, dt_obs);
-            return;
+            return cell.update(&mut self.u, dy, dt_obs);
         }
-        let a = &mut self.tmp;
-        // The components after the first: a_i = Σ_{j ≥ 1} y_j (S⁻¹h)_j(s_i); the first and the
-        // rest of the exponent follow in one pass with the split.
-        for (j, (y, sh)) in dy.iter().zip(&self.op.s_inv_h).enumerate().skip(1) {
-            for (a, h) in a.iter_mut().zip(sh) {
-                *a = if j == 1 { y * h } else { *a + y * h };
-            }
+        let (u, a) = (&mut self.u, &mut self.tmp);
+        if dy.iter().any(|v| v.is_nan()) {
+            let t = self.partial.terms(&self.op.s_inv_h, dy)?;
+            observation_factor(u, a, t.gain, t.half, t.dy, dt_obs);
+        } else {
+            observation_factor(u, a, &self.op.s_inv_h, &self.op.half_hsh, dy, dt_obs);
         }
-        let shift = split_exponents(
-            &mut self.u,
-            a,
-            &self.op.s_inv_h[0],
-            &self.op.half_hsh,
-            dy[0],
-            dt_obs,
-            dy.len() > 1,
-        );
-        if shift == f64::NEG_INFINITY {
-            // No mass left: `normalise` reports it.
-            return;
-        }
-        // Clamped at 0 against round-off; nodes without mass have −∞ and get 0.
-        linalg::scale_by_exp(&mut self.u, a, shift, super::FLUSH_BELOW);
+        Ok(())
     }
 
     /// Carries the density over `interval`: whole intervals Δτ with the solver made for Δτ,
@@ -653,19 +662,51 @@ impl YauYauFilter {
 
     /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
     fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
-        if obs.dt > 0.0
-            && observed == Observed::Nothing
-            && self.params.likelihood == Likelihood::InOperator
-        {
-            self.predict_without_likelihood(obs.dt);
-        } else if obs.dt > 0.0 {
-            self.propagate(obs.dt);
-            if observed == Observed::All {
-                self.update(obs.value, obs.dt);
+        if obs.dt > 0.0 {
+            // With the likelihood in the operator, only a fully observed increment has its
+            // −½hᵀS⁻¹h there; otherwise the Fokker–Planck part alone, and the observed
+            // components' factor with their ½h_Oᵀ S_OO⁻¹ h_O.
+            if observed != Observed::All && self.params.likelihood == Likelihood::InOperator {
+                self.predict_without_likelihood(obs.dt);
+            } else {
+                self.propagate(obs.dt);
+            }
+            if observed != Observed::Nothing {
+                self.update(obs.value, obs.dt)?;
             }
         }
         self.normalise()
     }
+}
+
+/// The robust-DMZ factor (15) in the log domain, without a logarithm: each value is split as
+/// `u_i = m_i 2^{e_i}` with `m_i ∈ [½, 1)`, the exponent `a_i + e_i ln 2` (with
+/// `a_i = Δyᵀ g(s_i) − half(s_i) Δτ`, where `g = S⁻¹h` and `half = ½ hᵀS⁻¹h` when the likelihood
+/// is in the update, zero when it is in the operator) is within ln 2 of `a_i + ln u_i`, and the
+/// new value is `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value
+/// is at most 1, the largest at least ½, and no intermediate overflows. `a` is scratch.
+fn observation_factor(
+    u: &mut [f64],
+    a: &mut [f64],
+    gain: &[Vec<f64>],
+    half: &[f64],
+    dy: &[f64],
+    dt_obs: f64,
+) {
+    // The components after the first: a_i = Σ_{j ≥ 1} y_j g_j(s_i); the first and the rest of
+    // the exponent follow in one pass with the split.
+    for (j, (y, sh)) in dy.iter().zip(gain).enumerate().skip(1) {
+        for (a, h) in a.iter_mut().zip(sh) {
+            *a = if j == 1 { y * h } else { *a + y * h };
+        }
+    }
+    let shift = split_exponents(u, a, &gain[0], half, dy[0], dt_obs, dy.len() > 1);
+    if shift == f64::NEG_INFINITY {
+        // No mass left: `normalise` reports it.
+        return;
+    }
+    // Clamped at 0 against round-off; nodes without mass have −∞ and get 0.
+    linalg::scale_by_exp(u, a, shift, super::FLUSH_BELOW);
 }
 
 impl Solver {
@@ -715,9 +756,6 @@ impl Filter for YauYauFilter {
             ObservationKind::Increment,
             self.op.s_inv_h.len(),
         )?;
-        if observed == Observed::Some {
-            return Err(crate::filters::partial_unsupported(&self.name));
-        }
         self.saved.save(&self.u, &self.estimate);
         let stepped = self.advance(obs, observed);
         if stepped.is_err() {
