@@ -951,6 +951,14 @@ impl ExperimentRun {
         self.next = last + 1;
     }
 
+    /// Appends the observation `value` at time `t` to a run over recorded data
+    /// ([`Recording::push`]: refused, the run left as it was, when it does not fit); the next
+    /// [`ExperimentRun::advance`] processes it. A live feed: start with
+    /// [`Experiment::start_recorded`] on the rows so far and push each new one.
+    pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), ZakaiError> {
+        self.data.push(t, value)
+    }
+
     /// Processes up to `count` further observations; returns how many were processed.
     pub fn advance(
         &mut self,

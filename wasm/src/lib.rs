@@ -412,6 +412,30 @@ impl Session {
         })
     }
 
+    /// A session over recorded observations that grows as they come: appends the observation
+    /// `values` (NaN marks a missing component; none observed is a prediction only) at time `t`
+    /// and steps every method over it — their predict and update with the user's own data.
+    /// Returns what [`Session::step`] returns; refused (the session unchanged) for a simulated
+    /// session, unread rows still pending, a time not after the last, or a wrong or infinite
+    /// value.
+    pub fn push(&mut self, t: f64, values: Vec<f64>) -> Result<JsValue, JsError> {
+        let Some(recording) = &mut self.recording else {
+            return Err(js_error(
+                "push needs a session over recorded observations (Session.fromRecording)",
+            ));
+        };
+        if !self.run.is_finished() {
+            return Err(js_error(
+                "step through the recorded rows before pushing new ones",
+            ));
+        }
+        self.run.push(t, &values).map_err(js_error)?;
+        recording
+            .push(t, &values)
+            .expect("the run's recording took the same row");
+        self.step(1)
+    }
+
     /// Restarts the same scenario with a new seed.
     pub fn reset(&mut self, seed: f64) -> Result<(), JsError> {
         let seed = seed_from_js(seed)?;

@@ -162,6 +162,58 @@ fn a_session_filters_recorded_observations() {
     assert!(err.contains("observations line 3, column dy1"), "{err}");
 }
 
+/// A session fed row by row (`push`) is the session over the whole file: starting from the
+/// first 11 rows and pushing the rest one at a time — with a gap (a row of NaN) and a step of
+/// 2.5 Δτ — gives every method's estimates of the session that read them all at once, bit for
+/// bit. A time that does not follow, an infinite value, a wrong length and a push into a
+/// simulated session are refused, and the session is as it was.
+#[wasm_bindgen_test]
+fn a_session_takes_pushed_observations() {
+    let config = presets::preset("cubic-sensor-1d").unwrap();
+    let experiment = zakai::Experiment::new(config.clone()).unwrap();
+    let data = zakai::Recording::from(experiment.simulate(5));
+    let rows = 40;
+    let (mut times, mut dy) = (data.times[..rows].to_vec(), data.observations[..rows].to_vec());
+    times[rows - 1] = times[rows - 2] + 2.5 * config.time.dt_obs;
+    dy[20] = f64::NAN;
+    let csv = |k: usize| {
+        let mut text = String::from("t,dy1\n");
+        for i in 0..k {
+            text += &format!("{},{}\n", times[i], dy[i]);
+        }
+        text
+    };
+    let mut whole =
+        Session::from_recording(config_js("cubic-sensor-1d"), &csv(rows), None, Some(5.0)).unwrap();
+    whole.step(usize::MAX).unwrap();
+    let mut live =
+        Session::from_recording(config_js("cubic-sensor-1d"), &csv(11), None, Some(5.0)).unwrap();
+    live.step(usize::MAX).unwrap();
+    let position = live.position();
+    for (what, t, value) in [
+        ("an earlier time", times[5], vec![0.0]),
+        ("an infinite value", times[11], vec![f64::INFINITY]),
+        ("two values", times[11], vec![0.0, 0.0]),
+    ] {
+        let e = message(live.push(t, value).err().unwrap_or_else(|| panic!("{what} taken")));
+        assert!(!e.is_empty(), "{what}");
+        assert_eq!(live.position(), position, "{what} moved the session");
+    }
+    for k in 11..rows {
+        live.push(times[k], vec![dy[k]]).unwrap();
+    }
+    assert!(live.finished());
+    for i in 0..config.methods.len() {
+        let (a, b) = (whole.estimates(i, 0, usize::MAX), live.estimates(i, 0, usize::MAX));
+        assert_eq!(a.len(), rows, "method {i}");
+        assert_eq!(a, b, "method {i}");
+    }
+    let mut simulated = Session::new(config_js("cubic-sensor-1d"), Some(5.0)).unwrap();
+    simulated.step(usize::MAX).unwrap();
+    let e = message(simulated.push(1e6, vec![0.0]).err().unwrap());
+    assert!(e.contains("recorded observations"), "{e}");
+}
+
 /// A forecast from the middle of a run: every method of the cubic sensor predicts 20 steps
 /// of Δτ on a fork (the run does not move: its estimates and position stay), the spread grows
 /// from the first step to the last, and bad requests are errors, not panics.

@@ -119,6 +119,47 @@ impl Recording {
         }
     }
 
+    /// Appends the observation `value` at time `t` (a recording that grows as a sensor reports):
+    /// refused, the recording left as it was, when t is not finite or does not follow the last
+    /// time, the row does not have m components or has an infinite one (NaN marks a missing
+    /// component), or the recording holds the truth (the new row would have none).
+    pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), crate::ZakaiError> {
+        let mut p = Vec::new();
+        let last = self.times.last().copied().unwrap_or(f64::NEG_INFINITY);
+        if !(t.is_finite() && t > last) {
+            p.push(ConfigProblem::new(
+                "t",
+                format!("must be finite and after the last time {last}, got {t}"),
+            ));
+        }
+        if value.len() != self.m {
+            p.push(ConfigProblem::new(
+                "observation",
+                format!("needs m = {} values, got {}", self.m, value.len()),
+            ));
+        } else if let Some(j) = value.iter().position(|v| v.is_infinite()) {
+            p.push(ConfigProblem::new(
+                "observation",
+                format!(
+                    "component {}: infinite (a missing value is NaN)",
+                    j + 1
+                ),
+            ));
+        }
+        if self.truth.is_some() {
+            p.push(ConfigProblem::new(
+                "truth",
+                "the recording holds the true states, which a new row would not have",
+            ));
+        }
+        if !p.is_empty() {
+            return Err(crate::ZakaiError::Config(p));
+        }
+        self.times.push(t);
+        self.observations.extend_from_slice(value);
+        Ok(())
+    }
+
     /// N, the number of observation intervals.
     pub fn steps(&self) -> usize {
         self.times.len().saturating_sub(1)
