@@ -810,7 +810,11 @@ fn sensor_one_increments(rows: usize, s11: f64) -> Vec<f64> {
 }
 
 /// Mean and variance after each of `rows` steps of `f`, given increments `row(k)`.
-fn moments_along(f: &mut dyn Filter, rows: usize, row: impl Fn(usize) -> Vec<f64>) -> Vec<[f64; 2]> {
+fn moments_along(
+    f: &mut dyn Filter,
+    rows: usize,
+    row: impl Fn(usize) -> Vec<f64>,
+) -> Vec<[f64; 2]> {
     (0..rows)
         .map(|k| {
             let value = row(k);
@@ -836,7 +840,10 @@ fn moments_along(f: &mut dyn Filter, rows: usize, row: impl Fn(usize) -> Vec<f64
 fn a_sensor_that_never_reports_is_the_model_without_it() {
     let rows = 30;
     let dy = sensor_one_increments(rows, 0.5);
-    let two = continuous_model(&["x", "0.5*x^2"], serde_json::json!([[0.5, 0.2], [0.2, 0.4]]));
+    let two = continuous_model(
+        &["x", "0.5*x^2"],
+        serde_json::json!([[0.5, 0.2], [0.2, 0.4]]),
+    );
     let one = continuous_model(&["x"], serde_json::json!([[0.5]]));
     let methods = [
         serde_json::json!({ "method": "qiem", "points": [201], "dt": 0.005 }),
@@ -890,7 +897,9 @@ fn the_direct_method_crosses_a_gap_and_takes_a_partial_increment() {
     let built = |e: &Experiment| e.build_method(&method, "direct".into(), 1).unwrap();
 
     let mut f = built(&one);
-    let before = *moments_along(f.as_mut(), 10, |k| vec![dy[k]]).last().unwrap();
+    let before = *moments_along(f.as_mut(), 10, |k| vec![dy[k]])
+        .last()
+        .unwrap();
     let gap: f64 = 0.5;
     for _ in 0..10 {
         f.step(&Observation::increment(0.05, &[f64::NAN])).unwrap();
@@ -914,6 +923,71 @@ fn the_direct_method_crosses_a_gap_and_takes_a_partial_increment() {
         assert!(
             (x[0] - y[0]).abs() < 0.03 * y[1].sqrt() && (x[1] - y[1]).abs() < 0.03 * y[1],
             "row {k}: {x:?} with sensor 2 missing, {y:?} with sensor 1 alone"
+        );
+    }
+}
+
+/// Whether `f`'s self-check reports that its steps keep making operators.
+fn reports_rebuilds(f: &dyn Filter) -> bool {
+    let mut concerns = Vec::new();
+    f.self_check(&mut concerns);
+    concerns
+        .iter()
+        .any(|c| c.check == zakai::filters::REBUILT_SHARE_CHECK)
+}
+
+/// Steps whose lengths keep changing (jittered time stamps, Δτ(1 + u/100)) make an operator
+/// for nearly every step: the grid and spectral filters (QIEM, the spectral filter, the
+/// separation filter) say so in their self-check after 12 such steps, and do not when the
+/// irregular steps repeat one length (1.5Δτ: one remainder operator, reused).
+#[test]
+fn steps_of_ever_changing_length_are_reported() {
+    let cubic = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let continuous = Experiment::new(cubic.clone()).unwrap();
+    let discrete = Experiment::new(linear_two_sensor(
+        serde_json::json!([{ "method": "kalman" }]),
+    ))
+    .unwrap();
+    let cases = [
+        (
+            &continuous,
+            serde_json::json!({ "method": "qiem", "points": [201] }),
+        ),
+        (&continuous, serde_json::json!({ "method": "spectral" })),
+        (
+            &discrete,
+            serde_json::json!({ "method": "separation", "cells": [200] }),
+        ),
+    ];
+    for (e, params) in cases {
+        let dt = e.config().time.dt_obs;
+        let m: zakai::MethodConfig = serde_json::from_value(params.clone()).unwrap();
+        let value = vec![0.01; e.model().m];
+        let observation = |step: f64| {
+            if e.model().m == 1 {
+                Observation::increment(step, &value)
+            } else {
+                Observation::measurement(step, &value)
+            }
+        };
+        let (mut regular, mut jittered) = (
+            e.build_method(&m, "m".into(), 1).unwrap(),
+            e.build_method(&m, "m".into(), 1).unwrap(),
+        );
+        let mut rng = Lcg(3);
+        for _ in 0..12 {
+            regular.step(&observation(1.5 * dt)).unwrap();
+            jittered
+                .step(&observation(dt * (1.0 + rng.uniform() / 100.0)))
+                .unwrap();
+        }
+        assert!(
+            !reports_rebuilds(regular.as_ref()),
+            "{params}: 1.5 Δτ steps"
+        );
+        assert!(
+            reports_rebuilds(jittered.as_ref()),
+            "{params}: jittered steps"
         );
     }
 }

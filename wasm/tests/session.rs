@@ -173,7 +173,10 @@ fn a_session_takes_pushed_observations() {
     let experiment = zakai::Experiment::new(config.clone()).unwrap();
     let data = zakai::Recording::from(experiment.simulate(5));
     let rows = 40;
-    let (mut times, mut dy) = (data.times[..rows].to_vec(), data.observations[..rows].to_vec());
+    let (mut times, mut dy) = (
+        data.times[..rows].to_vec(),
+        data.observations[..rows].to_vec(),
+    );
     times[rows - 1] = times[rows - 2] + 2.5 * config.time.dt_obs;
     dy[20] = f64::NAN;
     let csv = |k: usize| {
@@ -195,7 +198,11 @@ fn a_session_takes_pushed_observations() {
         ("an infinite value", times[11], vec![f64::INFINITY]),
         ("two values", times[11], vec![0.0, 0.0]),
     ] {
-        let e = message(live.push(t, value).err().unwrap_or_else(|| panic!("{what} taken")));
+        let e = message(
+            live.push(t, value)
+                .err()
+                .unwrap_or_else(|| panic!("{what} taken")),
+        );
         assert!(!e.is_empty(), "{what}");
         assert_eq!(live.position(), position, "{what} moved the session");
     }
@@ -204,7 +211,10 @@ fn a_session_takes_pushed_observations() {
     }
     assert!(live.finished());
     for i in 0..config.methods.len() {
-        let (a, b) = (whole.estimates(i, 0, usize::MAX), live.estimates(i, 0, usize::MAX));
+        let (a, b) = (
+            whole.estimates(i, 0, usize::MAX),
+            live.estimates(i, 0, usize::MAX),
+        );
         assert_eq!(a.len(), rows, "method {i}");
         assert_eq!(a, b, "method {i}");
     }

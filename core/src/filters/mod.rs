@@ -530,6 +530,80 @@ impl Substeps {
 /// irregular intervals): each is one factorisation or spectral solve of the grid's size.
 pub const REMAINDER_PLANS: usize = 4;
 
+/// Operators (solvers, plans, off-line matrices) made for interval lengths other than Δτ, the
+/// most recently used first and at most `keep` of them, with a count of how often a step
+/// needed a length it did not have: when the lengths keep changing (jittered time stamps),
+/// nearly every step makes one, which the self-check reports ([`LengthCache::check`]).
+#[derive(Clone, Debug)]
+pub(crate) struct LengthCache<T> {
+    entries: Vec<(f64, T)>,
+    keep: usize,
+    /// Lengths asked for, and those that had to be made.
+    asked: usize,
+    made: usize,
+}
+
+/// The self-check of [`LengthCache`]: the share of the lengths asked for that had to be made.
+pub const REBUILT_SHARE_CHECK: &str = "share of irregular steps that made a new operator";
+
+impl<T> LengthCache<T> {
+    /// Empty, keeping at most `keep` operators.
+    pub(crate) fn new(keep: usize) -> Self {
+        LengthCache {
+            entries: Vec::new(),
+            keep,
+            asked: 0,
+            made: 0,
+        }
+    }
+
+    /// Moves the operator for `length` to the front; false when there is none (then
+    /// [`LengthCache::insert`] one).
+    pub(crate) fn bring_to_front(&mut self, length: f64) -> bool {
+        self.asked += 1;
+        match self.entries.iter().position(|e| e.0 == length) {
+            Some(i) => {
+                self.entries[..=i].rotate_right(1);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Puts `value`, made for `length`, at the front, dropping the least recently used past
+    /// `keep`.
+    pub(crate) fn insert(&mut self, length: f64, value: T) {
+        self.made += 1;
+        self.entries.truncate(self.keep.saturating_sub(1));
+        self.entries.insert(0, (length, value));
+    }
+
+    /// The operator at the front (the one just brought there or inserted).
+    pub(crate) fn front(&mut self) -> &mut T {
+        &mut self.entries[0].1
+    }
+
+    /// The operator for `length`, if there is one.
+    pub(crate) fn get(&self, length: f64) -> Option<&T> {
+        self.entries.iter().find(|e| e.0 == length).map(|e| &e.1)
+    }
+
+    /// A concern when more operators were made than are kept and more than half of the
+    /// lengths asked for had to be made: the steps' lengths keep changing, and each one costs
+    /// an operator's construction (for the spectral filter, Algorithm 1 of 004 off-line).
+    pub(crate) fn check(&self, out: &mut Vec<Concern>) {
+        let share = self.made as f64 / self.asked.max(1) as f64;
+        if self.made > self.keep && share > 0.5 {
+            out.push(Concern::above(
+                REBUILT_SHARE_CHECK,
+                share,
+                0.5,
+                "the steps between observations keep changing length (e.g. jittered time stamps), so most steps make an operator of their own: round the times to a common step, or choose Δτ so that it divides them",
+            ));
+        }
+    }
+}
+
 /// `interval` as whole intervals Δτ = `dt_obs` and a remainder in (0, Δτ) (0 when the
 /// interval is a multiple of Δτ up to [`crate::recording::INTERVAL_TOLERANCE`]): how a grid
 /// filter built for Δτ crosses an interval of any length with the operators it has.

@@ -136,11 +136,21 @@ pub const PARTIAL_PATTERNS: usize = 8;
 #[derive(Clone, Debug)]
 pub struct PartialIncrements {
     noise_cov: DMatrix<f64>,
-    /// The patterns met so far, the most recently used first: which components are observed,
-    /// `gain[j][i] = (S_OO⁻¹ h_O(x_i))_j` and `half[i] = ½ h_Oᵀ S_OO⁻¹ h_O(x_i)`.
-    parts: Vec<(Vec<bool>, Vec<Vec<f64>>, Vec<f64>)>,
+    /// The patterns met so far, the most recently used first.
+    parts: Vec<Pattern>,
     /// The observed components of the last increment, in order.
     values: Vec<f64>,
+}
+
+/// One pattern of observed components and its terms.
+#[derive(Clone, Debug)]
+struct Pattern {
+    /// Which components are observed.
+    observed: Vec<bool>,
+    /// `gain[j][i] = (S_OO⁻¹ h_O(x_i))_j`.
+    gain: Vec<Vec<f64>>,
+    /// `half[i] = ½ h_Oᵀ S_OO⁻¹ h_O(x_i)`.
+    half: Vec<f64>,
 }
 
 /// The terms of one partially observed increment (see [`PartialIncrements::terms`]).
@@ -182,8 +192,8 @@ impl PartialIncrements {
         s_inv_h: &[Vec<f64>],
         dy: &[f64],
     ) -> Result<ObservedTerms<'_>, FilterError> {
-        let observed = |p: &[bool]| p.iter().zip(dy).all(|(&o, v)| o == !v.is_nan());
-        let i = match self.parts.iter().position(|(p, _, _)| observed(p)) {
+        let same = |p: &Pattern| p.observed.iter().zip(dy).all(|(&o, v)| o != v.is_nan());
+        let i = match self.parts.iter().position(same) {
             Some(i) => i,
             None => {
                 let pattern: Vec<bool> = dy.iter().map(|v| !v.is_nan()).collect();
@@ -195,20 +205,17 @@ impl PartialIncrements {
         };
         self.parts[..=i].rotate_right(1);
         self.values.clear();
-        self.values.extend(dy.iter().copied().filter(|v| !v.is_nan()));
-        let (_, gain, half) = &self.parts[0];
+        self.values
+            .extend(dy.iter().copied().filter(|v| !v.is_nan()));
+        let part = &self.parts[0];
         Ok(ObservedTerms {
             dy: &self.values,
-            gain,
-            half,
+            gain: &part.gain,
+            half: &part.half,
         })
     }
 
-    fn make(
-        &self,
-        s_inv_h: &[Vec<f64>],
-        pattern: Vec<bool>,
-    ) -> Result<(Vec<bool>, Vec<Vec<f64>>, Vec<f64>), FilterError> {
+    fn make(&self, s_inv_h: &[Vec<f64>], pattern: Vec<bool>) -> Result<Pattern, FilterError> {
         let rows: Vec<usize> = (0..pattern.len()).filter(|&j| pattern[j]).collect();
         let s = &self.noise_cov;
         let s_oo = DMatrix::from_fn(rows.len(), rows.len(), |a, b| s[(rows[a], rows[b])]);
@@ -234,6 +241,10 @@ impl PartialIncrements {
             }
             half[i] = 0.5 * hgh;
         }
-        Ok((pattern, gain, half))
+        Ok(Pattern {
+            observed: pattern,
+            gain,
+            half,
+        })
     }
 }

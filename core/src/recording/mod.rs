@@ -140,10 +140,7 @@ impl Recording {
         } else if let Some(j) = value.iter().position(|v| v.is_infinite()) {
             p.push(ConfigProblem::new(
                 "observation",
-                format!(
-                    "component {}: infinite (a missing value is NaN)",
-                    j + 1
-                ),
+                format!("component {}: infinite (a missing value is NaN)", j + 1),
             ));
         }
         if self.truth.is_some() {

@@ -47,7 +47,7 @@ use self::upwind::UpwindAdvection;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::{
     count_problem, normalise_on_grid, per_dimension, product, DensityView, Estimate, Filter,
-    Observation, ObservationKind, Observed, REMAINDER_PLANS,
+    LengthCache, Observation, ObservationKind, Observed, REMAINDER_PLANS,
 };
 use crate::grid::TensorGrid;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
@@ -151,7 +151,6 @@ pub fn check_model(name: &str, model: &Model) -> Result<GaussianMixture, FilterE
 /// How an observation interval is cut into FPE steps.
 #[derive(Clone, Debug)]
 struct StepPlan {
-    interval: f64,
     substeps: usize,
     dt: f64,
     implicit: ImplicitStep,
@@ -175,7 +174,7 @@ pub struct ContinuousDiscreteGrid {
     /// The plan for Δτ, and for up to [`REMAINDER_PLANS`] other lengths (the remainders of
     /// irregular intervals after whole Δτ), the most recently used first.
     plan: Option<StepPlan>,
-    remainders: Vec<StepPlan>,
+    remainders: LengthCache<StepPlan>,
     u: Vec<f64>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
@@ -257,7 +256,7 @@ impl ContinuousDiscreteGrid {
             target_dt: params.dt,
             dt_obs,
             plan: None,
-            remainders: Vec::new(),
+            remainders: LengthCache::new(REMAINDER_PLANS),
             saved: crate::filters::SavedDensity::new(len, &estimate),
             u,
             tmp: vec![0.0; len],
@@ -382,7 +381,6 @@ impl ContinuousDiscreteGrid {
             part,
         )?;
         Ok(StepPlan {
-            interval,
             substeps,
             dt,
             implicit,
@@ -408,19 +406,15 @@ impl ContinuousDiscreteGrid {
         let (whole, rest) = crate::filters::whole_intervals(interval, self.dt_obs);
         for _ in 0..whole {
             let plan = self.plan.as_ref().expect("planned in new");
-            self.run_plan(plan.substeps, plan.dt, None);
+            self.run_plan(plan.substeps, plan.dt, false);
         }
         if rest > 0.0 {
-            match self.remainders.iter().position(|p| p.interval == rest) {
-                Some(i) => self.remainders[..=i].rotate_right(1),
-                None => {
-                    let plan = self.plan_of(rest)?;
-                    self.remainders.truncate(REMAINDER_PLANS - 1);
-                    self.remainders.insert(0, plan);
-                }
+            if !self.remainders.bring_to_front(rest) {
+                let plan = self.plan_of(rest)?;
+                self.remainders.insert(rest, plan);
             }
-            let (substeps, dt) = (self.remainders[0].substeps, self.remainders[0].dt);
-            self.run_plan(substeps, dt, Some(0));
+            let (substeps, dt) = (self.remainders.front().substeps, self.remainders.front().dt);
+            self.run_plan(substeps, dt, true);
         }
         if self.u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -430,16 +424,16 @@ impl ContinuousDiscreteGrid {
         Ok(())
     }
 
-    /// `substeps` FPE steps of `dt` with the Δτ plan (`None`) or remainder plan `remainder`.
-    fn run_plan(&mut self, substeps: usize, dt: f64, remainder: Option<usize>) {
+    /// `substeps` FPE steps of `dt` with the Δτ plan, or the remainder plan at the front.
+    fn run_plan(&mut self, substeps: usize, dt: f64, remainder: bool) {
         for _ in 0..substeps {
             if self.scheme == FpeScheme::Separation {
                 self.advection.step(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
             let plan = match remainder {
-                Some(i) => &self.remainders[i],
-                None => self.plan.as_ref().expect("planned in new"),
+                true => self.remainders.front(),
+                false => self.plan.as_mut().expect("planned in new"),
             };
             plan.implicit.solve(&mut self.u, &mut self.tmp);
         }
@@ -538,5 +532,6 @@ impl Filter for ContinuousDiscreteGrid {
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
+        self.remainders.check(out);
     }
 }

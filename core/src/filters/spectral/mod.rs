@@ -42,7 +42,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
+use crate::filters::{Estimate, Filter, LengthCache, Observation, ObservationKind, Observed};
 use crate::linalg;
 use crate::model::dmz::{DmzCoefficients, Likelihood, PartialIncrements};
 use crate::model::{Model, Prior};
@@ -349,14 +349,13 @@ pub struct SpectralFilter {
     model: Model,
     partitions: usize,
     /// Operators for interval lengths other than T₀ (the remainders of irregular intervals
-    /// after whole T₀), the most recently used first, at most
-    /// [`crate::filters::REMAINDER_PLANS`]: each is one off-line computation of Algorithm 1
-    /// and one matrix of W's size.
-    remainders: Vec<(f64, Propagation)>,
+    /// after whole T₀), at most [`crate::filters::REMAINDER_PLANS`]: each is one off-line
+    /// computation of Algorithm 1 and one matrix of W's size.
+    remainders: LengthCache<Propagation>,
     /// With the likelihood in the operator: the operators of intervals without an increment
     /// (the Fokker–Planck part alone: T₀'s and the remainders', one off-line computation per
     /// length), at most [`crate::filters::REMAINDER_PLANS`] + 1.
-    gaps: Vec<(f64, Propagation)>,
+    gaps: LengthCache<Propagation>,
 }
 
 /// Which off-line operator a propagation uses.
@@ -364,10 +363,10 @@ pub struct SpectralFilter {
 enum Leg {
     /// The operator of T₀.
     Whole,
-    /// Remainder operator `i`.
-    Remainder(usize),
-    /// Gap operator `i` (likelihood in the operator, no increment).
-    Gap(usize),
+    /// The remainder operator at the front of its cache.
+    Remainder,
+    /// The gap operator of this length (likelihood in the operator, no increment).
+    Gap(f64),
 }
 
 impl SpectralFilter {
@@ -460,8 +459,8 @@ impl SpectralFilter {
             likelihood_in_operator: in_operator,
             model: model.clone(),
             partitions: params.partitions,
-            remainders: Vec::new(),
-            gaps: Vec::new(),
+            remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
+            gaps: LengthCache::new(crate::filters::REMAINDER_PLANS + 1),
             evaluate,
             project,
             layout,
@@ -502,12 +501,7 @@ impl SpectralFilter {
     /// [`crate::filters::REMAINDER_PLANS`]; moved to the front of the list.
     fn remainder(&mut self, rest: f64) -> Result<(), FilterError> {
         let with_likelihood = self.likelihood_in_operator;
-        self.recent_first(
-            |f| &mut f.remainders,
-            rest,
-            with_likelihood,
-            crate::filters::REMAINDER_PLANS,
-        )
+        self.recent_first(|f| &mut f.remainders, rest, with_likelihood)
     }
 
     /// The operator over `interval` (T₀ or a remainder below it) without an increment when
@@ -518,27 +512,19 @@ impl SpectralFilter {
     /// interval with an increment is: the off-line method is made for short intervals, and one
     /// operator over a long gap is not accurate.
     fn gap(&mut self, interval: f64) -> Result<(), FilterError> {
-        self.recent_first(
-            |f| &mut f.gaps,
-            interval,
-            false,
-            crate::filters::REMAINDER_PLANS + 1,
-        )
+        self.recent_first(|f| &mut f.gaps, interval, false)
     }
 
     /// Moves the off-line operator over `length` to the front of the cache `pick` selects,
     /// making it the first time that length occurs — Algorithm 1 with N′ partitions scaled
-    /// with the length, −½hᵀS⁻¹h in it when `with_likelihood` — and then dropping the least
-    /// recently used past `keep`.
+    /// with the length, −½hᵀS⁻¹h in it when `with_likelihood`.
     fn recent_first(
         &mut self,
-        pick: fn(&mut Self) -> &mut Vec<(f64, Propagation)>,
+        pick: fn(&mut Self) -> &mut LengthCache<Propagation>,
         length: f64,
         with_likelihood: bool,
-        keep: usize,
     ) -> Result<(), FilterError> {
-        if let Some(i) = pick(self).iter().position(|c| c.0 == length) {
-            pick(self)[..=i].rotate_right(1);
+        if pick(self).bring_to_front(length) {
             return Ok(());
         }
         let partitions = libm::ceil(self.partitions as f64 * length / self.t0).max(1.0) as usize;
@@ -549,26 +535,16 @@ impl SpectralFilter {
             with_likelihood,
         )?;
         let made = Propagation::new(w, &self.evaluate);
-        let cache = pick(self);
-        cache.truncate(keep - 1);
-        cache.insert(0, (length, made));
+        pick(self).insert(length, made);
         Ok(())
     }
 
-    /// The position of the gap operator of `interval` (made by [`Self::gap`]).
-    fn gap_index(&self, interval: f64) -> usize {
-        self.gaps
-            .iter()
-            .position(|g| g.0 == interval)
-            .expect("made before the step")
-    }
-
-    /// Propagation (40) over T₀ (`Leg::Whole`), with remainder operator `i` or gap operator
-    /// `i`, and the density at the on-line nodes.
+    /// Propagation (40) over T₀ (`Leg::Whole`), with the remainder operator at the front or
+    /// the gap operator of a length, and the density at the on-line nodes.
     fn propagate(&mut self, leg: Leg) {
         let propagation = match leg {
-            Leg::Remainder(i) => &self.remainders[i].1,
-            Leg::Gap(i) => &self.gaps[i].1,
+            Leg::Remainder => self.remainders.front(),
+            Leg::Gap(length) => self.gaps.get(length).expect("made before the step"),
             Leg::Whole => &self.propagation,
         };
         let w = match propagation {
@@ -805,6 +781,8 @@ impl Filter for SpectralFilter {
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        self.remainders.check(out);
+        self.gaps.check(out);
         if self.energy.share_above(TAIL_ENERGY_THRESHOLD) {
             out.push(crate::filters::Concern::above(
                 "energy in the highest Legendre degrees",
@@ -845,9 +823,9 @@ impl Filter for SpectralFilter {
         for leg in 1..=legs {
             self.propagate(match (gap, leg > whole) {
                 (false, false) => Leg::Whole,
-                (false, true) => Leg::Remainder(0),
-                (true, false) => Leg::Gap(self.gap_index(self.t0)),
-                (true, true) => Leg::Gap(self.gap_index(rest)),
+                (false, true) => Leg::Remainder,
+                (true, false) => Leg::Gap(self.t0),
+                (true, true) => Leg::Gap(rest),
             });
             if leg == legs && observed != Observed::Nothing {
                 stepped = self.update(obs.value, obs.dt);

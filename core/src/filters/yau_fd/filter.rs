@@ -12,7 +12,9 @@ use super::operator::{explicit_part, KolmogorovOperator};
 use super::superposition::Superposition;
 use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
-use crate::filters::{DensityView, Estimate, Filter, Observation, ObservationKind, Observed};
+use crate::filters::{
+    DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind, Observed,
+};
 use crate::grid::dst::DstPlan;
 use crate::grid::lines::LineSystems;
 use crate::grid::{for_each_line, TensorGrid};
@@ -361,14 +363,12 @@ pub struct YauYauFilter {
     /// Δτ, its substeps and solver.
     solver: Option<SolverFor>,
     /// Solvers for other interval lengths (the remainders of irregular intervals after whole
-    /// Δτ), with their substeps; the most recently used first, at most
-    /// [`crate::filters::REMAINDER_PLANS`].
-    remainders: Vec<SolverFor>,
+    /// Δτ), with their substeps; at most [`crate::filters::REMAINDER_PLANS`].
+    remainders: LengthCache<(usize, Solver)>,
     /// With the likelihood in the operator, an interval without an increment is the
     /// Fokker–Planck part alone: its operator (q = −∇·f, built on the first such interval)
-    /// and its solvers per interval length (the most recent first, at most
-    /// [`crate::filters::REMAINDER_PLANS`] + 1).
-    prediction: Option<(KolmogorovOperator, Vec<SolverFor>)>,
+    /// and its solvers per interval length (at most [`crate::filters::REMAINDER_PLANS`] + 1).
+    prediction: Option<(KolmogorovOperator, LengthCache<(usize, Solver)>)>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
     warnings: Vec<GuaranteeWarning>,
@@ -488,7 +488,7 @@ impl YauYauFilter {
             saved: crate::filters::SavedDensity::new(u.len(), &Estimate::zeros(model.n)),
             u,
             solver: None,
-            remainders: Vec::new(),
+            remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
             prediction: None,
             warnings: Vec::new(),
             cell,
@@ -549,34 +549,13 @@ impl YauYauFilter {
 
     /// Substeps of at most the scheme's Δt over `interval`.
     fn substeps_for(&self, interval: f64) -> usize {
-        libm::ceil(interval / self.params.dt - 1e-9).max(1.0) as usize
+        substeps_of(interval, self.params.dt)
     }
 
     /// The scheme's step of length `dt` (the superposition technique's remainders: QIEM with
     /// the exponential potential, which its bumps are carried with).
     fn stepper(&self, dt: f64) -> Solver {
-        self.stepper_for(&self.op, dt)
-    }
-
-    /// [`Self::stepper`] for the operator `op`.
-    fn stepper_for(&self, op: &KolmogorovOperator, dt: f64) -> Solver {
-        match self.scheme {
-            Scheme::Iem => Solver::Iem(SplitIem::new(op, &self.grid, dt, self.params.alpha)),
-            Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
-                op,
-                &self.grid,
-                dt,
-                self.params.potential,
-                self.scheme == Scheme::Qiem4,
-            )),
-            Scheme::Superposition => Solver::Qiem(QiemStep::new(
-                op,
-                &self.grid,
-                dt,
-                PotentialTerm::Exponential,
-                false,
-            )),
-        }
+        stepper_for(self.scheme, &self.params, &self.op, &self.grid, dt)
     }
 
     /// Normalises to unit mass and refreshes the estimate.
@@ -618,17 +597,12 @@ impl YauYauFilter {
             solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
         }
         if rest > 0.0 {
-            match self.remainders.iter().position(|r| r.0 == rest) {
-                Some(i) => self.remainders[..=i].rotate_right(1),
-                None => {
-                    let substeps = self.substeps_for(rest);
-                    let solver = self.stepper(rest / substeps as f64);
-                    self.remainders
-                        .truncate(crate::filters::REMAINDER_PLANS - 1);
-                    self.remainders.insert(0, (rest, substeps, solver));
-                }
+            if !self.remainders.bring_to_front(rest) {
+                let substeps = self.substeps_for(rest);
+                let solver = self.stepper(rest / substeps as f64);
+                self.remainders.insert(rest, (substeps, solver));
             }
-            let (_, substeps, solver) = &mut self.remainders[0];
+            let (substeps, solver) = self.remainders.front();
             solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
         }
     }
@@ -639,24 +613,22 @@ impl YauYauFilter {
     /// scheme's Δt, with the scheme's solver for that operator (made the first time the
     /// length occurs).
     fn predict_without_likelihood(&mut self, interval: f64) {
-        if self.prediction.is_none() {
-            self.prediction = Some((self.op.without_observation_term(), Vec::new()));
+        let keep = crate::filters::REMAINDER_PLANS + 1;
+        let (op, cache) = self
+            .prediction
+            .get_or_insert_with(|| (self.op.without_observation_term(), LengthCache::new(keep)));
+        if !cache.bring_to_front(interval) {
+            let substeps = substeps_of(interval, self.params.dt);
+            let solver = stepper_for(
+                self.scheme,
+                &self.params,
+                op,
+                &self.grid,
+                interval / substeps as f64,
+            );
+            cache.insert(interval, (substeps, solver));
         }
-        let (op, cache) = self.prediction.as_ref().expect("made above");
-        let i = match cache.iter().position(|c| c.0 == interval) {
-            Some(i) => i,
-            None => {
-                let substeps = self.substeps_for(interval);
-                let solver = self.stepper_for(op, interval / substeps as f64);
-                let (_, cache) = self.prediction.as_mut().expect("made above");
-                cache.truncate(crate::filters::REMAINDER_PLANS);
-                cache.insert(0, (interval, substeps, solver));
-                0
-            }
-        };
-        let (_, cache) = self.prediction.as_mut().expect("made above");
-        cache[..=i].rotate_right(1);
-        let (_, substeps, solver) = &mut cache[0];
+        let (substeps, solver) = cache.front();
         solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
     }
 
@@ -709,6 +681,38 @@ fn observation_factor(
     linalg::scale_by_exp(u, a, shift, super::FLUSH_BELOW);
 }
 
+/// Substeps of at most `dt` over `interval`.
+fn substeps_of(interval: f64, dt: f64) -> usize {
+    libm::ceil(interval / dt - 1e-9).max(1.0) as usize
+}
+
+/// [`YauYauFilter::stepper`] for the operator `op`.
+fn stepper_for(
+    scheme: Scheme,
+    params: &YauYauParams,
+    op: &KolmogorovOperator,
+    grid: &TensorGrid,
+    dt: f64,
+) -> Solver {
+    match scheme {
+        Scheme::Iem => Solver::Iem(SplitIem::new(op, grid, dt, params.alpha)),
+        Scheme::Qiem | Scheme::Qiem4 => Solver::Qiem(QiemStep::new(
+            op,
+            grid,
+            dt,
+            params.potential,
+            scheme == Scheme::Qiem4,
+        )),
+        Scheme::Superposition => Solver::Qiem(QiemStep::new(
+            op,
+            grid,
+            dt,
+            PotentialTerm::Exponential,
+            false,
+        )),
+    }
+}
+
 impl Solver {
     /// `substeps` steps (the superposition technique: its whole interval at once).
     fn run(&mut self, substeps: usize, grid: &TensorGrid, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
@@ -737,6 +741,10 @@ impl Filter for YauYauFilter {
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         let from = out.len();
         crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
+        self.remainders.check(out);
+        if let Some((_, cache)) = &self.prediction {
+            cache.check(out);
+        }
         if self.params.likelihood == Likelihood::InOperator {
             // With −½hᵀS⁻¹h in q the implicit step damps the tails by (1 + |q|Δt)⁻¹ per step
             // instead of e^{−|q|Δt}: mass at the edge is then the time step's doing, and a
