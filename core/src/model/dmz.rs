@@ -153,7 +153,10 @@ struct Pattern {
     half: Vec<f64>,
 }
 
-/// The terms of one partially observed increment (see [`PartialIncrements::terms`]).
+/// The terms of the observation factor of one increment: its observed components, with
+/// `S_OO⁻¹ h_O` and `½ h_Oᵀ S_OO⁻¹ h_O` at every point (see [`PartialIncrements::terms`]; for a
+/// whole increment, `S⁻¹h` and `½ hᵀS⁻¹h`).
+#[derive(Clone, Copy, Debug)]
 pub struct ObservedTerms<'a> {
     /// `Δy_O`, the observed components in order.
     pub dy: &'a [f64],

@@ -19,7 +19,7 @@ use crate::grid::dst::DstPlan;
 use crate::grid::lines::LineSystems;
 use crate::grid::{for_each_line, TensorGrid};
 use crate::linalg;
-use crate::model::dmz::PartialIncrements;
+use crate::model::dmz::{ObservedTerms, PartialIncrements};
 use crate::model::{Model, Prior};
 
 /// IEM in D dimensions by Lie operator splitting: `A = Σ_d A_d` with
@@ -238,10 +238,11 @@ impl CellSamples {
         let k = self.per_node;
         if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.s_inv_h, dy)?;
-            cell_factor(k, &mut self.exponents, u, t.gain, t.half, t.dy, dt_obs);
+            cell_factor(k, &mut self.exponents, u, &t, dt_obs);
         } else {
             let (gain, half) = (&self.s_inv_h, &self.half_hsh);
-            cell_factor(k, &mut self.exponents, u, gain, half, dy, dt_obs);
+            let t = ObservedTerms { dy, gain, half };
+            cell_factor(k, &mut self.exponents, u, &t, dt_obs);
         }
         Ok(())
     }
@@ -250,15 +251,8 @@ impl CellSamples {
 /// The factor `exp(Δyᵀg − ½hᵀS⁻¹h Δτ)` (with `g = S⁻¹h`, `half = ½hᵀS⁻¹h`) averaged over the
 /// `k` samples of each cell: every exponent `a_is + e_i ln 2` is shifted by the largest, so the
 /// mean of the exponentials is at most 1 and no intermediate overflows.
-fn cell_factor(
-    k: usize,
-    exponents: &mut [f64],
-    u: &mut [f64],
-    gain: &[Vec<f64>],
-    half: &[f64],
-    dy: &[f64],
-    dt_obs: f64,
-) {
+fn cell_factor(k: usize, exponents: &mut [f64], u: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {
+    let ObservedTerms { dy, gain, half } = *terms;
     for (a, h) in exponents.iter_mut().zip(half) {
         *a = -dt_obs * h;
     }
@@ -579,9 +573,10 @@ impl YauYauFilter {
         let (u, a) = (&mut self.u, &mut self.tmp);
         if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.op.s_inv_h, dy)?;
-            observation_factor(u, a, t.gain, t.half, t.dy, dt_obs);
+            observation_factor(u, a, &t, dt_obs);
         } else {
-            observation_factor(u, a, &self.op.s_inv_h, &self.op.half_hsh, dy, dt_obs);
+            let (gain, half) = (&self.op.s_inv_h, &self.op.half_hsh);
+            observation_factor(u, a, &ObservedTerms { dy, gain, half }, dt_obs);
         }
         Ok(())
     }
@@ -657,14 +652,8 @@ impl YauYauFilter {
 /// is in the update, zero when it is in the operator) is within ln 2 of `a_i + ln u_i`, and the
 /// new value is `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value
 /// is at most 1, the largest at least ½, and no intermediate overflows. `a` is scratch.
-fn observation_factor(
-    u: &mut [f64],
-    a: &mut [f64],
-    gain: &[Vec<f64>],
-    half: &[f64],
-    dy: &[f64],
-    dt_obs: f64,
-) {
+fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {
+    let ObservedTerms { dy, gain, half } = *terms;
     // The components after the first: a_i = Σ_{j ≥ 1} y_j g_j(s_i); the first and the rest of
     // the exponent follow in one pass with the split.
     for (j, (y, sh)) in dy.iter().zip(gain).enumerate().skip(1) {
