@@ -264,7 +264,8 @@ function fillForm(config) {
   $('seed').value = config.seed;
   $('mc-seed').value = config.seed;
   const failure = config.failure ?? {};
-  $('fail-bound').value = String(failure.divergence_bound ?? 1000);
+  // Empty: the bound comes from the problem (the domain, or the prior's scale).
+  $('fail-bound').value = failure.divergence_bound == null ? '' : String(failure.divergence_bound);
   $('fail-error').value = failure.track_loss ? String(failure.track_loss.error) : '';
   $('fail-duration').value = failure.track_loss ? String(failure.track_loss.duration) : '';
   state.methodRows = config.methods.map((m) => ({ enabled: true, config: structuredClone(m) }));
@@ -305,7 +306,7 @@ function readForm() {
   // The failure rule: the bound always, the track-loss rule when both its numbers are given.
   const [lossError, lossDuration] = [$('fail-error').value.trim(), $('fail-duration').value.trim()];
   c.failure = {
-    divergence_bound: Number($('fail-bound').value),
+    divergence_bound: $('fail-bound').value.trim() === '' ? null : Number($('fail-bound').value),
     track_loss: lossError === '' && lossDuration === '' ? null : { error: Number(lossError === '' ? NaN : lossError), duration: Number(lossDuration === '' ? NaN : lossDuration) },
   };
   $('methods').querySelectorAll('[data-param]').forEach((el) => {
@@ -1428,6 +1429,15 @@ worker.onmessage = ({ data }) => {
       setupLearn(learnHooks);
       break;
     }
+    case 'completed':
+      if (data.error) {
+        $('data-error').textContent = `${data.name}: ${data.error}`;
+        break;
+      }
+      $('data-error').textContent = '';
+      fillForm(data.config);
+      if (data.then) apply();
+      break;
     case 'validated':
       if (data.id === state.validateId) {
         showProblems(data.problems);
@@ -1653,9 +1663,9 @@ async function loadFile(file, as, then = true) {
       $('data-error').textContent = `${file.name}: not valid JSON: ${e.message}`;
       return;
     }
-    $('data-error').textContent = '';
-    fillForm(config);
-    if (then) apply();
+    // Zakai fills what the file omits (method parameters, the failure rule, …) as the CLI
+    // does; the form then shows every value the run uses.
+    worker.postMessage({ type: 'complete', config, name: file.name, then });
     return;
   }
   // A CSV whose header is t,x1,… is a truth; anything else is observations (the wasm reader

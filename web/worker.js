@@ -157,6 +157,13 @@ self.onmessage = async ({ data }) => {
       await zakai.default();
       post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed(), build });
       break;
+    case 'complete':
+      try {
+        post({ type: 'completed', config: zakai.completeScenario(data.config), name: data.name, then: data.then });
+      } catch (e) {
+        post({ type: 'completed', error: String(e?.message ?? e), name: data.name });
+      }
+      break;
     case 'validate':
       guard(() => {
         const problems = zakai.validateScenario(data.config);

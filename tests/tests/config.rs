@@ -345,3 +345,42 @@ fn recorded_data_needs_no_domain_and_no_final_time() {
         "{problems:?}"
     );
 }
+
+/// The catalogue's `density` flag (what the page's density panel picks by default) says
+/// which methods have a density: every registered method, built on the presets that apply
+/// them all, has a grid density exactly when its entry says so — but for the spectral filter,
+/// whose density is a Legendre expansion (drawn through its marginals, which then are not the
+/// Gaussian of its estimate).
+#[test]
+fn the_catalogue_says_which_methods_have_a_density() {
+    let mut seen = std::collections::BTreeSet::new();
+    for preset in zakai_tests::PRESETS_FOR_EVERY_METHOD {
+        let config = zakai::scenario::presets::preset(preset).unwrap();
+        let e = zakai::experiment::Experiment::new(config.clone()).unwrap();
+        for entry in zakai_tests::applicable_methods(&config, &e) {
+            let f = e
+                .build_method(&entry.defaults, entry.info.key.clone(), 1)
+                .unwrap();
+            let key = entry.info.key.as_str();
+            if key == "spectral" {
+                assert!(entry.density);
+                let grid: Vec<f64> = (0..41).map(|i| -2.0 + 0.1 * i as f64).collect();
+                let (mut own, mut gaussian) = (vec![0.0; 41], vec![0.0; 41]);
+                f.marginal_density(0, &grid, &mut own);
+                let e = f.estimate();
+                let var = e.covariance.unwrap()[(0, 0)];
+                for (g, x) in gaussian.iter_mut().zip(&grid) {
+                    let d = x - e.mean[0];
+                    *g = (-0.5 * d * d / var).exp() / (2.0 * std::f64::consts::PI * var).sqrt();
+                }
+                let gap: f64 = own.iter().zip(&gaussian).map(|(a, b)| (a - b).abs()).sum();
+                assert!(gap > 1e-6, "{preset} spectral: its marginal is the Gaussian");
+            } else {
+                assert_eq!(f.density().is_some(), entry.density, "{preset} {key}");
+            }
+            assert_eq!(entry.defaults.has_density(), entry.density);
+            seen.insert(entry.info.key.clone());
+        }
+    }
+    assert_eq!(seen.len(), zakai::scenario::methods::catalogue().len(), "every method: {seen:?}");
+}

@@ -93,6 +93,15 @@ pub fn validate_scenario(config: JsValue) -> Result<JsValue, JsError> {
     to_js(&problems)
 }
 
+/// The scenario as Zakai reads it, every omitted field filled with its default — each method's
+/// parameters with the catalogue's, the failure rule's bound left to the problem — as the CLI
+/// reads a scenario file; an Error saying what does not parse.
+#[wasm_bindgen(js_name = completeScenario)]
+pub fn complete_scenario(config: JsValue) -> Result<JsValue, JsError> {
+    let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+    to_js(&config)
+}
+
 /// Whether the scenario's model is a Yau filtering system on its domain (002 (C1)–(C3)):
 /// `{theorem, conditions: [{name, holds, detail}], note}`, each condition decided symbolically
 /// where the expressions allow it (its detail says which way). `null` when the model itself
@@ -318,6 +327,13 @@ struct SessionInfo {
     /// Sizes chosen from the problem for what the scenario left unset, one note each.
     chosen: Vec<String>,
     seed: u64,
+    /// Per method: an exact reference (the catalogue's `exact`).
+    exact: Vec<bool>,
+    /// Per method: a density on a grid or basis (the catalogue's `density`).
+    density: Vec<bool>,
+    /// Per method: the nodes of its grid density (0 without one), so the page can take the
+    /// finest grid filter as the reference where no exact one runs.
+    nodes: Vec<usize>,
 }
 
 /// A stepping session over one scenario: simulated, or on recorded observations.
@@ -450,7 +466,7 @@ impl Session {
     }
 
     /// `{name, n, m, steps, dt_obs, continuous, has_truth, t_start, t_end, domain, methods,
-    /// seed}`.
+    /// labels, chosen, seed, exact, density, nodes}`.
     pub fn info(&self) -> Result<JsValue, JsError> {
         let c = self.experiment.config();
         to_js(&SessionInfo {
@@ -468,6 +484,14 @@ impl Session {
             labels: c.method_labels(),
             chosen: self.experiment.chosen_defaults().to_vec(),
             seed: self.seed,
+            exact: c.methods.iter().map(|m| m.is_exact()).collect(),
+            density: c.methods.iter().map(|m| m.has_density()).collect(),
+            nodes: self
+                .run
+                .filters()
+                .iter()
+                .map(|f| f.density().map_or(0, |d| d.values.len()))
+                .collect(),
         })
     }
 

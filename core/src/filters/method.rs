@@ -198,6 +198,9 @@ pub trait Method {
     /// reported mixture reduction). The failure rule's track-loss test never marks them
     /// failed: an exact filter far from the truth is the problem's uncertainty, not a fault.
     const EXACT: bool = false;
+    /// True for methods whose posterior is a density on a grid or a basis (the grid,
+    /// spectral and direct methods): [`Filter::density`] gives it, and the page draws it.
+    const DENSITY: bool = false;
     /// The method's parameters (serde, with defaults).
     type Params: Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.

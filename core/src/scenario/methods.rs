@@ -48,6 +48,9 @@ pub struct CatalogueEntry {
     pub needs_domain: bool,
     /// Whether the method is an exact reference (never marked failed by the track-loss test).
     pub exact: bool,
+    /// Whether the method's posterior is a density on a grid or basis (the page's density
+    /// panel shows one of these by default).
+    pub density: bool,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -110,6 +113,11 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::EXACT,)* }
             }
 
+            /// Whether the method's posterior is a density on a grid or basis ([`Method::DENSITY`]).
+            pub fn has_density(&self) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::DENSITY,)* }
+            }
+
             /// Every problem with the parameters for an `n`-dimensional model, fields
             /// relative to the method (`"particles"`, `"init.mean"`, `"method"`).
             pub fn problems(&self, n: usize) -> Vec<ConfigProblem> {
@@ -163,6 +171,7 @@ macro_rules! registry {
                 needs_interval: <$method>::NEEDS_INTERVAL,
                 needs_domain: <$method>::NEEDS_DOMAIN,
                 exact: <$method>::EXACT,
+                density: <$method>::DENSITY,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }

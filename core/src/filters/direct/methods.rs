@@ -21,6 +21,7 @@ builder_fn!(Direct);
 impl Method for Direct {
     const KEY: &'static str = "direct";
     const NEEDS_DOMAIN: bool = true;
+    const DENSITY: bool = true;
     type Params = DirectParams;
     type Filter = DirectFilter;
 

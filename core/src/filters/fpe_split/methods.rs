@@ -71,6 +71,7 @@ macro_rules! fpe_method {
             const ALIASES: &'static [&'static str] = &[$alias];
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
+            const DENSITY: bool = true;
             type Params = FpeParams;
             type Filter = ContinuousDiscreteGrid;
 

@@ -21,6 +21,7 @@ impl Method for Spectral {
     const KEY: &'static str = "spectral";
     const NEEDS_INTERVAL: bool = true;
     const NEEDS_DOMAIN: bool = true;
+    const DENSITY: bool = true;
     type Params = SpectralParams;
     type Filter = SpectralFilter;
 

@@ -129,6 +129,7 @@ macro_rules! yau_yau_method {
             const KEY: &'static str = $key;
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
+            const DENSITY: bool = true;
             type Params = YauYauParams;
             type Filter = YauYauFilter;
 
