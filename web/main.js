@@ -81,6 +81,8 @@ const state = {
   history: [], // per drawn frame: {row, t, grid, densities, heat2d} — what the time slider shows
   scrub: null, // the row the time slider looks at, or null (live)
   hidden: new Set(), // methods switched off by their chips
+  completing: new Map(), // scenario files the worker is completing: id → resolve
+  completeId: 0,
 };
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
@@ -543,10 +545,13 @@ function makePlots(info) {
   $('heatmap-figure').hidden = n < 2;
   fillOptions($('component'), Array.from({ length: n }, (_, i) => [i, `x${i + 1}`]));
   fillOptions($('density-method'), names.map((m, i) => [i, m]));
-  // The richest density by default: a grid filter, else the last particle filter, else the first.
-  const grid = info.methods.findIndex((m) => /^(QIEM|IEM|SPT|SA|FDM|Direct)/.test(m));
-  const pf = info.methods.map((m, i) => (m.startsWith('PF') ? i : -1)).filter((i) => i >= 0).pop();
-  $('density-method').value = String(grid >= 0 ? grid : (pf ?? 0));
+  // The richest density by default: a grid filter's, else another method with a density of
+  // its own (the catalogue says which: the spectral filter), else the last particle filter's,
+  // else the first method's.
+  const gridded = info.nodes.findIndex((k) => k > 0);
+  const grid = gridded >= 0 ? gridded : info.density.findIndex((d) => d);
+  const pf = info.keys.lastIndexOf('pf');
+  $('density-method').value = String(grid >= 0 ? grid : Math.max(pf, 0));
   const perMethod = () => info.methods.map(() => Array.from({ length: n }, () => []));
   // obs: per component, z_k (discrete) or the observation path y(τ_k) = Σ Δy (continuous),
   // null where the recording has no value (a gap); ySum: the path's running sums.
@@ -563,6 +568,7 @@ function makePlots(info) {
   // The methods hidden by their chips stay hidden over a reset of the same methods.
   if (state.hiddenFor !== names.join('|')) state.hidden = new Set();
   state.hiddenFor = names.join('|');
+  errorChoices();
   makeCharts();
   $('metrics').classList.toggle('no-truth', !info.has_truth);
   fillOptions($('heatmap-method'), names.map((m, i) => [i, m]));
@@ -641,6 +647,16 @@ function makeCharts() {
   // observation (grey, scaled to the plot).
   names.forEach((m, i) => dseries.push({ label: `${m} predicted`, stroke: color(i), dash: [5, 4], width: 1.2 }));
   dseries.push({ label: 'likelihood (scaled)', stroke: '#98a2b3', width: 2 });
+  // The errors: against the reference filter (exact, else the finest grid filter) or the
+  // truth, on a log scale (an exact method's error against itself is left out).
+  const eseries = [{}, ...names.map((m, i) => ({ label: m, stroke: color(i), dash: dash(i), width: 1.5 }))];
+  state.errPlot?.destroy();
+  state.errPlot = new uPlot({
+    ...plotSize('errors-plot', 'errors'), series: eseries,
+    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { distr: 3, log: 10, range: decadeRange } },
+    axes: [{ ...axisFont, label: 't' }, { label: '|error|', ...axisFont, space: 24, values: (u, ticks) => ticks.map((v) => (Math.log10(v) % 1 === 0 ? `1e${Math.log10(v)}` : '')) }],
+    legend: { show: false },
+  }, state.data?.times.length ? errorData() : eseries.map(() => []), $('errors-plot'));
   state.densityPlot?.destroy();
   state.densityPlot = new uPlot({
     ...plotSize('density-plot', 'density'), series: dseries, scales: { x: { time: false, range: safeRange }, y: { range: safeRange } },
@@ -661,7 +677,7 @@ const OBS_COLORS = ['#444', '#1f4e8c', '#888', '#6a3d9a'];
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
   const width = $(id).clientWidth || (which === 'density' ? 360 : 800);
-  const height = { trajectory: trajectoryHeight, density: densityHeight, observations: observationsHeight }[which]();
+  const height = { trajectory: trajectoryHeight, density: densityHeight, observations: observationsHeight, errors: errorsHeight }[which]();
   return { width: width - 2, height };
 }
 // Heights from the window's: the main plot and a density panel fit a 1280 × 720 projector.
@@ -669,6 +685,7 @@ const clamp = (v, lo, hi) => Math.max(lo, Math.min(hi, v));
 const presenting = () => document.body.classList.contains('present');
 const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.34 : 0.3), 180, presenting() ? 520 : 340));
 const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.12, 90, presenting() ? 200 : 150));
+const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.2, 140, presenting() ? 320 : 240));
 const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', diamond: '◇' })[markerShape(i)];
@@ -888,6 +905,8 @@ function applyFrame(frame) {
   state.diagnostics = frame.diagnostics;
   state.summary = frame.summary;
   // Every failure stays listed (one line per method, with its time), not only the last.
+  // A failed reference hands over to the next (errorChoices picks live ones only).
+  if (frame.summary.failures.length) errorChoices();
   for (const f of frame.summary.failures) {
     const t = state.data.times[f.k];
     state.failures.set(f.method, `${labels()[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
@@ -903,6 +922,59 @@ function trajectoryData() {
   const none = d.times.map(() => null);
   const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
   return [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
+}
+
+// A log axis over whole decades around the data (one decade when there is none yet).
+function decadeRange(u, min, max) {
+  if (!(min > 0) || !Number.isFinite(max)) return [1e-3, 1];
+  const lo = 10 ** Math.floor(Math.log10(min));
+  const hi = 10 ** Math.ceil(Math.log10(max));
+  return [lo, hi > lo ? hi : lo * 10];
+}
+
+// The filter the errors are measured against where no truth is asked for: an exact one
+// (Kalman–Bucy, Kalman, Gaussian sum) that has not failed, else the grid filter with the most
+// nodes; -1 when the run has neither.
+function referenceMethod() {
+  const info = state.info;
+  const live = (i) => state.diagnostics?.[i]?.failed_at == null;
+  const exact = info.exact.findIndex((e, i) => e && live(i));
+  if (exact >= 0) return exact;
+  let best = -1;
+  info.nodes.forEach((k, i) => { if (k > 0 && live(i) && (best < 0 || k > info.nodes[best])) best = i; });
+  return best;
+}
+
+// The choices of the error plot: the reference filter, and the truth when there is one.
+function errorChoices() {
+  const info = state.info;
+  const ref = referenceMethod();
+  const names = labels();
+  const choices = [];
+  if (ref >= 0) choices.push(['reference', `${names[ref]} (${info.exact[ref] ? 'exact' : 'the finest grid filter'})`]);
+  if (info.has_truth) choices.push(['truth', 'the truth']);
+  const was = $('error-against').value;
+  fillOptions($('error-against'), choices);
+  if (choices.some(([v]) => v === was)) $('error-against').value = was;
+  $('errors-figure').hidden = !choices.length;
+  $('error-note').textContent = ref >= 0 && !info.exact[ref]
+    ? '(a grid filter is a reference only as far as it has converged: "check convergence" in the Monte Carlo panel says)'
+    : '';
+}
+
+// The error plot's series: |x̂_i − reference| (or − truth) of the shown component, null where
+// either is missing or the difference is exactly 0 (the reference itself; log scale).
+function errorData() {
+  const d = state.data;
+  const dim = shownDim();
+  const against = $('error-against').value;
+  const ref = against === 'truth' ? d.truth[dim] : d.est[referenceMethod()]?.[dim];
+  return [d.times, ...d.est.map((e) => e[dim].map((v, k) => {
+    const r = ref?.[k];
+    if (v == null || r == null) return null;
+    const gap = Math.abs(v - r);
+    return gap > 0 ? gap : null;
+  }))];
 }
 
 // The density plot's series at the time shown, or null when no density of the shown
@@ -974,6 +1046,11 @@ function describePlots(row) {
     }).join(', ');
     said(state.densityPlot, `posterior densities of x${dim + 1} at t = ${f.t.toFixed(2)}: ${peaks}`);
   }
+  if (!$('errors-figure').hidden) {
+    const errors = errorData();
+    const against = $('error-against').selectedOptions[0]?.textContent ?? '';
+    said(state.errPlot, `error of each estimate of x${dim + 1} against ${against}, log scale; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(errors[i + 1][row])}`).join(', ')}`);
+  }
   said(state.obsPlot, `${info.continuous ? 'observation path y' : 'measurements z'} against t; at t = ${t.toFixed(2)}: ${d.obs.map((o, j) => `component ${j + 1} ${num(o[row])}`).join(', ')}`);
 }
 
@@ -983,6 +1060,7 @@ function render() {
   const dim = shownDim();
   state.trajPlot.setData(trajectoryData());
   state.obsPlot.setData([d.times, ...d.obs]);
+  if (!$('errors-figure').hidden) state.errPlot.setData(errorData());
   const density = densityData();
   if (density) state.densityPlot.setData(density);
   const last = d.times.length ? d.times[d.times.length - 1] : 0;
@@ -1176,6 +1254,8 @@ function exportPng() {
     ['#heat', `posterior density over time of ${$('density-method').selectedOptions[0]?.textContent ?? ''}`],
     ['#density-plot canvas', 'posterior densities at the time shown (dashed: truth)'],
     ['#heatmap', `joint density of x1, x2 of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
+    ['#observations-plot canvas', $('observations-caption').textContent],
+    ['#errors-plot canvas', `error of each estimate of x${shownDim() + 1} against ${$('error-against').selectedOptions[0]?.textContent ?? ''} (log scale)`],
   ].map(([sel, caption]) => [document.querySelector(sel), caption])
     .filter(([c]) => c && c.offsetParent !== null && c.width > 0 && c.height > 0);
   if (!panels.length) return;
@@ -1430,13 +1510,8 @@ worker.onmessage = ({ data }) => {
       break;
     }
     case 'completed':
-      if (data.error) {
-        $('data-error').textContent = `${data.name}: ${data.error}`;
-        break;
-      }
-      $('data-error').textContent = '';
-      fillForm(data.config);
-      if (data.then) apply();
+      state.completing.get(data.id)?.(data);
+      state.completing.delete(data.id);
       break;
     case 'validated':
       if (data.id === state.validateId) {
@@ -1577,6 +1652,7 @@ window.addEventListener('resize', () => {
 });
 $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
 $('bands').addEventListener('change', () => render());
+$('error-against').addEventListener('change', () => render());
 $('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
 $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
@@ -1645,7 +1721,7 @@ state.learnRun = (config) => learnHooks.run(config); // for the lessons' browser
 function showDataStatus() {
   const r = state.recording;
   $('data-status').textContent = r
-    ? `filtering ${r.name}${r.truthText ? ` with the truth from ${r.truthName}` : ' (no truth: estimates and ±2σ bands, no errors)'}`
+    ? `filtering ${r.name} under the scenario “${state.base?.name ?? ''}”${r.truthText ? ` with the truth from ${r.truthName}` : ' (no truth: estimates and ±2σ bands, no errors against a truth)'}`
     : 'simulated data';
   $('data-clear').hidden = !r;
   if (r) $('data-section').open = true;
@@ -1665,7 +1741,15 @@ async function loadFile(file, as, then = true) {
     }
     // Zakai fills what the file omits (method parameters, the failure rule, …) as the CLI
     // does; the form then shows every value the run uses.
-    worker.postMessage({ type: 'complete', config, name: file.name, then });
+    const completed = await completeScenario(config);
+    if (completed.error) {
+      $('data-error').textContent = `${file.name}: ${completed.error}`;
+      return;
+    }
+    $('data-error').textContent = '';
+    fillForm(completed.config);
+    showDataStatus();
+    if (then) apply();
     return;
   }
   // A CSV whose header is t,x1,… is a truth; anything else is observations (the wasm reader
@@ -1684,6 +1768,15 @@ async function loadFile(file, as, then = true) {
   $('data-error').textContent = '';
   showDataStatus();
   if (then) apply();
+}
+
+// The scenario as Zakai reads it (the worker's answer: `{config}` or `{error}`).
+function completeScenario(config) {
+  const id = (state.completeId = (state.completeId ?? 0) + 1);
+  return new Promise((resolve) => {
+    state.completing.set(id, resolve);
+    worker.postMessage({ type: 'complete', config, id });
+  });
 }
 
 async function loadFiles(files) {

@@ -159,9 +159,9 @@ self.onmessage = async ({ data }) => {
       break;
     case 'complete':
       try {
-        post({ type: 'completed', config: zakai.completeScenario(data.config), name: data.name, then: data.then });
+        post({ type: 'completed', id: data.id, config: zakai.completeScenario(data.config) });
       } catch (e) {
-        post({ type: 'completed', error: String(e?.message ?? e), name: data.name });
+        post({ type: 'completed', id: data.id, error: String(e?.message ?? e) });
       }
       break;
     case 'validate':

@@ -489,7 +489,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await data.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
     await data.setInputFiles('#file-observations', obsPath);
     await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
-    assert.match(await data.textContent('#data-status'), /filtering recorded-obs\.csv \(no truth/);
+    assert.match(await data.textContent("#data-status"), /filtering recorded-obs\.csv under the scenario “cubic-sensor-1d” \(no truth/);
     await data.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
     await data.click('#play');
     await data.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 30000 });
@@ -538,7 +538,39 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
     }, [scenarioJson, saObs]);
     await data.waitForFunction(() => window.zakaiPage.info?.name === 'sa-example-1' && window.zakaiPage.info.has_truth === false, null, { timeout: 15000 });
-    assert.match(await data.textContent('#data-status'), /filtering sa-obs\.csv/);
+    assert.match(await data.textContent('#data-status'), /filtering sa-obs\.csv under the scenario “sa-example-1”/);
+    // A scenario file that leaves things out — every method's parameters, the seed, the
+    // failure rule, the time's inner steps — gets them as the CLI reads the file: the form
+    // shows the catalogue's defaults, the bound is left to the problem, and the estimates on
+    // the dropped observations are the CLI's on the same files.
+    {
+      const full = JSON.parse(scenarioJson);
+      const sparse = { name: 'sparse', model: full.model, prior: full.prior, domain: full.domain, time: { dt_obs: full.time.dt_obs }, methods: full.methods.map((m) => ({ method: m.method })) };
+      const sparsePath = `${artifacts}/sparse.json`;
+      const saObsPath = `${artifacts}/sa-obs.csv`;
+      writeFileSync(sparsePath, JSON.stringify(sparse));
+      writeFileSync(saObsPath, saObs);
+      const cliSparse = JSON.parse(execFileSync(cli, ['filter', sparsePath, '--observations', saObsPath, '--format', 'json']));
+      await data.setInputFiles('#file-scenario', sparsePath);
+      await data.waitForFunction(() => window.zakaiPage.info?.name === 'sparse', null, { timeout: 15000 });
+      const form = await data.evaluate(() => ({
+        bound: document.getElementById('fail-bound').value,
+        params: [...document.querySelectorAll('#methods [data-param]')].map((el) => [Number(el.dataset.row), el.dataset.param, el.value]),
+        keys: window.zakaiPage.methodRows.map((r) => r.config.method),
+        defaults: Object.fromEntries(window.zakaiPage.catalogue.map((m) => [m.key, m.defaults])),
+      }));
+      assert.equal(form.bound, '', 'the bound is left to the problem');
+      assert.ok(form.params.length > 0, 'the methods have parameter fields');
+      for (const [row, name, value] of form.params) {
+        const want = form.defaults[form.keys[row]][name];
+        assert.equal(value, Array.isArray(want) ? want.join(', ') : String(want ?? ''), `${form.keys[row]} ${name}: the catalogue's default`);
+      }
+      await data.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
+      await data.click('#play');
+      await data.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 30000 });
+      const est = await data.evaluate(() => window.zakaiPage.data.est.map((e) => e[0]));
+      cliSparse.methods.forEach((m, i) => m.estimates.forEach((v, k) => assert.ok(Math.abs(est[i][k] - v) <= 1e-9 * Math.max(1, Math.abs(v)), `sparse scenario, ${m.name} row ${k}: page ${est[i][k]}, CLI ${v}`)));
+    }
     // A recording with gaps and an irregular step: increments 10–14 missing (an empty field,
     // then NaN), row 20 dropped (its increment added to row 21's: a step of 2Δτ). Every
     // method runs through it, the grid filter included, and the page's estimates are the
@@ -604,6 +636,35 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       assert.ok(after.y[0] <= after.truth[0] && after.y[1] >= after.truth[1], `the y axis still holds the truth: ${JSON.stringify(after)}`);
       assert.deepEqual(after.density, before.density, 'the density axis keeps its range');
     }
+    // In presentation mode every visible piece of text (muted captions, hints, statuses,
+    // errors) keeps at least 7:1 contrast against the background it is drawn on (WCAG 2
+    // relative luminance); dimmed chips of hidden methods (opacity) aside.
+    const lowContrast = await page.evaluate(() => {
+      const rgba = (c) => { const v = c.match(/[\d.]+/g).map(Number); return [v[0], v[1], v[2], v[3] ?? 1]; };
+      const lum = ([r, g, b]) => {
+        const f = (c) => { c /= 255; return c <= 0.03928 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4; };
+        return 0.2126 * f(r) + 0.7152 * f(g) + 0.0722 * f(b);
+      };
+      const background = (el) => {
+        for (let e = el; e; e = e.parentElement) {
+          const c = rgba(getComputedStyle(e).backgroundColor);
+          if (c[3] > 0.5) return c;
+        }
+        return [255, 255, 255, 1];
+      };
+      const low = [];
+      for (const el of document.querySelectorAll('body *')) {
+        if (!el.getClientRects().length || el.closest('.hidden-method, option')) continue;
+        if (![...el.childNodes].some((n) => n.nodeType === 3 && n.textContent.trim())) continue;
+        const cs = getComputedStyle(el);
+        if (cs.visibility === 'hidden') continue;
+        const [a, b] = [lum(rgba(cs.color)), lum(background(el))].sort((x, y) => y - x);
+        const ratio = (a + 0.05) / (b + 0.05);
+        if (ratio < 7) low.push(`${el.tagName.toLowerCase()}${el.id ? `#${el.id}` : ''}${el.className ? `.${String(el.className).split(' ').join('.')}` : ''} "${el.textContent.trim().slice(0, 30)}" ${ratio.toFixed(2)}:1`);
+      }
+      return low;
+    });
+    assert.deepEqual(lowContrast, [], 'text below 7:1 in presentation mode');
     await page.keyboard.press('p');
     await page.setViewportSize({ width: 1440, height: 900 });
   }
@@ -681,6 +742,53 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(bayes.gap < 1e-3 && bayes.priorDrawn, `posterior = prediction × likelihood: ${JSON.stringify(bayes)}`);
     assert.match(await page.textContent('#step-phase'), /^update at t = 0\.040/);
     await page.uncheck('#split-step');
+  }
+
+  // 15e. Accuracy visible: the error plot measures every estimate against the exact filter
+  //      where one runs (sa-example-1: the Gaussian-sum filter, exact for its mixture noise, or
+  //      the KF), else against the grid filter with the most nodes (cubic sensor: QIEM(399)),
+  //      or against the truth on request; its series are |x̂_i − x̂_ref| (|x̂_i − x|) at every
+  //      row, the reference's own left out. The default density panel is a grid filter's,
+  //      picked from the catalogue (the spectral filter comes before QIEM in the cubic
+  //      sensor's list: a name-free choice that still prefers the grid).
+  {
+    const errorsOf = () => page.evaluate(() => {
+      const s = window.zakaiPage;
+      const sel = document.getElementById('error-against');
+      return { options: [...sel.options].map((o) => [o.value, o.textContent]), value: sel.value, series: s.errPlot.data.slice(1), est: s.data.est.map((e) => e[0]), truth: s.data.truth[0], labels: s.info.labels, nodes: s.info.nodes, exact: s.info.exact, density: document.getElementById('density-method').value };
+    });
+    const check = (r, against) => {
+      const ref = against === 'truth' ? r.truth : r.est[r.labels.indexOf(r.options.find(([v]) => v === 'reference')[1].replace(/ \(.*$/, ''))];
+      r.est.forEach((e, i) => e.forEach((v, k) => {
+        const want = v == null || ref[k] == null || v === ref[k] ? null : Math.abs(v - ref[k]);
+        const got = r.series[i][k];
+        assert.ok(want === null ? got === null : Math.abs(got - want) <= 1e-12 * Math.max(1, want), `${r.labels[i]} row ${k} against ${against}: ${got}, want ${want}`);
+      }));
+    };
+    for (const [preset, reference] of [['sa-example-1', /^(KF|GSF)/], ['cubic-sensor-1d', /^QIEM\(399\) \(the finest grid filter\)$/]]) {
+      await page.goto(`${url}?preset=${preset}`);
+      await page.waitForFunction((p) => window.zakaiPage?.info?.name === p, preset, { timeout: 30000 });
+      await page.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
+      await page.click('#play');
+      await page.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 60000 });
+      await page.waitForTimeout(300);
+      let r = await errorsOf();
+      assert.equal(r.value, 'reference', `${preset}: errors against the reference by default`);
+      assert.match(r.options[0][1], reference, `${preset}: the reference`);
+      if (preset === 'sa-example-1') assert.match(r.options[0][1], /\(exact\)$/);
+      else {
+        const finest = r.nodes.indexOf(Math.max(...r.nodes));
+        assert.ok(r.options[0][1].startsWith(r.labels[finest]), 'the grid filter with the most nodes');
+        assert.equal(r.density, String(r.nodes.findIndex((k) => k > 0)), 'the density panel shows a grid filter');
+        assert.ok(r.labels.findIndex((l) => l.startsWith('Spectral')) < Number(r.density), 'not the first method with a density by name order');
+      }
+      check(r, 'reference');
+      await page.selectOption('#error-against', 'truth');
+      await page.waitForTimeout(200);
+      r = await errorsOf();
+      check(r, 'truth');
+      await page.locator('#errors-figure').screenshot({ path: `${artifacts}/errors-${preset}.png` });
+    }
   }
 
   // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods

@@ -327,6 +327,8 @@ struct SessionInfo {
     /// Sizes chosen from the problem for what the scenario left unset, one note each.
     chosen: Vec<String>,
     seed: u64,
+    /// Per method: its key in scenarios (`"pf"`).
+    keys: Vec<String>,
     /// Per method: an exact reference (the catalogue's `exact`).
     exact: Vec<bool>,
     /// Per method: a density on a grid or basis (the catalogue's `density`).
@@ -466,7 +468,7 @@ impl Session {
     }
 
     /// `{name, n, m, steps, dt_obs, continuous, has_truth, t_start, t_end, domain, methods,
-    /// labels, chosen, seed, exact, density, nodes}`.
+    /// labels, chosen, seed, keys, exact, density, nodes}`.
     pub fn info(&self) -> Result<JsValue, JsError> {
         let c = self.experiment.config();
         to_js(&SessionInfo {
@@ -484,6 +486,7 @@ impl Session {
             labels: c.method_labels(),
             chosen: self.experiment.chosen_defaults().to_vec(),
             seed: self.seed,
+            keys: c.methods.iter().map(|m| m.key().to_string()).collect(),
             exact: c.methods.iter().map(|m| m.is_exact()).collect(),
             density: c.methods.iter().map(|m| m.has_density()).collect(),
             nodes: self
