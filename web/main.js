@@ -556,7 +556,11 @@ function makePlots(info) {
   // obs: per component, z_k (discrete) or the observation path y(τ_k) = Σ Δy (continuous),
   // null where the recording has no value (a gap); ySum: the path's running sums.
   state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), ghost: perMethod(), lo: perMethod(), hi: perMethod(),
-    obs: Array.from({ length: info.m }, () => []), ySum: new Array(info.m).fill(0) };
+    obs: Array.from({ length: info.m }, () => []), ySum: new Array(info.m).fill(0),
+    innov: info.methods.map(() => Array.from({ length: info.m }, () => [])) };
+  $('innovations-figure').hidden = info.continuous;
+  fillOptions($('innovation-component'), Array.from({ length: info.m }, (_, j) => [j, `z${j + 1}`]));
+  $('innovation-component').hidden = info.m < 2;
   $('observations-caption').textContent = info.continuous
     ? 'observation path y(t) = Σ Δy (a break: increments missing from the recording)'
     : 'measurements z_k (a break: values missing from the recording)';
@@ -617,6 +621,8 @@ function makeCharts() {
     const hi = 2 + 2 * M + 2 * i;
     bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
   });
+  // The previous run (before the last change or reset), faint and thin in its methods' colours.
+  (state.previous?.labels ?? []).forEach((m, i) => series.push({ label: `previous ${m}`, stroke: `${color(i)}59`, width: 1, dash: [1, 2] }));
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
     ...plotSize('trajectory-plot', 'trajectory'), series, bands,
@@ -647,6 +653,15 @@ function makeCharts() {
   // observation (grey, scaled to the plot).
   names.forEach((m, i) => dseries.push({ label: `${m} predicted`, stroke: color(i), dash: [5, 4], width: 1.2 }));
   dseries.push({ label: 'likelihood (scaled)', stroke: '#98a2b3', width: 2 });
+  // Discrete measurements: the innovations of each method, the chosen component.
+  const iseries = [{}, ...names.map((m, i) => ({ label: m, stroke: color(i), dash: dash(i), width: 1.2, points: { show: true, size: 3 } }))];
+  state.innovPlot?.destroy();
+  state.innovPlot = new uPlot({
+    ...plotSize('innovations-plot', 'errors'), series: iseries,
+    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
+    axes: [{ ...axisFont, label: '' }, { label: 'z − h(x̂⁻)', ...axisFont, space: 24 }],
+    legend: { show: false },
+  }, state.data?.times.length ? innovationData() : iseries.map(() => []), $('innovations-plot'));
   // The errors: against the reference filter (exact, else the finest grid filter) or the
   // truth, on a log scale (an exact method's error against itself is left out).
   const eseries = [{}, ...names.map((m, i) => ({ label: m, stroke: color(i), dash: dash(i), width: 1.5 }))];
@@ -869,6 +884,13 @@ function applyFrame(frame) {
       else if (info.continuous) d.obs[j].push(d.ySum[j] += v);
       else d.obs[j].push(v);
     }
+    frame.innovations?.forEach((v, i) => {
+      const have = v.length / info.m;
+      for (let j = 0; j < info.m; j++) {
+        const x = r < have ? v[r * info.m + j] : NaN;
+        d.innov[i][j].push(Number.isFinite(x) ? x : null);
+      }
+    });
     frame.estimates.forEach((e, i) => {
       const have = e.length / n;
       const sd = frame.sds?.[i];
@@ -921,7 +943,21 @@ function trajectoryData() {
   const dim = shownDim();
   const none = d.times.map(() => null);
   const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
-  return [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
+  const now = [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
+  const p = state.previous;
+  if (!p) return now;
+  // The previous run on its own times, joined with this one's (nulls where a run has no row);
+  // hidden by the "previous run" box, or where it has fewer components than the one shown.
+  const shown = $('previous').checked && dim < p.n;
+  const before = [p.times, ...p.est.map((e) => (shown ? e[dim] : p.times.map(() => null)))];
+  // Nulls stay breaks (a failure, a missing value); rows only one run has are spanned.
+  return uPlot.join([now, before], [now.map(() => 1), before.map(() => 1)]);
+}
+
+// The innovation plot's series: times and each method's innovations of the chosen component.
+function innovationData() {
+  const j = Number($('innovation-component').value) || 0;
+  return [state.data.times, ...state.data.innov.map((v) => v[j])];
 }
 
 // A log axis over whole decades around the data (one decade when there is none yet).
@@ -1046,6 +1082,10 @@ function describePlots(row) {
     }).join(', ');
     said(state.densityPlot, `posterior densities of x${dim + 1} at t = ${f.t.toFixed(2)}: ${peaks}`);
   }
+  if (!$('innovations-figure').hidden) {
+    const j = Number($('innovation-component').value) || 0;
+    said(state.innovPlot, `innovations z${j + 1} − h(x̂⁻) of each method against t; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(d.innov[i][j][row])}`).join(', ')}`);
+  }
   if (!$('errors-figure').hidden) {
     const errors = errorData();
     const against = $('error-against').selectedOptions[0]?.textContent ?? '';
@@ -1061,6 +1101,7 @@ function render() {
   state.trajPlot.setData(trajectoryData());
   state.obsPlot.setData([d.times, ...d.obs]);
   if (!$('errors-figure').hidden) state.errPlot.setData(errorData());
+  if (!$('innovations-figure').hidden) state.innovPlot.setData(innovationData());
   const density = densityData();
   if (density) state.densityPlot.setData(density);
   const last = d.times.length ? d.times[d.times.length - 1] : 0;
@@ -1255,6 +1296,7 @@ function exportPng() {
     ['#density-plot canvas', 'posterior densities at the time shown (dashed: truth)'],
     ['#heatmap', `joint density of x1, x2 of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
     ['#observations-plot canvas', $('observations-caption').textContent],
+    ['#innovations-plot canvas', `innovations z${(Number($('innovation-component').value) || 0) + 1} − h(x̂⁻) of each method`],
     ['#errors-plot canvas', `error of each estimate of x${shownDim() + 1} against ${$('error-against').selectedOptions[0]?.textContent ?? ''} (log scale)`],
   ].map(([sel, caption]) => [document.querySelector(sel), caption])
     .filter(([c]) => c && c.offsetParent !== null && c.width > 0 && c.height > 0);
@@ -1528,6 +1570,10 @@ worker.onmessage = ({ data }) => {
       // so does the last density drawn (it has that run's number of methods).
       state.queue.length = 0;
       state.lastDensity = null;
+      // The run on screen becomes the previous run, drawn faintly under the new one.
+      if (state.data?.times.length > 1 && state.info) {
+        state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n };
+      }
       state.info = data.info;
       if (state.pendingConfig) {
         state.base = state.pendingConfig;
@@ -1652,7 +1698,9 @@ window.addEventListener('resize', () => {
 });
 $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
 $('bands').addEventListener('change', () => render());
+$('previous').addEventListener('change', () => render());
 $('error-against').addEventListener('change', () => render());
+$('innovation-component').addEventListener('change', () => render());
 $('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
 $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
 $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));

@@ -40,6 +40,8 @@ function frame(summary) {
   const followed = info.methods.map((_, i) => session.followed(i, from, to));
   // Every estimate's standard deviations (the ±2σ bands, the CSV).
   const sds = info.methods.map((_, i) => session.sds(i, from, to));
+  // Discrete measurements: each method's innovations z_k − h(x̂_{k|k−1}).
+  const innovations = info.continuous ? null : info.methods.map((_, i) => session.innovations(i, from, to));
   const grid = session.densityGrid(view.dim, view.points);
   const densities = info.methods.map((_, i) => session.density(i, view.dim, view.points));
   const diagnostics = session.diagnostics();
@@ -62,8 +64,9 @@ function frame(summary) {
   if (heat2d) transfer.push(heat2d.values.buffer);
   if (heat2d?.curvature) transfer.push(heat2d.curvature.buffer);
   if (sds) transfer.push(...sds.map((s) => s.buffer));
+  if (innovations) transfer.push(...innovations.map((s) => s.buffer));
   transfer.push(observations.buffer);
-  post({ type: 'frame', load: loadId, from, to, times, truth, observations, estimates, followed, sds, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
+  post({ type: 'frame', load: loadId, from, to, times, truth, observations, estimates, followed, sds, innovations, grid, densities, diagnostics, logConcave, summary, heat2d }, transfer);
 }
 
 // Intervals owed to the playback: below one interval per frame (speeds down to 0.1) the

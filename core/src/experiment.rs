@@ -212,6 +212,12 @@ pub struct MethodTrack {
     pub timed_steps: usize,
     /// Wall time spent building the filter — its off-line part (seconds; 0 without a clock).
     pub build_seconds: f64,
+    /// The innovations `z_k − h(x̂_{k|k−1})` of discrete measurements (m per row of
+    /// `estimates`, NaN where a component is missing or the prediction failed), with
+    /// `x̂_{k|k−1}` the mean the method predicts for τ_k before it sees `z_k` (on a fork): the
+    /// part of each measurement its prediction did not expect. Empty unless the run records
+    /// them ([`ExperimentRun::record_innovations`]).
+    pub innovations: Vec<f64>,
     /// Estimates the method went on giving after a failure that left its state intact (the
     /// track-loss rule or the divergence bound, not a failed step or non-finite numbers),
     /// rows `failure.k ..`, row-major — for display only (a failed run's numbers never reach a
@@ -603,6 +609,7 @@ impl Experiment {
                 steps: 0,
                 timed_steps: 0,
                 build_seconds,
+                innovations: Vec::new(),
                 after_failure: Vec::new(),
                 off_track_since: None,
                 following: false,
@@ -627,6 +634,7 @@ impl Experiment {
             track_loss: self.config.failure.track_loss,
             exact: self.config.methods.iter().map(|m| m.is_exact()).collect(),
             follow_failed: false,
+            innovations: None,
         };
         run.observe(0, None, &mut Silent);
         Ok(run)
@@ -711,6 +719,29 @@ pub struct ExperimentRun {
     exact: Vec<bool>,
     /// Whether methods declared failed with their state intact keep being stepped.
     follow_failed: bool,
+    /// With discrete measurements, the model whose h gives each method's innovations
+    /// ([`MethodTrack::innovations`]), and the row being computed.
+    innovations: Option<(Model, Vec<f64>)>,
+}
+
+/// `row = z − h(x̂⁻)` for the measurement `obs`, with `x̂⁻` the mean `filter` predicts for its
+/// time (its own mean when `obs.dt` is 0); NaN where z is missing or the prediction fails.
+fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, row: &mut [f64]) {
+    let predicted = if obs.dt > 0.0 {
+        let mut ahead = filter.fork();
+        ahead.predict(obs.dt).ok().map(|()| ahead.estimate().mean)
+    } else {
+        Some(filter.estimate().mean)
+    };
+    match predicted {
+        Some(mean) if obs.value.len() == row.len() && mean.iter().all(|v| v.is_finite()) => {
+            model.observation.eval(mean.as_slice(), row);
+            for (r, z) in row.iter_mut().zip(obs.value) {
+                *r = z - *r;
+            }
+        }
+        _ => row.iter_mut().for_each(|r| *r = f64::NAN),
+    }
 }
 
 /// Row `k` of `data` as the observation a filter steps with: exactly Δτ when the step is Δτ up
@@ -832,6 +863,10 @@ impl ExperimentRun {
             }
             return;
         }
+        // The innovation, from the prediction on a fork (before the step moves the filter).
+        if let Some((model, row)) = &mut self.innovations {
+            innovation(filter.as_ref(), model, &obs, row);
+        }
         // Observation 0 is no step of the recursion (nothing, or the update at τ₀): untimed.
         let start = clock
             .filter(|_| k > 0 && track.times_next_step())
@@ -911,6 +946,9 @@ impl ExperimentRun {
                     ConcernRecord::record(&mut track.concerns, c, k, t.times[k]);
                 }
                 append(&mut track.estimates, est.mean.as_slice());
+                if let Some((_, row)) = &self.innovations {
+                    append(&mut track.innovations, row);
+                }
                 if let Some(p) = &est.covariance {
                     // nalgebra is column-major; P is symmetric, so rows read the same.
                     append(&mut track.covariances, p.as_slice());
@@ -957,6 +995,20 @@ impl ExperimentRun {
     /// [`Experiment::start_recorded`] on the rows so far and push each new one.
     pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), ZakaiError> {
         self.data.push(t, value)
+    }
+
+    /// Records every method's innovations `z_k − h(x̂_{k|k−1})` from the next observation on
+    /// ([`MethodTrack::innovations`], whose rows so far — the update at τ₀ of a run just
+    /// started — are NaN; `model` is the run's). Each costs a fork and a prediction per step;
+    /// observations of a continuous model have none (nothing is recorded).
+    pub fn record_innovations(&mut self, model: &Model) {
+        if self.data.continuous || self.innovations.is_some() {
+            return;
+        }
+        for track in &mut self.tracks {
+            track.innovations = alloc::vec![f64::NAN; track.rows() * model.m];
+        }
+        self.innovations = Some((model.clone(), alloc::vec![0.0; model.m]));
     }
 
     /// Processes up to `count` further observations; returns how many were processed.

@@ -374,7 +374,10 @@ fn the_catalogue_says_which_methods_have_a_density() {
                     *g = (-0.5 * d * d / var).exp() / (2.0 * std::f64::consts::PI * var).sqrt();
                 }
                 let gap: f64 = own.iter().zip(&gaussian).map(|(a, b)| (a - b).abs()).sum();
-                assert!(gap > 1e-6, "{preset} spectral: its marginal is the Gaussian");
+                assert!(
+                    gap > 1e-6,
+                    "{preset} spectral: its marginal is the Gaussian"
+                );
             } else {
                 assert_eq!(f.density().is_some(), entry.density, "{preset} {key}");
             }
@@ -382,5 +385,9 @@ fn the_catalogue_says_which_methods_have_a_density() {
             seen.insert(entry.info.key.clone());
         }
     }
-    assert_eq!(seen.len(), zakai::scenario::methods::catalogue().len(), "every method: {seen:?}");
+    assert_eq!(
+        seen.len(),
+        zakai::scenario::methods::catalogue().len(),
+        "every method: {seen:?}"
+    );
 }

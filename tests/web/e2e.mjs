@@ -783,12 +783,45 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
         assert.ok(r.labels.findIndex((l) => l.startsWith('Spectral')) < Number(r.density), 'not the first method with a density by name order');
       }
       check(r, 'reference');
+      // Innovations (discrete measurements only; their values against an exact Kalman filter
+      // are tests/tests/missing_data.rs's): one per measurement after τ₀, for every method.
+      const innov = await page.evaluate(() => ({ hidden: document.getElementById('innovations-figure').hidden, m: window.zakaiPage.info.m, rows: window.zakaiPage.data.times.length, series: window.zakaiPage.innovPlot.data.slice(1).map((s) => s.filter((v) => v != null).length) }));
+      if (preset === 'sa-example-1') {
+        assert.ok(!innov.hidden, 'the innovations are shown for discrete measurements');
+        innov.series.forEach((count, i) => assert.equal(count, innov.rows - 1, `${r.labels[i]}: an innovation per measurement after τ₀`));
+      } else assert.ok(innov.hidden, 'no innovations for continuous observations');
       await page.selectOption('#error-against', 'truth');
       await page.waitForTimeout(200);
       r = await errorsOf();
       check(r, 'truth');
       await page.locator('#errors-figure').screenshot({ path: `${artifacts}/errors-${preset}.png` });
     }
+    // The previous run stays on the trajectory plot after a change (here Δτ 0.01 → 0.02, so
+    // the two runs have different times): each of its methods' estimates at its own times,
+    // faint, until the "previous run" box is cleared.
+    const before = await page.evaluate(() => ({ times: window.zakaiPage.data.times, est: window.zakaiPage.data.est.map((e) => e[0]), labels: window.zakaiPage.info.labels }));
+    await page.fill('#dt-obs', '0.02');
+    await page.click('#apply');
+    await page.waitForFunction(() => window.zakaiPage.info?.dt_obs === 0.02, null, { timeout: 30000 });
+    await page.click('#play');
+    await page.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 60000 });
+    await page.waitForTimeout(300);
+    const overlay = () => page.evaluate(() => {
+      const u = window.zakaiPage.trajPlot;
+      const first = u.series.findIndex((s) => s.label?.startsWith('previous '));
+      return { labels: u.series.slice(first).map((s) => s.label), x: u.data[0], ys: u.data.slice(first) };
+    });
+    let shownBefore = await overlay();
+    assert.deepEqual(shownBefore.labels, before.labels.map((l) => `previous ${l}`), 'one faint line per method of the previous run');
+    before.est.forEach((e, i) => before.times.forEach((t, k) => {
+      const at = shownBefore.x.indexOf(t);
+      assert.ok(at >= 0 && shownBefore.ys[i][at] === e[k], `previous ${before.labels[i]} at t = ${t}`);
+    }));
+    await page.uncheck('#previous');
+    await page.waitForTimeout(200);
+    shownBefore = await overlay();
+    assert.ok(shownBefore.ys.every((y) => y.every((v) => v == null)), 'cleared: the previous run is not drawn');
+    await page.check('#previous');
   }
 
   // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods

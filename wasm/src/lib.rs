@@ -371,6 +371,7 @@ impl Session {
         let experiment = Experiment::new(config).map_err(js_error)?;
         let mut run = experiment.start(seed).map_err(js_error)?;
         run.follow_failed_methods(true);
+        run.record_innovations(experiment.model());
         Ok(Session {
             experiment,
             run,
@@ -406,6 +407,7 @@ impl Session {
             .start_recorded(recording.clone(), seed)
             .map_err(js_error)?;
         run.follow_failed_methods(true);
+        run.record_innovations(experiment.model());
         Ok(Session {
             experiment,
             run,
@@ -463,6 +465,7 @@ impl Session {
         }
         .map_err(js_error)?;
         self.run.follow_failed_methods(true);
+        self.run.record_innovations(self.experiment.model());
         self.seed = seed;
         Ok(())
     }
@@ -590,6 +593,23 @@ impl Session {
             return Vec::new();
         }
         track.estimates[a * track.n..b * track.n].to_vec()
+    }
+
+    /// Innovations `z_k − h(x̂_{k|k−1})` of method `index` for rows `from..to`, row-major (m per
+    /// row; NaN where a component is missing): each measurement less what the method's
+    /// prediction expected. Empty for continuous observations (a session records them for
+    /// discrete measurements only).
+    pub fn innovations(&self, index: usize, from: usize, to: usize) -> Vec<f64> {
+        let Some(track) = self.run.tracks().get(index) else {
+            return Vec::new();
+        };
+        let m = self.run.recording().m;
+        let rows = track.innovations.len() / m.max(1);
+        let (a, b) = (from.min(rows), to.min(rows));
+        if a >= b {
+            return Vec::new();
+        }
+        track.innovations[a * m..b * m].to_vec()
     }
 
     /// What method `index` went on estimating after a failure that left its state intact
