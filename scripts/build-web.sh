@@ -42,8 +42,8 @@ cp web/node_modules/temml/dist/temml.mjs web/node_modules/temml/dist/Temml-Local
 # The static site: one self-contained folder for any static host.
 rm -rf target/site
 mkdir -p target/site
-cp web/index.html web/main.js web/worker.js web/dom.js web/learn.js web/lessons.js web/matrix.js web/mixture.js \
-  web/canvas-plots.js web/style.css target/site/
+# Every module of the page (web/*.js: main.js boots the others) and its style.
+cp web/index.html web/*.js web/style.css target/site/
 cp -r web/vendor target/site/
 for pkg in pkg pkg-scalar; do
   mkdir -p "target/site/$pkg"

@@ -16,3 +16,6 @@ export const el = (tag, props = {}, ...children) => {
   e.append(...children.filter((c) => c != null));
   return e;
 };
+
+// Fills a <select> with `[value, text, title?]` options.
+export const fillOptions = (select, items) => select.replaceChildren(...items.map(([value, text, title]) => el('option', { value: String(value), title }, String(text))));

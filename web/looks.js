@@ -1,0 +1,33 @@
+// How methods look on every plot: Okabe & Ito's colour-blind-safe palette with cycling line
+// styles, the observation greys, marker symbols and line samples.
+
+import { el } from './dom.js';
+import { markerShape } from './canvas-plots.js';
+
+// Okabe & Ito's colour-blind-safe palette (black is the truth's) with four line styles that
+// cycle with it, so no two of the first 28 methods share a look — also under colour-vision
+// deficiency, where some of the colours come close (checked by the browser tests).
+const COLORS = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#C9B400'];
+const DASHES = [[], [7, 3], [2, 3], [9, 3, 2, 3]];
+export const color = (i) => COLORS[i % COLORS.length];
+export const dash = (i) => DASHES[i % DASHES.length];
+// Greys and a dark blue for the observation components (the methods' colours are for estimates).
+export const OBS_COLORS = ['#444', '#1f4e8c', '#888', '#6a3d9a'];
+export const markerSymbol = (i) => ({ square: '□', circle: '○', triangle: '△', diamond: '◇' })[markerShape(i)];
+// A short line in a method's colour and style (legend entries, chips).
+export function lineSample(stroke, pattern, width = 2) {
+  const dpr = window.devicePixelRatio || 1;
+  // A sample of a method's line style beside its name: decoration, hidden from screen readers.
+  const c = el('canvas', { width: 26 * dpr, height: 10 * dpr, 'aria-hidden': 'true' });
+  c.style.width = '26px';
+  c.style.height = '10px';
+  const ctx = c.getContext('2d');
+  ctx.strokeStyle = stroke;
+  ctx.lineWidth = width * dpr;
+  ctx.setLineDash(pattern.map((v) => v * dpr));
+  ctx.beginPath();
+  ctx.moveTo(0, 5 * dpr);
+  ctx.lineTo(26 * dpr, 5 * dpr);
+  ctx.stroke();
+  return c;
+}

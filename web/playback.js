@@ -1,0 +1,177 @@
+// Playback: play and pause, one step (or its predict and update halves), the time slider,
+// presentation mode, window resizing and the keyboard shortcuts.
+
+import { $ } from './dom.js';
+import { densityHeight, densityPoints, makeCharts, resetHeatStrip, shownRow } from './charts.js';
+import { state } from './state.js';
+import { formChanged } from './form.js';
+import { apply, checkedForm, worker } from './session.js';
+import { applyFrame, render } from './series.js';
+
+// ▶ play (and space) applies edits first, so a run never silently ignores them.
+function togglePlay() {
+  if (!state.playing && formChanged()) {
+    if (!checkedForm(true)) return;
+    state.playAfterLoad = true;
+    apply();
+    return;
+  }
+  setPlaying(!state.playing);
+}
+
+// The step in two halves (the "predict / update" box): a press with no prediction shown asks
+// the worker for the predict half; the next press takes the step, and the prediction and the
+// likelihood stay drawn beside the posterior they made.
+function stepInHalves() {
+  if (state.preview?.phase === 'predicted') {
+    state.preview.phase = 'updated';
+    worker.postMessage({ type: 'step', k: 1 });
+    return;
+  }
+  state.preview = null;
+  worker.postMessage({ type: 'preview' });
+}
+
+export function showStepPhase() {
+  const p = state.preview;
+  $('step-phase').textContent = !p ? ''
+    : p.phase === 'predicted'
+      ? `predict: every method moved to t = ${p.t.toFixed(3)} without the observation (dashed)${p.likelihood ? '; grey: the likelihood of the observation there' : ''}. Step again to update.`
+      : `update at t = ${p.t.toFixed(3)}: the posterior (solid) is the prediction (dashed) times the likelihood${p.likelihood ? ' (grey)' : ''}, normalised.`;
+  $('step').textContent = p?.phase === 'predicted' ? 'update' : 'step';
+}
+// The time slider spans the rows so far; live, it sits at the end.
+export function updateScrub() {
+  const rows = state.data?.times.length ?? 0;
+  const s = $('scrub');
+  s.max = String(Math.max(0, rows - 1));
+  s.value = String(state.scrub ?? Math.max(0, rows - 1));
+  $('scrub-live').hidden = state.scrub == null;
+  $('scrub-time').textContent = state.scrub == null ? 'live' : `t = ${(state.data.times[state.scrub] ?? 0).toFixed(3)}`;
+}
+
+function scrubTo(row) {
+  const last = state.data.times.length - 1;
+  if (state.playing) setPlaying(false);
+  state.scrub = row >= last ? null : Math.max(0, row);
+  render();
+}
+
+export function setPlaying(p) {
+  state.playing = p;
+  if (p && state.preview) {
+    state.preview = null;
+    showStepPhase();
+  }
+  state.lastIntervalAt = performance.now();
+  if (p && state.scrub != null) {
+    state.scrub = null;
+    render();
+  }
+  $('play').textContent = p ? '❚❚ pause' : '▶ play';
+  worker.postMessage({ type: p ? 'play' : 'pause' });
+}
+
+// The busy state: while playing, the intervals computed per second (over the last second)
+// beside the page's frame rate, and "computing…" when no interval has arrived for half a
+// second (a large grid's step) — the frame rate alone would show 60 while nothing advances.
+export function loop(ts) {
+  state.lastFrameTimes.push(ts);
+  while (state.lastFrameTimes.length && ts - state.lastFrameTimes[0] > 1000) state.lastFrameTimes.shift();
+  state.fps = state.lastFrameTimes.length;
+  if (state.queue.length) {
+    const frames = state.queue.splice(0);
+    frames.forEach(applyFrame);
+    if (state.preview?.phase === 'updated') showStepPhase();
+    state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
+    state.lastIntervalAt = ts;
+    render();
+    worker.postMessage({ type: 'ack' });
+  }
+  while (state.intervalTimes.length && ts - state.intervalTimes[0][0] > 1000) state.intervalTimes.shift();
+  const perSecond = state.intervalTimes.reduce((a, [, k]) => a + k, 0);
+  const busy = state.playing && ts - (state.lastIntervalAt ?? ts) > 500;
+  $('fps').textContent = busy ? `computing… · ${state.fps} fps` : state.playing ? `${perSecond} intervals/s · ${state.fps} fps` : `${state.fps} fps`;
+  $('fps').classList.toggle('busy', busy);
+  requestAnimationFrame(loop);
+}
+
+// One interval forward (back to the present first when the time slider looks back).
+function stepOnce() {
+  setPlaying(false);
+  if (state.scrub != null) scrubTo(Infinity);
+  if ($('split-step').checked) return stepInHalves();
+  worker.postMessage({ type: 'step', k: 1 });
+}
+// Presentation mode: the plots alone, in large type, with the methods the chips leave on.
+function setPresent(on) {
+  document.body.classList.toggle('present', on);
+  $('present').setAttribute('aria-pressed', String(on));
+  $('present').textContent = on ? 'end presentation' : 'present';
+  const url = new URL(location.href);
+  if (on) url.searchParams.set('present', '1'); else url.searchParams.delete('present');
+  history.replaceState(null, '', url);
+  fitPlots();
+}
+
+// Plots follow their panels' sizes (window resized, presentation mode).
+function fitPlots() {
+  if (!state.info) return;
+  makeCharts();
+  state.heatStrip.fit(densityHeight());
+  resetHeatStrip();
+  render();
+}
+
+// Wires the controls of this part of the page (called once, by main.js).
+export function setupPlayback() {
+  $('play').addEventListener('click', togglePlay);
+  $('step').addEventListener('click', stepOnce);
+  $('reset').addEventListener('click', apply);
+  $('speed').addEventListener('input', () => {
+    $('speed-value').textContent = $('speed').value;
+    worker.postMessage({ type: 'speed', value: Number($('speed').value) });
+  });
+  $('component').addEventListener('change', () => {
+    const dim = Number($('component').value);
+    worker.postMessage({ type: 'view', view: { dim }, redraw: !state.playing });
+    makeCharts();
+    resetHeatStrip();
+    render();
+  });
+  $('density-method').addEventListener('change', () => {
+    worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
+    resetHeatStrip();
+    render();
+  });
+  $('scrub').addEventListener('input', () => scrubTo(Number($('scrub').value)));
+  $('scrub-live').addEventListener('click', () => scrubTo(Infinity));
+  $('present').addEventListener('click', () => setPresent(!document.body.classList.contains('present')));
+
+  let resizeTimer = null;
+  window.addEventListener('resize', () => {
+    clearTimeout(resizeTimer);
+    resizeTimer = setTimeout(fitPlots, 100);
+  });
+  $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
+  $('bands').addEventListener('change', () => render());
+  $('previous').addEventListener('change', () => render());
+  $('error-against').addEventListener('change', () => render());
+  $('innovation-component').addEventListener('change', () => render());
+  $('lc-layer').addEventListener('change', () => worker.postMessage({ type: 'view', view: { lcLayer: $('lc-layer').checked }, redraw: true }));
+  $('grid-points').addEventListener('change', () => worker.postMessage({ type: 'view', view: { points: densityPoints() } }));
+  // Shortcuts work wherever the focus is, except where keys type text.
+  const typesText = (t) => t && (t.tagName === 'TEXTAREA' || t.isContentEditable
+    || (t.tagName === 'INPUT' && !['checkbox', 'radio', 'range', 'button', 'submit', 'reset', 'color', 'file'].includes(t.type)));
+  document.addEventListener('keydown', (e) => {
+    const t = document.activeElement;
+    if (typesText(t) || e.ctrlKey || e.metaKey || e.altKey) return;
+    // A slider keeps its arrow keys.
+    const arrows = t?.type !== 'range';
+    if (e.key === ' ') { e.preventDefault(); togglePlay(); }
+    else if (e.key === 'ArrowRight' && arrows) { e.preventDefault(); stepOnce(); }
+    else if (e.key === 'ArrowLeft' && arrows) { e.preventDefault(); scrubTo(shownRow() - 1); }
+    else if (e.key === 'r') { e.preventDefault(); apply(); }
+    else if (e.key === 'p') { e.preventDefault(); setPresent(!document.body.classList.contains('present')); }
+  });
+}

@@ -1,0 +1,272 @@
+// Frames from the worker into the page's data, and the plots' series drawn from it: the
+// trajectory with its bands and the previous run, innovations, errors against a reference,
+// densities; the text summaries of the plots; render().
+
+import uPlot from './vendor/uplot/uPlot.esm.js';
+import { $, el, fillOptions } from './dom.js';
+import { bandsShown, drawHeatmap, shownDim, shownFrame, shownRow } from './charts.js';
+import { labels, state } from './state.js';
+import { setPlaying, updateScrub } from './playback.js';
+
+// 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
+function showLogConcavity(c) {
+  const el = $('log-concavity');
+  if (!c) {
+    el.textContent = 'log-concavity (003 §3): shown for grid methods';
+    return;
+  }
+  const at = c.worst ? ` (smallest curvature of −log p ${c.worst[1].toFixed(2)} at x = ${c.worst[0].map((v) => v.toFixed(2)).join(', ')})` : '';
+  el.textContent = `${c.logConcave ? 'log-concave' : 'not log-concave'}${at}`;
+  el.title = `003 §3, of ${labels()[Number($('density-method').value) || 0]}'s density: the Hessian of −log p is positive semidefinite wherever the density is above 10⁻³ of its maximum`;
+  // A research diagnostic, not a fault of the run: neutral in colour.
+  el.className = c.logConcave ? 'hint' : 'hint diagnostic';
+}
+
+// Frames kept for the time slider: thinned (every other of the older half) past this many.
+const HISTORY_LIMIT = 600;
+
+export function applyFrame(frame) {
+  const d = state.data;
+  const info = state.info;
+  const n = info.n;
+  const rows = frame.to - frame.from;
+  for (let r = 0; r < rows; r++) {
+    d.times.push(frame.times[r]);
+    if (frame.truth.length) for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
+    for (let j = 0; j < info.m; j++) {
+      const v = frame.observations[r * info.m + j];
+      if (!Number.isFinite(v)) d.obs[j].push(null);
+      else if (info.continuous) d.obs[j].push(d.ySum[j] += v);
+      else d.obs[j].push(v);
+    }
+    frame.innovations?.forEach((v, i) => {
+      const have = v.length / info.m;
+      for (let j = 0; j < info.m; j++) {
+        const x = r < have ? v[r * info.m + j] : NaN;
+        d.innov[i][j].push(Number.isFinite(x) ? x : null);
+      }
+    });
+    frame.estimates.forEach((e, i) => {
+      const have = e.length / n;
+      const sd = frame.sds?.[i];
+      const haveSd = sd ? sd.length / n : 0;
+      // A failed method followed after its failure: its rows from max(from, k_fail) on.
+      const failedAt = frame.diagnostics[i]?.failed_at;
+      const g = frame.followed?.[i];
+      const gFrom = failedAt == null ? Infinity : Math.max(frame.from, failedAt) - frame.from;
+      for (let j = 0; j < n; j++) {
+        const mean = r < have ? e[r * n + j] : null;
+        d.est[i][j].push(mean);
+        const gr = r - gFrom;
+        const ghost = g && gr >= 0 && gr < g.length / n ? g[gr * n + j] : null;
+        d.ghost[i][j].push(ghost);
+        // The dashed part starts where the solid one ends.
+        const row = d.times.length - 1;
+        if (ghost != null && row > 0 && d.ghost[i][j][row - 1] == null) d.ghost[i][j][row - 1] = d.est[i][j][row - 1];
+        const s = r < haveSd && mean != null ? sd[r * n + j] : null;
+        d.lo[i][j].push(s == null ? null : mean - 2 * s);
+        d.hi[i][j].push(s == null ? null : mean + 2 * s);
+      }
+    });
+  }
+  const dim = shownDim();
+  const entry = { row: d.times.length - 1, t: d.times[d.times.length - 1], dim, grid: frame.grid, densities: frame.densities, heat2d: frame.heat2d };
+  state.lastDensity = entry;
+  if (rows > 0 || state.history.length === 0) state.history.push(entry);
+  if (state.history.length > HISTORY_LIMIT) {
+    const half = Math.floor(state.history.length / 2);
+    state.history = [...state.history.slice(0, half).filter((_, k) => k % 2 === 0), ...state.history.slice(half)];
+  }
+  if (entry.dim === dim) state.heatStrip.column(entry.t, frame.densities[Number($('density-method').value) || 0]);
+  showLogConcavity(frame.logConcave);
+  state.diagnostics = frame.diagnostics;
+  state.summary = frame.summary;
+  // Every failure stays listed (one line per method, with its time), not only the last.
+  // A failed reference hands over to the next (errorChoices picks live ones only).
+  if (frame.summary.failures.length) errorChoices();
+  for (const f of frame.summary.failures) {
+    const t = state.data.times[f.k];
+    state.failures.set(f.method, `${labels()[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
+  }
+  if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again. A failed method whose state is intact is drawn on, dashed, from its ✕.`;
+}
+
+// The trajectory plot's series for the shown component: times, truth, estimates, what failed
+// methods went on estimating, the ±2σ band edges.
+export function trajectoryData() {
+  const d = state.data;
+  const dim = shownDim();
+  const none = d.times.map(() => null);
+  const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
+  const now = [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
+  const p = state.previous;
+  if (!p) return now;
+  // The previous run on its own times, joined with this one's (nulls where a run has no row);
+  // hidden by the "previous run" box, or where it has fewer components than the one shown.
+  const shown = $('previous').checked && dim < p.n;
+  const before = [p.times, ...p.est.map((e) => (shown ? e[dim] : p.times.map(() => null)))];
+  // Nulls stay breaks (a failure, a missing value); rows only one run has are spanned.
+  return uPlot.join([now, before], [now.map(() => 1), before.map(() => 1)]);
+}
+
+// The innovation plot's series: times and each method's innovations of the chosen component.
+export function innovationData() {
+  const j = Number($('innovation-component').value) || 0;
+  return [state.data.times, ...state.data.innov.map((v) => v[j])];
+}
+// The filter the errors are measured against where no truth is asked for: an exact one
+// (Kalman–Bucy, Kalman, Gaussian sum) that has not failed, else the grid filter with the most
+// nodes; -1 when the run has neither.
+function referenceMethod() {
+  const info = state.info;
+  const live = (i) => state.diagnostics?.[i]?.failed_at == null;
+  const exact = info.exact.findIndex((e, i) => e && live(i));
+  if (exact >= 0) return exact;
+  let best = -1;
+  info.nodes.forEach((k, i) => { if (k > 0 && live(i) && (best < 0 || k > info.nodes[best])) best = i; });
+  return best;
+}
+
+// The choices of the error plot: the reference filter, and the truth when there is one.
+export function errorChoices() {
+  const info = state.info;
+  const ref = referenceMethod();
+  const names = labels();
+  const choices = [];
+  if (ref >= 0) choices.push(['reference', `${names[ref]} (${info.exact[ref] ? 'exact' : 'the finest grid filter'})`]);
+  if (info.has_truth) choices.push(['truth', 'the truth']);
+  const was = $('error-against').value;
+  fillOptions($('error-against'), choices);
+  if (choices.some(([v]) => v === was)) $('error-against').value = was;
+  $('errors-figure').hidden = !choices.length;
+  $('error-note').textContent = ref >= 0 && !info.exact[ref]
+    ? '(a grid filter is a reference only as far as it has converged: "check convergence" in the Monte Carlo panel says)'
+    : '';
+}
+
+// The error plot's series: |x̂_i − reference| (or − truth) of the shown component, null where
+// either is missing or the difference is exactly 0 (the reference itself; log scale).
+export function errorData() {
+  const d = state.data;
+  const dim = shownDim();
+  const against = $('error-against').value;
+  const ref = against === 'truth' ? d.truth[dim] : d.est[referenceMethod()]?.[dim];
+  return [d.times, ...d.est.map((e) => e[dim].map((v, k) => {
+    const r = ref?.[k];
+    if (v == null || r == null) return null;
+    const gap = Math.abs(v - r);
+    return gap > 0 ? gap : null;
+  }))];
+}
+
+// The density plot's series at the time shown, or null when no density of the shown
+// component is kept for it.
+export function densityData() {
+  const f = shownFrame();
+  if (!f || !f.grid.length || f.dim !== shownDim()) return null;
+  const none = f.grid.map(() => null);
+  const own = f.densities.map((v) => (v.length ? Array.from(v) : none));
+  const p = state.scrub == null ? state.preview : null;
+  const predicted = f.densities.map((_, i) => (p?.predicted[i]?.length ? p.predicted[i] : none));
+  let likelihood = none;
+  if (p?.likelihood) {
+    let top = 0;
+    for (const v of [...own, ...predicted]) for (const x of v) if (x > top) top = x;
+    likelihood = p.likelihood.map((l) => l * (top || 1));
+  }
+  return [Array.from(f.grid), ...own, ...predicted, likelihood];
+}
+
+// The plots' text alternatives: what each shows and its values at the time shown, on the
+// canvases (role img) that draw them.
+function describePlots(row) {
+  const d = state.data;
+  const info = state.info;
+  const dim = shownDim();
+  const names = labels();
+  const t = d.times[row];
+  const num = (v) => (v == null || !Number.isFinite(v) ? 'none' : Number(v).toPrecision(3));
+  const said = (u, text) => {
+    const canvas = u?.ctx?.canvas;
+    if (!canvas) return;
+    canvas.setAttribute('role', 'img');
+    canvas.setAttribute('aria-label', text);
+  };
+  if (t == null) return;
+  const estimates = names.map((m, i) => `${m} ${num(d.est[i][dim][row])}`).join(', ');
+  said(state.trajPlot, `x${dim + 1} against t from ${info.t_start} to ${info.t_end}; at t = ${t.toFixed(2)}: ${info.has_truth ? `truth ${num(d.truth[dim][row])}, ` : ''}${estimates}`);
+  const f = shownFrame();
+  if (f?.grid?.length) {
+    const peaks = names.map((m, i) => {
+      const v = f.densities[i];
+      if (!v?.length) return `${m} none`;
+      let k = 0;
+      for (let j = 1; j < v.length; j++) if (v[j] > v[k]) k = j;
+      return `${m} peaks at ${num(f.grid[k])}`;
+    }).join(', ');
+    said(state.densityPlot, `posterior densities of x${dim + 1} at t = ${f.t.toFixed(2)}: ${peaks}`);
+  }
+  if (!$('innovations-figure').hidden) {
+    const j = Number($('innovation-component').value) || 0;
+    said(state.innovPlot, `innovations z${j + 1} − h(x̂⁻) of each method against t; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(d.innov[i][j][row])}`).join(', ')}`);
+  }
+  if (!$('errors-figure').hidden) {
+    const errors = errorData();
+    const against = $('error-against').selectedOptions[0]?.textContent ?? '';
+    said(state.errPlot, `error of each estimate of x${dim + 1} against ${against}, log scale; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(errors[i + 1][row])}`).join(', ')}`);
+  }
+  said(state.obsPlot, `${info.continuous ? 'observation path y' : 'measurements z'} against t; at t = ${t.toFixed(2)}: ${d.obs.map((o, j) => `component ${j + 1} ${num(o[row])}`).join(', ')}`);
+}
+
+export function render() {
+  const d = state.data;
+  if (!d || !state.heatStrip) return;
+  const dim = shownDim();
+  state.trajPlot.setData(trajectoryData());
+  state.obsPlot.setData([d.times, ...d.obs]);
+  if (!$('errors-figure').hidden) state.errPlot.setData(errorData());
+  if (!$('innovations-figure').hidden) state.innovPlot.setData(innovationData());
+  const density = densityData();
+  if (density) state.densityPlot.setData(density);
+  const last = d.times.length ? d.times[d.times.length - 1] : 0;
+  const row = shownRow();
+  describePlots(row);
+  $('clock').textContent = state.scrub == null ? `t = ${last.toFixed(2)} / ${state.info.t_end.toFixed(2)}` : `t = ${(d.times[row] ?? 0).toFixed(2)} (looking back; live at ${last.toFixed(2)})`;
+  state.heatStrip.compose({ times: d.times, truth: state.info.has_truth ? d.truth[dim] : null, cursor: state.scrub == null ? null : d.times[row] });
+  if (state.info.n >= 2) drawHeatmap();
+  const tbody = $('metrics').querySelector('tbody');
+  const timing = $('timing').querySelector('tbody');
+  (state.diagnostics ?? []).forEach((m, i) => {
+    const tr = tbody.querySelector(`tr[data-method="${i}"]`);
+    if (!tr) return;
+    const mse = tr.querySelector('.mse');
+    mse.textContent = m.mse != null ? m.mse.toFixed(4) : m.mse_followed != null ? `— [${m.mse_followed.toFixed(4)}]` : '—';
+    mse.title = m.mse_followed != null ? 'failed: no MSE counts; in brackets, the MSE including what it estimated after failing' : '';
+    const status = tr.querySelector('.status');
+    // A self-check that warned: the result may not be trustworthy (not a failure).
+    const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';
+    const failedAt = d.times[m.failed_at];
+    // Every failure says why in the row (its first clause; the whole message on hover).
+    const why = m.failure ? `: ${m.failure.split(/ — |: /)[0]}` : '';
+    const live = state.summary?.finished ? 'done' : 'running';
+    status.textContent = (m.failed ? `failed at step ${m.failed_at}${failedAt == null ? '' : ` (t = ${failedAt.toFixed(2)})`}${why}` : live) + checked;
+    status.title = [m.failure, ...(m.concerns ?? [])].filter(Boolean).join('\n');
+    status.className = m.failed ? 'status failed' : (checked ? 'status warned' : 'status');
+    const t = timing.querySelector(`tr[data-method="${i}"]`);
+    if (t) {
+      t.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
+      t.querySelector('.concerns').textContent = m.concerns?.length ? m.concerns.join('\n') : 'within thresholds';
+    }
+  });
+  const warnings = (state.diagnostics ?? []).flatMap((m, i) => m.warnings.map((w) => `${labels()[i]}: ${w}`));
+  $('warnings').textContent = warnings.join('\n');
+  // The same warnings next to the parameters they concern, in the method's own row.
+  document.querySelectorAll('#methods .row-warnings').forEach((el) => { el.textContent = ''; });
+  (state.diagnostics ?? []).forEach((m, i) => {
+    const row = state.runRows?.[i];
+    const el = row == null ? null : document.querySelector(`#methods .method-row[data-row="${row}"] .row-warnings`);
+    if (el) el.textContent = m.warnings.join('\n');
+  });
+  updateScrub();
+  if (state.summary?.finished) setPlaying(false);
+}
