@@ -76,6 +76,16 @@ export function completeScenario(config) {
   });
 }
 
+// A load the worker refused: the session before it (if any) keeps running and its frames are
+// drawn again; the message goes to the element `where`.
+function loadRefused(data, where) {
+  state.loadSeq = data.load;
+  state.pendingConfig = null;
+  setPlaying(false);
+  $(where).textContent = data.message;
+  $('form-status').textContent = 'not applied';
+}
+
 // Wires the controls of this part of the page (called once, by main.js).
 export function setupSession(hooks = {}) {
   sessionHooks = hooks;
@@ -150,26 +160,17 @@ export function setupSession(hooks = {}) {
         render();
         break;
       case 'dataError':
-        // The load was refused and the worker's session is the one before: draw its frames.
-        state.loadSeq = data.load;
-        state.pendingConfig = null;
-        setPlaying(false);
-        $('data-error').textContent = data.message;
+        // The recording was refused: its message goes under "Your data".
+        loadRefused(data, 'data-error');
         $('data-section').open = true;
-        $('form-status').textContent = 'not applied';
         settleLoad(data.refused, data.message);
         break;
       case 'seed':
         $('seed').value = data.seed;
         break;
       case 'error':
-        // The previous session (if any) keeps running, and its frames are drawn again; the
-        // message goes next to the form.
-        state.loadSeq = data.load;
-        state.pendingConfig = null;
-        setPlaying(false);
-        $('general-error').textContent = data.message;
-        $('form-status').textContent = 'not applied';
+        // The message goes next to the form.
+        loadRefused(data, 'general-error');
         state.revealAfterValidate = true;
         validate();
         if (data.refused !== undefined) settleLoad(data.refused, data.message);

@@ -543,7 +543,9 @@ pub(crate) struct LengthCache<T> {
     made: usize,
 }
 
-/// The self-check of [`LengthCache`]: the share of the lengths asked for that had to be made.
+/// The self-check of the grid and spectral filters' caches of operators for interval lengths
+/// other than Δτ: the share of the irregular steps whose length had to get an operator of its own
+/// (reported above one half once more were made than are kept).
 pub const REBUILT_SHARE_CHECK: &str = "share of irregular steps that made a new operator";
 
 impl<T> LengthCache<T> {
