@@ -222,6 +222,8 @@ function showMethods() {
     state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
     state.densityPlot.setSeries(1 + i, { show });
     state.densityPlot.setSeries(1 + M + i, { show });
+    state.innovPlot.setSeries(1 + i, { show });
+    state.errPlot.setSeries(1 + i, { show });
     document.querySelectorAll(`#metrics tr[data-method="${i}"], #heatmap-key [data-method="${i}"]`).forEach((r) => r.classList.toggle('hidden-method', !show));
   }
   render();

@@ -331,7 +331,6 @@ export function setupForm() {
     }
     scheduleValidate();
   });
-  // ---------- Learn mode's view of the page ----------
   $('add-method').addEventListener('click', () => {
     const key = $('add-method-kind').value;
     state.methodRows.push({ enabled: true, config: structuredClone(methodEntry(key).defaults) });

@@ -83,7 +83,7 @@ export function applyFrame(frame) {
   state.summary = frame.summary;
   // Every failure stays listed (one line per method, with its time), not only the last.
   // A failed reference hands over to the next (errorChoices picks live ones only).
-  if (frame.summary.failures.length) errorChoices();
+  if (referenceMethod() !== state.reference) errorChoices();
   for (const f of frame.summary.failures) {
     const t = state.data.times[f.k];
     state.failures.set(f.method, `${labels()[f.method]} failed at step ${f.k} (t = ${t == null ? '?' : t.toFixed(2)}): ${f.message}.`);
@@ -131,6 +131,7 @@ function referenceMethod() {
 export function errorChoices() {
   const info = state.info;
   const ref = referenceMethod();
+  state.reference = ref;
   const names = labels();
   const choices = [];
   if (ref >= 0) choices.push(['reference', `${names[ref]} (${info.exact[ref] ? 'exact' : 'the finest grid filter'})`]);

@@ -11,6 +11,7 @@ use crate::validate::ConfigProblem;
 /// Why a filter could not take a step. The `Experiment` driver marks the
 /// method failed for the run (the papers' "—") and never reports its numbers as NaN.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum FilterError {
     /// The estimate or covariance became NaN or infinite.
     NonFinite {
@@ -58,8 +59,10 @@ impl fmt::Display for FilterError {
     }
 }
 
-/// Any error of the library.
+/// Any error of the library. Its [`source`](core::error::Error::source) is the expression or
+/// filter error it wraps.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ZakaiError {
     /// A text expression is invalid.
     Expression(ExprError),
@@ -67,9 +70,58 @@ pub enum ZakaiError {
     Config(Vec<ConfigProblem>),
     /// Dimensions do not agree.
     Dimension(String),
-    /// A filter failed.
+    /// A filter failed, or does not apply.
     Filter(FilterError),
-    /// Anything else, with a message.
+    /// A number outside the range its quantity must lie in.
+    OutOfRange {
+        /// The quantity (`"the observation noise intensity"`).
+        what: String,
+        /// Its value.
+        value: f64,
+        /// What it must be (`"positive and finite"`).
+        requirement: &'static str,
+    },
+    /// A method parameter that does not fit the method (its checks name it and say why).
+    InvalidParameter {
+        /// The method's display name.
+        method: String,
+        /// The parameter.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// A grid or table larger than its cap (the memory each array may take).
+    TooLarge {
+        /// What was asked for (`"grid of [2001, 2001] points"`).
+        what: String,
+        /// The cap.
+        limit: usize,
+        /// Of what (`"nodes"`).
+        unit: &'static str,
+    },
+    /// A method built for one observation interval Δτ was built without it.
+    NeedsInterval {
+        /// The method's display name.
+        method: String,
+    },
+    /// Something this build of the crate leaves out (built without a feature it needs).
+    NeedsFeature {
+        /// What needs it.
+        what: String,
+        /// The feature (`"std"`).
+        feature: &'static str,
+    },
+    /// A named item that does not exist (a preset, a method of a preset's table).
+    NotFound {
+        /// What kind of item (`"preset"`).
+        what: &'static str,
+        /// The name asked for.
+        name: String,
+        /// Where it was looked for (empty: everywhere).
+        within: String,
+    },
+    /// Anything else, with a message (a mixture or prior density that cannot be a
+    /// distribution, a non-finite diffusion).
     Other(String),
 }
 
@@ -89,6 +141,33 @@ impl fmt::Display for ZakaiError {
             }
             ZakaiError::Dimension(m) => write!(f, "dimension mismatch: {m}"),
             ZakaiError::Filter(e) => write!(f, "{e}"),
+            ZakaiError::OutOfRange {
+                what,
+                value,
+                requirement,
+            } => write!(f, "{what} must be {requirement}, got {value}"),
+            ZakaiError::InvalidParameter {
+                method,
+                field,
+                message,
+            } => write!(f, "{method}: {field}: {message}"),
+            ZakaiError::TooLarge { what, limit, unit } => {
+                write!(f, "{what} exceeds the cap of {limit} {unit}")
+            }
+            ZakaiError::NeedsInterval { method } => write!(
+                f,
+                "{method} is built for one observation interval Δτ; give it (builder: .dt(Δτ))"
+            ),
+            ZakaiError::NeedsFeature { what, feature } => {
+                write!(f, "{what} needs the `{feature}` feature of zakai")
+            }
+            ZakaiError::NotFound { what, name, within } => {
+                write!(f, "no {what} `{name}`")?;
+                if !within.is_empty() {
+                    write!(f, " in {within}")?;
+                }
+                Ok(())
+            }
             ZakaiError::Other(m) => write!(f, "{m}"),
         }
     }
@@ -106,13 +185,23 @@ impl From<FilterError> for ZakaiError {
     }
 }
 
-#[cfg(feature = "std")]
-impl std::error::Error for ZakaiError {}
-#[cfg(feature = "std")]
-impl std::error::Error for FilterError {}
+impl core::error::Error for ZakaiError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            ZakaiError::Expression(e) => Some(e),
+            ZakaiError::Filter(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl core::error::Error for FilterError {}
+
+impl core::error::Error for ExprError {}
 
 /// An invalid text expression. `position` counts characters from 0.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ExprError {
     /// The text does not parse.
     Syntax {
@@ -193,5 +282,50 @@ impl fmt::Display for ExprError {
             ),
             ExprError::Unavailable => write!(f, "text expressions need the `std` feature of zakai"),
         }
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::grid::TensorGrid;
+    use crate::testing::test;
+    use core::error::Error;
+
+    /// The wrapped expression or filter error is the source, reachable as the concrete type;
+    /// errors of their own have none.
+    #[test]
+    fn a_wrapped_error_is_the_source() {
+        let e = ZakaiError::from(FilterError::MassLost);
+        let source = e.source().expect("a source");
+        assert_eq!(
+            source.downcast_ref::<FilterError>(),
+            Some(&FilterError::MassLost)
+        );
+        let bad = ZakaiError::from(ExprError::Unavailable);
+        assert_eq!(
+            bad.source().unwrap().downcast_ref::<ExprError>(),
+            Some(&ExprError::Unavailable)
+        );
+        assert!(ZakaiError::Dimension("n".into()).source().is_none());
+    }
+
+    /// The causes the library knows come as structured values: a grid past the node cap is
+    /// `TooLarge` with the cap, a non-positive noise intensity `OutOfRange` with its value.
+    #[test]
+    fn known_causes_are_structured() {
+        let e = TensorGrid::new(&[(0.0, 1.0), (0.0, 1.0)], &[100_000, 100_000]).unwrap_err();
+        assert!(
+            matches!(e, ZakaiError::TooLarge { limit, unit: "nodes", .. } if limit == crate::grid::MAX_NODES),
+            "{e:?}"
+        );
+        assert!(alloc::format!("{e}").contains("exceeds the cap"), "{e}");
+        let e = crate::model::Noise::ContinuousScalar(-1.0)
+            .observation_model(1)
+            .unwrap_err();
+        assert!(
+            matches!(e, ZakaiError::OutOfRange { value, requirement: "positive and finite", .. } if value == -1.0),
+            "{e:?}"
+        );
     }
 }

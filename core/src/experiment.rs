@@ -41,6 +41,7 @@ mod standard_clock {
     use super::Clock;
 
     /// [`Clock`] on `std::time::Instant`.
+    #[derive(Clone, Copy, Debug)]
     pub struct StdClock(std::time::Instant);
 
     impl Default for StdClock {
@@ -110,6 +111,7 @@ pub trait Observer {
 }
 
 /// An observer that ignores everything.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Silent;
 impl Observer for Silent {}
 
@@ -306,6 +308,7 @@ impl RunResult {
 }
 
 /// A validated scenario with its model and prior built, ready to run any number of times.
+#[derive(Clone, Debug)]
 pub struct Experiment {
     config: ScenarioConfig,
     model: Model,
@@ -466,20 +469,9 @@ impl Experiment {
     pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
         let mut p = recording.problems();
         let dt_obs = self.config.time.dt_obs;
-        // A step of very many Δτ is a mis-set Δτ (datetimes read as seconds against a Δτ of
-        // 1, say): every method would take that many of its steps, for minutes or hours.
-        if let Some(k) = (1..recording.times.len())
-            .find(|&k| recording.step_length(k) > MAX_INTERVALS_PER_STEP * dt_obs)
-        {
-            p.push(ConfigProblem::new(
-                alloc::format!("times[{k}]"),
-                alloc::format!(
-                    "row {}: the step τ_k − τ_(k−1) = {:e} is more than {MAX_INTERVALS_PER_STEP:e} observation intervals Δτ = {dt_obs} (time.dt_obs), which the methods' time steps are made for; set time.dt_obs to the data's typical step (times given as datetimes are seconds: a day is 86400, a year about 3.156e7)",
-                    k + 1,
-                    recording.step_length(k)
-                ),
-            ));
-        }
+        p.extend(
+            (1..recording.times.len()).find_map(|k| long_step(k, recording.step_length(k), dt_obs)),
+        );
         let model = &self.model;
         if recording.n != model.n {
             p.push(ConfigProblem::new(
@@ -701,6 +693,7 @@ impl Filter for NotApplicable {
 }
 
 /// A run in progress (see [`Experiment::start`]).
+#[derive(Clone, Debug)]
 pub struct ExperimentRun {
     seed: u64,
     data: Recording,
@@ -742,6 +735,21 @@ fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, row: &mut [
         }
         _ => row.iter_mut().for_each(|r| *r = f64::NAN),
     }
+}
+
+/// A step of very many Δτ is a mis-set Δτ (datetimes read as seconds against a Δτ of 1, say):
+/// every method would take that many of its steps, for minutes or hours. The problem with row
+/// `k`'s `step`, if it is one.
+fn long_step(k: usize, step: f64, dt_obs: f64) -> Option<ConfigProblem> {
+    (step > MAX_INTERVALS_PER_STEP * dt_obs).then(|| {
+        ConfigProblem::new(
+            alloc::format!("times[{k}]"),
+            alloc::format!(
+                "row {}: the step τ_k − τ_(k−1) = {step:e} is more than {MAX_INTERVALS_PER_STEP:e} observation intervals Δτ = {dt_obs} (time.dt_obs), which the methods' time steps are made for; set time.dt_obs to the data's typical step (times given as datetimes are seconds: a day is 86400, a year about 3.156e7)",
+                k + 1
+            ),
+        )
+    })
 }
 
 /// Row `k` of `data` as the observation a filter steps with: exactly Δτ when the step is Δτ up
@@ -990,10 +998,15 @@ impl ExperimentRun {
     }
 
     /// Appends the observation `value` at time `t` to a run over recorded data
-    /// ([`Recording::push`]: refused, the run left as it was, when it does not fit); the next
+    /// ([`Recording::push`]: refused, the run left as it was, when it does not fit, or when
+    /// the step is more than [`MAX_INTERVALS_PER_STEP`] intervals Δτ); the next
     /// [`ExperimentRun::advance`] processes it. A live feed: start with
     /// [`Experiment::start_recorded`] on the rows so far and push each new one.
     pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), ZakaiError> {
+        let (k, last) = (self.data.times.len(), self.data.times.last().copied());
+        if let Some(problem) = last.and_then(|last| long_step(k, t - last, self.dt_obs)) {
+            return Err(ZakaiError::Config(alloc::vec![problem]));
+        }
         self.data.push(t, value)
     }
 

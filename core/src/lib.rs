@@ -80,6 +80,7 @@
 //! repetitions on rayon.
 #![no_std]
 #![warn(missing_docs)]
+#![warn(missing_debug_implementations)]
 
 extern crate alloc;
 #[cfg(feature = "std")]

@@ -74,8 +74,11 @@ pub fn reproduce_row(
     runs: usize,
     progress: &(dyn Fn() + Sync),
 ) -> Result<RowResult, ZakaiError> {
-    let mut config = presets::preset(row.preset)
-        .ok_or_else(|| ZakaiError::Other(alloc::format!("no preset `{}`", row.preset)))?;
+    let mut config = presets::preset(row.preset).ok_or_else(|| ZakaiError::NotFound {
+        what: "preset",
+        name: row.preset.into(),
+        within: alloc::string::String::new(),
+    })?;
     if let Some(adjust) = row.adjust {
         adjust(&mut config);
     }
@@ -86,12 +89,10 @@ pub fn reproduce_row(
             .iter()
             .find(|m| m.display_name() == *name)
             .cloned()
-            .ok_or_else(|| {
-                ZakaiError::Other(alloc::format!(
-                    "preset `{}` has no method `{name}` for {}",
-                    row.preset,
-                    table.id
-                ))
+            .ok_or_else(|| ZakaiError::NotFound {
+                what: "method",
+                name: alloc::string::ToString::to_string(*name),
+                within: alloc::format!("preset `{}` (for {})", row.preset, table.id),
             })?;
         methods.push(method);
     }

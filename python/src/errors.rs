@@ -45,7 +45,12 @@ pub fn from_core(e: ZakaiError) -> PyErr {
         }
         ZakaiError::Dimension(_) => raise("DimensionError", message, &[]),
         ZakaiError::Filter(_) => raise("FilterError", message, &[]),
-        ZakaiError::Other(_) => raise("ZakaiError", message, &[]),
+        // A value the caller gave that does not fit: a ValueError like a configuration's.
+        ZakaiError::OutOfRange { .. }
+        | ZakaiError::InvalidParameter { .. }
+        | ZakaiError::TooLarge { .. }
+        | ZakaiError::NeedsInterval { .. } => raise("ConfigError", message, &[]),
+        _ => raise("ZakaiError", message, &[]),
     }
 }
 

@@ -329,7 +329,7 @@ fn recorded_data_needs_no_domain_and_no_final_time() {
     let recording = zakai::Recording::measurements(1, 1, vec![0.0, 1.0, 2.0, 4.0], &z).unwrap();
     let run = e.filter_recorded(recording, 1).unwrap();
     assert!(run.methods.iter().all(|m| m.failure.is_none()));
-    let simulated = e.start(1).err().expect("a simulation needs T");
+    let simulated = e.start(1).expect_err("a simulation needs T");
     assert!(
         simulated.to_string().contains("time.t_final"),
         "{simulated}"

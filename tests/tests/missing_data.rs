@@ -938,8 +938,9 @@ fn reports_rebuilds(f: &dyn Filter) -> bool {
 
 /// Steps whose lengths keep changing (jittered time stamps, Δτ(1 + u/100)) make an operator
 /// for nearly every step: the grid and spectral filters (QIEM, the spectral filter, the
-/// separation filter) say so in their self-check after 12 such steps, and do not when the
-/// irregular steps repeat one length (1.5Δτ: one remainder operator, reused).
+/// separation filter; the spectral filter with the likelihood in the operator over gaps, whose
+/// T₀ operator is made once) say so in their self-check after 12 such steps, and do not when
+/// the irregular steps repeat one length (1.5Δτ: one remainder operator, reused).
 #[test]
 fn steps_of_ever_changing_length_are_reported() {
     let cubic = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
@@ -948,21 +949,29 @@ fn steps_of_ever_changing_length_are_reported() {
         serde_json::json!([{ "method": "kalman" }]),
     ))
     .unwrap();
+    let in_operator = serde_json::json!({ "method": "spectral", "likelihood": "in_operator" });
     let cases = [
         (
             &continuous,
             serde_json::json!({ "method": "qiem", "points": [201] }),
+            0.01,
         ),
-        (&continuous, serde_json::json!({ "method": "spectral" })),
+        (
+            &continuous,
+            serde_json::json!({ "method": "spectral" }),
+            0.01,
+        ),
+        (&continuous, in_operator, f64::NAN),
         (
             &discrete,
             serde_json::json!({ "method": "separation", "cells": [200] }),
+            0.01,
         ),
     ];
-    for (e, params) in cases {
+    for (e, params, observed) in cases {
         let dt = e.config().time.dt_obs;
         let m: zakai::MethodConfig = serde_json::from_value(params.clone()).unwrap();
-        let value = vec![0.01; e.model().m];
+        let value = vec![observed; e.model().m];
         let observation = |step: f64| {
             if e.model().m == 1 {
                 Observation::increment(step, &value)

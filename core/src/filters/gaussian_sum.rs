@@ -83,6 +83,7 @@ impl GaussianSumParams {
 }
 
 /// The Gaussian-sum filter registered as a [`Method`].
+#[derive(Clone, Copy, Debug, Default)]
 pub struct GaussianSum;
 builder_fn!(GaussianSum);
 
@@ -216,7 +217,9 @@ impl Component {
         gaussian_log_density_factored(&self.l, self.log_det, r)
     }
 }
+
 /// A model the Gaussian-sum filter fits: `dx = (A x + b) dt + G dw`, `z = C x + c + v`.
+#[derive(Clone, Debug)]
 pub struct LinearMixtureModel<'p> {
     a: DMatrix<f64>,
     b: DVector<f64>,
@@ -320,7 +323,11 @@ impl GaussianSumFilter {
         probes: &[Vec<f64>],
     ) -> Result<Self, ZakaiError> {
         if let Some((field, msg)) = params.problems().first() {
-            return Err(ZakaiError::Other(format!("{name}: {field}: {msg}")));
+            return Err(ZakaiError::InvalidParameter {
+                method: name,
+                field,
+                message: msg.clone(),
+            });
         }
         let LinearMixtureModel {
             a,

@@ -34,6 +34,7 @@ use crate::model::{GaussianMixture, Model, Prior};
 use crate::validate::{check_spd, check_vector, memory_problem, ConfigProblem};
 
 /// What building a filter needs besides its own parameters.
+#[derive(Clone, Copy, Debug)]
 pub struct BuildContext<'a> {
     /// The model.
     pub model: &'a Model,
@@ -53,15 +54,14 @@ pub struct BuildContext<'a> {
 impl BuildContext<'_> {
     /// Δτ, or the error a method built for one interval length returns without it.
     pub fn interval(&self, method: &str) -> Result<f64, ZakaiError> {
-        self.dt_obs.ok_or_else(|| {
-            ZakaiError::Other(format!(
-                "{method} is built for one observation interval Δτ; give it (builder: .dt(Δτ))"
-            ))
+        self.dt_obs.ok_or_else(|| ZakaiError::NeedsInterval {
+            method: method.into(),
         })
     }
 }
 
 /// What a method's checks see of the problem (nothing is built).
+#[derive(Clone, Copy, Debug)]
 pub struct ProblemContext<'a> {
     /// The model.
     pub model: &'a Model,
@@ -199,7 +199,9 @@ pub trait Method {
     /// failed: an exact filter far from the truth is the problem's uncertainty, not a fault.
     const EXACT: bool = false;
     /// True for methods whose posterior is a density on a grid or a basis (the grid,
-    /// spectral and direct methods): [`Filter::density`] gives it, and the page draws it.
+    /// spectral and direct methods), which the page draws: the grid methods give it by
+    /// [`Filter::density`], the spectral filter (a Legendre expansion) through
+    /// [`Filter::marginal_density`] only.
     const DENSITY: bool = false;
     /// The method's parameters (serde, with defaults).
     type Params: Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
@@ -338,6 +340,7 @@ pub fn prior_box(prior: &Prior, width: f64) -> Vec<(f64, f64)> {
 /// Builds a filter of method `M` from a model, a prior and `M`'s parameters (defaults unless
 /// changed), checking everything at once: [`Builder::build`] returns one
 /// [`ZakaiError::Config`] listing every problem found.
+#[derive(Debug)]
 pub struct Builder<'m, M: Method> {
     model: &'m Model,
     prior: Option<Prior>,

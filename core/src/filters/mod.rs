@@ -585,11 +585,6 @@ impl<T> LengthCache<T> {
         &mut self.entries[0].1
     }
 
-    /// The operator for `length`, if there is one.
-    pub(crate) fn get(&self, length: f64) -> Option<&T> {
-        self.entries.iter().find(|e| e.0 == length).map(|e| &e.1)
-    }
-
     /// A concern when more operators were made than are kept and more than half of the
     /// lengths asked for had to be made: the steps' lengths keep changing, and each one costs
     /// an operator's construction (for the spectral filter, Algorithm 1 of 004 off-line).

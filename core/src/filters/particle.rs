@@ -73,6 +73,7 @@ impl PfParams {
 }
 
 /// The bootstrap particle filter registered as a [`Method`].
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Pf;
 builder_fn!(Pf);
 

@@ -101,12 +101,14 @@ impl TensorGrid {
                     d + 1
                 )));
             }
-            len = len.checked_mul(n).filter(|&l| l <= MAX_NODES).ok_or_else(|| {
-                ZakaiError::Other(format!(
-                    "grid of {shape:?} points exceeds the cap of {MAX_NODES} nodes ({} MiB per array)",
-                    MAX_NODES * 8 / (1 << 20)
-                ))
-            })?;
+            len = len
+                .checked_mul(n)
+                .filter(|&l| l <= MAX_NODES)
+                .ok_or_else(|| ZakaiError::TooLarge {
+                    what: format!("grid of {shape:?} points"),
+                    limit: MAX_NODES,
+                    unit: "nodes",
+                })?;
         }
         let spacing = bounds
             .iter()

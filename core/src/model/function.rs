@@ -69,6 +69,19 @@ pub trait VectorFunction: Send + Sync {
     }
 }
 
+impl core::fmt::Debug for dyn VectorFunction {
+    /// Its dimensions and, when it has them, its expressions (closures are opaque).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut d = f.debug_struct("VectorFunction");
+        d.field("inputs", &self.input_dim())
+            .field("outputs", &self.output_dim());
+        match self.expressions() {
+            Some(texts) => d.field("expressions", &texts).finish(),
+            None => d.finish_non_exhaustive(),
+        }
+    }
+}
+
 /// Reusable working memory of batch evaluations ([`VectorFunction::eval_batch`]).
 #[derive(Clone, Debug, Default)]
 pub struct BatchScratch {
@@ -196,6 +209,17 @@ pub struct ClosureFunction {
     m: usize,
     value: Eval,
     jacobian: Option<Eval>,
+}
+
+impl core::fmt::Debug for ClosureFunction {
+    /// Its dimensions and whether the Jacobian is given (the closures are opaque).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ClosureFunction")
+            .field("n", &self.n)
+            .field("m", &self.m)
+            .field("jacobian_given", &self.jacobian.is_some())
+            .finish_non_exhaustive()
+    }
 }
 
 impl ClosureFunction {

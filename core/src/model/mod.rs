@@ -63,9 +63,11 @@ impl Noise {
             if v > 0.0 && v.is_finite() {
                 Ok(DMatrix::identity(m, m) * v)
             } else {
-                Err(ZakaiError::Other(format!(
-                    "{what} must be positive and finite, got {v}"
-                )))
+                Err(ZakaiError::OutOfRange {
+                    what: what.into(),
+                    value: v,
+                    requirement: "positive and finite",
+                })
             }
         };
         Ok(match self {
@@ -158,8 +160,7 @@ impl Model {
             ObservationModel::Continuous { noise_cov } => {
                 dim("observation noise S rows", noise_cov.nrows(), m)?;
                 dim("observation noise S columns", noise_cov.ncols(), m)?;
-                crate::linalg::cholesky(noise_cov, "observation noise covariance S")
-                    .map_err(|e| ZakaiError::Other(format!("{e}")))?;
+                crate::linalg::cholesky(noise_cov, "observation noise covariance S")?;
             }
             ObservationModel::Discrete { noise } => {
                 dim("measurement noise dimension", noise.dim(), m)?

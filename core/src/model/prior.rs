@@ -13,7 +13,7 @@ use super::noise::GaussianMixture;
 use crate::error::ZakaiError;
 
 /// The prior density of x₀.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub enum Prior {
     /// A Gaussian or Gaussian mixture.
     Mixture(GaussianMixture),
@@ -65,7 +65,7 @@ impl Prior {
 
 /// An unnormalised density tabulated at cell centres of a tensor grid on a box: cell
 /// probabilities for inverse-CDF sampling, and moments by the midpoint rule.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct TabulatedDensity {
     function: Arc<dyn VectorFunction>,
     lower: Vec<f64>,
@@ -88,7 +88,11 @@ impl TabulatedDensity {
         let total_cells = cells_per_dim
             .checked_pow(d as u32)
             .filter(|&c| c <= 4_000_000)
-            .ok_or_else(|| ZakaiError::Other("prior density table too large".into()))?;
+            .ok_or_else(|| ZakaiError::TooLarge {
+                what: alloc::format!("prior density table of {cells_per_dim}^{d} cells"),
+                limit: 4_000_000,
+                unit: "cells",
+            })?;
         let lower: Vec<f64> = bounds.iter().map(|b| b.0).collect();
         let cell: Vec<f64> = bounds
             .iter()
@@ -105,9 +109,11 @@ impl TabulatedDensity {
             function.eval(&x, &mut v);
             let p = v[0];
             if !p.is_finite() || p < 0.0 {
-                return Err(ZakaiError::Other(alloc::format!(
-                    "prior density is {p} at x = {x:?}; it must be finite and nonnegative"
-                )));
+                return Err(ZakaiError::OutOfRange {
+                    what: alloc::format!("the prior density at x = {x:?}"),
+                    value: p,
+                    requirement: "finite and nonnegative",
+                });
             }
             acc += p;
             cdf.push(acc);

@@ -96,9 +96,9 @@ pub fn reference(config: &ScenarioConfig, points: usize, dt: f64) -> Result<Refe
     };
     let method = qiem(points, dt);
     if let Some(reason) = method.suitability(e.model(), e.prior(), &probes, &bounds) {
-        return Err(ZakaiError::Other(format!(
+        return Err(ZakaiError::Filter(crate::FilterError::Unsuitable(format!(
             "no reference posterior for this scenario: {reason}"
-        )));
+        ))));
     }
     Ok(Reference {
         finer: Some(qiem(2 * points + 1, dt / 2.0)),

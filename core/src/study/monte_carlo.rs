@@ -162,6 +162,7 @@ pub struct MonteCarloSummary {
 }
 
 /// The Monte Carlo runner.
+#[derive(Clone, Copy, Debug)]
 pub struct MonteCarlo<'a> {
     experiment: &'a Experiment,
 }

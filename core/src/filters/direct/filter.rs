@@ -146,7 +146,8 @@ pub struct DirectFilter {
 #[derive(Clone, Debug)]
 struct StepWork {
     decomposition: Decomposition,
-    /// Δyᵀh at every node.
+    /// The observation factor's exponent at every node: Δyᵀh (30), or with components
+    /// missing `Δy_Oᵀh_O − ½|h_O|²Δτ` (0 for a gap).
     factor: Vec<f64>,
     /// Every propagated term: (sign, a, b, c) of `± exp(a x² + b x + c)`.
     quadratics: Vec<(f64, f64, f64, f64)>,

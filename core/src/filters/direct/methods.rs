@@ -15,6 +15,7 @@ use crate::validate::ConfigProblem;
 
 /// The direct method for Yau filtering systems: Gaussian approximation of the density and
 /// Riccati ODEs per Gaussian.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Direct;
 builder_fn!(Direct);
 

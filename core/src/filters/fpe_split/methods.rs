@@ -134,6 +134,7 @@ fn refined_cells(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
 
 /// The separation approach: upwind finite volumes for the advection, implicit finite
 /// differences for the diffusion (001 §3).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Separation;
 fpe_method!(
     Separation,
@@ -147,6 +148,7 @@ fpe_method!(
 
 /// The classic implicit finite-difference method on the unsplit Fokker–Planck equation (001
 /// §4's comparison).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct ImplicitFdm;
 fpe_method!(
     ImplicitFdm,

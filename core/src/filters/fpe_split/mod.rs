@@ -202,7 +202,11 @@ impl ContinuousDiscreteGrid {
         let n = model.n;
         let problems = params.problems(n);
         if let Some((field, msg)) = problems.first() {
-            return Err(ZakaiError::Other(format!("{name}: {field}: {msg}")));
+            return Err(ZakaiError::InvalidParameter {
+                method: name,
+                field,
+                message: msg.clone(),
+            });
         }
         let noise = check_model(&name, model)?;
         let q = model.process_noise();

@@ -73,6 +73,7 @@ fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo
 }
 
 /// The Kalman–Bucy filter: exact for linear models with Gaussian noise and prior.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Kalman;
 builder_fn!(Kalman);
 
@@ -116,6 +117,7 @@ impl Method for Kalman {
 }
 
 /// The extended Kalman filter (continuous–discrete, RK4 moment equations).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Ekf;
 builder_fn!(Ekf);
 
@@ -167,6 +169,7 @@ impl Method for Ekf {
 }
 
 /// The unscented Kalman filter (van der Merwe's scaled sigma points).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Ukf;
 builder_fn!(Ukf);
 
@@ -235,6 +238,7 @@ impl Method for Ukf {
 }
 
 /// The iterated EKF: Gauss–Newton on the MAP problem of each update (003 (4.5)).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Iekf;
 builder_fn!(Iekf);
 
@@ -298,6 +302,7 @@ impl Method for Iekf {
 
 /// The iterated optimisation Kalman filter: a λ-homotopy from the prior to the MAP problem
 /// with guarded Newton steps (003 Algorithm 4.1).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Iokf;
 builder_fn!(Iokf);
 

@@ -14,6 +14,7 @@ use crate::filters::method::{
 use crate::validate::ConfigProblem;
 
 /// The off-line/on-line spectral Yau–Yau filter (generalized Legendre basis).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Spectral;
 builder_fn!(Spectral);
 

@@ -352,9 +352,11 @@ pub struct SpectralFilter {
     /// after whole T₀), at most [`crate::filters::REMAINDER_PLANS`]: each is one off-line
     /// computation of Algorithm 1 and one matrix of W's size.
     remainders: LengthCache<Propagation>,
-    /// With the likelihood in the operator: the operators of intervals without an increment
-    /// (the Fokker–Planck part alone: T₀'s and the remainders', one off-line computation per
-    /// length), at most [`crate::filters::REMAINDER_PLANS`] + 1.
+    /// With the likelihood in the operator, the operators of intervals without a (whole)
+    /// increment — the Fokker–Planck part alone, one off-line computation per length: T₀'s
+    /// (made on the first such interval) and the remainders' (at most
+    /// [`crate::filters::REMAINDER_PLANS`]).
+    whole_gap: Option<Propagation>,
     gaps: LengthCache<Propagation>,
 }
 
@@ -365,8 +367,11 @@ enum Leg {
     Whole,
     /// The remainder operator at the front of its cache.
     Remainder,
-    /// The gap operator of this length (likelihood in the operator, no increment).
-    Gap(f64),
+    /// T₀'s operator without the observation term (likelihood in the operator, no whole
+    /// increment).
+    WholeGap,
+    /// The remainder's operator without the observation term, at the front of its cache.
+    RemainderGap,
 }
 
 impl SpectralFilter {
@@ -460,7 +465,8 @@ impl SpectralFilter {
             model: model.clone(),
             partitions: params.partitions,
             remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
-            gaps: LengthCache::new(crate::filters::REMAINDER_PLANS + 1),
+            whole_gap: None,
+            gaps: LengthCache::new(crate::filters::REMAINDER_PLANS),
             evaluate,
             project,
             layout,
@@ -504,15 +510,27 @@ impl SpectralFilter {
         self.recent_first(|f| &mut f.remainders, rest, with_likelihood)
     }
 
-    /// The operator over `interval` (T₀ or a remainder below it) without an increment when
-    /// the likelihood is in the operator: Algorithm 1 for the Fokker–Planck part alone (N′
-    /// partitions scaled with the length), made the first time that length occurs, kept among
-    /// the last [`crate::filters::REMAINDER_PLANS`] + 1 and moved to the front (so that T₀'s,
-    /// made just before a remainder's, stays). A gap is whole T₀ legs and a remainder, as an
-    /// interval with an increment is: the off-line method is made for short intervals, and one
-    /// operator over a long gap is not accurate.
-    fn gap(&mut self, interval: f64) -> Result<(), FilterError> {
-        self.recent_first(|f| &mut f.gaps, interval, false)
+    /// The operators of an interval without a whole increment when the likelihood is in the
+    /// operator: Algorithm 1 for the Fokker–Planck part alone (N′ partitions scaled with the
+    /// length), T₀'s when `whole` (made once) and the remainder's `rest` when positive (made the
+    /// first time that length occurs, kept among the last [`crate::filters::REMAINDER_PLANS`]).
+    /// A gap is whole T₀ legs and a remainder, as an interval with an increment is: the
+    /// off-line method is made for short intervals, and one operator over a long gap is not
+    /// accurate.
+    fn gap(&mut self, whole: bool, rest: f64) -> Result<(), FilterError> {
+        if whole && self.whole_gap.is_none() {
+            let w = offline::propagation_matrix(
+                &self.model,
+                &self.layout,
+                (self.t0, self.partitions),
+                false,
+            )?;
+            self.whole_gap = Some(Propagation::new(w, &self.evaluate));
+        }
+        if rest > 0.0 {
+            self.recent_first(|f| &mut f.gaps, rest, false)?;
+        }
+        Ok(())
     }
 
     /// Moves the off-line operator over `length` to the front of the cache `pick` selects,
@@ -544,7 +562,8 @@ impl SpectralFilter {
     fn propagate(&mut self, leg: Leg) {
         let propagation = match leg {
             Leg::Remainder => self.remainders.front(),
-            Leg::Gap(length) => self.gaps.get(length).expect("made before the step"),
+            Leg::WholeGap => self.whole_gap.as_ref().expect("made before the step"),
+            Leg::RemainderGap => self.gaps.front(),
             Leg::Whole => &self.propagation,
         };
         let w = match propagation {
@@ -803,16 +822,11 @@ impl Filter for SpectralFilter {
         }
         let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
         // Off-line, before anything moves (it fails only on a degenerate basis). A gap with
-        // the likelihood in the operator has operators of its own (T₀'s first: the
-        // remainder's is then the most recent).
-        // An increment with some components missing is the same prediction, then the observed
-        // components' factor.
+        // the likelihood in the operator has operators of its own; an increment with some
+        // components missing is the same prediction, then the observed components' factor.
         let gap = observed != Observed::All && self.likelihood_in_operator;
-        if gap && whole > 0 {
-            self.gap(self.t0)?;
-        }
-        if gap && rest > 0.0 {
-            self.gap(rest)?;
+        if gap {
+            self.gap(whole > 0, rest)?;
         } else if rest > 0.0 {
             self.remainder(rest)?;
         }
@@ -824,8 +838,8 @@ impl Filter for SpectralFilter {
             self.propagate(match (gap, leg > whole) {
                 (false, false) => Leg::Whole,
                 (false, true) => Leg::Remainder,
-                (true, false) => Leg::Gap(self.t0),
-                (true, true) => Leg::Gap(rest),
+                (true, false) => Leg::WholeGap,
+                (true, true) => Leg::RemainderGap,
             });
             if leg == legs && observed != Observed::Nothing {
                 stepped = self.update(obs.value, obs.dt);

@@ -648,8 +648,10 @@ impl YauYauFilter {
 
 /// The robust-DMZ factor (15) in the log domain, without a logarithm: each value is split as
 /// `u_i = m_i 2^{e_i}` with `m_i ∈ [½, 1)`, the exponent `a_i + e_i ln 2` (with
-/// `a_i = Δyᵀ g(s_i) − half(s_i) Δτ`, where `g = S⁻¹h` and `half = ½ hᵀS⁻¹h` when the likelihood
-/// is in the update, zero when it is in the operator) is within ln 2 of `a_i + ln u_i`, and the
+/// `a_i = Δyᵀ g(s_i) − half(s_i) Δτ`, with the terms of `terms`: for a whole increment
+/// `g = S⁻¹h` and `half = ½ hᵀS⁻¹h` when the likelihood is in the update, zero when it is in the
+/// operator; for a partial one the observed components' `S_OO⁻¹h_O` and `½ h_OᵀS_OO⁻¹h_O` in
+/// either case) is within ln 2 of `a_i + ln u_i`, and the
 /// new value is `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value
 /// is at most 1, the largest at least ½, and no intermediate overflows. `a` is scratch.
 fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {

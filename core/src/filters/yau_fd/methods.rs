@@ -114,9 +114,10 @@ fn build(
     #[cfg(not(feature = "std"))]
     {
         let _ = (scheme, p, dt_obs);
-        Err(ZakaiError::Other(format!(
-            "{name} needs the `std` feature of zakai (FFT plans)"
-        )))
+        Err(ZakaiError::NeedsFeature {
+            what: format!("{name} (FFT plans)"),
+            feature: "std",
+        })
     }
 }
 
@@ -247,6 +248,7 @@ fn refined_grid(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
 }
 
 /// The implicit Euler θ-scheme (000 (12)–(14), Algorithm 2).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Iem;
 yau_yau_method!(
     Iem,
@@ -273,6 +275,7 @@ yau_yau_method!(
 );
 
 /// The quasi-implicit Euler scheme, Laplacian by DST-I (000 (17)–(18), Algorithm 3).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem;
 yau_yau_method!(
     Qiem,
@@ -293,6 +296,7 @@ yau_yau_method!(
 );
 
 /// The superposition technique over QIEM (000 §2.5).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Spt;
 yau_yau_method!(
     Spt,
@@ -323,6 +327,7 @@ yau_yau_method!(
 );
 
 /// The fourth-order 2-D quasi-implicit scheme (000 (20)–(21), Algorithm 4).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem4;
 yau_yau_method!(
     Qiem4,
