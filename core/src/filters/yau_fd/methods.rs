@@ -92,6 +92,11 @@ fn grid_memory(p: &YauYauParams, n: usize) -> Option<usize> {
 }
 
 fn dmz_suitability(problem: &ProblemContext) -> Result<(), String> {
+    // Without `std` the schemes are not built (their DST solve uses rustfft): said before any
+    // build, by every check (the builder's, the run's "does not apply here").
+    if cfg!(not(feature = "std")) {
+        return Err("the Yau–Yau finite-difference filters need the `std` feature of zakai".into());
+    }
     crate::model::dmz::continuous_noise_inverse(
         problem.model,
         "the Yau–Yau and spectral DMZ filters",
@@ -248,6 +253,9 @@ fn refined_grid(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
 }
 
 /// The implicit Euler θ-scheme (000 (12)–(14), Algorithm 2).
+///
+/// Needs the `std` feature: without it the method's checks say so before anything is built
+/// (and `build` returns [`ZakaiError::NeedsFeature`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Iem;
 yau_yau_method!(
@@ -275,6 +283,9 @@ yau_yau_method!(
 );
 
 /// The quasi-implicit Euler scheme, Laplacian by DST-I (000 (17)–(18), Algorithm 3).
+///
+/// Needs the `std` feature: without it the method's checks say so before anything is built
+/// (and `build` returns [`ZakaiError::NeedsFeature`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem;
 yau_yau_method!(
@@ -296,6 +307,9 @@ yau_yau_method!(
 );
 
 /// The superposition technique over QIEM (000 §2.5).
+///
+/// Needs the `std` feature: without it the method's checks say so before anything is built
+/// (and `build` returns [`ZakaiError::NeedsFeature`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Spt;
 yau_yau_method!(
@@ -327,6 +341,9 @@ yau_yau_method!(
 );
 
 /// The fourth-order 2-D quasi-implicit scheme (000 (20)–(21), Algorithm 4).
+///
+/// Needs the `std` feature: without it the method's checks say so before anything is built
+/// (and `build` returns [`ZakaiError::NeedsFeature`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem4;
 yau_yau_method!(
