@@ -1,0 +1,234 @@
+"""What runs return: :class:`RunResult` (every method's estimates, covariances, failures and
+times, with pandas views), :class:`MethodResult` and :class:`MonteCarloTable`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+import numpy as np
+
+
+
+
+@dataclass
+class MethodResult:
+    """One method's record in a run.
+
+    Attributes
+    ----------
+    name : str
+        Display name, e.g. ``"PF(200)"``.
+    estimates : ndarray, shape (N + 1, n)
+        x̂(τ_k); rows after a failure are NaN.
+    covariances : ndarray, shape (N + 1, n, n), or None
+        P(τ_k) where the method has one.
+    failure : (k, t, message) or None
+        Where and why the method failed.
+    concerns : list of dict
+        Self-checks that crossed their thresholds (``check``, ``worst``, ``threshold``,
+        ``first_t``, ``steps``, ``advice``, ``text``): warnings, not failures.
+    mse : float or None
+        Mean square error against the truth (Shi, Chen & Yau 2021, (43)), when the truth is
+        known and the method finished.
+    seconds_per_step, build_seconds : float
+        Wall time per step and to build the filter (its off-line part).
+    """
+
+    name: str
+    estimates: np.ndarray
+    covariances: Optional[np.ndarray]
+    failure: Optional[tuple[int, float, str]]
+    concerns: list[dict[str, Any]]
+    mse: Optional[float]
+    seconds_per_step: float
+    build_seconds: float
+
+    @property
+    def warned(self) -> bool:
+        """Whether a self-check warned during the run."""
+        return bool(self.concerns)
+
+    @property
+    def sds(self) -> Optional[np.ndarray]:
+        """Standard deviations (N + 1, n) from the covariances, or ``None``."""
+        if self.covariances is None:
+            return None
+        return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
+
+
+
+@dataclass
+class RunResult:
+    """Every method's estimates on one set of observations.
+
+    Attributes
+    ----------
+    times : ndarray, shape (N + 1,)
+    observations : ndarray, shape (N + 1, m)
+        Row 0 of continuous observations is the start (zeros); row k the increment over
+        (τ_{k−1}, τ_k]. Discrete: the measurement at τ_k.
+    truth : ndarray, shape (N + 1, n), or None
+    methods : dict of str to MethodResult
+        In the scenario's order, keyed by display name.
+    warnings : list of (str, str)
+        ``(method, message)`` about parameters (stability conditions and the like).
+    chosen_defaults : list of str
+        Sizes chosen from the problem.
+    """
+
+    seed: int
+    continuous: bool
+    times: np.ndarray
+    observations: np.ndarray
+    truth: Optional[np.ndarray]
+    methods: dict[str, MethodResult]
+    warnings: list[tuple[str, str]] = field(default_factory=list)
+    chosen_defaults: list[str] = field(default_factory=list)
+    #: The index of the pandas object the observations came in (labels :meth:`to_pandas`).
+    index: Any = None
+
+    def to_pandas(self) -> Any:
+        """The run as a pandas DataFrame, one row per time, indexed like the observations
+        given to :func:`filter` (else by ``t``): the time ``t``, the observations (NaN where
+        missing), the truth when known, then per method its estimate ``<method> x<i>`` and,
+        where it has a covariance, its standard deviation ``<method> sd x<i>`` (NaN after a
+        failure)."""
+        import pandas as pd
+
+        n = next(iter(self.methods.values())).estimates.shape[1] if self.methods else 0
+        columns: dict[str, Any] = {"t": self.times}
+        prefix = "dy" if self.continuous else "z"
+        for j in range(self.observations.shape[1]):
+            columns[f"{prefix}{j + 1}"] = self.observations[:, j]
+        if self.truth is not None:
+            for j in range(self.truth.shape[1]):
+                columns[f"x{j + 1}"] = self.truth[:, j]
+        for key, m in self.methods.items():
+            sds = m.sds
+            for j in range(n):
+                columns[f"{key} x{j + 1}"] = m.estimates[:, j]
+                if sds is not None:
+                    columns[f"{key} sd x{j + 1}"] = sds[:, j]
+        index = self.index if self.index is not None else pd.Index(self.times, name="t")
+        return pd.DataFrame(columns, index=index)
+
+    @classmethod
+    def _from_dict(cls, d: dict[str, Any]) -> "RunResult":
+        methods: dict[str, MethodResult] = {}
+        for m in d["methods"]:
+            name = m["name"]
+            key, i = name, 2
+            while key in methods:  # two methods with one display name
+                key, i = f"{name} #{i}", i + 1
+            failure = m["failure"]
+            methods[key] = MethodResult(
+                name=name,
+                estimates=m["estimates"],
+                covariances=m["covariances"],
+                failure=None if failure is None else (int(failure[0]), float(failure[1]), failure[2]),
+                concerns=list(m["concerns"]),
+                mse=m["mse"],
+                seconds_per_step=m["seconds_per_step"],
+                build_seconds=m["build_seconds"],
+            )
+        return cls(
+            seed=d["seed"],
+            continuous=d["continuous"],
+            times=d["times"],
+            observations=d["observations"],
+            truth=d["truth"],
+            methods=methods,
+            warnings=[tuple(w) for w in d["warnings"]],
+            chosen_defaults=list(d["chosen_defaults"]),
+        )
+
+    def table(self) -> str:
+        """One line per method: last estimate, MSE, failure, warnings, time per step."""
+        lines = [f"{'method':<14} {'last estimate':>24} {'MSE':>10} {'µs/step':>9}  notes"]
+        for key, m in self.methods.items():
+            last = m.estimates[-1]
+            est = "—" if np.isnan(last).any() else np.array2string(last, precision=4)
+            mse = "—" if m.mse is None else f"{m.mse:.4g}"
+            notes = []
+            if m.failure is not None:
+                notes.append(f"failed at t = {m.failure[1]:.4g}: {m.failure[2]}")
+            notes += [c["text"] for c in m.concerns]
+            lines.append(
+                f"{key:<14} {est:>24} {mse:>10} {m.seconds_per_step * 1e6:>9.2f}  "
+                + "; ".join(notes)
+            )
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"RunResult(seed={self.seed}, steps={len(self.times) - 1}, methods={list(self.methods)})"
+
+
+
+class MonteCarloTable:
+    """The papers' table over many runs: per method the MSE (mean ± standard error over the
+    runs it finished, with the failed runs beside it), the paper's number where the scenario
+    is a paper's table row, warned runs and time per step.
+
+    Attributes
+    ----------
+    scenario : str
+    runs : int
+    seed : int
+        Seed of the first run (runs use ``seed, seed + 1, …``).
+    rows : list of dict
+        One dict per method (``name``, ``mse``, ``mse_stderr``, ``mse_text``,
+        ``mse_quartiles``, ``failed``, ``warned``, ``paper``, ``coincides_with``,
+        ``seconds_per_step``, ``build_seconds``, ``e_mean`` …).
+    how_means_are_taken : str
+        The rule behind every mean, said above the table.
+    """
+
+    def __init__(self, summary: dict[str, Any]) -> None:
+        self.scenario: str = summary["scenario"]
+        self.runs: int = summary["runs"]
+        self.seed: int = summary["seed"]
+        self.rows: list[dict[str, Any]] = summary["methods"]
+        self.warnings: list[tuple[str, str]] = [tuple(w) for w in summary["warnings"]]
+        self.how_means_are_taken: str = summary["how_means_are_taken"]
+
+    _COLUMNS = ("name", "mse", "mse_stderr", "failed", "runs", "mse_text", "paper_text",
+                "warned", "seconds_per_step", "build_seconds")
+
+    def to_pandas(self) -> Any:
+        """The table as a pandas DataFrame indexed by method (needs pandas)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("MonteCarloTable.to_pandas needs pandas (pip install pandas)") from e
+        frame = pd.DataFrame(
+            [{c: r[c] for c in self._COLUMNS} for r in self.rows]
+        )
+        return frame.set_index("name")
+
+    def notes(self) -> list[str]:
+        """Rows that are the same numbers as an earlier row, with the reason when known."""
+        out = []
+        for r in self.rows:
+            c = r.get("coincides_with")
+            if c is not None:
+                why = f": {c['why']}" if c.get("why") else ""
+                out.append(f"{r['name']} = {c['method']} in every run (largest relative "
+                           f"difference {c['largest_relative_difference']:.1e}){why}")
+        return out
+
+    def __str__(self) -> str:
+        lines = [
+            f"{self.scenario}: {self.runs} runs from seed {self.seed}",
+            f"{self.how_means_are_taken}.",
+            f"{'method':<14} {'MSE (runs finished)':>30} {'warned':>7} {'µs/step':>9}  paper",
+        ]
+        for r in self.rows:
+            lines.append(
+                f"{r['name']:<14} {r['mse_text']:>30} {r['warned']:>7} "
+                f"{r['seconds_per_step'] * 1e6:>9.2f}  {r['paper_text']}"
+            )
+        return "\n".join(lines + self.notes())
+
+    def __repr__(self) -> str:
+        return f"MonteCarloTable({self.scenario!r}, runs={self.runs})"

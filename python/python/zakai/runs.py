@@ -1,0 +1,124 @@
+"""Whole runs: :func:`simulate` a scenario, :func:`run` it, :func:`filter` recorded
+observations with every method, :func:`monte_carlo` the papers' tables."""
+
+from __future__ import annotations
+
+import json as _json
+from typing import Optional, Union
+
+import numpy as np
+
+from . import _zakai
+from .errors import ConfigError
+from ._convert import ArrayLike, _array, _times, _index_times
+from .scenario import Scenario
+from .results import RunResult, MonteCarloTable
+
+
+
+def _scenario(scenario: Union[Scenario, str]) -> Scenario:
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, str):
+        return Scenario.from_preset(scenario)
+    raise ConfigError(f"expected a Scenario or a preset name, not {type(scenario).__name__}")
+
+
+
+def _seed(scenario: Scenario, seed: Optional[int]) -> int:
+    value = scenario.seed if seed is None else seed
+    if not isinstance(value, (int, np.integer)) or value < 0:
+        raise ConfigError(f"seed: must be a nonnegative integer (got {value!r})")
+    return int(value)
+
+
+
+def simulate(
+    scenario: Union[Scenario, str], seed: Optional[int] = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Simulates the scenario's truth and observations.
+
+    Returns
+    -------
+    times : ndarray, shape (N + 1,)
+        τ_k = k Δτ.
+    states : ndarray, shape (N + 1, n)
+    observations : ndarray, shape (N + 1, m)
+        Continuous: row 0 zeros, row k the increment y(τ_k) − y(τ_{k−1}); discrete: z_k.
+    """
+    sc = _scenario(scenario)
+    return _zakai.simulate(sc._text(), _seed(sc, seed))
+
+
+
+def run(scenario: Union[Scenario, str], seed: Optional[int] = None) -> RunResult:
+    """Simulates the run with ``seed`` and filters it with every method of the scenario."""
+    sc = _scenario(scenario)
+    return RunResult._from_dict(_zakai.run(sc._text(), _seed(sc, seed)))
+
+
+
+def filter(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    times: Optional[ArrayLike] = None,
+    truth: Optional[ArrayLike] = None,
+    seed: Optional[int] = None,
+) -> RunResult:
+    """Every method of the scenario on your observations.
+
+    Parameters
+    ----------
+    scenario : Scenario or str
+        Model, prior, domain and methods (a preset name works).
+    observations : array_like or pandas Series/DataFrame, shape (rows, m) or (rows,) when m = 1
+        Continuous models: the increments Δy over each interval (N rows for N + 1 times), or
+        the layout :func:`simulate` returns (N + 1 rows, row 0 zeros). Discrete models: the
+        measurements z_k at every time, the first at the prior's time. **NaN is a missing
+        value**: only the observed components of a row are used, and a row of NaN is a
+        prediction only. A pandas object's index gives the times (unless ``times`` does),
+        and :meth:`RunResult.to_pandas` keeps it.
+    times : array_like, optional
+        τ₀ … τ_N (τ₀ the prior's time), increasing, possibly irregular: every method predicts
+        over each step whatever its length (grid and spectral methods as whole Δτ and a
+        remainder). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
+        converted to **seconds since the first**, so Δτ and the model's rates are per
+        second (a step of more than 10⁴ Δτ is refused as a mis-set Δτ). Every Δτ from 0 when absent.
+    truth : array_like, shape (N + 1, n), optional
+        The true states, for errors (MSE) against them.
+    seed : int, optional
+        Seeds the methods' random numbers (particle filter); the scenario's seed when absent.
+    """
+    sc = _scenario(scenario)
+    index_times, index = _index_times(observations)
+    obs = _array(
+        observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
+        "observations",
+    )
+    given = _times(times)
+    result = RunResult._from_dict(
+        _zakai.filter_recorded(
+            sc._text(),
+            obs,
+            given if given is not None else index_times,
+            _array(truth, "truth"),
+            _seed(sc, seed),
+        )
+    )
+    if index is not None and len(index) == len(result.times):
+        result.index = index
+    return result
+
+
+
+def monte_carlo(
+    scenario: Union[Scenario, str], runs: int, seed: Optional[int] = None
+) -> MonteCarloTable:
+    """``runs`` runs with seeds ``seed, seed + 1, …`` on every core (the GIL released).
+
+    Returns the papers' table; ``.to_pandas()`` gives it as a DataFrame.
+    """
+    sc = _scenario(scenario)
+    if not isinstance(runs, (int, np.integer)) or runs < 1:
+        raise ConfigError(f"runs: must be a positive integer (got {runs!r})")
+    return MonteCarloTable(_json.loads(_zakai.monte_carlo_json(sc._text(), int(runs), _seed(sc, seed))))

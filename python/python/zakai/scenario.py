@@ -1,0 +1,223 @@
+"""A scenario — model, prior, domain, time steps, seed and methods — as the JSON the command
+line and the playground read (:class:`Scenario`), the presets, and the method catalogue."""
+
+from __future__ import annotations
+
+import json as _json
+from typing import Any, Mapping, Optional, Sequence, Union
+
+from . import _zakai
+from .errors import ConfigError
+from ._convert import ArrayLike, MethodSpec, _vector, _domain
+from .models import Model, Prior
+
+
+
+
+
+
+def presets() -> list[str]:
+    """Names of the built-in scenarios (the papers' examples), in the command line's order."""
+    return [name for name, _ in _zakai.presets()]
+
+
+
+def set_memory_cap(cap: Union[int, str]) -> int:
+    """Sets the largest memory a scenario's methods may need together — bytes, or text such
+    as ``"8GiB"`` (default 1 GiB, the playground's cap). Scenarios are checked against it
+    before anything is allocated (:class:`ConfigError`). Returns the previous cap in bytes."""
+    return _zakai.set_memory_cap(cap)
+
+
+
+def methods() -> list[dict[str, Any]]:
+    """Every method: ``key``, names, paper, parameter schema and ``defaults``."""
+    return _json.loads(_zakai.catalogue_json())
+
+
+
+def _method_config(spec: MethodSpec) -> dict[str, Any]:
+    """A full method config from a key (``"pf"``) or a dict ``{"method": "pf", ...}``."""
+    if isinstance(spec, str):
+        key, params = spec, {}
+    elif isinstance(spec, Mapping):
+        params = dict(spec)
+        key = params.pop("method", None)
+        if not isinstance(key, str):
+            raise ConfigError("a method dict needs a 'method' key, e.g. {'method': 'pf'}")
+    else:
+        raise ConfigError(f"a method is a key or a dict, not {type(spec).__name__}")
+    return _json.loads(_zakai.method_defaults_json(key, _json.dumps(params)))
+
+
+
+class Scenario:
+    """A model, prior, domain, time grid and methods: what one run needs.
+
+    The same JSON as the command line's scenario files and the playground's "copy link".
+    Fields a user changes most are attributes (``dt_obs``, ``t_final``, ``seed``, ``domain``,
+    ``methods``, ``initial_state``); everything else through :attr:`config` (a dict). Every
+    assignment is checked when the scenario is used (or by :meth:`validate`), all problems at
+    once, with their field paths.
+
+    Parameters
+    ----------
+    model : Model
+    prior : Prior
+    methods : list of str or dict
+        Method keys (``"ukf"``, ``"pf"``, ``"qiem"``, …, see :func:`methods`) or dicts
+        ``{"method": "pf", "particles": 1000}``; parameters left out take their defaults,
+        sizes left unset are chosen from the problem.
+    dt_obs, t_final : float
+        Observation interval Δτ and horizon T (simulations; a recording brings its own times).
+    domain : list of (low, high), optional
+        The box the grid and spectral methods live on; ``prior mean ± 8 sd`` when absent.
+    initial_state : array_like, optional
+        x₀ of simulations; drawn from the prior when absent.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        prior: Prior,
+        methods: Sequence[MethodSpec] = ("ukf",),
+        *,
+        dt_obs: float = 0.01,
+        t_final: float = 1.0,
+        domain: Optional[Sequence[Sequence[float]]] = None,
+        initial_state: Optional[ArrayLike] = None,
+        seed: int = 0,
+        name: str = "custom",
+    ) -> None:
+        if domain is None:
+            domain = prior.covering_domain()
+            if domain is None:
+                raise ConfigError(
+                    "domain: a density prior needs the domain it lives on"
+                    if prior.config.get("kind") == "density"
+                    else "domain: none given, and none can be set around this prior"
+                )
+        self.config: dict[str, Any] = {
+            "name": name,
+            "model": dict(model.config),
+            "prior": dict(prior.config),
+            "initial_state": None if initial_state is None else _vector(initial_state, "initial_state"),
+            "domain": _domain(domain),
+            "time": {"t_final": float(t_final), "dt_obs": float(dt_obs), "inner_steps": 1},
+            "seed": int(seed),
+            "failure": {"divergence_bound": None, "track_loss": None},
+            "methods": [_method_config(m) for m in methods],
+        }
+
+    @classmethod
+    def from_json(cls, text: str) -> "Scenario":
+        """A scenario from its JSON text (a scenario file, ``zakai show``); checked at once."""
+        scenario = cls.__new__(cls)
+        normalised, _, _ = _zakai.check_scenario(text)
+        scenario.config = _json.loads(normalised)
+        return scenario
+
+    @classmethod
+    def from_preset(cls, name: str) -> "Scenario":
+        """A built-in scenario (see :func:`presets`), e.g. ``"cubic-sensor-1d"``."""
+        return cls.from_json(_zakai.preset_json(name))
+
+    def to_json(self, indent: Optional[int] = 2) -> str:
+        """The scenario as JSON, readable by ``zakai run <file>`` and the playground."""
+        return _json.dumps(self.config, indent=indent, ensure_ascii=False)
+
+    def copy(self) -> "Scenario":
+        """An independent copy."""
+        return Scenario.from_json(self.to_json())
+
+    def validate(self) -> "Scenario":
+        """Raises :class:`ConfigError` listing every problem; returns the scenario."""
+        _zakai.check_scenario(self._text())
+        return self
+
+    def _text(self) -> str:
+        return _json.dumps(self.config)
+
+    @property
+    def name(self) -> str:
+        """The scenario's name."""
+        return self.config["name"]
+
+    @property
+    def dt_obs(self) -> float:
+        """Δτ, the observation interval."""
+        return self.config["time"]["dt_obs"]
+
+    @dt_obs.setter
+    def dt_obs(self, value: float) -> None:
+        self.config["time"]["dt_obs"] = float(value)
+
+    @property
+    def t_final(self) -> float:
+        """T, the horizon of simulations."""
+        return self.config["time"]["t_final"]
+
+    @t_final.setter
+    def t_final(self, value: float) -> None:
+        self.config["time"]["t_final"] = float(value)
+
+    @property
+    def seed(self) -> int:
+        """The default seed of :func:`simulate`, :func:`run` and :func:`monte_carlo`."""
+        return self.config["seed"]
+
+    @seed.setter
+    def seed(self, value: int) -> None:
+        self.config["seed"] = int(value)
+
+    @property
+    def domain(self) -> list[list[float]]:
+        """The box ``[[low, high], …]`` of the grid and spectral methods."""
+        return self.config["domain"]
+
+    @domain.setter
+    def domain(self, value: Sequence[Sequence[float]]) -> None:
+        self.config["domain"] = _domain(value)
+
+    @property
+    def initial_state(self) -> Optional[list[float]]:
+        """x₀ of simulations, or ``None`` (drawn from the prior)."""
+        return self.config["initial_state"]
+
+    @initial_state.setter
+    def initial_state(self, value: Optional[ArrayLike]) -> None:
+        self.config["initial_state"] = None if value is None else _vector(value, "initial_state")
+
+    @property
+    def methods(self) -> list[dict[str, Any]]:
+        """The methods' configs (dicts; edit them in place or assign a new list of keys or
+        dicts)."""
+        return self.config["methods"]
+
+    @methods.setter
+    def methods(self, value: Sequence[MethodSpec]) -> None:
+        self.config["methods"] = [_method_config(m) for m in value]
+
+    @property
+    def method_names(self) -> list[str]:
+        """Display names with the sizes that matter (``"PF(200)"``), after validation."""
+        return _zakai.check_scenario(self._text())[1]
+
+    @property
+    def chosen_defaults(self) -> list[str]:
+        """Notes of the sizes chosen from the problem (e.g. the spectral basis)."""
+        return _zakai.check_scenario(self._text())[2]
+
+    @property
+    def n(self) -> int:
+        """State dimension."""
+        return len(self.config["model"]["drift"])
+
+    @property
+    def m(self) -> int:
+        """Observation dimension."""
+        return len(self.config["model"]["observation"])
+
+    def __repr__(self) -> str:
+        keys = ", ".join(m["method"] for m in self.methods)
+        return f"Scenario({self.name!r}, n={self.n}, m={self.m}, methods=[{keys}])"

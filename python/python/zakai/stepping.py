@@ -1,0 +1,195 @@
+"""The stepping filter: :class:`Filter`, one method you step, predict, update and fork."""
+
+from __future__ import annotations
+
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from . import _zakai
+from .errors import ConfigError
+from ._convert import ArrayLike, _array
+from .models import Model, Prior
+from .scenario import Scenario
+
+
+
+class Filter:
+    """One filter stepped by hand: ``f.step(dy, dt)``, then ``f.mean``, ``f.cov``,
+    ``f.density(grid)``.
+
+    Parameters
+    ----------
+    method : str
+        A method key (see :func:`methods`): ``"kalman"``, ``"ekf"``, ``"ukf"``, ``"pf"``,
+        ``"iekf"``, ``"iokf"``, ``"qiem"``, ``"iem"``, ``"spt"``, ``"qiem4"``, ``"spectral"``,
+        ``"direct"``, ``"separation"``, ``"implicit_fdm"``, ``"gaussian_sum"``.
+    model : Model
+    prior : Prior
+    dt_obs : float
+        The observation interval Δτ (the default step; grid and spectral methods are built
+        for it and cross other steps as whole Δτ and a remainder). A method's own ``dt`` (the grid filters' time step) is one of
+        ``params``.
+    domain : list of (low, high), optional
+        The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent.
+    seed : int
+        Seeds the method's random numbers.
+    **params
+        The method's parameters (``particles=1000``, ``points=[401]`` …); the rest take their
+        defaults or are chosen from the problem (:attr:`chosen_defaults`).
+
+    Examples
+    --------
+    >>> model = Model.continuous("0", "x^3")
+    >>> f = Filter("qiem", model, Prior.gaussian(1.0, 0.1), dt_obs=0.01, points=[401])
+    >>> f.step([0.012], 0.01)
+    >>> float(f.mean[0])  # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        method: str,
+        model: Model,
+        prior: Prior,
+        *,
+        dt_obs: float,
+        domain: Optional[Sequence[Sequence[float]]] = None,
+        seed: int = 0,
+        **params: Any,
+    ) -> None:
+        scenario = Scenario(
+            model,
+            prior,
+            [{"method": method, **params}],
+            dt_obs=dt_obs,
+            t_final=dt_obs,
+            domain=domain,
+            seed=seed,
+        )
+        self.scenario: Scenario = scenario
+        self._inner = _zakai.Stepper(scenario._text(), int(seed))
+        # Whether the filter is still at the prior's time (no step taken yet).
+        self._at_prior = True
+
+    def _dt(self, dt: Optional[float]) -> float:
+        if dt is None:
+            return self.scenario.dt_obs
+        if not isinstance(dt, (int, float, np.integer, np.floating)):
+            raise ConfigError(f"dt: must be a number of time units (got {type(dt).__name__})")
+        return float(dt)
+
+    def step(self, observation: ArrayLike, dt: Optional[float] = None) -> None:
+        """Predicts over ``dt`` (Δτ when absent) and assimilates one observation: the
+        increment dy for continuous models, the measurement z for discrete ones (``dt = 0``
+        assimilates at the current time). NaN components are missing: only the observed
+        ones are used, and an all-NaN observation is a prediction only. A step that fails
+        raises :class:`FilterError` and leaves the filter as it was."""
+        self._inner.step(_array(observation, "observation"), self._dt(dt))
+        self._at_prior = False
+
+    def predict(self, dt: Optional[float] = None) -> None:
+        """Predicts over ``dt`` (Δτ when absent) without an observation: a gap in the data,
+        or a forecast (on a :meth:`copy`, to keep the filter itself at the present)."""
+        self._inner.predict(self._dt(dt))
+        self._at_prior = False
+
+    def update(self, z: ArrayLike) -> None:
+        """Assimilates the measurement ``z`` at the current time, without predicting
+        (discrete models; NaN components are missing)."""
+        self._inner.update(_array(z, "z"))
+        self._at_prior = False
+
+    def copy(self) -> "Filter":
+        """An independent copy of the filter in its current state: stepping one does not
+        move the other (e.g. to forecast from here)."""
+        twin = Filter.__new__(Filter)
+        twin.scenario = self.scenario.copy()
+        twin._inner = self._inner.fork()
+        twin._at_prior = self._at_prior
+        return twin
+
+    def __copy__(self) -> "Filter":
+        return self.copy()
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> "Filter":
+        return self.copy()
+
+    def __reduce__(self) -> Any:
+        raise TypeError(
+            "a zakai.Filter holds its state in native memory and cannot be pickled; "
+            "keep its scenario (f.scenario.to_json()) and the observations, and step a new "
+            "Filter through them, or copy it in the same process with f.copy()"
+        )
+
+    def run(
+        self, observations: ArrayLike, dts: Optional[ArrayLike] = None
+    ) -> tuple[np.ndarray, Optional[np.ndarray]]:
+        """Steps through every row of ``observations`` (step lengths ``dts``) in Rust and
+        returns the means (rows, n) and covariances (rows, n, n) or ``None``, after each
+        step. NaN components are missing.
+
+        Without ``dts`` every row comes Δτ after the one before — and, as in
+        :func:`filter`, a discrete model's first row is a measurement at the prior's time
+        (step 0) when the filter has not stepped yet."""
+        obs = _array(observations, "observations")
+        assert obs is not None
+        rows = obs.shape[0]
+        if dts is None:
+            steps = np.full(rows, self.scenario.dt_obs)
+            if rows and self._at_prior and not self._inner.continuous:
+                steps[0] = 0.0
+        else:
+            steps = _array(dts, "dts")
+        result = self._inner.run(obs, steps)
+        self._at_prior = self._at_prior and rows == 0
+        return result
+
+    @property
+    def name(self) -> str:
+        """Display name, e.g. ``"PF(1000)"``."""
+        return self._inner.name
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The conditional mean (or the method's point estimate), shape (n,)."""
+        return self._inner.mean
+
+    @property
+    def cov(self) -> Optional[np.ndarray]:
+        """The conditional covariance, shape (n, n), or ``None``."""
+        return self._inner.cov
+
+    @property
+    def map(self) -> Optional[np.ndarray]:
+        """The maximum a posteriori point, for methods that compute one."""
+        return self._inner.map
+
+    @property
+    def warnings(self) -> list[str]:
+        """Warnings about the parameters (stability conditions), known before any step."""
+        return self._inner.warnings
+
+    @property
+    def chosen_defaults(self) -> list[str]:
+        """Notes of the sizes chosen from the problem."""
+        return self._inner.chosen_defaults
+
+    def self_check(self) -> list[dict[str, Any]]:
+        """The self-checks crossing their thresholds now (``check``, ``value``,
+        ``threshold``, ``above``, ``advice``); empty when all is well."""
+        return self._inner.self_check()
+
+    def density(self, grid: ArrayLike, dim: int = 0) -> np.ndarray:
+        """The marginal density of component ``dim`` at the points ``grid`` (the Gaussian of
+        the estimate for Kalman-type filters)."""
+        return self._inner.density(_array(grid, "grid"), int(dim))
+
+    def density2d(
+        self, xs: ArrayLike, ys: ArrayLike, dims: tuple[int, int] = (0, 1)
+    ) -> np.ndarray:
+        """The joint marginal density of components ``dims`` on ``xs × ys``, shape
+        (len(ys), len(xs))."""
+        return self._inner.density2d(_array(xs, "xs"), _array(ys, "ys"), tuple(dims))
+
+    def __repr__(self) -> str:
+        return repr(self._inner)
