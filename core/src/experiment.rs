@@ -79,12 +79,11 @@ mod standard_clock {
 pub use standard_clock::*;
 
 /// Timed steps that averaged less than this (seconds) are sampled: only one step in
-/// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step cost about 50 ns natively
-/// (`Instant::now` through the vDSO; BENCHMARKS.md, "The driver's own cost per step") — 15 %
-/// of the cheapest step, the 1-D spectral filter's 0.33 µs, and 1 % at this threshold. Timing
-/// one step in 32 brings that to 0.5 %, and the mean over 16 + 15 of a 500-step run is as good
-/// an estimate of the mean step as over all of them (one in 8, 2 % of the cheapest step, kept
-/// the driver above a tenth of it).
+/// [`SAMPLE_EVERY`] is timed. The two clock reads that time a step are a sizeable share of the
+/// cheapest steps (sub-microsecond filters) and a small one at this threshold; timing one step
+/// in [`SAMPLE_EVERY`] makes their share negligible, and the mean over the first steps and the
+/// sampled ones of a run estimates the mean step as well as all of them would (BENCHMARKS.md,
+/// "The driver's own cost per step", has the measurements).
 pub const SAMPLED_BELOW: f64 = 5e-6;
 
 /// See [`SAMPLED_BELOW`].

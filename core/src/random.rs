@@ -37,8 +37,8 @@ const ZIGGURAT_R: f64 = 3.654_152_885_361_009;
 const ZIGGURAT_AREA: f64 = 4.928_673_233_99e-3;
 
 /// N(0, 1) draws by the ziggurat method (Marsaglia & Tsang 2000): one 64-bit draw and a
-/// comparison for 99 % of the samples, so about five times faster than
-/// [`standard_normal`]'s Box–Muller. Its tables are computed with `libm` in the constructor,
+/// comparison for 99 % of the samples (the ziggurat's geometry), so several times faster
+/// than [`standard_normal`]'s Box–Muller. Its tables are computed with `libm` in the constructor,
 /// so the stream is the same on every platform. The particle filter draws its noise here; the
 /// simulators keep [`standard_normal`] so that the simulated truth does not depend on it.
 #[derive(Clone, Debug)]

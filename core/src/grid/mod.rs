@@ -216,8 +216,7 @@ impl TensorGrid {
 
     /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero). The sum runs in eight
     /// lanes ([`crate::linalg::sum_in_lanes`]): the drivers' self-check takes it after every
-    /// step, and as one chain of dependent additions it was 9.7 % of a 40 000-step QIEM run on
-    /// 2001 nodes.
+    /// step, and as one chain of dependent additions it was a sizeable share of a QIEM run.
     pub fn mass(&self, u: &[f64]) -> f64 {
         crate::linalg::sum_in_lanes(u, |v| v) * self.cell_volume()
     }

@@ -150,9 +150,8 @@ pub fn binary_split(v: f64) -> (f64, f64) {
 
 /// `max(m, v)`, ignoring a NaN `v` like `f64::max`, for loops over grid nodes. On wasm as a
 /// comparison and a select: wasm's `f64.max` propagates NaN, so `f64::max` compiles there to a
-/// call of libm's `fmax` per value, which also keeps the loop around it from vectorising (5 %
-/// of the 1-D QIEM's time in Node). Elsewhere `f64::max` itself, which x86-64 vectorises
-/// (there the select form measured 20 % slower in the QIEM step).
+/// call of libm's `fmax` per value, which also keeps the loop around it from vectorising.
+/// Elsewhere `f64::max` itself, which x86-64 vectorises (there the select form is the slower).
 #[inline(always)]
 pub fn larger(m: f64, v: f64) -> f64 {
     if cfg!(target_arch = "wasm32") {
@@ -216,8 +215,7 @@ pub(crate) fn separate(p: f64, r: f64, c: f64) -> f64 {
 /// `Σ_{i ≤ 13} rⁱ/i!` in Estrin's scheme: pairs `c_{2j} + c_{2j+1} r`, then pairs of those
 /// with r², r⁴, r⁸ — five multiply–adds `madd(p, r, c) = p r + c` deep instead of Horner's
 /// fourteen, so that a loop of exponentials runs at the machine's throughput rather than
-/// waiting on one long chain per value (with AVX2 and FMA the update's exponentials took
-/// 3 µs for 2001 nodes chained, left to the scheduler of one core).
+/// waiting on one long chain per value.
 #[inline(always)]
 fn taylor_by_estrin(r: f64, madd: &impl Fn(f64, f64, f64) -> f64) -> f64 {
     const C: [f64; 14] = [
@@ -360,9 +358,8 @@ per_node_kernel! {
 }
 
 /// `Σ f(x_i)` in eight interleaved partial sums, combined pairwise in a fixed order: a loop the
-/// compiler vectorises (one running sum waits on every addition's latency: for the particle
-/// filter's 10⁴ weights, about 10 µs of a 150 µs step), whose result does not depend on the
-/// vector width.
+/// compiler vectorises (one running sum waits on every addition's latency, a visible share of
+/// a particle filter's step), whose result does not depend on the vector width.
 #[inline(always)]
 pub fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
     const LANES: usize = 8;

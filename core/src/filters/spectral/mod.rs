@@ -756,7 +756,7 @@ impl Energy {
 /// `c ← c·scale` for the coefficients of a tensor basis with `counts` functions per dimension
 /// (first dimension fastest), and their [`Energy`]. The total is summed in the scaling pass
 /// itself, in four interleaved partial sums (one chain of additions would wait on each one's
-/// latency); the self-check reads it after every step, and 004's 1-D step is 0.3 µs.
+/// latency); the self-check reads it after every step, and 004's 1-D step is itself short.
 fn scale_and_measure(coeffs: &mut [f64], scale: f64, counts: &[usize]) -> Energy {
     let mut lanes = [0.0; 4];
     let mut chunks = coeffs.chunks_exact_mut(4);

@@ -138,7 +138,7 @@ pub fn qiem_stability(
 
 /// The largest prime rustfft transforms with its own butterflies and mixed-radix algorithms; a
 /// length with a larger prime factor goes through Rader's or Bluestein's algorithm, several
-/// times slower (measured: 3–4× per QIEM step in the browser for N + 1 = 402 = 2·3·67).
+/// times slower per QIEM step.
 pub const FAST_PRIME_LIMIT: usize = 31;
 
 /// The prime factors of `m` in increasing order, with repetition (none for m ≤ 1).
