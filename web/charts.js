@@ -12,6 +12,27 @@ import { densityData, errorChoices, errorData, innovationData, render, trajector
 
 // Points of the density grid the worker samples for the plots (the form's "grid points").
 export const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
+// The observation plot's series: a recording whole from the start, a simulation's observations
+// as far as the run has gone.
+export function observationData() {
+  const d = state.data;
+  return d.full ? [d.full.times, ...d.full.obs] : [d.times, ...d.obs];
+}
+
+// A recording's observations per component, as the observation plot draws them: z_k, or the
+// path y(τ_k) = Σ Δy for increments; null where a value is missing (the path carries on).
+function observationPaths(info, recorded) {
+  const obs = Array.from({ length: info.m }, () => []);
+  const sum = new Array(info.m).fill(0);
+  recorded.times.forEach((_, k) => {
+    for (let j = 0; j < info.m; j++) {
+      const v = recorded.observations[k * info.m + j];
+      obs[j].push(v == null ? null : info.continuous ? (sum[j] += v) : v);
+    }
+  });
+  return { times: recorded.times, obs };
+}
+
 // A scale's range with a margin. A single value (the first frame: one time, every estimate
 // at the prior mean, some a rounding error away), a range within rounding of one, or a
 // non-finite one gets a unit range around it: uPlot's axis would otherwise divide a range of
@@ -31,7 +52,7 @@ function safeRange(u, min, max) {
 // failure (dashed, lighter), then the ±2σ band edges when there is no truth.
 const ghostSeries = (i) => 2 + state.info.methods.length + i;
 
-export function makePlots(info) {
+export function makePlots(info, recorded = null) {
   const n = info.n;
   const names = info.labels ?? info.methods;
   const M = names.length;
@@ -53,7 +74,8 @@ export function makePlots(info) {
   // null where the recording has no value (a gap); ySum: the path's running sums.
   state.data = { times: [], truth: Array.from({ length: n }, () => []), est: perMethod(), ghost: perMethod(), lo: perMethod(), hi: perMethod(),
     obs: Array.from({ length: info.m }, () => []), ySum: new Array(info.m).fill(0),
-    innov: info.methods.map(() => Array.from({ length: info.m }, () => [])) };
+    innov: info.methods.map(() => Array.from({ length: info.m }, () => [])),
+    full: recorded && observationPaths(info, recorded) };
   $('innovations-figure').hidden = info.continuous;
   fillOptions($('innovation-component'), Array.from({ length: info.m }, (_, j) => [j, `z${j + 1}`]));
   $('innovation-component').hidden = info.m < 2;
@@ -142,7 +164,7 @@ export function makeCharts() {
     scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
     axes: [{ ...axisFont, label: '' }, { label: info.continuous ? 'y' : 'z', ...axisFont, space: 24 }],
     legend: { show: info.m > 1 },
-  }, state.data?.times.length ? [state.data.times, ...state.data.obs] : oseries.map(() => []), $('observations-plot'));
+  }, state.data ? observationData() : oseries.map(() => []), $('observations-plot'));
   const dseries = [{}];
   names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   // The step in two halves: each method's prediction (thin, dashed) and the likelihood of the

@@ -4,7 +4,7 @@
 
 import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
-import { bandsShown, drawHeatmap, shownDim, shownFrame, shownRow } from './charts.js';
+import { bandsShown, drawHeatmap, observationData, shownDim, shownFrame, shownRow } from './charts.js';
 import { labels, state } from './state.js';
 import { setPlaying, updateScrub } from './playback.js';
 
@@ -224,7 +224,7 @@ export function render() {
   if (!d || !state.heatStrip) return;
   const dim = shownDim();
   state.trajPlot.setData(trajectoryData());
-  state.obsPlot.setData([d.times, ...d.obs]);
+  state.obsPlot.setData(observationData());
   if (!$('errors-figure').hidden) state.errPlot.setData(errorData());
   if (!$('innovations-figure').hidden) state.innovPlot.setData(innovationData());
   const density = densityData();

@@ -142,7 +142,7 @@ export function setupSession(hooks = {}) {
         state.failures = new Map();
         $('data-error').textContent = '';
         showProblems([]);
-        makePlots(data.info);
+        makePlots(data.info, data.recorded);
         validate();
         if (state.playAfterLoad) {
           state.playAfterLoad = false;

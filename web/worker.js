@@ -96,7 +96,8 @@ function restarted() {
   awaitingAck = false;
   credit = 0;
   sent = 0;
-  post({ type: 'loaded', id: loadId, info });
+  // A recording is known before any step: the page draws its observations at once.
+  post({ type: 'loaded', id: loadId, info, recorded: session.recordedObservations() });
   frame(session.step(0));
 }
 

@@ -490,6 +490,15 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await data.setInputFiles('#file-observations', obsPath);
     await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
     assert.match(await data.textContent("#data-status"), /filtering recorded-obs\.csv under the scenario “cubic-sensor-1d” \(no truth/);
+    // The recording is drawn whole at once, before any step: its path y = Σ Δy row by row.
+    {
+      const rows = readFileSync(obsPath, 'utf8').trim().split('\n').slice(1).map((l) => Number(l.split(',')[1]));
+      const drawn = await data.evaluate(() => ({ position: window.zakaiPage.data.times.length, path: window.zakaiPage.obsPlot.data[1] }));
+      assert.ok(drawn.position <= 1, 'no step taken yet');
+      let sum = 0;
+      assert.equal(drawn.path.length, rows.length, 'every row of the recording drawn');
+      rows.forEach((v, k) => { sum += v; assert.ok(Math.abs(drawn.path[k] - sum) < 1e-9, `row ${k}: ${drawn.path[k]}, the file's path ${sum}`); });
+    }
     await data.evaluate(() => { document.getElementById('speed').value = '50'; document.getElementById('speed').dispatchEvent(new Event('input')); });
     await data.click('#play');
     await data.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 30000 });

@@ -534,6 +534,32 @@ impl Session {
         self.run.recording().observations[a * m..b * m].to_vec()
     }
 
+    /// The whole recording of a session over the user's observations, `{times, observations}`
+    /// (row-major, null where missing) — known before any step, unlike a simulation's, so the
+    /// page can draw it at once; `null` for a simulated session.
+    #[wasm_bindgen(js_name = recordedObservations)]
+    pub fn recorded_observations(&self) -> Result<JsValue, JsError> {
+        #[derive(Serialize)]
+        struct Recorded<'a> {
+            times: &'a [f64],
+            observations: Vec<Option<f64>>,
+        }
+        match &self.recording {
+            None => Ok(JsValue::NULL),
+            Some(_) => {
+                let r = self.run.recording();
+                to_js(&Recorded {
+                    times: &r.times,
+                    observations: r
+                        .observations
+                        .iter()
+                        .map(|v| v.is_finite().then_some(*v))
+                        .collect(),
+                })
+            }
+        }
+    }
+
     /// Standard deviations √P_jj of method `index` for rows `from..to`, row-major (empty for
     /// a method without a covariance; fewer rows after a failure) — the ±2σ bands.
     pub fn sds(&self, index: usize, from: usize, to: usize) -> Vec<f64> {
