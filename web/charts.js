@@ -19,6 +19,15 @@ export function observationData() {
   return d.full ? [d.full.times, ...d.full.obs] : [d.times, ...d.obs];
 }
 
+// Labels of a log axis: whole decades only, at most five of them (every k-th decade when the
+// errors span many, e.g. a scheme equal to the reference to round-off).
+function decadeLabels(u, ticks) {
+  const power = ticks.map((v) => Math.log10(v));
+  const whole = power.filter((p) => Math.abs(p - Math.round(p)) < 1e-9).length;
+  const every = Math.max(1, Math.ceil(whole / 5));
+  return power.map((p) => (Math.abs(p - Math.round(p)) < 1e-9 && Math.round(p) % every === 0 ? `1e${Math.round(p)}` : ''));
+}
+
 // A recording's observations per component, as the observation plot draws them: z_k, or the
 // path y(τ_k) = Σ Δy for increments; null where a value is missing (the path carries on).
 function observationPaths(info, recorded) {
@@ -187,7 +196,7 @@ export function makeCharts() {
   state.errPlot = new uPlot({
     ...plotSize('errors-plot', 'errors'), series: eseries,
     scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { distr: 3, log: 10, range: decadeRange } },
-    axes: [{ ...axisFont, label: 't' }, { label: '|error|', ...axisFont, space: 24, values: (u, ticks) => ticks.map((v) => (Math.log10(v) % 1 === 0 ? `1e${Math.log10(v)}` : '')) }],
+    axes: [{ ...axisFont, label: 't' }, { label: '|error|', ...axisFont, space: 24, values: decadeLabels }],
     legend: { show: false },
   }, state.data?.times.length ? errorData() : eseries.map(() => []), $('errors-plot'));
   state.densityPlot?.destroy();
