@@ -46,17 +46,8 @@ class Model:
         noise_cov : array_like, optional
             S; the identity when absent.
         """
-        return cls(
-            {
-                "drift": _strings(drift, "drift"),
-                "observation": _strings(observation, "observation"),
-                "diffusion": None if diffusion is None else _matrix(diffusion, "diffusion"),
-                "noise": {
-                    "kind": "continuous",
-                    "cov": None if noise_cov is None else _matrix(noise_cov, "noise_cov"),
-                },
-            }
-        )
+        cov = None if noise_cov is None else _matrix(noise_cov, "noise_cov")
+        return cls._of(drift, observation, diffusion, {"kind": "continuous", "cov": cov})
 
     @classmethod
     def discrete(
@@ -74,17 +65,18 @@ class Model:
             R (m × m; a scalar when m = 1).
         """
         m = len(_strings(observation, "observation"))
+        gaussian = {"weight": 1.0, "mean": [0.0] * m, "cov": _matrix(noise_cov, "noise_cov")}
+        return cls._of(drift, observation, diffusion, {"kind": "discrete", "mixture": [gaussian]})
+
+    @classmethod
+    def _of(cls, drift: Any, observation: Any, diffusion: Any, noise: dict) -> "Model":
+        """The model of these texts, diffusion and noise block (of the scenario JSON)."""
         return cls(
             {
                 "drift": _strings(drift, "drift"),
                 "observation": _strings(observation, "observation"),
                 "diffusion": None if diffusion is None else _matrix(diffusion, "diffusion"),
-                "noise": {
-                    "kind": "discrete",
-                    "mixture": [
-                        {"weight": 1.0, "mean": [0.0] * m, "cov": _matrix(noise_cov, "noise_cov")}
-                    ],
-                },
+                "noise": noise,
             }
         )
 
