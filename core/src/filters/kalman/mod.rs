@@ -7,6 +7,7 @@
 pub mod ekf;
 pub mod linear;
 pub mod map;
+pub mod map_point;
 pub mod measurement;
 pub mod methods;
 pub mod propagate;
@@ -15,7 +16,8 @@ pub mod ukf;
 
 pub use ekf::{EkfParams, ExtendedKalman};
 pub use linear::{KalmanBucy, KalmanParams};
-pub use map::{IekfParams, IokfParams, MapKalman, MapSolver};
+pub use map::{IekfParams, IokfParams, MapKalman};
+pub use map_point::MapSolver;
 pub use methods::{Ekf, Iekf, Iokf, Kalman, Ukf};
 pub use ukf::{UkfParams, UnscentedKalman};
 

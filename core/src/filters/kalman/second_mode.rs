@@ -43,8 +43,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::map::spd_inverse_into;
-use super::map::{in_standard_deviations, map_update, quadratic_form, MapSolver, MapWork};
+use super::map_point::{
+    in_standard_deviations, map_update, quadratic_form, spd_inverse_into, MapSolver, MapWork,
+};
 use super::measurement::Measurement;
 use super::GaussianState;
 use crate::filters::Concern;
