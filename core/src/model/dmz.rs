@@ -166,6 +166,21 @@ pub struct ObservedTerms<'a> {
     pub half: &'a [f64],
 }
 
+impl ObservedTerms<'_> {
+    /// The factor's exponent at every point, `out_i = Σ_j Δy_j gain_j(x_i) − scale · half(x_i)`
+    /// (`scale` is Δτ, or the number of intervals when `half` already holds `½hᵀS⁻¹h T₀`).
+    pub fn exponents(&self, scale: f64, out: &mut [f64]) {
+        for (a, h) in out.iter_mut().zip(self.half) {
+            *a = -scale * h;
+        }
+        for (y, g) in self.dy.iter().zip(self.gain) {
+            for (a, h) in out.iter_mut().zip(g) {
+                *a += y * h;
+            }
+        }
+    }
+}
+
 impl PartialIncrements {
     /// For the observation noise covariance S (positive definite).
     pub fn new(noise_cov: DMatrix<f64>) -> Self {

@@ -44,7 +44,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, LengthCache, Observation, ObservationKind, Observed};
 use crate::linalg;
-use crate::model::dmz::{DmzCoefficients, Likelihood, PartialIncrements};
+use crate::model::dmz::{DmzCoefficients, Likelihood, ObservedTerms, PartialIncrements};
 use crate::model::{Model, Prior};
 
 /// Largest number of basis functions per dimension.
@@ -630,32 +630,19 @@ impl SpectralFilter {
         let (values, a) = (&mut self.values, &mut self.exponents);
         if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.s_inv_h, dy)?;
-            observation_factor(values, a, t.gain, (t.half, dt), t.dy);
+            observation_factor(values, a, &t, dt);
         } else {
-            let intervals = dt / self.t0;
-            observation_factor(values, a, &self.s_inv_h, (&self.potential, intervals), dy);
+            let (gain, half) = (&self.s_inv_h, &self.potential);
+            observation_factor(values, a, &ObservedTerms { dy, gain, half }, dt / self.t0);
         }
         Ok(())
     }
 }
 
-/// `values ← values · exp(Δyᵀg − scale · potential − shift)` at the nodes, with `shift` the
-/// largest exponent (see [`SpectralFilter::update`]); `a` is scratch.
-fn observation_factor(
-    values: &mut [f64],
-    a: &mut [f64],
-    gain: &[Vec<f64>],
-    (potential, scale): (&[f64], f64),
-    dy: &[f64],
-) {
-    for (a, p) in a.iter_mut().zip(potential) {
-        *a = -p * scale;
-    }
-    for (y, sh) in dy.iter().zip(gain) {
-        for (a, h) in a.iter_mut().zip(sh) {
-            *a += y * h;
-        }
-    }
+/// `values ← values · exp(Δyᵀg − scale · half − shift)` at the nodes ([`ObservedTerms`]), with
+/// `shift` the largest exponent (see [`SpectralFilter::update`]); `a` is scratch.
+fn observation_factor(values: &mut [f64], a: &mut [f64], terms: &ObservedTerms, scale: f64) {
+    terms.exponents(scale, a);
     let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
     // Flushing products below 0 to 0 clips the negative values.
     linalg::scale_by_exp(values, a, shift, 0.0);

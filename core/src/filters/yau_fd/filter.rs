@@ -252,15 +252,7 @@ impl CellSamples {
 /// `k` samples of each cell: every exponent `a_is + e_i ln 2` is shifted by the largest, so the
 /// mean of the exponentials is at most 1 and no intermediate overflows.
 fn cell_factor(k: usize, exponents: &mut [f64], u: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {
-    let ObservedTerms { dy, gain, half } = *terms;
-    for (a, h) in exponents.iter_mut().zip(half) {
-        *a = -dt_obs * h;
-    }
-    for (y, sh) in dy.iter().zip(gain) {
-        for (a, h) in exponents.iter_mut().zip(sh) {
-            *a += y * h;
-        }
-    }
+    terms.exponents(dt_obs, exponents);
     let mut shift = f64::NEG_INFINITY;
     for (v, a) in u.iter_mut().zip(exponents.chunks_exact_mut(k)) {
         if *v > 0.0 {
