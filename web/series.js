@@ -212,7 +212,7 @@ function describePlots(row) {
     said(state.innovPlot, `innovations z${j + 1} − h(x̂⁻) of each method against t; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(d.innov[i][j][row])}`).join(', ')}`);
   }
   if (!$('errors-figure').hidden) {
-    const errors = errorData();
+    const errors = state.errPlot.data; // render set them just before
     const against = $('error-against').selectedOptions[0]?.textContent ?? '';
     said(state.errPlot, `error of each estimate of x${dim + 1} against ${against}, log scale; at t = ${t.toFixed(2)}: ${names.map((m, i) => `${m} ${num(errors[i + 1][row])}`).join(', ')}`);
   }
