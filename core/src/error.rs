@@ -241,8 +241,6 @@ pub enum ExprError {
         /// Character position where it starts.
         position: usize,
     },
-    /// The expression layer is not available (built without the `std` feature).
-    Unavailable,
 }
 
 impl fmt::Display for ExprError {
@@ -280,7 +278,6 @@ impl fmt::Display for ExprError {
                 f,
                 "constant `{literal}` at position {position} in `{expr}` is not a finite number"
             ),
-            ExprError::Unavailable => write!(f, "text expressions need the `std` feature of zakai"),
         }
     }
 }
@@ -302,10 +299,16 @@ mod tests {
             source.downcast_ref::<FilterError>(),
             Some(&FilterError::MassLost)
         );
-        let bad = ZakaiError::from(ExprError::Unavailable);
+        let unknown = ExprError::UnknownVariable {
+            expr: "y".into(),
+            name: "y".into(),
+            position: 0,
+            allowed: "x".into(),
+        };
+        let bad = ZakaiError::from(unknown.clone());
         assert_eq!(
             bad.source().unwrap().downcast_ref::<ExprError>(),
-            Some(&ExprError::Unavailable)
+            Some(&unknown)
         );
         assert!(ZakaiError::Dimension("n".into()).source().is_none());
     }

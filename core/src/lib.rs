@@ -75,7 +75,7 @@
 //!
 //! ## Features
 //!
-//! The crate is `no_std` + `alloc`. The default `std` feature adds text expressions (exmex),
+//! The crate is `no_std` + `alloc` (text expressions included). The default `std` feature adds
 //! FFT plans (the Yau–Yau schemes) and wall-clock timing; `parallel` runs Monte Carlo
 //! repetitions on rayon.
 #![no_std]

@@ -8,7 +8,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use zakai::model::expression::ExpressionFunction;
-use zakai::model::expression_error::ExprError;
+use zakai::ExprError;
 use zakai::model::function::VectorFunction;
 use zakai::model::symbolic;
 

@@ -1,58 +1,18 @@
 //! Functions from text: `f` and `h` typed as expressions in `x1..xn` (and `x` when n = 1),
-//! checked by the `exmex` crate's parser, read into a tree and compiled once
-//! (`model::compile`), with exact partial derivatives computed symbolically on that tree at
-//! construction. Functions without a derivative rule there (`abs`, `erf`, rounding, `min`,
-//! `max`, …) make the whole function fall back to central differences, reported as
-//! [`Derivatives::Numerical`].
+//! read by the one front end ([`super::syntax`]) and compiled once (`model::compile`), with
+//! exact partial derivatives computed symbolically on that tree at construction. Functions
+//! without a derivative rule there (`abs`, `erf`, rounding, …) make the whole function fall
+//! back to central differences, reported as [`Derivatives::Numerical`].
 
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
-use std::fmt::Debug;
-
-use exmex::prelude::*;
-use exmex::{FloatOpsFactory, MakeOperators, Operator};
 
 use super::compile::Expression;
-use super::expression_error::{normalize_expression, variable_index, ExprError, LIBM_UNARY};
 use super::function::{
     numerical_hessian, numerical_jacobian, per_point, BatchScratch, Derivatives, VectorFunction,
 };
 use super::program::{Program, BLOCK, MAX_INPUTS};
-
-/// exmex's float operators with every transcendental function (and `^`) computed by the
-/// pure-Rust `libm` crate instead of the platform's maths library, so that an expression gives
-/// bit-identical values natively and in wasm (same seed → same trajectory everywhere); plus
-/// `erf`, `erfc` and the constant `pi`.
-#[derive(Clone, Debug)]
-pub struct ZakaiOps;
-
-impl MakeOperators<f64> for ZakaiOps {
-    fn make<'a>() -> Vec<Operator<'a, f64>> {
-        let mut ops: Vec<Operator<'a, f64>> = FloatOpsFactory::<f64>::make()
-            .into_iter()
-            .filter(|op| op.repr() != "^" && !LIBM_UNARY.iter().any(|(name, _)| *name == op.repr()))
-            .collect();
-        // Same priority and associativity as exmex's own `^`.
-        ops.push(Operator::make_bin(
-            "^",
-            exmex::BinOp {
-                apply: libm::pow,
-                prio: 4,
-                is_commutative: false,
-            },
-        ));
-        for (name, f) in LIBM_UNARY {
-            ops.push(Operator::make_unary(name, *f));
-        }
-        ops.push(Operator::make_constant("pi", core::f64::consts::PI));
-        ops
-    }
-}
-
-type Ex = FlatEx<f64, ZakaiOps>;
-
-/// Largest number of distinct variable names one expression may use.
-const MAX_VARS: usize = 16;
+use super::syntax::{ExprError, Syntax};
 
 /// One scalar expression: its tree (for exact derivatives) and the compiled [`Program`]
 /// every evaluation runs.
@@ -118,10 +78,10 @@ impl ExpressionFunction {
                 Ok(scalar)
             })
             .collect::<Result<Vec<_>, ExprError>>()?;
-        // exmex differentiates recursively with large frames, and nested functions or
-        // quotients grow the derivative trees fast: beyond the budget the derivatives are
-        // numerical instead, so that parsing never overflows a 2 MiB thread stack (found by
-        // fuzzing; the budget is measured by the test
+        // Nested functions or quotients grow the derivative trees fast, and differentiation
+        // recurses through them: beyond the budget the derivatives are numerical instead, so
+        // that parsing never overflows a 2 MiB thread stack (found by fuzzing; the budget is
+        // measured by the test
         // `deep_or_long_expressions_are_refused_or_handled_on_a_small_stack`).
         let exact = if operations <= MAX_SYMBOLIC_OPERATIONS {
             exact_derivatives(&components, n)
@@ -171,54 +131,13 @@ pub const MAX_SYMBOLIC_DEPTH: usize = 6;
 /// The compiled expression and its symbolic cost: the number of operations (operators,
 /// functions, parentheses), or `usize::MAX` when it nests deeper than [`MAX_SYMBOLIC_DEPTH`].
 fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
-    let normalized = normalize_expression(text, n)?;
-    let (mut operations, mut depth, mut deepest) = (0usize, 0usize, 0usize);
-    for c in normalized.chars() {
-        match c {
-            '+' | '-' | '*' | '/' | '^' => operations += 1,
-            '(' => {
-                operations += 1;
-                depth += 1;
-                deepest = deepest.max(depth);
-            }
-            ')' => depth = depth.saturating_sub(1),
-            _ => {}
-        }
-    }
-    if deepest > MAX_SYMBOLIC_DEPTH {
-        operations = usize::MAX;
-    }
-    let ex = Ex::parse(&normalized).map_err(|e| ExprError::Syntax {
-        expr: text.to_string(),
-        position: None,
-        message: e.msg().to_string(),
-    })?;
-    for name in ex.var_names() {
-        match variable_index(name, n) {
-            Some(_) => {}
-            None => {
-                return Err(ExprError::UnknownVariable {
-                    expr: text.to_string(),
-                    name: name.clone(),
-                    position: text.find(name.as_str()).unwrap_or(0),
-                    allowed: super::expression_error::variable_names(n).join(", "),
-                })
-            }
-        }
-    }
-    if ex.var_names().len() > MAX_VARS {
-        return Err(ExprError::Syntax {
-            expr: text.to_string(),
-            position: None,
-            message: alloc::format!("at most {MAX_VARS} distinct variables per expression"),
-        });
-    }
-    let expr = Expression::parse(&normalized, n).map_err(|message| ExprError::Syntax {
-        expr: text.to_string(),
-        position: None,
-        message,
-    })?;
-    Ok((Scalar::new(expr), operations))
+    let syntax = Syntax::parse(text, n)?;
+    let operations = if syntax.depth > MAX_SYMBOLIC_DEPTH {
+        usize::MAX
+    } else {
+        syntax.operations
+    };
+    Ok((Scalar::new(Expression::from_syntax(&syntax)), operations))
 }
 
 fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives> {

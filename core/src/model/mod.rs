@@ -8,17 +8,15 @@
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
 
-#[cfg(feature = "std")]
 mod compile;
 pub mod dmz;
-#[cfg(feature = "std")]
 pub mod expression;
-pub mod expression_error;
 pub mod function;
 pub mod noise;
 pub mod prior;
 pub mod program;
 pub mod symbolic;
+pub mod syntax;
 
 use alloc::format;
 use alloc::sync::Arc;
@@ -184,7 +182,6 @@ impl Model {
     /// A model from text expressions in `x` (1-D) or `x1..xn`, with G = I:
     /// `Model::from_text(&["-x^3"], &["x"], Noise::discrete(0.1))`. Every invalid expression is
     /// reported at once, each with its field and character position.
-    #[cfg(feature = "std")]
     pub fn from_text(
         drift: &[&str],
         observation: &[&str],

@@ -1,7 +1,7 @@
 //! Compiled expressions: a flat program of elementwise operations evaluated over whole
 //! batches of points at once.
 //!
-//! A text expression is compiled once (read with exmex's conventions, see `model::compile`)
+//! A text expression is compiled once (read by `model::syntax`, see `model::compile`)
 //! into a list of instructions in static single assignment form, with
 //! registers reused once a value is dead. Evaluation runs one pass per instruction over a
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
@@ -9,8 +9,8 @@
 //! (`sin`, `exp`, …) are called per element without any interpretation per point.
 //!
 //! The per-point value of an expression is the same program on a block of one point, so the
-//! batch and the point-wise results are equal to the last bit. Against exmex's interpretation
-//! the program differs only where it strength-reduces an integer power `x^k` (0 ≤ k ≤ 4) to
+//! batch and the point-wise results are equal to the last bit. Against an interpreter of the
+//! same operations in the same order (exmex, in the tests) the program differs only where it strength-reduces an integer power `x^k` (0 ≤ k ≤ 4) to
 //! multiplications, which is within 2 ulp of `libm::pow` (tested here and, on whole
 //! expressions, in `model::compile`).
 

@@ -1,8 +1,8 @@
 //! Exact normal forms of text expressions, so that structural conditions such as 002's
 //! (C1)–(C3) can be decided symbolically rather than at test points.
 //!
-//! An expression is read — by the lexer of [`super::expression_error`], after the same
-//! normalisation the evaluator sees, so `-x^2` is `−(x²)` here too — into a [`Poly`]: a
+//! An expression is read from the syntax tree the evaluator compiles ([`super::syntax`]) — so `-x^2` is
+//! `−(x²)` here too — into a [`Poly`]: a
 //! polynomial with real coefficients in *atoms*, which are the state variables `x_i` and the
 //! elementary functions sin, cos, tan, sinh, cosh, tanh, exp of such polynomials. Sums,
 //! products, integer powers up to [`MAX_POWER`], division by constants and derivatives stay
@@ -37,9 +37,7 @@ use alloc::vec::Vec;
 use core::cmp::Ordering;
 use core::fmt;
 
-use super::expression_error::{
-    normalize_expression, tokenize, variable_index, Token, Token_, LIBM_UNARY,
-};
+use super::syntax::{Function, Node, Op, Syntax};
 
 /// Most terms a normal form may have; larger expressions are [`Unsupported`].
 pub const MAX_TERMS: usize = 4096;
@@ -112,6 +110,13 @@ impl Elementary {
             Elementary::Tanh => "tanh",
             Elementary::Exp => "exp",
         }
+    }
+
+    /// Its value at `v`, as the evaluator computes it.
+    pub fn value(self, v: f64) -> f64 {
+        (Function::named(self.name())
+            .expect("a function of the language")
+            .apply)(v)
     }
 
     fn parity(self) -> Parity {
@@ -321,7 +326,7 @@ impl Poly {
     /// `f(arg)` in normal form.
     pub fn apply(f: Elementary, arg: Poly) -> Sym {
         if let Some(c) = arg.as_constant() {
-            return finite_constant(call(f.name(), c), f.name());
+            return finite_constant(f.value(c), f.name());
         }
         let negative_lead = arg.terms[0].1 < 0.0;
         match f.parity() {
@@ -484,173 +489,57 @@ fn rewritten(m: &[(Atom, u32)]) -> Result<Option<Vec<(Monomial, f64)>>, Unsuppor
     Ok(None)
 }
 
-/// A function of the expression language at a constant.
-fn call(name: &str, v: f64) -> f64 {
-    match name {
-        "signum" if v.is_nan() => v,
-        "signum" => {
-            if v.is_sign_negative() {
-                -1.0
-            } else {
-                1.0
-            }
-        }
-        "fract" => v - libm::trunc(v),
-        _ => LIBM_UNARY
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or(f64::NAN, |(_, f)| f(v)),
-    }
-}
-
 /// The normal form of the text expression `text` in the state variables of an
 /// `n`-dimensional model.
 pub fn parse(text: &str, n: usize) -> Sym {
-    let normalized = normalize_expression(text, n).map_err(|e| Unsupported(e.to_string()))?;
-    let tokens = tokenize(&normalized, n).map_err(|e| Unsupported(e.to_string()))?;
-    let mut reader = Reader {
-        tokens: &tokens,
-        at: 0,
-        n,
-    };
-    let poly = reader.sum()?;
-    match tokens.get(reader.at) {
-        None => Ok(poly),
-        Some(t) => Err(Unsupported(format!("unexpected `{}`", t.text))),
-    }
-}
-
-/// Recursive descent over the normalised tokens, with exmex's precedence: `+ −` below
-/// `* /` below `^`; a sign right after `^` applies to the exponent's first operand.
-struct Reader<'a> {
-    tokens: &'a [Token_],
-    at: usize,
-    n: usize,
-}
-
-impl Reader<'_> {
-    /// Consumes the next token when it is one of the operators `ops`.
-    fn operator(&mut self, ops: &[&str]) -> Option<char> {
-        let t = self.tokens.get(self.at)?;
-        if t.kind == Token::Operator && ops.contains(&t.text.as_str()) {
-            self.at += 1;
-            t.text.chars().next()
-        } else {
-            None
-        }
-    }
-
-    fn expect(&mut self, kind: Token, what: &str) -> Result<(), Unsupported> {
-        match self.tokens.get(self.at) {
-            Some(t) if t.kind == kind => {
-                self.at += 1;
-                Ok(())
-            }
-            _ => Err(Unsupported(format!("expected {what}"))),
-        }
-    }
-
-    fn sum(&mut self) -> Sym {
-        let mut total = self.product()?;
-        while let Some(op) = self.operator(&["+", "-"]) {
-            let term = self.product()?;
-            total = total.add(&if op == '+' { term } else { term.scale(-1.0) })?;
-        }
-        Ok(total)
-    }
-
-    fn product(&mut self) -> Sym {
-        let mut total = self.signed()?;
-        while let Some(op) = self.operator(&["*", "/"]) {
-            let factor = self.signed()?;
-            total = if op == '*' {
-                total.mul(&factor)?
-            } else {
-                match factor.as_constant() {
-                    Some(c) if c != 0.0 => {
-                        let quotient = total.scale(1.0 / c);
-                        if quotient.terms.iter().any(|(_, v)| !v.is_finite()) {
-                            return Err(overflowed());
-                        }
-                        quotient
-                    }
-                    _ => return Err(Unsupported("division by a non-constant".into())),
+    let syntax = Syntax::parse(text, n).map_err(|e| Unsupported(e.to_string()))?;
+    // Children come before their parents: one pass, each child taken by its one parent.
+    let mut forms: Vec<Option<Poly>> = Vec::with_capacity(syntax.nodes.len());
+    let take = |forms: &mut Vec<Option<Poly>>, id: usize| forms[id].take().expect("a tree");
+    for node in &syntax.nodes {
+        let form = match *node {
+            Node::Number(v) => Poly::constant(v),
+            Node::Variable(j) => Poly::variable(j),
+            Node::Negate(a) => take(&mut forms, a).scale(-1.0),
+            Node::Call(f, a) => function(f, take(&mut forms, a))?,
+            Node::Binary(op, a, b) => {
+                let (a, b) = (take(&mut forms, a), take(&mut forms, b));
+                match op {
+                    Op::Add => a.add(&b)?,
+                    Op::Sub => a.add(&b.scale(-1.0))?,
+                    Op::Mul => a.mul(&b)?,
+                    Op::Div => divide(a, b)?,
+                    Op::Pow => raise(a, b)?,
                 }
-            };
-        }
-        Ok(total)
-    }
-
-    fn signed(&mut self) -> Sym {
-        match self.operator(&["+", "-"]) {
-            Some('-') => Ok(self.signed()?.scale(-1.0)),
-            Some(_) => self.signed(),
-            None => self.power(),
-        }
-    }
-
-    fn power(&mut self) -> Sym {
-        let base = self.primary()?;
-        if self.operator(&["^"]).is_none() {
-            return Ok(base);
-        }
-        let exponent = self.exponent()?;
-        raise(base, exponent)
-    }
-
-    fn exponent(&mut self) -> Sym {
-        match self.operator(&["+", "-"]) {
-            Some('-') => Ok(self.exponent()?.scale(-1.0)),
-            Some(_) => self.exponent(),
-            None => self.primary(),
-        }
-    }
-
-    fn primary(&mut self) -> Sym {
-        let Some(t) = self.tokens.get(self.at) else {
-            return Err(Unsupported("unexpected end".into()));
-        };
-        self.at += 1;
-        match t.kind {
-            Token::Operand => self.operand(&t.text),
-            Token::Function => {
-                self.expect(Token::Open, "`(`")?;
-                let argument = self.sum()?;
-                self.expect(Token::Close, "`)`")?;
-                function(&t.text, argument)
             }
-            Token::Open => {
-                let inner = self.sum()?;
-                self.expect(Token::Close, "`)`")?;
-                Ok(inner)
-            }
-            _ => Err(Unsupported(format!("unexpected `{}`", t.text))),
-        }
-    }
-
-    fn operand(&self, text: &str) -> Sym {
-        if let Some(i) = variable_index(text, self.n) {
-            return Ok(Poly::variable(i));
-        }
-        let value = match text {
-            "PI" | "pi" => core::f64::consts::PI,
-            "E" | "e" => core::f64::consts::E,
-            "TAU" => core::f64::consts::TAU,
-            number => number
-                .parse()
-                .map_err(|_| Unsupported(format!("unknown operand `{number}`")))?,
         };
-        Ok(Poly::constant(value))
+        forms.push(Some(form));
+    }
+    Ok(take(&mut forms, syntax.root))
+}
+
+/// `a / b`, for a non-zero constant b.
+fn divide(a: Poly, b: Poly) -> Sym {
+    match b.as_constant() {
+        Some(c) if c != 0.0 => {
+            let quotient = a.scale(1.0 / c);
+            if quotient.terms.iter().any(|(_, v)| !v.is_finite()) {
+                return Err(overflowed());
+            }
+            Ok(quotient)
+        }
+        _ => Err(Unsupported("division by a non-constant".into())),
     }
 }
 
-/// `name(argument)`.
-fn function(name: &str, argument: Poly) -> Sym {
-    if let Some(f) = Elementary::ALL.iter().find(|f| f.name() == name) {
-        return Poly::apply(*f, argument);
+/// `f(argument)`.
+fn function(f: Function, argument: Poly) -> Sym {
+    let name = f.name;
+    if let Some(g) = Elementary::ALL.iter().find(|g| g.name() == name) {
+        return Poly::apply(*g, argument);
     }
     match argument.as_constant() {
-        Some(c) => finite_constant(call(name, c), name),
+        Some(c) => finite_constant((f.apply)(c), name),
         None => Err(Unsupported(format!(
             "`{name}` of a non-constant has no normal form"
         ))),
@@ -788,7 +677,7 @@ mod tests {
                     .map(|(a, k)| {
                         let v = match a {
                             Atom::Var(i) => x[*i],
-                            Atom::Apply(f, u) => call(f.name(), value(u, x)),
+                            Atom::Apply(f, u) => f.value(value(u, x)),
                         };
                         libm::pow(v, f64::from(*k))
                     })
@@ -797,8 +686,7 @@ mod tests {
             .sum()
     }
 
-    /// The reader follows the evaluator's precedence: normal forms and exmex agree in value.
-    #[cfg(feature = "std")]
+    /// The normal form and the compiled program read the same tree: they agree in value.
     #[test]
     fn normal_forms_have_the_evaluators_values() {
         use crate::model::expression::ExpressionFunction;

@@ -261,8 +261,7 @@ fn mixture(comps: &[GaussianComponent], n: usize) -> Result<GaussianMixture, Zak
     )
 }
 
-/// Parses a text vector function (needs the `std` feature).
-#[cfg(feature = "std")]
+/// Parses a text vector function.
 pub fn parse_function(
     what: &str,
     texts: &[String],
@@ -272,17 +271,6 @@ pub fn parse_function(
     Ok(Arc::new(
         crate::model::expression::ExpressionFunction::parse(what, texts, n, m)?,
     ))
-}
-
-/// Parses a text vector function (needs the `std` feature).
-#[cfg(not(feature = "std"))]
-pub fn parse_function(
-    _what: &str,
-    _texts: &[String],
-    _n: usize,
-    _m: usize,
-) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
-    Err(crate::model::expression_error::ExprError::Unavailable.into())
 }
 
 impl ScenarioConfig {
