@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use plotters::prelude::*;
-use zakai::study::frontier::Frontier;
+use zakai::lab::study::frontier::Frontier;
 
 const PALETTE: [RGBColor; 10] = [
     RGBColor(36, 80, 179),
@@ -71,7 +71,7 @@ pub fn draw(f: &Frontier, title: &str, path: &Path) -> Result<(), String> {
         .x_desc("µs per observation interval (log scale)")
         .y_desc(format!(
             "MSE ({}, (43)); above 1.5× the optimum: on the top edge",
-            zakai::papers::cite("004")
+            zakai::lab::bibliography::cite("004")
         ))
         .draw()
         .map_err(|e| err(&e))?;

@@ -25,11 +25,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use zakai::reproduction;
-use zakai::scenario::methods::catalogue;
-use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
-use zakai::study::MonteCarlo;
-use zakai::Experiment;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::reproduction;
+use zakai::lab::scenario::catalogue;
+use zakai::lab::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai::lab::study::monte_carlo::MonteCarlo;
 
 /// `print!` to stdout that ends the program quietly when the reader has gone (`zakai show
 /// cubic-sensor-1d | head`) instead of panicking, and with a message on any other write error.
@@ -64,7 +64,7 @@ struct Cli {
     /// Largest memory a scenario's methods may need together, checked before anything is
     /// allocated (e.g. 512MiB, 8GiB; default 1GiB, the playground's cap). Also read from the
     /// environment variable ZAKAI_MEMORY_CAP.
-    #[arg(long, global = true, env = "ZAKAI_MEMORY_CAP", value_parser = zakai::scenario::parse_bytes)]
+    #[arg(long, global = true, env = "ZAKAI_MEMORY_CAP", value_parser = zakai::lab::scenario::parse_bytes)]
     memory_cap: Option<usize>,
     #[command(subcommand)]
     command: Command,
@@ -379,8 +379,8 @@ fn progress_bar(len: usize, what: &str) -> Result<ProgressBar, String> {
 }
 
 fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
-    let all = reproduction::tables();
-    let figures = reproduction::figures();
+    let all = zakai::lab::papers::tables();
+    let figures = zakai::lab::papers::figures();
     if runs == Some(0) {
         return Err("--runs must be at least 1".into());
     }
@@ -407,7 +407,7 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
                     None,
                 );
             }
-            None => vec![reproduction::table(id).ok_or_else(|| {
+            None => vec![zakai::lab::papers::table(id).ok_or_else(|| {
                 let ids: Vec<&str> = all
                     .iter()
                     .map(|t| t.id)
@@ -446,16 +446,16 @@ fn reproduce(id: Option<&str>, runs: Option<usize>) -> Result<(), String> {
 }
 
 /// `zakai check`: the convergence check of every method of the selection (see
-/// [`zakai::study::convergence`]).
+/// [`zakai::lab::study::convergence`]).
 fn check(selection: &Selection) -> Result<(), String> {
-    use zakai::study::convergence::{convergence_check, CONVERGED_SHARE};
+    use zakai::lab::study::convergence::{convergence_check, CONVERGED_SHARE};
     let (experiment, seed) = selection.experiment()?;
     let methods = experiment.config().methods.clone();
     eprintln!(
         "convergence check of {} on the observations of seed {seed}: each method against itself at doubled resolution",
         experiment.config().name
     );
-    let rows = convergence_check(&experiment, &methods, seed, zakai::validate::memory_cap());
+    let rows = convergence_check(&experiment, &methods, seed, zakai::memory_cap());
     outln!(
         "{:<14} {:>11} {:>11} {:>11}  {:<13} doubled",
         "method",
@@ -543,7 +543,7 @@ struct FrontierArgs {
 }
 
 fn frontier(a: &FrontierArgs) -> Result<(), String> {
-    use zakai::study::frontier as fr;
+    use zakai::lab::study::frontier as fr;
     if a.runs == 0 {
         return Err("--runs must be at least 1".into());
     }
@@ -605,7 +605,7 @@ fn jcurve(
     let mut curves = Vec::with_capacity(runs);
     for r in 0..runs as u64 {
         curves.push(
-            zakai::study::density_error::j_curve(&experiment, first + r, per_interval)
+            zakai::lab::study::density_error::j_curve(&experiment, first + r, per_interval)
                 .map_err(|e| e.to_string())?,
         );
     }
@@ -652,13 +652,8 @@ fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
     let bounds = experiment.config().bounds();
     let mut reports = vec![convex_filter::theorem_3_8(model, prior, &bounds)];
     if let Some(text) = phi {
-        let phi = zakai::model::expression::ExpressionFunction::parse(
-            "phi",
-            &[text.to_string()],
-            model.n,
-            1,
-        )
-        .map_err(|e| e.to_string())?;
+        let phi = zakai::ExpressionFunction::parse("phi", &[text.to_string()], model.n, 1)
+            .map_err(|e| e.to_string())?;
         let j = parse_matrix(j, model.n)?;
         reports.push(convex_filter::theorem_3_2(model, prior, &bounds, &phi, &j));
     }
@@ -738,7 +733,9 @@ fn simulate(a: SimulateArgs) -> Result<(), String> {
             );
         }
         let experiment = Experiment::new(config.clone()).map_err(|e| e.to_string())?;
-        let recording = zakai::Recording::from(experiment.simulate(seed.unwrap_or(config.seed)));
+        let recording = zakai::lab::recording::Recording::from(
+            experiment.simulate(seed.unwrap_or(config.seed)),
+        );
         if let (Some(path), Some(truth)) = (&a.truth_out, recording.truth_csv()) {
             emit(&truth, Some(path))?;
         }
@@ -810,7 +807,7 @@ fn main() -> ExitCode {
         }
     };
     if let Some(cap) = cli.memory_cap {
-        zakai::scenario::set_memory_cap(cap);
+        zakai::set_memory_cap(cap);
     }
     let result = match cli.command {
         Command::List => {

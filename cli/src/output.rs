@@ -3,12 +3,14 @@
 //! field (CSV), never NaN.
 
 use std::fmt::Write;
-use zakai::study::density_error::{JCurve, JKind};
-use zakai::study::frontier::{Frontier, ReferenceCheck};
+use zakai::lab::study::density_error::{JCurve, JKind};
+use zakai::lab::study::frontier::{Frontier, ReferenceCheck};
 
-use zakai::reproduction::{PaperTable, RowResult};
-use zakai::study::MonteCarloSummary;
-use zakai::Experiment;
+use zakai::lab::reproduction::RowResult;
+
+use zakai::lab::experiment::Experiment;
+use zakai::lab::papers::PaperTable;
+use zakai::lab::study::monte_carlo::MonteCarloSummary;
 
 use crate::Format;
 

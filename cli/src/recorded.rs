@@ -4,8 +4,9 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use zakai::experiment::RunResult;
-use zakai::{Experiment, Recording};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::experiment::RunResult;
+use zakai::lab::recording::Recording;
 
 use crate::Format;
 

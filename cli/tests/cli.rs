@@ -239,7 +239,7 @@ fn out_writes_a_file() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(&path).unwrap();
     assert!(csv.starts_with("method,runs,failed,mse"));
-    let methods = zakai::scenario::presets::preset("sa-example-1")
+    let methods = zakai::lab::scenario::presets::preset("sa-example-1")
         .unwrap()
         .methods
         .len();

@@ -4,8 +4,8 @@
 //! the direct method of 002 on its Example 4.3.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use zakai::experiment::{Experiment, Silent};
-use zakai::scenario::{presets, MethodConfig};
+use zakai::lab::experiment::{Experiment, Silent};
+use zakai::lab::scenario::{presets, MethodConfig};
 
 fn baselines(c: &mut Criterion) {
     let base = presets::preset("cubic-sensor-1d").expect("preset exists");

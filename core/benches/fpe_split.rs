@@ -5,11 +5,11 @@
 //! (prediction, update, reduction) of the reference.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use zakai::experiment::Experiment;
-use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
-use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
-use zakai::scenario::presets;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::presets;
 use zakai::Filter;
+use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
+use zakai::{GaussianSumFilter, GaussianSumParams};
 
 /// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
 /// measurement `z0` at τ₀.

@@ -18,8 +18,8 @@ mod common;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
-use zakai::model::BatchScratch;
 use zakai::simulate::{simulate, TimeGrid};
+use zakai::BatchScratch;
 use zakai::{Filter, Model, Noise, Pf, Ukf};
 
 const DT: f64 = 0.01;
@@ -30,7 +30,7 @@ fn increments(model: &Model, steps: usize) -> Vec<f64> {
         steps,
         inner_steps: 10,
     };
-    let data = simulate(model, &[1.0], grid, &mut zakai::random::rng_from_seed(1));
+    let data = simulate(model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1));
     data.observations
 }
 
@@ -62,7 +62,7 @@ fn unscented(c: &mut Criterion) {
         steps: 500,
         inner_steps: 10,
     };
-    let z = simulate(&model, &[1.0], grid, &mut zakai::random::rng_from_seed(1)).observations;
+    let z = simulate(&model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1)).observations;
     let mut ukf = Ukf::builder(&model)
         .prior_gaussian(&[1.0], &[[0.1]])
         .with(|p| p.substeps = 1)
@@ -120,9 +120,9 @@ fn batch_evaluation(c: &mut Criterion) {
 
 fn driver_overhead(c: &mut Criterion) {
     use criterion::BatchSize;
-    use zakai::experiment::{with_standard_clock, Silent};
-    use zakai::scenario::{presets, MethodConfig};
-    use zakai::Experiment;
+    use zakai::lab::experiment::Experiment;
+    use zakai::lab::experiment::{with_standard_clock, Silent};
+    use zakai::lab::scenario::{presets, MethodConfig};
 
     let mut group = c.benchmark_group("driver, 500 steps of the cubic sensor");
     let spectral = common::spectral_004(1);

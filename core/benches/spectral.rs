@@ -8,20 +8,20 @@
 mod common;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use zakai::experiment::Experiment;
-use zakai::filters::{Observation, ObservationKind};
-use zakai::scenario::{presets, MethodConfig};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, MethodConfig};
+use zakai::{Observation, ObservationKind};
 
 /// A 3-D model for the tensor-product filter with its default 8³ functions: cubic sensors
 /// on the three components of a stable linear drift, on [−4, 4]³.
-fn three_dimensional() -> zakai::scenario::ScenarioConfig {
+fn three_dimensional() -> zakai::lab::scenario::ScenarioConfig {
     let mut config = presets::preset("cubic-sensor-2d").expect("preset");
     config.name = "3-D cubic sensors".into();
     config.model.drift = ["-0.4*x1 + 0.1*x2", "-0.6*x2", "0.1*x1 - 0.5*x3"]
         .map(String::from)
         .to_vec();
     config.model.observation = ["x1^3", "x2^3", "x3^3"].map(String::from).to_vec();
-    config.prior = zakai::scenario::PriorConfig::Gaussian {
+    config.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: vec![1.0; 3],
         cov: (0..3)
             .map(|i| (0..3).map(|j| if i == j { 0.1 } else { 0.0 }).collect())
@@ -74,7 +74,7 @@ fn spectral(c: &mut Criterion) {
         ("spectral", common::spectral_004(1)),
         (
             "PF(200)",
-            MethodConfig::Pf(zakai::filters::particle::PfParams {
+            MethodConfig::Pf(zakai::PfParams {
                 particles: 200,
                 ..Default::default()
             }),

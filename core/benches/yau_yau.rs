@@ -6,11 +6,11 @@
 //! inverse DST) without the once-per-interval update (15) and moments.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use zakai::experiment::Experiment;
-use zakai::filters::yau_fd::YauYauParams;
-use zakai::filters::{Observation, ObservationKind};
-use zakai::grid::dst::DstPlan;
-use zakai::scenario::{presets, MethodConfig};
+use zakai::internals::grid::dst::DstPlan;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, MethodConfig};
+use zakai::YauYauParams;
+use zakai::{Observation, ObservationKind};
 
 /// Grid sizes at which QIEM also runs with ten substeps per interval.
 const INNER_LOOP_SIZES: [usize; 3] = [1999, 2001, 256];

@@ -31,7 +31,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         &model,
         &[0.0, 1.0],
         grid,
-        &mut zakai::random::rng_from_seed(9),
+        &mut zakai::simulate::rng_from_seed(9),
     );
 
     let (mean, cov) = ([0.0, 0.0], [[1.0, 0.0], [0.0, 1.0]]);

@@ -285,7 +285,6 @@ impl fmt::Display for ExprError {
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
-    use crate::grid::TensorGrid;
     use crate::testing::test;
     use core::error::Error;
 
@@ -311,24 +310,5 @@ mod tests {
             Some(&unknown)
         );
         assert!(ZakaiError::Dimension("n".into()).source().is_none());
-    }
-
-    /// The causes the library knows come as structured values: a grid past the node cap is
-    /// `TooLarge` with the cap, a non-positive noise intensity `OutOfRange` with its value.
-    #[test]
-    fn known_causes_are_structured() {
-        let e = TensorGrid::new(&[(0.0, 1.0), (0.0, 1.0)], &[100_000, 100_000]).unwrap_err();
-        assert!(
-            matches!(e, ZakaiError::TooLarge { limit, unit: "nodes", .. } if limit == crate::grid::MAX_NODES),
-            "{e:?}"
-        );
-        assert!(alloc::format!("{e}").contains("exceeds the cap"), "{e}");
-        let e = crate::model::Noise::ContinuousScalar(-1.0)
-            .observation_model(1)
-            .unwrap_err();
-        assert!(
-            matches!(e, ZakaiError::OutOfRange { value, requirement: "positive and finite", .. } if value == -1.0),
-            "{e:?}"
-        );
     }
 }

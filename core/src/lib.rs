@@ -56,22 +56,56 @@
 //! ([`Model::from_closures`]) or from the parts ([`Model::new`]). The crate's `examples/`
 //! folder holds complete programs.
 //!
-//! ## Comparing methods
+//! ## What the crate root holds
 //!
-//! * [`ScenarioConfig`] — one serde description of a problem (model, prior, domain, times,
-//!   methods); [`scenario::presets`] holds the papers' examples;
-//! * [`Experiment`] — simulates once, or takes a [`Recording`] of observations, and feeds
-//!   every method the same data, with errors against the truth when there is one;
-//! * [`study`] — Monte Carlo tables and accuracy/cost frontiers; [`papers`] — the papers'
-//!   tables as data; [`reproduction`] — those tables rerun.
+//! The root is the surface for filtering your own data, and each name has one path:
+//!
+//! * the model: [`Model`], [`Noise`], [`Prior`], [`GaussianMixture`], [`ObservationModel`],
+//!   and the functions it is made of ([`VectorFunction`], [`ExpressionFunction`],
+//!   [`ClosureFunction`], [`Derivatives`]);
+//! * the filters: [`Filter`] (with [`Fork`]), what it reads ([`Observation`],
+//!   [`ObservationKind`], [`Observed`]) and gives ([`Estimate`], [`DensityView`],
+//!   [`Concern`]); per family, the markers, the filter type they build and the parameters:
+//!
+//! | markers | builds | parameters |
+//! |---|---|---|
+//! | [`Kalman`] | [`KalmanBucy`] | [`KalmanParams`] |
+//! | [`Ekf`] | [`ExtendedKalman`] | [`EkfParams`] |
+//! | [`Ukf`] | [`UnscentedKalman`] | [`UkfParams`] |
+//! | [`Iekf`], [`Iokf`] | [`MapKalman`] | [`IekfParams`], [`IokfParams`] |
+//! | [`Pf`] | [`ParticleFilter`] | [`PfParams`] |
+//! | [`Iem`], [`Qiem`], [`Spt`], [`Qiem4`] | [`YauYauFilter`] | [`YauYauParams`] |
+//! | [`Separation`], [`ImplicitFdm`] | [`ContinuousDiscreteGrid`] | [`FpeParams`] |
+//! | [`Direct`] | [`DirectFilter`] | [`DirectParams`] |
+//! | [`Spectral`] | [`SpectralFilter`] | [`SpectralParams`] |
+//! | [`GaussianSum`] | [`GaussianSumFilter`] | [`GaussianSumParams`] |
+//!
+//! * building: [`Builder`], and the [`Method`] trait every family registers with (its
+//!   parameter schema [`MethodInfo`], [`ParamInfo`]);
+//! * errors: [`ZakaiError`], [`ExprError`], [`FilterError`], [`ConfigProblem`], and the
+//!   memory cap every allocation is checked against ([`memory_cap`], [`set_memory_cap`]).
+//!
+//! Three modules sit beside it: [`simulate`] (sample paths and observations of a model),
+//! [`diagnostics`] (the papers' structural conditions, decided for a model) and [`lab`].
+//!
+//! ## Comparing methods: the `lab` floor
+//!
+//! The harness that runs methods side by side lives in [`lab`]:
+//! [`lab::scenario::ScenarioConfig`] (one serde description of a problem, with the papers'
+//! examples in [`lab::scenario::presets`]), [`lab::experiment::Experiment`] (simulates once,
+//! or takes a [`lab::recording::Recording`], and feeds every method the same data),
+//! [`lab::study`] (Monte Carlo tables, convergence checks, accuracy/cost frontiers),
+//! [`lab::papers`] (the papers' tables as data) and [`lab::reproduction`] (those tables
+//! rerun). The CLI, the wasm crate and the Python package are built on it.
 //!
 //! ## Modules, bottom to top
 //!
-//! [`validate`] → [`error`] → [`linalg`], [`random`] → [`grid`], [`model`] → [`simulate`] →
-//! [`recording`], [`diagnostics`] → [`filters`] (one folder per method family, each
-//! registering itself through [`Method`]) → [`scenario`] → [`metrics`], [`papers`] →
-//! [`experiment`] → [`study`] → [`reproduction`]. A module uses only modules to its left
-//! (tested).
+//! validate → error → linalg, random → grid, model → [`simulate`] → [`diagnostics`] →
+//! filters (one folder per method family, each registering itself through [`Method`]) →
+//! [`lab`] (bibliography → scenario → recording, metrics, papers → experiment → study →
+//! reproduction). A module uses only modules to its left, and files side by side in a folder
+//! never import each other in a circle (both tested). The modules without a link are
+//! internal: the crate root re-exports what of them a user needs.
 //!
 //! ## Features
 //!
@@ -87,40 +121,50 @@ extern crate alloc;
 extern crate std;
 
 pub mod diagnostics;
-pub mod error;
-pub mod experiment;
-pub mod filters;
-pub mod grid;
-/// Dense and banded kernels the filters share (internal; not part of the chosen surface).
-#[doc(hidden)]
-pub mod linalg;
-pub mod metrics;
-pub mod model;
-pub mod papers;
-pub mod random;
-pub mod recording;
-pub mod reproduction;
-pub mod scenario;
+pub mod lab;
 pub mod simulate;
-pub mod study;
 #[cfg(test)]
 mod testing;
-pub mod validate;
+
+use internals::{error, filters, grid, linalg, model, random, validate};
 
 pub use nalgebra;
 
 pub use error::{ExprError, FilterError, ZakaiError};
-pub use experiment::{Experiment, ExperimentRun};
+pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
+
+pub use model::expression::ExpressionFunction;
+pub use model::{
+    BatchScratch, ClosureFunction, Derivatives, GaussianMixture, Model, Noise, ObservationModel,
+    Prior, VectorFunction,
+};
+
+pub use filters::method::{
+    BuildContext, Builder, Method, MethodInfo, ParamInfo, ParamKind, ProblemContext, Takes,
+};
+pub use filters::{
+    observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
+    ObservationKind, Observed,
+};
+
+// Each method family: its markers, the filter type they build, and its parameters.
+pub use filters::direct::filter::{DirectFilter, DirectParams};
 pub use filters::direct::Direct;
-pub use filters::fpe_split::{ImplicitFdm, Separation};
-pub use filters::gaussian_sum::GaussianSum;
-pub use filters::kalman::{Ekf, Iekf, Iokf, Kalman, Ukf};
-pub use filters::method::{Builder, Method, MethodInfo};
-pub use filters::particle::Pf;
-pub use filters::spectral::Spectral;
-pub use filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
-pub use filters::{Estimate, Filter, Fork, Observation};
-pub use model::{GaussianMixture, Model, Noise, Prior};
-pub use recording::Recording;
-pub use scenario::{MethodConfig, ScenarioConfig};
-pub use validate::ConfigProblem;
+pub use filters::fpe_split::{
+    ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation,
+};
+pub use filters::gaussian_sum::{GaussianSum, GaussianSumFilter, GaussianSumParams};
+pub use filters::kalman::{
+    Ekf, EkfParams, ExtendedKalman, GaussianInit, Iekf, IekfParams, Iokf, IokfParams, Kalman,
+    KalmanBucy, KalmanParams, MapKalman, MapSolver, Ukf, UkfParams, UnscentedKalman,
+};
+pub use filters::particle::{ParticleFilter, Pf, PfParams};
+pub use filters::spectral::{Spectral, SpectralFilter, SpectralParams};
+pub use filters::yau_fd::{
+    Iem, Likelihood, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
+};
+
+/// The one door to internals, for Zakai's own benchmarks, tests and fuzz targets: not part
+/// of the chosen surface, and not covered by semver.
+#[doc(hidden)]
+pub mod internals;

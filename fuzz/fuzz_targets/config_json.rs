@@ -5,7 +5,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use zakai::scenario::ScenarioConfig;
+use zakai::lab::scenario::ScenarioConfig;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(config) = serde_json::from_slice::<ScenarioConfig>(data) else {

@@ -7,10 +7,10 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use zakai::model::expression::ExpressionFunction;
+use zakai::ExpressionFunction;
 use zakai::ExprError;
-use zakai::model::function::VectorFunction;
-use zakai::model::symbolic;
+use zakai::VectorFunction;
+use zakai::internals::model::symbolic;
 
 fuzz_target!(|data: &[u8]| {
     let Some((&head, rest)) = data.split_first() else {

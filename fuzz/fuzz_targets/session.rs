@@ -4,8 +4,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use zakai::experiment::{Experiment, Silent};
-use zakai::scenario::ScenarioConfig;
+use zakai::lab::experiment::{Experiment, Silent};
+use zakai::lab::scenario::ScenarioConfig;
 
 /// Bounds that keep one input to well under a second.
 const MAX_STEPS: usize = 40;

@@ -5,13 +5,16 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use zakai::experiment::{ConcernRecord, RunResult};
-use zakai::model::ObservationModel;
-use zakai::scenario::methods::catalogue;
-use zakai::scenario::presets as preset_list;
-use zakai::scenario::PriorConfig;
-use zakai::study::monte_carlo::MonteCarlo;
-use zakai::{Experiment, MethodConfig, Recording, ScenarioConfig};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::experiment::{ConcernRecord, RunResult};
+use zakai::lab::recording::Recording;
+use zakai::lab::scenario::catalogue;
+use zakai::lab::scenario::presets as preset_list;
+use zakai::lab::scenario::MethodConfig;
+use zakai::lab::scenario::PriorConfig;
+use zakai::lab::scenario::ScenarioConfig;
+use zakai::lab::study::monte_carlo::MonteCarlo;
+use zakai::ObservationModel;
 
 use crate::arrays::{padded, rows, shaped};
 use crate::errors;
@@ -28,7 +31,7 @@ pub fn experiment(json: &str) -> PyResult<Experiment> {
 }
 
 /// The box `mean ± sds · sd` around a Gaussian or mixture prior (JSON), or `None`
-/// ([`zakai::scenario::PriorConfig::covering_box`]).
+/// ([`zakai::lab::scenario::PriorConfig::covering_box`]).
 #[pyfunction]
 pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>> {
     let prior: PriorConfig = serde_json::from_str(prior)
@@ -49,13 +52,13 @@ pub fn set_memory_cap(cap: &Bound<'_, PyAny>) -> PyResult<usize> {
                     "must be a byte count or text such as \"8GiB\"",
                 )
             })?;
-            zakai::scenario::parse_bytes(&text).map_err(|e| errors::config("memory_cap", e))?
+            zakai::lab::scenario::parse_bytes(&text).map_err(|e| errors::config("memory_cap", e))?
         }
     };
     if bytes == 0 {
         return Err(errors::config("memory_cap", "must be positive"));
     }
-    Ok(zakai::scenario::set_memory_cap(bytes))
+    Ok(zakai::set_memory_cap(bytes))
 }
 
 /// The presets as `(name, title)` pairs.
@@ -154,10 +157,10 @@ pub fn method_defaults_json(key: &str, params: &str) -> PyResult<String> {
 /// A parameter value as its kind wants it: Python's `1e3` or `400.0` where a count is
 /// expected is the whole number it equals; a fraction there is refused in words.
 fn whole_numbers(
-    kind: Option<zakai::filters::method::ParamKind>,
+    kind: Option<zakai::ParamKind>,
     v: serde_json::Value,
 ) -> Result<serde_json::Value, String> {
-    use zakai::filters::method::ParamKind;
+    use zakai::ParamKind;
     let whole = |v: serde_json::Value| -> Result<serde_json::Value, String> {
         match v.as_f64() {
             Some(x) if v.is_f64() => {

@@ -4,10 +4,10 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use zakai::experiment::method_seed;
-use zakai::filters::Concern;
-use zakai::model::ObservationModel;
+use zakai::lab::experiment::method_seed;
+use zakai::Concern;
 use zakai::Filter;
+use zakai::ObservationModel;
 
 use crate::arrays::{rows, shaped};
 use crate::errors;

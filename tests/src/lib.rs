@@ -55,9 +55,9 @@ impl Stopwatch {
     }
 }
 
-use zakai::scenario::methods::{catalogue, CatalogueEntry};
-use zakai::scenario::ScenarioConfig;
-use zakai::Experiment;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::ScenarioConfig;
+use zakai::lab::scenario::{catalogue, CatalogueEntry};
 
 /// Presets that between them apply every method of the catalogue.
 pub const PRESETS_FOR_EVERY_METHOD: [&str; 5] = [
@@ -149,12 +149,12 @@ pub fn compare_with_paper(
     id: &str,
     runs: usize,
     deviations: &[Deviation],
-) -> Vec<zakai::reproduction::RowResult> {
-    let table = zakai::reproduction::table(id).expect("a reproduced table");
+) -> Vec<zakai::lab::reproduction::RowResult> {
+    let table = zakai::lab::papers::table(id).expect("a reproduced table");
     let mut seen = vec![false; deviations.len()];
     let mut rows = Vec::new();
     for row in &table.rows {
-        let r = zakai::reproduction::reproduce_row(&table, row, runs, &|| {}).expect("runs");
+        let r = zakai::lab::reproduction::reproduce_row(&table, row, runs, &|| {}).expect("runs");
         for cell in &r.cells {
             let Some(paper) = &cell.paper else { continue };
             let ours = cell

@@ -11,8 +11,9 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use zakai_tests::test;
 
-use zakai::scenario::presets;
-use zakai::{Experiment, Observation};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::presets;
+use zakai::Observation;
 
 struct Counting;
 
@@ -134,8 +135,8 @@ fn filters_allocate_nothing_per_step() {
 fn map_filters_following_a_second_mode_allocate_nothing() {
     let mut config = zakai_tests::bimodal_scenario(20.0);
     config.methods = vec![
-        zakai::scenario::MethodConfig::Iekf(Default::default()),
-        zakai::scenario::MethodConfig::Iokf(Default::default()),
+        zakai::lab::scenario::MethodConfig::Iekf(Default::default()),
+        zakai::lab::scenario::MethodConfig::Iokf(Default::default()),
     ];
     let e = Experiment::new(config.clone()).unwrap();
     let data = e.simulate(1);

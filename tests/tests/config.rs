@@ -1,7 +1,7 @@
 //! ScenarioConfig: JSON round trip of every preset, and validation reporting every problem.
 
-use zakai::experiment::Experiment;
-use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, MethodConfig, ScenarioConfig};
 use zakai_tests::test;
 
 #[test]
@@ -18,7 +18,7 @@ fn every_preset_is_valid_and_round_trips_through_json() {
         // Papers cited by authors and year as well as number, in the title and the reference.
         for text in [&p.title, &p.reference] {
             assert!(
-                zakai::papers::AUTHORS
+                zakai::lab::bibliography::AUTHORS
                     .iter()
                     .any(|(n, who)| text.contains(&format!("{who} [{n}]"))),
                 "{}: {text}",
@@ -33,7 +33,7 @@ fn every_preset_is_valid_and_round_trips_through_json() {
         // Every preset builds and its first two steps run.
         let experiment = Experiment::new(p.clone()).unwrap();
         let mut run = experiment.start(1).unwrap();
-        run.advance(2, None, &mut zakai::experiment::Silent);
+        run.advance(2, None, &mut zakai::lab::experiment::Silent);
     }
 }
 
@@ -42,18 +42,17 @@ fn validation_reports_every_bad_field() {
     let mut c = presets::preset("yau-2d").unwrap();
     c.model.drift[1] = "cos(x1) + sin(x3)".into();
     c.model.observation[0] = "x1 - ".into();
-    c.prior = zakai::scenario::PriorConfig::Gaussian {
+    c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: vec![0.0],
         cov: vec![vec![1.0, 2.0], vec![2.0, 1.0]],
     };
     c.domain[1] = [3.0, -3.0];
     c.time.dt_obs = -0.1;
     let bad_method = format!("methods[{}].particles", c.methods.len());
-    c.methods
-        .push(MethodConfig::Pf(zakai::filters::particle::PfParams {
-            particles: 0,
-            ..Default::default()
-        }));
+    c.methods.push(MethodConfig::Pf(zakai::PfParams {
+        particles: 0,
+        ..Default::default()
+    }));
     let problems = c.validate();
     let fields: Vec<&str> = problems.iter().map(|p| p.field.as_str()).collect();
     for expected in [
@@ -93,7 +92,7 @@ fn unknown_fields_and_methods_are_rejected() {
 /// preset uses only registered methods.
 #[test]
 fn every_registered_method_is_consistent_and_presets_use_only_registered_ones() {
-    use zakai::scenario::methods::catalogue;
+    use zakai::lab::scenario::catalogue;
     let entries = catalogue();
     assert!(entries.len() >= 15, "all families are registered");
     let mut keys = std::collections::HashSet::new();
@@ -143,7 +142,7 @@ fn every_registered_method_is_consistent_and_presets_use_only_registered_ones() 
             e.defaults.problems(dims)
         );
     }
-    for p in zakai::scenario::presets::all() {
+    for p in zakai::lab::scenario::presets::all() {
         for m in &p.methods {
             assert!(
                 keys.contains(m.key()),
@@ -159,9 +158,9 @@ fn every_registered_method_is_consistent_and_presets_use_only_registered_ones() 
 /// conditions the constructors would fail on.
 #[test]
 fn suitability_names_the_reason_a_method_does_not_apply() {
-    use zakai::scenario::MethodConfig;
-    for preset in zakai::scenario::presets::all() {
-        let e = zakai::Experiment::new(preset.clone()).expect("valid preset");
+    use zakai::lab::scenario::MethodConfig;
+    for preset in zakai::lab::scenario::presets::all() {
+        let e = zakai::lab::experiment::Experiment::new(preset.clone()).expect("valid preset");
         let probes = preset.probe_points();
         for m in &preset.methods {
             assert_eq!(
@@ -174,8 +173,8 @@ fn suitability_names_the_reason_a_method_does_not_apply() {
         }
     }
     let reason = |preset: &str, key: &str| {
-        let c = zakai::scenario::presets::preset(preset).expect("preset");
-        let e = zakai::Experiment::new(c.clone()).expect("valid");
+        let c = zakai::lab::scenario::presets::preset(preset).expect("preset");
+        let e = zakai::lab::experiment::Experiment::new(c.clone()).expect("valid");
         MethodConfig::from_key(key).expect("key").suitability(
             e.model(),
             e.prior(),
@@ -201,9 +200,9 @@ fn suitability_names_the_reason_a_method_does_not_apply() {
     assert_eq!(reason("cubic-sensor-1d", "pf"), None);
     // Every method that applies builds: the reasons are not too strict.
     for preset in ["cubic-sensor-1d", "sa-example-1"] {
-        let c = zakai::scenario::presets::preset(preset).expect("preset");
-        let e = zakai::Experiment::new(c.clone()).expect("valid");
-        for entry in zakai::scenario::methods::catalogue() {
+        let c = zakai::lab::scenario::presets::preset(preset).expect("preset");
+        let e = zakai::lab::experiment::Experiment::new(c.clone()).expect("valid");
+        for entry in zakai::lab::scenario::catalogue() {
             let (key, m) = (entry.info.key, entry.defaults);
             if m.suitability(e.model(), e.prior(), &c.probe_points(), &c.bounds())
                 .is_none()
@@ -219,7 +218,7 @@ fn suitability_names_the_reason_a_method_does_not_apply() {
 /// validation, before anything is built.
 #[test]
 fn memory_cap_refuses_too_large_grids_before_allocation() {
-    let mut c = zakai::scenario::presets::preset("yau-2d").expect("preset");
+    let mut c = zakai::lab::scenario::presets::preset("yau-2d").expect("preset");
     let qiem = c
         .methods
         .iter()
@@ -227,13 +226,13 @@ fn memory_cap_refuses_too_large_grids_before_allocation() {
         .expect("qiem");
     let bytes = |points: usize| {
         let mut m = c.methods[qiem].clone();
-        if let zakai::scenario::MethodConfig::Qiem(p) = &mut m {
+        if let zakai::lab::scenario::MethodConfig::Qiem(p) = &mut m {
             p.points = vec![points];
         }
         m.memory_bytes(2).expect("finite")
     };
     assert!(bytes(256) > 3 * bytes(128) && bytes(128) > 3 * bytes(64));
-    if let zakai::scenario::MethodConfig::Qiem(p) = &mut c.methods[qiem] {
+    if let zakai::lab::scenario::MethodConfig::Qiem(p) = &mut c.methods[qiem] {
         p.points = vec![4000];
     }
     let problems = c.validate();
@@ -243,7 +242,7 @@ fn memory_cap_refuses_too_large_grids_before_allocation() {
         .map(|p| p.message.clone())
         .expect("refused");
     assert!(message.contains("above the cap of 1.00 GiB"), "{message}");
-    assert!(zakai::Experiment::new(c).is_err());
+    assert!(zakai::lab::experiment::Experiment::new(c).is_err());
 }
 
 /// Legends and rows carry the resolution a reader compares methods by: grid points per
@@ -308,25 +307,27 @@ fn method_labels_carry_the_resolution() {
 /// takes one from the problem (here 200 prior sds from the prior mean 1000).
 #[test]
 fn recorded_data_needs_no_domain_and_no_final_time() {
-    let mut config: zakai::ScenarioConfig = serde_json::from_value(serde_json::json!({
-        "name": "flow",
-        "model": {
-            "drift": ["0"], "observation": ["x"], "diffusion": [[30.0]],
-            "noise": { "kind": "discrete", "mixture": [
-                { "weight": 1.0, "mean": [0.0], "cov": [[400.0]] } ] }
-        },
-        "prior": { "kind": "gaussian", "mean": [1000.0], "cov": [[100.0]] },
-        "time": { "dt_obs": 1.0 },
-        "seed": 1,
-        "methods": [{ "method": "kalman" }, { "method": "ukf" }, { "method": "pf" }]
-    }))
-    .unwrap();
+    let mut config: zakai::lab::scenario::ScenarioConfig =
+        serde_json::from_value(serde_json::json!({
+            "name": "flow",
+            "model": {
+                "drift": ["0"], "observation": ["x"], "diffusion": [[30.0]],
+                "noise": { "kind": "discrete", "mixture": [
+                    { "weight": 1.0, "mean": [0.0], "cov": [[400.0]] } ] }
+            },
+            "prior": { "kind": "gaussian", "mean": [1000.0], "cov": [[100.0]] },
+            "time": { "dt_obs": 1.0 },
+            "seed": 1,
+            "methods": [{ "method": "kalman" }, { "method": "ukf" }, { "method": "pf" }]
+        }))
+        .unwrap();
     assert!(config.validate().is_empty(), "{:?}", config.validate());
     let prior = config.build_prior().unwrap();
     assert_eq!(config.divergence_bound(&prior), 1000.0 + 200.0 * 10.0);
-    let e = zakai::Experiment::new(config.clone()).unwrap();
+    let e = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
     let z = [1010.0, f64::NAN, 990.0, 1005.0];
-    let recording = zakai::Recording::measurements(1, 1, vec![0.0, 1.0, 2.0, 4.0], &z).unwrap();
+    let recording =
+        zakai::lab::recording::Recording::measurements(1, 1, vec![0.0, 1.0, 2.0, 4.0], &z).unwrap();
     let run = e.filter_recorded(recording, 1).unwrap();
     assert!(run.methods.iter().all(|m| m.failure.is_none()));
     let simulated = e.start(1).expect_err("a simulation needs T");
@@ -336,7 +337,7 @@ fn recorded_data_needs_no_domain_and_no_final_time() {
     );
     config
         .methods
-        .push(zakai::MethodConfig::from_key("qiem").unwrap());
+        .push(zakai::lab::scenario::MethodConfig::from_key("qiem").unwrap());
     let problems = config.validate();
     assert!(
         problems
@@ -355,8 +356,8 @@ fn recorded_data_needs_no_domain_and_no_final_time() {
 fn the_catalogue_says_which_methods_have_a_density() {
     let mut seen = std::collections::BTreeSet::new();
     for preset in zakai_tests::PRESETS_FOR_EVERY_METHOD {
-        let config = zakai::scenario::presets::preset(preset).unwrap();
-        let e = zakai::experiment::Experiment::new(config.clone()).unwrap();
+        let config = zakai::lab::scenario::presets::preset(preset).unwrap();
+        let e = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
         for entry in zakai_tests::applicable_methods(&config, &e) {
             let f = e
                 .build_method(&entry.defaults, entry.info.key.clone(), 1)
@@ -387,7 +388,7 @@ fn the_catalogue_says_which_methods_have_a_density() {
     }
     assert_eq!(
         seen.len(),
-        zakai::scenario::methods::catalogue().len(),
+        zakai::lab::scenario::catalogue().len(),
         "every method: {seen:?}"
     );
 }

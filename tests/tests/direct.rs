@@ -2,7 +2,7 @@
 //! examples 4.1 and 4.2 (Tables 1 and 2) with α = 0.01 on a grid of step 0.01, and the filter
 //! against Tables 3 and 4 (example 4.3) and example 4.4.
 
-use zakai::filters::direct::gaussian_approximation::{evaluate, gaussian_approximation};
+use zakai::internals::filters::direct::gaussian_approximation::{evaluate, gaussian_approximation};
 use zakai_tests::test;
 
 /// Runs Algorithm 1 on `[lo, hi]` with step 0.01; returns the terms and the fit's MSE over
@@ -12,7 +12,7 @@ fn approximate(
     hi: f64,
     f: &dyn Fn(f64) -> f64,
 ) -> (
-    Vec<zakai::filters::direct::gaussian_approximation::GaussianTerm>,
+    Vec<zakai::internals::filters::direct::gaussian_approximation::GaussianTerm>,
     f64,
 ) {
     let n = ((hi - lo) / 0.01).round() as usize + 1;
@@ -32,7 +32,7 @@ fn approximate(
 /// `(c, μ, σ)` of the paper's table against ours, term by term: c within `dc`, μ within one
 /// grid step, σ within `ds` relative.
 fn compare(
-    ours: &[zakai::filters::direct::gaussian_approximation::GaussianTerm],
+    ours: &[zakai::internals::filters::direct::gaussian_approximation::GaussianTerm],
     paper: &[(f64, f64, f64)],
     dc: f64,
     ds: f64,
@@ -108,8 +108,8 @@ fn example_4_2_reproduces_table_2() {
 
 mod riccati {
     use nalgebra::{DMatrix, DVector};
-    use zakai::filters::direct::gaussian_approximation::GaussianTerm;
-    use zakai::filters::direct::riccati::{KolmogorovCoefficients, QuadraticExponent};
+    use zakai::internals::filters::direct::gaussian_approximation::GaussianTerm;
+    use zakai::internals::filters::direct::riccati::{KolmogorovCoefficients, QuadraticExponent};
     use zakai_tests::test;
 
     /// Pure diffusion (l = 0, q = 0): a Gaussian of variance s₀ and mass 1 stays a Gaussian of
@@ -215,9 +215,9 @@ mod riccati {
 }
 
 mod filter {
-    use zakai::experiment::Experiment;
-    use zakai::scenario::{presets, MethodConfig};
-    use zakai::study::MonteCarlo;
+    use zakai::lab::experiment::Experiment;
+    use zakai::lab::scenario::{presets, MethodConfig};
+    use zakai::lab::study::monte_carlo::MonteCarlo;
     use zakai_tests::test;
 
     /// 002 Example 4.3 (f = tanh x, h = (x sin x, x cos x)), 20 runs from the preset's seed:
@@ -254,12 +254,13 @@ mod filter {
         let mut c = presets::preset("cubic-sensor-1d").unwrap();
         c.methods = vec![MethodConfig::from_key("direct").unwrap()];
         // The run goes on; the method is marked as not applying, with the condition.
-        let failure = |c: &zakai::ScenarioConfig| {
+        let failure = |c: &zakai::lab::scenario::ScenarioConfig| {
             let run = Experiment::new(c.clone()).unwrap().run(1).unwrap();
             let f = run.methods[0].failure.clone().expect("marked");
             assert_eq!(f.k, 0);
             assert!(
-                f.message.starts_with(zakai::experiment::NOT_APPLICABLE),
+                f.message
+                    .starts_with(zakai::lab::experiment::NOT_APPLICABLE),
                 "{}",
                 f.message
             );
@@ -278,19 +279,14 @@ mod filter {
 /// prior density, scanned on a 10⁻³ grid (the other peak, at 0.836, is lower).
 #[test]
 fn the_true_state_starts_at_the_mode_of_sigma_0() {
-    use zakai::model::VectorFunction;
+    use zakai::VectorFunction;
     for name in ["direct-4.3", "direct-4.4"] {
-        let config = zakai::scenario::presets::preset(name).unwrap();
-        let zakai::scenario::PriorConfig::Density { expression } = &config.prior else {
+        let config = zakai::lab::scenario::presets::preset(name).unwrap();
+        let zakai::lab::scenario::PriorConfig::Density { expression } = &config.prior else {
             panic!("{name}: σ₀ is a density expression");
         };
-        let sigma0 = zakai::model::expression::ExpressionFunction::parse(
-            "σ₀",
-            std::slice::from_ref(expression),
-            1,
-            1,
-        )
-        .unwrap();
+        let sigma0 =
+            zakai::ExpressionFunction::parse("σ₀", std::slice::from_ref(expression), 1, 1).unwrap();
         let mode = (-5000..8000)
             .map(|i| f64::from(i) * 1e-3)
             .max_by(|a, b| sigma0.value(&[*a])[0].total_cmp(&sigma0.value(&[*b])[0]))
@@ -337,9 +333,9 @@ fn example_4_3_reproduces_table_3() {
 }
 
 /// MSE of every method of `config` over seeds 1..=runs, in the scenario's order.
-fn monte_carlo(config: zakai::scenario::ScenarioConfig, runs: usize) -> Vec<f64> {
-    let experiment = zakai::experiment::Experiment::new(config).unwrap();
-    let summary = zakai::study::MonteCarlo::new(&experiment)
+fn monte_carlo(config: zakai::lab::scenario::ScenarioConfig, runs: usize) -> Vec<f64> {
+    let experiment = zakai::lab::experiment::Experiment::new(config).unwrap();
+    let summary = zakai::lab::study::monte_carlo::MonteCarlo::new(&experiment)
         .run(runs, 1, &|| {})
         .unwrap();
     summary
@@ -384,7 +380,7 @@ fn table_4_error_falls_with_the_time_step() {
 /// every step it was 0.94 against 0.55.
 #[test]
 fn table_4_setting_direct_method_matches_qiem() {
-    let mut config = zakai::scenario::presets::preset("direct-4.3").unwrap();
+    let mut config = zakai::lab::scenario::presets::preset("direct-4.3").unwrap();
     config.time.t_final = 10.0;
     config.time.dt_obs = 0.01;
     config
@@ -405,11 +401,11 @@ fn table_4_setting_direct_method_matches_qiem() {
 /// is just below our first quartile) — and our median is within a factor 3 of it.
 #[test]
 fn example_4_4_single_run_lies_within_our_spread() {
-    let mut config = zakai::scenario::presets::preset("direct-4.4").unwrap();
+    let mut config = zakai::lab::scenario::presets::preset("direct-4.4").unwrap();
     config.methods.retain(|m| m.key() == "direct");
     let seed = config.seed;
-    let experiment = zakai::experiment::Experiment::new(config).unwrap();
-    let summary = zakai::study::MonteCarlo::new(&experiment)
+    let experiment = zakai::lab::experiment::Experiment::new(config).unwrap();
+    let summary = zakai::lab::study::monte_carlo::MonteCarlo::new(&experiment)
         .run(20, seed, &|| {})
         .unwrap();
     let m = &summary.methods[0];
@@ -434,7 +430,7 @@ fn example_4_4_single_run_lies_within_our_spread() {
 /// MSE on the same runs — while the EKF is at least five times worse (it "blows up" in 002).
 #[test]
 fn example_4_4_direct_method_tracks_where_the_ekf_fails() {
-    let mut config = zakai::scenario::presets::preset("direct-4.4").unwrap();
+    let mut config = zakai::lab::scenario::presets::preset("direct-4.4").unwrap();
     config
         .methods
         .retain(|m| matches!(m.key(), "direct" | "qiem" | "ekf"));
@@ -451,8 +447,8 @@ mod yau_system {
 
     use nalgebra::DMatrix;
     use zakai::diagnostics::yau_system::{check, YauSystem};
-    use zakai::model::expression::ExpressionFunction;
-    use zakai::model::{Model, ObservationModel};
+    use zakai::ExpressionFunction;
+    use zakai::{Model, ObservationModel};
 
     fn system(f: &[&str], h: &[&str], half_width: f64) -> YauSystem {
         let (n, m) = (f.len(), h.len());

@@ -1,9 +1,9 @@
 //! `Filter::estimate_into`, the allocation-free read the driver uses after every step, gives
 //! exactly what `Filter::estimate` gives, for every method of the catalogue.
 
-use zakai::filters::Estimate;
-use zakai::scenario::presets;
-use zakai::Experiment;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::presets;
+use zakai::Estimate;
 use zakai_tests::test;
 
 /// On presets that between them apply every method, after 1, 2 and 20 steps, into an

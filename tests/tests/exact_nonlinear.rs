@@ -14,9 +14,10 @@
 //! method with its default sizes must either stay within a stated tolerance of the exact mean
 //! or raise a self-check warning during the run — never be silently off.
 
-use zakai::filters::Concern;
-use zakai::scenario::ScenarioConfig;
-use zakai::{Experiment, Filter, Kalman, Model, Noise, Observation};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::ScenarioConfig;
+use zakai::Concern;
+use zakai::{Filter, Kalman, Model, Noise, Observation};
 use zakai_tests::test;
 
 const MU0: f64 = 0.5;
@@ -148,7 +149,7 @@ fn every_method_is_near_the_exact_benes_mean_or_warns() {
     }
 }
 
-/// The convergence check (`zakai check`, [`zakai::study::convergence`]) agrees with the exact
+/// The convergence check (`zakai check`, [`zakai::lab::study::convergence`]) agrees with the exact
 /// filter on the Beneš model (seed 1): QIEM, within 0.005 of the exact mean, is judged
 /// converged (it moves by 0.0006 against a posterior sd of 1.07 when refined), and the
 /// spectral filter with its default basis (36 functions), off by RMS 0.074, is judged not
@@ -156,12 +157,12 @@ fn every_method_is_near_the_exact_benes_mean_or_warns() {
 /// filter can make.
 #[test]
 fn the_convergence_check_agrees_with_the_exact_filter() {
-    use zakai::study::convergence::convergence_check;
+    use zakai::lab::study::convergence::convergence_check;
     let config = benes_scenario();
     let e = Experiment::new(config.clone()).expect("valid");
     let methods: Vec<_> = ["qiem", "spectral"]
         .iter()
-        .map(|k| zakai::scenario::MethodConfig::from_key(k).unwrap())
+        .map(|k| zakai::lab::scenario::MethodConfig::from_key(k).unwrap())
         .collect();
     let rows = convergence_check(&e, &methods, 1, 1 << 30);
     for r in &rows {

@@ -1,8 +1,8 @@
 //! Text expressions: exact derivatives agree with finite differences; errors are typed.
 
-use zakai::model::expression::ExpressionFunction;
-use zakai::model::{Derivatives, VectorFunction};
 use zakai::ExprError;
+use zakai::ExpressionFunction;
+use zakai::{Derivatives, VectorFunction};
 use zakai_tests::test;
 
 fn parse(texts: &[&str], n: usize) -> ExpressionFunction {

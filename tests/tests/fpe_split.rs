@@ -2,13 +2,13 @@
 //! Gaussian-sum reference and J(t).
 
 use nalgebra::DVector;
-use zakai::experiment::Experiment;
-use zakai::filters::fpe_split::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
-use zakai::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams};
-use zakai::filters::kalman::{KalmanBucy, KalmanParams};
-use zakai::filters::{Filter, Observation, ObservationKind};
-use zakai::scenario::{presets, GaussianComponent, ObservationNoiseConfig, ScenarioConfig};
-use zakai::study::density_error::{j_curve, JKind};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, GaussianComponent, ObservationNoiseConfig, ScenarioConfig};
+use zakai::lab::study::density_error::{j_curve, JKind};
+use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
+use zakai::{Filter, Observation, ObservationKind};
+use zakai::{GaussianSumFilter, GaussianSumParams};
+use zakai::{KalmanBucy, KalmanParams};
 use zakai_tests::test;
 
 fn experiment(config: ScenarioConfig) -> Experiment {
@@ -35,7 +35,7 @@ fn grid_filter(e: &Experiment, scheme: FpeScheme, cells: usize, dt: f64) -> Cont
 fn ornstein_uhlenbeck() -> ScenarioConfig {
     let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["-x".into()];
-    c.prior = zakai::scenario::PriorConfig::Gaussian {
+    c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: vec![1.0],
         cov: vec![vec![0.2]],
     };
@@ -173,7 +173,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
             cov: vec![vec![0.1, 0.02], vec![0.02, 0.3]],
         }],
     };
-    c.prior = zakai::scenario::PriorConfig::Gaussian {
+    c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: vec![0.5, 0.2],
         cov: vec![vec![0.3, 0.1], vec![0.1, 0.2]],
     };

@@ -1,13 +1,13 @@
 //! The accuracy–cost frontier: the reference posterior, its convergence check, the sweep and
 //! the "cheapest within 5 %" rule.
 
-use zakai::scenario::{presets, MethodConfig};
-use zakai::study::frontier::{
+use zakai::lab::scenario::{presets, MethodConfig};
+use zakai::lab::study::frontier::{
     default_sweep, frontier, reference, reference_check, Frontier, FrontierPoint, SweepPoint,
 };
 use zakai_tests::test;
 
-fn cubic() -> zakai::scenario::ScenarioConfig {
+fn cubic() -> zakai::lab::scenario::ScenarioConfig {
     let mut c = presets::preset("cubic-sensor-1d").expect("preset");
     c.time.t_final = 1.0;
     c
@@ -71,7 +71,7 @@ fn the_sweep_keeps_only_methods_that_apply() {
 /// Each grid is swept at Δt = Δτ, Δτ/4 and min(Δτ, 10⁻³), never finer than that and each once.
 #[test]
 fn grids_are_swept_at_several_steps() {
-    let steps = |c: &zakai::scenario::ScenarioConfig| -> Vec<f64> {
+    let steps = |c: &zakai::lab::scenario::ScenarioConfig| -> Vec<f64> {
         default_sweep(c)
             .unwrap()
             .iter()

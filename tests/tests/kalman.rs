@@ -1,12 +1,12 @@
 //! The Kalman–Bucy reference and its agreement with EKF and UKF on linear models.
 
-use zakai::experiment::{Experiment, RunResult, Silent};
-use zakai::filters::kalman::{EkfParams, KalmanParams, UkfParams};
-use zakai::filters::{Observation, ObservationKind};
-use zakai::scenario::{
+use zakai::lab::experiment::{Experiment, RunResult, Silent};
+use zakai::lab::scenario::{
     FailureRule, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig, ScenarioConfig,
     TimeConfig,
 };
+use zakai::{EkfParams, KalmanParams, UkfParams};
+use zakai::{Observation, ObservationKind};
 use zakai_tests::test;
 
 fn scalar_linear(
@@ -92,7 +92,7 @@ fn kalman_filter_equals_an_independent_scalar_recursion_for_discrete_measurement
     // P ← e^{2aΔ} P + q (e^{2aΔ} − 1)/(2a); then the textbook scalar update.
     let (a, c, p0, dt, r) = (-0.4, 2.0, 1.0, 0.1, 0.3);
     let noise = ObservationNoiseConfig::Discrete {
-        mixture: vec![zakai::scenario::GaussianComponent {
+        mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
             mean: vec![0.0],
             cov: vec![vec![r]],
@@ -122,7 +122,7 @@ fn kalman_filter_equals_an_independent_scalar_recursion_for_discrete_measurement
 }
 
 fn linear_2d(noise: ObservationNoiseConfig, dt: f64) -> ScenarioConfig {
-    let mut config = zakai::scenario::presets::preset("sa-example-2").unwrap();
+    let mut config = zakai::lab::scenario::presets::preset("sa-example-2").unwrap();
     config.model.noise = noise;
     config.prior = PriorConfig::Gaussian {
         mean: vec![0.5, 0.5],
@@ -169,7 +169,7 @@ fn ekf_and_ukf_equal_the_kalman_filter_on_linear_models() {
     // Discrete Gaussian measurements every 0.2.
     let discrete = linear_2d(
         ObservationNoiseConfig::Discrete {
-            mixture: vec![zakai::scenario::GaussianComponent {
+            mixture: vec![zakai::lab::scenario::GaussianComponent {
                 weight: 1.0,
                 mean: vec![0.0, 0.0],
                 cov: vec![vec![0.1, 0.0], vec![0.0, 0.1]],
@@ -186,7 +186,7 @@ fn ekf_and_ukf_equal_the_kalman_filter_on_linear_models() {
 
 #[test]
 fn the_kalman_filter_refuses_a_nonlinear_model() {
-    let mut config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let mut config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     config.methods = vec![MethodConfig::Kalman(KalmanParams::default())];
     // The run goes on; the filter is marked as not applying, with the reason.
     let run = Experiment::new(config).unwrap().run(1).unwrap();
@@ -202,7 +202,7 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
     let config = linear_2d(ObservationNoiseConfig::Continuous { cov: None }, 0.01);
     let experiment = Experiment::new(config).unwrap();
     let bounds = experiment.config().bounds();
-    let ctx = zakai::scenario::methods::BuildContext {
+    let ctx = zakai::BuildContext {
         model: experiment.model(),
         prior: experiment.prior(),
         seed: 1,

@@ -1,7 +1,7 @@
 //! The log-concavity diagnostic of 003 §3 on 003's example (3.13)–(3.15) and in 2-D.
 
 use zakai::diagnostics::log_concavity::log_concavity;
-use zakai::filters::DensityView;
+use zakai::DensityView;
 use zakai_tests::test;
 
 /// 003 (3.15) at t = 1: `U(x₀) = 1/Var₀ − (9/2) y (y/10)^{1/3}` with x₀ = (y/10)^{1/3}.
@@ -108,9 +108,9 @@ mod convex_filter_conditions {
     use nalgebra::DMatrix;
     use zakai::diagnostics::convex_filter::{theorem_3_2, theorem_3_8};
     use zakai::diagnostics::ConditionReport;
-    use zakai::experiment::Experiment;
-    use zakai::model::expression::ExpressionFunction;
-    use zakai::scenario::{presets, PriorConfig, ScenarioConfig};
+    use zakai::lab::experiment::Experiment;
+    use zakai::lab::scenario::{presets, PriorConfig, ScenarioConfig};
+    use zakai::ExpressionFunction;
     use zakai_tests::test;
 
     fn check(config: ScenarioConfig, phi_j: Option<(&str, f64)>) -> ConditionReport {
@@ -140,7 +140,7 @@ mod convex_filter_conditions {
             cov: vec![vec![0.5]],
         };
         c.initial_state = None;
-        c.methods = vec![zakai::scenario::MethodConfig::from_key("ekf").unwrap()];
+        c.methods = vec![zakai::lab::scenario::MethodConfig::from_key("ekf").unwrap()];
         c
     }
 

@@ -1,15 +1,15 @@
 //! The MAP-update filters of 003 (IEKF, IOKF): exact on linear models, the right minimiser
 //! on a nonlinear one, guarded Newton steps, and 003 Table 1 with the preset's seeds.
 
-use zakai::experiment::Experiment;
-use zakai::filters::kalman::map::MAP_UNCONVERGED_THRESHOLD;
-use zakai::filters::kalman::{IekfParams, IokfParams};
-use zakai::filters::{Concern, Filter, Observation, ObservationKind};
-use zakai::scenario::{
+use zakai::internals::filters::kalman::map::MAP_UNCONVERGED_THRESHOLD;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{
     presets, FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
     PriorConfig, ScenarioConfig, TimeConfig,
 };
+use zakai::{Concern, Filter, Observation, ObservationKind};
 use zakai::{Iekf, Iokf, Model, Noise};
+use zakai::{IekfParams, IokfParams};
 use zakai_tests::test;
 
 fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> ScenarioConfig {
@@ -408,7 +408,7 @@ fn a_map_update_that_stops_short_of_its_map_point_says_so() {
     assert!(concern.is_none(), "{concern:?}");
 }
 
-/// The second-mode watch (`zakai::filters::kalman::second_mode`) stays quiet where the model
+/// The second-mode watch (`zakai::internals::filters::kalman::second_mode`) stays quiet where the model
 /// tells the candidate apart: on `cos-x2` h = x² cannot tell x from −x, but the prior N(1,
 /// 0.25) and the drift cos x towards π/2 make −x implausible (its free-density weight is
 /// below the drop threshold); on `bearings-only` every state along the bearing matches the
@@ -418,7 +418,7 @@ fn a_map_update_that_stops_short_of_its_map_point_says_so() {
 #[test]
 fn the_second_mode_watch_is_quiet_where_the_model_tells_the_mirror_apart() {
     for name in ["cos-x2", "bearings-only"] {
-        let mut config = zakai::scenario::presets::preset(name).expect("a preset");
+        let mut config = zakai::lab::scenario::presets::preset(name).expect("a preset");
         config.methods = vec![
             MethodConfig::Iekf(IekfParams::default()),
             MethodConfig::Iokf(IokfParams::default()),

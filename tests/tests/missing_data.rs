@@ -5,10 +5,11 @@
 //! filter with the exact discretisation of an Ornstein–Uhlenbeck drift, and a point-mass
 //! filter on a fine grid whose transition is a Gaussian kernel of many small Euler steps.
 
-use zakai::experiment::Experiment;
-use zakai::filters::{Estimate, Filter, Observation};
-use zakai::scenario::ScenarioConfig;
-use zakai::{FilterError, Recording};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::recording::Recording;
+use zakai::lab::scenario::ScenarioConfig;
+use zakai::FilterError;
+use zakai::{Estimate, Filter, Observation};
 use zakai_tests::test;
 use zakai_tests::{applicable_methods, observation_of, PRESETS_FOR_EVERY_METHOD};
 
@@ -44,7 +45,7 @@ fn fingerprint(f: &dyn Filter) -> Vec<u64> {
 fn failed_steps_leave_every_filter_as_it_was() {
     let (mut methods, mut blowups) = (0, 0);
     for preset in PRESETS_FOR_EVERY_METHOD {
-        let config = zakai::scenario::presets::preset(preset).unwrap();
+        let config = zakai::lab::scenario::presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
         let data = e.simulate(4);
         let dt = config.time.dt_obs;
@@ -131,7 +132,7 @@ fn failed_steps_leave_every_filter_as_it_was() {
 fn forks_predictions_and_updates() {
     let mut tried = 0;
     for preset in ["sa-example-1", "sa-example-2", "cubic-sensor-1d"] {
-        let config = zakai::scenario::presets::preset(preset).unwrap();
+        let config = zakai::lab::scenario::presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
         let data = e.simulate(6);
         let dt = config.time.dt_obs;
@@ -537,7 +538,7 @@ fn a_gap_is_crossed_by_the_grid_filter_as_by_a_fine_point_mass_filter() {
 /// partitions of the same time).
 #[test]
 fn remainders_predict_as_the_schemes_own_steps() {
-    let config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let mut half = config.clone();
     half.time.dt_obs /= 2.0;
     let (e, e_half) = (
@@ -548,7 +549,7 @@ fn remainders_predict_as_the_schemes_own_steps() {
     let dt = config.time.dt_obs;
     let mut tried = 0;
     for key in ["qiem", "iem", "spt", "spectral"] {
-        let m = zakai::MethodConfig::from_key(key).unwrap();
+        let m = zakai::lab::scenario::MethodConfig::from_key(key).unwrap();
         let mut f = e.build_method(&m, key.into(), 1).unwrap();
         let mut g = e_half.build_method(&m, key.into(), 1).unwrap();
         for k in 1..=20 {
@@ -650,7 +651,7 @@ fn both_likelihoods(
     let built = |likelihood: &str| {
         let mut p = params.clone();
         p["likelihood"] = likelihood.into();
-        let m: zakai::MethodConfig = serde_json::from_value(p).unwrap();
+        let m: zakai::lab::scenario::MethodConfig = serde_json::from_value(p).unwrap();
         e.build_method(&m, key.clone(), 1).unwrap()
     };
     (built("in_operator"), built("in_update"))
@@ -665,7 +666,7 @@ fn both_likelihoods(
 /// gap was refused.
 #[test]
 fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
-    let config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let e = Experiment::new(config.clone()).unwrap();
     let data = e.simulate(3);
     let dt = config.time.dt_obs;
@@ -726,7 +727,7 @@ fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
 /// 0.02 %; one operator over the whole gap, tried first, was unstable past 2 Δτ).
 #[test]
 fn the_spectral_filter_crosses_a_gap_with_the_likelihood_in_its_operator() {
-    let config = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let e = Experiment::new(config.clone()).unwrap();
     let data = e.simulate(3);
     let dt = config.time.dt_obs;
@@ -856,7 +857,8 @@ fn a_sensor_that_never_reports_is_the_model_without_it() {
             let mut p = params.clone();
             p["likelihood"] = likelihood.into();
             let built = |e: &Experiment, p: &serde_json::Value| {
-                let m: zakai::MethodConfig = serde_json::from_value(p.clone()).unwrap();
+                let m: zakai::lab::scenario::MethodConfig =
+                    serde_json::from_value(p.clone()).unwrap();
                 e.build_method(&m, "m".into(), 1).unwrap()
             };
             let mut reference = p.clone();
@@ -891,7 +893,7 @@ fn the_direct_method_crosses_a_gap_and_takes_a_partial_increment() {
     let rows = 30;
     let dy = sensor_one_increments(rows, 1.0);
     let direct = serde_json::json!({ "method": "direct", "linear": [-1.0, 0.3] });
-    let method: zakai::MethodConfig = serde_json::from_value(direct).unwrap();
+    let method: zakai::lab::scenario::MethodConfig = serde_json::from_value(direct).unwrap();
     let one = continuous_model(&["x"], serde_json::json!([[1.0]]));
     let two = continuous_model(&["x", "x"], serde_json::json!([[1.0, 0.0], [0.0, 1.0]]));
     let built = |e: &Experiment| e.build_method(&method, "direct".into(), 1).unwrap();
@@ -933,7 +935,7 @@ fn reports_rebuilds(f: &dyn Filter) -> bool {
     f.self_check(&mut concerns);
     concerns
         .iter()
-        .any(|c| c.check == zakai::filters::REBUILT_SHARE_CHECK)
+        .any(|c| c.check == zakai::internals::filters::REBUILT_SHARE_CHECK)
 }
 
 /// Steps whose lengths keep changing (jittered time stamps, Δτ(1 + u/100)) make an operator
@@ -943,7 +945,7 @@ fn reports_rebuilds(f: &dyn Filter) -> bool {
 /// the irregular steps repeat one length (1.5Δτ: one remainder operator, reused).
 #[test]
 fn steps_of_ever_changing_length_are_reported() {
-    let cubic = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let cubic = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let continuous = Experiment::new(cubic.clone()).unwrap();
     let discrete = Experiment::new(linear_two_sensor(
         serde_json::json!([{ "method": "kalman" }]),
@@ -970,7 +972,7 @@ fn steps_of_ever_changing_length_are_reported() {
     ];
     for (e, params, observed) in cases {
         let dt = e.config().time.dt_obs;
-        let m: zakai::MethodConfig = serde_json::from_value(params.clone()).unwrap();
+        let m: zakai::lab::scenario::MethodConfig = serde_json::from_value(params.clone()).unwrap();
         let value = vec![observed; e.model().m];
         let observation = |step: f64| {
             if e.model().m == 1 {
@@ -1014,7 +1016,7 @@ fn recorded_innovations_are_the_exact_filters() {
     let e = Experiment::new(linear_two_sensor(methods)).unwrap();
     let mut run = e.start_recorded(recording.clone(), 1).unwrap();
     run.record_innovations(e.model());
-    run.complete(None, &mut zakai::experiment::Silent);
+    run.complete(None, &mut zakai::lab::experiment::Silent);
     let (h, c) = ([1.0, 0.5], [0.0, 1.0]);
     for m in &run.finish().methods {
         assert_eq!(m.innovations.len(), 2 * recording.times.len(), "{}", m.name);

@@ -3,10 +3,12 @@
 //! row, and rows that are the same numbers are named with the reason. Short runs (T = 1) of
 //! the presets, seeds stated.
 
-use zakai::experiment::Experiment;
-use zakai::scenario::{presets, MethodConfig, ScenarioConfig};
-use zakai::study::monte_carlo::{MonteCarloSummary, COINCIDENCE_TOLERANCE, HOW_MEANS_ARE_TAKEN};
-use zakai::study::MonteCarlo;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, MethodConfig, ScenarioConfig};
+use zakai::lab::study::monte_carlo::MonteCarlo;
+use zakai::lab::study::monte_carlo::{
+    MonteCarloSummary, COINCIDENCE_TOLERANCE, HOW_MEANS_ARE_TAKEN,
+};
 use zakai_tests::test;
 
 fn summary(config: ScenarioConfig, runs: usize, seed: u64) -> MonteCarloSummary {
@@ -21,7 +23,10 @@ fn keep(mut config: ScenarioConfig, keys: &[&str]) -> ScenarioConfig {
     config
 }
 
-fn row<'a>(s: &'a MonteCarloSummary, name: &str) -> &'a zakai::study::MethodSummary {
+fn row<'a>(
+    s: &'a MonteCarloSummary,
+    name: &str,
+) -> &'a zakai::lab::study::monte_carlo::MethodSummary {
     s.methods.iter().find(|m| m.name == name).expect("method")
 }
 

@@ -1,8 +1,10 @@
 //! The own-data API: builders check everything at once, filters built for one interval take
 //! any other, and the driver runs on recorded observations with the truth optional.
 
-use zakai::scenario::presets;
-use zakai::{Experiment, Model, Noise, Observation, Qiem, Recording, Ukf, ZakaiError};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::recording::Recording;
+use zakai::lab::scenario::presets;
+use zakai::{Model, Noise, Observation, Qiem, Ukf, ZakaiError};
 use zakai_tests::test;
 
 fn problems(e: ZakaiError) -> Vec<zakai::ConfigProblem> {

@@ -1,16 +1,16 @@
 //! The bootstrap particle filter converges to the Kalman filter on a linear Gaussian model.
 
-use zakai::experiment::Experiment;
-use zakai::filters::kalman::KalmanParams;
-use zakai::filters::particle::PfParams;
-use zakai::scenario::{presets, MethodConfig, PriorConfig, TimeConfig};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{presets, MethodConfig, PriorConfig, TimeConfig};
+use zakai::KalmanParams;
+use zakai::PfParams;
 use zakai_tests::test;
 
 fn mean_square_gap(particles: usize, seed: u64) -> f64 {
     let mut config = presets::preset("sa-example-1").unwrap();
     // Gaussian measurement noise so that the KF is the exact posterior mean.
-    config.model.noise = zakai::scenario::ObservationNoiseConfig::Discrete {
-        mixture: vec![zakai::scenario::GaussianComponent {
+    config.model.noise = zakai::lab::scenario::ObservationNoiseConfig::Discrete {
+        mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
             mean: vec![0.0],
             cov: vec![vec![0.5]],
@@ -71,7 +71,7 @@ fn particle_mean_approaches_the_kalman_mean_as_particles_grow() {
 /// 10 % of a filter with 100 steps (measured 0.052).
 #[test]
 fn substeps_follow_the_models_time_scale() {
-    let config: zakai::ScenarioConfig = serde_json::from_value(serde_json::json!({
+    let config: zakai::lab::scenario::ScenarioConfig = serde_json::from_value(serde_json::json!({
         "name": "pendulum",
         "model": {
             "drift": ["x2", "-16*sin(x1) - 0.2*x2"],

@@ -19,13 +19,13 @@ use zakai_tests::test;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
-use zakai::experiment::{Experiment, Silent};
-use zakai::filters::fpe_split::FpeParams;
-use zakai::filters::yau_fd::YauYauParams;
-use zakai::scenario::{
+use zakai::lab::experiment::{Experiment, Silent};
+use zakai::lab::scenario::{
     FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
     ScenarioConfig, TimeConfig,
 };
+use zakai::FpeParams;
+use zakai::YauYauParams;
 
 /// One random 1-D model with a grid method.
 #[derive(Clone, Debug)]

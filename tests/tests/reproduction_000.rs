@@ -2,9 +2,9 @@
 //! (33) tracked by QIEM, and Table 1 (f = cos x, h = xⁿ) over 100 seeded runs. The seeds are the
 //! presets' own; the tolerances are stated at each assertion.
 
-use zakai::experiment::Experiment;
-use zakai::scenario::presets;
-use zakai::study::{MonteCarlo, MonteCarloSummary};
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::presets;
+use zakai::lab::study::monte_carlo::{MonteCarlo, MonteCarloSummary};
 use zakai_tests::test;
 
 fn monte_carlo(preset: &str, keys: &[&str], runs: usize) -> MonteCarloSummary {

@@ -2,8 +2,8 @@
 //! can (thresholds: `TAIL_ENERGY_THRESHOLD`, `BOUNDARY_MASS_THRESHOLD`,
 //! `WIDTH_IN_CELLS_THRESHOLD`, `ESS_SHARE_THRESHOLD`), on data simulated with fixed seeds.
 
-use zakai::filters::Concern;
 use zakai::simulate::{simulate, TimeGrid};
+use zakai::Concern;
 use zakai::{Filter, Kalman, Model, Noise, Pf, Qiem, Separation, Spectral};
 use zakai_tests::test;
 
@@ -25,7 +25,7 @@ fn the_spectral_filter_warns_when_its_basis_is_too_small() {
         steps: 400,
         inner_steps: 10,
     };
-    let data = simulate(&model, &[0.5], grid, &mut zakai::random::rng_from_seed(2));
+    let data = simulate(&model, &[0.5], grid, &mut zakai::simulate::rng_from_seed(2));
     for ((offline, online), should_warn) in [((11, 16), true), ((30, 30), false)] {
         let mut spectral = Spectral::builder(&model)
             .prior_gaussian(&[0.0], &[[0.5]])
@@ -138,7 +138,7 @@ fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
         &truth_model,
         &[0.0],
         grid,
-        &mut zakai::random::rng_from_seed(11),
+        &mut zakai::simulate::rng_from_seed(11),
     );
     let nis = "normalised innovation squared (mean over 50 updates, per component)";
     for (variance, expect) in [(0.1, None), (0.001, Some(true)), (10.0, Some(false))] {
@@ -182,11 +182,11 @@ fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
 /// intervals).
 #[test]
 fn the_direct_method_warns_when_its_residual_carries_much_of_the_density() {
-    let config = zakai::scenario::presets::preset("direct-4.3").unwrap();
-    let e = zakai::Experiment::new(config.clone()).unwrap();
+    let config = zakai::lab::scenario::presets::preset("direct-4.3").unwrap();
+    let e = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
     let data = e.simulate(1);
     for (alpha, should_warn) in [(0.01, false), (0.4, true)] {
-        let method = zakai::scenario::MethodConfig::Direct(zakai::scenario::DirectParams {
+        let method = zakai::lab::scenario::MethodConfig::Direct(zakai::DirectParams {
             alpha,
             ..Default::default()
         });
@@ -218,9 +218,12 @@ fn the_direct_method_warns_when_its_residual_carries_much_of_the_density() {
 fn the_map_filters_warn_when_an_update_leaves_the_predicted_gaussian() {
     const CHECK: &str = "MAP point from the predicted mean, in predicted standard deviations";
     for (preset, should_warn) in [("direct-4.3", true), ("yau-2d", false)] {
-        let e = zakai::Experiment::new(zakai::scenario::presets::preset(preset).unwrap()).unwrap();
+        let e = zakai::lab::experiment::Experiment::new(
+            zakai::lab::scenario::presets::preset(preset).unwrap(),
+        )
+        .unwrap();
         let data = e.simulate(1);
-        let method = zakai::scenario::MethodConfig::from_key("iekf").unwrap();
+        let method = zakai::lab::scenario::MethodConfig::from_key("iekf").unwrap();
         let mut f = e.build_method(&method, "IEKF".into(), 1).unwrap();
         let mut warned = 0;
         for k in 1..=data.steps() {

@@ -1,7 +1,7 @@
 //! The signal/observation generator: increments with the right moments, determinism.
 
-use zakai::model::{ClosureFunction, GaussianMixture, Model, ObservationModel};
 use zakai::simulate::{rng_from_seed, simulate, TimeGrid};
+use zakai::{ClosureFunction, GaussianMixture, Model, ObservationModel};
 use zakai_tests::test;
 
 use nalgebra::{DMatrix, DVector};
@@ -108,7 +108,7 @@ fn discrete_measurements_carry_mixture_noise() {
 
 #[test]
 fn the_same_seed_gives_the_same_trajectory() {
-    let config = zakai::scenario::presets::preset("yau-2d").unwrap();
+    let config = zakai::lab::scenario::presets::preset("yau-2d").unwrap();
     let model = config.build_model().unwrap();
     let time = config.time_grid();
     let a = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(77));

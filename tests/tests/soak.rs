@@ -20,11 +20,11 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 use zakai_tests::test;
 
-use zakai::experiment::{method_seed, Experiment};
-use zakai::filters::kalman::{IekfParams, IokfParams};
-use zakai::filters::{Filter, Observation, ObservationKind};
-use zakai::scenario::{presets, MethodConfig};
+use zakai::lab::experiment::{method_seed, Experiment};
+use zakai::lab::scenario::{presets, MethodConfig};
 use zakai::simulate::{rng_from_seed, standard_normal};
+use zakai::{Filter, Observation, ObservationKind};
+use zakai::{IekfParams, IokfParams};
 
 /// Live heap bytes of the whole test binary.
 static LIVE: AtomicIsize = AtomicIsize::new(0);

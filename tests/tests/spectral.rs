@@ -2,10 +2,11 @@
 //! the exact posterior of the cubic sensor), reproduction of 004 Tables 1 and 2 with the
 //! presets' seeds, and its parameter checks. Tolerances are stated at each assertion.
 
-use zakai::experiment::{Experiment, Silent};
-use zakai::filters::yau_fd::YauYauParams;
-use zakai::reproduction;
-use zakai::scenario::{presets, MethodConfig, SpectralParams};
+use zakai::lab::experiment::{Experiment, Silent};
+use zakai::lab::reproduction;
+use zakai::lab::scenario::{presets, MethodConfig};
+use zakai::SpectralParams;
+use zakai::YauYauParams;
 use zakai_tests::test;
 
 /// Time-averaged |mean difference| and the mean L1 distance of the densities at t = 1..5,
@@ -160,7 +161,7 @@ fn impossible_parameters_are_refused() {
     let mut four = presets::preset("cubic-sensor-1d").expect("preset");
     four.model.drift = vec!["0".into(); 4];
     four.model.observation = vec!["x1".into()];
-    four.prior = zakai::scenario::PriorConfig::Gaussian {
+    four.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: vec![0.0; 4],
         cov: (0..4)
             .map(|i| (0..4).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
@@ -190,12 +191,12 @@ fn impossible_parameters_are_refused() {
 /// A stable linear model in n = 2 or 3 dimensions, observed in every component, on
 /// [−w, w]ⁿ, with the exact Kalman–Bucy filter and the spectral filter with `basis` functions
 /// per dimension.
-fn linear_against_kalman(n: usize, basis: usize, w: f64) -> zakai::scenario::ScenarioConfig {
+fn linear_against_kalman(n: usize, basis: usize, w: f64) -> zakai::lab::scenario::ScenarioConfig {
     let mut c = presets::preset("cubic-sensor-1d").expect("preset");
     let drift = ["-0.6*x1 + 0.2*x2", "-0.1*x1 - 0.5*x2", "0.2*x2 - 0.4*x3"];
     c.model.drift = drift[..n].iter().map(|s| s.to_string()).collect();
     c.model.observation = (1..=n).map(|d| format!("0.8*x{d}")).collect();
-    c.prior = zakai::scenario::PriorConfig::Gaussian {
+    c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
         mean: (0..n).map(|d| 0.3 - 0.2 * d as f64).collect(),
         cov: (0..n)
             .map(|i| (0..n).map(|j| if i == j { 0.4 } else { 0.05 }).collect())

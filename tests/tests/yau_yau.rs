@@ -1,13 +1,13 @@
 //! The finite-difference Yau–Yau filters of 000 against the exact Kalman–Bucy posterior on a
 //! linear Gaussian model, and their guarantee checks.
 
-use zakai::experiment::Experiment;
-use zakai::filters::kalman::KalmanParams;
-use zakai::filters::yau_fd::{Likelihood, PotentialTerm, YauYauParams};
-use zakai::scenario::{
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::{
     FailureRule, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig, ScenarioConfig,
     TimeConfig,
 };
+use zakai::KalmanParams;
+use zakai::{Likelihood, PotentialTerm, YauYauParams};
 use zakai_tests::test;
 
 fn linear(points: usize, dt: f64) -> ScenarioConfig {
@@ -71,7 +71,7 @@ fn grid_filters_track_the_kalman_bucy_posterior_on_a_linear_model() {
     let mut worst_mean = [0.0f64; 2];
     let mut worst_var = [0.0f64; 2];
     while !run.is_finished() {
-        run.advance(1, None, &mut zakai::experiment::Silent);
+        run.advance(1, None, &mut zakai::lab::experiment::Silent);
         let kf = run.filters()[0].estimate();
         for (g, (wm, wv)) in worst_mean.iter_mut().zip(worst_var.iter_mut()).enumerate() {
             let est = run.filters()[1 + g].estimate();
@@ -175,7 +175,7 @@ fn grid_limits_are_reported_before_allocation() {
     );
     c.methods = vec![MethodConfig::Qiem(YauYauParams::default())];
     c.model.noise = ObservationNoiseConfig::Discrete {
-        mixture: vec![zakai::scenario::GaussianComponent {
+        mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
             mean: vec![0.0],
             cov: vec![vec![1.0]],
@@ -202,7 +202,7 @@ fn final_density(points: usize, dt: f64, t_final: f64) -> (Vec<f64>, Vec<f64>) {
     })];
     let experiment = Experiment::new(c).unwrap();
     let mut run = experiment.start(6).unwrap();
-    run.advance(usize::MAX, None, &mut zakai::experiment::Silent);
+    run.advance(usize::MAX, None, &mut zakai::lab::experiment::Silent);
     let view = run.filters()[0].density().unwrap();
     let (lo, hi) = view.bounds[0];
     let h = (hi - lo) / (points + 1) as f64;
@@ -335,7 +335,7 @@ fn final_density_2d(method: fn(YauYauParams) -> MethodConfig, points: usize) -> 
     })];
     let experiment = Experiment::new(c).unwrap();
     let mut run = experiment.start(3).unwrap();
-    run.advance(usize::MAX, None, &mut zakai::experiment::Silent);
+    run.advance(usize::MAX, None, &mut zakai::lab::experiment::Silent);
     (points, run.filters()[0].density().unwrap().values.to_vec())
 }
 
@@ -396,7 +396,7 @@ fn the_cell_averaged_factor_resolves_likelihoods_narrower_than_the_grid() {
             ..YauYauParams::default()
         })
     };
-    let mut c = zakai::scenario::presets::preset("cos-x6").unwrap();
+    let mut c = zakai::lab::scenario::presets::preset("cos-x6").unwrap();
     c.methods = vec![q(5601, 5e-4, 1), q(1401, 1e-3, 1), q(1401, 1e-3, 8)];
     let e = Experiment::new(c).unwrap();
     for seed in [70u64, 92] {
@@ -470,7 +470,7 @@ fn an_unset_grid_is_chosen_from_the_problem() {
     let mut run = experiment.start(4).unwrap();
     let mut worst = 0.0f64;
     while !run.is_finished() {
-        run.advance(1, None, &mut zakai::experiment::Silent);
+        run.advance(1, None, &mut zakai::lab::experiment::Silent);
         let kf = run.filters()[0].estimate().mean[0];
         for g in 1..3 {
             worst = worst.max((run.filters()[g].estimate().mean[0] - kf).abs());
@@ -483,7 +483,7 @@ fn an_unset_grid_is_chosen_from_the_problem() {
 
     // The cubic sensor (h = x³, prior N(1, 0.1) on [−4, 4]): the steady state at the prior's
     // +3 sd, b = 1.95, is the narrower (1/√(3b²) = 0.296), and the grid resolves it.
-    let mut cubic = zakai::scenario::presets::preset("cubic-sensor-1d").unwrap();
+    let mut cubic = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     cubic.methods = vec![MethodConfig::from_key("qiem").unwrap()];
     let experiment = Experiment::new(cubic).unwrap();
     let MethodConfig::Qiem(chosen) = &experiment.config().methods[0] else {

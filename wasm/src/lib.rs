@@ -8,9 +8,10 @@
 
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
-use zakai::experiment::{Clock, ExperimentRun, Observer};
-use zakai::scenario::{ConfigProblem, ScenarioConfig};
-use zakai::Experiment;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::experiment::{Clock, ExperimentRun, Observer};
+use zakai::lab::scenario::ScenarioConfig;
+use zakai::ConfigProblem;
 
 #[wasm_bindgen]
 extern "C" {
@@ -72,7 +73,7 @@ pub fn start() {
 /// Every preset scenario, as an array of plain objects.
 #[wasm_bindgen]
 pub fn presets() -> Result<JsValue, JsError> {
-    to_js(&zakai::scenario::presets::all())
+    to_js(&zakai::lab::scenario::presets::all())
 }
 
 /// The method catalogue, the page's one source of method forms: `[{key, name, summary, paper,
@@ -80,7 +81,7 @@ pub fn presets() -> Result<JsValue, JsError> {
 /// needs_interval, needs_domain, defaults: {method, …parameters}}, …]`.
 #[wasm_bindgen]
 pub fn methods() -> Result<JsValue, JsError> {
-    to_js(&zakai::scenario::methods::catalogue())
+    to_js(&zakai::lab::scenario::catalogue())
 }
 
 /// Every problem with a scenario, as `[{field, message}, …]` (empty when valid).
@@ -148,7 +149,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
     let probes = config.probe_points();
     let bounds = config.bounds();
     let n = model.n;
-    let kinds = zakai::scenario::methods::catalogue()
+    let kinds = zakai::lab::scenario::catalogue()
         .into_iter()
         .map(|entry| Kind {
             reason: entry.defaults.suitability(&model, &prior, &probes, &bounds),
@@ -166,7 +167,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
     to_js(&Suitability {
         kinds,
         rows,
-        cap: zakai::scenario::memory_cap(),
+        cap: zakai::memory_cap(),
     })
 }
 
@@ -176,7 +177,7 @@ pub fn method_suitability(config: JsValue) -> Result<JsValue, JsError> {
 pub struct MonteCarloJob {
     experiment: Experiment,
     seed: u64,
-    results: Vec<zakai::experiment::RunResult>,
+    results: Vec<zakai::lab::experiment::RunResult>,
 }
 
 #[wasm_bindgen]
@@ -200,7 +201,7 @@ impl MonteCarloJob {
         let seed = self.seed.wrapping_add(self.results.len() as u64);
         let result = self
             .experiment
-            .run_with(seed, Some(&JsClock), &mut zakai::experiment::Silent)
+            .run_with(seed, Some(&JsClock), &mut zakai::lab::experiment::Silent)
             .map_err(js_error)?;
         self.results.push(result);
         Ok(self.results.len())
@@ -209,12 +210,12 @@ impl MonteCarloJob {
     /// The summary of the runs done so far (`MonteCarloSummary`: per method MSE ± s.e.,
     /// failed runs, mean time per run and per step, E_RMS, …).
     pub fn summary(&self) -> Result<JsValue, JsError> {
-        let mc = zakai::study::MonteCarlo::new(&self.experiment);
+        let mc = zakai::lab::study::monte_carlo::MonteCarlo::new(&self.experiment);
         to_js(&mc.summarise(&self.results, self.seed))
     }
 }
 
-/// The convergence check of `zakai check` (`zakai::study::convergence`): every method of the
+/// The convergence check of `zakai check` (`zakai::lab::study::convergence`): every method of the
 /// scenario against itself at doubled resolution on the observations of `seed`, as
 /// `[{method, refined, rms_change, max_change, spread, converged, failure}]` (`converged`
 /// null for exact filters and failed checks), plus the verdict's share of the posterior
@@ -223,22 +224,22 @@ impl MonteCarloJob {
 pub fn convergence_check(config: JsValue, seed: f64) -> Result<JsValue, JsError> {
     #[derive(Serialize)]
     struct Check {
-        rows: Vec<zakai::study::convergence::Convergence>,
+        rows: Vec<zakai::lab::study::convergence::Convergence>,
         share: f64,
     }
     let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
     let seed = seed_from_js(seed)?;
     let experiment = Experiment::new(config).map_err(js_error)?;
     let methods = experiment.config().methods.clone();
-    let rows = zakai::study::convergence::convergence_check(
+    let rows = zakai::lab::study::convergence::convergence_check(
         &experiment,
         &methods,
         seed,
-        zakai::scenario::memory_cap(),
+        zakai::memory_cap(),
     );
     to_js(&Check {
         rows,
-        share: zakai::study::convergence::CONVERGED_SHARE,
+        share: zakai::lab::study::convergence::CONVERGED_SHARE,
     })
 }
 
@@ -345,7 +346,7 @@ pub struct Session {
     run: ExperimentRun,
     seed: u64,
     /// The user's observations (and truth, if given), when the session filters recorded data.
-    recording: Option<zakai::Recording>,
+    recording: Option<zakai::lab::recording::Recording>,
 }
 
 fn seed_from_js(seed: f64) -> Result<u64, JsError> {
@@ -397,7 +398,7 @@ impl Session {
             None => config.seed,
         };
         let experiment = Experiment::new(config).map_err(js_error)?;
-        let recording = zakai::Recording::from_csv(
+        let recording = zakai::lab::recording::Recording::from_csv(
             experiment.model().n,
             observations.as_bytes(),
             truth.as_deref().map(str::as_bytes),
@@ -722,7 +723,7 @@ impl Session {
         let likelihood = (model.n == 1)
             .then(|| {
                 let states: Vec<Vec<f64>> = grid.iter().map(|&x| vec![x]).collect();
-                zakai::filters::observation_log_likelihoods(model, &states, &obs)
+                zakai::observation_log_likelihoods(model, &states, &obs)
             })
             .flatten()
             .and_then(|log| {
@@ -777,7 +778,7 @@ impl Session {
             })
             .collect();
         let shape = [xs.len(), ys.len()];
-        let view = zakai::filters::DensityView {
+        let view = zakai::DensityView {
             bounds: &bounds,
             shape: &shape,
             values: &values,
@@ -872,7 +873,7 @@ impl Session {
         let rows = [&track.estimates[..], &track.after_failure[..]].concat();
         let truth = truth.get(..rows.len())?;
         Some(
-            zakai::metrics::mse_components(truth, &rows, track.n)
+            zakai::lab::metrics::mse_components(truth, &rows, track.n)
                 .iter()
                 .sum(),
         )

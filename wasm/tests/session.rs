@@ -4,7 +4,7 @@
 
 use wasm_bindgen::JsValue;
 use wasm_bindgen_test::*;
-use zakai::scenario::presets;
+use zakai::lab::scenario::presets;
 use zakai_wasm::{validate_scenario, Session};
 
 fn config_js(name: &str) -> JsValue {
@@ -50,8 +50,7 @@ fn invalid_configs_are_errors_not_panics() {
         "{e}"
     );
     let problems = validate_scenario(js).unwrap();
-    let problems: Vec<zakai::scenario::ConfigProblem> =
-        serde_wasm_bindgen::from_value(problems).unwrap();
+    let problems: Vec<zakai::ConfigProblem> = serde_wasm_bindgen::from_value(problems).unwrap();
     assert_eq!(problems.len(), 1);
     assert!(Session::new(config_js("yau-2d"), Some(-1.0)).is_err());
     assert!(Session::new(config_js("yau-2d"), Some(0.5)).is_err());
@@ -85,7 +84,7 @@ fn log_concavity_of_a_grid_density() {
     assert!(get("log_concave").as_bool().is_some());
     let values = js_sys::Array::from(&get("min_curvature"));
     let points = p.methods[qiem].clone();
-    let zakai::scenario::MethodConfig::Qiem(params) = points else {
+    let zakai::lab::scenario::MethodConfig::Qiem(params) = points else {
         unreachable!()
     };
     assert_eq!(values.length() as usize, params.points[0]);
@@ -121,8 +120,8 @@ fn heavy_expressions_build_without_overflowing_the_stack() {
 #[wasm_bindgen_test]
 fn a_session_filters_recorded_observations() {
     let config = presets::preset("cubic-sensor-1d").unwrap();
-    let experiment = zakai::Experiment::new(config.clone()).unwrap();
-    let recording = zakai::Recording::from(experiment.simulate(5));
+    let experiment = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
+    let recording = zakai::lab::recording::Recording::from(experiment.simulate(5));
     let mut simulated = Session::new(config_js("cubic-sensor-1d"), Some(5.0)).unwrap();
     let mut recorded = Session::from_recording(
         config_js("cubic-sensor-1d"),
@@ -170,8 +169,8 @@ fn a_session_filters_recorded_observations() {
 #[wasm_bindgen_test]
 fn a_session_takes_pushed_observations() {
     let config = presets::preset("cubic-sensor-1d").unwrap();
-    let experiment = zakai::Experiment::new(config.clone()).unwrap();
-    let data = zakai::Recording::from(experiment.simulate(5));
+    let experiment = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
+    let data = zakai::lab::recording::Recording::from(experiment.simulate(5));
     let rows = 40;
     let (mut times, mut dy) = (
         data.times[..rows].to_vec(),

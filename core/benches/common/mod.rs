@@ -3,10 +3,11 @@
 
 use criterion::{BatchSize, Bencher};
 use std::hint::black_box;
-use zakai::filters::spectral::SpectralParams;
-use zakai::scenario::MethodConfig;
+use zakai::lab::experiment::Experiment;
+use zakai::lab::scenario::MethodConfig;
 use zakai::simulate::Trajectory;
-use zakai::{Experiment, Filter, Observation};
+use zakai::SpectralParams;
+use zakai::{Filter, Observation};
 
 /// The spectral filter with 004's sizes: in 1-D 11 off-line and 16 on-line functions (the
 /// cubic sensor (44)); in 2-D and 3-D the defaults (15², 004's example (46), and 8³). A 1-D
@@ -22,7 +23,7 @@ pub fn spectral_004(n: usize) -> MethodConfig {
 
 /// Steps `filter` through every increment of the 1-D continuous-observation run `data` after
 /// the first, reading the estimate after each step when `estimates` is set (into one
-/// reused [`zakai::filters::Estimate`], as the driver does).
+/// reused [`zakai::Estimate`], as the driver does).
 pub fn bare_run(filter: &mut dyn Filter, data: &Trajectory, estimates: bool) {
     let mut estimate = filter.estimate();
     for k in 1..data.times.len() {

@@ -237,14 +237,14 @@ pub trait Method {
     ) -> Result<Self::Filter, ZakaiError>;
     /// The same method at doubled resolution (grid points, basis, particles, substeps) with
     /// what was doubled (`"particles 200 → 400"`), for the convergence check
-    /// ([`crate::study::convergence`]); `None` for exact filters or when the doubled
+    /// ([`crate::lab::study::convergence`]); `None` for exact filters or when the doubled
     /// resolution is past the method's limits.
     fn refined(_params: &Self::Params, _n: usize) -> Option<(Self::Params, String)> {
         None
     }
     /// The sizes the user left unset, chosen from the problem (model, prior, domain) instead
     /// of fixed numbers, with a note of what was chosen and why; `None` when nothing is
-    /// chosen this way. Applied by [`crate::Experiment::new`] and by the builders before the
+    /// chosen this way. Applied by [`crate::lab::experiment::Experiment::new`] and by the builders before the
     /// filter is built, so a default follows the domain and the prior.
     fn problem_defaults(
         _params: &Self::Params,

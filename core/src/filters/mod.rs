@@ -601,11 +601,16 @@ impl<T> LengthCache<T> {
     }
 }
 
+/// Relative tolerance within which a step τ_k − τ_{k−1} counts as the interval Δτ (the
+/// driver then steps by Δτ exactly, so a recording written from a simulation filters bit for
+/// bit as the simulation did).
+pub const INTERVAL_TOLERANCE: f64 = 1e-9;
+
 /// `interval` as whole intervals Δτ = `dt_obs` and a remainder in (0, Δτ) (0 when the
-/// interval is a multiple of Δτ up to [`crate::recording::INTERVAL_TOLERANCE`]): how a grid
+/// interval is a multiple of Δτ up to [`INTERVAL_TOLERANCE`]): how a grid
 /// filter built for Δτ crosses an interval of any length with the operators it has.
 pub(crate) fn whole_intervals(interval: f64, dt_obs: f64) -> (usize, f64) {
-    let tolerance = crate::recording::INTERVAL_TOLERANCE;
+    let tolerance = INTERVAL_TOLERANCE;
     let ratio = interval / dt_obs;
     let nearest = libm::round(ratio);
     if nearest >= 1.0 && (ratio - nearest).abs() <= tolerance * ratio {

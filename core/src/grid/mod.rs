@@ -536,4 +536,15 @@ mod tests {
         let total: f64 = out.iter().sum::<f64>() * 0.2 * 0.2;
         assert!((total - 1.0).abs() < 1e-3, "{total}");
     }
+
+    /// A grid past the node cap is the structured `TooLarge`, with the cap.
+    #[test]
+    fn a_grid_past_the_cap_is_too_large() {
+        let e = TensorGrid::new(&[(0.0, 1.0), (0.0, 1.0)], &[100_000, 100_000]).unwrap_err();
+        assert!(
+            matches!(e, crate::error::ZakaiError::TooLarge { limit, unit: "nodes", .. } if limit == MAX_NODES),
+            "{e:?}"
+        );
+        assert!(alloc::format!("{e}").contains("exceeds the cap"), "{e}");
+    }
 }

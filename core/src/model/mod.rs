@@ -258,3 +258,21 @@ impl Model {
         matches!(self.observations, ObservationModel::Continuous { .. })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::test;
+
+    /// A non-positive noise intensity is the structured `OutOfRange`, with its value.
+    #[test]
+    fn a_negative_intensity_is_out_of_range() {
+        let e = Noise::ContinuousScalar(-1.0)
+            .observation_model(1)
+            .unwrap_err();
+        assert!(
+            matches!(e, ZakaiError::OutOfRange { value, requirement: "positive and finite", .. } if value == -1.0),
+            "{e:?}"
+        );
+    }
+}

@@ -107,7 +107,7 @@ impl ImplicitStep {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::presets;
+    use crate::model::{Model, Noise};
     use crate::testing::test;
     use alloc::vec;
     use nalgebra::{DMatrix, DVector};
@@ -154,8 +154,13 @@ mod tests {
     /// Δt = 0.01 (1.7·10⁻⁵ parabolic, 4.9·10⁻⁵ FDM measured).
     #[test]
     fn the_split_step_is_24_to_second_order() {
-        let config = presets::preset("sa-example-2").expect("preset");
-        let model = config.build_model().expect("model");
+        // 001 §4.1 example 2's signal (the measurements do not enter the step).
+        let model = Model::from_text(
+            &["-0.05*x1 + x2", "0.7*x1 - 0.4*x2"],
+            &["x1 + x2", "x2"],
+            Noise::discrete(0.1),
+        )
+        .expect("model");
         let grid = TensorGrid::new(&[(-2.0, 5.0), (-2.0, 5.0)], &[9, 8]).expect("grid");
         let advection = UpwindAdvection::new(&grid, &*model.drift);
         let n = 2;

@@ -779,16 +779,14 @@ impl Filter for YauYauFilter {
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
-    use crate::scenario::presets;
+    use crate::model::Noise;
     use crate::testing::test;
 
     /// A model with a strong drift f = 3 sin 2x and h = x on [−3, 3], its operator on `points`
     /// nodes, and the (22) warnings for `dt`.
     fn operator(points: usize, dt: f64) -> (TensorGrid, KolmogorovOperator, usize) {
-        let mut config = presets::preset("cubic-sensor-1d").expect("preset");
-        config.model.drift = vec!["3*sin(2*x)".into()];
-        config.model.observation = vec!["x".into()];
-        let model = config.build_model().expect("model");
+        let model =
+            Model::from_text(&["3*sin(2*x)"], &["x"], Noise::continuous(1.0)).expect("model");
         let grid = TensorGrid::new(&[(-3.0, 3.0)], &[points]).expect("grid");
         let op = KolmogorovOperator::new(&model, &grid, false).expect("operator");
         let warnings = guarantees::m_matrix(&op, &grid, dt).len();

@@ -15,12 +15,13 @@ use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
 use crate::error::{FilterError, ZakaiError};
+use crate::filters::method::BuildContext;
 use crate::filters::{Concern, Filter, Observation, ObservationKind};
-use crate::metrics;
+use crate::lab::metrics;
+use crate::lab::recording::{is_interval, Recording};
+use crate::lab::scenario::MethodConfig;
+use crate::lab::scenario::ScenarioConfig;
 use crate::model::{Model, Prior};
-use crate::recording::{is_interval, Recording};
-use crate::scenario::methods::{BuildContext, MethodConfig};
-use crate::scenario::ScenarioConfig;
 use crate::simulate::{rng_from_seed, simulate, Trajectory};
 use crate::validate::ConfigProblem;
 
@@ -696,7 +697,7 @@ impl Filter for NotApplicable {
 pub struct ExperimentRun {
     seed: u64,
     data: Recording,
-    /// Δτ: steps within [`crate::recording::INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
+    /// Δτ: steps within [`crate::lab::recording::INTERVAL_TOLERANCE`] of it are taken as exactly Δτ.
     dt_obs: f64,
     /// The self-checks' findings of one step (reused: nothing is allocated per step).
     concerns: Vec<Concern>,
@@ -706,7 +707,7 @@ pub struct ExperimentRun {
     tracks: Vec<MethodTrack>,
     next: usize,
     bound: f64,
-    track_loss: Option<crate::scenario::TrackLoss>,
+    track_loss: Option<crate::lab::scenario::TrackLoss>,
     /// Per method: an exact reference, which the track-loss test does not apply to.
     exact: Vec<bool>,
     /// Whether methods declared failed with their state intact keep being stepped.
@@ -1103,7 +1104,7 @@ mod tests {
     /// way the mean is the clock's tick, the two readings around a step being one apart.
     #[test]
     fn cheap_steps_are_timed_on_a_sample_and_dear_ones_on_every_step() {
-        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        let mut config = crate::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
         config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
         config.failure.track_loss = None;
         let experiment = Experiment::new(config).unwrap();
@@ -1126,7 +1127,7 @@ mod tests {
 
     #[test]
     fn a_failure_under_a_violated_condition_names_the_condition() {
-        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        let mut config = crate::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
         config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
         config.methods.push(config.methods[0].clone());
         let experiment = Experiment::new(config).unwrap();
@@ -1153,7 +1154,7 @@ mod tests {
     /// bit for bit, failures at the same observation with the same message, and steps.
     #[test]
     fn method_by_method_runs_record_what_stepped_runs_record() {
-        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        let mut config = crate::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
         config.time.t_final = 1.0;
         // A tight divergence bound makes methods fail in some runs, so failures are compared
         // too (checked below).
@@ -1187,11 +1188,11 @@ mod tests {
     /// a run that does not follow records nothing after the failure.
     #[test]
     fn a_followed_method_after_track_loss_estimates_what_it_would_without_the_rule() {
-        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        let mut config = crate::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
         config.methods.retain(|m| matches!(m, MethodConfig::Ekf(_)));
         config.time.t_final = 2.0;
         let free = Experiment::new(config.clone()).unwrap().run(3).unwrap();
-        config.failure.track_loss = Some(crate::scenario::TrackLoss {
+        config.failure.track_loss = Some(crate::lab::scenario::TrackLoss {
             error: 1e-3,
             duration: 0.0,
         });
@@ -1226,14 +1227,14 @@ mod tests {
     /// runs to the end.
     #[test]
     fn exact_references_are_never_lost_by_the_track_loss_rule() {
-        let mut config = crate::scenario::presets::preset("cubic-sensor-1d").unwrap();
+        let mut config = crate::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
         config.model.observation = alloc::vec!["x".into()];
         config.methods = alloc::vec![
             MethodConfig::Kalman(Default::default()),
             MethodConfig::Ekf(Default::default()),
         ];
         config.time.t_final = 1.0;
-        config.failure.track_loss = Some(crate::scenario::TrackLoss {
+        config.failure.track_loss = Some(crate::lab::scenario::TrackLoss {
             error: 1e-3,
             duration: 0.0,
         });

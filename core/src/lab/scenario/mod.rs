@@ -2,7 +2,7 @@
 //! wasm `Session`, the page's URL and the tests all use it; nothing re-describes a scenario in
 //! another shape.
 
-pub mod methods;
+mod methods;
 pub mod presets;
 
 use alloc::format;
@@ -14,10 +14,9 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::validate::{check_spd, check_vector, matrix};
-pub use crate::validate::{
-    format_bytes, memory_cap, parse_bytes, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES,
-};
-pub use methods::{DirectParams, MethodConfig, SpectralParams};
+pub use crate::validate::{format_bytes, parse_bytes};
+use crate::validate::{memory_cap, ConfigProblem};
+pub use methods::{catalogue, CatalogueEntry, MethodConfig};
 
 use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};

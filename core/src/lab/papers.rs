@@ -2,15 +2,13 @@
 //! (000 Yueh, Lin & Yau 2014; 002 Shi, Yang & Yau 2018; 003 Kang, Salmon & Yau 2023; 004 Shi,
 //! Chen & Yau 2021), the J(t) figures of 001 (Šimandl & Švácha 2005), and which of those
 //! numbers apply to a given scenario ([`paper_values`], shown beside every Monte Carlo table).
-//! Running the tables is [`crate::reproduction`]'s.
+//! Running the tables is [`crate::lab::reproduction`]'s.
 
 use alloc::string::String;
 use alloc::vec::Vec;
 
+use crate::lab::scenario::{presets, MethodConfig, ScenarioConfig};
 use crate::model::{Model, Prior};
-use crate::scenario::{presets, MethodConfig, ScenarioConfig};
-
-pub use crate::scenario::presets::{cite, AUTHORS};
 
 /// The error measure a table reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,7 +76,7 @@ fn cells(values: &[(&'static str, Option<&[f64]>)]) -> Vec<(&'static str, Option
 }
 
 /// A figure of J(t) against the exact Gaussian-sum density (001), reproduced by
-/// [`crate::study::density_error::j_curve`] over `runs` seeds of `preset`.
+/// [`crate::lab::study::density_error::j_curve`] over `runs` seeds of `preset`.
 #[derive(Clone, Debug)]
 pub struct PaperFigure {
     /// Identifier for `zakai reproduce`, e.g. `001-fig-4`.
@@ -336,7 +334,7 @@ impl PaperValue {
 /// The papers' numbers that apply to `config`'s methods, as `(method index, value)`: a cell
 /// applies when `config` is the row's preset (after the row's adjustment) in model, prior,
 /// truth, domain and time, and the method is the preset's method of that name with the same
-/// parameters (sizes left unset chosen from the problem as [`crate::Experiment::new`] does, with
+/// parameters (sizes left unset chosen from the problem as [`crate::lab::experiment::Experiment::new`] does, with
 /// `model` and `prior`) — a scenario changed anywhere that matters gets no
 /// paper value.
 pub fn paper_values(

@@ -16,9 +16,9 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
-use crate::experiment::Experiment;
 use crate::filters::{Estimate, Filter, Observation};
-use crate::scenario::MethodConfig;
+use crate::lab::experiment::Experiment;
+use crate::lab::scenario::MethodConfig;
 use crate::simulate::Trajectory;
 
 /// The share of the posterior standard deviation by which a converged method's estimate may
@@ -106,7 +106,7 @@ pub fn convergence_check(
                 ));
                 return row;
             }
-            let seed = crate::experiment::method_seed(seed, i);
+            let seed = crate::lab::experiment::method_seed(seed, i);
             let run = |m: &MethodConfig| {
                 let mut filter = experiment.build_method(m, m.display_name(), seed)?;
                 estimates(filter.as_mut(), &data)

@@ -1,4 +1,4 @@
-//! Recorded observations: what the driver ([`crate::Experiment`]) feeds every filter, whether
+//! Recorded observations: what the driver ([`crate::lab::experiment::Experiment`]) feeds every filter, whether
 //! Zakai simulated them ([`Trajectory`] converts) or a user recorded them. The truth is
 //! optional: without it a run reports estimates, covariances, failures and timings, with it
 //! also errors against it.
@@ -52,10 +52,7 @@ pub struct Recording {
     pub truth: Option<Vec<f64>>,
 }
 
-/// Relative tolerance within which a step τ_k − τ_{k−1} counts as the interval Δτ (the
-/// driver then steps by Δτ exactly, so a recording written from a simulation filters bit for
-/// bit as the simulation did).
-pub const INTERVAL_TOLERANCE: f64 = 1e-9;
+pub use crate::filters::INTERVAL_TOLERANCE;
 
 /// Whether a step of length `step` is the interval `dt_obs` up to [`INTERVAL_TOLERANCE`].
 pub fn is_interval(step: f64, dt_obs: f64) -> bool {

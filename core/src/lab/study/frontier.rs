@@ -15,16 +15,16 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use super::MonteCarlo;
+use super::monte_carlo::MonteCarlo;
 use crate::error::ZakaiError;
-use crate::experiment::Experiment;
 use crate::filters::fpe_split::FpeParams;
 use crate::filters::gaussian_sum::GaussianSumParams;
 use crate::filters::kalman::{EkfParams, IekfParams, UkfParams};
 use crate::filters::particle::PfParams;
 use crate::filters::spectral::SpectralParams;
 use crate::filters::yau_fd::YauYauParams;
-use crate::scenario::{MethodConfig, ScenarioConfig};
+use crate::lab::experiment::Experiment;
+use crate::lab::scenario::{MethodConfig, ScenarioConfig};
 
 /// One method at one setting of its cost knob.
 #[derive(Clone, Debug, PartialEq)]

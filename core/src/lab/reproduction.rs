@@ -1,4 +1,4 @@
-//! The papers' tables reproduced: every row of a table of [`crate::papers`] runs its preset's
+//! The papers' tables reproduced: every row of a table of [`crate::lab::papers`] runs its preset's
 //! Monte Carlo job restricted to the table's methods and sets our mean (± standard error,
 //! failed runs) beside the paper's number.
 //!
@@ -8,13 +8,11 @@
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
-use crate::experiment::Experiment;
-use crate::scenario::presets;
-use crate::study::{MethodSummary, MonteCarlo};
+use crate::lab::experiment::Experiment;
+use crate::lab::scenario::presets;
+use crate::lab::study::monte_carlo::{MethodSummary, MonteCarlo};
 
-pub use crate::papers::{
-    figures, paper_values, table, tables, Metric, PaperFigure, PaperRow, PaperTable, PaperValue,
-};
+use crate::lab::papers::{Metric, PaperRow, PaperTable};
 
 /// Our result for one method of one row.
 #[derive(Clone, Debug)]

@@ -1,5 +1,5 @@
 //! Error measures of the papers (pure functions of truth and estimates; the runners that
-//! repeat experiments to compute them are in [`crate::study`]).
+//! repeat experiments to compute them are in [`crate::lab::study`]).
 //!
 //! * MSE of 004 (43): `(1/(N+1)) Σ_{k=0}^N (x_k − x̂_k)²`, per component (Table 2 reports
 //!   x₁ and x₂ separately) and summed;

@@ -18,20 +18,12 @@ use crate::filters::fpe_split::{ImplicitFdm, Separation};
 use crate::filters::gaussian_sum::GaussianSum;
 use crate::filters::kalman::{Ekf, Iekf, Iokf, Kalman, Ukf};
 use crate::filters::method::memory_estimate;
-pub use crate::filters::method::{BuildContext, Method, MethodInfo, ProblemContext};
+use crate::filters::method::{BuildContext, Method, MethodInfo, ProblemContext};
 use crate::filters::particle::Pf;
 use crate::filters::spectral::Spectral;
 use crate::filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
 use crate::filters::Filter;
 use crate::model::{Model, Prior};
-
-pub use crate::filters::direct::filter::DirectParams;
-pub use crate::filters::fpe_split::FpeParams;
-pub use crate::filters::gaussian_sum::GaussianSumParams;
-pub use crate::filters::kalman::{EkfParams, IekfParams, IokfParams, KalmanParams, UkfParams};
-pub use crate::filters::particle::PfParams;
-pub use crate::filters::spectral::SpectralParams;
-pub use crate::filters::yau_fd::{Scheme, YauYauParams};
 
 /// One method of the catalogue: its description and its default parameters (as a
 /// [`MethodConfig`], so it serializes to the JSON a scenario holds).

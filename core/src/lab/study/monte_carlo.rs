@@ -10,9 +10,9 @@ use alloc::vec::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ZakaiError;
-use crate::experiment::{Experiment, RunResult, Silent};
-use crate::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
-use crate::papers::{paper_values, PaperValue};
+use crate::lab::experiment::{Experiment, RunResult, Silent};
+use crate::lab::metrics::{abs_errors, mean_and_stderr, mean_error_norm, quartiles};
+use crate::lab::papers::{paper_values, PaperValue};
 
 /// Summary of one method over a Monte Carlo job.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -58,7 +58,7 @@ pub struct MethodSummary {
     /// The first run's self-check warnings, one line each, for the report.
     pub first_concerns: Vec<String>,
     /// The paper's number for this method, when the scenario is the preset of a paper's
-    /// table row with this method unchanged ([`crate::papers::paper_values`]).
+    /// table row with this method unchanged ([`crate::lab::papers::paper_values`]).
     #[serde(default)]
     pub paper: Option<PaperValue>,
     /// An earlier method of the table that gave this one's MSE in every run.
@@ -198,7 +198,7 @@ impl<'a> MonteCarlo<'a> {
     }
 
     fn one(&self, seed: u64) -> Result<RunResult, ZakaiError> {
-        crate::experiment::with_standard_clock(|clock| {
+        crate::lab::experiment::with_standard_clock(|clock| {
             self.experiment.run_with(seed, clock, &mut Silent)
         })
     }

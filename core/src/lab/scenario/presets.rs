@@ -107,24 +107,6 @@ fn ekf_from(mean: f64, variance: f64) -> MethodConfig {
     })
 }
 
-/// The five papers by number with their authors and year (`shared/papers/README.md`).
-pub const AUTHORS: [(&str, &str); 5] = [
-    ("000", "Yueh, Lin & Yau 2014"),
-    ("001", "Šimandl & Švácha 2005"),
-    ("002", "Shi, Yang & Yau 2018"),
-    ("003", "Kang, Salmon & Yau 2023"),
-    ("004", "Shi, Chen & Yau 2021"),
-];
-
-/// A paper cited by authors and year as well as number: `"Shi, Chen & Yau 2021 [004]"` for
-/// `"004"`; an unknown number stays as it is.
-pub fn cite(paper: &str) -> alloc::string::String {
-    match AUTHORS.iter().find(|(n, _)| *n == paper) {
-        Some((n, who)) => alloc::format!("{who} [{n}]"),
-        None => paper.into(),
-    }
-}
-
 struct Spec<'a> {
     name: &'a str,
     /// The paper's number ("004"), cited with its authors and year in the title and reference.
@@ -148,7 +130,7 @@ struct Spec<'a> {
 }
 
 fn build(s: Spec) -> ScenarioConfig {
-    let citation = cite(s.paper);
+    let citation = crate::lab::bibliography::cite(s.paper);
     ScenarioConfig {
         name: s.name.into(),
         title: match s.place {

@@ -13,11 +13,11 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
-use crate::experiment::Experiment;
 use crate::filters::fpe_split::{ContinuousDiscreteGrid, FpeScheme};
 use crate::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams, Reduction};
 use crate::filters::Filter;
-use crate::scenario::MethodConfig;
+use crate::lab::experiment::Experiment;
+use crate::lab::scenario::MethodConfig;
 
 /// Where in the observation cycle a sample of J was taken.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
