@@ -139,17 +139,17 @@ pub use model::{
     Prior, VectorFunction,
 };
 
-pub use filters::method::{
-    BuildContext, Builder, Method, MethodInfo, ParamInfo, ParamKind, ProblemContext, Takes,
-};
+pub use filters::builder::Builder;
+pub use filters::method::{BuildContext, Method, MethodInfo, ProblemContext, Takes};
+pub use filters::params::{ParamInfo, ParamKind};
 pub use filters::{
     observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
     ObservationKind, Observed,
 };
 
 // Each method family: its markers, the filter type they build, and its parameters.
-pub use filters::direct::filter::{DirectFilter, DirectParams};
 pub use filters::direct::Direct;
+pub use filters::direct::{DirectFilter, DirectParams};
 pub use filters::fpe_split::{
     ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation,
 };

@@ -1,27 +1,35 @@
-//! Filters: one [`Filter`] trait, one module per method family.
+//! Filters: one [`Filter`] trait, one folder per method family.
 //!
-//! * [`kalman`] — Kalman–Bucy (exact for linear Gaussian models), EKF, UKF;
+//! * [`kalman`] — Kalman–Bucy (exact for linear Gaussian models), EKF, UKF, and the MAP
+//!   updates of 003 (IEKF, IOKF);
 //! * [`particle`] — the bootstrap particle filter;
-//! * [`yau_fd`] — the finite-difference Yau–Yau filters of 000 (IEM, QIEM; the filters
-//!   need the `std` feature for their FFT plans);
+//! * [`yau_fd`] — the finite-difference Yau–Yau filters of 000 (IEM, QIEM, SPT, QIEM-4; the
+//!   filters need the `std` feature for their FFT plans);
 //! * [`spectral`] — the off-line/on-line spectral Yau–Yau filter of 004 (Legendre basis);
 //! * [`direct`] — the direct method of 002 (Gaussian approximation and Riccati ODEs);
 //! * [`fpe_split`] — the continuous–discrete Fokker–Planck grid filters of 001;
-//! * [`gaussian_sum`] — the exact Gaussian-sum filter of linear models with mixtures;
-//! * [`method`] — the [`method::Method`] trait each family registers itself with, its
-//!   parameter schema and the one [`method::Builder`].
+//! * [`gaussian_sum`] — the exact Gaussian-sum filter of linear models with mixtures.
 //!
-//! Every filter is built from a [`crate::model::Model`], a prior and its own parameters (a
-//! serde struct with defaults and a check listing every problem), consumes the same
-//! [`Observation`]s, and exposes its [`Estimate`]; grid methods also expose their density
-//! through [`DensityView`].
+//! Every family folder has the same shape: `mod.rs` (the module doc — idea, equations,
+//! example, cost — and the family's public names), `params.rs` (its parameters, each
+//! declared once with `parameters!`, see [`params`]), `filter.rs` (its filter; the Gaussian
+//! family has one file per filter type instead: `linear.rs`, `ekf.rs`, `ukf.rs`, `map.rs`) and
+//! `method.rs` (its registration: the [`method::Method`] implementation), beside the building
+//! blocks named in its paper's words (`operator.rs`, `riccati.rs`, `legendre.rs`, …). The
+//! catalogue (`lab::scenario`) lists each family once; [`builder::Builder`] builds any of them.
+//!
+//! Every filter is built from a [`crate::model::Model`], a prior and its own parameters,
+//! consumes the same [`Observation`]s, and exposes its [`Estimate`]; grid methods also expose
+//! their density through [`DensityView`].
 
+pub mod builder;
 pub mod direct;
 pub mod fpe_split;
 pub mod gaussian_sum;
 pub mod kalman;
 pub mod marginal;
 pub mod method;
+pub mod params;
 pub mod particle;
 pub mod spectral;
 pub mod yau_fd;

@@ -1,7 +1,7 @@
 //! The comparison harness: everything that runs methods side by side rather than filtering
 //! one series — the one description of a problem ([`scenario::ScenarioConfig`], with the
 //! papers' examples in [`scenario::presets`] and the method catalogue in
-//! [`scenario::methods`]), recorded observations ([`recording::Recording`]), the driver that
+//! [`scenario::catalogue`]), recorded observations ([`recording::Recording`]), the driver that
 //! feeds every method the same data ([`experiment::Experiment`]), error metrics
 //! ([`metrics`]), Monte Carlo tables, convergence checks and accuracy/cost frontiers
 //! ([`study`]), and the papers' tables as data ([`papers`]) and rerun ([`reproduction`]), the

@@ -24,82 +24,16 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
 
 use super::gaussian_approximation::Decomposition;
 use super::riccati::{propagate_scalar_term, KolmogorovCoefficients};
+use super::DirectParams;
 use crate::diagnostics::yau_system::{self, Affine};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
 use crate::model::dmz::PartialIncrements;
 use crate::model::{Model, ObservationModel, Prior};
-
-/// Parameters of the direct method.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct DirectParams {
-    /// Grid points on the domain (decomposition, recombination, estimate).
-    pub points: usize,
-    /// α of Algorithm 1 (threshold α · max).
-    pub alpha: f64,
-    /// Largest number of Gaussians per decomposition.
-    pub max_terms: usize,
-    /// RK4 steps per observation interval for (35)–(37).
-    pub substeps: usize,
-    /// The affine part `l(x) = slope · x + offset` of f in (C1).
-    pub linear: [f64; 2],
-}
-
-impl Default for DirectParams {
-    fn default() -> Self {
-        DirectParams {
-            points: 801,
-            alpha: 0.01,
-            max_terms: 60,
-            substeps: 10,
-            linear: [0.0, 0.0],
-        }
-    }
-}
-
-impl DirectParams {
-    /// Problems with these parameters for an n-dimensional model, `(field, message)`.
-    pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
-        let mut p = Vec::new();
-        if n != 1 {
-            p.push((
-                "method",
-                format!("the direct method is built for n = 1; the model has n = {n}"),
-            ));
-        }
-        if !(11..=100_000).contains(&self.points) {
-            p.push((
-                "points",
-                format!("must be between 11 and 100000, got {}", self.points),
-            ));
-        }
-        if !(self.alpha > 0.0 && self.alpha < 1.0) {
-            p.push(("alpha", format!("must be in (0, 1), got {}", self.alpha)));
-        }
-        if !(1..=1000).contains(&self.max_terms) {
-            p.push((
-                "max_terms",
-                format!("must be between 1 and 1000, got {}", self.max_terms),
-            ));
-        }
-        if !(1..=10_000).contains(&self.substeps) {
-            p.push((
-                "substeps",
-                format!("must be between 1 and 10000, got {}", self.substeps),
-            ));
-        }
-        if self.linear.iter().any(|v| !v.is_finite()) {
-            p.push(("linear", "must be finite".into()));
-        }
-        p
-    }
-}
 
 /// The direct method's self-check threshold: the share `Σ|r| / Σ|û|` of û that Algorithm 1
 /// leaves to the residual r, which is carried over the interval with the zeroth-order factor

@@ -5,32 +5,11 @@
 
 use alloc::string::String;
 
-use serde::{Deserialize, Serialize};
-
 use super::measurement::MeasurementForm;
-use super::{GaussianInit, GaussianState};
+use super::{EkfParams, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::model::{Model, Prior};
-
-/// Parameters of [`ExtendedKalman`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct EkfParams {
-    /// RK4 steps per observation interval for the moment equations.
-    pub substeps: usize,
-    /// Overrides the prior's mean and covariance.
-    pub init: GaussianInit,
-}
-
-impl Default for EkfParams {
-    fn default() -> Self {
-        EkfParams {
-            substeps: 4,
-            init: GaussianInit::default(),
-        }
-    }
-}
 
 /// The extended Kalman filter (see the module doc).
 #[derive(Clone, Debug)]

@@ -19,21 +19,12 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
 
 use super::measurement::MeasurementForm;
-use super::{GaussianInit, GaussianState};
+use super::{GaussianState, KalmanParams};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::model::{Model, Prior, VectorFunction};
-
-/// Parameters of [`KalmanBucy`].
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct KalmanParams {
-    /// Overrides the prior's mean and covariance.
-    pub init: GaussianInit,
-}
 
 /// Jacobian of `g` at `x` as a matrix.
 fn jacobian_at(g: &dyn VectorFunction, x: &[f64]) -> DMatrix<f64> {

@@ -20,12 +20,10 @@
 //! `P ← P − K H P` with H at that point. For continuous observations h and R are those of the
 //! increment (`h Δτ`, `S Δτ`), as for the EKF.
 
-use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
 use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
 
 use super::map_point::{map_update, MapSolver, MapWork, UpdateReport};
 use super::measurement::MeasurementForm;
@@ -34,102 +32,6 @@ use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::model::{Model, Prior};
-
-/// Parameters of the IEKF.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct IekfParams {
-    /// Largest number of Gauss–Newton iterations per observation (003 Table 1: 6).
-    pub iterations: usize,
-    /// Stop when `‖Δx‖ ≤ tolerance · (1 + ‖x‖)`.
-    pub tolerance: f64,
-    /// RK4 steps per observation interval for the moment equations.
-    pub substeps: usize,
-    /// Overrides the prior's mean and covariance.
-    pub init: GaussianInit,
-}
-
-impl Default for IekfParams {
-    fn default() -> Self {
-        IekfParams {
-            iterations: 6,
-            tolerance: 1e-10,
-            substeps: 4,
-            init: GaussianInit::default(),
-        }
-    }
-}
-
-/// Parameters of the IOKF (Algorithm 4.1).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct IokfParams {
-    /// l, the number of homotopy splits `λ_j = j/l` (003 Table 1: 3).
-    pub splits: usize,
-    /// m, Newton steps per split (003 Table 1: 2).
-    pub newton_steps: usize,
-    /// RK4 steps per observation interval for the moment equations.
-    pub substeps: usize,
-    /// Overrides the prior's mean and covariance.
-    pub init: GaussianInit,
-}
-
-impl Default for IokfParams {
-    fn default() -> Self {
-        IokfParams {
-            splits: 3,
-            newton_steps: 2,
-            substeps: 4,
-            init: GaussianInit::default(),
-        }
-    }
-}
-
-impl IekfParams {
-    /// Problems with these parameters, `(field, message)`.
-    pub fn problems(&self) -> alloc::vec::Vec<(&'static str, String)> {
-        let mut p = alloc::vec::Vec::new();
-        if !(1..=1000).contains(&self.iterations) {
-            p.push((
-                "iterations",
-                format!("must be between 1 and 1000, got {}", self.iterations),
-            ));
-        }
-        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
-            p.push((
-                "tolerance",
-                format!("must be nonnegative and finite, got {}", self.tolerance),
-            ));
-        }
-        if self.substeps == 0 {
-            p.push(("substeps", "must be at least 1".into()));
-        }
-        p
-    }
-}
-
-impl IokfParams {
-    /// Problems with these parameters, `(field, message)`.
-    pub fn problems(&self) -> alloc::vec::Vec<(&'static str, String)> {
-        let mut p = alloc::vec::Vec::new();
-        if !(1..=100).contains(&self.splits) {
-            p.push((
-                "splits",
-                format!("l must be between 1 and 100, got {}", self.splits),
-            ));
-        }
-        if !(1..=100).contains(&self.newton_steps) {
-            p.push((
-                "newton_steps",
-                format!("m must be between 1 and 100, got {}", self.newton_steps),
-            ));
-        }
-        if self.substeps == 0 {
-            p.push(("substeps", "must be at least 1".into()));
-        }
-        p
-    }
-}
 
 /// The MAP filters' convergence self-check threshold: the Gauss–Newton step still left at the
 /// point an update returns, in standard deviations of the Laplace covariance there. At a MAP

@@ -9,17 +9,19 @@ pub mod linear;
 pub mod map;
 pub mod map_point;
 pub mod measurement;
-pub mod methods;
+mod method;
+mod params;
 pub mod propagate;
 pub mod second_mode;
 pub mod ukf;
 
-pub use ekf::{EkfParams, ExtendedKalman};
-pub use linear::{KalmanBucy, KalmanParams};
-pub use map::{IekfParams, IokfParams, MapKalman};
+pub use ekf::ExtendedKalman;
+pub use linear::KalmanBucy;
+pub use map::MapKalman;
 pub use map_point::MapSolver;
-pub use methods::{Ekf, Iekf, Iokf, Kalman, Ukf};
-pub use ukf::{UkfParams, UnscentedKalman};
+pub use method::{Ekf, Iekf, Iokf, Kalman, Ukf};
+pub use params::{EkfParams, IekfParams, IokfParams, KalmanParams, UkfParams, MAX_SUBSTEPS};
+pub use ukf::UnscentedKalman;
 
 use alloc::vec::Vec;
 

@@ -16,68 +16,13 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
 
 use super::measurement::{Measurement, MeasurementForm};
-use super::{GaussianInit, GaussianState};
+use super::{GaussianState, UkfParams};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::linalg::cholesky_in;
 use crate::model::{BatchScratch, Model, Prior};
-
-/// Parameters of [`UnscentedKalman`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct UkfParams {
-    /// Spread of the sigma points (0 < α ≤ 1).
-    pub alpha: f64,
-    /// Prior-knowledge weight (2 is optimal for Gaussians).
-    pub beta: f64,
-    /// Secondary scaling; n + κ must be positive.
-    pub kappa: f64,
-    /// RK4 steps per observation interval for the sigma-point moment equations.
-    pub substeps: usize,
-    /// Overrides the prior's mean and covariance.
-    pub init: GaussianInit,
-}
-
-impl Default for UkfParams {
-    fn default() -> Self {
-        UkfParams {
-            alpha: 0.5,
-            beta: 2.0,
-            kappa: 0.0,
-            substeps: 4,
-            init: GaussianInit::default(),
-        }
-    }
-}
-
-impl UkfParams {
-    /// Problems with these parameters for an `n`-dimensional state.
-    pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
-        let mut p = Vec::new();
-        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
-            p.push(("alpha", format!("must be in (0, 1], got {}", self.alpha)));
-        }
-        if !self.beta.is_finite() || self.beta < 0.0 {
-            p.push((
-                "beta",
-                format!("must be finite and nonnegative, got {}", self.beta),
-            ));
-        }
-        if !self.kappa.is_finite() || n as f64 + self.kappa <= 0.0 {
-            p.push((
-                "kappa",
-                format!("n + κ must be positive (n = {n}, κ = {})", self.kappa),
-            ));
-        }
-        if self.substeps == 0 {
-            p.push(("substeps", "must be at least 1".into()));
-        }
-        p
-    }
-}
 
 /// Sigma-point weights.
 #[derive(Clone, Debug)]

@@ -15,7 +15,7 @@ use super::{
     FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
     ScenarioConfig, TimeConfig, TrackLoss,
 };
-use crate::filters::direct::filter::DirectParams;
+use crate::filters::direct::DirectParams;
 use crate::filters::fpe_split::FpeParams;
 use crate::filters::gaussian_sum::GaussianSumParams;
 use crate::filters::kalman::{

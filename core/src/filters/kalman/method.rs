@@ -4,35 +4,20 @@
 
 use alloc::format;
 use alloc::string::String;
-use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{
     validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
-    MapKalman, MapSolver, UkfParams, UnscentedKalman,
+    MapKalman, MapSolver, UkfParams, UnscentedKalman, MAX_SUBSTEPS,
 };
 use crate::error::ZakaiError;
-use crate::filters::method::{builder_fn, double};
+use crate::filters::builder::builder_fn;
+use crate::filters::method::double;
 use crate::filters::method::{
-    problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind, ProblemContext, Takes,
-    SMALL_MEMORY,
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes, SMALL_MEMORY,
 };
+use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
-
-/// The parameter every Gaussian filter has: `init`, a starting Gaussian other than the
-/// prior's moments, is left to JSON and the Rust API (it is not a form field).
-/// Most RK4 substeps per interval the convergence check doubles to.
-const MAX_SUBSTEPS: usize = 4096;
-
-fn substeps_param() -> ParamInfo {
-    ParamInfo::new(
-        "substeps",
-        ParamKind::Int,
-        "substeps",
-        "RK4 steps of the moment equations per observation interval",
-    )
-    .at_least(1.0)
-}
 
 /// A Gaussian filter's own problems and those of its optional starting Gaussian `init`.
 fn with_init(
@@ -59,7 +44,8 @@ fn map_kalman(
     )
 }
 
-fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo>) -> MethodInfo {
+/// A Gaussian filter's description, with the parameters its params type `P` declares.
+fn info<P: Declared>(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
     MethodInfo {
         key: key.into(),
         name: name.into(),
@@ -67,8 +53,8 @@ fn info(key: &str, name: &str, summary: &str, paper: &str, params: Vec<ParamInfo
         paper: paper.into(),
         takes: Takes::Both,
         dims: "any".into(),
-        params,
-        json_only: vec!["init".into()],
+        params: P::form(),
+        json_only: P::json_only(),
     }
 }
 
@@ -85,12 +71,11 @@ impl Method for Kalman {
     type Filter = KalmanBucy;
 
     fn info() -> MethodInfo {
-        info(
+        info::<Self::Params>(
             Self::KEY,
             "KF",
             "Kalman–Bucy filter, exact for linear Gaussian models",
             "Kalman & Bucy (1961); the exact reference of every paper",
-            Vec::new(),
         )
     }
     fn display_name(_: &KalmanParams) -> String {
@@ -127,24 +112,18 @@ impl Method for Ekf {
     type Filter = ExtendedKalman;
 
     fn info() -> MethodInfo {
-        info(
+        info::<Self::Params>(
             Self::KEY,
             "EKF",
             "extended Kalman filter (continuous–discrete, RK4 moment equations)",
             "Jazwinski (1970); the baseline of 000 (Yueh, Lin & Yau 2014) and 002 (Shi, Yang & Yau 2018)",
-            vec![substeps_param()],
         )
     }
     fn display_name(_: &EkfParams) -> String {
         "EKF".into()
     }
     fn problems(p: &EkfParams, n: usize) -> Vec<ConfigProblem> {
-        let own = if p.substeps == 0 {
-            vec![("substeps", String::from("must be at least 1"))]
-        } else {
-            Vec::new()
-        };
-        with_init(own, &p.init, n)
+        with_init(p.range_problems(), &p.init, n)
     }
     fn memory(_: &EkfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -179,34 +158,11 @@ impl Method for Ukf {
     type Filter = UnscentedKalman;
 
     fn info() -> MethodInfo {
-        info(
+        info::<Self::Params>(
             Self::KEY,
             "UKF",
             "unscented Kalman filter (van der Merwe scaled sigma points)",
             "Julier & Uhlmann (1997); Wan & van der Merwe (2000)",
-            vec![
-                ParamInfo::new(
-                    "alpha",
-                    ParamKind::Number,
-                    "α (spread)",
-                    "spread of the sigma points around the mean, 0 < α ≤ 1",
-                )
-                .range(0.0, 1.0),
-                ParamInfo::new(
-                    "beta",
-                    ParamKind::Number,
-                    "β",
-                    "prior knowledge of the distribution; 2 is optimal for Gaussians",
-                )
-                .at_least(0.0),
-                ParamInfo::new(
-                    "kappa",
-                    ParamKind::Number,
-                    "κ",
-                    "secondary scaling; n + κ must stay positive",
-                ),
-                substeps_param(),
-            ],
         )
     }
     fn display_name(_: &UkfParams) -> String {
@@ -248,35 +204,18 @@ impl Method for Iekf {
     type Filter = MapKalman;
 
     fn info() -> MethodInfo {
-        info(
+        info::<Self::Params>(
             Self::KEY,
             "IEKF",
             "iterated EKF: Gauss–Newton on the MAP problem of each update",
             "003 Kang, Salmon & Yau (2023), (4.5)",
-            vec![
-                ParamInfo::new(
-                    "iterations",
-                    ParamKind::Int,
-                    "iterations",
-                    "most Gauss–Newton iterations per update",
-                )
-                .at_least(1.0),
-                ParamInfo::new(
-                    "tolerance",
-                    ParamKind::Number,
-                    "tolerance",
-                    "stop when a Gauss–Newton step is shorter than this",
-                )
-                .at_least(0.0),
-                substeps_param(),
-            ],
         )
     }
     fn display_name(p: &IekfParams) -> String {
         format!("IEKF({})", p.iterations)
     }
     fn problems(p: &IekfParams, n: usize) -> Vec<ConfigProblem> {
-        with_init(p.problems(), &p.init, n)
+        with_init(p.range_problems(), &p.init, n)
     }
     fn memory(_: &IekfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
@@ -312,35 +251,18 @@ impl Method for Iokf {
     type Filter = MapKalman;
 
     fn info() -> MethodInfo {
-        info(
+        info::<Self::Params>(
             Self::KEY,
             "IOKF",
             "iterated optimisation Kalman filter: λ-homotopy with guarded Newton steps",
             "003 Kang, Salmon & Yau (2023), Algorithm 4.1",
-            vec![
-                ParamInfo::new(
-                    "splits",
-                    ParamKind::Int,
-                    "l (splits)",
-                    "steps of the homotopy parameter λ from 0 to 1",
-                )
-                .at_least(1.0),
-                ParamInfo::new(
-                    "newton_steps",
-                    ParamKind::Int,
-                    "m (Newton)",
-                    "guarded Newton steps at each λ",
-                )
-                .at_least(1.0),
-                substeps_param(),
-            ],
         )
     }
     fn display_name(p: &IokfParams) -> String {
         format!("IOKF({}×{})", p.newton_steps, p.splits)
     }
     fn problems(p: &IokfParams, n: usize) -> Vec<ConfigProblem> {
-        with_init(p.problems(), &p.init, n)
+        with_init(p.range_problems(), &p.init, n)
     }
     fn memory(_: &IokfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)

@@ -2,15 +2,16 @@
 
 use alloc::format;
 use alloc::string::String;
-use alloc::vec;
 use alloc::vec::Vec;
 
-use super::filter::{check_system, DirectFilter, DirectParams};
+use super::filter::{check_system, DirectFilter};
+use super::DirectParams;
 use crate::error::ZakaiError;
+use crate::filters::builder::builder_fn;
 use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes,
 };
+use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
 
 /// The direct method for Yau filtering systems: Gaussian approximation of the density and
@@ -30,48 +31,14 @@ impl Method for Direct {
         MethodInfo {
             key: Self::KEY.into(),
             name: "Direct".into(),
-            summary: "direct method for Yau filtering systems: Gaussian approximation + Riccati ODEs"
-                .into(),
+            summary:
+                "direct method for Yau filtering systems: Gaussian approximation + Riccati ODEs"
+                    .into(),
             paper: "002 Shi, Yang & Yau (2018), Algorithm 1, (35)–(37)".into(),
             takes: Takes::Increments,
             dims: "1".into(),
-            params: vec![
-                ParamInfo::new(
-                    "points",
-                    ParamKind::Int,
-                    "grid points",
-                    "points on the domain where the density is decomposed into Gaussians and recombined",
-                )
-                .range(11.0, 100000.0),
-                ParamInfo::new(
-                    "alpha",
-                    ParamKind::Number,
-                    "α (threshold)",
-                    "Algorithm 1 places Gaussians until the rest is below α · max",
-                )
-                .range(0.0, 1.0),
-                ParamInfo::new(
-                    "max_terms",
-                    ParamKind::Int,
-                    "max terms",
-                    "most Gaussians per decomposition",
-                )
-                .range(1.0, 1000.0),
-                ParamInfo::new(
-                    "substeps",
-                    ParamKind::Int,
-                    "substeps",
-                    "RK4 steps of the Riccati ODEs (35)–(37) per observation interval",
-                )
-                .range(1.0, 10000.0),
-                ParamInfo::new(
-                    "linear",
-                    ParamKind::NumberList,
-                    "l = a·x + b (a, b)",
-                    "the affine part of the drift in (C1); the rest must satisfy (C2)–(C3)",
-                ),
-            ],
-            json_only: Vec::new(),
+            params: DirectParams::form(),
+            json_only: DirectParams::json_only(),
         }
     }
     fn display_name(_: &DirectParams) -> String {

@@ -1,15 +1,16 @@
 //! The spectral Yau–Yau filter of 004 (Shi, Chen & Yau 2021) registered as a [`Method`].
 
+use crate::filters::params::Declared;
 use alloc::format;
 use alloc::string::String;
-use alloc::vec;
 use alloc::vec::Vec;
 
+use super::params::MAX_BASIS;
 use super::{SpectralFilter, SpectralParams};
 use crate::error::ZakaiError;
+use crate::filters::builder::builder_fn;
 use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes,
 };
 use crate::validate::ConfigProblem;
 
@@ -27,9 +28,6 @@ impl Method for Spectral {
     type Filter = SpectralFilter;
 
     fn info() -> MethodInfo {
-        let auto = |name, label, help| {
-            ParamInfo::new(name, ParamKind::OptionalInt, label, help).at_least(1.0)
-        };
         MethodInfo {
             key: Self::KEY.into(),
             name: "Spectral".into(),
@@ -37,42 +35,8 @@ impl Method for Spectral {
             paper: "004 Shi, Chen & Yau (2021), (17)–(42)".into(),
             takes: Takes::Increments,
             dims: "1–3".into(),
-            params: vec![
-                auto(
-                    "offline_basis",
-                    "N₁+1 (off-line)",
-                    "basis functions per dimension of the off-line operator (empty: 11 in 1-D, 15 in 2-D, 8 in 3-D)",
-                ),
-                auto(
-                    "online_basis",
-                    "N₂+1 (on-line)",
-                    "basis functions per dimension of the on-line density (empty: 16 in 1-D, 15 in 2-D, 8 in 3-D)",
-                ),
-                ParamInfo::new(
-                    "partitions",
-                    ParamKind::Int,
-                    "N′ (Euler steps)",
-                    "implicit Euler steps of the off-line operator over one interval, (1 + Δs𝓛)^{N′}",
-                )
-                .at_least(1.0),
-                auto(
-                    "quadrature",
-                    "off-line nodes",
-                    "Gauss–Legendre nodes per dimension off-line (empty: 2·max(N₁, N₂) + 24)",
-                ),
-                auto(
-                    "online_nodes",
-                    "on-line nodes",
-                    "Gauss–Legendre nodes per dimension on-line (empty: N₁ + N₂ + 8)",
-                ),
-                ParamInfo::choice(
-                    "likelihood",
-                    &["in_update", "in_operator"],
-                    "−½hᵀS⁻¹h goes",
-                    "in_update: into the observation factor 004 (42); in_operator: into the operator, as 004 (17)",
-                ),
-            ],
-            json_only: vec!["t0".into()],
+            params: SpectralParams::form(),
+            json_only: SpectralParams::json_only(),
         }
     }
     fn display_name(_: &SpectralParams) -> String {
@@ -161,4 +125,18 @@ impl Method for Spectral {
             .is_empty()
             .then(|| (refined, format!("{a}, {b}")))
     }
+}
+
+/// Legendre functions per prior standard deviation across the domain's half-width that a
+/// 1-D basis left unset gets: `N = ⌈4 L / σ₀⌉`, at least 004's 16 and at most [`MAX_BASIS`].
+/// On the cubic sensor's [−4, 4] with σ₀ = 0.32 that is 51 (004 used 16, whose self-check
+/// warns there); on [−12, 12] with σ₀ ≈ 1.1 it is 44.
+pub const FUNCTIONS_PER_SD: f64 = 4.0;
+
+/// The basis size [`FUNCTIONS_PER_SD`] gives for half-width `half` and prior sd `sd`, or
+/// `None` when either is not positive and finite.
+pub fn basis_for(half: f64, sd: f64) -> Option<usize> {
+    let ratio = half / sd;
+    (ratio.is_finite() && ratio > 0.0)
+        .then(|| (libm::ceil(FUNCTIONS_PER_SD * ratio) as usize).clamp(16, MAX_BASIS))
 }

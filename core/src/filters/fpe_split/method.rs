@@ -3,15 +3,15 @@
 
 use alloc::format;
 use alloc::string::String;
-use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{check_model, ContinuousDiscreteGrid, FpeParams, FpeScheme};
 use crate::error::ZakaiError;
+use crate::filters::builder::builder_fn;
 use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes,
 };
+use crate::filters::params::Declared;
 use crate::filters::{per_dimension, product};
 use crate::validate::ConfigProblem;
 
@@ -23,23 +23,8 @@ fn info(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
         paper: paper.into(),
         takes: Takes::Measurements,
         dims: "1–3".into(),
-        params: vec![
-            ParamInfo::new(
-                "cells",
-                ParamKind::IntList,
-                "cells",
-                "cells per dimension over the domain (001 §4: 200 on ⟨−10, 10⟩, 35 × 35 in 2-D)",
-            )
-            .at_least(2.0),
-            ParamInfo::new(
-                "dt",
-                ParamKind::Number,
-                "Δt",
-                "time step of the Fokker–Planck scheme, rounded down to divide Δτ and reduced further when the CFL condition 001 (16) / (23) needs it",
-            )
-            .at_least(0.0),
-        ],
-        json_only: Vec::new(),
+        params: FpeParams::form(),
+        json_only: FpeParams::json_only(),
     }
 }
 

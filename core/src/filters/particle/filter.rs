@@ -1,10 +1,4 @@
-//! The bootstrap particle filter (Gordon, Salmond & Smith): particles follow the signal SDE by
-//! Euler–Maruyama, weights are multiplied by the observation likelihood and kept in the log
-//! domain, and systematic resampling runs whenever the effective sample size
-//! `ESS = 1 / Σ wᵢ²` falls below `ess_threshold · N`.
-//!
-//! Likelihoods: for an increment, `Δy ~ N(h(x) Δτ, S Δτ)`; for a measurement, the model's
-//! noise density (Gaussian or mixture) at `z − h(x)`.
+//! The bootstrap particle filter itself.
 
 use alloc::format;
 use alloc::string::String;
@@ -12,182 +6,13 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use rand::RngExt;
-use serde::{Deserialize, Serialize};
 
-use crate::error::{FilterError, ZakaiError};
-use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
-};
+use super::PfParams;
+use crate::error::FilterError;
 use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
 use crate::model::{BatchScratch, Model, ObservationModel, Prior};
 use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
-use crate::validate::ConfigProblem;
-
-/// Parameters of [`ParticleFilter`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct PfParams {
-    /// Number of particles N.
-    pub particles: usize,
-    /// Resample when ESS < ess_threshold · N (0 = never, 1 = always).
-    pub ess_threshold: f64,
-    /// Euler–Maruyama steps per observation interval Δτ (a step of another length takes as
-    /// many steps of at most Δτ/substeps as it needs). `None`: chosen from the model's time
-    /// scale against Δτ ([`substeps_for`]).
-    pub substeps: Option<usize>,
-}
-
-impl Default for PfParams {
-    fn default() -> Self {
-        PfParams {
-            particles: 200,
-            ess_threshold: 0.5,
-            substeps: None,
-        }
-    }
-}
-
-impl PfParams {
-    /// Problems with these parameters.
-    pub fn problems(&self) -> Vec<(&'static str, String)> {
-        let mut p = Vec::new();
-        if self.particles == 0 || self.particles > 10_000_000 {
-            p.push((
-                "particles",
-                format!("must be in 1..=10000000, got {}", self.particles),
-            ));
-        }
-        if !(0.0..=1.0).contains(&self.ess_threshold) {
-            p.push((
-                "ess_threshold",
-                format!("must be in [0, 1], got {}", self.ess_threshold),
-            ));
-        }
-        if self.substeps == Some(0) {
-            p.push(("substeps", "must be at least 1".into()));
-        }
-        p
-    }
-}
-
-/// The bootstrap particle filter registered as a [`Method`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Pf;
-builder_fn!(Pf);
-
-impl Method for Pf {
-    const KEY: &'static str = "pf";
-    type Params = PfParams;
-    type Filter = ParticleFilter;
-
-    fn info() -> MethodInfo {
-        MethodInfo {
-            key: Self::KEY.into(),
-            name: "PF".into(),
-            summary: "bootstrap particle filter (systematic resampling on an ESS threshold)".into(),
-            paper: "Gordon, Salmond & Smith (1993); the baseline of 000–004".into(),
-            takes: Takes::Both,
-            dims: "any".into(),
-            params: vec![
-                ParamInfo::new(
-                    "particles",
-                    ParamKind::Int,
-                    "particles N",
-                    "number of particles; the error falls like 1/√N",
-                )
-                .range(1.0, 1e7),
-                ParamInfo::new(
-                    "ess_threshold",
-                    ParamKind::Number,
-                    "resample below ESS/N",
-                    "resample when the effective sample size 1/Σwᵢ² falls below this fraction of N (0 never, 1 every step)",
-                )
-                .range(0.0, 1.0),
-                ParamInfo::new(
-                    "substeps",
-                    ParamKind::OptionalInt,
-                    "substeps",
-                    "Euler–Maruyama steps of each particle per observation interval; empty: chosen so that ‖∂f/∂x‖∞ times the step is at most 0.1 over the domain",
-                )
-                .at_least(1.0),
-            ],
-            json_only: Vec::new(),
-        }
-    }
-    fn display_name(p: &PfParams) -> String {
-        format!("PF({})", p.particles)
-    }
-    fn problems(p: &PfParams, _: usize) -> Vec<ConfigProblem> {
-        problems_from(p.problems())
-    }
-    fn memory(p: &PfParams, n: usize) -> Option<usize> {
-        // Particles, f, noise, the resampling target and h (n ≥ m assumed), two weights, the
-        // resampling's slot starts and ancestors.
-        p.particles.checked_mul(5 * n + 4)?.checked_mul(8)
-    }
-    fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
-        let mut pf = ParticleFilter::new(name, ctx.model, ctx.prior, p, ctx.seed)?;
-        pf.substeps = crate::filters::Substeps::new(p.substeps.unwrap_or(1), ctx.dt_obs);
-        Ok(pf)
-    }
-    fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
-        if p.substeps.is_some() {
-            return None;
-        }
-        let dt = problem.dt_obs?;
-        let (substeps, rate) = substeps_for(problem.model, problem.probes, dt);
-        Some((
-            PfParams {
-                substeps: Some(substeps),
-                ..p.clone()
-            },
-            format!(
-                "{substeps} Euler–Maruyama substep(s) per interval, chosen so that ‖∂f/∂x‖∞ Δt ≤ {EULER_RATE_STEP} (‖∂f/∂x‖∞ up to {rate:.3} over the domain, Δτ = {dt})"
-            ),
-        ))
-    }
-    fn refined(p: &PfParams, _: usize) -> Option<(PfParams, String)> {
-        let (particles, what) =
-            crate::filters::method::double("particles", p.particles, 10_000_000)?;
-        Some((
-            PfParams {
-                particles,
-                ..p.clone()
-            },
-            what,
-        ))
-    }
-}
-
-/// The largest `‖∂f/∂x‖∞ · Δt` of an Euler–Maruyama step chosen from the problem: the drift
-/// then changes by at most a tenth over a step, where the scheme's bias (first order in Δt) is
-/// small against the particles' own error.
-pub const EULER_RATE_STEP: f64 = 0.1;
-
-/// Most Euler–Maruyama substeps per interval chosen from the problem.
-pub const MAX_CHOSEN_SUBSTEPS: usize = 1000;
-
-/// Substeps per interval `dt` for the particle filter on `model`, and the rate they follow:
-/// the largest `‖∂f/∂x‖∞` (row sums of |∂f/∂x|, at least the spectral radius) over `probes`,
-/// L, gives `⌈L dt / 0.1⌉` steps ([`EULER_RATE_STEP`]; 1 to [`MAX_CHOSEN_SUBSTEPS`]).
-pub fn substeps_for(model: &Model, probes: &[Vec<f64>], dt: f64) -> (usize, f64) {
-    let n = model.n;
-    let mut jacobian = vec![0.0; n * n];
-    let mut rate: f64 = 0.0;
-    for x in probes {
-        model.drift.jacobian(x, &mut jacobian);
-        for row in jacobian.chunks_exact(n) {
-            let sum: f64 = row.iter().map(|v| v.abs()).sum();
-            if sum.is_finite() {
-                rate = rate.max(sum);
-            }
-        }
-    }
-    let steps = libm::ceil(rate * dt / EULER_RATE_STEP - 1e-9).max(1.0);
-    ((steps as usize).min(MAX_CHOSEN_SUBSTEPS), rate)
-}
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
 /// resampling) as a share of N. Below 1 % the posterior rests on a handful of particles.
@@ -248,7 +73,7 @@ pub struct ParticleFilter {
     /// Distinct particles kept by the last resampling (N when the last step did not resample).
     last_unique: usize,
     /// Euler–Maruyama steps per prediction (per Δτ when built for it).
-    substeps: crate::filters::Substeps,
+    pub(super) substeps: crate::filters::Substeps,
 }
 
 impl ParticleFilter {

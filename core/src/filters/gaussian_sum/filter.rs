@@ -1,163 +1,20 @@
-//! The Gaussian-sum filter: the exact filtering density of a linear model with a
-//! Gaussian-mixture prior and Gaussian-mixture measurement noise — the reference density of
-//! 001 §4 (Šimandl & Švácha, 2005) against which J(t) is measured.
-//!
-//! Model: `dx = (A x + b) dt + G dw`, `z_k = C x_k + c + v_k`,
-//! `p(v_k) = Σ_j β_j N(μ_j, R_j)`, `p(x_0) = Σ_i α_i N(m_i, P_i)`.
-//!
-//! * **Prediction**: every component exactly, `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` (Van Loan's
-//!   discretisation, shared with the Kalman–Bucy filter).
-//! * **Update**: every component i meets every noise component j:
-//!   `S = C P_i Cᵀ + R_j`, `K = P_i Cᵀ S⁻¹`, `m_ij = m_i + K ν_ij` with
-//!   `ν_ij = z − C m_i − c − μ_j`, `P_ij = P_i − K S Kᵀ`, `w_ij ∝ α_i β_j N(ν_ij; 0, S)`.
-//! * **Mixture reduction**: the count grows by the factor J at every measurement, so
-//!   components with relative weight below `prune` are dropped and pairs are merged
-//!   (moment-preserving) in order of Runnalls' bound on the Kullback–Leibler discrepancy
-//!   `B_ij = ½ [(w_i + w_j) log det P_ij − w_i log det P_i − w_j log det P_j]`, while
-//!   `B ≤ merge_cost` or the count exceeds `max_components`. The largest cost accepted and the
-//!   pruned weight are reported ([`GaussianSumFilter::reduction`]), so how exact the reference
-//!   is stays visible; with no pruning or cap-forced merging the density is exact.
+//! The Gaussian-sum filter itself.
 
 use alloc::format;
 use alloc::string::String;
-use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
 
-use super::kalman::linear::{affine_parts, Discretization};
-use super::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
-};
-use super::{marginal, Estimate, Filter, Observation, ObservationKind, Observed};
+use super::GaussianSumParams;
 use crate::error::{FilterError, ZakaiError};
+use crate::filters::kalman::linear::{affine_parts, Discretization};
+use crate::filters::{marginal, Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
 use crate::linalg::{
     cholesky_in, gaussian_log_density_factored, log_det_from_factor, log_sum_exp, symmetrize,
 };
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
-use crate::validate::ConfigProblem;
-
-/// Parameters of [`GaussianSumFilter`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct GaussianSumParams {
-    /// Most components kept after a measurement.
-    pub max_components: usize,
-    /// Components whose weight is below `prune` times the largest weight are dropped.
-    pub prune: f64,
-    /// Pairs whose merging costs at most this (Runnalls' bound, nats) are always merged.
-    pub merge_cost: f64,
-}
-
-impl Default for GaussianSumParams {
-    fn default() -> Self {
-        GaussianSumParams {
-            max_components: 64,
-            prune: 1e-12,
-            merge_cost: 1e-10,
-        }
-    }
-}
-
-impl GaussianSumParams {
-    /// Every problem with the parameters.
-    pub fn problems(&self) -> Vec<(&'static str, String)> {
-        let mut p = Vec::new();
-        if !(1..=4096).contains(&self.max_components) {
-            p.push((
-                "max_components",
-                format!("must be between 1 and 4096, got {}", self.max_components),
-            ));
-        }
-        if !(0.0..1.0).contains(&self.prune) {
-            p.push(("prune", "must be in [0, 1)".into()));
-        }
-        if !(self.merge_cost >= 0.0 && self.merge_cost.is_finite()) {
-            p.push(("merge_cost", "must be nonnegative and finite".into()));
-        }
-        p
-    }
-}
-
-/// The Gaussian-sum filter registered as a [`Method`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct GaussianSum;
-builder_fn!(GaussianSum);
-
-impl Method for GaussianSum {
-    const KEY: &'static str = "gaussian_sum";
-    const EXACT: bool = true;
-    const ALIASES: &'static [&'static str] = &["gsf"];
-    type Params = GaussianSumParams;
-    type Filter = GaussianSumFilter;
-
-    fn info() -> MethodInfo {
-        MethodInfo {
-            key: Self::KEY.into(),
-            name: "GSF".into(),
-            summary: "Gaussian-sum filter, exact for linear models with mixture prior and noise"
-                .into(),
-            paper: "Sorenson & Alspach (1971); the reference of 001 Šimandl & Švácha (2005), §4"
-                .into(),
-            takes: Takes::Measurements,
-            dims: "any".into(),
-            params: vec![
-                ParamInfo::new(
-                    "max_components",
-                    ParamKind::Int,
-                    "max components",
-                    "most Gaussians kept after a measurement (pairs are merged beyond it)",
-                )
-                .range(1.0, 4096.0),
-                ParamInfo::new(
-                    "prune",
-                    ParamKind::Number,
-                    "prune below",
-                    "drop components lighter than this fraction of the heaviest",
-                )
-                .range(0.0, 1.0),
-                ParamInfo::new(
-                    "merge_cost",
-                    ParamKind::Number,
-                    "merge cost (nats)",
-                    "always merge pairs whose Runnalls bound on the KL discrepancy is below this",
-                )
-                .at_least(0.0),
-            ],
-            json_only: Vec::new(),
-        }
-    }
-    fn display_name(_: &GaussianSumParams) -> String {
-        "GSF".into()
-    }
-    fn problems(p: &GaussianSumParams, _: usize) -> Vec<ConfigProblem> {
-        problems_from(p.problems())
-    }
-    fn suitability(problem: &ProblemContext, _: &GaussianSumParams) -> Result<(), String> {
-        check_model(problem.model, problem.prior, problem.probes)
-            .map(|_| ())
-            .map_err(|e| format!("{e}"))
-    }
-    fn memory(p: &GaussianSumParams, n: usize) -> Option<usize> {
-        // Candidates after an update (noise mixtures of up to 4 components assumed) and their
-        // pairwise merge costs.
-        let k = p.max_components.checked_mul(4)?;
-        let values = k
-            .checked_mul(k)?
-            .checked_add(k.checked_mul(n * n + n + 2)?)?;
-        values.checked_mul(8)
-    }
-    fn build(
-        ctx: &BuildContext,
-        p: &GaussianSumParams,
-        name: String,
-    ) -> Result<GaussianSumFilter, ZakaiError> {
-        GaussianSumFilter::new(name, ctx.model, ctx.prior, p, ctx.probes)
-    }
-}
 
 /// One weighted Gaussian `w N(m, P)` with the Cholesky factor and `log det` of P (for its
 /// density), in storage that is rewritten in place.

@@ -2,6 +2,7 @@
 //! [`Method`]s: [`Iem`], [`Qiem`], [`Spt`] and [`Qiem4`]. They share [`YauYauParams`] and
 //! [`YauYauFilter`]; each names its scheme, its own parameters and its checks.
 
+use crate::filters::params::Declared;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec;
@@ -9,66 +10,20 @@ use alloc::vec::Vec;
 
 use super::{Scheme, YauYauFilter, YauYauParams};
 use crate::error::ZakaiError;
+use crate::filters::builder::builder_fn;
 use crate::filters::method::{
-    builder_fn, problems_from, BuildContext, Method, MethodInfo, ParamInfo, ParamKind,
-    ProblemContext, Takes,
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes,
 };
 use crate::filters::{per_dimension, product};
 use crate::validate::ConfigProblem;
 
-fn points() -> ParamInfo {
-    ParamInfo::new(
-        "points",
-        ParamKind::IntList,
-        "grid points",
-        "interior grid points per dimension (one number: the same in every dimension; empty: chosen from the problem in 1-D, 201 per dimension else)",
-    )
-    .at_least(3.0)
-}
-fn dt() -> ParamInfo {
-    ParamInfo::new(
-        "dt",
-        ParamKind::Number,
-        "Δt",
-        "time step of the scheme, rounded down to divide Δτ",
-    )
-    .at_least(0.0)
-}
-fn potential() -> ParamInfo {
-    ParamInfo::choice(
-        "potential",
-        &["exponential", "explicit"],
-        "potential term",
-        "exponential: e^{Δt q} u, stable for every step; explicit: (1 + Δt q) u as in 000 (18)",
-    )
-}
-fn likelihood() -> ParamInfo {
-    ParamInfo::choice(
-        "likelihood",
-        &["in_update", "in_operator"],
-        "−½hᵀS⁻¹h goes",
-        "in_update: into the observation factor, the bounded Gaussian likelihood of the increment; in_operator: into the potential q, as 000 (4) writes it",
-    )
-}
-fn likelihood_samples() -> ParamInfo {
-    ParamInfo::new(
-        "likelihood_samples",
-        ParamKind::Int,
-        "cell samples",
-        "samples per dimension averaging the observation factor over each cell (1: its value at the node, as 000 (15))",
-    )
-    .range(1.0, 64.0)
-}
-
-/// The description of one scheme: the shared parameters, the scheme's `own`, and the shared
-/// fields it does not use.
+/// The description of one scheme: the shared parameters less the fields it does not use.
 fn info(
     key: &str,
     name: &str,
     summary: &str,
     paper: &str,
     dims: &str,
-    own: ParamInfo,
     unused: &[&str],
 ) -> MethodInfo {
     MethodInfo {
@@ -78,8 +33,15 @@ fn info(
         paper: paper.into(),
         takes: Takes::Increments,
         dims: dims.into(),
-        params: vec![points(), dt(), own, likelihood(), likelihood_samples()],
-        json_only: unused.iter().map(|&u| u.into()).collect(),
+        params: YauYauParams::form()
+            .into_iter()
+            .filter(|p| !unused.contains(&p.name.as_str()))
+            .collect(),
+        json_only: unused
+            .iter()
+            .map(|&u| u.into())
+            .chain(YauYauParams::json_only())
+            .collect(),
     }
 }
 
@@ -269,14 +231,7 @@ yau_yau_method!(
         "Yau–Yau implicit Euler θ-scheme, tridiagonal / split",
         "000 Yueh, Lin & Yau (2014), (12)–(14), Algorithm 2",
         "1–3",
-        ParamInfo::new(
-            "alpha",
-            ParamKind::Number,
-            "α (implicit weight)",
-            "weight of the implicit side of the θ-scheme (1: implicit Euler, ½: Crank–Nicolson)",
-        )
-        .range(0.0, 1.0),
-        &["potential", "centres", "eta"],
+        &["potential", "centres"],
     ),
     |_, _| Vec::new(),
     grid_memory
@@ -299,8 +254,7 @@ yau_yau_method!(
         "Yau–Yau quasi-implicit Euler, Laplacian by DST-I",
         "000 Yueh, Lin & Yau (2014), (17)–(18), Algorithm 3",
         "1–3",
-        potential(),
-        &["alpha", "centres", "eta"],
+        &["alpha", "centres"],
     ),
     |_, _| Vec::new(),
     grid_memory
@@ -323,14 +277,7 @@ yau_yau_method!(
         "Yau–Yau superposition technique over QIEM: bumps carried off-line",
         "000 Yueh, Lin & Yau (2014), §2.5",
         "1–3",
-        ParamInfo::new(
-            "centres",
-            ParamKind::IntList,
-            "bump centres",
-            "Gaussian bumps per dimension whose off-line solutions are superposed",
-        )
-        .at_least(1.0),
-        &["alpha", "potential", "eta"],
+        &["alpha", "potential"],
     ),
     YauYauParams::superposition_problems,
     |p, n| {
@@ -357,8 +304,7 @@ yau_yau_method!(
         "fourth-order 2-D quasi-implicit Euler (9-point Laplacian by DST)",
         "000 Yueh, Lin & Yau (2014), (20)–(21), Algorithm 4",
         "2",
-        potential(),
-        &["alpha", "centres", "eta"],
+        &["alpha", "centres"],
     ),
     YauYauParams::fourth_order_problems,
     grid_memory

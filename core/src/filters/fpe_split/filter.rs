@@ -1,0 +1,438 @@
+//! The continuous–discrete grid filter itself: Fokker–Planck steps between measurements
+//! (the separation approach or the unsplit implicit FDM), Bayes' rule at each one.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::implicit::{ImplicitPart, ImplicitStep};
+use super::upwind::UpwindAdvection;
+use super::{FpeParams, FpeScheme, MAX_SUBSTEPS};
+use crate::error::{FilterError, ZakaiError};
+use crate::filters::{
+    normalise_on_grid, DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind,
+    Observed, REMAINDER_PLANS,
+};
+use crate::grid::TensorGrid;
+use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
+
+/// The model fits the filter: discrete measurements (their noise density is returned) and a
+/// diagonal `Q = G Gᵀ` (001 (24) has no mixed derivatives).
+pub fn check_model(name: &str, model: &Model) -> Result<GaussianMixture, FilterError> {
+    let noise = match &model.observations {
+        ObservationModel::Discrete { noise } => noise.clone(),
+        ObservationModel::Continuous { .. } => {
+            return Err(FilterError::Unsuitable(format!(
+                "{name} is the continuous–discrete filter of 001: it needs discrete measurements z_k = h(x_k) + v_k, and this model observes dy = h dt + dw"
+            )))
+        }
+    };
+    let q = model.process_noise();
+    let n = model.n;
+    for i in 0..n {
+        for j in 0..n {
+            if i != j && libm::fabs(q[(i, j)]) > 1e-12 * (q[(i, i)] + q[(j, j)]) {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name}: 001 (24) discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {}",
+                    i + 1,
+                    j + 1,
+                    q[(i, j)]
+                )));
+            }
+        }
+    }
+    Ok(noise)
+}
+
+/// How an observation interval is cut into FPE steps.
+#[derive(Clone, Debug)]
+struct StepPlan {
+    substeps: usize,
+    dt: f64,
+    implicit: ImplicitStep,
+}
+
+/// The continuous–discrete grid filter (see the module doc).
+#[derive(Clone, Debug)]
+pub struct ContinuousDiscreteGrid {
+    name: String,
+    scheme: FpeScheme,
+    grid: TensorGrid,
+    advection: UpwindAdvection,
+    divergence: Vec<f64>,
+    diffusion: Vec<f64>,
+    noise: crate::filters::ObservedNoise,
+    /// h at the cell centres, row per cell.
+    h_nodes: Vec<f64>,
+    target_dt: f64,
+    /// Δτ, the observation interval the filter is built for.
+    dt_obs: f64,
+    /// The plan for Δτ, and for up to [`REMAINDER_PLANS`] other lengths (the remainders of
+    /// irregular intervals after whole Δτ), the most recently used first.
+    plan: Option<StepPlan>,
+    remainders: LengthCache<StepPlan>,
+    u: Vec<f64>,
+    /// The density and estimate a step started from.
+    saved: crate::filters::SavedDensity,
+    tmp: Vec<f64>,
+    residual: Vec<f64>,
+    work: Vec<f64>,
+    estimate: Estimate,
+    /// Storage of the estimate's moments (see [`normalise_on_grid`]).
+    moments: crate::grid::Moments,
+    warnings: Vec<String>,
+}
+
+impl ContinuousDiscreteGrid {
+    /// Builds the filter on `bounds` (the cells tile the box) for observation interval
+    /// `dt_obs` (used for the step-choice warnings).
+    pub fn new(
+        name: String,
+        scheme: FpeScheme,
+        model: &Model,
+        prior: &Prior,
+        params: &FpeParams,
+        bounds: &[(f64, f64)],
+        dt_obs: f64,
+    ) -> Result<Self, ZakaiError> {
+        let n = model.n;
+        let problems = params.problems(n);
+        if let Some((field, msg)) = problems.first() {
+            return Err(ZakaiError::InvalidParameter {
+                method: name,
+                field,
+                message: msg.clone(),
+            });
+        }
+        let noise = check_model(&name, model)?;
+        let q = model.process_noise();
+        let shape = params.shape(n);
+        let cell_bounds: Vec<(f64, f64)> = bounds
+            .iter()
+            .zip(&shape)
+            .map(|(&(a, b), &c)| {
+                let half = 0.5 * (b - a) / c as f64;
+                (a - half, b + half)
+            })
+            .collect();
+        let grid = TensorGrid::new(&cell_bounds, &shape)?;
+        let advection = UpwindAdvection::new(&grid, &*model.drift);
+        let mut jac = vec![0.0; n * n];
+        let mut divergence = Vec::with_capacity(grid.len());
+        let m = model.m;
+        let mut h_nodes = Vec::with_capacity(grid.len() * m);
+        let mut hx = vec![0.0; m];
+        grid.for_each_node(|_, x| {
+            model.drift.jacobian(x, &mut jac);
+            divergence.push((0..n).map(|l| jac[l * n + l]).sum());
+            model.observation.eval(x, &mut hx);
+            h_nodes.extend_from_slice(&hx);
+        });
+        let diffusion: Vec<f64> = (0..n).map(|l| q[(l, l)]).collect();
+        let mut u = grid.tabulate(|x| prior.density(x));
+        if u.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "prior density",
+            }
+            .into());
+        }
+        let mut moments = crate::grid::Moments::zeros(n);
+        let mut estimate = Estimate {
+            mean: nalgebra::DVector::zeros(n),
+            covariance: None,
+            map: None,
+        };
+        normalise_on_grid(&grid, &mut u, &mut moments, &mut estimate)?;
+        let len = grid.len();
+        let mut filter = ContinuousDiscreteGrid {
+            name,
+            scheme,
+            grid,
+            advection,
+            divergence,
+            diffusion,
+            noise: crate::filters::ObservedNoise::new(noise),
+            h_nodes,
+            target_dt: params.dt,
+            dt_obs,
+            plan: None,
+            remainders: LengthCache::new(REMAINDER_PLANS),
+            saved: crate::filters::SavedDensity::new(len, &estimate),
+            u,
+            tmp: vec![0.0; len],
+            residual: vec![0.0; m],
+            work: vec![0.0; m],
+            estimate,
+            moments,
+            warnings: Vec::new(),
+        };
+        let (_, notes) = filter.step_count(dt_obs)?;
+        filter.warnings = notes;
+        filter.plan_for(dt_obs)?;
+        if scheme == FpeScheme::ImplicitFdm {
+            filter.warnings.extend(filter.peclet_warning());
+        }
+        Ok(filter)
+    }
+
+    /// The grid of cell centres.
+    pub fn grid(&self) -> &TensorGrid {
+        &self.grid
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> FpeScheme {
+        self.scheme
+    }
+
+    /// FPE steps per observation interval of length `interval` (see the module doc), with the
+    /// notes on why more steps than `interval / dt` were needed.
+    pub fn step_count(&self, interval: f64) -> Result<(usize, Vec<String>), FilterError> {
+        let mut notes = Vec::new();
+        let requested = libm::ceil(interval / self.target_dt - 1e-9).max(1.0);
+        let mut steps = requested;
+        let mut x = vec![0.0; self.grid.dim()];
+        if self.scheme == FpeScheme::Separation {
+            let (rate, idx) = self.advection.courant_rate(&self.grid);
+            let needed = libm::ceil(rate * interval);
+            if needed > steps {
+                self.grid.node(idx, &mut x);
+                notes.push(format!(
+                    "(16)/(23) CFL: Σ|f_l|Δt/Δx_l reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    rate * interval / requested,
+                    rounded(&x),
+                    interval / requested,
+                    interval / needed,
+                    needed
+                ));
+                steps = needed;
+            }
+        }
+        let (min_div, idx) =
+            self.divergence
+                .iter()
+                .enumerate()
+                .fold(
+                    (f64::INFINITY, 0),
+                    |acc, (i, &d)| if d < acc.0 { (d, i) } else { acc },
+                );
+        if min_div < 0.0 {
+            let needed = libm::ceil(2.0 * -min_div * interval);
+            if needed > steps {
+                self.grid.node(idx, &mut x);
+                notes.push(format!(
+                    "diagonal of the implicit step: 1 + Δt ∇·f = {:.3} < ½ at x = {:?}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    1.0 + interval / steps * min_div,
+                    rounded(&x),
+                    interval / needed,
+                    needed
+                ));
+                steps = needed;
+            }
+        }
+        if !steps.is_finite() || steps > MAX_SUBSTEPS as f64 {
+            return Err(FilterError::Unsuitable(format!(
+                "{} would need {steps:.3e} FPE steps per observation interval (more than {MAX_SUBSTEPS}): {}; use fewer cells or a smaller domain",
+                self.name,
+                notes.join("; ")
+            )));
+        }
+        Ok((steps as usize, notes))
+    }
+
+    /// The FDM positivity warning: a cell Péclet number `|f_l| Δx_l / Q_ll` above 1.
+    fn peclet_warning(&self) -> Option<String> {
+        let mut worst = (0.0, 0, 0);
+        for l in 0..self.grid.dim() {
+            let scale = self.grid.spacing()[l] / self.diffusion[l];
+            for (idx, f) in self.advection.velocity(l).iter().enumerate() {
+                let pe = libm::fabs(*f) * scale;
+                if pe > worst.0 || pe.is_nan() {
+                    worst = (pe, l, idx);
+                }
+            }
+        }
+        (worst.0 > 1.0 || worst.0.is_nan()).then(|| {
+            let mut x = vec![0.0; self.grid.dim()];
+            self.grid.node(worst.2, &mut x);
+            format!(
+                "M-matrix condition of the implicit FDM: the cell Péclet number |f_{0}|Δx_{0}/Q_{0}{0} is {1:.3} > 1 at x = {2:?}; central differences may turn the density negative there",
+                worst.1 + 1,
+                worst.0,
+                rounded(&x)
+            )
+        })
+    }
+
+    /// The plan of the implicit step for intervals of length `interval`.
+    fn plan_of(&self, interval: f64) -> Result<StepPlan, FilterError> {
+        let (substeps, _) = self.step_count(interval)?;
+        let dt = interval / substeps as f64;
+        let part = match self.scheme {
+            FpeScheme::Separation => ImplicitPart::Parabolic,
+            FpeScheme::ImplicitFdm => ImplicitPart::Unsplit,
+        };
+        let implicit = ImplicitStep::new(
+            &self.grid,
+            &self.advection,
+            &self.divergence,
+            &self.diffusion,
+            dt,
+            part,
+        )?;
+        Ok(StepPlan {
+            substeps,
+            dt,
+            implicit,
+        })
+    }
+
+    /// Factorises the implicit step for Δτ (at construction).
+    fn plan_for(&mut self, interval: f64) -> Result<(), FilterError> {
+        self.plan = Some(self.plan_of(interval)?);
+        Ok(())
+    }
+
+    /// FPE steps the filter takes per interval of the length it last predicted over.
+    pub fn substeps(&self) -> Option<(usize, f64)> {
+        self.plan.as_ref().map(|p| (p.substeps, p.dt))
+    }
+
+    /// Predicts the density over `interval` (001 Step 3): the FPE without a measurement, as
+    /// whole intervals Δτ with the plan made for Δτ and the rest with a plan for its length
+    /// (made the first time that length occurs and kept among the last [`REMAINDER_PLANS`]).
+    /// The density is not renormalised (mass that leaves the grid is lost, as in the scheme).
+    fn propagate(&mut self, interval: f64) -> Result<(), FilterError> {
+        let (whole, rest) = crate::filters::whole_intervals(interval, self.dt_obs);
+        for _ in 0..whole {
+            let plan = self.plan.as_ref().expect("planned in new");
+            self.run_plan(plan.substeps, plan.dt, false);
+        }
+        if rest > 0.0 {
+            if !self.remainders.bring_to_front(rest) {
+                let plan = self.plan_of(rest)?;
+                self.remainders.insert(rest, plan);
+            }
+            let (substeps, dt) = (self.remainders.front().substeps, self.remainders.front().dt);
+            self.run_plan(substeps, dt, true);
+        }
+        if self.u.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "predictive density",
+            });
+        }
+        Ok(())
+    }
+
+    /// `substeps` FPE steps of `dt` with the Δτ plan, or the remainder plan at the front.
+    fn run_plan(&mut self, substeps: usize, dt: f64, remainder: bool) {
+        for _ in 0..substeps {
+            if self.scheme == FpeScheme::Separation {
+                self.advection.step(&self.grid, dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
+            let plan = match remainder {
+                true => self.remainders.front(),
+                false => self.plan.as_mut().expect("planned in new"),
+            };
+            plan.implicit.solve(&mut self.u, &mut self.tmp);
+        }
+    }
+
+    /// The Bayes update (6)–(7) with the observed components of `z` (NaN = missing: the
+    /// noise density of the observed ones, its marginal), then the normalisation by `c'_k`.
+    fn assimilate(&mut self, z: &[f64]) -> Result<(), FilterError> {
+        let m = self.residual.len();
+        let noise = self.noise.of(z)?;
+        let mut max = f64::NEG_INFINITY;
+        for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
+            if *u > 0.0 {
+                let h = &self.h_nodes[idx * m..(idx + 1) * m];
+                let k = crate::filters::observed_residual(z, |a| z[a] - h[a], &mut self.residual);
+                *log = noise.log_pdf_slice(&self.residual[..k], &mut self.work) + libm::log(*u);
+                max = max.max(*log);
+            } else {
+                *log = f64::NEG_INFINITY;
+            }
+        }
+        if max == f64::NEG_INFINITY || max.is_nan() {
+            return Err(FilterError::MassLost);
+        }
+        for (u, log) in self.u.iter_mut().zip(&self.tmp) {
+            *u = libm::exp(log - max);
+        }
+        self.normalise()
+    }
+
+    /// Normalises the density and refreshes the estimate.
+    fn normalise(&mut self) -> Result<(), FilterError> {
+        normalise_on_grid(
+            &self.grid,
+            &mut self.u,
+            &mut self.moments,
+            &mut self.estimate,
+        )
+    }
+
+    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            self.propagate(obs.dt)?;
+        }
+        match observed {
+            Observed::Nothing => self.normalise(),
+            Observed::All | Observed::Some => self.assimilate(obs.value),
+        }
+    }
+}
+
+/// Coordinates rounded to 4 significant decimals for messages.
+fn rounded(x: &[f64]) -> Vec<f64> {
+    x.iter().map(|v| libm::round(v * 1e4) / 1e4).collect()
+}
+
+impl Filter for ContinuousDiscreteGrid {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        let observed = obs.check(
+            &self.name,
+            ObservationKind::Measurement,
+            self.residual.len(),
+        )?;
+        self.saved.save(&self.u, &self.estimate);
+        let stepped = self.advance(obs, observed);
+        if stepped.is_err() {
+            self.saved.restore(&mut self.u, &mut self.estimate);
+        }
+        stepped
+    }
+
+    fn estimate(&self) -> Estimate {
+        self.estimate.clone()
+    }
+
+    fn estimate_into(&self, out: &mut Estimate) {
+        out.copy_from(&self.estimate);
+    }
+
+    fn density(&self) -> Option<DensityView<'_>> {
+        Some(self.grid.view(&self.u))
+    }
+
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.grid.marginal(&self.u, dim, grid, out);
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
+        self.remainders.check(out);
+    }
+}
