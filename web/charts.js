@@ -120,7 +120,7 @@ export function makePlots(info, recorded = null) {
   resetHeatStrip();
   $('metrics').querySelector('tbody').replaceChildren(...names.map((m, i) => {
     return el('tr', { dataset: { method: String(i) } },
-      el('td', {}, lineSample(color(i), dash(i)), m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'));
+      el('td', {}, lineSample(color(i), dash(i)), m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'), el('td', { className: 'loglik' }, '–'));
   }));
   $('timing').querySelector('tbody').replaceChildren(...names.map((m, i) => el('tr', { dataset: { method: String(i) } },
     el('td', {}, m), el('td', { className: 'time' }, '–'), el('td', { className: 'concerns' }, '—'))));

@@ -243,6 +243,7 @@ export function render() {
     const mse = tr.querySelector('.mse');
     mse.textContent = m.mse != null ? m.mse.toFixed(4) : m.mse_followed != null ? `— [${m.mse_followed.toFixed(4)}]` : '—';
     mse.title = m.mse_followed != null ? 'failed: no MSE counts; in brackets, the MSE including what it estimated after failing' : '';
+    tr.querySelector('.loglik').textContent = m.log_likelihood != null ? m.log_likelihood.toFixed(3) : '—';
     const status = tr.querySelector('.status');
     // A self-check that warned: the result may not be trustworthy (not a failure).
     const checked = m.concerns?.length ? ` ⚠ ${m.concerns.length} self-check${m.concerns.length > 1 ? 's' : ''}` : '';

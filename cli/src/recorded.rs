@@ -39,7 +39,8 @@ fn sds(covariances: &[f64], n: usize, k: usize) -> Option<Vec<f64>> {
 }
 
 /// The run's estimates per observation time as CSV: `t`, then per method its estimate
-/// `<name> x1…` and, where it has a covariance, `<name> sd1…`; a failed method's cells are
+/// `<name> x1…`, where it has a covariance `<name> sd1…`, and the log-likelihood of the row's
+/// observation `<name> loglik` (0 where nothing was observed); a failed method's cells are
 /// empty from its failure on.
 pub fn estimates_csv(result: &RunResult) -> String {
     let r = &result.recording;
@@ -54,6 +55,7 @@ pub fn estimates_csv(result: &RunResult) -> String {
                 let _ = write!(s, ",{} sd{i}", m.name);
             }
         }
+        let _ = write!(s, ",{} loglik", m.name);
     }
     s.push('\n');
     for (k, t) in r.times.iter().enumerate() {
@@ -75,6 +77,10 @@ pub fn estimates_csv(result: &RunResult) -> String {
                     }
                 }
             }
+            s.push(',');
+            if let Some(ll) = m.log_likelihoods.get(k).filter(|v| !v.is_nan()) {
+                let _ = write!(s, "{ll:?}");
+            }
         }
         s.push('\n');
     }
@@ -82,7 +88,8 @@ pub fn estimates_csv(result: &RunResult) -> String {
 }
 
 /// The run as JSON: per method its name, estimates, covariances (row-major, n × n per row),
-/// failure, timings and — with a truth — MSE.
+/// the log-likelihood of each row's observation and their sum, failure, timings and — with a
+/// truth — MSE.
 pub fn json(result: &RunResult) -> String {
     let methods: Vec<serde_json::Value> = result
         .methods
@@ -93,6 +100,8 @@ pub fn json(result: &RunResult) -> String {
                 "name": m.name,
                 "estimates": m.estimates,
                 "covariances": m.covariances,
+                "log_likelihoods": m.log_likelihoods,
+                "log_likelihood": m.log_likelihood(),
                 "failure": m.failure,
                 "concerns": m.concerns,
                 "seconds_per_step": m.seconds_per_step(),
@@ -113,8 +122,8 @@ pub fn json(result: &RunResult) -> String {
     format!("{value:#}\n")
 }
 
-/// A one-screen summary: per method the last estimate (± sd), failure, time per step and,
-/// with a truth, MSE.
+/// A one-screen summary: per method the last estimate (± sd), failure, time per step, the
+/// log-likelihood of the data and, with a truth, MSE.
 pub fn table(result: &RunResult) -> String {
     let r = &result.recording;
     let n = r.n;
@@ -138,8 +147,8 @@ pub fn table(result: &RunResult) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<16} {:>28} {:>12} {:>12}  status",
-        "method", "final estimate (± sd)", "µs/step", "MSE"
+        "{:<16} {:>28} {:>12} {:>14} {:>12}  status",
+        "method", "final estimate (± sd)", "µs/step", "log-lik", "MSE"
     );
     for (i, m) in result.methods.iter().enumerate() {
         let rows = m.rows();
@@ -166,10 +175,12 @@ pub fn table(result: &RunResult) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<16} {:>28} {:>12.2} {:>12}  {status}",
+            "{:<16} {:>28} {:>12.2} {:>14} {:>12}  {status}",
             m.name,
             estimate,
             m.seconds_per_step() * 1e6,
+            m.log_likelihood()
+                .map_or_else(|| "—".into(), |v| format!("{v:.4}")),
             result
                 .mse(i)
                 .map_or_else(|| "—".into(), |v| format!("{v:.5}")),

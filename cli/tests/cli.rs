@@ -411,6 +411,23 @@ fn filtering_a_simulated_csv_reproduces_the_simulated_run_bit_for_bit() {
                 s["name"]
             );
             assert!(f["mse"].is_null(), "no truth, no MSE");
+            // Every method gives the data's log-likelihood, one term per row, and their sum.
+            if f["failure"].is_null() {
+                let terms: Vec<f64> = f["log_likelihoods"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_f64().expect("a finite term"))
+                    .collect();
+                let total = f["log_likelihood"].as_f64().expect("a total");
+                let n = blind["n"].as_u64().unwrap() as usize;
+                assert_eq!(terms.len(), bits(&f["estimates"]).len() / n);
+                assert!(
+                    (total - terms.iter().sum::<f64>()).abs() <= 1e-9 * total.abs().max(1.0),
+                    "{preset} {}: {total}",
+                    s["name"]
+                );
+            }
             assert!(
                 f["failure"].is_null() || !s["failure"].is_null(),
                 "{preset} {}: {}",

@@ -384,6 +384,11 @@ fn result_dict<'py>(
         }
         md.set_item("concerns", concerns)?;
         md.set_item("mse", result.mse(i))?;
+        md.set_item(
+            "log_likelihoods",
+            padded(py, track.log_likelihoods.clone(), count, &[])?,
+        )?;
+        md.set_item("log_likelihood", track.log_likelihood())?;
         md.set_item("seconds_per_step", track.seconds_per_step())?;
         md.set_item("build_seconds", track.build_seconds)?;
         methods.append(md)?;

@@ -146,6 +146,13 @@ impl Stepper {
         self.filter.update(&values).map_err(errors::from_filter)
     }
 
+    /// The log-likelihood of the last step's observation given the ones before it (0 when it
+    /// observed nothing), or `None` when the method gives none.
+    #[getter]
+    fn log_likelihood(&self) -> Option<f64> {
+        self.filter.log_likelihood()
+    }
+
     /// An independent copy in the current state (stepping one does not move the other).
     fn fork(&self) -> Stepper {
         Stepper {

@@ -56,6 +56,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.equal(cells.length, run.methods.length);
   for (const row of cells) {
     assert.ok(/^\d+\.\d{4}$/.test(row[1]) || row[2].startsWith('failed'), `metrics row ${row}`);
+    // The observations' log-likelihood so far: a number for every method that has not failed.
+    assert.ok(/^-?\d+\.\d{3}$/.test(row[3]) || row[2].startsWith('failed'), `log-likelihood in ${row}`);
   }
   // Time per step is a researcher's diagnostic, in its own panel.
   const timing = await page.$$eval('#timing tbody tr', (rows) => rows.map((r) => r.children[1].textContent));

@@ -302,6 +302,8 @@ struct MethodDiagnostics {
     /// For a failed method that is still followed: 004 (43) over every row so far, those
     /// before and after its failure (what the failure rule hides; display only).
     mse_followed: Option<f64>,
+    /// The log-likelihood of the observations so far (`None` for a failed method).
+    log_likelihood: Option<f64>,
     ms_per_step: f64,
     steps: usize,
     warnings: Vec<String>,
@@ -835,8 +837,9 @@ impl Session {
         }
     }
 
-    /// Per method: `{name, key, failed, failure, failed_at, mse, ms_per_step, steps,
-    /// warnings}`; `mse` is 004 (43) over the rows so far; `warnings` name violated stability
+    /// Per method: `{name, key, failed, failure, failed_at, mse, log_likelihood, ms_per_step,
+    /// steps, warnings}`; `mse` is 004 (43) over the rows so far, `log_likelihood` the
+    /// observations' so far ([`zakai::Filter::log_likelihood`], summed); `warnings` name violated stability
     /// or positivity conditions of the chosen steps (000 (22), (30), (31)).
     pub fn diagnostics(&self) -> Result<JsValue, JsError> {
         let methods = &self.experiment.config().methods;
@@ -853,6 +856,7 @@ impl Session {
                 failed_at: t.failure.as_ref().map(|f| f.k),
                 mse: self.run.running_mse(i),
                 mse_followed: self.mse_followed(i),
+                log_likelihood: t.log_likelihood(),
                 ms_per_step: t.seconds_per_step() * 1e3,
                 steps: t.steps,
                 warnings: self.run.filters()[i].warnings(),

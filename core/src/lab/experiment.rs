@@ -220,6 +220,10 @@ pub struct MethodTrack {
     /// part of each measurement its prediction did not expect. Empty unless the run records
     /// them ([`ExperimentRun::record_innovations`]).
     pub innovations: Vec<f64>,
+    /// The log-likelihood of each row's observation given the ones before it
+    /// ([`crate::Filter::log_likelihood`]; one per row of `estimates`, 0 where nothing was
+    /// observed, NaN where the method gives none).
+    pub log_likelihoods: Vec<f64>,
     /// Estimates the method went on giving after a failure that left its state intact (the
     /// track-loss rule or the divergence bound, not a failed step or non-finite numbers),
     /// rows `failure.k ..`, row-major — for display only (a failed run's numbers never reach a
@@ -237,6 +241,15 @@ impl MethodTrack {
     /// Number of estimate rows.
     pub fn rows(&self) -> usize {
         self.estimates.len() / self.n
+    }
+    /// The log-likelihood of the data the method saw, the sum of
+    /// [`MethodTrack::log_likelihoods`]: `None` when it failed (its rows stop early) or gives
+    /// none.
+    pub fn log_likelihood(&self) -> Option<f64> {
+        if self.failed() || self.log_likelihoods.iter().any(|v| v.is_nan()) {
+            return None;
+        }
+        Some(self.log_likelihoods.iter().sum())
     }
     /// True when the method failed in this run.
     pub fn failed(&self) -> bool {
@@ -602,6 +615,7 @@ impl Experiment {
                 timed_steps: 0,
                 build_seconds,
                 innovations: Vec::new(),
+                log_likelihoods: Vec::with_capacity(rows),
                 after_failure: Vec::new(),
                 off_track_since: None,
                 following: false,
@@ -954,6 +968,9 @@ impl ExperimentRun {
                     ConcernRecord::record(&mut track.concerns, c, k, t.times[k]);
                 }
                 append(&mut track.estimates, est.mean.as_slice());
+                track
+                    .log_likelihoods
+                    .push(filter.log_likelihood().unwrap_or(f64::NAN));
                 if let Some((_, row)) = &self.innovations {
                     append(&mut track.innovations, row);
                 }

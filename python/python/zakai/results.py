@@ -31,6 +31,16 @@ class MethodResult:
     mse : float or None
         Mean square error against the truth (Shi, Chen & Yau 2021, (43)), when the truth is
         known and the method finished.
+    log_likelihood : float or None
+        The log-likelihood of the data under the method: the sum of ``log_likelihoods``;
+        ``None`` when the method failed. Exact for the Kalman and Gaussian-sum filters, from
+        the density's normaliser for the grid and spectral filters, the log of the weights'
+        mean for the particle filter, from the Gaussian predictive density (an approximation)
+        for the EKF, UKF, IEKF, IOKF and the direct method. For continuous observations it is
+        the likelihood ratio against Wiener measure (the Kallianpur–Striebel normaliser).
+    log_likelihoods : ndarray, shape (N + 1,)
+        ln p(y_k | y_1:k−1) of each row's observation (0 where nothing was observed; NaN after
+        a failure).
     seconds_per_step, build_seconds : float
         Wall time per step and to build the filter (its off-line part).
     """
@@ -41,6 +51,8 @@ class MethodResult:
     failure: Optional[tuple[int, float, str]]
     concerns: list[dict[str, Any]]
     mse: Optional[float]
+    log_likelihood: Optional[float]
+    log_likelihoods: np.ndarray
     seconds_per_step: float
     build_seconds: float
 
@@ -92,8 +104,8 @@ class RunResult:
         """The run as a pandas DataFrame, one row per time, indexed like the observations
         given to :func:`filter` (else by ``t``): the time ``t``, the observations (NaN where
         missing), the truth when known, then per method its estimate ``<method> x<i>`` and,
-        where it has a covariance, its standard deviation ``<method> sd x<i>`` (NaN after a
-        failure)."""
+        where it has a covariance, its standard deviation ``<method> sd x<i>``, and the
+        log-likelihood of the row's observation ``<method> loglik`` (NaN after a failure)."""
         import pandas as pd
 
         n = next(iter(self.methods.values())).estimates.shape[1] if self.methods else 0
@@ -110,6 +122,7 @@ class RunResult:
                 columns[f"{key} x{j + 1}"] = m.estimates[:, j]
                 if sds is not None:
                     columns[f"{key} sd x{j + 1}"] = sds[:, j]
+            columns[f"{key} loglik"] = m.log_likelihoods
         index = self.index if self.index is not None else pd.Index(self.times, name="t")
         return pd.DataFrame(columns, index=index)
 
@@ -129,6 +142,8 @@ class RunResult:
                 failure=None if failure is None else (int(failure[0]), float(failure[1]), failure[2]),
                 concerns=list(m["concerns"]),
                 mse=m["mse"],
+                log_likelihood=m["log_likelihood"],
+                log_likelihoods=m["log_likelihoods"],
                 seconds_per_step=m["seconds_per_step"],
                 build_seconds=m["build_seconds"],
             )
@@ -144,18 +159,22 @@ class RunResult:
         )
 
     def table(self) -> str:
-        """One line per method: last estimate, MSE, failure, warnings, time per step."""
-        lines = [f"{'method':<14} {'last estimate':>24} {'MSE':>10} {'µs/step':>9}  notes"]
+        """One line per method: last estimate, MSE, log-likelihood, failure, warnings, time
+        per step."""
+        lines = [
+            f"{'method':<14} {'last estimate':>24} {'MSE':>10} {'log-lik':>12} {'µs/step':>9}  notes"
+        ]
         for key, m in self.methods.items():
             last = m.estimates[-1]
             est = "—" if np.isnan(last).any() else np.array2string(last, precision=4)
             mse = "—" if m.mse is None else f"{m.mse:.4g}"
+            ll = "—" if m.log_likelihood is None else f"{m.log_likelihood:.4f}"
             notes = []
             if m.failure is not None:
                 notes.append(f"failed at t = {m.failure[1]:.4g}: {m.failure[2]}")
             notes += [c["text"] for c in m.concerns]
             lines.append(
-                f"{key:<14} {est:>24} {mse:>10} {m.seconds_per_step * 1e6:>9.2f}  "
+                f"{key:<14} {est:>24} {mse:>10} {ll:>12} {m.seconds_per_step * 1e6:>9.2f}  "
                 + "; ".join(notes)
             )
         return "\n".join(lines)

@@ -99,6 +99,14 @@ class Filter:
         self._inner.update(_array(z, "z"))
         self._at_prior = False
 
+    @property
+    def log_likelihood(self) -> Optional[float]:
+        """ln p(y_k | y_1:k−1) of the last step's observation given the ones before it: 0
+        when it observed nothing (a gap, every component missing); summed over the steps,
+        the log-likelihood of the data (see :attr:`MethodResult.log_likelihood` for what is
+        exact and what approximate). For continuous observations, against Wiener measure."""
+        return self._inner.log_likelihood
+
     def copy(self) -> "Filter":
         """An independent copy of the filter in its current state: stepping one does not
         move the other (e.g. to forecast from here)."""

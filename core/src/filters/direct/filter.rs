@@ -73,7 +73,12 @@ pub struct DirectFilter {
     nodes: Vec<f64>,
     work: StepWork,
     /// What a step starts from: û and the estimate, the density, the terms and the share.
-    saved: (crate::filters::SavedDensity, Vec<f64>, usize, f64),
+    saved: (crate::filters::SavedDensity, Vec<f64>, usize, f64, f64),
+    /// `ln ∫ e^{F} û`, the mass of the density û stands for (û is kept scaled to a largest
+    /// value of 1; the scale is this).
+    log_mass: f64,
+    /// The last step's log-likelihood ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
 }
 
 /// Storage of a step, made once (a step allocates nothing).
@@ -239,7 +244,10 @@ impl DirectFilter {
                 vec![0.0; x.len()],
                 0,
                 0.0,
+                0.0,
             ),
+            log_mass: 0.0,
+            log_likelihood: 0.0,
             nodes: x,
             grid,
         };
@@ -253,7 +261,8 @@ impl DirectFilter {
         self.terms
     }
 
-    /// The density `e^{F} û` normalised on the grid, and the estimate.
+    /// The density `e^{F} û` normalised on the grid, and the estimate; records the mass
+    /// `e^{F} û` had.
     fn refresh(&mut self) -> Result<(), FilterError> {
         for ((l, &u), &big_f) in self
             .work
@@ -268,19 +277,20 @@ impl DirectFilter {
                 f64::NEG_INFINITY
             };
         }
-        exp_shifted(&self.work.log, &mut self.density);
+        let shift = exp_shifted(&self.work.log, &mut self.density);
         crate::filters::normalise_on_grid(
             &self.grid,
             &mut self.density,
             &mut self.moments,
             &mut self.estimate,
         )?;
+        self.log_mass = libm::log(self.moments.mass) + shift;
         Ok(())
     }
 }
 
-/// `out = exp(log − max log)` (all zero when no value is finite).
-fn exp_shifted(log: &[f64], out: &mut [f64]) {
+/// `out = exp(log − max log)` (all zero when no value is finite); returns the shift.
+fn exp_shifted(log: &[f64], out: &mut [f64]) -> f64 {
     let shift = log.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     for (o, &v) in out.iter_mut().zip(log) {
         *o = if shift.is_finite() {
@@ -289,6 +299,7 @@ fn exp_shifted(log: &[f64], out: &mut [f64]) {
             0.0
         };
     }
+    shift
 }
 
 impl DirectFilter {
@@ -297,7 +308,11 @@ impl DirectFilter {
     /// `exp(Δyᵀh)` (30); otherwise (32) carries no observation term and the factor is the
     /// observed components' likelihood `exp(Δy_Oᵀh_O − ½|h_O|²Δτ)` (S = I) — exact for a gap,
     /// and for a partial increment the splitting of the in-update form (first order in Δτ).
-    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+    /// Returns the step's log-likelihood: the logarithm of the mass of `e^{F} û` after the
+    /// interval against before it — (32) carries the increment's −½|h|²Δτ with η and the
+    /// factor is `exp(Δyᵀh)`, so the ratio is the normaliser of the interval (0 for a gap).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<f64, FilterError> {
+        let before = self.log_mass;
         let len = self.u_hat.len();
         let StepWork {
             decomposition,
@@ -407,7 +422,11 @@ impl DirectFilter {
             return Err(FilterError::MassLost);
         }
         self.u_hat.iter_mut().for_each(|u| *u /= top);
-        self.refresh()
+        self.refresh()?;
+        Ok(match observed {
+            Observed::Nothing => 0.0,
+            _ => self.log_mass + libm::log(top) + shift - before,
+        })
     }
 }
 
@@ -419,20 +438,30 @@ impl Filter for DirectFilter {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Increment, self.h.len())?;
         if obs.dt <= 0.0 {
+            self.log_likelihood = 0.0;
             return Ok(());
         }
-        let (saved, density, terms, share) = &mut self.saved;
+        let (saved, density, terms, share, log_mass) = &mut self.saved;
         saved.save(&self.u_hat, &self.estimate);
         density.copy_from_slice(&self.density);
-        (*terms, *share) = (self.terms, self.residual_share);
-        let stepped = self.advance(obs, observed);
-        if stepped.is_err() {
-            let (saved, density, terms, share) = &self.saved;
-            saved.restore(&mut self.u_hat, &mut self.estimate);
-            self.density.copy_from_slice(density);
-            (self.terms, self.residual_share) = (*terms, *share);
+        (*terms, *share, *log_mass) = (self.terms, self.residual_share, self.log_mass);
+        match self.advance(obs, observed) {
+            Ok(log_likelihood) => {
+                self.log_likelihood = log_likelihood;
+                Ok(())
+            }
+            Err(e) => {
+                let (saved, density, terms, share, log_mass) = &self.saved;
+                saved.restore(&mut self.u_hat, &mut self.estimate);
+                self.density.copy_from_slice(density);
+                (self.terms, self.residual_share, self.log_mass) = (*terms, *share, *log_mass);
+                Err(e)
+            }
         }
-        stepped
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

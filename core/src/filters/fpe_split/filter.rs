@@ -75,6 +75,8 @@ pub struct ContinuousDiscreteGrid {
     u: Vec<f64>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
+    /// The last step's log-likelihood ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
     tmp: Vec<f64>,
     residual: Vec<f64>,
     work: Vec<f64>,
@@ -159,6 +161,7 @@ impl ContinuousDiscreteGrid {
             plan: None,
             remainders: LengthCache::new(REMAINDER_PLANS),
             saved: crate::filters::SavedDensity::new(len, &estimate),
+            log_likelihood: 0.0,
             u,
             tmp: vec![0.0; len],
             residual: vec![0.0; m],
@@ -341,8 +344,11 @@ impl ContinuousDiscreteGrid {
     }
 
     /// The Bayes update (6)–(7) with the observed components of `z` (NaN = missing: the
-    /// noise density of the observed ones, its marginal), then the normalisation by `c'_k`.
-    fn assimilate(&mut self, z: &[f64]) -> Result<(), FilterError> {
+    /// noise density of the observed ones, its marginal), then the normalisation by `c'_k`;
+    /// returns the log-likelihood `ln p(z | past) = ln(c'_k / ∫ p̂)`, the normaliser against
+    /// the predicted density's mass.
+    fn assimilate(&mut self, z: &[f64]) -> Result<f64, FilterError> {
+        let before = self.grid.mass(&self.u);
         let m = self.residual.len();
         let noise = self.noise.of(z)?;
         let mut max = f64::NEG_INFINITY;
@@ -362,7 +368,8 @@ impl ContinuousDiscreteGrid {
         for (u, log) in self.u.iter_mut().zip(&self.tmp) {
             *u = libm::exp(log - max);
         }
-        self.normalise()
+        self.normalise()?;
+        Ok(libm::log(self.moments.mass) + max - libm::log(before))
     }
 
     /// Normalises the density and refreshes the estimate.
@@ -375,13 +382,14 @@ impl ContinuousDiscreteGrid {
         )
     }
 
-    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
-    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way); returns its
+    /// log-likelihood (0 without a measurement).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<f64, FilterError> {
         if obs.dt > 0.0 {
             self.propagate(obs.dt)?;
         }
         match observed {
-            Observed::Nothing => self.normalise(),
+            Observed::Nothing => self.normalise().map(|_| 0.0),
             Observed::All | Observed::Some => self.assimilate(obs.value),
         }
     }
@@ -404,11 +412,20 @@ impl Filter for ContinuousDiscreteGrid {
             self.residual.len(),
         )?;
         self.saved.save(&self.u, &self.estimate);
-        let stepped = self.advance(obs, observed);
-        if stepped.is_err() {
-            self.saved.restore(&mut self.u, &mut self.estimate);
+        match self.advance(obs, observed) {
+            Ok(log_likelihood) => {
+                self.log_likelihood = log_likelihood;
+                Ok(())
+            }
+            Err(e) => {
+                self.saved.restore(&mut self.u, &mut self.estimate);
+                Err(e)
+            }
         }
-        stepped
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

@@ -144,9 +144,11 @@ pub struct GaussianSumFilter {
     len: usize,
     cached: Option<Discretization>,
     reduction: Reduction,
+    /// The last step's log-likelihood ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
     work: UpdateWork,
     /// The mixture a step started from (its first `.1` slots), restored when the step fails.
-    saved: (Vec<Component>, usize, Reduction),
+    saved: (Vec<Component>, usize, Reduction, f64),
 }
 
 /// Storage of a step, made once (the update writes the next mixture into `next`; the merge
@@ -235,7 +237,9 @@ impl GaussianSumFilter {
                 (0..slots).map(|_| Component::zeros(n)).collect(),
                 0,
                 Reduction::default(),
+                0.0,
             ),
+            log_likelihood: 0.0,
         })
     }
 
@@ -252,7 +256,9 @@ impl GaussianSumFilter {
     /// The mixture's components.
     /// Keeps the mixture (storage grown once to its working size).
     fn save(&mut self) {
-        let (saved, len, reduction) = &mut self.saved;
+        let (saved, len, reduction, log_likelihood) = &mut self.saved;
+        *log_likelihood = self.log_likelihood;
+        self.log_likelihood = 0.0;
         let n = self.a.nrows();
         if saved.len() < self.len {
             saved.resize_with(self.len, || Component::zeros(n));
@@ -266,7 +272,8 @@ impl GaussianSumFilter {
 
     /// Back to the mixture [`GaussianSumFilter::save`] kept.
     fn restore(&mut self) {
-        let (saved, len, reduction) = &self.saved;
+        let (saved, len, reduction, log_likelihood) = &self.saved;
+        self.log_likelihood = *log_likelihood;
         let n = self.a.nrows();
         if self.components.len() < *len {
             self.components.resize_with(*len, || Component::zeros(n));
@@ -297,7 +304,8 @@ impl GaussianSumFilter {
         Ok(())
     }
 
-    /// The Bayes update with the observed components of `z`, then the mixture reduction. A
+    /// The Bayes update with the observed components of `z`, then the mixture reduction; the
+    /// log-likelihood `ln Σ_ij w_i β_j N(z; C m_i + c + μ_j, C P_i Cᵀ + R_j)` (exact). A
     /// missing component (NaN) is taken out as in the Kalman filters: its row of C and its
     /// entries of c, z and every noise mean read 0, its rows and columns of every noise
     /// covariance those of the identity — the same update as with the observed rows alone
@@ -346,7 +354,10 @@ impl GaussianSumFilter {
                 work,
                 ..
             } = self;
-            Self::update_with(components, len, work, (&c, &c0, &noise), &z)?;
+            let total = Self::update_with(components, len, work, (&c, &c0, &noise), &z)?;
+            // A masked row's density is N(0; 0, 1): take its 1/√(2π) out again.
+            let missing = seen.iter().filter(|s| !**s).count() as f64;
+            self.log_likelihood = total + 0.5 * missing * libm::log(core::f64::consts::TAU);
         } else {
             let GaussianSumFilter {
                 c,
@@ -357,21 +368,22 @@ impl GaussianSumFilter {
                 work,
                 ..
             } = self;
-            Self::update_with(components, len, work, (c, c0, noise), z)?;
+            self.log_likelihood = Self::update_with(components, len, work, (c, c0, noise), z)?;
         }
         self.reduce();
         Ok(())
     }
 
     /// The Bayes update of every pair (component, noise component) with `z = C x + c + v`
-    /// into the mixture's storage (`components`, `len`).
+    /// into the mixture's storage (`components`, `len`); returns the log of the weights'
+    /// total before normalisation, `ln p(z | past)`.
     fn update_with(
         components: &mut Vec<Component>,
         len: &mut usize,
         work: &mut UpdateWork,
         (c, c0, noise): (&DMatrix<f64>, &DVector<f64>, &GaussianMixture),
         z: &[f64],
-    ) -> Result<(), FilterError> {
+    ) -> Result<f64, FilterError> {
         let count = *len * noise.components().len();
         work.z.copy_from_slice(z);
         // The bank holds max(prior, cap) × J; more only when merges failed to keep the cap.
@@ -421,7 +433,7 @@ impl GaussianSumFilter {
         }
         core::mem::swap(components, &mut work.next);
         *len = count;
-        Ok(())
+        Ok(total)
     }
 
     /// Keeps the slots among the first `len` that `keep` says (in order) at the front;
@@ -587,6 +599,10 @@ impl Filter for GaussianSumFilter {
             self.restore();
         }
         stepped
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

@@ -68,6 +68,10 @@ impl Filter for ExtendedKalman {
         })
     }
 
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.state.log_likelihood)
+    }
+
     fn estimate(&self) -> Estimate {
         self.state.estimate()
     }

@@ -210,6 +210,10 @@ impl Filter for KalmanBucy {
         })
     }
 
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.state.log_likelihood)
+    }
+
     fn estimate(&self) -> Estimate {
         self.state.estimate()
     }

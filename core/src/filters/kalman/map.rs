@@ -138,7 +138,10 @@ impl Filter for MapKalman {
             let Some(meas) = state.predict_then_measure(name, model, q, steps, form, obs)? else {
                 return Ok(None);
             };
-            map_update(*solver, model, meas, state, work).map(|report| Some((report, meas)))
+            let report = map_update(*solver, model, meas, state, work)?;
+            // The Gaussian predictive density at the predicted mean, as the EKF's.
+            state.record_log_likelihood(report.log_density, meas)?;
+            Ok(Some((report, meas)))
         })?;
         let Some((report, meas)) = stepped else {
             watch.elapse(model, q, steps, obs.dt);
@@ -155,6 +158,10 @@ impl Filter for MapKalman {
         };
         watch.after_update(&interval, state, last.log_density);
         Ok(())
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.state.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

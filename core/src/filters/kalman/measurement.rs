@@ -31,6 +31,8 @@ pub struct MeasurementForm {
 /// The measurement equation for one observation.
 #[derive(Clone, Debug)]
 pub struct Measurement {
+    /// Whether this is an increment of a continuous observation.
+    pub continuous: bool,
     /// Multiplies h (Δτ for increments, 1 for measurements).
     pub scale: f64,
     /// R.
@@ -53,6 +55,7 @@ impl MeasurementForm {
             ObservationModel::Discrete { noise } => (false, noise.mean(), noise.covariance()),
         };
         let current = Measurement {
+            continuous,
             scale: 1.0,
             noise_cov: noise_cov.clone(),
             value: DVector::zeros(model.m),

@@ -154,8 +154,11 @@ pub struct GaussianState {
     pub parts: UpdateParts,
     work: UpdateWork,
     moments: propagate::MomentWork,
+    /// The log-likelihood of the last step's observation ([`crate::Filter::log_likelihood`]):
+    /// from the Gaussian predictive density of the update, 0 after a step without one.
+    pub log_likelihood: f64,
     /// The state a step started from ([`GaussianState::save`]).
-    saved: (DVector<f64>, DMatrix<f64>, InnovationWindow),
+    saved: (DVector<f64>, DMatrix<f64>, InnovationWindow, f64),
 }
 
 /// The residual `r = z − ẑ` (m), the cross covariance `P_xz` (n × m) and the innovation
@@ -173,10 +176,13 @@ pub struct UpdateParts {
 }
 
 /// Storage of the update: the Cholesky factor of P_zz, Kᵀ, P_zz⁻¹ r, and the linearised
-/// observation `H` (with its row-major evaluation) at the mean.
+/// observation `H` (with its row-major evaluation) at the mean; the factor of R and R⁻¹z of
+/// the likelihood's reference density.
 #[derive(Clone, Debug)]
 struct UpdateWork {
     factor: DMatrix<f64>,
+    noise_factor: DMatrix<f64>,
+    noise_whitened: DVector<f64>,
     gain_t: DMatrix<f64>,
     whitened: DVector<f64>,
     h: DMatrix<f64>,
@@ -215,8 +221,11 @@ impl GaussianState {
                 pzz: DMatrix::zeros(m, m),
                 observed: m,
             },
+            log_likelihood: 0.0,
             work: UpdateWork {
                 factor: DMatrix::zeros(m, m),
+                noise_factor: DMatrix::zeros(m, m),
+                noise_whitened: DVector::zeros(m),
                 gain_t: DMatrix::zeros(m, n),
                 whitened: DVector::zeros(m),
                 h: DMatrix::zeros(m, n),
@@ -227,16 +236,20 @@ impl GaussianState {
                 DVector::zeros(n),
                 DMatrix::zeros(n, n),
                 InnovationWindow::new(),
+                0.0,
             ),
         }
     }
 
-    /// Keeps the mean, covariance and innovation window (no allocation), so that
-    /// [`GaussianState::restore`] can undo a step that fails.
+    /// Keeps the mean, covariance, innovation window and log-likelihood (no allocation), so
+    /// that [`GaussianState::restore`] can undo a step that fails; the step to come starts
+    /// with a log-likelihood of 0 (nothing observed yet).
     pub fn save(&mut self) {
         self.saved.0.copy_from(&self.mean);
         self.saved.1.copy_from(&self.cov);
         self.saved.2.clone_from(&self.innovations);
+        self.saved.3 = self.log_likelihood;
+        self.log_likelihood = 0.0;
     }
 
     /// Back to the state of the last [`GaussianState::save`].
@@ -244,6 +257,7 @@ impl GaussianState {
         self.mean.copy_from(&self.saved.0);
         self.cov.copy_from(&self.saved.1);
         self.innovations.clone_from(&self.saved.2);
+        self.log_likelihood = self.saved.3;
     }
 
     /// Runs `step` on the state; when it fails, the state is restored to what it was before
@@ -261,10 +275,13 @@ impl GaussianState {
     }
 
     /// The linear(ised) update from [`GaussianState::parts`] (residual `r = z − ẑ`, `P_xz`,
-    /// `P_zz`): gain `K = P_xz P_zz⁻¹`, `m += K r`, `P −= K P_zz Kᵀ = P_xz Kᵀ`.
-    pub fn update(&mut self) -> Result<(), FilterError> {
+    /// `P_zz`) of the measurement `meas`: gain `K = P_xz P_zz⁻¹`, `m += K r`,
+    /// `P −= K P_zz Kᵀ = P_xz Kᵀ`; the log-likelihood from the innovation's density.
+    pub fn update(&mut self, meas: &measurement::Measurement) -> Result<(), FilterError> {
         let nis = self.gain()?;
         self.innovations.push(nis, self.parts.observed);
+        let log_density = self.innovation_log_density(nis);
+        self.record_log_likelihood(log_density, meas)?;
         self.mean
             .gemv_tr(1.0, &self.work.gain_t, &self.parts.residual, 1.0);
         self.downdate_covariance()
@@ -280,6 +297,42 @@ impl GaussianState {
             - (0..factor.nrows())
                 .map(|i| libm::log(factor[(i, i)]))
                 .sum::<f64>()
+    }
+
+    /// Records the step's log-likelihood from the innovation's log-density `log_density`
+    /// ([`GaussianState::innovation_log_density`], at the predicted mean): for a measurement
+    /// `log N(z; ẑ, P_zz)`, the Gaussian predictive density of z; for an increment
+    /// `log N(Δy; ĥΔτ, P_zz) − log N(Δy; 0, SΔτ)`, the same against the Wiener reference, so
+    /// that it estimates the Kallianpur–Striebel normaliser of the interval
+    /// `E[exp(ΔyᵀS⁻¹h − ½hᵀS⁻¹h Δτ)]`. Missing components add nothing (their rows of P_zz and
+    /// R are identity rows, their values 0).
+    pub fn record_log_likelihood(
+        &mut self,
+        log_density: f64,
+        meas: &measurement::Measurement,
+    ) -> Result<(), FilterError> {
+        let observed = meas.count as f64;
+        let mut ll = log_density - 0.5 * observed * libm::log(core::f64::consts::TAU);
+        if meas.continuous {
+            let work = &mut self.work;
+            let chol = crate::linalg::cholesky_in(
+                &mut work.noise_factor,
+                &meas.noise_cov,
+                "observation noise covariance",
+            )?;
+            work.noise_whitened.copy_from(&meas.value);
+            chol.solve_mut(&mut work.noise_whitened);
+            let quadratic = meas.value.dot(&work.noise_whitened);
+            work.noise_factor = chol.unpack_dirty();
+            let half_log_det: f64 = (0..work.noise_factor.nrows())
+                .map(|i| libm::log(work.noise_factor[(i, i)]))
+                .sum();
+            ll -= -0.5 * quadratic
+                - half_log_det
+                - 0.5 * observed * libm::log(core::f64::consts::TAU);
+        }
+        self.log_likelihood = ll;
+        Ok(())
     }
 
     /// The gain of the update in [`GaussianState::parts`]: `Kᵀ = P_zz⁻¹ P_xzᵀ` into the
@@ -341,7 +394,7 @@ impl GaussianState {
         meas: &measurement::Measurement,
     ) -> Result<(), FilterError> {
         self.linearize(model, meas, None);
-        self.update()
+        self.update(meas)
     }
 
     /// The EKF prediction over `dt`: the linearised moment equations (Jazwinski) in

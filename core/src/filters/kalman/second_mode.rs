@@ -514,6 +514,7 @@ mod tests {
             state.mean[0] = 1.2;
             state.cov[(0, 0)] = 0.04;
             let meas = Measurement {
+                continuous: true,
                 scale: 0.01,
                 noise_cov: DMatrix::from_element(1, 1, 0.01),
                 value: DVector::from_element(1, 0.0),

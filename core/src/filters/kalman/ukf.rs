@@ -248,7 +248,7 @@ impl UnscentedKalman {
         for (r, z) in zhat.iter_mut().zip(meas.value.iter()) {
             *r = z - *r;
         }
-        state.update()
+        state.update(meas)
     }
 }
 
@@ -290,6 +290,10 @@ impl Filter for UnscentedKalman {
                 None => Ok(()),
             }
         })
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.state.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

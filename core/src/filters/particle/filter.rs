@@ -41,6 +41,8 @@ pub struct ParticleFilter {
     particles: Vec<f64>,
     /// Normalised log-weights and the same weights in the linear domain.
     log_weights: Vec<f64>,
+    /// The last step's log-likelihood estimate ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
     weights: Vec<f64>,
     /// f (n·N), then the noise draws (n·N); h or the residual (m·N); resampling target (n·N).
     drift: Vec<f64>,
@@ -124,6 +126,7 @@ impl ParticleFilter {
             normal: NormalZiggurat::new(),
             particles,
             log_weights: vec![-libm::log(count as f64); count],
+            log_likelihood: 0.0,
             weights: vec![uniform; count],
             drift: vec![0.0; count * n],
             noise: vec![0.0; count * n],
@@ -188,15 +191,17 @@ impl ParticleFilter {
     }
 
     /// Into `next_log_weights`: the log-weights times the likelihood of the observed
-    /// components of `obs` at the particles (the moved ones in `resampled` when `moved`;
-    /// constant factors dropped: they cancel in the normalisation); then normalised, with
-    /// the linear weights in `next_weights`.
+    /// components of `obs` at the particles (the moved ones in `resampled` when `moved`);
+    /// then normalised, with the linear weights in `next_weights`. Returns the step's
+    /// log-likelihood estimate, the log of the weights' total `ln Σ wᵢ p(obs | xᵢ)` — for an
+    /// increment against the Wiener reference `N(Δy; 0, SΔτ)`, whose factors the weights
+    /// leave out.
     fn weigh(
         &mut self,
         obs: &Observation,
         observed: Observed,
         moved: bool,
-    ) -> Result<(), FilterError> {
+    ) -> Result<f64, FilterError> {
         let (m, count) = (self.model.m, self.params.particles);
         let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });
         let scale = if continuous { obs.dt } else { 1.0 };
@@ -216,6 +221,9 @@ impl ParticleFilter {
         }
         let lw = &mut self.next_log_weights;
         lw.copy_from_slice(&self.log_weights);
+        // The log-density of the observation under the reference the weights are taken
+        // against (0 for measurements: their weights are whole densities).
+        let mut reference = 0.0;
         match (observed, &self.model.observations) {
             (Observed::Some, _) => {
                 let noise = self.observed_noise.of(obs.value)?;
@@ -224,6 +232,14 @@ impl ParticleFilter {
                 } else {
                     1.0
                 };
+                if continuous {
+                    let k = crate::filters::observed_residual(
+                        obs.value,
+                        |a| obs.value[a] * unscale,
+                        &mut self.residual,
+                    );
+                    reference = noise.log_pdf_slice(&self.residual[..k], &mut self.work);
+                }
                 let predicted = &self.predicted;
                 for (i, w) in lw.iter_mut().enumerate() {
                     let k = crate::filters::observed_residual(
@@ -234,12 +250,13 @@ impl ParticleFilter {
                     *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
                 }
             }
-            // −½ rᵀ (S Δτ)⁻¹ r.
+            // −½ rᵀ (S Δτ)⁻¹ r, against −½ Δyᵀ (S Δτ)⁻¹ Δy.
             (_, ObservationModel::Continuous { .. }) => {
                 let c = -0.5 / obs.dt;
                 for a in 0..m {
                     for b in 0..m {
                         let s = c * self.noise_inverse[a * m + b];
+                        reference += s * obs.value[a] * obs.value[b];
                         let (ra, rb) = (
                             &self.predicted[a * count..(a + 1) * count],
                             &self.predicted[b * count..(b + 1) * count],
@@ -259,7 +276,8 @@ impl ParticleFilter {
                 }
             }
         }
-        normalise(&mut self.next_log_weights, &mut self.next_weights)
+        let total = normalise(&mut self.next_log_weights, &mut self.next_weights)?;
+        Ok(total - reference)
     }
 
     /// Systematic resampling with one uniform u ([`systematic_ancestors`]), the particles
@@ -297,8 +315,9 @@ impl ParticleFilter {
 }
 
 /// Normalises `log_weights` and fills the linear `weights`: one exponential per particle;
-/// [`FilterError::MassLost`] when no weight is left (nothing finite, or NaN).
-fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<(), FilterError> {
+/// returns the log of their total before, or [`FilterError::MassLost`] when no weight is left
+/// (nothing finite, or NaN).
+fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<f64, FilterError> {
     let max = log_weights
         .iter()
         .fold(f64::NEG_INFINITY, |a, &b| crate::linalg::larger(a, b));
@@ -313,7 +332,7 @@ fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<(), FilterE
     let inv = 1.0 / total;
     weights.iter_mut().for_each(|w| *w *= inv);
     log_weights.iter_mut().for_each(|w| *w -= shift);
-    Ok(())
+    Ok(shift)
 }
 
 /// Systematic resampling's ancestors: points `t_j = (u + j)/N` on the CDF `c_i` of the
@@ -393,10 +412,14 @@ impl Filter for ParticleFilter {
         if moved {
             self.predict_into_spare(obs.dt);
         }
+        let mut log_likelihood = 0.0;
         if observed != Observed::Nothing {
-            if let Err(e) = self.weigh(obs, observed, moved) {
-                self.rng = rng;
-                return Err(e);
+            match self.weigh(obs, observed, moved) {
+                Ok(ll) => log_likelihood = ll,
+                Err(e) => {
+                    self.rng = rng;
+                    return Err(e);
+                }
             }
             core::mem::swap(&mut self.log_weights, &mut self.next_log_weights);
             core::mem::swap(&mut self.weights, &mut self.next_weights);
@@ -404,6 +427,7 @@ impl Filter for ParticleFilter {
         if moved {
             core::mem::swap(&mut self.particles, &mut self.resampled);
         }
+        self.log_likelihood = log_likelihood;
         if observed == Observed::Nothing {
             return Ok(());
         }
@@ -413,6 +437,10 @@ impl Filter for ParticleFilter {
             self.resample();
         }
         Ok(())
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -154,6 +154,8 @@ pub struct SpectralFilter {
     energy: Energy,
     /// The coefficients, estimate and energy a step started from.
     saved: (crate::filters::SavedDensity, Energy),
+    /// The last step's log-likelihood ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
     /// Whether `−½hᵀS⁻¹h` is in the off-line operator (then an interval without its
     /// increment has an operator of its own, without that term: `gaps`).
     likelihood_in_operator: bool,
@@ -274,6 +276,7 @@ impl SpectralFilter {
                 crate::filters::SavedDensity::new(online_len, &Estimate::zeros(n)),
                 Energy::default(),
             ),
+            log_likelihood: 0.0,
             likelihood_in_operator: in_operator,
             model: model.clone(),
             partitions: params.partitions,
@@ -294,8 +297,8 @@ impl SpectralFilter {
     }
 
     /// Takes the estimate (41) from the nodal values, projects them onto the on-line basis
-    /// (39) and normalises the coefficients.
-    fn normalise_and_project(&mut self) -> Result<(), FilterError> {
+    /// (39) and normalises the coefficients; returns the mass they had.
+    fn normalise_and_project(&mut self) -> Result<f64, FilterError> {
         let (values, weight, coords) = (&self.values, &self.weight, &self.coords);
         let out = &mut self.estimate;
         let mass = match self.layout.dims() {
@@ -312,7 +315,7 @@ impl SpectralFilter {
             &mut self.coeffs,
         );
         self.energy = scale_and_measure(&mut self.coeffs, 1.0 / mass, &self.layout.online);
-        Ok(())
+        Ok(mass)
     }
 
     /// The remainder operator for intervals of length `rest` (< T₀): made off-line the first
@@ -439,26 +442,33 @@ impl SpectralFilter {
     /// `exp(Δy_Oᵀ S_OO⁻¹ h_O − ½ h_Oᵀ S_OO⁻¹ h_O Δτ)` ([`PartialIncrements`]). Products below
     /// zero (from negative nodal values, the polynomial's ripples where the density is small)
     /// are flushed to zero, so the factor cannot turn them into negative mass.
-    fn update(&mut self, dy: &[f64], dt: f64) -> Result<(), FilterError> {
+    /// Returns the logarithm the factor was divided by.
+    fn update(&mut self, dy: &[f64], dt: f64) -> Result<f64, FilterError> {
         let (values, a) = (&mut self.values, &mut self.exponents);
-        if dy.iter().any(|v| v.is_nan()) {
+        Ok(if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.s_inv_h, dy)?;
-            observation_factor(values, a, &t, dt);
+            observation_factor(values, a, &t, dt)
         } else {
             let (gain, half) = (&self.s_inv_h, &self.potential);
-            observation_factor(values, a, &ObservedTerms { dy, gain, half }, dt / self.t0);
-        }
-        Ok(())
+            observation_factor(values, a, &ObservedTerms { dy, gain, half }, dt / self.t0)
+        })
     }
 }
 
 /// `values ← values · exp(Δyᵀg − scale · half − shift)` at the nodes ([`ObservedTerms`]), with
-/// `shift` the largest exponent (see [`SpectralFilter::update`]); `a` is scratch.
-fn observation_factor(values: &mut [f64], a: &mut [f64], terms: &ObservedTerms, scale: f64) {
+/// `shift` the largest exponent (see [`SpectralFilter::update`]), returned; `a` is scratch.
+fn observation_factor(values: &mut [f64], a: &mut [f64], terms: &ObservedTerms, scale: f64) -> f64 {
     terms.exponents(scale, a);
     let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
     // Flushing products below 0 to 0 clips the negative values.
     linalg::scale_by_exp(values, a, shift, 0.0);
+    shift
+}
+
+/// The quadrature mass of the nodal values' positive part (what the factor (42) multiplies:
+/// it flushes negative products to zero).
+fn positive_mass(values: &[f64], weight: &[f64]) -> f64 {
+    values.iter().zip(weight).map(|(v, w)| v.max(0.0) * w).sum()
 }
 
 /// The estimate (41) from nodal values on the on-line grid of an N-dimensional model: mean
@@ -618,6 +628,7 @@ impl Filter for SpectralFilter {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Increment, self.s_inv_h.len())?;
         if obs.dt <= 0.0 {
+            self.log_likelihood = 0.0;
             return Ok(());
         }
         let (whole, rest) = crate::filters::whole_intervals(obs.dt, self.t0);
@@ -633,6 +644,12 @@ impl Filter for SpectralFilter {
         self.saved.0.save(&self.coeffs, &self.estimate);
         self.saved.1 = self.energy;
         let legs = whole + usize::from(rest > 0.0);
+        // Whether the operators carry the increment's −½hᵀS⁻¹h (likelihood in the operator,
+        // 004 (17)): then every leg's loss of mass is the likelihood's, counted from the unit
+        // mass the interval starts with; otherwise the factor's normaliser counts against
+        // the predicted density's mass.
+        let carried = self.likelihood_in_operator && observed == Observed::All;
+        let mut log_likelihood = 0.0;
         let mut stepped = Ok(());
         for leg in 1..=legs {
             self.propagate(match (gap, leg > whole) {
@@ -641,19 +658,47 @@ impl Filter for SpectralFilter {
                 (true, false) => Leg::WholeGap,
                 (true, true) => Leg::RemainderGap,
             });
+            let mut factor = None;
             if leg == legs && observed != Observed::Nothing {
-                stepped = self.update(obs.value, obs.dt);
+                let before = if carried {
+                    1.0
+                } else {
+                    positive_mass(&self.values, &self.weight)
+                };
+                match self.update(obs.value, obs.dt) {
+                    Ok(shift) => factor = Some((shift, before)),
+                    Err(e) => {
+                        stepped = Err(e);
+                        break;
+                    }
+                }
             }
-            stepped = stepped.and_then(|()| self.normalise_and_project());
-            if stepped.is_err() {
-                break;
+            match self.normalise_and_project() {
+                Ok(mass) => {
+                    if let Some((shift, before)) = factor {
+                        log_likelihood += libm::log(mass) + shift - libm::log(before);
+                    } else if carried {
+                        log_likelihood += libm::log(mass);
+                    }
+                }
+                Err(e) => {
+                    stepped = Err(e);
+                    break;
+                }
             }
         }
-        if stepped.is_err() {
-            self.saved.0.restore(&mut self.coeffs, &mut self.estimate);
-            self.energy = self.saved.1;
+        match stepped {
+            Ok(()) => self.log_likelihood = log_likelihood,
+            Err(_) => {
+                self.saved.0.restore(&mut self.coeffs, &mut self.estimate);
+                self.energy = self.saved.1;
+            }
         }
         stepped
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

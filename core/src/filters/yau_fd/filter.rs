@@ -234,24 +234,30 @@ impl QiemStep {
 impl CellSamples {
     /// [`YauYauFilter::update`] with the factor averaged over each cell's samples (only the
     /// observed components of a partly missing increment, [`PartialIncrements`]).
-    fn update(&mut self, u: &mut [f64], dy: &[f64], dt_obs: f64) -> Result<(), FilterError> {
+    fn update(&mut self, u: &mut [f64], dy: &[f64], dt_obs: f64) -> Result<f64, FilterError> {
         let k = self.per_node;
-        if dy.iter().any(|v| v.is_nan()) {
+        Ok(if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.s_inv_h, dy)?;
-            cell_factor(k, &mut self.exponents, u, &t, dt_obs);
+            cell_factor(k, &mut self.exponents, u, &t, dt_obs)
         } else {
             let (gain, half) = (&self.s_inv_h, &self.half_hsh);
             let t = ObservedTerms { dy, gain, half };
-            cell_factor(k, &mut self.exponents, u, &t, dt_obs);
-        }
-        Ok(())
+            cell_factor(k, &mut self.exponents, u, &t, dt_obs)
+        })
     }
 }
 
 /// The factor `exp(Δyᵀg − ½hᵀS⁻¹h Δτ)` (with `g = S⁻¹h`, `half = ½hᵀS⁻¹h`) averaged over the
 /// `k` samples of each cell: every exponent `a_is + e_i ln 2` is shifted by the largest, so the
-/// mean of the exponentials is at most 1 and no intermediate overflows.
-fn cell_factor(k: usize, exponents: &mut [f64], u: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {
+/// mean of the exponentials is at most 1 and no intermediate overflows. Returns the shift
+/// (the factor's logarithm the values were divided by; −∞ when no mass was left).
+fn cell_factor(
+    k: usize,
+    exponents: &mut [f64],
+    u: &mut [f64],
+    terms: &ObservedTerms,
+    dt_obs: f64,
+) -> f64 {
     terms.exponents(dt_obs, exponents);
     let mut shift = f64::NEG_INFINITY;
     for (v, a) in u.iter_mut().zip(exponents.chunks_exact_mut(k)) {
@@ -265,7 +271,7 @@ fn cell_factor(k: usize, exponents: &mut [f64], u: &mut [f64], terms: &ObservedT
         }
     }
     if shift == f64::NEG_INFINITY {
-        return;
+        return shift;
     }
     let inv = 1.0 / k as f64;
     for (v, a) in u.iter_mut().zip(exponents.chunks_exact(k)) {
@@ -281,6 +287,7 @@ fn cell_factor(k: usize, exponents: &mut [f64], u: &mut [f64], terms: &ObservedT
         let w = *v * mean;
         *v = if w < super::FLUSH_BELOW { 0.0 } else { w };
     }
+    shift
 }
 
 linalg::simd::per_node_kernel! {
@@ -357,6 +364,8 @@ pub struct YauYauFilter {
     prediction: Option<(KolmogorovOperator, LengthCache<(usize, Solver)>)>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
+    /// The last step's log-likelihood ([`Filter::log_likelihood`]).
+    log_likelihood: f64,
     warnings: Vec<GuaranteeWarning>,
     estimate: Estimate,
     /// Storage of the estimate's moments.
@@ -472,6 +481,7 @@ impl YauYauFilter {
             grid,
             op,
             saved: crate::filters::SavedDensity::new(u.len(), &Estimate::zeros(model.n)),
+            log_likelihood: 0.0,
             u,
             solver: None,
             remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
@@ -557,20 +567,19 @@ impl YauYauFilter {
 
     /// The robust-DMZ factor (15) in the log domain (see [`observation_factor`]); an increment
     /// with some components missing gets the factor of the observed ones
-    /// ([`PartialIncrements`]).
-    fn update(&mut self, dy: &[f64], dt_obs: f64) -> Result<(), FilterError> {
+    /// ([`PartialIncrements`]). Returns the logarithm the factor was divided by.
+    fn update(&mut self, dy: &[f64], dt_obs: f64) -> Result<f64, FilterError> {
         if let Some(cell) = &mut self.cell {
             return cell.update(&mut self.u, dy, dt_obs);
         }
         let (u, a) = (&mut self.u, &mut self.tmp);
-        if dy.iter().any(|v| v.is_nan()) {
+        Ok(if dy.iter().any(|v| v.is_nan()) {
             let t = self.partial.terms(&self.op.s_inv_h, dy)?;
-            observation_factor(u, a, &t, dt_obs);
+            observation_factor(u, a, &t, dt_obs)
         } else {
             let (gain, half) = (&self.op.s_inv_h, &self.op.half_hsh);
-            observation_factor(u, a, &ObservedTerms { dy, gain, half }, dt_obs);
-        }
-        Ok(())
+            observation_factor(u, a, &ObservedTerms { dy, gain, half }, dt_obs)
+        })
     }
 
     /// Carries the density over `interval`: whole intervals Δτ with the solver made for Δτ,
@@ -619,22 +628,39 @@ impl YauYauFilter {
         solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp);
     }
 
-    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way).
-    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(), FilterError> {
+    /// The step of [`Filter::step`] once `obs` is checked (it may fail half-way); returns the
+    /// step's log-likelihood: the logarithm of the mass the factor (15) leaves, relative to
+    /// the mass it was applied to — the predicted density's (the normaliser
+    /// `∫ exp(ΔyᵀS⁻¹h − ½hᵀS⁻¹hΔτ) p(x | past) dx`), or, when the operator carried the
+    /// interval's −½hᵀS⁻¹h (likelihood in the operator, 000 (4)), the unit mass the
+    /// interval started from (mass that leaves the box then counts against it).
+    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<f64, FilterError> {
+        let mut factor = None;
         if obs.dt > 0.0 {
             // With the likelihood in the operator, only a fully observed increment has its
             // −½hᵀS⁻¹h there; otherwise the Fokker–Planck part alone, and the observed
             // components' factor with their ½h_Oᵀ S_OO⁻¹ h_O.
-            if observed != Observed::All && self.params.likelihood == Likelihood::InOperator {
+            let in_operator = self.params.likelihood == Likelihood::InOperator;
+            if observed != Observed::All && in_operator {
                 self.predict_without_likelihood(obs.dt);
             } else {
                 self.propagate(obs.dt);
             }
             if observed != Observed::Nothing {
-                self.update(obs.value, obs.dt)?;
+                let before = if in_operator && observed == Observed::All {
+                    1.0
+                } else {
+                    self.grid.mass(&self.u)
+                };
+                let shift = self.update(obs.value, obs.dt)?;
+                factor = Some((shift, before));
             }
         }
-        self.normalise()
+        self.normalise()?;
+        Ok(match factor {
+            Some((shift, before)) => libm::log(self.moments.mass) + shift - libm::log(before),
+            None => 0.0,
+        })
     }
 }
 
@@ -646,7 +672,8 @@ impl YauYauFilter {
 /// either case) is within ln 2 of `a_i + ln u_i`, and the
 /// new value is `m_i exp(a_i + e_i ln 2 − shift)` with `shift` the largest exponent: every value
 /// is at most 1, the largest at least ½, and no intermediate overflows. `a` is scratch.
-fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_obs: f64) {
+/// Returns `shift` (−∞ when no mass was left).
+fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_obs: f64) -> f64 {
     let ObservedTerms { dy, gain, half } = *terms;
     // The components after the first: a_i = Σ_{j ≥ 1} y_j g_j(s_i); the first and the rest of
     // the exponent follow in one pass with the split.
@@ -658,10 +685,11 @@ fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_ob
     let shift = split_exponents(u, a, &gain[0], half, dy[0], dt_obs, dy.len() > 1);
     if shift == f64::NEG_INFINITY {
         // No mass left: `normalise` reports it.
-        return;
+        return shift;
     }
     // Clamped at 0 against round-off; nodes without mass have −∞ and get 0.
     linalg::scale_by_exp(u, a, shift, super::FLUSH_BELOW);
+    shift
 }
 
 /// Substeps of at most `dt` over `interval`.
@@ -748,11 +776,20 @@ impl Filter for YauYauFilter {
             self.op.s_inv_h.len(),
         )?;
         self.saved.save(&self.u, &self.estimate);
-        let stepped = self.advance(obs, observed);
-        if stepped.is_err() {
-            self.saved.restore(&mut self.u, &mut self.estimate);
+        match self.advance(obs, observed) {
+            Ok(log_likelihood) => {
+                self.log_likelihood = log_likelihood;
+                Ok(())
+            }
+            Err(e) => {
+                self.saved.restore(&mut self.u, &mut self.estimate);
+                Err(e)
+            }
         }
-        stepped
+    }
+
+    fn log_likelihood(&self) -> Option<f64> {
+        Some(self.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

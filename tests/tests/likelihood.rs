@@ -1,0 +1,349 @@
+//! Every method's log-likelihood of the data ([`Filter::log_likelihood`], summed over the
+//! steps) against an exact Kalman log-likelihood written here, independently of Zakai's
+//! filters, on linear-Gaussian models: an Ornstein–Uhlenbeck state dx = −x dt + dv,
+//! measured as z_k = x_k + v_k (R = 0.5) or observed continuously as dy = x dt + dw (S = 1),
+//! with a gap and a missing value in the data.
+//!
+//! The reference predicts exactly (x_{k+1} = e^{−Δτ} x_k + noise of variance
+//! (1 − e^{−2Δτ})/2) and takes, per step,
+//!
+//! * a measurement: ℓ_k = ln N(z_k; m, P + R), m and P predicted;
+//! * an increment over Δτ (the sampled-model update every filter makes:
+//!   Δy = x Δτ + w, w ~ N(0, Δτ)): ℓ_k = ln N(Δy; mΔτ, PΔτ² + Δτ) − ln N(Δy; 0, Δτ), the
+//!   likelihood ratio against Wiener measure;
+//!
+//! and nothing for a gap.
+
+use zakai::{Filter, Model, Noise, Observation};
+use zakai_tests::test;
+
+const DT: f64 = 0.2;
+const STEPS: usize = 60;
+/// The step whose observation is missing, and the one that is a gap of two intervals.
+const MISSING: usize = 17;
+const GAP: usize = 31;
+
+fn ln_normal(x: f64, mean: f64, var: f64) -> f64 {
+    -0.5 * ((x - mean) * (x - mean) / var + (std::f64::consts::TAU * var).ln())
+}
+
+/// A fixed pseudo-random sequence of standard normals (Box–Muller on a small LCG).
+fn normals(count: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    (0..count)
+        .map(|_| {
+            let (u, v) = (uniform(), uniform());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        })
+        .collect()
+}
+
+/// The observations: (interval length, value; NaN = missing) per step, simulated exactly.
+fn data(continuous: bool) -> Vec<(f64, f64)> {
+    let e = normals(3 * STEPS, 11);
+    let mut x = 0.3;
+    let mut out = Vec::new();
+    for k in 0..STEPS {
+        let dt = if k == GAP { 2.0 * DT } else { DT };
+        let a = (-dt).exp();
+        x = a * x + ((1.0 - a * a) / 2.0).sqrt() * e[3 * k];
+        let value = if continuous {
+            x * dt + dt.sqrt() * e[3 * k + 1]
+        } else {
+            x + 0.5f64.sqrt() * e[3 * k + 1]
+        };
+        out.push((dt, if k == MISSING { f64::NAN } else { value }));
+    }
+    out
+}
+
+/// The exact log-likelihood of `data`, its per-step terms summed.
+fn kalman_log_likelihood(data: &[(f64, f64)], continuous: bool) -> f64 {
+    let (mut m, mut p) = (0.0, 1.0);
+    let mut total = 0.0;
+    for &(dt, value) in data {
+        let a = (-dt).exp();
+        m *= a;
+        p = a * a * p + (1.0 - a * a) / 2.0;
+        if value.is_nan() {
+            continue;
+        }
+        let (scale, r) = if continuous { (dt, dt) } else { (1.0, 0.5) };
+        let s = scale * scale * p + r;
+        total += ln_normal(value, scale * m, s);
+        if continuous {
+            total -= ln_normal(value, 0.0, r);
+        }
+        let k = p * scale / s;
+        m += k * (value - scale * m);
+        p -= k * scale * p;
+    }
+    total
+}
+
+/// The method's log-likelihood of `data`, summed.
+fn log_likelihood(filter: &mut dyn Filter, data: &[(f64, f64)], continuous: bool) -> f64 {
+    data.iter()
+        .map(|&(dt, value)| {
+            let z = [value];
+            let obs = if continuous {
+                Observation::increment(dt, &z)
+            } else {
+                Observation::measurement(dt, &z)
+            };
+            filter.step(&obs).unwrap();
+            filter.log_likelihood().expect("every method gives one")
+        })
+        .sum()
+}
+
+/// The builder with the prior N(0, 1) every reference starts from.
+fn prior<M: zakai::Method>(b: zakai::Builder<'_, M>) -> zakai::Builder<'_, M> {
+    b.prior_gaussian(&[0.0], &[[1.0]])
+}
+
+fn model(continuous: bool) -> Model {
+    let noise = if continuous {
+        Noise::continuous(1.0)
+    } else {
+        Noise::discrete(0.5)
+    };
+    Model::from_text(&["-x"], &["x"], noise).unwrap()
+}
+
+/// Discrete measurements: the Kalman and Gaussian-sum filters give the exact value to 10⁻⁹;
+/// the extended, unscented and iterated filters to their RK4 moment equations' error (10⁻⁶
+/// allowed; 1.2·10⁻⁸ measured); the grid filter of 001 converges to it (3.2·10⁻² on 400 cells,
+/// 9.0·10⁻³ on 1600 measured); the particle filter's mean over 20 seeds is within four
+/// standard errors of it.
+#[test]
+fn measurements_every_method_against_the_exact_likelihood() {
+    let (data, model) = (data(false), model(false));
+    let exact = kalman_log_likelihood(&data, false);
+    assert!(exact.is_finite() && exact < 0.0, "{exact}");
+    // Exact: the exact discretisation and update; to the RK4 moment equations' error: the
+    // rest (4 substeps per interval).
+    let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
+        (
+            "KF",
+            Box::new(prior(zakai::Kalman::builder(&model)).build().unwrap()),
+            1e-9,
+        ),
+        (
+            "GSF",
+            Box::new(prior(zakai::GaussianSum::builder(&model)).build().unwrap()),
+            1e-9,
+        ),
+        (
+            "EKF",
+            Box::new(prior(zakai::Ekf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+        (
+            "UKF",
+            Box::new(prior(zakai::Ukf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+        (
+            "IEKF",
+            Box::new(prior(zakai::Iekf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+        (
+            "IOKF",
+            Box::new(prior(zakai::Iokf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+    ];
+    for (name, f, tolerance) in &mut methods {
+        let ll = log_likelihood(f.as_mut(), &data, false);
+        println!(
+            "{name}: relative error {:.1e}",
+            (ll - exact).abs() / exact.abs()
+        );
+        assert!(
+            (ll - exact).abs() < *tolerance * exact.abs(),
+            "{name}: {ll} against {exact}"
+        );
+    }
+    let grid = |cells: usize| {
+        let mut f = prior(zakai::Separation::builder(&model))
+            .domain(&[(-6.0, 6.0)])
+            .dt(DT)
+            .with(|p| p.cells = vec![cells])
+            .build()
+            .unwrap();
+        (log_likelihood(&mut f, &data, false) - exact).abs()
+    };
+    let (coarse, fine) = (grid(400), grid(1600));
+    println!("SA: |Δℓ| {coarse:.2e} on 400 cells, {fine:.2e} on 1600 (ℓ = {exact:.4})");
+    assert!(fine < 0.5 * coarse && fine < 2e-2, "{coarse} → {fine}");
+    let runs: Vec<f64> = (0..20)
+        .map(|seed| {
+            let mut pf = prior(zakai::Pf::builder(&model))
+                .with(|p| {
+                    p.particles = 2000;
+                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
+                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
+                    p.substeps = Some(40);
+                })
+                .seed(seed)
+                .build()
+                .unwrap();
+            log_likelihood(&mut pf, &data, false)
+        })
+        .collect();
+    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
+    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+        / (runs.len() * (runs.len() - 1)) as f64)
+        .sqrt();
+    println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
+    assert!(
+        (mean - exact).abs() < 4.0 * se + 1e-3,
+        "{mean} ± {se} against {exact}"
+    );
+}
+
+/// Continuous observations: the Kalman–Bucy filter gives the exact value of the sampled model
+/// to 10⁻⁹, the EKF/UKF to their RK4 moment equations' error (10⁻⁶ allowed); QIEM converges
+/// to it as its grid and step are refined (6.4·10⁻² → 1.3·10⁻² measured), the spectral filter
+/// and the direct method (002) are within their time discretisation's error; the particle
+/// filter's mean over seeds is within four standard errors.
+#[test]
+fn increments_every_method_against_the_exact_likelihood() {
+    let (data, model) = (data(true), model(true));
+    let exact = kalman_log_likelihood(&data, true);
+    assert!(exact.is_finite(), "{exact}");
+    let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
+        (
+            "KF",
+            Box::new(prior(zakai::Kalman::builder(&model)).build().unwrap()),
+            1e-9,
+        ),
+        (
+            "EKF",
+            Box::new(prior(zakai::Ekf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+        (
+            "UKF",
+            Box::new(prior(zakai::Ukf::builder(&model)).build().unwrap()),
+            1e-6,
+        ),
+    ];
+    for (name, f, tolerance) in &mut methods {
+        let ll = log_likelihood(f.as_mut(), &data, true);
+        println!("{name}: error {:.1e}", (ll - exact).abs());
+        assert!(
+            (ll - exact).abs() < *tolerance * exact.abs().max(1.0),
+            "{name}: {ll} against {exact}"
+        );
+    }
+    let qiem = |points: usize, dt: f64, edit: fn(&mut zakai::YauYauParams)| {
+        let mut f = prior(zakai::Qiem::builder(&model))
+            .domain(&[(-6.0, 6.0)])
+            .dt(DT)
+            .with(|p| {
+                p.points = vec![points];
+                p.dt = dt;
+                edit(p);
+            })
+            .build()
+            .unwrap();
+        (log_likelihood(&mut f, &data, true) - exact).abs()
+    };
+    let (coarse, fine) = (qiem(101, 0.02, |_| {}), qiem(401, 0.005, |_| {}));
+    println!("QIEM: |Δℓ| {coarse:.2e} (101 points, Δt 0.02), {fine:.2e} (401, 0.005)");
+    assert!(fine < 0.5 * coarse && fine < 2e-2, "{coarse} → {fine}");
+    // The same with the likelihood in the operator (000 (4): its implicit damping of
+    // −½hᵀS⁻¹h is the less accurate form; 3.2·10⁻² measured, 5·10⁻² allowed), and with the
+    // factor averaged over 3 samples per cell (1.3·10⁻², 2·10⁻² allowed).
+    let in_operator = qiem(401, 0.005, |p| p.likelihood = zakai::Likelihood::InOperator);
+    let cells = qiem(401, 0.005, |p| p.likelihood_samples = 3);
+    println!(
+        "QIEM (401, 0.005): in the operator {in_operator:.2e}, 3 samples per cell {cells:.2e}"
+    );
+    assert!(in_operator < 5e-2 && cells < 2e-2, "{in_operator}, {cells}");
+    let spectral = |basis: usize| {
+        let mut f = prior(zakai::Spectral::builder(&model))
+            .domain(&[(-6.0, 6.0)])
+            .dt(DT)
+            .with(|p| {
+                p.offline_basis = Some(basis);
+                p.online_basis = Some(basis);
+            })
+            .build()
+            .unwrap();
+        (log_likelihood(&mut f, &data, true) - exact).abs()
+    };
+    // The spectral filter's propagation over Δτ is one step (1 + Δτ𝓛) of 004's Algorithm 1
+    // (N′ = 1; N′ ≥ 2 loses the density's mass on this model, see the closing note of issue
+    // 43): its time error, not the basis, sets the likelihood's (3.0·10⁻² with 16 functions,
+    // 8.1·10⁻² with 32 measured; 0.1 allowed).
+    let (s16, s32) = (spectral(16), spectral(32));
+    println!("spectral: |Δℓ| {s16:.2e} (16 functions), {s32:.2e} (32)");
+    let mut direct = prior(zakai::Direct::builder(&model))
+        .domain(&[(-6.0, 6.0)])
+        .with(|p| p.linear = [-1.0, 0.0])
+        .build()
+        .unwrap();
+    let d = (log_likelihood(&mut direct, &data, true) - exact).abs();
+    println!("direct |Δℓ| {d:.2e} (ℓ = {exact:.4})");
+    // The direct method: 3.4·10⁻² measured (its first-order carry of the residual); 5·10⁻²
+    // allowed.
+    assert!(
+        s16 < 0.1 && s32 < 0.1 && d < 5e-2,
+        "spectral {s16}, {s32}, direct {d}"
+    );
+    let runs: Vec<f64> = (0..20)
+        .map(|seed| {
+            let mut pf = prior(zakai::Pf::builder(&model))
+                .with(|p| {
+                    p.particles = 2000;
+                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
+                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
+                    p.substeps = Some(40);
+                })
+                .seed(seed)
+                .dt(DT)
+                .build()
+                .unwrap();
+            log_likelihood(&mut pf, &data, true)
+        })
+        .collect();
+    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
+    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+        / (runs.len() * (runs.len() - 1)) as f64)
+        .sqrt();
+    println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
+    assert!(
+        (mean - exact).abs() < 4.0 * se + 1e-2,
+        "{mean} ± {se} against {exact}"
+    );
+}
+
+/// A step that observes nothing — a gap, or every component missing — adds nothing, and a
+/// step that fails leaves the last value.
+#[test]
+fn nothing_observed_adds_nothing_and_a_failed_step_keeps_the_value() {
+    let model = model(false);
+    let mut f = zakai::Ukf::builder(&model)
+        .prior_gaussian(&[0.0], &[[1.0]])
+        .build()
+        .unwrap();
+    f.step_measurement(0.2, &[0.4]).unwrap();
+    let ll = f.log_likelihood().unwrap();
+    assert!(ll != 0.0 && ll.is_finite());
+    assert!(f.step_measurement(f64::NAN, &[0.1]).is_err());
+    assert_eq!(f.log_likelihood(), Some(ll));
+    f.predict(0.2).unwrap();
+    assert_eq!(f.log_likelihood(), Some(0.0));
+    f.step_measurement(0.2, &[f64::NAN]).unwrap();
+    assert_eq!(f.log_likelihood(), Some(0.0));
+}
