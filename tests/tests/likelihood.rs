@@ -103,6 +103,79 @@ fn log_likelihood(filter: &mut dyn Filter, data: &[(f64, f64)], continuous: bool
         .sum()
 }
 
+/// The Gaussian filters against `exact`: the Kalman and Gaussian-sum filters (exact
+/// discretisation and update) to 10⁻⁹ relative, the extended, unscented and iterated ones to
+/// their RK4 moment equations' error (4 substeps per interval), 10⁻⁶; the Gaussian-sum and
+/// MAP filters on measurements only.
+fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, exact: f64) {
+    let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
+        (
+            "KF",
+            Box::new(prior(zakai::Kalman::builder(model)).build().unwrap()),
+            1e-9,
+        ),
+        (
+            "EKF",
+            Box::new(prior(zakai::Ekf::builder(model)).build().unwrap()),
+            1e-6,
+        ),
+        (
+            "UKF",
+            Box::new(prior(zakai::Ukf::builder(model)).build().unwrap()),
+            1e-6,
+        ),
+    ];
+    if !continuous {
+        methods.push((
+            "GSF",
+            Box::new(prior(zakai::GaussianSum::builder(model)).build().unwrap()),
+            1e-9,
+        ));
+        methods.push((
+            "IEKF",
+            Box::new(prior(zakai::Iekf::builder(model)).build().unwrap()),
+            1e-6,
+        ));
+        methods.push((
+            "IOKF",
+            Box::new(prior(zakai::Iokf::builder(model)).build().unwrap()),
+            1e-6,
+        ));
+    }
+    for (name, f, tolerance) in &mut methods {
+        let ll = log_likelihood(f.as_mut(), data, continuous);
+        let error = (ll - exact).abs() / exact.abs().max(1.0);
+        println!("{name}: relative error {error:.1e}");
+        assert!(error < *tolerance, "{name}: {ll} against {exact}");
+    }
+}
+
+/// The particle filter's (2000 particles) log-likelihood of `data` over 20 seeds: the mean
+/// and its standard error.
+fn particle_log_likelihood(model: &Model, data: &[(f64, f64)], continuous: bool) -> (f64, f64) {
+    let runs: Vec<f64> = (0..20)
+        .map(|seed| {
+            let mut pf = prior(zakai::Pf::builder(model))
+                .with(|p| {
+                    p.particles = 2000;
+                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
+                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
+                    p.substeps = Some(40);
+                })
+                .seed(seed)
+                .dt(DT)
+                .build()
+                .unwrap();
+            log_likelihood(&mut pf, data, continuous)
+        })
+        .collect();
+    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
+    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+        / (runs.len() * (runs.len() - 1)) as f64)
+        .sqrt();
+    (mean, se)
+}
+
 /// The builder with the prior N(0, 1) every reference starts from.
 fn prior<M: zakai::Method>(b: zakai::Builder<'_, M>) -> zakai::Builder<'_, M> {
     b.prior_gaussian(&[0.0], &[[1.0]])
@@ -127,51 +200,7 @@ fn measurements_every_method_against_the_exact_likelihood() {
     let (data, model) = (data(false), model(false));
     let exact = kalman_log_likelihood(&data, false);
     assert!(exact.is_finite() && exact < 0.0, "{exact}");
-    // Exact: the exact discretisation and update; to the RK4 moment equations' error: the
-    // rest (4 substeps per interval).
-    let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
-        (
-            "KF",
-            Box::new(prior(zakai::Kalman::builder(&model)).build().unwrap()),
-            1e-9,
-        ),
-        (
-            "GSF",
-            Box::new(prior(zakai::GaussianSum::builder(&model)).build().unwrap()),
-            1e-9,
-        ),
-        (
-            "EKF",
-            Box::new(prior(zakai::Ekf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-        (
-            "UKF",
-            Box::new(prior(zakai::Ukf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-        (
-            "IEKF",
-            Box::new(prior(zakai::Iekf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-        (
-            "IOKF",
-            Box::new(prior(zakai::Iokf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-    ];
-    for (name, f, tolerance) in &mut methods {
-        let ll = log_likelihood(f.as_mut(), &data, false);
-        println!(
-            "{name}: relative error {:.1e}",
-            (ll - exact).abs() / exact.abs()
-        );
-        assert!(
-            (ll - exact).abs() < *tolerance * exact.abs(),
-            "{name}: {ll} against {exact}"
-        );
-    }
+    gaussian_filters_match(&model, &data, false, exact);
     let grid = |cells: usize| {
         let mut f = prior(zakai::Separation::builder(&model))
             .domain(&[(-6.0, 6.0)])
@@ -184,25 +213,7 @@ fn measurements_every_method_against_the_exact_likelihood() {
     let (coarse, fine) = (grid(400), grid(1600));
     println!("SA: |Δℓ| {coarse:.2e} on 400 cells, {fine:.2e} on 1600 (ℓ = {exact:.4})");
     assert!(fine < 0.5 * coarse && fine < 2e-2, "{coarse} → {fine}");
-    let runs: Vec<f64> = (0..20)
-        .map(|seed| {
-            let mut pf = prior(zakai::Pf::builder(&model))
-                .with(|p| {
-                    p.particles = 2000;
-                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
-                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
-                    p.substeps = Some(40);
-                })
-                .seed(seed)
-                .build()
-                .unwrap();
-            log_likelihood(&mut pf, &data, false)
-        })
-        .collect();
-    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
-    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-        / (runs.len() * (runs.len() - 1)) as f64)
-        .sqrt();
+    let (mean, se) = particle_log_likelihood(&model, &data, false);
     println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
     assert!(
         (mean - exact).abs() < 4.0 * se + 1e-3,
@@ -220,31 +231,7 @@ fn increments_every_method_against_the_exact_likelihood() {
     let (data, model) = (data(true), model(true));
     let exact = kalman_log_likelihood(&data, true);
     assert!(exact.is_finite(), "{exact}");
-    let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
-        (
-            "KF",
-            Box::new(prior(zakai::Kalman::builder(&model)).build().unwrap()),
-            1e-9,
-        ),
-        (
-            "EKF",
-            Box::new(prior(zakai::Ekf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-        (
-            "UKF",
-            Box::new(prior(zakai::Ukf::builder(&model)).build().unwrap()),
-            1e-6,
-        ),
-    ];
-    for (name, f, tolerance) in &mut methods {
-        let ll = log_likelihood(f.as_mut(), &data, true);
-        println!("{name}: error {:.1e}", (ll - exact).abs());
-        assert!(
-            (ll - exact).abs() < *tolerance * exact.abs().max(1.0),
-            "{name}: {ll} against {exact}"
-        );
-    }
+    gaussian_filters_match(&model, &data, true, exact);
     let qiem = |points: usize, dt: f64, edit: fn(&mut zakai::YauYauParams)| {
         let mut f = prior(zakai::Qiem::builder(&model))
             .domain(&[(-6.0, 6.0)])
@@ -301,26 +288,7 @@ fn increments_every_method_against_the_exact_likelihood() {
         s16 < 0.1 && s32 < 0.1 && d < 5e-2,
         "spectral {s16}, {s32}, direct {d}"
     );
-    let runs: Vec<f64> = (0..20)
-        .map(|seed| {
-            let mut pf = prior(zakai::Pf::builder(&model))
-                .with(|p| {
-                    p.particles = 2000;
-                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
-                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
-                    p.substeps = Some(40);
-                })
-                .seed(seed)
-                .dt(DT)
-                .build()
-                .unwrap();
-            log_likelihood(&mut pf, &data, true)
-        })
-        .collect();
-    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
-    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-        / (runs.len() * (runs.len() - 1)) as f64)
-        .sqrt();
+    let (mean, se) = particle_log_likelihood(&model, &data, true);
     println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
     assert!(
         (mean - exact).abs() < 4.0 * se + 1e-2,

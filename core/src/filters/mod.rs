@@ -375,6 +375,28 @@ impl SavedDensity {
         u.copy_from_slice(&self.u);
         estimate.copy_from(&self.estimate);
     }
+
+    /// Ends a step that returned `result` (its log-likelihood, or why it failed): a success
+    /// records the log-likelihood, a failure puts back what [`SavedDensity::save`] kept and
+    /// leaves the last log-likelihood.
+    pub(crate) fn settle(
+        &self,
+        result: Result<f64, crate::error::FilterError>,
+        u: &mut [f64],
+        estimate: &mut Estimate,
+        log_likelihood: &mut f64,
+    ) -> Result<(), crate::error::FilterError> {
+        match result {
+            Ok(ll) => {
+                *log_likelihood = ll;
+                Ok(())
+            }
+            Err(e) => {
+                self.restore(u, estimate);
+                Err(e)
+            }
+        }
+    }
 }
 
 /// The grid self-check's first threshold: mass on the two outermost nodes of any face, as a

@@ -412,16 +412,10 @@ impl Filter for ContinuousDiscreteGrid {
             self.residual.len(),
         )?;
         self.saved.save(&self.u, &self.estimate);
-        match self.advance(obs, observed) {
-            Ok(log_likelihood) => {
-                self.log_likelihood = log_likelihood;
-                Ok(())
-            }
-            Err(e) => {
-                self.saved.restore(&mut self.u, &mut self.estimate);
-                Err(e)
-            }
-        }
+        let result = self.advance(obs, observed);
+        let (u, estimate) = (&mut self.u, &mut self.estimate);
+        self.saved
+            .settle(result, u, estimate, &mut self.log_likelihood)
     }
 
     fn log_likelihood(&self) -> Option<f64> {
