@@ -47,7 +47,7 @@ pub fn render(
         Format::Csv => {
             writeln!(
                 s,
-                "method,runs,failed,mse,mse_stderr,mse_q1,mse_median,mse_q3,mse_components,rms_components,seconds_per_run,seconds_per_step,build_seconds"
+                "method,runs,failed,mse,mse_stderr,mse_q1,mse_median,mse_q3,mse_components,rms_components,seconds_per_run,seconds_per_step,build_seconds,log_likelihood,log_likelihood_stderr"
             )?;
             for m in &summary.methods {
                 let join = |v: &Option<Vec<f64>>| join_components(v, |x| format!("{x}"), ";", "");
@@ -58,7 +58,7 @@ pub fn render(
                 };
                 writeln!(
                     s,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     m.name,
                     m.runs,
                     m.failed,
@@ -71,7 +71,11 @@ pub fn render(
                     join(&m.rms_components),
                     m.seconds_per_run,
                     m.seconds_per_step,
-                    m.build_seconds
+                    m.build_seconds,
+                    m.log_likelihood.map(|v| v.to_string()).unwrap_or_default(),
+                    m.log_likelihood_stderr
+                        .map(|v| v.to_string())
+                        .unwrap_or_default()
                 )?;
             }
         }
@@ -88,12 +92,13 @@ pub fn render(
             writeln!(s)?;
             writeln!(
                 s,
-                "{:<12} {:>30} {:>26} {:>22} {:>16} {:>12} {:>12} {:>10}{}",
+                "{:<12} {:>30} {:>26} {:>22} {:>16} {:>22} {:>12} {:>12} {:>10}{}",
                 "method",
                 "MSE (runs finished)",
                 "median [q₁, q₃] of runs",
                 "MSE per component",
                 "RMS (000 §4.2)",
+                "log-likelihood",
                 "ms/run",
                 "µs/step",
                 "build ms",
@@ -111,14 +116,20 @@ pub fn render(
                 } else {
                     format!("   {}", m.paper_text)
                 };
+                let likelihood = match (m.log_likelihood, m.log_likelihood_stderr) {
+                    (Some(v), Some(e)) => format!("{v:.3} ± {e:.3}"),
+                    (Some(v), None) => format!("{v:.3}"),
+                    _ => "—".into(),
+                };
                 writeln!(
                     s,
-                    "{:<12} {:>30} {:>26} {:>22} {:>16} {:>12.3} {:>12.2} {:>10.2}{}",
+                    "{:<12} {:>30} {:>26} {:>22} {:>16} {:>22} {:>12.3} {:>12.2} {:>10.2}{}",
                     m.name,
                     m.mse_text,
                     spread,
                     comps,
                     rms,
+                    likelihood,
                     m.seconds_per_run * 1e3,
                     m.seconds_per_step * 1e6,
                     m.build_seconds * 1e3,

@@ -203,6 +203,13 @@ fn table_json_and_csv_carry_the_same_numbers_and_never_nan() {
             .lines()
             .find(|l| l.starts_with(&format!("{name},")))
             .unwrap();
+        // The mean log-likelihood of the runs the method finished, in all three.
+        if failed < runs {
+            let ll = m["log_likelihood"].as_f64().expect("a mean log-likelihood");
+            assert!(row.contains(&format!("{ll:.3}")), "{row} vs {ll}");
+            let csv_ll: f64 = csv_row.split(',').nth(13).unwrap().parse().unwrap();
+            assert_eq!(csv_ll, ll);
+        }
         match m["mse"].as_f64() {
             Some(mse) => {
                 assert!(row.contains(&format!("{mse:.4}")), "{row} vs {mse}");

@@ -30,6 +30,13 @@ pub struct MethodSummary {
     /// Quartiles `[q₁, median, q₃]` of the per-run MSEs (the runs that did not fail).
     #[serde(default)]
     pub mse_quartiles: Option<[f64; 3]>,
+    /// Mean log-likelihood of a run's data under the method
+    /// ([`crate::lab::experiment::MethodTrack::log_likelihood`]) over the runs it finished.
+    #[serde(default)]
+    pub log_likelihood: Option<f64>,
+    /// Standard error of that mean.
+    #[serde(default)]
+    pub log_likelihood_stderr: Option<f64>,
     /// Mean over the runs of the time-averaged error norm `‖x_k − x̂_k‖₂` (003 (5.1)).
     pub error_norm: Option<f64>,
     /// Standard error of that mean.
@@ -271,6 +278,7 @@ impl<'a> MonteCarlo<'a> {
                 let mut rms = Vec::new();
                 let mut norms = Vec::new();
                 let mut errors = Vec::new();
+                let mut log_likelihoods = Vec::new();
                 let mut failed = 0;
                 let mut first_failure = None;
                 let (mut warned, mut first_concerns) = (0, Vec::new());
@@ -293,6 +301,7 @@ impl<'a> MonteCarlo<'a> {
                                 .collect();
                         }
                     }
+                    log_likelihoods.extend(track.log_likelihood());
                     match track.mse_components(truth) {
                         Some(c) => {
                             let mse: f64 = c.iter().sum();
@@ -322,6 +331,7 @@ impl<'a> MonteCarlo<'a> {
                 }
                 let stats = mean_and_stderr(&mses);
                 let norm_stats = mean_and_stderr(&norms);
+                let ll_stats = mean_and_stderr(&log_likelihoods);
                 let summary = MethodSummary {
                     name: name.clone(),
                     runs: results.len(),
@@ -329,6 +339,8 @@ impl<'a> MonteCarlo<'a> {
                     mse: stats.map(|s| s.0),
                     mse_stderr: stats.map(|s| s.1),
                     mse_quartiles: quartiles(&mses),
+                    log_likelihood: ll_stats.map(|s| s.0),
+                    log_likelihood_stderr: ll_stats.map(|s| s.1),
                     warned,
                     first_concerns,
                     error_norm: norm_stats.map(|s| s.0),
