@@ -315,3 +315,103 @@ fn nothing_observed_adds_nothing_and_a_failed_step_keeps_the_value() {
     f.step_measurement(0.2, &[f64::NAN]).unwrap();
     assert_eq!(f.log_likelihood(), Some(0.0));
 }
+
+/// A sensor that never reports adds nothing: with h = (x, x) and the second component always
+/// missing, every method's log-likelihood is the one-sensor model's on the same data (the
+/// observed rows with their marginal noise), measurements and increments alike.
+#[test]
+fn a_missing_component_is_the_one_sensor_likelihood() {
+    use zakai::nalgebra::DMatrix;
+    for continuous in [false, true] {
+        let data = data(continuous);
+        let (two, one) = if continuous {
+            let s = DMatrix::from_row_slice(2, 2, &[1.0, 0.3, 0.3, 0.8]);
+            (Noise::Continuous(s), Noise::continuous(1.0))
+        } else {
+            let r = DMatrix::from_row_slice(2, 2, &[0.5, 0.2, 0.2, 0.4]);
+            (Noise::Discrete(r), Noise::discrete(0.5))
+        };
+        let two = Model::from_text(&["-x"], &["x", "x"], two).unwrap();
+        let one = Model::from_text(&["-x"], &["x"], one).unwrap();
+        let run = |f: &mut dyn Filter, width: usize| -> f64 {
+            data.iter()
+                .map(|&(dt, value)| {
+                    let z = [value, f64::NAN];
+                    let z = &z[..width];
+                    let obs = if continuous {
+                        Observation::increment(dt, z)
+                    } else {
+                        Observation::measurement(dt, z)
+                    };
+                    f.step(&obs).unwrap();
+                    f.log_likelihood().unwrap()
+                })
+                .sum()
+        };
+        let mut pairs: Vec<(&str, Box<dyn Filter>, Box<dyn Filter>)> = vec![
+            (
+                "KF",
+                Box::new(prior(zakai::Kalman::builder(&two)).build().unwrap()),
+                Box::new(prior(zakai::Kalman::builder(&one)).build().unwrap()),
+            ),
+            (
+                "UKF",
+                Box::new(prior(zakai::Ukf::builder(&two)).build().unwrap()),
+                Box::new(prior(zakai::Ukf::builder(&one)).build().unwrap()),
+            ),
+            (
+                "PF",
+                Box::new(
+                    prior(zakai::Pf::builder(&two))
+                        .dt(DT)
+                        .seed(3)
+                        .build()
+                        .unwrap(),
+                ),
+                Box::new(
+                    prior(zakai::Pf::builder(&one))
+                        .dt(DT)
+                        .seed(3)
+                        .build()
+                        .unwrap(),
+                ),
+            ),
+        ];
+        if continuous {
+            let qiem = |m: &Model| -> Box<dyn Filter> {
+                Box::new(
+                    prior(zakai::Qiem::builder(m))
+                        .domain(&[(-6.0, 6.0)])
+                        .dt(DT)
+                        .with(|p| p.points = vec![201])
+                        .build()
+                        .unwrap(),
+                )
+            };
+            pairs.push(("QIEM", qiem(&two), qiem(&one)));
+        } else {
+            let sa = |m: &Model| -> Box<dyn Filter> {
+                Box::new(
+                    prior(zakai::Separation::builder(m))
+                        .domain(&[(-6.0, 6.0)])
+                        .dt(DT)
+                        .build()
+                        .unwrap(),
+                )
+            };
+            pairs.push(("SA", sa(&two), sa(&one)));
+            pairs.push((
+                "GSF",
+                Box::new(prior(zakai::GaussianSum::builder(&two)).build().unwrap()),
+                Box::new(prior(zakai::GaussianSum::builder(&one)).build().unwrap()),
+            ));
+        }
+        for (name, a, b) in &mut pairs {
+            let (with_two, with_one) = (run(a.as_mut(), 2), run(b.as_mut(), 1));
+            assert!(
+                (with_two - with_one).abs() <= 1e-9 * with_one.abs().max(1.0),
+                "{name} (continuous {continuous}): {with_two} against {with_one}"
+            );
+        }
+    }
+}
