@@ -13,7 +13,8 @@ use zakai::{Estimate, Filter, Observation};
 use zakai_tests::test;
 use zakai_tests::{applicable_methods, observation_of, PRESETS_FOR_EVERY_METHOD};
 
-/// Every number a filter exposes, as bits: mean, covariance, MAP and density.
+/// Every number a filter exposes, as bits: mean, covariance, MAP, density and the last
+/// step's log-likelihood.
 fn fingerprint(f: &dyn Filter) -> Vec<u64> {
     let Estimate {
         mean,
@@ -30,6 +31,7 @@ fn fingerprint(f: &dyn Filter) -> Vec<u64> {
     if let Some(d) = f.density() {
         bits.extend(d.values.iter().map(|v| v.to_bits()));
     }
+    bits.extend(f.log_likelihood().map(f64::to_bits));
     bits
 }
 

@@ -763,12 +763,13 @@ pub trait Filter: core::fmt::Debug + Fork {
     ///   Kallianpur–Striebel normaliser of the robust DMZ factor, 000 (15), 004 (42)); with
     ///   components missing, the same with the observed rows of h and the marginal S_OO.
     ///
-    /// Exact for the Kalman–Bucy filter (for the sampled-model update it makes) and the
-    /// Gaussian-sum filter; from the normalising constant of the density for the grid and
-    /// spectral filters (converging as the grid is refined); the particle filter's is the log
-    /// of its weights' mean (whose exponential is unbiased for the likelihood); the EKF, UKF,
-    /// IEKF, IOKF and the direct method give their Gaussian predictive density's, an
-    /// approximation.
+    /// Exact for the Kalman–Bucy filter on linear-Gaussian models (for the sampled-model
+    /// update it makes; with mixture noise it uses the noise's first two moments) and for the
+    /// Gaussian-sum filter up to its reported mixture reduction; from the normalising constant
+    /// of the density for the grid and spectral filters (converging as the grid is refined)
+    /// and from the mass ratio of `e^{F} û` for the direct method; the particle filter's is
+    /// the log of its weights' mean (whose exponential is unbiased for the likelihood); the
+    /// EKF, UKF, IEKF and IOKF give their Gaussian predictive density's, an approximation.
     fn log_likelihood(&self) -> Option<f64> {
         None
     }

@@ -221,6 +221,12 @@ impl TensorGrid {
         crate::linalg::sum_in_lanes(u, |v| v) * self.cell_volume()
     }
 
+    /// The mass of the positive part, Σ max(u, 0) Δs^D: what an observation factor that
+    /// leaves only positive values multiplies.
+    pub fn positive_mass(&self, u: &[f64]) -> f64 {
+        crate::linalg::sum_in_lanes(u, |v| v.max(0.0)) * self.cell_volume()
+    }
+
     /// Mass on the `layers` outermost nodes next to every face of the box (a node near two
     /// faces counts twice — an upper bound). Only those slabs are visited, so in 1-D it costs
     /// 2·`layers` additions.

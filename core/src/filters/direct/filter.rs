@@ -308,9 +308,11 @@ impl DirectFilter {
     /// `exp(Δyᵀh)` (30); otherwise (32) carries no observation term and the factor is the
     /// observed components' likelihood `exp(Δy_Oᵀh_O − ½|h_O|²Δτ)` (S = I) — exact for a gap,
     /// and for a partial increment the splitting of the in-update form (first order in Δτ).
-    /// Returns the step's log-likelihood: the logarithm of the mass of `e^{F} û` after the
-    /// interval against before it — (32) carries the increment's −½|h|²Δτ with η and the
-    /// factor is `exp(Δyᵀh)`, so the ratio is the normaliser of the interval (0 for a gap).
+    /// Returns the step's log-likelihood: with every component observed, the logarithm of
+    /// the mass of `e^{F} û` after the interval against before it — (32) carries the
+    /// increment's −½|h|²Δτ with η and the factor is `exp(Δyᵀh)`, so the ratio is the
+    /// normaliser of the interval; with some missing, the factor's normaliser against the
+    /// predicted density's mass (the same sum without the factor); 0 for a gap.
     fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<f64, FilterError> {
         let before = self.log_mass;
         let len = self.u_hat.len();
@@ -422,10 +424,30 @@ impl DirectFilter {
             return Err(FilterError::MassLost);
         }
         self.u_hat.iter_mut().for_each(|u| *u /= top);
+        // With some components missing, ln ∫ e^{F} û e^{−g}: the predicted density's mass in
+        // the units of û (every node's exponent carried its factor g).
+        let predicted = (observed == Observed::Some).then(|| {
+            let exponent =
+                |(u, (f, g)): (&f64, (&f64, &f64))| (*u > 0.0).then(|| libm::log(*u) + f - g);
+            let nodes = || {
+                self.u_hat
+                    .iter()
+                    .zip(self.potential.iter().zip(factor.iter()))
+            };
+            let top = nodes()
+                .filter_map(exponent)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let sum: f64 = nodes()
+                .filter_map(exponent)
+                .map(|e| libm::exp(e - top))
+                .sum();
+            libm::log(sum * self.grid.cell_volume()) + top
+        });
         self.refresh()?;
-        Ok(match observed {
-            Observed::Nothing => 0.0,
-            _ => self.log_mass + libm::log(top) + shift - before,
+        Ok(match (observed, predicted) {
+            (Observed::Nothing, _) => 0.0,
+            (_, Some(predicted)) => self.log_mass - predicted,
+            (_, None) => self.log_mass + libm::log(top) + shift - before,
         })
     }
 }

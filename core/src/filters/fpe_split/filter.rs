@@ -348,7 +348,8 @@ impl ContinuousDiscreteGrid {
     /// returns the log-likelihood `ln p(z | past) = ln(c'_k / ∫ p̂)`, the normaliser against
     /// the predicted density's mass.
     fn assimilate(&mut self, z: &[f64]) -> Result<f64, FilterError> {
-        let before = self.grid.mass(&self.u);
+        // The update keeps only the positive values (a negative one becomes 0).
+        let before = self.grid.positive_mass(&self.u);
         let m = self.residual.len();
         let noise = self.noise.of(z)?;
         let mut max = f64::NEG_INFINITY;

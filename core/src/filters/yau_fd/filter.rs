@@ -647,10 +647,12 @@ impl YauYauFilter {
                 self.propagate(obs.dt);
             }
             if observed != Observed::Nothing {
+                // The factor keeps only positive values (negative ones, left by a scheme
+                // outside its positivity condition or by SPT's projection, become 0).
                 let before = if in_operator && observed == Observed::All {
                     1.0
                 } else {
-                    self.grid.mass(&self.u)
+                    self.grid.positive_mass(&self.u)
                 };
                 let shift = self.update(obs.value, obs.dt)?;
                 factor = Some((shift, before));
