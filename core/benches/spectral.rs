@@ -22,10 +22,11 @@ fn three_dimensional() -> zakai::lab::scenario::ScenarioConfig {
         .to_vec();
     config.model.observation = ["x1^3", "x2^3", "x3^3"].map(String::from).to_vec();
     config.prior = zakai::lab::scenario::PriorConfig::Gaussian {
-        mean: vec![1.0; 3],
+        mean: vec![1.0; 3].into(),
         cov: (0..3)
             .map(|i| (0..3).map(|j| if i == j { 0.1 } else { 0.0 }).collect())
-            .collect(),
+            .collect::<Vec<Vec<f64>>>()
+            .into(),
     };
     config.initial_state = Some(vec![1.0; 3]);
     config.domain = vec![[-4.0, 4.0]; 3];

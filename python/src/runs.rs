@@ -36,7 +36,8 @@ pub fn experiment(json: &str) -> PyResult<Experiment> {
 pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>> {
     let prior: PriorConfig = serde_json::from_str(prior)
         .map_err(|e| errors::config("prior", format!("invalid prior: {e}")))?;
-    Ok(prior.covering_box(sds))
+    // A prior written in a scenario's parameters has no box on its own.
+    Ok(prior.covering_box(sds, &[]))
 }
 
 /// Sets the largest memory a scenario's methods may need together (bytes, or text such as

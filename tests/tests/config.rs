@@ -43,8 +43,8 @@ fn validation_reports_every_bad_field() {
     c.model.drift[1] = "cos(x1) + sin(x3)".into();
     c.model.observation[0] = "x1 - ".into();
     c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
-        mean: vec![0.0],
-        cov: vec![vec![1.0, 2.0], vec![2.0, 1.0]],
+        mean: vec![0.0].into(),
+        cov: vec![vec![1.0, 2.0], vec![2.0, 1.0]].into(),
     };
     c.domain[1] = [3.0, -3.0];
     c.time.dt_obs = -0.1;

@@ -36,8 +36,8 @@ fn ornstein_uhlenbeck() -> ScenarioConfig {
     let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["-x".into()];
     c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
-        mean: vec![1.0],
-        cov: vec![vec![0.2]],
+        mean: vec![1.0].into(),
+        cov: vec![vec![0.2]].into(),
     };
     c.domain = vec![[-6.0, 6.0]];
     c
@@ -130,7 +130,7 @@ fn unsuitable_models_are_refused_with_the_reason() {
     assert!(err.to_string().contains("discrete measurements"), "{err}");
 
     let mut c = presets::preset("sa-example-2").expect("preset");
-    c.model.diffusion = Some(vec![vec![1.0, 0.0], vec![0.5, 1.0]]);
+    c.model.diffusion = Some(vec![vec![1.0, 0.0], vec![0.5, 1.0]].into());
     let e = experiment(c);
     let err = ContinuousDiscreteGrid::new(
         "SA".into(),
@@ -169,13 +169,13 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
     c.model.noise = ObservationNoiseConfig::Discrete {
         mixture: vec![GaussianComponent {
             weight: 1.0,
-            mean: vec![0.0, 0.0],
-            cov: vec![vec![0.1, 0.02], vec![0.02, 0.3]],
+            mean: vec![0.0, 0.0].into(),
+            cov: vec![vec![0.1, 0.02], vec![0.02, 0.3]].into(),
         }],
     };
     c.prior = zakai::lab::scenario::PriorConfig::Gaussian {
-        mean: vec![0.5, 0.2],
-        cov: vec![vec![0.3, 0.1], vec![0.1, 0.2]],
+        mean: vec![0.5, 0.2].into(),
+        cov: vec![vec![0.3, 0.1], vec![0.1, 0.2]].into(),
     };
     let e = experiment(c);
     let probes = e.config().probe_points();

@@ -18,6 +18,7 @@ fn scalar_linear(
     noise: ObservationNoiseConfig,
 ) -> ScenarioConfig {
     ScenarioConfig {
+        parameters: Default::default(),
         name: "scalar-linear".into(),
         title: String::new(),
         reference: String::new(),
@@ -25,12 +26,12 @@ fn scalar_linear(
         model: ModelConfig {
             drift: vec![format!("{a}*x")],
             observation: vec![format!("{c}*x")],
-            diffusion: Some(vec![vec![0.7]]),
+            diffusion: Some(vec![vec![0.7]].into()),
             noise,
         },
         prior: PriorConfig::Gaussian {
-            mean: vec![0.5],
-            cov: vec![vec![p0]],
+            mean: vec![0.5].into(),
+            cov: vec![vec![p0]].into(),
         },
         initial_state: None,
         domain: vec![[-10.0, 10.0]],
@@ -94,8 +95,8 @@ fn kalman_filter_equals_an_independent_scalar_recursion_for_discrete_measurement
     let noise = ObservationNoiseConfig::Discrete {
         mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
-            mean: vec![0.0],
-            cov: vec![vec![r]],
+            mean: vec![0.0].into(),
+            cov: vec![vec![r]].into(),
         }],
     };
     let config = scalar_linear(a, c, p0, dt, 2.0, noise);
@@ -125,8 +126,8 @@ fn linear_2d(noise: ObservationNoiseConfig, dt: f64) -> ScenarioConfig {
     let mut config = zakai::lab::scenario::presets::preset("sa-example-2").unwrap();
     config.model.noise = noise;
     config.prior = PriorConfig::Gaussian {
-        mean: vec![0.5, 0.5],
-        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]],
+        mean: vec![0.5, 0.5].into(),
+        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]].into(),
     };
     config.time = TimeConfig {
         t_final: 2.0,
@@ -171,8 +172,8 @@ fn ekf_and_ukf_equal_the_kalman_filter_on_linear_models() {
         ObservationNoiseConfig::Discrete {
             mixture: vec![zakai::lab::scenario::GaussianComponent {
                 weight: 1.0,
-                mean: vec![0.0, 0.0],
-                cov: vec![vec![0.1, 0.0], vec![0.0, 0.1]],
+                mean: vec![0.0, 0.0].into(),
+                cov: vec![vec![0.1, 0.0], vec![0.0, 0.1]].into(),
             }],
         },
         0.2,

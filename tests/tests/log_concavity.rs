@@ -136,8 +136,8 @@ mod convex_filter_conditions {
         c.model.drift = vec![drift.into()];
         c.model.observation = vec![observation.into()];
         c.prior = PriorConfig::Gaussian {
-            mean: vec![0.0],
-            cov: vec![vec![0.5]],
+            mean: vec![0.0].into(),
+            cov: vec![vec![0.5]].into(),
         };
         c.initial_state = None;
         c.methods = vec![zakai::lab::scenario::MethodConfig::from_key("ekf").unwrap()];

@@ -14,6 +14,7 @@ use zakai_tests::test;
 
 fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> ScenarioConfig {
     ScenarioConfig {
+        parameters: Default::default(),
         name: "scalar".into(),
         title: String::new(),
         reference: String::new(),
@@ -21,18 +22,18 @@ fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> Scen
         model: ModelConfig {
             drift: vec!["-0.3*x".into()],
             observation: vec![observation.into()],
-            diffusion: Some(vec![vec![0.5]]),
+            diffusion: Some(vec![vec![0.5]].into()),
             noise: ObservationNoiseConfig::Discrete {
                 mixture: vec![GaussianComponent {
                     weight: 1.0,
-                    mean: vec![0.0],
-                    cov: vec![vec![0.2]],
+                    mean: vec![0.0].into(),
+                    cov: vec![vec![0.2]].into(),
                 }],
             },
         },
         prior: PriorConfig::Gaussian {
-            mean: vec![0.5],
-            cov: vec![vec![prior_var]],
+            mean: vec![0.5].into(),
+            cov: vec![vec![prior_var]].into(),
         },
         initial_state: None,
         domain: vec![[-10.0, 10.0]],
@@ -232,8 +233,8 @@ fn map_updates(
     config.model.noise = ObservationNoiseConfig::Discrete {
         mixture: vec![GaussianComponent {
             weight: 1.0,
-            mean: vec![0.0],
-            cov: vec![vec![r]],
+            mean: vec![0.0].into(),
+            cov: vec![vec![r]].into(),
         }],
     };
     let experiment = Experiment::new(config).unwrap();

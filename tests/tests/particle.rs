@@ -12,13 +12,13 @@ fn mean_square_gap(particles: usize, seed: u64) -> f64 {
     config.model.noise = zakai::lab::scenario::ObservationNoiseConfig::Discrete {
         mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
-            mean: vec![0.0],
-            cov: vec![vec![0.5]],
+            mean: vec![0.0].into(),
+            cov: vec![vec![0.5]].into(),
         }],
     };
     config.prior = PriorConfig::Gaussian {
-        mean: vec![-2.0],
-        cov: vec![vec![1.0]],
+        mean: vec![-2.0].into(),
+        cov: vec![vec![1.0]].into(),
     };
     config.time = TimeConfig {
         t_final: 3.0,

@@ -111,6 +111,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
     let [e, g] = c.observation;
     let discrete = matches!(key, "separation" | "implicit_fdm");
     ScenarioConfig {
+        parameters: Default::default(),
         name: format!("property-{key}"),
         title: String::new(),
         reference: String::new(),
@@ -123,8 +124,8 @@ fn scenario(c: &Case) -> ScenarioConfig {
                 ObservationNoiseConfig::Discrete {
                     mixture: vec![GaussianComponent {
                         weight: 1.0,
-                        mean: vec![0.0],
-                        cov: vec![vec![0.5]],
+                        mean: vec![0.0].into(),
+                        cov: vec![vec![0.5]].into(),
                     }],
                 }
             } else {
@@ -132,8 +133,8 @@ fn scenario(c: &Case) -> ScenarioConfig {
             },
         },
         prior: PriorConfig::Gaussian {
-            mean: vec![c.prior.0],
-            cov: vec![vec![c.prior.1]],
+            mean: vec![c.prior.0].into(),
+            cov: vec![vec![c.prior.1]].into(),
         },
         initial_state: None,
         domain: vec![[-c.half_width, c.half_width]],
@@ -334,6 +335,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
     runner(24)
         .run(&strategy, |((a, b, c, d), (e, g), points, seed)| {
             let config = ScenarioConfig {
+                parameters: Default::default(),
                 name: "property-qiem4".into(),
                 title: String::new(),
                 reference: String::new(),
@@ -345,8 +347,8 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                     noise: ObservationNoiseConfig::Continuous { cov: None },
                 },
                 prior: PriorConfig::Gaussian {
-                    mean: vec![0.3, -0.2],
-                    cov: vec![vec![0.3, 0.0], vec![0.0, 0.3]],
+                    mean: vec![0.3, -0.2].into(),
+                    cov: vec![vec![0.3, 0.0], vec![0.0, 0.3]].into(),
                 },
                 initial_state: None,
                 domain: vec![[-5.0, 5.0], [-5.0, 5.0]],

@@ -159,7 +159,7 @@ fn impossible_parameters_are_refused() {
     four.model.drift = vec!["0".into(); 4];
     four.model.observation = vec!["x1".into()];
     four.prior = zakai::lab::scenario::PriorConfig::Gaussian {
-        mean: vec![0.0; 4],
+        mean: vec![0.0; 4].into(),
         cov: (0..4)
             .map(|i| (0..4).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
             .collect(),

@@ -17,6 +17,7 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
         ..YauYauParams::default()
     };
     ScenarioConfig {
+        parameters: Default::default(),
         name: "linear-1d".into(),
         title: String::new(),
         reference: String::new(),
@@ -28,8 +29,8 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
             noise: ObservationNoiseConfig::Continuous { cov: None },
         },
         prior: PriorConfig::Gaussian {
-            mean: vec![0.5],
-            cov: vec![vec![0.3]],
+            mean: vec![0.5].into(),
+            cov: vec![vec![0.3]].into(),
         },
         initial_state: None,
         domain: vec![[-6.0, 6.0]],
@@ -54,8 +55,8 @@ fn linear_2d(points: usize, dt: f64) -> ScenarioConfig {
     c.model.drift = vec!["-0.6*x1 + 0.3*x2".into(), "-0.2*x1 - 0.5*x2".into()];
     c.model.observation = vec!["x1".into(), "x1 + x2".into()];
     c.prior = PriorConfig::Gaussian {
-        mean: vec![0.5, -0.3],
-        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]],
+        mean: vec![0.5, -0.3].into(),
+        cov: vec![vec![0.3, 0.05], vec![0.05, 0.2]].into(),
     };
     c.domain = vec![[-5.0, 5.0], [-5.0, 5.0]];
     c
@@ -177,8 +178,8 @@ fn grid_limits_are_reported_before_allocation() {
     c.model.noise = ObservationNoiseConfig::Discrete {
         mixture: vec![zakai::lab::scenario::GaussianComponent {
             weight: 1.0,
-            mean: vec![0.0],
-            cov: vec![vec![1.0]],
+            mean: vec![0.0].into(),
+            cov: vec![vec![1.0]].into(),
         }],
     };
     // Not applying to discrete measurements: marked so in the run, with the reason.

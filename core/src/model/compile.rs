@@ -62,6 +62,17 @@ impl Expression {
         e
     }
 
+    /// The value of `text`, an expression in `names` (a scenario's parameters) and constants
+    /// alone — no state variable — folded as compilation folds constants.
+    pub(crate) fn constant_value(
+        text: &str,
+        names: &[(alloc::string::String, f64)],
+    ) -> Result<f64, crate::error::ExprError> {
+        let e = Expression::from_syntax(&Syntax::parse_with(text, 0, names)?);
+        // With no variable every node folds to a constant.
+        Ok(e.constant(e.root()).unwrap_or(f64::NAN))
+    }
+
     /// Reads `text` in the state variables of an `n`-dimensional model.
     #[cfg(test)]
     pub(crate) fn parse(text: &str, n: usize) -> Result<Expression, ExprError> {

@@ -58,6 +58,19 @@ pub struct ExpressionFunction {
     exact: Option<ExactDerivatives>,
 }
 
+/// The value of `text`, an expression in `names` (a scenario's parameters) and constants
+/// alone, e.g. `sqrt(2*q)`; errors carry the position, like any expression's.
+pub fn constant_value(text: &str, names: &[(String, f64)]) -> Result<f64, ExprError> {
+    super::compile::Expression::constant_value(text, names)
+}
+
+/// Reads `text` as [`ExpressionFunction::parse`] reads one component, with `names` (a
+/// scenario's parameters) standing for their values: every mistake, an unknown name among
+/// them, is reported at its position in `text` as written.
+pub fn check_with_names(text: &str, n: usize, names: &[(String, f64)]) -> Result<(), ExprError> {
+    super::syntax::Syntax::parse_with(text, n, names).map(|_| ())
+}
+
 impl ExpressionFunction {
     /// Parses one expression per output component, in the state variables of an
     /// `n`-dimensional model. `what` names the function in error messages ("drift f").

@@ -272,6 +272,16 @@ impl Syntax {
     /// Reads `text` in the state variables of an `n`-dimensional model, or says at which
     /// character it goes wrong.
     pub(crate) fn parse(text: &str, n: usize) -> Result<Syntax, ExprError> {
+        Syntax::parse_with(text, n, &[])
+    }
+
+    /// As [`Syntax::parse`], with `names` — a scenario's parameters — read as the numbers
+    /// they stand for (exactly as if the value had been typed).
+    pub(crate) fn parse_with(
+        text: &str,
+        n: usize,
+        names: &[(String, f64)],
+    ) -> Result<Syntax, ExprError> {
         if let Some((position, _)) = text.char_indices().nth(MAX_EXPRESSION_CHARS) {
             return Err(syntax_error(
                 text,
@@ -279,7 +289,7 @@ impl Syntax {
                 &format!("longer than {MAX_EXPRESSION_CHARS} characters"),
             ));
         }
-        let tokens = tokenize(text, n)?;
+        let tokens = tokenize(text, n, names)?;
         let mut parser = Parser {
             text,
             tokens: &tokens,
@@ -614,7 +624,7 @@ impl Parser<'_> {
 }
 
 /// Splits `text` into tokens, reporting lexical mistakes with their positions.
-fn tokenize(text: &str, n: usize) -> Result<Vec<Token>, ExprError> {
+fn tokenize(text: &str, n: usize, names: &[(String, f64)]) -> Result<Vec<Token>, ExprError> {
     let chars: Vec<char> = text.chars().collect();
     let syntax = |position: usize, message: &str| ExprError::Syntax {
         expr: text.to_string(),
@@ -638,21 +648,7 @@ fn tokenize(text: &str, n: usize) -> Result<Vec<Token>, ExprError> {
             i += 1;
             continue;
         } else if c.is_ascii_digit() || c == '.' {
-            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
-                i += 1;
-            }
-            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
-                let mut j = i + 1;
-                if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
-                    j += 1;
-                }
-                if j < chars.len() && chars[j].is_ascii_digit() {
-                    i = j;
-                    while i < chars.len() && chars[i].is_ascii_digit() {
-                        i += 1;
-                    }
-                }
-            }
+            i = number_end(&chars, i);
             let literal: String = chars[start..i].iter().collect();
             match literal.parse::<f64>() {
                 Ok(v) if v.is_finite() => Lexeme::Number(v),
@@ -665,10 +661,8 @@ fn tokenize(text: &str, n: usize) -> Result<Vec<Token>, ExprError> {
                 }
                 Err(_) => return Err(syntax(start, &format!("malformed number `{literal}`"))),
             }
-        } else if c.is_ascii_alphabetic() || c == '_' {
-            while i < chars.len() && (chars[i].is_ascii_alphanumeric() || chars[i] == '_') {
-                i += 1;
-            }
+        } else if is_name_start(c) {
+            i = name_end(&chars, i);
             let name: String = chars[start..i].iter().collect();
             if let Some(f) = Function::named(&name) {
                 Lexeme::Function(f)
@@ -676,12 +670,16 @@ fn tokenize(text: &str, n: usize) -> Result<Vec<Token>, ExprError> {
                 Lexeme::Number(v)
             } else if let Some(j) = variable_index(&name, n) {
                 Lexeme::Variable(j)
+            } else if let Some((_, v)) = names.iter().find(|(p, _)| *p == name) {
+                Lexeme::Number(*v)
             } else {
+                let mut allowed = variable_names(n);
+                allowed.extend(names.iter().map(|(p, _)| p.clone()));
                 return Err(ExprError::UnknownVariable {
                     expr: text.to_string(),
                     name,
                     position: start,
-                    allowed: variable_names(n).join(", "),
+                    allowed: allowed.join(", "),
                 });
             }
         } else if c == '*' && chars.get(i + 1) == Some(&'*') {
@@ -727,6 +725,86 @@ fn tokenize(text: &str, n: usize) -> Result<Vec<Token>, ExprError> {
         )),
         _ => Ok(tokens),
     }
+}
+
+/// Whether `c` starts a name (a function, constant, variable or parameter).
+fn is_name_start(c: char) -> bool {
+    c.is_ascii_alphabetic() || c == '_'
+}
+
+/// The end of the name starting at `chars[i]`.
+fn name_end(chars: &[char], mut i: usize) -> usize {
+    while i < chars.len() && (chars[i].is_ascii_alphanumeric() || chars[i] == '_') {
+        i += 1;
+    }
+    i
+}
+
+/// The end of the number literal starting at `chars[i]` (digits and points, then an
+/// optional exponent `e±d…`).
+fn number_end(chars: &[char], mut i: usize) -> usize {
+    while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+        i += 1;
+    }
+    if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+        let mut j = i + 1;
+        if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
+            j += 1;
+        }
+        if j < chars.len() && chars[j].is_ascii_digit() {
+            i = j;
+            while i < chars.len() && chars[i].is_ascii_digit() {
+                i += 1;
+            }
+        }
+    }
+    i
+}
+
+/// The names in `text` that are not functions or built-in constants — state variables and
+/// parameters — with their character positions, in order.
+pub(crate) fn free_names(text: &str) -> Vec<(String, usize)> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut found = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c.is_ascii_digit() || c == '.' {
+            i = number_end(&chars, i);
+        } else if is_name_start(c) {
+            let end = name_end(&chars, i);
+            let name: String = chars[i..end].iter().collect();
+            if Function::named(&name).is_none() && constant(&name).is_none() {
+                found.push((name, i));
+            }
+            i = end;
+        } else {
+            i += 1;
+        }
+    }
+    found
+}
+
+/// `text` with every parameter of `names` replaced by its value, written so that it reads
+/// back to the same `f64` (in parentheses when negative): the expression a model is built
+/// from once the parameters have values.
+pub(crate) fn substitute(text: &str, names: &[(String, f64)]) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut last = 0;
+    for (name, at) in free_names(text) {
+        if let Some((_, v)) = names.iter().find(|(p, _)| *p == name) {
+            out.extend(&chars[last..at]);
+            out.push_str(&if *v < 0.0 {
+                format!("({v:?})")
+            } else {
+                format!("{v:?}")
+            });
+            last = at + name.chars().count();
+        }
+    }
+    out.extend(&chars[last..]);
+    out
 }
 
 /// Whether a token of kind `token` (whose first character is `c`) may follow one of kind

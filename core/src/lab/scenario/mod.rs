@@ -3,8 +3,10 @@
 //! another shape.
 
 mod methods;
+pub mod parameters;
 pub mod presets;
 
+use alloc::collections::BTreeMap;
 use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::sync::Arc;
@@ -17,6 +19,10 @@ use crate::validate::{check_spd, check_vector, matrix};
 pub use crate::validate::{format_bytes, parse_bytes};
 use crate::validate::{memory_cap, ConfigProblem};
 pub use methods::{catalogue, CatalogueEntry, MethodConfig};
+use parameters::{
+    check_parameters, coefficient_texts, named_values, CoefficientMatrix, CoefficientVector,
+    Parameters,
+};
 
 use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};
@@ -34,10 +40,33 @@ pub struct GaussianComponent {
     /// Weight (normalised over the mixture).
     #[serde(default = "one")]
     pub weight: f64,
-    /// Mean.
-    pub mean: Vec<f64>,
-    /// Covariance, rows.
-    pub cov: Vec<Vec<f64>>,
+    /// Mean (numbers or expressions in the parameters).
+    pub mean: CoefficientVector,
+    /// Covariance, rows (numbers or expressions in the parameters).
+    pub cov: CoefficientMatrix,
+}
+
+/// A [`GaussianComponent`] with its coefficients resolved to numbers.
+#[derive(Clone, Debug)]
+struct NumericComponent {
+    weight: f64,
+    mean: Vec<f64>,
+    cov: Vec<Vec<f64>>,
+}
+
+impl GaussianComponent {
+    fn resolve(
+        &self,
+        names: &[(String, f64)],
+        field: &str,
+        problems: &mut Vec<ConfigProblem>,
+    ) -> NumericComponent {
+        NumericComponent {
+            weight: self.weight,
+            mean: self.mean.resolve(names, &format!("{field}.mean"), problems),
+            cov: self.cov.resolve(names, &format!("{field}.cov"), problems),
+        }
+    }
 }
 
 fn one() -> f64 {
@@ -50,9 +79,9 @@ fn one() -> f64 {
 pub enum ObservationNoiseConfig {
     /// `dy = h dt + dw`, `E[dw dwᵀ] = S dt`; `cov` = S (identity when absent).
     Continuous {
-        /// S, rows.
+        /// S, rows (numbers or expressions in the parameters).
         #[serde(default)]
-        cov: Option<Vec<Vec<f64>>>,
+        cov: Option<CoefficientMatrix>,
     },
     /// `z_k = h(x_k) + v_k` with v_k a Gaussian mixture (one component = Gaussian).
     Discrete {
@@ -69,9 +98,10 @@ pub struct ModelConfig {
     pub drift: Vec<String>,
     /// Observation h, one expression per observation component.
     pub observation: Vec<String>,
-    /// Diffusion G (rows); the identity when absent.
+    /// Diffusion G (rows, numbers or expressions in the parameters); the identity when
+    /// absent.
     #[serde(default)]
-    pub diffusion: Option<Vec<Vec<f64>>>,
+    pub diffusion: Option<CoefficientMatrix>,
     /// Observation noise.
     pub noise: ObservationNoiseConfig,
 }
@@ -82,10 +112,10 @@ pub struct ModelConfig {
 pub enum PriorConfig {
     /// N(mean, cov).
     Gaussian {
-        /// Mean.
-        mean: Vec<f64>,
-        /// Covariance, rows.
-        cov: Vec<Vec<f64>>,
+        /// Mean (numbers or expressions in the parameters).
+        mean: CoefficientVector,
+        /// Covariance, rows (numbers or expressions in the parameters).
+        cov: CoefficientMatrix,
     },
     /// A Gaussian mixture.
     Mixture {
@@ -155,6 +185,10 @@ pub const DIVERGENCE_SCALES: f64 = 200.0;
 pub struct ScenarioConfig {
     /// Short identifier, e.g. `cubic-sensor-1d`.
     pub name: String,
+    /// Named parameters the expressions and coefficients may use (see [`parameters`]); a
+    /// fit estimates them.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: Parameters,
     /// One-line title.
     #[serde(default)]
     pub title: String,
@@ -189,15 +223,26 @@ pub struct ScenarioConfig {
 }
 
 impl PriorConfig {
-    /// The Gaussian components of a Gaussian or mixture prior (`None` for a density).
-    fn components(&self) -> Option<Vec<GaussianComponent>> {
+    /// The Gaussian components of a Gaussian or mixture prior (`None` for a density), their
+    /// coefficients resolved with `names`.
+    fn components(
+        &self,
+        names: &[(String, f64)],
+        problems: &mut Vec<ConfigProblem>,
+    ) -> Option<Vec<NumericComponent>> {
         match self {
-            PriorConfig::Gaussian { mean, cov } => Some(alloc::vec![GaussianComponent {
+            PriorConfig::Gaussian { mean, cov } => Some(alloc::vec![NumericComponent {
                 weight: 1.0,
-                mean: mean.clone(),
-                cov: cov.clone(),
+                mean: mean.resolve(names, "prior.mean", problems),
+                cov: cov.resolve(names, "prior.cov", problems),
             }]),
-            PriorConfig::Mixture { components } => Some(components.clone()),
+            PriorConfig::Mixture { components } => Some(
+                components
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| c.resolve(names, &format!("prior.components[{i}]"), problems))
+                    .collect(),
+            ),
             PriorConfig::Density { .. } => None,
         }
     }
@@ -206,8 +251,13 @@ impl PriorConfig {
     /// covariance, [`crate::filters::method::prior_box`]): the default domain for a model given
     /// without one. `None` for a density prior, which is only defined on a domain, or a
     /// prior too malformed to give a box.
-    pub fn covering_box(&self, sds: f64) -> Option<Vec<[f64; 2]>> {
-        let components = self.components()?;
+    /// Coefficients are resolved with `names` (a scenario's [`named_values`]).
+    pub fn covering_box(&self, sds: f64, names: &[(String, f64)]) -> Option<Vec<[f64; 2]>> {
+        let mut problems = Vec::new();
+        let components = self.components(names, &mut problems)?;
+        if !problems.is_empty() {
+            return None;
+        }
         let n = components.first()?.mean.len();
         let prior = Prior::Mixture(mixture(&components, n).ok()?);
         let bounds = crate::filters::method::prior_box(&prior, sds);
@@ -219,7 +269,7 @@ impl PriorConfig {
 }
 
 fn check_mixture(
-    comps: &[GaussianComponent],
+    comps: &[NumericComponent],
     n: usize,
     field: &str,
     problems: &mut Vec<ConfigProblem>,
@@ -245,7 +295,7 @@ fn check_mixture(
     }
 }
 
-fn mixture(comps: &[GaussianComponent], n: usize) -> Result<GaussianMixture, ZakaiError> {
+fn mixture(comps: &[NumericComponent], n: usize) -> Result<GaussianMixture, ZakaiError> {
     GaussianMixture::new(
         comps
             .iter()
@@ -258,6 +308,34 @@ fn mixture(comps: &[GaussianComponent], n: usize) -> Result<GaussianMixture, Zak
             })
             .collect(),
     )
+}
+
+/// `texts` with the parameters of `names` written as their values
+/// ([`crate::model::syntax::substitute`]).
+fn substituted(texts: &[String], names: &[(String, f64)]) -> Vec<String> {
+    texts
+        .iter()
+        .map(|t| crate::model::syntax::substitute(t, names))
+        .collect()
+}
+
+/// Reads one component `text` of `what` with the parameters of `names`: a mistake is
+/// reported at its position as written, then the component as built (values substituted)
+/// is compiled.
+fn check_expression(
+    what: &str,
+    text: &str,
+    n: usize,
+    names: &[(String, f64)],
+) -> Result<(), ZakaiError> {
+    crate::model::expression::check_with_names(text, n, names)?;
+    parse_function(
+        what,
+        &substituted(core::slice::from_ref(&String::from(text)), names),
+        n,
+        1,
+    )?;
+    Ok(())
 }
 
 /// Parses a text vector function.
@@ -352,12 +430,13 @@ impl ScenarioConfig {
         if n == 0 || n > MAX_STATE_DIM || m == 0 || m > MAX_STATE_DIM {
             return p;
         }
+        let names = named_values(&self.parameters);
         for (field, texts) in [
             ("drift", &self.model.drift),
             ("observation", &self.model.observation),
         ] {
             for (i, t) in texts.iter().enumerate() {
-                if let Err(e) = parse_function(field, core::slice::from_ref(t), n, 1) {
+                if let Err(e) = check_expression(field, t, n, &names) {
                     p.push(ConfigProblem::new(
                         format!("model.{field}[{i}]"),
                         e.to_string(),
@@ -365,8 +444,10 @@ impl ScenarioConfig {
                 }
             }
         }
+        check_parameters(&self.parameters, &self.expression_texts(), &mut p);
         if let Some(g) = &self.model.diffusion {
-            match matrix(g, n) {
+            let g = g.resolve(&names, "model.diffusion", &mut p);
+            match matrix(&g, n) {
                 None => p.push(ConfigProblem::new(
                     "model.diffusion",
                     format!("must be {n}×{n}"),
@@ -380,25 +461,33 @@ impl ScenarioConfig {
         }
         match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov: Some(s) } => {
-                check_spd(s, m, "model.noise.cov", &mut p)
+                let s = s.resolve(&names, "model.noise.cov", &mut p);
+                check_spd(&s, m, "model.noise.cov", &mut p)
             }
             ObservationNoiseConfig::Continuous { cov: None } => {}
             ObservationNoiseConfig::Discrete { mixture } => {
-                check_mixture(mixture, m, "model.noise.mixture", &mut p)
+                let comps: Vec<_> = mixture
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| c.resolve(&names, &format!("model.noise.mixture[{i}]"), &mut p))
+                    .collect();
+                check_mixture(&comps, m, "model.noise.mixture", &mut p)
             }
         }
         match &self.prior {
-            PriorConfig::Gaussian { mean, cov } => {
-                check_vector(mean, n, "prior.mean", &mut p);
-                check_spd(cov, n, "prior.cov", &mut p);
+            PriorConfig::Gaussian { .. } => {
+                let comps = self.prior.components(&names, &mut p).unwrap_or_default();
+                for c in comps {
+                    check_vector(&c.mean, n, "prior.mean", &mut p);
+                    check_spd(&c.cov, n, "prior.cov", &mut p);
+                }
             }
-            PriorConfig::Mixture { components } => {
-                check_mixture(components, n, "prior.components", &mut p)
+            PriorConfig::Mixture { .. } => {
+                let comps = self.prior.components(&names, &mut p).unwrap_or_default();
+                check_mixture(&comps, n, "prior.components", &mut p)
             }
             PriorConfig::Density { expression } => {
-                if let Err(e) =
-                    parse_function("prior density", core::slice::from_ref(expression), n, 1)
-                {
+                if let Err(e) = check_expression("prior density", expression, n, &names) {
                     p.push(ConfigProblem::new("prior.expression", e.to_string()));
                 }
             }
@@ -522,28 +611,129 @@ impl ScenarioConfig {
         }
     }
 
-    /// Builds the model (expressions are parsed here).
+    /// Every expression of the scenario — drift, observation, density prior and the
+    /// coefficients given as expressions — as written.
+    pub fn expression_texts(&self) -> Vec<&str> {
+        let mut texts: Vec<&str> = self
+            .model
+            .drift
+            .iter()
+            .chain(&self.model.observation)
+            .map(String::as_str)
+            .collect();
+        let mut vectors = Vec::new();
+        let mut matrices: Vec<&CoefficientMatrix> = self.model.diffusion.iter().collect();
+        match &self.model.noise {
+            ObservationNoiseConfig::Continuous { cov } => matrices.extend(cov),
+            ObservationNoiseConfig::Discrete { mixture } => {
+                vectors.extend(mixture.iter().map(|c| &c.mean));
+                matrices.extend(mixture.iter().map(|c| &c.cov));
+            }
+        }
+        match &self.prior {
+            PriorConfig::Gaussian { mean, cov } => {
+                vectors.push(mean);
+                matrices.push(cov);
+            }
+            PriorConfig::Mixture { components } => {
+                vectors.extend(components.iter().map(|c| &c.mean));
+                matrices.extend(components.iter().map(|c| &c.cov));
+            }
+            PriorConfig::Density { expression } => texts.push(expression),
+        }
+        texts.extend(coefficient_texts(vectors, matrices));
+        texts
+    }
+
+    /// The scenario's parameters as `(name, value)` pairs, the way expressions read them.
+    pub fn parameter_values(&self) -> Vec<(String, f64)> {
+        named_values(&self.parameters)
+    }
+
+    /// The scenario with its parameters' values set to `values` (by name; a name it does
+    /// not declare is refused).
+    pub fn with_parameter_values(&self, values: &[(String, f64)]) -> Result<Self, ZakaiError> {
+        let mut out = self.clone();
+        for (name, v) in values {
+            match out.parameters.get_mut(name) {
+                Some(p) => p.value = *v,
+                None => {
+                    return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                        "parameters",
+                        format!(
+                            "the scenario declares no parameter `{name}` (it has: {})",
+                            self.parameters
+                                .keys()
+                                .cloned()
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )]))
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// `f` of the scenario's numbers with the parameters' values, or the problems found.
+    fn resolved<T>(
+        &self,
+        f: impl FnOnce(&[(String, f64)], &mut Vec<ConfigProblem>) -> T,
+    ) -> Result<T, ZakaiError> {
+        let mut problems = Vec::new();
+        let out = f(&self.parameter_values(), &mut problems);
+        if problems.is_empty() {
+            Ok(out)
+        } else {
+            Err(ZakaiError::Config(problems))
+        }
+    }
+
+    /// Builds the model (expressions are parsed here, the parameters standing for their
+    /// values).
     pub fn build_model(&self) -> Result<Model, ZakaiError> {
         let n = self.state_dim();
         let m = self.obs_dim();
-        let drift = parse_function("drift f", &self.model.drift, n, n)?;
-        let observation = parse_function("observation h", &self.model.observation, n, m)?;
+        let names = self.parameter_values();
+        let drift = parse_function("drift f", &substituted(&self.model.drift, &names), n, n)?;
+        let observation = parse_function(
+            "observation h",
+            &substituted(&self.model.observation, &names),
+            n,
+            m,
+        )?;
         let diffusion = match &self.model.diffusion {
-            Some(g) => matrix(g, n)
-                .ok_or_else(|| ZakaiError::Dimension(format!("diffusion G must be {n}×{n}")))?,
+            Some(g) => {
+                let g = self.resolved(|names, p| g.resolve(names, "model.diffusion", p))?;
+                matrix(&g, n)
+                    .ok_or_else(|| ZakaiError::Dimension(format!("diffusion G must be {n}×{n}")))?
+            }
             None => DMatrix::identity(n, n),
         };
         let observations = match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov } => ObservationModel::Continuous {
                 noise_cov: match cov {
-                    Some(s) => matrix(s, m)
-                        .ok_or_else(|| ZakaiError::Dimension(format!("noise S must be {m}×{m}")))?,
+                    Some(s) => {
+                        let s = self.resolved(|names, p| s.resolve(names, "model.noise.cov", p))?;
+                        matrix(&s, m).ok_or_else(|| {
+                            ZakaiError::Dimension(format!("noise S must be {m}×{m}"))
+                        })?
+                    }
                     None => DMatrix::identity(m, m),
                 },
             },
-            ObservationNoiseConfig::Discrete { mixture: comps } => ObservationModel::Discrete {
-                noise: mixture(comps, m)?,
-            },
+            ObservationNoiseConfig::Discrete { mixture: comps } => {
+                let comps = self.resolved(|names, p| {
+                    comps
+                        .iter()
+                        .enumerate()
+                        .map(|(i, c)| c.resolve(names, &format!("model.noise.mixture[{i}]"), p))
+                        .collect::<Vec<_>>()
+                })?;
+                ObservationModel::Discrete {
+                    noise: mixture(&comps, m)?,
+                }
+            }
         };
         Model::new(drift, observation, diffusion, observations)
     }
@@ -569,11 +759,13 @@ impl ScenarioConfig {
         let n = self.state_dim();
         match &self.prior {
             PriorConfig::Gaussian { .. } | PriorConfig::Mixture { .. } => {
-                let components = self.prior.components().unwrap_or_default();
+                let components =
+                    self.resolved(|names, p| self.prior.components(names, p).unwrap_or_default())?;
                 Ok(Prior::Mixture(mixture(&components, n)?))
             }
             PriorConfig::Density { expression } => {
-                let f = parse_function("prior density", core::slice::from_ref(expression), n, 1)?;
+                let text = substituted(core::slice::from_ref(expression), &self.parameter_values());
+                let f = parse_function("prior density", &text, n, 1)?;
                 let cells = match n {
                     1 => 4000,
                     2 => 400,
@@ -594,7 +786,7 @@ impl ScenarioConfig {
     pub fn probe_points(&self) -> Vec<Vec<f64>> {
         // Without a domain, the box the prior covers; a domain with too few intervals (an
         // invalid scenario) is padded with [−1, 1].
-        let mut bounds = match self.prior.covering_box(6.0) {
+        let mut bounds = match self.prior.covering_box(6.0, &self.parameter_values()) {
             Some(b) if self.domain.is_empty() => b.iter().map(|b| (b[0], b[1])).collect(),
             _ => self.bounds(),
         };

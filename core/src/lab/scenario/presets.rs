@@ -32,8 +32,8 @@ fn strings(v: &[&str]) -> Vec<String> {
 fn gaussian(mean: &[f64], variance: f64) -> PriorConfig {
     let n = mean.len();
     PriorConfig::Gaussian {
-        mean: mean.to_vec(),
-        cov: diagonal(n, variance),
+        mean: mean.to_vec().into(),
+        cov: diagonal(n, variance).into(),
     }
 }
 
@@ -46,8 +46,8 @@ fn diagonal(n: usize, v: f64) -> Vec<Vec<f64>> {
 fn component(weight: f64, mean: &[f64], variance: f64) -> GaussianComponent {
     GaussianComponent {
         weight,
-        mean: mean.to_vec(),
-        cov: diagonal(mean.len(), variance),
+        mean: mean.to_vec().into(),
+        cov: diagonal(mean.len(), variance).into(),
     }
 }
 
@@ -132,6 +132,7 @@ struct Spec<'a> {
 fn build(s: Spec) -> ScenarioConfig {
     let citation = crate::lab::bibliography::cite(s.paper);
     ScenarioConfig {
+        parameters: Default::default(),
         name: s.name.into(),
         title: match s.place {
             "" => alloc::format!("{} ({citation})", s.title),
