@@ -8,7 +8,7 @@ use std::path::Path;
 use plotters::prelude::*;
 use zakai::lab::study::frontier::Frontier;
 
-const PALETTE: [RGBColor; 10] = [
+pub(crate) const PALETTE: [RGBColor; 10] = [
     RGBColor(36, 80, 179),
     RGBColor(217, 72, 15),
     RGBColor(43, 138, 62),

@@ -7,6 +7,10 @@
 //!           [--format table|json|csv] [--out FILE]
 //! zakai filter <preset|file.json> --observations obs.csv [--truth truth.csv]
 //!              [--methods …] [--format table|json|csv] [--out FILE]
+//! zakai fit <preset|file.json> --observations obs.csv [--method KEY] [--params a,b]
+//!           [--format table|json|csv] [--out FILE]
+//! zakai fit <preset|file.json> --observations obs.csv --profile a [--methods …]
+//!           [--points N] [--range LO,HI] [--svg FILE] [--out FILE]
 //! zakai simulate <preset|file.json> [--seed S] [--format json|csv] [--out FILE]
 //!                [--truth-out FILE]
 //! zakai reproduce [table|figure|all] [--runs N]
@@ -15,8 +19,10 @@
 //!
 //! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
 
+mod fit;
 mod frontier_plot;
 mod output;
+mod profile_plot;
 mod recorded;
 
 use std::path::PathBuf;
@@ -147,6 +153,44 @@ enum Command {
     Filter(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
+    /// Fit the scenario's parameters to recorded observations by maximum likelihood under
+    /// one method (Nelder–Mead within the bounds, standard errors from the observed
+    /// information), or with --profile draw the log-likelihood along one parameter for every
+    /// selected method.
+    Fit(FitArgs),
+}
+
+/// `zakai fit`.
+#[derive(Args)]
+struct FitArgs {
+    #[command(flatten)]
+    selection: Selection,
+    /// The observations (CSV, as for `zakai filter`).
+    #[arg(long)]
+    observations: PathBuf,
+    /// The method whose likelihood is maximised (a catalogue key; default: the scenario's
+    /// first method, or the first of --methods).
+    #[arg(long)]
+    method: Option<String>,
+    /// Comma-separated parameters to fit (default: all the scenario declares); the others
+    /// keep their values.
+    #[arg(long, value_delimiter = ',')]
+    params: Option<Vec<String>>,
+    /// Instead of fitting: the log-likelihood along this parameter, the others at their
+    /// values, for every selected method — CSV to --out (or stdout), the plot to --svg.
+    #[arg(long)]
+    profile: Option<String>,
+    /// Values of the profile.
+    #[arg(long, default_value_t = 41)]
+    points: usize,
+    /// The profile's interval `LO,HI` (default: from the parameter's bounds and value).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    range: Option<Vec<f64>>,
+    /// Where to draw the profile (SVG).
+    #[arg(long)]
+    svg: Option<PathBuf>,
+    #[command(flatten)]
+    output: Output,
 }
 
 /// `zakai show`: the scenario as JSON, with the sizes chosen from the problem on request.
@@ -363,6 +407,40 @@ fn filter(a: &FilterArgs) -> Result<(), String> {
     let result = recorded::filter(&experiment, &a.observations, a.truth.as_deref(), seed)?;
     emit(
         &recorded::render(&result, a.output.format()),
+        a.output.out.as_deref(),
+    )
+}
+
+fn fit_command(a: &FitArgs) -> Result<(), String> {
+    let mut config = load(&a.selection.scenario)?;
+    if let Some(keys) = &a.selection.methods {
+        select_methods(&mut config, keys)?;
+    }
+    let seed = a.selection.seed.unwrap_or(config.seed);
+    let recording = fit::recording(config.state_dim(), &a.observations)?;
+    if let Some(parameter) = &a.profile {
+        if !(2..=10_000).contains(&a.points) {
+            return Err(format!("--points must be in [2, 10000], got {}", a.points));
+        }
+        let range = match a.range.as_deref() {
+            None => None,
+            Some(&[lo, hi]) => Some((lo, hi)),
+            Some(other) => return Err(format!("--range needs LO,HI, got {} values", other.len())),
+        };
+        let profiles = fit::profiles(&config, &recording, parameter, a.points, range, seed)?;
+        eprint!("{}", fit::maxima(&profiles));
+        if let Some(svg) = &a.svg {
+            profile_plot::draw(&profiles, &config.name, svg)?;
+        }
+        return emit(&fit::profiles_csv(&profiles), a.output.out.as_deref());
+    }
+    if let Some(key) = &a.method {
+        select_methods(&mut config, std::slice::from_ref(key))?;
+    }
+    let names = a.params.clone().unwrap_or_default();
+    let result = fit::fit(&config, recording, 0, &names, seed)?;
+    emit(
+        &fit::render_fit(&result, &config, a.output.format()),
         a.output.out.as_deref(),
     )
 }
@@ -830,6 +908,7 @@ fn main() -> ExitCode {
             csv,
         } => jcurve(&scenario, seed, runs, per_interval, csv),
         Command::Run(args) => run(&args),
+        Command::Fit(args) => fit_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

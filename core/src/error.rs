@@ -120,6 +120,16 @@ pub enum ZakaiError {
         /// Where it was looked for (empty: everywhere).
         within: String,
     },
+    /// A method failed on the data of a run it was asked to complete (a likelihood
+    /// evaluation, [`crate::lab::fit`]).
+    RunFailed {
+        /// The method's display name.
+        method: String,
+        /// The observation at which it failed.
+        step: usize,
+        /// Why.
+        message: String,
+    },
     /// Anything else, with a message (a mixture or prior density that cannot be a
     /// distribution, a non-finite diffusion).
     Other(String),
@@ -154,6 +164,11 @@ impl fmt::Display for ZakaiError {
             ZakaiError::TooLarge { what, limit, unit } => {
                 write!(f, "{what} exceeds the cap of {limit} {unit}")
             }
+            ZakaiError::RunFailed {
+                method,
+                step,
+                message,
+            } => write!(f, "{method} failed at observation {step}: {message}"),
             ZakaiError::NeedsInterval { method } => write!(
                 f,
                 "{method} is built for one observation interval Δτ; give it (builder: .dt(Δτ))"

@@ -44,7 +44,7 @@ pub fn from_core(e: ZakaiError) -> PyErr {
             raise(class, message, &problems)
         }
         ZakaiError::Dimension(_) => raise("DimensionError", message, &[]),
-        ZakaiError::Filter(_) => raise("FilterError", message, &[]),
+        ZakaiError::Filter(_) | ZakaiError::RunFailed { .. } => raise("FilterError", message, &[]),
         // A value the caller gave that does not fit: a ValueError like a configuration's.
         ZakaiError::OutOfRange { .. }
         | ZakaiError::InvalidParameter { .. }

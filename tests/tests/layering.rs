@@ -5,7 +5,7 @@
 //! `lab::scenario`). Order, bottom to top (as the crate doc lists it; `testing`, the unit
 //! tests' attribute, sits below them all): validate → error → linalg, random → grid, model →
 //! simulate → diagnostics → filters → lab: bibliography → scenario → recording, metrics,
-//! papers → experiment → study → reproduction.
+//! papers → experiment → study, fit → reproduction.
 // Reads the core's sources from the file system: native only.
 #![cfg(not(target_arch = "wasm32"))]
 
@@ -26,7 +26,7 @@ const LAYERS: &[&[&str]] = &[
     &["lab::scenario"],
     &["lab::recording", "lab::metrics", "lab::papers"],
     &["lab::experiment"],
-    &["lab::study"],
+    &["lab::study", "lab::fit"],
     &["lab::reproduction"],
 ];
 

@@ -122,6 +122,10 @@ pub trait Method {
     /// [`Filter::density`], the spectral filter (a Legendre expansion) through
     /// [`Filter::marginal_density`] only.
     const DENSITY: bool = false;
+    /// True for methods that draw random numbers (the particle filter): their log-likelihood
+    /// is a random function of the model's parameters, so a fit reports no standard errors
+    /// from its finite differences ([`crate::lab::fit`]).
+    const RANDOM: bool = false;
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.

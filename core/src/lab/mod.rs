@@ -4,17 +4,19 @@
 //! [`scenario::catalogue`]), recorded observations ([`recording::Recording`]), the driver that
 //! feeds every method the same data ([`experiment::Experiment`]), error metrics
 //! ([`metrics`]), Monte Carlo tables, convergence checks and accuracy/cost frontiers
-//! ([`study`]), and the papers' tables as data ([`papers`]) and rerun ([`reproduction`]), the
+//! ([`study`]), maximum-likelihood fits and likelihood profiles of a scenario's parameters
+//! ([`fit`]), and the papers' tables as data ([`papers`]) and rerun ([`reproduction`]), the
 //! papers cited by authors and year ([`bibliography`]).
 //!
 //! The CLI, the wasm crate and the Python package are built on this floor; a program that
 //! filters its own observations needs only the crate root.
 //!
 //! Bottom to top (a module uses only those before it, tested): [`bibliography`] → [`scenario`] → [`recording`],
-//! [`metrics`], [`papers`] → [`experiment`] → [`study`] → [`reproduction`].
+//! [`metrics`], [`papers`] → [`experiment`] → [`study`], [`fit`] → [`reproduction`].
 
 pub mod bibliography;
 pub mod experiment;
+pub mod fit;
 pub mod metrics;
 pub mod papers;
 pub mod recording;

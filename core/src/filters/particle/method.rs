@@ -23,6 +23,7 @@ builder_fn!(Pf);
 
 impl Method for Pf {
     const KEY: &'static str = "pf";
+    const RANDOM: bool = true;
     type Params = PfParams;
     type Filter = ParticleFilter;
 

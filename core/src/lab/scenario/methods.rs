@@ -43,6 +43,8 @@ pub struct CatalogueEntry {
     /// Whether the method's posterior is a density on a grid or basis (the page's density
     /// panel shows one of these by default).
     pub density: bool,
+    /// Whether the method draws random numbers (its likelihood is random in the parameters).
+    pub random: bool,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -100,6 +102,10 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::NEEDS_DOMAIN,)* }
             }
 
+            /// Whether the method draws random numbers ([`Method::RANDOM`]).
+            pub fn is_random(&self) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::RANDOM,)* }
+            }
             /// Whether the method is an exact reference ([`Method::EXACT`]).
             pub fn is_exact(&self) -> bool {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::EXACT,)* }
@@ -164,6 +170,7 @@ macro_rules! registry {
                 needs_domain: <$method>::NEEDS_DOMAIN,
                 exact: <$method>::EXACT,
                 density: <$method>::DENSITY,
+                random: <$method>::RANDOM,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }

@@ -1,0 +1,263 @@
+//! Fitting a model's unknown parameters to recorded data by maximum likelihood.
+//!
+//! A scenario names its unknowns ([`crate::lab::scenario::parameters`]); a [`Likelihood`]
+//! holds the scenario, the recorded observations and one method, and gives the
+//! log-likelihood ln p(z₁,…,z_N | θ) of the data at any parameter values θ — the sum of the
+//! method's per-step [`crate::Filter::log_likelihood`] over one run, so one evaluation costs
+//! one filter run and no second pass. What that number is depends on the method: exact for
+//! the Kalman–Bucy and Kalman filters on a linear-Gaussian model, the grid and spectral
+//! filters' normalising constants (converging to the exact value as the grid is refined), the
+//! particle filter's unbiased estimate of the likelihood (so its logarithm is biased low by
+//! about half its variance), the Gaussian predictive densities of the EKF, UKF, IEKF, IOKF and
+//! the direct method (approximations: the maximum they give is the maximum of an approximate
+//! likelihood, and can sit at the wrong parameter values).
+//!
+//! * [`profile`] — the log-likelihood along one parameter, the others held at their values,
+//!   for one or several methods: what the page's Likelihood view draws.
+//! * `maximise` (feature `fit`) — the maximum-likelihood estimate within the parameters'
+//!   bounds with argmin's Nelder–Mead simplex, and standard errors from the observed
+//!   information, −∇² ln L at the optimum by central differences ([`observed_information`]).
+//!
+//! Every batch of evaluations (a simplex's first vertices, a profile, the information's
+//! stencil) goes through an [`Evaluate`], so that they run on every core natively
+//! ([`Likelihood`] itself, on rayon's pool with the `parallel` feature) or on a cluster
+//! (the Python package hands them to a `concurrent.futures.Executor`).
+//!
+//! The methods' sizes that a scenario leaves to the problem (grid nodes, particles, basis)
+//! are chosen once, at the parameters' starting values, and then held: a likelihood whose
+//! grid moved with θ would jump where the size does.
+
+mod information;
+#[cfg(feature = "fit")]
+mod maximise;
+mod profile;
+mod transform;
+
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::vec::Vec;
+
+use crate::error::ZakaiError;
+use crate::lab::experiment::Experiment;
+use crate::lab::recording::Recording;
+use crate::lab::scenario::ScenarioConfig;
+use crate::validate::ConfigProblem;
+
+pub use information::{observed_information, standard_errors, Information};
+#[cfg(feature = "fit")]
+pub use maximise::{maximise, FitOptions, FitResult};
+pub use profile::{profile, profile_grid, Profile};
+pub use transform::Transform;
+
+/// Evaluates the log-likelihood at a batch of parameter points.
+pub trait Evaluate {
+    /// ln p(data | θ) at every point of `points`; `f64::NEG_INFINITY` where the method
+    /// failed on the data (its run stopped or gave no likelihood) at that point.
+    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64>;
+}
+
+/// The log-likelihood of recorded data as a function of some of a scenario's parameters,
+/// under one method.
+#[derive(Clone, Debug)]
+pub struct Likelihood {
+    config: ScenarioConfig,
+    recording: Recording,
+    names: Vec<String>,
+    bounds: Vec<(f64, f64)>,
+    start: Vec<f64>,
+    seed: u64,
+    method: String,
+}
+
+impl Likelihood {
+    /// The likelihood of `recording` under method `method` (an index into the scenario's
+    /// methods) as a function of the parameters `names` (all the scenario's, in name order,
+    /// when empty); the others stay at their values. `seed` seeds the method's random numbers,
+    /// the same at every point (common random numbers: a particle filter's likelihood is then
+    /// a smooth-looking function of θ rather than fresh noise at each point).
+    ///
+    /// Every problem — unknown names, a method index out of range, a recording that does not
+    /// fit the model — is reported before any run.
+    pub fn new(
+        config: &ScenarioConfig,
+        recording: Recording,
+        method: usize,
+        names: &[String],
+        seed: u64,
+    ) -> Result<Self, ZakaiError> {
+        let mut problems = Vec::new();
+        let names: Vec<String> = if names.is_empty() {
+            config.parameters.keys().cloned().collect()
+        } else {
+            names.to_vec()
+        };
+        if names.is_empty() {
+            problems.push(ConfigProblem::new(
+                "parameters",
+                "the scenario declares no parameter to fit",
+            ));
+        }
+        for (i, name) in names.iter().enumerate() {
+            if !config.parameters.contains_key(name) {
+                problems.push(ConfigProblem::new(
+                    "params",
+                    format!(
+                        "the scenario declares no parameter `{name}` (it has: {})",
+                        config
+                            .parameters
+                            .keys()
+                            .cloned()
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            } else if names[..i].contains(name) {
+                problems.push(ConfigProblem::new(
+                    "params",
+                    format!("`{name}` is named twice"),
+                ));
+            }
+        }
+        if method >= config.methods.len() {
+            problems.push(ConfigProblem::new(
+                "method",
+                format!(
+                    "method {method} asked for, the scenario has {}",
+                    config.methods.len()
+                ),
+            ));
+        }
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
+        let mut one = config.clone();
+        one.methods = alloc::vec![config.methods[method].clone()];
+        // The sizes left to the problem are chosen here, once, at the starting values.
+        let experiment = Experiment::new(one)?;
+        let problems = experiment.recording_problems(&recording);
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
+        let config = experiment.config().clone();
+        let bounds = names
+            .iter()
+            .map(|n| config.parameters[n].interval())
+            .collect();
+        let start = names.iter().map(|n| config.parameters[n].value).collect();
+        Ok(Likelihood {
+            method: experiment.method_names()[0].to_string(),
+            config,
+            recording,
+            names,
+            bounds,
+            start,
+            seed,
+        })
+    }
+
+    /// The parameters it varies, in order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+    /// Their bounds, `(lower, upper)`, infinite where open.
+    pub fn bounds(&self) -> &[(f64, f64)] {
+        &self.bounds
+    }
+    /// Their values in the scenario (a fit's starting point).
+    pub fn start(&self) -> &[f64] {
+        &self.start
+    }
+    /// The seed of the method's random numbers.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// The method's display name.
+    pub fn method(&self) -> &str {
+        &self.method
+    }
+    /// The scenario, the method alone and its sizes chosen.
+    pub fn config(&self) -> &ScenarioConfig {
+        &self.config
+    }
+    /// The number of observations the likelihood is of: measurement times, or increments
+    /// of a continuous path.
+    pub fn observations(&self) -> usize {
+        if self.recording.continuous {
+            self.recording.steps()
+        } else {
+            self.recording.times.len()
+        }
+    }
+
+    /// ln p(data | θ) from one run of the method; an error when θ has the wrong length, is
+    /// not finite or lies outside the bounds, when the model does not build at θ (a
+    /// covariance that is no longer positive definite …), or when the method fails on the
+    /// data (the failure is named).
+    pub fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
+        if theta.len() != self.names.len() {
+            return Err(ZakaiError::Dimension(format!(
+                "{} parameter values given for {} parameters ({})",
+                theta.len(),
+                self.names.len(),
+                self.names.join(", ")
+            )));
+        }
+        for ((name, &v), &(lo, hi)) in self.names.iter().zip(theta).zip(&self.bounds) {
+            if !(v.is_finite() && lo <= v && v <= hi) {
+                return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                    format!("parameters.{name}"),
+                    format!("{v} is not a finite value in [{lo}, {hi}]"),
+                )]));
+            }
+        }
+        let values: Vec<(String, f64)> = self.names.iter().cloned().zip(theta.to_vec()).collect();
+        let experiment = Experiment::new(self.config.with_parameter_values(&values)?)?;
+        let run = experiment.filter_recorded(self.recording.clone(), self.seed)?;
+        let track = &run.methods[0];
+        match (&track.failure, track.log_likelihood()) {
+            (None, Some(l)) if !l.is_nan() => Ok(l),
+            (Some(f), _) => Err(ZakaiError::RunFailed {
+                method: track.name.clone(),
+                step: f.k,
+                message: f.message.clone(),
+            }),
+            _ => Err(ZakaiError::RunFailed {
+                method: track.name.clone(),
+                step: track.rows(),
+                message: "it gives no log-likelihood".to_string(),
+            }),
+        }
+    }
+
+    /// [`Likelihood::log_likelihood`] with a failure as `f64::NEG_INFINITY` (the value the
+    /// optimisers and [`Evaluate`] work with).
+    pub fn value(&self, theta: &[f64]) -> f64 {
+        self.log_likelihood(theta).unwrap_or(f64::NEG_INFINITY)
+    }
+}
+
+impl Evaluate for Likelihood {
+    /// One run per point, on rayon's pool with the `parallel` feature.
+    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            points.par_iter().map(|p| self.value(p)).collect()
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            points.iter().map(|p| self.value(p)).collect()
+        }
+    }
+}
+
+/// The parameters' names and values as `name = value` for messages.
+pub(crate) fn describe(names: &[String], values: &[f64]) -> String {
+    names
+        .iter()
+        .zip(values)
+        .map(|(n, v)| format!("{n} = {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+        .to_string()
+}

@@ -1,0 +1,123 @@
+//! The log-likelihood along one parameter, the others held at their values — for a model
+//! with one unknown, its profile log-likelihood — drawn for several methods on the same data
+//! to show where each one's maximum lies.
+
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use super::{Evaluate, Likelihood};
+
+/// One method's log-likelihood along one parameter.
+#[derive(Clone, Debug)]
+pub struct Profile {
+    /// The method's display name.
+    pub method: String,
+    /// The parameter.
+    pub parameter: String,
+    /// The parameter's values.
+    pub values: Vec<f64>,
+    /// ln L at each value (`f64::NEG_INFINITY` where the method failed).
+    pub log_likelihoods: Vec<f64>,
+    /// The maximum, `(θ*, ln L(θ*))`: the best value refined by the parabola through it and
+    /// its two neighbours (the best value itself at an end of the grid); `None` when the
+    /// method failed everywhere.
+    pub maximum: Option<(f64, f64)>,
+}
+
+/// `points` evenly spaced values of a parameter with bounds `(lo, hi)` and value `value`:
+/// the bounds less 1 % of the width at each end when both are finite (a variance at 0 is no
+/// model), from a quarter to four times the distance to the one finite bound, or
+/// `value ± 3·max(|value|, 1)` when unbounded.
+pub fn profile_grid(bounds: (f64, f64), value: f64, points: usize) -> Vec<f64> {
+    let (lo, hi) = bounds;
+    let (a, b) = match (lo.is_finite(), hi.is_finite()) {
+        (true, true) => (lo + 0.01 * (hi - lo), hi - 0.01 * (hi - lo)),
+        (true, false) => {
+            let d = (value - lo).max(1e-2);
+            (lo + 0.25 * d, lo + 4.0 * d)
+        }
+        (false, true) => {
+            let d = (hi - value).max(1e-2);
+            (hi - 4.0 * d, hi - 0.25 * d)
+        }
+        (false, false) => {
+            let d = 3.0 * value.abs().max(1.0);
+            (value - d, value + d)
+        }
+    };
+    let points = points.max(2);
+    (0..points)
+        .map(|i| a + (b - a) * i as f64 / (points - 1) as f64)
+        .collect()
+}
+
+/// The log-likelihood of `likelihood` (a [`Likelihood`] of one parameter) at `values`, one
+/// batch through `evaluate` (`likelihood` itself runs them on every core).
+pub fn profile(likelihood: &Likelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
+    let points: Vec<Vec<f64>> = values.iter().map(|&v| alloc::vec![v]).collect();
+    let log_likelihoods = evaluate.log_likelihoods(&points);
+    Profile {
+        method: likelihood.method().into(),
+        parameter: likelihood.names()[0].clone(),
+        values: values.to_vec(),
+        maximum: maximum(values, &log_likelihoods),
+        log_likelihoods,
+    }
+}
+
+/// The grid's best point refined by the parabola through it and its neighbours.
+fn maximum(values: &[f64], ls: &[f64]) -> Option<(f64, f64)> {
+    let best = (0..ls.len())
+        .filter(|&i| ls[i].is_finite())
+        .max_by(|&i, &j| ls[i].total_cmp(&ls[j]))?;
+    if best == 0 || best + 1 == ls.len() || !ls[best - 1].is_finite() || !ls[best + 1].is_finite() {
+        return Some((values[best], ls[best]));
+    }
+    let (x0, x1, x2) = (values[best - 1], values[best], values[best + 1]);
+    let (y0, y1, y2) = (ls[best - 1], ls[best], ls[best + 1]);
+    // Vertex of the parabola through the three points.
+    let d01 = (y1 - y0) / (x1 - x0);
+    let d12 = (y2 - y1) / (x2 - x1);
+    let curvature = (d12 - d01) / (x2 - x0);
+    if !(curvature < 0.0) {
+        return Some((x1, y1));
+    }
+    let vertex = 0.5 * (x0 + x1) - 0.5 * d01 / curvature;
+    let vertex = vertex.clamp(x0, x2);
+    let height = y1 + d01 * (vertex - x1) + curvature * (vertex - x0) * (vertex - x1);
+    Some((vertex, height.max(y1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::test;
+
+    #[test]
+    fn the_maximum_of_a_sampled_parabola_is_its_vertex() {
+        let values: Vec<f64> = (0..11).map(|i| i as f64 * 0.5).collect();
+        let ls: Vec<f64> = values
+            .iter()
+            .map(|x| 3.0 - 2.0 * (x - 1.8) * (x - 1.8))
+            .collect();
+        let (x, y) = maximum(&values, &ls).unwrap();
+        assert!(
+            (x - 1.8).abs() < 1e-12 && (y - 3.0).abs() < 1e-12,
+            "{x} {y}"
+        );
+        // At the end of the grid, the end; nothing finite, nothing.
+        let rising: Vec<f64> = values.clone();
+        assert_eq!(maximum(&values, &rising), Some((5.0, 5.0)));
+        assert_eq!(maximum(&values, &[f64::NEG_INFINITY; 11]), None);
+    }
+
+    #[test]
+    fn profile_grids_follow_the_bounds() {
+        let g = profile_grid((0.0, 10.0), 3.0, 5);
+        assert_eq!((g[0], g[4]), (0.1, 9.9));
+        let g = profile_grid((0.0, f64::INFINITY), 2.0, 3);
+        assert_eq!((g[0], g[2]), (0.5, 8.0));
+        let g = profile_grid((f64::NEG_INFINITY, f64::INFINITY), -1.0, 3);
+        assert_eq!((g[0], g[2]), (-4.0, 2.0));
+    }
+}

@@ -1,0 +1,96 @@
+//! Bounds removed by a change of variables: the optimiser moves freely in u ∈ ℝᵖ and every
+//! point it tries maps inside the bounds — θ = lo + (hi − lo)/(1 + e^{−u}) on a finite
+//! interval, lo + e^u or hi − e^{−u} on a half-line, θ = u on the whole line (the transforms
+//! statsmodels uses for variances and the like).
+
+use alloc::vec::Vec;
+
+/// The change of variables of one parameter, from its bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transform {
+    /// Unbounded: θ = u.
+    Identity,
+    /// `[lo, ∞)`: θ = lo + eᵘ.
+    Lower(f64),
+    /// `(−∞, hi]`: θ = hi − e^{−u}.
+    Upper(f64),
+    /// `[lo, hi]`: θ = lo + (hi − lo) σ(u), σ the logistic function.
+    Interval(f64, f64),
+}
+
+impl Transform {
+    /// The transform for bounds `(lo, hi)` (infinite where open).
+    pub fn of(bounds: (f64, f64)) -> Transform {
+        match (bounds.0.is_finite(), bounds.1.is_finite()) {
+            (false, false) => Transform::Identity,
+            (true, false) => Transform::Lower(bounds.0),
+            (false, true) => Transform::Upper(bounds.1),
+            (true, true) => Transform::Interval(bounds.0, bounds.1),
+        }
+    }
+
+    /// θ(u).
+    pub fn to_bounded(self, u: f64) -> f64 {
+        match self {
+            Transform::Identity => u,
+            Transform::Lower(lo) => lo + libm::exp(u),
+            Transform::Upper(hi) => hi - libm::exp(-u),
+            Transform::Interval(lo, hi) => {
+                let t = lo + (hi - lo) / (1.0 + libm::exp(-u));
+                t.clamp(lo, hi)
+            }
+        }
+    }
+
+    /// u(θ), with θ first moved inside the bounds by a millionth of its scale when it sits on
+    /// one (a start on a bound has no finite u).
+    pub fn to_free(self, theta: f64) -> f64 {
+        let nudge = |b: f64| 1e-6 * b.abs().max(1.0);
+        match self {
+            Transform::Identity => theta,
+            Transform::Lower(lo) => libm::log((theta - lo).max(nudge(lo))),
+            Transform::Upper(hi) => -libm::log((hi - theta).max(nudge(hi))),
+            Transform::Interval(lo, hi) => {
+                let width = hi - lo;
+                let s = ((theta - lo) / width).clamp(1e-6, 1.0 - 1e-6);
+                libm::log(s / (1.0 - s))
+            }
+        }
+    }
+}
+
+/// θ(u) componentwise.
+pub(crate) fn bounded(transforms: &[Transform], u: &[f64]) -> Vec<f64> {
+    transforms
+        .iter()
+        .zip(u)
+        .map(|(t, &u)| t.to_bounded(u))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::test;
+
+    #[test]
+    fn transforms_round_trip_and_stay_inside() {
+        for (bounds, theta) in [
+            ((f64::NEG_INFINITY, f64::INFINITY), -3.5),
+            ((0.0, f64::INFINITY), 2.0),
+            ((f64::NEG_INFINITY, 1.0), -4.0),
+            ((-1.0, 5.0), 0.25),
+        ] {
+            let t = Transform::of(bounds);
+            let back = t.to_bounded(t.to_free(theta));
+            assert!((back - theta).abs() < 1e-12 * theta.abs().max(1.0), "{t:?}");
+            for u in [-700.0, -30.0, 0.0, 30.0, 700.0] {
+                let v = t.to_bounded(u);
+                assert!(bounds.0 <= v && v <= bounds.1, "{t:?} {u} {v}");
+            }
+        }
+        // A start on a bound is moved just inside.
+        let t = Transform::of((0.0, f64::INFINITY));
+        assert!(t.to_free(0.0).is_finite());
+    }
+}
