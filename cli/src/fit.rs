@@ -42,6 +42,9 @@ pub fn fit(
 ) -> Result<FitResult, String> {
     let likelihood =
         Likelihood::new(config, recording, method, names, seed).map_err(|e| e.to_string())?;
+    for note in likelihood.chosen_defaults() {
+        eprintln!("default from the problem (held at every point) — {note}");
+    }
     let bar = spinner(&format!("fitting with {}", likelihood.method()))?;
     let progress = |count: usize, best: f64| {
         bar.set_message(format!("{count} evaluations, best ln L {best:.4}"));

@@ -67,6 +67,7 @@ pub struct Likelihood {
     start: Vec<f64>,
     seed: u64,
     method: String,
+    chosen: Vec<String>,
 }
 
 impl Likelihood {
@@ -146,6 +147,7 @@ impl Likelihood {
         let start = names.iter().map(|n| config.parameters[n].value).collect();
         Ok(Likelihood {
             method: experiment.method_names()[0].to_string(),
+            chosen: experiment.chosen_defaults().to_vec(),
             config,
             recording,
             names,
@@ -166,6 +168,11 @@ impl Likelihood {
     /// Their values in the scenario (a fit's starting point).
     pub fn start(&self) -> &[f64] {
         &self.start
+    }
+    /// The sizes chosen from the problem at the starting values and held at every point,
+    /// one note each ([`Experiment::chosen_defaults`]).
+    pub fn chosen_defaults(&self) -> &[String] {
+        &self.chosen
     }
     /// The seed of the method's random numbers.
     pub fn seed(&self) -> u64 {

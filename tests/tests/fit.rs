@@ -1,0 +1,179 @@
+//! Likelihoods, profiles and maximum-likelihood fits against independent references: the Nile
+//! local-level model against a Kalman log-likelihood written here and Durbin & Koopman's
+//! published estimates; problems reported before any run.
+
+use zakai::lab::fit::{self, Likelihood};
+use zakai::lab::recording::Recording;
+use zakai::lab::scenario::ScenarioConfig;
+use zakai_tests::test;
+
+/// Annual flow of the Nile at Aswan, 1871–1970 (10⁸ m³; Cobb 1978).
+const NILE: [f64; 100] = [
+    1120., 1160., 963., 1210., 1160., 1160., 813., 1230., 1370., 1140., 995., 935., 1110., 994.,
+    1020., 960., 1180., 799., 958., 1140., 1100., 1210., 1150., 1250., 1260., 1220., 1030., 1100.,
+    774., 840., 874., 694., 940., 833., 701., 916., 692., 1020., 1050., 969., 831., 726., 456.,
+    824., 702., 1120., 1100., 832., 764., 821., 768., 845., 864., 862., 698., 845., 744., 796.,
+    1040., 759., 781., 865., 845., 944., 984., 897., 822., 1010., 771., 676., 649., 846., 812.,
+    742., 801., 1040., 860., 874., 848., 890., 744., 749., 838., 1050., 918., 986., 797., 923.,
+    975., 815., 1020., 906., 901., 1170., 912., 746., 919., 718., 714., 740.,
+];
+
+/// The prior of the level at 1871: near-diffuse, N(1120, 10⁷).
+const PRIOR: (f64, f64) = (1120.0, 1e7);
+
+/// The local level dx = √q dW, z = x + v (Var v = r), q and r its parameters.
+fn local_level(methods: &str) -> ScenarioConfig {
+    serde_json::from_str(&format!(
+        r#"{{ "name": "nile",
+        "parameters": {{ "q": {{ "value": 1000, "bounds": [0, null] }},
+                         "r": {{ "value": 10000, "bounds": [0, null] }} }},
+        "model": {{ "drift": ["0"], "observation": ["x"], "diffusion": [["sqrt(q)"]],
+                   "noise": {{ "kind": "discrete", "mixture": [{{ "mean": [0], "cov": [["r"]] }}] }} }},
+        "prior": {{ "kind": "gaussian", "mean": [{}], "cov": [[{}]] }},
+        "domain": [[-2000, 4000]], "time": {{ "dt_obs": 1 }}, "methods": [{methods}] }}"#,
+        PRIOR.0, PRIOR.1
+    ))
+    .unwrap()
+}
+
+fn nile() -> Recording {
+    let years = (0..100).map(|k| 1871.0 + k as f64).collect();
+    Recording::measurements(1, 1, years, &NILE).unwrap()
+}
+
+/// The local level's log-likelihood, written here: the scalar Kalman filter's prediction
+/// errors, ln N(z_k; m_k, p_k + r) summed.
+fn reference(q: f64, r: f64) -> f64 {
+    let (mut m, mut p) = PRIOR;
+    let mut total = 0.0;
+    for (k, &z) in NILE.iter().enumerate() {
+        if k > 0 {
+            p += q;
+        }
+        let s = p + r;
+        let e = z - m;
+        total += -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + e * e / s);
+        m += p / s * e;
+        p -= p * p / s;
+    }
+    total
+}
+
+#[test]
+fn the_likelihood_is_the_kalman_likelihood_at_every_point() {
+    let l = Likelihood::new(&local_level(r#"{"method": "kalman"}"#), nile(), 0, &[], 1).unwrap();
+    assert_eq!(l.names(), ["q", "r"]);
+    for (q, r) in [(1469.1, 15099.0), (100.0, 30000.0), (5000.0, 2000.0)] {
+        let got = l.log_likelihood(&[q, r]).unwrap();
+        let want = reference(q, r);
+        assert!(
+            (got - want).abs() < 1e-9 * want.abs(),
+            "{q} {r}: {got} vs {want}"
+        );
+    }
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_kalman_fit_of_the_nile_is_durbin_and_koopmans_estimate() {
+    let config = local_level(r#"{"method": "kalman"}"#);
+    let l = Likelihood::new(&config, nile(), 0, &[], 1).unwrap();
+    let result = fit::maximise(&l, &l, &fit::FitOptions::default(), &|_, _| {}).unwrap();
+    let (q, r) = (result.estimate[0], result.estimate[1]);
+    println!(
+        "fit: q = {q}, r = {r}, ln L = {}, {} evaluations",
+        result.log_likelihood, result.evaluations
+    );
+    println!(
+        "standard errors {:?}, notes {:?}",
+        result.stderr, result.notes
+    );
+    // Durbin & Koopman (2012), §2.10.3: σ²_ε = 15099, σ²_η = 1469.1 (diffuse prior; ours is
+    // N(1120, 10⁷)).
+    assert!((q / 1469.1 - 1.0).abs() < 1e-3, "q = {q}");
+    assert!((r / 15099.0 - 1.0).abs() < 1e-3, "r = {r}");
+    assert!(
+        result.converged && result.notes.is_empty(),
+        "{:?}",
+        result.notes
+    );
+    // A maximum of the likelihood written here: every move by a thousandth lowers it.
+    let top = reference(q, r);
+    assert!((result.log_likelihood - top).abs() < 1e-9 * top.abs());
+    for (dq, dr) in [(1.001, 1.0), (0.999, 1.0), (1.0, 1.001), (1.0, 0.999)] {
+        assert!(reference(q * dq, r * dr) < top, "{dq} {dr}");
+    }
+    // Standard errors: the observed information of the reference by its own differences
+    // (steps of 1 %), inverted.
+    let (hq, hr) = (0.01 * q, 0.01 * r);
+    let d2 = |f: &dyn Fn(f64) -> f64, h: f64| (f(h) - 2.0 * f(0.0) + f(-h)) / (h * h);
+    let iqq = -d2(&|d| reference(q + d, r), hq);
+    let irr = -d2(&|d| reference(q, r + d), hr);
+    let iqr = -(reference(q + hq, r + hr) - reference(q + hq, r - hr) - reference(q - hq, r + hr)
+        + reference(q - hq, r - hr))
+        / (4.0 * hq * hr);
+    let det = iqq * irr - iqr * iqr;
+    let (se_q, se_r) = ((irr / det).sqrt(), (iqq / det).sqrt());
+    println!("reference standard errors {se_q} {se_r}");
+    assert!((result.stderr[0] / se_q - 1.0).abs() < 0.01);
+    assert!((result.stderr[1] / se_r - 1.0).abs() < 0.01);
+}
+
+#[test]
+fn a_profile_peaks_where_the_likelihood_along_the_parameter_does() {
+    let config = local_level(r#"{"method": "kalman"}"#);
+    let l = Likelihood::new(&config, nile(), 0, &["q".into()], 1).unwrap();
+    let values: Vec<f64> = (0..41).map(|i| 2000.0 + 100.0 * i as f64).collect();
+    let p = fit::profile(&l, &l, &values);
+    for (v, got) in values.iter().zip(&p.log_likelihoods) {
+        assert!((got - reference(*v, 10000.0)).abs() < 1e-9 * got.abs());
+    }
+    // The maximum along q with r = 10000, by golden sections on the reference.
+    let (mut a, mut b) = (2000.0f64, 6000.0f64);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..100 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if reference(c, 10000.0) > reference(d, 10000.0) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let (x, l_max) = p.maximum.unwrap();
+    println!("profile maximum {x} (golden sections: {a})");
+    // The parabola through three points 100 apart: within a fifth of the spacing.
+    assert!((x - a).abs() < 20.0, "{x} vs {a}");
+    assert!((l_max - reference(a, 10000.0)).abs() < 1e-3);
+}
+
+#[test]
+fn problems_are_reported_before_any_run() {
+    let config = local_level(r#"{"method": "kalman"}"#);
+    let message = |r: Result<Likelihood, zakai::ZakaiError>| r.unwrap_err().to_string();
+    let m = message(Likelihood::new(&config, nile(), 0, &["sigma".into()], 1));
+    assert!(
+        m.contains("no parameter `sigma`") && m.contains("q, r"),
+        "{m}"
+    );
+    let m = message(Likelihood::new(&config, nile(), 3, &[], 1));
+    assert!(m.contains("method 3"), "{m}");
+    let m = message(Likelihood::new(
+        &config,
+        nile(),
+        0,
+        &["q".into(), "q".into()],
+        1,
+    ));
+    assert!(m.contains("named twice"), "{m}");
+    let two = Recording::measurements(1, 2, vec![0.0, 1.0], &[1.0, 2.0, 3.0, 4.0]).unwrap();
+    let m = message(Likelihood::new(&config, two, 0, &[], 1));
+    assert!(m.contains("m = 1"), "{m}");
+    let l = Likelihood::new(&config, nile(), 0, &[], 1).unwrap();
+    assert!(l
+        .log_likelihood(&[-1.0, 5.0])
+        .unwrap_err()
+        .to_string()
+        .contains("[0, inf]"));
+    assert!(l.log_likelihood(&[1.0]).is_err());
+    assert_eq!(l.value(&[f64::NAN, 1.0]), f64::NEG_INFINITY);
+}
