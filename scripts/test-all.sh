@@ -80,7 +80,7 @@ ZAKAI_CLI=target/debug/zakai node tests/web/determinism.mjs
 step "Python package: abi3 wheel (maturin) in a virtual environment, pytest, the example"
 venv=target/py-venv
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas
+"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas statsmodels "dask[distributed]"
 rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl

@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod errors;
+mod fit;
 mod runs;
 mod stepping;
 
@@ -28,6 +29,9 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::run, m)?)?;
     m.add_function(wrap_pyfunction!(runs::filter_recorded, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_json, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::log_likelihood, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::profile, m)?)?;
     m.add_class::<stepping::Stepper>()?;
     Ok(())
 }

@@ -237,9 +237,25 @@ pub fn filter_recorded<'py>(
     seed: u64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
+    let recording = recording_of(&e, &observations, times.as_ref(), truth.as_ref())?;
+    let result = py
+        .detach(|| e.filter_recorded(recording, seed))
+        .map_err(errors::from_core)?;
+    result_dict(py, &result, e.chosen_defaults())
+}
+
+/// A user's observations (rows of m values; increments for continuous models, measurements for
+/// discrete ones) at `times` (τ₀…τ_N; every Δτ from 0 when absent), with the true states when
+/// known, as a recording for `e`'s model — every mismatch in the caller's words.
+pub fn recording_of(
+    e: &Experiment,
+    observations: &PyReadonlyArrayDyn<'_, f64>,
+    times: Option<&PyReadonlyArrayDyn<'_, f64>>,
+    truth: Option<&PyReadonlyArrayDyn<'_, f64>>,
+) -> PyResult<Recording> {
     let model = e.model();
     let continuous = matches!(model.observations, ObservationModel::Continuous { .. });
-    let (values, count, width) = rows(&observations, "observations")?;
+    let (values, count, width) = rows(observations, "observations")?;
     if width != model.m {
         return Err(errors::dimension(format!(
             "observations have {width} column(s), the model observes m = {}",
@@ -248,7 +264,7 @@ pub fn filter_recorded<'py>(
     }
     let dt_obs = e.config().time.dt_obs;
     let times = match times {
-        Some(t) => rows(&t, "times")?.0,
+        Some(t) => rows(t, "times")?.0,
         None if continuous => regular_times(count + 1, dt_obs),
         None => regular_times(count, dt_obs),
     };
@@ -283,9 +299,9 @@ pub fn filter_recorded<'py>(
         Recording::measurements(model.n, model.m, times, &values)
     }
     .map_err(errors::from_core)?;
-    let recording = match truth {
+    Ok(match truth {
         Some(t) => {
-            let (states, r, w) = rows(&t, "truth")?;
+            let (states, r, w) = rows(t, "truth")?;
             if r != recording.times.len() || w != model.n {
                 return Err(errors::dimension(format!(
                     "truth has shape ({r}, {w}); it needs one row of n = {} per time ({} rows)",
@@ -296,11 +312,7 @@ pub fn filter_recorded<'py>(
             recording.with_truth(states).map_err(errors::from_core)?
         }
         None => recording,
-    };
-    let result = py
-        .detach(|| e.filter_recorded(recording, seed))
-        .map_err(errors::from_core)?;
-    result_dict(py, &result, e.chosen_defaults())
+    })
 }
 
 /// The Monte Carlo summary of `runs` runs with seeds `seed, seed + 1, …` (every core, the GIL

@@ -21,7 +21,8 @@ command line's messages.
 
 The package mirrors the Rust side: :mod:`zakai.models` (``Model``, ``Prior``),
 :mod:`zakai.scenario` (``Scenario``, presets, the method catalogue), :mod:`zakai.runs`
-(``simulate``, ``run``, ``filter``, ``monte_carlo``), :mod:`zakai.results` (``RunResult``,
+(``simulate``, ``run``, ``filter``, ``monte_carlo``), :mod:`zakai.fitting` (``fit``,
+``profile``, ``log_likelihood``: a scenario's parameters from your data), :mod:`zakai.results` (``RunResult``,
 ``MethodResult``, ``MonteCarloTable``), :mod:`zakai.stepping` (the stepping ``Filter``) and
 :mod:`zakai.errors`; everything is also here, at the top.
 """
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 from . import _zakai
 from ._convert import ArrayLike, MethodSpec
+from .fitting import FitResult, Profile, fit, log_likelihood, profile
 from .errors import ConfigError, DimensionError, ExpressionError, FilterError, ZakaiError
 from .models import DOMAIN_SDS, Model, Prior
 from .results import MethodResult, MonteCarloTable, RunResult
@@ -53,6 +55,11 @@ __all__ = [
     "run",
     "filter",
     "monte_carlo",
+    "fit",
+    "profile",
+    "log_likelihood",
+    "FitResult",
+    "Profile",
     "set_memory_cap",
     "ZakaiError",
     "ConfigError",

@@ -31,16 +31,45 @@ def _numbers(value: Any, name: str) -> np.ndarray:
 
 
 
-def _matrix(value: Any, name: str) -> list[list[float]]:
-    """A square matrix as rows; a scalar is the 1 × 1 matrix."""
-    a = np.atleast_2d(_numbers(value, name))
+Coefficient = Union[float, str]
+
+
+def _has_text(value: Any) -> bool:
+    """Whether ``value`` (a number, text or nested sequence) holds a text entry."""
+    if isinstance(value, str):
+        return True
+    if isinstance(value, (list, tuple)):
+        return any(_has_text(v) for v in value)
+    return False
+
+
+def _coefficients(value: Any, name: str) -> np.ndarray:
+    """Numbers and expressions in a scenario's parameters (``"sqrt(q)"``) as an object array:
+    numbers finite floats, text kept as it is (the core reads and checks it)."""
+    a = np.array(value, dtype=object)
+    out = np.empty(a.shape, dtype=object)
+    for i, v in np.ndenumerate(a):
+        if isinstance(v, str):
+            out[i] = v
+        else:
+            out[i] = float(_numbers(v, name))
+    return out
+
+
+def _matrix(value: Any, name: str) -> list[list[Coefficient]]:
+    """A square matrix as rows; a scalar is the 1 × 1 matrix. Entries may be expressions in
+    the scenario's parameters (``"r"``, ``"sqrt(q)"``)."""
+    a = np.atleast_2d(_coefficients(value, name) if _has_text(value) else _numbers(value, name))
     if a.ndim != 2:
         raise DimensionError(f"{name} must be a matrix, got shape {a.shape}")
     return a.tolist()
 
 
 
-def _vector(value: Any, name: str = "vector") -> list[float]:
+def _vector(value: Any, name: str = "vector") -> list[Coefficient]:
+    """A vector; entries may be expressions in the scenario's parameters."""
+    if _has_text(value):
+        return np.atleast_1d(_coefficients(value, name)).ravel().tolist()
     return np.atleast_1d(_numbers(value, name)).ravel().tolist()
 
 
@@ -77,9 +106,12 @@ def _domain(value: Any) -> list[list[float]]:
 
 
 
-def _positive_definite(rows: list[list[float]], name: str) -> list[list[float]]:
+def _positive_definite(rows: list[list[Any]], name: str) -> list[list[Any]]:
     """``rows`` when they are a symmetric positive definite matrix, else a ConfigError that
-    says so (a variance must be positive)."""
+    says so (a variance must be positive). Rows with expressions in the scenario's parameters
+    are checked by the core, at the parameters' values."""
+    if _has_text(rows):
+        return rows
     a = np.asarray(rows)
     if a.shape[0] != a.shape[1] or not np.allclose(a, a.T):
         raise ConfigError(f"{name}: must be a symmetric matrix, got {rows!r}")

@@ -26,6 +26,34 @@ def filter_recorded(
     seed: int,
 ) -> dict[str, Any]: ...
 def monte_carlo_json(json: str, runs: int, seed: int) -> str: ...
+def log_likelihood(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    method: int,
+    names: list[str],
+    seed: int,
+    point: list[float],
+) -> float: ...
+def fit(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    method: int,
+    names: list[str],
+    seed: int,
+    evaluator: Optional[Any] = None,
+) -> dict[str, Any]: ...
+def profile(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    parameter: str,
+    values: Optional[list[float]],
+    points: int,
+    seed: int,
+    evaluator: Optional[Any] = None,
+) -> tuple[list[float], list[dict[str, Any]]]: ...
 
 class Stepper:
     def __init__(self, scenario: str, seed: int) -> None: ...

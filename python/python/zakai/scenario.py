@@ -51,6 +51,29 @@ def _method_config(spec: MethodSpec) -> dict[str, Any]:
 
 
 
+def _parameter(name: str, value: Any) -> dict[str, Any]:
+    """One parameter's JSON from a value, ``(value, (lo, hi))`` or a dict."""
+    if isinstance(value, Mapping):
+        return dict(value)
+    bounds = None
+    if isinstance(value, (tuple, list)):
+        if len(value) != 2:
+            raise ConfigError(f"parameters.{name}: give a value or (value, (lower, upper)), got {value!r}")
+        value, bounds = value
+        if bounds is not None:
+            lo, hi = bounds
+            bounds = [None if lo is None else float(lo), None if hi is None else float(hi)]
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as e:
+        raise ConfigError(f"parameters.{name}: the value must be a number, got {value!r}") from e
+    out: dict[str, Any] = {"value": v}
+    if bounds is not None:
+        out["bounds"] = bounds
+    return out
+
+
+
 class Scenario:
     """A model, prior, domain, time grid and methods: what one run needs.
 
@@ -74,6 +97,12 @@ class Scenario:
         The box the grid and spectral methods live on; ``prior mean ± 8 sd`` when absent.
     initial_state : array_like, optional
         x₀ of simulations; drawn from the prior when absent.
+    parameters : dict, optional
+        Named parameters the model's expressions and coefficients may use (the unknowns
+        :func:`zakai.fit` estimates): ``{"q": 0.5}``, ``{"q": (0.5, (0, None))}`` with bounds
+        (``None`` an open side) or ``{"q": {"value": 0.5, "bounds": [0, None]}}``. Use them
+        in expressions (``"-theta*x"``) and in the diffusion, noise covariance and prior as
+        text (``diffusion="sqrt(q)"``, ``noise_cov="r"``).
     """
 
     def __init__(
@@ -88,6 +117,7 @@ class Scenario:
         initial_state: Optional[ArrayLike] = None,
         seed: int = 0,
         name: str = "custom",
+        parameters: Optional[Mapping[str, Any]] = None,
     ) -> None:
         if domain is None:
             domain = prior.covering_domain()
@@ -108,6 +138,8 @@ class Scenario:
             "failure": {"divergence_bound": None, "track_loss": None},
             "methods": [_method_config(m) for m in methods],
         }
+        if parameters:
+            self.parameters = parameters
 
     @classmethod
     def from_json(cls, text: str) -> "Scenario":
@@ -160,6 +192,16 @@ class Scenario:
     @t_final.setter
     def t_final(self, value: float) -> None:
         self.config["time"]["t_final"] = float(value)
+
+    @property
+    def parameters(self) -> dict[str, dict[str, Any]]:
+        """The named parameters, ``{name: {"value": v, "bounds": [lo, hi]}}`` (a copy; assign
+        to change them)."""
+        return _json.loads(_json.dumps(self.config.get("parameters", {})))
+
+    @parameters.setter
+    def parameters(self, value: Mapping[str, Any]) -> None:
+        self.config["parameters"] = {str(k): _parameter(k, v) for k, v in dict(value).items()}
 
     @property
     def seed(self) -> int:

@@ -18,7 +18,7 @@ use argmin::solver::neldermead::NelderMead;
 
 use super::information::{observed_information, standard_errors};
 use super::transform::{bounded, Transform};
-use super::{describe, Evaluate, Likelihood};
+use super::{Evaluate, Likelihood};
 use crate::error::ZakaiError;
 
 /// How long a fit may run and when it has converged.
@@ -252,4 +252,14 @@ impl FitResult {
             self.evaluations
         )
     }
+}
+
+/// The parameters' names and values as `name = value` for messages.
+fn describe(names: &[String], values: &[f64]) -> String {
+    names
+        .iter()
+        .zip(values)
+        .map(|(n, v)| format!("{n} = {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -257,14 +257,3 @@ impl Evaluate for Likelihood {
         }
     }
 }
-
-/// The parameters' names and values as `name = value` for messages.
-pub(crate) fn describe(names: &[String], values: &[f64]) -> String {
-    names
-        .iter()
-        .zip(values)
-        .map(|(n, v)| format!("{n} = {v}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-        .to_string()
-}

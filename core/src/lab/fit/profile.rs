@@ -79,7 +79,7 @@ fn maximum(values: &[f64], ls: &[f64]) -> Option<(f64, f64)> {
     let d01 = (y1 - y0) / (x1 - x0);
     let d12 = (y2 - y1) / (x2 - x1);
     let curvature = (d12 - d01) / (x2 - x0);
-    if !(curvature < 0.0) {
+    if curvature.is_nan() || curvature >= 0.0 {
         return Some((x1, y1));
     }
     let vertex = 0.5 * (x0 + x1) - 0.5 * d01 / curvature;

@@ -3,8 +3,6 @@
 //! interval, lo + e^u or hi − e^{−u} on a half-line, θ = u on the whole line (the transforms
 //! statsmodels uses for variances and the like).
 
-use alloc::vec::Vec;
-
 /// The change of variables of one parameter, from its bounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Transform {
@@ -60,7 +58,8 @@ impl Transform {
 }
 
 /// θ(u) componentwise.
-pub(crate) fn bounded(transforms: &[Transform], u: &[f64]) -> Vec<f64> {
+#[cfg(feature = "fit")]
+pub(crate) fn bounded(transforms: &[Transform], u: &[f64]) -> alloc::vec::Vec<f64> {
     transforms
         .iter()
         .zip(u)

@@ -445,9 +445,14 @@ impl ScenarioConfig {
             }
         }
         check_parameters(&self.parameters, &self.expression_texts(), &mut p);
+        // An entry that does not resolve is reported once, not again as a non-finite
+        // number or a matrix that is not positive definite.
+        let unresolved = |p: &Vec<ConfigProblem>, before: usize| p.len() > before;
         if let Some(g) = &self.model.diffusion {
+            let before = p.len();
             let g = g.resolve(&names, "model.diffusion", &mut p);
             match matrix(&g, n) {
+                _ if unresolved(&p, before) => {}
                 None => p.push(ConfigProblem::new(
                     "model.diffusion",
                     format!("must be {n}×{n}"),
@@ -461,30 +466,42 @@ impl ScenarioConfig {
         }
         match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov: Some(s) } => {
+                let before = p.len();
                 let s = s.resolve(&names, "model.noise.cov", &mut p);
-                check_spd(&s, m, "model.noise.cov", &mut p)
+                if !unresolved(&p, before) {
+                    check_spd(&s, m, "model.noise.cov", &mut p)
+                }
             }
             ObservationNoiseConfig::Continuous { cov: None } => {}
             ObservationNoiseConfig::Discrete { mixture } => {
+                let before = p.len();
                 let comps: Vec<_> = mixture
                     .iter()
                     .enumerate()
                     .map(|(i, c)| c.resolve(&names, &format!("model.noise.mixture[{i}]"), &mut p))
                     .collect();
-                check_mixture(&comps, m, "model.noise.mixture", &mut p)
+                if !unresolved(&p, before) {
+                    check_mixture(&comps, m, "model.noise.mixture", &mut p)
+                }
             }
         }
         match &self.prior {
             PriorConfig::Gaussian { .. } => {
+                let before = p.len();
                 let comps = self.prior.components(&names, &mut p).unwrap_or_default();
-                for c in comps {
-                    check_vector(&c.mean, n, "prior.mean", &mut p);
-                    check_spd(&c.cov, n, "prior.cov", &mut p);
+                if !unresolved(&p, before) {
+                    for c in comps {
+                        check_vector(&c.mean, n, "prior.mean", &mut p);
+                        check_spd(&c.cov, n, "prior.cov", &mut p);
+                    }
                 }
             }
             PriorConfig::Mixture { .. } => {
+                let before = p.len();
                 let comps = self.prior.components(&names, &mut p).unwrap_or_default();
-                check_mixture(&comps, n, "prior.components", &mut p)
+                if !unresolved(&p, before) {
+                    check_mixture(&comps, n, "prior.components", &mut p)
+                }
             }
             PriorConfig::Density { expression } => {
                 if let Err(e) = check_expression("prior density", expression, n, &names) {

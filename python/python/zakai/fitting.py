@@ -1,0 +1,349 @@
+"""Fitting a scenario's parameters to your data: :func:`fit` (maximum likelihood with
+standard errors), :func:`profile` (the log-likelihood along one parameter for every method)
+and :func:`log_likelihood` (one evaluation).
+
+The likelihood of the data is the method's own (see :attr:`MethodResult.log_likelihood`):
+exact for the Kalman filters on linear-Gaussian models, converging with the grid for the grid
+and spectral filters, an unbiased estimate (of L, not ln L) for the particle filter, and a
+Gaussian approximation for the EKF, UKF, IEKF, IOKF and the direct method — whose maxima can
+sit at the wrong parameter values, which :func:`profile` shows side by side.
+
+Evaluations run on every core of this machine (the GIL released). Pass a
+``concurrent.futures.Executor`` — a ``ProcessPoolExecutor``, or a Dask cluster's
+``client.get_executor()`` — and the batches (a profile's values, the first simplex, the
+information's finite-difference stencil) are spread over it instead, one task per
+likelihood evaluation; the workers need ``zakai`` installed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _zakai
+from ._convert import ArrayLike, _array, _index_times, _times
+from .errors import ConfigError
+from .scenario import Scenario
+
+
+
+def _observations(observations: Any, times: Optional[ArrayLike]) -> tuple[np.ndarray, Optional[np.ndarray]]:
+    """The observations as an array and their times (given, or a pandas index's)."""
+    index_times, _ = _index_times(observations)
+    obs = _array(
+        observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
+        "observations",
+    )
+    given = _times(times)
+    return obs, given if given is not None else index_times
+
+
+
+def _method_index(sc: Scenario, method: Union[str, int, None]) -> tuple[Scenario, int]:
+    """The scenario and the index of ``method`` in it: a key (added with its defaults when the
+    scenario lacks it), an index, or the first method when ``None``."""
+    methods = sc.config["methods"]
+    if method is None:
+        return sc, 0
+    if isinstance(method, (int, np.integer)) and not isinstance(method, bool):
+        if not 0 <= method < len(methods):
+            raise ConfigError(f"method: index {method} asked for, the scenario has {len(methods)} methods")
+        return sc, int(method)
+    if isinstance(method, str):
+        for i, m in enumerate(methods):
+            if m.get("method") == method:
+                return sc, i
+        extended = sc.copy()
+        extended.methods = list(methods) + [method]
+        return extended, len(methods)
+    raise ConfigError(f"method: a method key such as 'ukf' or an index, not {method!r}")
+
+
+
+def _task(args: tuple) -> float:
+    """One likelihood evaluation, as an executor's worker runs it (module level, so that it
+    pickles by reference)."""
+    return _zakai.log_likelihood(*args)
+
+
+
+def _evaluator(
+    executor: Any, text: str, obs: np.ndarray, times: Optional[np.ndarray], seed: int
+) -> Optional[Callable[[int, list[str], list[list[float]]], list[float]]]:
+    """The batch evaluator the core calls, one executor task per point; ``None`` without an
+    executor (the core then runs the batch on every core itself)."""
+    if executor is None:
+        return None
+    if not hasattr(executor, "submit"):
+        raise ConfigError(
+            f"executor: a concurrent.futures.Executor (with .submit), not {type(executor).__name__}"
+        )
+
+    def evaluate(method: int, names: list[str], points: list[list[float]]) -> list[float]:
+        futures = [
+            executor.submit(_task, (text, obs, times, method, names, seed, list(p)))
+            for p in points
+        ]
+        return [float(f.result()) for f in futures]
+
+    return evaluate
+
+
+
+def _seed(sc: Scenario, seed: Optional[int]) -> int:
+    value = sc.seed if seed is None else seed
+    if not isinstance(value, (int, np.integer)) or value < 0:
+        raise ConfigError(f"seed: must be a nonnegative integer (got {value!r})")
+    return int(value)
+
+
+
+def _scenario(scenario: Union[Scenario, str]) -> Scenario:
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, str):
+        return Scenario.from_preset(scenario)
+    raise ConfigError(f"expected a Scenario or a preset name, not {type(scenario).__name__}")
+
+
+
+@dataclass
+class FitResult:
+    """A maximum-likelihood fit.
+
+    Attributes
+    ----------
+    method : str
+        The method whose likelihood was maximised.
+    params : dict
+        The estimate θ̂, by parameter name.
+    stderr : dict
+        Standard errors from the observed information −∇² ln L(θ̂) (central differences);
+        NaN where there are none (see ``notes``).
+    loglik : float
+        ln L(θ̂).
+    nfev : int
+        Likelihood evaluations (filter runs), the information's included.
+    nit : int
+        Simplex iterations (Nelder–Mead, argmin).
+    converged : bool
+        Whether the simplex met its tolerance.
+    cov : ndarray, shape (p, p), or None
+        The estimate's asymptotic covariance (the information's inverse).
+    start : dict
+        The starting values (the scenario's).
+    bounds : dict
+        ``(lower, upper)`` per parameter, ``None`` an open side.
+    nobs : int
+        Observations the likelihood is of.
+    notes : list of str
+        What to know: no convergence, an estimate on a bound, why there are no standard
+        errors.
+    chosen_defaults : list of str
+        Sizes chosen from the problem at the starting values and held at every point.
+    """
+
+    method: str
+    params: dict[str, float]
+    stderr: dict[str, float]
+    loglik: float
+    nfev: int
+    nit: int
+    converged: bool
+    cov: Optional[np.ndarray]
+    start: dict[str, float]
+    bounds: dict[str, tuple[Optional[float], Optional[float]]]
+    nobs: int
+    notes: list[str] = field(default_factory=list)
+    chosen_defaults: list[str] = field(default_factory=list)
+
+    def to_pandas(self) -> Any:
+        """The estimates as a DataFrame indexed by parameter: ``estimate``, ``stderr``, the
+        95 % Wald interval ``ci_lower``/``ci_upper`` (θ̂ ± 1.96·se), ``start``, ``lower``,
+        ``upper``."""
+        import pandas as pd
+
+        names = list(self.params)
+        est = np.array([self.params[n] for n in names])
+        se = np.array([self.stderr[n] for n in names])
+        return pd.DataFrame(
+            {
+                "estimate": est,
+                "stderr": se,
+                "ci_lower": est - 1.96 * se,
+                "ci_upper": est + 1.96 * se,
+                "start": [self.start[n] for n in names],
+                "lower": [self.bounds[n][0] for n in names],
+                "upper": [self.bounds[n][1] for n in names],
+            },
+            index=pd.Index(names, name="parameter"),
+        )
+
+    def __str__(self) -> str:
+        lines = [f"Maximum-likelihood fit — {self.method}, {self.nobs} observations"]
+        for n in self.params:
+            lines.append(f"  {n:<12} {self.params[n]:>14.6g} ± {self.stderr[n]:.4g}")
+        lines.append(f"  ln L = {self.loglik:.6f}; {self.nfev} evaluations, {self.nit} iterations"
+                     + (", converged" if self.converged else ""))
+        lines.extend(f"  note: {n}" for n in self.notes)
+        return "\n".join(lines)
+
+
+
+def fit(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    method: Union[str, int, None] = None,
+    params: Optional[Sequence[str]] = None,
+    *,
+    times: Optional[ArrayLike] = None,
+    seed: Optional[int] = None,
+    executor: Any = None,
+) -> FitResult:
+    """Maximum-likelihood estimate of the scenario's parameters from your observations.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With ``parameters`` (their values are the starting point, their bounds the search
+        box) used in its expressions or coefficients.
+    observations : array_like or pandas Series/DataFrame
+        As for :func:`zakai.filter` (NaN a missing value, a pandas index as the times).
+    method : str or int, optional
+        The method whose likelihood is maximised: a key (``"kalman"``, ``"separation"``, …;
+        added with its defaults if the scenario lacks it) or an index; the first method when
+        absent.
+    params : list of str, optional
+        The parameters to fit; all the scenario declares when absent (the others keep their
+        values).
+    times : array_like, optional
+        τ₀ … τ_N, as for :func:`zakai.filter`.
+    seed : int, optional
+        The method's random numbers (the same at every point); the scenario's when absent.
+    executor : concurrent.futures.Executor, optional
+        Spreads the batches of evaluations over its workers (e.g. a Dask cluster's
+        ``client.get_executor()``); every core of this machine when absent.
+
+    Returns
+    -------
+    FitResult
+    """
+    sc, index = _method_index(_scenario(scenario), method)
+    obs, t = _observations(observations, times)
+    s = _seed(sc, seed)
+    text = sc._text()
+    d = _zakai.fit(
+        text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s)
+    )
+    names = d["names"]
+    cov = d["covariance"]
+    return FitResult(
+        method=d["method"],
+        params=dict(zip(names, d["estimate"])),
+        stderr=dict(zip(names, d["stderr"])),
+        loglik=d["log_likelihood"],
+        nfev=d["evaluations"],
+        nit=d["iterations"],
+        converged=d["converged"],
+        cov=None if cov is None else np.array(cov).reshape(len(names), len(names)),
+        start=dict(zip(names, d["start"])),
+        bounds=dict(zip(names, [tuple(b) for b in d["bounds"]])),
+        nobs=d["observations"],
+        notes=list(d["notes"]),
+        chosen_defaults=list(d["chosen_defaults"]),
+    )
+
+
+
+@dataclass
+class Profile:
+    """The log-likelihood along one parameter for every method of a scenario, the others at
+    their values (for a model with one unknown, its profile log-likelihood).
+
+    Attributes
+    ----------
+    parameter : str
+    values : ndarray
+        The parameter's values.
+    loglik : dict of ndarray
+        ln L at each value, by method name (``-inf`` where the method failed).
+    maxima : dict
+        ``(θ*, ln L(θ*))`` by method name — the best value refined by a parabola through its
+        neighbours — or ``None`` where the method failed everywhere.
+    """
+
+    parameter: str
+    values: np.ndarray
+    loglik: dict[str, np.ndarray]
+    maxima: dict[str, Optional[tuple[float, float]]]
+
+    def to_pandas(self) -> Any:
+        """A DataFrame indexed by the parameter's values, a column of ln L per method."""
+        import pandas as pd
+
+        return pd.DataFrame(self.loglik, index=pd.Index(self.values, name=self.parameter))
+
+
+
+def profile(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    param: str,
+    values: Optional[ArrayLike] = None,
+    *,
+    points: int = 41,
+    times: Optional[ArrayLike] = None,
+    seed: Optional[int] = None,
+    executor: Any = None,
+) -> Profile:
+    """The log-likelihood of your observations along ``param`` for every method of the
+    scenario, the other parameters at their values.
+
+    ``values`` default to ``points`` values spanning the parameter's bounds (less 1 % at each
+    end), or a quarter to four times its distance from a one-sided bound, or its value ± 3 when
+    unbounded. ``times``, ``seed`` and ``executor`` are as for :func:`fit`.
+    """
+    sc = _scenario(scenario)
+    obs, t = _observations(observations, times)
+    s = _seed(sc, seed)
+    v = None
+    if values is not None:
+        v = np.asarray(values, dtype=float).ravel()
+        if v.size < 1 or not np.isfinite(v).all():
+            raise ConfigError("values: must be finite numbers")
+        v = v.tolist()
+    if not isinstance(points, (int, np.integer)) or not 2 <= points <= 10_000:
+        raise ConfigError(f"points: must be an integer in [2, 10000], got {points!r}")
+    text = sc._text()
+    grid, rows = _zakai.profile(
+        text, obs, t, str(param), v, int(points), s, _evaluator(executor, text, obs, t, s)
+    )
+    return Profile(
+        parameter=str(param),
+        values=np.array(grid),
+        loglik={r["method"]: np.array(r["log_likelihoods"]) for r in rows},
+        maxima={r["method"]: r["maximum"] for r in rows},
+    )
+
+
+
+def log_likelihood(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    method: Union[str, int, None] = None,
+    *,
+    times: Optional[ArrayLike] = None,
+    seed: Optional[int] = None,
+    **values: float,
+) -> float:
+    """ln p(observations | θ) under one method, with parameters set by keyword
+    (``log_likelihood(sc, z, "kalman", q=1400.0, r=15000.0)``; the others at their values);
+    ``-inf`` where the method fails on the data."""
+    sc, index = _method_index(_scenario(scenario), method)
+    obs, t = _observations(observations, times)
+    names = list(values)
+    return _zakai.log_likelihood(
+        sc._text(), obs, t, index, names, _seed(sc, seed), [float(values[n]) for n in names]
+    )

@@ -1,0 +1,203 @@
+//! Likelihoods, profiles and maximum-likelihood fits of a scenario's parameters on a user's
+//! recording (`zakai.fit`, `zakai.profile`, `zakai.log_likelihood`): the core's `lab::fit`,
+//! its evaluations on every core with the GIL released, or handed in batches to a Python
+//! callable (which spreads them over a `concurrent.futures.Executor`).
+
+use std::cell::RefCell;
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood};
+
+use crate::errors;
+use crate::runs::{experiment, parse, recording_of};
+
+/// The batches of a fit or profile handed to `callable(method, names, points)`, which returns
+/// one log-likelihood per point. The first Python error is kept (and raised after the
+/// optimiser returns); from then on every point counts as failed.
+struct PyEvaluate<'a> {
+    callable: &'a Py<PyAny>,
+    method: usize,
+    names: &'a [String],
+    error: RefCell<Option<PyErr>>,
+}
+
+impl Evaluate for PyEvaluate<'_> {
+    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+        let failed = vec![f64::NEG_INFINITY; points.len()];
+        if self.error.borrow().is_some() {
+            return failed;
+        }
+        Python::attach(|py| {
+            let values = self
+                .callable
+                .call1(py, (self.method, self.names.to_vec(), points.to_vec()))
+                .and_then(|r| r.extract::<Vec<f64>>(py));
+            match values {
+                Ok(v) if v.len() == points.len() => v
+                    .into_iter()
+                    .map(|l| if l.is_nan() { f64::NEG_INFINITY } else { l })
+                    .collect(),
+                Ok(v) => {
+                    *self.error.borrow_mut() = Some(errors::dimension(format!(
+                        "the evaluator returned {} values for {} points",
+                        v.len(),
+                        points.len()
+                    )));
+                    failed
+                }
+                Err(e) => {
+                    *self.error.borrow_mut() = Some(e);
+                    failed
+                }
+            }
+        })
+    }
+}
+
+/// The likelihood of the recording under method `method` as a function of `names`.
+#[allow(clippy::too_many_arguments)]
+fn likelihood(
+    json: &str,
+    observations: &PyReadonlyArrayDyn<'_, f64>,
+    times: Option<&PyReadonlyArrayDyn<'_, f64>>,
+    method: usize,
+    names: &[String],
+    seed: u64,
+) -> PyResult<Likelihood> {
+    let e = experiment(json)?;
+    let recording = recording_of(&e, observations, times, None)?;
+    Likelihood::new(&parse(json)?, recording, method, names, seed).map_err(errors::from_core)
+}
+
+/// ln p(data | θ) under method `method` at `point` (values of `names`); `-inf` where the method
+/// fails on the data there — one evaluation of a fit's or profile's batch, as an executor's
+/// task runs it.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, method, names, seed, point))]
+#[allow(clippy::too_many_arguments)]
+pub fn log_likelihood<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    method: usize,
+    names: Vec<String>,
+    seed: u64,
+    point: Vec<f64>,
+) -> PyResult<f64> {
+    let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+    Ok(py.detach(|| l.value(&point)))
+}
+
+/// The maximum-likelihood fit of `names` (all the scenario's when empty) under method
+/// `method`, as a dict; `evaluator(method, names, points)` runs the batches when given.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, method, names, seed, evaluator=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn fit<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    method: usize,
+    names: Vec<String>,
+    seed: u64,
+    evaluator: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+    let options = FitOptions::default();
+    let result = match &evaluator {
+        None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
+        Some(callable) => {
+            let remote = PyEvaluate {
+                callable,
+                method,
+                names: l.names(),
+                error: RefCell::new(None),
+            };
+            let result = maximise(&l, &remote, &options, &|_, _| {});
+            if let Some(e) = remote.error.into_inner() {
+                return Err(e);
+            }
+            result
+        }
+    }
+    .map_err(errors::from_core)?;
+    let d = PyDict::new(py);
+    d.set_item("method", &result.method)?;
+    d.set_item("names", &result.names)?;
+    d.set_item("start", &result.start)?;
+    d.set_item("estimate", &result.estimate)?;
+    d.set_item("stderr", &result.stderr)?;
+    d.set_item("covariance", &result.covariance)?;
+    d.set_item("log_likelihood", result.log_likelihood)?;
+    d.set_item("evaluations", result.evaluations)?;
+    d.set_item("iterations", result.iterations)?;
+    d.set_item("converged", result.converged)?;
+    d.set_item("observations", result.observations)?;
+    d.set_item("notes", &result.notes)?;
+    d.set_item("chosen_defaults", l.chosen_defaults())?;
+    let bounds: Vec<(Option<f64>, Option<f64>)> = l
+        .bounds()
+        .iter()
+        .map(|&(lo, hi)| (lo.is_finite().then_some(lo), hi.is_finite().then_some(hi)))
+        .collect();
+    d.set_item("bounds", bounds)?;
+    Ok(d)
+}
+
+/// The log-likelihood along `parameter` at `values` (`points` values from its bounds and value
+/// when absent, [`zakai::lab::fit::profile_grid`]) for every method of the scenario: the
+/// values, and a dict per method (name, log-likelihoods, maximum); `evaluator` as for [`fit`].
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, parameter, values, points, seed, evaluator=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn profile<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    parameter: String,
+    values: Option<Vec<f64>>,
+    points: usize,
+    seed: u64,
+    evaluator: Option<Py<PyAny>>,
+) -> PyResult<(Vec<f64>, Bound<'py, PyList>)> {
+    let config = parse(json)?;
+    let methods = config.methods.len();
+    let values = match (values, config.parameters.get(&parameter)) {
+        (Some(v), _) => v,
+        (None, Some(p)) => zakai::lab::fit::profile_grid(p.interval(), p.value, points),
+        // The likelihood below names the unknown parameter.
+        (None, None) => Vec::new(),
+    };
+    let names = [parameter];
+    let out = PyList::empty(py);
+    for method in 0..methods {
+        let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+        let p = match &evaluator {
+            None => py.detach(|| zakai::lab::fit::profile(&l, &l, &values)),
+            Some(callable) => {
+                let remote = PyEvaluate {
+                    callable,
+                    method,
+                    names: &names,
+                    error: RefCell::new(None),
+                };
+                let p = zakai::lab::fit::profile(&l, &remote, &values);
+                if let Some(e) = remote.error.into_inner() {
+                    return Err(e);
+                }
+                p
+            }
+        };
+        let d = PyDict::new(py);
+        d.set_item("method", &p.method)?;
+        d.set_item("log_likelihoods", &p.log_likelihoods)?;
+        d.set_item("maximum", p.maximum)?;
+        out.append(d)?;
+    }
+    Ok((values, out))
+}

@@ -1,0 +1,136 @@
+"""Fitting a model's parameters from Python: the Nile local level against statsmodels'
+maximum-likelihood estimate (the same prior, the same gaps), profiles, executors (a process
+pool and a Dask LocalCluster) giving the same numbers as every core, and bad input."""
+
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import zakai
+from zakai.errors import ConfigError
+
+sm = pytest.importorskip("statsmodels.api")
+
+PRIOR = (1120.0, 1e7)
+
+
+def nile():
+    """The Nile's annual flow 1871–1970 (statsmodels' copy), years 1890–1892 unknown."""
+    data = sm.datasets.nile.load_pandas().data
+    years = data["year"].to_numpy(dtype=float)
+    flow = data["volume"].to_numpy(dtype=float).copy()
+    flow[(years >= 1890) & (years <= 1892)] = np.nan
+    return years, flow
+
+
+def local_level(methods=("kalman",)):
+    """dx = √q dW, z = x + v with Var v = r: q and r the unknowns."""
+    model = zakai.Model.discrete("0", "x", noise_cov="r", diffusion="sqrt(q)")
+    return zakai.Scenario(
+        model,
+        zakai.Prior.gaussian(PRIOR[0], PRIOR[1]),
+        list(methods),
+        dt_obs=1.0,
+        domain=[(-2000, 4000)],
+        parameters={"q": (1000.0, (0, None)), "r": (10000.0, (0, None))},
+    )
+
+
+def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate():
+    years, flow = nile()
+    # Zakai gets the year 1900 dropped (a step of two years); statsmodels has it missing.
+    keep = years != 1900
+    fitted = zakai.fit(local_level(), flow[keep], "kalman", times=years[keep])
+    sm_flow = flow.copy()
+    sm_flow[years == 1900] = np.nan
+    mod = sm.tsa.UnobservedComponents(sm_flow, "llevel")
+    mod.ssm.initialize_known(np.array([PRIOR[0]]), np.array([[PRIOR[1]]]))
+    # The likelihood is flat near its top: statsmodels' default L-BFGS stops 8e-7 below it
+    # (q = 1003.1), so its Nelder–Mead with tight tolerances is the reference.
+    res = mod.fit(disp=False, method="nm", maxiter=5000, xtol=1e-10, ftol=1e-12)
+    r_sm, q_sm = res.params  # sigma2.irregular, sigma2.level
+    print(fitted)
+    print("statsmodels", q_sm, r_sm, res.llf)
+    assert fitted.params["q"] == pytest.approx(q_sm, rel=1e-3)
+    assert fitted.params["r"] == pytest.approx(r_sm, rel=1e-3)
+    # statsmodels leaves the first observation out of ln L (its burn-in of one state):
+    # ln N(z_1871; 1120, 10⁷ + r) apart, the two likelihoods are the same function.
+    s = PRIOR[1] + fitted.params["r"]
+    first = -0.5 * (np.log(2 * np.pi * s) + (flow[0] - PRIOR[0]) ** 2 / s)
+    same_point = mod.loglike([fitted.params["r"], fitted.params["q"]])
+    assert fitted.loglik - first == pytest.approx(same_point, rel=1e-9)
+    assert fitted.loglik - first >= res.llf - 1e-6
+    assert fitted.converged and not fitted.notes
+    frame = fitted.to_pandas()
+    assert list(frame.index) == ["q", "r"]
+    assert (frame["ci_lower"] < frame["estimate"]).all()
+    assert frame.loc["q", "lower"] == 0.0 and frame.loc["q", "upper"] is None
+
+
+def test_fit_reads_a_pandas_series_and_a_grid_method():
+    years, flow = nile()
+    series = pd.Series(flow, index=years)
+    fitted = zakai.fit(local_level(), series, "separation", params=["r"])
+    exact = zakai.fit(local_level(), series, "kalman", params=["r"])
+    assert fitted.method.startswith("SA") and list(fitted.params) == ["r"]
+    # The grid filter's likelihood on its default grid: the estimate within a tenth of a
+    # standard error of the exact one.
+    assert abs(fitted.params["r"] - exact.params["r"]) < 0.1 * exact.stderr["r"]
+
+
+def test_a_profile_peaks_where_the_fit_does_for_one_parameter():
+    years, flow = nile()
+    sc = local_level(["kalman", "ukf"])
+    sc.config["parameters"]["q"]["value"] = 1469.1
+    p = zakai.profile(sc, flow, "r", np.linspace(8000, 25000, 35), times=years)
+    one = zakai.fit(sc, flow, "kalman", params=["r"], times=years)
+    assert set(p.loglik) == {"KF", "UKF"}
+    x, _ = p.maxima["KF"]
+    assert abs(x - one.params["r"]) < 0.05 * one.stderr["r"]
+    frame = p.to_pandas()
+    assert frame.index.name == "r" and frame.shape == (35, 2)
+    # The same points by log_likelihood, one at a time.
+    r0 = float(p.values[10])
+    direct = zakai.log_likelihood(sc, flow, "kalman", times=years, r=r0)
+    assert direct == pytest.approx(p.loglik["KF"][10], rel=1e-12)
+
+
+def test_an_executor_gives_the_same_fit_as_every_core():
+    years, flow = nile()
+    local = zakai.fit(local_level(), flow, "kalman", times=years)
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        remote = zakai.fit(local_level(), flow, "kalman", times=years, executor=pool)
+    assert remote.params == local.params and remote.nfev == local.nfev
+
+
+def test_a_dask_cluster_spreads_a_profile():
+    distributed = pytest.importorskip("distributed")
+    years, flow = nile()
+    sc = local_level(["kalman"])
+    local = zakai.profile(sc, flow, "q", points=9, times=years)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            remote = zakai.profile(sc, flow, "q", points=9, times=years,
+                                   executor=client.get_executor())
+    np.testing.assert_array_equal(remote.values, local.values)
+    np.testing.assert_array_equal(remote.loglik["KF"], local.loglik["KF"])
+
+
+def test_bad_input_is_refused_with_its_reason():
+    years, flow = nile()
+    with pytest.raises(ConfigError, match="no parameter `sigma`"):
+        zakai.fit(local_level(), flow, "kalman", params=["sigma"], times=years)
+    with pytest.raises(ConfigError, match="method"):
+        zakai.fit(local_level(), flow, 5, times=years)
+    with pytest.raises(ConfigError, match="executor"):
+        zakai.fit(local_level(), flow, times=years, executor=object())
+    with pytest.raises(ConfigError, match="points"):
+        zakai.profile(local_level(), flow, "q", points=1, times=years)
+    bad = local_level()
+    bad.config["model"]["diffusion"] = [["sqrt(qq)"]]
+    with pytest.raises(ConfigError, match=r"model.diffusion\[0\]\[0\]: unknown variable `qq` at position 5") as e:
+        zakai.fit(bad, flow, times=years)
+    assert "finite" not in str(e.value)
