@@ -2,8 +2,9 @@
 // the method rows built from the catalogue's schema, and the form's own controls.
 
 import { $, el, fillOptions } from './dom.js';
-import { identity, matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
+import { coefficient, identity, matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
 import { mixtureEditor, readMixture, resizeMixture } from './mixture.js';
+import { fillParameters, readParameters, setupParameters } from './parameters.js';
 import { methodEntry, state } from './state.js';
 import { apply, scheduleValidate, worker } from './session.js';
 
@@ -39,10 +40,11 @@ function paramValue(kind, text) {
   if (kind === 'choice') return t;
   return Number(t);
 }
+// Comma-separated entries: numbers, or expressions in the parameters (the prior mean).
 function parseList(text) {
   const t = text.trim();
   if (t === '') return null;
-  return t.split(',').map((s) => Number(s.trim()));
+  return t.split(',').map(coefficient);
 }
 
 function exprInputs(container, label, field, values) {
@@ -189,6 +191,7 @@ export function fillForm(config) {
   $('dim').value = n;
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
+  fillParameters(config.parameters, scheduleValidate);
   matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, onInput: scheduleValidate });
   const noise = config.model.noise;
   $('noise-kind').value = noise.kind;
@@ -229,6 +232,9 @@ export function readForm() {
   const values = (id) => [...$(id).querySelectorAll('input')].map((el) => el.value);
   c.model.drift = values('drift');
   c.model.observation = values('observation');
+  const parameters = readParameters();
+  if (Object.keys(parameters).length) c.parameters = parameters;
+  else delete c.parameters;
   c.model.diffusion = readMatrix($('diffusion'));
   if ($('noise-kind').value === 'continuous') {
     c.model.noise = { kind: 'continuous', cov: readMatrix($('noise-cov')) };
@@ -243,7 +249,8 @@ export function readForm() {
   } else {
     c.prior = { kind, expression: $('prior-expr').value };
   }
-  c.initial_state = parseList($('x0').value);
+  // x₀ is numbers only (a parameter has no place there).
+  c.initial_state = parseList($('x0').value)?.map((v) => (typeof v === 'string' ? NaN : v)) ?? null;
   const domain = [];
   $('domain').querySelectorAll('input').forEach((el) => {
     const i = Number(el.dataset.field.match(/\d+/)[0]);
@@ -305,6 +312,7 @@ function changeDimension() {
 
 // Wires the controls of this part of the page (called once, by main.js).
 export function setupForm() {
+  setupParameters();
   $('preset').addEventListener('change', () => {
     const p = state.presets.find((x) => x.name === $('preset').value);
     fillForm(p);

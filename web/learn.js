@@ -106,6 +106,7 @@ async function openLesson(page, id) {
   const tries = lesson.tryThis.map((t) => action(t.label, () => {
     if (t.mc) return page.monteCarlo(t.mc);
     if (t.check) return page.checkConvergence();
+    if (t.likelihood) return page.likelihood(t.likelihood);
     if (t.view) return page.view(t.view);
     const config = page.current();
     t.change(config, page.method);

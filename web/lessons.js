@@ -244,6 +244,32 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'likelihood',
+    title: '8. The likelihood of the data: whose noise level to believe',
+    preset: 'cubic-sensor-fit',
+    seed: 3,
+    scenario: (c) => c,
+    body: [
+      'Every lesson so far took the model as known. In practice its noise levels rarely are. Here the state moves by $dx = -x\\,dt + \\sqrt q\\,dv$ and is measured every $\\Delta\\tau = 0.2$ as $z_k = x_k^3 + v_k$, $v_k \\sim N(0, r)$, with the measurement noise variance $r$ unknown. The data say which values of $r$ are plausible, through their likelihood.',
+      'Before it sees $z_k$, a filter predicts it: $p(z_k \\mid z_0, \\dots, z_{k-1})$. The likelihood of all the data is the product of these predictions, each evaluated at what was then measured (the first against the prior):',
+      '$$\\ln L(r) = \\ln p(z_0, \\dots, z_N \\mid r) = \\sum_{k=0}^{N} \\ln p(z_k \\mid z_0, \\dots, z_{k-1}, r).$$',
+      'For a filter that carries the density, each prediction is the normalising constant of its Bayes update, the denominator of (3) of Šimandl & Švácha (2005) — $c_k\' $ in their grid form (6):',
+      '$$p(z_k \\mid z_{0:k-1}) = \\int p(z_k \\mid x)\\, p(x \\mid z_{0:k-1})\\, dx,$$',
+      'computed by the separation approach (SA) on its 200 cells, correct up to the grid. The EKF predicts instead with the Gaussian $N\\big(h(\\hat x_{k|k-1}),\\, H P_{k|k-1} H^\\top + r\\big)$, $H = h\'(\\hat x_{k|k-1}) = 3\\hat x_{k|k-1}^2$, and the UKF with the Gaussian of its sigma points. Where $\\hat x$ is near 0 the EKF\'s $H$ is near 0: it predicts $z_k$ to lie within about $\\sqrt r$ of $\\hat x^3$, while $x^3$ itself can be far from $\\hat x^3$. A larger $r$ makes its predictions wide enough, so its likelihood is largest at a noise level above the true one: the maximum of an approximate likelihood is not the maximum of the likelihood.',
+      'The data here are simulated with $q = 0.49$ and $r = 0.5$ (seed 3, 301 measurements); the Likelihood view below draws $\\ln L(r)$ for each method with $q$ held at 0.49. The command zakai fit and zakai.fit in Python find the maximum and its standard error.',
+    ],
+    lookFor: [
+      'The three estimates follow the truth when $|x|$ is large and differ most near $x = 0$, where $x^3$ is flat and one measurement says little.',
+    ],
+    tryThis: [
+      {
+        label: 'draw the likelihood of r',
+        likelihood: 'r',
+        expect: 'SA\'s $\\ln L(r)$ peaks near $r = 0.46$, within 0.1 of the true 0.5; the EKF\'s near $r = 0.95$, almost twice it; the UKF\'s near 0.6. At its own maximum the EKF\'s $\\ln L$ is more than 40 below the SA\'s: under the EKF\'s Gaussian predictions the data are $e^{40}$ times less probable than under the density the SA carries.',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */

@@ -12,6 +12,7 @@ import { loop, setupPlayback } from './playback.js';
 import { setupExport } from './export.js';
 import { setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
 import { setupFiles } from './data-files.js';
+import { setupLikelihood, startProfile } from './likelihood.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
@@ -47,6 +48,11 @@ const learnHooks = {
     startMonteCarlo();
     $('mc-panel').scrollIntoView({ block: 'start' });
   },
+  likelihood(parameter) {
+    $('lik-panel').open = true;
+    startProfile(parameter);
+    $('lik-panel').scrollIntoView({ block: 'start' });
+  },
   view(name) {
     const box = $(name);
     if (box && !box.checked) {
@@ -63,6 +69,7 @@ setupSession({ onReady: () => setupLearn(learnHooks) });
 setupPlayback();
 setupExport();
 setupMonteCarlo();
+setupLikelihood();
 setupFiles();
 if (new URLSearchParams(location.search).get('present') === '1') document.body.classList.add('present');
 worker.postMessage({ type: 'init' });

@@ -11,6 +11,21 @@ export const identity = (n) => Array.from({ length: n }, (_, i) => Array.from({ 
  * numbers, or null for the identity when `identityAllowed`), `rows × cols` when the value
  * does not say. `onInput` runs after every edit.
  */
+/**
+ * One entry as typed: a number, or — when it does not read as one — the text itself, an
+ * expression in the scenario's parameters (`r`, `sqrt(q)`) that the core reads and checks;
+ * NaN when empty.
+ */
+export function coefficient(text) {
+  const t = String(text).trim();
+  if (t === '') return NaN;
+  const v = Number(t);
+  return Number.isNaN(v) ? t : v;
+}
+
+/** Whether `v` is a usable entry: a finite number or an expression. */
+export const isCoefficient = (v) => Number.isFinite(v) || (typeof v === 'string' && v !== '');
+
 export function matrixEditor(box, { value, rows, cols, identityAllowed = false, onInput }) {
   box._matrix = { identityAllowed, onInput, rows, cols };
   setMatrix(box, value);
@@ -24,8 +39,9 @@ export function setMatrix(box, value) {
   m.rows = shown.length;
   m.cols = shown[0]?.length ?? m.rows;
   const field = box.dataset.field;
+  // An entry written as an expression in the parameters is a text field, a number a number field.
   const cells = shown.map((row, i) => el('tr', {}, ...row.map((v, j) => el('td', {}, el('input', {
-    type: 'number', step: 'any', value: String(v), disabled: isIdentity && m.identityAllowed,
+    type: typeof v === 'string' ? 'text' : 'number', step: 'any', value: String(v), disabled: isIdentity && m.identityAllowed,
     ariaLabel: `${field} row ${i + 1}, column ${j + 1}`, dataset: { cell: `${i},${j}` },
   })))));
   const parts = [];
@@ -54,11 +70,12 @@ export function setMatrix(box, value) {
       m.onInput?.();
       return;
     }
-    // A plain number is a 1 × 1 matrix; rows must be arrays of numbers of one length.
-    if (typeof parsed === 'number') parsed = [[parsed]];
+    // A plain number (or expression) is a 1 × 1 matrix; rows must be arrays of one length of
+    // numbers or expressions in the parameters.
+    if (typeof parsed === 'number' || typeof parsed === 'string') parsed = [[parsed]];
     const ok = parsed === null || (Array.isArray(parsed) && parsed.length > 0
-      && parsed.every((r) => Array.isArray(r) && r.length === parsed[0].length && r.every((v) => typeof v === 'number')));
-    box._matrix.jsonError = ok ? null : 'the rows as JSON must be a list of equally long lists of numbers, e.g. [[1, 0], [0, 1]]';
+      && parsed.every((r) => Array.isArray(r) && r.length === parsed[0].length && r.every((v) => typeof v === 'number' || typeof v === 'string')));
+    box._matrix.jsonError = ok ? null : 'the rows as JSON must be a list of equally long lists of numbers (or expressions in the parameters, e.g. "sqrt(q)"), e.g. [[1, 0], [0, 1]]';
     if (ok) setMatrix(box, parsed);
     m.onInput?.();
   });
@@ -70,14 +87,14 @@ function gridValues(box) {
   const out = Array.from({ length: m.rows }, () => Array(m.cols).fill(NaN));
   box.querySelectorAll('[data-cell]').forEach((input) => {
     const [i, j] = input.dataset.cell.split(',').map(Number);
-    out[i][j] = input.value.trim() === '' ? NaN : Number(input.value);
+    out[i][j] = coefficient(input.value);
   });
   return out;
 }
 
 /**
- * The editor's value: null (the identity), rows of numbers, or `{__invalid: message}` naming
- * the first entry that is not a number.
+ * The editor's value: null (the identity), rows of numbers (and expressions in the
+ * parameters), or `{__invalid: message}` naming the first empty or non-finite entry.
  */
 export function readMatrix(box) {
   const m = box._matrix;
@@ -86,7 +103,7 @@ export function readMatrix(box) {
   if (m.identityAllowed && box.querySelector('.identity-box')?.checked) return null;
   const rows = gridValues(box);
   for (const [i, row] of rows.entries()) {
-    const j = row.findIndex((v) => !Number.isFinite(v));
+    const j = row.findIndex((v) => !isCoefficient(v));
     if (j >= 0) return { __invalid: `row ${i + 1}, column ${j + 1} needs a number` };
   }
   return rows;

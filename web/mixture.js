@@ -3,7 +3,7 @@
 // the prior σ₀ and the discrete measurement noise v of 001 (Šimandl & Švácha 2005) are
 // mixtures, and a lecturer changes them here instead of typing JSON.
 import { el } from './dom.js';
-import { identity, matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
+import { coefficient, identity, isCoefficient, matrixEditor, readMatrix, resizeMatrix } from './matrix.js';
 
 /** A new component of dimension `dim`: weight 1, mean 0, covariance I. */
 const standard = (dim) => ({ weight: 1, mean: Array(dim).fill(0), cov: identity(dim) });
@@ -71,8 +71,8 @@ export function readMixture(box) {
     const weight = text === '' ? NaN : Number(text);
     if (!Number.isFinite(weight)) return { __invalid: `component ${i + 1}: the weight needs a number` };
     const meanText = row.querySelector('.mixture-mean').value.trim();
-    const mean = meanText === '' ? [] : meanText.split(',').map((s) => (s.trim() === '' ? NaN : Number(s.trim())));
-    if (mean.length !== m.dim || mean.some((v) => !Number.isFinite(v))) {
+    const mean = meanText === '' ? [] : meanText.split(',').map(coefficient);
+    if (mean.length !== m.dim || mean.some((v) => !isCoefficient(v))) {
       return { __invalid: `component ${i + 1}: the mean needs ${m.dim} comma-separated number${m.dim === 1 ? '' : 's'}` };
     }
     const cov = readMatrix(row.querySelector('.matrix'));

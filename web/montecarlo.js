@@ -4,7 +4,19 @@ import { $ } from './dom.js';
 import { checkedForm, worker, workerUrl } from './session.js';
 import { csvCell, csvName, download, share } from './export.js';
 
-const mc = { worker: null, ready: false, summary: null, pending: null };
+const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {} };
+
+// Other panels' jobs in the same worker (the Likelihood view): their messages by type.
+export function onJobMessage(type, handler) {
+  mc.handlers[type] = handler;
+}
+
+// Sends `msg` to the second worker, once it is ready.
+export function postJob(msg) {
+  const w = mcWorker();
+  if (mc.ready) w.postMessage(msg);
+  else mc.pending = msg;
+}
 
 function mcWorker() {
   if (mc.worker) return mc.worker;
@@ -28,7 +40,7 @@ function mcWorker() {
         $('mc-status').textContent = data.cancelled ? `cancelled after ${data.done} of ${data.runs} runs` : `finished: ${data.done} runs`;
         if (data.summary) showMonteCarlo(data.summary);
         break;
-      case 'error':
+      case 'mcError':
         $('mc-start').disabled = false;
         $('mc-cancel').disabled = true;
         $('mc-status').textContent = `error: ${data.message}`;
@@ -41,6 +53,8 @@ function mcWorker() {
         $('check-start').disabled = false;
         $('check-status').textContent = `error: ${data.message}`;
         break;
+      default:
+        mc.handlers[data.type]?.(data);
     }
   };
   mc.worker.postMessage({ type: 'init' });
@@ -61,10 +75,7 @@ export function startMonteCarlo() {
   $('mc-table').querySelector('tbody').replaceChildren();
   $('mc-notes').replaceChildren();
   $('mc-rule').hidden = true;
-  const msg = { type: 'mcStart', config, seed, runs };
-  const w = mcWorker();
-  if (mc.ready) w.postMessage(msg);
-  else mc.pending = msg;
+  postJob({ type: 'mcStart', config, seed, runs });
 }
 
 // The convergence check (`zakai check`), in the Monte Carlo worker: each method against itself
@@ -75,10 +86,7 @@ export function startConvergenceCheck() {
   const seed = Math.max(0, Number($('mc-seed').value) | 0);
   $('check-start').disabled = true;
   $('check-status').textContent = `checking on the observations of seed ${seed}…`;
-  const msg = { type: 'check', config, seed };
-  const w = mcWorker();
-  if (mc.ready) w.postMessage(msg);
-  else mc.pending = msg;
+  postJob({ type: 'check', config, seed });
 }
 
 function showConvergence({ rows, share }) {

@@ -22,6 +22,15 @@ export function localProblems(config) {
   if (config.prior.mean && config.prior.mean.some((v) => Number.isNaN(v))) {
     problems.push({ field: 'prior.mean', message: 'needs comma-separated numbers' });
   }
+  for (const [name, p] of Object.entries(config.parameters ?? {})) {
+    if (!/^[A-Za-z_][A-Za-z0-9_]*$/.test(name)) {
+      problems.push({ field: 'parameters', message: `\`${name}\` is not a name: a letter or _ followed by letters, digits and _` });
+    }
+    if (!Number.isFinite(p.value)) problems.push({ field: 'parameters', message: `${name}: the value needs a number` });
+    if ((p.bounds ?? []).some((b) => b != null && !Number.isFinite(b))) {
+      problems.push({ field: 'parameters', message: `${name}: a bound needs a number (or nothing: no bound)` });
+    }
+  }
   if (!Number.isInteger(config.seed) || config.seed < 0) {
     problems.push({ field: 'seed', message: 'must be a nonnegative integer' });
   }

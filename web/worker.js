@@ -110,32 +110,36 @@ function guard(fn) {
   }
 }
 
-// Monte Carlo: one realisation per call, yielding between runs so that a cancel gets through.
-let mcCancelled = false;
-async function monteCarlo({ config, seed, runs }) {
-  mcCancelled = false;
+// Long jobs of the second worker, one unit per call — a Monte Carlo realisation, a likelihood
+// evaluation (one method over the whole data at one parameter value) — yielding between units
+// so that a cancel gets through. `report()` (the summary so far) costs a pass over every unit
+// done: at most a few times per second. Messages: `<kind>Progress`, `<kind>Done`,
+// `<kind>Error`.
+let cancelled = false;
+async function unitJob(kind, create, report, total) {
+  cancelled = false;
   let job;
   try {
-    job = new zakai.MonteCarloJob(config, seed);
+    job = create();
   } catch (e) {
-    post({ type: 'error', load: loadId, message: String(e?.message ?? e) });
+    post({ type: `${kind}Error`, load: loadId, message: String(e?.message ?? e) });
     return;
   }
+  const runs = total ?? job.total();
   let done = 0;
-  let lastSummary = 0;
+  let lastReport = 0;
   try {
-    while (done < runs && !mcCancelled) {
+    while (done < runs && !cancelled) {
       done = job.runNext();
       const now = performance.now();
-      // The summary costs a pass over every run so far: at most a few per second.
-      const summary = now - lastSummary > 250 || done === runs ? job.summary() : null;
-      if (summary) lastSummary = now;
-      post({ type: 'mcProgress', done, runs, summary });
+      const summary = now - lastReport > 250 || done === runs ? report(job) : null;
+      if (summary) lastReport = now;
+      post({ type: `${kind}Progress`, done, runs, summary });
       await new Promise((r) => setTimeout(r, 0));
     }
-    post({ type: 'mcDone', done, runs, cancelled: mcCancelled, summary: done > 0 ? job.summary() : null });
+    post({ type: `${kind}Done`, done, runs, cancelled, summary: done > 0 ? report(job) : null });
   } catch (e) {
-    post({ type: 'error', load: loadId, message: String(e?.message ?? e) });
+    post({ type: `${kind}Error`, load: loadId, message: String(e?.message ?? e) });
   } finally {
     job.free();
   }
@@ -145,10 +149,15 @@ self.onmessage = async ({ data }) => {
   if (!zakai) await loading;
   switch (data.type) {
     case 'mcStart':
-      monteCarlo(data);
+      unitJob('mc', () => new zakai.MonteCarloJob(data.config, data.seed), (job) => job.summary(), data.runs);
+      break;
+    case 'profileStart':
+      unitJob('profile', () => new zakai.LikelihoodProfile(data.config, data.parameter, data.points, data.seed, data.observations ?? undefined),
+        (job) => job.result());
       break;
     case 'mcCancel':
-      mcCancelled = true;
+    case 'profileCancel':
+      cancelled = true;
       break;
     case 'check':
       try {

@@ -286,6 +286,28 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.ok(big.concerns.every((c) => /on [12] step/.test(c)), 'the self-check (nearly) silent');
   assert.ok(big.msPerStep < r.methods.QIEM.msPerStep / 2, 'still a fraction of QIEM\'s time');
 
+  // Lesson 8: the likelihood of the noise level r on the run with seed 3 — the SA's maximum
+  // near 0.46 (within 0.1 of the true 0.5), the EKF's near 0.95, the UKF's near 0.6, the EKF's
+  // peak more than 40 below the SA's; the estimates differ most near x = 0.
+  await openLesson('likelihood');
+  r = await run();
+  const near0 = r.truth.map((x, k) => ({ x, k })).filter(({ x }) => Math.abs(x) < 0.3).map(({ k }) => k);
+  const far = r.truth.map((x, k) => ({ x, k })).filter(({ x }) => Math.abs(x) > 1).map(({ k }) => k);
+  const spread = (ks) => mean(ks.map((k) => Math.max(...['SA(200)', 'EKF', 'UKF'].map((m) => r.methods[m].est[k])) - Math.min(...['SA(200)', 'EKF', 'UKF'].map((m) => r.methods[m].est[k]))));
+  console.log('lesson 8: estimates apart near 0', spread(near0), 'at |x| > 1', spread(far));
+  assert.ok(spread(near0) > spread(far), 'the estimates differ most near 0');
+  await page.click('#lesson button.try:has-text("draw the likelihood of r")');
+  await page.waitForFunction(() => /finished|error/.test(document.getElementById('lik-status').textContent), null, { timeout: 120000 });
+  assert.match(await page.textContent('#lik-status'), /finished: 123 filter runs/);
+  const maxima = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#lik-table tbody tr')].map((tr) => [tr.cells[0].textContent, [Number(tr.cells[1].textContent), Number(tr.cells[2].textContent)]])));
+  console.log('lesson 8, maxima of ln L(r):', JSON.stringify(maxima));
+  assert.ok(Math.abs(maxima.SA[0] - 0.46) < 0.02 && Math.abs(maxima.SA[0] - 0.5) < 0.1, 'SA near 0.46, within 0.1 of 0.5');
+  assert.ok(Math.abs(maxima.EKF[0] - 0.95) < 0.03 && maxima.EKF[0] > 1.8 * 0.5, 'EKF near 0.95, almost twice the truth');
+  assert.ok(Math.abs(maxima.UKF[0] - 0.6) < 0.03, 'UKF near 0.6');
+  assert.ok(maxima.SA[1] - maxima.EKF[1] > 40, 'the EKF\'s peak more than 40 below the SA\'s');
+  await page.evaluate(() => document.getElementById('lik-panel').scrollIntoView());
+  await page.screenshot({ path: `${artifacts}/lesson-likelihood.png` });
+
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
   await openLesson('kalman-bucy');

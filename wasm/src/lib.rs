@@ -215,6 +215,131 @@ impl MonteCarloJob {
     }
 }
 
+/// The log-likelihood along one of the scenario's parameters for every method, on the data
+/// of the run on screen — the page's Likelihood view ([`zakai::lab::fit`]). One evaluation (a
+/// whole filter run of one method at one value) per [`LikelihoodProfile::run_next`], so the
+/// worker reports progress and can stop between them.
+#[wasm_bindgen]
+pub struct LikelihoodProfile {
+    likelihoods: Vec<zakai::lab::fit::Likelihood>,
+    values: Vec<f64>,
+    done: Vec<Vec<f64>>,
+}
+
+#[wasm_bindgen]
+impl LikelihoodProfile {
+    /// The profile of `parameter` at `points` values from its bounds and value
+    /// ([`zakai::lab::fit::profile_grid`]) on the recording `observations` (CSV text, as for
+    /// [`Session::from_recording`]) or, when absent, on the run simulated with `seed`.
+    #[wasm_bindgen(constructor)]
+    pub fn new(
+        config: JsValue,
+        parameter: &str,
+        points: usize,
+        seed: f64,
+        observations: Option<String>,
+    ) -> Result<LikelihoodProfile, JsError> {
+        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+        let seed = seed_from_js(seed)?;
+        let p = config.parameters.get(parameter).ok_or_else(|| {
+            js_error(format!(
+                "the scenario declares no parameter `{parameter}` (it has: {})",
+                config
+                    .parameters
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        if !(2..=1000).contains(&points) {
+            return Err(js_error(format!(
+                "points must be in [2, 1000], got {points}"
+            )));
+        }
+        let values = zakai::lab::fit::profile_grid(p.interval(), p.value, points);
+        let experiment = Experiment::new(config.clone()).map_err(js_error)?;
+        let recording = match observations {
+            Some(csv) => zakai::lab::recording::Recording::from_csv(
+                experiment.model().n,
+                csv.as_bytes(),
+                None,
+            )
+            .map_err(js_error)?,
+            None => experiment.simulate(seed).into(),
+        };
+        let names = [parameter.to_string()];
+        let likelihoods = (0..config.methods.len())
+            .map(|i| {
+                zakai::lab::fit::Likelihood::new(&config, recording.clone(), i, &names, seed)
+                    .map_err(js_error)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(LikelihoodProfile {
+            done: vec![Vec::new(); likelihoods.len()],
+            likelihoods,
+            values,
+        })
+    }
+
+    /// Evaluations in all (methods × values).
+    pub fn total(&self) -> usize {
+        self.likelihoods.len() * self.values.len()
+    }
+
+    /// Runs the next evaluation; returns how many are done.
+    #[wasm_bindgen(js_name = runNext)]
+    pub fn run_next(&mut self) -> usize {
+        let count: usize = self.done.iter().map(Vec::len).sum();
+        if count < self.total() {
+            let (m, k) = (count / self.values.len(), count % self.values.len());
+            let value = self.likelihoods[m].value(&[self.values[k]]);
+            self.done[m].push(value);
+        }
+        self.done.iter().map(Vec::len).sum()
+    }
+
+    /// The profiles so far: `{parameter, values, methods: [{method, log_likelihoods (null
+    /// where the method failed), maximum: [value, ln L] or null}]}` (methods not reached yet
+    /// are left out).
+    pub fn result(&self) -> Result<JsValue, JsError> {
+        #[derive(Serialize)]
+        struct Row {
+            method: String,
+            log_likelihoods: Vec<Option<f64>>,
+            maximum: Option<(f64, f64)>,
+            complete: bool,
+        }
+        #[derive(Serialize)]
+        struct Out {
+            parameter: String,
+            values: Vec<f64>,
+            methods: Vec<Row>,
+        }
+        let rows = self
+            .likelihoods
+            .iter()
+            .zip(&self.done)
+            .filter(|(_, d)| !d.is_empty())
+            .map(|(l, d)| {
+                let values = self.values[..d.len()].to_vec();
+                let p = zakai::lab::fit::Profile::new(l, values, d.clone());
+                Row {
+                    method: p.method,
+                    log_likelihoods: d.iter().map(|v| v.is_finite().then_some(*v)).collect(),
+                    maximum: p.maximum,
+                    complete: d.len() == self.values.len(),
+                }
+            })
+            .collect();
+        to_js(&Out {
+            parameter: self.likelihoods[0].names()[0].clone(),
+            values: self.values.clone(),
+            methods: rows,
+        })
+    }
+}
+
 /// The convergence check of `zakai check` (`zakai::lab::study::convergence`): every method of the
 /// scenario against itself at doubled resolution on the observations of `seed`, as
 /// `[{method, refined, rms_change, max_change, spread, converged, failure}]` (`converged`

@@ -56,12 +56,21 @@ pub fn profile_grid(bounds: (f64, f64), value: f64, points: usize) -> Vec<f64> {
 pub fn profile(likelihood: &Likelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
     let points: Vec<Vec<f64>> = values.iter().map(|&v| alloc::vec![v]).collect();
     let log_likelihoods = evaluate.log_likelihoods(&points);
-    Profile {
-        method: likelihood.method().into(),
-        parameter: likelihood.names()[0].clone(),
-        values: values.to_vec(),
-        maximum: maximum(values, &log_likelihoods),
-        log_likelihoods,
+    Profile::new(likelihood, values.to_vec(), log_likelihoods)
+}
+
+impl Profile {
+    /// The profile of `likelihood` (of one parameter) from its values at `values`, computed
+    /// elsewhere (one at a time, as the playground does between frames); the maximum is
+    /// found here.
+    pub fn new(likelihood: &Likelihood, values: Vec<f64>, log_likelihoods: Vec<f64>) -> Profile {
+        Profile {
+            method: likelihood.method().into(),
+            parameter: likelihood.names()[0].clone(),
+            maximum: maximum(&values, &log_likelihoods),
+            values,
+            log_likelihoods,
+        }
     }
 }
 
