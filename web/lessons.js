@@ -256,17 +256,17 @@ export const LESSONS = [
       '$$\\ln L(r) = \\ln p(z_0, \\dots, z_N \\mid r) = \\sum_{k=0}^{N} \\ln p(z_k \\mid z_0, \\dots, z_{k-1}, r).$$',
       'For a filter that carries the density, each prediction is the normalising constant of its Bayes update, the denominator of (3) of Šimandl & Švácha (2005) — $c_k\' $ in their grid form (6):',
       '$$p(z_k \\mid z_{0:k-1}) = \\int p(z_k \\mid x)\\, p(x \\mid z_{0:k-1})\\, dx,$$',
-      'computed by the separation approach (SA) on its 200 cells, correct up to the grid. The EKF predicts instead with the Gaussian $N\\big(h(\\hat x_{k|k-1}),\\, H P_{k|k-1} H^\\top + r\\big)$, $H = h\'(\\hat x_{k|k-1}) = 3\\hat x_{k|k-1}^2$, and the UKF with the Gaussian of its sigma points. Where $\\hat x$ is near 0 the EKF\'s $H$ is near 0: it predicts $z_k$ to lie within about $\\sqrt r$ of $\\hat x^3$, while $x^3$ itself can be far from $\\hat x^3$. A larger $r$ makes its predictions wide enough, so its likelihood is largest at a noise level above the true one: the maximum of an approximate likelihood is not the maximum of the likelihood.',
+      'computed by the separation approach (SA) on its 200 cells, correct up to the grid. The EKF predicts instead with the Gaussian $N\\big(h(\\hat x_{k|k-1}),\\, H P_{k|k-1} H^\\top + r\\big)$, $H = h\'(\\hat x_{k|k-1}) = 3\\hat x_{k|k-1}^2$, and the UKF with the Gaussian of its sigma points. Here the EKF starts at the prior mean 0, where $H = 0$: its gain is 0, so its estimate never leaves 0 (the drift $-x$ keeps it there) and every prediction is $N(0, r)$. Its likelihood $\\sum_k \\ln N(z_k; 0, r)$ is largest at $r = \\frac{1}{N+1}\\sum_k z_k^2$, the mean square of the data: all of $x^3$ is taken for noise. The maximum of an approximate likelihood is not the maximum of the likelihood.',
       'The data here are simulated with $q = 0.49$ and $r = 0.5$ (seed 3, 301 measurements); the Likelihood view below draws $\\ln L(r)$ for each method with $q$ held at 0.49. The command zakai fit and zakai.fit in Python find the maximum and its standard error.',
     ],
     lookFor: [
-      'The three estimates follow the truth when $|x|$ is large and differ most near $x = 0$, where $x^3$ is flat and one measurement says little.',
+      'The EKF\'s estimate is 0 throughout: started at the prior mean, where $h\'(0) = 0$, it has no gain. Where the truth is far from 0 ($|x| > 1$) its RMS error is 1.23, against the SA\'s 0.51.',
     ],
     tryThis: [
       {
         label: 'draw the likelihood of r',
         likelihood: 'r',
-        expect: 'SA\'s $\\ln L(r)$ peaks near $r = 0.46$, within 0.1 of the true 0.5; the EKF\'s near $r = 0.95$, almost twice it; the UKF\'s near 0.6. At its own maximum the EKF\'s $\\ln L$ is more than 40 below the SA\'s: under the EKF\'s Gaussian predictions the data are $e^{40}$ times less probable than under the density the SA carries.',
+        expect: 'SA\'s $\\ln L(r)$ peaks near $r = 0.46$, within 0.1 of the true 0.5; the EKF\'s near $r = 0.95$, almost twice it — the mean square of the measurements, 0.947, where the parabola through the nearest values puts the vertex at 0.954; the UKF\'s near 0.6. At its own maximum the EKF\'s $\\ln L$ is more than 40 below the SA\'s: under the EKF\'s Gaussian predictions the data are more than $e^{40}$ times less probable than under the density the SA carries.',
       },
     ],
   },

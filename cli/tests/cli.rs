@@ -537,3 +537,135 @@ fn show_chosen_prints_the_sizes_chosen_from_the_problem() {
         "{note}"
     );
 }
+
+/// The cubic-sensor-fit preset's data from `zakai simulate` (seed 3), as a CSV file.
+fn fit_observations() -> std::path::PathBuf {
+    let o = zakai(&[
+        "simulate",
+        "cubic-sensor-fit",
+        "--seed",
+        "3",
+        "--format",
+        "csv",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    temp_file("fit-obs.csv", &String::from_utf8_lossy(&o.stdout))
+}
+
+#[test]
+fn fit_reports_the_estimate_in_every_format_and_refuses_bad_requests() {
+    let obs = fit_observations();
+    let obs = obs.to_str().unwrap();
+    let args = [
+        "fit",
+        "cubic-sensor-fit",
+        "--observations",
+        obs,
+        "--method",
+        "ekf",
+    ];
+    let json = zakai(&[&args[..], &["--format", "json", "--params", "r"]].concat());
+    assert!(json.status.success(), "{}", stderr(&json));
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    let r = v["parameters"]["r"]["estimate"].as_f64().unwrap();
+    let se = v["parameters"]["r"]["stderr"].as_f64().unwrap();
+    assert_eq!(v["method"], "EKF");
+    assert!(v["converged"].as_bool().unwrap() && se > 0.0, "{v}");
+    // The same estimate in the CSV and the table.
+    let csv = zakai(&[&args[..], &["--format", "csv", "--params", "r"]].concat());
+    let text = String::from_utf8_lossy(&csv.stdout).into_owned();
+    let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(row[0], "r");
+    assert_eq!(row[1].parse::<f64>().unwrap(), r);
+    let table = zakai(&[&args[..], &["--params", "r"]].concat());
+    assert!(String::from_utf8_lossy(&table.stdout).contains(&format!("{r:.6}")));
+    // Requests that cannot be met: one line each, non-zero.
+    assert_clean_failure(
+        &zakai(&[&args[..], &["--params", "sigma"]].concat()),
+        "no parameter `sigma`",
+    );
+    assert_clean_failure(
+        &zakai(&[
+            "fit",
+            "cubic-sensor-fit",
+            "--observations",
+            obs,
+            "--profile",
+            "r",
+            "--range",
+            "1",
+        ]),
+        "--range needs LO,HI",
+    );
+    assert_clean_failure(
+        &zakai(&[
+            "fit",
+            "cubic-sensor-fit",
+            "--observations",
+            obs,
+            "--profile",
+            "r",
+            "--range",
+            "3,9",
+        ]),
+        "within the bounds",
+    );
+    assert_clean_failure(
+        &zakai(&["fit", "cubic-sensor-1d", "--observations", obs]),
+        "declares no parameter",
+    );
+}
+
+#[test]
+fn fit_profile_writes_csv_and_svg_with_each_maximum() {
+    let obs = fit_observations();
+    let dir = obs.parent().unwrap();
+    let (csv, svg) = (dir.join("r.csv"), dir.join("r.svg"));
+    let o = zakai(&[
+        "fit",
+        "cubic-sensor-fit",
+        "--observations",
+        obs.to_str().unwrap(),
+        "--profile",
+        "r",
+        "--points",
+        "21",
+        "--methods",
+        "ekf,ukf",
+        "--out",
+        csv.to_str().unwrap(),
+        "--svg",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "r,EKF loglik,UKF loglik");
+    assert_eq!(lines.len(), 22);
+    // The EKF's printed maximum lies at the best of its column's values or between its
+    // neighbours.
+    let err = stderr(&o);
+    let peak: f64 = err
+        .lines()
+        .find(|l| l.starts_with("EKF: ln L peaks at r = "))
+        .and_then(|l| l["EKF: ln L peaks at r = ".len()..].split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    let rows: Vec<(f64, f64)> = lines[1..]
+        .iter()
+        .map(|l| {
+            let c: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (c[0], c[1])
+        })
+        .collect();
+    let best = (0..rows.len())
+        .max_by(|&i, &j| rows[i].1.total_cmp(&rows[j].1))
+        .unwrap();
+    let (lo, hi) = (
+        rows[best.saturating_sub(1)].0,
+        rows[(best + 1).min(rows.len() - 1)].0,
+    );
+    assert!(lo <= peak && peak <= hi, "{peak} not in [{lo}, {hi}]");
+    let drawing = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawing.contains("<svg") && drawing.contains("EKF: maximum at"));
+}

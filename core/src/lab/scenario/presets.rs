@@ -500,10 +500,10 @@ fn noise_fit() -> ScenarioConfig {
             are the scenario's parameters: the Likelihood view draws ln p(z₁, …, z_N | r) of \
             the data for each method. The separation approach (SA) on 200 cells of [−4, 4] \
             computes the likelihood from the normaliser of the density on its grid; the EKF \
-            and UKF from their Gaussian predictive densities, which misjudge how far a \
-            measurement of x³ can fall from its prediction. Look for: the SA's maximum near \
-            the true r = 0.5, the EKF's at a far larger noise level (it explains its own \
-            linearisation errors as measurement noise), and the UKF's in between.",
+            and UKF from their Gaussian predictive densities. Look for: the SA's maximum near \
+            the true r = 0.5; the EKF's at the mean square of the measurements (started at \
+            the prior mean 0, where h'(0) = 0, it has no gain, never moves, and takes all of \
+            x³ for noise); the UKF's in between.",
         drift: &["-x"],
         observation: &["x^3"],
         noise: ObservationNoiseConfig::Discrete {
