@@ -156,17 +156,9 @@ pub fn profiles(
     range: Option<(f64, f64)>,
     seed: u64,
 ) -> Result<Vec<Profile>, String> {
-    let p = config.parameters.get(parameter).ok_or_else(|| {
-        format!(
-            "--profile {parameter}: the scenario declares no such parameter (it has: {})",
-            config
-                .parameters
-                .keys()
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
-    })?;
+    let p = config
+        .parameter(parameter, "--profile")
+        .map_err(|p| format!("{}: {}", p.field, p.message))?;
     let values = match range {
         Some((a, b)) => {
             let (lo, hi) = p.interval();

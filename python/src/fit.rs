@@ -56,6 +56,27 @@ impl Evaluate for PyEvaluate<'_> {
     }
 }
 
+/// `run` with the batches going to `callable` (see [`PyEvaluate`]), the first Python error it
+/// raised returned instead of the result.
+fn through<T>(
+    callable: &Py<PyAny>,
+    method: usize,
+    names: &[String],
+    run: impl FnOnce(&dyn Evaluate) -> T,
+) -> PyResult<T> {
+    let remote = PyEvaluate {
+        callable,
+        method,
+        names,
+        error: RefCell::new(None),
+    };
+    let out = run(&remote);
+    match remote.error.into_inner() {
+        Some(e) => Err(e),
+        None => Ok(out),
+    }
+}
+
 /// The likelihood of the recording under method `method` as a function of `names`.
 #[allow(clippy::too_many_arguments)]
 fn likelihood(
@@ -110,19 +131,9 @@ pub fn fit<'py>(
     let options = FitOptions::default();
     let result = match &evaluator {
         None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
-        Some(callable) => {
-            let remote = PyEvaluate {
-                callable,
-                method,
-                names: l.names(),
-                error: RefCell::new(None),
-            };
-            let result = maximise(&l, &remote, &options, &|_, _| {});
-            if let Some(e) = remote.error.into_inner() {
-                return Err(e);
-            }
-            result
-        }
+        Some(callable) => through(callable, method, l.names(), |remote| {
+            maximise(&l, remote, &options, &|_, _| {})
+        })?,
     }
     .map_err(errors::from_core)?;
     let d = PyDict::new(py);
@@ -179,19 +190,9 @@ pub fn profile<'py>(
         let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
         let p = match &evaluator {
             None => py.detach(|| zakai::lab::fit::profile(&l, &l, &values)),
-            Some(callable) => {
-                let remote = PyEvaluate {
-                    callable,
-                    method,
-                    names: &names,
-                    error: RefCell::new(None),
-                };
-                let p = zakai::lab::fit::profile(&l, &remote, &values);
-                if let Some(e) = remote.error.into_inner() {
-                    return Err(e);
-                }
-                p
-            }
+            Some(callable) => through(callable, method, &names, |remote| {
+                zakai::lab::fit::profile(&l, remote, &values)
+            })?,
         };
         let d = PyDict::new(py);
         d.set_item("method", &p.method)?;

@@ -241,17 +241,9 @@ impl LikelihoodProfile {
     ) -> Result<LikelihoodProfile, JsError> {
         let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
         let seed = seed_from_js(seed)?;
-        let p = config.parameters.get(parameter).ok_or_else(|| {
-            js_error(format!(
-                "the scenario declares no parameter `{parameter}` (it has: {})",
-                config
-                    .parameters
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })?;
+        let p = config
+            .parameter(parameter, "parameter")
+            .map_err(|p| js_error(p.message))?;
         if !(2..=1000).contains(&points) {
             return Err(js_error(format!(
                 "points must be in [2, 1000], got {points}"

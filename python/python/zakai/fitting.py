@@ -25,6 +25,7 @@ import numpy as np
 from . import _zakai
 from ._convert import ArrayLike, _array, _index_times, _times
 from .errors import ConfigError
+from .runs import _scenario, _seed
 from .scenario import Scenario
 
 
@@ -89,23 +90,6 @@ def _evaluator(
         return [float(f.result()) for f in futures]
 
     return evaluate
-
-
-
-def _seed(sc: Scenario, seed: Optional[int]) -> int:
-    value = sc.seed if seed is None else seed
-    if not isinstance(value, (int, np.integer)) or value < 0:
-        raise ConfigError(f"seed: must be a nonnegative integer (got {value!r})")
-    return int(value)
-
-
-
-def _scenario(scenario: Union[Scenario, str]) -> Scenario:
-    if isinstance(scenario, Scenario):
-        return scenario
-    if isinstance(scenario, str):
-        return Scenario.from_preset(scenario)
-    raise ConfigError(f"expected a Scenario or a preset name, not {type(scenario).__name__}")
 
 
 

@@ -99,19 +99,8 @@ impl Likelihood {
             ));
         }
         for (i, name) in names.iter().enumerate() {
-            if !config.parameters.contains_key(name) {
-                problems.push(ConfigProblem::new(
-                    "params",
-                    format!(
-                        "the scenario declares no parameter `{name}` (it has: {})",
-                        config
-                            .parameters
-                            .keys()
-                            .cloned()
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ));
+            if let Err(problem) = config.parameter(name, "params") {
+                problems.push(problem);
             } else if names[..i].contains(name) {
                 problems.push(ConfigProblem::new(
                     "params",

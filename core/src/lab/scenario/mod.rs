@@ -21,7 +21,7 @@ use crate::validate::{memory_cap, ConfigProblem};
 pub use methods::{catalogue, CatalogueEntry, MethodConfig};
 use parameters::{
     check_parameters, coefficient_texts, named_values, CoefficientMatrix, CoefficientVector,
-    Parameters,
+    ParameterConfig, Parameters,
 };
 
 use crate::error::ZakaiError;
@@ -667,26 +667,32 @@ impl ScenarioConfig {
         named_values(&self.parameters)
     }
 
+    /// The parameter `name`, or the problem at `field` saying which the scenario has.
+    pub fn parameter(&self, name: &str, field: &str) -> Result<&ParameterConfig, ConfigProblem> {
+        self.parameters.get(name).ok_or_else(|| {
+            ConfigProblem::new(
+                field,
+                format!(
+                    "the scenario declares no parameter `{name}` (it has: {})",
+                    self.parameters
+                        .keys()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })
+    }
+
     /// The scenario with its parameters' values set to `values` (by name; a name it does
     /// not declare is refused).
     pub fn with_parameter_values(&self, values: &[(String, f64)]) -> Result<Self, ZakaiError> {
         let mut out = self.clone();
         for (name, v) in values {
-            match out.parameters.get_mut(name) {
-                Some(p) => p.value = *v,
-                None => {
-                    return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
-                        "parameters",
-                        format!(
-                            "the scenario declares no parameter `{name}` (it has: {})",
-                            self.parameters
-                                .keys()
-                                .cloned()
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                    )]))
-                }
+            self.parameter(name, "parameters")
+                .map_err(|p| ZakaiError::Config(alloc::vec![p]))?;
+            if let Some(p) = out.parameters.get_mut(name) {
+                p.value = *v;
             }
         }
         Ok(out)
