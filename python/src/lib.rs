@@ -29,6 +29,8 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::run, m)?)?;
     m.add_function(wrap_pyfunction!(runs::filter_recorded, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_json, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::run_json, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::monte_carlo_from_runs, m)?)?;
     m.add_function(wrap_pyfunction!(fit::log_likelihood, m)?)?;
     m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
     m.add_function(wrap_pyfunction!(fit::profile, m)?)?;

@@ -119,6 +119,17 @@ def test_a_dask_cluster_spreads_a_profile():
     np.testing.assert_array_equal(remote.loglik["KF"], local.loglik["KF"])
 
 
+def test_a_monte_carlo_on_an_executor_is_the_same_table():
+    sc = zakai.Scenario.from_preset("sa-example-1")
+    local = zakai.monte_carlo(sc, runs=4, seed=2).to_pandas()
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        remote = zakai.monte_carlo(sc, runs=4, seed=2, executor=pool).to_pandas()
+    # The runs come back bit for bit: every number but the timings is the same.
+    timing = [c for c in local.columns if "second" in c or c.startswith("ms")]
+    pd.testing.assert_frame_equal(local.drop(columns=timing), remote.drop(columns=timing))
+    assert "mse" in local.columns and local["mse"].notna().all()
+
+
 def test_bad_input_is_refused_with_its_reason():
     years, flow = nile()
     with pytest.raises(ConfigError, match="no parameter `sigma`"):
@@ -127,6 +138,8 @@ def test_bad_input_is_refused_with_its_reason():
         zakai.fit(local_level(), flow, 5, times=years)
     with pytest.raises(ConfigError, match="executor"):
         zakai.fit(local_level(), flow, times=years, executor=object())
+    with pytest.raises(ConfigError, match="executor"):
+        zakai.monte_carlo(local_level(), runs=2, executor=object())
     with pytest.raises(ConfigError, match="points"):
         zakai.profile(local_level(), flow, "q", points=1, times=years)
     bad = local_level()

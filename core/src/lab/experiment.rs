@@ -10,6 +10,7 @@
 //! numbers never reach a table. Errors against the truth (MSE, the track-loss rule) exist only
 //! when the truth is known: always for simulated runs, optionally for recordings.
 
+use alloc::borrow::Cow;
 use alloc::boxed::Box;
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
@@ -126,16 +127,17 @@ pub struct Failure {
 
 /// A self-check that warned during a run ([`Filter::self_check`]): when it first crossed its
 /// threshold, on how many steps, and its worst value.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ConcernRecord {
     /// What is watched.
-    pub check: &'static str,
+    pub check: Cow<'static, str>,
     /// The documented threshold.
+    #[serde(deserialize_with = "nan_from_null")]
     pub threshold: f64,
     /// Whether values above the threshold are the problem (else below).
     pub above: bool,
     /// What it means and what to change.
-    pub advice: &'static str,
+    pub advice: Cow<'static, str>,
     /// Observation index and time of the first crossing.
     pub first_k: usize,
     /// τ at the first crossing.
@@ -143,7 +145,13 @@ pub struct ConcernRecord {
     /// Steps on which the threshold was crossed.
     pub steps: usize,
     /// The value furthest beyond the threshold.
+    #[serde(deserialize_with = "nan_from_null")]
     pub worst: f64,
+}
+
+/// A number serialised as JSON writes it, NaN as `null`, read back.
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    <Option<f64> as serde::Deserialize>::deserialize(d).map(|v| v.unwrap_or(f64::NAN))
 }
 
 impl ConcernRecord {
@@ -175,10 +183,10 @@ impl ConcernRecord {
                 }
             }
             None => records.push(ConcernRecord {
-                check: c.check,
+                check: Cow::Borrowed(c.check),
                 threshold: c.threshold,
                 above: c.above,
-                advice: c.advice,
+                advice: Cow::Borrowed(c.advice),
                 first_k: k,
                 first_t: t,
                 steps: 1,
@@ -188,17 +196,19 @@ impl ConcernRecord {
     }
 }
 
-/// One method's record in one run.
-#[derive(Clone, Debug)]
+/// One method's record in one run (serialised bit for bit, [`crate::lab::recording::bits`]).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct MethodTrack {
     /// Display name.
     pub name: String,
     /// State dimension.
     pub n: usize,
     /// Estimates x̂(τ_k), row-major, for k = 0..(rows − 1); rows stop at a failure.
+    #[serde(with = "crate::lab::recording::bits")]
     pub estimates: Vec<f64>,
     /// Covariances P(τ_k) (n × n each, row-major) for the rows of `estimates`, when the
     /// method has them (Kalman family, particle and grid filters); empty otherwise.
+    #[serde(with = "crate::lab::recording::bits")]
     pub covariances: Vec<f64>,
     /// The failure, if the method failed.
     pub failure: Option<Failure>,
@@ -207,30 +217,36 @@ pub struct MethodTrack {
     /// Wall time spent in the timed steps' `step` (seconds; 0 without a clock). Every step is
     /// timed, except that a method whose timed steps average under [`SAMPLED_BELOW`] is timed
     /// on one step in [`SAMPLE_EVERY`] (see there).
+    #[serde(with = "crate::lab::recording::bits")]
     pub seconds: f64,
     /// Number of steps taken.
     pub steps: usize,
     /// Number of steps whose wall time is in [`MethodTrack::seconds`].
     pub timed_steps: usize,
     /// Wall time spent building the filter — its off-line part (seconds; 0 without a clock).
+    #[serde(with = "crate::lab::recording::bits")]
     pub build_seconds: f64,
     /// The innovations `z_k − h(x̂_{k|k−1})` of discrete measurements (m per row of
     /// `estimates`, NaN where a component is missing or the prediction failed), with
     /// `x̂_{k|k−1}` the mean the method predicts for τ_k before it sees `z_k` (on a fork): the
     /// part of each measurement its prediction did not expect. Empty unless the run records
     /// them ([`ExperimentRun::record_innovations`]).
+    #[serde(with = "crate::lab::recording::bits")]
     pub innovations: Vec<f64>,
     /// The log-likelihood of each row's observation given the ones before it
     /// ([`crate::Filter::log_likelihood`]; one per row of `estimates`, 0 where nothing was
     /// observed, NaN where the method gives none).
+    #[serde(with = "crate::lab::recording::bits")]
     pub log_likelihoods: Vec<f64>,
     /// Estimates the method went on giving after a failure that left its state intact (the
     /// track-loss rule or the divergence bound, not a failed step or non-finite numbers),
     /// rows `failure.k ..`, row-major — for display only (a failed run's numbers never reach a
     /// table). Empty unless the run follows failed methods
     /// ([`ExperimentRun::follow_failed_methods`]).
+    #[serde(with = "crate::lab::recording::bits")]
     pub after_failure: Vec<f64>,
     /// Since when the error has been above the track-loss threshold.
+    #[serde(with = "crate::lab::recording::bits")]
     off_track_since: Option<f64>,
     /// Whether the method is still stepped after its failure (a followed run, the state
     /// intact; see `after_failure`).
@@ -298,8 +314,8 @@ impl MethodTrack {
     }
 }
 
-/// A finished run.
-#[derive(Clone, Debug)]
+/// A finished run (serde: the transport of a run between processes, numbers bit for bit).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RunResult {
     /// The seed of the run.
     pub seed: u64,

@@ -25,7 +25,7 @@ import numpy as np
 from . import _zakai
 from ._convert import ArrayLike, _array, _index_times, _times
 from .errors import ConfigError
-from .runs import _scenario, _seed
+from .runs import _check_executor, _scenario, _seed
 from .scenario import Scenario
 
 
@@ -77,10 +77,7 @@ def _evaluator(
     executor (the core then runs the batch on every core itself)."""
     if executor is None:
         return None
-    if not hasattr(executor, "submit"):
-        raise ConfigError(
-            f"executor: a concurrent.futures.Executor (with .submit), not {type(executor).__name__}"
-        )
+    _check_executor(executor)
 
     def evaluate(method: int, names: list[str], points: list[list[float]]) -> list[float]:
         futures = [
@@ -244,7 +241,8 @@ def fit(
 @dataclass
 class Profile:
     """The log-likelihood along one parameter for every method of a scenario, the others at
-    their values (for a model with one unknown, its profile log-likelihood).
+    their values: a slice of the likelihood (the log-likelihood itself with one unknown; not
+    the profile likelihood, which would refit the others at each value).
 
     Attributes
     ----------

@@ -4,7 +4,7 @@ observations with every method, :func:`monte_carlo` the papers' tables."""
 from __future__ import annotations
 
 import json as _json
-from typing import Optional, Union
+from typing import Any, Optional, Union
 
 import numpy as np
 
@@ -111,14 +111,44 @@ def filter(
 
 
 
+def _check_executor(executor: Any) -> None:
+    """A ConfigError unless ``executor`` can take tasks (``.submit``)."""
+    if not hasattr(executor, "submit"):
+        raise ConfigError(
+            f"executor: a concurrent.futures.Executor (with .submit), not {type(executor).__name__}"
+        )
+
+
+
+def _run_task(args: tuple) -> str:
+    """One realisation, as an executor's worker runs it (module level: pickled by reference)."""
+    return _zakai.run_json(*args)
+
+
+
 def monte_carlo(
-    scenario: Union[Scenario, str], runs: int, seed: Optional[int] = None
+    scenario: Union[Scenario, str],
+    runs: int,
+    seed: Optional[int] = None,
+    *,
+    executor: Any = None,
 ) -> MonteCarloTable:
-    """``runs`` runs with seeds ``seed, seed + 1, …`` on every core (the GIL released).
+    """``runs`` runs with seeds ``seed, seed + 1, …`` on every core (the GIL released), or
+    one task per run on ``executor`` — any ``concurrent.futures.Executor``, e.g. a Dask
+    cluster's ``client.get_executor()`` (its workers need ``zakai`` installed); each run comes
+    back bit for bit, so the table is the same as on this machine (times apart).
 
     Returns the papers' table; ``.to_pandas()`` gives it as a DataFrame.
     """
     sc = _scenario(scenario)
     if not isinstance(runs, (int, np.integer)) or runs < 1:
         raise ConfigError(f"runs: must be a positive integer (got {runs!r})")
-    return MonteCarloTable(_json.loads(_zakai.monte_carlo_json(sc._text(), int(runs), _seed(sc, seed))))
+    first = _seed(sc, seed)
+    if executor is None:
+        return MonteCarloTable(_json.loads(_zakai.monte_carlo_json(sc._text(), int(runs), first)))
+    _check_executor(executor)
+    text = sc._text()
+    futures = [executor.submit(_run_task, (text, first + i)) for i in range(int(runs))]
+    return MonteCarloTable(
+        _json.loads(_zakai.monte_carlo_from_runs(text, [f.result() for f in futures], first))
+    )

@@ -2,18 +2,20 @@
 //!
 //! A scenario names its unknowns ([`crate::lab::scenario::parameters`]); a [`Likelihood`]
 //! holds the scenario, the recorded observations and one method, and gives the
-//! log-likelihood ln p(z₁,…,z_N | θ) of the data at any parameter values θ — the sum of the
+//! log-likelihood ln p(z₀,…,z_N | θ) of the data at any parameter values θ — the sum of the
 //! method's per-step [`crate::Filter::log_likelihood`] over one run, so one evaluation costs
 //! one filter run and no second pass. What that number is depends on the method: exact for
 //! the Kalman–Bucy and Kalman filters on a linear-Gaussian model, the grid and spectral
 //! filters' normalising constants (converging to the exact value as the grid is refined), the
-//! particle filter's unbiased estimate of the likelihood (so its logarithm is biased low by
+//! particle filter's estimate, unbiased for the likelihood of the whole data (so its logarithm is biased low by
 //! about half its variance), the Gaussian predictive densities of the EKF, UKF, IEKF, IOKF and
 //! the direct method (approximations: the maximum they give is the maximum of an approximate
 //! likelihood, and can sit at the wrong parameter values).
 //!
-//! * [`profile`] — the log-likelihood along one parameter, the others held at their values,
-//!   for one or several methods: what the page's Likelihood view draws.
+//! * [`profile`] — a slice of the log-likelihood along one parameter, the others held at
+//!   their values (the log-likelihood itself with one unknown; not the profile likelihood,
+//!   which would refit the others at each value), for one or several methods: what the
+//!   page's Likelihood view and `zakai fit --profile` draw.
 //! * `maximise` (feature `fit`) — the maximum-likelihood estimate within the parameters'
 //!   bounds with argmin's Nelder–Mead simplex, and standard errors from the observed
 //!   information, −∇² ln L at the optimum by central differences ([`observed_information`]).

@@ -1,6 +1,7 @@
-//! The log-likelihood along one parameter, the others held at their values — for a model
-//! with one unknown, its profile log-likelihood — drawn for several methods on the same data
-//! to show where each one's maximum lies.
+//! A slice of the log-likelihood along one parameter, the others held at their values — with
+//! one unknown the log-likelihood itself; not the profile likelihood max_ψ ln L(θ, ψ), which
+//! would refit the others at each value — drawn for several methods on the same data to show
+//! where each one's maximum lies.
 
 use alloc::string::String;
 use alloc::vec::Vec;

@@ -24,6 +24,7 @@ use crate::simulate::Trajectory;
 use crate::validate::ConfigProblem;
 
 #[cfg(feature = "std")]
+pub mod bits;
 mod csv;
 
 /// Which part of a recording a row problem is in.
@@ -36,19 +37,22 @@ pub(crate) enum Part {
 }
 
 /// Observations at known times, with the true states when they are known.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Recording {
     /// State dimension n.
     pub n: usize,
     /// Observation dimension m.
     pub m: usize,
     /// τ_0, …, τ_N.
+    #[serde(with = "bits")]
     pub times: Vec<f64>,
     /// Row k at `observations[k*m..(k+1)*m]` (see the module doc; N + 1 rows).
+    #[serde(with = "bits")]
     pub observations: Vec<f64>,
     /// Whether rows are increments of a continuous observation (else measurements).
     pub continuous: bool,
     /// The true states x(τ_k), row-major (N + 1 rows), when known.
+    #[serde(with = "bits")]
     pub truth: Option<Vec<f64>>,
 }
 

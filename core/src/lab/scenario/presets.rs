@@ -492,18 +492,21 @@ fn noise_fit() -> ScenarioConfig {
         paper: "001",
         title: "Cubic sensor with unknown noise levels: whose likelihood to trust",
         place: "",
-        reference: "the separation approach (§2–3) on the cubic sensor h = x³ of \
-            Shi, Chen & Yau 2021 [004] (44), measured at discrete times",
-        description: "dx = −x dt + √q dv, z_k = x_k³ + v_k with Var v_k = r, every Δτ = 0.2 for \
-            T = 60 (301 measurements, the first at t = 0), p(x₀) = N(0, 0.25); the data are simulated with \
+        reference: "the separation approach (§2–3) on the cubic-sensor observation h = x³ \
+            (004 (44) has it with dx = dv and continuous observations), here with an \
+            Ornstein–Uhlenbeck state and discrete measurements",
+        description: "dx = −x dt + √q dw, z_k = x_k³ + v_k with Var v_k = r, every Δτ = 0.2 for \
+            T = 60 (301 measurements z₀, …, z₃₀₀, the first at t = 0), p(x₀) = N(0, 0.25), \
+            the truth on 20 Euler–Maruyama steps per interval; the data are simulated with \
             q = 0.49 and r = 0.5, the values the scenario declares. The noise levels q and r \
-            are the scenario's parameters: the Likelihood view draws ln p(z₁, …, z_N | r) of \
-            the data for each method. The separation approach (SA) on 200 cells of [−4, 4] \
-            computes the likelihood from the normaliser of the density on its grid; the EKF \
-            and UKF from their Gaussian predictive densities. Look for: the SA's maximum near \
-            the true r = 0.5; the EKF's at the mean square of the measurements (started at \
-            the prior mean 0, where h'(0) = 0, it has no gain, never moves, and takes all of \
-            x³ for noise); the UKF's in between.",
+            are the scenario's parameters: the Likelihood view draws ln p(z₀, …, z₃₀₀ | r, q) \
+            of the data for each method along one of them, the other held. The separation \
+            approach (SA) on 200 cells of [−4, 4] computes the likelihood from the normaliser \
+            of the density on its grid; the EKF and UKF from their Gaussian predictive \
+            densities. Look for: the SA's maximum near the true r = 0.5; the EKF's at the mean \
+            square of the measurements (started at the prior mean 0, where h'(0) = 0, it has \
+            no gain, never moves, and takes all of x³ for noise); on seed 3, the UKF's in \
+            between.",
         drift: &["-x"],
         observation: &["x^3"],
         noise: ObservationNoiseConfig::Discrete {
