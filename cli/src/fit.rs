@@ -147,11 +147,14 @@ fn cell(v: f64) -> String {
 }
 
 /// The log-likelihood along `parameter` for every method of `config`, at `points` values
-/// (over `range` when given, else [`fit::profile_grid`]).
+/// (over `range` when given, else [`fit::profile_grid`]): the profile log-likelihood, ln L
+/// maximised over `refit` at each value, when `refit` names parameters; else a slice, the
+/// others held.
 pub fn profiles(
     config: &ScenarioConfig,
     recording: &Recording,
     parameter: &str,
+    refit: &[String],
     points: usize,
     range: Option<(f64, f64)>,
     seed: u64,
@@ -174,9 +177,11 @@ pub fn profiles(
         }
         None => fit::profile_grid(p.interval(), p.value, points),
     };
-    let names = [parameter.to_string()];
+    let names: Vec<String> = std::iter::once(parameter.to_string())
+        .chain(refit.iter().filter(|n| *n != parameter).cloned())
+        .collect();
     let bar = ProgressBar::with_draw_target(
-        Some(config.methods.len() as u64),
+        Some((config.methods.len() * values.len()) as u64),
         ProgressDrawTarget::stderr(),
     );
     let mut out = Vec::new();
@@ -184,8 +189,13 @@ pub fn profiles(
         let likelihood = Likelihood::new(config, recording.clone(), i, &names, seed)
             .map_err(|e| e.to_string())?;
         bar.set_message(likelihood.method().to_string());
-        out.push(fit::profile(&likelihood, &likelihood, &values));
-        bar.inc(1);
+        out.push(if names.len() == 1 {
+            bar.inc(values.len() as u64);
+            fit::profile(&likelihood, &likelihood, &values)
+        } else {
+            let step = |_: usize, _: usize| bar.inc(1);
+            fit::profile_refitted(&likelihood, &likelihood, &values, &step)
+        });
     }
     bar.finish_and_clear();
     Ok(out)

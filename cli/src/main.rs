@@ -173,11 +173,13 @@ struct FitArgs {
     #[arg(long)]
     method: Option<String>,
     /// Comma-separated parameters to fit (default: all the scenario declares); the others
-    /// keep their values.
+    /// keep their values. With --profile: the parameters refitted at each value (the profile
+    /// log-likelihood); without, a slice with the others held.
     #[arg(long, value_delimiter = ',')]
     params: Option<Vec<String>>,
-    /// Instead of fitting: the log-likelihood along this parameter, the others at their
-    /// values, for every selected method — CSV to --out (or stdout), the plot to --svg.
+    /// Instead of fitting: the log-likelihood along this parameter for every selected method
+    /// — the profile, maximised over the --params at each value, or a slice with the others
+    /// at their values — CSV to --out (or stdout), the plot to --svg.
     #[arg(long)]
     profile: Option<String>,
     /// Values of the profile.
@@ -427,10 +429,16 @@ fn fit_command(a: &FitArgs) -> Result<(), String> {
             Some(&[lo, hi]) => Some((lo, hi)),
             Some(other) => return Err(format!("--range needs LO,HI, got {} values", other.len())),
         };
-        let profiles = fit::profiles(&config, &recording, parameter, a.points, range, seed)?;
+        let refit: Vec<String> = (a.params.iter().flatten())
+            .filter(|n| *n != parameter)
+            .cloned()
+            .collect();
+        let profiles = fit::profiles(
+            &config, &recording, parameter, &refit, a.points, range, seed,
+        )?;
         eprint!("{}", fit::maxima(&profiles));
         if let Some(svg) = &a.svg {
-            profile_plot::draw(&profiles, &config.name, svg)?;
+            profile_plot::draw(&profiles, &refit, &config.name, svg)?;
         }
         return emit(&fit::profiles_csv(&profiles), a.output.out.as_deref());
     }

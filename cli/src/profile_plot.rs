@@ -9,8 +9,22 @@ use zakai::lab::fit::Profile;
 use crate::frontier_plot::PALETTE;
 
 /// Draws `profiles` (of one parameter, at the same values) into the SVG file `path`; ln L is
-/// shown down to 20 below the highest maximum (lower values on the bottom edge).
-pub fn draw(profiles: &[Profile], title: &str, path: &Path) -> Result<(), String> {
+/// shown down to 20 below the highest maximum (lower values on the bottom edge). `refitted`
+/// names the parameters maximised over at each value (empty: a slice, the others held).
+pub fn draw(
+    profiles: &[Profile],
+    refitted: &[String],
+    title: &str,
+    path: &Path,
+) -> Result<(), String> {
+    let y_label = if refitted.is_empty() {
+        String::from("ln L (the others at their values); below max − 20: on the bottom edge")
+    } else {
+        format!(
+            "max over {} of ln L; below max − 20: on the bottom edge",
+            refitted.join(", ")
+        )
+    };
     let err = |e: &dyn std::fmt::Display| format!("cannot draw {}: {e}", path.display());
     let Some(first) = profiles.first() else {
         return Err(format!("nothing to plot in {}", path.display()));
@@ -45,7 +59,7 @@ pub fn draw(profiles: &[Profile], title: &str, path: &Path) -> Result<(), String
     chart
         .configure_mesh()
         .x_desc(first.parameter.as_str())
-        .y_desc("ln L (the others at their values); below max − 20: on the bottom edge")
+        .y_desc(y_label)
         .draw()
         .map_err(|e| err(&e))?;
     for (i, p) in profiles.iter().enumerate() {

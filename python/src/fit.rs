@@ -163,7 +163,7 @@ pub fn fit<'py>(
 /// when absent, [`zakai::lab::fit::profile_grid`]) for every method of the scenario: the
 /// values, and a dict per method (name, log-likelihoods, maximum); `evaluator` as for [`fit`].
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, parameter, values, points, seed, evaluator=None))]
+#[pyo3(signature = (json, observations, times, parameter, values, points, seed, refit, evaluator=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn profile<'py>(
     py: Python<'py>,
@@ -174,6 +174,7 @@ pub fn profile<'py>(
     values: Option<Vec<f64>>,
     points: usize,
     seed: u64,
+    refit: Vec<String>,
     evaluator: Option<Py<PyAny>>,
 ) -> PyResult<(Vec<f64>, Bound<'py, PyList>)> {
     let config = parse(json)?;
@@ -184,15 +185,23 @@ pub fn profile<'py>(
         // The likelihood below names the unknown parameter.
         (None, None) => Vec::new(),
     };
-    let names = [parameter];
+    let names: Vec<String> = std::iter::once(parameter.clone())
+        .chain(refit.into_iter().filter(|n| *n != parameter))
+        .collect();
+    // A slice with the others held, or the profile maximised over the refitted ones.
+    let along = |l: &Likelihood, evaluate: &dyn Evaluate| {
+        if names.len() == 1 {
+            zakai::lab::fit::profile(l, evaluate, &values)
+        } else {
+            zakai::lab::fit::profile_refitted(l, evaluate, &values, &|_, _| {})
+        }
+    };
     let out = PyList::empty(py);
     for method in 0..methods {
         let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
         let p = match &evaluator {
-            None => py.detach(|| zakai::lab::fit::profile(&l, &l, &values)),
-            Some(callable) => through(callable, method, &names, |remote| {
-                zakai::lab::fit::profile(&l, remote, &values)
-            })?,
+            None => py.detach(|| along(&l, &l)),
+            Some(callable) => through(callable, method, &names, |remote| along(&l, remote))?,
         };
         let d = PyDict::new(py);
         d.set_item("method", &p.method)?;

@@ -97,6 +97,18 @@ def test_a_profile_peaks_where_the_fit_does_for_one_parameter():
     assert direct == pytest.approx(p.loglik["KF"][10], rel=1e-12)
 
 
+def test_the_profile_likelihood_peaks_at_the_joint_fit():
+    years, flow = nile()
+    both = zakai.fit(local_level(), flow, "kalman", times=years)
+    p = zakai.profile(local_level(), flow, "q", np.linspace(200, 5000, 25), refit=["r"], times=years)
+    x, top = p.maxima["KF"]
+    # The parabola through values 200 apart: q within a tenth of that, ln L within 0.005.
+    assert abs(x - both.params["q"]) < 20 and abs(top - both.loglik) < 5e-3
+    # Above the slice with r held at its start, everywhere.
+    s = zakai.profile(local_level(), flow, "q", np.linspace(200, 5000, 25), times=years)
+    assert (p.loglik["KF"] >= s.loglik["KF"] - 1e-9).all()
+
+
 def test_an_executor_gives_the_same_fit_as_every_core():
     years, flow = nile()
     local = zakai.fit(local_level(), flow, "kalman", times=years)

@@ -177,3 +177,47 @@ fn problems_are_reported_before_any_run() {
     assert!(l.log_likelihood(&[1.0]).is_err());
     assert_eq!(l.value(&[f64::NAN, 1.0]), f64::NEG_INFINITY);
 }
+
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn the_profile_likelihood_refits_the_others_and_peaks_at_the_fit() {
+    let config = local_level(r#"{"method": "kalman"}"#);
+    let both = Likelihood::new(&config, nile(), 0, &["q".into(), "r".into()], 1).unwrap();
+    let fitted = fit::maximise(&both, &both, &fit::FitOptions::default(), &|_, _| {}).unwrap();
+    let values: Vec<f64> = (0..25).map(|i| 200.0 + 200.0 * i as f64).collect();
+    let profile = fit::profile_refitted(&both, &both, &values, &|_, _| {});
+    let one = Likelihood::new(&config, nile(), 0, &["q".into()], 1).unwrap();
+    let slice = fit::profile(&one, &one, &values);
+    for (k, v) in values.iter().enumerate() {
+        // Maximised over r, never below the slice at r's value, and the reference's maximum
+        // over r by golden sections on ln r.
+        assert!(
+            profile.log_likelihoods[k] >= slice.log_likelihoods[k] - 1e-9,
+            "q = {v}"
+        );
+        let (mut a, mut b) = (1000f64.ln(), 100000f64.ln());
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..100 {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if reference(*v, c.exp()) > reference(*v, d.exp()) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let best = reference(*v, a.exp());
+        assert!(
+            (profile.log_likelihoods[k] - best).abs() < 1e-6,
+            "q = {v}: {} vs {best}",
+            profile.log_likelihoods[k]
+        );
+    }
+    // Its maximum is the fit's: the same ln L, at q̂ within a tenth of the spacing.
+    let (q, l) = profile.maximum.unwrap();
+    println!(
+        "profile maximum q = {q}, ln L = {l}; fit q = {}, ln L = {}",
+        fitted.estimate[0], fitted.log_likelihood
+    );
+    assert!((q - fitted.estimate[0]).abs() < 20.0);
+    assert!((l - fitted.log_likelihood).abs() < 1e-3);
+}

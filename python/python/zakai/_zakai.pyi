@@ -54,6 +54,7 @@ def profile(
     values: Optional[list[float]],
     points: int,
     seed: int,
+    refit: list[str],
     evaluator: Optional[Any] = None,
 ) -> tuple[list[float], list[dict[str, Any]]]: ...
 

@@ -240,9 +240,10 @@ def fit(
 
 @dataclass
 class Profile:
-    """The log-likelihood along one parameter for every method of a scenario, the others at
-    their values: a slice of the likelihood (the log-likelihood itself with one unknown; not
-    the profile likelihood, which would refit the others at each value).
+    """The log-likelihood along one parameter for every method of a scenario: the profile
+    log-likelihood max over ``refit`` of ln L at each value when :func:`profile` was given
+    parameters to refit, else a slice with the others at their values (with one unknown, the
+    log-likelihood itself).
 
     Attributes
     ----------
@@ -276,12 +277,15 @@ def profile(
     values: Optional[ArrayLike] = None,
     *,
     points: int = 41,
+    refit: Optional[Sequence[str]] = None,
     times: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
     executor: Any = None,
 ) -> Profile:
     """The log-likelihood of your observations along ``param`` for every method of the
-    scenario, the other parameters at their values.
+    scenario: with ``refit`` (names of other parameters) the profile log-likelihood, ln L
+    maximised over them at each value (a Nelder–Mead fit per value, warm-started); without, a
+    slice with the other parameters at their values.
 
     ``values`` default to ``points`` values spanning the parameter's bounds (less 1 % at each
     end), or a quarter to four times its distance from a one-sided bound, or its value ± 3 when
@@ -300,7 +304,8 @@ def profile(
         raise ConfigError(f"points: must be an integer in [2, 10000], got {points!r}")
     text = sc._text()
     grid, rows = _zakai.profile(
-        text, obs, t, str(param), v, int(points), s, _evaluator(executor, text, obs, t, s)
+        text, obs, t, str(param), v, int(points), s, [str(n) for n in (refit or [])],
+        _evaluator(executor, text, obs, t, s),
     )
     return Profile(
         parameter=str(param),

@@ -16,7 +16,7 @@ use core::cell::{Cell, RefCell};
 use argmin::core::{CostFunction, Error, Executor, State, TerminationReason, TerminationStatus};
 use argmin::solver::neldermead::NelderMead;
 
-use super::information::{observed_information, standard_errors};
+use super::information::{observed_information, standard_errors, Information};
 use super::transform::{bounded, Transform};
 use super::{Evaluate, Likelihood};
 use crate::error::ZakaiError;
@@ -33,6 +33,9 @@ pub struct FitOptions {
     /// The first simplex: the start and, for each parameter, the start moved by this much in
     /// the unbounded variable (0.5: a factor e^0.5 ≈ 1.65 for a parameter bounded on one side).
     pub initial_step: f64,
+    /// Whether to compute the observed information and standard errors (a profile's inner
+    /// fits need only the maximum).
+    pub standard_errors: bool,
 }
 
 impl Default for FitOptions {
@@ -41,6 +44,7 @@ impl Default for FitOptions {
             max_iterations: 400,
             tolerance: 1e-8,
             initial_step: 0.5,
+            standard_errors: true,
         }
     }
 }
@@ -188,8 +192,16 @@ pub fn maximise(
     let estimate = bounded(&transforms, &u_best);
     let log_likelihood = -state.get_best_cost();
     let fit_evaluations = result.problem.problem.as_ref().map_or(0, |o| o.count.get());
-    let information =
-        observed_information(evaluate, &estimate, log_likelihood, likelihood.bounds());
+    let information = if options.standard_errors {
+        observed_information(evaluate, &estimate, log_likelihood, likelihood.bounds())
+    } else {
+        Information {
+            matrix: vec![f64::NAN; p * p],
+            covariance: None,
+            steps: Vec::new(),
+            notes: vec![String::from("standard errors not asked for")],
+        }
+    };
     let stencil = information.steps.len() * 2
         + information.steps.len() * information.steps.len().saturating_sub(1) * 2;
     let mut notes = Vec::new();

@@ -48,6 +48,8 @@ use crate::validate::ConfigProblem;
 pub use information::{observed_information, standard_errors, Information};
 #[cfg(feature = "fit")]
 pub use maximise::{maximise, FitOptions, FitResult};
+#[cfg(feature = "fit")]
+pub use profile::profile_refitted;
 pub use profile::{profile, profile_grid, Profile};
 pub use transform::Transform;
 
@@ -176,6 +178,10 @@ impl Likelihood {
     /// The scenario, the method alone and its sizes chosen.
     pub fn config(&self) -> &ScenarioConfig {
         &self.config
+    }
+    /// The data.
+    pub fn recording(&self) -> &Recording {
+        &self.recording
     }
     /// The number of observations the likelihood is of: measurement times, or increments
     /// of a continuous path.

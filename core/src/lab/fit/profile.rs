@@ -75,6 +75,90 @@ impl Profile {
     }
 }
 
+/// The profile log-likelihood of `parameter`: at each of `values`, ln L maximised over the
+/// parameters `refit` (warm-started from the previous value's optimum), the scenario's other
+/// parameters held — max_ψ ln L(θ, ψ), the curve whose drop of 1.92 from its maximum bounds
+/// the 95 % likelihood-ratio interval. `full` evaluates the likelihood of
+/// `[parameter, refit…]` (a [`Likelihood`] of those names, or a cluster's evaluator); the
+/// sizes chosen from the problem are those of `full_likelihood`, held at every value.
+/// `progress` hears `(values done, values)`. A value where the fit fails gets
+/// `f64::NEG_INFINITY`.
+#[cfg(feature = "fit")]
+pub fn profile_refitted(
+    full_likelihood: &Likelihood,
+    full: &dyn Evaluate,
+    values: &[f64],
+    progress: &dyn Fn(usize, usize),
+) -> Profile {
+    use super::maximise::{maximise, FitOptions};
+    use alloc::string::ToString;
+    let names = full_likelihood.names();
+    let (parameter, refit) = (names[0].clone(), &names[1..]);
+    let options = FitOptions {
+        standard_errors: false,
+        ..FitOptions::default()
+    };
+    let mut start: Vec<f64> = full_likelihood.start()[1..].to_vec();
+    let mut log_likelihoods = Vec::with_capacity(values.len());
+    for (k, &v) in values.iter().enumerate() {
+        let fixed = Fixed { full, value: v };
+        let warm: Vec<(alloc::string::String, f64)> = core::iter::once((parameter.clone(), v))
+            .chain(refit.iter().cloned().zip(start.iter().copied()))
+            .collect();
+        let inner = full_likelihood
+            .config()
+            .with_parameter_values(&warm)
+            .and_then(|c| {
+                Likelihood::new(
+                    &c,
+                    full_likelihood.recording().clone(),
+                    0,
+                    refit,
+                    full_likelihood.seed(),
+                )
+            })
+            .and_then(|l| maximise(&l, &fixed, &options, &|_, _| {}));
+        match inner {
+            Ok(fit) => {
+                start = fit.estimate;
+                log_likelihoods.push(fit.log_likelihood);
+            }
+            Err(_) => log_likelihoods.push(f64::NEG_INFINITY),
+        }
+        progress(k + 1, values.len());
+    }
+    Profile {
+        method: full_likelihood.method().to_string(),
+        parameter,
+        maximum: maximum(values, &log_likelihoods),
+        values: values.to_vec(),
+        log_likelihoods,
+    }
+}
+
+/// The likelihood of the refitted parameters with the profiled one fixed: each point gets the
+/// fixed value put in front.
+#[cfg(feature = "fit")]
+struct Fixed<'a> {
+    full: &'a dyn Evaluate,
+    value: f64,
+}
+
+#[cfg(feature = "fit")]
+impl Evaluate for Fixed<'_> {
+    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+        let full: Vec<Vec<f64>> = points
+            .iter()
+            .map(|p| {
+                core::iter::once(self.value)
+                    .chain(p.iter().copied())
+                    .collect()
+            })
+            .collect();
+        self.full.log_likelihoods(&full)
+    }
+}
+
 /// The grid's best point refined by the parabola through it and its neighbours.
 fn maximum(values: &[f64], ls: &[f64]) -> Option<(f64, f64)> {
     let best = (0..ls.len())
