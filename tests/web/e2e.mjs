@@ -1005,8 +1005,11 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.equal(await page.$$eval('#noise-mix .mixture-component', (rows) => rows.length),
     await page.evaluate(() => window.zakaiPage.base.model.noise.mixture.length), 'one row per noise component');
   assert.equal((await page.$$('textarea')).length, 0, 'no JSON text areas');
-  await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', '1, x');
+  await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', '1, ');
   await page.waitForFunction(() => document.querySelector('[data-error="prior.components"]').textContent.includes('component 1: the mean needs 2 comma-separated numbers'), null, { timeout: 5000 });
+  // A name is an expression in the scenario's parameters: one it does not declare is named.
+  await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', '1, y');
+  await page.waitForFunction(() => document.querySelector('[data-error="prior.components[0]"]').textContent.includes('unknown variable `y`'), null, { timeout: 5000 });
   await page.fill('#prior-mix .mixture-component:nth-child(2) .mixture-mean', String(presetPrior[0].mean.join(', ')));
   await page.click('#prior-mix .add-component');
   assert.equal(await page.$$eval('#prior-mix .mixture-component', (rows) => rows.length), presetPrior.length + 1);

@@ -679,7 +679,12 @@ fn tokenize(text: &str, n: usize, names: &[(String, f64)]) -> Result<Vec<Token>,
                     expr: text.to_string(),
                     name,
                     position: start,
-                    allowed: allowed.join(", "),
+                    allowed: if allowed.is_empty() {
+                        // A coefficient of a scenario that declares no parameters.
+                        "numbers only: the scenario declares no parameters".to_string()
+                    } else {
+                        allowed.join(", ")
+                    },
                 });
             }
         } else if c == '*' && chars.get(i + 1) == Some(&'*') {
