@@ -23,8 +23,8 @@ use alloc::vec::Vec;
 use crate::simulate::Trajectory;
 use crate::validate::ConfigProblem;
 
-#[cfg(feature = "std")]
 pub mod bits;
+#[cfg(feature = "std")]
 mod csv;
 
 /// Which part of a recording a row problem is in.
