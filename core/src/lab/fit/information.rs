@@ -19,6 +19,8 @@ pub struct Information {
     pub covariance: Option<Vec<f64>>,
     /// The finite-difference steps used, one per parameter.
     pub steps: Vec<f64>,
+    /// The log-likelihood evaluations the stencil took.
+    pub evaluations: usize,
     /// Why there are no standard errors, or which parameters have none, when so.
     pub notes: Vec<String>,
 }
@@ -71,6 +73,7 @@ pub fn observed_information(
             }
         }
     }
+    let evaluations = points.len();
     let values = evaluate.log_likelihoods(&points);
     let mut next = values.into_iter();
     let mut matrix = vec![f64::NAN; p * p];
@@ -124,6 +127,7 @@ pub fn observed_information(
         matrix,
         covariance,
         steps,
+        evaluations,
         notes,
     }
 }

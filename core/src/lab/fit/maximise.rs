@@ -199,11 +199,10 @@ pub fn maximise(
             matrix: vec![f64::NAN; p * p],
             covariance: None,
             steps: Vec::new(),
+            evaluations: 0,
             notes: vec![String::from("standard errors not asked for")],
         }
     };
-    let stencil = information.steps.len() * 2
-        + information.steps.len() * information.steps.len().saturating_sub(1) * 2;
     let mut notes = Vec::new();
     if !converged {
         notes.push(format!(
@@ -245,7 +244,7 @@ pub fn maximise(
         stderr,
         covariance,
         log_likelihood,
-        evaluations: fit_evaluations + stencil,
+        evaluations: fit_evaluations + information.evaluations,
         iterations,
         converged,
         observations: likelihood.observations(),
