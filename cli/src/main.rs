@@ -151,6 +151,11 @@ enum Command {
     /// deviation — converged when by at most a twentieth of it.
     Check(Selection),
     Filter(FilterArgs),
+    /// Smooth recorded observations: every method of the scenario as its fixed-interval
+    /// smoother — the best estimate at each observation time from all the observations
+    /// (RTS for the Gaussian filters, forward–backward on the grid, FFBSi for the particle
+    /// filter); methods without one say why. Arguments as for `filter`.
+    Smooth(FilterArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
     /// Fit the scenario's parameters to recorded observations by maximum likelihood under
@@ -404,9 +409,15 @@ fn emit(text: &str, path: Option<&std::path::Path>) -> Result<(), String> {
     }
 }
 
-fn filter(a: &FilterArgs) -> Result<(), String> {
+fn filter(a: &FilterArgs, smooth: bool) -> Result<(), String> {
     let (experiment, seed) = a.selection.experiment()?;
-    let result = recorded::filter(&experiment, &a.observations, a.truth.as_deref(), seed)?;
+    let result = recorded::filter(
+        &experiment,
+        &a.observations,
+        a.truth.as_deref(),
+        seed,
+        smooth,
+    )?;
     emit(
         &recorded::render(&result, a.output.format()),
         a.output.out.as_deref(),
@@ -902,7 +913,8 @@ fn main() -> ExitCode {
         }
         Command::Show { scenario, chosen } => show(&scenario, chosen),
         Command::Simulate(args) => simulate(args),
-        Command::Filter(args) => filter(&args),
+        Command::Filter(args) => filter(&args, false),
+        Command::Smooth(args) => filter(&args, true),
         Command::Reproduce { table, runs } => reproduce(table.as_deref(), runs),
         Command::Convexity { scenario, phi, j } => convexity(&scenario, phi.as_deref(), &j),
         Command::YauSystem { scenario } => yau_system(&scenario),

@@ -16,20 +16,24 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
 }
 
 /// Reads the observations (and optional truth) for `experiment`'s model and runs every
-/// method on them.
+/// method on them — as its filter, or with `smooth` as its fixed-interval smoother (`zakai
+/// smooth`).
 pub fn filter(
     experiment: &Experiment,
     observations: &Path,
     truth: Option<&Path>,
     seed: u64,
+    smooth: bool,
 ) -> Result<RunResult, String> {
     let obs = read(observations)?;
     let truth = truth.map(read).transpose()?;
     let recording = Recording::from_csv(experiment.model().n, &obs, truth.as_deref())
         .map_err(|e| e.to_string())?;
-    experiment
-        .filter_recorded(recording, seed)
-        .map_err(|e| e.to_string())
+    match smooth {
+        true => experiment.smooth_recorded(recording, seed),
+        false => experiment.filter_recorded(recording, seed),
+    }
+    .map_err(|e| e.to_string())
 }
 
 /// Standard deviations from row k's covariance (n × n), when the method records them.
@@ -40,8 +44,9 @@ fn sds(covariances: &[f64], n: usize, k: usize) -> Option<Vec<f64>> {
 
 /// The run's estimates per observation time as CSV: `t`, then per method its estimate
 /// `<name> x1…`, where it has a covariance `<name> sd1…`, and the log-likelihood of the row's
-/// observation `<name> loglik` (0 where nothing was observed); a failed method's cells are
-/// empty from its failure on.
+/// observation `<name> loglik` (0 where nothing was observed); in a smoothing run also the
+/// smoothed `<name> smoothed x1…`, `<name> smoothed sd1…` (empty for a method without a
+/// smoother). A failed method's cells are empty from its failure on.
 pub fn estimates_csv(result: &RunResult) -> String {
     let r = &result.recording;
     let n = r.n;
@@ -56,6 +61,13 @@ pub fn estimates_csv(result: &RunResult) -> String {
             }
         }
         let _ = write!(s, ",{} loglik", m.name);
+        if m.smoothed.is_some() {
+            for what in ["x", "sd"] {
+                for i in 1..=n {
+                    let _ = write!(s, ",{} smoothed {what}{i}", m.name);
+                }
+            }
+        }
     }
     s.push('\n');
     for (k, t) in r.times.iter().enumerate() {
@@ -81,6 +93,18 @@ pub fn estimates_csv(result: &RunResult) -> String {
             if let Some(ll) = m.log_likelihoods.get(k).filter(|v| !v.is_nan()) {
                 let _ = write!(s, "{ll:?}");
             }
+            if let Some(smoothed) = &m.smoothed {
+                let row = smoothed.estimates.get(k * n..(k + 1) * n);
+                let sd = sds(&smoothed.covariances, n, k);
+                for values in [row.map(<[f64]>::to_vec), sd] {
+                    for i in 0..n {
+                        s.push(',');
+                        if let Some(v) = &values {
+                            let _ = write!(s, "{:?}", v[i]);
+                        }
+                    }
+                }
+            }
         }
         s.push('\n');
     }
@@ -91,6 +115,7 @@ pub fn estimates_csv(result: &RunResult) -> String {
 /// the log-likelihood of each row's observation and their sum, failure, timings and — with a
 /// truth — MSE.
 pub fn json(result: &RunResult) -> String {
+    let r = &result.recording;
     let methods: Vec<serde_json::Value> = result
         .methods
         .iter()
@@ -107,10 +132,18 @@ pub fn json(result: &RunResult) -> String {
                 "seconds_per_step": m.seconds_per_step(),
                 "build_seconds": m.build_seconds,
                 "mse": result.mse(i),
+                "smoothed": m.smoothed.as_ref().map(|s| serde_json::json!({
+                    "smoother": s.smoother,
+                    "estimates": s.estimates,
+                    "covariances": s.covariances,
+                    "failure": s.failure,
+                    "notes": s.notes,
+                    "seconds": s.seconds,
+                    "mse": r.truth.as_deref().and_then(|t| s.mse(t, r.n)),
+                })),
             })
         })
         .collect();
-    let r = &result.recording;
     let value = serde_json::json!({
         "n": r.n,
         "m": r.m,
@@ -186,6 +219,9 @@ pub fn table(result: &RunResult) -> String {
                 .map_or_else(|| "—".into(), |v| format!("{v:.5}")),
         );
     }
+    if result.methods.iter().any(|m| m.smoothed.is_some()) {
+        smoothed_table(result, &mut s);
+    }
     for (method, w) in &result.warnings {
         let _ = writeln!(s, "warning: {method}: {w}");
     }
@@ -195,6 +231,49 @@ pub fn table(result: &RunResult) -> String {
         }
     }
     s
+}
+
+/// The smoothing part of [`table`]: per method its smoother, the smoothed estimate at the
+/// first row (where smoothing uses the most data the filter had not seen), with a truth the
+/// smoothed MSE, and why a method has no smoothed track.
+fn smoothed_table(result: &RunResult, s: &mut String) {
+    let r = &result.recording;
+    let n = r.n;
+    let _ = writeln!(
+        s,
+        "\n{:<16} {:<18} {:>28} {:>12} {:>10}  status",
+        "smoothed", "smoother", "first row (± sd)", "MSE", "seconds"
+    );
+    for m in &result.methods {
+        let Some(sm) = &m.smoothed else { continue };
+        let first = match sm.estimates.get(..n) {
+            Some(mean) if sm.failure.is_none() => {
+                let sd = sds(&sm.covariances, n, 0);
+                (0..n)
+                    .map(|j| match &sd {
+                        Some(sd) => format!("{:.4} ± {:.4}", mean[j], sd[j]),
+                        None => format!("{:.4}", mean[j]),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+            _ => String::new(),
+        };
+        let mse = r.truth.as_deref().and_then(|t| sm.mse(t, n));
+        let _ = writeln!(
+            s,
+            "{:<16} {:<18} {:>28} {:>12} {:>10.3}  {}",
+            m.name,
+            sm.smoother.as_deref().unwrap_or("—"),
+            first,
+            mse.map_or_else(|| "—".into(), |v| format!("{v:.5}")),
+            sm.seconds,
+            sm.failure.as_deref().unwrap_or("ok")
+        );
+        for note in &sm.notes {
+            let _ = writeln!(s, "  note: {}: {note}", m.name);
+        }
+    }
 }
 
 /// Renders a recorded run in `format`.

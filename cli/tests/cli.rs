@@ -669,3 +669,109 @@ fn fit_profile_writes_csv_and_svg_with_each_maximum() {
     let drawing = std::fs::read_to_string(&svg).unwrap();
     assert!(drawing.contains("<svg") && drawing.contains("EKF: maximum at"));
 }
+
+/// `zakai smooth` on a short local-level series with a gap (rows 4–7 missing): the Kalman
+/// smoother's CSV columns are an RTS smoother written here (to 10⁻⁹ relative), the smoothed
+/// sd inside the gap is below the filter's, the JSON carries the same numbers, and a method
+/// without a smoother has empty smoothed cells and says why in the table.
+#[test]
+fn smooth_writes_the_smoothed_estimates_beside_the_filtered() {
+    let z = [
+        1.2,
+        0.7,
+        1.9,
+        f64::NAN,
+        f64::NAN,
+        f64::NAN,
+        f64::NAN,
+        2.4,
+        2.0,
+        2.8,
+    ];
+    let mut csv = String::from("t,z1\n");
+    for (k, v) in z.iter().enumerate() {
+        let cell = if v.is_nan() {
+            String::new()
+        } else {
+            v.to_string()
+        };
+        csv.push_str(&format!("{k},{cell}\n"));
+    }
+    let obs = temp_file("smooth-obs.csv", &csv);
+    let scenario = temp_file(
+        "smooth-scenario.json",
+        r#"{ "name": "level", "model": { "drift": ["0"], "observation": ["x"], "diffusion": [[0.5]],
+             "noise": { "kind": "discrete", "mixture": [{ "mean": [0], "cov": [[0.3]] }] } },
+             "prior": { "kind": "gaussian", "mean": [0], "cov": [[4]] },
+             "domain": [[-10, 14]], "time": { "dt_obs": 1 },
+             "methods": [{ "method": "kalman" }, { "method": "gaussian_sum" }] }"#,
+    );
+    let args = |format: &str| {
+        zakai(&[
+            "smooth",
+            scenario.to_str().unwrap(),
+            "--observations",
+            obs.to_str().unwrap(),
+            "--format",
+            format,
+        ])
+    };
+    // The reference: scalar Kalman filter and RTS smoother, q = 0.25 per step, r = 0.3.
+    let (q, r) = (0.25, 0.3);
+    let (mut m, mut p) = (0.0, 4.0);
+    let (mut filtered, mut predicted) = (Vec::new(), Vec::new());
+    for (k, v) in z.iter().enumerate() {
+        if k > 0 {
+            p += q;
+        }
+        predicted.push((m, p));
+        if !v.is_nan() {
+            let g = p / (p + r);
+            m += g * (v - m);
+            p -= g * p;
+        }
+        filtered.push((m, p));
+    }
+    let mut smoothed = filtered.clone();
+    for k in (0..z.len() - 1).rev() {
+        let ((m, p), (mp, pp)) = (filtered[k], predicted[k + 1]);
+        let g = p / pp;
+        smoothed[k] = (
+            m + g * (smoothed[k + 1].0 - mp),
+            p + g * g * (smoothed[k + 1].1 - pp),
+        );
+    }
+    let o = args("csv");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (x, sd, fsd, gsf) = (
+        col("KF smoothed x1"),
+        col("KF smoothed sd1"),
+        col("KF sd1"),
+        col("GSF smoothed x1"),
+    );
+    for (k, line) in lines[1..].iter().enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let value = |i: usize| cells[i].parse::<f64>().unwrap();
+        let (want_m, want_p) = smoothed[k];
+        assert!(
+            (value(x) - want_m).abs() < 1e-9 * (1.0 + want_m.abs()),
+            "row {k}"
+        );
+        assert!((value(sd) - want_p.sqrt()).abs() < 1e-9, "row {k}");
+        if (3..7).contains(&k) {
+            assert!(value(sd) < value(fsd), "row {k}: the gap is bridged");
+        }
+        assert_eq!(cells[gsf], "", "row {k}: no smoother, no value");
+    }
+    let o = args("json");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let s = &v["methods"][0]["smoothed"];
+    assert_eq!(s["smoother"], "RTS");
+    assert!((s["estimates"][5].as_f64().unwrap() - smoothed[5].0).abs() < 1e-9);
+    let table = String::from_utf8(args("table").stdout).unwrap();
+    assert!(table.contains("no smoother:"), "{table}");
+}

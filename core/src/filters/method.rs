@@ -126,6 +126,10 @@ pub trait Method {
     /// is a random function of the model's parameters, so a fit reports no standard errors
     /// from its finite differences ([`crate::lab::fit`]).
     const RANDOM: bool = false;
+    /// The method's fixed-interval smoother, or why it has none
+    /// ([`crate::filters::smoothing`]).
+    const SMOOTHING: super::smoothing::Smoothing =
+        super::smoothing::Smoothing::NotAvailable("no smoother is implemented for this method");
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.

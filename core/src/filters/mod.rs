@@ -31,6 +31,7 @@ pub mod marginal;
 pub mod method;
 pub mod params;
 pub mod particle;
+pub mod smoothing;
 pub mod spectral;
 pub mod yau_fd;
 
@@ -547,6 +548,11 @@ impl Substeps {
         }
     }
 
+    /// The steps over Δτ.
+    pub(crate) fn per_interval(&self) -> usize {
+        self.per_interval
+    }
+
     /// The steps over `dt` (exactly `per_interval` over Δτ).
     pub(crate) fn over(&self, dt: f64) -> usize {
         match self.longest {
@@ -771,6 +777,24 @@ pub trait Filter: core::fmt::Debug + Fork {
     /// the log of its weights' mean (whose exponential is unbiased for the likelihood); the
     /// EKF, UKF, IEKF and IOKF give their Gaussian predictive density's, an approximation.
     fn log_likelihood(&self) -> Option<f64> {
+        None
+    }
+    /// This filter, from its current state, as the forward pass of its fixed-interval smoother
+    /// ([`smoothing`]): a filter that steps exactly as this one does and keeps what the
+    /// backward pass needs, with its memory checked against `plan` before anything is kept.
+    /// An error for methods without a smoother (the catalogue says why,
+    /// [`method::Method::SMOOTHING`]).
+    fn smoother(
+        &self,
+        _plan: &smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn smoothing::Smoother>, FilterError> {
+        Err(smoothing::no_smoother(
+            self.name(),
+            "the method does not implement one",
+        ))
+    }
+    /// This filter as a smoother, when it is one (what [`Filter::smoother`] returned).
+    fn as_smoother(&mut self) -> Option<&mut dyn smoothing::Smoother> {
         None
     }
     /// The current estimate.

@@ -90,6 +90,29 @@ impl LineSystems {
             self.solve_line(start, rhs, x)
         });
     }
+
+    /// Solves the transposed systems `Aᵀ x = rhs` along every line with the same factors
+    /// (`A = L U` gives `Aᵀ = Uᵀ Lᵀ`: a forward substitution with Uᵀ, then a backward one
+    /// with the unit Lᵀ) — the adjoint of [`LineSystems::solve`], for the backward equation
+    /// of a smoother. `rhs` is overwritten and the solution is written to `x`.
+    pub fn solve_transposed(&self, rhs: &mut [f64], x: &mut [f64]) {
+        let (stride, n) = (self.stride, self.n);
+        for_each_line(rhs.len(), stride, n, |start| {
+            // Uᵀ y = rhs: y_0 = rhs_0 / d_0, y_j = (rhs_j − upper_{j−1} y_{j−1}) / d_j.
+            rhs[start] /= self.diag[start];
+            for j in 1..n {
+                let i = start + j * stride;
+                rhs[i] = (rhs[i] - self.upper[i - stride] * rhs[i - stride]) / self.diag[i];
+            }
+            // Lᵀ x = y: x_last = y_last, x_j = y_j − mult_{j+1} x_{j+1}.
+            let last = start + (n - 1) * stride;
+            x[last] = rhs[last];
+            for j in (0..n - 1).rev() {
+                let i = start + j * stride;
+                x[i] = rhs[i] - self.mult[i + stride] * x[i + stride];
+            }
+        });
+    }
 }
 
 #[cfg(test)]
@@ -138,6 +161,46 @@ mod tests {
                 worst < 1e-14,
                 "largest difference from the dense solve {worst}"
             );
+        }
+    }
+
+    /// The transposed solve against nalgebra's dense LU on the transposed matrix, on both axes
+    /// of a 4 × 3 grid.
+    #[test]
+    fn transposed_lines_match_the_dense_solve() {
+        let shape = [4usize, 3];
+        let len = 12;
+        for (axis, stride) in [(0usize, 1usize), (1, 4)] {
+            let n = shape[axis];
+            let lower: Vec<f64> = (0..len).map(|i| -0.3 - 0.05 * i as f64).collect();
+            let upper: Vec<f64> = (0..len).map(|i| -0.2 + 0.03 * i as f64).collect();
+            let diag: Vec<f64> = (0..len).map(|i| 2.0 + 0.1 * i as f64).collect();
+            let mut a = DMatrix::zeros(len, len);
+            for i in 0..len {
+                a[(i, i)] = diag[i];
+                let j = (i / stride) % n;
+                if j > 0 {
+                    a[(i, i - stride)] = lower[i];
+                }
+                if j + 1 < n {
+                    a[(i, i + stride)] = upper[i];
+                }
+            }
+            let b: Vec<f64> = (0..len).map(|i| (i as f64 * 0.9).cos()).collect();
+            let exact = a
+                .transpose()
+                .lu()
+                .solve(&DVector::from_vec(b.clone()))
+                .expect("regular");
+            let f = LineSystems::factor(stride, n, &lower, diag, upper);
+            let (mut rhs, mut x) = (b, vec![0.0; len]);
+            f.solve_transposed(&mut rhs, &mut x);
+            let worst = x
+                .iter()
+                .zip(exact.iter())
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-14, "largest difference {worst}");
         }
     }
 

@@ -251,6 +251,54 @@ pub struct MethodTrack {
     /// Whether the method is still stepped after its failure (a followed run, the state
     /// intact; see `after_failure`).
     following: bool,
+    /// The smoothed estimates of a smoothing run ([`Experiment::smooth_recorded`]); `None`
+    /// in a filtering run.
+    #[serde(default)]
+    pub smoothed: Option<SmoothedTrack>,
+}
+
+/// One method's fixed-interval smoother over a run ([`crate::filters::smoothing`]): the
+/// best estimates of the states at the observation times given all the observations.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct SmoothedTrack {
+    /// The smoother (`"RTS"`, `"forward–backward"`, `"FFBSi"`), `None` when the method has
+    /// none.
+    pub smoother: Option<String>,
+    /// Smoothed means E[x(τ_k) | all observations], row-major, one row per row of the
+    /// filter's estimates; empty when there is no smoothed track.
+    #[serde(with = "crate::lab::recording::bits")]
+    pub estimates: Vec<f64>,
+    /// Smoothed covariances (n × n per row, row-major).
+    #[serde(with = "crate::lab::recording::bits")]
+    pub covariances: Vec<f64>,
+    /// Why there is no smoothed track: the method has no smoother, the filter failed, or the
+    /// backward pass failed.
+    pub failure: Option<String>,
+    /// What the smoother approximated or cost on this run.
+    pub notes: Vec<String>,
+    /// Wall time of the backward pass (seconds; 0 without a clock).
+    #[serde(with = "crate::lab::recording::bits")]
+    pub seconds: f64,
+}
+
+impl SmoothedTrack {
+    /// A track without smoothed estimates, and why.
+    fn unavailable(smoother: Option<String>, why: String) -> Self {
+        SmoothedTrack {
+            smoother,
+            failure: Some(why),
+            ..Default::default()
+        }
+    }
+
+    /// MSE of 004 (43) of the smoothed means against `truth` (`None` without them).
+    pub fn mse(&self, truth: &[f64], n: usize) -> Option<f64> {
+        (self.failure.is_none() && self.estimates.len() == truth.len()).then(|| {
+            metrics::mse_components(truth, &self.estimates, n)
+                .iter()
+                .sum()
+        })
+    }
 }
 
 impl MethodTrack {
@@ -489,7 +537,7 @@ impl Experiment {
         }
         // The simulator's output fits the model by construction (and a truth that blew up is
         // the methods' problem to meet, not an input error).
-        self.start_checked(self.simulate(seed).into(), seed, clock)
+        self.start_checked(self.simulate(seed).into(), seed, clock, None)
     }
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
@@ -576,7 +624,31 @@ impl Experiment {
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
         }
-        self.start_checked(recording, seed, clock)
+        self.start_checked(recording, seed, clock, None)
+    }
+
+    /// Every method over the whole `recording` as its fixed-interval smoother
+    /// ([`crate::filters::smoothing`]): the filtering run of
+    /// [`Experiment::filter_recorded`], and in each [`MethodTrack::smoothed`] the smoothed
+    /// means and covariances at the same rows — or why there are none (the method has no
+    /// smoother, its filter failed, or its smoother's memory would exceed the cap, checked
+    /// before anything is kept).
+    pub fn smooth_recorded(
+        &self,
+        recording: Recording,
+        seed: u64,
+    ) -> Result<RunResult, ZakaiError> {
+        let problems = self.recording_problems(&recording);
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
+        with_standard_clock(|clock| {
+            let plan = crate::filters::smoothing::SmoothingPlan::for_steps(recording.times.len());
+            let mut run = self.start_checked(recording, seed, clock, Some(plan))?;
+            run.complete(clock, &mut Silent);
+            run.smooth(clock);
+            Ok(run.finish())
+        })
     }
 
     /// Builds every filter and processes observation 0 of a recording known to fit.
@@ -585,6 +657,7 @@ impl Experiment {
         recording: Recording,
         seed: u64,
         clock: Option<&dyn Clock>,
+        smoothing: Option<crate::filters::smoothing::SmoothingPlan>,
     ) -> Result<ExperimentRun, ZakaiError> {
         let mut filters: Vec<Box<dyn Filter>> = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
@@ -635,6 +708,7 @@ impl Experiment {
                 after_failure: Vec::new(),
                 off_track_since: None,
                 following: false,
+                smoothed: None,
             })
             .collect();
         for (i, reason) in not_applicable {
@@ -642,6 +716,9 @@ impl Experiment {
                 k: 0,
                 message: alloc::format!("{NOT_APPLICABLE}: {reason}"),
             });
+        }
+        if let Some(plan) = smoothing {
+            self.smoothers(&plan, &mut filters, &mut tracks);
         }
         let mut run = ExperimentRun {
             seed,
@@ -660,6 +737,38 @@ impl Experiment {
         };
         run.observe(0, None, &mut Silent);
         Ok(run)
+    }
+
+    /// Turns every applicable filter into its smoother ([`Filter::smoother`]), noting in its
+    /// track why one cannot smooth.
+    fn smoothers(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+        filters: &mut [Box<dyn Filter>],
+        tracks: &mut [MethodTrack],
+    ) {
+        for ((filter, track), method) in filters.iter_mut().zip(tracks).zip(&self.config.methods) {
+            let (name, why) = match method.smoothing() {
+                crate::filters::smoothing::Smoothing::By(name, _) => (Some(name.to_string()), None),
+                crate::filters::smoothing::Smoothing::NotAvailable(why) => (None, Some(why)),
+            };
+            track.smoothed = Some(if let Some(failure) = &track.failure {
+                SmoothedTrack::unavailable(name, failure.message.clone())
+            } else if let Some(why) = why {
+                SmoothedTrack::unavailable(None, alloc::format!("no smoother: {why}"))
+            } else {
+                match filter.smoother(plan) {
+                    Ok(smoother) => {
+                        *filter = smoother;
+                        SmoothedTrack {
+                            smoother: name,
+                            ..Default::default()
+                        }
+                    }
+                    Err(e) => SmoothedTrack::unavailable(name, e.to_string()),
+                }
+            });
+        }
     }
 
     /// A whole run, timed with `clock` (none: times are 0), reporting failures to `observer`.
@@ -1073,6 +1182,59 @@ impl ExperimentRun {
             done += 1;
         }
         done
+    }
+
+    /// The backward pass of every method's smoother (a run started as a smoothing run,
+    /// [`Experiment::smooth_recorded`], once every observation is processed): fills
+    /// [`MethodTrack::smoothed`] with the smoothed rows, or why there are none.
+    fn smooth(&mut self, clock: Option<&dyn Clock>) {
+        let continuous = self.data.continuous;
+        for (filter, track) in self.filters.iter_mut().zip(&mut self.tracks) {
+            let Some(smoothed) = &mut track.smoothed else {
+                continue;
+            };
+            if smoothed.failure.is_some() {
+                continue;
+            }
+            if let Some(failure) = &track.failure {
+                smoothed.failure = Some(alloc::format!(
+                    "the filter failed at row {}: {}",
+                    failure.k,
+                    failure.message
+                ));
+                continue;
+            }
+            let Some(smoother) = filter.as_smoother() else {
+                continue;
+            };
+            let start = clock.map(|c| c.now());
+            let n = track.n;
+            let mut rows: Vec<(usize, crate::filters::Estimate)> = Vec::new();
+            let result =
+                smoother.smooth(&mut |step| rows.push((step.index, step.estimate.clone())));
+            // Row k of a continuous run is the state after step k (row 0: the start); a
+            // discrete run's row 0 is already the update at τ₀, the smoother's step 1.
+            let skip = usize::from(!continuous);
+            match result {
+                Ok(()) => {
+                    rows.reverse();
+                    for (_, est) in rows.iter().filter(|(i, _)| *i >= skip) {
+                        append(&mut smoothed.estimates, est.mean.as_slice());
+                        match &est.covariance {
+                            Some(p) => append(&mut smoothed.covariances, p.as_slice()),
+                            None => smoothed
+                                .covariances
+                                .extend(core::iter::repeat_n(f64::NAN, n * n)),
+                        }
+                    }
+                    smoothed.notes = smoother.notes();
+                }
+                Err(e) => smoothed.failure = Some(alloc::format!("the backward pass failed: {e}")),
+            }
+            if let (Some(c), Some(s)) = (clock, start) {
+                smoothed.seconds = c.now() - s;
+            }
+        }
     }
 
     /// Ends the run (processing any remaining observations) and hands over the records.

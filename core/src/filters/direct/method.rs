@@ -1,5 +1,6 @@
 //! The direct method of 002 (Shi, Yang & Yau 2018) registered as a [`Method`].
 
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -21,6 +22,9 @@ pub struct Direct;
 builder_fn!(Direct);
 
 impl Method for Direct {
+    const SMOOTHING: Smoothing = Smoothing::NotAvailable(
+        "the direct method's density is a Gaussian-approximated exponential family carried by Riccati ODEs (002); a backward equation in that family is not derived, so no smoother is offered",
+    );
     const KEY: &'static str = "direct";
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;

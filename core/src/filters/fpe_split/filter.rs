@@ -328,6 +328,47 @@ impl ContinuousDiscreteGrid {
         Ok(())
     }
 
+    /// The transposed prediction over `interval` on `self.u` (the adjoint of
+    /// [`ContinuousDiscreteGrid::propagate`]: the remainder's plan first, then the whole
+    /// intervals, each FPE step as its implicit part transposed, then its upwind part).
+    fn propagate_back(&mut self, interval: f64) -> Result<(), FilterError> {
+        let (whole, rest) = crate::filters::whole_intervals(interval, self.dt_obs);
+        if rest > 0.0 {
+            if !self.remainders.bring_to_front(rest) {
+                let plan = self.plan_of(rest)?;
+                self.remainders.insert(rest, plan);
+            }
+            let (substeps, dt) = (self.remainders.front().substeps, self.remainders.front().dt);
+            self.run_plan_back(substeps, dt, true);
+        }
+        for _ in 0..whole {
+            let plan = self.plan.as_ref().expect("planned in new");
+            self.run_plan_back(plan.substeps, plan.dt, false);
+        }
+        if self.u.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "backward function of the smoother",
+            });
+        }
+        Ok(())
+    }
+
+    /// The transposed steps of [`ContinuousDiscreteGrid::run_plan`].
+    fn run_plan_back(&mut self, substeps: usize, dt: f64, remainder: bool) {
+        for _ in 0..substeps {
+            let plan = match remainder {
+                true => self.remainders.front(),
+                false => self.plan.as_mut().expect("planned in new"),
+            };
+            plan.implicit.solve_transposed(&mut self.u, &mut self.tmp);
+            if self.scheme == FpeScheme::Separation {
+                self.advection
+                    .step_transposed(&self.grid, dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
+        }
+    }
+
     /// `substeps` FPE steps of `dt` with the Δτ plan, or the remainder plan at the front.
     fn run_plan(&mut self, substeps: usize, dt: f64, remainder: bool) {
         for _ in 0..substeps {
@@ -396,6 +437,37 @@ impl ContinuousDiscreteGrid {
     }
 }
 
+impl crate::filters::smoothing::GridTransition for ContinuousDiscreteGrid {
+    fn grid_density(&self) -> (&TensorGrid, &[f64]) {
+        (&self.grid, &self.u)
+    }
+
+    fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            core::mem::swap(&mut self.u, values);
+            let carried = self.propagate(obs.dt);
+            core::mem::swap(&mut self.u, values);
+            carried?;
+        }
+        Ok(())
+    }
+
+    fn carry_back(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
+        if obs.dt > 0.0 {
+            core::mem::swap(&mut self.u, values);
+            let carried = self.propagate_back(obs.dt);
+            core::mem::swap(&mut self.u, values);
+            carried?;
+        }
+        Ok(())
+    }
+
+    fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
+        self.u.copy_from_slice(values);
+        self.normalise()
+    }
+}
+
 /// Coordinates rounded to 4 significant decimals for messages.
 fn rounded(x: &[f64]) -> Vec<f64> {
     x.iter().map(|v| libm::round(v * 1e4) / 1e4).collect()
@@ -421,6 +493,13 @@ impl Filter for ContinuousDiscreteGrid {
 
     fn log_likelihood(&self) -> Option<f64> {
         Some(self.log_likelihood)
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        crate::filters::smoothing::grid_smoother(self, plan)
     }
 
     fn estimate(&self) -> Estimate {

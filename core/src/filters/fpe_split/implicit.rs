@@ -98,6 +98,15 @@ impl ImplicitStep {
         }
     }
 
+    /// Solves the transposed step `Πᵀ` in place: the axes' transposed systems in the reverse
+    /// order (the adjoint of [`ImplicitStep::solve`], for a smoother).
+    pub fn solve_transposed(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+        for axis in self.axes.iter().rev() {
+            axis.solve_transposed(u, tmp);
+            core::mem::swap(u, tmp);
+        }
+    }
+
     /// Values the factors store.
     pub fn values(cells: usize, dims: usize) -> Option<usize> {
         cells.checked_mul(3 * dims)

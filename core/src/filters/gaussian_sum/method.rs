@@ -1,5 +1,6 @@
 //! The Gaussian-sum filter registered as a [`Method`].
 
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -19,6 +20,9 @@ pub struct GaussianSum;
 builder_fn!(GaussianSum);
 
 impl Method for GaussianSum {
+    const SMOOTHING: Smoothing = Smoothing::NotAvailable(
+        "a Gaussian-sum smoother (a two-filter mixture product) is not implemented; on the linear models it applies to, the Kalman RTS smoother of each component is not the mixture's",
+    );
     const KEY: &'static str = "gaussian_sum";
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["gsf"];

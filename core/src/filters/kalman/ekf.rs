@@ -45,9 +45,18 @@ impl ExtendedKalman {
     }
 }
 
+super::smoother::gaussian_filter!(ExtendedKalman);
+
 impl Filter for ExtendedKalman {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        super::smoother::rts(self, plan)
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {

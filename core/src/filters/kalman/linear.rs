@@ -179,9 +179,18 @@ impl KalmanBucy {
     }
 }
 
+super::smoother::gaussian_filter!(KalmanBucy);
+
 impl Filter for KalmanBucy {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        super::smoother::rts(self, plan)
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
@@ -202,6 +211,11 @@ impl Filter for KalmanBucy {
             if obs.dt > 0.0 {
                 let d = Discretization::for_step(cached, a, b, q, obs.dt);
                 d.propagate(&mut state.mean, &mut state.cov, moved);
+                let (m, p) = (state.mean.clone(), state.cov.clone());
+                if let Some(s) = state.transition_mut() {
+                    s.phi = &d.phi * &s.phi;
+                    s.predicted = (m, p);
+                }
             }
             match meas {
                 Some(meas) => state.linearized_update(model, meas),

@@ -115,9 +115,18 @@ impl MapKalman {
     }
 }
 
+super::smoother::gaussian_filter!(MapKalman);
+
 impl Filter for MapKalman {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        super::smoother::rts(self, plan)
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {

@@ -2,6 +2,7 @@
 //! [`Ukf`], [`Iekf`] and [`Iokf`]. Their state is a mean and a covariance, so their memory is
 //! a constant; they apply to every dimension.
 
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -64,6 +65,10 @@ pub struct Kalman;
 builder_fn!(Kalman);
 
 impl Method for Kalman {
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "RTS",
+        "the Rauch–Tung–Striebel smoother of the sampled model the filter updates with (Φ = e^{AΔτ}): exact on linear-Gaussian models",
+    );
     const KEY: &'static str = "kalman";
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
@@ -107,6 +112,10 @@ pub struct Ekf;
 builder_fn!(Ekf);
 
 impl Method for Ekf {
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "extended RTS",
+        "the extended RTS smoother: the RTS recursion with the transition's sensitivity Φ integrated along the EKF's moment equations (dΦ/dt = ∂f/∂x(m) Φ); a Gaussian approximation",
+    );
     const KEY: &'static str = "ekf";
     type Params = EkfParams;
     type Filter = ExtendedKalman;
@@ -153,6 +162,10 @@ pub struct Ukf;
 builder_fn!(Ukf);
 
 impl Method for Ukf {
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "unscented RTS",
+        "the continuous–discrete unscented RTS smoother: the cross-covariance follows the sigma points' statistically linearised drift (dΦ/dt = E[f (x − m)ᵀ] P⁻¹ Φ); a Gaussian approximation",
+    );
     const KEY: &'static str = "ukf";
     type Params = UkfParams;
     type Filter = UnscentedKalman;
@@ -199,6 +212,10 @@ pub struct Iekf;
 builder_fn!(Iekf);
 
 impl Method for Iekf {
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "extended RTS",
+        "the extended RTS smoother over the IEKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
+    );
     const KEY: &'static str = "iekf";
     type Params = IekfParams;
     type Filter = MapKalman;
@@ -246,6 +263,10 @@ pub struct Iokf;
 builder_fn!(Iokf);
 
 impl Method for Iokf {
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "extended RTS",
+        "the extended RTS smoother over the IOKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
+    );
     const KEY: &'static str = "iokf";
     type Params = IokfParams;
     type Filter = MapKalman;

@@ -13,6 +13,7 @@ mod method;
 mod params;
 pub mod propagate;
 pub mod second_mode;
+pub(crate) mod smoother;
 pub mod ukf;
 
 pub use ekf::ExtendedKalman;
@@ -470,6 +471,23 @@ impl GaussianState {
         crate::filters::copy_vector(&mut out.mean, &self.mean);
         crate::filters::copy_matrix(&mut out.covariance, &self.cov);
         crate::filters::copy_optional_vector(&mut out.map, map);
+    }
+
+    /// Tracks the transition of every prediction from now on ([`propagate::Sensitivity`]),
+    /// for an RTS smoother.
+    pub fn track_transitions(&mut self) {
+        self.moments.sensitivity = Some(propagate::Sensitivity::new(self.mean.len()));
+    }
+
+    /// The tracked transition, when [`GaussianState::track_transitions`] was called.
+    pub fn transition(&self) -> Option<&propagate::Sensitivity> {
+        self.moments.sensitivity.as_ref()
+    }
+
+    /// The tracked transition, to begin a step or to set a prediction made without the
+    /// moment equations (the Kalman–Bucy filter's exact one).
+    pub fn transition_mut(&mut self) -> Option<&mut propagate::Sensitivity> {
+        self.moments.sensitivity.as_mut()
     }
 
     /// Fails when m or P is non-finite.

@@ -24,6 +24,61 @@ pub struct MomentWork {
     pt: DMatrix<f64>,
     /// ∂f/∂x, row-major (the EKF's rates).
     jacobian: Vec<f64>,
+    /// The transition's sensitivity, integrated alongside when a smoother asks for it.
+    pub sensitivity: Option<Sensitivity>,
+}
+
+/// The sensitivity of the prediction `Φ = ∂m(t)/∂m(t₀)` of the linearised dynamics,
+/// `dΦ/dt = A(t) Φ` with `A` the drift's linearisation the rates leave in their `jacobian`
+/// storage (∂f/∂x at the mean for the EKF, the statistical linearisation for the UKF), and the
+/// predicted moments of the last prediction: what an RTS smoother needs of a step
+/// ([`crate::filters::smoothing`] (S1)).
+#[derive(Clone, Debug)]
+pub struct Sensitivity {
+    /// Φ since the step began ([`Sensitivity::begin`]).
+    pub phi: DMatrix<f64>,
+    /// The predicted mean and covariance (the moments the step started from until it
+    /// predicts).
+    pub predicted: (DVector<f64>, DMatrix<f64>),
+    phit: DMatrix<f64>,
+    kphi: [DMatrix<f64>; 4],
+    a: DMatrix<f64>,
+}
+
+impl Sensitivity {
+    /// Storage for an `n`-dimensional state.
+    pub fn new(n: usize) -> Self {
+        Sensitivity {
+            phi: DMatrix::identity(n, n),
+            predicted: (DVector::zeros(n), DMatrix::zeros(n, n)),
+            phit: DMatrix::zeros(n, n),
+            kphi: core::array::from_fn(|_| DMatrix::zeros(n, n)),
+            a: DMatrix::zeros(n, n),
+        }
+    }
+
+    /// A step begins at (m, P): Φ = I, and the prediction is (m, P) until one is made.
+    pub fn begin(&mut self, m: &DVector<f64>, p: &DMatrix<f64>) {
+        self.phi.fill_with_identity();
+        self.predicted.0.copy_from(m);
+        self.predicted.1.copy_from(p);
+    }
+
+    /// `kphi[stage] = A Φ_stage` with A row-major in `a` and `Φ_stage = Φ + along · kphi[prev]`.
+    fn stage(&mut self, stage: usize, along: f64, a: &[f64]) {
+        let n = self.phi.nrows();
+        for i in 0..n {
+            for j in 0..n {
+                self.a[(i, j)] = a[i * n + j];
+            }
+        }
+        self.phit.copy_from(&self.phi);
+        if stage > 0 {
+            self.phit
+                .zip_apply(&self.kphi[stage - 1], |x, k| *x += k * along);
+        }
+        self.kphi[stage].gemm(1.0, &self.a, &self.phit, 0.0);
+    }
 }
 
 impl MomentWork {
@@ -35,6 +90,7 @@ impl MomentWork {
             mt: DVector::zeros(n),
             pt: DMatrix::zeros(n, n),
             jacobian: vec![0.0; n * n],
+            sensitivity: None,
         }
     }
 }
@@ -65,7 +121,9 @@ pub fn linearized_rates(
 }
 
 /// Integrates `(dm/dt, dP/dt) = rates(m, P)` over `dt` in `substeps` RK4 steps, in place;
-/// `rates((m, P), (dm, dP), jacobian)` writes the rates at (m, P), with n² values of scratch.
+/// `rates((m, P), (dm, dP), jacobian)` writes the rates at (m, P), with n² values of scratch
+/// in which it leaves the drift's linearisation A (row-major) when the work tracks the
+/// [`Sensitivity`] (which is then integrated alongside).
 pub fn rk4_moments(
     m: &mut DVector<f64>,
     p: &mut DMatrix<f64>,
@@ -85,11 +143,15 @@ pub fn rk4_moments(
         mt,
         pt,
         jacobian,
+        sensitivity,
     } = work;
     for _ in 0..substeps {
         for stage in 0..4 {
             if stage == 0 {
                 rates((m, p), (&mut km[0], &mut kp[0]), jacobian)?;
+                if let Some(s) = sensitivity.as_mut() {
+                    s.stage(0, 0.0, jacobian);
+                }
                 continue;
             }
             // Stages 2 and 3 at half a step along the previous rates, stage 4 at a whole one.
@@ -99,12 +161,23 @@ pub fn rk4_moments(
             pt.copy_from(p);
             pt.zip_apply(&kp[stage - 1], |a, b| *a += b * along);
             rates((mt, pt), (&mut km[stage], &mut kp[stage]), jacobian)?;
+            if let Some(s) = sensitivity.as_mut() {
+                s.stage(stage, along, jacobian);
+            }
         }
         for (stage, weight) in [1.0, 2.0, 2.0, 1.0].into_iter().enumerate() {
             m.axpy(weight * h / 6.0, &km[stage], 1.0);
             p.zip_apply(&kp[stage], |a, b| *a += b * (weight * h / 6.0));
+            if let Some(s) = sensitivity.as_mut() {
+                let Sensitivity { phi, kphi, .. } = s;
+                phi.zip_apply(&kphi[stage], |a, b| *a += b * (weight * h / 6.0));
+            }
         }
         crate::linalg::symmetrize(p);
+    }
+    if let Some(s) = sensitivity.as_mut() {
+        s.predicted.0.copy_from(m);
+        s.predicted.1.copy_from(p);
     }
     Ok(())
 }

@@ -175,7 +175,9 @@ impl UnscentedKalman {
     }
 
     /// The sigma-point moment rates at (m, P) into (dm, dP) (see the module doc): f over all
-    /// sigma points in one batch.
+    /// sigma points in one batch. With `linearisation`, also the statistically linearised
+    /// drift `A = E[(f(x) − f̄)(x − m)ᵀ] P⁻¹` there (row-major), for the unscented RTS
+    /// smoother ([`crate::filters::smoothing`] (S1)).
     fn rates(
         model: &Model,
         q: &DMatrix<f64>,
@@ -183,6 +185,7 @@ impl UnscentedKalman {
         sigma: &mut SigmaPoints,
         (m, p): (&DVector<f64>, &DMatrix<f64>),
         (dm, dp): (&mut DVector<f64>, &mut DMatrix<f64>),
+        linearisation: Option<&mut [f64]>,
     ) -> Result<(), FilterError> {
         let n = model.n;
         sigma.place(w, m, p)?;
@@ -199,6 +202,16 @@ impl UnscentedKalman {
             (&sigma.points, m.as_slice()),
             dp,
         );
+        if let Some(a) = linearisation {
+            // Aᵀ = P⁻¹ Cᵀ.
+            let chol = crate::linalg::cholesky(p, "covariance")?;
+            let at = chol.solve(&dp.transpose());
+            for i in 0..n {
+                for j in 0..n {
+                    a[i * n + j] = at[(j, i)];
+                }
+            }
+        }
         // dP = C + Cᵀ + Q.
         for a in 0..n {
             for b in a..n {
@@ -261,9 +274,18 @@ impl UnscentedKalman {
     }
 }
 
+super::smoother::gaussian_filter!(UnscentedKalman);
+
 impl Filter for UnscentedKalman {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        super::smoother::rts(self, plan)
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
@@ -281,8 +303,9 @@ impl Filter for UnscentedKalman {
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
             if obs.dt > 0.0 {
-                state.predict_with(obs.dt, substeps.over(obs.dt), |at, rates, _| {
-                    Self::rates(model, q, weights, sigma, at, rates)
+                let tracking = state.transition().is_some();
+                state.predict_with(obs.dt, substeps.over(obs.dt), |at, rates, a| {
+                    Self::rates(model, q, weights, sigma, at, rates, tracking.then_some(a))
                 })?;
             }
             match meas {

@@ -33,14 +33,14 @@ pub const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
 #[derive(Clone, Debug)]
 pub struct ParticleFilter {
     name: String,
-    model: Model,
-    params: PfParams,
-    rng: SimRng,
+    pub(super) model: Model,
+    pub(super) params: PfParams,
+    pub(super) rng: SimRng,
     normal: NormalZiggurat,
     /// Component j of particle i at `particles[j * N + i]`.
-    particles: Vec<f64>,
+    pub(super) particles: Vec<f64>,
     /// Normalised log-weights and the same weights in the linear domain.
-    log_weights: Vec<f64>,
+    pub(super) log_weights: Vec<f64>,
     /// The last step's log-likelihood estimate ([`Filter::log_likelihood`]).
     log_likelihood: f64,
     weights: Vec<f64>,
@@ -76,6 +76,9 @@ pub struct ParticleFilter {
     last_unique: usize,
     /// Euler–Maruyama steps per prediction (per Δτ when built for it).
     pub(super) substeps: crate::filters::Substeps,
+    /// The clouds between the Euler–Maruyama steps of the last prediction (after 1, …, S − 1
+    /// of its S steps, n·N values each), kept when a smoother asks for them.
+    pub(super) trail: Option<Vec<f64>>,
 }
 
 impl ParticleFilter {
@@ -146,6 +149,7 @@ impl ParticleFilter {
             last_ess: count as f64,
             last_unique: count,
             substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), None),
+            trail: None,
         })
     }
 
@@ -173,6 +177,8 @@ impl ParticleFilter {
                 .eval_batch(from, &mut self.drift, &mut self.scratch);
             if substep == 0 {
                 self.resampled.copy_from_slice(&self.particles);
+            } else if let Some(trail) = &mut self.trail {
+                trail.extend_from_slice(&self.resampled);
             }
             self.normal.fill(&mut self.rng, &mut self.noise);
             for j in 0..n {
@@ -441,6 +447,13 @@ impl Filter for ParticleFilter {
 
     fn log_likelihood(&self) -> Option<f64> {
         Some(self.log_likelihood)
+    }
+
+    fn smoother(
+        &self,
+        plan: &crate::filters::smoothing::SmoothingPlan,
+    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        self.ffbsi(plan)
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

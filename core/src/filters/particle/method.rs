@@ -2,6 +2,7 @@
 //! construction, and the substeps it chooses from the problem.
 
 use crate::filters::params::Declared;
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec;
@@ -24,6 +25,10 @@ builder_fn!(Pf);
 impl Method for Pf {
     const KEY: &'static str = "pf";
     const RANDOM: bool = true;
+    const SMOOTHING: Smoothing = Smoothing::By(
+        "FFBSi",
+        "forward filtering, backward simulation: M trajectories drawn backward through the stored particle clouds with the transition density of the filter's Euler–Maruyama steps (needs a nonsingular G Gᵀ); unbiased for the discretised model up to Monte Carlo error, at O(M N) per Euler step",
+    );
     type Params = PfParams;
     type Filter = ParticleFilter;
 

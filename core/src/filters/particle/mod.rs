@@ -27,6 +27,7 @@
 mod filter;
 mod method;
 mod params;
+mod smoother;
 
 pub use filter::{ParticleFilter, ESS_SHARE_THRESHOLD, UNIQUE_SHARE_THRESHOLD};
 pub use method::{substeps_for, Pf, EULER_RATE_STEP, MAX_CHOSEN_SUBSTEPS};

@@ -20,6 +20,9 @@ parameters! {
         /// another length takes as many steps of at most Δτ/substeps as it needs); empty:
         /// chosen so that ‖∂f/∂x‖∞ times the step is at most 0.1 over the domain.
         substeps: Option<usize> = None => optional_int "substeps", at_least(1);
+        /// Trajectories M the smoother (FFBSi) draws backward through the particle clouds:
+        /// its error falls like 1/√M, its cost is O(M N) per Euler–Maruyama step.
+        trajectories: usize = 100 => int "smoother trajectories M", range(1, MAX_PARTICLES);
     }
 }
 

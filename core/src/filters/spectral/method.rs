@@ -1,6 +1,7 @@
 //! The spectral Yau–Yau filter of 004 (Shi, Chen & Yau 2021) registered as a [`Method`].
 
 use crate::filters::params::Declared;
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -20,6 +21,9 @@ pub struct Spectral;
 builder_fn!(Spectral);
 
 impl Method for Spectral {
+    const SMOOTHING: Smoothing = Smoothing::NotAvailable(
+        "the spectral filter's Legendre expansion is projected after every update (004); the transposed projection is not implemented, so no smoother is offered yet",
+    );
     const KEY: &'static str = "spectral";
     const NEEDS_INTERVAL: bool = true;
     const NEEDS_DOMAIN: bool = true;

@@ -3,6 +3,7 @@
 //! [`YauYauFilter`]; each names its scheme, its own parameters and its checks.
 
 use crate::filters::params::Declared;
+use crate::filters::smoothing::Smoothing;
 use alloc::format;
 use alloc::string::String;
 use alloc::vec;
@@ -98,6 +99,9 @@ macro_rules! yau_yau_method {
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
             const DENSITY: bool = true;
+            const SMOOTHING: Smoothing = Smoothing::NotAvailable(
+                "the forward–backward smoother needs the transposed step of each Yau–Yau scheme (IEM, QIEM, its 4th-order form, superposition); it is not implemented yet",
+            );
             type Params = YauYauParams;
             type Filter = YauYauFilter;
 

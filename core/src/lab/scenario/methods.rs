@@ -45,6 +45,8 @@ pub struct CatalogueEntry {
     pub density: bool,
     /// Whether the method draws random numbers (its likelihood is random in the parameters).
     pub random: bool,
+    /// Its fixed-interval smoother, or why it has none.
+    pub smoother: crate::filters::smoothing::SmootherInfo,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -105,6 +107,10 @@ macro_rules! registry {
             /// Whether the method draws random numbers ([`Method::RANDOM`]).
             pub fn is_random(&self) -> bool {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::RANDOM,)* }
+            }
+            /// The method's smoother, or why it has none ([`Method::SMOOTHING`]).
+            pub fn smoothing(&self) -> crate::filters::smoothing::Smoothing {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::SMOOTHING,)* }
             }
             /// Whether the method is an exact reference ([`Method::EXACT`]).
             pub fn is_exact(&self) -> bool {
@@ -171,6 +177,7 @@ macro_rules! registry {
                 exact: <$method>::EXACT,
                 density: <$method>::DENSITY,
                 random: <$method>::RANDOM,
+                smoother: <$method>::SMOOTHING.into(),
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }

@@ -1,0 +1,308 @@
+//! Forward filtering, backward simulation (FFBSi; Godsill, Doucet & West 2004) for the
+//! particle filter ([`crate::filters::smoothing`]).
+//!
+//! The forward pass is the particle filter, keeping after every step its particles and
+//! weights, and the clouds between the Euler–Maruyama steps of each prediction. Between two
+//! observations the particles move S Euler–Maruyama steps of length h, each with the Gaussian
+//! transition density `p(x' | x) = N(x'; x + f(x) h, Q h)`, `Q = G Gᵀ`; along those steps the
+//! filtering distribution is the moved cloud with the weights of the last observation. The
+//! backward pass draws M trajectories: the last point from the final weights, then each
+//! earlier point among the cloud before it with probability
+//! `∝ w^i N(x' ; x^i + f(x^i) h, Q h)` (the backward kernel of the discretised chain), down to
+//! the start. The smoothed mean and covariance at an observation time are those of the M
+//! trajectories' points there: unbiased for the discretised model's smoother as N → ∞, with a
+//! Monte Carlo error that falls like 1/√M. A step of length 0 (the update at τ₀) does not move
+//! a trajectory.
+//!
+//! Cost: O(M N n²) per Euler–Maruyama step backward (every trajectory weighs every particle),
+//! and n·N·S values kept per step. The density exists only for a nonsingular Q, so a model
+//! whose noise drives fewer components than it has is refused.
+
+use alloc::boxed::Box;
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, RngExt};
+
+use super::ParticleFilter;
+use crate::error::FilterError;
+use crate::filters::smoothing::{no_smoother, SmoothedStep, Smoother, SmoothingPlan};
+use crate::filters::{Estimate, Filter, Observation};
+use crate::model::BatchScratch;
+use crate::random::{rng_from_seed, SimRng};
+
+/// One step of the forward pass.
+#[derive(Clone, Debug)]
+struct Record {
+    /// Euler–Maruyama steps of the prediction (0: the step did not move) and their length.
+    substeps: usize,
+    h: f64,
+    /// The clouds after 1, …, S − 1 Euler steps (n·N each).
+    trail: Vec<f64>,
+    /// Particles and log-weights after the step.
+    particles: Vec<f64>,
+    log_weights: Vec<f64>,
+}
+
+/// The FFBSi smoother of the particle filter (see the module doc).
+#[derive(Clone, Debug)]
+pub(crate) struct Ffbsi {
+    filter: ParticleFilter,
+    start: (Vec<f64>, Vec<f64>),
+    records: Vec<Record>,
+    /// L⁻¹ with `Q = L Lᵀ`.
+    whiten: DMatrix<f64>,
+    rng: SimRng,
+}
+
+impl ParticleFilter {
+    /// The FFBSi smoother from the filter's current state (see the module doc).
+    pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
+        let q = self.model.process_noise();
+        let chol = q.clone().cholesky().ok_or_else(|| {
+            no_smoother(
+                self.name(),
+                "FFBSi needs the transition density of the Euler–Maruyama step, and this model's diffusion G Gᵀ is singular",
+            )
+        })?;
+        let (n, count) = (self.model.n, self.params.particles);
+        let substeps = self.substeps.per_interval();
+        let per_step = (n * substeps + 1) * count * core::mem::size_of::<f64>();
+        plan.check(
+            self.name(),
+            per_step,
+            "the particle clouds of every Euler step",
+        )?;
+        let whiten = chol
+            .l()
+            .try_inverse()
+            .ok_or(FilterError::NotPositiveDefinite {
+                what: "diffusion G Gᵀ",
+            })?;
+        let mut filter = self.clone();
+        filter.trail = Some(Vec::new());
+        // The backward draws use a stream of their own, seeded from the filter's.
+        let rng = rng_from_seed(filter.rng.clone().next_u64() ^ 0x9e37_79b9_7f4a_7c15);
+        Ok(Box::new(Ffbsi {
+            start: (filter.particles.clone(), filter.log_weights.clone()),
+            filter,
+            records: Vec::with_capacity(plan.steps),
+            whiten,
+            rng,
+        }))
+    }
+}
+
+impl Filter for Ffbsi {
+    fn name(&self) -> &str {
+        self.filter.name()
+    }
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        if let Some(t) = &mut self.filter.trail {
+            t.clear();
+        }
+        self.filter.step(obs)?;
+        let moved = obs.dt > 0.0;
+        let substeps = if moved {
+            self.filter.substeps.over(obs.dt)
+        } else {
+            0
+        };
+        self.records.push(Record {
+            substeps,
+            h: if moved { obs.dt / substeps as f64 } else { 0.0 },
+            trail: self
+                .filter
+                .trail
+                .as_ref()
+                .map_or_else(Vec::new, |t| t.clone()),
+            particles: self.filter.particles.clone(),
+            log_weights: self.filter.log_weights.clone(),
+        });
+        Ok(())
+    }
+    fn log_likelihood(&self) -> Option<f64> {
+        self.filter.log_likelihood()
+    }
+    fn estimate(&self) -> Estimate {
+        self.filter.estimate()
+    }
+    fn estimate_into(&self, out: &mut Estimate) {
+        self.filter.estimate_into(out)
+    }
+    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
+        self.filter.self_check(out)
+    }
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.filter.marginal_density(dim, grid, out)
+    }
+    fn as_smoother(&mut self) -> Option<&mut dyn Smoother> {
+        Some(self)
+    }
+}
+
+/// Draws an index with probabilities `∝ exp(log_p)` (`log_p` is overwritten).
+fn draw(log_p: &mut [f64], rng: &mut SimRng) -> usize {
+    let max = log_p.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    let mut total = 0.0;
+    for v in log_p.iter_mut() {
+        *v = libm::exp(*v - max);
+        total += *v;
+    }
+    let mut u = rng.random::<f64>() * total;
+    for (i, v) in log_p.iter().enumerate() {
+        u -= v;
+        if u <= 0.0 {
+            return i;
+        }
+    }
+    log_p.len() - 1
+}
+
+impl Ffbsi {
+    /// Moves every trajectory in `points` (n·M, component-major) one Euler step back, onto
+    /// the cloud `cloud` (n·N) with log-weights `log_w`: the backward kernel of the module doc.
+    #[allow(clippy::too_many_arguments)]
+    fn back_one(
+        &mut self,
+        cloud: &[f64],
+        log_w: &[f64],
+        h: f64,
+        points: &mut [f64],
+        drift: &mut Vec<f64>,
+        scratch: &mut BatchScratch,
+        log_p: &mut [f64],
+    ) {
+        let (n, count) = (self.filter.model.n, log_w.len());
+        let m = points.len() / n;
+        drift.resize(n * count, 0.0);
+        self.filter.model.drift.eval_batch(cloud, drift, scratch);
+        let scale = 0.5 / h;
+        let mut diff = DVector::zeros(n);
+        let mut white = DVector::zeros(n);
+        let mut chosen = vec![0usize; m];
+        for (t, pick) in chosen.iter_mut().enumerate() {
+            for (i, lp) in log_p.iter_mut().enumerate() {
+                for j in 0..n {
+                    diff[j] = points[j * m + t] - cloud[j * count + i] - drift[j * count + i] * h;
+                }
+                white.gemv(1.0, &self.whiten, &diff, 0.0);
+                *lp = log_w[i] - scale * white.norm_squared();
+            }
+            *pick = draw(log_p, &mut self.rng);
+        }
+        for (t, &i) in chosen.iter().enumerate() {
+            for j in 0..n {
+                points[j * m + t] = cloud[j * count + i];
+            }
+        }
+    }
+}
+
+/// The mean and covariance of `points` (n·M, component-major).
+fn moments(points: &[f64], n: usize, out: &mut Estimate) {
+    let m = points.len() / n;
+    for j in 0..n {
+        out.mean[j] = points[j * m..(j + 1) * m].iter().sum::<f64>() / m as f64;
+    }
+    let mut cov = DMatrix::zeros(n, n);
+    for a in 0..n {
+        for b in 0..=a {
+            let (ma, mb) = (out.mean[a], out.mean[b]);
+            let c = (0..m)
+                .map(|t| (points[a * m + t] - ma) * (points[b * m + t] - mb))
+                .sum::<f64>()
+                / m as f64;
+            cov[(a, b)] = c;
+            cov[(b, a)] = c;
+        }
+    }
+    out.covariance = Some(cov);
+}
+
+impl Smoother for Ffbsi {
+    fn smooth(&mut self, visit: &mut dyn FnMut(SmoothedStep<'_>)) -> Result<(), FilterError> {
+        let (n, count) = (self.filter.model.n, self.filter.params.particles);
+        let m = self.filter.params.trajectories;
+        let last = self.records.len();
+        let mut estimate = Estimate::zeros(n);
+        let mut points = vec![0.0; n * m];
+        let mut log_p = vec![0.0; count];
+        // The last points, from the final weights.
+        let (particles, log_w) = match self.records.last() {
+            Some(r) => (r.particles.clone(), r.log_weights.clone()),
+            None => self.start.clone(),
+        };
+        for t in 0..m {
+            log_p.copy_from_slice(&log_w);
+            let i = draw(&mut log_p, &mut self.rng);
+            for j in 0..n {
+                points[j * m + t] = particles[j * count + i];
+            }
+        }
+        moments(&points, n, &mut estimate);
+        visit(SmoothedStep {
+            index: last,
+            estimate: &estimate,
+            density: None,
+        });
+        let mut drift = Vec::new();
+        let mut scratch = BatchScratch::default();
+        for k in (0..last).rev() {
+            let record = self.records[k].clone();
+            if record.substeps > 0 {
+                let (before, before_w) = match k {
+                    0 => self.start.clone(),
+                    _ => (
+                        self.records[k - 1].particles.clone(),
+                        self.records[k - 1].log_weights.clone(),
+                    ),
+                };
+                // Back through the clouds after S − 1, …, 1 Euler steps, then the cloud the
+                // step started from; all carry the weights of the step's start.
+                for s in (0..record.substeps).rev() {
+                    let cloud = match s {
+                        0 => &before[..],
+                        _ => &record.trail[(s - 1) * n * count..s * n * count],
+                    };
+                    self.back_one(
+                        cloud,
+                        &before_w,
+                        record.h,
+                        &mut points,
+                        &mut drift,
+                        &mut scratch,
+                        &mut log_p,
+                    );
+                }
+            }
+            if points.iter().any(|v| !v.is_finite()) {
+                return Err(FilterError::NonFinite {
+                    what: "smoothed trajectories",
+                });
+            }
+            moments(&points, n, &mut estimate);
+            visit(SmoothedStep {
+                index: k,
+                estimate: &estimate,
+                density: None,
+            });
+        }
+        Ok(())
+    }
+
+    fn notes(&self) -> Vec<String> {
+        let (count, m) = (
+            self.filter.params.particles,
+            self.filter.params.trajectories,
+        );
+        let euler: usize = self.records.iter().map(|r| r.substeps).sum();
+        vec![format!(
+            "FFBSi: {m} trajectories through {count} particles over {euler} Euler–Maruyama steps ({:.2e} kernel evaluations); Monte Carlo error ~ 1/√{m}",
+            (m * count * euler) as f64
+        )]
+    }
+}

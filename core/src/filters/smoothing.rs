@@ -1,0 +1,368 @@
+//! Fixed-interval smoothing: the best estimate of the state at every observation time from
+//! **all** the data, `p(x_k | z_1:N)`, where a filter gives `p(x_k | z_1:k)`.
+//!
+//! Every smoother is a forward pass and a backward pass. The forward pass is the method's own
+//! filter, which a [`Smoother`] wraps: it steps exactly as the filter does and keeps what the
+//! backward pass needs. [`Smoother::smooth`] then runs backward over the steps taken. A filter
+//! becomes its smoother with [`Filter::smoother`](super::Filter::smoother); a method without
+//! one returns an error saying why (and says so in the catalogue, [`Smoothing`]).
+//!
+//! * **Gaussian filters** (Kalman–Bucy, EKF, UKF, IEKF, IOKF): the Rauch–Tung–Striebel
+//!   recursion in its general Gaussian form (Särkkä 2013, *Bayesian Filtering and Smoothing*,
+//!   Thm 8.2 / eq. (9.3)):
+//!   `G_k = C_{k,k+1} P⁻_{k+1}⁻¹`, `m^s_k = m_k + G_k (m^s_{k+1} − m⁻_{k+1})`,
+//!   `P^s_k = P_k + G_k (P^s_{k+1} − P⁻_{k+1}) G_kᵀ` (S1)
+//!   with `C_{k,k+1} = Cov(x_k, x_{k+1} | z_1:k) = P_k Φ_kᵀ`, where Φ_k solves `dΦ/dt = A(t) Φ`,
+//!   `Φ(0) = I`, along the filter's own moment equations: A = ∂f/∂x at the mean for the EKF
+//!   (the extended RTS smoother), A = E[f(x)(x − m)ᵀ] P⁻¹ by the sigma points for the UKF
+//!   (the statistically linearised drift of Särkkä's continuous–discrete unscented RTS
+//!   smoother), A the drift matrix for the Kalman–Bucy filter (Φ = e^{AΔτ}: the exact RTS
+//!   smoother of the sampled model, the one the filter updates with).
+//! * **Grid filters**: the forward–backward recursion on the filter's own grid. If one step of
+//!   the scheme carries the density as `p⁻_{k+1} = T_k p_k` (the discrete Fokker–Planck or
+//!   Kolmogorov operator, exactly as the filter applies it) and then multiplies by the
+//!   likelihood, the smoothed densities of that discrete model are
+//!   `p^s_k = p_k ⊙ T_kᵀ (p^s_{k+1} ⊘ p⁻_{k+1})` (S2)
+//!   (the density form of the RTS recursion: `p(x_k | z_1:N) = p(x_k | z_1:k)
+//!   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`), so the smoothed
+//!   density is consistent with the filter's, and converges with it as the grid is refined.
+//!   `T_kᵀ` — the backward Kolmogorov equation in the scheme's discretisation — is each
+//!   scheme's transposed step ([`GridTransition::carry_back`]).
+//! * **Particle filter**: forward filtering, backward simulation (FFBSi; Godsill, Doucet &
+//!   West 2004): trajectories drawn backward through the stored particle clouds with
+//!   probabilities `∝ w_k^i p(x_{k+1} | x_k^i)`, the transition density of the filter's own
+//!   Euler–Maruyama steps. Its cost is O(M N) per Euler step for M trajectories and N
+//!   particles.
+
+use alloc::boxed::Box;
+use alloc::format;
+use alloc::string::String;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use serde::{Deserialize, Serialize};
+
+use super::{normalise_on_grid, DensityView, Estimate, Filter, Observation};
+use crate::error::FilterError;
+use crate::grid::{Moments, TensorGrid};
+
+/// How a method smooths, for the catalogue: the smoother and what it computes, or why the
+/// method has none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Smoothing {
+    /// The method's smoother: a short name and what it computes (what is exact, what is
+    /// approximate, its cost).
+    By(&'static str, &'static str),
+    /// The method has no smoother, and why.
+    NotAvailable(&'static str),
+}
+
+/// [`Smoothing`] as the catalogue shows it (serde).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SmootherInfo {
+    /// The smoother's name (`"RTS"`, `"forward–backward"`, `"FFBSi"`), or `None` when the
+    /// method has none.
+    pub name: Option<String>,
+    /// What it computes, or why there is none.
+    pub summary: String,
+}
+
+impl From<Smoothing> for SmootherInfo {
+    fn from(s: Smoothing) -> Self {
+        match s {
+            Smoothing::By(name, summary) => SmootherInfo {
+                name: Some(name.into()),
+                summary: summary.into(),
+            },
+            Smoothing::NotAvailable(why) => SmootherInfo {
+                name: None,
+                summary: why.into(),
+            },
+        }
+    }
+}
+
+/// What a smoother is told before its forward pass, so that it can check its memory before
+/// it allocates anything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SmoothingPlan {
+    /// The steps the forward pass will take (an estimate; more are accepted while the memory
+    /// lasts).
+    pub steps: usize,
+    /// The most bytes the smoother's records may take ([`crate::validate::memory_cap`] by
+    /// default).
+    pub memory_cap: usize,
+}
+
+impl SmoothingPlan {
+    /// A plan for `steps` steps under the process's memory cap.
+    pub fn for_steps(steps: usize) -> Self {
+        SmoothingPlan {
+            steps,
+            memory_cap: crate::validate::memory_cap(),
+        }
+    }
+
+    /// An error when `per_step` bytes for every planned step (and one more) exceed the cap.
+    pub fn check(&self, name: &str, per_step: usize, what: &str) -> Result<(), FilterError> {
+        let need = per_step.checked_mul(self.steps + 1);
+        match need {
+            Some(b) if b <= self.memory_cap => Ok(()),
+            _ => Err(FilterError::Unsuitable(format!(
+                "{name}'s smoother would keep {} for {} steps ({what}), more than the memory cap of {} MiB",
+                need.map_or_else(|| "more than usize::MAX bytes".into(), |b| format!("{} MiB", b >> 20)),
+                self.steps,
+                self.memory_cap >> 20
+            ))),
+        }
+    }
+}
+
+/// One smoothed time: `index` 0 is the time the forward pass started at, `i` the time after its
+/// i-th step.
+#[derive(Clone, Copy, Debug)]
+pub struct SmoothedStep<'a> {
+    /// Which time (see above).
+    pub index: usize,
+    /// The smoothed mean and covariance.
+    pub estimate: &'a Estimate,
+    /// The smoothed density, for grid smoothers.
+    pub density: Option<DensityView<'a>>,
+}
+
+/// A fixed-interval smoother: a filter (its forward pass, which steps exactly as the method's
+/// filter does) that keeps what its backward pass needs (see the module doc).
+pub trait Smoother: Filter {
+    /// The backward pass over the steps taken so far: `visit` sees every smoothed time, from
+    /// the last to the first (index 0). The forward pass is not changed and may go on.
+    fn smooth(&mut self, visit: &mut dyn FnMut(SmoothedStep<'_>)) -> Result<(), FilterError>;
+    /// What the smoother approximates or costs on this run, beyond the catalogue's summary.
+    fn notes(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// The smoothed estimates of `smoother`, in time order (index 0 first).
+pub fn smoothed_estimates(smoother: &mut dyn Smoother) -> Result<Vec<Estimate>, FilterError> {
+    let mut out: Vec<Estimate> = Vec::new();
+    smoother.smooth(&mut |step| out.push(step.estimate.clone()))?;
+    out.reverse();
+    Ok(out)
+}
+
+/// The refusal of a method without a smoother.
+pub(crate) fn no_smoother(name: &str, why: &str) -> FilterError {
+    FilterError::Unsuitable(format!("{name} has no smoother: {why}"))
+}
+
+/// What a grid filter gives its forward–backward smoother (S2): its density and the scheme's
+/// step and transposed step.
+pub(crate) trait GridTransition: Filter + Clone + 'static {
+    /// The grid and the current (normalised) density on it.
+    fn grid_density(&self) -> (&TensorGrid, &[f64]);
+    /// Carries `values` over `obs.dt` as the step with `obs` does before it assimilates:
+    /// `values ← T values`, not renormalised.
+    fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError>;
+    /// The transposed step: `values ← Tᵀ values` for the same `obs`.
+    fn carry_back(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError>;
+    /// Sets the filter's density to `values` (already normalised), to refilter a segment
+    /// from a checkpoint.
+    fn restore(&mut self, values: &[f64]) -> Result<(), FilterError>;
+}
+
+/// A recorded step: its length and observation (kept so that the backward pass can redo the
+/// step's operator, and a segment between checkpoints can be refiltered).
+#[derive(Clone, Debug)]
+struct StepRecord {
+    dt: f64,
+    value: Vec<f64>,
+    kind: super::ObservationKind,
+}
+
+impl StepRecord {
+    fn observation(&self) -> Observation<'_> {
+        Observation {
+            dt: self.dt,
+            value: &self.value,
+            kind: self.kind,
+        }
+    }
+}
+
+/// The forward–backward smoother (S2) of a grid filter `F`. The filtered densities are kept
+/// every `stride` steps (checkpoints); the backward pass refilters each segment between two
+/// checkpoints from the first (so memory is checkpoints plus one segment, at the cost of
+/// one more forward pass when `stride > 1`).
+#[derive(Clone, Debug)]
+pub(crate) struct GridSmoother<F: GridTransition> {
+    filter: F,
+    /// A copy of the filter the backward pass steps and carries with.
+    worker: F,
+    steps: Vec<StepRecord>,
+    /// The filtered density after step `i · stride` (index 0: the start).
+    checkpoints: Vec<Vec<f64>>,
+    stride: usize,
+    cells: usize,
+}
+
+impl<F: GridTransition> GridSmoother<F> {
+    /// The smoother of `filter` from its current state, for `plan`: every density is kept
+    /// when they fit under the cap, else every ⌈√steps⌉-th (refused when even that does
+    /// not fit).
+    pub(crate) fn new(filter: &F, plan: &SmoothingPlan) -> Result<Self, FilterError> {
+        let cells = filter.grid_density().1.len();
+        let bytes = cells.saturating_mul(core::mem::size_of::<f64>());
+        let stride = match plan.check(filter.name(), bytes, "one density per step") {
+            Ok(()) => 1,
+            Err(_) => {
+                let stride = libm::ceil(libm::sqrt(plan.steps.max(1) as f64)) as usize;
+                // Checkpoints and one segment, plus the segment's predicted densities.
+                let kept = plan.steps / stride + 3 * stride;
+                let per = bytes.saturating_mul(kept) / (plan.steps + 1).max(1) + 1;
+                plan.check(
+                    filter.name(),
+                    per,
+                    "densities at checkpoints every ⌈√N⌉ steps and one segment",
+                )?;
+                stride
+            }
+        };
+        Ok(GridSmoother {
+            filter: filter.clone(),
+            worker: filter.clone(),
+            steps: Vec::new(),
+            checkpoints: vec![filter.grid_density().1.to_vec()],
+            stride,
+            cells,
+        })
+    }
+
+    /// The filtered densities after steps `from..=to` (index `from` a checkpoint), refiltered.
+    fn refilter(&mut self, from: usize, to: usize) -> Result<Vec<Vec<f64>>, FilterError> {
+        let start = &self.checkpoints[from / self.stride];
+        let mut out = Vec::with_capacity(to - from + 1);
+        out.push(start.clone());
+        if to > from {
+            self.worker.restore(start)?;
+            for record in &self.steps[from..to] {
+                self.worker.step(&record.observation())?;
+                out.push(self.worker.grid_density().1.to_vec());
+            }
+        }
+        Ok(out)
+    }
+}
+
+impl<F: GridTransition> Filter for GridSmoother<F> {
+    fn name(&self) -> &str {
+        self.filter.name()
+    }
+    fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
+        self.filter.step(obs)?;
+        self.steps.push(StepRecord {
+            dt: obs.dt,
+            value: obs.value.to_vec(),
+            kind: obs.kind,
+        });
+        if self.steps.len().is_multiple_of(self.stride) {
+            self.checkpoints.push(self.filter.grid_density().1.to_vec());
+        }
+        Ok(())
+    }
+    fn log_likelihood(&self) -> Option<f64> {
+        self.filter.log_likelihood()
+    }
+    fn estimate(&self) -> Estimate {
+        self.filter.estimate()
+    }
+    fn estimate_into(&self, out: &mut Estimate) {
+        self.filter.estimate_into(out)
+    }
+    fn density(&self) -> Option<DensityView<'_>> {
+        self.filter.density()
+    }
+    fn warnings(&self) -> Vec<String> {
+        self.filter.warnings()
+    }
+    fn self_check(&self, out: &mut Vec<super::Concern>) {
+        self.filter.self_check(out)
+    }
+    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+        self.filter.marginal_density(dim, grid, out)
+    }
+    fn as_smoother(&mut self) -> Option<&mut dyn Smoother> {
+        Some(self)
+    }
+}
+
+impl<F: GridTransition> Smoother for GridSmoother<F> {
+    fn smooth(&mut self, visit: &mut dyn FnMut(SmoothedStep<'_>)) -> Result<(), FilterError> {
+        let last = self.steps.len();
+        let grid = self.filter.grid_density().0.clone();
+        let n = grid.dim();
+        let mut moments = Moments::zeros(n);
+        let mut estimate = Estimate::zeros(n);
+        // p^s at the last step is the filtered density.
+        let mut smoothed = self.filter.grid_density().1.to_vec();
+        normalise_on_grid(&grid, &mut smoothed, &mut moments, &mut estimate)?;
+        visit(SmoothedStep {
+            index: last,
+            estimate: &estimate,
+            density: Some(grid.view(&smoothed)),
+        });
+        let mut ratio = vec![0.0; self.cells];
+        let mut k = last;
+        while k > 0 {
+            // The segment [from, k] whose filtered densities the recursion needs.
+            let from = ((k - 1) / self.stride) * self.stride;
+            let filtered = self.refilter(from, k - 1)?;
+            for j in (from..k).rev() {
+                let p = &filtered[j - from];
+                // p⁻_{j+1} = T p_j, then r = p^s_{j+1} ⊘ p⁻_{j+1} (0 where nothing was
+                // predicted: there p^s is 0 too).
+                ratio.copy_from_slice(p);
+                let record = &self.steps[j];
+                self.worker.carry(&record.observation(), &mut ratio)?;
+                let top = ratio.iter().fold(0.0f64, |a, &b| a.max(b));
+                for (r, s) in ratio.iter_mut().zip(&smoothed) {
+                    *r = if *r > 1e-300 * top && *r > 0.0 {
+                        s / *r
+                    } else {
+                        0.0
+                    };
+                }
+                self.worker.carry_back(&record.observation(), &mut ratio)?;
+                for ((s, p), r) in smoothed.iter_mut().zip(p).zip(&ratio) {
+                    *s = (p * r).max(0.0);
+                }
+                normalise_on_grid(&grid, &mut smoothed, &mut moments, &mut estimate)?;
+                visit(SmoothedStep {
+                    index: j,
+                    estimate: &estimate,
+                    density: Some(grid.view(&smoothed)),
+                });
+            }
+            k = from;
+        }
+        Ok(())
+    }
+
+    fn notes(&self) -> Vec<String> {
+        if self.stride > 1 {
+            vec![format!(
+                "densities kept every {} steps (memory cap); each segment was refiltered in the backward pass",
+                self.stride
+            )]
+        } else {
+            Vec::new()
+        }
+    }
+}
+
+/// `Box<dyn Smoother>` of a grid filter.
+pub(crate) fn grid_smoother<F: GridTransition>(
+    filter: &F,
+    plan: &SmoothingPlan,
+) -> Result<Box<dyn Smoother>, FilterError> {
+    Ok(Box::new(GridSmoother::new(filter, plan)?))
+}
