@@ -36,6 +36,17 @@ pub fn filter(
     .map_err(|e| e.to_string())
 }
 
+/// `mean ± sd` per component (the mean alone without sds), for tables.
+fn with_sds(mean: &[f64], sd: Option<Vec<f64>>) -> String {
+    (0..mean.len())
+        .map(|j| match &sd {
+            Some(sd) => format!("{:.4} ± {:.4}", mean[j], sd[j]),
+            None => format!("{:.4}", mean[j]),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Standard deviations from row k's covariance (n × n), when the method records them.
 fn sds(covariances: &[f64], n: usize, k: usize) -> Option<Vec<f64>> {
     let p = covariances.get(k * n * n..(k + 1) * n * n)?;
@@ -187,15 +198,7 @@ pub fn table(result: &RunResult) -> String {
         let rows = m.rows();
         let last = rows.checked_sub(1);
         let estimate = last.map_or_else(String::new, |k| {
-            let mean = &m.estimates[k * n..(k + 1) * n];
-            let sd = sds(&m.covariances, n, k);
-            (0..n)
-                .map(|j| match &sd {
-                    Some(sd) => format!("{:.4} ± {:.4}", mean[j], sd[j]),
-                    None => format!("{:.4}", mean[j]),
-                })
-                .collect::<Vec<_>>()
-                .join(", ")
+            with_sds(&m.estimates[k * n..(k + 1) * n], sds(&m.covariances, n, k))
         });
         let status = match &m.failure {
             Some(f) => format!(
@@ -247,16 +250,7 @@ fn smoothed_table(result: &RunResult, s: &mut String) {
     for m in &result.methods {
         let Some(sm) = &m.smoothed else { continue };
         let first = match sm.estimates.get(..n) {
-            Some(mean) if sm.failure.is_none() => {
-                let sd = sds(&sm.covariances, n, 0);
-                (0..n)
-                    .map(|j| match &sd {
-                        Some(sd) => format!("{:.4} ± {:.4}", mean[j], sd[j]),
-                        None => format!("{:.4}", mean[j]),
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            }
+            Some(mean) if sm.failure.is_none() => with_sds(mean, sds(&sm.covariances, n, 0)),
             _ => String::new(),
         };
         let mse = r.truth.as_deref().and_then(|t| sm.mse(t, n));

@@ -226,8 +226,10 @@ fn regular_times(count: usize, dt_obs: f64) -> Vec<f64> {
 /// Every method of the scenario on a user's observations (rows of m values; increments for
 /// continuous models, measurements for discrete ones), at `times` (τ₀…τ_N; every Δτ from 0
 /// when absent), with the true states when known; `seed` seeds the methods' random numbers.
+/// With `smooth`, each method runs as its fixed-interval smoother and its record carries the
+/// smoothed estimates.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, truth, seed))]
+#[pyo3(signature = (json, observations, times, truth, seed, smooth=false))]
 pub fn filter_recorded<'py>(
     py: Python<'py>,
     json: &str,
@@ -235,11 +237,15 @@ pub fn filter_recorded<'py>(
     times: Option<PyReadonlyArrayDyn<'py, f64>>,
     truth: Option<PyReadonlyArrayDyn<'py, f64>>,
     seed: u64,
+    smooth: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
     let recording = recording_of(&e, &observations, times.as_ref(), truth.as_ref())?;
     let result = py
-        .detach(|| e.filter_recorded(recording, seed))
+        .detach(|| match smooth {
+            true => e.smooth_recorded(recording, seed),
+            false => e.filter_recorded(recording, seed),
+        })
         .map_err(errors::from_core)?;
     result_dict(py, &result, e.chosen_defaults())
 }
@@ -429,6 +435,23 @@ fn result_dict<'py>(
         md.set_item("log_likelihood", track.log_likelihood())?;
         md.set_item("seconds_per_step", track.seconds_per_step())?;
         md.set_item("build_seconds", track.build_seconds)?;
+        match &track.smoothed {
+            Some(s) => {
+                let sd = PyDict::new(py);
+                sd.set_item("smoother", &s.smoother)?;
+                sd.set_item("estimates", padded(py, s.estimates.clone(), count, &[n])?)?;
+                sd.set_item(
+                    "covariances",
+                    padded(py, s.covariances.clone(), count, &[n, n])?,
+                )?;
+                sd.set_item("failure", &s.failure)?;
+                sd.set_item("notes", &s.notes)?;
+                sd.set_item("seconds", s.seconds)?;
+                sd.set_item("mse", r.truth.as_deref().and_then(|t| s.mse(t, n)))?;
+                md.set_item("smoothed", sd)?;
+            }
+            None => md.set_item("smoothed", py.None())?,
+        }
         methods.append(md)?;
     }
     d.set_item("methods", methods)?;

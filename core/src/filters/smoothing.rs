@@ -27,7 +27,7 @@
 //!   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`), so the smoothed
 //!   density is consistent with the filter's, and converges with it as the grid is refined.
 //!   `T_kᵀ` — the backward Kolmogorov equation in the scheme's discretisation — is each
-//!   scheme's transposed step ([`GridTransition::carry_back`]).
+//!   scheme's transposed step (the FPE step of 001 transposed: its upwind part and its tridiagonal solves).
 //! * **Particle filter**: forward filtering, backward simulation (FFBSi; Godsill, Doucet &
 //!   West 2004): trajectories drawn backward through the stored particle clouds with
 //!   probabilities `∝ w_k^i p(x_{k+1} | x_k^i)`, the transition density of the filter's own
@@ -150,6 +150,41 @@ pub fn smoothed_estimates(smoother: &mut dyn Smoother) -> Result<Vec<Estimate>, 
     Ok(out)
 }
 
+/// The [`Filter`] methods of a smoother that are its forward pass's (the filter in field
+/// `$filter`), and [`Filter::as_smoother`]; `step` is the smoother's own.
+macro_rules! forward_pass {
+    ($filter:ident) => {
+        fn name(&self) -> &str {
+            self.$filter.name()
+        }
+        fn log_likelihood(&self) -> Option<f64> {
+            self.$filter.log_likelihood()
+        }
+        fn estimate(&self) -> $crate::filters::Estimate {
+            self.$filter.estimate()
+        }
+        fn estimate_into(&self, out: &mut $crate::filters::Estimate) {
+            self.$filter.estimate_into(out)
+        }
+        fn density(&self) -> Option<$crate::filters::DensityView<'_>> {
+            self.$filter.density()
+        }
+        fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+            self.$filter.warnings()
+        }
+        fn self_check(&self, out: &mut alloc::vec::Vec<$crate::filters::Concern>) {
+            self.$filter.self_check(out)
+        }
+        fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+            self.$filter.marginal_density(dim, grid, out)
+        }
+        fn as_smoother(&mut self) -> Option<&mut dyn $crate::filters::smoothing::Smoother> {
+            Some(self)
+        }
+    };
+}
+pub(crate) use forward_pass;
+
 /// The refusal of a method without a smoother.
 pub(crate) fn no_smoother(name: &str, why: &str) -> FilterError {
     FilterError::Unsuitable(format!("{name} has no smoother: {why}"))
@@ -254,9 +289,7 @@ impl<F: GridTransition> GridSmoother<F> {
 }
 
 impl<F: GridTransition> Filter for GridSmoother<F> {
-    fn name(&self) -> &str {
-        self.filter.name()
-    }
+    forward_pass!(filter);
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         self.filter.step(obs)?;
         self.steps.push(StepRecord {
@@ -268,30 +301,6 @@ impl<F: GridTransition> Filter for GridSmoother<F> {
             self.checkpoints.push(self.filter.grid_density().1.to_vec());
         }
         Ok(())
-    }
-    fn log_likelihood(&self) -> Option<f64> {
-        self.filter.log_likelihood()
-    }
-    fn estimate(&self) -> Estimate {
-        self.filter.estimate()
-    }
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.filter.estimate_into(out)
-    }
-    fn density(&self) -> Option<DensityView<'_>> {
-        self.filter.density()
-    }
-    fn warnings(&self) -> Vec<String> {
-        self.filter.warnings()
-    }
-    fn self_check(&self, out: &mut Vec<super::Concern>) {
-        self.filter.self_check(out)
-    }
-    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        self.filter.marginal_density(dim, grid, out)
-    }
-    fn as_smoother(&mut self) -> Option<&mut dyn Smoother> {
-        Some(self)
     }
 }
 

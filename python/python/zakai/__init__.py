@@ -21,9 +21,9 @@ command line's messages.
 
 The package mirrors the Rust side: :mod:`zakai.models` (``Model``, ``Prior``),
 :mod:`zakai.scenario` (``Scenario``, presets, the method catalogue), :mod:`zakai.runs`
-(``simulate``, ``run``, ``filter``, ``monte_carlo``), :mod:`zakai.fitting` (``fit``,
+(``simulate``, ``run``, ``filter``, ``smooth``, ``monte_carlo``), :mod:`zakai.fitting` (``fit``,
 ``profile``, ``log_likelihood``: a scenario's parameters from your data), :mod:`zakai.results` (``RunResult``,
-``MethodResult``, ``MonteCarloTable``), :mod:`zakai.stepping` (the stepping ``Filter``) and
+``MethodResult``, ``Smoothed``, ``MonteCarloTable``), :mod:`zakai.stepping` (the stepping ``Filter``) and
 :mod:`zakai.errors`; everything is also here, at the top.
 """
 
@@ -34,8 +34,8 @@ from ._convert import ArrayLike, MethodSpec
 from .fitting import FitResult, Profile, fit, log_likelihood, profile
 from .errors import ConfigError, DimensionError, ExpressionError, FilterError, ZakaiError
 from .models import DOMAIN_SDS, Model, Prior
-from .results import MethodResult, MonteCarloTable, RunResult
-from .runs import filter, monte_carlo, run, simulate
+from .results import MethodResult, MonteCarloTable, RunResult, Smoothed
+from .runs import filter, monte_carlo, run, simulate, smooth
 from .scenario import Scenario, methods, presets, set_memory_cap
 from .stepping import Filter
 
@@ -54,6 +54,8 @@ __all__ = [
     "simulate",
     "run",
     "filter",
+    "smooth",
+    "Smoothed",
     "monte_carlo",
     "fit",
     "profile",

@@ -12,6 +12,44 @@ import numpy as np
 
 
 @dataclass
+class Smoothed:
+    """One method's fixed-interval smoother over a run (:func:`zakai.smooth`): the best
+    estimate of the state at every observation time from **all** the observations.
+
+    Attributes
+    ----------
+    smoother : str or None
+        ``"RTS"`` (Kalman–Bucy), ``"extended RTS"`` (EKF, IEKF, IOKF), ``"unscented RTS"``
+        (UKF), ``"forward–backward"`` (the separation and implicit-FDM grid filters),
+        ``"FFBSi"`` (particle filter); ``None`` when the method has none.
+    estimates : ndarray, shape (N + 1, n)
+        E[x(τ_k) | all observations]; NaN when there is no smoothed track.
+    covariances : ndarray, shape (N + 1, n, n)
+    failure : str or None
+        Why there is no smoothed track (no smoother, the filter failed, the memory cap).
+    notes : list of str
+        What the smoother approximated or cost on this run.
+    seconds : float
+        Wall time of the backward pass.
+    mse : float or None
+        MSE of the smoothed means against the truth, when it is known.
+    """
+
+    smoother: Optional[str]
+    estimates: np.ndarray
+    covariances: np.ndarray
+    failure: Optional[str]
+    notes: list[str]
+    seconds: float
+    mse: Optional[float]
+
+    @property
+    def sds(self) -> np.ndarray:
+        """Smoothed standard deviations (N + 1, n)."""
+        return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
+
+
+@dataclass
 class MethodResult:
     """One method's record in a run.
 
@@ -43,6 +81,9 @@ class MethodResult:
         a failure).
     seconds_per_step, build_seconds : float
         Wall time per step and to build the filter (its off-line part).
+    smoothed : Smoothed or None
+        The smoother's estimates in a run of :func:`zakai.smooth`; ``None`` in a filtering
+        run.
     """
 
     name: str
@@ -55,6 +96,7 @@ class MethodResult:
     log_likelihoods: np.ndarray
     seconds_per_step: float
     build_seconds: float
+    smoothed: Optional[Smoothed] = None
 
     @property
     def warned(self) -> bool:
@@ -105,7 +147,9 @@ class RunResult:
         given to :func:`filter` (else by ``t``): the time ``t``, the observations (NaN where
         missing), the truth when known, then per method its estimate ``<method> x<i>`` and,
         where it has a covariance, its standard deviation ``<method> sd x<i>``, and the
-        log-likelihood of the row's observation ``<method> loglik`` (NaN after a failure)."""
+        log-likelihood of the row's observation ``<method> loglik`` (NaN after a failure); in
+        a run of :func:`zakai.smooth` also ``<method> smoothed x<i>`` and
+        ``<method> smoothed sd x<i>`` (NaN for a method without a smoother)."""
         import pandas as pd
 
         n = next(iter(self.methods.values())).estimates.shape[1] if self.methods else 0
@@ -123,6 +167,11 @@ class RunResult:
                 if sds is not None:
                     columns[f"{key} sd x{j + 1}"] = sds[:, j]
             columns[f"{key} loglik"] = m.log_likelihoods
+            if m.smoothed is not None:
+                smoothed_sds = m.smoothed.sds
+                for j in range(n):
+                    columns[f"{key} smoothed x{j + 1}"] = m.smoothed.estimates[:, j]
+                    columns[f"{key} smoothed sd x{j + 1}"] = smoothed_sds[:, j]
         index = self.index if self.index is not None else pd.Index(self.times, name="t")
         return pd.DataFrame(columns, index=index)
 
@@ -135,6 +184,7 @@ class RunResult:
             while key in methods:  # two methods with one display name
                 key, i = f"{name} #{i}", i + 1
             failure = m["failure"]
+            sm = m.get("smoothed")
             methods[key] = MethodResult(
                 name=name,
                 estimates=m["estimates"],
@@ -146,6 +196,7 @@ class RunResult:
                 log_likelihoods=m["log_likelihoods"],
                 seconds_per_step=m["seconds_per_step"],
                 build_seconds=m["build_seconds"],
+                smoothed=None if sm is None else Smoothed(**sm),
             )
         return cls(
             seed=d["seed"],

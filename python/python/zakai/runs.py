@@ -89,6 +89,19 @@ def filter(
     seed : int, optional
         Seeds the methods' random numbers (particle filter); the scenario's seed when absent.
     """
+    return _recorded(scenario, observations, times, truth, seed, smooth=False)
+
+
+
+def _recorded(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    times: Optional[ArrayLike],
+    truth: Optional[ArrayLike],
+    seed: Optional[int],
+    smooth: bool,
+) -> RunResult:
+    """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
     index_times, index = _index_times(observations)
     obs = _array(
@@ -103,12 +116,52 @@ def filter(
             given if given is not None else index_times,
             _array(truth, "truth"),
             _seed(sc, seed),
+            smooth,
         )
     )
     if index is not None and len(index) == len(result.times):
         result.index = index
     return result
 
+
+def smooth(
+    scenario: Union[Scenario, str],
+    observations: ArrayLike,
+    times: Optional[ArrayLike] = None,
+    truth: Optional[ArrayLike] = None,
+    seed: Optional[int] = None,
+) -> RunResult:
+    """Every method of the scenario as its fixed-interval smoother on your observations.
+
+    A filter's estimate at τ_k uses the observations up to τ_k; a smoother's uses all of
+    them, before and after — the best estimate of the past, and what bridges a gap from both
+    sides. The run is :func:`filter`'s (same arguments, same filtered estimates), and each
+    :class:`MethodResult` carries ``smoothed`` (:class:`Smoothed`): the smoothed means and
+    covariances at every row, or why there are none.
+
+    Smoothers: the Rauch–Tung–Striebel recursion for the Kalman–Bucy filter (exact on
+    linear-Gaussian models) and its extended (EKF, IEKF, IOKF) and unscented (UKF) forms;
+    the forward–backward recursion on the grid of the separation and implicit-FDM filters
+    (the smoothed density of the discrete model the filter solves); forward filtering,
+    backward simulation for the particle filter (``trajectories`` of its parameters, error
+    ~ 1/√M). The other methods run their filter and say why they have no smoother
+    (``zakai.methods()`` lists each method's ``smoother``).
+
+    Parameters are those of :func:`filter`.
+
+    Examples
+    --------
+    >>> import numpy as np, zakai
+    >>> model = zakai.Model.discrete("0", "x", noise_cov=0.3, diffusion=0.5)
+    >>> sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 4.0), ["kalman"],
+    ...                     dt_obs=1.0, domain=[(-10, 14)])
+    >>> z = np.array([1.2, 0.7, 1.9, np.nan, np.nan, 2.4, 2.0])
+    >>> r = zakai.smooth(sc, z)
+    >>> s = r.methods["KF"].smoothed
+    >>> bool(s.sds[3, 0] < r.methods["KF"].sds[3, 0])  # the gap is bridged from both sides
+    True
+    """
+    return _recorded(scenario, observations, times, truth, seed, smooth=True)
 
 
 def _check_executor(executor: Any) -> None:

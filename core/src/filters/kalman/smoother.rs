@@ -17,7 +17,6 @@
 //! its update is partial or absent, and the recursion is unchanged.
 
 use alloc::boxed::Box;
-use alloc::string::String;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
@@ -75,9 +74,7 @@ pub(crate) fn rts<F: GaussianFilter>(
 }
 
 impl<F: GaussianFilter> Filter for Rts<F> {
-    fn name(&self) -> &str {
-        self.filter.name()
-    }
+    crate::filters::smoothing::forward_pass!(filter);
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let state = self.filter.gaussian_mut();
         let (m, p) = (state.mean.clone(), state.cov.clone());
@@ -91,24 +88,6 @@ impl<F: GaussianFilter> Filter for Rts<F> {
             filtered: (state.mean.clone(), state.cov.clone()),
         });
         Ok(())
-    }
-    fn log_likelihood(&self) -> Option<f64> {
-        self.filter.log_likelihood()
-    }
-    fn estimate(&self) -> Estimate {
-        self.filter.estimate()
-    }
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.filter.estimate_into(out)
-    }
-    fn warnings(&self) -> Vec<String> {
-        self.filter.warnings()
-    }
-    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        self.filter.self_check(out)
-    }
-    fn as_smoother(&mut self) -> Option<&mut dyn Smoother> {
-        Some(self)
     }
 }
 

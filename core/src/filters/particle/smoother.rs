@@ -97,9 +97,7 @@ impl ParticleFilter {
 }
 
 impl Filter for Ffbsi {
-    fn name(&self) -> &str {
-        self.filter.name()
-    }
+    crate::filters::smoothing::forward_pass!(filter);
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         if let Some(t) = &mut self.filter.trail {
             t.clear();
@@ -123,24 +121,6 @@ impl Filter for Ffbsi {
             log_weights: self.filter.log_weights.clone(),
         });
         Ok(())
-    }
-    fn log_likelihood(&self) -> Option<f64> {
-        self.filter.log_likelihood()
-    }
-    fn estimate(&self) -> Estimate {
-        self.filter.estimate()
-    }
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.filter.estimate_into(out)
-    }
-    fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
-        self.filter.self_check(out)
-    }
-    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        self.filter.marginal_density(dim, grid, out)
-    }
-    fn as_smoother(&mut self) -> Option<&mut dyn Smoother> {
-        Some(self)
     }
 }
 
