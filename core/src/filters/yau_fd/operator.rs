@@ -186,6 +186,46 @@ pub fn explicit_part(
     }
 }
 
+/// The transpose of [`explicit_part`]: `out = w ⊙ r − Δt Σ_d K_d (p̃_d ⊙ r)` — the central
+/// (and the fourth-order) first differences are antisymmetric stencils, so `K_dᵀ = −K_d` with
+/// the same zero boundary. The backward step of a smoother ([`crate::filters::smoothing`]).
+pub fn explicit_part_transposed(
+    grid: &TensorGrid,
+    weighted_drift: &[Vec<f64>],
+    weight: &[f64],
+    r: &[f64],
+    dt: f64,
+    out: &mut [f64],
+    fourth_order: bool,
+) {
+    for ((o, w), r) in out.iter_mut().zip(weight).zip(r) {
+        *o = w * r;
+    }
+    for (d, p) in weighted_drift.iter().enumerate() {
+        let (stride, n) = (grid.stride(d), grid.shape()[d] as isize);
+        let c = dt / (if fourth_order { 12.0 } else { 2.0 } * grid.spacing()[d]);
+        crate::grid::for_each_line(r.len(), stride, n as usize, |base| {
+            // v_j = p̃_j r_j along the line, zero beyond its ends.
+            let v = |j: isize| {
+                if j < 0 || j >= n {
+                    0.0
+                } else {
+                    let i = base + j as usize * stride;
+                    p[i] * r[i]
+                }
+            };
+            for j in 0..n {
+                let diff = if fourth_order {
+                    -v(j + 2) + 8.0 * v(j + 1) - 8.0 * v(j - 1) + v(j - 2)
+                } else {
+                    v(j + 1) - v(j - 1)
+                };
+                out[base + j as usize * stride] -= c * diff;
+            }
+        });
+    }
+}
+
 /// `o_i += c p_i (r_i − l_i)`; a missing neighbour is an iterator of zeros.
 #[inline]
 fn add_difference<'a>(

@@ -91,6 +91,16 @@ impl Superposition {
         })
     }
 
+    /// The transpose of [`Superposition::apply`]: `r ← B (BᵀB + λI)⁻¹ Vᵀ r` (the backward
+    /// step of a smoother).
+    pub fn apply_transposed(&mut self, r: &mut [f64]) {
+        let len = r.len();
+        self.coeff
+            .gemv_tr(1.0, &self.evolved, &DVectorView::from_slice(r, len), 0.0);
+        self.normal.solve_mut(&mut self.coeff);
+        DVectorViewMut::from_slice(r, len).gemv_tr(1.0, &self.bumps_t, &self.coeff, 0.0);
+    }
+
     /// `u ← V (BᵀB + λI)⁻¹ Bᵀ u`.
     pub fn apply(&mut self, u: &mut [f64]) {
         let len = u.len();
