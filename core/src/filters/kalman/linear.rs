@@ -211,11 +211,7 @@ impl Filter for KalmanBucy {
             if obs.dt > 0.0 {
                 let d = Discretization::for_step(cached, a, b, q, obs.dt);
                 d.propagate(&mut state.mean, &mut state.cov, moved);
-                let (m, p) = (state.mean.clone(), state.cov.clone());
-                if let Some(s) = state.transition_mut() {
-                    s.phi = &d.phi * &s.phi;
-                    s.predicted = (m, p);
-                }
+                state.record_prediction(&d.phi);
             }
             match meas {
                 Some(meas) => state.linearized_update(model, meas),

@@ -484,8 +484,18 @@ impl GaussianState {
         self.moments.sensitivity.as_ref()
     }
 
-    /// The tracked transition, to begin a step or to set a prediction made without the
-    /// moment equations (the Kalman–Bucy filter's exact one).
+    /// After a prediction made without the moment equations (the Kalman–Bucy filter's exact
+    /// one, with transition matrix `phi`): Φ ← phi Φ and the predicted moments, when the
+    /// transitions are tracked (nothing is done, nor allocated, otherwise).
+    pub fn record_prediction(&mut self, phi: &DMatrix<f64>) {
+        if let Some(s) = self.moments.sensitivity.as_mut() {
+            s.phi = phi * &s.phi;
+            s.predicted.0.copy_from(&self.mean);
+            s.predicted.1.copy_from(&self.cov);
+        }
+    }
+
+    /// The tracked transition, to begin a step.
     pub fn transition_mut(&mut self) -> Option<&mut propagate::Sensitivity> {
         self.moments.sensitivity.as_mut()
     }
