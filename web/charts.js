@@ -9,6 +9,7 @@ import { labels, state } from './state.js';
 import { worker } from './session.js';
 import { showStepPhase, updateScrub } from './playback.js';
 import { densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
+import { smoothedDensity, smoothedShown } from './smoothing.js';
 
 // Points of the density grid the worker samples for the plots (the form's "grid points").
 export const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
@@ -148,8 +149,10 @@ export function makeCharts() {
     const hi = 2 + 2 * M + 2 * i;
     bands.push({ series: [hi, hi + 1], fill: `${color(i)}26` });
   });
-  // The previous run (before the last change or reset), faint and thin in its methods' colours.
-  (state.previous?.labels ?? []).forEach((m, i) => series.push({ label: `previous ${m}`, stroke: `${color(i)}59`, width: 1, dash: [1, 2] }));
+  // The previous run (before the last change or reset), faint and thin in its methods' colours;
+  // with the smoothed estimates shown, the filters' estimates there instead.
+  if (smoothedShown()) names.forEach((m, i) => series.push({ label: `${m} filtered`, stroke: `${color(i)}8c`, width: 1.5, dash: [2, 3] }));
+  else (state.previous?.labels ?? []).forEach((m, i) => series.push({ label: `previous ${m}`, stroke: `${color(i)}59`, width: 1, dash: [1, 2] }));
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
     ...plotSize('trajectory-plot', 'trajectory'), series, bands,
@@ -251,6 +254,7 @@ function showMethods() {
     state.trajPlot.setSeries(ghostSeries(i), { show });
     state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
     state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
+    if (smoothedShown()) state.trajPlot.setSeries(2 + 4 * M + i, { show });
     state.densityPlot.setSeries(1 + i, { show });
     state.densityPlot.setSeries(1 + M + i, { show });
     state.innovPlot.setSeries(1 + i, { show });
@@ -267,6 +271,11 @@ export function resetHeatStrip() {
   const [lo, hi] = info.domain[dim];
   state.heatStrip.reset({ t0: info.t_start, t1: info.t_end, lo, hi, label: `x${dim + 1}` });
   const method = Number($('density-method').value) || 0;
+  if (smoothedDensity(0, dim, method)) {
+    state.data.times.slice(0, state.smoothed.rows)
+      .forEach((t, row) => state.heatStrip.column(t, smoothedDensity(row, dim, method)));
+    return;
+  }
   for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
 }
 

@@ -214,6 +214,7 @@ export function fillForm(config) {
   $('t-final').value = config.time.t_final;
   $('dt-obs').value = config.time.dt_obs;
   $('inner').value = config.time.inner_steps;
+  $('unobserved').value = (config.time.unobserved ?? []).map(([a, b]) => `${a}-${b}`).join(', ');
   $('seed').value = config.seed;
   $('mc-seed').value = config.seed;
   const failure = config.failure ?? {};
@@ -225,6 +226,15 @@ export function fillForm(config) {
   methodRowsUI();
   $('description').textContent = config.description;
   $('reference').textContent = config.reference ? `Source: ${config.reference}` : '';
+}
+
+// "3-5, 7-7.5" as [[3, 5], [7, 7.5]]; an entry that is not `from-to` becomes [NaN, NaN] (a
+// local problem). Negative times are written with the minus sign first: "-1--0.5".
+export function unobservedIntervals(text) {
+  return text.split(',').map((s) => s.trim()).filter(Boolean).map((s) => {
+    const m = s.match(/^(-?[0-9.eE+]+)\s*[-–]\s*(-?[0-9.eE+]+)$/);
+    return m ? [Number(m[1]), Number(m[2])] : [NaN, NaN];
+  });
 }
 
 export function readForm() {
@@ -259,6 +269,8 @@ export function readForm() {
   });
   c.domain = domain;
   c.time = { t_final: Number($('t-final').value), dt_obs: Number($('dt-obs').value), inner_steps: Number($('inner').value) };
+  const outages = unobservedIntervals($('unobserved').value);
+  if (outages.length) c.time.unobserved = outages;
   c.seed = Number($('seed').value);
   // The failure rule: the bound always, the track-loss rule when both its numbers are given.
   const [lossError, lossDuration] = [$('fail-error').value.trim(), $('fail-duration').value.trim()];

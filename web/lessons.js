@@ -270,6 +270,37 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'smoothing',
+    title: '9. Filtering, forecasting and smoothing',
+    preset: 'double-well-outage',
+    seed: 5,
+    scenario: (c) => c,
+    body: [
+      'Three questions can be asked about the state $x(t)$ from observations $y(s)$ on $[0, T]$. Filtering: what do the observations up to $t$ say about $x(t)$, the density $p\big(x(t) \mid y(s), s \le t\big)$ — what every lesson so far computed. Forecasting: what do they say about a later $x(t + u)$, $p\big(x(t+u) \mid y(s), s \le t\big)$. Smoothing: what do all of them, before and after $t$, say about $x(t)$, $p\big(x(t) \mid y(s), s \le T\big)$ — the best estimate of the past.',
+      'With no observation between $t$ and $t + u$ the forecast density moves by the Fokker–Planck (forward Kolmogorov) equation alone, lesson 1\'s operator without the observation term:',
+      '$$\\partial_t p = \\mathcal L^* p = \\tfrac12 \\sum_{i,j} \\partial_i \\partial_j \\big((GG^\\top)_{ij}\\, p\\big) - \\sum_i \\partial_i (f_i\\, p).$$',
+      'A filter whose sensor is out does exactly this: it only predicts, so its estimate is a forecast from the last observation.',
+      'The smoothed density is the filtered one reweighted by what the later observations say about each starting point, $\\beta_t(x)$, the likelihood of the observations after $t$ given $x(t) = x$:',
+      '$$p\\big(x(t) \\mid y_{[0,T]}\\big) \\propto p\\big(x(t) \\mid y_{[0,t]}\\big)\\, \\beta_t(x).$$',
+      'Between observations $\\beta$ solves the backward Kolmogorov equation, whose operator is the adjoint of $\\mathcal L^*$, and each observation multiplies it by the same likelihood factor that multiplies the filter (Pardoux 1982):',
+      '$$-\\partial_t \\beta = \\mathcal L \\beta = \\sum_i f_i\\, \\partial_i \\beta + \\tfrac12 \\sum_{i,j} (GG^\\top)_{ij}\\, \\partial_i \\partial_j \\beta.$$',
+      'On the grid, with one step of the scheme $p^-_{k+1} = T_k\\, p_k$ followed by the update, the adjoint is the transposed matrix $T_k^\\top$, and the forward–backward recursion gives the smoothed densities of the discrete model the filter solves: $p^s_k = p_k \\odot T_k^\\top\\big(p^s_{k+1} \\oslash p^-_{k+1}\\big)$ ($\\odot$, $\\oslash$ node by node), starting from $p^s_N = p_N$. For a Gaussian filter the same recursion on means and covariances is the Rauch–Tung–Striebel smoother (Rauch, Tung & Striebel 1965): exact for the Kalman–Bucy filter on linear models (for the sampled observations it updates with), an approximation for the UKF, which linearises the drift statistically. The particle filter\'s smoother draws whole trajectories backward through its stored particle clouds (Godsill, Doucet & West 2004).',
+      'Here: a double well $dx = (x - x^3)\\,dt + 0.8\\,dv$, whose state lingers near $x = \\pm 1$ and now and then crosses over, observed as $dy = x\\,dt + dw$ with $S = 0.3$, except from $t = 3$ to $5.5$, when the sensor is out. QIEM on 299 points, the UKF and a particle filter of 500 run as filters; "smooth the run" below runs each as its smoother.',
+    ],
+    lookFor: [
+      'In the outage every filter forecasts: QIEM\'s standard deviation grows from 0.70 at $t = 3$ to 0.90 at $t = 5.5$, and its density spreads into both wells (at $t = 5.45$ its peaks are at $x \\approx -0.98$ and $1.01$, the lower one 0.68 times as high). Its estimate stays in between: 0.20 at $t = 4.25$, where the truth, which crossed from 0.50 at $t = 3$, is at $-0.74$.',
+      'Smoothed, QIEM\'s estimate follows the crossing ($-0.58 \\pm 0.66$ at $t = 4.25$): its mean square error over the outage falls from 1.13 to 0.10, and at $t = 5.5$ its standard deviation is 0.36 instead of 0.90. At $t = 8$, with no later data, the smoothed estimate is the filtered one.',
+      'The UKF\'s smoother also moves down, but too far: $-1.16 \\pm 0.91$ at $t = 4.25$ (a Gaussian through a bimodal forecast); over the outage its mean square error falls from 0.84 to 0.13.',
+    ],
+    tryThis: [
+      {
+        label: 'smooth the run',
+        view: 'smoothed',
+        expect: 'the estimates drawn are now the smoothed ones, the filters\' faint and dotted beside them, and the heat strip shows QIEM\'s smoothed density: at $t = 4.25$ a single peak, in the lower well, where the filter\'s forecast spreads over both.',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */
@@ -283,4 +314,7 @@ export const REFERENCES = [
   ['', 'R. E. Kalman and R. S. Bucy, “New results in linear filtering and prediction theory”, Journal of Basic Engineering 83, 1961.'],
   ['', 'S. J. Julier and J. K. Uhlmann, “Unscented filtering and nonlinear estimation”, Proceedings of the IEEE 92(3), 2004.'],
   ['', 'N. J. Gordon, D. J. Salmond and A. F. M. Smith, “Novel approach to nonlinear/non-Gaussian Bayesian state estimation”, IEE Proceedings F 140(2), 1993.'],
+  ['', 'H. E. Rauch, F. Tung and C. T. Striebel, “Maximum likelihood estimates of linear dynamic systems”, AIAA Journal 3(8), 1965.'],
+  ['', 'É. Pardoux, “Équations du filtrage non linéaire, de la prédiction et du lissage”, Stochastics 6(3–4), 1982.'],
+  ['', 'S. J. Godsill, A. Doucet and M. West, “Monte Carlo smoothing for nonlinear time series”, Journal of the American Statistical Association 99(465), 2004.'],
 ];

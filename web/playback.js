@@ -7,6 +7,7 @@ import { state } from './state.js';
 import { formChanged } from './form.js';
 import { apply, checkedForm, worker } from './session.js';
 import { applyFrame, render } from './series.js';
+import { requestSmoothing, setupSmoothing } from './smoothing.js';
 
 // ▶ play (and space) applies edits first, so a run never silently ignores them.
 function togglePlay() {
@@ -138,12 +139,15 @@ export function setupPlayback() {
     makeCharts();
     resetHeatStrip();
     render();
+    requestSmoothing();
   });
   $('density-method').addEventListener('change', () => {
     worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
     resetHeatStrip();
     render();
+    requestSmoothing();
   });
+  setupSmoothing();
   $('scrub').addEventListener('input', () => scrubTo(Number($('scrub').value)));
   $('scrub-live').addEventListener('click', () => scrubTo(Infinity));
   $('present').addEventListener('click', () => setPresent(!document.body.classList.contains('present')));

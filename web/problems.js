@@ -19,6 +19,9 @@ export function localProblems(config) {
   if (config.initial_state && config.initial_state.some((v) => Number.isNaN(v))) {
     problems.push({ field: 'initial_state', message: 'needs comma-separated numbers' });
   }
+  (config.time.unobserved ?? []).forEach(([a, b]) => {
+    if (!Number.isFinite(a) || !Number.isFinite(b)) problems.push({ field: 'time.unobserved', message: 'needs intervals from-to, comma-separated (e.g. 3-5, 7-7.5)' });
+  });
   if (config.prior.mean && config.prior.mean.some((v) => Number.isNaN(v))) {
     problems.push({ field: 'prior.mean', message: 'needs comma-separated numbers' });
   }

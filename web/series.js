@@ -7,6 +7,7 @@ import { $, el, fillOptions } from './dom.js';
 import { bandsShown, drawHeatmap, observationData, shownDim, shownFrame, shownRow } from './charts.js';
 import { labels, state } from './state.js';
 import { setPlaying, updateScrub } from './playback.js';
+import { dropSmoothed, smoothedShown } from './smoothing.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
 function showLogConcavity(c) {
@@ -30,6 +31,7 @@ export function applyFrame(frame) {
   const info = state.info;
   const n = info.n;
   const rows = frame.to - frame.from;
+  if (rows > 0 && state.smoothed) dropSmoothed('the run moved on: tick "smoothed" again to smooth the rows so far');
   for (let r = 0; r < rows; r++) {
     d.times.push(frame.times[r]);
     if (frame.truth.length) for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
@@ -97,6 +99,15 @@ export function trajectoryData() {
   const d = state.data;
   const dim = shownDim();
   const none = d.times.map(() => null);
+  if (smoothedShown()) {
+    // The smoothed estimates and bands in the methods' own lines; the filters' estimates
+    // where the previous run goes (faint, dotted), to compare with.
+    const s = state.smoothed;
+    const pad = (v) => d.times.map((_, k) => (k < s.rows ? v[k] : null));
+    const bands = s.est.flatMap((_, i) => (bandsShown() ? [pad(s.hi[i][dim]), pad(s.lo[i][dim])] : [none, none]));
+    return [d.times, state.info.has_truth ? d.truth[dim] : none, ...s.est.map((e) => pad(e[dim])), ...d.ghost.map(() => none), ...bands,
+      ...d.est.map((e) => e[dim])];
+  }
   const bands = d.est.flatMap((_, i) => (bandsShown() ? [d.hi[i][dim], d.lo[i][dim]] : [none, none]));
   const now = [d.times, state.info.has_truth ? d.truth[dim] : none, ...d.est.map((e) => e[dim]), ...d.ghost.map((g) => g[dim]), ...bands];
   const p = state.previous;

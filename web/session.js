@@ -9,6 +9,7 @@ import { localProblems, revealFirstProblem, showProblems } from './problems.js';
 import { setPlaying, showStepPhase } from './playback.js';
 import { render } from './series.js';
 import { configFromAddress } from './export.js';
+import { dropSmoothed, receiveSmoothed } from './smoothing.js';
 
 // The worker learns `?wasm=scalar` (force the fallback build) from its own URL.
 export const workerUrl = () => new URL(`./worker.js${location.search.includes('wasm=') ? `?wasm=${new URLSearchParams(location.search).get('wasm')}` : ''}`, import.meta.url);
@@ -128,6 +129,7 @@ export function setupSession(hooks = {}) {
         // so does the last density drawn (it has that run's number of methods).
         state.queue.length = 0;
         state.lastDensity = null;
+        dropSmoothed('');
         // The run on screen becomes the previous run, drawn faintly under the new one.
         if (state.data?.times.length > 1 && state.info) {
           state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n };
@@ -152,6 +154,9 @@ export function setupSession(hooks = {}) {
         break;
       case 'frame':
         if (data.load === state.loadSeq) state.queue.push(data);
+        break;
+      case 'smoothed':
+        receiveSmoothed(data);
         break;
       case 'preview':
         if (data.load !== state.loadSeq) break;

@@ -32,6 +32,7 @@ export const state = {
   info: null, // the Session's info: name, n, m, times, methods, labels, keys, exact, density, nodes …
   data: null, // times, truth, est, ghost, lo, hi, obs, ySum, innov: per method and component
   previous: null, // {times, est, labels, n} of the run before the last change, drawn faintly
+  smoothed: null, // the smoothers over the rows so far (smoothing.js): {rows, dim, method, grid, points, densities, methods, est, lo, hi}
   reference: -1, // the method the error plot measures against (-1: none)
   diagnostics: null, // per method: mse, failed, failed_at, concerns … (the last frame's)
   summary: null, // the last frame's step summary (position, finished, failures)

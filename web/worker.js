@@ -241,6 +241,10 @@ self.onmessage = async ({ data }) => {
         frame(session.step(data.k ?? 1));
       });
       break;
+    case 'smooth':
+      // Every method's smoother over the rows so far, the run unmoved.
+      guard(() => post({ type: 'smoothed', load: loadId, dim: data.dim, densityMethod: data.densityMethod, result: session.smooth(data.densityMethod, data.dim, data.points) }));
+      break;
     case 'preview':
       // The next step's predict half (and the next observation's likelihood), the run unmoved.
       guard(() => post({ type: 'preview', load: loadId, preview: session.preview(view.dim, view.points) }));

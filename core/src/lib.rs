@@ -142,6 +142,9 @@ pub use model::{
 pub use filters::builder::Builder;
 pub use filters::method::{BuildContext, Method, MethodInfo, ProblemContext, Takes};
 pub use filters::params::{ParamInfo, ParamKind};
+pub use filters::smoothing::{
+    smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,
+};
 pub use filters::{
     observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
     ObservationKind, Observed,

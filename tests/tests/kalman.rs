@@ -39,6 +39,7 @@ fn scalar_linear(
             t_final,
             dt_obs: dt,
             inner_steps: 1,
+            unobserved: Vec::new(),
         },
         seed: 3,
         failure: FailureRule::default(),
@@ -133,6 +134,7 @@ fn linear_2d(noise: ObservationNoiseConfig, dt: f64) -> ScenarioConfig {
         t_final: 2.0,
         dt_obs: dt,
         inner_steps: 1,
+        unobserved: Vec::new(),
     };
     config.methods = vec![
         MethodConfig::Kalman(KalmanParams::default()),

@@ -41,6 +41,7 @@ fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> Scen
             t_final: 2.0,
             dt_obs: 0.1,
             inner_steps: 1,
+            unobserved: Vec::new(),
         },
         seed: 4,
         failure: FailureRule::default(),

@@ -24,6 +24,7 @@ fn mean_square_gap(particles: usize, seed: u64) -> f64 {
         t_final: 3.0,
         dt_obs: 0.1,
         inner_steps: 10,
+        unobserved: Vec::new(),
     };
     config.methods = vec![
         MethodConfig::Kalman(KalmanParams::default()),

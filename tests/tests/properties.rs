@@ -142,6 +142,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
             t_final: 20.0 * c.dt_obs,
             dt_obs: c.dt_obs,
             inner_steps: 4,
+            unobserved: Vec::new(),
         },
         seed: c.seed,
         // Divergence is not what is tested here: the grid bounds the estimate anyway.
@@ -356,6 +357,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                     t_final: 0.2,
                     dt_obs: 0.01,
                     inner_steps: 2,
+                    unobserved: Vec::new(),
                 },
                 seed,
                 failure: FailureRule {

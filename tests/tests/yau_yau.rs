@@ -38,6 +38,7 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
             t_final: 2.0,
             dt_obs: 0.01,
             inner_steps: 1,
+            unobserved: Vec::new(),
         },
         seed: 2,
         failure: FailureRule::default(),

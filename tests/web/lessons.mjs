@@ -314,6 +314,67 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.evaluate(() => document.getElementById('lik-panel').scrollIntoView());
   await page.screenshot({ path: `${artifacts}/lesson-likelihood.png` });
 
+  // Lesson 9: filtering, forecasting and smoothing on the double well with a sensor outage
+  // (seed 5): the forecast spreads over both wells, the smoother follows the crossing.
+  await openLesson('smoothing');
+  r = await run();
+  const at9 = (t) => r.times.findIndex((x) => x >= t - 1e-9);
+  const qiem9 = Object.keys(r.methods).find((m) => m.startsWith('QIEM'));
+  const q9 = r.methods[qiem9];
+  console.log('lesson 9: QIEM sd at 3 and 5.5', q9.sd[at9(3)], q9.sd[at9(5.5)], 'estimate at 4.25', q9.est[at9(4.25)], 'truth', r.truth[at9(3)], r.truth[at9(4.25)]);
+  assert.ok(Math.abs(q9.sd[at9(3)] - 0.70) < 0.01 && Math.abs(q9.sd[at9(5.5)] - 0.90) < 0.01, 'the sd grows from 0.70 to 0.90 in the outage');
+  assert.ok(Math.abs(q9.est[at9(4.25)] - 0.20) < 0.01, 'the filter at 0.20 at t = 4.25');
+  assert.ok(Math.abs(r.truth[at9(3)] - 0.50) < 0.01 && Math.abs(r.truth[at9(4.25)] + 0.74) < 0.01, 'the truth crossed from 0.50 to −0.74');
+  // The forecast density at t ≈ 5.45 (the kept frame nearest): peaks near ∓1, the lower 0.68 as high.
+  const peaks9 = await page.evaluate(() => {
+    const s = window.zakaiPage;
+    const h = s.history.reduce((b, e) => (Math.abs(e.t - 5.45) < Math.abs(b.t - 5.45) ? e : b));
+    const v = h.densities[0]; const top = Math.max(...v);
+    const out = [];
+    for (let k = 1; k < v.length - 1; k++) if (v[k] > v[k - 1] && v[k] >= v[k + 1] && v[k] > 0.1 * top) out.push([h.grid[k], v[k] / top]);
+    return { t: h.t, peaks: out };
+  });
+  console.log('lesson 9: forecast peaks', JSON.stringify(peaks9));
+  assert.ok(Math.abs(peaks9.t - 5.45) < 0.03 && peaks9.peaks.length === 2, 'two peaks near t = 5.45');
+  assert.ok(Math.abs(peaks9.peaks[0][0] + 0.98) < 0.05 && Math.abs(peaks9.peaks[1][0] - 1.01) < 0.05, 'at −0.98 and 1.01');
+  assert.ok(Math.abs(Math.min(peaks9.peaks[0][1], peaks9.peaks[1][1]) - 0.68) < 0.03 && peaks9.peaks[0][1] < peaks9.peaks[1][1], 'the lower one 0.68 as high');
+  await page.click('#lesson button.try:has-text("smooth the run")');
+  await page.waitForFunction(() => window.zakaiPage.smoothed != null, null, { timeout: 120000 });
+  const s9 = await page.evaluate(() => {
+    const s = window.zakaiPage; const d = s.data;
+    const at = (t) => d.times.findIndex((x) => x >= t - 1e-9);
+    const gap = d.times.map((t, k) => (t >= 3 && t < 5.5 ? k : -1)).filter((k) => k >= 0);
+    const mse = (e) => gap.reduce((a, k) => a + (e[k] - d.truth[0][k]) ** 2, 0) / gap.length;
+    return Object.fromEntries(s.info.methods.map((name, i) => {
+      const f = d.est[i][0]; const sm = s.smoothed.est[i][0];
+      const sd = (k) => (s.smoothed.hi[i][0][k] - sm[k]) / 2;
+      return [name, { s425: sm[at(4.25)], sd425: sd(at(4.25)), sd55: sd(at(5.5)), gapF: mse(f), gapS: mse(sm), lastF: f[f.length - 1], lastS: sm[sm.length - 1],
+        drawn: s.trajPlot.data[2 + i][at(4.25)] === sm[at(4.25)], smoother: s.smoothed.methods[i].smoother }];
+    }));
+  });
+  console.log('lesson 9, smoothed:', JSON.stringify(s9));
+  const qs9 = s9[qiem9];
+  assert.equal(qs9.smoother, 'forward–backward');
+  assert.ok(qs9.drawn && s9.UKF.drawn, 'the smoothed estimates are the ones drawn');
+  assert.ok(Math.abs(qs9.s425 + 0.58) < 0.01 && Math.abs(qs9.sd425 - 0.66) < 0.01, 'smoothed −0.58 ± 0.66 at t = 4.25');
+  assert.ok(Math.abs(qs9.gapF - 1.13) < 0.01 && Math.abs(qs9.gapS - 0.10) < 0.01, 'MSE over the outage 1.13 → 0.10');
+  assert.ok(Math.abs(qs9.sd55 - 0.36) < 0.01, 'sd 0.36 at t = 5.5');
+  assert.ok(Math.abs(qs9.lastS - qs9.lastF) < 1e-9 && Math.abs(s9.UKF.lastS - s9.UKF.lastF) < 1e-9, 'at t = 8 the smoothed estimate is the filtered one');
+  assert.ok(Math.abs(s9.UKF.s425 + 1.16) < 0.01 && Math.abs(s9.UKF.sd425 - 0.91) < 0.01 && s9.UKF.s425 < r.truth[at9(4.25)] - 0.3, 'the UKF\'s smoother too far: −1.16 ± 0.91');
+  assert.ok(Math.abs(s9.UKF.gapF - 0.84) < 0.01 && Math.abs(s9.UKF.gapS - 0.13) < 0.01, 'the UKF\'s MSE over the outage 0.84 → 0.13');
+  // The heat strip shows QIEM's smoothed density: at t = 4.25 one well (one peak, below 0).
+  const strip9 = await page.evaluate(() => {
+    const s = window.zakaiPage.smoothed; const d = window.zakaiPage.data;
+    const row = d.times.findIndex((x) => x >= 4.25 - 1e-9);
+    const v = s.densities.slice(row * s.points, (row + 1) * s.points); const top = Math.max(...v);
+    const peaks = [];
+    for (let k = 1; k < v.length - 1; k++) if (v[k] > v[k - 1] && v[k] >= v[k + 1] && v[k] > 0.1 * top) peaks.push(s.grid[k]);
+    return { method: s.method, peaks };
+  });
+  assert.equal(strip9.method, 0, 'the strip is QIEM\'s');
+  assert.ok(strip9.peaks.length === 1 && strip9.peaks[0] < 0, `one well, below 0: ${strip9.peaks}`);
+  await page.screenshot({ path: `${artifacts}/lesson-smoothing.png` });
+
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
   await openLesson('kalman-bucy');

@@ -130,6 +130,28 @@ pub struct SmoothedStep<'a> {
     pub density: Option<DensityView<'a>>,
 }
 
+impl SmoothedStep<'_> {
+    /// The smoothed marginal density of component `dim` at the points `at`, into `out`: the
+    /// grid smoother's own density integrated over the other components, else the Gaussian
+    /// of the smoothed mean and variance.
+    pub fn marginal_density(&self, dim: usize, at: &[f64], out: &mut [f64]) {
+        if let Some(grid) = self.density.and_then(|v| {
+            TensorGrid::new(v.bounds, v.shape)
+                .ok()
+                .map(|g| (g, v.values))
+        }) {
+            grid.0.marginal(grid.1, dim, at, out);
+            return;
+        }
+        let var = self
+            .estimate
+            .covariance
+            .as_ref()
+            .map_or(0.0, |p| p[(dim, dim)]);
+        super::marginal::gaussian(self.estimate.mean[dim], var, at, out);
+    }
+}
+
 /// A fixed-interval smoother: a filter (its forward pass, which steps exactly as the method's
 /// filter does) that keeps what its backward pass needs (see the module doc).
 pub trait Smoother: Filter {

@@ -510,6 +510,26 @@ impl Experiment {
         simulate(&self.model, &x0, self.config.time_grid(), &mut rng)
     }
 
+    /// What a simulated run observes of `trajectory`: its observations, missing (NaN) in the
+    /// scenario's [`crate::lab::scenario::TimeConfig::unobserved`] intervals.
+    pub fn observed(&self, trajectory: Trajectory) -> Recording {
+        let mut recording: Recording = trajectory.into();
+        let time = &self.config.time;
+        if !time.unobserved.is_empty() {
+            let m = recording.m;
+            for k in 1..recording.times.len() {
+                let step = recording.step_length(k);
+                if time.is_unobserved(recording.times[k], step, recording.continuous) {
+                    recording.observations[k * m..(k + 1) * m].fill(f64::NAN);
+                }
+            }
+            if !recording.continuous && time.is_unobserved(recording.times[0], 0.0, false) {
+                recording.observations[..m].fill(f64::NAN);
+            }
+        }
+        recording
+    }
+
     /// Simulates the truth for `seed` and builds every filter; observation 0 is processed
     /// (a measurement at τ₀ for discrete models) and the initial estimates recorded.
     pub fn start(&self, seed: u64) -> Result<ExperimentRun, ZakaiError> {
@@ -537,7 +557,7 @@ impl Experiment {
         }
         // The simulator's output fits the model by construction (and a truth that blew up is
         // the methods' problem to meet, not an input error).
-        self.start_checked(self.simulate(seed).into(), seed, clock, None)
+        self.start_checked(self.observed(self.simulate(seed)), seed, clock, None)
     }
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
@@ -638,6 +658,19 @@ impl Experiment {
         recording: Recording,
         seed: u64,
     ) -> Result<RunResult, ZakaiError> {
+        self.smooth_recorded_with(recording, seed, &mut |_, _, _| {})
+    }
+
+    /// [`Experiment::smooth_recorded`], showing `visit` every smoothed row of every method as
+    /// the backward pass computes it — `(method, row, step)`, rows from the last to the first,
+    /// with the smoothed density of grid methods in `step.density` (e.g. to draw its marginal
+    /// over time; nothing of it is kept).
+    pub fn smooth_recorded_with(
+        &self,
+        recording: Recording,
+        seed: u64,
+        visit: &mut dyn FnMut(usize, usize, &crate::filters::smoothing::SmoothedStep<'_>),
+    ) -> Result<RunResult, ZakaiError> {
         let problems = self.recording_problems(&recording);
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
@@ -646,7 +679,7 @@ impl Experiment {
             let plan = crate::filters::smoothing::SmoothingPlan::for_steps(recording.times.len());
             let mut run = self.start_checked(recording, seed, clock, Some(plan))?;
             run.complete(clock, &mut Silent);
-            run.smooth(clock);
+            run.smooth(clock, visit);
             Ok(run.finish())
         })
     }
@@ -1187,9 +1220,13 @@ impl ExperimentRun {
     /// The backward pass of every method's smoother (a run started as a smoothing run,
     /// [`Experiment::smooth_recorded`], once every observation is processed): fills
     /// [`MethodTrack::smoothed`] with the smoothed rows, or why there are none.
-    fn smooth(&mut self, clock: Option<&dyn Clock>) {
+    fn smooth(
+        &mut self,
+        clock: Option<&dyn Clock>,
+        visit: &mut dyn FnMut(usize, usize, &crate::filters::smoothing::SmoothedStep<'_>),
+    ) {
         let continuous = self.data.continuous;
-        for (filter, track) in self.filters.iter_mut().zip(&mut self.tracks) {
+        for (method, (filter, track)) in self.filters.iter_mut().zip(&mut self.tracks).enumerate() {
             let Some(smoothed) = &mut track.smoothed else {
                 continue;
             };
@@ -1210,11 +1247,15 @@ impl ExperimentRun {
             let start = clock.map(|c| c.now());
             let n = track.n;
             let mut rows: Vec<(usize, crate::filters::Estimate)> = Vec::new();
-            let result =
-                smoother.smooth(&mut |step| rows.push((step.index, step.estimate.clone())));
             // Row k of a continuous run is the state after step k (row 0: the start); a
             // discrete run's row 0 is already the update at τ₀, the smoother's step 1.
             let skip = usize::from(!continuous);
+            let result = smoother.smooth(&mut |step| {
+                if step.index >= skip {
+                    visit(method, step.index - skip, &step);
+                }
+                rows.push((step.index, step.estimate.clone()))
+            });
             match result {
                 Ok(()) => {
                     rows.reverse();

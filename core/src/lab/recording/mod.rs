@@ -158,6 +158,19 @@ impl Recording {
         Ok(())
     }
 
+    /// The first `rows` rows (all of them when there are fewer): the recording up to τ_(rows−1).
+    pub fn first_rows(&self, rows: usize) -> Recording {
+        let rows = rows.min(self.times.len());
+        Recording {
+            n: self.n,
+            m: self.m,
+            times: self.times[..rows].to_vec(),
+            observations: self.observations[..rows * self.m].to_vec(),
+            continuous: self.continuous,
+            truth: self.truth.as_ref().map(|t| t[..rows * self.n].to_vec()),
+        }
+    }
+
     /// N, the number of observation intervals.
     pub fn steps(&self) -> usize {
         self.times.len().saturating_sub(1)

@@ -142,6 +142,21 @@ pub struct TimeConfig {
     /// Euler–Maruyama steps of the truth per observation interval.
     #[serde(default = "one_usize")]
     pub inner_steps: usize,
+    /// Intervals `[from, to)` of a simulated run in which nothing is observed: a measurement
+    /// at a time in one, or an increment over an interval whose midpoint is in one, is
+    /// missing (NaN) in the run's observations — a sensor outage, during which every filter
+    /// only predicts (forecasts) and a smoother bridges from both sides. Empty by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unobserved: Vec<[f64; 2]>,
+}
+
+impl TimeConfig {
+    /// Whether the observation of a row ending at `t` (a measurement at `t`, or an increment
+    /// over `(t − step, t]`) falls in an [`TimeConfig::unobserved`] interval.
+    pub fn is_unobserved(&self, t: f64, step: f64, continuous: bool) -> bool {
+        let at = if continuous { t - 0.5 * step } else { t };
+        self.unobserved.iter().any(|[a, b]| *a <= at && at < *b)
+    }
 }
 
 fn one_usize() -> usize {
@@ -553,6 +568,14 @@ impl ScenarioConfig {
                     self.steps()
                 ),
             ));
+        }
+        for (i, [a, b]) in t.unobserved.iter().enumerate() {
+            if !(a.is_finite() && b.is_finite() && a < b) {
+                p.push(ConfigProblem::new(
+                    format!("time.unobserved[{i}]"),
+                    format!("an interval [from, to) needs finite from < to, got [{a}, {b}]"),
+                ));
+            }
         }
         if t.inner_steps == 0 || t.inner_steps > 100_000 {
             p.push(ConfigProblem::new(
