@@ -655,3 +655,45 @@ mod references {
         assert!(pf_mean < 0.35 && pf_sd < 0.25, "{pf_mean}, {pf_sd}");
     }
 }
+
+/// The grid smoother under a memory cap: with room for every density it keeps them all; with
+/// less, checkpoints every ⌈√N⌉ steps and refilters each segment backward — the same smoothed
+/// estimates to 10⁻¹² — and says so; with too little it refuses before anything is kept,
+/// naming the cap.
+#[test]
+fn the_grid_smoother_keeps_to_the_memory_cap() {
+    use zakai::{Observation, ObservationKind, SmoothingPlan};
+    let config = local_level(serde_json::json!([{"method": "separation", "cells": [1201]}]));
+    let e = Experiment::new(config.clone()).unwrap();
+    let data = nile_with_gaps();
+    let filter = e.build_method(&config.methods[0], "SA".into(), 1).unwrap();
+    let smooth = |cap: usize| -> Result<(Vec<f64>, Vec<String>), zakai::FilterError> {
+        let plan = SmoothingPlan {
+            steps: data.times.len(),
+            memory_cap: cap,
+        };
+        let mut s = filter.smoother(&plan)?;
+        for k in 0..data.times.len() {
+            let obs = Observation {
+                dt: data.step_length(k),
+                value: data.observation(k),
+                kind: ObservationKind::Measurement,
+            };
+            s.step(&obs)?;
+        }
+        let mut means = Vec::new();
+        s.smooth(&mut |step| means.push(step.estimate.mean[0]))?;
+        Ok((means, s.notes()))
+    };
+    let (all, notes) = smooth(64 << 20).unwrap();
+    assert!(notes.is_empty(), "{notes:?}");
+    // 2 densities of 9.6 kB per step for 99 steps need 1.9 MB; 400 kB holds the checkpoints
+    // and one segment.
+    let (checkpointed, notes) = smooth(400 << 10).unwrap();
+    assert!(notes[0].contains("every 10 steps"), "{notes:?}");
+    for (a, b) in all.iter().zip(&checkpointed) {
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "{a} vs {b}");
+    }
+    let refused = smooth(50 << 10).unwrap_err().to_string();
+    assert!(refused.contains("memory cap"), "{refused}");
+}

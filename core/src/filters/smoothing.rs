@@ -212,19 +212,25 @@ pub(crate) fn no_smoother(name: &str, why: &str) -> FilterError {
     FilterError::Unsuitable(format!("{name} has no smoother: {why}"))
 }
 
-/// What a grid filter gives its forward–backward smoother (S2): its density and the scheme's
-/// step and transposed step.
+/// What a grid filter gives its forward–backward smoother (S2): its density, the predicted
+/// density of its last step, and the scheme's transposed step.
 pub(crate) trait GridTransition: Filter + Clone + 'static {
     /// The grid and the current (normalised) density on it.
     fn grid_density(&self) -> (&TensorGrid, &[f64]);
     /// Carries `values` over `obs.dt` as the step with `obs` does before it assimilates:
-    /// `values ← T values`, not renormalised.
+    /// `values ← T_k values`, not renormalised (the forward pass keeps the step's own
+    /// [`GridTransition::last_predicted`] instead; this is for the adjoint tests).
+    #[cfg(test)]
     fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError>;
-    /// The transposed step: `values ← Tᵀ values` for the same `obs`.
+    /// The transposed step: `values ← T_kᵀ values` for the step with `obs`.
     fn carry_back(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError>;
     /// Sets the filter's density to `values` (already normalised), to refilter a segment
     /// from a checkpoint.
     fn restore(&mut self, values: &[f64]) -> Result<(), FilterError>;
+    /// Keeps every step's predicted density `p⁻ = T_k p_k` (before the update) from now on.
+    fn keep_predicted(&mut self);
+    /// The last step's predicted density (after [`GridTransition::keep_predicted`]).
+    fn last_predicted(&self) -> &[f64];
 }
 
 /// A recorded step: its length and observation (kept so that the backward pass can redo the
@@ -246,10 +252,11 @@ impl StepRecord {
     }
 }
 
-/// The forward–backward smoother (S2) of a grid filter `F`. The filtered densities are kept
-/// every `stride` steps (checkpoints); the backward pass refilters each segment between two
-/// checkpoints from the first (so memory is checkpoints plus one segment, at the cost of
-/// one more forward pass when `stride > 1`).
+/// The forward–backward smoother (S2) of a grid filter `F`. Every step's filtered and
+/// predicted densities are kept when they fit under the memory cap; otherwise the filtered
+/// density every `stride` steps (checkpoints), and the backward pass refilters each segment
+/// between two checkpoints from the first (memory: the checkpoints and one segment, for one
+/// more forward pass).
 #[derive(Clone, Debug)]
 pub(crate) struct GridSmoother<F: GridTransition> {
     filter: F,
@@ -258,23 +265,29 @@ pub(crate) struct GridSmoother<F: GridTransition> {
     steps: Vec<StepRecord>,
     /// The filtered density after step `i · stride` (index 0: the start).
     checkpoints: Vec<Vec<f64>>,
+    /// With `stride` 1, every step's predicted density.
+    predicted: Vec<Vec<f64>>,
     stride: usize,
     cells: usize,
 }
 
 impl<F: GridTransition> GridSmoother<F> {
     /// The smoother of `filter` from its current state, for `plan`: every density is kept
-    /// when they fit under the cap, else every ⌈√steps⌉-th (refused when even that does
-    /// not fit).
+    /// when they fit under the cap, else checkpoints every ⌈√steps⌉-th (refused when even
+    /// those do not fit).
     pub(crate) fn new(filter: &F, plan: &SmoothingPlan) -> Result<Self, FilterError> {
         let cells = filter.grid_density().1.len();
         let bytes = cells.saturating_mul(core::mem::size_of::<f64>());
-        let stride = match plan.check(filter.name(), bytes, "one density per step") {
+        let stride = match plan.check(
+            filter.name(),
+            bytes.saturating_mul(2),
+            "the filtered and predicted densities of every step",
+        ) {
             Ok(()) => 1,
             Err(_) => {
                 let stride = libm::ceil(libm::sqrt(plan.steps.max(1) as f64)) as usize;
-                // Checkpoints and one segment, plus the segment's predicted densities.
-                let kept = plan.steps / stride + 3 * stride;
+                // The checkpoints, and one segment's filtered and predicted densities.
+                let kept = plan.steps / stride + 2 * stride + 2;
                 let per = bytes.saturating_mul(kept) / (plan.steps + 1).max(1) + 1;
                 plan.check(
                     filter.name(),
@@ -284,29 +297,45 @@ impl<F: GridTransition> GridSmoother<F> {
                 stride
             }
         };
+        let mut filter = filter.clone();
+        filter.keep_predicted();
         Ok(GridSmoother {
-            filter: filter.clone(),
             worker: filter.clone(),
-            steps: Vec::new(),
             checkpoints: vec![filter.grid_density().1.to_vec()],
+            filter,
+            steps: Vec::new(),
+            predicted: Vec::new(),
             stride,
             cells,
         })
     }
 
-    /// The filtered densities after steps `from..=to` (index `from` a checkpoint), refiltered.
-    fn refilter(&mut self, from: usize, to: usize) -> Result<Vec<Vec<f64>>, FilterError> {
-        let start = &self.checkpoints[from / self.stride];
-        let mut out = Vec::with_capacity(to - from + 1);
-        out.push(start.clone());
-        if to > from {
-            self.worker.restore(start)?;
-            for record in &self.steps[from..to] {
-                self.worker.step(&record.observation())?;
-                out.push(self.worker.grid_density().1.to_vec());
+    /// The filtered densities before steps `from..to` and the steps' predicted densities
+    /// (`from` a checkpoint), refiltered from the checkpoint when they are not kept.
+    #[allow(clippy::type_complexity)]
+    fn segment(
+        &mut self,
+        from: usize,
+        to: usize,
+    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), FilterError> {
+        let mut filtered = Vec::with_capacity(to - from);
+        let mut predicted = Vec::with_capacity(to - from);
+        let start = self.checkpoints[from / self.stride].clone();
+        if self.stride == 1 {
+            filtered.push(start);
+            predicted.push(self.predicted[from].clone());
+            return Ok((filtered, predicted));
+        }
+        self.worker.restore(&start)?;
+        filtered.push(start);
+        for (j, record) in self.steps[from..to].iter().enumerate() {
+            self.worker.step(&record.observation())?;
+            predicted.push(self.worker.last_predicted().to_vec());
+            if from + j + 1 < to {
+                filtered.push(self.worker.grid_density().1.to_vec());
             }
         }
-        Ok(out)
+        Ok((filtered, predicted))
     }
 }
 
@@ -319,6 +348,9 @@ impl<F: GridTransition> Filter for GridSmoother<F> {
             value: obs.value.to_vec(),
             kind: obs.kind,
         });
+        if self.stride == 1 {
+            self.predicted.push(self.filter.last_predicted().to_vec());
+        }
         if self.steps.len().is_multiple_of(self.stride) {
             self.checkpoints.push(self.filter.grid_density().1.to_vec());
         }
@@ -344,26 +376,24 @@ impl<F: GridTransition> Smoother for GridSmoother<F> {
         let mut ratio = vec![0.0; self.cells];
         let mut k = last;
         while k > 0 {
-            // The segment [from, k] whose filtered densities the recursion needs.
+            // The segment [from, k) of steps whose densities the recursion needs.
             let from = ((k - 1) / self.stride) * self.stride;
-            let filtered = self.refilter(from, k - 1)?;
+            let (filtered, predicted) = self.segment(from, k)?;
             for j in (from..k).rev() {
-                let p = &filtered[j - from];
-                // p⁻_{j+1} = T p_j, then r = p^s_{j+1} ⊘ p⁻_{j+1} (0 where nothing was
-                // predicted: there p^s is 0 too).
-                ratio.copy_from_slice(p);
-                let record = &self.steps[j];
-                self.worker.carry(&record.observation(), &mut ratio)?;
-                let top = ratio.iter().fold(0.0f64, |a, &b| a.max(b));
-                for (r, s) in ratio.iter_mut().zip(&smoothed) {
-                    *r = if *r > 1e-300 * top && *r > 0.0 {
-                        s / *r
+                // r = p^s_(j+1) ⊘ p⁻_(j+1) (0 where nothing was predicted: there p^s is 0
+                // too), then p^s_j = p_j ⊙ T_jᵀ r.
+                let pred = &predicted[j - from];
+                let top = pred.iter().fold(0.0f64, |a, &b| a.max(b));
+                for ((r, s), p) in ratio.iter_mut().zip(&smoothed).zip(pred) {
+                    *r = if *p > 1e-300 * top && *p > 0.0 {
+                        s / p
                     } else {
                         0.0
                     };
                 }
+                let record = self.steps[j].clone();
                 self.worker.carry_back(&record.observation(), &mut ratio)?;
-                for ((s, p), r) in smoothed.iter_mut().zip(p).zip(&ratio) {
+                for ((s, p), r) in smoothed.iter_mut().zip(&filtered[j - from]).zip(&ratio) {
                     *s = (p * r).max(0.0);
                 }
                 normalise_on_grid(&grid, &mut smoothed, &mut moments, &mut estimate)?;

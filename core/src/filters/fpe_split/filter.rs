@@ -84,6 +84,8 @@ pub struct ContinuousDiscreteGrid {
     /// Storage of the estimate's moments (see [`normalise_on_grid`]).
     moments: crate::grid::Moments,
     warnings: Vec<String>,
+    /// The last step's predicted density (before its update), kept for a smoother.
+    predicted: Option<Vec<f64>>,
 }
 
 impl ContinuousDiscreteGrid {
@@ -169,6 +171,7 @@ impl ContinuousDiscreteGrid {
             estimate,
             moments,
             warnings: Vec::new(),
+            predicted: None,
         };
         let (_, notes) = filter.step_count(dt_obs)?;
         filter.warnings = notes;
@@ -430,6 +433,9 @@ impl ContinuousDiscreteGrid {
         if obs.dt > 0.0 {
             self.propagate(obs.dt)?;
         }
+        if let Some(kept) = &mut self.predicted {
+            kept.copy_from_slice(&self.u);
+        }
         match observed {
             Observed::Nothing => self.normalise().map(|_| 0.0),
             Observed::All | Observed::Some => self.assimilate(obs.value),
@@ -442,6 +448,7 @@ impl crate::filters::smoothing::GridTransition for ContinuousDiscreteGrid {
         (&self.grid, &self.u)
     }
 
+    #[cfg(test)]
     fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
         if obs.dt > 0.0 {
             core::mem::swap(&mut self.u, values);
@@ -465,6 +472,14 @@ impl crate::filters::smoothing::GridTransition for ContinuousDiscreteGrid {
     fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
         self.u.copy_from_slice(values);
         self.normalise()
+    }
+
+    fn keep_predicted(&mut self) {
+        self.predicted = Some(self.u.clone());
+    }
+
+    fn last_predicted(&self) -> &[f64] {
+        self.predicted.as_deref().unwrap_or(&[])
     }
 }
 

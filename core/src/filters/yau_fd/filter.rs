@@ -417,6 +417,8 @@ pub struct YauYauFilter {
     cell: Option<CellSamples>,
     /// The factor's terms for increments with some components missing.
     partial: PartialIncrements,
+    /// The last step's predicted density (before its factor), kept for a smoother.
+    predicted: Option<Vec<f64>>,
 }
 
 /// `S⁻¹h` and `½hᵀS⁻¹h` at K^D points inside every cell (node-major), for the cell average
@@ -538,6 +540,7 @@ impl YauYauFilter {
                 map: None,
             },
             moments: crate::grid::Moments::zeros(model.n),
+            predicted: None,
         };
         filter.normalise()?;
         filter.prepare(dt_obs)?;
@@ -751,6 +754,9 @@ impl YauYauFilter {
             } else {
                 self.propagate(obs.dt);
             }
+            if let Some(kept) = &mut self.predicted {
+                kept.copy_from_slice(&self.u);
+            }
             if observed != Observed::Nothing {
                 // The factor keeps only positive values (negative ones, left by a scheme
                 // outside its positivity condition or by SPT's projection, become 0).
@@ -762,6 +768,8 @@ impl YauYauFilter {
                 let shift = self.update(obs.value, obs.dt)?;
                 factor = Some((shift, before));
             }
+        } else if let Some(kept) = &mut self.predicted {
+            kept.copy_from_slice(&self.u);
         }
         self.normalise()?;
         Ok(match factor {
@@ -879,6 +887,7 @@ impl crate::filters::smoothing::GridTransition for YauYauFilter {
         (&self.grid, &self.u)
     }
 
+    #[cfg(test)]
     fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
         self.carry_values(obs, values, false)
     }
@@ -890,6 +899,14 @@ impl crate::filters::smoothing::GridTransition for YauYauFilter {
     fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
         self.u.copy_from_slice(values);
         self.normalise()
+    }
+
+    fn keep_predicted(&mut self) {
+        self.predicted = Some(self.u.clone());
+    }
+
+    fn last_predicted(&self) -> &[f64] {
+        self.predicted.as_deref().unwrap_or(&[])
     }
 }
 

@@ -201,26 +201,37 @@ pub fn explicit_part_transposed(
     for ((o, w), r) in out.iter_mut().zip(weight).zip(r) {
         *o = w * r;
     }
+    // v = p̃_d ⊙ r, then out −= c K_d v along every line (zero beyond its ends).
+    let mut v = vec![0.0; r.len()];
     for (d, p) in weighted_drift.iter().enumerate() {
-        let (stride, n) = (grid.stride(d), grid.shape()[d] as isize);
+        let (stride, n) = (grid.stride(d), grid.shape()[d]);
         let c = dt / (if fourth_order { 12.0 } else { 2.0 } * grid.spacing()[d]);
-        crate::grid::for_each_line(r.len(), stride, n as usize, |base| {
-            // v_j = p̃_j r_j along the line, zero beyond its ends.
-            let v = |j: isize| {
-                if j < 0 || j >= n {
-                    0.0
+        for ((v, p), r) in v.iter_mut().zip(p).zip(r) {
+            *v = p * r;
+        }
+        crate::grid::for_each_line(r.len(), stride, n, |base| {
+            let at = |j: usize, back: usize, ahead: usize| -> (f64, f64) {
+                let right = if j + ahead < n {
+                    v[base + (j + ahead) * stride]
                 } else {
-                    let i = base + j as usize * stride;
-                    p[i] * r[i]
-                }
+                    0.0
+                };
+                let left = if j >= back {
+                    v[base + (j - back) * stride]
+                } else {
+                    0.0
+                };
+                (right, left)
             };
             for j in 0..n {
+                let (r1, l1) = at(j, 1, 1);
                 let diff = if fourth_order {
-                    -v(j + 2) + 8.0 * v(j + 1) - 8.0 * v(j - 1) + v(j - 2)
+                    let (r2, l2) = at(j, 2, 2);
+                    -r2 + 8.0 * r1 - 8.0 * l1 + l2
                 } else {
-                    v(j + 1) - v(j - 1)
+                    r1 - l1
                 };
-                out[base + j as usize * stride] -= c * diff;
+                out[base + j * stride] -= c * diff;
             }
         });
     }
