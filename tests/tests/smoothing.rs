@@ -89,7 +89,7 @@ fn worst(track: &MethodTrack, means: &[f64], variances: &[f64]) -> (f64, f64) {
     out
 }
 
-/// The Kalman, EKF, UKF and IEKF smoothers are the RTS smoother of the local level (a linear
+/// The Kalman, EKF, UKF, IEKF and IOKF smoothers are the RTS smoother of the local level (a linear
 /// model: the extended and unscented ones reduce to it) to 10⁻⁹ of the smoothed sd, at every
 /// row: the gaps, where the smoother bridges 20 missing years, and the two-year step.
 #[test]
@@ -97,7 +97,7 @@ fn the_gaussian_smoothers_are_the_rts_smoother_over_gaps() {
     let data = nile_with_gaps();
     let (means, variances) = reference(&data);
     let methods = serde_json::json!([
-        {"method": "kalman"}, {"method": "ekf"}, {"method": "ukf"}, {"method": "iekf"}
+        {"method": "kalman"}, {"method": "ekf"}, {"method": "ukf"}, {"method": "iekf"}, {"method": "iokf"}
     ]);
     let e = Experiment::new(local_level(methods)).unwrap();
     let run = e.smooth_recorded(data.clone(), 1).unwrap();
@@ -294,12 +294,12 @@ fn oscillator_gaps(methods: serde_json::Value, seed: u64) -> Vec<(String, f64, f
 }
 
 /// In 2-D, with a gap of 15 rows and an irregular step: the Kalman smoother is the RTS
-/// smoother written here to 10⁻⁹; the EKF, UKF and IEKF smoothers, whose predictions
+/// smoother written here to 10⁻⁹; the EKF, UKF, IEKF and IOKF smoothers, whose predictions
 /// integrate the moment equations by RK4, to 10⁻⁶.
 #[test]
 fn the_gaussian_smoothers_are_the_rts_smoother_in_two_dimensions() {
     let methods = serde_json::json!([
-        {"method": "kalman"}, {"method": "ekf"}, {"method": "ukf"}, {"method": "iekf"}
+        {"method": "kalman"}, {"method": "ekf"}, {"method": "ukf"}, {"method": "iekf"}, {"method": "iokf"}
     ]);
     for (name, mean, sd) in oscillator_gaps(methods, 1) {
         let tolerance = if name == "KF" { 1e-9 } else { 1e-6 };
