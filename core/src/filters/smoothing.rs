@@ -9,7 +9,7 @@
 //!
 //! * **Gaussian filters** (Kalman–Bucy, EKF, UKF, IEKF, IOKF): the Rauch–Tung–Striebel
 //!   recursion in its general Gaussian form (Särkkä 2013, *Bayesian Filtering and Smoothing*,
-//!   ch. 8–9):
+//!   ch. 8–10):
 //!   `G_k = C_{k,k+1} P⁻_{k+1}⁻¹`, `m^s_k = m_k + G_k (m^s_{k+1} − m⁻_{k+1})`,
 //!   `P^s_k = P_k + G_k (P^s_{k+1} − P⁻_{k+1}) G_kᵀ` (S1)
 //!   with `C_{k,k+1} = Cov(x_k, x_{k+1} | z_1:k) = P_k Φ_kᵀ`, where Φ_k solves `dΦ/dt = A(t) Φ`,
@@ -23,10 +23,12 @@
 //!   Kolmogorov operator, exactly as the filter applies it) and then multiplies by the
 //!   likelihood, the smoothed densities of that discrete model are
 //!   `p^s_k = p_k ⊙ T_kᵀ (p^s_{k+1} ⊘ p⁻_{k+1})` (S2)
-//!   (the density form of the RTS recursion: `p(x_k | z_1:N) = p(x_k | z_1:k)
-//!   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`), so the smoothed
+//!   (the discrete form of `p(x_k | z_1:N) = p(x_k | z_1:k)
+//!   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`, whose Gaussian case
+//!   is the RTS recursion), so the smoothed
 //!   density is consistent with the filter's, and converges with it as the grid is refined.
-//!   `T_kᵀ` — the backward Kolmogorov equation in the scheme's discretisation — is each
+//!   `T_kᵀ` — one step of the backward equation's solution operator in the scheme's
+//!   discretisation — is each
 //!   scheme's transposed step (`GridTransition::carry_back`: the θ-scheme's and 001's
 //!   tridiagonal solves transposed with the same factors, QIEM's symmetric DST solve and
 //!   antisymmetric drift differences, the superposition map transposed, 001's upwind part).

@@ -27,7 +27,7 @@ impl Method for Pf {
     const RANDOM: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(
         "FFBSi",
-        "forward filtering, backward simulation: M trajectories drawn backward through the stored particle clouds with the transition density of the filter's Euler–Maruyama steps (needs a nonsingular G Gᵀ); unbiased for the discretised model up to Monte Carlo error, at O(M N) per Euler step",
+        "forward filtering, backward simulation: M trajectories drawn backward through the stored particle clouds with the transition density of the filter's Euler–Maruyama steps (needs a nonsingular G Gᵀ); consistent for the discretised model, with errors of order N^−½ (particles) and M^−½ (trajectories), at O(M N) per Euler step",
     );
     type Params = PfParams;
     type Filter = ParticleFilter;

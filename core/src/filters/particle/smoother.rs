@@ -10,8 +10,8 @@
 //! earlier point among the cloud before it with probability
 //! `∝ w^i N(x' ; x^i + f(x^i) h, Q h)` (the backward kernel of the discretised chain), down to
 //! the start. The smoothed mean and covariance at an observation time are those of the M
-//! trajectories' points there: unbiased for the discretised model's smoother as N → ∞, with a
-//! Monte Carlo error that falls like 1/√M. A step of length 0 (the update at τ₀) does not move
+//! trajectories' points there: consistent for the discretised model's smoother, with an error of
+//! order N^−½ from the particle clouds plus M^−½ from the trajectories. A step of length 0 (the update at τ₀) does not move
 //! a trajectory.
 //!
 //! Cost: O(M N n²) per Euler–Maruyama step backward (every trajectory weighs every particle),
