@@ -297,8 +297,11 @@ export function showFormStatus(problems = 0) {
   $('form-status').textContent = problems ? `${problems === 1 ? 'a problem' : `${problems} problems`} at the marked field${problems === 1 ? '' : 's'} — not applied` : changed ? 'changed — not applied (▶ play applies)' : 'applied';
   $('form-status').classList.toggle('changed', changed || problems > 0);
 }
+// The largest n the form's own control makes (its matrices are n × n grids of fields); a
+// scenario file may hold more (the Gaussian and particle filters take any n).
+const FORM_MAX_DIM = 20;
 function changeDimension() {
-  const n = Math.max(1, Math.min(8, Number($('dim').value) | 0));
+  const n = Math.max(1, Math.min(FORM_MAX_DIM, Number($('dim').value) | 0));
   const c = readForm();
   const resize = (arr, fill) => Array.from({ length: n }, (_, i) => arr[i] ?? fill(i));
   // A covariance's entries that fit, the identity's elsewhere.

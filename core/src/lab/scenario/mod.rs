@@ -28,8 +28,12 @@ use crate::error::ZakaiError;
 use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};
 use crate::simulate::TimeGrid;
 
-/// Largest state dimension a scenario may declare.
-pub const MAX_STATE_DIM: usize = 8;
+/// Largest state (and observation) dimension a scenario may declare: a bound on the text a
+/// scenario may hold, not on the methods — the Gaussian and particle filters take any
+/// dimension up to it, and every method's memory estimate, checked against the memory cap
+/// before anything is allocated, is what limits the grid and spectral methods (to 1–3
+/// dimensions) and the others long before it.
+pub const MAX_STATE_DIM: usize = 1024;
 /// Largest number of observation intervals in one run.
 pub const MAX_STEPS: usize = 2_000_000;
 
