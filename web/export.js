@@ -62,7 +62,8 @@ export function download(name, blob) {
 export const csvCell = (v) => (v == null || Number.isNaN(v) ? '' : String(v));
 export const csvName = (s) => `"${String(s).replace(/"/g, '""')}"`;
 
-// Truth and every method's estimates so far, one row per observation time.
+// Truth and every method's estimates so far, one row per observation time; with the smoothed
+// estimates on screen, also each method's smoothed mean and sd (`<method>_smoothed_x1`, …).
 function exportCsv() {
   const d = state.data;
   const info = state.info;
@@ -74,12 +75,20 @@ function exportCsv() {
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_x${j + 1}`)); });
   // The standard deviations behind the ±2σ bands (empty for a method without a covariance).
   info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_sd${j + 1}`)); });
+  const s = state.smoothed;
+  if (s) {
+    for (const what of ['x', 'sd']) info.methods.forEach((m) => { for (let j = 0; j < n; j++) head.push(csvName(`${m}_smoothed_${what}${j + 1}`)); });
+  }
   const lines = [head.join(',')];
   for (let r = 0; r < d.times.length; r++) {
     const row = [d.times[r], ...d.obs.map((o) => o[r])];
     if (truth) for (let j = 0; j < n; j++) row.push(d.truth[j][r]);
     d.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
     d.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(d.hi[i][j][r] == null ? null : (d.hi[i][j][r] - e[j][r]) / 2); });
+    if (s) {
+      s.est.forEach((e) => { for (let j = 0; j < n; j++) row.push(e[j][r]); });
+      s.est.forEach((e, i) => { for (let j = 0; j < n; j++) row.push(s.hi[i][j][r] == null ? null : (s.hi[i][j][r] - e[j][r]) / 2); });
+    }
     lines.push(row.map(csvCell).join(','));
   }
   download(`zakai-${info.name}-seed${info.seed}.csv`, new Blob([lines.join('\n') + '\n'], { type: 'text/csv' }));

@@ -378,6 +378,14 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   });
   assert.equal(strip9.method, 0, 'the strip is QIEM\'s');
   assert.ok(strip9.peaks.length === 1 && strip9.peaks[0] < 0, `one well, below 0: ${strip9.peaks}`);
+  // The CSV export carries the smoothed estimates beside the filtered ones.
+  const [csv9] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
+  const csvLines9 = (await (await import('node:fs/promises')).readFile(await csv9.path(), 'utf8')).trim().split('\n');
+  const head9 = csvLines9[0].split(',');
+  const col9 = head9.indexOf('"QIEM_smoothed_x1"');
+  const row9 = csvLines9.findIndex((l) => Number(l.split(',')[0]) >= 4.25 - 1e-9);
+  assert.ok(col9 > 0 && head9.includes('"UKF_smoothed_sd1"'), 'smoothed columns in the CSV');
+  assert.equal(Number(csvLines9[row9].split(',')[col9]), qs9.s425, 'the smoothed estimate in the CSV');
   await page.screenshot({ path: `${artifacts}/lesson-smoothing.png` });
 
   // A run the page refuses reports why (a broken drift expression, with its position); the
