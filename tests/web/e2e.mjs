@@ -615,6 +615,26 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
         assert.equal(gapShown[i].filter((v) => v !== null).length, rows.length, `${m.name}: a row per time`);
         m.estimates.forEach((v, k) => assert.ok(Math.abs(gapShown[i][k] - v) <= 1e-9 * Math.max(1, Math.abs(v)), `${m.name} row ${k} with gaps: page ${gapShown[i][k]}, CLI ${v}`));
       });
+      // Smoothed on the page across the same gaps: each method's smoother is `zakai smooth`'s
+      // on the same file (the particle filter's FFBSi draws included), or says why it has none.
+      const smoothRun = JSON.parse(execFileSync(cli, ['smooth', 'cubic-sensor-1d', '--observations', gapPath, '--seed', '1', '--format', 'json']));
+      await data.check('#smoothed');
+      await data.waitForFunction(() => window.zakaiPage.smoothed != null, null, { timeout: 60000 });
+      const pageSmoothed = await data.evaluate(() => window.zakaiPage.smoothed.methods.map((m) => ({ smoother: m.smoother, failure: m.failure, estimates: m.estimates })));
+      let smoothedMethods = 0;
+      smoothRun.methods.forEach((m, i) => {
+        const s = m.smoothed;
+        assert.equal(pageSmoothed[i].smoother, s.smoother, `${m.name}: the same smoother`);
+        if (s.failure) {
+          assert.ok(pageSmoothed[i].failure, `${m.name}: no smoother on the page either`);
+          return;
+        }
+        smoothedMethods += 1;
+        s.estimates.forEach((v, k) => assert.ok(Math.abs(pageSmoothed[i].estimates[k] - v) <= 1e-9 * Math.max(1, Math.abs(v)), `${m.name} smoothed row ${k}: page ${pageSmoothed[i].estimates[k]}, CLI ${v}`));
+      });
+      console.log(`smoothed across the gaps: ${smoothedMethods} of ${smoothRun.methods.length} methods as the CLI's`);
+      assert.ok(smoothedMethods >= 8, 'the Gaussian, particle and Yau–Yau smoothers');
+      await data.screenshot({ path: `${artifacts}/recorded-gaps-smoothed.png` });
     }
     await data.close();
   }
