@@ -208,3 +208,67 @@ pub fn compare_with_paper(
 }
 
 include!("../../core/examples/data/nile.rs");
+
+/// The point-mass transition of the double well `dx = (x − x³) dt + g dv` over one
+/// Euler–Maruyama step `h`, between the equally spaced nodes `xs`: for each source node, the
+/// nodes the Gaussian N(x + (x − x³)h, g²h) reaches (8 sds) with their weights, normalised to
+/// 1 — the references' kernel, written here, independent of Zakai.
+pub fn double_well_kernel(xs: &[f64], h: f64, g2: f64) -> Vec<Vec<(usize, f64)>> {
+    let (lo, dx, nodes) = (xs[0], xs[1] - xs[0], xs.len());
+    xs.iter()
+        .map(|&x| {
+            let (mu, var) = (x + (x - x * x * x) * h, g2 * h);
+            let reach = (8.0 * var.sqrt() / dx).ceil() as isize + 1;
+            let centre = ((mu - lo) / dx).round() as isize;
+            let mut row: Vec<(usize, f64)> = (centre - reach..=centre + reach)
+                .filter(|&j| j >= 0 && (j as usize) < nodes)
+                .map(|j| {
+                    let d = xs[j as usize] - mu;
+                    (j as usize, (-d * d / (2.0 * var)).exp())
+                })
+                .collect();
+            let total: f64 = row.iter().map(|e| e.1).sum();
+            row.iter_mut().for_each(|e| e.1 /= total);
+            row
+        })
+        .collect()
+}
+
+/// `K p` for a kernel of [`double_well_kernel`] (rows are source nodes).
+pub fn carry(kernel: &[Vec<(usize, f64)>], p: &[f64]) -> Vec<f64> {
+    let mut next = vec![0.0; p.len()];
+    for (i, row) in kernel.iter().enumerate() {
+        for &(j, w) in row {
+            next[j] += p[i] * w;
+        }
+    }
+    next
+}
+
+/// `Kᵀ r` for a kernel of [`double_well_kernel`].
+pub fn carry_back(kernel: &[Vec<(usize, f64)>], r: &[f64]) -> Vec<f64> {
+    kernel
+        .iter()
+        .map(|row| row.iter().map(|&(j, w)| w * r[j]).sum())
+        .collect()
+}
+
+/// A small generator of the tests' own (64-bit LCG, Box–Muller), so that data the tests
+/// simulate owe nothing to Zakai.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// Uniform on (0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    /// Standard normal.
+    pub fn normal(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}

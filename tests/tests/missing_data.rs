@@ -11,6 +11,7 @@ use zakai::lab::scenario::ScenarioConfig;
 use zakai::FilterError;
 use zakai::{Estimate, Filter, Observation};
 use zakai_tests::test;
+use zakai_tests::Lcg;
 use zakai_tests::{applicable_methods, observation_of, PRESETS_FOR_EVERY_METHOD};
 
 /// Every number a filter exposes, as bits: mean, covariance, MAP, density and the last
@@ -219,23 +220,6 @@ fn linear_two_sensor(methods: serde_json::Value) -> ScenarioConfig {
     .expect("a valid scenario")
 }
 
-/// A small generator of its own (64-bit LCG, Box–Muller), so the data owe nothing to Zakai.
-struct Lcg(u64);
-
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// A recording of the two-sensor model with irregular times (steps of 0.1, 0.25, 0.03,
 /// 0.4 …, whole multiples of Δτ and not), sensor 2 reporting on every third row only
 /// (multi-rate), a gap of three rows with nothing observed, and the truth.
@@ -424,25 +408,6 @@ fn double_well(methods: serde_json::Value) -> ScenarioConfig {
 fn reference_point_mass(r: &Recording, nodes: usize, micro: f64) -> Vec<(f64, f64)> {
     let dx = 6.0 / (nodes - 1) as f64;
     let xs: Vec<f64> = (0..nodes).map(|i| -3.0 + i as f64 * dx).collect();
-    let kernel = |h: f64| -> Vec<Vec<(usize, f64)>> {
-        xs.iter()
-            .map(|&x| {
-                let (mu, var) = (x + (x - x * x * x) * h, 0.49 * h);
-                let reach = (8.0 * var.sqrt() / dx).ceil() as isize + 1;
-                let centre = ((mu + 3.0) / dx).round() as isize;
-                let mut row: Vec<(usize, f64)> = (centre - reach..=centre + reach)
-                    .filter(|&j| j >= 0 && (j as usize) < nodes)
-                    .map(|j| {
-                        let d = xs[j as usize] - mu;
-                        (j as usize, (-d * d / (2.0 * var)).exp())
-                    })
-                    .collect();
-                let total: f64 = row.iter().map(|e| e.1).sum();
-                row.iter_mut().for_each(|e| e.1 /= total);
-                row
-            })
-            .collect()
-    };
     let mut p: Vec<f64> = xs
         .iter()
         .map(|x| (-(x - 0.2) * (x - 0.2) / 0.6).exp())
@@ -452,15 +417,9 @@ fn reference_point_mass(r: &Recording, nodes: usize, micro: f64) -> Vec<(f64, f6
         let dt = r.step_length(k);
         if dt > 0.0 {
             let steps = (dt / micro).ceil() as usize;
-            let step = kernel(dt / steps as f64);
+            let step = zakai_tests::double_well_kernel(&xs, dt / steps as f64, 0.49);
             for _ in 0..steps {
-                let mut next = vec![0.0; nodes];
-                for (i, row) in step.iter().enumerate() {
-                    for &(j, w) in row {
-                        next[j] += p[i] * w;
-                    }
-                }
-                p = next;
+                p = zakai_tests::carry(&step, &p);
             }
         }
         let z = r.observation(k)[0];

@@ -7,6 +7,7 @@ use zakai::lab::experiment::{Experiment, MethodTrack};
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 use zakai_tests::test;
+use zakai_tests::Lcg;
 use zakai_tests::NILE;
 
 /// The local level's variances (Durbin & Koopman's maximum-likelihood estimates) and prior.
@@ -154,23 +155,6 @@ fn methods_without_a_smoother_say_so() {
     let why = s.failure.as_deref().unwrap();
     assert!(why.starts_with("no smoother:"), "{why}");
     assert!(!run.methods[1].estimates.is_empty(), "the filter still ran");
-}
-
-/// A small generator of its own (64-bit LCG, Box–Muller), so the data owe nothing to Zakai.
-struct Lcg(u64);
-
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
 }
 
 /// The damped oscillator `dx = A x dt + G dv`, A = [[0, 1], [−1, −0.4]], G = diag(0.3, 0.5),
@@ -369,25 +353,6 @@ mod references {
     ) -> (Vec<f64>, Vec<f64>) {
         let dx = 6.0 / (nodes - 1) as f64;
         let xs: Vec<f64> = (0..nodes).map(|i| -3.0 + i as f64 * dx).collect();
-        let kernel = |h: f64| -> Vec<Vec<(usize, f64)>> {
-            xs.iter()
-                .map(|&x| {
-                    let (mu, var) = (x + (x - x * x * x) * h, G * G * h);
-                    let reach = (8.0 * var.sqrt() / dx).ceil() as isize + 1;
-                    let centre = ((mu + 3.0) / dx).round() as isize;
-                    let mut row: Vec<(usize, f64)> = (centre - reach..=centre + reach)
-                        .filter(|&j| j >= 0 && (j as usize) < nodes)
-                        .map(|j| {
-                            let d = xs[j as usize] - mu;
-                            (j as usize, (-d * d / (2.0 * var)).exp())
-                        })
-                        .collect();
-                    let total: f64 = row.iter().map(|e| e.1).sum();
-                    row.iter_mut().for_each(|e| e.1 /= total);
-                    row
-                })
-                .collect()
-        };
         let normalise = |p: &mut Vec<f64>| {
             let total: f64 = p.iter().sum();
             p.iter_mut().for_each(|v| *v /= total);
@@ -402,15 +367,9 @@ mod references {
             if k > 0 {
                 let dt = times[k] - times[k - 1];
                 let steps = (dt / micro).ceil() as usize;
-                let step = kernel(dt / steps as f64);
+                let step = zakai_tests::double_well_kernel(&xs, dt / steps as f64, G * G);
                 for _ in 0..steps {
-                    let mut next = vec![0.0; nodes];
-                    for (i, row) in step.iter().enumerate() {
-                        for &(j, w) in row {
-                            next[j] += p[i] * w;
-                        }
-                    }
-                    p = next;
+                    p = zakai_tests::carry(&step, &p);
                 }
                 steps_of.push((steps, step));
             }
@@ -440,13 +399,7 @@ mod references {
             // K p_k, keeping every micro step's input for the transposed pass.
             let mut carried = filtered[k].clone();
             for _ in 0..*steps {
-                let mut next = vec![0.0; nodes];
-                for (i, row) in step.iter().enumerate() {
-                    for &(j, w) in row {
-                        next[j] += carried[i] * w;
-                    }
-                }
-                carried = next;
+                carried = zakai_tests::carry(step, &carried);
             }
             let mut r: Vec<f64> = smoothed
                 .iter()
@@ -454,10 +407,7 @@ mod references {
                 .map(|(s, c)| if *c > 1e-300 { s / c } else { 0.0 })
                 .collect();
             for _ in 0..*steps {
-                r = step
-                    .iter()
-                    .map(|row| row.iter().map(|&(j, w)| w * r[j]).sum())
-                    .collect();
+                r = zakai_tests::carry_back(step, &r);
             }
             smoothed = filtered[k].iter().zip(&r).map(|(p, r)| p * r).collect();
             normalise(&mut smoothed);

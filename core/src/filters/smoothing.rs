@@ -211,6 +211,27 @@ macro_rules! forward_pass {
 }
 pub(crate) use forward_pass;
 
+/// [`GridTransition`]'s storage methods for a grid filter whose density is its field `u`,
+/// normalised by its `normalise()`, and whose field `predicted: Option<Vec<f64>>` keeps the
+/// last step's predicted density when asked (invoked in the filter's own module).
+macro_rules! density_storage {
+    () => {
+        fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
+            self.u.copy_from_slice(values);
+            self.normalise()
+        }
+
+        fn keep_predicted(&mut self) {
+            self.predicted = Some(self.u.clone());
+        }
+
+        fn last_predicted(&self) -> &[f64] {
+            self.predicted.as_deref().unwrap_or(&[])
+        }
+    };
+}
+pub(crate) use density_storage;
+
 /// The refusal of a method without a smoother.
 pub(crate) fn no_smoother(name: &str, why: &str) -> FilterError {
     FilterError::Unsuitable(format!("{name} has no smoother: {why}"))

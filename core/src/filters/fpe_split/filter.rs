@@ -469,18 +469,7 @@ impl crate::filters::smoothing::GridTransition for ContinuousDiscreteGrid {
         Ok(())
     }
 
-    fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
-        self.u.copy_from_slice(values);
-        self.normalise()
-    }
-
-    fn keep_predicted(&mut self) {
-        self.predicted = Some(self.u.clone());
-    }
-
-    fn last_predicted(&self) -> &[f64] {
-        self.predicted.as_deref().unwrap_or(&[])
-    }
+    crate::filters::smoothing::density_storage!();
 }
 
 /// Coordinates rounded to 4 significant decimals for messages.
