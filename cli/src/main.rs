@@ -830,9 +830,8 @@ fn simulate(a: SimulateArgs) -> Result<(), String> {
             );
         }
         let experiment = Experiment::new(config.clone()).map_err(|e| e.to_string())?;
-        let recording = zakai::lab::recording::Recording::from(
-            experiment.simulate(seed.unwrap_or(config.seed)),
-        );
+        // What the run observes: missing in the scenario's outages (`time.unobserved`).
+        let recording = experiment.observed(experiment.simulate(seed.unwrap_or(config.seed)));
         if let (Some(path), Some(truth)) = (&a.truth_out, recording.truth_csv()) {
             emit(&truth, Some(path))?;
         }
