@@ -640,20 +640,10 @@ impl YauYauFilter {
     fn carry_over(&mut self, interval: f64, transposed: bool) {
         let (built_for, _, _) = self.solver.as_ref().expect("prepared in new");
         let (whole, rest) = crate::filters::whole_intervals(interval, *built_for);
-        let run = |solver: &mut Solver,
-                   substeps,
-                   grid: &TensorGrid,
-                   u: &mut Vec<f64>,
-                   tmp: &mut Vec<f64>| {
-            match transposed {
-                false => solver.run(substeps, grid, u, tmp),
-                true => solver.run_transposed(substeps, grid, u, tmp),
-            }
-        };
         let whole_intervals = |f: &mut Self| {
             for _ in 0..whole {
                 let (_, substeps, solver) = f.solver.as_mut().expect("prepared in new");
-                run(solver, *substeps, &f.grid, &mut f.u, &mut f.tmp);
+                solver.run(*substeps, &f.grid, (&mut f.u, &mut f.tmp), transposed);
             }
         };
         if !transposed {
@@ -666,7 +656,12 @@ impl YauYauFilter {
                 self.remainders.insert(rest, (substeps, solver));
             }
             let (substeps, solver) = self.remainders.front();
-            run(solver, *substeps, &self.grid, &mut self.u, &mut self.tmp);
+            solver.run(
+                *substeps,
+                &self.grid,
+                (&mut self.u, &mut self.tmp),
+                transposed,
+            );
         }
         if transposed {
             whole_intervals(self);
@@ -700,10 +695,12 @@ impl YauYauFilter {
             cache.insert(interval, (substeps, solver));
         }
         let (substeps, solver) = cache.front();
-        match transposed {
-            false => solver.run(*substeps, &self.grid, &mut self.u, &mut self.tmp),
-            true => solver.run_transposed(*substeps, &self.grid, &mut self.u, &mut self.tmp),
-        }
+        solver.run(
+            *substeps,
+            &self.grid,
+            (&mut self.u, &mut self.tmp),
+            transposed,
+        );
     }
 
     /// What [`YauYauFilter::advance`] does to the density over `obs.dt` before the factor
@@ -840,44 +837,37 @@ fn stepper_for(
 }
 
 impl Solver {
-    /// `substeps` steps (the superposition technique: its whole interval at once).
-    fn run(&mut self, substeps: usize, grid: &TensorGrid, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
-        match self {
-            Solver::Iem(tri) => {
-                for _ in 0..substeps {
-                    tri.step(u, tmp);
-                }
-            }
-            Solver::Qiem(qiem) => {
-                for _ in 0..substeps {
-                    qiem.step(grid, u, tmp);
-                }
-            }
-            // The whole interval at once: project onto the bumps, combine their solutions.
-            Solver::Superposition(spt) => spt.apply(u),
-        }
-    }
-
-    /// The transpose of [`Solver::run`] (the backward step of a smoother).
-    fn run_transposed(
+    /// `substeps` steps (the superposition technique: its whole interval at once), or with
+    /// `transposed` their transpose (the backward step of a smoother).
+    fn run(
         &mut self,
         substeps: usize,
         grid: &TensorGrid,
-        u: &mut Vec<f64>,
-        tmp: &mut Vec<f64>,
+        (u, tmp): (&mut Vec<f64>, &mut Vec<f64>),
+        transposed: bool,
     ) {
         match self {
             Solver::Iem(tri) => {
                 for _ in 0..substeps {
-                    tri.step_transposed(u, tmp);
+                    match transposed {
+                        false => tri.step(u, tmp),
+                        true => tri.step_transposed(u, tmp),
+                    }
                 }
             }
             Solver::Qiem(qiem) => {
                 for _ in 0..substeps {
-                    qiem.step_transposed(grid, u, tmp);
+                    match transposed {
+                        false => qiem.step(grid, u, tmp),
+                        true => qiem.step_transposed(grid, u, tmp),
+                    }
                 }
             }
-            Solver::Superposition(spt) => spt.apply_transposed(u),
+            // The whole interval at once: project onto the bumps, combine their solutions.
+            Solver::Superposition(spt) => match transposed {
+                false => spt.apply(u),
+                true => spt.apply_transposed(u),
+            },
         }
     }
 }
