@@ -334,34 +334,28 @@ impl<F: GridTransition> GridSmoother<F> {
             cells,
         })
     }
+}
 
-    /// The filtered densities before steps `from..to` and the steps' predicted densities
-    /// (`from` a checkpoint), refiltered from the checkpoint when they are not kept.
-    #[allow(clippy::type_complexity)]
-    fn segment(
-        &mut self,
-        from: usize,
-        to: usize,
-    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), FilterError> {
-        let mut filtered = Vec::with_capacity(to - from);
-        let mut predicted = Vec::with_capacity(to - from);
-        let start = self.checkpoints[from / self.stride].clone();
-        if self.stride == 1 {
-            filtered.push(start);
-            predicted.push(self.predicted[from].clone());
-            return Ok((filtered, predicted));
+/// The filtered densities before `steps` and the steps' predicted densities, refiltered by
+/// `worker` from the checkpoint `start` (the density before the first of them).
+#[allow(clippy::type_complexity)]
+fn refilter<F: GridTransition>(
+    worker: &mut F,
+    start: &[f64],
+    steps: &[StepRecord],
+) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), FilterError> {
+    let mut filtered = Vec::with_capacity(steps.len());
+    let mut predicted = Vec::with_capacity(steps.len());
+    worker.restore(start)?;
+    filtered.push(start.to_vec());
+    for (j, record) in steps.iter().enumerate() {
+        worker.step(&record.observation())?;
+        predicted.push(worker.last_predicted().to_vec());
+        if j + 1 < steps.len() {
+            filtered.push(worker.grid_density().1.to_vec());
         }
-        self.worker.restore(&start)?;
-        filtered.push(start);
-        for (j, record) in self.steps[from..to].iter().enumerate() {
-            self.worker.step(&record.observation())?;
-            predicted.push(self.worker.last_predicted().to_vec());
-            if from + j + 1 < to {
-                filtered.push(self.worker.grid_density().1.to_vec());
-            }
-        }
-        Ok((filtered, predicted))
     }
+    Ok((filtered, predicted))
 }
 
 impl<F: GridTransition> Filter for GridSmoother<F> {
@@ -403,7 +397,15 @@ impl<F: GridTransition> Smoother for GridSmoother<F> {
         while k > 0 {
             // The segment [from, k) of steps whose densities the recursion needs.
             let from = ((k - 1) / self.stride) * self.stride;
-            let (filtered, predicted) = self.segment(from, k)?;
+            // Kept (every step's, with `stride` 1), or refiltered from the segment's checkpoint.
+            let refiltered;
+            let (filtered, predicted): (&[Vec<f64>], &[Vec<f64>]) = if self.stride == 1 {
+                (&self.checkpoints[from..k], &self.predicted[from..k])
+            } else {
+                let start = &self.checkpoints[from / self.stride];
+                refiltered = refilter(&mut self.worker, start, &self.steps[from..k])?;
+                (&refiltered.0, &refiltered.1)
+            };
             for j in (from..k).rev() {
                 // r = p^s_(j+1) ⊘ p⁻_(j+1) (0 where nothing was predicted: there p^s is 0
                 // too), then p^s_j = p_j ⊙ T_jᵀ r.
@@ -416,8 +418,8 @@ impl<F: GridTransition> Smoother for GridSmoother<F> {
                         0.0
                     };
                 }
-                let record = self.steps[j].clone();
-                self.worker.carry_back(&record.observation(), &mut ratio)?;
+                self.worker
+                    .carry_back(&self.steps[j].observation(), &mut ratio)?;
                 for ((s, p), r) in smoothed.iter_mut().zip(&filtered[j - from]).zip(&ratio) {
                     *s = (p * r).max(0.0);
                 }
