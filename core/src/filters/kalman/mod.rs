@@ -495,9 +495,12 @@ impl GaussianState {
         }
     }
 
-    /// The tracked transition, to begin a step.
-    pub fn transition_mut(&mut self) -> Option<&mut propagate::Sensitivity> {
-        self.moments.sensitivity.as_mut()
+    /// A step begins, when the transitions are tracked: Φ = I, and the prediction is the
+    /// current (m, P) until one is made ([`propagate::Sensitivity::begin`]).
+    pub fn begin_tracked_step(&mut self) {
+        if let Some(s) = self.moments.sensitivity.as_mut() {
+            s.begin(&self.mean, &self.cov);
+        }
     }
 
     /// Fails when m or P is non-finite.

@@ -76,9 +76,7 @@ pub(crate) fn rts<F: GaussianFilter>(
 impl<F: GaussianFilter> Filter for Rts<F> {
     crate::filters::smoothing::forward_pass!(filter);
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let state = self.filter.gaussian_mut();
-        let (m, p) = (state.mean.clone(), state.cov.clone());
-        state.transition_mut().expect("tracked").begin(&m, &p);
+        self.filter.gaussian_mut().begin_tracked_step();
         self.filter.step(obs)?;
         let state = self.filter.gaussian();
         let s = state.transition().expect("tracked");
