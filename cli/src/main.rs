@@ -552,7 +552,8 @@ fn check(selection: &Selection) -> Result<(), String> {
         "convergence check of {} on the observations of seed {seed}: each method against itself at doubled resolution",
         experiment.config().name
     );
-    let rows = convergence_check(&experiment, &methods, seed, zakai::memory_cap());
+    let rows = convergence_check(&experiment, &methods, seed, zakai::memory_cap())
+        .map_err(|e| e.to_string())?;
     outln!(
         "{:<14} {:>11} {:>11} {:>11}  {:<13} doubled",
         "method",
@@ -831,7 +832,11 @@ fn simulate(a: SimulateArgs) -> Result<(), String> {
         }
         let experiment = Experiment::new(config.clone()).map_err(|e| e.to_string())?;
         // What the run observes: missing in the scenario's outages (`time.unobserved`).
-        let recording = experiment.observed(experiment.simulate(seed.unwrap_or(config.seed)));
+        let recording = experiment.observed(
+            experiment
+                .simulate(seed.unwrap_or(config.seed))
+                .map_err(|e| e.to_string())?,
+        );
         if let (Some(path), Some(truth)) = (&a.truth_out, recording.truth_csv()) {
             emit(&truth, Some(path))?;
         }

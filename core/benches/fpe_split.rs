@@ -42,7 +42,7 @@ fn fpe_split(c: &mut Criterion) {
     for (preset, cells, dt) in [("sa-example-1", 200, 0.01), ("sa-example-2", 35, 0.005)] {
         let experiment = Experiment::new(presets::preset(preset).expect("preset")).expect("valid");
         let dt_obs = experiment.config().time.dt_obs;
-        let traj = experiment.simulate(1);
+        let traj = experiment.simulate(1).unwrap();
         for (scheme, label) in [
             (FpeScheme::Separation, "SA"),
             (FpeScheme::ImplicitFdm, "FDM"),
@@ -92,7 +92,7 @@ fn fpe_split(c: &mut Criterion) {
 fn scaling_group(c: &mut Criterion, group: &str, preset: &str, dt: f64, sizes: &[usize]) {
     let experiment = Experiment::new(presets::preset(preset).expect("preset")).expect("valid");
     let dt_obs = experiment.config().time.dt_obs;
-    let traj = experiment.simulate(1);
+    let traj = experiment.simulate(1).unwrap();
     let n = experiment.model().n;
     let mut group = c.benchmark_group(group);
     if n > 1 {

@@ -30,7 +30,7 @@ fn increments(model: &Model, steps: usize) -> Vec<f64> {
         steps,
         inner_steps: 10,
     };
-    let data = simulate(model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1));
+    let data = simulate(model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1)).unwrap();
     data.observations
 }
 
@@ -62,7 +62,9 @@ fn unscented(c: &mut Criterion) {
         steps: 500,
         inner_steps: 10,
     };
-    let z = simulate(&model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1)).observations;
+    let z = simulate(&model, &[1.0], grid, &mut zakai::simulate::rng_from_seed(1))
+        .unwrap()
+        .observations;
     let mut ukf = Ukf::builder(&model)
         .prior_gaussian(&[1.0], &[[0.1]])
         .with(|p| p.substeps = 1)
@@ -134,7 +136,7 @@ fn driver_overhead(c: &mut Criterion) {
         // loses the state).
         config.failure.track_loss = None;
         let experiment = Experiment::new(config).expect("valid");
-        let data = experiment.simulate(1);
+        let data = experiment.simulate(1).unwrap();
         group.bench_function(format!("{label}, bare loop with estimates"), |b| {
             common::time_bare_runs(b, &experiment, &method, &data, true)
         });

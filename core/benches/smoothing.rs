@@ -34,7 +34,7 @@ fn rows(r: &Recording) -> std::ops::RangeInclusive<usize> {
 fn run(c: &mut Criterion, group: &str, experiment: &Experiment, methods: &[MethodConfig]) {
     let mut g = c.benchmark_group(group);
     g.sample_size(10);
-    let data = experiment.observed(experiment.simulate(experiment.config().seed));
+    let data = experiment.observed(experiment.simulate(experiment.config().seed).unwrap());
     let plan = SmoothingPlan::for_steps(data.times.len());
     for method in methods {
         let built = experiment

@@ -70,7 +70,7 @@ fn spectral(c: &mut Criterion) {
     let mut config = presets::preset("cubic-sensor-1d").expect("preset");
     config.methods = vec![common::spectral_004(1)];
     let experiment = Experiment::new(config).expect("valid");
-    let observations = experiment.simulate(1);
+    let observations = experiment.simulate(1).unwrap();
     for (label, method) in [
         ("spectral", common::spectral_004(1)),
         (

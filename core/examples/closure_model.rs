@@ -32,7 +32,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         &[0.0, 1.0],
         grid,
         &mut zakai::simulate::rng_from_seed(9),
-    );
+    )?;
 
     let (mean, cov) = ([0.0, 0.0], [[1.0, 0.0], [0.0, 1.0]]);
     let mut ekf = Ekf::builder(&model).prior_gaussian(&mean, &cov).build()?;

@@ -16,7 +16,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         steps: 100,
         inner_steps: 10,
     };
-    let data = simulate(&model, &[2.0], grid, &mut zakai::simulate::rng_from_seed(3));
+    let data = simulate(&model, &[2.0], grid, &mut zakai::simulate::rng_from_seed(3))?;
 
     let mut pf = Pf::builder(&model)
         .prior_gaussian(&[0.0], &[[4.0]])

@@ -20,7 +20,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         steps: 300,
         inner_steps: 10,
     };
-    let data = simulate(&model, &[0.8], grid, &mut zakai::simulate::rng_from_seed(5));
+    let data = simulate(&model, &[0.8], grid, &mut zakai::simulate::rng_from_seed(5))?;
     // Increments Δy over (τ_{k−1}, τ_k]; row 0 of the simulated array is the start.
     let dy = &data.observations[1..];
 

@@ -19,7 +19,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         steps: 400,
         inner_steps: 10,
     };
-    let data = simulate(&model, &[0.5], grid, &mut zakai::simulate::rng_from_seed(2));
+    let data = simulate(&model, &[0.5], grid, &mut zakai::simulate::rng_from_seed(2))?;
     let dy = &data.observations[1..];
 
     let mut spectral = Spectral::builder(&model)

@@ -19,7 +19,7 @@ fn main() -> Result<(), zakai::ZakaiError> {
         steps: 200,
         inner_steps: 20,
     };
-    let data = simulate(&model, &[1.5], grid, &mut zakai::simulate::rng_from_seed(7));
+    let data = simulate(&model, &[1.5], grid, &mut zakai::simulate::rng_from_seed(7))?;
     let (z, truth) = (&data.observations, &data.states);
 
     let mut ukf = Ukf::builder(&model)

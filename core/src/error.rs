@@ -36,6 +36,9 @@ pub enum FilterError {
     BadObservation(String),
     /// The model does not fit the method (e.g. a nonlinear model given to the Kalman filter).
     Unsuitable(String),
+    /// The measurement density `p(z | x)` is undefined where the filter needs it (a negative
+    /// Poisson rate, a variance that is not positive, a log-density that is NaN).
+    Likelihood(String),
 }
 
 impl fmt::Display for FilterError {
@@ -55,6 +58,9 @@ impl fmt::Display for FilterError {
             ),
             FilterError::BadObservation(m) => write!(f, "bad observation: {m}"),
             FilterError::Unsuitable(m) => write!(f, "{m}"),
+            FilterError::Likelihood(m) => {
+                write!(f, "the measurement density p(z | x) is undefined: {m}")
+            }
         }
     }
 }

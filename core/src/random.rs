@@ -116,6 +116,86 @@ impl NormalZiggurat {
     }
 }
 
+/// A uniform draw in (0, 1].
+fn open_uniform<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
+    1.0 - rng.random::<f64>()
+}
+
+/// One Gamma(`shape`, 1) draw, `shape` > 0, by Marsaglia & Tsang's squeeze method (2000, "A
+/// simple method for generating gamma variables", ACM TOMS 26(3)): with d = a − ⅓ and
+/// c = 1/√(9d), v = (1 + cξ)³ for a normal ξ is accepted when ln u < ξ²/2 + d − dv + d ln v;
+/// for a < 1, Gamma(a) = Gamma(a + 1) · u^{1/a} (their §6). With `libm`, so the stream is the
+/// same on every platform.
+pub fn gamma<R: rand::Rng + ?Sized>(rng: &mut R, shape: f64) -> f64 {
+    if shape < 1.0 {
+        let u = open_uniform(rng);
+        return gamma(rng, shape + 1.0) * libm::pow(u, 1.0 / shape);
+    }
+    let d = shape - 1.0 / 3.0;
+    let c = 1.0 / libm::sqrt(9.0 * d);
+    loop {
+        let xi = standard_normal(rng);
+        let t = 1.0 + c * xi;
+        if t <= 0.0 {
+            continue;
+        }
+        let v = t * t * t;
+        let u = open_uniform(rng);
+        if libm::log(u) < 0.5 * xi * xi + d - d * v + d * libm::log(v) {
+            return d * v;
+        }
+    }
+}
+
+/// One draw of Student's t with ν = `dof` > 0 degrees of freedom: ξ / √(χ²_ν / ν), with
+/// χ²_ν = 2 Gamma(ν/2).
+pub fn student_t<R: rand::Rng + ?Sized>(rng: &mut R, dof: f64) -> f64 {
+    let xi = standard_normal(rng);
+    let chi2 = 2.0 * gamma(rng, 0.5 * dof);
+    xi / libm::sqrt(chi2 / dof)
+}
+
+/// One Poisson(`rate`) draw, `rate` ≥ 0 and finite, as an `f64`. Below a rate of 10 by
+/// multiplying uniforms until the product falls below e^{−λ} (Knuth, TAOCP vol. 2, §3.4.1);
+/// from 10 on by Hörmann's transformed rejection with squeeze, PTRS (1993, "The transformed
+/// rejection method for generating Poisson random variables", Insurance: Mathematics and
+/// Economics 12), whose cost does not grow with λ.
+pub fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, rate: f64) -> f64 {
+    if rate < 10.0 {
+        let limit = libm::exp(-rate);
+        let mut k = 0.0;
+        let mut product = open_uniform(rng);
+        while product > limit {
+            k += 1.0;
+            product *= open_uniform(rng);
+        }
+        return k;
+    }
+    let root = libm::sqrt(rate);
+    let b = 0.931 + 2.53 * root;
+    let a = -0.059 + 0.02483 * b;
+    let inverse_alpha = 1.1239 + 1.1328 / (b - 3.4);
+    let v_r = 0.9277 - 3.6224 / (b - 2.0);
+    let ln_rate = libm::log(rate);
+    loop {
+        let u = rng.random::<f64>() - 0.5;
+        let v = open_uniform(rng);
+        let us = 0.5 - libm::fabs(u);
+        let k = libm::floor((2.0 * a / us + b) * u + rate + 0.43);
+        if us >= 0.07 && v <= v_r {
+            return k;
+        }
+        if k < 0.0 || (us < 0.013 && v > us) {
+            continue;
+        }
+        if libm::log(v) + libm::log(inverse_alpha) - libm::log(a / (us * us) + b)
+            <= -rate + k * ln_rate - libm::lgamma(k + 1.0)
+        {
+            return k;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

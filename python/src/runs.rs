@@ -200,7 +200,7 @@ pub fn simulate<'py>(
     seed: u64,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let e = experiment(json)?;
-    let trajectory = py.detach(|| e.simulate(seed));
+    let trajectory = py.detach(|| e.simulate(seed)).map_err(errors::from_core)?;
     let rows = trajectory.times.len();
     let (n, m) = (e.model().n, e.model().m);
     Ok((

@@ -61,7 +61,7 @@ fn allocations_per_step(
 ) -> Vec<(String, usize, usize)> {
     let config = presets::preset(preset).unwrap();
     let e = Experiment::new(config.clone()).unwrap();
-    let data = e.simulate(3);
+    let data = e.simulate(3).unwrap();
     let dt = config.time.dt_obs;
     let mut out = Vec::new();
     for entry in zakai_tests::applicable_methods(&config, &e) {
@@ -139,7 +139,7 @@ fn map_filters_following_a_second_mode_allocate_nothing() {
         zakai::lab::scenario::MethodConfig::Iokf(Default::default()),
     ];
     let e = Experiment::new(config.clone()).unwrap();
-    let data = e.simulate(1);
+    let data = e.simulate(1).unwrap();
     for m in &config.methods {
         let mut filter = e.build_method(m, m.display_name(), 1).unwrap();
         let observe = |k: usize| Observation::increment(0.01, data.observation(k));

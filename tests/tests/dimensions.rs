@@ -55,7 +55,9 @@ fn gaussian_and_particle_filters_take_twenty_dimensions() {
         {"method": "iokf"}, {"method": "pf", "particles": 4000, "trajectories": 50}, {"method": "pf", "particles": 40000, "trajectories": 20}
     ]);
     let e = zakai::lab::experiment::Experiment::new(chain(methods)).unwrap();
-    let run = e.smooth_recorded(e.observed(e.simulate(3)), 3).unwrap();
+    let run = e
+        .smooth_recorded(e.observed(e.simulate(3).unwrap()), 3)
+        .unwrap();
     let kf = &run.methods[0];
     let rows = kf.rows();
     assert_eq!(rows, 31);

@@ -14,7 +14,7 @@ fn estimate_into_is_the_estimate() {
     for preset in zakai_tests::PRESETS_FOR_EVERY_METHOD {
         let config = presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
-        let data = e.simulate(2);
+        let data = e.simulate(2).unwrap();
         for entry in zakai_tests::applicable_methods(&config, &e) {
             let m = entry.defaults;
             let mut filter = e.build_method(&m, m.display_name(), 1).unwrap();

@@ -64,7 +64,7 @@ fn against_benes(seeds: &[u64]) -> Vec<(String, f64, f64, usize)> {
         let m = entry.defaults;
         let (mut sum, mut worst, mut steps, mut warned) = (0.0, 0.0f64, 0, 0);
         for &seed in seeds {
-            let data = e.simulate(seed);
+            let data = e.simulate(seed).unwrap();
             let mut filter = e.build_method(&m, m.display_name(), seed).unwrap();
             let mut exact = Kalman::builder(&linear)
                 .prior_gaussian(&[MU0], &[[P0]])
@@ -164,7 +164,7 @@ fn the_convergence_check_agrees_with_the_exact_filter() {
         .iter()
         .map(|k| zakai::lab::scenario::MethodConfig::from_key(k).unwrap())
         .collect();
-    let rows = convergence_check(&e, &methods, 1, 1 << 30);
+    let rows = convergence_check(&e, &methods, 1, 1 << 30).unwrap();
     for r in &rows {
         println!("{r:?}");
     }
@@ -248,7 +248,7 @@ fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
         let (mut sum, mut steps, mut warned) = (0.0, 0, 0);
         let (mut off, mut off_warned) = (0, 0);
         for seed in [1u64, 2] {
-            let data = e.simulate(seed);
+            let data = e.simulate(seed).unwrap();
             let mut filter = e.build_method(&m, m.display_name(), seed).unwrap();
             let mut reference = FineGrid::new(-6.0, 6.0, 1201, 0.3, 1.0);
             let mut concerns: Vec<Concern> = Vec::new();

@@ -42,7 +42,7 @@ fn grid_filter_intervals_cover_the_truth_and_the_ekf_bias_is_shown() {
     let fits: Vec<_> = seeds
         .par_iter()
         .map(|&seed| {
-            let data = Recording::from(experiment.simulate(seed));
+            let data = Recording::from(experiment.simulate(seed).unwrap());
             let one = |method: usize| {
                 let l = Likelihood::new(&config, data.clone(), method, &[], seed).unwrap();
                 // Serial evaluations inside: the seeds already share the cores.

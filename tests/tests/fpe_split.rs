@@ -195,7 +195,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
         &probes,
     )
     .expect("kf");
-    let traj = e.simulate(4);
+    let traj = e.simulate(4).unwrap();
     for k in 0..=traj.steps() {
         let obs = Observation {
             dt: if k == 0 { 0.0 } else { traj.dt_obs },
@@ -256,7 +256,7 @@ fn gaussian_sum_update_matches_the_brute_force_posterior() {
 #[test]
 fn gaussian_sum_reduction_is_controlled() {
     let e = experiment(presets::preset("sa-example-1").expect("preset"));
-    let traj = e.simulate(2);
+    let traj = e.simulate(2).unwrap();
     let run = |cap: usize| {
         let mut gsf = GaussianSumFilter::new(
             "GSF".into(),
@@ -325,7 +325,7 @@ fn example_2_tracks_the_exact_conditional_mean() {
     let sa_track = &result.methods[sa];
     assert!(!sa_track.failed());
     let mut f = grid_filter(&e, FpeScheme::Separation, 35, 0.005);
-    let traj = e.simulate(1);
+    let traj = e.simulate(1).unwrap();
     f.update(traj.observation(0)).expect("update");
     let d = f.density().expect("density");
     assert_eq!(d.shape, &[35, 35]);

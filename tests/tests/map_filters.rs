@@ -427,7 +427,7 @@ fn the_second_mode_watch_is_quiet_where_the_model_tells_the_mirror_apart() {
         ];
         let e = Experiment::new(config.clone()).expect("valid");
         for seed in 1..=5u64 {
-            let data = e.simulate(seed);
+            let data = e.simulate(seed).unwrap();
             for m in &config.methods {
                 let mut filter = e.build_method(m, m.display_name(), seed).unwrap();
                 let mut concerns: Vec<Concern> = Vec::new();

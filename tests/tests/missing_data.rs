@@ -50,7 +50,7 @@ fn failed_steps_leave_every_filter_as_it_was() {
     for preset in PRESETS_FOR_EVERY_METHOD {
         let config = zakai::lab::scenario::presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
-        let data = e.simulate(4);
+        let data = e.simulate(4).unwrap();
         let dt = config.time.dt_obs;
         for entry in applicable_methods(&config, &e) {
             let key = entry.info.key.clone();
@@ -137,7 +137,7 @@ fn forks_predictions_and_updates() {
     for preset in ["sa-example-1", "sa-example-2", "cubic-sensor-1d"] {
         let config = zakai::lab::scenario::presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
-        let data = e.simulate(6);
+        let data = e.simulate(6).unwrap();
         let dt = config.time.dt_obs;
         for entry in applicable_methods(&config, &e) {
             let key = entry.info.key.clone();
@@ -506,7 +506,7 @@ fn remainders_predict_as_the_schemes_own_steps() {
         Experiment::new(config.clone()).unwrap(),
         Experiment::new(half).unwrap(),
     );
-    let data = e.simulate(3);
+    let data = e.simulate(3).unwrap();
     let dt = config.time.dt_obs;
     let mut tried = 0;
     for key in ["qiem", "iem", "spt", "spectral"] {
@@ -629,7 +629,7 @@ fn both_likelihoods(
 fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
     let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let e = Experiment::new(config.clone()).unwrap();
-    let data = e.simulate(3);
+    let data = e.simulate(3).unwrap();
     let dt = config.time.dt_obs;
     for key in ["qiem", "iem"] {
         let (mut operator, mut update) = both_likelihoods(
@@ -690,7 +690,7 @@ fn a_gap_with_the_likelihood_in_the_operator_is_the_fokker_planck_part() {
 fn the_spectral_filter_crosses_a_gap_with_the_likelihood_in_its_operator() {
     let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
     let e = Experiment::new(config.clone()).unwrap();
-    let data = e.simulate(3);
+    let data = e.simulate(3).unwrap();
     let dt = config.time.dt_obs;
     let (mut operator, mut update) = both_likelihoods(
         &e,

@@ -33,7 +33,7 @@ fn a_step_of_another_length_is_handled_or_refused() {
     for preset in ["cubic-sensor-1d", "sa-example-1", "direct-4.3", "yau-2d"] {
         let config = presets::preset(preset).unwrap();
         let e = Experiment::new(config.clone()).unwrap();
-        let data = e.simulate(2);
+        let data = e.simulate(2).unwrap();
         let dt = config.time.dt_obs;
         for entry in zakai_tests::applicable_methods(&config, &e) {
             let m = entry.defaults;
@@ -133,7 +133,7 @@ fn builders_list_every_problem_at_once() {
 fn experiments_run_on_recordings_with_the_truth_optional() {
     let config = presets::preset("sa-example-1").unwrap();
     let e = Experiment::new(config).unwrap();
-    let data = e.simulate(9);
+    let data = e.simulate(9).unwrap();
     let simulated = e.run(9).unwrap();
     let mut blind = Recording::from(data.clone());
     blind.truth = None;

@@ -25,7 +25,7 @@ fn the_spectral_filter_warns_when_its_basis_is_too_small() {
         steps: 400,
         inner_steps: 10,
     };
-    let data = simulate(&model, &[0.5], grid, &mut zakai::simulate::rng_from_seed(2));
+    let data = simulate(&model, &[0.5], grid, &mut zakai::simulate::rng_from_seed(2)).unwrap();
     for ((offline, online), should_warn) in [((11, 16), true), ((30, 30), false)] {
         let mut spectral = Spectral::builder(&model)
             .prior_gaussian(&[0.0], &[[0.5]])
@@ -139,7 +139,8 @@ fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
         &[0.0],
         grid,
         &mut zakai::simulate::rng_from_seed(11),
-    );
+    )
+    .unwrap();
     let nis = "normalised innovation squared (mean over 50 updates, per component)";
     for (variance, expect) in [(0.1, None), (0.001, Some(true)), (10.0, Some(false))] {
         let model = Model::from_text(&["-x"], &["x"], Noise::discrete(variance)).unwrap();
@@ -184,7 +185,7 @@ fn kalman_filters_warn_when_their_innovations_do_not_fit_their_covariance() {
 fn the_direct_method_warns_when_its_residual_carries_much_of_the_density() {
     let config = zakai::lab::scenario::presets::preset("direct-4.3").unwrap();
     let e = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
-    let data = e.simulate(1);
+    let data = e.simulate(1).unwrap();
     for (alpha, should_warn) in [(0.01, false), (0.4, true)] {
         let method = zakai::lab::scenario::MethodConfig::Direct(zakai::DirectParams {
             alpha,
@@ -222,7 +223,7 @@ fn the_map_filters_warn_when_an_update_leaves_the_predicted_gaussian() {
             zakai::lab::scenario::presets::preset(preset).unwrap(),
         )
         .unwrap();
-        let data = e.simulate(1);
+        let data = e.simulate(1).unwrap();
         let method = zakai::lab::scenario::MethodConfig::from_key("iekf").unwrap();
         let mut f = e.build_method(&method, "IEKF".into(), 1).unwrap();
         let mut warned = 0;

@@ -38,7 +38,7 @@ fn algorithm_1_increments_have_the_right_mean_and_variance() {
             steps,
             inner_steps: inner,
         };
-        let traj = simulate(&model, &[0.0], time, &mut rng_from_seed(9));
+        let traj = simulate(&model, &[0.0], time, &mut rng_from_seed(9)).unwrap();
         let dx: Vec<f64> = traj.states.windows(2).map(|w| w[1] - w[0]).collect();
         let dy: Vec<f64> = traj.observations[1..].to_vec();
         let (mx, vx) = mean_var(&dx);
@@ -88,7 +88,7 @@ fn discrete_measurements_carry_mixture_noise() {
         f,
         h,
         DMatrix::identity(1, 1),
-        ObservationModel::Discrete { noise },
+        ObservationModel::additive(noise),
     )
     .unwrap();
     let n = 100_000;
@@ -97,7 +97,7 @@ fn discrete_measurements_carry_mixture_noise() {
         steps: n,
         inner_steps: 1,
     };
-    let traj = simulate(&model, &[0.0], time, &mut rng_from_seed(4));
+    let traj = simulate(&model, &[0.0], time, &mut rng_from_seed(4)).unwrap();
     let (m, v) = mean_var(&traj.observations);
     assert!(
         (m - 1.25).abs() < 5.0 * (0.7125 / n as f64).sqrt(),
@@ -111,9 +111,9 @@ fn the_same_seed_gives_the_same_trajectory() {
     let config = zakai::lab::scenario::presets::preset("yau-2d").unwrap();
     let model = config.build_model().unwrap();
     let time = config.time_grid();
-    let a = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(77));
-    let b = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(77));
-    let c = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(78));
+    let a = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(77)).unwrap();
+    let b = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(77)).unwrap();
+    let c = simulate(&model, &[0.1, 0.2], time, &mut rng_from_seed(78)).unwrap();
     assert_eq!(a.states, b.states);
     assert_eq!(a.observations, b.observations);
     assert_ne!(a.states, c.states);

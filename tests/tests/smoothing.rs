@@ -546,7 +546,9 @@ mod references {
         let e = Experiment::new(config).unwrap();
         let mut totals = vec![(0.0, 0.0); e.method_names().len()];
         for seed in 0..runs {
-            let run = e.smooth_recorded(e.simulate(seed).into(), seed).unwrap();
+            let run = e
+                .smooth_recorded(e.simulate(seed).unwrap().into(), seed)
+                .unwrap();
             let truth = run.recording.truth.as_deref().unwrap();
             for (total, track) in totals.iter_mut().zip(&run.methods) {
                 let filtered = track

@@ -258,7 +258,7 @@ impl LikelihoodProfile {
                 None,
             )
             .map_err(js_error)?,
-            None => experiment.simulate(seed).into(),
+            None => experiment.simulate(seed).map_err(js_error)?.into(),
         };
         let names = [parameter.to_string()];
         let likelihoods = (0..config.methods.len())
@@ -353,7 +353,8 @@ pub fn convergence_check(config: JsValue, seed: f64) -> Result<JsValue, JsError>
         &methods,
         seed,
         zakai::memory_cap(),
-    );
+    )
+    .map_err(js_error)?;
     to_js(&Check {
         rows,
         share: zakai::lab::study::convergence::CONVERGED_SHARE,

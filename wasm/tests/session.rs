@@ -121,7 +121,7 @@ fn heavy_expressions_build_without_overflowing_the_stack() {
 fn a_session_filters_recorded_observations() {
     let config = presets::preset("cubic-sensor-1d").unwrap();
     let experiment = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
-    let recording = zakai::lab::recording::Recording::from(experiment.simulate(5));
+    let recording = zakai::lab::recording::Recording::from(experiment.simulate(5).unwrap());
     let mut simulated = Session::new(config_js("cubic-sensor-1d"), Some(5.0)).unwrap();
     let mut recorded = Session::from_recording(
         config_js("cubic-sensor-1d"),
@@ -170,7 +170,7 @@ fn a_session_filters_recorded_observations() {
 fn a_session_takes_pushed_observations() {
     let config = presets::preset("cubic-sensor-1d").unwrap();
     let experiment = zakai::lab::experiment::Experiment::new(config.clone()).unwrap();
-    let data = zakai::lab::recording::Recording::from(experiment.simulate(5));
+    let data = zakai::lab::recording::Recording::from(experiment.simulate(5).unwrap());
     let rows = 40;
     let (mut times, mut dy) = (
         data.times[..rows].to_vec(),

@@ -330,6 +330,54 @@ impl ObservedNoise {
     }
 }
 
+/// The likelihood `x ↦ p(z | x)` of a measurement's observed components, as the grid and
+/// particle filters multiply it in (001 (6), 003's update (6)): additive noise through the
+/// marginal density of each pattern of missing components ([`ObservedNoise`]), the other
+/// [`MeasurementDensity`](crate::model::MeasurementDensity) families component by component.
+#[derive(Clone, Debug)]
+pub(crate) struct MeasurementLikelihood {
+    density: crate::model::MeasurementDensity,
+    noise: Option<ObservedNoise>,
+    residual: Vec<f64>,
+    work: Vec<f64>,
+}
+
+impl MeasurementLikelihood {
+    /// For `density` and `m` measurement components.
+    pub(crate) fn new(density: &crate::model::MeasurementDensity, m: usize) -> Self {
+        MeasurementLikelihood {
+            density: density.clone(),
+            noise: density.additive().cloned().map(ObservedNoise::new),
+            residual: alloc::vec![0.0; m],
+            work: alloc::vec![0.0; m],
+        }
+    }
+
+    /// Refuses a measurement its family cannot produce (a count that is not a nonnegative
+    /// integer, a log-density's measurement with some components missing) before anything
+    /// moves; `name` is the filter's.
+    pub(crate) fn check(&self, name: &str, z: &[f64]) -> Result<(), FilterError> {
+        self.density
+            .check_value(z)
+            .map_err(|e| FilterError::BadObservation(alloc::format!("{name}: {e}")))
+    }
+
+    /// `ln p(z | x)` of the observed components of `z` (NaN = missing), with `hx = h(x)`.
+    pub(crate) fn log_at(&mut self, z: &[f64], x: &[f64], hx: &[f64]) -> Result<f64, FilterError> {
+        match &mut self.noise {
+            Some(noise) => {
+                let noise = noise.of(z)?;
+                let k = observed_residual(z, |a| z[a] - hx[a], &mut self.residual);
+                Ok(noise.log_pdf_slice(&self.residual[..k], &mut self.work))
+            }
+            None => self
+                .density
+                .log_likelihood(z, x, hx, &mut self.work)
+                .map_err(FilterError::Likelihood),
+        }
+    }
+}
+
 /// Writes `residual(a)` of the observed components `a` of `value` (NaN = missing) one after
 /// another into `out`; returns how many.
 pub(crate) fn observed_residual(
@@ -414,8 +462,9 @@ pub const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
 
 /// The log-likelihood of `obs` at each state of `states`, up to a constant in the state: for
 /// an increment Δy over Δt, `hᵀS⁻¹Δy − ½hᵀS⁻¹h Δt` (the observation factor of the Yau–Yau
-/// method, 000 (2) with S); for a measurement z, `log p_v(z − h(x))` (001 (6)). `None` when a
-/// component of `obs` is missing or S is singular. What multiplies the predicted density into
+/// method, 000 (2) with S); for a measurement z, `log p(z | x)` (001 (6): `log p_v(z − h(x))`
+/// for additive noise). `None` when a component of `obs` is missing, S is singular or the
+/// measurement density is undefined at one of the states. What multiplies the predicted density into
 /// the posterior (the update half of a step, for display).
 pub fn observation_log_likelihoods(
     model: &crate::model::Model,
@@ -442,19 +491,16 @@ pub fn observation_log_likelihoods(
                     .collect(),
             )
         }
-        crate::model::ObservationModel::Discrete { noise } => Some(
+        crate::model::ObservationModel::Discrete { density } => {
+            let mut scratch = Vec::new();
             states
                 .iter()
                 .map(|x| {
                     model.observation.eval(x, &mut hx);
-                    let r = nalgebra::DVector::from_iterator(
-                        model.m,
-                        obs.value.iter().zip(&hx).map(|(z, h)| z - h),
-                    );
-                    noise.log_pdf(&r)
+                    density.log_likelihood(obs.value, x, &hx, &mut scratch).ok()
                 })
-                .collect(),
-        ),
+                .collect()
+        }
     }
 }
 

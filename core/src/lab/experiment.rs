@@ -500,8 +500,9 @@ impl Experiment {
     }
 
     /// The truth and observations of the run with `seed` (x₀ from the scenario or drawn from
-    /// the prior, then the simulator on the same stream).
-    pub fn simulate(&self, seed: u64) -> Trajectory {
+    /// the prior, then the simulator on the same stream); fails when the measurements cannot
+    /// be simulated ([`crate::simulate::simulate`]).
+    pub fn simulate(&self, seed: u64) -> Result<Trajectory, ZakaiError> {
         let mut rng = rng_from_seed(seed);
         let x0 = match &self.config.initial_state {
             Some(x) => x.clone(),
@@ -557,7 +558,7 @@ impl Experiment {
         }
         // The simulator's output fits the model by construction (and a truth that blew up is
         // the methods' problem to meet, not an input error).
-        self.start_checked(self.observed(self.simulate(seed)), seed, clock, None)
+        self.start_checked(self.observed(self.simulate(seed)?), seed, clock, None)
     }
 
     /// Every problem with running this experiment's methods on `recording`: its own problems

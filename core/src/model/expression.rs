@@ -12,7 +12,7 @@ use super::function::{
     numerical_hessian, numerical_jacobian, per_point, BatchScratch, Derivatives, VectorFunction,
 };
 use super::program::{Program, BLOCK, MAX_INPUTS};
-use super::syntax::{ExprError, Syntax};
+use super::syntax::{ExprError, Syntax, Variables};
 
 /// One scalar expression: its tree (for exact derivatives) and the compiled [`Program`]
 /// every evaluation runs.
@@ -68,13 +68,35 @@ pub fn constant_value(text: &str, names: &[(String, f64)]) -> Result<f64, ExprEr
 /// scenario's parameters) standing for their values: every mistake, an unknown name among
 /// them, is reported at its position in `text` as written.
 pub fn check_with_names(text: &str, n: usize, names: &[(String, f64)]) -> Result<(), ExprError> {
-    super::syntax::Syntax::parse_with(text, n, names).map(|_| ())
+    check_in(text, &Variables::state(n), names)
+}
+
+/// [`check_with_names`] in `variables` (the state and, for a log-density, the measurement).
+pub fn check_in(
+    text: &str,
+    variables: &Variables,
+    names: &[(String, f64)],
+) -> Result<(), ExprError> {
+    super::syntax::Syntax::parse_in(text, variables, names).map(|_| ())
 }
 
 impl ExpressionFunction {
     /// Parses one expression per output component, in the state variables of an
     /// `n`-dimensional model. `what` names the function in error messages ("drift f").
     pub fn parse(what: &str, texts: &[String], n: usize, m: usize) -> Result<Self, ExprError> {
+        Self::parse_in(what, texts, &Variables::state(n), m)
+    }
+
+    /// As [`ExpressionFunction::parse`], in `variables`: the function's inputs are the state
+    /// and then the other variables, in their order (a log-density `log p(z | x)` reads
+    /// `[x, z]`).
+    pub fn parse_in(
+        what: &str,
+        texts: &[String],
+        variables: &Variables,
+        m: usize,
+    ) -> Result<Self, ExprError> {
+        let n = variables.count();
         if texts.len() != m {
             return Err(ExprError::WrongComponentCount {
                 what: what.to_string(),
@@ -86,7 +108,7 @@ impl ExpressionFunction {
         let components = texts
             .iter()
             .map(|t| {
-                let (scalar, ops) = compile(t, n)?;
+                let (scalar, ops) = compile(t, variables)?;
                 operations = operations.max(ops);
                 Ok(scalar)
             })
@@ -143,8 +165,8 @@ pub const MAX_SYMBOLIC_DEPTH: usize = 6;
 
 /// The compiled expression and its symbolic cost: the number of operations (operators,
 /// functions, parentheses), or `usize::MAX` when it nests deeper than [`MAX_SYMBOLIC_DEPTH`].
-fn compile(text: &str, n: usize) -> Result<(Scalar, usize), ExprError> {
-    let syntax = Syntax::parse(text, n)?;
+fn compile(text: &str, variables: &Variables) -> Result<(Scalar, usize), ExprError> {
+    let syntax = Syntax::parse_in(text, variables, &[])?;
     let operations = if syntax.depth > MAX_SYMBOLIC_DEPTH {
         usize::MAX
     } else {

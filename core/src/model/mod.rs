@@ -4,6 +4,7 @@
 //!     dx = f(x) dt + G dv,                      v standard Brownian motion in Rⁿ
 //!     dy = h(x) dt + dw,   E[dw dwᵀ] = S dt      (continuous, 000 (1), 002 (1), 004 (1))
 //!     z_k = h(x_k) + v_k,  v_k ~ Gaussian or mixture  (continuous–discrete, 001 (1)–(2), 003 (5.2))
+//!     z_k ~ p(z | x_k)                            (counts, outliers, volatility: [`measurement`])
 //! ```
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
@@ -12,6 +13,7 @@ mod compile;
 pub mod dmz;
 pub mod expression;
 pub mod function;
+pub mod measurement;
 pub mod noise;
 pub mod prior;
 pub mod program;
@@ -24,6 +26,7 @@ use alloc::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 
 pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
+pub use measurement::MeasurementDensity;
 pub use noise::GaussianMixture;
 pub use prior::Prior;
 
@@ -43,6 +46,9 @@ pub enum Noise {
     DiscreteScalar(f64),
     /// Discrete measurements with `v_k` from a Gaussian mixture.
     DiscreteMixture(GaussianMixture),
+    /// Discrete measurements from any [`MeasurementDensity`] (Poisson counts, Student-t,
+    /// state-dependent variance, a log-density).
+    Measurement(MeasurementDensity),
 }
 
 impl Noise {
@@ -73,16 +79,15 @@ impl Noise {
             Noise::ContinuousScalar(s) => ObservationModel::Continuous {
                 noise_cov: scalar(s, "the observation noise intensity")?,
             },
-            Noise::Discrete(r) => ObservationModel::Discrete {
-                noise: GaussianMixture::gaussian(DVector::zeros(r.nrows()), r)?,
-            },
-            Noise::DiscreteScalar(r) => ObservationModel::Discrete {
-                noise: GaussianMixture::gaussian(
-                    DVector::zeros(m),
-                    scalar(r, "the measurement noise variance")?,
-                )?,
-            },
-            Noise::DiscreteMixture(noise) => ObservationModel::Discrete { noise },
+            Noise::Discrete(r) => {
+                ObservationModel::additive(GaussianMixture::gaussian(DVector::zeros(r.nrows()), r)?)
+            }
+            Noise::DiscreteScalar(r) => ObservationModel::additive(GaussianMixture::gaussian(
+                DVector::zeros(m),
+                scalar(r, "the measurement noise variance")?,
+            )?),
+            Noise::DiscreteMixture(noise) => ObservationModel::additive(noise),
+            Noise::Measurement(density) => ObservationModel::Discrete { density },
         })
     }
 }
@@ -95,11 +100,21 @@ pub enum ObservationModel {
         /// S (m × m, symmetric positive definite).
         noise_cov: DMatrix<f64>,
     },
-    /// `z_k = h(x_k) + v_k` at the observation times; v_k from a Gaussian or mixture.
+    /// Measurements `z_k ~ p(z | x_k)` at the observation times: `z_k = h(x_k) + v_k` with v_k
+    /// from a Gaussian or mixture (001, 003), or another [`MeasurementDensity`].
     Discrete {
-        /// Density of v_k.
-        noise: GaussianMixture,
+        /// `p(z | x)`.
+        density: MeasurementDensity,
     },
+}
+
+impl ObservationModel {
+    /// Measurements `z_k = h(x_k) + v_k`, v_k from `noise` (001 (1)–(2)).
+    pub fn additive(noise: GaussianMixture) -> Self {
+        ObservationModel::Discrete {
+            density: MeasurementDensity::Additive(noise),
+        }
+    }
 }
 
 /// A filtering model: dimensions, drift, observation function, diffusion and noise.
@@ -160,9 +175,7 @@ impl Model {
                 dim("observation noise S columns", noise_cov.ncols(), m)?;
                 crate::linalg::cholesky(noise_cov, "observation noise covariance S")?;
             }
-            ObservationModel::Discrete { noise } => {
-                dim("measurement noise dimension", noise.dim(), m)?
-            }
+            ObservationModel::Discrete { density } => density.check_dimensions(n, m)?,
         }
         if diffusion.iter().any(|v| !v.is_finite()) {
             return Err(ZakaiError::Other(

@@ -188,6 +188,56 @@ pub fn variable_index(name: &str, n: usize) -> Option<usize> {
     (i >= 1 && i <= n && !name[1..].starts_with('0')).then(|| i - 1)
 }
 
+/// The variables an expression may read, in the order of its inputs: the state `x1..xn` (`x`
+/// when n = 1), then other named ones — the measurement `z1..zm` of a log-density
+/// `log p(z | x)` (`z` when m = 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variables {
+    n: usize,
+    others: Vec<String>,
+}
+
+impl Variables {
+    /// The state variables of an `n`-dimensional model alone.
+    pub fn state(n: usize) -> Self {
+        Variables {
+            n,
+            others: Vec::new(),
+        }
+    }
+
+    /// The state variables, then the measurement `z1..zm` (`z` when m = 1).
+    pub fn state_and_measurement(n: usize, m: usize) -> Self {
+        let mut others: Vec<String> = (1..=m).map(|i| format!("z{i}")).collect();
+        if m == 1 {
+            others = alloc::vec!["z".to_string()];
+        }
+        Variables { n, others }
+    }
+
+    /// How many inputs an expression in these variables takes.
+    pub fn count(&self) -> usize {
+        self.n + self.others.len()
+    }
+
+    /// The input `name` stands for, if it is one of these variables.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        variable_index(name, self.n).or_else(|| {
+            self.others
+                .iter()
+                .position(|o| o == name)
+                .map(|i| self.n + i)
+        })
+    }
+
+    /// Every name, for messages.
+    pub fn names(&self) -> Vec<String> {
+        let mut names = variable_names(self.n);
+        names.extend(self.others.iter().cloned());
+        names
+    }
+}
+
 /// Longest expression accepted, in characters.
 pub const MAX_EXPRESSION_CHARS: usize = 1000;
 /// Deepest nesting of parentheses and stacked unary signs accepted.
@@ -275,11 +325,20 @@ impl Syntax {
         Syntax::parse_with(text, n, &[])
     }
 
-    /// As [`Syntax::parse`], with `names` — a scenario's parameters — read as the numbers
-    /// they stand for (exactly as if the value had been typed).
+    /// As [`Syntax::parse_in`], in the state variables of an `n`-dimensional model.
     pub(crate) fn parse_with(
         text: &str,
         n: usize,
+        names: &[(String, f64)],
+    ) -> Result<Syntax, ExprError> {
+        Syntax::parse_in(text, &Variables::state(n), names)
+    }
+
+    /// Reads `text` in `variables`, with `names` — a scenario's parameters — read as the
+    /// numbers they stand for (exactly as if the value had been typed).
+    pub(crate) fn parse_in(
+        text: &str,
+        variables: &Variables,
         names: &[(String, f64)],
     ) -> Result<Syntax, ExprError> {
         if let Some((position, _)) = text.char_indices().nth(MAX_EXPRESSION_CHARS) {
@@ -289,7 +348,7 @@ impl Syntax {
                 &format!("longer than {MAX_EXPRESSION_CHARS} characters"),
             ));
         }
-        let tokens = tokenize(text, n, names)?;
+        let tokens = tokenize(text, variables, names)?;
         let mut parser = Parser {
             text,
             tokens: &tokens,
@@ -624,7 +683,11 @@ impl Parser<'_> {
 }
 
 /// Splits `text` into tokens, reporting lexical mistakes with their positions.
-fn tokenize(text: &str, n: usize, names: &[(String, f64)]) -> Result<Vec<Token>, ExprError> {
+fn tokenize(
+    text: &str,
+    variables: &Variables,
+    names: &[(String, f64)],
+) -> Result<Vec<Token>, ExprError> {
     let chars: Vec<char> = text.chars().collect();
     let syntax = |position: usize, message: &str| ExprError::Syntax {
         expr: text.to_string(),
@@ -668,12 +731,12 @@ fn tokenize(text: &str, n: usize, names: &[(String, f64)]) -> Result<Vec<Token>,
                 Lexeme::Function(f)
             } else if let Some(v) = constant(&name) {
                 Lexeme::Number(v)
-            } else if let Some(j) = variable_index(&name, n) {
+            } else if let Some(j) = variables.index(&name) {
                 Lexeme::Variable(j)
             } else if let Some((_, v)) = names.iter().find(|(p, _)| *p == name) {
                 Lexeme::Number(*v)
             } else {
-                let mut allowed = variable_names(n);
+                let mut allowed = variables.names();
                 allowed.extend(names.iter().map(|(p, _)| p.clone()));
                 return Err(ExprError::UnknownVariable {
                     expr: text.to_string(),

@@ -17,7 +17,9 @@ use alloc::vec::Vec;
 pub use crate::random::{rng_from_seed, standard_normal, standard_normal_vector, SimRng};
 use nalgebra::DMatrix;
 
+use crate::error::ZakaiError;
 use crate::model::{Model, ObservationModel};
+use alloc::format;
 
 /// Observation times: N intervals of length Δτ, each simulated with `inner_steps` steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,8 +76,15 @@ impl Trajectory {
     }
 }
 
-/// Simulates the model from `x0` over `time`, drawing all noise from `rng`.
-pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> Trajectory {
+/// Simulates the model from `x0` over `time`, drawing all noise from `rng`. Fails when the
+/// measurements' family has no sampler (a log-density) or is undefined at the true state (a
+/// negative Poisson rate or variance).
+pub fn simulate(
+    model: &Model,
+    x0: &[f64],
+    time: TimeGrid,
+    rng: &mut SimRng,
+) -> Result<Trajectory, ZakaiError> {
     let (n, m) = (model.n, model.m);
     let inner = time.inner_steps.max(1);
     let dt = time.dt_obs / inner as f64;
@@ -98,19 +107,26 @@ pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> 
     let mut fx = vec![0.0; n];
     let mut hx = vec![0.0; m];
 
-    let measure = |x: &[f64], rng: &mut SimRng, out: &mut [f64], hx: &mut [f64]| {
-        if let ObservationModel::Discrete { noise } = &model.observations {
-            model.observation.eval(x, hx);
-            let v = noise.sample(rng);
-            for j in 0..m {
-                out[j] = hx[j] + v[j];
-            }
+    let density = match &model.observations {
+        ObservationModel::Discrete { density } => {
+            density.sampler().map_err(ZakaiError::Other)?;
+            Some(density)
         }
+        ObservationModel::Continuous { .. } => None,
+    };
+    let measure = |x: &[f64], rng: &mut SimRng, out: &mut [f64], hx: &mut [f64]| {
+        if let Some(density) = density {
+            model.observation.eval(x, hx);
+            density
+                .sample(x, hx, rng, out)
+                .map_err(|e| ZakaiError::Other(format!("simulating the measurements: {e}")))?;
+        }
+        Ok::<(), ZakaiError>(())
     };
 
     times.push(0.0);
     states.extend_from_slice(&x);
-    measure(&x, rng, &mut observations[0..m], &mut hx);
+    measure(&x, rng, &mut observations[0..m], &mut hx)?;
     for k in 1..=steps {
         let row = &mut observations[k * m..(k + 1) * m];
         for _ in 0..inner {
@@ -127,11 +143,11 @@ pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> 
                 x[i] += fx[i] * dt + v[i] * sqrt_dt;
             }
         }
-        measure(&x, rng, row, &mut hx);
+        measure(&x, rng, row, &mut hx)?;
         times.push(k as f64 * time.dt_obs);
         states.extend_from_slice(&x);
     }
-    Trajectory {
+    Ok(Trajectory {
         n,
         m,
         dt_obs: time.dt_obs,
@@ -139,5 +155,5 @@ pub fn simulate(model: &Model, x0: &[f64], time: TimeGrid, rng: &mut SimRng) -> 
         states,
         observations,
         continuous: obs_sqrt.is_some(),
-    }
+    })
 }

@@ -15,13 +15,14 @@ use crate::filters::{
     Observed, REMAINDER_PLANS,
 };
 use crate::grid::TensorGrid;
-use crate::model::{GaussianMixture, Model, ObservationModel, Prior};
+use crate::model::{MeasurementDensity, Model, ObservationModel, Prior};
 
-/// The model fits the filter: discrete measurements (their noise density is returned) and a
-/// diagonal `Q = G Gᵀ` (001 (24) has no mixed derivatives).
-pub fn check_model(name: &str, model: &Model) -> Result<GaussianMixture, FilterError> {
+/// The model fits the filter: discrete measurements (their density `p(z | x)` is returned;
+/// any family, the update (6) multiplies it in node by node) and a diagonal `Q = G Gᵀ`
+/// (001 (24) has no mixed derivatives).
+pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, FilterError> {
     let noise = match &model.observations {
-        ObservationModel::Discrete { noise } => noise.clone(),
+        ObservationModel::Discrete { density } => density.clone(),
         ObservationModel::Continuous { .. } => {
             return Err(FilterError::Unsuitable(format!(
                 "{name} is the continuous–discrete filter of 001: it needs discrete measurements z_k = h(x_k) + v_k, and this model observes dy = h dt + dw"
@@ -62,9 +63,10 @@ pub struct ContinuousDiscreteGrid {
     advection: UpwindAdvection,
     divergence: Vec<f64>,
     diffusion: Vec<f64>,
-    noise: crate::filters::ObservedNoise,
-    /// h at the cell centres, row per cell.
+    likelihood: crate::filters::MeasurementLikelihood,
+    /// h at the cell centres, row per cell, with m components.
     h_nodes: Vec<f64>,
+    m: usize,
     target_dt: f64,
     /// Δτ, the observation interval the filter is built for.
     dt_obs: f64,
@@ -78,8 +80,8 @@ pub struct ContinuousDiscreteGrid {
     /// The last step's log-likelihood ([`Filter::log_likelihood`]).
     log_likelihood: f64,
     tmp: Vec<f64>,
-    residual: Vec<f64>,
-    work: Vec<f64>,
+    /// One cell centre while the likelihood is evaluated.
+    node: Vec<f64>,
     estimate: Estimate,
     /// Storage of the estimate's moments (see [`normalise_on_grid`]).
     moments: crate::grid::Moments,
@@ -156,8 +158,9 @@ impl ContinuousDiscreteGrid {
             advection,
             divergence,
             diffusion,
-            noise: crate::filters::ObservedNoise::new(noise),
+            likelihood: crate::filters::MeasurementLikelihood::new(&noise, m),
             h_nodes,
+            m,
             target_dt: params.dt,
             dt_obs,
             plan: None,
@@ -166,8 +169,7 @@ impl ContinuousDiscreteGrid {
             log_likelihood: 0.0,
             u,
             tmp: vec![0.0; len],
-            residual: vec![0.0; m],
-            work: vec![0.0; m],
+            node: vec![0.0; n],
             estimate,
             moments,
             warnings: Vec::new(),
@@ -394,14 +396,13 @@ impl ContinuousDiscreteGrid {
     fn assimilate(&mut self, z: &[f64]) -> Result<f64, FilterError> {
         // The update keeps only the positive values (a negative one becomes 0).
         let before = self.grid.positive_mass(&self.u);
-        let m = self.residual.len();
-        let noise = self.noise.of(z)?;
+        let m = self.m;
         let mut max = f64::NEG_INFINITY;
         for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
             if *u > 0.0 {
                 let h = &self.h_nodes[idx * m..(idx + 1) * m];
-                let k = crate::filters::observed_residual(z, |a| z[a] - h[a], &mut self.residual);
-                *log = noise.log_pdf_slice(&self.residual[..k], &mut self.work) + libm::log(*u);
+                self.grid.node(idx, &mut self.node);
+                *log = self.likelihood.log_at(z, &self.node, h)? + libm::log(*u);
                 max = max.max(*log);
             } else {
                 *log = f64::NEG_INFINITY;
@@ -483,11 +484,8 @@ impl Filter for ContinuousDiscreteGrid {
     }
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let observed = obs.check(
-            &self.name,
-            ObservationKind::Measurement,
-            self.residual.len(),
-        )?;
+        let observed = obs.check(&self.name, ObservationKind::Measurement, self.m)?;
+        self.likelihood.check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);
         let result = self.advance(obs, observed);
         let (u, estimate) = (&mut self.u, &mut self.estimate);

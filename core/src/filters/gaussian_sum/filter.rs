@@ -95,7 +95,15 @@ pub fn check_model<'p>(
 ) -> Result<LinearMixtureModel<'p>, FilterError> {
     let method = "the Gaussian-sum filter";
     let noise = match &model.observations {
-        ObservationModel::Discrete { noise } => noise.clone(),
+        ObservationModel::Discrete { density } => match density.additive() {
+            Some(noise) => noise.clone(),
+            None => {
+                return Err(FilterError::Unsuitable(format!(
+                    "{method} of 001 needs additive Gaussian or Gaussian-mixture noise z_k = C x_k + v_k; this model's measurements are {}",
+                    density.describe()
+                )))
+            }
+        },
         ObservationModel::Continuous { .. } => {
             return Err(FilterError::Unsuitable(format!(
                 "{method} of 001 needs discrete measurements z_k = C x_k + v_k; this model observes dy = h dt + dw"

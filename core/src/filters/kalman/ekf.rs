@@ -23,16 +23,22 @@ pub struct ExtendedKalman {
 }
 
 impl ExtendedKalman {
-    /// Builds the filter from the model and the prior's moments.
-    pub fn new(name: String, model: &Model, prior: &Prior, params: &EkfParams) -> Self {
-        ExtendedKalman {
+    /// Builds the filter from the model and the prior's moments; fails for measurements
+    /// without the two moments its update needs ([`MeasurementForm::new`]).
+    pub fn new(
+        name: String,
+        model: &Model,
+        prior: &Prior,
+        params: &EkfParams,
+    ) -> Result<Self, crate::error::FilterError> {
+        Ok(ExtendedKalman {
+            form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             q: model.process_noise(),
-            form: MeasurementForm::new(model),
             substeps: crate::filters::Substeps::new(params.substeps, None),
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
-        }
+        })
     }
 }
 
@@ -87,6 +93,10 @@ impl Filter for ExtendedKalman {
 
     fn estimate_into(&self, out: &mut Estimate) {
         self.state.estimate_into(out, None);
+    }
+
+    fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+        self.form.warnings()
     }
 
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {

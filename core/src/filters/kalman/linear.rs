@@ -166,12 +166,12 @@ impl KalmanBucy {
             probes,
         )?;
         Ok(KalmanBucy {
+            form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             a,
             b,
             q: model.process_noise(),
-            form: MeasurementForm::new(model),
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
             cached: None,
             moved: (DVector::zeros(model.n), DMatrix::zeros(model.n, model.n)),
@@ -214,7 +214,10 @@ impl Filter for KalmanBucy {
                 state.record_prediction(&d.phi);
             }
             match meas {
-                Some(meas) => state.linearized_update(model, meas),
+                Some(meas) => {
+                    meas.noise_at(model, state.mean.as_slice())?;
+                    state.linearized_update(model, meas)
+                }
                 None => state.check(),
             }
         })
@@ -230,6 +233,10 @@ impl Filter for KalmanBucy {
 
     fn estimate_into(&self, out: &mut Estimate) {
         self.state.estimate_into(out, None);
+    }
+
+    fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+        self.form.warnings()
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

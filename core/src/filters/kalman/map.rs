@@ -73,7 +73,8 @@ pub struct MapKalman {
 }
 
 impl MapKalman {
-    /// Builds the filter from the model and the prior's moments.
+    /// Builds the filter from the model and the prior's moments; fails for measurements
+    /// without the two moments its update needs ([`MeasurementForm::new`]).
     pub fn new(
         name: String,
         model: &Model,
@@ -81,13 +82,13 @@ impl MapKalman {
         init: &GaussianInit,
         substeps: usize,
         solver: MapSolver,
-    ) -> Self {
+    ) -> Result<Self, crate::error::FilterError> {
         let state = GaussianState::initial(prior.mean(), prior.covariance(), init, model.m);
-        MapKalman {
+        Ok(MapKalman {
+            form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             q: model.process_noise(),
-            form: MeasurementForm::new(model),
             substeps: crate::filters::Substeps::new(substeps, None),
             solver,
             watch: ModeWatch::new(&state, model.m),
@@ -99,7 +100,7 @@ impl MapKalman {
                 unconverged: 0.0,
                 log_density: 0.0,
             },
-        }
+        })
     }
 
     /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
@@ -181,6 +182,10 @@ impl Filter for MapKalman {
 
     fn estimate_into(&self, out: &mut Estimate) {
         self.state.estimate_into(out, Some(&self.state.mean));
+    }
+
+    fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+        self.form.warnings()
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -4,7 +4,11 @@
 //!   (the observation integral by its value at the interval's end: the sampled-model update
 //!   that 000 and 002 compare against, which tends to Kalman–Bucy's as Δτ → 0);
 //! * Discrete `z = h(x) + v`: `v` replaced by its first two moments (exact for Gaussian noise;
-//!   the best linear update for 001's mixtures).
+//!   the best linear update for 001's mixtures);
+//! * Other measurement densities (Poisson counts, Student-t, a variance s(x)): `z ≈ h(x) + v`,
+//!   `v ~ N(0, R(x̂⁻))` with `R(x) = diag Var[z_j | x]` at the predicted mean (a documented
+//!   approximation, [`MeasurementDensity::gaussian_match`]); a log-density has no moments to
+//!   use, and the filters built on this say so.
 //!
 //! A missing component (NaN) is taken out without changing the dimension: its row of h and
 //! of the Jacobian reads 0, its value 0, its row and column of R those of the identity. Then
@@ -16,12 +20,15 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::FilterError;
 use crate::filters::{Observation, ObservationKind, Observed};
-use crate::model::{Model, ObservationModel};
+use crate::model::measurement::GaussianMatch;
+use crate::model::{MeasurementDensity, Model, ObservationModel};
 
 /// The measurement equation `z = scale · h(x) + offset + noise(R)` for one observation, and
 /// the storage of the current one (written by [`MeasurementForm::at`] without allocating).
 #[derive(Clone, Debug)]
 pub struct MeasurementForm {
+    /// Said when the measurement density is not additive Gaussian noise.
+    approximation: Option<alloc::string::String>,
     continuous: bool,
     offset: DVector<f64>,
     noise_cov: DMatrix<f64>,
@@ -43,40 +50,79 @@ pub struct Measurement {
     pub observed: alloc::vec::Vec<bool>,
     /// How many were (the innovation's degrees of freedom).
     pub count: usize,
+    /// The measurement density when R depends on the state (set by
+    /// [`Measurement::noise_at`]).
+    state_noise: Option<MeasurementDensity>,
+    /// h(x) and Var[z | x] while R(x) is evaluated.
+    hx: alloc::vec::Vec<f64>,
+    variance: alloc::vec::Vec<f64>,
 }
 
 impl MeasurementForm {
-    /// From the model's observation noise.
-    pub fn new(model: &Model) -> Self {
+    /// From the model's observation noise (`name` is the filter's); fails for a measurement
+    /// density without the two moments the update needs.
+    pub fn new(name: &str, model: &Model) -> Result<Self, FilterError> {
+        let m = model.m;
+        let mut state_noise = None;
         let (continuous, offset, noise_cov) = match &model.observations {
             ObservationModel::Continuous { noise_cov } => {
-                (true, DVector::zeros(model.m), noise_cov.clone())
+                (true, DVector::zeros(m), noise_cov.clone())
             }
-            ObservationModel::Discrete { noise } => (false, noise.mean(), noise.covariance()),
+            ObservationModel::Discrete { density } => match density.gaussian_match(m) {
+                Ok(GaussianMatch::Constant { offset, cov }) => {
+                    (false, DVector::from_vec(offset), cov)
+                }
+                Ok(GaussianMatch::StateDependent) => {
+                    state_noise = Some(density.clone());
+                    (false, DVector::zeros(m), DMatrix::identity(m, m))
+                }
+                Err(why) => return Err(FilterError::Unsuitable(alloc::format!("{name}: {why}"))),
+            },
         };
         let current = Measurement {
             continuous,
             scale: 1.0,
             noise_cov: noise_cov.clone(),
-            value: DVector::zeros(model.m),
-            observed: alloc::vec![true; model.m],
-            count: model.m,
+            value: DVector::zeros(m),
+            observed: alloc::vec![true; m],
+            count: m,
+            state_noise,
+            hx: alloc::vec![0.0; m],
+            variance: alloc::vec![0.0; m],
         };
-        MeasurementForm {
+        let approximation = match &model.observations {
+            ObservationModel::Discrete { density } if density.additive().is_none() => {
+                Some(alloc::format!(
+                    "{name} replaces the measurements' density ({}) by a Gaussian with its conditional mean h(x) and variance R(x) at the predicted mean (a moment match): an approximation, so its estimates and likelihood are not those of the model; the grid and particle filters use p(z | x) itself",
+                    density.describe()
+                ))
+            }
+            _ => None,
+        };
+        Ok(MeasurementForm {
+            approximation,
             continuous,
             offset,
             noise_cov,
             current,
-        }
+        })
+    }
+
+    /// What the filter should say about its measurement update before the first step: that
+    /// it is a moment match, when the measurements are not additive Gaussian noise.
+    pub fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+        self.approximation.iter().cloned().collect()
     }
 
     /// The equation for `obs` (`name` is the filter's, for errors), or an error when `obs` is
     /// bad (see [`Observation::check`]); `None` when nothing was observed (a prediction only).
+    /// Its R is the one to use once [`Measurement::noise_at`] has evaluated it at the
+    /// predicted mean (a no-op when R does not depend on the state).
     pub fn at(
         &mut self,
         name: &str,
         obs: &Observation,
-    ) -> Result<Option<&Measurement>, FilterError> {
+    ) -> Result<Option<&mut Measurement>, FilterError> {
         let kind = if self.continuous {
             ObservationKind::Increment
         } else {
@@ -84,6 +130,11 @@ impl MeasurementForm {
         };
         if obs.check(name, kind, self.offset.len())? == Observed::Nothing {
             return Ok(None);
+        }
+        if let Some(density) = &self.current.state_noise {
+            density
+                .check_value(obs.value)
+                .map_err(|e| FilterError::BadObservation(alloc::format!("{name}: {e}")))?;
         }
         let current = &mut self.current;
         current.scale = if self.continuous { obs.dt } else { 1.0 };
@@ -113,6 +164,23 @@ impl MeasurementForm {
 }
 
 impl Measurement {
+    /// Sets R to `diag Var[z_j | x]` at `x` (the predicted mean) when it depends on the
+    /// state (Poisson counts, a variance s(x)); fails where a variance is not positive.
+    pub fn noise_at(&mut self, model: &Model, x: &[f64]) -> Result<(), FilterError> {
+        let Some(density) = &self.state_noise else {
+            return Ok(());
+        };
+        model.observation.eval(x, &mut self.hx);
+        density
+            .conditional_variance(x, &self.hx, &mut self.variance)
+            .map_err(FilterError::Likelihood)?;
+        self.noise_cov.fill(0.0);
+        for (i, v) in self.variance.iter().enumerate() {
+            self.noise_cov[(i, i)] = if self.observed[i] { *v } else { 1.0 };
+        }
+        Ok(())
+    }
+
     /// `scale · h(x)` (the offset is already taken out of `value`; 0 in missing rows).
     pub fn predict(&self, model: &Model, x: &[f64]) -> DVector<f64> {
         let mut out = DVector::zeros(model.m);

@@ -40,7 +40,7 @@ fn map_kalman(
     name: String,
 ) -> Result<MapKalman, ZakaiError> {
     Ok(
-        MapKalman::new(name, ctx.model, ctx.prior, init, substeps, solver)
+        MapKalman::new(name, ctx.model, ctx.prior, init, substeps, solver)?
             .with_interval(substeps, ctx.dt_obs),
     )
 }
@@ -142,7 +142,7 @@ impl Method for Ekf {
         p: &EkfParams,
         name: String,
     ) -> Result<ExtendedKalman, ZakaiError> {
-        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p).with_interval(p, ctx.dt_obs))
+        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p)?.with_interval(p, ctx.dt_obs))
     }
     fn refined(p: &EkfParams, _: usize) -> Option<(EkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;

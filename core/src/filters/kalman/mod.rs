@@ -438,8 +438,9 @@ impl GaussianState {
 
     /// The common first half of an EKF-type step: the measurement equation of `obs` (checked
     /// before anything moves, so a refused one leaves the state; `name` is the filter's, for
-    /// errors), then the linearised prediction over `obs.dt`; `None` when there is nothing to
-    /// assimilate (a prediction only, or the zero increment at τ₀).
+    /// errors), then the linearised prediction over `obs.dt` and R at the predicted mean;
+    /// `None` when there is nothing to assimilate (a prediction only, or the zero increment at
+    /// τ₀).
     pub fn predict_then_measure<'f>(
         &mut self,
         name: &str,
@@ -453,7 +454,13 @@ impl GaussianState {
         if obs.dt > 0.0 {
             self.predict_linearized(model, q, obs.dt, substeps)?;
         }
-        Ok(meas)
+        match meas {
+            Some(meas) => {
+                meas.noise_at(model, self.mean.as_slice())?;
+                Ok(Some(meas))
+            }
+            None => Ok(None),
+        }
     }
 
     /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).

@@ -513,15 +513,12 @@ mod tests {
             let mut state = free.clone();
             state.mean[0] = 1.2;
             state.cov[(0, 0)] = 0.04;
-            let meas = Measurement {
-                continuous: true,
-                scale: 0.01,
-                noise_cov: DMatrix::from_element(1, 1, 0.01),
-                value: DVector::from_element(1, 0.0),
-                observed: alloc::vec![true],
-                count: 1,
-            };
-            let found = watch.candidate(&model, &meas, &state);
+            // Δy = 0 over Δτ = 0.01 with S = 1: scale 0.01, R = 0.01.
+            let mut form = super::super::measurement::MeasurementForm::new("test", &model).unwrap();
+            let obs = crate::filters::Observation::increment(0.01, &[0.0]);
+            let meas = form.at("test", &obs).unwrap().unwrap();
+            assert_eq!((meas.scale, meas.noise_cov[(0, 0)]), (0.01, 0.01));
+            let found = watch.candidate(&model, meas, &state);
             match mirror {
                 Some(x) => {
                     assert!(found, "{h}: no candidate");

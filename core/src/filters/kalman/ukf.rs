@@ -163,10 +163,10 @@ impl UnscentedKalman {
             rest: 0.5 / (n + lambda),
         };
         Ok(UnscentedKalman {
+            form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             q: model.process_noise(),
-            form: MeasurementForm::new(model),
             substeps: crate::filters::Substeps::new(params.substeps, None),
             weights,
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
@@ -309,7 +309,10 @@ impl Filter for UnscentedKalman {
                 })?;
             }
             match meas {
-                Some(meas) => Self::update(model, weights, sigma, state, meas),
+                Some(meas) => {
+                    meas.noise_at(model, state.mean.as_slice())?;
+                    Self::update(model, weights, sigma, state, meas)
+                }
                 None => Ok(()),
             }
         })
@@ -325,6 +328,10 @@ impl Filter for UnscentedKalman {
 
     fn estimate_into(&self, out: &mut Estimate) {
         self.state.estimate_into(out, None);
+    }
+
+    fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+        self.form.warnings()
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -23,6 +23,16 @@ pub const ESS_SHARE_THRESHOLD: f64 = 0.01;
 /// repeated: its spread, and the density drawn from it, say little about the posterior.
 pub const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
 
+/// How a particle filter weighs its particles.
+#[derive(Clone, Debug)]
+enum Weighing {
+    /// Increments Δy of continuous observations: the density of their observed rows,
+    /// `N(0, S)` (the residuals scaled by 1/√Δτ).
+    Increments(crate::filters::ObservedNoise),
+    /// Measurements: `p(z | x)` of any family.
+    Measurements(crate::filters::MeasurementLikelihood),
+}
+
 /// The bootstrap particle filter (see the module doc).
 ///
 /// Particles are stored as structure of arrays and moved, weighed and resampled one pass per
@@ -55,9 +65,8 @@ pub struct ParticleFilter {
     /// step leaves the filter as it was.
     next_log_weights: Vec<f64>,
     next_weights: Vec<f64>,
-    /// The noise density of the observed rows: the measurement noise, or `N(0, S)` for
-    /// increments (whose residuals are then scaled by 1/√Δτ).
-    observed_noise: crate::filters::ObservedNoise,
+    /// How the observed rows weigh a particle.
+    weighing: Weighing,
     /// Resampling: the last particle whose copies start at each slot (N + 1), and the
     /// particle each slot copies (N).
     starts: Vec<usize>,
@@ -65,8 +74,10 @@ pub struct ParticleFilter {
     /// G (row-major) and, for continuous observations, S⁻¹ (row-major).
     diffusion: Vec<f64>,
     noise_inverse: Vec<f64>,
-    /// One residual while a mixture density is evaluated.
+    /// One residual (or h at one particle) while a density is evaluated, one particle, and
+    /// work space.
     residual: Vec<f64>,
+    point: Vec<f64>,
     work: Vec<f64>,
     scratch: BatchScratch,
     resamples: usize,
@@ -110,16 +121,22 @@ impl ParticleFilter {
                 .to_vec(),
             ObservationModel::Discrete { .. } => Vec::new(),
         };
-        let observed_noise = crate::filters::ObservedNoise::new(match &model.observations {
-            ObservationModel::Continuous { noise_cov } => crate::model::GaussianMixture::gaussian(
-                nalgebra::DVector::zeros(m),
-                noise_cov.clone(),
-            )
-            .map_err(|_| FilterError::NotPositiveDefinite {
-                what: "observation noise",
-            })?,
-            ObservationModel::Discrete { noise } => noise.clone(),
-        });
+        let weighing = match &model.observations {
+            ObservationModel::Continuous { noise_cov } => {
+                Weighing::Increments(crate::filters::ObservedNoise::new(
+                    crate::model::GaussianMixture::gaussian(
+                        nalgebra::DVector::zeros(m),
+                        noise_cov.clone(),
+                    )
+                    .map_err(|_| FilterError::NotPositiveDefinite {
+                        what: "observation noise",
+                    })?,
+                ))
+            }
+            ObservationModel::Discrete { density } => {
+                Weighing::Measurements(crate::filters::MeasurementLikelihood::new(density, m))
+            }
+        };
         let uniform = 1.0 / count as f64;
         Ok(ParticleFilter {
             name,
@@ -137,12 +154,13 @@ impl ParticleFilter {
             resampled: vec![0.0; count * n],
             next_log_weights: vec![0.0; count],
             next_weights: vec![0.0; count],
-            observed_noise,
+            weighing,
             starts: vec![0; count + 1],
             ancestors: vec![0; count],
             diffusion: model.diffusion.transpose().as_slice().to_vec(),
             noise_inverse,
             residual: vec![0.0; m],
+            point: vec![0.0; n],
             work: vec![0.0; m],
             scratch: BatchScratch::default(),
             resamples: 0,
@@ -209,8 +227,6 @@ impl ParticleFilter {
         moved: bool,
     ) -> Result<f64, FilterError> {
         let (m, count) = (self.model.m, self.params.particles);
-        let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });
-        let scale = if continuous { obs.dt } else { 1.0 };
         let particles = if moved {
             &self.resampled
         } else {
@@ -219,33 +235,45 @@ impl ParticleFilter {
         self.model
             .observation
             .eval_batch(particles, &mut self.predicted, &mut self.scratch);
-        // Residuals z − h(x)·scale, in place (NaN in missing rows, which are not read).
-        for (a, z) in obs.value.iter().enumerate() {
-            self.predicted[a * count..(a + 1) * count]
-                .iter_mut()
-                .for_each(|r| *r = z - *r * scale);
-        }
         let lw = &mut self.next_log_weights;
         lw.copy_from_slice(&self.log_weights);
         // The log-density of the observation under the reference the weights are taken
         // against (0 for measurements: their weights are whole densities).
         let mut reference = 0.0;
-        match (observed, &self.model.observations) {
-            (Observed::Some, _) => {
-                let noise = self.observed_noise.of(obs.value)?;
-                let unscale = if continuous {
-                    1.0 / libm::sqrt(obs.dt)
-                } else {
-                    1.0
-                };
-                if continuous {
-                    let k = crate::filters::observed_residual(
-                        obs.value,
-                        |a| obs.value[a] * unscale,
-                        &mut self.residual,
-                    );
-                    reference = noise.log_pdf_slice(&self.residual[..k], &mut self.work);
+        let noise = match &mut self.weighing {
+            // ln p(z | xᵢ) of the observed components, whatever the family.
+            Weighing::Measurements(likelihood) => {
+                for (i, w) in lw.iter_mut().enumerate() {
+                    for (j, x) in self.point.iter_mut().enumerate() {
+                        *x = particles[j * count + i];
+                    }
+                    for (a, h) in self.residual.iter_mut().enumerate() {
+                        *h = self.predicted[a * count + i];
+                    }
+                    *w += likelihood.log_at(obs.value, &self.point, &self.residual)?;
                 }
+                let total = normalise(&mut self.next_log_weights, &mut self.next_weights)?;
+                return Ok(total);
+            }
+            Weighing::Increments(noise) => noise,
+        };
+        // Increments: residuals Δy − h(x)Δτ, in place (NaN in missing rows, which are not
+        // read).
+        for (a, z) in obs.value.iter().enumerate() {
+            self.predicted[a * count..(a + 1) * count]
+                .iter_mut()
+                .for_each(|r| *r = z - *r * obs.dt);
+        }
+        match observed {
+            Observed::Some => {
+                let noise = noise.of(obs.value)?;
+                let unscale = 1.0 / libm::sqrt(obs.dt);
+                let k = crate::filters::observed_residual(
+                    obs.value,
+                    |a| obs.value[a] * unscale,
+                    &mut self.residual,
+                );
+                reference = noise.log_pdf_slice(&self.residual[..k], &mut self.work);
                 let predicted = &self.predicted;
                 for (i, w) in lw.iter_mut().enumerate() {
                     let k = crate::filters::observed_residual(
@@ -257,7 +285,7 @@ impl ParticleFilter {
                 }
             }
             // −½ rᵀ (S Δτ)⁻¹ r, against −½ Δyᵀ (S Δτ)⁻¹ Δy.
-            (_, ObservationModel::Continuous { .. }) => {
+            _ => {
                 let c = -0.5 / obs.dt;
                 for a in 0..m {
                     for b in 0..m {
@@ -271,14 +299,6 @@ impl ParticleFilter {
                             .zip(ra.iter().zip(rb))
                             .for_each(|(w, (x, y))| *w += s * x * y);
                     }
-                }
-            }
-            (_, ObservationModel::Discrete { noise }) => {
-                for (i, w) in lw.iter_mut().enumerate() {
-                    for a in 0..m {
-                        self.residual[a] = self.predicted[a * count + i];
-                    }
-                    *w += noise.log_pdf_slice(&self.residual, &mut self.work);
                 }
             }
         }
@@ -406,6 +426,9 @@ impl Filter for ParticleFilter {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the particles.
         let mut observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;
+        if let Weighing::Measurements(likelihood) = &self.weighing {
+            likelihood.check(&self.name, obs.value)?;
+        }
         let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });
         if continuous && obs.dt == 0.0 {
             // An increment over no time: nothing to assimilate.

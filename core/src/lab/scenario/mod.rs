@@ -20,12 +20,14 @@ pub use crate::validate::{format_bytes, parse_bytes};
 use crate::validate::{memory_cap, ConfigProblem};
 pub use methods::{catalogue, CatalogueEntry, MethodConfig};
 use parameters::{
-    check_parameters, coefficient_texts, named_values, CoefficientMatrix, CoefficientVector,
-    ParameterConfig, Parameters,
+    check_parameters, coefficient_texts, named_values, Coefficient, CoefficientMatrix,
+    CoefficientVector, ParameterConfig, Parameters,
 };
 
 use crate::error::ZakaiError;
-use crate::model::{GaussianMixture, Model, ObservationModel, Prior, VectorFunction};
+use crate::model::{
+    GaussianMixture, MeasurementDensity, Model, ObservationModel, Prior, VectorFunction,
+};
 use crate::simulate::TimeGrid;
 
 /// Largest state (and observation) dimension a scenario may declare: a bound on the text a
@@ -91,6 +93,28 @@ pub enum ObservationNoiseConfig {
     Discrete {
         /// Components of the density of v_k.
         mixture: Vec<GaussianComponent>,
+    },
+    /// Counts `z_{k,j} ~ Poisson(h_j(x_k))`: h is the rate, nonnegative.
+    Poisson,
+    /// `z_{k,j} = h_j(x_k) + scale · t_j`, t_j Student's t with `dof` degrees of freedom.
+    StudentT {
+        /// ν > 0 (number or expression in the parameters).
+        dof: Coefficient,
+        /// σ > 0 (number or expression in the parameters).
+        scale: Coefficient,
+    },
+    /// `z_{k,j} ~ N(h_j(x_k), s_j(x_k))`: Gaussian noise whose variance is an expression in
+    /// the state (stochastic volatility: h = 0, s = β² exp(x)).
+    Heteroscedastic {
+        /// s, one expression per observation component, in the state and the parameters.
+        variance: Vec<String>,
+    },
+    /// `log p(z_k | x_k)` as one expression in the state (`x1..xn`, `x` when n = 1), the
+    /// measurement (`z1..zm`, `z` when m = 1) and the parameters. Grid and particle filters
+    /// only; it cannot be simulated.
+    LogDensity {
+        /// ℓ(x, z) = log p(z | x).
+        expression: String,
     },
 }
 
@@ -338,6 +362,26 @@ fn substituted(texts: &[String], names: &[(String, f64)]) -> Vec<String> {
         .collect()
 }
 
+/// The log-density `log p(z | x)` of `text`, an expression in the state, the measurement and
+/// the parameters of `names` (a mistake is reported at its position as written).
+fn log_density(
+    text: &str,
+    n: usize,
+    m: usize,
+    names: &[(String, f64)],
+) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
+    let variables = crate::model::syntax::Variables::state_and_measurement(n, m);
+    crate::model::expression::check_in(text, &variables, names)?;
+    Ok(Arc::new(
+        crate::model::expression::ExpressionFunction::parse_in(
+            "log-density log p(z | x)",
+            &substituted(core::slice::from_ref(&String::from(text)), names),
+            &variables,
+            1,
+        )?,
+    ))
+}
+
 /// Reads one component `text` of `what` with the parameters of `names`: a mistake is
 /// reported at its position as written, then the component as built (values substituted)
 /// is compiled.
@@ -501,6 +545,43 @@ impl ScenarioConfig {
                     .collect();
                 if !unresolved(&p, before) {
                     check_mixture(&comps, m, "model.noise.mixture", &mut p)
+                }
+            }
+            ObservationNoiseConfig::Poisson => {}
+            ObservationNoiseConfig::StudentT { dof, scale } => {
+                for (field, c) in [("model.noise.dof", dof), ("model.noise.scale", scale)] {
+                    match c.resolve(&names, field) {
+                        Err(problem) => p.push(problem),
+                        Ok(v) if !(v > 0.0 && v.is_finite()) => p.push(ConfigProblem::new(
+                            field,
+                            format!("must be positive and finite, got {v}"),
+                        )),
+                        Ok(_) => {}
+                    }
+                }
+            }
+            ObservationNoiseConfig::Heteroscedastic { variance } => {
+                if variance.len() != m {
+                    p.push(ConfigProblem::new(
+                        "model.noise.variance",
+                        format!(
+                            "needs one expression per observation component ({m}), {} given",
+                            variance.len()
+                        ),
+                    ));
+                }
+                for (i, t) in variance.iter().enumerate() {
+                    if let Err(e) = check_expression("variance s", t, n, &names) {
+                        p.push(ConfigProblem::new(
+                            format!("model.noise.variance[{i}]"),
+                            e.to_string(),
+                        ));
+                    }
+                }
+            }
+            ObservationNoiseConfig::LogDensity { expression } => {
+                if let Err(e) = log_density(expression, n, m, &names) {
+                    p.push(ConfigProblem::new("model.noise.expression", e.to_string()));
                 }
             }
         }
@@ -673,6 +754,14 @@ impl ScenarioConfig {
                 vectors.extend(mixture.iter().map(|c| &c.mean));
                 matrices.extend(mixture.iter().map(|c| &c.cov));
             }
+            ObservationNoiseConfig::Poisson => {}
+            ObservationNoiseConfig::StudentT { dof, scale } => {
+                texts.extend([dof, scale].into_iter().filter_map(Coefficient::text))
+            }
+            ObservationNoiseConfig::Heteroscedastic { variance } => {
+                texts.extend(variance.iter().map(String::as_str))
+            }
+            ObservationNoiseConfig::LogDensity { expression } => texts.push(expression),
         }
         match &self.prior {
             PriorConfig::Gaussian { mean, cov } => {
@@ -780,10 +869,39 @@ impl ScenarioConfig {
                         .map(|(i, c)| c.resolve(names, &format!("model.noise.mixture[{i}]"), p))
                         .collect::<Vec<_>>()
                 })?;
+                ObservationModel::additive(mixture(&comps, m)?)
+            }
+            ObservationNoiseConfig::Poisson => ObservationModel::Discrete {
+                density: MeasurementDensity::Poisson,
+            },
+            ObservationNoiseConfig::StudentT { dof, scale } => {
+                let (dof, scale) = self.resolved(|names, p| {
+                    let mut value = |c: &Coefficient, field: &str| {
+                        c.resolve(names, field).unwrap_or_else(|e| {
+                            p.push(e);
+                            f64::NAN
+                        })
+                    };
+                    (
+                        value(dof, "model.noise.dof"),
+                        value(scale, "model.noise.scale"),
+                    )
+                })?;
                 ObservationModel::Discrete {
-                    noise: mixture(&comps, m)?,
+                    density: MeasurementDensity::student_t(dof, scale)?,
                 }
             }
+            ObservationNoiseConfig::Heteroscedastic { variance } => ObservationModel::Discrete {
+                density: MeasurementDensity::Heteroscedastic(parse_function(
+                    "variance s",
+                    &substituted(variance, &names),
+                    n,
+                    m,
+                )?),
+            },
+            ObservationNoiseConfig::LogDensity { expression } => ObservationModel::Discrete {
+                density: MeasurementDensity::LogDensity(log_density(expression, n, m, &names)?),
+            },
         };
         Model::new(drift, observation, diffusion, observations)
     }

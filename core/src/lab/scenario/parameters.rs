@@ -99,7 +99,7 @@ impl Coefficient {
     }
 
     /// The expression, if the coefficient is one.
-    fn text(&self) -> Option<&str> {
+    pub(crate) fn text(&self) -> Option<&str> {
         match self {
             Coefficient::Value(_) => None,
             Coefficient::Expression(t) => Some(t),

@@ -71,16 +71,16 @@ fn estimates(filter: &mut dyn Filter, data: &Trajectory) -> Result<Vec<Estimate>
 
 /// Runs every method of `methods` and its refinement on the observations of `seed` and
 /// compares the estimates (see the module doc). Refinements that need more than `memory_cap`
-/// bytes are not run (reported as the failure).
+/// bytes are not run (reported as the failure). Fails only when the run cannot be simulated.
 pub fn convergence_check(
     experiment: &Experiment,
     methods: &[MethodConfig],
     seed: u64,
     memory_cap: usize,
-) -> Vec<Convergence> {
-    let data = experiment.simulate(seed);
+) -> Result<Vec<Convergence>, crate::error::ZakaiError> {
+    let data = experiment.simulate(seed)?;
     let n = experiment.model().n;
-    methods
+    Ok(methods
         .iter()
         .enumerate()
         .map(|(i, method)| {
@@ -136,5 +136,5 @@ pub fn convergence_check(
             }
             row
         })
-        .collect()
+        .collect())
 }

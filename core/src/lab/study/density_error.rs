@@ -143,7 +143,7 @@ pub fn j_curve(
         &config.probe_points(),
     )?;
     let per_interval = per_interval.max(1);
-    let trajectory = experiment.simulate(seed);
+    let trajectory = experiment.simulate(seed)?;
     let mut scratch: Vec<Vec<f64>> = grids.iter().map(|g| vec![0.0; g.grid().len()]).collect();
     let mut samples = Vec::new();
     let mut gap = vec![0.0; grids.len()];
