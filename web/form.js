@@ -7,6 +7,7 @@ import { mixtureEditor, readMixture, resizeMixture } from './mixture.js';
 import { fillParameters, readParameters, setupParameters } from './parameters.js';
 import { methodEntry, state } from './state.js';
 import { apply, scheduleValidate, worker } from './session.js';
+import { loadTemml, richText } from './tex.js';
 
 // One form field for a parameter described by the schema (ParamInfo: name, label, help,
 // kind, min, max, choices).
@@ -180,9 +181,71 @@ function showPriorKind(kind) {
   }
 }
 
-function showNoiseKind(kind) {
-  $('noise-cov-label').style.display = kind === 'continuous' ? '' : 'none';
-  $('noise-mix-label').style.display = kind === 'discrete' ? '' : 'none';
+// The kinds of observation noise (zakai::scenario::noise_kinds) as the form's choice list:
+// called once the worker has sent them.
+export function noiseKindOptions() {
+  fillOptions($('noise-kind'), state.noiseKinds.map((k) => [k.kind, k.label, k.summary]));
+}
+
+const noiseKind = (kind) => state.noiseKinds.find((k) => k.kind === kind);
+
+// The controls of noise `kind`: the matrix (S) and mixture (v) editors for the Gaussian kinds,
+// and for the others one control per field of the catalogue — a number or parameter
+// expression, one expression per observation component, or one expression in x and z —
+// filled from `noise` when it is of that kind, else from the kind's defaults. Then the kind's
+// equation, rendered, and what it is for.
+function showNoiseKind(kind, noise = readNoise(), m = observationCount()) {
+  const entry = noiseKind(kind);
+  const fields = entry?.fields ?? [];
+  $('noise-cov-label').style.display = fields.some((f) => f.kind === 'matrix') ? '' : 'none';
+  $('noise-mix-label').style.display = fields.some((f) => f.kind === 'mixture') ? '' : 'none';
+  const box = $('noise-fields');
+  box.replaceChildren();
+  for (const f of fields) {
+    if (f.kind === 'matrix' || f.kind === 'mixture') continue;
+    const field = `model.noise.${f.key}`;
+    const given = noise?.kind === kind ? noise[f.key] : undefined;
+    if (f.kind === 'expressions') {
+      const c = el('div', { title: f.title, dataset: { noiseField: f.key } });
+      exprInputs(c, f.symbol, field, Array.from({ length: m }, (_, i) => String(given?.[i] ?? f.default)));
+      box.append(c);
+    } else {
+      const input = el('input', { type: 'text', className: f.kind === 'expression' ? 'wide' : 'short', value: String(given ?? f.default), dataset: { field, noiseField: f.key } });
+      input.addEventListener('input', scheduleValidate);
+      box.append(el('label', { title: f.title }, `${f.label} `, input), el('span', { className: 'error', dataset: { error: field } }));
+    }
+  }
+  const formula = $('noise-formula');
+  formula.replaceChildren(entry?.summary ?? '');
+  if (entry) {
+    loadTemml().then(() => {
+      if ($('noise-kind').value === kind) formula.replaceChildren(...richText(`$${entry.formula}$`), el('br'), entry.summary);
+    });
+  }
+}
+
+const observationCount = () => $('observation').querySelectorAll('input').length;
+
+// The noise block of the form: the matrix or mixture of the Gaussian kinds, else the kind's
+// fields (a coefficient as a number when it reads as one, else as the expression typed).
+function readNoise() {
+  const kind = $('noise-kind').value;
+  if (kind === 'continuous') return { kind, cov: readMatrix($('noise-cov')) };
+  if (kind === 'discrete') return { kind, mixture: readMixture($('noise-mix')) };
+  const noise = { kind };
+  for (const f of noiseKind(kind)?.fields ?? []) {
+    const control = $('noise-fields').querySelector(`[data-noise-field="${f.key}"]`);
+    if (!control) continue;
+    if (f.kind === 'expressions') {
+      noise[f.key] = [...control.querySelectorAll('input')].map((i) => i.value);
+    } else if (f.kind === 'coefficient') {
+      const text = control.value.trim();
+      noise[f.key] = text !== '' && Number.isFinite(Number(text)) ? Number(text) : text;
+    } else {
+      noise[f.key] = control.value;
+    }
+  }
+  return noise;
 }
 
 export function fillForm(config) {
@@ -198,7 +261,7 @@ export function fillForm(config) {
   const m = config.model.observation.length;
   matrixEditor($('noise-cov'), { value: noise.kind === 'continuous' ? noise.cov ?? null : null, rows: m, identityAllowed: true, onInput: scheduleValidate });
   mixtureEditor($('noise-mix'), { value: noise.kind === 'discrete' ? noise.mixture : null, dim: m, onInput: scheduleValidate });
-  showNoiseKind(noise.kind);
+  showNoiseKind(noise.kind, noise, m);
   const prior = config.prior;
   $('prior-kind').value = prior.kind;
   $('prior-mean').value = prior.kind === 'gaussian' ? prior.mean.join(', ') : Array(n).fill(0).join(', ');
@@ -246,11 +309,7 @@ export function readForm() {
   if (Object.keys(parameters).length) c.parameters = parameters;
   else delete c.parameters;
   c.model.diffusion = readMatrix($('diffusion'));
-  if ($('noise-kind').value === 'continuous') {
-    c.model.noise = { kind: 'continuous', cov: readMatrix($('noise-cov')) };
-  } else {
-    c.model.noise = { kind: 'discrete', mixture: readMixture($('noise-mix')) };
-  }
+  c.model.noise = readNoise();
   const kind = $('prior-kind').value;
   if (kind === 'gaussian') {
     c.prior = { kind, mean: parseList($('prior-mean').value) ?? [], cov: readMatrix($('prior-cov')) ?? [] };
@@ -340,17 +399,21 @@ export function setupForm() {
   $('dim').addEventListener('change', changeDimension);
   $('add-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
+    const noise = readNoise();
     exprInputs($('observation'), 'h', 'model.observation', [...values, 'x1']);
     resizeMatrix($('noise-cov'), values.length + 1);
     resizeMixture($('noise-mix'), values.length + 1);
+    showNoiseKind(noise.kind, noise);
     scheduleValidate();
   });
   $('remove-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
     if (values.length > 1) {
+      const noise = readNoise();
       exprInputs($('observation'), 'h', 'model.observation', values.slice(0, -1));
       resizeMatrix($('noise-cov'), values.length - 1);
       resizeMixture($('noise-mix'), values.length - 1);
+      showNoiseKind(noise.kind, noise);
     }
     scheduleValidate();
   });

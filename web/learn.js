@@ -1,42 +1,11 @@
 // Learn mode: the lessons of lessons.js beside the running plots. A lesson loads its scenario
 // and seed and plays it; "try this" buttons change one thing and replay; equations are
-// rendered by Temml (vendored, loaded on first use) into MathML.
+// rendered by Temml (vendored, loaded on first use) into MathML (tex.js).
 
 import { $, el } from './dom.js';
 import { LESSONS, REFERENCES } from './lessons.js';
+import { loadTemml, richText } from './tex.js';
 
-let temml = null;
-const loadTemml = async () => {
-  temml ??= (await import('./vendor/temml/temml.mjs')).default;
-  return temml;
-};
-
-// Temml writes a few inline styles, which the page's Content-Security-Policy (style-src
-// 'self') refuses: they become data attributes that style.css styles the same way.
-const INLINE_STYLES = { 'display:blockmath;': '', 'math-depth:0;': ' data-tml="depth0"' };
-function mathml(tex, display) {
-  const markup = temml.renderToString(tex, { displayMode: display, throwOnError: false });
-  return markup.replace(/ style="([^"]*)"/g, (_, decl) => INLINE_STYLES[decl.replace(/\s+/g, '')] ?? '');
-}
-
-/** Text with `$…$` (inline) and `$$…$$` (displayed) TeX as DOM nodes. The lessons are the
- *  page's own static text; only Temml's MathML is parsed as markup. */
-function richText(text) {
-  const nodes = [];
-  for (const part of text.split(/(\$\$[^$]+\$\$|\$[^$]+\$)/)) {
-    if (!part) continue;
-    const display = part.startsWith('$$');
-    if (part.startsWith('$')) {
-      const tex = part.slice(display ? 2 : 1, display ? -2 : -1);
-      const t = document.createElement('template');
-      t.innerHTML = mathml(tex, display);
-      nodes.push(...t.content.childNodes);
-    } else {
-      nodes.push(document.createTextNode(part));
-    }
-  }
-  return nodes;
-}
 
 /**
  * Sets up Learn mode. `page` is the playground's side: `presets()`, `method(key, params)`,

@@ -4,7 +4,7 @@
 import { $, fillOptions } from './dom.js';
 import { makePlots } from './charts.js';
 import { labels, state } from './state.js';
-import { fillForm, readForm, showStructure, showSuitability } from './form.js';
+import { fillForm, noiseKindOptions, readForm, showStructure, showSuitability } from './form.js';
 import { localProblems, revealFirstProblem, showProblems } from './problems.js';
 import { setPlaying, showStepPhase } from './playback.js';
 import { render } from './series.js';
@@ -95,6 +95,8 @@ export function setupSession(hooks = {}) {
       case 'ready': {
         state.presets = data.presets;
         state.catalogue = data.methods;
+        state.noiseKinds = data.noiseKinds;
+        noiseKindOptions();
         state.build = data.build;
         $('fps').title = `frames per second of this page (wasm build: ${data.build})`;
         fillOptions($('preset'), data.presets.map((p) => [p.name, `${p.name} — ${p.title}`]));

@@ -8,6 +8,7 @@ export const state = {
   // From the worker's first answer.
   presets: [], // the scenarios of zakai::scenario::presets, for the Problem menu
   catalogue: [], // the method catalogue (see methodEntry)
+  noiseKinds: [], // the kinds of observation noise and their fields (zakai::scenario::noise_kinds)
   build: '', // which wasm build the worker loaded (SIMD or scalar), for the fps tooltip
   randomSeed: null, // a seed drawn by the worker, for the "random seed" button
   // The form and its scenario.

@@ -168,7 +168,7 @@ self.onmessage = async ({ data }) => {
       break;
     case 'init':
       await zakai.default();
-      post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), seed: zakai.randomSeed(), build });
+      post({ type: 'ready', presets: zakai.presets(), methods: zakai.methods(), noiseKinds: zakai.noiseKinds(), seed: zakai.randomSeed(), build });
       break;
     case 'complete':
       try {

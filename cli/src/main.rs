@@ -885,6 +885,21 @@ fn list() -> String {
             p.name, p.title, p.reference
         ));
     }
+    s.push_str("\nObservation noise (model.noise.kind):\n");
+    for k in zakai::lab::scenario::noise_kinds() {
+        let fields: Vec<&str> = k.fields.iter().map(|f| f.key).collect();
+        s.push_str(&format!(
+            "  {:<18} {} [fields: {}] — {}\n",
+            k.kind,
+            k.label,
+            if fields.is_empty() {
+                "none".to_string()
+            } else {
+                fields.join(", ")
+            },
+            k.summary
+        ));
+    }
     s.push_str("\nMethods:\n");
     for m in catalogue() {
         s.push_str(&format!(

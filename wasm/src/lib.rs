@@ -84,6 +84,13 @@ pub fn methods() -> Result<JsValue, JsError> {
     to_js(&zakai::lab::scenario::catalogue())
 }
 
+/// The kinds of observation noise, the page's one source of its noise controls: `[{kind,
+/// label, formula, summary, continuous, fields: [{key, label, title, kind, default}]}, …]`.
+#[wasm_bindgen(js_name = noiseKinds)]
+pub fn noise_kinds() -> Result<JsValue, JsError> {
+    to_js(&zakai::lab::scenario::noise_kinds())
+}
+
 /// Every problem with a scenario, as `[{field, message}, …]` (empty when valid).
 #[wasm_bindgen(js_name = validateScenario)]
 pub fn validate_scenario(config: JsValue) -> Result<JsValue, JsError> {

@@ -18,9 +18,12 @@ DOMAIN_SDS: float = 8.0
 @dataclass(frozen=True)
 class Model:
     """A model ``dx = f(x) dt + G dv`` observed continuously (``dy = h(x) dt + dw``) or at
-    discrete times (``z_k = h(x_k) + v_k``).
+    discrete times (``z_k = h(x_k) + v_k``, or ``z_k ~ p(z | x_k)``).
 
-    Build it with :meth:`continuous` or :meth:`discrete`. Expressions are text in ``x``
+    Build it with :meth:`continuous` or :meth:`discrete` (additive Gaussian noise), or with
+    one of the measurement families beyond it: :meth:`poisson` (counts), :meth:`student_t`
+    (outliers), :meth:`heteroscedastic` (a variance s(x): stochastic volatility) and
+    :meth:`log_density` (any ``log p(z | x)``). Expressions are text in ``x``
     (``x1 … xn`` when n > 1) with ``+ - * / ^``, ``sin cos tan exp log sqrt tanh abs`` and
     friends; they are compiled once, with exact derivatives, in Rust.
     """
@@ -67,6 +70,94 @@ class Model:
         m = len(_strings(observation, "observation"))
         gaussian = {"weight": 1.0, "mean": [0.0] * m, "cov": _matrix(noise_cov, "noise_cov")}
         return cls._of(drift, observation, diffusion, {"kind": "discrete", "mixture": [gaussian]})
+
+    @classmethod
+    def poisson(
+        cls,
+        drift: Union[str, Sequence[str]],
+        rate: Union[str, Sequence[str]],
+        diffusion: Optional[ArrayLike] = None,
+    ) -> "Model":
+        """Counts ``z_{k,j} ~ Poisson(λ_j(x_k))``, independent given the state.
+
+        Parameters
+        ----------
+        rate : str or list of str
+            λ = h(x), one expression per count series; it must be nonnegative wherever a
+            filter evaluates it (``exp(x)`` is, ``x`` is not). The grid and particle
+            filters use the Poisson likelihood exactly; the Kalman-type filters replace
+            it by ``N(λ(x), diag λ(x̂⁻))`` and say so in the run's warnings.
+        """
+        return cls._of(drift, rate, diffusion, {"kind": "poisson"})
+
+    @classmethod
+    def student_t(
+        cls,
+        drift: Union[str, Sequence[str]],
+        observation: Union[str, Sequence[str]],
+        dof: Union[float, str],
+        scale: Union[float, str],
+        diffusion: Optional[ArrayLike] = None,
+    ) -> "Model":
+        """``z_{k,j} = h_j(x_k) + scale · t_j``, ``t_j`` Student's t with ``dof`` degrees of
+        freedom: measurement noise with heavy tails (outliers).
+
+        Parameters
+        ----------
+        dof, scale : float or str
+            ν > 0 and σ > 0 (numbers, or expressions in the scenario's parameters). The
+            Kalman-type filters need ν > 2 (a variance) and then use ``N(h, σ²ν/(ν−2))``.
+        """
+        return cls._of(
+            drift, observation, diffusion, {"kind": "student_t", "dof": dof, "scale": scale}
+        )
+
+    @classmethod
+    def heteroscedastic(
+        cls,
+        drift: Union[str, Sequence[str]],
+        observation: Union[str, Sequence[str]],
+        variance: Union[str, Sequence[str]],
+        diffusion: Optional[ArrayLike] = None,
+    ) -> "Model":
+        """``z_{k,j} ~ N(h_j(x_k), s_j(x_k))``: Gaussian measurement noise whose variance is
+        an expression in the state — stochastic volatility with ``observation="0"`` and
+        ``variance="exp(x)"``.
+
+        Parameters
+        ----------
+        variance : str or list of str
+            s(x), one expression per observation component, positive wherever a filter
+            evaluates it.
+        """
+        return cls._of(
+            drift,
+            observation,
+            diffusion,
+            {"kind": "heteroscedastic", "variance": _strings(variance, "variance")},
+        )
+
+    @classmethod
+    def log_density(
+        cls,
+        drift: Union[str, Sequence[str]],
+        observation: Union[str, Sequence[str]],
+        log_density: str,
+        diffusion: Optional[ArrayLike] = None,
+    ) -> "Model":
+        """Measurements with ``log p(z | x)`` given as one expression in the state (``x``
+        or ``x1 … xn``) and the measurement (``z`` or ``z1 … zm``), e.g. Laplace noise
+        ``"-abs(z - x)/b - log(2*b)"``.
+
+        Only the grid and particle filters take it (the others raise
+        :class:`~zakai.errors.FilterError` saying why), it cannot be simulated (give
+        observations), and a measurement must be whole or wholly missing. The observation
+        h (one expression per measurement component) fixes m and is what the run's
+        innovations compare against.
+        """
+        return cls._of(
+            drift, observation, diffusion, {"kind": "log_density", "expression": log_density}
+        )
 
     @classmethod
     def _of(cls, drift: Any, observation: Any, diffusion: Any, noise: dict) -> "Model":

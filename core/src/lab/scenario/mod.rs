@@ -3,6 +3,7 @@
 //! another shape.
 
 mod methods;
+pub mod noise_kinds;
 pub mod parameters;
 pub mod presets;
 
@@ -19,6 +20,7 @@ use crate::validate::{check_spd, check_vector, matrix};
 pub use crate::validate::{format_bytes, parse_bytes};
 use crate::validate::{memory_cap, ConfigProblem};
 pub use methods::{catalogue, CatalogueEntry, MethodConfig};
+pub use noise_kinds::{noise_kinds, NoiseKind};
 use parameters::{
     check_parameters, coefficient_texts, named_values, Coefficient, CoefficientMatrix,
     CoefficientVector, ParameterConfig, Parameters,
