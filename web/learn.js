@@ -77,8 +77,10 @@ async function openLesson(page, id) {
     if (t.check) return page.checkConvergence();
     if (t.likelihood) return page.likelihood(t.likelihood);
     if (t.view) return page.view(t.view);
-    const config = page.current();
-    t.change(config, page.method);
+    // A try with `preset` runs that preset with the lesson's seed; else `change` edits the run.
+    const config = t.preset ? structuredClone(page.presets().find((p) => p.name === t.preset)) : page.current();
+    if (t.preset) config.seed = lesson.seed;
+    else t.change(config, page.method);
     return page.run(config).then((refused) => {
       if (!refused) applied.push(t.label);
       return refused;

@@ -302,6 +302,38 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'measurement-families',
+    title: '10. Counts, volatility and outliers: measurements that are not Gaussian',
+    preset: 'stochastic-volatility',
+    seed: 1,
+    scenario: (c) => c,
+    body: [
+      'Every lesson so far measured the state through Gaussian noise. Many data are not like that: counts of events (spikes, cases, photons), measurements with occasional gross errors, returns whose spread is what changes. All that Bayes\' rule needs from a measurement is its likelihood, the density $p(z_k \\mid x)$ of the value measured given each possible state. The update multiplies the predicted density by it and normalises:',
+      '$$p(x \\mid z_{0:k}) = \\frac{p(z_k \\mid x)\\, p(x \\mid z_{0:k-1})}{\\int p(z_k \\mid x\')\\, p(x\' \\mid z_{0:k-1})\\, dx\'},$$',
+      'the separation approach\'s update (Šimandl & Švácha 2005 [001], (6)), written there for $p(z_k \\mid x) = p_v(z_k - h(x))$. On a grid the product is taken node by node, on particles particle by particle, whatever the form of $p(z \\mid x)$: these filters are exact in the measurement, and approximate only in their grid or their number of particles. Three measurement models are in this lesson:',
+      '$$z_k \\sim N\\big(0,\\, e^{x_k}\\big), \\qquad z_k \\sim \\mathrm{Poisson}\\big(e^{x_k}\\big), \\qquad z_k = x_k + \\sigma\\, t_k,\\ t_k \\sim t_\\nu .$$',
+      'A Kalman-type filter assumes $z = h(x) + v$ with Gaussian $v$. Zakai gives it each family\'s first two conditional moments: the mean $E[z \\mid x] = h(x)$ and the variance $R = \\mathrm{Var}[z \\mid x]$, evaluated at the predicted mean $\\hat x^-$. That is $R = e^{\\hat x^-}$ for the volatility (with $h = 0$) and for the counts (with $h = e^x$), and $R = \\sigma^2 \\nu / (\\nu - 2)$ for Student-t noise, which has a variance only when $\\nu > 2$. This is a moment match, and the run\'s warnings say so for each Gaussian filter.',
+      'For the volatility it is fatal. Every sigma point of the UKF predicts $z = h(\\chi_i) = 0$, so the cross-covariance $P_{xz}$ and with it the gain $K = P_{xz} P_{zz}^{-1}$ are 0; the EKF\'s gain is 0 too, since $H = h\'(\\hat x) = 0$. The information about $x$ is in the size of $z$, and an update linear in $z$ cannot use it.',
+      'Here: $dx = -0.1\\,x\\,dt + 0.3\\,dv$, the log-variance of daily returns $z_k \\sim N(0, e^{x_k})$, every $\\Delta\\tau = 1$ for $T = 300$, $p(x_0) = N(0, 0.45)$ (the stationary law). The separation approach (SA) on 200 cells of $[-4, 4]$, a particle filter of 1000, the UKF and the EKF.',
+    ],
+    lookFor: [
+      'The UKF\'s and EKF\'s estimates are 0 at every time, and their standard deviation stays at 0.67, the prior\'s $\\sqrt{0.45}$: they never learn from the data (MSE 0.571). The SA follows the swings of the log-variance (MSE 0.306), as does the particle filter (0.310).',
+      'The warnings under the plots name the moment match for the UKF and the EKF, and for neither the SA nor the particle filter.',
+    ],
+    tryThis: [
+      {
+        label: 'counts: Poisson(eˣ)',
+        preset: 'poisson-counts',
+        expect: 'the poisson-counts preset, $dx = -0.5\\,x\\,dt + 0.6\\,dv$ and $z_k \\sim \\mathrm{Poisson}(e^{x_k})$ every 0.5: here the four estimates are close (MSE SA 0.170, UKF 0.169, EKF 0.154: on this run the moment match costs no accuracy), but the log-likelihoods are not: −171.8 for the SA, −195.0 for the UKF. A model fitted by maximising a Gaussian filter\'s likelihood would be fitted to the wrong density (lesson 8).',
+      },
+      {
+        label: 'outliers: Student-t noise',
+        preset: 'student-t-outliers',
+        expect: 'the student-t-outliers preset, $dx = -x\\,dt + dv$ and $z_k = x_k + 0.2\\,t_k$ with $\\nu = 2.5$, every 0.25. The t log-likelihood\'s slope in $x$ is $(\\nu + 1)\\,r / (\\nu\\sigma^2 + r^2)$ with $r = z - x$: it tends to 0 as $|r|$ grows, so a measurement far from every plausible state barely moves the posterior, while a Gaussian update moves the mean by $K r$, in proportion to $r$. At $t = 23.5$ the measurement is −6.12 while the state is −0.53: the UKF jumps to −3.52, the SA stays at −0.31. Over the run the MSE is 0.111 for the SA and 0.205 for the UKF.',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */

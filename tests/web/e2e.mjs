@@ -1045,6 +1045,41 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.$eval('#dim', (e) => e.dispatchEvent(new Event('change')));
   await page.waitForFunction(() => document.querySelectorAll('#prior-mix .mixture-component:first-of-type input[data-cell]').length === 9, null, { timeout: 5000 });
   assert.equal(await page.inputValue('#prior-mix .mixture-component:nth-child(2) .mixture-mean'), `${presetPrior[1].mean.join(', ')}, 0`);
+  // Measurement families from the catalogue's noise kinds: the choice list is the
+  // catalogue's, a preset's family fills its fields and renders its equation, another kind
+  // brings its own fields with their defaults, a bad value is named at its field, and the
+  // applied scenario carries what was typed; a log-density takes x and z.
+  await load(`${url}?preset=student-t-outliers`, 'student-t-outliers');
+  const kinds = await page.$$eval('#noise-kind option', (o) => o.map((x) => x.value));
+  assert.deepEqual(kinds, ['continuous', 'discrete', 'poisson', 'student_t', 'heteroscedastic', 'log_density']);
+  assert.equal(await page.inputValue('#noise-kind'), 'student_t');
+  assert.equal(await page.inputValue('[data-noise-field="dof"]'), '2.5');
+  assert.equal(await page.inputValue('[data-noise-field="scale"]'), '0.2');
+  await page.waitForFunction(() => document.querySelector('#noise-formula math') != null, null, { timeout: 10000 });
+  assert.ok(!(await page.isVisible('#noise-mix-label')) && !(await page.isVisible('#noise-cov-label')), 'no mixture or S for Student-t');
+  await page.fill('[data-noise-field="dof"]', '-1');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.noise.dof"]').textContent.includes('must be positive'), null, { timeout: 5000 });
+  await page.fill('[data-noise-field="dof"]', '4');
+  await page.selectOption('#noise-kind', 'heteroscedastic');
+  assert.equal(await page.inputValue('[data-noise-field="variance"] input'), 'exp(x)');
+  await page.fill('[data-noise-field="variance"] input', '0.5*exp(x');
+  await page.waitForFunction(() => /position|expected|\)/.test(document.querySelector('[data-error="model.noise.variance[0]"]').textContent), null, { timeout: 5000 });
+  console.log('variance error:', await page.textContent('[data-error="model.noise.variance[0]"]'));
+  await page.fill('[data-noise-field="variance"] input', '0.5*exp(x)');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.base.model.noise.kind === 'heteroscedastic', null, { timeout: 10000 });
+  assert.deepEqual(await page.evaluate(() => window.zakaiPage.base.model.noise), { kind: 'heteroscedastic', variance: ['0.5*exp(x)'] });
+  await page.selectOption('#noise-kind', 'log_density');
+  await page.fill('[data-noise-field="expression"]', '-abs(z - x)/0.3 - log(0.6) + w');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.noise.expression"]').textContent.includes('unknown variable `w`'), null, { timeout: 5000 });
+  assert.ok((await page.textContent('[data-error="model.noise.expression"]')).includes('z'), 'the message lists z among the variables');
+  await page.selectOption('#noise-kind', 'poisson');
+  assert.equal(await page.$$eval('#noise-fields input', (i) => i.length), 0, 'Poisson has no fields');
+  await page.fill('#observation input', 'exp(x)');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.base.model.noise.kind === 'poisson', null, { timeout: 10000 });
+  await page.screenshot({ path: `${artifacts}/noise-kinds.png` });
+
   // −5 particles: the field is marked, the message is next to it in plain words.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   await page.fill('#methods .method-row:nth-child(3) input[data-param="particles"]', '-5');

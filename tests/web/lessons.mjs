@@ -388,6 +388,45 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.equal(Number(csvLines9[row9].split(',')[col9]), qs9.s425, 'the smoothed estimate in the CSV');
   await page.screenshot({ path: `${artifacts}/lesson-smoothing.png` });
 
+  // Lesson 10: measurements that are not Gaussian. The three presets' runs with seed 1, each
+  // sentence about them read back from the page (MSE and log-likelihood from its table's
+  // diagnostics, estimates from the run, the warnings under the plots).
+  const scores = () => page.evaluate(() => Object.fromEntries(window.zakaiPage.info.methods.map((name, i) => {
+    const d = window.zakaiPage.diagnostics[i];
+    return [name, { mse: d.mse, ll: d.log_likelihood }];
+  })));
+  await openLesson('measurement-families');
+  r = await run();
+  let sc = await scores();
+  console.log('lesson 10, volatility:', JSON.stringify(sc));
+  for (const m of ['UKF', 'EKF']) {
+    assert.ok(r.methods[m].est.every((v) => v === 0), `${m}: 0 at every time`);
+    assert.ok(r.methods[m].sd.every((v) => Math.abs(v - Math.sqrt(0.45)) < 0.005), `${m}: sd stays at 0.67`);
+    assert.ok(Math.abs(sc[m].mse - 0.571) < 0.0005, `${m}: MSE 0.571`);
+  }
+  assert.ok(Math.abs(sc.SA.mse - 0.306) < 0.0005 && Math.abs(sc['PF(1000)'].mse - 0.310) < 0.0005, 'SA 0.306, PF 0.310');
+  assert.ok(Math.max(...r.methods.SA.est) - Math.min(...r.methods.SA.est) > 2, 'the SA follows the swings');
+  const warned = (name) => r.warnings.includes(`${name}: replaces the measurements' density`) && r.warnings.includes('moment match');
+  assert.ok(warned('UKF') && warned('EKF'), `the moment match named for the UKF and EKF: ${r.warnings}`);
+  assert.ok(!r.warnings.includes('SA:') && !r.warnings.includes('PF(1000):'), 'and for neither the SA nor the PF');
+  await page.screenshot({ path: `${artifacts}/lesson-volatility.png` });
+  await tryThis('counts: Poisson(eˣ)');
+  sc = await scores();
+  console.log('lesson 10, counts:', JSON.stringify(sc));
+  assert.equal(await page.evaluate(() => window.zakaiPage.base.name), 'poisson-counts');
+  assert.ok(Math.abs(sc.SA.mse - 0.170) < 0.0005 && Math.abs(sc.UKF.mse - 0.169) < 0.0005 && Math.abs(sc.EKF.mse - 0.154) < 0.0005, 'MSE 0.170, 0.169, 0.154');
+  assert.ok(Math.abs(sc.SA.ll + 171.8) < 0.05 && Math.abs(sc.UKF.ll + 195.0) < 0.05, 'log-likelihoods −171.8 and −195.0');
+  await tryThis('outliers: Student-t noise');
+  r = await run();
+  sc = await scores();
+  const k10 = r.times.findIndex((t) => Math.abs(t - 23.5) < 1e-9);
+  const z10 = await page.evaluate((k) => window.zakaiPage.data.obs[0][k], k10);
+  console.log('lesson 10, outlier at 23.5:', z10, r.truth[k10], r.methods.UKF.est[k10], r.methods.SA.est[k10], JSON.stringify(sc));
+  assert.ok(Math.abs(z10 + 6.12) < 0.005 && Math.abs(r.truth[k10] + 0.53) < 0.005, 'z = −6.12 where x = −0.53');
+  assert.ok(Math.abs(r.methods.UKF.est[k10] + 3.52) < 0.005 && Math.abs(r.methods.SA.est[k10] + 0.31) < 0.005, 'UKF −3.52, SA −0.31');
+  assert.ok(Math.abs(sc.SA.mse - 0.111) < 0.0005 && Math.abs(sc.UKF.mse - 0.205) < 0.0005, 'MSE 0.111 and 0.205');
+  await page.screenshot({ path: `${artifacts}/lesson-outliers.png` });
+
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
   await openLesson('kalman-bucy');

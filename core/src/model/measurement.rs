@@ -181,7 +181,7 @@ impl MeasurementDensity {
         let seen = || z.iter().enumerate().filter(|(_, v)| !v.is_nan());
         match self {
             MeasurementDensity::Poisson => {
-                if let Some((j, v)) = seen().find(|(_, v)| !(**v >= 0.0 && v.fract() == 0.0)) {
+                if let Some((j, v)) = seen().find(|(_, v)| !(**v >= 0.0 && libm::trunc(**v) == **v)) {
                     return Err(format!(
                         "component {} is {v}, and a Poisson count is a nonnegative integer",
                         j + 1

@@ -93,7 +93,7 @@ impl MeasurementForm {
         let approximation = match &model.observations {
             ObservationModel::Discrete { density } if density.additive().is_none() => {
                 Some(alloc::format!(
-                    "{name} replaces the measurements' density ({}) by a Gaussian with its conditional mean h(x) and variance R(x) at the predicted mean (a moment match): an approximation, so its estimates and likelihood are not those of the model; the grid and particle filters use p(z | x) itself",
+                    "replaces the measurements' density ({}) by a Gaussian with its conditional mean h(x) and variance R(x) at the predicted mean (a moment match): an approximation, so its estimates and likelihood are not those of the model; the grid and particle filters use p(z | x) itself",
                     density.describe()
                 ))
             }
