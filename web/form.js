@@ -201,16 +201,19 @@ function showNoiseKind(kind, noise = readNoise(), m = observationCount()) {
   $('noise-mix-label').style.display = fields.some((f) => f.kind === 'mixture') ? '' : 'none';
   const box = $('noise-fields');
   box.replaceChildren();
+  // A kind's default expressions are written for n = m = 1: x1 and z1 in larger models.
+  const n = Number($('dim').value);
+  const adapt = (text) => text.replace(/\bx\b/g, n > 1 ? 'x1' : 'x').replace(/\bz\b/g, m > 1 ? 'z1' : 'z');
   for (const f of fields) {
     if (f.kind === 'matrix' || f.kind === 'mixture') continue;
     const field = `model.noise.${f.key}`;
     const given = noise?.kind === kind ? noise[f.key] : undefined;
     if (f.kind === 'expressions') {
       const c = el('div', { title: f.title, dataset: { noiseField: f.key } });
-      exprInputs(c, f.symbol, field, Array.from({ length: m }, (_, i) => String(given?.[i] ?? f.default)));
+      exprInputs(c, f.symbol, field, Array.from({ length: m }, (_, i) => String(given?.[i] ?? adapt(f.default))));
       box.append(c);
     } else {
-      const input = el('input', { type: 'text', className: f.kind === 'expression' ? 'wide' : 'short', value: String(given ?? f.default), dataset: { field, noiseField: f.key } });
+      const input = el('input', { type: 'text', className: f.kind === 'expression' ? 'wide' : 'short', value: String(given ?? adapt(f.default)), dataset: { field, noiseField: f.key } });
       input.addEventListener('input', scheduleValidate);
       box.append(el('label', { title: f.title }, `${f.label} `, input), el('span', { className: 'error', dataset: { error: field } }));
     }

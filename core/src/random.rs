@@ -121,12 +121,16 @@ fn open_uniform<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
     1.0 - rng.random::<f64>()
 }
 
-/// One Gamma(`shape`, 1) draw, `shape` > 0, by Marsaglia & Tsang's squeeze method (2000, "A
+/// One Gamma(`shape`, 1) draw, `shape` > 0 and finite (NaN otherwise), by Marsaglia & Tsang's squeeze method (2000, "A
 /// simple method for generating gamma variables", ACM TOMS 26(3)): with d = a − ⅓ and
 /// c = 1/√(9d), v = (1 + cξ)³ for a normal ξ is accepted when ln u < ξ²/2 + d − dv + d ln v;
 /// for a < 1, Gamma(a) = Gamma(a + 1) · u^{1/a} (their §6). With `libm`, so the stream is the
 /// same on every platform.
 pub fn gamma<R: rand::Rng + ?Sized>(rng: &mut R, shape: f64) -> f64 {
+    // Not a shape (NaN, infinite, ≤ 0): no draw, and no endless rejection loop.
+    if !(shape > 0.0 && shape.is_finite()) {
+        return f64::NAN;
+    }
     if shape < 1.0 {
         let u = open_uniform(rng);
         return gamma(rng, shape + 1.0) * libm::pow(u, 1.0 / shape);
@@ -155,12 +159,16 @@ pub fn student_t<R: rand::Rng + ?Sized>(rng: &mut R, dof: f64) -> f64 {
     xi / libm::sqrt(chi2 / dof)
 }
 
-/// One Poisson(`rate`) draw, `rate` ≥ 0 and finite, as an `f64`. Below a rate of 10 by
+/// One Poisson(`rate`) draw, `rate` ≥ 0 and finite (NaN otherwise), as an `f64`. Below a rate of 10 by
 /// multiplying uniforms until the product falls below e^{−λ} (Knuth, TAOCP vol. 2, §3.4.1);
 /// from 10 on by Hörmann's transformed rejection with squeeze, PTRS (1993, "The transformed
 /// rejection method for generating Poisson random variables", Insurance: Mathematics and
 /// Economics 12), whose cost does not grow with λ.
 pub fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, rate: f64) -> f64 {
+    // Not a rate (NaN, infinite, < 0): no draw, and no endless loop.
+    if !(rate >= 0.0 && rate.is_finite()) {
+        return f64::NAN;
+    }
     if rate < 10.0 {
         let limit = libm::exp(-rate);
         let mut k = 0.0;
@@ -198,6 +206,19 @@ pub fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, rate: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// A shape or rate that is not one gives NaN at once, not an endless rejection loop.
+    #[test]
+    fn draws_refuse_a_parameter_that_is_not_one() {
+        let mut rng = rng_from_seed(1);
+        for bad in [f64::NAN, f64::INFINITY, -1.0, 0.0] {
+            assert!(gamma(&mut rng, bad).is_nan(), "gamma({bad})");
+        }
+        for bad in [f64::NAN, f64::INFINITY, -1.0] {
+            assert!(poisson(&mut rng, bad).is_nan(), "poisson({bad})");
+        }
+        assert_eq!(poisson(&mut rng, 0.0), 0.0);
+    }
+
     use super::*;
     use crate::testing::test;
 

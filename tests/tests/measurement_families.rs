@@ -476,3 +476,80 @@ fn simulated_measurements_have_the_family_s_moments() {
         }
     }
 }
+
+/// Student-t noise built directly (not through `MeasurementDensity::student_t`) is checked
+/// when the model is built: no simulation can then loop on a degree of freedom that is not one.
+#[test]
+fn a_student_t_density_built_directly_is_checked_with_the_model() {
+    use zakai::{MeasurementDensity, Model, Noise};
+    for (dof, scale) in [
+        (f64::INFINITY, 1.0),
+        (f64::NAN, 1.0),
+        (3.0, 0.0),
+        (-1.0, 1.0),
+    ] {
+        let noise = Noise::Measurement(MeasurementDensity::StudentT { dof, scale });
+        let refused = Model::from_text(&["-x"], &["x"], noise)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            refused.contains("positive and finite"),
+            "ν = {dof}, σ = {scale}: {refused}"
+        );
+    }
+}
+
+/// A missing component needs no variance: counts whose second rate is 0 (so Var[z₂ | x] = 0)
+/// are filtered by the EKF while z₂ is missing, and refused with the reason when it is given.
+#[test]
+fn a_missing_component_needs_no_variance_in_the_moment_match() {
+    let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "two-counts",
+        "model": { "drift": ["-x"], "observation": ["exp(x)", "0"], "noise": { "kind": "poisson" } },
+        "prior": { "kind": "gaussian", "mean": [0.0], "cov": [[0.5]] },
+        "domain": [[-4.0, 4.0]], "time": { "dt_obs": DT },
+        "methods": [{ "method": "ekf" }, { "method": "separation", "cells": [100] }]
+    }))
+    .unwrap();
+    let e = Experiment::new(config).unwrap();
+    let data =
+        |z2: f64| Recording::measurements(1, 2, vec![0.0, DT], &[1.0, f64::NAN, 3.0, z2]).unwrap();
+    let run = e.filter_recorded(data(f64::NAN), 1).unwrap();
+    assert!(
+        run.methods.iter().all(|m| m.failure.is_none()),
+        "{:?}",
+        run.methods[0].failure
+    );
+    let run = e.filter_recorded(data(0.0), 1).unwrap();
+    let failure = run.methods[0]
+        .failure
+        .as_ref()
+        .expect("Var[z2 | x] = 0 observed");
+    assert!(
+        failure.message.contains("Var[z2 | x] is 0"),
+        "{}",
+        failure.message
+    );
+    assert!(
+        run.methods[1].failure.is_none(),
+        "the grid filter takes a rate of 0"
+    );
+}
+
+/// In a log-density, `z` and `z1` both name the one measurement component; a scenario
+/// parameter cannot take either name.
+#[test]
+fn a_log_density_reads_z_or_z1() {
+    for text in ["-abs(z - x)/0.3 - log(0.6)", "-abs(z1 - x)/0.3 - log(0.6)"] {
+        let config = scenario(
+            "x",
+            serde_json::json!({ "kind": "log_density", "expression": text }),
+            serde_json::json!([{ "method": "pf" }]),
+        );
+        assert!(
+            config.validate().is_empty(),
+            "{text}: {:?}",
+            config.validate()
+        );
+    }
+}

@@ -104,7 +104,7 @@ fn unknown_unused_and_ill_formed_parameters_are_reported_where_they_are() {
         "{:?}",
         c.validate()
     );
-    // A name taken by a state variable or a function, a value outside its bounds, bounds
+    // A name taken by a variable or a function, a value outside its bounds, bounds
     // that are no interval.
     let c = scenario(
         "-theta*x",
@@ -113,7 +113,7 @@ fn unknown_unused_and_ill_formed_parameters_are_reported_where_they_are() {
         "0",
         "1",
         r#"{ "theta": { "value": 7, "bounds": [0, 5] }, "x": { "value": 1 },
-             "sin": { "value": 1 }, "b": { "value": 1, "bounds": [2, 1] } }"#,
+             "sin": { "value": 1 }, "z2": { "value": 1 }, "b": { "value": 1, "bounds": [2, 1] } }"#,
     );
     let problems = c.validate();
     let has = |field: &str, text: &str| {
@@ -125,14 +125,13 @@ fn unknown_unused_and_ill_formed_parameters_are_reported_where_they_are() {
         has("parameters.theta.value", "outside the bounds"),
         "{problems:?}"
     );
-    assert!(
-        has("parameters.x", "already a state variable"),
-        "{problems:?}"
-    );
-    assert!(
-        has("parameters.sin", "already a state variable"),
-        "{problems:?}"
-    );
+    // z1…zm are a log-density's measurement (model.noise.kind = log_density).
+    for name in ["x", "sin", "z2"] {
+        assert!(
+            has(&format!("parameters.{name}"), "already a variable"),
+            "{problems:?}"
+        );
+    }
     assert!(has("parameters.b.bounds", "lower < upper"), "{problems:?}");
     // A covariance that a parameter's value makes invalid is reported as one.
     let c = scenario(

@@ -405,6 +405,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(Math.abs(sc[m].mse - 0.571) < 0.0005, `${m}: MSE 0.571`);
   }
   assert.ok(Math.abs(sc.SA.mse - 0.306) < 0.0005 && Math.abs(sc['PF(1000)'].mse - 0.310) < 0.0005, 'SA 0.306, PF 0.310');
+  assert.ok(Math.abs(mean(r.truth.map((x) => x * x)) - sc.UKF.mse) < 1e-9, 'the UKF\'s MSE is this path\'s mean of x²');
   assert.ok(Math.max(...r.methods.SA.est) - Math.min(...r.methods.SA.est) > 2, 'the SA follows the swings');
   const warned = (name) => r.warnings.includes(`${name}: replaces the measurements' density`) && r.warnings.includes('moment match');
   assert.ok(warned('UKF') && warned('EKF'), `the moment match named for the UKF and EKF: ${r.warnings}`);

@@ -304,15 +304,22 @@ impl ObservedNoise {
         &mut self,
         value: &[f64],
     ) -> Result<&crate::model::GaussianMixture, FilterError> {
+        let pattern = self.pattern_of(value)?;
+        Ok(self.density(pattern))
+    }
+
+    /// Which density [`ObservedNoise::of`] gives for `value`: `None` for the full one, else
+    /// the index of the marginal of its pattern of missing components (made the first time).
+    pub(crate) fn pattern_of(&mut self, value: &[f64]) -> Result<Option<usize>, FilterError> {
         let seen = |v: &f64| !Observation::is_missing(*v);
         if value.iter().all(seen) {
-            return Ok(&self.full);
+            return Ok(None);
         }
         let found = self
             .marginals
             .iter()
             .position(|(pattern, _)| pattern.iter().zip(value).all(|(p, v)| *p == seen(v)));
-        let index = match found {
+        Ok(Some(match found {
             Some(i) => i,
             None => {
                 let pattern: Vec<bool> = value.iter().map(seen).collect();
@@ -325,19 +332,28 @@ impl ObservedNoise {
                 self.marginals.push((pattern, marginal));
                 self.marginals.len() - 1
             }
-        };
-        Ok(&self.marginals[index].1)
+        }))
+    }
+
+    /// The density of a pattern from [`ObservedNoise::pattern_of`].
+    pub(crate) fn density(&self, pattern: Option<usize>) -> &crate::model::GaussianMixture {
+        match pattern {
+            None => &self.full,
+            Some(i) => &self.marginals[i].1,
+        }
     }
 }
 
 /// The likelihood `x ↦ p(z | x)` of a measurement's observed components, as the grid and
-/// particle filters multiply it in (001 (6), 003's update (6)): additive noise through the
+/// particle filters multiply it in (Bayes' rule, 001 (3); on the grid 001 (6)–(7)): additive noise through the
 /// marginal density of each pattern of missing components ([`ObservedNoise`]), the other
 /// [`MeasurementDensity`](crate::model::MeasurementDensity) families component by component.
 #[derive(Clone, Debug)]
 pub(crate) struct MeasurementLikelihood {
     density: crate::model::MeasurementDensity,
     noise: Option<ObservedNoise>,
+    /// The marginal of the current observation's pattern ([`MeasurementLikelihood::check`]).
+    pattern: Option<usize>,
     residual: Vec<f64>,
     work: Vec<f64>,
 }
@@ -348,27 +364,46 @@ impl MeasurementLikelihood {
         MeasurementLikelihood {
             density: density.clone(),
             noise: density.additive().cloned().map(ObservedNoise::new),
+            pattern: None,
             residual: alloc::vec![0.0; m],
             work: alloc::vec![0.0; m],
         }
     }
 
-    /// Refuses a measurement its family cannot produce (a count that is not a nonnegative
-    /// integer, a log-density's measurement with some components missing) before anything
-    /// moves; `name` is the filter's.
-    pub(crate) fn check(&self, name: &str, z: &[f64]) -> Result<(), FilterError> {
-        self.density
-            .check_value(z)
-            .map_err(|e| FilterError::BadObservation(alloc::format!("{name}: {e}")))
+    /// Whether [`MeasurementLikelihood::log_at`] reads the state x itself (a variance s(x), a
+    /// log-density, and the place a Poisson rate is negative, for its message), not only h(x).
+    pub(crate) fn reads_state(&self) -> bool {
+        !matches!(
+            self.density,
+            crate::model::MeasurementDensity::Additive(_)
+                | crate::model::MeasurementDensity::StudentT { .. }
+        )
     }
 
-    /// `ln p(z | x)` of the observed components of `z` (NaN = missing), with `hx = h(x)`.
+    /// Refuses a measurement its family cannot produce (a count that is not a nonnegative
+    /// integer, a log-density's measurement with some components missing) before anything
+    /// moves, and prepares for it (the marginal noise density of its observed components,
+    /// made the first time its pattern occurs); `name` is the filter's.
+    pub(crate) fn check(&mut self, name: &str, z: &[f64]) -> Result<(), FilterError> {
+        self.density
+            .check_value(z)
+            .map_err(|e| FilterError::BadObservation(alloc::format!("{name}: {e}")))?;
+        if let Some(noise) = &mut self.noise {
+            self.pattern = noise.pattern_of(z)?;
+        }
+        Ok(())
+    }
+
+    /// `ln p(z | x)` of the observed components of `z` (NaN = missing), with `hx = h(x)`,
+    /// for the `z` last given to [`MeasurementLikelihood::check`]; `x` is read only when
+    /// [`MeasurementLikelihood::reads_state`].
     pub(crate) fn log_at(&mut self, z: &[f64], x: &[f64], hx: &[f64]) -> Result<f64, FilterError> {
-        match &mut self.noise {
+        match &self.noise {
             Some(noise) => {
-                let noise = noise.of(z)?;
                 let k = observed_residual(z, |a| z[a] - hx[a], &mut self.residual);
-                Ok(noise.log_pdf_slice(&self.residual[..k], &mut self.work))
+                Ok(noise
+                    .density(self.pattern)
+                    .log_pdf_slice(&self.residual[..k], &mut self.work))
             }
             None => self
                 .density

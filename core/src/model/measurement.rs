@@ -1,8 +1,9 @@
 //! The density `p(z | x)` of a discrete measurement.
 //!
-//! The grid and particle filters use it as it is: Bayes' rule multiplies the predicted
-//! density by the likelihood `x ↦ p(z_k | x)` node by node or particle by particle (001 (6),
-//! the update (6)–(7) of 003), whatever its form. Five families:
+//! The grid and particle filters use it as it is: Bayes' rule (Šimandl & Švácha 2005, 001
+//! (3)) multiplies the predicted density by the likelihood `x ↦ p(z_k | x)`, cell by cell on the
+//! separation approach's grid (001 (6)–(7), written there for additive noise) and particle by
+//! particle, whatever its form. Five families:
 //!
 //! | family | `p(z | x)`, components independent given x | use |
 //! |---|---|---|
@@ -136,12 +137,16 @@ impl MeasurementDensity {
         }
     }
 
-    /// Checks the density's dimensions against a model with state dimension `n` and `m`
-    /// measurement components.
-    pub fn check_dimensions(&self, n: usize, m: usize) -> Result<(), ZakaiError> {
+    /// Checks the density against a model with state dimension `n` and `m` measurement
+    /// components: its dimensions, and ν, σ > 0 and finite for Student-t noise (the variants
+    /// can be built directly; [`MeasurementDensity::student_t`] checks them too).
+    pub fn check(&self, n: usize, m: usize) -> Result<(), ZakaiError> {
         let (what, got, want) = match self {
             MeasurementDensity::Additive(noise) => ("measurement noise dimension", noise.dim(), m),
-            MeasurementDensity::Poisson | MeasurementDensity::StudentT { .. } => return Ok(()),
+            MeasurementDensity::Poisson => return Ok(()),
+            MeasurementDensity::StudentT { dof, scale } => {
+                return Self::student_t(*dof, *scale).map(|_| ())
+            }
             MeasurementDensity::Heteroscedastic(s) => {
                 if s.input_dim() != n {
                     return Err(ZakaiError::Dimension(format!(
@@ -181,7 +186,8 @@ impl MeasurementDensity {
         let seen = || z.iter().enumerate().filter(|(_, v)| !v.is_nan());
         match self {
             MeasurementDensity::Poisson => {
-                if let Some((j, v)) = seen().find(|(_, v)| !(**v >= 0.0 && libm::trunc(**v) == **v)) {
+                if let Some((j, v)) = seen().find(|(_, v)| !(**v >= 0.0 && libm::trunc(**v) == **v))
+                {
                     return Err(format!(
                         "component {} is {v}, and a Poisson count is a nonnegative integer",
                         j + 1
@@ -321,12 +327,13 @@ impl MeasurementDensity {
     }
 
     /// `Var[z_j | x]` into `out` (length m), given `hx = h(x)`, for the families whose
-    /// [`MeasurementDensity::gaussian_match`] is state-dependent; an `Err` when a variance
-    /// is not positive and finite there.
+    /// [`MeasurementDensity::gaussian_match`] is state-dependent; an `Err` when the variance
+    /// of an `observed` component is not positive and finite there.
     pub fn conditional_variance(
         &self,
         x: &[f64],
         hx: &[f64],
+        observed: &[bool],
         out: &mut [f64],
     ) -> Result<(), String> {
         match self {
@@ -339,7 +346,7 @@ impl MeasurementDensity {
                 ))
             }
         }
-        match out.iter().position(|v| !(*v > 0.0 && v.is_finite())) {
+        match (0..out.len()).position(|j| observed[j] && !(out[j] > 0.0 && out[j].is_finite())) {
             None => Ok(()),
             Some(j) => Err(format!(
                 "Var[z{} | x] is {} at the predicted mean x = {x:?}; the Gaussian approximation needs it positive",
@@ -398,9 +405,9 @@ impl MeasurementDensity {
                 s.eval(x, out);
                 for j in 0..out.len() {
                     let v = out[j];
-                    if !(v >= 0.0 && v.is_finite()) {
+                    if !(v > 0.0 && v.is_finite()) {
                         return Err(format!(
-                            "the variance s{}(x) is {v} at the true state x = {x:?}",
+                            "the variance s{}(x) is {v} at the true state x = {x:?}; it must be positive and finite",
                             j + 1
                         ));
                     }

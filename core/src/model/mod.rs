@@ -175,7 +175,7 @@ impl Model {
                 dim("observation noise S columns", noise_cov.ncols(), m)?;
                 crate::linalg::cholesky(noise_cov, "observation noise covariance S")?;
             }
-            ObservationModel::Discrete { density } => density.check_dimensions(n, m)?,
+            ObservationModel::Discrete { density } => density.check(n, m)?,
         }
         if diffusion.iter().any(|v| !v.is_finite()) {
             return Err(ZakaiError::Other(

@@ -206,13 +206,13 @@ impl Variables {
         }
     }
 
-    /// The state variables, then the measurement `z1..zm` (`z` when m = 1).
+    /// The state variables, then the measurement `z1..zm` (and `z` when m = 1, as `x` for
+    /// the state).
     pub fn state_and_measurement(n: usize, m: usize) -> Self {
-        let mut others: Vec<String> = (1..=m).map(|i| format!("z{i}")).collect();
-        if m == 1 {
-            others = alloc::vec!["z".to_string()];
+        Variables {
+            n,
+            others: (1..=m).map(|i| format!("z{i}")).collect(),
         }
-        Variables { n, others }
     }
 
     /// How many inputs an expression in these variables takes.
@@ -220,8 +220,14 @@ impl Variables {
         self.n + self.others.len()
     }
 
-    /// The input `name` stands for, if it is one of these variables.
+    /// The input `name` stands for, if it is one of these variables (`z` is `z1` when it is
+    /// the only measurement component).
     pub fn index(&self, name: &str) -> Option<usize> {
+        let name = if name == "z" && self.others.len() == 1 {
+            "z1"
+        } else {
+            name
+        };
         variable_index(name, self.n).or_else(|| {
             self.others
                 .iter()
@@ -234,6 +240,9 @@ impl Variables {
     pub fn names(&self) -> Vec<String> {
         let mut names = variable_names(self.n);
         names.extend(self.others.iter().cloned());
+        if self.others.len() == 1 {
+            names.push("z".to_string());
+        }
         names
     }
 }

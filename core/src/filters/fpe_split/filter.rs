@@ -397,11 +397,14 @@ impl ContinuousDiscreteGrid {
         // The update keeps only the positive values (a negative one becomes 0).
         let before = self.grid.positive_mass(&self.u);
         let m = self.m;
+        let reads_state = self.likelihood.reads_state();
         let mut max = f64::NEG_INFINITY;
         for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
             if *u > 0.0 {
                 let h = &self.h_nodes[idx * m..(idx + 1) * m];
-                self.grid.node(idx, &mut self.node);
+                if reads_state {
+                    self.grid.node(idx, &mut self.node);
+                }
                 *log = self.likelihood.log_at(z, &self.node, h)? + libm::log(*u);
                 max = max.max(*log);
             } else {

@@ -172,7 +172,7 @@ impl Measurement {
         };
         model.observation.eval(x, &mut self.hx);
         density
-            .conditional_variance(x, &self.hx, &mut self.variance)
+            .conditional_variance(x, &self.hx, &self.observed, &mut self.variance)
             .map_err(FilterError::Likelihood)?;
         self.noise_cov.fill(0.0);
         for (i, v) in self.variance.iter().enumerate() {

@@ -243,9 +243,12 @@ impl ParticleFilter {
         let noise = match &mut self.weighing {
             // ln p(z | xᵢ) of the observed components, whatever the family.
             Weighing::Measurements(likelihood) => {
+                let reads_state = likelihood.reads_state();
                 for (i, w) in lw.iter_mut().enumerate() {
-                    for (j, x) in self.point.iter_mut().enumerate() {
-                        *x = particles[j * count + i];
+                    if reads_state {
+                        for (j, x) in self.point.iter_mut().enumerate() {
+                            *x = particles[j * count + i];
+                        }
                     }
                     for (a, h) in self.residual.iter_mut().enumerate() {
                         *h = self.predicted[a * count + i];
@@ -426,7 +429,7 @@ impl Filter for ParticleFilter {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the particles.
         let mut observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;
-        if let Weighing::Measurements(likelihood) = &self.weighing {
+        if let Weighing::Measurements(likelihood) = &mut self.weighing {
             likelihood.check(&self.name, obs.value)?;
         }
         let continuous = matches!(self.model.observations, ObservationModel::Continuous { .. });

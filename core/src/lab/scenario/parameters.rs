@@ -243,8 +243,11 @@ pub(crate) fn check_parameters(
             .first()
             .map(|(n, _)| n)
             != Some(name)
-            || name == "x"
-            || (name.starts_with('x') && name[1..].chars().all(|c| c.is_ascii_digit()));
+            // The state x1…xn and a log-density's measurement z1…zm, whatever n and m.
+            || ["x", "z"].iter().any(|v| {
+                name.strip_prefix(v)
+                    .is_some_and(|rest| rest.chars().all(|c| c.is_ascii_digit()))
+            });
         if !identifier {
             problems.push(ConfigProblem::new(
                 &field,
@@ -253,7 +256,7 @@ pub(crate) fn check_parameters(
         } else if taken {
             problems.push(ConfigProblem::new(
                 &field,
-                format!("`{name}` is already a state variable, constant or function"),
+                format!("`{name}` is already a variable (the state x, the measurement z), constant or function"),
             ));
         }
         if !p.value.is_finite() {

@@ -543,8 +543,8 @@ fn measurement_families() -> Vec<ScenarioConfig> {
             p(x₀) = N(0, 0.36) (the stationary law). The separation approach (SA) on 200 cells \
             of [−4.5, 3.5] and the particle filter use the Poisson likelihood itself; the UKF \
             and EKF replace it by N(eˣ, e^{x̂⁻}) (a moment match, said in the run's \
-            warnings). Look for: with the default seed 1 the four estimates are close (MSE SA \
-            0.170, UKF 0.169, EKF 0.154: the moment match costs little accuracy here), but \
+            warnings). Look for: with the default seed 1 the estimates are close (MSE SA \
+            0.170, UKF 0.169, EKF 0.154; one run cannot rank them), but \
             the log-likelihoods are not: −171.8 for the SA, −195.0 for the UKF. A model \
             fitted with a Gaussian filter's likelihood would be fitted to the wrong density.",
         drift: &["-0.5*x"],
@@ -564,7 +564,7 @@ fn measurement_families() -> Vec<ScenarioConfig> {
         title: "Outliers: measurement noise with heavy tails (Student-t)",
         place: "",
         reference: "the separation approach (§2–3, update (6)) with the Student-t likelihood",
-        description: "dx = −x dt + dv measured as z_k = x_k + 0.2 t_k, t_k Student's t with \
+        description: "dx = −x dt + dv measured as z_k = x_k + 0.2 e_k, e_k Student's t with \
             ν = 2.5 degrees of freedom (model.noise.kind = student_t: mostly small errors, now \
             and then a very large one), every Δτ = 0.25 for T = 30, p(x₀) = N(0, 0.5). The \
             separation approach (SA) on 200 cells of [−4, 4] and the particle filter use the \
