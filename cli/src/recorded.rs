@@ -270,11 +270,22 @@ fn smoothed_table(result: &RunResult, s: &mut String) {
     }
 }
 
-/// Renders a recorded run in `format`.
+/// Renders a recorded run in `format`. A CSV has no place for the methods' warnings and
+/// self-check findings (the table and the JSON carry them): they go to stderr.
 pub fn render(result: &RunResult, format: Format) -> String {
     match format {
         Format::Table => table(result),
         Format::Json => json(result),
-        Format::Csv => estimates_csv(result),
+        Format::Csv => {
+            for (method, w) in &result.warnings {
+                eprintln!("warning: {method}: {w}");
+            }
+            for m in &result.methods {
+                for c in &m.concerns {
+                    eprintln!("self-check: {}: {}", m.name, c.describe());
+                }
+            }
+            estimates_csv(result)
+        }
     }
 }

@@ -82,7 +82,7 @@ pub fn noise_kinds() -> Vec<NoiseKind> {
             kind: "discrete",
             label: "discrete z = h(x) + v",
             formula: r"z_k = h(x_k) + v_k,\quad v_k \sim \textstyle\sum_i w_i N(m_i, P_i)",
-            summary: "measurements at every Δτ with additive Gaussian or Gaussian-mixture noise (001, 003): the grid, particle, Kalman-type and Gaussian-sum filters",
+            summary: "measurements at every Δτ with additive Gaussian or Gaussian-mixture noise (001, 003): the continuous–discrete grid filters (SA, FDM), the particle, Kalman-type and Gaussian-sum filters",
             continuous: false,
             fields: vec![NoiseField {
                 key: "mixture",
@@ -97,7 +97,7 @@ pub fn noise_kinds() -> Vec<NoiseKind> {
             kind: "poisson",
             label: "counts z ~ Poisson(h(x))",
             formula: r"z_{k,j} \sim \mathrm{Poisson}\big(h_j(x_k)\big)",
-            summary: "counts (spikes, cases, photons) with rate h ≥ 0: exact in the grid and particle filters; the Kalman-type filters use N(h(x), diag h(x̂⁻)) and warn",
+            summary: "counts (spikes, cases, photons) with rate h ≥ 0: exact in the SA, FDM and particle filters; the Kalman-type filters use N(h(x), diag h(x̂⁻)) and warn",
             continuous: false,
             fields: vec![],
         },
@@ -105,7 +105,7 @@ pub fn noise_kinds() -> Vec<NoiseKind> {
             kind: "student_t",
             label: "outliers z = h(x) + σ t_ν",
             formula: r"z_{k,j} = h_j(x_k) + \sigma\, t_{\nu}",
-            summary: "heavy-tailed noise: exact in the grid and particle filters; the Kalman-type filters use its variance σ²ν/(ν−2) (ν > 2) and warn",
+            summary: "heavy-tailed noise: exact in the SA, FDM and particle filters; the Kalman-type filters use its variance σ²ν/(ν−2) (ν > 2) and warn",
             continuous: false,
             fields: vec![
                 NoiseField {
@@ -130,7 +130,7 @@ pub fn noise_kinds() -> Vec<NoiseKind> {
             kind: "heteroscedastic",
             label: "variance s(x): z ~ N(h(x), s(x))",
             formula: r"z_{k,j} \sim N\big(h_j(x_k),\, s_j(x_k)\big)",
-            summary: "Gaussian noise whose variance depends on the state (stochastic volatility: h = 0, s = e^x): exact in the grid and particle filters; the Kalman-type filters use s(x̂⁻) and warn",
+            summary: "Gaussian noise whose variance depends on the state (stochastic volatility: h = 0, s = e^x): exact in the SA, FDM and particle filters; the Kalman-type filters use s(x̂⁻) and warn",
             continuous: false,
             fields: vec![NoiseField {
                 key: "variance",
@@ -145,7 +145,7 @@ pub fn noise_kinds() -> Vec<NoiseKind> {
             kind: "log_density",
             label: "log-density log p(z | x)",
             formula: r"\log p(z_k \mid x_k) = \ell(x_k, z_k)",
-            summary: "any measurement density, as an expression in x and z: the grid and particle filters only; it cannot be simulated (load observations)",
+            summary: "any measurement density, as an expression in x and z: the SA, FDM and particle filters only; it cannot be simulated (load observations)",
             continuous: false,
             fields: vec![NoiseField {
                 key: "expression",
