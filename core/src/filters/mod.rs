@@ -394,6 +394,13 @@ impl MeasurementLikelihood {
         Ok(())
     }
 
+    /// For additive noise, the density of the observed components of the `z` last given to
+    /// [`MeasurementLikelihood::check`] (its marginal when some are missing), for a filter
+    /// that forms the residuals z − h(x) itself, in a batch; `None` for the other families.
+    pub(crate) fn additive_density(&self) -> Option<&crate::model::GaussianMixture> {
+        self.noise.as_ref().map(|n| n.density(self.pattern))
+    }
+
     /// `ln p(z | x)` of the observed components of `z` (NaN = missing), with `hx = h(x)`,
     /// for the `z` last given to [`MeasurementLikelihood::check`]; `x` is read only when
     /// [`MeasurementLikelihood::reads_state`].
