@@ -354,6 +354,8 @@ pub(crate) struct MeasurementLikelihood {
     noise: Option<ObservedNoise>,
     /// The marginal of the current observation's pattern ([`MeasurementLikelihood::check`]).
     pattern: Option<usize>,
+    /// Student-t's log normalising constant, computed once.
+    constant: f64,
     residual: Vec<f64>,
     work: Vec<f64>,
 }
@@ -365,6 +367,12 @@ impl MeasurementLikelihood {
             density: density.clone(),
             noise: density.additive().cloned().map(ObservedNoise::new),
             pattern: None,
+            constant: match density {
+                crate::model::MeasurementDensity::StudentT { dof, scale } => {
+                    crate::model::measurement::student_t_log_constant(*dof, *scale)
+                }
+                _ => 0.0,
+            },
             residual: alloc::vec![0.0; m],
             work: alloc::vec![0.0; m],
         }
@@ -412,10 +420,20 @@ impl MeasurementLikelihood {
                     .density(self.pattern)
                     .log_pdf_slice(&self.residual[..k], &mut self.work))
             }
-            None => self
-                .density
-                .log_likelihood(z, x, hx, &mut self.work)
-                .map_err(FilterError::Likelihood),
+            None => match &self.density {
+                crate::model::MeasurementDensity::StudentT { dof, scale } => {
+                    Ok(crate::model::measurement::student_t_log_density(
+                        z,
+                        hx,
+                        *dof,
+                        *scale,
+                        self.constant,
+                    ))
+                }
+                density => density
+                    .log_likelihood(z, x, hx, &mut self.work)
+                    .map_err(FilterError::Likelihood),
+            },
         }
     }
 }

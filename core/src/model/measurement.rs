@@ -94,6 +94,33 @@ fn ln_gamma(x: f64) -> f64 {
     libm::lgamma(x)
 }
 
+/// `ln Γ((ν+1)/2) − ln Γ(ν/2) − ½ ln(νπ) − ln σ`, the log of Student-t's normalising
+/// constant with `dof` ν and `scale` σ.
+pub(crate) fn student_t_log_constant(dof: f64, scale: f64) -> f64 {
+    ln_gamma(0.5 * (dof + 1.0))
+        - ln_gamma(0.5 * dof)
+        - 0.5 * libm::log(dof * core::f64::consts::PI)
+        - libm::log(scale)
+}
+
+/// `Σ_j ln t_ν((z_j − h_j)/σ)/σ` over the observed components of `z` (NaN = missing), with
+/// `constant` from [`student_t_log_constant`] (a filter computes it once).
+pub(crate) fn student_t_log_density(
+    z: &[f64],
+    hx: &[f64],
+    dof: f64,
+    scale: f64,
+    constant: f64,
+) -> f64 {
+    (0..z.len())
+        .filter(|&j| !z[j].is_nan())
+        .map(|j| {
+            let r = (z[j] - hx[j]) / scale;
+            constant - 0.5 * (dof + 1.0) * libm::log1p(r * r / dof)
+        })
+        .sum()
+}
+
 /// `ln(2π)`.
 const LN_TAU: f64 = 1.837_877_066_409_345_5;
 
@@ -251,19 +278,13 @@ impl MeasurementDensity {
                 }
                 Ok(sum)
             }
-            MeasurementDensity::StudentT { dof, scale } => {
-                let c = ln_gamma(0.5 * (dof + 1.0))
-                    - ln_gamma(0.5 * dof)
-                    - 0.5 * libm::log(dof * core::f64::consts::PI)
-                    - libm::log(*scale);
-                Ok((0..z.len())
-                    .filter(seen)
-                    .map(|j| {
-                        let r = (z[j] - hx[j]) / scale;
-                        c - 0.5 * (dof + 1.0) * libm::log1p(r * r / dof)
-                    })
-                    .sum())
-            }
+            MeasurementDensity::StudentT { dof, scale } => Ok(student_t_log_density(
+                z,
+                hx,
+                *dof,
+                *scale,
+                student_t_log_constant(*dof, *scale),
+            )),
             MeasurementDensity::Heteroscedastic(s) => {
                 scratch.resize(z.len(), 0.0);
                 s.eval(x, scratch);
