@@ -21,6 +21,7 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::presets, m)?)?;
     m.add_function(wrap_pyfunction!(runs::preset_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::catalogue_json, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::noise_kinds_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::check_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(runs::covering_domain, m)?)?;
     m.add_function(wrap_pyfunction!(runs::set_memory_cap, m)?)?;

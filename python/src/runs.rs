@@ -95,6 +95,12 @@ pub fn catalogue_json() -> String {
     to_json(&catalogue())
 }
 
+/// Every kind of observation noise with its fields, as JSON.
+#[pyfunction]
+pub fn noise_kinds_json() -> String {
+    to_json(&zakai::lab::scenario::noise_kinds())
+}
+
 /// Validates a scenario and returns `(normalised JSON, method display names, notes of the
 /// sizes chosen from the problem)`.
 #[pyfunction]

@@ -142,3 +142,31 @@ def test_student_t_and_log_density_models_build_and_refuse_what_they_cannot_do()
     bad = zakai.Model.log_density("-x", "x", "-abs(w - x)")
     with pytest.raises(ConfigError, match="w"):
         zakai.filter(zakai.Scenario(bad, zakai.Prior.gaussian(0.0, 0.5), ["pf"], dt_obs=1.0), z)
+
+
+def test_each_model_constructor_builds_a_kind_of_the_catalogue():
+    kinds = {k["kind"]: k for k in zakai.noise_kinds()}
+    built = {
+        zakai.Model.continuous("-x", "x").config["noise"]["kind"],
+        zakai.Model.discrete("-x", "x", noise_cov=1.0).config["noise"]["kind"],
+        zakai.Model.poisson("-x", "exp(x)").config["noise"]["kind"],
+        zakai.Model.student_t("-x", "x", dof=3, scale=1).config["noise"]["kind"],
+        zakai.Model.heteroscedastic("-x", "0", "exp(x)").config["noise"]["kind"],
+        zakai.Model.log_density("-x", "x", "-abs(z - x)").config["noise"]["kind"],
+    }
+    assert built == set(kinds), (built, set(kinds))
+    for name, k in kinds.items():
+        noise = {"kind": name}
+        for f in k["fields"]:
+            if f["kind"] in ("coefficient",):
+                noise[f["key"]] = float(f["default"])
+            elif f["kind"] == "expressions":
+                noise[f["key"]] = [f["default"]]
+            elif f["kind"] == "expression":
+                noise[f["key"]] = f["default"]
+        if name in ("continuous", "discrete"):
+            continue
+        model = zakai.Model._of("-x", "exp(x)" if name == "poisson" else "x", None, noise)
+        sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 0.5), ["pf"], dt_obs=1.0)
+        result = zakai.filter(sc, [1.0, 2.0, float("nan"), 0.0], times=[0, 1, 2, 3.5])
+        assert result.methods["PF(200)"].failure is None, name

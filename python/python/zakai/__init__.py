@@ -36,7 +36,7 @@ from .errors import ConfigError, DimensionError, ExpressionError, FilterError, Z
 from .models import DOMAIN_SDS, Model, Prior
 from .results import MethodResult, MonteCarloTable, RunResult, Smoothed
 from .runs import filter, monte_carlo, run, simulate, smooth
-from .scenario import Scenario, methods, presets, set_memory_cap
+from .scenario import Scenario, methods, noise_kinds, presets, set_memory_cap
 from .stepping import Filter
 
 __version__: str = _zakai.__version__
@@ -51,6 +51,7 @@ __all__ = [
     "MonteCarloTable",
     "presets",
     "methods",
+    "noise_kinds",
     "simulate",
     "run",
     "filter",

@@ -35,6 +35,15 @@ def methods() -> list[dict[str, Any]]:
     return _json.loads(_zakai.catalogue_json())
 
 
+def noise_kinds() -> list[dict[str, Any]]:
+    """Every kind of observation noise a scenario may declare (``model.noise.kind``):
+    ``kind``, ``label``, ``formula`` (TeX), ``summary`` (what it models, which methods take
+    it), ``continuous`` and its ``fields`` (``key``, ``label``, ``symbol``, ``title``,
+    ``kind``, ``default``) — the catalogue the playground's form and ``zakai list`` use. The
+    :class:`Model` constructors build each of them."""
+    return _json.loads(_zakai.noise_kinds_json())
+
+
 
 def _method_config(spec: MethodSpec) -> dict[str, Any]:
     """A full method config from a key (``"pf"``) or a dict ``{"method": "pf", ...}``."""
