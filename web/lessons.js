@@ -319,6 +319,7 @@ export const LESSONS = [
     ],
     lookFor: [
       'The UKF\'s and EKF\'s estimates are 0 at every time, and their standard deviation stays at 0.67, the prior\'s $\\sqrt{0.45}$ (the prior is the stationary law, so prediction alone keeps it there): they never learn from the data (MSE 0.571, this path\'s mean of $x_t^2$, whose expectation is 0.45). The SA follows the swings of the log-variance (MSE 0.306), as does the particle filter (0.310).',
+      'The SA\'s density (the heat strip, and the densities plot when you look back) leans to the right: its skewness is positive at each of the 61 times the page keeps for looking back (every 5 time units), between 0.01 and 0.21. Each measurement\'s log-likelihood in $x$, $-x/2 - z^2 e^{-x}/2$ up to a constant, falls off double-exponentially towards low volatility and only linearly towards high, so the data rule out low volatilities more sharply than high ones.',
       'The warnings under the plots name the moment match for the UKF and the EKF, and for neither the SA nor the particle filter.',
     ],
     tryThis: [

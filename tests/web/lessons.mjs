@@ -407,6 +407,21 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.ok(Math.abs(sc.SA.mse - 0.306) < 0.0005 && Math.abs(sc['PF(1000)'].mse - 0.310) < 0.0005, 'SA 0.306, PF 0.310');
   assert.ok(Math.abs(mean(r.truth.map((x) => x * x)) - sc.UKF.mse) < 1e-9, 'the UKF\'s MSE is this path\'s mean of x²');
   assert.ok(Math.max(...r.methods.SA.est) - Math.min(...r.methods.SA.est) > 2, 'the SA follows the swings');
+  // The SA's density leans right at every kept frame (skewness between 0.01 and 0.21).
+  const skews = await page.evaluate(() => window.zakaiPage.history.map((h) => {
+    const v = h.densities[0]; const g = h.grid;
+    let mass = 0, m1 = 0;
+    for (let k = 0; k < v.length; k++) { mass += v[k]; m1 += v[k] * g[k]; }
+    const mean = m1 / mass; let m2 = 0, m3 = 0;
+    for (let k = 0; k < v.length; k++) { const d = g[k] - mean; m2 += v[k] * d * d; m3 += v[k] * d * d * d; }
+    return { t: h.t, skew: (m3 / mass) / Math.pow(m2 / mass, 1.5) };
+  }));
+  console.log('lesson 10, SA skewness at the kept frames:', skews.length, Math.min(...skews.map((s) => s.skew)), Math.max(...skews.map((s) => s.skew)));
+  assert.equal(skews.length, 61, '61 kept frames');
+  assert.ok(skews.every((s, i) => Math.abs(s.t - 5 * i) < 1e-9), 'every 5 time units');
+  assert.ok(skews.every((s) => s.skew > 0), 'positive skewness at every kept frame');
+  assert.ok(Math.abs(Math.min(...skews.map((s) => s.skew)) - 0.01) < 0.005 && Math.abs(Math.max(...skews.map((s) => s.skew)) - 0.21) < 0.005, 'between 0.01 and 0.21');
+  assert.equal(await page.evaluate(() => window.zakaiPage.info.methods[0]), 'SA', 'the densities are the SA\'s');
   const warned = (name) => r.warnings.includes(`${name}: replaces the measurements' density`) && r.warnings.includes('moment match');
   assert.ok(warned('UKF') && warned('EKF'), `the moment match named for the UKF and EKF: ${r.warnings}`);
   assert.ok(!r.warnings.includes('SA:') && !r.warnings.includes('PF(1000):'), 'and for neither the SA nor the PF');

@@ -517,8 +517,10 @@ fn measurement_families() -> Vec<ScenarioConfig> {
             depend on x, so their gain is 0 and they never learn from the data (the run's \
             warnings say they moment-match). Look for: with the default seed 1 the UKF and \
             EKF estimates stay at 0 for the whole run (MSE 0.571) while the SA follows the \
-            volatility's swings (MSE 0.306, the PF 0.310); the SA's density in the heat strip \
-            is wide and skewed (a small |z| says little about x).",
+            volatility's swings (MSE 0.306, the PF 0.310); the SA's density leans to the right \
+            (positive skewness at every time the page keeps): each measurement's \
+            likelihood in x, −x/2 − z² e^{−x}/2, falls off double-exponentially towards low \
+            volatility and only linearly towards high.",
         drift: &["-0.1*x"],
         observation: &["0"],
         noise: ObservationNoiseConfig::Heteroscedastic {
