@@ -241,50 +241,47 @@ impl ParticleFilter {
         // against (0 for measurements: their weights are whole densities).
         let mut reference = 0.0;
         let noise = match &mut self.weighing {
-            // ln p(z | xᵢ) of the observed components, whatever the family.
-            // Additive noise: the residuals z − h(x) as a batch, then the noise density of the
-            // observed components at each particle's.
-            Weighing::Measurements(likelihood) if likelihood.additive_density().is_some() => {
-                let noise = likelihood.additive_density().expect("additive");
-                for (a, z) in obs.value.iter().enumerate() {
-                    self.predicted[a * count..(a + 1) * count]
-                        .iter_mut()
-                        .for_each(|r| *r = z - *r);
-                }
-                let predicted = &self.predicted;
-                for (i, w) in lw.iter_mut().enumerate() {
-                    let k = if observed == Observed::All {
-                        for (a, r) in self.residual.iter_mut().enumerate() {
-                            *r = predicted[a * count + i];
-                        }
-                        m
-                    } else {
-                        crate::filters::observed_residual(
-                            obs.value,
-                            |a| predicted[a * count + i],
-                            &mut self.residual,
-                        )
-                    };
-                    *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
-                }
-                let total = normalise(&mut self.next_log_weights, &mut self.next_weights)?;
-                return Ok(total);
-            }
             Weighing::Measurements(likelihood) => {
-                let reads_state = likelihood.reads_state();
-                for (i, w) in lw.iter_mut().enumerate() {
-                    if reads_state {
-                        for (j, x) in self.point.iter_mut().enumerate() {
-                            *x = particles[j * count + i];
+                if let Some(noise) = likelihood.additive_density() {
+                    // Additive noise: the residuals z − h(x) as a batch, then the noise
+                    // density of the observed components at each particle's.
+                    for (a, z) in obs.value.iter().enumerate() {
+                        self.predicted[a * count..(a + 1) * count]
+                            .iter_mut()
+                            .for_each(|r| *r = z - *r);
+                    }
+                    let predicted = &self.predicted;
+                    for (i, w) in lw.iter_mut().enumerate() {
+                        let k = if observed == Observed::All {
+                            for (a, r) in self.residual.iter_mut().enumerate() {
+                                *r = predicted[a * count + i];
+                            }
+                            m
+                        } else {
+                            crate::filters::observed_residual(
+                                obs.value,
+                                |a| predicted[a * count + i],
+                                &mut self.residual,
+                            )
+                        };
+                        *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
+                    }
+                } else {
+                    // ln p(z | xᵢ) of the observed components, whatever the family.
+                    let reads_state = likelihood.reads_state();
+                    for (i, w) in lw.iter_mut().enumerate() {
+                        if reads_state {
+                            for (j, x) in self.point.iter_mut().enumerate() {
+                                *x = particles[j * count + i];
+                            }
                         }
+                        for (a, h) in self.residual.iter_mut().enumerate() {
+                            *h = self.predicted[a * count + i];
+                        }
+                        *w += likelihood.log_at(obs.value, &self.point, &self.residual)?;
                     }
-                    for (a, h) in self.residual.iter_mut().enumerate() {
-                        *h = self.predicted[a * count + i];
-                    }
-                    *w += likelihood.log_at(obs.value, &self.point, &self.residual)?;
                 }
-                let total = normalise(&mut self.next_log_weights, &mut self.next_weights)?;
-                return Ok(total);
+                return normalise(&mut self.next_log_weights, &mut self.next_weights);
             }
             Weighing::Increments(noise) => noise,
         };
