@@ -135,8 +135,8 @@ pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
 
 pub use model::expression::ExpressionFunction;
 pub use model::{
-    BatchScratch, ClosureFunction, Derivatives, GaussianMixture, MeasurementDensity, Model, Noise,
-    ObservationModel, Prior, VectorFunction,
+    BatchScratch, ClosureFunction, Derivatives, Diffusion, GaussianMixture, MeasurementDensity,
+    Model, Noise, ObservationModel, Prior, ProcessNoise, VectorFunction,
 };
 
 pub use filters::builder::Builder;

@@ -48,7 +48,8 @@ fn parameters_build_the_model_their_values_typed_in_build() {
     for x in [-2.0, 0.0, 0.3, 4.0] {
         assert_eq!(a.drift.value(&[x]), b.drift.value(&[x]));
     }
-    assert_eq!(a.diffusion, b.diffusion);
+    assert_eq!(a.diffusion.constant(), b.diffusion.constant());
+    assert!(a.diffusion.constant().is_some());
     let (pa, pb) = (named.build_prior().unwrap(), typed.build_prior().unwrap());
     assert_eq!(pa.mean(), pb.mean());
     assert_eq!(pa.covariance(), pb.covariance());

@@ -1,15 +1,17 @@
 //! The filtering model
 //!
 //! ```text
-//!     dx = f(x) dt + G dv,                      v standard Brownian motion in Rⁿ
+//!     dx = f(x) dt + G(x) dv,                   v standard Brownian motion in Rⁿ
 //!     dy = h(x) dt + dw,   E[dw dwᵀ] = S dt      (continuous, 000 (1), 002 (1), 004 (1))
 //!     z_k = h(x_k) + v_k,  v_k ~ Gaussian or mixture  (continuous–discrete, 001 (1)–(2), 003 (5.2))
 //!     z_k ~ p(z | x_k)                            (counts, outliers, volatility: [`measurement`])
 //! ```
 //!
-//! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004).
+//! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004; constant in all five papers,
+//! a function of the state here when a model needs one: [`diffusion`]).
 
 mod compile;
+pub mod diffusion;
 pub mod dmz;
 pub mod expression;
 pub mod function;
@@ -25,6 +27,7 @@ use alloc::sync::Arc;
 
 use nalgebra::{DMatrix, DVector};
 
+pub use diffusion::{Diffusion, ProcessNoise};
 pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
 pub use measurement::MeasurementDensity;
 pub use noise::GaussianMixture;
@@ -128,8 +131,8 @@ pub struct Model {
     pub drift: Arc<dyn VectorFunction>,
     /// Observation function h: Rⁿ → Rᵐ.
     pub observation: Arc<dyn VectorFunction>,
-    /// Diffusion G (n × n), Q = G Gᵀ.
-    pub diffusion: DMatrix<f64>,
+    /// Diffusion G (n × n, constant or a function of the state), Q = G Gᵀ.
+    pub diffusion: Diffusion,
     /// Continuous or discrete observations.
     pub observations: ObservationModel,
 }
@@ -167,8 +170,6 @@ impl Model {
         };
         dim("drift output dimension", drift.output_dim(), n)?;
         dim("observation input dimension", observation.input_dim(), n)?;
-        dim("diffusion G rows", diffusion.nrows(), n)?;
-        dim("diffusion G columns", diffusion.ncols(), n)?;
         match &observations {
             ObservationModel::Continuous { noise_cov } => {
                 dim("observation noise S rows", noise_cov.nrows(), m)?;
@@ -177,11 +178,8 @@ impl Model {
             }
             ObservationModel::Discrete { density } => density.check(n, m)?,
         }
-        if diffusion.iter().any(|v| !v.is_finite()) {
-            return Err(ZakaiError::Other(
-                "diffusion G has non-finite entries".into(),
-            ));
-        }
+        let diffusion = Diffusion::Constant(diffusion);
+        diffusion.check(n)?;
         Ok(Model {
             n,
             m,
@@ -261,9 +259,18 @@ impl Model {
         Model::new(self.drift, self.observation, diffusion, self.observations)
     }
 
-    /// Q = G Gᵀ.
-    pub fn process_noise(&self) -> DMatrix<f64> {
-        &self.diffusion * self.diffusion.transpose()
+    /// The same model with a state-dependent diffusion `G(x)`: `g` maps the n state
+    /// components to the n² entries of G, row-major (see [`diffusion`] for what each method
+    /// does with it).
+    pub fn with_state_diffusion(self, g: Arc<dyn VectorFunction>) -> Result<Self, ZakaiError> {
+        let diffusion = Diffusion::StateDependent(g);
+        diffusion.check(self.n)?;
+        Ok(Model { diffusion, ..self })
+    }
+
+    /// Q = G Gᵀ: a matrix when G is constant, a function of the state otherwise.
+    pub fn process_noise(&self) -> ProcessNoise {
+        ProcessNoise::of(&self.diffusion)
     }
 
     /// True for continuous observations dy = h dt + dw.

@@ -862,6 +862,14 @@ pub(crate) fn free_names(text: &str) -> Vec<(String, usize)> {
     found
 }
 
+/// Whether `text` reads a state variable of an `n`-dimensional model (a coefficient that is a
+/// function of the state, such as a diffusion entry `0.3*sqrt(abs(x))`).
+pub(crate) fn reads_state(text: &str, n: usize) -> bool {
+    free_names(text)
+        .iter()
+        .any(|(name, _)| variable_index(name, n).is_some())
+}
+
 /// `text` with every parameter of `names` replaced by its value, written so that it reads
 /// back to the same `f64` (in parentheses when negative): the expression a model is built
 /// from once the parameters have values.

@@ -106,6 +106,7 @@ pub fn simulate(
     let mut x = x0.to_vec();
     let mut fx = vec![0.0; n];
     let mut hx = vec![0.0; m];
+    let mut g = vec![0.0; n * n];
 
     let density = match &model.observations {
         ObservationModel::Discrete { density } => {
@@ -138,7 +139,15 @@ pub fn simulate(
                     row[j] += hx[j] * dt + w[j] * sqrt_dt;
                 }
             }
-            let v = &model.diffusion * standard_normal_vector(rng, n);
+            model.diffusion.eval(&x, &mut g);
+            if g.iter().any(|v| !v.is_finite()) {
+                return Err(ZakaiError::Other(format!(
+                    "simulating the state: the diffusion G(x) is not finite at x = {x:.4?} (t = {:.4}); write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))",
+                    (k - 1) as f64 * time.dt_obs
+                )));
+            }
+            let xi = standard_normal_vector(rng, n);
+            let v = DMatrix::from_row_slice(n, n, &g) * xi;
             for i in 0..n {
                 x[i] += fx[i] * dt + v[i] * sqrt_dt;
             }

@@ -103,8 +103,13 @@ pub fn check_model(model: &Model) -> Result<(), FilterError> {
             "the direct method needs continuous observations dy = h dt + dw".into(),
         ));
     };
+    let q = model.process_noise();
+    let q = q.require_constant(
+        "the direct method of 002",
+        "its Gaussian approximation and Riccati ODEs (002 (7)–(12)) are derived for dx = f dt + dv",
+    )?;
     let identity = |m: &DMatrix<f64>| (m - DMatrix::identity(m.nrows(), m.ncols())).amax() < 1e-12;
-    if !identity(noise_cov) || !identity(&model.process_noise()) {
+    if !identity(noise_cov) || !identity(q) {
         return Err(FilterError::Unsuitable(
             "the direct method of 002 is written for G = I and S = I".into(),
         ));

@@ -19,7 +19,8 @@ use crate::model::{MeasurementDensity, Model, ObservationModel, Prior};
 
 /// The model fits the filter: discrete measurements (their density `p(z | x)` is returned;
 /// any family, the update (6) multiplies it in node by node) and a diagonal `Q = G Gᵀ`
-/// (001 (24) has no mixed derivatives).
+/// (001 (24) has no mixed derivatives). A state-dependent Q is checked for off-diagonal
+/// entries at the grid's cells when the filter is built.
 pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, FilterError> {
     let noise = match &model.observations {
         ObservationModel::Discrete { density } => density.clone(),
@@ -30,6 +31,9 @@ pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, Filt
         }
     };
     let q = model.process_noise();
+    let Some(q) = q.constant() else {
+        return Ok(noise);
+    };
     let n = model.n;
     for i in 0..n {
         for j in 0..n {
@@ -62,7 +66,8 @@ pub struct ContinuousDiscreteGrid {
     grid: TensorGrid,
     advection: UpwindAdvection,
     divergence: Vec<f64>,
-    diffusion: Vec<f64>,
+    /// `a_ll = (G Gᵀ)_ll` at every cell, per dimension.
+    diffusion: Vec<Vec<f64>>,
     likelihood: crate::filters::MeasurementLikelihood,
     /// h at the cell centres, row per cell, with m components.
     h_nodes: Vec<f64>,
@@ -112,7 +117,6 @@ impl ContinuousDiscreteGrid {
             });
         }
         let noise = check_model(&name, model)?;
-        let q = model.process_noise();
         let shape = params.shape(n);
         let cell_bounds: Vec<(f64, f64)> = bounds
             .iter()
@@ -135,7 +139,11 @@ impl ContinuousDiscreteGrid {
             model.observation.eval(x, &mut hx);
             h_nodes.extend_from_slice(&hx);
         });
-        let diffusion: Vec<f64> = (0..n).map(|l| q[(l, l)]).collect();
+        let table = model
+            .process_noise()
+            .tabulate_diagonal(n, grid.len(), |i, x| grid.node(i, x));
+        table.require_diagonal(&name, "001 (24)")?;
+        let diffusion = table.diagonal;
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -249,13 +257,27 @@ impl ContinuousDiscreteGrid {
         Ok((steps as usize, notes))
     }
 
-    /// The FDM positivity warning: a cell Péclet number `|f_l| Δx_l / Q_ll` above 1.
+    /// The FDM positivity warning: a cell Péclet number `|f_l| Δx_l / a_ll` above 1 (with a
+    /// state-dependent `a`, the smaller of its values at the cell's two neighbours along `l`,
+    /// whose coefficients in the cell's row the advection must not turn positive).
     fn peclet_warning(&self) -> Option<String> {
         let mut worst = (0.0, 0, 0);
         for l in 0..self.grid.dim() {
-            let scale = self.grid.spacing()[l] / self.diffusion[l];
+            let (stride, cells, dx) = (
+                self.grid.stride(l),
+                self.grid.shape()[l],
+                self.grid.spacing()[l],
+            );
+            let a = &self.diffusion[l];
             for (idx, f) in self.advection.velocity(l).iter().enumerate() {
-                let pe = libm::fabs(*f) * scale;
+                let i = self.grid.index_in(idx, l);
+                let below = if i > 0 { a[idx - stride] } else { a[idx] };
+                let above = if i + 1 < cells {
+                    a[idx + stride]
+                } else {
+                    a[idx]
+                };
+                let pe = libm::fabs(*f) * dx / below.min(above);
                 if pe > worst.0 || pe.is_nan() {
                     worst = (pe, l, idx);
                 }
@@ -265,7 +287,7 @@ impl ContinuousDiscreteGrid {
             let mut x = vec![0.0; self.grid.dim()];
             self.grid.node(worst.2, &mut x);
             format!(
-                "M-matrix condition of the implicit FDM: the cell Péclet number |f_{0}|Δx_{0}/Q_{0}{0} is {1:.3} > 1 at x = {2:?}; central differences may turn the density negative there",
+                "M-matrix condition of the implicit FDM: the cell Péclet number |f_{0}|Δx_{0}/a_{0}{0} is {1:.3} > 1 at x = {2:?}; central differences may turn the density negative there",
                 worst.1 + 1,
                 worst.0,
                 rounded(&x)

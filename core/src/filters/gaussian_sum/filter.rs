@@ -110,6 +110,10 @@ pub fn check_model<'p>(
             )))
         }
     };
+    model.process_noise().require_constant(
+        method,
+        "its components are exact Kalman filters of a linear-Gaussian model",
+    )?;
     let (a, b) = affine_parts(&*model.drift, method, "drift f", probes)?;
     let (c, c0) = affine_parts(&*model.observation, method, "observation h", probes)?;
     let Prior::Mixture(mixture) = prior else {
@@ -214,7 +218,10 @@ impl GaussianSumFilter {
         }
         Ok(GaussianSumFilter {
             name,
-            q: model.process_noise(),
+            q: model
+                .process_noise()
+                .require_constant("the Gaussian-sum filter", "checked above")?
+                .clone(),
             len: mixture.components().len(),
             work: UpdateWork {
                 next: (0..slots).map(|_| Component::zeros(n)).collect(),

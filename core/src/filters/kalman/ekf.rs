@@ -16,7 +16,7 @@ use crate::model::{Model, Prior};
 pub struct ExtendedKalman {
     name: String,
     model: Model,
-    q: nalgebra::DMatrix<f64>,
+    q: crate::model::ProcessNoise,
     form: MeasurementForm,
     substeps: crate::filters::Substeps,
     state: GaussianState,
@@ -96,7 +96,7 @@ impl Filter for ExtendedKalman {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        self.form.warnings()
+        super::approximations(&self.form, &self.q)
     }
 
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {

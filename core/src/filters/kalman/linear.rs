@@ -171,7 +171,13 @@ impl KalmanBucy {
             model: model.clone(),
             a,
             b,
-            q: model.process_noise(),
+            q: model
+                .process_noise()
+                .require_constant(
+                    "the Kalman–Bucy filter",
+                    "it is the exact filter of a linear-Gaussian model",
+                )?
+                .clone(),
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
             cached: None,
             moved: (DVector::zeros(model.n), DMatrix::zeros(model.n, model.n)),

@@ -23,8 +23,6 @@
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use nalgebra::DMatrix;
-
 use super::map_point::{map_update, MapSolver, MapWork, UpdateReport};
 use super::measurement::MeasurementForm;
 use super::second_mode::{Interval, ModeWatch};
@@ -60,7 +58,7 @@ pub const MAP_JUMP_THRESHOLD: f64 = 3.0;
 pub struct MapKalman {
     name: String,
     model: Model,
-    q: DMatrix<f64>,
+    q: crate::model::ProcessNoise,
     form: MeasurementForm,
     substeps: crate::filters::Substeps,
     solver: MapSolver,
@@ -185,7 +183,7 @@ impl Filter for MapKalman {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        self.form.warnings()
+        super::approximations(&self.form, &self.q)
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -45,6 +45,23 @@ pub struct GaussianInit {
     pub variance: Option<f64>,
 }
 
+/// The approximations a Gaussian filter makes of this model, for its warnings: the
+/// measurements' moment match ([`measurement::MeasurementForm::warnings`]) and, when G depends
+/// on the state, the process noise taken at the mean.
+pub(crate) fn approximations(
+    form: &measurement::MeasurementForm,
+    q: &crate::model::ProcessNoise,
+) -> Vec<alloc::string::String> {
+    let mut out = form.warnings();
+    if q.constant().is_none() {
+        out.push(
+            "replaces the state-dependent process noise Q(x) = G(x)G(x)ᵀ by Q at the current mean in dP/dt = FP + PFᵀ + Q (E[Q(x)] ≠ Q(E[x]) where Q is not affine): an approximation that grows with the spread of the posterior"
+                .into(),
+        );
+    }
+    out
+}
+
 /// Updates over which the innovation self-check averages the normalised innovation squared.
 pub const NIS_WINDOW: usize = 50;
 
@@ -403,7 +420,7 @@ impl GaussianState {
     pub fn predict_linearized(
         &mut self,
         model: &crate::model::Model,
-        q: &DMatrix<f64>,
+        q: &crate::model::ProcessNoise,
         dt: f64,
         substeps: usize,
     ) -> Result<(), FilterError> {
@@ -445,7 +462,7 @@ impl GaussianState {
         &mut self,
         name: &str,
         model: &crate::model::Model,
-        q: &DMatrix<f64>,
+        q: &crate::model::ProcessNoise,
         substeps: usize,
         form: &'f mut measurement::MeasurementForm,
         obs: &crate::filters::Observation,

@@ -95,11 +95,12 @@ impl MomentWork {
     }
 }
 
-/// The EKF's moment rates: `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q`, written into
+/// The EKF's moment rates: `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q(m)` (Q at the mean
+/// when G depends on the state), written into
 /// `dm`, `dp`; `jacobian` holds n² values.
 pub fn linearized_rates(
     model: &Model,
-    q: &DMatrix<f64>,
+    q: &crate::model::ProcessNoise,
     jacobian: &mut [f64],
     (m, p): (&DVector<f64>, &DMatrix<f64>),
     (dm, dp): (&mut DVector<f64>, &mut DMatrix<f64>),
@@ -115,9 +116,10 @@ pub fn linearized_rates(
                 fp += jacobian[i * n + k] * p[(k, j)];
                 pf += p[(i, k)] * jacobian[j * n + k];
             }
-            dp[(i, j)] = fp + pf + q[(i, j)];
+            dp[(i, j)] = fp + pf;
         }
     }
+    q.add_at(m.as_slice(), 1.0, dp);
 }
 
 /// Integrates `(dm/dt, dP/dt) = rates(m, P)` over `dt` in `substeps` RK4 steps, in place;

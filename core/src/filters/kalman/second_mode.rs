@@ -79,7 +79,7 @@ pub(super) struct Interval<'a> {
     pub solver: MapSolver,
     pub model: &'a Model,
     /// The process noise covariance.
-    pub q: &'a DMatrix<f64>,
+    pub q: &'a crate::model::ProcessNoise,
     /// RK4 steps of the moment equations per interval.
     pub substeps: usize,
     pub dt: f64,
@@ -140,7 +140,13 @@ impl ModeWatch {
 
     /// Time passing without an observation (`substeps` RK4 steps over `dt`): the free
     /// distribution's clock runs on, and a followed second mode is predicted as the filter is.
-    pub(super) fn elapse(&mut self, model: &Model, q: &DMatrix<f64>, substeps: usize, dt: f64) {
+    pub(super) fn elapse(
+        &mut self,
+        model: &Model,
+        q: &crate::model::ProcessNoise,
+        substeps: usize,
+        dt: f64,
+    ) {
         self.free_elapsed += dt;
         self.free_intervals += 1;
         if self.following
@@ -215,7 +221,7 @@ impl ModeWatch {
 
     /// Brings the free distribution to the present, one RK4 step per [`SEARCH_EVERY`]
     /// observation intervals; false (and the watch stops) when it cannot be propagated.
-    fn bring_free_up_to_date(&mut self, model: &Model, q: &DMatrix<f64>) -> bool {
+    fn bring_free_up_to_date(&mut self, model: &Model, q: &crate::model::ProcessNoise) -> bool {
         if self.free_elapsed > 0.0 {
             let steps = self.free_intervals.div_ceil(SEARCH_EVERY).max(1);
             if self
@@ -236,7 +242,7 @@ impl ModeWatch {
     fn search(
         &mut self,
         model: &Model,
-        q: &DMatrix<f64>,
+        q: &crate::model::ProcessNoise,
         meas: &Measurement,
         state: &GaussianState,
     ) {

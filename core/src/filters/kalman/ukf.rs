@@ -135,7 +135,7 @@ impl SigmaPoints {
 pub struct UnscentedKalman {
     name: String,
     model: Model,
-    q: DMatrix<f64>,
+    q: crate::model::ProcessNoise,
     form: MeasurementForm,
     substeps: crate::filters::Substeps,
     weights: Weights,
@@ -180,7 +180,7 @@ impl UnscentedKalman {
     /// smoother ([`crate::filters::smoothing`] (S1)).
     fn rates(
         model: &Model,
-        q: &DMatrix<f64>,
+        q: &crate::model::ProcessNoise,
         w: &Weights,
         sigma: &mut SigmaPoints,
         (m, p): (&DVector<f64>, &DMatrix<f64>),
@@ -212,14 +212,15 @@ impl UnscentedKalman {
                 }
             }
         }
-        // dP = C + Cᵀ + Q.
+        // dP = C + Cᵀ + Q(m).
         for a in 0..n {
             for b in a..n {
                 let (x, y) = (dp[(a, b)], dp[(b, a)]);
-                dp[(a, b)] = x + y + q[(a, b)];
-                dp[(b, a)] = y + x + q[(b, a)];
+                dp[(a, b)] = x + y;
+                dp[(b, a)] = y + x;
             }
         }
+        q.add_at(m.as_slice(), 1.0, dp);
         Ok(())
     }
 
@@ -331,7 +332,7 @@ impl Filter for UnscentedKalman {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        self.form.warnings()
+        super::approximations(&self.form, &self.q)
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -11,7 +11,7 @@ use super::PfParams;
 use crate::error::FilterError;
 use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
-use crate::model::{BatchScratch, Model, ObservationModel, Prior};
+use crate::model::{BatchScratch, Diffusion, Model, ObservationModel, Prior};
 use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
@@ -31,6 +31,19 @@ enum Weighing {
     Increments(crate::filters::ObservedNoise),
     /// Measurements: `p(z | x)` of any family.
     Measurements(crate::filters::MeasurementLikelihood),
+}
+
+/// G as the particles' Euler–Maruyama steps use it.
+#[derive(Clone, Debug)]
+enum ParticleDiffusion {
+    /// A constant G, row-major.
+    Constant(Vec<f64>),
+    /// `G(x)`, and its n² entries at every particle as structure of arrays (entry (j, l) of
+    /// particle i at `values[(j * n + l) * N + i]`).
+    StateDependent {
+        g: alloc::sync::Arc<dyn crate::model::VectorFunction>,
+        values: Vec<f64>,
+    },
 }
 
 /// The bootstrap particle filter (see the module doc).
@@ -71,8 +84,8 @@ pub struct ParticleFilter {
     /// particle each slot copies (N).
     starts: Vec<usize>,
     ancestors: Vec<usize>,
-    /// G (row-major) and, for continuous observations, S⁻¹ (row-major).
-    diffusion: Vec<f64>,
+    /// G and, for continuous observations, S⁻¹ (row-major).
+    diffusion: ParticleDiffusion,
     noise_inverse: Vec<f64>,
     /// One residual (or h at one particle) while a density is evaluated, one particle, and
     /// work space.
@@ -157,7 +170,15 @@ impl ParticleFilter {
             weighing,
             starts: vec![0; count + 1],
             ancestors: vec![0; count],
-            diffusion: model.diffusion.transpose().as_slice().to_vec(),
+            diffusion: match &model.diffusion {
+                Diffusion::Constant(g) => {
+                    ParticleDiffusion::Constant(g.transpose().as_slice().to_vec())
+                }
+                Diffusion::StateDependent(g) => ParticleDiffusion::StateDependent {
+                    g: g.clone(),
+                    values: vec![0.0; n * n * count],
+                },
+            },
             noise_inverse,
             residual: vec![0.0; m],
             point: vec![0.0; n],
@@ -176,10 +197,11 @@ impl ParticleFilter {
         self.resamples
     }
 
-    /// Euler–Maruyama for every particle: x += f(x) h + G ξ √h, in the steps
+    /// Euler–Maruyama for every particle: x += f(x) h + G(x) ξ √h, in the steps
     /// [`crate::filters::Substeps`] gives for `dt`, from `particles` into `resampled` (the
-    /// particles move only when the step succeeds).
-    fn predict_into_spare(&mut self, dt: f64) {
+    /// particles move only when the step succeeds). A state-dependent G is evaluated at every
+    /// particle at the start of each substep; where it is not finite the step fails.
+    fn predict_into_spare(&mut self, dt: f64) -> Result<(), FilterError> {
         let (n, count) = (self.model.n, self.params.particles);
         let substeps = self.substeps.over(dt);
         let h = dt / substeps as f64;
@@ -193,6 +215,17 @@ impl ParticleFilter {
             self.model
                 .drift
                 .eval_batch(from, &mut self.drift, &mut self.scratch);
+            if let ParticleDiffusion::StateDependent { g, values } = &mut self.diffusion {
+                g.eval_batch(from, values, &mut self.scratch);
+                if let Some(bad) = values.iter().position(|v| !v.is_finite()) {
+                    let i = bad % count;
+                    let x: Vec<f64> = (0..n).map(|j| from[j * count + i]).collect();
+                    return Err(FilterError::Unsuitable(format!(
+                        "{}: the diffusion G(x) is not finite at the particle x = {x:.4?}; write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))",
+                        self.name
+                    )));
+                }
+            }
             if substep == 0 {
                 self.resampled.copy_from_slice(&self.particles);
             } else if let Some(trail) = &mut self.trail {
@@ -204,14 +237,26 @@ impl ParticleFilter {
                 let f = &self.drift[j * count..(j + 1) * count];
                 x.iter_mut().zip(f).for_each(|(x, f)| *x += f * h);
                 for l in 0..n {
-                    let g = self.diffusion[j * n + l] * sqrt_h;
-                    if g != 0.0 {
-                        let xi = &self.noise[l * count..(l + 1) * count];
-                        x.iter_mut().zip(xi).for_each(|(x, xi)| *x += g * xi);
+                    let xi = &self.noise[l * count..(l + 1) * count];
+                    match &self.diffusion {
+                        ParticleDiffusion::Constant(g) => {
+                            let g = g[j * n + l] * sqrt_h;
+                            if g != 0.0 {
+                                x.iter_mut().zip(xi).for_each(|(x, xi)| *x += g * xi);
+                            }
+                        }
+                        ParticleDiffusion::StateDependent { values, .. } => {
+                            let g = &values[(j * n + l) * count..(j * n + l + 1) * count];
+                            x.iter_mut()
+                                .zip(xi)
+                                .zip(g)
+                                .for_each(|((x, xi), g)| *x += g * sqrt_h * xi);
+                        }
                     }
                 }
             }
         }
+        Ok(())
     }
 
     /// Into `next_log_weights`: the log-weights times the likelihood of the observed
@@ -467,7 +512,14 @@ impl Filter for ParticleFilter {
         // a step that succeeds swaps them in (and keeps the generator's advance).
         let rng = self.rng.clone();
         if moved {
-            self.predict_into_spare(obs.dt);
+            let trail_len = self.trail.as_ref().map(Vec::len);
+            if let Err(e) = self.predict_into_spare(obs.dt) {
+                self.rng = rng;
+                if let (Some(trail), Some(len)) = (&mut self.trail, trail_len) {
+                    trail.truncate(len);
+                }
+                return Err(e);
+            }
         }
         let mut log_likelihood = 0.0;
         if observed != Observed::Nothing {

@@ -62,6 +62,12 @@ impl ParticleFilter {
     /// The FFBSi smoother from the filter's current state (see the module doc).
     pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
         let q = self.model.process_noise();
+        let q = q.constant().ok_or_else(|| {
+            no_smoother(
+                self.name(),
+                "FFBSi here weighs backward draws with one Gaussian Euler–Maruyama transition density N(x + f h, Q h), and this model's Q = G(x) G(x)ᵀ depends on the state",
+            )
+        })?;
         let chol = q.clone().cholesky().ok_or_else(|| {
             no_smoother(
                 self.name(),

@@ -1,8 +1,9 @@
 //! 004 Algorithm 1, the off-line part: the propagation over one observation interval T₀ as a
 //! matrix from on-line coefficients to off-line coefficients.
 //!
-//! With `𝓛 = −(𝓛₀ − ½hᵀS⁻¹h)` (20), `𝓛₀ρ = ½ Σ_ij Q_ij ∂_i∂_j ρ − Σ_i ∂_i(f_i ρ)` the
-//! Fokker–Planck operator, and Δs = T₀/N′, the functions `Z_l = (1 + Δs𝓛)^{N′} φ_l` (28) are
+//! With `𝓛 = −(𝓛₀ − ½hᵀS⁻¹h)` (20), `𝓛₀ρ = ½ Σ_ij ∂_i∂_j (a_ij ρ) − Σ_i ∂_i(f_i ρ)` the
+//! Fokker–Planck operator (`a = G Gᵀ`; 004 writes `½ Σ_ij Q_ij ∂_i∂_j ρ` for a constant Q, and
+//! a state-dependent `a(x)` enters the same way, tabulated at the nodes), and Δs = T₀/N′, the functions `Z_l = (1 + Δs𝓛)^{N′} φ_l` (28) are
 //! computed on a tensor Gauss–Legendre grid: φ_l exactly, each application of 𝓛 by the nodal
 //! differentiation matrices (the derivative of the polynomial interpolant). For polynomial f and
 //! h this is exact as long as the degree of `Z_l` stays below the number of nodes per dimension
@@ -60,18 +61,18 @@ fn apply_step(
     nodes: &Nodes,
     layout: &Layout,
     c: &DmzCoefficients,
-    q_mat: &DMatrix<f64>,
+    diffusion: &[Diffusion],
     ds: f64,
     v: &mut [f64],
 ) {
     let len = v.len();
     let dims = nodes.dims;
     let mut fp = vec![0.0; len];
-    let mut first = vec![vec![0.0; len]; dims];
+    let mut first = vec![0.0; len];
     let mut lo = vec![0.0; len];
     let mut tmp = vec![0.0; len];
-    // 𝓛₀v: the drift part −Σ ∂_i(f_i v), then ½ Σ Q_ij ∂_i ∂_j v.
-    for (d, first_d) in first.iter_mut().enumerate() {
+    // 𝓛₀v: the drift part −Σ ∂_i(f_i v), then ½ Σ ∂_i ∂_j (a_ij v).
+    for d in 0..dims {
         let r = layout.half_width[d];
         for ((p, f), x) in fp.iter_mut().zip(&c.f[d]).zip(v.iter()) {
             *p = f * x;
@@ -80,28 +81,56 @@ fn apply_step(
         for (l, t) in lo.iter_mut().zip(&tmp) {
             *l -= t / r;
         }
-        nodes.derivative(v, d, first_d);
-        for f in first_d.iter_mut() {
-            *f /= r;
-        }
     }
-    for i in 0..dims {
-        for j in 0..dims {
-            let qij = q_mat[(i, j)];
-            if qij == 0.0 {
-                continue;
-            }
-            nodes.derivative(&first[j], i, &mut tmp);
-            let r = layout.half_width[i];
-            for (l, t) in lo.iter_mut().zip(&tmp) {
-                *l += 0.5 * qij * t / r;
-            }
+    for Diffusion { i, j, a } in diffusion {
+        for ((p, a), x) in fp.iter_mut().zip(a).zip(v.iter()) {
+            *p = a * x;
+        }
+        nodes.derivative(&fp, *j, &mut first);
+        nodes.derivative(&first, *i, &mut tmp);
+        let r = layout.half_width[*i] * layout.half_width[*j];
+        for (l, t) in lo.iter_mut().zip(&tmp) {
+            *l += 0.5 * t / r;
         }
     }
     // (1 + Δs𝓛) v = v − Δs (𝓛₀ v − ½hᵀS⁻¹h v).
     for ((x, l), h) in v.iter_mut().zip(&lo).zip(&c.half_hsh) {
         *x -= ds * (l - h * *x);
     }
+}
+
+/// One entry `a_ij` of `a = G Gᵀ` at every quadrature node.
+struct Diffusion {
+    i: usize,
+    j: usize,
+    a: Vec<f64>,
+}
+
+/// The entries of `a` that are not zero at every node, tabulated there.
+fn tabulate_diffusion(model: &Model, nodes: &Nodes, layout: &Layout) -> Vec<Diffusion> {
+    let n = nodes.dims;
+    let q = model.process_noise();
+    let mut entries: Vec<Diffusion> = (0..n * n)
+        .map(|k| Diffusion {
+            i: k / n,
+            j: k % n,
+            a: Vec::with_capacity(nodes.len()),
+        })
+        .collect();
+    let mut x = vec![0.0; n];
+    let mut a = DMatrix::zeros(n, n);
+    for node in 0..nodes.len() {
+        for (d, v) in x.iter_mut().enumerate() {
+            *v = layout.to_domain(d, nodes.nodes[nodes.index(node, d)]);
+        }
+        a.fill(0.0);
+        q.add_at(&x, 1.0, &mut a);
+        for e in entries.iter_mut() {
+            e.a.push(a[(e.i, e.j)]);
+        }
+    }
+    entries.retain(|e| e.a.iter().any(|&v| v != 0.0));
+    entries
 }
 
 /// Tabulates a tensor basis (`counts` functions per dimension) on the nodes, one column per
@@ -157,13 +186,13 @@ pub fn propagation_matrix(
     if !potential_in_operator {
         c.half_hsh.iter_mut().for_each(|v| *v = 0.0);
     }
-    let q_mat = model.process_noise();
+    let diffusion = tabulate_diffusion(model, &nodes, layout);
     let ds = t0 / partitions as f64;
     let mut z = tabulate_basis(&nodes, &layout.offline);
     for mut column in z.column_iter_mut() {
         let v = column.as_mut_slice();
         for _ in 0..partitions {
-            apply_step(&nodes, layout, &c, &q_mat, ds, v);
+            apply_step(&nodes, layout, &c, &diffusion, ds, v);
         }
     }
     let online = tabulate_basis(&nodes, &layout.online);

@@ -23,7 +23,9 @@ use crate::model::dmz::{ObservedTerms, PartialIncrements};
 use crate::model::{Model, Prior};
 
 /// IEM in D dimensions by Lie operator splitting: `A = Σ_d A_d` with
-/// `A_d = ½ Q_dd T_d + P_d K_d + q/D`, and one θ-step
+/// `A_d = ½ Q_dd T_d + P_d K_d + q/D` (with a state-dependent diagonal `a_dd(s)`, `½ T_d` is
+/// applied to `a_dd u`: row i reads `(a_{i−1}u_{i−1} − 2a_i u_i + a_{i+1}u_{i+1})/(2Δs²)`, the
+/// conservative difference of `½ ∂²(a u)/∂s²`), and one θ-step
 /// `[I − αΔt A_d] U ← [I + βΔt A_d] U` per dimension in turn — a tridiagonal system along every
 /// grid line, LU-factored once (Thomas algorithm, coefficients stored per node). In one
 /// dimension this is exactly (14); in more it adds an O(Δt) splitting error, the order of the
@@ -52,16 +54,28 @@ impl SplitIem {
             .map(|d| {
                 let (stride, n) = (grid.stride(d), grid.shape()[d]);
                 let ds = grid.spacing()[d];
-                let qd = op.diffusion[d];
                 let len = grid.len();
+                // a at the neighbours along d (the line's ends have none; their entries are
+                // never read).
+                let below = |i: usize| match grid.index_in(i, d) {
+                    0 => 0.0,
+                    _ => op.a(d, i - stride),
+                };
+                let above = |i: usize| {
+                    if grid.index_in(i, d) + 1 == n {
+                        0.0
+                    } else {
+                        op.a(d, i + stride)
+                    }
+                };
                 let sub: Vec<f64> = (0..len)
-                    .map(|i| qd / (2.0 * ds * ds) - op.p[d][i] / (2.0 * ds))
+                    .map(|i| below(i) / (2.0 * ds * ds) - op.p[d][i] / (2.0 * ds))
                     .collect();
                 let sup: Vec<f64> = (0..len)
-                    .map(|i| qd / (2.0 * ds * ds) + op.p[d][i] / (2.0 * ds))
+                    .map(|i| above(i) / (2.0 * ds * ds) + op.p[d][i] / (2.0 * ds))
                     .collect();
                 let dia: Vec<f64> = (0..len)
-                    .map(|i| -qd / (ds * ds) + op.q[i] / dims as f64)
+                    .map(|i| -op.a(d, i) / (ds * ds) + op.q[i] / dims as f64)
                     .collect();
                 let explicit = [
                     sub.iter().map(|a| beta * dt * a).collect(),
@@ -498,6 +512,11 @@ impl YauYauFilter {
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
         let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
+        if op.varying.is_some() && scheme != Scheme::Iem {
+            return Err(FilterError::Unsuitable(format!(
+                "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
+            )));
+        }
         if scheme == Scheme::Qiem4 {
             let (a, b) = (grid.spacing()[0], grid.spacing()[1]);
             if (a - b).abs() > 1e-9 * a || op.diffusion[0] != op.diffusion[1] {

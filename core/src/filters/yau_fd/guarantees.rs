@@ -3,7 +3,11 @@
 //! * (22) nonnegativity (M-matrix) of IEM: `|p_d(s)| < Q_dd/Δs_d` and `q(s) < 1/Δt`
 //!   (000 states it for Q = I and with `|q|`; the proof's off-diagonal entries
 //!   `−Δt(Q_dd/(2Δs²) ± p_d/(2Δs))` give the Q_dd factor, and its row sum (24) uses the
-//!   second half only as `1 − Δt q(s) > 0`, which a negative q never breaks);
+//!   second half only as `1 − Δt q(s) > 0`, which a negative q never breaks). With a
+//!   state-dependent diagonal `a_dd(s)` the same proof reads the off-diagonal entries
+//!   `−Δt(a_dd(s_{i±1})/(2Δs²) ± p_d/(2Δs))` and the row sum
+//!   `1 − Δt (q + Σ_d (a_{i−1} − 2a_i + a_{i+1})/(2Δs_d²))`: the conditions become
+//!   `|p_d(s_i)| < min(a_dd(s_{i−1}), a_dd(s_{i+1}))/Δs_d` and `(q + Σ_d δ²a_dd/(2Δs_d²)) Δt < 1`;
 //! * (30) stability of IEM: `∇·f ≥ 0`;
 //! * (31) stability of QIEM: `(Δs)²(2q + q²Δt) + Δt p² ≤ 2`, evaluated per dimension.
 //!
@@ -55,8 +59,23 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
     let mut out = Vec::new();
     for d in 0..grid.dim() {
         let ds = grid.spacing()[d];
-        let qdd = op.diffusion[d];
-        let (ratio, idx) = worst_node(grid, |i| libm::fabs(op.p[d][i]) * ds / qdd);
+        let (stride, cells) = (grid.stride(d), grid.shape()[d]);
+        // a at the node's neighbours along d (the node's own where the line ends).
+        let neighbours = |i: usize| {
+            let j = grid.index_in(i, d);
+            let below = if j > 0 {
+                op.a(d, i - stride)
+            } else {
+                op.a(d, i)
+            };
+            let above = if j + 1 < cells {
+                op.a(d, i + stride)
+            } else {
+                op.a(d, i)
+            };
+            below.min(above)
+        };
+        let (ratio, idx) = worst_node(grid, |i| libm::fabs(op.p[d][i]) * ds / neighbours(i));
         if ratio.is_nan() || ratio >= 1.0 {
             let x = point(grid, idx);
             out.push(GuaranteeWarning {
@@ -74,13 +93,39 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
     // 000 states (22) as |q| Δt < 1, but its proof (24) uses it only through 1 − Δt q(s) > 0:
     // a negative q (an observation term −½hᵀS⁻¹h in the operator, a positive ∇·f) adds to the
     // diagonal and never breaks the M-matrix property. The check is that sharper condition.
-    let (ratio, idx) = worst_node(grid, |i| op.q[i] * dt);
+    let curvature = |i: usize| -> f64 {
+        if op.varying.is_none() {
+            return 0.0;
+        }
+        (0..grid.dim())
+            .map(|d| {
+                let (stride, cells, ds) = (grid.stride(d), grid.shape()[d], grid.spacing()[d]);
+                let j = grid.index_in(i, d);
+                let below = if j > 0 { op.a(d, i - stride) } else { 0.0 };
+                let above = if j + 1 < cells {
+                    op.a(d, i + stride)
+                } else {
+                    0.0
+                };
+                (below - 2.0 * op.a(d, i) + above) / (2.0 * ds * ds)
+            })
+            .sum()
+    };
+    let (ratio, idx) = worst_node(grid, |i| (op.q[i] + curvature(i)) * dt);
     if ratio.is_nan() || ratio >= 1.0 {
         let x = point(grid, idx);
+        let (what, needs) = if op.varying.is_some() {
+            (
+                "(q + Σ δ²a/(2Δs²))(s) Δt",
+                "1 − Δt (q + Σ δ²a/(2Δs²))(s) > 0",
+            )
+        } else {
+            ("q(s) Δt", "1 − Δt q(s) > 0")
+        };
         out.push(GuaranteeWarning {
             condition: "(22) nonnegativity (M-matrix)".into(),
             message: format!(
-                "(22) violated: q(s) Δt = {ratio:.3e} ≥ 1 at s = {x:.3?} (q = {:.3e}, Δt = {dt:.2e}; the M-matrix proof (24) needs 1 − Δt q(s) > 0); shrink Δt",
+                "(22) violated: {what} = {ratio:.3e} ≥ 1 at s = {x:.3?} (q = {:.3e}, Δt = {dt:.2e}; the M-matrix proof (24) needs {needs}); shrink Δt",
                 op.q[idx]
             ),
             worst: x,
@@ -89,8 +134,16 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
     out
 }
 
-/// (30): IEM stability, ∇·f ≥ 0 on the grid.
+/// (30): IEM stability, ∇·f ≥ 0 on the grid — proven in 000 for a constant Q; with a
+/// state-dependent one the warning says that no stability condition is checked.
 pub fn iem_stability(op: &KolmogorovOperator, grid: &TensorGrid) -> Vec<GuaranteeWarning> {
+    if op.varying.is_some() {
+        return alloc::vec![GuaranteeWarning {
+            condition: "(30) IEM stability".into(),
+            message: "(30) not checked: 000 proves IEM's stability for a constant Q, and this model's diffusion depends on the state; only the nonnegativity (22), restated for a(s), is checked".into(),
+            worst: Vec::new(),
+        }];
+    }
     let (neg, idx) = worst_node(grid, |i| -op.div_f[i]);
     if neg > 0.0 {
         let x = point(grid, idx);

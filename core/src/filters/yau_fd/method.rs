@@ -345,7 +345,8 @@ fn grid_from_problem(p: &YauYauParams, problem: &ProblemContext) -> Option<(YauY
         (centre - 3.0 * prior_sd).max(lo),
         (centre + 3.0 * prior_sd).min(hi),
     );
-    let q = model.process_noise()[(0, 0)];
+    // Q at the prior's mean (the linearised filter's steady state is only a guide).
+    let q = model.process_noise().at(&[centre])[(0, 0)];
     let mut jacobian = vec![0.0; model.m];
     let mut steady = f64::INFINITY;
     const SAMPLES: usize = 64;

@@ -2,7 +2,9 @@
 //!
 //! `∂u/∂t = ½ Σ_d Q_dd ∂²u/∂s_d² + Σ_d p_d ∂u/∂s_d + q u`, with `p_d = −f_d` (3) and
 //! `q = −(∇·f + ½ hᵀ S⁻¹ h)` (4) — 000 takes Q = I and S = I; a diagonal Q and any S are
-//! allowed here. The observation factor of (15) needs `S⁻¹ h`, tabulated too.
+//! allowed here. A diagonal Q that depends on the state, `a_dd(x)`, is tabulated per node: the
+//! Fokker–Planck term is then `½ Σ_d ∂²(a_dd u)/∂s_d²`, which only IEM's tridiagonal systems
+//! take (differencing `a u` itself, see [`KolmogorovOperator::varying`]). The observation factor of (15) needs `S⁻¹ h`, tabulated too.
 //!
 //! With [`super::Likelihood::InUpdate`] the `−½ hᵀS⁻¹h` part of q is taken out of the
 //! operator and applied with the factor (15) at the observation time instead (the same Lie
@@ -34,8 +36,10 @@ pub struct KolmogorovOperator {
     pub div_f: Vec<f64>,
     /// `s_inv_h[j][i] = (S⁻¹ h(s_i))_j`.
     pub s_inv_h: Vec<Vec<f64>>,
-    /// Q_dd.
+    /// Q_dd; with a state-dependent Q, the largest `a_dd` on the grid.
     pub diffusion: Vec<f64>,
+    /// A state-dependent diagonal: `varying[d][i] = a_dd(s_i)`, or `None` for a constant Q.
+    pub varying: Option<Vec<Vec<f64>>>,
 }
 
 impl KolmogorovOperator {
@@ -47,23 +51,46 @@ impl KolmogorovOperator {
         likelihood_in_update: bool,
     ) -> Result<Self, FilterError> {
         let n = model.n;
-        let q_mat = model.process_noise();
-        for i in 0..n {
-            for j in 0..n {
-                if i != j && q_mat[(i, j)] != 0.0 {
-                    return Err(FilterError::Unsuitable(format!(
-                        "the Yau–Yau finite-difference filters need a diagonal Q = G Gᵀ; Q[{i}][{j}] = {}",
-                        q_mat[(i, j)]
-                    )));
+        let noise = model.process_noise();
+        let (diffusion, varying) = match noise.constant() {
+            Some(q_mat) => {
+                for i in 0..n {
+                    for j in 0..n {
+                        if i != j && q_mat[(i, j)] != 0.0 {
+                            return Err(FilterError::Unsuitable(format!(
+                                "the Yau–Yau finite-difference filters need a diagonal Q = G Gᵀ; Q[{i}][{j}] = {}",
+                                q_mat[(i, j)]
+                            )));
+                        }
+                    }
                 }
+                let diffusion: Vec<f64> = (0..n).map(|d| q_mat[(d, d)]).collect();
+                if diffusion.iter().any(|&v| v <= 0.0) {
+                    return Err(FilterError::Unsuitable(
+                        "the Yau–Yau filters need a positive diffusion in every dimension".into(),
+                    ));
+                }
+                (diffusion, None)
             }
-        }
-        let diffusion: Vec<f64> = (0..n).map(|d| q_mat[(d, d)]).collect();
-        if diffusion.iter().any(|&v| v <= 0.0) {
-            return Err(FilterError::Unsuitable(
-                "the Yau–Yau filters need a positive diffusion in every dimension".into(),
-            ));
-        }
+            None => {
+                let table = noise.tabulate_diagonal(n, grid.len(), |i, x| grid.node(i, x));
+                table.require_diagonal(
+                    "the Yau–Yau finite-difference filters",
+                    "000 (2) with a diagonal Q",
+                )?;
+                let largest = table
+                    .diagonal
+                    .iter()
+                    .map(|a| a.iter().fold(0.0, |m: f64, &v| m.max(v)))
+                    .collect::<Vec<f64>>();
+                if largest.iter().any(|&v| v <= 0.0) {
+                    return Err(FilterError::Unsuitable(
+                        "the Yau–Yau filters need a positive diffusion in every dimension somewhere on the grid".into(),
+                    ));
+                }
+                (largest, Some(table.diagonal))
+            }
+        };
         let c = DmzCoefficients::tabulate(model, "the Yau–Yau filters", grid.len(), |i, x| {
             grid.node(i, x)
         })?;
@@ -87,7 +114,16 @@ impl KolmogorovOperator {
             div_f,
             s_inv_h,
             diffusion,
+            varying,
         })
+    }
+
+    /// `a_dd` at node `i`.
+    pub fn a(&self, d: usize, i: usize) -> f64 {
+        match &self.varying {
+            Some(a) => a[d][i],
+            None => self.diffusion[d],
+        }
     }
 
     /// The operator of an interval without an observation: the Fokker–Planck part alone,

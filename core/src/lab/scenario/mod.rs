@@ -513,7 +513,23 @@ impl ScenarioConfig {
         // An entry that does not resolve is reported once, not again as a non-finite
         // number or a matrix that is not positive definite.
         let unresolved = |p: &Vec<ConfigProblem>, before: usize| p.len() > before;
-        if let Some(g) = &self.model.diffusion {
+        if let Some(texts) = self.state_diffusion() {
+            // G(x): every entry an expression in the state and the parameters.
+            if texts.len() != n * n {
+                p.push(ConfigProblem::new(
+                    "model.diffusion",
+                    format!("must be {n}×{n}"),
+                ));
+            }
+            for (k, t) in texts.iter().enumerate() {
+                if let Err(e) = check_expression("diffusion", t, n, &names) {
+                    p.push(ConfigProblem::new(
+                        format!("model.diffusion[{}][{}]", k / n.max(1), k % n.max(1)),
+                        e.to_string(),
+                    ));
+                }
+            }
+        } else if let Some(g) = &self.model.diffusion {
             let before = p.len();
             let g = g.resolve(&names, "model.diffusion", &mut p);
             match matrix(&g, n) {
@@ -843,7 +859,22 @@ impl ScenarioConfig {
             n,
             m,
         )?;
+        let state_diffusion = match self.state_diffusion() {
+            Some(texts) if texts.len() == n * n => Some(parse_function(
+                "diffusion G",
+                &substituted(&texts, &names),
+                n,
+                n * n,
+            )?),
+            Some(_) => {
+                return Err(ZakaiError::Dimension(format!(
+                    "diffusion G must be {n}×{n}"
+                )))
+            }
+            None => None,
+        };
         let diffusion = match &self.model.diffusion {
+            Some(_) if state_diffusion.is_some() => DMatrix::identity(n, n),
             Some(g) => {
                 let g = self.resolved(|names, p| g.resolve(names, "model.diffusion", p))?;
                 matrix(&g, n)
@@ -905,7 +936,32 @@ impl ScenarioConfig {
                 density: MeasurementDensity::LogDensity(log_density(expression, n, m, &names)?),
             },
         };
-        Model::new(drift, observation, diffusion, observations)
+        let model = Model::new(drift, observation, diffusion, observations)?;
+        match state_diffusion {
+            Some(g) => model.with_state_diffusion(g),
+            None => Ok(model),
+        }
+    }
+
+    /// The diffusion's entries as expressions, row-major, when one of them reads the state
+    /// (G(x)); `None` for a constant G (numbers and expressions in the parameters alone).
+    pub fn state_diffusion(&self) -> Option<Vec<String>> {
+        let g = self.model.diffusion.as_ref()?;
+        let n = self.state_dim();
+        let reads =
+            g.0.iter()
+                .flatten()
+                .filter_map(Coefficient::text)
+                .any(|t| crate::model::syntax::reads_state(t, n));
+        reads.then(|| {
+            g.0.iter()
+                .flatten()
+                .map(|c| match c {
+                    Coefficient::Value(v) => format!("{v:?}"),
+                    Coefficient::Expression(t) => t.clone(),
+                })
+                .collect()
+        })
     }
 
     /// Whether the model is a Yau filtering system on the domain (002 (C1)–(C3),
