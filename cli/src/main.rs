@@ -907,6 +907,16 @@ fn list() -> String {
             m.info.key, m.info.summary, m.info.paper
         ));
     }
+    s.push_str("\nA diffusion G(x) that depends on the state (model.diffusion entries in x):\n");
+    for m in catalogue() {
+        use zakai::DiffusionSupport;
+        let (kind, how) = match m.state_diffusion {
+            DiffusionSupport::Exact(how) => ("uses it", how),
+            DiffusionSupport::Approximate(how) => ("approximates it", how),
+            DiffusionSupport::Refused(how) => ("refuses it", how),
+        };
+        s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
+    }
     s
 }
 

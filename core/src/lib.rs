@@ -140,7 +140,9 @@ pub use model::{
 };
 
 pub use filters::builder::Builder;
-pub use filters::method::{BuildContext, Method, MethodInfo, ProblemContext, Takes};
+pub use filters::method::{
+    BuildContext, DiffusionSupport, Method, MethodInfo, ProblemContext, Takes,
+};
 pub use filters::params::{ParamInfo, ParamKind};
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,

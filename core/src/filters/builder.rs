@@ -210,7 +210,7 @@ impl<'m, M: Method> Builder<'m, M> {
                     bounds: &bounds,
                     dt_obs: self.dt,
                 };
-                if let Err(why) = M::suitability(&ctx, &self.params) {
+                if let Err(why) = crate::filters::method::suitability_of::<M>(&ctx, &self.params) {
                     problems.push(ConfigProblem::new("method", why));
                 }
             }

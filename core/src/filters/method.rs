@@ -75,6 +75,18 @@ pub enum Takes {
     Both,
 }
 
+/// What a method does with a state-dependent diffusion `G(x)` ([`crate::model::diffusion`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", content = "how", rename_all = "snake_case")]
+pub enum DiffusionSupport {
+    /// Uses `G(x)` itself (to the method's own discretisation).
+    Exact(&'static str),
+    /// Uses an approximation of it, named in the run's warnings.
+    Approximate(&'static str),
+    /// Refuses the model, with the reason.
+    Refused(&'static str),
+}
+
 /// A method described for users: key, name, paper, what it takes, its parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodInfo {
@@ -130,6 +142,8 @@ pub trait Method {
     /// ([`crate::filters::smoothing`]).
     const SMOOTHING: super::smoothing::Smoothing =
         super::smoothing::Smoothing::NotAvailable("no smoother is implemented for this method");
+    /// What the method does with a state-dependent diffusion `G(x)`.
+    const STATE_DIFFUSION: DiffusionSupport;
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.
@@ -191,6 +205,23 @@ pub trait Method {
     ) -> Option<String> {
         None
     }
+}
+
+/// Why method `M` does not apply to the problem: a state-dependent diffusion it refuses
+/// ([`Method::STATE_DIFFUSION`]), then its own [`Method::suitability`].
+pub fn suitability_of<M: Method>(
+    problem: &ProblemContext,
+    params: &M::Params,
+) -> Result<(), String> {
+    if let DiffusionSupport::Refused(why) = M::STATE_DIFFUSION {
+        if problem.model.diffusion.constant().is_none() {
+            return Err(format!(
+                "{} needs a constant diffusion G ({why}), and this model's G depends on the state",
+                M::info().name
+            ));
+        }
+    }
+    M::suitability(problem, params)
 }
 
 /// `value` doubled when that stays within `max`, with the description `"{what} v → 2v"`

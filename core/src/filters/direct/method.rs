@@ -26,6 +26,10 @@ impl Method for Direct {
         "the direct method's density is a Gaussian-approximated exponential family carried by Riccati ODEs (002); a backward equation in that family is not derived, so no smoother is offered",
     );
     const KEY: &'static str = "direct";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Refused(
+            "002's Gaussian approximation and Riccati ODEs are derived for dx = f dt + dv",
+        );
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     type Params = DirectParams;

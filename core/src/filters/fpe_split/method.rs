@@ -54,6 +54,10 @@ macro_rules! fpe_method {
 
         impl Method for $method {
             const KEY: &'static str = $key;
+            const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+                crate::filters::method::DiffusionSupport::Exact(
+                    "a diagonal a(x) = G Gᵀ by conservative differences of a p in the implicit step (001 (24)); off-diagonal entries are refused",
+                );
             const ALIASES: &'static [&'static str] = &[$alias];
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;

@@ -45,6 +45,10 @@ fn map_kalman(
     )
 }
 
+/// How the Gaussian filters treat a state-dependent G(x).
+const GAUSSIAN_Q: &str =
+    "Q(x̂) = G(x̂)G(x̂)ᵀ at the current mean in the covariance equation dP/dt = FP + PFᵀ + Q";
+
 /// A Gaussian filter's description, with the parameters its params type `P` declares.
 fn info<P: Declared>(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
     MethodInfo {
@@ -70,6 +74,10 @@ impl Method for Kalman {
         "the Rauch–Tung–Striebel smoother of the sampled model the filter updates with (Φ = e^{AΔτ}): exact on linear-Gaussian models",
     );
     const KEY: &'static str = "kalman";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Refused(
+            "the exact filter of a linear-Gaussian model needs a constant G",
+        );
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
     type Params = KalmanParams;
@@ -117,6 +125,8 @@ impl Method for Ekf {
         "the extended RTS smoother: the RTS recursion with the transition's sensitivity Φ integrated along the EKF's moment equations (dΦ/dt = ∂f/∂x(m) Φ); a Gaussian approximation",
     );
     const KEY: &'static str = "ekf";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
     type Params = EkfParams;
     type Filter = ExtendedKalman;
 
@@ -167,6 +177,8 @@ impl Method for Ukf {
         "the continuous–discrete unscented RTS smoother: the cross-covariance follows the sigma points' statistically linearised drift (dΦ/dt = E[f (x − m)ᵀ] P⁻¹ Φ); a Gaussian approximation",
     );
     const KEY: &'static str = "ukf";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
     type Params = UkfParams;
     type Filter = UnscentedKalman;
 
@@ -217,6 +229,8 @@ impl Method for Iekf {
         "the extended RTS smoother over the IEKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
     );
     const KEY: &'static str = "iekf";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
     type Params = IekfParams;
     type Filter = MapKalman;
 
@@ -268,6 +282,8 @@ impl Method for Iokf {
         "the extended RTS smoother over the IOKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
     );
     const KEY: &'static str = "iokf";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
     type Params = IokfParams;
     type Filter = MapKalman;
 

@@ -24,6 +24,10 @@ builder_fn!(Pf);
 
 impl Method for Pf {
     const KEY: &'static str = "pf";
+    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+        crate::filters::method::DiffusionSupport::Exact(
+            "G(x) at each particle in every Euler–Maruyama substep (FFBSi smoothing refuses it)",
+        );
     const RANDOM: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(
         "FFBSi",

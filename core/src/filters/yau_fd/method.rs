@@ -89,6 +89,19 @@ fn build(
     }
 }
 
+/// What a scheme does with a state-dependent G(x).
+const fn state_diffusion(scheme: Scheme) -> crate::filters::method::DiffusionSupport {
+    use crate::filters::method::DiffusionSupport::{Exact, Refused};
+    match scheme {
+        Scheme::Iem => Exact(
+            "a diagonal a(x) = G Gᵀ by conservative differences of a u in the tridiagonal θ-step; off-diagonal entries are refused",
+        ),
+        _ => Refused(
+            "the DST solve (000 (18)) diagonalises a constant-coefficient Laplacian; IEM takes a(x)",
+        ),
+    }
+}
+
 /// The implementation every scheme shares; `$own` is its extra problems.
 macro_rules! yau_yau_method {
     ($method:ident, $key:literal, $name:literal, $scheme:expr, $info:expr, $own:expr, $memory:expr) => {
@@ -96,6 +109,8 @@ macro_rules! yau_yau_method {
 
         impl Method for $method {
             const KEY: &'static str = $key;
+            const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+                state_diffusion($scheme);
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
             const DENSITY: bool = true;

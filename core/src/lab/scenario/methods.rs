@@ -47,6 +47,8 @@ pub struct CatalogueEntry {
     pub random: bool,
     /// Its fixed-interval smoother, or why it has none.
     pub smoother: crate::filters::smoothing::SmootherInfo,
+    /// What it does with a state-dependent diffusion G(x).
+    pub state_diffusion: crate::filters::method::DiffusionSupport,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -130,7 +132,7 @@ macro_rules! registry {
 
             /// Why the method does not apply to this problem, or `Ok` (cheap: nothing built).
             pub fn check_suitability(&self, problem: &ProblemContext) -> Result<(), String> {
-                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::suitability(problem, p),)* }
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => crate::filters::method::suitability_of::<$method>(problem, p),)* }
             }
 
             /// Memory the method allocates for an `n`-dimensional model, estimated from its
@@ -178,6 +180,7 @@ macro_rules! registry {
                 density: <$method>::DENSITY,
                 random: <$method>::RANDOM,
                 smoother: <$method>::SMOOTHING.into(),
+                state_diffusion: <$method>::STATE_DIFFUSION,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }
