@@ -258,7 +258,7 @@ export function fillForm(config) {
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
   fillParameters(config.parameters, scheduleValidate);
-  matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, onInput: scheduleValidate });
+  matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, expressions: true, onInput: scheduleValidate });
   const noise = config.model.noise;
   $('noise-kind').value = noise.kind;
   const m = config.model.observation.length;

@@ -335,6 +335,38 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'state-dependent-noise',
+    title: '11. Noise that grows with the state',
+    preset: 'interest-rate',
+    seed: 1,
+    scenario: (c) => c,
+    body: [
+      'Every model so far had a constant noise gain $G$. In many systems the noise scales with the state: a population fluctuates more when it is large, an interest rate moves less when it is low. Cox, Ingersoll & Ross (1985) model a short rate as',
+      '$$dx = \\kappa(\\theta - x)\\,dt + \\sigma\\sqrt{x}\\,dv,$$',
+      'pulled towards the level $\\theta$ at the rate $\\kappa$, with a noise that vanishes as $x \\to 0$; when $2\\kappa\\theta \\ge \\sigma^2$ (Feller\'s condition) the rate never reaches 0. Its stationary law is a gamma density, $p_\\infty(x) \\propto x^{2\\kappa\\theta/\\sigma^2 - 1} e^{-2\\kappa x/\\sigma^2}$.',
+      'Here $\\kappa = 0.5$, $\\theta = 0.25$, $\\sigma = 0.35$ ($2\\kappa\\theta = 0.25 \\ge \\sigma^2 = 0.1225$), so $p_\\infty(x) \\propto x^{1.04} e^{-8.16\\,x}$, which is this run\'s prior. The rate is measured every $\\Delta\\tau = 0.25$ with noise, $z_k = x_k + 0.3\\,e_k$, for $T = 50$. The program\'s $G(x) = 0.35\\sqrt{|x|}$ is the same while $x > 0$, and is defined on the whole grid and wherever an Euler step of the simulation or of a particle lands below 0.',
+      'Between measurements the density solves lesson 1\'s Fokker–Planck equation, with $a(x) = G(x)^2 = \\sigma^2 |x|$ inside the second derivative:',
+      '$$\\partial_t p = -\\partial_x\\big(f\\,p\\big) + \\tfrac12\\,\\partial_x^2\\big(a\\,p\\big).$$',
+      'Šimandl & Švácha (2005) [001] write it, (4), for a $Q$ that does not depend on $x$, where the last term is $\\tfrac12 Q\\,\\partial_x^2 p$. The separation approach\'s implicit step (their (17)) then differences $a\\,p$ instead of $p$:',
+      '$$\\frac{P_{j+1}[i] - P^*[i]}{\\Delta t} = -f\'(x_i)\\,P_{j+1}[i] + \\frac{a_{i+1}P_{j+1}[i+1] - 2a_i P_{j+1}[i] + a_{i-1}P_{j+1}[i-1]}{2\\,\\Delta x^2},$$',
+      'with $a_i = a(x_i)$; for a constant $a = Q$ this is (17). The matrix of this system has the off-diagonal entries $-\\Delta t\\,a_{i\\pm1}/(2\\Delta x^2) \\le 0$, and column $i$ holds $1 + \\Delta t\\,f\'(x_i) + \\Delta t\\,a_i/\\Delta x^2$ on the diagonal against $\\Delta t\\,a_i/\\Delta x^2$ off it in all. When $1 + \\Delta t\\,f\'(x_i) > 0$ it is strictly diagonally dominant by columns, an M-matrix, so the step keeps the density nonnegative; and since the diffusion\'s entries in each column sum to 0, it moves mass between cells without creating or destroying any (away from the grid\'s edges). The particle filter moves each particle with its own noise, $x \\leftarrow x + f(x)\\,h + G(x)\\sqrt{h}\\,\\xi$ (Euler–Maruyama).',
+      'A Gaussian filter carries a mean $m$ and a variance $P$. For this model the exact prediction\'s mean and variance obey $\\dot m = \\kappa(\\theta - m)$ and $\\dot P = -2\\kappa P + \\sigma^2 m$ (the expectations of $dx$ and, by Itô\'s formula, of $d(x - m)^2$, with $\\mathbb E\\,a(x) = \\sigma^2\\,\\mathbb E\\,x$ while $x > 0$). The UKF here takes $a$ at its mean, $\\dot P = -2\\kappa P + a(m)$, as the run\'s warning says, and its sigma points follow the linear drift exactly: between measurements it gets the mean and the variance right, up to the mass its Gaussian puts below 0. What it cannot carry is the shape.',
+    ],
+    lookFor: [
+      'The SA\'s density (the heat strip, and the densities plot at the time shown) leans to the right at each of the 41 times the page keeps for looking back (every 1.25 time units): its skewness is between 0.27 and 1.09, largest at the time where its mean is lowest ($t = 45$) and smallest where its mean is highest ($t = 3.75$): near 0 the noise is small, and the density piles up against it with a long tail upwards. It never puts more than 0.5 % of its mass below 0 (0.46 % at $t = 45$).',
+      'The UKF\'s Gaussian gives a negative rate a probability above 5 % at 16 of those 41 times, and 20.5 % at $t = 41.25$ (mean 0.087, standard deviation 0.106), where the SA\'s density has 0.39 % below 0.',
+      'The estimates are close all the same: MSE 0.0111 for the SA, 0.0110 for the particle filter and 0.0105 for the UKF on this path (one run cannot rank them). The measurement noise\'s standard deviation, 0.3, is 1.7 to 4 times the SA\'s posterior one (0.075 to 0.18 at the kept times), so each update moves the estimate a little, and the UKF predicts the right mean and variance in between.',
+      'The warnings under the plots name the UKF\'s approximation (the process noise taken at the mean), and say nothing of the SA or the particle filter.',
+    ],
+    tryThis: [
+      {
+        label: 'a constant noise instead',
+        change: (c) => { c.model.diffusion = [[0.175]]; },
+        expect: '$G = 0.175 = \\sigma\\sqrt\\theta$, the same noise at every level as the square-root model has at $\\theta$ (Vasicek 1977\'s model). The density is then nearly symmetric once the prior is forgotten: its skewness is between −0.03 and 0.03 at every kept time from $t = 1.25$ on (the prior\'s is 0.73). And the model itself allows negative rates: the truth dips to −0.05, and the SA\'s density has 22.8 % of its mass below 0 at $t = 45$. The Gaussian is now close to the right shape (MSE SA 0.0112, UKF 0.0111).',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */
@@ -344,6 +376,8 @@ export const REFERENCES = [
   ['002', 'J. Shi, Z. Yang and S. S.-T. Yau, “Direct method for Yau filtering system with nonlinear observations”, International Journal of Control 91(3), 2018.'],
   ['003', 'J. Kang, A. Salmon and S. S.-T. Yau, “Log-concave posterior densities arising in continuous filtering and a maximum a posteriori algorithm”, SIAM Journal on Control and Optimization 61(4), 2023.'],
   ['004', 'J. Shi, X. Chen and S. S.-T. Yau, “A novel real-time filtering method to general nonlinear filtering problem without memory”, IEEE Access 9, 2021.'],
+  ['', 'J. C. Cox, J. E. Ingersoll and S. A. Ross, “A theory of the term structure of interest rates”, Econometrica 53(2), 1985.'],
+  ['', 'O. Vasicek, “An equilibrium characterization of the term structure”, Journal of Financial Economics 5(2), 1977.'],
   ['', 'M. Zakai, “On the optimal filtering of diffusion processes”, Zeitschrift für Wahrscheinlichkeitstheorie und verwandte Gebiete 11, 1969.'],
   ['', 'R. E. Kalman and R. S. Bucy, “New results in linear filtering and prediction theory”, Journal of Basic Engineering 83, 1961.'],
   ['', 'S. J. Julier and J. K. Uhlmann, “Unscented filtering and nonlinear estimation”, Proceedings of the IEEE 92(3), 2004.'],

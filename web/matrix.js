@@ -26,8 +26,8 @@ export function coefficient(text) {
 /** Whether `v` is a usable entry: a finite number or an expression. */
 export const isCoefficient = (v) => Number.isFinite(v) || (typeof v === 'string' && v !== '');
 
-export function matrixEditor(box, { value, rows, cols, identityAllowed = false, onInput }) {
-  box._matrix = { identityAllowed, onInput, rows, cols };
+export function matrixEditor(box, { value, rows, cols, identityAllowed = false, expressions = false, onInput }) {
+  box._matrix = { identityAllowed, expressions, onInput, rows, cols };
   setMatrix(box, value);
 }
 
@@ -39,9 +39,10 @@ export function setMatrix(box, value) {
   m.rows = shown.length;
   m.cols = shown[0]?.length ?? m.rows;
   const field = box.dataset.field;
-  // An entry written as an expression in the parameters is a text field, a number a number field.
+  // An entry written as an expression in the parameters is a text field, a number a number field
+  // (every entry a text field where entries may be expressions in the state, as G(x)'s are).
   const cells = shown.map((row, i) => el('tr', {}, ...row.map((v, j) => el('td', {}, el('input', {
-    type: typeof v === 'string' ? 'text' : 'number', step: 'any', value: String(v), disabled: isIdentity && m.identityAllowed,
+    type: typeof v === 'string' || m.expressions ? 'text' : 'number', step: 'any', value: String(v), disabled: isIdentity && m.identityAllowed,
     ariaLabel: `${field} row ${i + 1}, column ${j + 1}`, dataset: { cell: `${i},${j}` },
   })))));
   const parts = [];

@@ -100,7 +100,11 @@ fn point_mass(
         let mass: f64 = p.iter().sum();
         p.iter_mut().for_each(|v| *v /= mass);
         let mean: f64 = x.iter().zip(&p).map(|(a, b)| a * b).sum();
-        let var: f64 = x.iter().zip(&p).map(|(a, b)| (a - mean) * (a - mean) * b).sum();
+        let var: f64 = x
+            .iter()
+            .zip(&p)
+            .map(|(a, b)| (a - mean) * (a - mean) * b)
+            .sum();
         means.push(mean);
         sds.push(var.sqrt());
     }
@@ -285,7 +289,10 @@ fn the_simulator_draws_with_the_state_dependent_variance() {
         let mean = draws.iter().sum::<f64>() / count;
         let var = draws.iter().map(|d| (d - mean) * (d - mean)).sum::<f64>() / (count - 1.0);
         let want = variance(x0) * h;
-        println!("x = {x0}: mean {mean:.3e} (want {:.3e}), var {var:.3e} (want {want:.3e})", drift(x0) * h);
+        println!(
+            "x = {x0}: mean {mean:.3e} (want {:.3e}), var {var:.3e} (want {want:.3e})",
+            drift(x0) * h
+        );
         assert!((mean - drift(x0) * h).abs() < 4.0 * (want / count).sqrt());
         assert!((var - want).abs() < 4.0 * want * (2.0 / count).sqrt());
     }

@@ -2,8 +2,9 @@
 //! or a matrix of functions of the state (a population or interest-rate model whose noise
 //! scales with the state, `G(x) = σ√x`).
 //!
-//! The Fokker–Planck operator it enters is `½ Σ_ij ∂_i∂_j (a_ij p)` with `a = G Gᵀ` (001 (4),
-//! 004 (20); 000 (2) writes it for a constant `a`, where it is `½ Σ a_ij ∂_i∂_j p`). Each family
+//! The Fokker–Planck operator it enters is `½ Σ_ij ∂_i∂_j (a_ij p)` with `a = G Gᵀ` (Risken
+//! 1984); the papers write it for an `a` that does not depend on the state (001 (4), 000 (2),
+//! 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family
 //! says what it does with a state-dependent `a`: the grid filters difference `a p` itself
 //! (conservative, so mass is kept), the spectral filter's off-line operator applies it at its
 //! quadrature nodes, the particle filter and the simulator take `G` at each particle in every

@@ -5,7 +5,8 @@
 //!   `(1 + Δt ∇·f(x[i])) P[i] − ½ Δt Σ_l (aP)[i_l+1] − 2(aP)[i] + (aP)[i_l−1]) / Δx_l² = P*[i]`
 //!   with `a = a_ll(x)` the diagonal of `Q = G Gᵀ` at each cell — 001's `Q_ll` when G is
 //!   constant; when it depends on the state, the difference of `a P` discretises
-//!   `½ ∂²(a_ll p)/∂x_l²`, the Fokker–Planck term itself (001 (4)), in conservative form;
+//!   `½ ∂²(a_ll p)/∂x_l²`, the general Fokker–Planck term (001 (4) writes it for a Q that does
+//!   not depend on x), in conservative form;
 //! * the classic implicit FDM on the unsplit FPE (4) (the paper's comparator, Press et al.):
 //!   the same with the advection `Δt f_l(x[i]) (P[i_l+1] − P[i_l−1]) / (2Δx_l)` added on the
 //!   left.
