@@ -272,3 +272,27 @@ impl Lcg {
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
 }
+
+/// The largest |x̂ − reference mean| over the rows, in reference sds, of method `index` of
+/// `run` (which must not have failed, and must have a row for every reference row).
+pub fn worst_gap(
+    run: &zakai::lab::experiment::RunResult,
+    index: usize,
+    means: &[f64],
+    sds: &[f64],
+) -> f64 {
+    let track = &run.methods[index];
+    assert!(
+        track.failure.is_none(),
+        "{}: {:?}",
+        track.name,
+        track.failure
+    );
+    assert_eq!(track.estimates.len(), means.len(), "{}", track.name);
+    track
+        .estimates
+        .iter()
+        .zip(means.iter().zip(sds))
+        .map(|(e, (m, s))| (e - m).abs() / s)
+        .fold(0.0, f64::max)
+}

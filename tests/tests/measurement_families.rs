@@ -12,7 +12,7 @@
 use zakai::lab::experiment::{Experiment, RunResult};
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
-use zakai_tests::test;
+use zakai_tests::{test, worst_gap};
 
 /// Measurement interval and number of intervals of the simulated data.
 const DT: f64 = 0.25;
@@ -119,23 +119,6 @@ fn point_mass(data: &Recording, log_lik: impl Fn(f64, f64) -> f64) -> (Vec<f64>,
         sds.push(var.sqrt());
     }
     (means, sds, ll)
-}
-
-/// The largest |x̂ − reference mean| over the rows, in reference sds.
-fn worst_gap(run: &RunResult, index: usize, means: &[f64], sds: &[f64]) -> f64 {
-    let track = &run.methods[index];
-    assert!(
-        track.failure.is_none(),
-        "{}: {:?}",
-        track.name,
-        track.failure
-    );
-    track
-        .estimates
-        .iter()
-        .zip(means.iter().zip(sds))
-        .map(|(e, (m, s))| (e - m).abs() / s)
-        .fold(0.0, f64::max)
 }
 
 /// Grid filters within `grid` sds, the PF within `pf` sds, the log-likelihood of the grid

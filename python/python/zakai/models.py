@@ -45,7 +45,10 @@ class Model:
         drift, observation : str or list of str
             f and h, one expression per component.
         diffusion : array_like, optional
-            G (n × n rows; a scalar when n = 1); the identity when absent.
+            G (n × n rows; a scalar when n = 1); the identity when absent. Entries may be
+            expressions in the parameters (``"sqrt(q)"``) or in the state, making G a function
+            G(x) (``"0.3*sqrt(abs(x))"``: the grid, spectral and particle filters use it, the
+            Kalman family takes it at the mean, QIEM and the exact filters refuse it).
         noise_cov : array_like, optional
             S; the identity when absent.
         """
