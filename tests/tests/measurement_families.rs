@@ -9,7 +9,7 @@
 //! log-density) with the reason. The simulator's draws are checked against each family's
 //! mean and variance.
 
-use zakai::lab::experiment::{Experiment, RunResult};
+use zakai::lab::experiment::Experiment;
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 use zakai_tests::{test, worst_gap};
