@@ -12,7 +12,8 @@
 use zakai::lab::experiment::Experiment;
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
-use zakai_tests::{test, worst_gap};
+use zakai_tests::test;
+use zakai_tests::worst_gap;
 
 /// Measurement interval and number of intervals of the simulated data.
 const DT: f64 = 0.25;

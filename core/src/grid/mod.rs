@@ -5,6 +5,8 @@
 //! `Δs_d = (upper_d − lower_d)/(N_d + 1)`; the boundary nodes carry the zero Dirichlet value and
 //! are not stored. Values are stored with the first dimension fastest.
 
+/// The mixed second derivatives of the Fokker–Planck operator as a positive step.
+pub(crate) mod cross;
 #[cfg(feature = "std")]
 #[doc(hidden)]
 pub mod dst;

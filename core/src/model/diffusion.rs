@@ -161,16 +161,20 @@ impl ProcessNoise {
         }
     }
 
-    /// The diagonal `a_dd(x)` at each point given by `point(i, x)` for i < len, one vector per
-    /// dimension; the largest off-diagonal `|a_ij|` relative to `a_ii + a_jj` is returned too,
-    /// with where it is (for the grid filters that difference the diagonal only).
-    pub fn tabulate_diagonal(
+    /// `a(x)` at each point given by `point(i, x)` for i < len: the diagonal, one vector per
+    /// dimension, the off-diagonal entries that are not zero everywhere, and the largest
+    /// off-diagonal `|a_ij|` relative to `a_ii + a_jj` with where it is (for the grid filters
+    /// that difference the diagonal only).
+    pub fn tabulate(
         &self,
         n: usize,
         len: usize,
         mut point: impl FnMut(usize, &mut [f64]),
-    ) -> DiagonalTable {
+    ) -> DiffusionTable {
         let mut diagonal = vec![Vec::with_capacity(len); n];
+        let mut off: Vec<(usize, usize, Vec<f64>)> = (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j, Vec::with_capacity(len))))
+            .collect();
         let mut worst = OffDiagonal::default();
         let mut undefined = None;
         let mut x = vec![0.0; n];
@@ -184,6 +188,9 @@ impl ProcessNoise {
             }
             if undefined.is_none() && q.iter().any(|v| !v.is_finite()) {
                 undefined = Some(x.clone());
+            }
+            for (i, j, column) in off.iter_mut() {
+                column.push(q[(*i, *j)]);
             }
             for i in 0..n {
                 for j in 0..i {
@@ -205,18 +212,24 @@ impl ProcessNoise {
                     let v = column[0];
                     column.resize(len, v);
                 }
+                for (_, _, column) in off.iter_mut() {
+                    let v = column[0];
+                    column.resize(len, v);
+                }
                 break;
             }
         }
-        DiagonalTable {
+        off.retain(|(_, _, column)| column.iter().any(|&v| v != 0.0));
+        DiffusionTable {
             diagonal,
+            off,
             worst,
             undefined,
         }
     }
 }
 
-/// The largest off-diagonal entry of Q found by [`ProcessNoise::tabulate_diagonal`].
+/// The largest off-diagonal entry of Q found by [`ProcessNoise::tabulate`].
 #[derive(Clone, Debug, Default)]
 pub struct OffDiagonal {
     /// `|a_ij| / (a_ii + a_jj)`.
@@ -229,26 +242,34 @@ pub struct OffDiagonal {
     pub at: Vec<f64>,
 }
 
-/// `a_dd(x)` at the points of a grid, and the largest off-diagonal entry.
+/// `a(x)` at the points of a grid, and the largest off-diagonal entry.
 #[derive(Clone, Debug)]
-pub struct DiagonalTable {
+pub struct DiffusionTable {
     /// `diagonal[d][i] = a_dd(x_i)`.
     pub diagonal: Vec<Vec<f64>>,
+    /// `(i, j, a_ij at every point)` for i < j, where not zero everywhere.
+    pub off: Vec<(usize, usize, Vec<f64>)>,
     /// The largest off-diagonal entry met.
     pub worst: OffDiagonal,
     /// The first point where Q is not finite.
     pub undefined: Option<Vec<f64>>,
 }
 
-impl DiagonalTable {
+impl DiffusionTable {
+    /// The refusal of a method when Q is not finite at a point of its grid.
+    pub fn require_finite(&self, method: &str) -> Result<(), FilterError> {
+        match &self.undefined {
+            Some(x) => Err(FilterError::Unsuitable(format!(
+                "{method}: the diffusion G(x) is not finite at the grid point x = {x:.4?}; write G so that it is defined on the whole domain (e.g. sqrt(abs(x)) rather than sqrt(x))"
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// The refusal of a method that differences only the diagonal of `a` (`scheme` names the
     /// equation), when an off-diagonal entry is not negligible or Q is not finite somewhere.
     pub fn require_diagonal(&self, method: &str, scheme: &str) -> Result<(), FilterError> {
-        if let Some(x) = &self.undefined {
-            return Err(FilterError::Unsuitable(format!(
-                "{method}: the diffusion G(x) is not finite at the grid point x = {x:.4?}; write G so that it is defined on the whole domain (e.g. sqrt(abs(x)) rather than sqrt(x))"
-            )));
-        }
+        self.require_finite(method)?;
         let w = &self.worst;
         if w.relative > 1e-12 || w.relative.is_nan() {
             return Err(FilterError::Unsuitable(format!(

@@ -14,13 +14,14 @@ use crate::filters::{
     normalise_on_grid, DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind,
     Observed, REMAINDER_PLANS,
 };
+use crate::grid::cross::CrossDiffusion;
 use crate::grid::TensorGrid;
 use crate::model::{MeasurementDensity, Model, ObservationModel, Prior};
 
 /// The model fits the filter: discrete measurements (their density `p(z | x)` is returned;
-/// any family, the update (6) multiplies it in node by node) and a diagonal `Q = G Gᵀ`
-/// (001 (24) has no mixed derivatives). A state-dependent Q is checked for off-diagonal
-/// entries at the grid's cells when the filter is built.
+/// any family, the update (6) multiplies it in node by node). Mixed terms of `Q = G Gᵀ`
+/// (which 001 (24) does not have) are checked for diagonal dominance on the grid when the
+/// filter is built (`grid::cross`).
 pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, FilterError> {
     let noise = match &model.observations {
         ObservationModel::Discrete { density } => density.clone(),
@@ -30,24 +31,39 @@ pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, Filt
             )))
         }
     };
-    let q = model.process_noise();
-    let Some(q) = q.constant() else {
-        return Ok(noise);
-    };
-    let n = model.n;
-    for i in 0..n {
-        for j in 0..n {
-            if i != j && libm::fabs(q[(i, j)]) > 1e-12 * (q[(i, i)] + q[(j, j)]) {
-                return Err(FilterError::Unsuitable(format!(
-                    "{name}: 001 (24) discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {}",
-                    i + 1,
-                    j + 1,
-                    q[(i, j)]
-                )));
-            }
-        }
-    }
     Ok(noise)
+}
+
+/// The grid of cells whose centres tile `bounds` (the ends of the box are cell centres).
+pub fn cell_grid(params: &FpeParams, bounds: &[(f64, f64)]) -> Result<TensorGrid, ZakaiError> {
+    let shape = params.shape(bounds.len());
+    let cell_bounds: Vec<(f64, f64)> = bounds
+        .iter()
+        .zip(&shape)
+        .map(|(&(a, b), &c)| {
+            let half = 0.5 * (b - a) / c as f64;
+            (a - half, b + half)
+        })
+        .collect();
+    TensorGrid::new(&cell_bounds, &shape)
+}
+
+/// `a = G Gᵀ` on the cells of `grid`: the diagonal the implicit step takes and the mixed
+/// terms' explicit step; refused where `a` is not finite or its mixed terms cannot be made
+/// positive on these cells (see `CrossDiffusion::diagonal_left`). Checked before a run as well (the method's
+/// suitability), so that such a model is "not applicable" rather than a failed build.
+pub fn diffusion_on(
+    name: &str,
+    model: &Model,
+    grid: &TensorGrid,
+) -> Result<(Vec<Vec<f64>>, CrossDiffusion), FilterError> {
+    let table = model
+        .process_noise()
+        .tabulate(model.n, grid.len(), |i, x| grid.node(i, x));
+    table.require_finite(name)?;
+    let cross = CrossDiffusion::new(grid, &table.off);
+    let diffusion = cross.diagonal_left(name, grid, table.diagonal)?;
+    Ok((diffusion, cross))
 }
 
 /// How an observation interval is cut into FPE steps.
@@ -68,6 +84,8 @@ pub struct ContinuousDiscreteGrid {
     divergence: Vec<f64>,
     /// `a_ll = (G Gᵀ)_ll` at every cell, per dimension.
     diffusion: Vec<Vec<f64>>,
+    /// The mixed terms of `a`, a positive explicit step (`grid::cross`).
+    cross: CrossDiffusion,
     likelihood: crate::filters::MeasurementLikelihood,
     /// h at the cell centres, row per cell, with m components.
     h_nodes: Vec<f64>,
@@ -117,16 +135,7 @@ impl ContinuousDiscreteGrid {
             });
         }
         let noise = check_model(&name, model)?;
-        let shape = params.shape(n);
-        let cell_bounds: Vec<(f64, f64)> = bounds
-            .iter()
-            .zip(&shape)
-            .map(|(&(a, b), &c)| {
-                let half = 0.5 * (b - a) / c as f64;
-                (a - half, b + half)
-            })
-            .collect();
-        let grid = TensorGrid::new(&cell_bounds, &shape)?;
+        let grid = cell_grid(params, bounds)?;
         let advection = UpwindAdvection::new(&grid, &*model.drift);
         let mut jac = vec![0.0; n * n];
         let mut divergence = Vec::with_capacity(grid.len());
@@ -139,11 +148,7 @@ impl ContinuousDiscreteGrid {
             model.observation.eval(x, &mut hx);
             h_nodes.extend_from_slice(&hx);
         });
-        let table = model
-            .process_noise()
-            .tabulate_diagonal(n, grid.len(), |i, x| grid.node(i, x));
-        table.require_diagonal(&name, "001 (24)")?;
-        let diffusion = table.diagonal;
+        let (diffusion, cross) = diffusion_on(&name, model, &grid)?;
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -166,6 +171,7 @@ impl ContinuousDiscreteGrid {
             advection,
             divergence,
             diffusion,
+            cross,
             likelihood: crate::filters::MeasurementLikelihood::new(&noise, m),
             h_nodes,
             m,
@@ -219,6 +225,22 @@ impl ContinuousDiscreteGrid {
                     rate * interval / requested,
                     rounded(&x),
                     interval / requested,
+                    interval / needed,
+                    needed
+                ));
+                steps = needed;
+            }
+        }
+        if !self.cross.is_empty() {
+            let (rate, idx) = self.cross.rate_bound(self.grid.len());
+            let needed = libm::ceil(rate * interval);
+            if needed > steps {
+                self.grid.node(idx, &mut x);
+                notes.push(format!(
+                    "mixed terms of Q = G Gᵀ (an explicit step): Σ_(l<k) |a_lk| Δt/(Δx_l Δx_k) reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    rate * interval / steps,
+                    rounded(&x),
+                    interval / steps,
                     interval / needed,
                     needed
                 ));
@@ -388,6 +410,11 @@ impl ContinuousDiscreteGrid {
                 false => self.plan.as_mut().expect("planned in new"),
             };
             plan.implicit.solve_transposed(&mut self.u, &mut self.tmp);
+            if !self.cross.is_empty() {
+                self.cross
+                    .step_transposed(&self.grid, dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
             if self.scheme == FpeScheme::Separation {
                 self.advection
                     .step_transposed(&self.grid, dt, &self.u, &mut self.tmp);
@@ -401,6 +428,10 @@ impl ContinuousDiscreteGrid {
         for _ in 0..substeps {
             if self.scheme == FpeScheme::Separation {
                 self.advection.step(&self.grid, dt, &self.u, &mut self.tmp);
+                core::mem::swap(&mut self.u, &mut self.tmp);
+            }
+            if !self.cross.is_empty() {
+                self.cross.step(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
             let plan = match remainder {

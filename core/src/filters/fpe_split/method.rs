@@ -31,11 +31,31 @@ fn info(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
 
 fn memory(p: &FpeParams, n: usize) -> Option<usize> {
     // The factors of the implicit step and, per cell, the density, its copy, the
-    // upwind fluxes and the likelihood.
+    // upwind fluxes, the likelihood, the diagonal of a and, for a correlated a, the rate and
+    // direction of each mixed term (counted as two values per pair).
     let cells = product(&per_dimension(&p.cells, n))?;
     p.factor_values(n)?
-        .checked_add(cells.checked_mul(6 + 2 * n)?)?
+        .checked_add(cells.checked_mul(6 + 3 * n + n * n.saturating_sub(1))?)?
         .checked_mul(8)
+}
+
+/// A state-dependent or correlated `a` fits the cells (finite, mixed terms positive): tabulated
+/// on the grid the filter would build, only when `a` can have mixed terms or vary.
+fn mixed_terms_fit(name: &str, problem: &ProblemContext, p: &FpeParams) -> Result<(), String> {
+    let q = problem.model.process_noise();
+    let n = problem.model.n;
+    if let Some(q) = q.constant() {
+        if (0..n).all(|i| (0..n).all(|j| i == j || q[(i, j)] == 0.0)) {
+            return Ok(());
+        }
+    }
+    if !p.problems(n).is_empty() {
+        return Ok(()); // reported with the parameters
+    }
+    let grid = super::filter::cell_grid(p, problem.bounds).map_err(|e| format!("{e}"))?;
+    super::filter::diffusion_on(name, problem.model, &grid)
+        .map(|_| ())
+        .map_err(|e| format!("{e}"))
 }
 
 fn build(
@@ -56,7 +76,7 @@ macro_rules! fpe_method {
             const KEY: &'static str = $key;
             const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
                 crate::filters::method::DiffusionSupport::Exact(
-                    "a diagonal a(x) = G Gᵀ by conservative differences of a p in the implicit step (001 (24)); off-diagonal entries are refused",
+                    "a(x) = G Gᵀ: the diagonal by conservative differences of a p in the implicit step (001 (24)), the mixed terms as a positive explicit step where a_ll ≥ Σ_k |a_lk| Δx_l/Δx_k",
                 );
             const ALIASES: &'static [&'static str] = &[$alias];
             const NEEDS_INTERVAL: bool = true;
@@ -85,10 +105,9 @@ macro_rules! fpe_method {
             fn problems(p: &FpeParams, n: usize) -> Vec<ConfigProblem> {
                 problems_from(p.problems(n))
             }
-            fn suitability(problem: &ProblemContext, _: &FpeParams) -> Result<(), String> {
-                check_model($name, problem.model)
-                    .map(|_| ())
-                    .map_err(|e| format!("{e}"))
+            fn suitability(problem: &ProblemContext, p: &FpeParams) -> Result<(), String> {
+                check_model($name, problem.model).map_err(|e| format!("{e}"))?;
+                mixed_terms_fit($name, problem, p)
             }
             fn memory(p: &FpeParams, n: usize) -> Option<usize> {
                 memory(p, n)

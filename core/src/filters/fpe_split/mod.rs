@@ -10,7 +10,11 @@
 //!   the log domain so that a sharp likelihood cannot underflow the whole grid.
 //! * **Prediction** between measurements: the FPE (4)
 //!   `∂p/∂t = −∇p · f − p ∇·f + ½ Σ_l Q_ll ∂²p/∂x_l²` over `M` steps of `Δt` by one of two
-//!   schemes ([`FpeScheme`]):
+//!   schemes ([`FpeScheme`]) — with `½ Σ_l ∂²(a_ll p)/∂x_l²` in its place when `a = G Gᵀ`
+//!   depends on the state ([`implicit`]), and the mixed terms `Σ_{l<k} ∂_l∂_k (a_lk p)`, which
+//!   001 does not have, as an explicit positive step of their own before the implicit one
+//!   (`crate::grid::cross`: a diffusion along the grid's diagonals that lends part of the
+//!   diagonal of `a`):
 //!   - the **separation approach** (SA, 001 §3): per step, the hyperbolic part (9) by the
 //!     explicit upwind finite-volume scheme (12)–(14) / (19)–(22) ([`upwind`]), then the
 //!     parabolic part (10) by the implicit scheme (17) / (24) ([`implicit`]) — tridiagonal
@@ -26,8 +30,10 @@
 //! when a cell Péclet number `|f_l| Δx_l / Q_ll` exceeds 1; that is a grid condition no step
 //! choice can fix, so it is a warning.
 //!
-//! 001 (24) discretises the diagonal of `Q = G Gᵀ` only; a model with correlated diffusion is
-//! refused rather than silently changed.
+//! 001 (24) discretises the diagonal of `Q = G Gᵀ` only. Mixed terms are taken when the cells
+//! allow a nonnegative scheme, `a_ll ≥ Σ_k |a_lk| Δx_l/Δx_k` at every cell (a correlated Q with
+//! cells shaped like it); otherwise the model is refused with where, and the explicit step's
+//! condition `Δt Σ_{l<k} |a_lk|/(Δx_lΔx_k) ≤ 1` sub-steps like the CFL condition.
 //!
 //! Cost: per observation interval, Δτ/Δt steps of O(cells) each (a tridiagonal solve per
 //! grid line and dimension, the upwind fluxes), and one likelihood per cell at a

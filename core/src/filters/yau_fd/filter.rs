@@ -33,6 +33,10 @@ use crate::model::{Model, Prior};
 #[derive(Clone, Debug)]
 struct SplitIem {
     axes: Vec<AxisSystem>,
+    /// The mixed terms of Q, an explicit step of `dt` before the axes ([`crate::grid::cross`]).
+    cross: crate::grid::cross::CrossDiffusion,
+    grid: TensorGrid,
+    dt: f64,
 }
 
 /// The explicit rows and factored implicit systems along one dimension.
@@ -98,13 +102,27 @@ impl SplitIem {
                 }
             })
             .collect();
-        SplitIem { axes }
+        SplitIem {
+            axes,
+            cross: op.cross.clone(),
+            grid: grid.clone(),
+            dt,
+        }
     }
 
     /// The transpose of [`SplitIem::step`]: the dimensions in reverse order, each as the
     /// transposed implicit solve and then the transposed explicit rows (the backward step of
     /// a smoother).
     fn step_transposed(&self, u: &mut [f64], tmp: &mut [f64]) {
+        self.transposed_axes(u, tmp);
+        if !self.cross.is_empty() {
+            self.cross.step_transposed(&self.grid, self.dt, u, tmp);
+            u.copy_from_slice(tmp);
+        }
+    }
+
+    /// The axes' part of [`SplitIem::step_transposed`].
+    fn transposed_axes(&self, u: &mut [f64], tmp: &mut [f64]) {
         for ax in self.axes.iter().rev() {
             let (stride, n) = (ax.stride, ax.n);
             ax.implicit.solve_transposed(u, tmp);
@@ -127,8 +145,12 @@ impl SplitIem {
         }
     }
 
-    /// One θ-step per dimension, using `tmp`.
+    /// The mixed terms' explicit step, then one θ-step per dimension, using `tmp`.
     fn step(&self, u: &mut [f64], tmp: &mut [f64]) {
+        if !self.cross.is_empty() {
+            self.cross.step(&self.grid, self.dt, u, tmp);
+            u.copy_from_slice(tmp);
+        }
         for ax in &self.axes {
             let (stride, n) = (ax.stride, ax.n);
             let [s, d, p] = &ax.explicit;
@@ -514,7 +536,8 @@ impl YauYauFilter {
         let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
         if op.varying.is_some() && scheme != Scheme::Iem {
             return Err(FilterError::Unsuitable(format!(
-                "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
+                "{name} needs a constant diagonal Q = G Gᵀ: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's {}; IEM takes it (its tridiagonal systems take a(x) node by node, mixed terms as an explicit step)",
+                if op.cross.is_empty() { "G depends on the state" } else { "Q has mixed terms" }
             )));
         }
         if scheme == Scheme::Qiem4 {

@@ -90,6 +90,20 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
             });
         }
     }
+    if !op.cross.is_empty() {
+        let (rate, idx) = op.cross.rate_bound(grid.len());
+        if rate * dt > 1.0 || rate.is_nan() {
+            let x = point(grid, idx);
+            out.push(GuaranteeWarning {
+                condition: "(22) nonnegativity (M-matrix)".into(),
+                message: format!(
+                    "nonnegativity of the mixed terms' explicit step: Δt Σ_(l<k) |a_lk|/(Δs_l Δs_k) = {:.3} > 1 at s = {x:.3?}; shrink Δt",
+                    rate * dt
+                ),
+                worst: x,
+            });
+        }
+    }
     // 000 states (22) as |q| Δt < 1, but its proof (24) uses it only through 1 − Δt q(s) > 0:
     // a negative q (an observation term −½hᵀS⁻¹h in the operator, a positive ∇·f) adds to the
     // diagonal and never breaks the M-matrix property. The check is that sharper condition.

@@ -94,7 +94,7 @@ const fn state_diffusion(scheme: Scheme) -> crate::filters::method::DiffusionSup
     use crate::filters::method::DiffusionSupport::{Exact, Refused};
     match scheme {
         Scheme::Iem => Exact(
-            "a diagonal a(x) = G Gᵀ by conservative differences of a u in the tridiagonal θ-step; off-diagonal entries are refused",
+            "a(x) = G Gᵀ: the diagonal by conservative differences of a u in the tridiagonal θ-step, the mixed terms as a positive explicit step where a_ll ≥ Σ_k |a_lk| Δs_l/Δs_k",
         ),
         _ => Refused(
             "the DST solve (000 (18)) diagonalises a constant-coefficient Laplacian; IEM takes a(x)",
@@ -139,7 +139,18 @@ macro_rules! yau_yau_method {
                 problems_from(p.problems(n).into_iter().chain(own(p, n)).collect())
             }
             fn suitability(problem: &ProblemContext, _: &YauYauParams) -> Result<(), String> {
-                dmz_suitability(problem)
+                dmz_suitability(problem)?;
+                let n = problem.model.n;
+                let mixed = problem.model.process_noise().constant().is_some_and(|q| {
+                    (0..n).any(|i| (0..n).any(|j| i != j && q[(i, j)] != 0.0))
+                });
+                if mixed && $scheme != Scheme::Iem {
+                    return Err(format!(
+                        "{} needs a diagonal Q = G Gᵀ: its DST solve (000 (18)) diagonalises ½ Σ Q_dd ∂²/∂s_d², and this model's Q has mixed terms; IEM takes them as an explicit step",
+                        $name
+                    ));
+                }
+                Ok(())
             }
             fn memory(p: &YauYauParams, n: usize) -> Option<usize> {
                 let memory: fn(&YauYauParams, usize) -> Option<usize> = $memory;

@@ -4,7 +4,9 @@
 //! `q = −(∇·f + ½ hᵀ S⁻¹ h)` (4) — 000 takes Q = I and S = I; a diagonal Q and any S are
 //! allowed here. A diagonal Q that depends on the state, `a_dd(x)`, is tabulated per node: the
 //! Fokker–Planck term is then `½ Σ_d ∂²(a_dd u)/∂s_d²`, which only IEM's tridiagonal systems
-//! take (differencing `a u` itself, see [`KolmogorovOperator::varying`]). The observation factor of (15) needs `S⁻¹ h`, tabulated too.
+//! take (differencing `a u` itself, see [`KolmogorovOperator::varying`]); so do mixed terms of
+//! Q (constant or not), as IEM's explicit step [`KolmogorovOperator::cross`] with the share of
+//! the diagonal they take. The observation factor of (15) needs `S⁻¹ h`, tabulated too.
 //!
 //! With [`super::Likelihood::InUpdate`] the `−½ hᵀS⁻¹h` part of q is taken out of the
 //! operator and applied with the factor (15) at the observation time instead (the same Lie
@@ -13,11 +15,11 @@
 //! bounded — round-off at the edge of the box can no longer be amplified by `exp(Δy h)`
 //! for steep h before the potential has damped it.
 
-use alloc::format;
 use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::error::FilterError;
+use crate::grid::cross::CrossDiffusion;
 use crate::grid::TensorGrid;
 use crate::model::dmz::DmzCoefficients;
 use crate::model::Model;
@@ -38,8 +40,12 @@ pub struct KolmogorovOperator {
     pub s_inv_h: Vec<Vec<f64>>,
     /// Q_dd; with a state-dependent Q, the largest `a_dd` on the grid.
     pub diffusion: Vec<f64>,
-    /// A state-dependent diagonal: `varying[d][i] = a_dd(s_i)`, or `None` for a constant Q.
+    /// A state-dependent diagonal: `varying[d][i] = a_dd(s_i)`, or `None` for a constant
+    /// diagonal Q (with mixed terms, the diagonal less the share they take).
     pub varying: Option<Vec<Vec<f64>>>,
+    /// The mixed terms `Σ_{l<k} ∂_l∂_k(a_lk u)` as an explicit positive step
+    /// (`grid::cross`); empty for a diagonal Q.
+    pub cross: CrossDiffusion,
 }
 
 impl KolmogorovOperator {
@@ -52,18 +58,12 @@ impl KolmogorovOperator {
     ) -> Result<Self, FilterError> {
         let n = model.n;
         let noise = model.process_noise();
-        let (diffusion, varying) = match noise.constant() {
+        let diagonal_q = noise
+            .constant()
+            .filter(|q| (0..n).all(|i| (0..n).all(|j| i == j || q[(i, j)] == 0.0)));
+        let mut cross = CrossDiffusion::default();
+        let (diffusion, varying) = match diagonal_q {
             Some(q_mat) => {
-                for i in 0..n {
-                    for j in 0..n {
-                        if i != j && q_mat[(i, j)] != 0.0 {
-                            return Err(FilterError::Unsuitable(format!(
-                                "the Yau–Yau finite-difference filters need a diagonal Q = G Gᵀ; Q[{i}][{j}] = {}",
-                                q_mat[(i, j)]
-                            )));
-                        }
-                    }
-                }
                 let diffusion: Vec<f64> = (0..n).map(|d| q_mat[(d, d)]).collect();
                 if diffusion.iter().any(|&v| v <= 0.0) {
                     return Err(FilterError::Unsuitable(
@@ -73,13 +73,12 @@ impl KolmogorovOperator {
                 (diffusion, None)
             }
             None => {
-                let table = noise.tabulate_diagonal(n, grid.len(), |i, x| grid.node(i, x));
-                table.require_diagonal(
-                    "the Yau–Yau finite-difference filters",
-                    "000 (2) with a diagonal Q",
-                )?;
-                let largest = table
-                    .diagonal
+                let who = "the Yau–Yau finite-difference filters";
+                let table = noise.tabulate(n, grid.len(), |i, x| grid.node(i, x));
+                table.require_finite(who)?;
+                cross = CrossDiffusion::new(grid, &table.off);
+                let left = cross.diagonal_left(who, grid, table.diagonal)?;
+                let largest = left
                     .iter()
                     .map(|a| a.iter().fold(0.0, |m: f64, &v| m.max(v)))
                     .collect::<Vec<f64>>();
@@ -88,7 +87,7 @@ impl KolmogorovOperator {
                         "the Yau–Yau filters need a positive diffusion in every dimension somewhere on the grid".into(),
                     ));
                 }
-                (largest, Some(table.diagonal))
+                (largest, Some(left))
             }
         };
         let c = DmzCoefficients::tabulate(model, "the Yau–Yau filters", grid.len(), |i, x| {
@@ -115,6 +114,7 @@ impl KolmogorovOperator {
             s_inv_h,
             diffusion,
             varying,
+            cross,
         })
     }
 
