@@ -215,37 +215,35 @@ impl ContinuousDiscreteGrid {
         let requested = libm::ceil(interval / self.target_dt - 1e-9).max(1.0);
         let mut steps = requested;
         let mut x = vec![0.0; self.grid.dim()];
-        if self.scheme == FpeScheme::Separation {
-            let (rate, idx) = self.advection.courant_rate(&self.grid);
+        // An explicit part with a rate bound: Δt ≤ 1/rate, sub-stepping (with a note) if not.
+        let mut explicit = |what: &str, (rate, idx): (f64, usize), steps: &mut f64| {
             let needed = libm::ceil(rate * interval);
-            if needed > steps {
+            if needed > *steps {
                 self.grid.node(idx, &mut x);
                 notes.push(format!(
-                    "(16)/(23) CFL: Σ|f_l|Δt/Δx_l reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
-                    rate * interval / requested,
+                    "{what} reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
+                    rate * interval / *steps,
                     rounded(&x),
-                    interval / requested,
+                    interval / *steps,
                     interval / needed,
                     needed
                 ));
-                steps = needed;
+                *steps = needed;
             }
+        };
+        if self.scheme == FpeScheme::Separation {
+            explicit(
+                "(16)/(23) CFL: Σ|f_l|Δt/Δx_l",
+                self.advection.courant_rate(&self.grid),
+                &mut steps,
+            );
         }
         if !self.cross.is_empty() {
-            let (rate, idx) = self.cross.rate_bound(self.grid.len());
-            let needed = libm::ceil(rate * interval);
-            if needed > steps {
-                self.grid.node(idx, &mut x);
-                notes.push(format!(
-                    "mixed terms of Q = G Gᵀ (an explicit step): Σ_(l<k) |a_lk| Δt/(Δx_l Δx_k) reaches {:.3} at x = {:?} with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval)",
-                    rate * interval / steps,
-                    rounded(&x),
-                    interval / steps,
-                    interval / needed,
-                    needed
-                ));
-                steps = needed;
-            }
+            explicit(
+                "mixed terms of Q = G Gᵀ (an explicit step): Σ_(l<k) |a_lk| Δt/(Δx_l Δx_k)",
+                self.cross.rate_bound(self.grid.len()),
+                &mut steps,
+            );
         }
         let (min_div, idx) =
             self.divergence
