@@ -129,23 +129,28 @@ fn unsuitable_models_are_refused_with_the_reason() {
     .expect_err("refused");
     assert!(err.to_string().contains("discrete measurements"), "{err}");
 
+    // A correlated Q (a₁₂ = 0.5): taken on square cells, refused on cells 4 times as long
+    // along x₂ (the mixed term would need a₂₂ = 1.25 ≥ 0.5 · 4).
     let mut c = presets::preset("sa-example-2").expect("preset");
     c.model.diffusion = Some(vec![vec![1.0, 0.0], vec![0.5, 1.0]].into());
     let e = experiment(c);
-    let err = ContinuousDiscreteGrid::new(
-        "SA".into(),
-        FpeScheme::Separation,
-        e.model(),
-        e.prior(),
-        &FpeParams {
-            cells: vec![20],
-            dt: 0.01,
-        },
-        &e.config().bounds(),
-        0.2,
-    )
-    .expect_err("refused");
-    assert!(err.to_string().contains("diagonal of Q"), "{err}");
+    let build = |cells: Vec<usize>| {
+        ContinuousDiscreteGrid::new(
+            "SA".into(),
+            FpeScheme::Separation,
+            e.model(),
+            e.prior(),
+            &FpeParams { cells, dt: 0.01 },
+            &e.config().bounds(),
+            0.2,
+        )
+    };
+    assert!(build(vec![20, 20]).is_ok());
+    let err = build(vec![40, 10]).expect_err("refused");
+    assert!(
+        err.to_string().contains("mixed terms of Q") && err.to_string().contains("a_22"),
+        "{err}"
+    );
 
     let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["0.1*x^2".into()];

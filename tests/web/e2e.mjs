@@ -1079,6 +1079,19 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.click('#apply');
   await page.waitForFunction(() => window.zakaiPage.base.model.noise.kind === 'poisson', null, { timeout: 10000 });
   await page.screenshot({ path: `${artifacts}/noise-kinds.png` });
+  // A diffusion G(x): the interest-rate preset's G cell is a text field holding its
+  // expression in x; a mistake there is named at G; the applied scenario carries what was typed.
+  await load(`${url}?preset=interest-rate`, 'interest-rate');
+  const gCell = '#diffusion input[data-cell="0,0"]';
+  assert.equal(await page.getAttribute(gCell, 'type'), 'text', 'G(x) cells take expressions');
+  assert.equal(await page.inputValue(gCell), '0.35*sqrt(abs(x))');
+  await page.fill(gCell, '0.35*sqrt(abs(y))');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.diffusion"]').textContent.includes('`y`'), null, { timeout: 5000 });
+  console.log('G(x) error:', await page.textContent('[data-error="model.diffusion"]'));
+  await page.fill(gCell, '0.4*sqrt(abs(x))');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.diffusion"]').textContent === '', null, { timeout: 5000 });
+  await page.click('#apply');
+  await page.waitForFunction(() => JSON.stringify(window.zakaiPage.base.model.diffusion) === '[["0.4*sqrt(abs(x))"]]', null, { timeout: 10000 });
 
   // −5 particles: the field is marked, the message is next to it in plain words.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
