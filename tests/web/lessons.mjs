@@ -443,70 +443,72 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.ok(Math.abs(sc.SA.mse - 0.111) < 0.0005 && Math.abs(sc.UKF.mse - 0.205) < 0.0005, 'MSE 0.111 and 0.205');
   await page.screenshot({ path: `${artifacts}/lesson-outliers.png` });
 
-  // Lesson 11: a diffusion that depends on the state. The SA's density at the kept frames
-  // (mean, sd, skewness, mass below 0) and the UKF's Gaussian mass below 0 there.
-  const keptFrames = () => page.evaluate(() => window.zakaiPage.history.map((h) => {
-    const v = h.densities[0]; const g = h.grid;
-    let mass = 0, m1 = 0, below = 0;
-    for (let k = 0; k < v.length; k++) { mass += v[k]; m1 += v[k] * g[k]; if (g[k] < 0) below += v[k]; }
-    const mean = m1 / mass; let m2 = 0, m3 = 0;
-    for (let k = 0; k < v.length; k++) { const d = g[k] - mean; m2 += v[k] * d * d; m3 += v[k] * d * d * d; }
-    return { t: h.t, mean, sd: Math.sqrt(m2 / mass), skew: (m3 / mass) / Math.pow(m2 / mass, 1.5), below: below / mass };
-  }));
-  // Φ by Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7).
-  const normalCdf = (x) => {
-    const z = Math.abs(x) / Math.SQRT2; const t = 1 / (1 + 0.3275911 * z);
-    const erf = 1 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t * Math.exp(-z * z);
-    return 0.5 * (1 + (x >= 0 ? erf : -erf));
-  };
-  const near = (a, b, tol) => Math.abs(a - b) <= tol;
-  await openLesson('state-dependent-noise');
-  r = await run();
-  sc = await scores();
-  let kept = await keptFrames();
-  console.log('lesson 11:', JSON.stringify(sc), kept.length);
-  assert.equal(await page.evaluate(() => window.zakaiPage.info.methods[0]), 'SA', 'the densities are the SA\'s');
-  assert.equal(kept.length, 41, '41 kept frames');
-  assert.ok(kept.every((f, i) => near(f.t, 1.25 * i, 1e-9)), 'every 1.25 time units');
-  const skews = kept.map((f) => f.skew);
-  assert.ok(skews.every((v) => v > 0), 'leans right at every kept time');
-  assert.ok(near(Math.min(...skews), 0.27, 0.005) && near(Math.max(...skews), 1.09, 0.005), `skewness 0.27 to 1.09: ${Math.min(...skews)}, ${Math.max(...skews)}`);
-  const at = (pick, key) => kept.reduce((a, b) => (pick(b[key], a[key]) ? b : a));
-  const lowest = at((x, y) => x < y, 'mean'), highest = at((x, y) => x > y, 'mean');
-  assert.ok(near(lowest.t, 45, 1e-9) && lowest.skew === Math.max(...skews), 'largest skewness where the mean is lowest, t = 45');
-  assert.ok(near(highest.t, 3.75, 1e-9) && highest.skew === Math.min(...skews), 'smallest where it is highest, t = 3.75');
-  const mostBelow = at((x, y) => x > y, 'below');
-  assert.ok(mostBelow.below <= 0.005 && near(mostBelow.t, 45, 1e-9) && near(mostBelow.below, 0.0046, 0.00005), `at most 0.5 % below 0, 0.46 % at t = 45: ${mostBelow.below} at ${mostBelow.t}`);
-  const ukfBelow = kept.map((f) => {
-    const k = r.times.findIndex((t) => near(t, f.t, 1e-9));
-    const m = r.methods.UKF.est[k], s = r.methods.UKF.sd[k];
-    return { t: f.t, m, s, below: normalCdf(-m / s), sa: f.below };
-  });
-  assert.equal(ukfBelow.filter((u) => u.below > 0.05).length, 16, 'above 5 % at 16 of the 41 times');
-  const worst = ukfBelow.reduce((a, b) => (b.below > a.below ? b : a));
-  console.log('lesson 11, the UKF\'s worst:', JSON.stringify(worst));
-  assert.ok(near(worst.t, 41.25, 1e-9) && near(worst.below, 0.205, 0.0005), '20.5 % at t = 41.25');
-  assert.ok(near(worst.m, 0.087, 0.0005) && near(worst.s, 0.106, 0.0005), 'mean 0.087, sd 0.106');
-  assert.ok(near(worst.sa, 0.0039, 0.00005), 'where the SA has 0.39 % below 0');
-  assert.ok(near(sc.SA.mse, 0.0111, 0.00005) && near(sc['PF(1000)'].mse, 0.0110, 0.00005) && near(sc.UKF.mse, 0.0105, 0.00005), 'MSE 0.0111, 0.0110, 0.0105');
-  const sds = kept.map((f) => f.sd);
-  assert.ok(near(Math.min(...sds), 0.075, 0.0005) && near(Math.max(...sds), 0.18, 0.005), `posterior sd 0.075 to 0.18: ${Math.min(...sds)} ${Math.max(...sds)}`);
-  assert.ok(0.3 / Math.max(...sds) >= 1.65 && 0.3 / Math.min(...sds) <= 4.05, '1.7 to 4 times');
-  assert.ok(r.warnings.includes('UKF: replaces the state-dependent process noise'), `the UKF's Q at the mean named: ${r.warnings}`);
-  assert.ok(!r.warnings.includes('SA:') && !r.warnings.includes('PF(1000):'), 'nothing of the SA or the PF');
-  await page.screenshot({ path: `${artifacts}/lesson-state-noise.png` });
-  await tryThis('a constant noise instead');
-  r = await run();
-  sc = await scores();
-  kept = await keptFrames();
-  const later = kept.filter((f) => f.t >= 1.25 - 1e-9);
-  console.log('lesson 11, constant noise:', JSON.stringify(sc), Math.min(...later.map((f) => f.skew)), Math.max(...later.map((f) => f.skew)), Math.min(...r.truth));
-  assert.ok(later.length === 40 && later.every((f) => Math.abs(f.skew) < 0.03), 'skewness within ±0.03 from t = 1.25');
-  assert.ok(near(kept[0].skew, 0.73, 0.005), 'the prior\'s 0.73');
-  assert.ok(near(Math.min(...r.truth), -0.05, 0.005), 'the truth dips to −0.05');
-  const at45 = kept.find((f) => near(f.t, 45, 1e-9));
-  assert.ok(near(at45.below, 0.228, 0.0005), `22.8 % below 0 at t = 45: ${at45.below}`);
-  assert.ok(near(sc.SA.mse, 0.0112, 0.00005) && near(sc.UKF.mse, 0.0111, 0.00005), 'MSE 0.0112 and 0.0111');
+  {
+    // Lesson 11: a diffusion that depends on the state. The SA's density at the kept frames
+    // (mean, sd, skewness, mass below 0) and the UKF's Gaussian mass below 0 there.
+    const keptFrames = () => page.evaluate(() => window.zakaiPage.history.map((h) => {
+      const v = h.densities[0]; const g = h.grid;
+      let mass = 0, m1 = 0, below = 0;
+      for (let k = 0; k < v.length; k++) { mass += v[k]; m1 += v[k] * g[k]; if (g[k] < 0) below += v[k]; }
+      const mean = m1 / mass; let m2 = 0, m3 = 0;
+      for (let k = 0; k < v.length; k++) { const d = g[k] - mean; m2 += v[k] * d * d; m3 += v[k] * d * d * d; }
+      return { t: h.t, mean, sd: Math.sqrt(m2 / mass), skew: (m3 / mass) / Math.pow(m2 / mass, 1.5), below: below / mass };
+    }));
+    // Φ by Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7).
+    const normalCdf = (x) => {
+      const z = Math.abs(x) / Math.SQRT2; const t = 1 / (1 + 0.3275911 * z);
+      const erf = 1 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t * Math.exp(-z * z);
+      return 0.5 * (1 + (x >= 0 ? erf : -erf));
+    };
+    const near = (a, b, tol) => Math.abs(a - b) <= tol;
+    await openLesson('state-dependent-noise');
+    r = await run();
+    sc = await scores();
+    let kept = await keptFrames();
+    console.log('lesson 11:', JSON.stringify(sc), kept.length);
+    assert.equal(await page.evaluate(() => window.zakaiPage.info.methods[0]), 'SA', 'the densities are the SA\'s');
+    assert.equal(kept.length, 41, '41 kept frames');
+    assert.ok(kept.every((f, i) => near(f.t, 1.25 * i, 1e-9)), 'every 1.25 time units');
+    const skews11 = kept.map((f) => f.skew);
+    assert.ok(skews11.every((v) => v > 0), 'leans right at every kept time');
+    assert.ok(near(Math.min(...skews11), 0.27, 0.005) && near(Math.max(...skews11), 1.09, 0.005), `skewness 0.27 to 1.09: ${Math.min(...skews11)}, ${Math.max(...skews11)}`);
+    const at = (pick, key) => kept.reduce((a, b) => (pick(b[key], a[key]) ? b : a));
+    const lowest = at((x, y) => x < y, 'mean'), highest = at((x, y) => x > y, 'mean');
+    assert.ok(near(lowest.t, 45, 1e-9) && lowest.skew === Math.max(...skews11), 'largest skewness where the mean is lowest, t = 45');
+    assert.ok(near(highest.t, 3.75, 1e-9) && highest.skew === Math.min(...skews11), 'smallest where it is highest, t = 3.75');
+    const mostBelow = at((x, y) => x > y, 'below');
+    assert.ok(mostBelow.below <= 0.005 && near(mostBelow.t, 45, 1e-9) && near(mostBelow.below, 0.0046, 0.00005), `at most 0.5 % below 0, 0.46 % at t = 45: ${mostBelow.below} at ${mostBelow.t}`);
+    const ukfBelow = kept.map((f) => {
+      const k = r.times.findIndex((t) => near(t, f.t, 1e-9));
+      const m = r.methods.UKF.est[k], s = r.methods.UKF.sd[k];
+      return { t: f.t, m, s, below: normalCdf(-m / s), sa: f.below };
+    });
+    assert.equal(ukfBelow.filter((u) => u.below > 0.05).length, 16, 'above 5 % at 16 of the 41 times');
+    const worst = ukfBelow.reduce((a, b) => (b.below > a.below ? b : a));
+    console.log('lesson 11, the UKF\'s worst:', JSON.stringify(worst));
+    assert.ok(near(worst.t, 41.25, 1e-9) && near(worst.below, 0.205, 0.0005), '20.5 % at t = 41.25');
+    assert.ok(near(worst.m, 0.087, 0.0005) && near(worst.s, 0.106, 0.0005), 'mean 0.087, sd 0.106');
+    assert.ok(near(worst.sa, 0.0039, 0.00005), 'where the SA has 0.39 % below 0');
+    assert.ok(near(sc.SA.mse, 0.0111, 0.00005) && near(sc['PF(1000)'].mse, 0.0110, 0.00005) && near(sc.UKF.mse, 0.0105, 0.00005), 'MSE 0.0111, 0.0110, 0.0105');
+    const sds = kept.map((f) => f.sd);
+    assert.ok(near(Math.min(...sds), 0.075, 0.0005) && near(Math.max(...sds), 0.18, 0.005), `posterior sd 0.075 to 0.18: ${Math.min(...sds)} ${Math.max(...sds)}`);
+    assert.ok(0.3 / Math.max(...sds) >= 1.65 && 0.3 / Math.min(...sds) <= 4.05, '1.7 to 4 times');
+    assert.ok(r.warnings.includes('UKF: replaces the state-dependent process noise'), `the UKF's Q at the mean named: ${r.warnings}`);
+    assert.ok(!r.warnings.includes('SA:') && !r.warnings.includes('PF(1000):'), 'nothing of the SA or the PF');
+    await page.screenshot({ path: `${artifacts}/lesson-state-noise.png` });
+    await tryThis('a constant noise instead');
+    r = await run();
+    sc = await scores();
+    kept = await keptFrames();
+    const later = kept.filter((f) => f.t >= 1.25 - 1e-9);
+    console.log('lesson 11, constant noise:', JSON.stringify(sc), Math.min(...later.map((f) => f.skew)), Math.max(...later.map((f) => f.skew)), Math.min(...r.truth));
+    assert.ok(later.length === 40 && later.every((f) => Math.abs(f.skew) < 0.03), 'skewness within ±0.03 from t = 1.25');
+    assert.ok(near(kept[0].skew, 0.73, 0.005), 'the prior\'s 0.73');
+    assert.ok(near(Math.min(...r.truth), -0.05, 0.005), 'the truth dips to −0.05');
+    const at45 = kept.find((f) => near(f.t, 45, 1e-9));
+    assert.ok(near(at45.below, 0.228, 0.0005), `22.8 % below 0 at t = 45: ${at45.below}`);
+    assert.ok(near(sc.SA.mse, 0.0112, 0.00005) && near(sc.UKF.mse, 0.0111, 0.00005), 'MSE 0.0112 and 0.0111');
+  }
 
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
