@@ -423,7 +423,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const csp = await page.getAttribute('meta[http-equiv="Content-Security-Policy"]', 'content');
   assert.ok(csp && !csp.includes("'unsafe-eval'") && !/script-src[^;]*'unsafe-inline'/.test(csp), `CSP without unsafe-eval: ${csp}`);
   const textFields = await page.$$eval('#form input:not([type]), #form input[type="text"], #form textarea, #methods input[type="text"]',
-    (els) => els.map((e) => (e.id ? `#${e.id}` : (e.dataset.field ? `[data-field="${e.dataset.field}"]` : `[data-row="${e.dataset.row}"][data-param="${e.dataset.param}"]`))));
+    (els) => els.filter((e) => !e.disabled).map((e) => (e.id ? `#${e.id}` : (e.dataset.field ? `[data-field="${e.dataset.field}"]`
+      : (e.dataset.cell ? `#${e.closest('[id]').id} [data-cell="${e.dataset.cell}"]` : `[data-row="${e.dataset.row}"][data-param="${e.dataset.param}"]`)))));
   assert.ok(textFields.length >= 8, `text fields found: ${textFields}`);
   // Expressions first: the model's validation quotes them in its messages.
   const fillHostile = async (sel) => {

@@ -531,8 +531,26 @@ impl ScenarioConfig {
             }
         } else if let Some(g) = &self.model.diffusion {
             let before = p.len();
-            let g = g.resolve(&names, "model.diffusion", &mut p);
-            match matrix(&g, n) {
+            let resolved = g.resolve(&names, "model.diffusion", &mut p);
+            if unresolved(&p, before) {
+                // An entry that is neither a number nor an expression in the parameters is
+                // reported as what it may also be, an expression in the state (G(x)), so that
+                // the message lists the state variables among those allowed.
+                p.truncate(before);
+                for (i, row) in g.0.iter().enumerate() {
+                    for (j, c) in row.iter().enumerate() {
+                        if let Some(t) = c.text() {
+                            if let Err(e) = check_expression("diffusion", t, n, &names) {
+                                p.push(ConfigProblem::new(
+                                    format!("model.diffusion[{i}][{j}]"),
+                                    e.to_string(),
+                                ));
+                            }
+                        }
+                    }
+                }
+            }
+            match matrix(&resolved, n) {
                 _ if unresolved(&p, before) => {}
                 None => p.push(ConfigProblem::new(
                     "model.diffusion",
