@@ -244,6 +244,9 @@ impl SpectralSolve {
 #[derive(Clone, Debug)]
 struct QiemStep {
     spectral: SpectralSolve,
+    /// The mixed terms of a constant Q, an explicit step before the rest
+    /// ([`KolmogorovOperator::cross`]).
+    cross: crate::grid::cross::CrossDiffusion,
     fourth_order: bool,
     /// `e^{Δt q}` or `1 + Δt q` per node.
     potential: Vec<f64>,
@@ -277,6 +280,7 @@ impl QiemStep {
             } else {
                 SpectralSolve::new(op, grid, dt)
             },
+            cross: op.cross.clone(),
             fourth_order,
             potential,
             weighted_drift,
@@ -299,10 +303,19 @@ impl QiemStep {
             self.fourth_order,
         );
         core::mem::swap(u, tmp);
+        if !self.cross.is_empty() {
+            self.cross.step_transposed(grid, self.dt, u, tmp);
+            core::mem::swap(u, tmp);
+        }
     }
 
-    /// One step from `u` (left in `tmp`) to the new density in `u` (the two swap places).
+    /// One step from `u` (left in `tmp`) to the new density in `u` (the two swap places): the
+    /// mixed terms' explicit step when Q has them, then (18).
     fn step(&mut self, grid: &TensorGrid, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+        if !self.cross.is_empty() {
+            self.cross.step(grid, self.dt, u, tmp);
+            core::mem::swap(u, tmp);
+        }
         let (drift, weight) = (&self.weighted_drift, &self.potential);
         explicit_part(grid, drift, weight, u, self.dt, tmp, self.fourth_order);
         core::mem::swap(u, tmp);
@@ -534,10 +547,14 @@ impl YauYauFilter {
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
         let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
-        if op.varying.is_some() && scheme != Scheme::Iem {
+        if op.state_dependent && scheme != Scheme::Iem {
             return Err(FilterError::Unsuitable(format!(
-                "{name} needs a constant diagonal Q = G Gᵀ: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's {}; IEM takes it (its tridiagonal systems take a(x) node by node, mixed terms as an explicit step)",
-                if op.cross.is_empty() { "G depends on the state" } else { "Q has mixed terms" }
+                "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
+            )));
+        }
+        if !op.cross.is_empty() && scheme == Scheme::Qiem4 {
+            return Err(FilterError::Unsuitable(format!(
+                "{name} needs a diagonal Q = G Gᵀ: the mixed terms' explicit step is second order and would spoil the fourth-order scheme; QIEM and IEM take them"
             )));
         }
         if scheme == Scheme::Qiem4 {

@@ -144,9 +144,9 @@ macro_rules! yau_yau_method {
                 let mixed = problem.model.process_noise().constant().is_some_and(|q| {
                     (0..n).any(|i| (0..n).any(|j| i != j && q[(i, j)] != 0.0))
                 });
-                if mixed && $scheme != Scheme::Iem {
+                if mixed && $scheme == Scheme::Qiem4 {
                     return Err(format!(
-                        "{} needs a diagonal Q = G Gᵀ: its DST solve (000 (18)) diagonalises ½ Σ Q_dd ∂²/∂s_d², and this model's Q has mixed terms; IEM takes them as an explicit step",
+                        "{} needs a diagonal Q = G Gᵀ: the mixed terms' explicit step is second order and would spoil the fourth-order scheme; QIEM and IEM take them",
                         $name
                     ));
                 }

@@ -43,6 +43,8 @@ pub struct KolmogorovOperator {
     /// A state-dependent diagonal: `varying[d][i] = a_dd(s_i)`, or `None` for a constant
     /// diagonal Q (with mixed terms, the diagonal less the share they take).
     pub varying: Option<Vec<Vec<f64>>>,
+    /// Whether Q depends on the state (only IEM takes it then).
+    pub state_dependent: bool,
     /// The mixed terms `Σ_{l<k} ∂_l∂_k(a_lk u)` as an explicit positive step
     /// (`grid::cross`); empty for a diagonal Q.
     pub cross: CrossDiffusion,
@@ -114,6 +116,7 @@ impl KolmogorovOperator {
             s_inv_h,
             diffusion,
             varying,
+            state_dependent: noise.constant().is_none(),
             cross,
         })
     }
