@@ -7,6 +7,9 @@
 //!     dy = h(x) dt + dw        (continuous)   or   z_k = h(x_k) + v_k   (discrete)
 //! ```
 //!
+//! (and beyond the papers: measurements from any density `p(z | x)`, [`MeasurementDensity`];
+//! a diffusion `G(x)` that depends on the state, [`Model::with_state_diffusion`])
+//!
 //! from its observations, with the methods of five papers on the Yau–Yau method and its
 //! relatives beside the classic references:
 //!
