@@ -503,7 +503,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     const later = kept.filter((f) => f.t >= 1.25 - 1e-9);
     console.log('lesson 11, constant noise:', JSON.stringify(sc), Math.min(...later.map((f) => f.skew)), Math.max(...later.map((f) => f.skew)), Math.min(...r.truth));
     assert.ok(later.length === 40 && later.every((f) => Math.abs(f.skew) < 0.03), 'skewness within ±0.03 from t = 1.25');
-    assert.ok(near(kept[0].skew, 0.73, 0.005), 'the prior\'s 0.73');
+    assert.ok(near(kept[0].skew, 0.73, 0.005), 'at t = 0, after the first measurement, 0.73');
     assert.ok(near(Math.min(...r.truth), -0.05, 0.005), 'the truth dips to −0.05');
     const at45 = kept.find((f) => near(f.t, 45, 1e-9));
     assert.ok(near(at45.below, 0.228, 0.0005), `22.8 % below 0 at t = 45: ${at45.below}`);

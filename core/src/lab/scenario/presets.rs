@@ -507,8 +507,8 @@ fn interest_rate() -> ScenarioConfig {
             (model.diffusion holds an expression in x), the particle filter moves each particle \
             with its own G(x), the UKF takes Q at its mean (said in the run's warnings). Look \
             for: with the default seed 1 the estimates are close (MSE SA 0.0111, PF 0.0110, \
-            UKF 0.0105; one run cannot rank them) but the densities are not: the SA's leans \
-            right at every kept time (skewness 0.27 to 1.09) and has at most 0.5 % of its mass \
+            UKF 0.0105; one run cannot rank them) but the densities are not: the SA's is \
+            skewed right at every kept time (skewness 0.27 to 1.09) and has at most 0.5 % of its mass \
             below 0, while the UKF's Gaussian gives a negative rate up to 20.5 % (t = 41.25).",
         drift: &["0.5*(0.25 - x)"],
         observation: &["x"],
