@@ -778,15 +778,10 @@ fn smooth_writes_the_smoothed_estimates_beside_the_filtered() {
 
 include!("../../core/examples/data/nile.rs");
 
-/// A recorded series through the CLI with a measurement density beyond Gaussian noise: the
-/// Nile's flow as a local level observed with Student-t noise (ν = 4, σ = 100: the 1913 low
-/// of 456 is an outlier to it), with ten years missing and 1950 dropped (a two-year step).
-/// `zakai filter` runs the separation approach, the particle filter and the UKF; the SA is
-/// held against a point-mass filter written here (the local level's Gaussian transition on a
-/// fine grid, the t density in a few lines), the UKF's moment match is named in its warnings.
-#[test]
-fn filter_takes_student_t_noise_on_a_recorded_series() {
-    let (q, nu, sigma) = (1500.0f64, 4.0f64, 100.0f64);
+/// The Nile's flow as the recorded series of a test: years 1901–1910 unknown and 1950 dropped
+/// (a gap and an irregular step), filtered by `zakai filter` with `scenario` (JSON) into CSV
+/// rows; returns the times, the measurements (NaN where unknown), the header and the rows.
+fn filter_the_nile(tag: &str, scenario: &str) -> NileRun {
     let mut csv = String::from("t,z1\n");
     let (mut times, mut z) = (Vec::new(), Vec::new());
     for (k, &v) in NILE.iter().enumerate() {
@@ -803,9 +798,63 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
         };
         csv.push_str(&format!("{},{cell}\n", 1871 + k));
     }
-    let obs = temp_file("nile-t-obs.csv", &csv);
-    let scenario = temp_file(
-        "nile-t-scenario.json",
+    let obs = temp_file(&format!("{tag}-obs.csv"), &csv);
+    let scenario = temp_file(&format!("{tag}-scenario.json"), scenario);
+    let out = zakai(&[
+        "filter",
+        scenario.to_str().unwrap(),
+        "--observations",
+        obs.to_str().unwrap(),
+        "--format",
+        "csv",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    NileRun {
+        times,
+        z,
+        head,
+        rows,
+        stderr: err,
+    }
+}
+
+/// What [`filter_the_nile`] returns.
+struct NileRun {
+    times: Vec<f64>,
+    z: Vec<f64>,
+    head: Vec<String>,
+    rows: Vec<Vec<f64>>,
+    stderr: String,
+}
+
+/// A recorded series through the CLI with a measurement density beyond Gaussian noise: the
+/// Nile's flow as a local level observed with Student-t noise (ν = 4, σ = 100: the 1913 low
+/// of 456 is an outlier to it), with ten years missing and 1950 dropped (a two-year step).
+/// `zakai filter` runs the separation approach, the particle filter and the UKF; the SA is
+/// held against a point-mass filter written here (the local level's Gaussian transition on a
+/// fine grid, the t density in a few lines), the UKF's moment match is named in its warnings.
+#[test]
+fn filter_takes_student_t_noise_on_a_recorded_series() {
+    let (q, nu, sigma) = (1500.0f64, 4.0f64, 100.0f64);
+    let NileRun {
+        times,
+        z,
+        head,
+        rows,
+        stderr: err,
+    } = filter_the_nile(
+        "nile-t",
         &format!(
             r#"{{ "name": "nile-t", "model": {{ "drift": ["0"], "observation": ["x"], "diffusion": [[{}]],
                  "noise": {{ "kind": "student_t", "dof": {nu}, "scale": {sigma} }} }},
@@ -816,31 +865,8 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
             q.sqrt()
         ),
     );
-    let out = zakai(&[
-        "filter",
-        scenario.to_str().unwrap(),
-        "--observations",
-        obs.to_str().unwrap(),
-        "--format",
-        "csv",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("UKF") && stderr(&out).contains("moment match"),
-        "{}",
-        stderr(&out)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|c| c.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    assert!(err.contains("UKF") && err.contains("moment match"), "{err}");
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     // The point-mass reference on [−500, 2500], 2 units apart; the transition kernel depends
     // on the distance in cells only.
     let (cells, dx) = (1500usize, 2.0);
@@ -892,25 +918,14 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
 #[test]
 fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
     let (s, r) = (1.2f64, 15000.0f64);
-    let mut csv = String::from("t,z1\n");
-    let (mut times, mut z) = (Vec::new(), Vec::new());
-    for (k, &v) in NILE.iter().enumerate() {
-        if k == 79 {
-            continue;
-        }
-        let value = if (30..40).contains(&k) { f64::NAN } else { v };
-        times.push(1871.0 + k as f64);
-        z.push(value);
-        let cell = if value.is_nan() {
-            String::new()
-        } else {
-            v.to_string()
-        };
-        csv.push_str(&format!("{},{cell}\n", 1871 + k));
-    }
-    let obs = temp_file("nile-sqrt-obs.csv", &csv);
-    let scenario = temp_file(
-        "nile-sqrt-scenario.json",
+    let NileRun {
+        times,
+        z,
+        head,
+        rows,
+        stderr: err,
+    } = filter_the_nile(
+        "nile-sqrt",
         &format!(
             r#"{{ "name": "nile-sqrt", "model": {{ "drift": ["0"], "observation": ["x"],
                  "diffusion": [["{s}*sqrt(abs(x))"]],
@@ -921,31 +936,11 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
                              {{ "method": "pf", "particles": 5000, "substeps": 4 }}, {{ "method": "ukf" }}] }}"#
         ),
     );
-    let out = zakai(&[
-        "filter",
-        scenario.to_str().unwrap(),
-        "--observations",
-        obs.to_str().unwrap(),
-        "--format",
-        "csv",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("UKF") && stderr(&out).contains("state-dependent process noise"),
-        "{}",
-        stderr(&out)
+        err.contains("UKF") && err.contains("state-dependent process noise"),
+        "{err}"
     );
-    let text = String::from_utf8(out.stdout).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|c| c.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     // The point-mass reference on [0, 2500], 2 units apart: per year 4 Euler–Maruyama kernels
     // N(x, s²|x| h), h = 1/4, each column normalised.
     let (cells, dx, h) = (1250usize, 2.0, 0.25);

@@ -7,6 +7,8 @@
 //!
 //! Run: `cargo bench -p zakai --bench diffusion`.
 
+mod common;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::lab::experiment::Experiment;
 use zakai::lab::recording::Recording;
@@ -52,21 +54,7 @@ fn bench_runs(
     for (name, e) in cases {
         for (index, method) in methods.iter().enumerate() {
             group.bench_function(format!("{method}, {name}"), |b| {
-                b.iter(|| {
-                    let mut filter = e
-                        .build_method(&e.config().methods[index], method.to_string(), 3)
-                        .unwrap();
-                    for k in 0..data.times.len() {
-                        let dt = if k == 0 {
-                            0.0
-                        } else {
-                            data.times[k] - data.times[k - 1]
-                        };
-                        let obs = zakai::Observation::measurement(dt, data.observation(k));
-                        filter.step(&obs).unwrap();
-                    }
-                    filter.estimate().mean[0]
-                })
+                b.iter(|| common::whole_run(e, index, method, data))
             });
         }
     }

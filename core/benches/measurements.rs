@@ -6,6 +6,8 @@
 //!
 //! Run: `cargo bench -p zakai --bench measurements`.
 
+mod common;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::lab::experiment::Experiment;
 use zakai::lab::recording::Recording;
@@ -62,21 +64,7 @@ fn families(c: &mut Criterion) {
         let e = Experiment::new(scenario(h, noise)).unwrap();
         for (index, method) in ["SA(200)", "PF(1000)"].iter().enumerate() {
             group.bench_function(format!("{method}, {name}"), |b| {
-                b.iter(|| {
-                    let mut filter = e
-                        .build_method(&e.config().methods[index], method.to_string(), 3)
-                        .unwrap();
-                    for k in 0..data.times.len() {
-                        let dt = if k == 0 {
-                            0.0
-                        } else {
-                            data.times[k] - data.times[k - 1]
-                        };
-                        let obs = zakai::Observation::measurement(dt, data.observation(k));
-                        filter.step(&obs).unwrap();
-                    }
-                    filter.estimate().mean[0]
-                })
+                b.iter(|| common::whole_run(&e, index, method, &data))
             });
         }
     }

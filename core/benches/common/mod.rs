@@ -1,5 +1,8 @@
 //! What several benches share: 004's spectral sizes and a filter stepped through a simulated
-//! run without the experiment driver.
+//! run without the experiment driver, or through recorded measurements with the build.
+
+// Every bench includes this module and uses part of it.
+#![allow(dead_code)]
 
 use criterion::{BatchSize, Bencher};
 use std::hint::black_box;
@@ -59,4 +62,29 @@ pub fn time_bare_runs(
         },
         BatchSize::LargeInput,
     )
+}
+
+/// Builds method `index` of `experiment` (named `name`) and steps it through every row of the
+/// recorded measurements `data`; returns the last estimate's first component. The whole run of
+/// the `measurements` and `diffusion` benches (the build timed with it).
+pub fn whole_run(
+    experiment: &Experiment,
+    index: usize,
+    name: &str,
+    data: &zakai::lab::recording::Recording,
+) -> f64 {
+    let mut filter = experiment
+        .build_method(&experiment.config().methods[index], name.to_string(), 3)
+        .expect("builds");
+    for k in 0..data.times.len() {
+        let dt = if k == 0 {
+            0.0
+        } else {
+            data.times[k] - data.times[k - 1]
+        };
+        filter
+            .step(&Observation::measurement(dt, data.observation(k)))
+            .expect("steps");
+    }
+    filter.estimate().mean[0]
 }
