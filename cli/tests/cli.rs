@@ -829,6 +829,35 @@ fn filter_the_nile(tag: &str, scenario: &str) -> NileRun {
     }
 }
 
+/// A point-mass density `p` on `grid` normalised to weights summing to 1, and its mean and
+/// standard deviation.
+fn normalised_moments(grid: &[f64], p: &mut [f64]) -> (f64, f64) {
+    let mass: f64 = p.iter().sum();
+    p.iter_mut().for_each(|v| *v /= mass);
+    let mean: f64 = grid.iter().zip(p.iter()).map(|(x, w)| x * w).sum();
+    let var: f64 = grid
+        .iter()
+        .zip(p.iter())
+        .map(|(x, w)| (x - mean).powi(2) * w)
+        .sum();
+    (mean, var.sqrt())
+}
+
+/// The SA's estimates within 0.05 and the PF(5000)'s within 0.2 of the point-mass
+/// reference's standard deviations at every row (`reference`: mean and sd per row).
+fn sa_and_pf_follow(head: &[String], rows: &[Vec<f64>], reference: &[(f64, f64)], what: &str) {
+    let worst = |method: &str| {
+        rows.iter()
+            .zip(reference)
+            .map(|(row, (mean, sd))| (row[col(method)] - mean).abs() / sd)
+            .fold(0.0f64, f64::max)
+    };
+    let (sa, pf) = (worst("SA x1"), worst("PF(5000) x1"));
+    println!("{what}: SA within {sa:.4} sd, PF(5000) within {pf:.4} sd of the point-mass filter");
+    assert!(sa < 0.05, "SA {sa} sd from the point-mass filter");
+    assert!(pf < 0.2, "PF {pf} sd from the point-mass filter");
+}
+
 /// What [`filter_the_nile`] returns.
 struct NileRun {
     times: Vec<f64>,
@@ -866,7 +895,6 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
         ),
     );
     assert!(err.contains("UKF") && err.contains("moment match"), "{err}");
-    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     // The point-mass reference on [−500, 2500], 2 units apart; the transition kernel depends
     // on the distance in cells only.
     let (cells, dx) = (1500usize, 2.0);
@@ -874,7 +902,7 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
     let normal =
         |v: f64, var: f64| (-v * v / (2.0 * var)).exp() / (2.0 * std::f64::consts::PI * var).sqrt();
     let mut p: Vec<f64> = grid.iter().map(|x| normal(x - 1120.0, 40000.0)).collect();
-    let (mut worst, mut worst_pf) = (0.0f64, 0.0f64);
+    let mut reference = Vec::new();
     for (k, &zk) in z.iter().enumerate() {
         if k > 0 {
             let var = q * (times[k] - times[k - 1]);
@@ -891,24 +919,9 @@ fn filter_takes_student_t_noise_on_a_recorded_series() {
                 *pi *= (1.0 + r * r / nu).powf(-(nu + 1.0) / 2.0);
             }
         }
-        let mass: f64 = p.iter().sum();
-        p.iter_mut().for_each(|v| *v /= mass);
-        let mean: f64 = grid.iter().zip(&p).map(|(x, w)| x * w).sum();
-        let sd = grid
-            .iter()
-            .zip(&p)
-            .map(|(x, w)| (x - mean).powi(2) * w)
-            .sum::<f64>()
-            .sqrt();
-        worst = worst.max((rows[k][col("SA x1")] - mean).abs() / sd);
-        worst_pf = worst_pf.max((rows[k][col("PF(5000) x1")] - mean).abs() / sd);
+        reference.push(normalised_moments(&grid, &mut p));
     }
-    println!("Nile with t noise: SA within {worst:.4} sd, PF(5000) within {worst_pf:.4} sd of the point-mass filter");
-    assert!(worst < 0.05, "SA {worst} sd from the point-mass filter");
-    assert!(
-        worst_pf < 0.2,
-        "PF {worst_pf} sd from the point-mass filter"
-    );
+    sa_and_pf_follow(&head, &rows, &reference, "Nile with t noise");
 }
 
 /// `zakai filter` on the Nile's flow (a recorded series, years 1901–1910 unknown and 1950
@@ -940,7 +953,6 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
         err.contains("UKF") && err.contains("state-dependent process noise"),
         "{err}"
     );
-    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     // The point-mass reference on [0, 2500], 2 units apart: per year 4 Euler–Maruyama kernels
     // N(x, s²|x| h), h = 1/4, each column normalised.
     let (cells, dx, h) = (1250usize, 2.0, 0.25);
@@ -961,7 +973,7 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
         .iter()
         .map(|x| (-(x - 1120.0) * (x - 1120.0) / 80000.0).exp())
         .collect();
-    let (mut worst, mut worst_pf) = (0.0f64, 0.0f64);
+    let mut reference = Vec::new();
     for (k, &zk) in z.iter().enumerate() {
         if k > 0 {
             let substeps = ((times[k] - times[k - 1]) / h).round() as usize;
@@ -982,22 +994,12 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
                 *pi *= (-(zk - x) * (zk - x) / (2.0 * r)).exp();
             }
         }
-        let mass: f64 = p.iter().sum();
-        p.iter_mut().for_each(|v| *v /= mass);
-        let mean: f64 = grid.iter().zip(&p).map(|(x, w)| x * w).sum();
-        let sd = grid
-            .iter()
-            .zip(&p)
-            .map(|(x, w)| (x - mean).powi(2) * w)
-            .sum::<f64>()
-            .sqrt();
-        worst = worst.max((rows[k][col("SA x1")] - mean).abs() / sd);
-        worst_pf = worst_pf.max((rows[k][col("PF(5000) x1")] - mean).abs() / sd);
+        reference.push(normalised_moments(&grid, &mut p));
     }
-    println!("Nile with G(x) = {s}√|x|: SA within {worst:.4} sd, PF(5000) within {worst_pf:.4} sd of the point-mass filter");
-    assert!(worst < 0.05, "SA {worst} sd from the point-mass filter");
-    assert!(
-        worst_pf < 0.2,
-        "PF {worst_pf} sd from the point-mass filter"
+    sa_and_pf_follow(
+        &head,
+        &rows,
+        &reference,
+        &format!("Nile with G(x) = {s}√|x|"),
     );
 }
