@@ -846,6 +846,7 @@ fn normalised_moments(grid: &[f64], p: &mut [f64]) -> (f64, f64) {
 /// The SA's estimates within 0.05 and the PF(5000)'s within 0.2 of the point-mass
 /// reference's standard deviations at every row (`reference`: mean and sd per row).
 fn sa_and_pf_follow(head: &[String], rows: &[Vec<f64>], reference: &[(f64, f64)], what: &str) {
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     let worst = |method: &str| {
         rows.iter()
             .zip(reference)
