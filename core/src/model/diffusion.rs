@@ -4,10 +4,10 @@
 //!
 //! The Fokker–Planck operator it enters is `½ Σ_ij ∂_i∂_j (a_ij p)` with `a = G Gᵀ` (Risken
 //! 1984); the papers write it for an `a` that does not depend on the state (001 (4), 000 (2),
-//! 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family
-//! says what it does with a state-dependent `a`: the grid filters difference `a p` itself
-//! (conservative, so mass is kept), the spectral filter's off-line operator applies it at its
-//! quadrature nodes, the particle filter and the simulator take `G` at each particle in every
+//! 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family says what it does with a
+//! state-dependent `a` (the catalogue's `state_diffusion`): the grid filters difference `a p`
+//! itself (conservative, so mass is kept) and take its mixed terms as a positive explicit step
+//! (`grid::cross`), the spectral filter's off-line operator applies it at its quadrature nodes, the particle filter and the simulator take `G` at each particle in every
 //! Euler–Maruyama substep, the Kalman family uses `Q(x̂)` at the current mean (an
 //! approximation each names in its warnings), and methods whose derivation needs a constant `G`
 //! (the direct method of 002, the exact Kalman–Bucy and Gaussian-sum references, QIEM's
