@@ -138,17 +138,17 @@ impl CrossDiffusion {
         let (il, ik) = (grid.index_in(m, p.l), grid.index_in(m, p.k));
         let (nl, nk) = (grid.shape()[p.l], grid.shape()[p.k]);
         let (sl, sk) = (grid.stride(p.l), grid.stride(p.k));
-        // m + d with d = e_l ± e_k, and m − d.
-        let up = (il + 1 < nl)
-            .then_some(())
-            .and_then(|_| match p.positive[m] {
-                true => (ik + 1 < nk).then(|| m + sl + sk),
-                false => (ik > 0).then(|| m + sl - sk),
-            });
-        let down = (il > 0).then_some(()).and_then(|_| match p.positive[m] {
-            true => (ik > 0).then(|| m - sl - sk),
-            false => (ik + 1 < nk).then(|| m - sl + sk),
-        });
+        // m + d and m − d with d = e_l + e_k (a_lk ≥ 0) or e_l − e_k: a step up along l goes up
+        // along k in the first case and down in the second.
+        let (k_up, k_down) = (ik + 1 < nk, ik > 0);
+        let up = match p.positive[m] {
+            true => (il + 1 < nl && k_up).then(|| m + sl + sk),
+            false => (il + 1 < nl && k_down).then(|| m + sl - sk),
+        };
+        let down = match p.positive[m] {
+            true => (il > 0 && k_down).then(|| m - sl - sk),
+            false => (il > 0 && k_up).then(|| m - sl + sk),
+        };
         [up, down]
     }
 

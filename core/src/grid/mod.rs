@@ -183,6 +183,16 @@ impl TensorGrid {
         (idx / self.strides[d]) % self.shape[d]
     }
 
+    /// The flat indices of the nodes before and after `idx` along dimension d, `None` past
+    /// the ends of its grid line.
+    pub fn neighbours(&self, idx: usize, d: usize) -> [Option<usize>; 2] {
+        let (j, stride) = (self.index_in(idx, d), self.strides[d]);
+        [
+            (j > 0).then(|| idx - stride),
+            (j + 1 < self.shape[d]).then(|| idx + stride),
+        ]
+    }
+
     /// Advances the odometer `counter` (per-dimension indices from dimension `first` on) and
     /// the coordinates `x` to the next node in storage order.
     fn next_node(&self, counter: &mut [usize], x: &mut [f64], first: usize) {

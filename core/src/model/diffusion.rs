@@ -7,7 +7,8 @@
 //! 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family says what it does with a
 //! state-dependent `a` (the catalogue's `state_diffusion`): the grid filters difference `a p`
 //! itself (conservative, so mass is kept) and take its mixed terms as a positive explicit step
-//! (`grid::cross`), the spectral filter's off-line operator applies it at its quadrature nodes, the particle filter and the simulator take `G` at each particle in every
+//! (`grid::cross`), the spectral filter's off-line operator applies it at its quadrature
+//! nodes, the particle filter and the simulator take `G` at each particle in every
 //! Euler–Maruyama substep, the Kalman family uses `Q(x̂)` at the current mean (an
 //! approximation each names in its warnings), and methods whose derivation needs a constant `G`
 //! (the direct method of 002, the exact Kalman–Bucy and Gaussian-sum references, QIEM's
@@ -115,6 +116,14 @@ impl ProcessNoise {
         }
     }
 
+    /// The constant Q when it is also diagonal (no mixed terms), else `None`.
+    pub fn constant_diagonal(&self) -> Option<&DMatrix<f64>> {
+        self.constant().filter(|q| {
+            let n = q.nrows();
+            (0..n).all(|i| (0..n).all(|j| i == j || q[(i, j)] == 0.0))
+        })
+    }
+
     /// The constant Q that `method` needs, or its refusal: `why` says what in the method's
     /// derivation needs a constant G.
     pub fn require_constant(&self, method: &str, why: &str) -> Result<&DMatrix<f64>, FilterError> {
@@ -127,12 +136,18 @@ impl ProcessNoise {
 
     /// `out += scale · Q(x)`.
     pub fn add_at(&self, x: &[f64], scale: f64, out: &mut DMatrix<f64>) {
+        self.add_at_with(x, scale, out, &mut Vec::new());
+    }
+
+    /// [`ProcessNoise::add_at`] with `entries` as the storage of G(x)'s n² values (grown on
+    /// first use, so that a caller that keeps it allocates once).
+    fn add_at_with(&self, x: &[f64], scale: f64, out: &mut DMatrix<f64>, entries: &mut Vec<f64>) {
         match self {
             ProcessNoise::Constant(q) => out.zip_apply(q, |o, q| *o += scale * q),
             ProcessNoise::StateDependent(g) => {
                 let n = x.len();
-                let mut entries = vec![0.0; n * n];
-                g.eval(x, &mut entries);
+                entries.resize(n * n, 0.0);
+                g.eval(x, entries);
                 for i in 0..n {
                     for j in 0..=i {
                         let v: f64 = (0..n)
@@ -162,9 +177,8 @@ impl ProcessNoise {
     }
 
     /// `a(x)` at each point given by `point(i, x)` for i < len: the diagonal, one vector per
-    /// dimension, the off-diagonal entries that are not zero everywhere, and the largest
-    /// off-diagonal `|a_ij|` relative to `a_ii + a_jj` with where it is (for the grid filters
-    /// that difference the diagonal only).
+    /// dimension, the off-diagonal entries that are not zero everywhere, and the first point
+    /// where it is not finite.
     pub fn tabulate(
         &self,
         n: usize,
@@ -175,14 +189,13 @@ impl ProcessNoise {
         let mut off: Vec<(usize, usize, Vec<f64>)> = (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j, Vec::with_capacity(len))))
             .collect();
-        let mut worst = OffDiagonal::default();
         let mut undefined = None;
         let mut x = vec![0.0; n];
-        let mut q = DMatrix::zeros(n, n);
+        let (mut q, mut entries) = (DMatrix::zeros(n, n), Vec::new());
         for idx in 0..len {
             point(idx, &mut x);
             q.fill(0.0);
-            self.add_at(&x, 1.0, &mut q);
+            self.add_at_with(&x, 1.0, &mut q, &mut entries);
             for (d, column) in diagonal.iter_mut().enumerate() {
                 column.push(q[(d, d)]);
             }
@@ -191,20 +204,6 @@ impl ProcessNoise {
             }
             for (i, j, column) in off.iter_mut() {
                 column.push(q[(*i, *j)]);
-            }
-            for i in 0..n {
-                for j in 0..i {
-                    let size = libm::fabs(q[(i, j)]);
-                    let relative = size / (q[(i, i)] + q[(j, j)]).max(f64::MIN_POSITIVE);
-                    if size > 0.0 && (relative > worst.relative || relative.is_nan()) {
-                        worst = OffDiagonal {
-                            relative,
-                            entry: (i, j),
-                            value: q[(i, j)],
-                            at: x.clone(),
-                        };
-                    }
-                }
             }
             if matches!(self, ProcessNoise::Constant(_)) && idx == 0 {
                 // The same everywhere: fill the rest without re-evaluating.
@@ -223,34 +222,18 @@ impl ProcessNoise {
         DiffusionTable {
             diagonal,
             off,
-            worst,
             undefined,
         }
     }
 }
 
-/// The largest off-diagonal entry of Q found by [`ProcessNoise::tabulate`].
-#[derive(Clone, Debug, Default)]
-pub struct OffDiagonal {
-    /// `|a_ij| / (a_ii + a_jj)`.
-    pub relative: f64,
-    /// (i, j), zero-based.
-    pub entry: (usize, usize),
-    /// `a_ij`.
-    pub value: f64,
-    /// The point.
-    pub at: Vec<f64>,
-}
-
-/// `a(x)` at the points of a grid, and the largest off-diagonal entry.
+/// `a(x)` at the points of a grid, and where it is not finite.
 #[derive(Clone, Debug)]
 pub struct DiffusionTable {
     /// `diagonal[d][i] = a_dd(x_i)`.
     pub diagonal: Vec<Vec<f64>>,
     /// `(i, j, a_ij at every point)` for i < j, where not zero everywhere.
     pub off: Vec<(usize, usize, Vec<f64>)>,
-    /// The largest off-diagonal entry met.
-    pub worst: OffDiagonal,
     /// The first point where Q is not finite.
     pub undefined: Option<Vec<f64>>,
 }
@@ -264,22 +247,5 @@ impl DiffusionTable {
             ))),
             None => Ok(()),
         }
-    }
-
-    /// The refusal of a method that differences only the diagonal of `a` (`scheme` names the
-    /// equation), when an off-diagonal entry is not negligible or Q is not finite somewhere.
-    pub fn require_diagonal(&self, method: &str, scheme: &str) -> Result<(), FilterError> {
-        self.require_finite(method)?;
-        let w = &self.worst;
-        if w.relative > 1e-12 || w.relative.is_nan() {
-            return Err(FilterError::Unsuitable(format!(
-                "{method}: {scheme} discretises only the diagonal of Q = G Gᵀ, and this model has Q[{}][{}] = {:.4} at x = {:.3?}",
-                w.entry.0 + 1,
-                w.entry.1 + 1,
-                w.value,
-                w.at
-            )));
-        }
-        Ok(())
     }
 }

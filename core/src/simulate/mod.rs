@@ -147,9 +147,9 @@ pub fn simulate(
                 )));
             }
             let xi = standard_normal_vector(rng, n);
-            let v = DMatrix::from_row_slice(n, n, &g) * xi;
-            for i in 0..n {
-                x[i] += fx[i] * dt + v[i] * sqrt_dt;
+            for (i, row) in g.chunks_exact(n).enumerate() {
+                let v: f64 = row.iter().zip(xi.iter()).map(|(g, xi)| g * xi).sum();
+                x[i] += fx[i] * dt + v * sqrt_dt;
             }
         }
         measure(&x, rng, row, &mut hx)?;

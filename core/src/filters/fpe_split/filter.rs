@@ -283,20 +283,10 @@ impl ContinuousDiscreteGrid {
     fn peclet_warning(&self) -> Option<String> {
         let mut worst = (0.0, 0, 0);
         for l in 0..self.grid.dim() {
-            let (stride, cells, dx) = (
-                self.grid.stride(l),
-                self.grid.shape()[l],
-                self.grid.spacing()[l],
-            );
-            let a = &self.diffusion[l];
+            let (dx, a) = (self.grid.spacing()[l], &self.diffusion[l]);
             for (idx, f) in self.advection.velocity(l).iter().enumerate() {
-                let i = self.grid.index_in(idx, l);
-                let below = if i > 0 { a[idx - stride] } else { a[idx] };
-                let above = if i + 1 < cells {
-                    a[idx + stride]
-                } else {
-                    a[idx]
-                };
+                // a at the neighbours (the cell's own where its line ends).
+                let [below, above] = self.grid.neighbours(idx, l).map(|n| a[n.unwrap_or(idx)]);
                 let pe = libm::fabs(*f) * dx / below.min(above);
                 if pe > worst.0 || pe.is_nan() {
                     worst = (pe, l, idx);

@@ -70,7 +70,7 @@ impl ImplicitStep {
             .iter()
             .enumerate()
             .map(|(l, a)| {
-                let (dx, stride) = (grid.spacing()[l], grid.stride(l));
+                let dx = grid.spacing()[l];
                 let diff = |idx: usize| 0.5 * dt * a[idx] / (dx * dx);
                 let adv = |idx: usize| match part {
                     ImplicitPart::Parabolic => 0.0,
@@ -79,21 +79,11 @@ impl ImplicitStep {
                 // Row i's coefficients of P[i − 1] and P[i + 1] (a at those cells); the first
                 // and last cell of a line have no such neighbour, and the factors never read
                 // those entries.
-                let last = grid.shape()[l] - 1;
                 let lower: Vec<f64> = (0..grid.len())
-                    .map(|i| match grid.index_in(i, l) {
-                        0 => 0.0,
-                        _ => -diff(i - stride) - adv(i),
-                    })
+                    .map(|i| grid.neighbours(i, l)[0].map_or(0.0, |b| -diff(b) - adv(i)))
                     .collect();
                 let upper = (0..grid.len())
-                    .map(|i| {
-                        if grid.index_in(i, l) == last {
-                            0.0
-                        } else {
-                            -diff(i + stride) + adv(i)
-                        }
-                    })
+                    .map(|i| grid.neighbours(i, l)[1].map_or(0.0, |b| -diff(b) + adv(i)))
                     .collect();
                 let diag = divergence
                     .iter()

@@ -42,12 +42,9 @@ fn memory(p: &FpeParams, n: usize) -> Option<usize> {
 /// A state-dependent or correlated `a` fits the cells (finite, mixed terms positive): tabulated
 /// on the grid the filter would build, only when `a` can have mixed terms or vary.
 fn mixed_terms_fit(name: &str, problem: &ProblemContext, p: &FpeParams) -> Result<(), String> {
-    let q = problem.model.process_noise();
     let n = problem.model.n;
-    if let Some(q) = q.constant() {
-        if (0..n).all(|i| (0..n).all(|j| i == j || q[(i, j)] == 0.0)) {
-            return Ok(());
-        }
+    if problem.model.process_noise().constant_diagonal().is_some() {
+        return Ok(());
     }
     if !p.problems(n).is_empty() {
         return Ok(()); // reported with the parameters

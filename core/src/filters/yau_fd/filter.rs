@@ -33,9 +33,8 @@ use crate::model::{Model, Prior};
 #[derive(Clone, Debug)]
 struct SplitIem {
     axes: Vec<AxisSystem>,
-    /// The mixed terms of Q, an explicit step of `dt` before the axes ([`crate::grid::cross`]).
+    /// The mixed terms of Q, an explicit step of `dt` before the axes (`grid::cross`).
     cross: crate::grid::cross::CrossDiffusion,
-    grid: TensorGrid,
     dt: f64,
 }
 
@@ -59,24 +58,15 @@ impl SplitIem {
                 let (stride, n) = (grid.stride(d), grid.shape()[d]);
                 let ds = grid.spacing()[d];
                 let len = grid.len();
-                // a at the neighbours along d (the line's ends have none; their entries are
-                // never read).
-                let below = |i: usize| match grid.index_in(i, d) {
-                    0 => 0.0,
-                    _ => op.a(d, i - stride),
-                };
-                let above = |i: usize| {
-                    if grid.index_in(i, d) + 1 == n {
-                        0.0
-                    } else {
-                        op.a(d, i + stride)
-                    }
-                };
+                // a at the neighbour before (side 0) or after (1) along d; the line's ends have
+                // none, and their entries are never read.
+                let at =
+                    |i: usize, side: usize| grid.neighbours(i, d)[side].map_or(0.0, |n| op.a(d, n));
                 let sub: Vec<f64> = (0..len)
-                    .map(|i| below(i) / (2.0 * ds * ds) - op.p[d][i] / (2.0 * ds))
+                    .map(|i| at(i, 0) / (2.0 * ds * ds) - op.p[d][i] / (2.0 * ds))
                     .collect();
                 let sup: Vec<f64> = (0..len)
-                    .map(|i| above(i) / (2.0 * ds * ds) + op.p[d][i] / (2.0 * ds))
+                    .map(|i| at(i, 1) / (2.0 * ds * ds) + op.p[d][i] / (2.0 * ds))
                     .collect();
                 let dia: Vec<f64> = (0..len)
                     .map(|i| -op.a(d, i) / (ds * ds) + op.q[i] / dims as f64)
@@ -105,7 +95,6 @@ impl SplitIem {
         SplitIem {
             axes,
             cross: op.cross.clone(),
-            grid: grid.clone(),
             dt,
         }
     }
@@ -113,10 +102,10 @@ impl SplitIem {
     /// The transpose of [`SplitIem::step`]: the dimensions in reverse order, each as the
     /// transposed implicit solve and then the transposed explicit rows (the backward step of
     /// a smoother).
-    fn step_transposed(&self, u: &mut [f64], tmp: &mut [f64]) {
+    fn step_transposed(&self, grid: &TensorGrid, u: &mut [f64], tmp: &mut [f64]) {
         self.transposed_axes(u, tmp);
         if !self.cross.is_empty() {
-            self.cross.step_transposed(&self.grid, self.dt, u, tmp);
+            self.cross.step_transposed(grid, self.dt, u, tmp);
             u.copy_from_slice(tmp);
         }
     }
@@ -146,9 +135,9 @@ impl SplitIem {
     }
 
     /// The mixed terms' explicit step, then one θ-step per dimension, using `tmp`.
-    fn step(&self, u: &mut [f64], tmp: &mut [f64]) {
+    fn step(&self, grid: &TensorGrid, u: &mut [f64], tmp: &mut [f64]) {
         if !self.cross.is_empty() {
-            self.cross.step(&self.grid, self.dt, u, tmp);
+            self.cross.step(grid, self.dt, u, tmp);
             u.copy_from_slice(tmp);
         }
         for ax in &self.axes {
@@ -909,8 +898,8 @@ impl Solver {
             Solver::Iem(tri) => {
                 for _ in 0..substeps {
                     match transposed {
-                        false => tri.step(u, tmp),
-                        true => tri.step_transposed(u, tmp),
+                        false => tri.step(grid, u, tmp),
+                        true => tri.step_transposed(grid, u, tmp),
                     }
                 }
             }
@@ -1046,7 +1035,7 @@ mod tests {
             u[spike] = 1.0;
             let mut tmp = vec![0.0; grid.len()];
             for _ in 0..30 {
-                iem.step(&mut u, &mut tmp);
+                iem.step(&grid, &mut u, &mut tmp);
                 lowest = u.iter().copied().fold(lowest, f64::min);
             }
         }

@@ -59,20 +59,9 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
     let mut out = Vec::new();
     for d in 0..grid.dim() {
         let ds = grid.spacing()[d];
-        let (stride, cells) = (grid.stride(d), grid.shape()[d]);
         // a at the node's neighbours along d (the node's own where the line ends).
         let neighbours = |i: usize| {
-            let j = grid.index_in(i, d);
-            let below = if j > 0 {
-                op.a(d, i - stride)
-            } else {
-                op.a(d, i)
-            };
-            let above = if j + 1 < cells {
-                op.a(d, i + stride)
-            } else {
-                op.a(d, i)
-            };
+            let [below, above] = grid.neighbours(i, d).map(|n| op.a(d, n.unwrap_or(i)));
             below.min(above)
         };
         let (ratio, idx) = worst_node(grid, |i| libm::fabs(op.p[d][i]) * ds / neighbours(i));
@@ -113,14 +102,8 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
         }
         (0..grid.dim())
             .map(|d| {
-                let (stride, cells, ds) = (grid.stride(d), grid.shape()[d], grid.spacing()[d]);
-                let j = grid.index_in(i, d);
-                let below = if j > 0 { op.a(d, i - stride) } else { 0.0 };
-                let above = if j + 1 < cells {
-                    op.a(d, i + stride)
-                } else {
-                    0.0
-                };
+                let ds = grid.spacing()[d];
+                let [below, above] = grid.neighbours(i, d).map(|n| n.map_or(0.0, |n| op.a(d, n)));
                 (below - 2.0 * op.a(d, i) + above) / (2.0 * ds * ds)
             })
             .sum()

@@ -140,10 +140,9 @@ macro_rules! yau_yau_method {
             }
             fn suitability(problem: &ProblemContext, _: &YauYauParams) -> Result<(), String> {
                 dmz_suitability(problem)?;
-                let n = problem.model.n;
-                let mixed = problem.model.process_noise().constant().is_some_and(|q| {
-                    (0..n).any(|i| (0..n).any(|j| i != j && q[(i, j)] != 0.0))
-                });
+                let q = problem.model.process_noise();
+                // A state-dependent Q is refused by every scheme but IEM already.
+                let mixed = q.constant().is_some() && q.constant_diagonal().is_none();
                 if mixed && $scheme == Scheme::Qiem4 {
                     return Err(format!(
                         "{} needs a diagonal Q = G Gᵀ: the mixed terms' explicit step is second order and would spoil the fourth-order scheme; QIEM and IEM take them",

@@ -60,11 +60,8 @@ impl KolmogorovOperator {
     ) -> Result<Self, FilterError> {
         let n = model.n;
         let noise = model.process_noise();
-        let diagonal_q = noise
-            .constant()
-            .filter(|q| (0..n).all(|i| (0..n).all(|j| i == j || q[(i, j)] == 0.0)));
         let mut cross = CrossDiffusion::default();
-        let (diffusion, varying) = match diagonal_q {
+        let (diffusion, varying) = match noise.constant_diagonal() {
             Some(q_mat) => {
                 let diffusion: Vec<f64> = (0..n).map(|d| q_mat[(d, d)]).collect();
                 if diffusion.iter().any(|&v| v <= 0.0) {
