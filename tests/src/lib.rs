@@ -296,3 +296,28 @@ pub fn worst_gap(
         .map(|(e, (m, s))| (e - m).abs() / s)
         .fold(0.0, f64::max)
 }
+
+/// Simulated measurements as a recorded series with a gap and an irregular step: the rows in
+/// `gap` missing (NaN in every component) and row `dropped` left out (an interval twice as
+/// long), with the truth.
+pub fn with_gap_and_irregular_step(
+    data: &zakai::simulate::Trajectory,
+    gap: core::ops::Range<usize>,
+    dropped: usize,
+) -> zakai::lab::recording::Recording {
+    let (n, m) = (data.n, data.m);
+    let (mut times, mut z, mut truth) = (Vec::new(), Vec::new(), Vec::new());
+    for k in (0..data.times.len()).filter(|&k| k != dropped) {
+        times.push(data.times[k]);
+        let row = data.observation(k);
+        z.extend(
+            row.iter()
+                .map(|&v| if gap.contains(&k) { f64::NAN } else { v }),
+        );
+        truth.extend_from_slice(&data.states[k * n..(k + 1) * n]);
+    }
+    zakai::lab::recording::Recording::measurements(n, m, times, &z)
+        .unwrap()
+        .with_truth(truth)
+        .unwrap()
+}

@@ -54,23 +54,7 @@ fn methods() -> serde_json::Value {
 /// The simulated run of `config` with the gap and the dropped row.
 fn with_gap_and_irregular_step(e: &Experiment) -> Recording {
     let data = e.simulate(e.config().seed).unwrap();
-    let (mut times, mut z, mut truth) = (Vec::new(), Vec::new(), Vec::new());
-    for k in 0..data.times.len() {
-        if k == DROPPED {
-            continue;
-        }
-        times.push(data.times[k]);
-        z.push(if GAP.contains(&k) {
-            f64::NAN
-        } else {
-            data.observations[k]
-        });
-        truth.push(data.states[k]);
-    }
-    Recording::measurements(1, 1, times, &z)
-        .unwrap()
-        .with_truth(truth)
-        .unwrap()
+    zakai_tests::with_gap_and_irregular_step(&data, GAP, DROPPED)
 }
 
 /// The point-mass filter: posterior means, sds and the log-likelihood of the observed rows,

@@ -117,7 +117,6 @@ fn the_simulator_draws_with_the_state_dependent_variance() {
 mod references {
     use super::*;
     use zakai::lab::experiment::RunResult;
-    use zakai::lab::recording::Recording;
     use zakai_tests::test;
     use zakai_tests::worst_gap;
 
@@ -238,24 +237,9 @@ mod references {
             ]),
         );
         let e = Experiment::new(config).unwrap();
-        let data = e.simulate(5).unwrap();
-        let (mut times, mut z, mut truth) = (Vec::new(), Vec::new(), Vec::new());
-        for k in 0..data.times.len() {
-            if k == 30 {
-                continue;
-            }
-            times.push(data.times[k]);
-            z.push(if (12..17).contains(&k) {
-                f64::NAN
-            } else {
-                data.observations[k]
-            });
-            truth.push(data.states[k]);
-        }
-        let recording = Recording::measurements(1, 1, times.clone(), &z)
-            .unwrap()
-            .with_truth(truth)
-            .unwrap();
+        let recording =
+            zakai_tests::with_gap_and_irregular_step(&e.simulate(5).unwrap(), 12..17, 30);
+        let (times, z) = (recording.times.clone(), recording.observations.clone());
         let (means, sds) = point_mass(&times, 0.005, |k, x| {
             (!z[k].is_nan()).then(|| -(z[k] - x) * (z[k] - x) / (2.0 * 0.09))
         });
@@ -324,24 +308,7 @@ mod references {
         let q = e.model().process_noise();
         let q = q.constant().unwrap();
         assert!((q[(0, 1)] - 0.6).abs() < 1e-12 && (q[(1, 1)] - 0.8).abs() < 1e-12);
-        let data = e.simulate(4).unwrap();
-        let (mut times, mut z, mut truth) = (Vec::new(), Vec::new(), Vec::new());
-        for k in 0..data.times.len() {
-            if k == 15 {
-                continue;
-            }
-            times.push(data.times[k]);
-            z.push(if (5..9).contains(&k) {
-                f64::NAN
-            } else {
-                data.observations[k]
-            });
-            truth.extend_from_slice(&data.states[2 * k..2 * k + 2]);
-        }
-        let recording = Recording::measurements(2, 1, times, &z)
-            .unwrap()
-            .with_truth(truth)
-            .unwrap();
+        let recording = zakai_tests::with_gap_and_irregular_step(&e.simulate(4).unwrap(), 5..9, 15);
         let run = e.filter_recorded(recording, 3).unwrap();
         let kalman = &run.methods[3];
         assert!(kalman.failure.is_none(), "{:?}", kalman.failure);
