@@ -909,11 +909,11 @@ fn list() -> String {
     }
     s.push_str("\nA diffusion G(x) that depends on the state (model.diffusion entries in x):\n");
     for m in catalogue() {
-        use zakai::DiffusionSupport;
+        use zakai::Support;
         let (kind, how) = match m.state_diffusion {
-            DiffusionSupport::Exact(how) => ("uses it", how),
-            DiffusionSupport::Approximate(how) => ("approximates it", how),
-            DiffusionSupport::Refused(how) => ("refuses it", how),
+            Support::Exact(how) => ("uses it", how),
+            Support::Approximate(how) => ("approximates it", how),
+            Support::Refused(how) => ("refuses it", how),
         };
         s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
     }

@@ -22,6 +22,7 @@ fn observation(r: &Recording, k: usize) -> Observation<'_> {
         } else {
             ObservationKind::Measurement
         },
+        inputs: None,
     }
 }
 

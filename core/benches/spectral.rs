@@ -61,6 +61,7 @@ fn spectral(c: &mut Criterion) {
             dt: 0.01,
             value: &dy,
             kind: ObservationKind::Increment,
+            inputs: None,
         };
         group.bench_function(format!("{preset} on-line step"), |b| {
             b.iter(|| filter.step(&obs).expect("steps"))

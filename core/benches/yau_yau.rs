@@ -50,6 +50,7 @@ fn bench(c: &mut Criterion, preset: &str, domain: Vec<[f64; 2]>, sizes: &[usize]
                 dt,
                 value: &dy,
                 kind: ObservationKind::Increment,
+                inputs: None,
             };
             let size = (0..n)
                 .map(|_| points.to_string())
@@ -89,6 +90,7 @@ fn superposition(c: &mut Criterion) {
         dt: 0.01,
         value: &dy,
         kind: ObservationKind::Increment,
+        inputs: None,
     };
     for (label, method) in [
         ("SPT on-line interval", MethodConfig::Spt(params.clone())),

@@ -138,14 +138,12 @@ pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
 
 pub use model::expression::ExpressionFunction;
 pub use model::{
-    BatchScratch, ClosureFunction, Derivatives, Diffusion, GaussianMixture, MeasurementDensity,
-    Model, Noise, ObservationModel, Prior, ProcessNoise, VectorFunction,
+    BatchScratch, ClosureFunction, Derivatives, Diffusion, GaussianMixture, Inputs,
+    MeasurementDensity, Model, Noise, ObservationModel, Prior, ProcessNoise, VectorFunction,
 };
 
 pub use filters::builder::Builder;
-pub use filters::method::{
-    BuildContext, DiffusionSupport, Method, MethodInfo, ProblemContext, Takes,
-};
+pub use filters::method::{BuildContext, Method, MethodInfo, ProblemContext, Support, Takes};
 pub use filters::params::{ParamInfo, ParamKind};
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,

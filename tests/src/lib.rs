@@ -299,16 +299,19 @@ pub fn worst_gap(
 
 /// Simulated measurements as a recorded series with a gap and an irregular step: the rows in
 /// `gap` missing (NaN in every component) and row `dropped` left out (an interval twice as
-/// long), with the truth.
+/// long), with the truth and the known inputs (the row after the dropped one keeps its own:
+/// they are held over the whole longer interval).
 pub fn with_gap_and_irregular_step(
     data: &zakai::simulate::Trajectory,
     gap: core::ops::Range<usize>,
     dropped: usize,
 ) -> zakai::lab::recording::Recording {
     let (n, m) = (data.n, data.m);
-    let (mut times, mut z, mut truth) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut times, mut z, mut truth, mut inputs) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for k in (0..data.times.len()).filter(|&k| k != dropped) {
         times.push(data.times[k]);
+        inputs.extend_from_slice(data.inputs_at(k));
         let row = data.observation(k);
         z.extend(
             row.iter()
@@ -319,5 +322,7 @@ pub fn with_gap_and_irregular_step(
     zakai::lab::recording::Recording::measurements(n, m, times, &z)
         .unwrap()
         .with_truth(truth)
+        .unwrap()
+        .with_inputs(data.input_count, inputs)
         .unwrap()
 }

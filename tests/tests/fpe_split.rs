@@ -206,6 +206,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
             dt: if k == 0 { 0.0 } else { traj.dt_obs },
             value: traj.observation(k),
             kind: ObservationKind::Measurement,
+            inputs: None,
         };
         gsf.step(&obs).expect("gsf step");
         kf.step(&obs).expect("kf step");

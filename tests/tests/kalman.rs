@@ -28,6 +28,7 @@ fn scalar_linear(
             observation: vec![format!("{c}*x")],
             diffusion: Some(vec![vec![0.7]].into()),
             noise,
+            inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {
             mean: vec![0.5].into(),
@@ -221,6 +222,7 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
         dt: 0.01,
         value: &bad,
         kind: ObservationKind::Increment,
+        inputs: None,
     };
     assert!(filter.step(&obs).is_err());
     let before = filter.estimate().mean.clone();

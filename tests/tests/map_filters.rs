@@ -30,6 +30,7 @@ fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> Scen
                     cov: vec![vec![0.2]].into(),
                 }],
             },
+            inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {
             mean: vec![0.5].into(),
@@ -117,6 +118,7 @@ fn guarded_newton_finds_the_map_point_of_a_cubic_measurement() {
             dt: 0.0,
             value: &value,
             kind: ObservationKind::Measurement,
+            inputs: None,
         })
         .unwrap();
         let x = f.estimate().mean[0];
@@ -259,6 +261,7 @@ fn map_updates(
                 dt: 0.0,
                 value: &value,
                 kind: ObservationKind::Measurement,
+                inputs: None,
             }) {
                 Ok(()) => (f.estimate().mean[0] - exact).abs(),
                 Err(_) => f64::INFINITY,

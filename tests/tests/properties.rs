@@ -131,6 +131,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
             } else {
                 ObservationNoiseConfig::Continuous { cov: None }
             },
+            inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {
             mean: vec![c.prior.0].into(),
@@ -346,6 +347,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                     observation: vec![format!("{e}*x1"), format!("{g}*x1 + x2")],
                     diffusion: None,
                     noise: ObservationNoiseConfig::Continuous { cov: None },
+                    inputs: Vec::new(),
                 },
                 prior: PriorConfig::Gaussian {
                     mean: vec![0.3, -0.2].into(),

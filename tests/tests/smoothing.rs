@@ -630,6 +630,7 @@ fn the_grid_smoother_keeps_to_the_memory_cap() {
                 dt: data.step_length(k),
                 value: data.observation(k),
                 kind: ObservationKind::Measurement,
+                inputs: None,
             };
             s.step(&obs)?;
         }

@@ -118,6 +118,7 @@ fn every_1d_method_runs_a_million_intervals_without_nan_or_memory_growth() {
             dt,
             value: &value,
             kind: ObservationKind::Increment,
+            inputs: None,
         };
         for (i, filter) in filters.iter_mut().enumerate() {
             match filter.step(&obs) {

@@ -27,6 +27,7 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
             observation: vec!["1.5*x".into()],
             diffusion: None,
             noise: ObservationNoiseConfig::Continuous { cov: None },
+            inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {
             mean: vec![0.5].into(),

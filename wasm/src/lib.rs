@@ -919,7 +919,7 @@ impl Session {
                     return Vec::new();
                 }
                 let mut ahead = filter.fork();
-                if ahead.predict(obs.dt).is_err() {
+                if ahead.step(&obs.predicting()).is_err() {
                     return Vec::new();
                 }
                 let mut out = vec![0.0; grid.len()];

@@ -242,7 +242,7 @@ impl<'m, M: Method> Builder<'m, M> {
             bounds: &bounds,
             dt_obs: self.dt,
         };
-        let params = M::problem_defaults(&self.params, &problem)
+        let params = crate::filters::method::problem_defaults_of::<M>(&problem, &self.params)
             .map(|(p, _)| p)
             .unwrap_or_else(|| self.params.clone());
         M::build(

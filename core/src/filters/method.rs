@@ -63,6 +63,29 @@ pub struct ProblemContext<'a> {
     pub dt_obs: Option<f64>,
 }
 
+impl ProblemContext<'_> {
+    /// `f` of this problem with a driven model replaced by the model at its start — `t = 0`,
+    /// every input 0 ([`Model::at`]): what the checks and defaults that evaluate the model's
+    /// functions read. (A method that takes a driven model is built with the model itself.)
+    pub fn at_start<R>(&self, f: impl FnOnce(&ProblemContext<'_>) -> R) -> R {
+        let start = match self.model.inputs {
+            None => return f(self),
+            Some(k) => self.model.at(0.0, &alloc::vec![0.0; k]),
+        };
+        match start {
+            Ok(model) => f(&ProblemContext {
+                model: &model,
+                prior: self.prior,
+                probes: self.probes,
+                bounds: self.bounds,
+                dt_obs: self.dt_obs,
+            }),
+            // Zeros are finite and as many as the model reads: not reached.
+            Err(_) => f(self),
+        }
+    }
+}
+
 /// Which observations a method takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -75,11 +98,12 @@ pub enum Takes {
     Both,
 }
 
-/// What a method does with a state-dependent diffusion `G(x)` ([`crate::model::diffusion`]).
+/// What a method does with a model beyond its papers' — a state-dependent diffusion `G(x)`
+/// ([`crate::model::diffusion`]), time and known inputs ([`crate::model::inputs`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", content = "how", rename_all = "snake_case")]
-pub enum DiffusionSupport {
-    /// Uses `G(x)` itself (to the method's own discretisation).
+pub enum Support {
+    /// Uses the model itself (to the method's own discretisation).
     Exact(&'static str),
     /// Uses an approximation of it, named in the run's warnings.
     Approximate(&'static str),
@@ -143,7 +167,10 @@ pub trait Method {
     const SMOOTHING: super::smoothing::Smoothing =
         super::smoothing::Smoothing::NotAvailable("no smoother is implemented for this method");
     /// What the method does with a state-dependent diffusion `G(x)`.
-    const STATE_DIFFUSION: DiffusionSupport;
+    const STATE_DIFFUSION: Support;
+    /// What the method does with a driven model, whose functions read the time `t` and known
+    /// inputs `u1..uk` ([`crate::model::inputs`]).
+    const INPUTS: Support;
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.
@@ -208,12 +235,13 @@ pub trait Method {
 }
 
 /// Why method `M` does not apply to the problem: a state-dependent diffusion it refuses
-/// ([`Method::STATE_DIFFUSION`]), then its own [`Method::suitability`].
+/// ([`Method::STATE_DIFFUSION`]), a driven model it refuses ([`Method::INPUTS`]), then its own
+/// [`Method::suitability`].
 pub fn suitability_of<M: Method>(
     problem: &ProblemContext,
     params: &M::Params,
 ) -> Result<(), String> {
-    if let DiffusionSupport::Refused(why) = M::STATE_DIFFUSION {
+    if let Support::Refused(why) = M::STATE_DIFFUSION {
         if problem.model.diffusion.constant().is_none() {
             return Err(format!(
                 "{} needs a constant diffusion G ({why}), and this model's G depends on the state",
@@ -221,7 +249,24 @@ pub fn suitability_of<M: Method>(
             ));
         }
     }
-    M::suitability(problem, params)
+    if let Support::Refused(why) = M::INPUTS {
+        if problem.model.is_driven() {
+            return Err(format!(
+                "{} needs a time-invariant model ({why}), and this model reads the time or known inputs",
+                M::info().name
+            ));
+        }
+    }
+    problem.at_start(|problem| M::suitability(problem, params))
+}
+
+/// The sizes `M` chooses from the problem ([`Method::problem_defaults`]), read on the model
+/// at its start when it is driven ([`ProblemContext::at_start`]).
+pub fn problem_defaults_of<M: Method>(
+    problem: &ProblemContext,
+    params: &M::Params,
+) -> Option<(M::Params, String)> {
+    problem.at_start(|problem| M::problem_defaults(params, problem))
 }
 
 /// `value` doubled when that stays within `max`, with the description `"{what} v → 2v"`

@@ -63,6 +63,9 @@ pub struct Observation<'a> {
     pub value: &'a [f64],
     /// Increment or measurement.
     pub kind: ObservationKind,
+    /// The time τ_k and the known inputs over the interval ending at it, for a driven model
+    /// ([`crate::model::inputs`]); `None` for an autonomous one.
+    pub inputs: Option<crate::model::Inputs<'a>>,
 }
 
 impl<'a> Observation<'a> {
@@ -72,6 +75,7 @@ impl<'a> Observation<'a> {
             dt,
             value: dy,
             kind: ObservationKind::Increment,
+            inputs: None,
         }
     }
     /// A measurement z_k = h(x_k) + v_k, `dt` after the previous one (0 at the prior's time).
@@ -80,6 +84,16 @@ impl<'a> Observation<'a> {
             dt,
             value: z,
             kind: ObservationKind::Measurement,
+            inputs: None,
+        }
+    }
+
+    /// The same observation at time `t` = τ_k with the known inputs `u` over the interval
+    /// ending at it, for a driven model ([`crate::model::inputs`]).
+    pub fn with_inputs(self, t: f64, u: &'a [f64]) -> Self {
+        Observation {
+            inputs: Some(crate::model::Inputs { t, u }),
+            ..self
         }
     }
 }
@@ -218,6 +232,17 @@ impl Observation<'_> {
             dt,
             value: &[],
             kind: ObservationKind::Measurement,
+            inputs: None,
+        }
+    }
+
+    /// The same interval (with its time and inputs) with nothing observed: the prediction
+    /// half of this step.
+    pub fn predicting(&self) -> Observation<'_> {
+        Observation {
+            value: &[],
+            kind: ObservationKind::Measurement,
+            ..*self
         }
     }
 
@@ -534,6 +559,11 @@ pub fn observation_log_likelihoods(
     if obs.value.iter().any(|v| !v.is_finite()) || obs.value.len() != model.m {
         return None;
     }
+    // A driven model's measurement at the observation's time and inputs.
+    let frozen = model.frozen_for(obs).ok()?;
+    let model = frozen
+        .as_ref()
+        .map_or(model, |(_, measurement)| measurement);
     let mut hx = alloc::vec![0.0; model.m];
     match &model.observations {
         crate::model::ObservationModel::Continuous { noise_cov } => {

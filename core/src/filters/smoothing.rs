@@ -273,6 +273,7 @@ impl StepRecord {
             dt: self.dt,
             value: &self.value,
             kind: self.kind,
+            inputs: None,
         }
     }
 }

@@ -23,7 +23,7 @@ use crate::lab::recording::{is_interval, Recording};
 use crate::lab::scenario::MethodConfig;
 use crate::lab::scenario::ScenarioConfig;
 use crate::model::{Model, Prior};
-use crate::simulate::{rng_from_seed, simulate, Trajectory};
+use crate::simulate::{rng_from_seed, Trajectory};
 use crate::validate::ConfigProblem;
 
 /// A source of wall-clock time in seconds (std: `Instant`; wasm: `performance.now()`).
@@ -508,7 +508,14 @@ impl Experiment {
             Some(x) => x.clone(),
             None => self.prior.sample(&mut rng).as_slice().to_vec(),
         };
-        simulate(&self.model, &x0, self.config.time_grid(), &mut rng)
+        let grid = self.config.time_grid();
+        let inputs = if self.model.is_driven() {
+            let times: Vec<f64> = (0..=grid.steps).map(|k| k as f64 * grid.dt_obs).collect();
+            self.config.simulated_inputs(&times)?
+        } else {
+            Vec::new()
+        };
+        crate::simulate::simulate_driven(&self.model, &x0, grid, &inputs, &mut rng)
     }
 
     /// What a simulated run observes of `trajectory`: its observations, missing (NaN) in the
@@ -595,6 +602,23 @@ impl Experiment {
             model.observations,
             crate::model::ObservationModel::Continuous { .. }
         );
+        let k = model.inputs.unwrap_or(0);
+        if recording.input_count != k {
+            p.push(ConfigProblem::new(
+                "observations",
+                if k == 0 {
+                    alloc::format!(
+                        "the recording has {} known inputs (columns u1..), and the model reads none: declare them in model.inputs and read them in its expressions",
+                        recording.input_count
+                    )
+                } else {
+                    alloc::format!(
+                        "the model reads k = {k} known inputs u1..u{k}, and the recording has {} (give them as the columns u1..u{k} after the observations)",
+                        recording.input_count
+                    )
+                },
+            ));
+        }
         if recording.continuous != continuous {
             let (got, want) = if continuous {
                 ("measurements z_k", "increments Δy of dy = h dt + dw")
@@ -895,10 +919,18 @@ pub struct ExperimentRun {
 fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, row: &mut [f64]) {
     let predicted = if obs.dt > 0.0 {
         let mut ahead = filter.fork();
-        ahead.predict(obs.dt).ok().map(|()| ahead.estimate().mean)
+        ahead
+            .step(&obs.predicting())
+            .ok()
+            .map(|()| ahead.estimate().mean)
     } else {
         Some(filter.estimate().mean)
     };
+    // A driven model's h at the measurement's time and inputs.
+    let frozen = model.frozen_for(obs).ok().flatten();
+    let model = frozen
+        .as_ref()
+        .map_or(model, |(_, measurement)| measurement);
     match predicted {
         Some(mean) if obs.value.len() == row.len() && mean.iter().all(|v| v.is_finite()) => {
             model.observation.eval(mean.as_slice(), row);
@@ -942,6 +974,11 @@ fn observation_at(data: &Recording, k: usize, dt_obs: f64) -> Observation<'_> {
         } else {
             ObservationKind::Measurement
         },
+        // Read by a driven model only (`Model::frozen_for`).
+        inputs: Some(crate::model::Inputs {
+            t: data.times[k],
+            u: data.inputs_at(k),
+        }),
     }
 }
 

@@ -35,8 +35,9 @@ pub enum Diffusion {
 }
 
 impl Diffusion {
-    /// Checks the shape against the state dimension n (a constant G must also be finite).
-    pub fn check(&self, n: usize) -> Result<(), ZakaiError> {
+    /// Checks the shape against the state dimension n, G(x) reading `extra` more inputs (the
+    /// time and inputs of a driven model); a constant G must also be finite.
+    pub fn check(&self, n: usize, extra: usize) -> Result<(), ZakaiError> {
         match self {
             Diffusion::Constant(g) => {
                 if g.nrows() != n || g.ncols() != n {
@@ -53,11 +54,12 @@ impl Diffusion {
                 }
             }
             Diffusion::StateDependent(g) => {
-                if g.input_dim() != n || g.output_dim() != n * n {
+                if g.input_dim() != n + extra || g.output_dim() != n * n {
                     return Err(ZakaiError::Dimension(format!(
-                        "diffusion G(x) maps {} inputs to {} entries, expected {n} to {}",
+                        "diffusion G(x) maps {} inputs to {} entries, expected {} to {}",
                         g.input_dim(),
                         g.output_dim(),
+                        n + extra,
                         n * n
                     )));
                 }

@@ -165,9 +165,10 @@ impl MeasurementDensity {
     }
 
     /// Checks the density against a model with state dimension `n` and `m` measurement
-    /// components: its dimensions, and ν, σ > 0 and finite for Student-t noise (the variants
+    /// components (its functions reading `extra` more inputs, the time and inputs of a driven
+    /// model): its dimensions, and ν, σ > 0 and finite for Student-t noise (the variants
     /// can be built directly; [`MeasurementDensity::student_t`] checks them too).
-    pub fn check(&self, n: usize, m: usize) -> Result<(), ZakaiError> {
+    pub fn check(&self, n: usize, m: usize, extra: usize) -> Result<(), ZakaiError> {
         let (what, got, want) = match self {
             MeasurementDensity::Additive(noise) => ("measurement noise dimension", noise.dim(), m),
             MeasurementDensity::Poisson => return Ok(()),
@@ -175,10 +176,11 @@ impl MeasurementDensity {
                 return Self::student_t(*dof, *scale).map(|_| ())
             }
             MeasurementDensity::Heteroscedastic(s) => {
-                if s.input_dim() != n {
+                if s.input_dim() != n + extra {
                     return Err(ZakaiError::Dimension(format!(
-                        "the variance s(x) takes {} inputs, expected the state's {n}",
-                        s.input_dim()
+                        "the variance s(x) takes {} inputs, expected {}",
+                        s.input_dim(),
+                        n + extra
                     )));
                 }
                 ("number of variances s(x)", s.output_dim(), m)
@@ -193,7 +195,7 @@ impl MeasurementDensity {
                 (
                     "log-density inputs (state, then measurement)",
                     l.input_dim(),
-                    n + m,
+                    n + m + extra,
                 )
             }
         };

@@ -15,6 +15,7 @@ pub mod diffusion;
 pub mod dmz;
 pub mod expression;
 pub mod function;
+pub mod inputs;
 pub mod measurement;
 pub mod noise;
 pub mod prior;
@@ -29,6 +30,7 @@ use nalgebra::{DMatrix, DVector};
 
 pub use diffusion::{Diffusion, ProcessNoise};
 pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
+pub use inputs::Inputs;
 pub use measurement::MeasurementDensity;
 pub use noise::GaussianMixture;
 pub use prior::Prior;
@@ -135,6 +137,9 @@ pub struct Model {
     pub diffusion: Diffusion,
     /// Continuous or discrete observations.
     pub observations: ObservationModel,
+    /// `Some(k)` for a driven model: its functions read the state, then the time `t` and k
+    /// known inputs `u1..uk` ([`inputs`]); `None` for an autonomous model.
+    pub inputs: Option<usize>,
 }
 
 impl core::fmt::Debug for Model {
@@ -145,6 +150,7 @@ impl core::fmt::Debug for Model {
             .field("m", &self.m)
             .field("diffusion", &self.diffusion)
             .field("observations", &self.observations)
+            .field("inputs", &self.inputs)
             .finish_non_exhaustive()
     }
 }
@@ -157,7 +163,39 @@ impl Model {
         diffusion: DMatrix<f64>,
         observations: ObservationModel,
     ) -> Result<Self, ZakaiError> {
-        let n = drift.input_dim();
+        Self::assemble(
+            drift,
+            observation,
+            Diffusion::Constant(diffusion),
+            observations,
+            None,
+        )
+    }
+
+    /// A driven model ([`inputs`]): `drift`, `observation` and the functions of `diffusion`
+    /// and of the measurement density read the state, then the time `t` and the `inputs`
+    /// known inputs `u1..uk` (the drift's n outputs give the state dimension). Each filter
+    /// step fixes `(t, u)` from its observation ([`Model::at`]).
+    pub fn driven(
+        drift: Arc<dyn VectorFunction>,
+        observation: Arc<dyn VectorFunction>,
+        diffusion: Diffusion,
+        observations: ObservationModel,
+        inputs: usize,
+    ) -> Result<Self, ZakaiError> {
+        Self::assemble(drift, observation, diffusion, observations, Some(inputs))
+    }
+
+    /// Checks every dimension: the functions read n (+ 1 + k for a driven model) inputs.
+    fn assemble(
+        drift: Arc<dyn VectorFunction>,
+        observation: Arc<dyn VectorFunction>,
+        diffusion: Diffusion,
+        observations: ObservationModel,
+        inputs: Option<usize>,
+    ) -> Result<Self, ZakaiError> {
+        let extra = inputs.map_or(0, |k| 1 + k);
+        let n = drift.output_dim();
         let m = observation.output_dim();
         let dim = |what: &str, got: usize, want: usize| {
             if got == want {
@@ -168,18 +206,21 @@ impl Model {
                 )))
             }
         };
-        dim("drift output dimension", drift.output_dim(), n)?;
-        dim("observation input dimension", observation.input_dim(), n)?;
+        dim("drift input dimension", drift.input_dim(), n + extra)?;
+        dim(
+            "observation input dimension",
+            observation.input_dim(),
+            n + extra,
+        )?;
         match &observations {
             ObservationModel::Continuous { noise_cov } => {
                 dim("observation noise S rows", noise_cov.nrows(), m)?;
                 dim("observation noise S columns", noise_cov.ncols(), m)?;
                 crate::linalg::cholesky(noise_cov, "observation noise covariance S")?;
             }
-            ObservationModel::Discrete { density } => density.check(n, m)?,
+            ObservationModel::Discrete { density } => density.check(n, m, extra)?,
         }
-        let diffusion = Diffusion::Constant(diffusion);
-        diffusion.check(n)?;
+        diffusion.check(n, extra)?;
         Ok(Model {
             n,
             m,
@@ -187,6 +228,7 @@ impl Model {
             observation,
             diffusion,
             observations,
+            inputs,
         })
     }
 
@@ -256,7 +298,13 @@ impl Model {
 
     /// The same model with diffusion G (n × n; Q = G Gᵀ).
     pub fn with_diffusion(self, diffusion: DMatrix<f64>) -> Result<Self, ZakaiError> {
-        Model::new(self.drift, self.observation, diffusion, self.observations)
+        Model::assemble(
+            self.drift,
+            self.observation,
+            Diffusion::Constant(diffusion),
+            self.observations,
+            self.inputs,
+        )
     }
 
     /// The same model with a state-dependent diffusion `G(x)`: `g` maps the n state
@@ -264,13 +312,18 @@ impl Model {
     /// does with it).
     pub fn with_state_diffusion(self, g: Arc<dyn VectorFunction>) -> Result<Self, ZakaiError> {
         let diffusion = Diffusion::StateDependent(g);
-        diffusion.check(self.n)?;
+        diffusion.check(self.n, self.inputs.map_or(0, |k| 1 + k))?;
         Ok(Model { diffusion, ..self })
     }
 
     /// Q = G Gᵀ: a matrix when G is constant, a function of the state otherwise.
     pub fn process_noise(&self) -> ProcessNoise {
         ProcessNoise::of(&self.diffusion)
+    }
+
+    /// True for a driven model, whose functions read the time and known inputs ([`inputs`]).
+    pub fn is_driven(&self) -> bool {
+        self.inputs.is_some()
     }
 
     /// True for continuous observations dy = h dt + dw.

@@ -189,12 +189,14 @@ pub fn variable_index(name: &str, n: usize) -> Option<usize> {
 }
 
 /// The variables an expression may read, in the order of its inputs: the state `x1..xn` (`x`
-/// when n = 1), then other named ones — the measurement `z1..zm` of a log-density
-/// `log p(z | x)` (`z` when m = 1).
+/// when n = 1), then the measurement `z1..zm` of a log-density `log p(z | x)` (`z` when
+/// m = 1), then, in a driven model ([`crate::model::inputs`]), the time `t` and the known
+/// inputs `u1..uk`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Variables {
     n: usize,
-    others: Vec<String>,
+    m: usize,
+    inputs: Option<usize>,
 }
 
 impl Variables {
@@ -202,46 +204,61 @@ impl Variables {
     pub fn state(n: usize) -> Self {
         Variables {
             n,
-            others: Vec::new(),
+            m: 0,
+            inputs: None,
         }
     }
 
     /// The state variables, then the measurement `z1..zm` (and `z` when m = 1, as `x` for
     /// the state).
     pub fn state_and_measurement(n: usize, m: usize) -> Self {
-        Variables {
-            n,
-            others: (1..=m).map(|i| format!("z{i}")).collect(),
-        }
+        Variables { n, m, inputs: None }
+    }
+
+    /// These variables followed by the time `t` and the `k` known inputs `u1..uk` of a driven
+    /// model (`None`: an autonomous model, whose expressions may not read `t`).
+    pub fn driven(self, inputs: Option<usize>) -> Self {
+        Variables { inputs, ..self }
     }
 
     /// How many inputs an expression in these variables takes.
     pub fn count(&self) -> usize {
-        self.n + self.others.len()
+        self.n + self.m + self.inputs.map_or(0, |k| 1 + k)
     }
 
     /// The input `name` stands for, if it is one of these variables (`z` is `z1` when it is
     /// the only measurement component).
     pub fn index(&self, name: &str) -> Option<usize> {
-        let name = if name == "z" && self.others.len() == 1 {
-            "z1"
-        } else {
-            name
+        let numbered = |prefix: char, count: usize| {
+            let i: usize = name.strip_prefix(prefix)?.parse().ok()?;
+            (i >= 1 && i <= count && !name[1..].starts_with('0')).then(|| i - 1)
         };
-        variable_index(name, self.n).or_else(|| {
-            self.others
-                .iter()
-                .position(|o| o == name)
-                .map(|i| self.n + i)
-        })
+        if let Some(i) = variable_index(name, self.n) {
+            return Some(i);
+        }
+        if name == "z" && self.m == 1 {
+            return Some(self.n);
+        }
+        if let Some(i) = numbered('z', self.m) {
+            return Some(self.n + i);
+        }
+        let k = self.inputs?;
+        if name == "t" {
+            return Some(self.n + self.m);
+        }
+        numbered('u', k).map(|i| self.n + self.m + 1 + i)
     }
 
     /// Every name, for messages.
     pub fn names(&self) -> Vec<String> {
         let mut names = variable_names(self.n);
-        names.extend(self.others.iter().cloned());
-        if self.others.len() == 1 {
+        names.extend((1..=self.m).map(|i| format!("z{i}")));
+        if self.m == 1 {
             names.push("z".to_string());
+        }
+        if let Some(k) = self.inputs {
+            names.push("t".to_string());
+            names.extend((1..=k).map(|i| format!("u{i}")));
         }
         names
     }
@@ -868,6 +885,17 @@ pub(crate) fn reads_state(text: &str, n: usize) -> bool {
     free_names(text)
         .iter()
         .any(|(name, _)| variable_index(name, n).is_some())
+}
+
+/// Whether `text` reads the time `t` or a known input `u1`, `u2`, … of a driven model
+/// ([`crate::model::inputs`]).
+pub(crate) fn reads_drive(text: &str) -> bool {
+    free_names(text).iter().any(|(name, _)| {
+        name == "t"
+            || name
+                .strip_prefix('u')
+                .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
+    })
 }
 
 /// `text` with every parameter of `names` replaced by its value, written so that it reads

@@ -49,6 +49,11 @@ pub struct Trajectory {
     pub observations: Vec<f64>,
     /// Whether observations are increments of a continuous y.
     pub continuous: bool,
+    /// k, the known inputs per row of a driven model (0: none).
+    pub input_count: usize,
+    /// The known inputs the run used, row k (those over `(τ_{k−1}, τ_k]`) at
+    /// `inputs[k*input_count..]`.
+    pub inputs: Vec<f64>,
 }
 
 impl Trajectory {
@@ -64,6 +69,10 @@ impl Trajectory {
     pub fn steps(&self) -> usize {
         self.times.len() - 1
     }
+    /// The known inputs of row k (empty for an autonomous model).
+    pub fn inputs_at(&self, k: usize) -> &[f64] {
+        &self.inputs[k * self.input_count..(k + 1) * self.input_count]
+    }
     /// The cumulative observation path y(τ_k) (continuous models), row-major.
     pub fn cumulative_y(&self) -> Vec<f64> {
         let mut y = self.observations.clone();
@@ -78,14 +87,49 @@ impl Trajectory {
 
 /// Simulates the model from `x0` over `time`, drawing all noise from `rng`. Fails when the
 /// measurements' family has no sampler (a log-density) or is undefined at the true state (a
-/// negative Poisson rate or variance).
+/// negative Poisson rate or variance), and for a driven model ([`simulate_driven`]).
 pub fn simulate(
     model: &Model,
     x0: &[f64],
     time: TimeGrid,
     rng: &mut SimRng,
 ) -> Result<Trajectory, ZakaiError> {
+    simulate_driven(model, x0, time, &[], rng)
+}
+
+/// [`simulate`] for a driven model ([`crate::model::inputs`]) with the known `inputs`, k per
+/// row for the N + 1 times (row k held over `(τ_{k−1}, τ_k]`, row 0 read by the measurement
+/// at τ₀): each Euler–Maruyama step reads the time at its start, each measurement its own
+/// time. An autonomous model takes no inputs.
+pub fn simulate_driven(
+    model: &Model,
+    x0: &[f64],
+    time: TimeGrid,
+    inputs: &[f64],
+    rng: &mut SimRng,
+) -> Result<Trajectory, ZakaiError> {
     let (n, m) = (model.n, model.m);
+    let k_inputs = model.inputs.unwrap_or(0);
+    if inputs.len() != (time.steps + 1) * k_inputs || (model.inputs.is_none() && !inputs.is_empty())
+    {
+        return Err(ZakaiError::Dimension(format!(
+            "the simulation needs {} known inputs ({} rows of k = {k_inputs}), got {}",
+            (time.steps + 1) * k_inputs,
+            time.steps + 1,
+            inputs.len()
+        )));
+    }
+    // The model at time t with the inputs of row k (`None`: the model itself, autonomous).
+    let at = |t: f64, k: usize| -> Result<Option<Model>, ZakaiError> {
+        match model.inputs {
+            None => Ok(None),
+            Some(c) => model
+                .at(t, &inputs[k * c..(k + 1) * c])
+                .map(Some)
+                .map_err(|e| ZakaiError::Other(format!("simulating the driven model: {e}"))),
+        }
+    };
+
     let inner = time.inner_steps.max(1);
     let dt = time.dt_obs / inner as f64;
     let sqrt_dt = libm::sqrt(dt);
@@ -108,15 +152,11 @@ pub fn simulate(
     let mut hx = vec![0.0; m];
     let mut g = vec![0.0; n * n];
 
-    let density = match &model.observations {
-        ObservationModel::Discrete { density } => {
-            density.sampler().map_err(ZakaiError::Other)?;
-            Some(density)
-        }
-        ObservationModel::Continuous { .. } => None,
-    };
-    let measure = |x: &[f64], rng: &mut SimRng, out: &mut [f64], hx: &mut [f64]| {
-        if let Some(density) = density {
+    if let ObservationModel::Discrete { density } = &model.observations {
+        density.sampler().map_err(ZakaiError::Other)?;
+    }
+    let measure = |model: &Model, x: &[f64], rng: &mut SimRng, out: &mut [f64], hx: &mut [f64]| {
+        if let ObservationModel::Discrete { density } = &model.observations {
             model.observation.eval(x, hx);
             density
                 .sample(x, hx, rng, out)
@@ -127,10 +167,20 @@ pub fn simulate(
 
     times.push(0.0);
     states.extend_from_slice(&x);
-    measure(&x, rng, &mut observations[0..m], &mut hx)?;
+    let start = at(0.0, 0)?;
+    measure(
+        start.as_ref().unwrap_or(model),
+        &x,
+        rng,
+        &mut observations[0..m],
+        &mut hx,
+    )?;
     for k in 1..=steps {
         let row = &mut observations[k * m..(k + 1) * m];
-        for _ in 0..inner {
+        for i in 0..inner {
+            let t = (k - 1) as f64 * time.dt_obs + i as f64 * dt;
+            let frozen = at(t, k)?;
+            let model = frozen.as_ref().unwrap_or(model);
             model.drift.eval(&x, &mut fx);
             if let Some(l) = &obs_sqrt {
                 model.observation.eval(&x, &mut hx);
@@ -142,8 +192,7 @@ pub fn simulate(
             model.diffusion.eval(&x, &mut g);
             if g.iter().any(|v| !v.is_finite()) {
                 return Err(ZakaiError::Other(format!(
-                    "simulating the state: the diffusion G(x) is not finite at x = {x:.4?} (t = {:.4}); write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))",
-                    (k - 1) as f64 * time.dt_obs
+                    "simulating the state: the diffusion G(x) is not finite at x = {x:.4?} (t = {t:.4}); write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))"
                 )));
             }
             let xi = standard_normal_vector(rng, n);
@@ -152,8 +201,10 @@ pub fn simulate(
                 x[i] += fx[i] * dt + v * sqrt_dt;
             }
         }
-        measure(&x, rng, row, &mut hx)?;
-        times.push(k as f64 * time.dt_obs);
+        let tk = k as f64 * time.dt_obs;
+        let end = at(tk, k)?;
+        measure(end.as_ref().unwrap_or(model), &x, rng, row, &mut hx)?;
+        times.push(tk);
         states.extend_from_slice(&x);
     }
     Ok(Trajectory {
@@ -164,5 +215,7 @@ pub fn simulate(
         states,
         observations,
         continuous: obs_sqrt.is_some(),
+        input_count: k_inputs,
+        inputs: inputs.to_vec(),
     })
 }

@@ -26,10 +26,13 @@ impl Method for Direct {
         "the direct method's density is a Gaussian-approximated exponential family carried by Riccati ODEs (002); a backward equation in that family is not derived, so no smoother is offered",
     );
     const KEY: &'static str = "direct";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Refused(
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Refused(
             "002's Gaussian approximation and Riccati ODEs are derived for dx = f dt + dv",
         );
+    const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "the Gaussian approximation of the initial density and the Riccati ODEs are solved once for the whole run (002 §3)",
+    );
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     type Params = DirectParams;

@@ -66,6 +66,53 @@ pub fn diffusion_on(
     Ok((diffusion, cross))
 }
 
+/// What the filter tabulates from the model on its cells: once for an autonomous model, at
+/// every step for a driven one ([`crate::model::inputs`]: the dynamics at the interval's
+/// midpoint, the measurement at its end).
+#[derive(Clone, Debug)]
+struct Tabulated {
+    advection: UpwindAdvection,
+    divergence: Vec<f64>,
+    diffusion: Vec<Vec<f64>>,
+    cross: CrossDiffusion,
+    likelihood: crate::filters::MeasurementLikelihood,
+    h_nodes: Vec<f64>,
+}
+
+impl Tabulated {
+    /// f, ∇·f and a = G Gᵀ of `dynamics`, h and p(z | x) of `measurement`, on `grid`.
+    fn of(
+        name: &str,
+        grid: &TensorGrid,
+        dynamics: &Model,
+        measurement: &Model,
+    ) -> Result<Self, FilterError> {
+        let noise = check_model(name, measurement)?;
+        let n = dynamics.n;
+        let advection = UpwindAdvection::new(grid, &*dynamics.drift);
+        let mut jac = vec![0.0; n * n];
+        let mut divergence = Vec::with_capacity(grid.len());
+        let m = measurement.m;
+        let mut h_nodes = Vec::with_capacity(grid.len() * m);
+        let mut hx = vec![0.0; m];
+        grid.for_each_node(|_, x| {
+            dynamics.drift.jacobian(x, &mut jac);
+            divergence.push((0..n).map(|l| jac[l * n + l]).sum());
+            measurement.observation.eval(x, &mut hx);
+            h_nodes.extend_from_slice(&hx);
+        });
+        let (diffusion, cross) = diffusion_on(name, dynamics, grid)?;
+        Ok(Tabulated {
+            advection,
+            divergence,
+            diffusion,
+            cross,
+            likelihood: crate::filters::MeasurementLikelihood::new(&noise, m),
+            h_nodes,
+        })
+    }
+}
+
 /// How an observation interval is cut into FPE steps.
 #[derive(Clone, Debug)]
 struct StepPlan {
@@ -90,6 +137,8 @@ pub struct ContinuousDiscreteGrid {
     /// h at the cell centres, row per cell, with m components.
     h_nodes: Vec<f64>,
     m: usize,
+    /// A driven model ([`crate::model::inputs`]), tabulated anew at every step.
+    driven: Option<Model>,
     target_dt: f64,
     /// Δτ, the observation interval the filter is built for.
     dt_obs: f64,
@@ -134,21 +183,18 @@ impl ContinuousDiscreteGrid {
                 message: msg.clone(),
             });
         }
-        let noise = check_model(&name, model)?;
         let grid = cell_grid(params, bounds)?;
-        let advection = UpwindAdvection::new(&grid, &*model.drift);
-        let mut jac = vec![0.0; n * n];
-        let mut divergence = Vec::with_capacity(grid.len());
-        let m = model.m;
-        let mut h_nodes = Vec::with_capacity(grid.len() * m);
-        let mut hx = vec![0.0; m];
-        grid.for_each_node(|_, x| {
-            model.drift.jacobian(x, &mut jac);
-            divergence.push((0..n).map(|l| jac[l * n + l]).sum());
-            model.observation.eval(x, &mut hx);
-            h_nodes.extend_from_slice(&hx);
-        });
-        let (diffusion, cross) = diffusion_on(&name, model, &grid)?;
+        // A driven model is tabulated at its start (t = 0, the first inputs unknown: zeros)
+        // for the step-choice warnings; every step tabulates it anew.
+        let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
+        let Tabulated {
+            advection,
+            divergence,
+            diffusion,
+            cross,
+            likelihood,
+            h_nodes,
+        } = Tabulated::of(&name, &grid, &start, &start)?;
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -172,9 +218,10 @@ impl ContinuousDiscreteGrid {
             divergence,
             diffusion,
             cross,
-            likelihood: crate::filters::MeasurementLikelihood::new(&noise, m),
+            likelihood,
             h_nodes,
-            m,
+            m: model.m,
+            driven: model.is_driven().then(|| model.clone()),
             target_dt: params.dt,
             dt_obs,
             plan: None,
@@ -196,6 +243,19 @@ impl ContinuousDiscreteGrid {
             filter.warnings.extend(filter.peclet_warning());
         }
         Ok(filter)
+    }
+
+    /// The operators of a driven model's step: `table` in place of the last one, and the
+    /// implicit step for Δτ factorised for it (the remainders' plans are dropped).
+    fn retabulate(&mut self, table: Tabulated) -> Result<(), FilterError> {
+        self.advection = table.advection;
+        self.divergence = table.divergence;
+        self.diffusion = table.diffusion;
+        self.cross = table.cross;
+        self.likelihood = table.likelihood;
+        self.h_nodes = table.h_nodes;
+        self.remainders = LengthCache::new(REMAINDER_PLANS);
+        self.plan_for(self.dt_obs)
     }
 
     /// The grid of cell centres.
@@ -529,6 +589,15 @@ impl Filter for ContinuousDiscreteGrid {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Measurement, self.m)?;
+        if let Some(model) = &self.driven {
+            let (dynamics, measurement) = model.frozen_for(obs)?.expect("a driven model");
+            self.retabulate(Tabulated::of(
+                &self.name,
+                &self.grid,
+                &dynamics,
+                &measurement,
+            )?)?;
+        }
         self.likelihood.check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);
         let result = self.advance(obs, observed);
@@ -545,6 +614,12 @@ impl Filter for ContinuousDiscreteGrid {
         &self,
         plan: &crate::filters::smoothing::SmoothingPlan,
     ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        if self.driven.is_some() {
+            return Err(crate::filters::smoothing::no_smoother(
+                &self.name,
+                "its backward pass replays one operator for every interval, and a driven model's changes with the time and inputs (not implemented)",
+            ));
+        }
         crate::filters::smoothing::grid_smoother(self, plan)
     }
 

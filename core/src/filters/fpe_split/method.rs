@@ -71,10 +71,13 @@ macro_rules! fpe_method {
 
         impl Method for $method {
             const KEY: &'static str = $key;
-            const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-                crate::filters::method::DiffusionSupport::Exact(
+            const STATE_DIFFUSION: crate::filters::method::Support =
+                crate::filters::method::Support::Exact(
                     "a(x) = G Gᵀ: the diagonal by conservative differences of a p in the implicit step (001 (24)), the mixed terms as a positive explicit step where a_ll ≥ Σ_k |a_lk| Δx_l/Δx_k",
                 );
+            const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
+                "f, a = G Gᵀ and the implicit step (001 (24)) tabulated and factorised anew at every step, at the interval's midpoint and with its inputs; h at τ_k in the update (6) (no smoother)",
+            );
             const ALIASES: &'static [&'static str] = &[$alias];
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;

@@ -24,10 +24,13 @@ impl Method for GaussianSum {
         "a Gaussian-sum smoother (a two-filter mixture product) is not implemented; on the linear models it applies to, the Kalman RTS smoother of each component is not the mixture's",
     );
     const KEY: &'static str = "gaussian_sum";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Refused(
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Refused(
             "its components are exact Kalman filters of a linear-Gaussian model",
         );
+    const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "its transition matrices are computed once, for a time-invariant linear model",
+    );
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["gsf"];
     type Params = GaussianSumParams;

@@ -74,10 +74,12 @@ impl Filter for ExtendedKalman {
             substeps,
             state,
         } = self;
+        let mut driven = super::DrivenStep::of(name, model, obs)?;
+        let (step, form) = super::DrivenStep::parts(&mut driven, model, q, form);
         state.transaction(|state| {
             let steps = substeps.over(obs.dt);
-            match state.predict_then_measure(name, model, q, steps, form, obs)? {
-                Some(meas) => state.linearized_update(model, meas),
+            match state.predict_then_measure(name, &step, steps, form, obs)? {
+                Some(meas) => state.linearized_update(step.measurement, meas),
                 None => Ok(()),
             }
         })

@@ -143,7 +143,13 @@ impl Filter for MapKalman {
         } = self;
         let steps = substeps.over(obs.dt);
         let stepped = state.transaction(|state| {
-            let Some(meas) = state.predict_then_measure(name, model, q, steps, form, obs)? else {
+            // An autonomous model (the MAP filters refuse a driven one: `Method::INPUTS`).
+            let own = super::StepModels {
+                dynamics: model,
+                q,
+                measurement: model,
+            };
+            let Some(meas) = state.predict_then_measure(name, &own, steps, form, obs)? else {
                 return Ok(None);
             };
             let report = map_update(*solver, model, meas, state, work)?;

@@ -49,6 +49,12 @@ fn map_kalman(
 const GAUSSIAN_Q: &str =
     "Q(x̂) = G(x̂)G(x̂)ᵀ at the current mean in the covariance equation dP/dt = FP + PFᵀ + Q";
 
+/// How the Gaussian filters treat time and known inputs.
+const GAUSSIAN_INPUTS: &str = "each step's inputs held over its interval, t at the interval's midpoint in the moment equations and at τ_k in the update";
+
+/// Why the MAP filters refuse time and known inputs.
+const MAP_INPUTS: &str = "the second-mode watch of 003 carries the model's free distribution over several intervals at once, which a time-varying model does not allow; not implemented";
+
 /// A Gaussian filter's description, with the parameters its params type `P` declares.
 fn info<P: Declared>(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
     MethodInfo {
@@ -74,10 +80,13 @@ impl Method for Kalman {
         "the Rauch–Tung–Striebel smoother of the sampled model the filter updates with (Φ = e^{AΔτ}): exact on linear-Gaussian models",
     );
     const KEY: &'static str = "kalman";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Refused(
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Refused(
             "the exact filter of a linear-Gaussian model needs a constant G",
         );
+    const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "its matrices F, H and the transition over Δτ are computed once, for a time-invariant model",
+    );
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
     type Params = KalmanParams;
@@ -125,8 +134,10 @@ impl Method for Ekf {
         "the extended RTS smoother: the RTS recursion with the transition's sensitivity Φ integrated along the EKF's moment equations (dΦ/dt = ∂f/∂x(m) Φ); a Gaussian approximation",
     );
     const KEY: &'static str = "ekf";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(GAUSSIAN_Q);
+    const INPUTS: crate::filters::method::Support =
+        crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
     type Params = EkfParams;
     type Filter = ExtendedKalman;
 
@@ -177,8 +188,10 @@ impl Method for Ukf {
         "the continuous–discrete unscented RTS smoother: the cross-covariance follows the sigma points' statistically linearised drift (dΦ/dt = E[f (x − m)ᵀ] P⁻¹ Φ); a Gaussian approximation",
     );
     const KEY: &'static str = "ukf";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(GAUSSIAN_Q);
+    const INPUTS: crate::filters::method::Support =
+        crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
     type Params = UkfParams;
     type Filter = UnscentedKalman;
 
@@ -229,8 +242,10 @@ impl Method for Iekf {
         "the extended RTS smoother over the IEKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
     );
     const KEY: &'static str = "iekf";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(GAUSSIAN_Q);
+    const INPUTS: crate::filters::method::Support =
+        crate::filters::method::Support::Refused(MAP_INPUTS);
     type Params = IekfParams;
     type Filter = MapKalman;
 
@@ -282,8 +297,10 @@ impl Method for Iokf {
         "the extended RTS smoother over the IOKF's filtered and predicted moments (the prediction is the EKF's); a Gaussian approximation",
     );
     const KEY: &'static str = "iokf";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Approximate(GAUSSIAN_Q);
+    const STATE_DIFFUSION: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(GAUSSIAN_Q);
+    const INPUTS: crate::filters::method::Support =
+        crate::filters::method::Support::Refused(MAP_INPUTS);
     type Params = IokfParams;
     type Filter = MapKalman;
 

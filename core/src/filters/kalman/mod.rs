@@ -453,7 +453,7 @@ impl GaussianState {
         self.check()
     }
 
-    /// The common first half of an EKF-type step: the measurement equation of `obs` (checked
+    /// The common first half of an EKF-type step (with the `step`'s models): the measurement equation of `obs` (checked
     /// before anything moves, so a refused one leaves the state; `name` is the filter's, for
     /// errors), then the linearised prediction over `obs.dt` and R at the predicted mean;
     /// `None` when there is nothing to assimilate (a prediction only, or the zero increment at
@@ -461,19 +461,18 @@ impl GaussianState {
     pub fn predict_then_measure<'f>(
         &mut self,
         name: &str,
-        model: &crate::model::Model,
-        q: &crate::model::ProcessNoise,
+        step: &StepModels<'_>,
         substeps: usize,
         form: &'f mut measurement::MeasurementForm,
         obs: &crate::filters::Observation,
     ) -> Result<Option<&'f measurement::Measurement>, FilterError> {
         let meas = form.at(name, obs)?;
         if obs.dt > 0.0 {
-            self.predict_linearized(model, q, obs.dt, substeps)?;
+            self.predict_linearized(step.dynamics, step.q, obs.dt, substeps)?;
         }
         match meas {
             Some(meas) => {
-                meas.noise_at(model, self.mean.as_slice())?;
+                meas.noise_at(step.measurement, self.mean.as_slice())?;
                 Ok(Some(meas))
             }
             None => Ok(None),
@@ -553,6 +552,76 @@ pub fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::Conf
         }
     }
     problems
+}
+
+/// The models one step of a Gaussian filter uses: the dynamics' (with its process noise Q)
+/// over the interval and the measurement's at its end — the filter's own model for both, or,
+/// for a driven model, those frozen for the step ([`crate::model::inputs`]).
+#[derive(Debug)]
+pub struct StepModels<'a> {
+    /// The model over the interval.
+    pub dynamics: &'a crate::model::Model,
+    /// Its process noise Q.
+    pub q: &'a crate::model::ProcessNoise,
+    /// The model at the measurement.
+    pub measurement: &'a crate::model::Model,
+}
+
+/// What a driven model's step uses in place of the filter's own model, process noise and
+/// measurement form: the models frozen for the step's observation.
+pub(crate) struct DrivenStep {
+    dynamics: crate::model::Model,
+    q: crate::model::ProcessNoise,
+    measurement: crate::model::Model,
+    form: measurement::MeasurementForm,
+}
+
+impl DrivenStep {
+    /// `None` for an autonomous model; checked before anything moves (inputs missing or not
+    /// finite are an error).
+    pub(crate) fn of(
+        name: &str,
+        model: &crate::model::Model,
+        obs: &crate::filters::Observation,
+    ) -> Result<Option<Self>, FilterError> {
+        let Some((dynamics, measurement)) = model.frozen_for(obs)? else {
+            return Ok(None);
+        };
+        Ok(Some(DrivenStep {
+            q: dynamics.process_noise(),
+            form: measurement::MeasurementForm::new(name, &measurement)?,
+            dynamics,
+            measurement,
+        }))
+    }
+
+    /// The step's models and measurement form: `driven`'s when there is one, else the
+    /// filter's own.
+    pub(crate) fn parts<'a>(
+        driven: &'a mut Option<DrivenStep>,
+        model: &'a crate::model::Model,
+        q: &'a crate::model::ProcessNoise,
+        form: &'a mut measurement::MeasurementForm,
+    ) -> (StepModels<'a>, &'a mut measurement::MeasurementForm) {
+        match driven {
+            Some(d) => (
+                StepModels {
+                    dynamics: &d.dynamics,
+                    q: &d.q,
+                    measurement: &d.measurement,
+                },
+                &mut d.form,
+            ),
+            None => (
+                StepModels {
+                    dynamics: model,
+                    q,
+                    measurement: model,
+                },
+                form,
+            ),
+        }
+    }
 }
 
 #[cfg(test)]

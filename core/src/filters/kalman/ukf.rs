@@ -301,18 +301,28 @@ impl Filter for UnscentedKalman {
             sigma,
         } = self;
         // Checked before anything moves: a refused observation leaves the state.
+        let mut driven = super::DrivenStep::of(name, model, obs)?;
+        let (step, form) = super::DrivenStep::parts(&mut driven, model, q, form);
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
             if obs.dt > 0.0 {
                 let tracking = state.transition().is_some();
                 state.predict_with(obs.dt, substeps.over(obs.dt), |at, rates, a| {
-                    Self::rates(model, q, weights, sigma, at, rates, tracking.then_some(a))
+                    Self::rates(
+                        step.dynamics,
+                        step.q,
+                        weights,
+                        sigma,
+                        at,
+                        rates,
+                        tracking.then_some(a),
+                    )
                 })?;
             }
             match meas {
                 Some(meas) => {
-                    meas.noise_at(model, state.mean.as_slice())?;
-                    Self::update(model, weights, sigma, state, meas)
+                    meas.noise_at(step.measurement, state.mean.as_slice())?;
+                    Self::update(step.measurement, weights, sigma, state, meas)
                 }
                 None => Ok(()),
             }

@@ -56,7 +56,10 @@ enum ParticleDiffusion {
 #[derive(Clone, Debug)]
 pub struct ParticleFilter {
     name: String,
+    /// The model of the current step (for a driven model, frozen for it).
     pub(super) model: Model,
+    /// A driven model ([`crate::model::inputs`]), frozen into `model` at each step.
+    pub(super) driven: Option<Model>,
     pub(super) params: PfParams,
     pub(super) rng: SimRng,
     normal: NormalZiggurat,
@@ -154,6 +157,7 @@ impl ParticleFilter {
         Ok(ParticleFilter {
             name,
             model: model.clone(),
+            driven: model.is_driven().then(|| model.clone()),
             params: params.clone(),
             rng,
             normal: NormalZiggurat::new(),
@@ -190,6 +194,17 @@ impl ParticleFilter {
             substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), None),
             trail: None,
         })
+    }
+
+    /// The model the next prediction uses: `dynamics`, a driven model frozen for the step
+    /// (its drift and, when state-dependent, its G).
+    fn freeze_dynamics(&mut self, dynamics: &Model) {
+        if let (ParticleDiffusion::StateDependent { g, .. }, Diffusion::StateDependent(frozen)) =
+            (&mut self.diffusion, &dynamics.diffusion)
+        {
+            *g = frozen.clone();
+        }
+        self.model = dynamics.clone();
     }
 
     /// How many times the filter has resampled.
@@ -498,6 +513,18 @@ impl Filter for ParticleFilter {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the particles.
+        let frozen = match &self.driven {
+            Some(model) => model.frozen_for(obs)?,
+            None => None,
+        };
+        if let Some((_, measurement)) = &frozen {
+            if let ObservationModel::Discrete { density } = &measurement.observations {
+                self.weighing = Weighing::Measurements(crate::filters::MeasurementLikelihood::new(
+                    density,
+                    measurement.m,
+                ));
+            }
+        }
         let mut observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;
         if let Weighing::Measurements(likelihood) = &mut self.weighing {
             likelihood.check(&self.name, obs.value)?;
@@ -511,6 +538,9 @@ impl Filter for ParticleFilter {
         // The particles move into the spare buffer and the weights into the next ones; only
         // a step that succeeds swaps them in (and keeps the generator's advance).
         let rng = self.rng.clone();
+        if let Some((dynamics, _)) = &frozen {
+            self.freeze_dynamics(dynamics);
+        }
         if moved {
             let trail_len = self.trail.as_ref().map(Vec::len);
             if let Err(e) = self.predict_into_spare(obs.dt) {
@@ -520,6 +550,9 @@ impl Filter for ParticleFilter {
                 }
                 return Err(e);
             }
+        }
+        if let Some((_, measurement)) = frozen {
+            self.model = measurement;
         }
         let mut log_likelihood = 0.0;
         if observed != Observed::Nothing {

@@ -24,10 +24,12 @@ builder_fn!(Pf);
 
 impl Method for Pf {
     const KEY: &'static str = "pf";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
-        crate::filters::method::DiffusionSupport::Exact(
-            "G(x) at each particle in every Euler–Maruyama substep (FFBSi smoothing refuses it)",
-        );
+    const STATE_DIFFUSION: crate::filters::method::Support = crate::filters::method::Support::Exact(
+        "G(x) at each particle in every Euler–Maruyama substep (FFBSi smoothing refuses it)",
+    );
+    const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
+        "each step's inputs held over its interval, t at the interval's midpoint in the Euler–Maruyama substeps and at τ_k in the weights",
+    );
     const RANDOM: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(
         "FFBSi",

@@ -61,6 +61,12 @@ pub(crate) struct Ffbsi {
 impl ParticleFilter {
     /// The FFBSi smoother from the filter's current state (see the module doc).
     pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
+        if self.driven.is_some() {
+            return Err(no_smoother(
+                self.name(),
+                "FFBSi here replays one transition density for every interval, and this model's changes with the time and inputs (not implemented)",
+            ));
+        }
         let q = self.model.process_noise();
         let q = q.constant().ok_or_else(|| {
             no_smoother(

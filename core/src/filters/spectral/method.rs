@@ -25,8 +25,11 @@ impl Method for Spectral {
         "the spectral filter's Legendre expansion is projected after every update (004); the transposed projection is not implemented, so no smoother is offered yet",
     );
     const KEY: &'static str = "spectral";
-    const STATE_DIFFUSION: crate::filters::method::DiffusionSupport = crate::filters::method::DiffusionSupport::Exact(
+    const STATE_DIFFUSION: crate::filters::method::Support = crate::filters::method::Support::Exact(
         "½ Σ ∂i∂j(a_ij ρ) with a(x) = G Gᵀ at the quadrature nodes of the off-line operator (004 Algorithm 1)",
+    );
+    const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "the off-line operator of 004 Algorithm 1 is computed once, before any observation, for a time-invariant generator",
     );
     const NEEDS_INTERVAL: bool = true;
     const NEEDS_DOMAIN: bool = true;

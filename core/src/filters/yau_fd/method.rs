@@ -90,14 +90,27 @@ fn build(
 }
 
 /// What a scheme does with a state-dependent G(x).
-const fn state_diffusion(scheme: Scheme) -> crate::filters::method::DiffusionSupport {
-    use crate::filters::method::DiffusionSupport::{Exact, Refused};
+const fn state_diffusion(scheme: Scheme) -> crate::filters::method::Support {
+    use crate::filters::method::Support::{Exact, Refused};
     match scheme {
         Scheme::Iem => Exact(
             "a(x) = G Gᵀ: the diagonal by conservative differences of a u in the tridiagonal θ-step, the mixed terms as a positive explicit step where a_ll ≥ Σ_k |a_lk| Δs_l/Δs_k",
         ),
         _ => Refused(
             "the DST solve (000 (18)) diagonalises a constant-coefficient Laplacian; IEM takes a(x)",
+        ),
+    }
+}
+
+/// What a scheme does with a driven model (time and known inputs).
+const fn inputs(scheme: Scheme) -> crate::filters::method::Support {
+    use crate::filters::method::Support::Refused;
+    match scheme {
+        Scheme::Superposition => Refused(
+            "the superposition technique (000 §2.5) precomputes the solution operator once, for a time-invariant Kolmogorov equation",
+        ),
+        _ => Refused(
+            "its Kolmogorov operator (000 (2)) is tabulated and factorised once for the whole run; a time-varying model would need it remade every step, which is not implemented",
         ),
     }
 }
@@ -109,8 +122,9 @@ macro_rules! yau_yau_method {
 
         impl Method for $method {
             const KEY: &'static str = $key;
-            const STATE_DIFFUSION: crate::filters::method::DiffusionSupport =
+            const STATE_DIFFUSION: crate::filters::method::Support =
                 state_diffusion($scheme);
+            const INPUTS: crate::filters::method::Support = inputs($scheme);
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
             const DENSITY: bool = true;

@@ -6,6 +6,8 @@
 //!   `t,z1,…,zm` (measurements); the first row is the prior's time τ₀ — for increments it
 //!   holds zeros (the increment over `(τ_{k−1}, τ_k]` is on row k), for measurements it is a
 //!   measurement at τ₀.
+//! * Known inputs of a driven model ([`crate::model::inputs`]): further columns `u1,…,uk`
+//!   after the observations, every field a number — row k's are those over `(τ_{k−1}, τ_k]`.
 //! * Truth (optional): header `t,x1,…,xn`, one row per observation row, at the same times.
 //!
 //! Blank lines and lines starting with `#` are skipped; fields may be padded with spaces. In
@@ -178,8 +180,52 @@ fn check_header(
     None
 }
 
+/// Takes the known inputs `u1,…,uk` (the columns from the first named `u…` on) out of the
+/// observations table: their count and values, row-major. Every input must be a number.
+fn split_inputs(t: &mut Table, problems: &mut Vec<ConfigProblem>) -> (usize, Vec<f64>) {
+    let Some(first) = t
+        .columns
+        .iter()
+        .skip(1)
+        .position(|c| c.starts_with('u'))
+        .map(|j| j + 1)
+    else {
+        return (0, Vec::new());
+    };
+    let count = t.columns.len() - first;
+    if let Some(j) =
+        (first..t.columns.len()).find(|&j| t.columns[j] != format!("u{}", j - first + 1))
+    {
+        problems.push(ConfigProblem::new(
+            "observations line 1",
+            format!(
+                "the known inputs must be the last columns, named u1,…,u{count} in order; column {} is `{}`",
+                j + 1,
+                t.columns[j]
+            ),
+        ));
+        return (0, Vec::new());
+    }
+    let mut values = Vec::with_capacity(count * t.rows.len());
+    for (row, line) in t.rows.iter_mut().zip(&t.lines) {
+        if let Some(j) = row[first..].iter().position(|v| v.is_nan()) {
+            if problems.len() < MAX_REPORTED {
+                problems.push(ConfigProblem::new(
+                    format!("observations line {line}, column u{}", j + 1),
+                    "a known input must be given on every row (a driven model reads it over the interval)",
+                ));
+            }
+        }
+        values.extend_from_slice(&row[first..]);
+        row.truncate(first);
+    }
+    t.columns.truncate(first);
+    (count, values)
+}
+
 impl Recording {
-    /// Reads a recording from CSV text: `observations` (header `t,dy1,…` or `t,z1,…`), and
+    /// Reads a recording from CSV text: `observations` (header `t,dy1,…` or `t,z1,…`, then the
+    /// known inputs `u1,…` of a driven model, if any), and
     /// optionally the `truth` (`t,x1,…`) for an `n`-dimensional state. Every problem — header,
     /// a field that is not a number (with its line and column), a row of the wrong length,
     /// times not increasing, truth rows at other times — is reported at once.
@@ -189,7 +235,10 @@ impl Recording {
         truth: Option<&[u8]>,
     ) -> Result<Self, ZakaiError> {
         let mut problems = Vec::new();
-        let obs = read_table("observations", observations, true, &mut problems);
+        let mut obs = read_table("observations", observations, true, &mut problems);
+        let (input_count, inputs) = obs
+            .as_mut()
+            .map_or((0, Vec::new()), |t| split_inputs(t, &mut problems));
         let truth = truth.and_then(|t| read_table("truth", t, false, &mut problems));
         let kind = obs
             .as_ref()
@@ -231,6 +280,8 @@ impl Recording {
             observations: values,
             continuous,
             truth: None,
+            input_count,
+            inputs,
         };
         let mut truth_lines = Vec::new();
         if let Some(t) = truth {
@@ -275,30 +326,43 @@ impl Recording {
         }
     }
 
-    /// The observations as CSV (see the module doc), values in shortest round-trip form.
+    /// The observations as CSV (see the module doc), then the known inputs when there are
+    /// any, values in shortest round-trip form.
     pub fn observations_csv(&self) -> String {
         let prefix = if self.continuous { "dy" } else { "z" };
-        write_table(prefix, self.m, &self.times, &self.observations)
+        write_table(
+            &self.times,
+            &[
+                (prefix, self.m, &self.observations),
+                ("u", self.input_count, &self.inputs),
+            ],
+        )
     }
 
     /// The truth as CSV (`t,x1,…`), when it is known.
     pub fn truth_csv(&self) -> Option<String> {
         self.truth
             .as_ref()
-            .map(|t| write_table("x", self.n, &self.times, t))
+            .map(|t| write_table(&self.times, &[("x", self.n, t)]))
     }
 }
 
-fn write_table(prefix: &str, width: usize, times: &[f64], values: &[f64]) -> String {
+/// The table `t,<prefix>1,…` of `times` and, for each block `(prefix, width, values)`, its
+/// columns (row-major values, `width` per row).
+fn write_table(times: &[f64], blocks: &[(&str, usize, &[f64])]) -> String {
     let mut out = String::from("t");
-    for j in 1..=width {
-        out.push_str(&format!(",{prefix}{j}"));
+    for (prefix, width, _) in blocks {
+        for j in 1..=*width {
+            out.push_str(&format!(",{prefix}{j}"));
+        }
     }
     out.push('\n');
     for (k, t) in times.iter().enumerate() {
         out.push_str(&format!("{t:?}"));
-        for v in &values[k * width..(k + 1) * width] {
-            out.push_str(&format!(",{v:?}"));
+        for (_, width, values) in blocks {
+            for v in &values[k * width..(k + 1) * width] {
+                out.push_str(&format!(",{v:?}"));
+            }
         }
         out.push('\n');
     }
@@ -335,6 +399,8 @@ mod tests {
                 7e-9,
                 -0.0
             ]),
+            input_count: 0,
+            inputs: Vec::new(),
         };
         let back = Recording::from_csv(
             2,

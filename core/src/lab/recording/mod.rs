@@ -54,6 +54,14 @@ pub struct Recording {
     /// The true states x(τ_k), row-major (N + 1 rows), when known.
     #[serde(with = "bits")]
     pub truth: Option<Vec<f64>>,
+    /// k, the number of known inputs u1..uk on each row (0: none) of a driven model
+    /// ([`crate::model::inputs`]).
+    #[serde(default)]
+    pub input_count: usize,
+    /// The known inputs, row k at `inputs[k*input_count..]`: those over `(τ_{k−1}, τ_k]`
+    /// (N + 1 rows; row 0's are read by a measurement at τ₀).
+    #[serde(default, with = "bits")]
+    pub inputs: Vec<f64>,
 }
 
 pub use crate::filters::INTERVAL_TOLERANCE;
@@ -82,6 +90,8 @@ impl Recording {
             observations,
             continuous: true,
             truth: None,
+            input_count: 0,
+            inputs: Vec::new(),
         }
         .checked()
     }
@@ -101,8 +111,28 @@ impl Recording {
             observations: z.to_vec(),
             continuous: false,
             truth: None,
+            input_count: 0,
+            inputs: Vec::new(),
         }
         .checked()
+    }
+
+    /// With the known inputs of a driven model ([`crate::model::inputs`]): `count` per row,
+    /// row-major, one row per time (those over the interval ending at it), every one finite.
+    pub fn with_inputs(
+        mut self,
+        count: usize,
+        inputs: Vec<f64>,
+    ) -> Result<Self, crate::ZakaiError> {
+        self.input_count = count;
+        self.inputs = inputs;
+        self.checked()
+    }
+
+    /// The known inputs of row k (empty when the recording has none).
+    pub fn inputs_at(&self, k: usize) -> &[f64] {
+        let c = self.input_count;
+        &self.inputs[k * c..(k + 1) * c]
     }
 
     /// With the true states (row-major, one row per time).
@@ -125,7 +155,24 @@ impl Recording {
     /// time, the row does not have m components or has an infinite one (NaN marks a missing
     /// component), or the recording holds the truth (the new row would have none).
     pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), crate::ZakaiError> {
+        self.push_with_inputs(t, value, &[])
+    }
+
+    /// [`Recording::push`] with the known inputs `u` over the interval ending at `t` (as many
+    /// as the recording's [`Recording::input_count`], every one finite).
+    pub fn push_with_inputs(
+        &mut self,
+        t: f64,
+        value: &[f64],
+        u: &[f64],
+    ) -> Result<(), crate::ZakaiError> {
         let mut p = Vec::new();
+        if u.len() != self.input_count || u.iter().any(|v| !v.is_finite()) {
+            p.push(ConfigProblem::new(
+                "inputs",
+                format!("needs k = {} finite inputs, got {:?}", self.input_count, u),
+            ));
+        }
         let last = self.times.last().copied().unwrap_or(f64::NEG_INFINITY);
         if !(t.is_finite() && t > last) {
             p.push(ConfigProblem::new(
@@ -155,6 +202,7 @@ impl Recording {
         }
         self.times.push(t);
         self.observations.extend_from_slice(value);
+        self.inputs.extend_from_slice(u);
         Ok(())
     }
 
@@ -168,6 +216,8 @@ impl Recording {
             observations: self.observations[..rows * self.m].to_vec(),
             continuous: self.continuous,
             truth: self.truth.as_ref().map(|t| t[..rows * self.n].to_vec()),
+            input_count: self.input_count,
+            inputs: self.inputs[..rows * self.input_count].to_vec(),
         }
     }
 
@@ -296,6 +346,30 @@ impl Recording {
                 p.extend(non_finite(Part::Truth, truth, self.n, "truth"));
             }
         }
+        if self.inputs.len() != rows * self.input_count {
+            p.push(ConfigProblem::new(
+                "inputs",
+                format!(
+                    "needs {rows} rows of k = {} values ({} in all), got {}",
+                    self.input_count,
+                    rows * self.input_count,
+                    self.inputs.len()
+                ),
+            ));
+        } else {
+            let c = self.input_count.max(1);
+            p.extend(self.inputs.iter().position(|v| !v.is_finite()).map(|i| {
+                place(
+                    Part::Observations,
+                    i / c,
+                    format!("inputs[{}][{}]", i / c, i % c),
+                    format!(
+                        "input u{} is not finite (a driven model reads every input on every row)",
+                        i % c + 1
+                    ),
+                )
+            }));
+        }
         p
     }
 }
@@ -309,6 +383,8 @@ impl From<Trajectory> for Recording {
             observations: t.observations,
             continuous: t.continuous,
             truth: Some(t.states),
+            input_count: t.input_count,
+            inputs: t.inputs,
         }
     }
 }

@@ -48,7 +48,9 @@ pub struct CatalogueEntry {
     /// Its fixed-interval smoother, or why it has none.
     pub smoother: crate::filters::smoothing::SmootherInfo,
     /// What it does with a state-dependent diffusion G(x).
-    pub state_diffusion: crate::filters::method::DiffusionSupport,
+    pub state_diffusion: crate::filters::method::Support,
+    /// What it does with a driven model (time and known inputs).
+    pub inputs: crate::filters::method::Support,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -150,7 +152,7 @@ macro_rules! registry {
             /// The method with the sizes left unset chosen from the problem, and a note of
             /// what was chosen, or `None` (see [`Method::problem_defaults`]).
             pub fn problem_defaults(&self, problem: &ProblemContext) -> Option<(MethodConfig, String)> {
-                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::problem_defaults(p, problem).map(|(p, note)| (MethodConfig::$variant(p), note)),)* }
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => crate::filters::method::problem_defaults_of::<$method>(problem, p).map(|(p, note)| (MethodConfig::$variant(p), note)),)* }
             }
 
             /// Why this method and `other` compute the same estimates on `problem`, when
@@ -181,6 +183,7 @@ macro_rules! registry {
                 random: <$method>::RANDOM,
                 smoother: <$method>::SMOOTHING.into(),
                 state_diffusion: <$method>::STATE_DIFFUSION,
+                inputs: <$method>::INPUTS,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }

@@ -27,6 +27,7 @@ use parameters::{
 };
 
 use crate::error::ZakaiError;
+use crate::model::syntax::Variables;
 use crate::model::{
     GaussianMixture, MeasurementDensity, Model, ObservationModel, Prior, VectorFunction,
 };
@@ -134,6 +135,14 @@ pub struct ModelConfig {
     pub diffusion: Option<CoefficientMatrix>,
     /// Observation noise.
     pub noise: ObservationNoiseConfig,
+    /// The known inputs `u1..uk` of a driven model ([`crate::model::inputs`]): one expression
+    /// in the time `t` and the parameters per input, the series a simulated run records
+    /// beside its observations (row k holds u at the midpoint of `(τ_{k−1}, τ_k]`, row 0 at
+    /// τ₀). Recorded observations bring their own (the CSV columns `u1..uk`), which replace
+    /// these. The model's expressions may read `t` and `u1..uk`; with no inputs, an
+    /// expression that reads `t` still makes the model driven.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub inputs: Vec<String>,
 }
 
 /// The prior density σ₀ of x₀.
@@ -370,9 +379,10 @@ fn log_density(
     text: &str,
     n: usize,
     m: usize,
+    inputs: Option<usize>,
     names: &[(String, f64)],
 ) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
-    let variables = crate::model::syntax::Variables::state_and_measurement(n, m);
+    let variables = Variables::state_and_measurement(n, m).driven(inputs);
     crate::model::expression::check_in(text, &variables, names)?;
     Ok(Arc::new(
         crate::model::expression::ExpressionFunction::parse_in(
@@ -390,28 +400,28 @@ fn log_density(
 fn check_expression(
     what: &str,
     text: &str,
-    n: usize,
+    variables: &Variables,
     names: &[(String, f64)],
 ) -> Result<(), ZakaiError> {
-    crate::model::expression::check_with_names(text, n, names)?;
+    crate::model::expression::check_in(text, variables, names)?;
     parse_function(
         what,
         &substituted(core::slice::from_ref(&String::from(text)), names),
-        n,
+        variables,
         1,
     )?;
     Ok(())
 }
 
-/// Parses a text vector function.
+/// Parses a text vector function with `m` components in `variables`.
 pub fn parse_function(
     what: &str,
     texts: &[String],
-    n: usize,
+    variables: &Variables,
     m: usize,
 ) -> Result<Arc<dyn VectorFunction>, ZakaiError> {
     Ok(Arc::new(
-        crate::model::expression::ExpressionFunction::parse(what, texts, n, m)?,
+        crate::model::expression::ExpressionFunction::parse_in(what, texts, variables, m)?,
     ))
 }
 
@@ -496,12 +506,13 @@ impl ScenarioConfig {
             return p;
         }
         let names = named_values(&self.parameters);
+        let variables = self.variables();
         for (field, texts) in [
             ("drift", &self.model.drift),
             ("observation", &self.model.observation),
         ] {
             for (i, t) in texts.iter().enumerate() {
-                if let Err(e) = check_expression(field, t, n, &names) {
+                if let Err(e) = check_expression(field, t, &variables, &names) {
                     p.push(ConfigProblem::new(
                         format!("model.{field}[{i}]"),
                         e.to_string(),
@@ -522,7 +533,7 @@ impl ScenarioConfig {
                 ));
             }
             for (k, t) in texts.iter().enumerate() {
-                if let Err(e) = check_expression("diffusion", t, n, &names) {
+                if let Err(e) = check_expression("diffusion", t, &variables, &names) {
                     p.push(ConfigProblem::new(
                         format!("model.diffusion[{}][{}]", k / n.max(1), k % n.max(1)),
                         e.to_string(),
@@ -540,7 +551,7 @@ impl ScenarioConfig {
                 for (i, row) in g.0.iter().enumerate() {
                     for (j, c) in row.iter().enumerate() {
                         if let Some(t) = c.text() {
-                            if let Err(e) = check_expression("diffusion", t, n, &names) {
+                            if let Err(e) = check_expression("diffusion", t, &variables, &names) {
                                 p.push(ConfigProblem::new(
                                     format!("model.diffusion[{i}][{j}]"),
                                     e.to_string(),
@@ -607,7 +618,7 @@ impl ScenarioConfig {
                     ));
                 }
                 for (i, t) in variance.iter().enumerate() {
-                    if let Err(e) = check_expression("variance s", t, n, &names) {
+                    if let Err(e) = check_expression("variance s", t, &variables, &names) {
                         p.push(ConfigProblem::new(
                             format!("model.noise.variance[{i}]"),
                             e.to_string(),
@@ -616,7 +627,7 @@ impl ScenarioConfig {
                 }
             }
             ObservationNoiseConfig::LogDensity { expression } => {
-                if let Err(e) = log_density(expression, n, m, &names) {
+                if let Err(e) = log_density(expression, n, m, self.driven(), &names) {
                     p.push(ConfigProblem::new("model.noise.expression", e.to_string()));
                 }
             }
@@ -640,7 +651,9 @@ impl ScenarioConfig {
                 }
             }
             PriorConfig::Density { expression } => {
-                if let Err(e) = check_expression("prior density", expression, n, &names) {
+                if let Err(e) =
+                    check_expression("prior density", expression, &Variables::state(n), &names)
+                {
                     p.push(ConfigProblem::new("prior.expression", e.to_string()));
                 }
             }
@@ -810,6 +823,7 @@ impl ScenarioConfig {
             }
             PriorConfig::Density { expression } => texts.push(expression),
         }
+        texts.extend(self.model.inputs.iter().map(String::as_str));
         texts.extend(coefficient_texts(vectors, matrices));
         texts
     }
@@ -870,18 +884,24 @@ impl ScenarioConfig {
         let n = self.state_dim();
         let m = self.obs_dim();
         let names = self.parameter_values();
-        let drift = parse_function("drift f", &substituted(&self.model.drift, &names), n, n)?;
+        let variables = self.variables();
+        let drift = parse_function(
+            "drift f",
+            &substituted(&self.model.drift, &names),
+            &variables,
+            n,
+        )?;
         let observation = parse_function(
             "observation h",
             &substituted(&self.model.observation, &names),
-            n,
+            &variables,
             m,
         )?;
         let state_diffusion = match self.state_diffusion() {
             Some(texts) if texts.len() == n * n => Some(parse_function(
                 "diffusion G",
                 &substituted(&texts, &names),
-                n,
+                &variables,
                 n * n,
             )?),
             Some(_) => {
@@ -946,31 +966,101 @@ impl ScenarioConfig {
                 density: MeasurementDensity::Heteroscedastic(parse_function(
                     "variance s",
                     &substituted(variance, &names),
-                    n,
+                    &variables,
                     m,
                 )?),
             },
             ObservationNoiseConfig::LogDensity { expression } => ObservationModel::Discrete {
-                density: MeasurementDensity::LogDensity(log_density(expression, n, m, &names)?),
+                density: MeasurementDensity::LogDensity(log_density(
+                    expression,
+                    n,
+                    m,
+                    self.driven(),
+                    &names,
+                )?),
             },
         };
-        let model = Model::new(drift, observation, diffusion, observations)?;
-        match state_diffusion {
-            Some(g) => model.with_state_diffusion(g),
-            None => Ok(model),
+        let diffusion = match state_diffusion {
+            Some(g) => crate::model::Diffusion::StateDependent(g),
+            None => crate::model::Diffusion::Constant(diffusion),
+        };
+        match self.driven() {
+            Some(k) => Model::driven(drift, observation, diffusion, observations, k),
+            None => match diffusion {
+                crate::model::Diffusion::Constant(g) => {
+                    Model::new(drift, observation, g, observations)
+                }
+                crate::model::Diffusion::StateDependent(g) => {
+                    Model::new(drift, observation, DMatrix::identity(n, n), observations)?
+                        .with_state_diffusion(g)
+                }
+            },
         }
     }
 
-    /// The diffusion's entries as expressions, row-major, when one of them reads the state
-    /// (G(x)); `None` for a constant G (numbers and expressions in the parameters alone).
+    /// `Some(k)` for a driven model ([`crate::model::inputs`]): the k inputs of
+    /// [`ModelConfig::inputs`], or none when only the time `t` is read; `None` when no
+    /// expression of the model reads `t` or an input.
+    pub fn driven(&self) -> Option<usize> {
+        let k = self.model.inputs.len();
+        let reads = self
+            .expression_texts()
+            .into_iter()
+            .any(crate::model::syntax::reads_drive);
+        (k > 0 || reads).then_some(k)
+    }
+
+    /// The variables the model's expressions read: the state, and the time and inputs of a
+    /// driven model.
+    pub fn variables(&self) -> Variables {
+        Variables::state(self.state_dim()).driven(self.driven())
+    }
+
+    /// The known inputs of a simulated run ([`ModelConfig::inputs`]) at `times`: row 0 at
+    /// τ₀, row k at the midpoint of `(τ_{k−1}, τ_k]`, k per row.
+    pub fn simulated_inputs(&self, times: &[f64]) -> Result<Vec<f64>, ZakaiError> {
+        let names = self.parameter_values();
+        let texts = substituted(&self.model.inputs, &names);
+        let time = Variables::state(0).driven(Some(0));
+        let mut problems = Vec::new();
+        for (i, t) in self.model.inputs.iter().enumerate() {
+            if let Err(e) = crate::model::expression::check_in(t, &time, &names) {
+                problems.push(ConfigProblem::new(
+                    format!("model.inputs[{i}]"),
+                    e.to_string(),
+                ));
+            }
+        }
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
+        let u = parse_function("inputs u", &texts, &time, texts.len())?;
+        let mut out = Vec::with_capacity(times.len() * texts.len());
+        let mut row = alloc::vec![0.0; texts.len()];
+        for (k, t) in times.iter().enumerate() {
+            let at = if k == 0 { *t } else { 0.5 * (times[k - 1] + t) };
+            u.eval(&[at], &mut row);
+            if let Some(i) = row.iter().position(|v| !v.is_finite()) {
+                return Err(ZakaiError::Other(format!(
+                    "the input u{} = {} is {} at t = {at}",
+                    i + 1,
+                    self.model.inputs[i],
+                    row[i]
+                )));
+            }
+            out.extend_from_slice(&row);
+        }
+        Ok(out)
+    }
+
+    /// The diffusion's entries as expressions, row-major, when one of them reads the state,
+    /// the time or an input (G(x)); `None` for a constant G (numbers and expressions in the parameters alone).
     pub fn state_diffusion(&self) -> Option<Vec<String>> {
         let g = self.model.diffusion.as_ref()?;
         let n = self.state_dim();
-        let reads =
-            g.0.iter()
-                .flatten()
-                .filter_map(Coefficient::text)
-                .any(|t| crate::model::syntax::reads_state(t, n));
+        let reads = g.0.iter().flatten().filter_map(Coefficient::text).any(|t| {
+            crate::model::syntax::reads_state(t, n) || crate::model::syntax::reads_drive(t)
+        });
         reads.then(|| {
             g.0.iter()
                 .flatten()
@@ -1009,7 +1099,7 @@ impl ScenarioConfig {
             }
             PriorConfig::Density { expression } => {
                 let text = substituted(core::slice::from_ref(expression), &self.parameter_values());
-                let f = parse_function("prior density", &text, n, 1)?;
+                let f = parse_function("prior density", &text, &Variables::state(n), 1)?;
                 let cells = match n {
                     1 => 4000,
                     2 => 400,

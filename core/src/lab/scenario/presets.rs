@@ -145,6 +145,7 @@ fn build(s: Spec) -> ScenarioConfig {
             observation: strings(s.observation),
             diffusion: None,
             noise: s.noise,
+            inputs: Vec::new(),
         },
         prior: s.prior,
         initial_state: s.initial_state,

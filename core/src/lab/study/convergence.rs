@@ -53,7 +53,10 @@ fn estimates(filter: &mut dyn Filter, data: &Trajectory) -> Result<Vec<Estimate>
     let dt = data.dt_obs;
     let mut out = Vec::with_capacity(data.steps() + 1);
     if !data.continuous {
-        filter.step(&Observation::measurement(0.0, data.observation(0)))?;
+        filter.step(
+            &Observation::measurement(0.0, data.observation(0))
+                .with_inputs(data.times[0], data.inputs_at(0)),
+        )?;
     }
     out.push(filter.estimate());
     for k in 1..=data.steps() {
@@ -63,7 +66,7 @@ fn estimates(filter: &mut dyn Filter, data: &Trajectory) -> Result<Vec<Estimate>
         } else {
             Observation::measurement(dt, z)
         };
-        filter.step(&obs)?;
+        filter.step(&obs.with_inputs(data.times[k], data.inputs_at(k)))?;
         out.push(filter.estimate());
     }
     Ok(out)
