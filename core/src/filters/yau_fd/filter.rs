@@ -431,6 +431,9 @@ pub struct YauYauFilter {
     params: YauYauParams,
     grid: TensorGrid,
     op: KolmogorovOperator,
+    /// A driven model ([`crate::model::inputs`]): the operator is made anew at every step from
+    /// the model at the interval's midpoint with its inputs.
+    driven: Option<Model>,
     /// The density, normalised to unit mass.
     u: Vec<f64>,
     tmp: Vec<f64>,
@@ -535,6 +538,11 @@ impl YauYauFilter {
         }
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
+        let driven = model.is_driven().then(|| model.clone());
+        // A driven model is tabulated at its start (t = 0, inputs 0) for the checks and
+        // warnings below; each step tabulates it anew.
+        let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
+        let model = &start;
         let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
         if op.state_dependent && scheme != Scheme::Iem {
             return Err(FilterError::Unsuitable(format!(
@@ -573,6 +581,7 @@ impl YauYauFilter {
             tmp: vec![0.0; grid.len()],
             grid,
             op,
+            driven,
             saved: crate::filters::SavedDensity::new(u.len(), &Estimate::zeros(model.n)),
             log_likelihood: 0.0,
             u,
@@ -598,6 +607,33 @@ impl YauYauFilter {
     /// The grid.
     pub fn grid(&self) -> &TensorGrid {
         &self.grid
+    }
+
+    /// The operator, the observation factor's terms and the solver for Δτ made from `model`,
+    /// a driven model frozen for the step (the other lengths' solvers are dropped).
+    fn retabulate(&mut self, model: &Model) -> Result<(), FilterError> {
+        let in_update = self.params.likelihood == Likelihood::InUpdate;
+        let op = KolmogorovOperator::new(model, &self.grid, in_update)?;
+        if op.state_dependent && self.scheme != Scheme::Iem {
+            return Err(FilterError::Unsuitable(format!(
+                "{} needs a constant diffusion G, and this model's G changes with the time or inputs; IEM's tridiagonal systems take a(x) node by node",
+                self.name
+            )));
+        }
+        if self.cell.is_some() {
+            self.cell = Some(CellSamples::new(
+                model,
+                &self.grid,
+                self.params.likelihood_samples,
+                in_update,
+            )?);
+        }
+        self.partial = PartialIncrements::of(model, "the Yau–Yau filters")?;
+        self.op = op;
+        self.remainders = LengthCache::new(crate::filters::REMAINDER_PLANS);
+        self.prediction = None;
+        let dt_obs = self.solver.as_ref().map(|s| s.0).expect("prepared in new");
+        self.prepare(dt_obs)
     }
 
     /// Builds the solver for observation interval `dt_obs` (Δt rounded so that it divides it)
@@ -946,6 +982,12 @@ impl Filter for YauYauFilter {
         &self,
         plan: &crate::filters::smoothing::SmoothingPlan,
     ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
+        if self.driven.is_some() {
+            return Err(crate::filters::smoothing::no_smoother(
+                &self.name,
+                "its backward pass replays one operator for every interval, and a driven model's changes with the time and inputs (not implemented)",
+            ));
+        }
         crate::filters::smoothing::grid_smoother(self, plan)
     }
 
@@ -975,6 +1017,10 @@ impl Filter for YauYauFilter {
             ObservationKind::Increment,
             self.op.s_inv_h.len(),
         )?;
+        if let Some(model) = &self.driven {
+            let (dynamics, _) = model.frozen_for(obs)?.expect("a driven model");
+            self.retabulate(&dynamics)?;
+        }
         self.saved.save(&self.u, &self.estimate);
         let result = self.advance(obs, observed);
         let (u, estimate) = (&mut self.u, &mut self.estimate);

@@ -104,13 +104,13 @@ const fn state_diffusion(scheme: Scheme) -> crate::filters::method::Support {
 
 /// What a scheme does with a driven model (time and known inputs).
 const fn inputs(scheme: Scheme) -> crate::filters::method::Support {
-    use crate::filters::method::Support::Refused;
+    use crate::filters::method::Support::{Exact, Refused};
     match scheme {
         Scheme::Superposition => Refused(
-            "the superposition technique (000 §2.5) precomputes the solution operator once, for a time-invariant Kolmogorov equation",
+            "the superposition technique (000 §2.5) carries its bumps off-line once, for a time-invariant Kolmogorov equation",
         ),
-        _ => Refused(
-            "its Kolmogorov operator (000 (2)) is tabulated and factorised once for the whole run; a time-varying model would need it remade every step, which is not implemented",
+        _ => Exact(
+            "the Kolmogorov operator (000 (2)) tabulated and its solver made anew at every step, from the model at the interval's midpoint with its inputs, which the factor (15) also reads (no smoother)",
         ),
     }
 }
