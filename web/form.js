@@ -48,11 +48,13 @@ function parseList(text) {
   return t.split(',').map(coefficient);
 }
 
-function exprInputs(container, label, field, values) {
+// One text input per component of `field`, labelled `f1(x) = ` (`f(x) = ` when there is one);
+// the known inputs are always numbered and functions of t: `u1(t) = `.
+function exprInputs(container, label, field, values, { argument = 'x', numbered = values.length > 1 } = {}) {
   container.replaceChildren();
   values.forEach((v, i) => {
     const l = document.createElement('label');
-    l.textContent = `${label}${values.length > 1 ? i + 1 : ''}(x) = `;
+    l.textContent = `${label}${numbered ? i + 1 : ''}(${argument}) = `;
     const input = document.createElement('input');
     input.value = v;
     input.dataset.field = `${field}[${i}]`;
@@ -227,6 +229,13 @@ function showNoiseKind(kind, noise = readNoise(), m = observationCount()) {
   }
 }
 
+// The known inputs u1…uk of a driven model, expressions in t: what a simulated run records
+// beside its observations (loaded data bring theirs as CSV columns u1…uk).
+function knownInputs(values) {
+  exprInputs($('inputs'), 'u', 'model.inputs', values, { argument: 't', numbered: true });
+  $('remove-u').disabled = values.length === 0;
+}
+
 const observationCount = () => $('observation').querySelectorAll('input').length;
 
 // The noise block of the form: the matrix or mixture of the Gaussian kinds, else the kind's
@@ -257,6 +266,7 @@ export function fillForm(config) {
   $('dim').value = n;
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
+  knownInputs(config.model.inputs ?? []);
   fillParameters(config.parameters, scheduleValidate);
   matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, expressions: true, onInput: scheduleValidate });
   const noise = config.model.noise;
@@ -308,6 +318,9 @@ export function readForm() {
   const values = (id) => [...$(id).querySelectorAll('input')].map((el) => el.value);
   c.model.drift = values('drift');
   c.model.observation = values('observation');
+  const inputs = values('inputs');
+  if (inputs.length) c.model.inputs = inputs;
+  else delete c.model.inputs;
   const parameters = readParameters();
   if (Object.keys(parameters).length) c.parameters = parameters;
   else delete c.parameters;
@@ -407,6 +420,14 @@ export function setupForm() {
     resizeMatrix($('noise-cov'), values.length + 1);
     resizeMixture($('noise-mix'), values.length + 1);
     showNoiseKind(noise.kind, noise);
+    scheduleValidate();
+  });
+  $('add-u').addEventListener('click', () => {
+    knownInputs([...$('inputs').querySelectorAll('input')].map((el) => el.value).concat(['sin(t)']));
+    scheduleValidate();
+  });
+  $('remove-u').addEventListener('click', () => {
+    knownInputs([...$('inputs').querySelectorAll('input')].map((el) => el.value).slice(0, -1));
     scheduleValidate();
   });
   $('remove-h').addEventListener('click', () => {

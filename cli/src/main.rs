@@ -907,16 +907,27 @@ fn list() -> String {
             m.info.key, m.info.summary, m.info.paper
         ));
     }
-    s.push_str("\nA diffusion G(x) that depends on the state (model.diffusion entries in x):\n");
-    for m in catalogue() {
-        use zakai::Support;
-        let (kind, how) = match m.state_diffusion {
-            Support::Exact(how) => ("uses it", how),
-            Support::Approximate(how) => ("approximates it", how),
-            Support::Refused(how) => ("refuses it", how),
-        };
-        s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
-    }
+    let support = |title: &str, of: fn(&zakai::lab::scenario::CatalogueEntry) -> zakai::Support| {
+        let mut s = format!("\n{title}:\n");
+        for m in catalogue() {
+            use zakai::Support;
+            let (kind, how) = match of(&m) {
+                Support::Exact(how) => ("uses it", how),
+                Support::Approximate(how) => ("approximates it", how),
+                Support::Refused(how) => ("refuses it", how),
+            };
+            s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
+        }
+        s
+    };
+    s.push_str(&support(
+        "A diffusion G(x) that depends on the state (model.diffusion entries in x)",
+        |m| m.state_diffusion,
+    ));
+    s.push_str(&support(
+        "A driven model: expressions in the time t and known inputs u1..uk (model.inputs; CSV columns u1..uk)",
+        |m| m.inputs,
+    ));
     s
 }
 

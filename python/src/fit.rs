@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyList};
 use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood};
 
 use crate::errors;
-use crate::runs::{experiment, parse, recording_of};
+use crate::runs::{experiment, parse, recording_of, with_inputs};
 
 /// The batches of a fit or profile handed to `callable(method, names, points)`, which returns
 /// one log-likelihood per point. The first Python error is kept (and raised after the
@@ -86,9 +86,11 @@ fn likelihood(
     method: usize,
     names: &[String],
     seed: u64,
+    inputs: Option<&PyReadonlyArrayDyn<'_, f64>>,
 ) -> PyResult<Likelihood> {
     let e = experiment(json)?;
     let recording = recording_of(&e, observations, times, None)?;
+    let recording = with_inputs(&e, recording, inputs)?;
     Likelihood::new(&parse(json)?, recording, method, names, seed).map_err(errors::from_core)
 }
 
@@ -96,7 +98,7 @@ fn likelihood(
 /// fails on the data there — one evaluation of a fit's or profile's batch, as an executor's
 /// task runs it.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, method, names, seed, point))]
+#[pyo3(signature = (json, observations, times, method, names, seed, point, inputs=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn log_likelihood<'py>(
     py: Python<'py>,
@@ -107,15 +109,24 @@ pub fn log_likelihood<'py>(
     names: Vec<String>,
     seed: u64,
     point: Vec<f64>,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<f64> {
-    let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+    let l = likelihood(
+        json,
+        &observations,
+        times.as_ref(),
+        method,
+        &names,
+        seed,
+        inputs.as_ref(),
+    )?;
     Ok(py.detach(|| l.value(&point)))
 }
 
 /// The maximum-likelihood fit of `names` (all the scenario's when empty) under method
 /// `method`, as a dict; `evaluator(method, names, points)` runs the batches when given.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, method, names, seed, evaluator=None))]
+#[pyo3(signature = (json, observations, times, method, names, seed, evaluator=None, inputs=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
@@ -126,8 +137,17 @@ pub fn fit<'py>(
     names: Vec<String>,
     seed: u64,
     evaluator: Option<Py<PyAny>>,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+    let l = likelihood(
+        json,
+        &observations,
+        times.as_ref(),
+        method,
+        &names,
+        seed,
+        inputs.as_ref(),
+    )?;
     let options = FitOptions::default();
     let result = match &evaluator {
         None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
@@ -163,7 +183,7 @@ pub fn fit<'py>(
 /// when absent, [`zakai::lab::fit::profile_grid`]) for every method of the scenario: the
 /// values, and a dict per method (name, log-likelihoods, maximum); `evaluator` as for [`fit`].
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, parameter, values, points, seed, refit, evaluator=None))]
+#[pyo3(signature = (json, observations, times, parameter, values, points, seed, refit, evaluator=None, inputs=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn profile<'py>(
     py: Python<'py>,
@@ -176,6 +196,7 @@ pub fn profile<'py>(
     seed: u64,
     refit: Vec<String>,
     evaluator: Option<Py<PyAny>>,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<(Vec<f64>, Bound<'py, PyList>)> {
     let config = parse(json)?;
     let methods = config.methods.len();
@@ -198,7 +219,15 @@ pub fn profile<'py>(
     };
     let out = PyList::empty(py);
     for method in 0..methods {
-        let l = likelihood(json, &observations, times.as_ref(), method, &names, seed)?;
+        let l = likelihood(
+            json,
+            &observations,
+            times.as_ref(),
+            method,
+            &names,
+            seed,
+            inputs.as_ref(),
+        )?;
         let p = match &evaluator {
             None => py.detach(|| along(&l, &l)),
             Some(callable) => through(callable, method, &names, |remote| along(&l, remote))?,

@@ -195,24 +195,31 @@ fn whole_numbers(
     }
 }
 
-/// `(times, states, observations)` of the run with `seed`: times τ₀…τ_N, the true states
-/// (N + 1, n) and the observation rows (N + 1, m; for continuous observations row 0 is the
-/// start and holds zeros, row k the increment over (τ_{k−1}, τ_k]).
+/// `(times, states, observations, inputs)` of the run with `seed`: times τ₀…τ_N, the true
+/// states (N + 1, n), the observation rows (N + 1, m; for continuous observations row 0 is
+/// the start and holds zeros, row k the increment over (τ_{k−1}, τ_k]) and the known inputs
+/// of a driven model (N + 1, k; k = 0 otherwise).
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 pub fn simulate<'py>(
     py: Python<'py>,
     json: &str,
     seed: u64,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+) -> PyResult<(
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+)> {
     let e = experiment(json)?;
     let trajectory = py.detach(|| e.simulate(seed)).map_err(errors::from_core)?;
     let rows = trajectory.times.len();
-    let (n, m) = (e.model().n, e.model().m);
+    let (n, m, k) = (e.model().n, e.model().m, trajectory.input_count);
     Ok((
         shaped(py, trajectory.times, &[rows])?.into_any(),
         shaped(py, trajectory.states, &[rows, n])?.into_any(),
         shaped(py, trajectory.observations, &[rows, m])?.into_any(),
+        shaped(py, trajectory.inputs, &[rows, k])?.into_any(),
     ))
 }
 
@@ -235,7 +242,8 @@ fn regular_times(count: usize, dt_obs: f64) -> Vec<f64> {
 /// With `smooth`, each method runs as its fixed-interval smoother and its record carries the
 /// smoothed estimates.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, truth, seed, smooth=false))]
+#[pyo3(signature = (json, observations, times, truth, seed, smooth=false, inputs=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn filter_recorded<'py>(
     py: Python<'py>,
     json: &str,
@@ -244,9 +252,11 @@ pub fn filter_recorded<'py>(
     truth: Option<PyReadonlyArrayDyn<'py, f64>>,
     seed: u64,
     smooth: bool,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
     let recording = recording_of(&e, &observations, times.as_ref(), truth.as_ref())?;
+    let recording = with_inputs(&e, recording, inputs.as_ref())?;
     let result = py
         .detach(|| match smooth {
             true => e.smooth_recorded(recording, seed),
@@ -325,6 +335,48 @@ pub fn recording_of(
         }
         None => recording,
     })
+}
+
+/// `recording` with the known inputs of a driven model: `inputs` has one row of k values per
+/// time (N + 1 rows), or, for increments, one per interval (N rows; row 0, which no increment
+/// reads, is then a copy of row 1). Refused when the count does not fit the model's.
+pub fn with_inputs(
+    e: &Experiment,
+    recording: Recording,
+    inputs: Option<&PyReadonlyArrayDyn<'_, f64>>,
+) -> PyResult<Recording> {
+    let want = e.model().inputs.unwrap_or(0);
+    let Some(inputs) = inputs else {
+        if want > 0 {
+            return Err(errors::dimension(format!(
+                "the model reads k = {want} known inputs u1..u{want}: pass them as inputs= (one row of {want} per time)"
+            )));
+        }
+        return Ok(recording);
+    };
+    let (mut values, count, width) = rows(inputs, "inputs")?;
+    let times = recording.times.len();
+    if width != want {
+        return Err(errors::dimension(format!(
+            "inputs have {width} column(s), the model reads k = {want}"
+        )));
+    }
+    if recording.continuous && count + 1 == times {
+        let first = values[..width].to_vec();
+        values.splice(0..0, first);
+    } else if count != times {
+        return Err(errors::dimension(format!(
+            "{count} input rows for {times} times: one row per time{}",
+            if recording.continuous {
+                " (or per increment)"
+            } else {
+                ""
+            }
+        )));
+    }
+    recording
+        .with_inputs(width, values)
+        .map_err(errors::from_core)
 }
 
 /// The Monte Carlo summary of `runs` runs with seeds `seed, seed + 1, …` (every core, the GIL

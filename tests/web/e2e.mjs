@@ -1093,6 +1093,31 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.waitForFunction(() => document.querySelector('[data-error="model.diffusion"]').textContent === '', null, { timeout: 5000 });
   await page.click('#apply');
   await page.waitForFunction(() => JSON.stringify(window.zakaiPage.base.model.diffusion) === '[["0.4*sqrt(abs(x))"]]', null, { timeout: 10000 });
+  // A known input u1(t): the drift may then read u1 and t (before, u1 is an unknown name);
+  // the methods made once for the whole run are listed as not applicable with the reason, and
+  // the run carries the input.
+  await load(`${url}?preset=sa-example-1`, 'sa-example-1');
+  const drift = await page.inputValue('#drift input');
+  await page.fill('#drift input', `${drift} + u1`);
+  await page.waitForFunction(() => document.querySelector('[data-error="model.drift[0]"]').textContent.includes('`u1`'), null, { timeout: 5000 });
+  await page.click('#add-u');
+  assert.equal(await page.inputValue('#inputs input[data-field="model.inputs[0]"]'), 'sin(t)');
+  assert.match(await page.textContent('#inputs label'), /^u1\(t\) = /);
+  await page.fill('#inputs input', 'sin(0.5*t');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.inputs[0]"]').textContent.includes('never closed'), null, { timeout: 5000 });
+  await page.fill('#inputs input', 'sin(0.5*t)');
+  await page.waitForFunction(() => document.querySelector('[data-error="model.drift[0]"]').textContent === '' && document.querySelector('#unavailable-list li[data-method="gaussian_sum"]')?.textContent.includes('time-invariant'), null, { timeout: 10000 });
+  console.log('driven model, not applicable:', await page.textContent('#unavailable-list li[data-method="gaussian_sum"]'));
+  await page.click('#apply');
+  await page.waitForFunction(() => JSON.stringify(window.zakaiPage.base.model.inputs) === '["sin(0.5*t)"]', null, { timeout: 10000 });
+  await page.waitForFunction(() => window.zakaiPage.data.times.length === window.zakaiPage.info.steps + 1, null, { timeout: 60000 });
+  const drivenRun = await page.evaluate(() => ({ methods: window.zakaiPage.info.methods, failed: window.zakaiPage.diagnostics?.map((d) => d.failed) }));
+  console.log('driven run:', JSON.stringify(drivenRun));
+  assert.ok(drivenRun.methods.includes('SA'), 'the SA runs the driven model');
+  assert.ok(drivenRun.failed.every((f) => !f), 'no applicable method fails');
+  await page.screenshot({ path: `${artifacts}/known-input.png` });
+  await page.click('#remove-u');
+  assert.equal(await page.$$eval('#inputs input', (i) => i.length), 0);
 
   // −5 particles: the field is marked, the message is next to it in plain words.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');

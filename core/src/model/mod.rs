@@ -240,21 +240,47 @@ impl Model {
         observation: &[&str],
         noise: Noise,
     ) -> Result<Self, ZakaiError> {
+        Self::text_model(drift, observation, noise, None)
+    }
+
+    /// A driven model from text ([`inputs`]): expressions in the state, the time `t` and the
+    /// `inputs` known inputs `u1..uk`, with G = I:
+    /// `Model::driven_from_text(&["-x + 2*u1"], &["x"], Noise::discrete(0.1), 1)`.
+    pub fn driven_from_text(
+        drift: &[&str],
+        observation: &[&str],
+        noise: Noise,
+        inputs: usize,
+    ) -> Result<Self, ZakaiError> {
+        Self::text_model(drift, observation, noise, Some(inputs))
+    }
+
+    /// [`Model::from_text`], driven by `inputs` when given.
+    fn text_model(
+        drift: &[&str],
+        observation: &[&str],
+        noise: Noise,
+        inputs: Option<usize>,
+    ) -> Result<Self, ZakaiError> {
         use crate::validate::ConfigProblem;
         use alloc::string::String;
         use alloc::vec::Vec;
         let (n, m) = (drift.len(), observation.len());
+        let variables = syntax::Variables::state(n).driven(inputs);
         let mut problems = Vec::new();
         let mut parse = |field: &str, texts: &[&str], out_dim: usize| {
             let owned: Vec<String> = texts.iter().map(|t| String::from(*t)).collect();
             for (i, t) in owned.iter().enumerate() {
-                if let Err(e) =
-                    expression::ExpressionFunction::parse(field, core::slice::from_ref(t), n, 1)
-                {
+                if let Err(e) = expression::ExpressionFunction::parse_in(
+                    field,
+                    core::slice::from_ref(t),
+                    &variables,
+                    1,
+                ) {
                     problems.push(ConfigProblem::new(format!("{field}[{i}]"), format!("{e}")));
                 }
             }
-            expression::ExpressionFunction::parse(field, &owned, n, out_dim).ok()
+            expression::ExpressionFunction::parse_in(field, &owned, &variables, out_dim).ok()
         };
         let f = parse("drift", drift, n);
         let h = parse("observation", observation, m);
@@ -268,11 +294,12 @@ impl Model {
             ));
         }
         match (f, h) {
-            (Some(f), Some(h)) if problems.is_empty() => Model::new(
+            (Some(f), Some(h)) if problems.is_empty() => Model::assemble(
                 Arc::new(f),
                 Arc::new(h),
-                DMatrix::identity(n, n),
+                Diffusion::Constant(DMatrix::identity(n, n)),
                 noise.observation_model(m)?,
+                inputs,
             ),
             _ => Err(ZakaiError::Config(problems)),
         }

@@ -25,7 +25,7 @@ import numpy as np
 from . import _zakai
 from ._convert import ArrayLike, _array, _index_times, _times
 from .errors import ConfigError
-from .runs import _check_executor, _scenario, _seed
+from .runs import _check_executor, _inputs, _scenario, _seed
 from .scenario import Scenario
 
 
@@ -71,7 +71,12 @@ def _task(args: tuple) -> float:
 
 
 def _evaluator(
-    executor: Any, text: str, obs: np.ndarray, times: Optional[np.ndarray], seed: int
+    executor: Any,
+    text: str,
+    obs: np.ndarray,
+    times: Optional[np.ndarray],
+    seed: int,
+    inputs: Optional[np.ndarray] = None,
 ) -> Optional[Callable[[int, list[str], list[list[float]]], list[float]]]:
     """The batch evaluator the core calls, one executor task per point; ``None`` without an
     executor (the core then runs the batch on every core itself)."""
@@ -81,7 +86,7 @@ def _evaluator(
 
     def evaluate(method: int, names: list[str], points: list[list[float]]) -> list[float]:
         futures = [
-            executor.submit(_task, (text, obs, times, method, names, seed, list(p)))
+            executor.submit(_task, (text, obs, times, method, names, seed, list(p), inputs))
             for p in points
         ]
         return [float(f.result()) for f in futures]
@@ -182,6 +187,7 @@ def fit(
     times: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
     executor: Any = None,
+    inputs: Optional[ArrayLike] = None,
 ) -> FitResult:
     """Maximum-likelihood estimate of the scenario's parameters from your observations.
 
@@ -206,6 +212,8 @@ def fit(
     executor : concurrent.futures.Executor, optional
         Spreads the batches of evaluations over its workers (e.g. a Dask cluster's
         ``client.get_executor()``); every core of this machine when absent.
+    inputs : array_like, shape (rows, k), optional
+        The known inputs of a driven model, as for :func:`zakai.filter`.
 
     Returns
     -------
@@ -215,8 +223,9 @@ def fit(
     obs, t = _observations(observations, times)
     s = _seed(sc, seed)
     text = sc._text()
+    u = _inputs(inputs)
     d = _zakai.fit(
-        text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s)
+        text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s, u), u
     )
     names = d["names"]
     cov = d["covariance"]
@@ -281,6 +290,7 @@ def profile(
     times: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
     executor: Any = None,
+    inputs: Optional[ArrayLike] = None,
 ) -> Profile:
     """The log-likelihood of your observations along ``param`` for every method of the
     scenario: with ``refit`` (names of other parameters) the profile log-likelihood, ln L
@@ -289,7 +299,7 @@ def profile(
 
     ``values`` default to ``points`` values spanning the parameter's bounds (less 1 % at each
     end), or a quarter to four times its distance from a one-sided bound, or its value ± 3 when
-    unbounded. ``times``, ``seed`` and ``executor`` are as for :func:`fit`.
+    unbounded. ``times``, ``seed``, ``executor`` and ``inputs`` are as for :func:`fit`.
     """
     sc = _scenario(scenario)
     obs, t = _observations(observations, times)
@@ -303,9 +313,11 @@ def profile(
     if not isinstance(points, (int, np.integer)) or not 2 <= points <= 10_000:
         raise ConfigError(f"points: must be an integer in [2, 10000], got {points!r}")
     text = sc._text()
+    u = _inputs(inputs)
     grid, rows = _zakai.profile(
         text, obs, t, str(param), v, int(points), s, [str(n) for n in (refit or [])],
-        _evaluator(executor, text, obs, t, s),
+        _evaluator(executor, text, obs, t, s, u),
+        u,
     )
     return Profile(
         parameter=str(param),
@@ -323,14 +335,23 @@ def log_likelihood(
     *,
     times: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
+    inputs: Optional[ArrayLike] = None,
     **values: float,
 ) -> float:
     """ln p(observations | θ) under one method, with parameters set by keyword
     (``log_likelihood(sc, z, "kalman", q=1400.0, r=15000.0)``; the others at their values);
-    ``-inf`` where the method fails on the data."""
+    ``-inf`` where the method fails on the data. ``inputs``: a driven model's known inputs,
+    as for :func:`zakai.filter`."""
     sc, index = _method_index(_scenario(scenario), method)
     obs, t = _observations(observations, times)
     names = list(values)
     return _zakai.log_likelihood(
-        sc._text(), obs, t, index, names, _seed(sc, seed), [float(values[n]) for n in names]
+        sc._text(),
+        obs,
+        t,
+        index,
+        names,
+        _seed(sc, seed),
+        [float(values[n]) for n in names],
+        _inputs(inputs),
     )

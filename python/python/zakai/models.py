@@ -162,6 +162,23 @@ class Model:
             drift, observation, diffusion, {"kind": "log_density", "expression": log_density}
         )
 
+    def with_inputs(self, *inputs: str) -> "Model":
+        """The same model driven by known inputs ``u1 … uk``: its expressions may then read
+        them and the time ``t`` (``"-x + 2*u1"``). Each argument is the input as an
+        expression in ``t``, the series a simulated run records (and :func:`zakai.simulate`
+        returns with ``with_inputs=True``); recorded data bring their own (``inputs=`` of
+        :func:`zakai.filter`), so ``"0"`` will do when you only filter. The Gaussian, particle
+        and grid filters hold each row's inputs over its interval; methods whose operator is
+        made once (Kalman–Bucy, spectral, superposition, direct, Gaussian sum, IEKF/IOKF)
+        refuse a driven model and say why.
+
+        >>> import zakai
+        >>> m = zakai.Model.discrete("-x + 2*u1", "x", noise_cov=0.1).with_inputs("sin(t)")
+        >>> m.config["inputs"]
+        ['sin(t)']
+        """
+        return Model({**self.config, "inputs": _strings(list(inputs), "inputs")})
+
     @classmethod
     def _of(cls, drift: Any, observation: Any, diffusion: Any, noise: dict) -> "Model":
         """The model of these texts, diffusion and noise block (of the scenario JSON)."""

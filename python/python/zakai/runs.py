@@ -34,9 +34,15 @@ def _seed(scenario: Scenario, seed: Optional[int]) -> int:
 
 
 def simulate(
-    scenario: Union[Scenario, str], seed: Optional[int] = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    scenario: Union[Scenario, str], seed: Optional[int] = None, *, with_inputs: bool = False
+) -> tuple:
     """Simulates the scenario's truth and observations.
+
+    Parameters
+    ----------
+    with_inputs : bool
+        Also return the known inputs the run used (a driven model's, from the scenario's
+        ``model.inputs`` expressions in t), to pass to :func:`filter` as ``inputs=``.
 
     Returns
     -------
@@ -45,9 +51,14 @@ def simulate(
     states : ndarray, shape (N + 1, n)
     observations : ndarray, shape (N + 1, m)
         Continuous: row 0 zeros, row k the increment y(τ_k) − y(τ_{k−1}); discrete: z_k.
+    inputs : ndarray, shape (N + 1, k), with ``with_inputs``
+        Row k: the inputs over (τ_{k−1}, τ_k] (row 0 those a measurement at τ₀ reads).
     """
     sc = _scenario(scenario)
-    return _zakai.simulate(sc._text(), _seed(sc, seed))
+    times, states, observations, inputs = _zakai.simulate(sc._text(), _seed(sc, seed))
+    if with_inputs:
+        return times, states, observations, inputs
+    return times, states, observations
 
 
 
@@ -64,6 +75,8 @@ def filter(
     times: Optional[ArrayLike] = None,
     truth: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
+    *,
+    inputs: Optional[ArrayLike] = None,
 ) -> RunResult:
     """Every method of the scenario on your observations.
 
@@ -88,8 +101,22 @@ def filter(
         The true states, for errors (MSE) against them.
     seed : int, optional
         Seeds the methods' random numbers (particle filter); the scenario's seed when absent.
+    inputs : array_like or pandas DataFrame, shape (rows, k), optional
+        The known inputs u1…uk of a driven model (one whose expressions read them or the
+        time t): one row per time, row k held over (τ_{k−1}, τ_k] (for increments one row
+        per interval also works). Required when the model reads inputs; methods that need a
+        time-invariant model say so in their failure.
     """
-    return _recorded(scenario, observations, times, truth, seed, smooth=False)
+    return _recorded(scenario, observations, times, truth, seed, smooth=False, inputs=inputs)
+
+
+
+def _inputs(inputs: Optional[ArrayLike]) -> Optional[np.ndarray]:
+    """Known inputs as a (rows, k) array (a 1-D array or Series is one input)."""
+    if inputs is None:
+        return None
+    a = _array(inputs.to_numpy(dtype=float) if hasattr(inputs, "to_numpy") else inputs, "inputs")
+    return a.reshape(-1, 1) if a.ndim == 1 else a
 
 
 
@@ -100,6 +127,7 @@ def _recorded(
     truth: Optional[ArrayLike],
     seed: Optional[int],
     smooth: bool,
+    inputs: Optional[ArrayLike] = None,
 ) -> RunResult:
     """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
@@ -117,6 +145,7 @@ def _recorded(
             _array(truth, "truth"),
             _seed(sc, seed),
             smooth,
+            _inputs(inputs),
         )
     )
     if index is not None and len(index) == len(result.times):
@@ -130,6 +159,8 @@ def smooth(
     times: Optional[ArrayLike] = None,
     truth: Optional[ArrayLike] = None,
     seed: Optional[int] = None,
+    *,
+    inputs: Optional[ArrayLike] = None,
 ) -> RunResult:
     """Every method of the scenario as its fixed-interval smoother on your observations.
 
@@ -161,7 +192,7 @@ def smooth(
     >>> bool(s.sds[3, 0] < r.methods["KF"].sds[3, 0])  # the gap is bridged from both sides
     True
     """
-    return _recorded(scenario, observations, times, truth, seed, smooth=True)
+    return _recorded(scenario, observations, times, truth, seed, smooth=True, inputs=inputs)
 
 
 def _check_executor(executor: Any) -> None:

@@ -520,6 +520,12 @@ impl ScenarioConfig {
                 }
             }
         }
+        let time = Variables::state(0).driven(Some(0));
+        for (i, t) in self.model.inputs.iter().enumerate() {
+            if let Err(e) = check_expression("input u", t, &time, &names) {
+                p.push(ConfigProblem::new(format!("model.inputs[{i}]"), e.to_string()));
+            }
+        }
         check_parameters(&self.parameters, &self.expression_texts(), &mut p);
         // An entry that does not resolve is reported once, not again as a non-finite
         // number or a matrix that is not positive definite.
