@@ -747,6 +747,12 @@ fn convexity(scenario: &str, phi: Option<&str>, j: &str) -> Result<(), String> {
     let config = load(scenario)?;
     let experiment = Experiment::new(config).map_err(|e| e.to_string())?;
     let (model, prior) = (experiment.model(), experiment.prior());
+    if model.is_driven() {
+        return Err(
+            "003's convex-filter conditions are for a time-invariant model, and this one reads the time or known inputs"
+                .into(),
+        );
+    }
     let bounds = experiment.config().bounds();
     let mut reports = vec![convex_filter::theorem_3_8(model, prior, &bounds)];
     if let Some(text) = phi {

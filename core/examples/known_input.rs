@@ -12,13 +12,9 @@ use zakai::simulate::{rng_from_seed, simulate_driven, TimeGrid};
 use zakai::{Ekf, Filter, Kalman, Model, Noise, Observation, Separation};
 
 fn main() -> Result<(), zakai::ZakaiError> {
-    let model = Model::driven_from_text(
-        &["-0.5*(x - 15) + 6*u1"],
-        &["x"],
-        Noise::discrete(0.25),
-        1,
-    )?
-    .with_diffusion(zakai::nalgebra::DMatrix::from_element(1, 1, 0.8))?;
+    let model =
+        Model::driven_from_text(&["-0.5*(x - 15) + 6*u1"], &["x"], Noise::discrete(0.25), 1)?
+            .with_diffusion(zakai::nalgebra::DMatrix::from_element(1, 1, 0.8))?;
     let dt = 0.5;
     let grid = TimeGrid {
         dt_obs: dt,
@@ -44,7 +40,10 @@ fn main() -> Result<(), zakai::ZakaiError> {
         .dt(dt)
         .with(|p| p.cells = vec![2000])
         .build()?;
-    match Kalman::builder(&model).prior_gaussian(&[15.0], &[[4.0]]).build() {
+    match Kalman::builder(&model)
+        .prior_gaussian(&[15.0], &[[4.0]])
+        .build()
+    {
         Ok(_) => println!("the Kalman–Bucy filter took the driven model"),
         Err(e) => println!("KF: {e}"),
     }

@@ -282,10 +282,19 @@ impl fmt::Display for ExprError {
                 name,
                 position,
                 allowed,
-            } => write!(
-                f,
-                "unknown variable `{name}` at position {position} in `{expr}` (allowed: {allowed})"
-            ),
+            } => {
+                write!(
+                    f,
+                    "unknown variable `{name}` at position {position} in `{expr}` (allowed: {allowed})"
+                )?;
+                if is_input_name(name) {
+                    write!(
+                        f,
+                        "; a known input u1…uk is declared first (model.inputs, \"+ known input\" in the playground)"
+                    )?;
+                }
+                Ok(())
+            }
             ExprError::WrongComponentCount {
                 what,
                 expected,
@@ -332,4 +341,10 @@ mod tests {
         );
         assert!(ZakaiError::Dimension("n".into()).source().is_none());
     }
+}
+
+/// Whether `name` is a known input's, `u1`, `u2`, … (`crate::model::inputs`).
+pub(crate) fn is_input_name(name: &str) -> bool {
+    name.strip_prefix('u')
+        .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
 }

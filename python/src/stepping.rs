@@ -37,7 +37,12 @@ impl Stepper {
         Ok(())
     }
 
-    fn step_values(&mut self, values: &[f64], dt: f64) -> PyResult<()> {
+    fn step_values(
+        &mut self,
+        values: &[f64],
+        dt: f64,
+        inputs: Option<(f64, &[f64])>,
+    ) -> PyResult<()> {
         if !(dt.is_finite() && dt >= 0.0) || (self.continuous && dt == 0.0) {
             return Err(errors::config(
                 "dt",
@@ -51,12 +56,16 @@ impl Stepper {
                 ),
             ));
         }
-        let stepped = if self.continuous {
-            self.filter.step_increment(dt, values)
+        let obs = if self.continuous {
+            zakai::Observation::increment(dt, values)
         } else {
-            self.filter.step_measurement(dt, values)
+            zakai::Observation::measurement(dt, values)
         };
-        stepped.map_err(errors::from_filter)
+        let obs = match inputs {
+            Some((t, u)) => obs.with_inputs(t, u),
+            None => obs,
+        };
+        self.filter.step(&obs).map_err(errors::from_filter)
     }
 
     fn check_dim(&self, dim: usize) -> PyResult<()> {
@@ -115,22 +124,38 @@ impl Stepper {
     }
 
     /// Predicts over `dt` and assimilates one observation (an increment dy for continuous
-    /// models, a measurement z for discrete ones); NaN components are missing.
-    fn step(&mut self, observation: PyReadonlyArrayDyn<'_, f64>, dt: f64) -> PyResult<()> {
+    /// models, a measurement z for discrete ones); NaN components are missing. A driven
+    /// model's step needs its time `t` and inputs `u` (over the interval that ends at `t`).
+    #[pyo3(signature = (observation, dt, t=None, u=None))]
+    fn step(
+        &mut self,
+        observation: PyReadonlyArrayDyn<'_, f64>,
+        dt: f64,
+        t: Option<f64>,
+        u: Option<Vec<f64>>,
+    ) -> PyResult<()> {
         let (values, _, _) = rows(&observation, "observation")?;
         self.observation(&values)?;
-        self.step_values(&values, dt)
+        let u = u.unwrap_or_default();
+        self.step_values(&values, dt, t.map(|t| (t, u.as_slice())))
     }
 
-    /// Predicts over `dt` without an observation.
-    fn predict(&mut self, dt: f64) -> PyResult<()> {
+    /// Predicts over `dt` without an observation (with a driven model's `t` and `u`).
+    #[pyo3(signature = (dt, t=None, u=None))]
+    fn predict(&mut self, dt: f64, t: Option<f64>, u: Option<Vec<f64>>) -> PyResult<()> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(errors::config(
                 "dt",
                 format!("must be finite and nonnegative (got {dt})"),
             ));
         }
-        self.filter.predict(dt).map_err(errors::from_filter)
+        let u = u.unwrap_or_default();
+        let obs = zakai::Observation::nothing(dt);
+        let obs = match t {
+            Some(t) => obs.with_inputs(t, &u),
+            None => obs,
+        };
+        self.filter.step(&obs).map_err(errors::from_filter)
     }
 
     /// Assimilates the measurement `z` at the current time (discrete models).
@@ -188,7 +213,7 @@ impl Stepper {
         let mut means = Vec::with_capacity(count * n);
         let mut covs = Vec::new();
         for (k, dt) in dts.iter().enumerate() {
-            self.step_values(&values[k * m..(k + 1) * m], *dt)
+            self.step_values(&values[k * m..(k + 1) * m], *dt, None)
                 .map_err(|e| errors::raise("FilterError", format!("row {k}: {e}"), &[]))?;
             let est = self.filter.estimate();
             means.extend_from_slice(est.mean.as_slice());

@@ -1110,6 +1110,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   console.log('driven model, not applicable:', await page.textContent('#unavailable-list li[data-method="gaussian_sum"]'));
   await page.click('#apply');
   await page.waitForFunction(() => JSON.stringify(window.zakaiPage.base.model.inputs) === '["sin(0.5*t)"]', null, { timeout: 10000 });
+  await page.$eval('#speed', (e) => { e.value = '50'; e.dispatchEvent(new Event('input')); });
+  await page.click('#play');
   await page.waitForFunction(() => window.zakaiPage.data.times.length === window.zakaiPage.info.steps + 1, null, { timeout: 60000 });
   const drivenRun = await page.evaluate(() => ({ methods: window.zakaiPage.info.methods, failed: window.zakaiPage.diagnostics?.map((d) => d.failed) }));
   console.log('driven run:', JSON.stringify(drivenRun));

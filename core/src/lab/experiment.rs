@@ -484,19 +484,21 @@ impl Experiment {
         })
     }
 
-    /// `f` of this experiment's problem (model, prior, probe points, domain).
+    /// `f` of this experiment's problem (model, prior, probe points, domain); a driven
+    /// model as at its start ([`crate::filters::method::ProblemContext::at_start`]).
     pub(crate) fn with_problem<T>(
         &self,
         f: impl FnOnce(&crate::filters::method::ProblemContext) -> T,
     ) -> T {
         let bounds = self.config.bounds();
-        f(&crate::filters::method::ProblemContext {
+        crate::filters::method::ProblemContext {
             model: &self.model,
             prior: &self.prior,
             probes: &self.probes,
             bounds: &bounds,
             dt_obs: Some(self.config.time.dt_obs),
-        })
+        }
+        .at_start(f)
     }
 
     /// The truth and observations of the run with `seed` (x₀ from the scenario or drawn from

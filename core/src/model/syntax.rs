@@ -890,12 +890,9 @@ pub(crate) fn reads_state(text: &str, n: usize) -> bool {
 /// Whether `text` reads the time `t` or a known input `u1`, `u2`, … of a driven model
 /// ([`crate::model::inputs`]).
 pub(crate) fn reads_drive(text: &str) -> bool {
-    free_names(text).iter().any(|(name, _)| {
-        name == "t"
-            || name
-                .strip_prefix('u')
-                .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
-    })
+    free_names(text)
+        .iter()
+        .any(|(name, _)| name == "t" || crate::error::is_input_name(name))
 }
 
 /// `text` with every parameter of `names` replaced by its value, written so that it reads

@@ -14,6 +14,13 @@ from .scenario import Scenario
 
 
 
+def _drive(t: Optional[float], u: Optional[ArrayLike]) -> tuple:
+    """A driven model's step time and inputs as the core takes them."""
+    if t is None:
+        return (None, None)
+    return (float(t), [] if u is None else [float(v) for v in _array(u, "u").ravel()])
+
+
 class Filter:
     """One filter stepped by hand: ``f.step(dy, dt)``, then ``f.mean``, ``f.cov``,
     ``f.density(grid)``.
@@ -78,19 +85,35 @@ class Filter:
             raise ConfigError(f"dt: must be a number of time units (got {type(dt).__name__})")
         return float(dt)
 
-    def step(self, observation: ArrayLike, dt: Optional[float] = None) -> None:
+    def step(
+        self,
+        observation: ArrayLike,
+        dt: Optional[float] = None,
+        *,
+        t: Optional[float] = None,
+        u: Optional[ArrayLike] = None,
+    ) -> None:
         """Predicts over ``dt`` (Δτ when absent) and assimilates one observation: the
         increment dy for continuous models, the measurement z for discrete ones (``dt = 0``
         assimilates at the current time). NaN components are missing: only the observed
-        ones are used, and an all-NaN observation is a prediction only. A step that fails
-        raises :class:`FilterError` and leaves the filter as it was."""
-        self._inner.step(_array(observation, "observation"), self._dt(dt))
+        ones are used, and an all-NaN observation is a prediction only. A driven model
+        (:meth:`Model.with_inputs`) needs the observation's time ``t`` and the known inputs
+        ``u`` over the interval that ends at it. A step that fails raises
+        :class:`FilterError` and leaves the filter as it was."""
+        self._inner.step(_array(observation, "observation"), self._dt(dt), *_drive(t, u))
         self._at_prior = False
 
-    def predict(self, dt: Optional[float] = None) -> None:
+    def predict(
+        self,
+        dt: Optional[float] = None,
+        *,
+        t: Optional[float] = None,
+        u: Optional[ArrayLike] = None,
+    ) -> None:
         """Predicts over ``dt`` (Δτ when absent) without an observation: a gap in the data,
-        or a forecast (on a :meth:`copy`, to keep the filter itself at the present)."""
-        self._inner.predict(self._dt(dt))
+        or a forecast (on a :meth:`copy`, to keep the filter itself at the present). A driven
+        model needs the time ``t`` it predicts to and the inputs ``u`` held until then."""
+        self._inner.predict(self._dt(dt), *_drive(t, u))
         self._at_prior = False
 
     def update(self, z: ArrayLike) -> None:

@@ -523,7 +523,10 @@ impl ScenarioConfig {
         let time = Variables::state(0).driven(Some(0));
         for (i, t) in self.model.inputs.iter().enumerate() {
             if let Err(e) = check_expression("input u", t, &time, &names) {
-                p.push(ConfigProblem::new(format!("model.inputs[{i}]"), e.to_string()));
+                p.push(ConfigProblem::new(
+                    format!("model.inputs[{i}]"),
+                    e.to_string(),
+                ));
             }
         }
         check_parameters(&self.parameters, &self.expression_texts(), &mut p);
@@ -1084,6 +1087,11 @@ impl ScenarioConfig {
     pub fn yau_system(&self) -> Result<crate::diagnostics::yau_system::YauSystem, ZakaiError> {
         use crate::diagnostics::yau_system::{check, Affine};
         let model = self.build_model()?;
+        if model.is_driven() {
+            return Err(ZakaiError::Other(
+                "002's conditions (C1)–(C3) are for a time-invariant model, and this one reads the time or known inputs".into(),
+            ));
+        }
         let given = self.methods.iter().find_map(|m| match m {
             MethodConfig::Direct(p) if model.n == 1 => Some(Affine {
                 d_mat: DMatrix::from_element(1, 1, p.linear[0]),
