@@ -312,6 +312,12 @@ impl fmt::Display for ExprError {
     }
 }
 
+/// Whether `name` is a known input's, `u1`, `u2`, … (`crate::model::inputs`).
+pub(crate) fn is_input_name(name: &str) -> bool {
+    name.strip_prefix('u')
+        .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
+}
+
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
@@ -341,10 +347,4 @@ mod tests {
         );
         assert!(ZakaiError::Dimension("n".into()).source().is_none());
     }
-}
-
-/// Whether `name` is a known input's, `u1`, `u2`, … (`crate::model::inputs`).
-pub(crate) fn is_input_name(name: &str) -> bool {
-    name.strip_prefix('u')
-        .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
 }
