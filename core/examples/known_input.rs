@@ -1,10 +1,11 @@
-//! A room's temperature pushed by a known heater command: `dx = (−0.5 (x − 15) + 6 u1) dt
-//! + 0.8 dv`, read by a thermometer `z_k = x_k + v_k` (variance 0.25) every Δτ = 0.5, the
-//! command u1 ∈ {0, 1} (on for 10 time units, off for 10) recorded beside the readings. The
-//! model is *driven* (`Model::driven_from_text`: its expressions read `u1` and may read `t`);
-//! every step hands the filters the row's time and input (`Observation::with_inputs`), held
-//! over the interval that ends at it. The EKF and the separation-approach grid filter use it;
-//! the Kalman–Bucy filter, whose matrices are computed once, refuses the model and says why.
+//! A room's temperature pushed by a known heater command,
+//! `dx = (−0.5 (x − 15) + 6 u1) dt + 0.8 dv`, read by a thermometer `z_k = x_k + v_k`
+//! (variance 0.25) every Δτ = 0.5, the command u1 ∈ {0, 1} (on for 10 time units, off for
+//! 10) recorded beside the readings. The model is *driven* (`Model::driven_from_text`: its
+//! expressions read `u1` and may read `t`); every step hands the filters the row's time and
+//! input (`Observation::with_inputs`), held over the interval that ends at it. The EKF and
+//! the separation-approach grid filter use it; the Kalman–Bucy filter, whose matrices are
+//! computed once, refuses the model and says why.
 //!
 //! Run: `cargo run -p zakai --example known_input`
 
