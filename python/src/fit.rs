@@ -77,16 +77,21 @@ fn through<T>(
     }
 }
 
+/// A recording's arrays as Python passes them: the observations, their times and the known
+/// inputs.
+type Arrays<'a, 'py> = (
+    &'a PyReadonlyArrayDyn<'py, f64>,
+    Option<&'a PyReadonlyArrayDyn<'py, f64>>,
+    Option<&'a PyReadonlyArrayDyn<'py, f64>>,
+);
+
 /// The likelihood of the recording under method `method` as a function of `names`.
-#[allow(clippy::too_many_arguments)]
 fn likelihood(
     json: &str,
-    observations: &PyReadonlyArrayDyn<'_, f64>,
-    times: Option<&PyReadonlyArrayDyn<'_, f64>>,
+    (observations, times, inputs): Arrays<'_, '_>,
     method: usize,
     names: &[String],
     seed: u64,
-    inputs: Option<&PyReadonlyArrayDyn<'_, f64>>,
 ) -> PyResult<Likelihood> {
     let e = experiment(json)?;
     let recording = recording_of(&e, observations, times, None)?;
@@ -111,15 +116,8 @@ pub fn log_likelihood<'py>(
     point: Vec<f64>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<f64> {
-    let l = likelihood(
-        json,
-        &observations,
-        times.as_ref(),
-        method,
-        &names,
-        seed,
-        inputs.as_ref(),
-    )?;
+    let arrays = (&observations, times.as_ref(), inputs.as_ref());
+    let l = likelihood(json, arrays, method, &names, seed)?;
     Ok(py.detach(|| l.value(&point)))
 }
 
@@ -139,15 +137,8 @@ pub fn fit<'py>(
     evaluator: Option<Py<PyAny>>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let l = likelihood(
-        json,
-        &observations,
-        times.as_ref(),
-        method,
-        &names,
-        seed,
-        inputs.as_ref(),
-    )?;
+    let arrays = (&observations, times.as_ref(), inputs.as_ref());
+    let l = likelihood(json, arrays, method, &names, seed)?;
     let options = FitOptions::default();
     let result = match &evaluator {
         None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
@@ -219,15 +210,8 @@ pub fn profile<'py>(
     };
     let out = PyList::empty(py);
     for method in 0..methods {
-        let l = likelihood(
-            json,
-            &observations,
-            times.as_ref(),
-            method,
-            &names,
-            seed,
-            inputs.as_ref(),
-        )?;
+        let arrays = (&observations, times.as_ref(), inputs.as_ref());
+        let l = likelihood(json, arrays, method, &names, seed)?;
         let p = match &evaluator {
             None => py.detach(|| along(&l, &l)),
             Some(callable) => through(callable, method, &names, |remote| along(&l, remote))?,

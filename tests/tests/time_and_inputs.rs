@@ -73,6 +73,30 @@ fn kalman(data: &Recording) -> (Vec<f64>, Vec<f64>, f64) {
     (means, sds, ll)
 }
 
+/// Method i of `run` within `bounds[i]` = (posterior sds, ln L) of the exact filter's
+/// means, sds and log-likelihood.
+fn within(
+    run: &zakai::lab::experiment::RunResult,
+    (means, sds, reference): (&[f64], &[f64], f64),
+    bounds: &[(f64, f64)],
+) {
+    for (i, (gap_bound, ll_bound)) in bounds.iter().enumerate() {
+        let track = &run.methods[i];
+        let gap = worst_gap(run, i, means, sds);
+        let ll: f64 = track.log_likelihoods.iter().sum();
+        println!(
+            "{}: worst gap {gap:.3e} sd, ln L {ll:.6} (exact {reference:.6})",
+            track.name
+        );
+        assert!(gap <= *gap_bound, "{}: {gap} sd", track.name);
+        assert!(
+            (ll - reference).abs() <= *ll_bound,
+            "{}: ln L {ll} vs {reference}",
+            track.name
+        );
+    }
+}
+
 /// The simulated run with the gap and the dropped row, its inputs carried along.
 fn recorded(e: &Experiment) -> Recording {
     let data = e.simulate(e.config().seed).unwrap();
@@ -98,30 +122,14 @@ fn a_known_input_and_a_known_gain_match_the_exact_filter() {
     assert_eq!(data.input_count, 2);
     let (means, sds, reference) = kalman(&data);
     let run = e.filter_recorded(data, 11).unwrap();
-    for (i, (gap_bound, ll_bound)) in [
+    let bounds = [
         (1e-5, 1e-5),
         (1e-5, 1e-5),
         (0.05, 0.05),
         (0.05, 0.05),
         (0.15, 0.5),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let track = &run.methods[i];
-        let gap = worst_gap(&run, i, &means, &sds);
-        let ll: f64 = track.log_likelihoods.iter().sum();
-        println!(
-            "{}: worst gap {gap:.3e} sd, ln L {ll:.6} (exact {reference:.6})",
-            track.name
-        );
-        assert!(gap <= gap_bound, "{}: {gap} sd", track.name);
-        assert!(
-            (ll - reference).abs() <= ll_bound,
-            "{}: ln L {ll} vs {reference}",
-            track.name
-        );
-    }
+    ];
+    within(&run, (&means, &sds, reference), &bounds);
 }
 
 /// The input matters: filtering the same measurements with the inputs of another series
@@ -381,30 +389,14 @@ fn the_yau_yau_filters_take_a_driven_model() {
     };
     let (means, sds, reference) = increments_kalman(&data, S);
     let run = e.filter_recorded(data, 3).unwrap();
-    for (i, (gap_bound, ll_bound)) in [
+    let bounds = [
         (0.05, 0.05),
         (0.05, 0.05),
         (0.05, 0.05),
         (0.05, 0.05),
         (0.1, 0.1),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let track = &run.methods[i];
-        let gap = worst_gap(&run, i, &means, &sds);
-        let ll: f64 = track.log_likelihoods.iter().sum();
-        println!(
-            "{}: worst gap {gap:.3e} sd, ln L {ll:.4} (exact {reference:.4})",
-            track.name
-        );
-        assert!(gap <= gap_bound, "{}: {gap} sd", track.name);
-        assert!(
-            (ll - reference).abs() <= ll_bound,
-            "{}: ln L {ll} vs {reference}",
-            track.name
-        );
-    }
+    ];
+    within(&run, (&means, &sds, reference), &bounds);
     let spt = run.methods[5].failure.as_ref().expect("SPT refuses");
     assert!(spt.message.contains("time-invariant"), "{}", spt.message);
 }

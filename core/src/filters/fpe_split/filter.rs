@@ -73,9 +73,12 @@ pub fn diffusion_on(
 struct Tabulated {
     advection: UpwindAdvection,
     divergence: Vec<f64>,
+    /// `a_ll = (G Gᵀ)_ll` at every cell, per dimension.
     diffusion: Vec<Vec<f64>>,
+    /// The mixed terms of `a`, a positive explicit step (`grid::cross`).
     cross: CrossDiffusion,
     likelihood: crate::filters::MeasurementLikelihood,
+    /// h at the cell centres, row per cell, with m components.
     h_nodes: Vec<f64>,
 }
 
@@ -127,15 +130,8 @@ pub struct ContinuousDiscreteGrid {
     name: String,
     scheme: FpeScheme,
     grid: TensorGrid,
-    advection: UpwindAdvection,
-    divergence: Vec<f64>,
-    /// `a_ll = (G Gᵀ)_ll` at every cell, per dimension.
-    diffusion: Vec<Vec<f64>>,
-    /// The mixed terms of `a`, a positive explicit step (`grid::cross`).
-    cross: CrossDiffusion,
-    likelihood: crate::filters::MeasurementLikelihood,
-    /// h at the cell centres, row per cell, with m components.
-    h_nodes: Vec<f64>,
+    /// The model on the cells.
+    table: Tabulated,
     m: usize,
     /// A driven model ([`crate::model::inputs`]), tabulated anew at every step.
     driven: Option<Model>,
@@ -187,14 +183,7 @@ impl ContinuousDiscreteGrid {
         // A driven model is tabulated at its start (t = 0, the first inputs unknown: zeros)
         // for the step-choice warnings; every step tabulates it anew.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
-        let Tabulated {
-            advection,
-            divergence,
-            diffusion,
-            cross,
-            likelihood,
-            h_nodes,
-        } = Tabulated::of(&name, &grid, &start, &start)?;
+        let table = Tabulated::of(&name, &grid, &start, &start)?;
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -214,12 +203,7 @@ impl ContinuousDiscreteGrid {
             name,
             scheme,
             grid,
-            advection,
-            divergence,
-            diffusion,
-            cross,
-            likelihood,
-            h_nodes,
+            table,
             m: model.m,
             driven: model.is_driven().then(|| model.clone()),
             target_dt: params.dt,
@@ -248,12 +232,7 @@ impl ContinuousDiscreteGrid {
     /// The operators of a driven model's step: `table` in place of the last one, and the
     /// implicit step for Δτ factorised for it (the remainders' plans are dropped).
     fn retabulate(&mut self, table: Tabulated) -> Result<(), FilterError> {
-        self.advection = table.advection;
-        self.divergence = table.divergence;
-        self.diffusion = table.diffusion;
-        self.cross = table.cross;
-        self.likelihood = table.likelihood;
-        self.h_nodes = table.h_nodes;
+        self.table = table;
         self.remainders = LengthCache::new(REMAINDER_PLANS);
         self.plan_for(self.dt_obs)
     }
@@ -294,19 +273,20 @@ impl ContinuousDiscreteGrid {
         if self.scheme == FpeScheme::Separation {
             explicit(
                 "(16)/(23) CFL: Σ|f_l|Δt/Δx_l",
-                self.advection.courant_rate(&self.grid),
+                self.table.advection.courant_rate(&self.grid),
                 &mut steps,
             );
         }
-        if !self.cross.is_empty() {
+        if !self.table.cross.is_empty() {
             explicit(
                 "mixed terms of Q = G Gᵀ (an explicit step): Σ_(l<k) |a_lk| Δt/(Δx_l Δx_k)",
-                self.cross.rate_bound(self.grid.len()),
+                self.table.cross.rate_bound(self.grid.len()),
                 &mut steps,
             );
         }
         let (min_div, idx) =
-            self.divergence
+            self.table
+                .divergence
                 .iter()
                 .enumerate()
                 .fold(
@@ -343,8 +323,8 @@ impl ContinuousDiscreteGrid {
     fn peclet_warning(&self) -> Option<String> {
         let mut worst = (0.0, 0, 0);
         for l in 0..self.grid.dim() {
-            let (dx, a) = (self.grid.spacing()[l], &self.diffusion[l]);
-            for (idx, f) in self.advection.velocity(l).iter().enumerate() {
+            let (dx, a) = (self.grid.spacing()[l], &self.table.diffusion[l]);
+            for (idx, f) in self.table.advection.velocity(l).iter().enumerate() {
                 // a at the neighbours (the cell's own where its line ends).
                 let [below, above] = self.grid.neighbours(idx, l).map(|n| a[n.unwrap_or(idx)]);
                 let pe = libm::fabs(*f) * dx / below.min(above);
@@ -375,9 +355,9 @@ impl ContinuousDiscreteGrid {
         };
         let implicit = ImplicitStep::new(
             &self.grid,
-            &self.advection,
-            &self.divergence,
-            &self.diffusion,
+            &self.table.advection,
+            &self.table.divergence,
+            &self.table.diffusion,
             dt,
             part,
         )?;
@@ -458,13 +438,15 @@ impl ContinuousDiscreteGrid {
                 false => self.plan.as_mut().expect("planned in new"),
             };
             plan.implicit.solve_transposed(&mut self.u, &mut self.tmp);
-            if !self.cross.is_empty() {
-                self.cross
+            if !self.table.cross.is_empty() {
+                self.table
+                    .cross
                     .step_transposed(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
             if self.scheme == FpeScheme::Separation {
-                self.advection
+                self.table
+                    .advection
                     .step_transposed(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
@@ -475,11 +457,15 @@ impl ContinuousDiscreteGrid {
     fn run_plan(&mut self, substeps: usize, dt: f64, remainder: bool) {
         for _ in 0..substeps {
             if self.scheme == FpeScheme::Separation {
-                self.advection.step(&self.grid, dt, &self.u, &mut self.tmp);
+                self.table
+                    .advection
+                    .step(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
-            if !self.cross.is_empty() {
-                self.cross.step(&self.grid, dt, &self.u, &mut self.tmp);
+            if !self.table.cross.is_empty() {
+                self.table
+                    .cross
+                    .step(&self.grid, dt, &self.u, &mut self.tmp);
                 core::mem::swap(&mut self.u, &mut self.tmp);
             }
             let plan = match remainder {
@@ -498,15 +484,15 @@ impl ContinuousDiscreteGrid {
         // The update keeps only the positive values (a negative one becomes 0).
         let before = self.grid.positive_mass(&self.u);
         let m = self.m;
-        let reads_state = self.likelihood.reads_state();
+        let reads_state = self.table.likelihood.reads_state();
         let mut max = f64::NEG_INFINITY;
         for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
             if *u > 0.0 {
-                let h = &self.h_nodes[idx * m..(idx + 1) * m];
+                let h = &self.table.h_nodes[idx * m..(idx + 1) * m];
                 if reads_state {
                     self.grid.node(idx, &mut self.node);
                 }
-                *log = self.likelihood.log_at(z, &self.node, h)? + libm::log(*u);
+                *log = self.table.likelihood.log_at(z, &self.node, h)? + libm::log(*u);
                 max = max.max(*log);
             } else {
                 *log = f64::NEG_INFINITY;
@@ -598,7 +584,7 @@ impl Filter for ContinuousDiscreteGrid {
                 &measurement,
             )?)?;
         }
-        self.likelihood.check(&self.name, obs.value)?;
+        self.table.likelihood.check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);
         let result = self.advance(obs, observed);
         let (u, estimate) = (&mut self.u, &mut self.estimate);
