@@ -236,6 +236,31 @@ impl Observation<'_> {
         }
     }
 
+    /// The two models a step over this observation uses, for a driven `model`
+    /// ([`crate::model::inputs`]): the dynamics' at the interval's midpoint and the
+    /// measurement's at its end (an increment's, over the interval, is the dynamics'), both
+    /// with the observation's inputs. `None` for an autonomous model; an error when a driven
+    /// model's observation carries no inputs, or inputs that do not fit it.
+    pub fn frozen(
+        &self,
+        model: &crate::model::Model,
+    ) -> Result<Option<(crate::model::Model, crate::model::Model)>, FilterError> {
+        if !model.is_driven() {
+            return Ok(None);
+        }
+        let Some(crate::model::Inputs { t, u }) = self.inputs else {
+            return Err(FilterError::BadObservation(
+                "the model reads the time t and known inputs: give each step the observation's time and inputs (Observation::with_inputs)".into(),
+            ));
+        };
+        let dynamics = model.at(t - 0.5 * self.dt, u)?;
+        let measurement = match self.kind {
+            ObservationKind::Increment => dynamics.clone(),
+            ObservationKind::Measurement => model.at(t, u)?,
+        };
+        Ok(Some((dynamics, measurement)))
+    }
+
     /// The same interval (with its time and inputs) with nothing observed: the prediction
     /// half of this step.
     pub fn predicting(&self) -> Observation<'_> {
@@ -560,7 +585,7 @@ pub fn observation_log_likelihoods(
         return None;
     }
     // A driven model's measurement at the observation's time and inputs.
-    let frozen = model.frozen_for(obs).ok()?;
+    let frozen = obs.frozen(model).ok()?;
     let model = frozen
         .as_ref()
         .map_or(model, |(_, measurement)| measurement);

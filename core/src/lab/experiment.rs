@@ -929,7 +929,7 @@ fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, row: &mut [
         Some(filter.estimate().mean)
     };
     // A driven model's h at the measurement's time and inputs.
-    let frozen = model.frozen_for(obs).ok().flatten();
+    let frozen = obs.frozen(model).ok().flatten();
     let model = frozen
         .as_ref()
         .map_or(model, |(_, measurement)| measurement);
@@ -976,7 +976,7 @@ fn observation_at(data: &Recording, k: usize, dt_obs: f64) -> Observation<'_> {
         } else {
             ObservationKind::Measurement
         },
-        // Read by a driven model only (`Model::frozen_for`).
+        // Read by a driven model only (`Observation::frozen`).
         inputs: Some(crate::model::Inputs {
             t: data.times[k],
             u: data.inputs_at(k),

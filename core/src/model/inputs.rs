@@ -14,15 +14,15 @@
 //! of the increments, whose row k is also the interval's), and at the measurement `z_k`. The
 //! time the dynamics read is held at the interval's midpoint `τ_{k−1} + Δτ/2` (the midpoint
 //! rule, second order in Δτ for a drift smooth in t); a measurement at `τ_k` reads `t = τ_k`.
-//! Each step therefore sees two *frozen* models ([`Model::at`]): an autonomous model whose
-//! functions are the driven ones with `(t, u)` fixed.
+//! Each step therefore sees two *frozen* models ([`Model::at`]; `Observation::frozen` gives
+//! the pair): an autonomous model whose functions are the driven ones with `(t, u)` fixed.
 //!
 //! **Which methods.** The Gaussian filters (EKF, UKF, IEKF, IOKF) and the particle filter
 //! take the frozen models step by step. Methods whose operator is made once for the whole run
 //! — the spectral filter's off-line operator (Luo & Yau 2013, 004 §3), the superposition
 //! technique (Yau & Yau 2008, 000 §2.5), the direct method's Riccati solution (002), the
 //! grid filters' factorised operators, the Kalman–Bucy and Gaussian-sum filters' fixed
-//! matrices — refuse a driven model with that reason ([`crate::filters::method::Method::INPUTS`]).
+//! matrices — refuse a driven model with that reason (the catalogue's `inputs`).
 
 use alloc::sync::Arc;
 use alloc::vec;
@@ -190,29 +190,5 @@ impl Model {
             observations,
             inputs: None,
         })
-    }
-
-    /// The two models of a step over `obs` (see the module doc): the dynamics' at the
-    /// interval's midpoint and the measurement's at its end (an increment's, over the
-    /// interval, is the dynamics'), both with the observation's inputs. `None` for an autonomous model; an error when a driven model's observation
-    /// carries no inputs.
-    pub fn frozen_for(
-        &self,
-        obs: &crate::filters::Observation,
-    ) -> Result<Option<(Model, Model)>, FilterError> {
-        if self.inputs.is_none() {
-            return Ok(None);
-        }
-        let Some(Inputs { t, u }) = obs.inputs else {
-            return Err(FilterError::BadObservation(
-                "the model reads the time t and known inputs: give each step the observation's time and inputs (Observation::with_inputs)".into(),
-            ));
-        };
-        let dynamics = self.at(t - 0.5 * obs.dt, u)?;
-        let measurement = match obs.kind {
-            crate::filters::ObservationKind::Increment => dynamics.clone(),
-            crate::filters::ObservationKind::Measurement => self.at(t, u)?,
-        };
-        Ok(Some((dynamics, measurement)))
     }
 }

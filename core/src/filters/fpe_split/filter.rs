@@ -576,7 +576,7 @@ impl Filter for ContinuousDiscreteGrid {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Measurement, self.m)?;
         if let Some(model) = &self.driven {
-            let (dynamics, measurement) = model.frozen_for(obs)?.expect("a driven model");
+            let (dynamics, measurement) = obs.frozen(model)?.expect("a driven model");
             self.retabulate(Tabulated::of(
                 &self.name,
                 &self.grid,

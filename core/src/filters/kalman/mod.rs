@@ -584,7 +584,7 @@ impl DrivenStep {
         model: &crate::model::Model,
         obs: &crate::filters::Observation,
     ) -> Result<Option<Self>, FilterError> {
-        let Some((dynamics, measurement)) = model.frozen_for(obs)? else {
+        let Some((dynamics, measurement)) = obs.frozen(model)? else {
             return Ok(None);
         };
         Ok(Some(DrivenStep {

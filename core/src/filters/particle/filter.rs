@@ -514,7 +514,7 @@ impl Filter for ParticleFilter {
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the particles.
         let frozen = match &self.driven {
-            Some(model) => model.frozen_for(obs)?,
+            Some(model) => obs.frozen(model)?,
             None => None,
         };
         if let Some((_, measurement)) = &frozen {

@@ -1018,7 +1018,7 @@ impl Filter for YauYauFilter {
             self.op.s_inv_h.len(),
         )?;
         if let Some(model) = &self.driven {
-            let (dynamics, _) = model.frozen_for(obs)?.expect("a driven model");
+            let (dynamics, _) = obs.frozen(model)?.expect("a driven model");
             self.retabulate(&dynamics)?;
         }
         self.saved.save(&self.u, &self.estimate);
