@@ -131,3 +131,20 @@ def test_missing_or_misshapen_inputs_are_refused():
     bad[5] = np.nan
     with pytest.raises(zakai.errors.ZakaiError, match="u1"):
         zakai.filter(sc, flow, times=years, inputs=bad)
+
+
+def test_a_filter_steps_with_its_time_and_inputs():
+    model = zakai.Model.discrete("-x + 2*u1", "x", noise_cov=0.1, diffusion=0.5)
+    model = model.with_inputs("0")
+    pushed = zakai.Filter("ukf", model, zakai.Prior.gaussian(0.0, 1.0), dt_obs=0.5)
+    idle = pushed.copy()
+    with pytest.raises(zakai.errors.FilterError, match="inputs"):
+        pushed.step([0.0], 0.5)
+    # Nothing observed, the input on: the mean moves towards 2u = 2 as 2(1 − e^{−t}) (up to
+    # the RK4 steps of the moment equations: 2·10⁻⁶ relative measured).
+    pushed.predict(0.5, t=0.5, u=[1.0])
+    idle.predict(0.5, t=0.5, u=[0.0])
+    assert float(pushed.mean[0]) == pytest.approx(2 * (1 - np.exp(-0.5)), rel=1e-5)
+    assert float(idle.mean[0]) == pytest.approx(0.0, abs=1e-12)
+    pushed.step([1.0], 0.5, t=1.0, u=[1.0])
+    assert pushed.log_likelihood is not None and np.isfinite(pushed.log_likelihood)
