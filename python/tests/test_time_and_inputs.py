@@ -3,8 +3,8 @@ around 1899 (Cobb 1978; Durbin & Koopman's intervention example); a local level 
 ``z = x + b·u1 + v`` with ``u1`` = 0 before 1899 and 1 from then on is statsmodels'
 ``UnobservedComponents(..., exog=u1)``, whose maximum-likelihood estimate is the reference
 for Zakai's fit (EKF: exact on this linear model). Then the layouts ``inputs=`` takes
-(arrays, a DataFrame, one row per increment), a simulated driven run filtered back, and the
-errors."""
+(arrays, a DataFrame), a simulated driven run filtered back, a stepping ``Filter`` given its
+time and inputs, and the errors."""
 
 import numpy as np
 import pandas as pd

@@ -215,6 +215,13 @@ fn time_invariant_methods_refuse_with_the_reason() {
         ]
         .contains(&entry.info.key.as_str());
         assert_eq!(refused, expected, "{}", entry.info.key);
+        // Built directly (a convergence check, Python's Filter), it refuses too, and does not
+        // evaluate the driven functions at the state alone.
+        if refused {
+            let built = e.build_method(&entry.defaults, entry.info.name.clone(), 1);
+            let why = built.err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(why.contains("time-invariant"), "{}: {why}", entry.info.key);
+        }
     }
 }
 

@@ -245,7 +245,7 @@ impl<'m, M: Method> Builder<'m, M> {
         let params = crate::filters::method::problem_defaults_of::<M>(&problem, &self.params)
             .map(|(p, _)| p)
             .unwrap_or_else(|| self.params.clone());
-        M::build(
+        crate::filters::method::build_of::<M>(
             &BuildContext {
                 model: self.model,
                 prior,

@@ -234,30 +234,52 @@ pub trait Method {
     }
 }
 
-/// Why method `M` does not apply to the problem: a state-dependent diffusion it refuses
-/// ([`Method::STATE_DIFFUSION`]), a driven model it refuses ([`Method::INPUTS`]), then its own
-/// [`Method::suitability`].
-pub fn suitability_of<M: Method>(
-    problem: &ProblemContext,
-    params: &M::Params,
-) -> Result<(), String> {
+/// Why method `M` does not take `model` at all: a state-dependent diffusion it refuses
+/// ([`Method::STATE_DIFFUSION`]) or a driven model it refuses ([`Method::INPUTS`]).
+pub fn refusal<M: Method>(model: &Model) -> Option<String> {
     if let Support::Refused(why) = M::STATE_DIFFUSION {
-        if problem.model.diffusion.constant().is_none() {
-            return Err(format!(
+        if model.diffusion.constant().is_none() {
+            return Some(format!(
                 "{} needs a constant diffusion G ({why}), and this model's G depends on the state",
                 M::info().name
             ));
         }
     }
     if let Support::Refused(why) = M::INPUTS {
-        if problem.model.is_driven() {
-            return Err(format!(
+        if model.is_driven() {
+            return Some(format!(
                 "{} needs a time-invariant model ({why}), and this model reads the time or known inputs",
                 M::info().name
             ));
         }
     }
+    None
+}
+
+/// Why method `M` does not apply to the problem: its [`refusal`] of the model, then its own
+/// [`Method::suitability`].
+pub fn suitability_of<M: Method>(
+    problem: &ProblemContext,
+    params: &M::Params,
+) -> Result<(), String> {
+    if let Some(why) = refusal::<M>(problem.model) {
+        return Err(why);
+    }
     problem.at_start(|problem| M::suitability(problem, params))
+}
+
+/// [`Method::build`], refused first when the method does not take the model at all
+/// ([`refusal`]): every path that builds a filter — the builders, an experiment, a
+/// convergence check, the Python `Filter` — goes through it.
+pub fn build_of<M: Method>(
+    ctx: &BuildContext,
+    params: &M::Params,
+    name: String,
+) -> Result<M::Filter, ZakaiError> {
+    if let Some(why) = refusal::<M>(ctx.model) {
+        return Err(crate::error::FilterError::Unsuitable(why).into());
+    }
+    M::build(ctx, params, name)
 }
 
 /// The sizes `M` chooses from the problem ([`Method::problem_defaults`]), read on the model

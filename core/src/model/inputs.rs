@@ -17,12 +17,18 @@
 //! Each step therefore sees two *frozen* models ([`Model::at`]; `Observation::frozen` gives
 //! the pair): an autonomous model whose functions are the driven ones with `(t, u)` fixed.
 //!
-//! **Which methods.** The Gaussian filters (EKF, UKF, IEKF, IOKF) and the particle filter
-//! take the frozen models step by step. Methods whose operator is made once for the whole run
-//! — the spectral filter's off-line operator (Luo & Yau 2013, 004 §3), the superposition
-//! technique (Yau & Yau 2008, 000 §2.5), the direct method's Riccati solution (002), the
-//! grid filters' factorised operators, the Kalman–Bucy and Gaussian-sum filters' fixed
-//! matrices — refuse a driven model with that reason (the catalogue's `inputs`).
+//! **Which methods.** The EKF, UKF and particle filter take the frozen models step by step;
+//! the continuous–discrete grid filters (Šimandl & Švácha 2005, 001) and the Yau–Yau IEM,
+//! QIEM and QIEM-4 (Yueh, Lin & Yau 2014, 000) tabulate and factorise their operator anew at
+//! every step. Methods whose operator is made once for the whole run refuse a driven model
+//! with that reason (the catalogue's `inputs`): the spectral filter's off-line operator
+//! (Shi, Chen & Yau 2021, 004 Algorithm 1), the superposition technique (000 §2.5), the
+//! direct method's Riccati solution (Shi, Yang & Yau 2018, 002), the Kalman–Bucy and
+//! Gaussian-sum filters' fixed matrices — and the IEKF and IOKF (Kang, Salmon & Yau 2023,
+//! 003), whose second-mode watch carries the model over several intervals at once.
+//!
+//! A step that fails (inputs missing or not finite, a function undefined at them) leaves the
+//! filter's density or moments and estimate as they were.
 
 use alloc::sync::Arc;
 use alloc::vec;

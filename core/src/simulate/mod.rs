@@ -87,7 +87,8 @@ impl Trajectory {
 
 /// Simulates the model from `x0` over `time`, drawing all noise from `rng`. Fails when the
 /// measurements' family has no sampler (a log-density) or is undefined at the true state (a
-/// negative Poisson rate or variance), and for a driven model ([`simulate_driven`]).
+/// negative Poisson rate or variance), and for a model driven by known inputs (whose series
+/// [`simulate_driven`] takes; a model that reads only the time needs none).
 pub fn simulate(
     model: &Model,
     x0: &[f64],

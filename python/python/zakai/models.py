@@ -167,10 +167,10 @@ class Model:
         them and the time ``t`` (``"-x + 2*u1"``). Each argument is the input as an
         expression in ``t``, the series a simulated run records (and :func:`zakai.simulate`
         returns with ``with_inputs=True``); recorded data bring their own (``inputs=`` of
-        :func:`zakai.filter`), so ``"0"`` will do when you only filter. The Gaussian, particle
-        and grid filters hold each row's inputs over its interval; methods whose operator is
-        made once (Kalman–Bucy, spectral, superposition, direct, Gaussian sum, IEKF/IOKF)
-        refuse a driven model and say why.
+        :func:`zakai.filter`), so ``"0"`` will do when you only filter. The EKF, UKF,
+        particle and grid filters hold each row's inputs over its interval; methods whose
+        operator is made once (Kalman–Bucy, spectral, superposition, direct, Gaussian sum,
+        IEKF/IOKF) refuse a driven model and say why.
 
         >>> import zakai
         >>> m = zakai.Model.discrete("-x + 2*u1", "x", noise_cov=0.1).with_inputs("sin(t)")

@@ -17,6 +17,8 @@ from .scenario import Scenario
 def _drive(t: Optional[float], u: Optional[ArrayLike]) -> tuple:
     """A driven model's step time and inputs as the core takes them."""
     if t is None:
+        if u is not None:
+            raise ConfigError("u: a driven model's inputs come with the step's time t (t=..., u=...)")
         return (None, None)
     return (float(t), [] if u is None else [float(v) for v in _array(u, "u").ravel()])
 

@@ -165,7 +165,7 @@ macro_rules! registry {
             /// Builds the filter.
             pub fn build(&self, name: String, ctx: &BuildContext) -> Result<Box<dyn Filter>, ZakaiError> {
                 Ok(match self {
-                    $($(#[$attr])* MethodConfig::$variant(p) => Box::new(<$method>::build(ctx, p, name)?),)*
+                    $($(#[$attr])* MethodConfig::$variant(p) => Box::new(crate::filters::method::build_of::<$method>(ctx, p, name)?),)*
                 })
             }
         }

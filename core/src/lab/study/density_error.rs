@@ -106,6 +106,11 @@ pub fn j_curve(
 ) -> Result<JCurve, ZakaiError> {
     let config = experiment.config();
     let (model, prior) = (experiment.model(), experiment.prior());
+    if let Some(why) =
+        crate::filters::method::refusal::<crate::filters::gaussian_sum::GaussianSum>(model)
+    {
+        return Err(crate::error::FilterError::Unsuitable(why).into());
+    }
     let bounds = config.bounds();
     let dt_obs = config.time.dt_obs;
     let mut grids = Vec::new();
