@@ -215,6 +215,15 @@ impl Variables {
         Variables { n, m, inputs: None }
     }
 
+    /// The time `t` alone: what a known input's expression reads.
+    pub const fn time() -> Self {
+        Variables {
+            n: 0,
+            m: 0,
+            inputs: Some(0),
+        }
+    }
+
     /// These variables followed by the time `t` and the `k` known inputs `u1..uk` of a driven
     /// model (`None`: an autonomous model, whose expressions may not read `t`).
     pub fn driven(self, inputs: Option<usize>) -> Self {

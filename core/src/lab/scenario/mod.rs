@@ -413,6 +413,9 @@ fn check_expression(
     Ok(())
 }
 
+/// What the expressions of the known inputs read: the time `t` alone.
+const INPUT_VARIABLES: Variables = Variables::time();
+
 /// Parses a text vector function with `m` components in `variables`.
 pub fn parse_function(
     what: &str,
@@ -520,15 +523,7 @@ impl ScenarioConfig {
                 }
             }
         }
-        let time = Variables::state(0).driven(Some(0));
-        for (i, t) in self.model.inputs.iter().enumerate() {
-            if let Err(e) = check_expression("input u", t, &time, &names) {
-                p.push(ConfigProblem::new(
-                    format!("model.inputs[{i}]"),
-                    e.to_string(),
-                ));
-            }
-        }
+        p.extend(self.input_problems(&names));
         check_parameters(&self.parameters, &self.expression_texts(), &mut p);
         // An entry that does not resolve is reported once, not again as a non-finite
         // number or a matrix that is not positive definite.
@@ -1025,25 +1020,31 @@ impl ScenarioConfig {
         Variables::state(self.state_dim()).driven(self.driven())
     }
 
-    /// The known inputs of a simulated run ([`ModelConfig::inputs`]) at `times`: row 0 at
-    /// τ₀, row k at the midpoint of `(τ_{k−1}, τ_k]`, k per row.
-    pub fn simulated_inputs(&self, times: &[f64]) -> Result<Vec<f64>, ZakaiError> {
-        let names = self.parameter_values();
-        let texts = substituted(&self.model.inputs, &names);
-        let time = Variables::state(0).driven(Some(0));
-        let mut problems = Vec::new();
+    /// Every problem with the expressions of [`ModelConfig::inputs`] (in `t` and the
+    /// parameters of `names`), each at its index.
+    fn input_problems(&self, names: &[(String, f64)]) -> Vec<ConfigProblem> {
+        let mut p = Vec::new();
         for (i, t) in self.model.inputs.iter().enumerate() {
-            if let Err(e) = crate::model::expression::check_in(t, &time, &names) {
-                problems.push(ConfigProblem::new(
+            if let Err(e) = check_expression("input u", t, &INPUT_VARIABLES, names) {
+                p.push(ConfigProblem::new(
                     format!("model.inputs[{i}]"),
                     e.to_string(),
                 ));
             }
         }
+        p
+    }
+
+    /// The known inputs of a simulated run ([`ModelConfig::inputs`]) at `times`: row 0 at
+    /// τ₀, row k at the midpoint of `(τ_{k−1}, τ_k]`, k per row.
+    pub fn simulated_inputs(&self, times: &[f64]) -> Result<Vec<f64>, ZakaiError> {
+        let names = self.parameter_values();
+        let problems = self.input_problems(&names);
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
         }
-        let u = parse_function("inputs u", &texts, &time, texts.len())?;
+        let texts = substituted(&self.model.inputs, &names);
+        let u = parse_function("inputs u", &texts, &INPUT_VARIABLES, texts.len())?;
         let mut out = Vec::with_capacity(times.len() * texts.len());
         let mut row = alloc::vec![0.0; texts.len()];
         for (k, t) in times.iter().enumerate() {
