@@ -85,7 +85,7 @@ venv=target/py-venv
 rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
-ZAKAI_CLI=target/debug/zakai "$venv/bin/python" -m pytest -q python/tests
+ZAKAI_NO_SKIPS=1 ZAKAI_CLI=target/debug/zakai "$venv/bin/python" -m pytest -q python/tests
 "$venv/bin/python" python/examples/tour.py > /dev/null
 
 step "browser end-to-end tests (headless chromium)"

@@ -380,16 +380,39 @@ pub fn with_inputs(
 }
 
 /// The Monte Carlo summary of `runs` runs with seeds `seed, seed + 1, …` (every core, the GIL
-/// released), as JSON.
+/// released), as JSON. `progress(done, runs)` is called after each run, from the thread that
+/// ran it (taking the GIL for the call); the first exception it raises is raised here once the
+/// runs are over.
 #[pyfunction]
-pub fn monte_carlo_json(py: Python<'_>, json: &str, runs: usize, seed: u64) -> PyResult<String> {
+#[pyo3(signature = (json, runs, seed, progress=None))]
+pub fn monte_carlo_json(
+    py: Python<'_>,
+    json: &str,
+    runs: usize,
+    seed: u64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<String> {
     if runs == 0 {
         return Err(errors::config("runs", "must be at least 1"));
     }
     let e = experiment(json)?;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let raised: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+    let report = || {
+        let Some(callable) = &progress else { return };
+        let count = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        Python::attach(|py| {
+            if let Err(err) = callable.call1(py, (count, runs)) {
+                raised.lock().unwrap().get_or_insert(err);
+            }
+        });
+    };
     let summary = py
-        .detach(|| MonteCarlo::new(&e).run(runs, seed, &|| {}))
+        .detach(|| MonteCarlo::new(&e).run(runs, seed, &report))
         .map_err(errors::from_core)?;
+    if let Some(err) = raised.into_inner().unwrap() {
+        return Err(err);
+    }
     Ok(to_json(&summary))
 }
 

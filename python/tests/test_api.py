@@ -107,23 +107,57 @@ def test_monte_carlo_table_pandas_and_parallel():
 
 
 def test_monte_carlo_releases_the_gil():
+    """The runs take place on Rust's own threads with the GIL released: the job's first
+    progress callback (made from one of those threads, which must take the GIL to make it)
+    waits for an event that only the main thread sets, after it has seen that callback begin.
+    Were the GIL held by the calling thread through the runs, no callback could start (the
+    threads would wait for the GIL for ever) and the main thread's wait would time out. No
+    clock is read: the timeouts only keep a broken build from hanging the suite."""
     sc = zakai.Scenario.from_preset("cubic-sensor-1d")
-    sc.methods = [{"method": "pf", "particles": 2000}]
-    ticks = []
-    done = threading.Event()
+    sc.methods = [{"method": "pf", "particles": 200}]
+    started, main_ran = threading.Event(), threading.Event()
+    callers, seen = [], []
+
+    def progress(done, runs):
+        callers.append(threading.get_ident())
+        if not started.is_set():
+            started.set()
+            seen.append(main_ran.wait(timeout=120))
+        else:
+            seen.append(main_ran.is_set())
+
+    out = {}
 
     def job():
-        zakai.monte_carlo(sc, runs=6, seed=1)
-        done.set()
+        out["caller"] = threading.get_ident()
+        out["table"] = zakai.monte_carlo(sc, runs=8, seed=1, progress=progress)
 
-    worker = threading.Thread(target=job)
+    worker = threading.Thread(target=job, daemon=True)
     worker.start()
-    while not done.is_set():
-        ticks.append(time.perf_counter())
-        time.sleep(0.001)
-    worker.join()
-    # Python kept running beside the Rust job (with the GIL held there would be ~1 tick).
-    assert len(ticks) > 20, len(ticks)
+    assert started.wait(timeout=120), "no progress callback: the GIL was never released"
+    main_ran.set()
+    worker.join(timeout=300)
+    assert not worker.is_alive(), "the Monte Carlo job did not finish"
+    assert len(callers) == 8 and all(seen), seen
+    # Every callback came from a thread of the Rust job, not the Python thread that called it.
+    assert out["caller"] not in callers
+    assert out["table"].rows[0]["runs"] == 8
+
+
+def test_a_progress_callback_that_raises_stops_nothing_and_is_raised():
+    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+    sc.methods = [{"method": "pf", "particles": 100}]
+    calls = []
+
+    def progress(done, runs):
+        calls.append((done, runs))
+        raise ValueError("from the callback")
+
+    with pytest.raises(ValueError, match="from the callback"):
+        zakai.monte_carlo(sc, runs=3, seed=1, progress=progress)
+    assert sorted(calls) == [(1, 3), (2, 3), (3, 3)]
+    with pytest.raises(zakai.ConfigError, match="progress"):
+        zakai.monte_carlo(sc, runs=3, seed=1, progress=3)
 
 
 def test_monte_carlo_table_names_coinciding_rows_and_paper_values():

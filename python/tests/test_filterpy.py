@@ -11,14 +11,12 @@ first, at the prior's time, which FilterPy would make with its unset sigma point
 import numpy as np
 import pytest
 
-filterpy_kalman = pytest.importorskip("filterpy.kalman")
-
 import zakai
 
 ALPHA, BETA, KAPPA = 0.5, 2.0, 0.0
 
 
-def _filterpy_ukf(x0, p0, q, r, dt, hx, dim_z):
+def _filterpy_ukf(filterpy_kalman, x0, p0, q, r, dt, hx, dim_z):
     n = len(x0)
     points = filterpy_kalman.MerweScaledSigmaPoints(n, alpha=ALPHA, beta=BETA, kappa=KAPPA)
     ukf = filterpy_kalman.UnscentedKalmanFilter(
@@ -44,6 +42,7 @@ CASES = {
 
 @pytest.mark.parametrize("case", CASES)
 def test_ukf_agrees_with_filterpy(case):
+    filterpy_kalman = pytest.importorskip("filterpy.kalman")
     c = CASES[case]
     dt, steps = 0.1, 60
     model = zakai.Model.discrete(c["drift"], c["observation"], noise_cov=c["r"], diffusion=c["g"])
@@ -53,7 +52,7 @@ def test_ukf_agrees_with_filterpy(case):
     rng = np.random.default_rng(11)
     n, m = len(c["x0"]), len(c["observation"])
     q = c["g"] @ c["g"].T * dt
-    ukf, points = _filterpy_ukf(c["x0"], c["p0"], q, c["r"], dt, c["hx"], m)
+    ukf, points = _filterpy_ukf(filterpy_kalman, c["x0"], c["p0"], q, c["r"], dt, c["hx"], m)
     x = rng.multivariate_normal(c["x0"], c["p0"])
     worst = 0.0
     for k in range(steps + 1):

@@ -11,12 +11,11 @@ import pytest
 import zakai
 from zakai.errors import ConfigError
 
-sm = pytest.importorskip("statsmodels.api")
 
 PRIOR = (1120.0, 1e7)
 
 
-def nile():
+def nile(sm):
     """The Nile's annual flow 1871–1970 (statsmodels' copy), years 1890–1892 unknown."""
     data = sm.datasets.nile.load_pandas().data
     years = data["year"].to_numpy(dtype=float)
@@ -38,8 +37,8 @@ def local_level(methods=("kalman",)):
     )
 
 
-def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate():
-    years, flow = nile()
+def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate(sm):
+    years, flow = nile(sm)
     # Zakai gets the year 1900 dropped (a step of two years); statsmodels has it missing.
     keep = years != 1900
     fitted = zakai.fit(local_level(), flow[keep], "kalman", times=years[keep])
@@ -69,8 +68,8 @@ def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate():
     assert frame.loc["q", "lower"] == 0.0 and frame.loc["q", "upper"] is None
 
 
-def test_fit_reads_a_pandas_series_and_a_grid_method():
-    years, flow = nile()
+def test_fit_reads_a_pandas_series_and_a_grid_method(sm):
+    years, flow = nile(sm)
     series = pd.Series(flow, index=years)
     fitted = zakai.fit(local_level(), series, "separation", params=["r"])
     exact = zakai.fit(local_level(), series, "kalman", params=["r"])
@@ -80,8 +79,8 @@ def test_fit_reads_a_pandas_series_and_a_grid_method():
     assert abs(fitted.params["r"] - exact.params["r"]) < 0.1 * exact.stderr["r"]
 
 
-def test_a_profile_peaks_where_the_fit_does_for_one_parameter():
-    years, flow = nile()
+def test_a_profile_peaks_where_the_fit_does_for_one_parameter(sm):
+    years, flow = nile(sm)
     sc = local_level(["kalman", "ukf"])
     sc.config["parameters"]["q"]["value"] = 1469.1
     p = zakai.profile(sc, flow, "r", np.linspace(8000, 25000, 35), times=years)
@@ -97,8 +96,8 @@ def test_a_profile_peaks_where_the_fit_does_for_one_parameter():
     assert direct == pytest.approx(p.loglik["KF"][10], rel=1e-12)
 
 
-def test_the_profile_likelihood_peaks_at_the_joint_fit():
-    years, flow = nile()
+def test_the_profile_likelihood_peaks_at_the_joint_fit(sm):
+    years, flow = nile(sm)
     both = zakai.fit(local_level(), flow, "kalman", times=years)
     p = zakai.profile(local_level(), flow, "q", np.linspace(200, 5000, 25), refit=["r"], times=years)
     x, top = p.maxima["KF"]
@@ -109,17 +108,17 @@ def test_the_profile_likelihood_peaks_at_the_joint_fit():
     assert (p.loglik["KF"] >= s.loglik["KF"] - 1e-9).all()
 
 
-def test_an_executor_gives_the_same_fit_as_every_core():
-    years, flow = nile()
+def test_an_executor_gives_the_same_fit_as_every_core(sm):
+    years, flow = nile(sm)
     local = zakai.fit(local_level(), flow, "kalman", times=years)
     with ProcessPoolExecutor(max_workers=2) as pool:
         remote = zakai.fit(local_level(), flow, "kalman", times=years, executor=pool)
     assert remote.params == local.params and remote.nfev == local.nfev
 
 
-def test_a_dask_cluster_spreads_a_profile():
+def test_a_dask_cluster_spreads_a_profile(sm):
     distributed = pytest.importorskip("distributed")
-    years, flow = nile()
+    years, flow = nile(sm)
     sc = local_level(["kalman"])
     local = zakai.profile(sc, flow, "q", points=9, times=years)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -142,8 +141,8 @@ def test_a_monte_carlo_on_an_executor_is_the_same_table():
     assert "mse" in local.columns and local["mse"].notna().all()
 
 
-def test_bad_input_is_refused_with_its_reason():
-    years, flow = nile()
+def test_bad_input_is_refused_with_its_reason(sm):
+    years, flow = nile(sm)
     with pytest.raises(ConfigError, match="no parameter `sigma`"):
         zakai.fit(local_level(), flow, "kalman", params=["sigma"], times=years)
     with pytest.raises(ConfigError, match="method"):

@@ -13,7 +13,6 @@ import pytest
 import zakai
 from zakai.errors import ConfigError, FilterError
 
-sm = pytest.importorskip("statsmodels.api")
 
 
 def point_mass(z, times, theta, mu, sigma, prior, log_lik, lo, hi, cells=1200):
@@ -78,7 +77,7 @@ def check(result, means, sds, ll, grid=0.05, pf=0.2, ll_tol=0.1):
             assert warned, f"{name}: no moment-match warning in {result.warnings}"
 
 
-def test_sunspot_counts_as_poisson_with_an_ou_log_rate():
+def test_sunspot_counts_as_poisson_with_an_ou_log_rate(sm):
     data = sm.datasets.sunspots.load_pandas().data
     years = data.YEAR.to_numpy()[49:149]  # 1749–1848
     counts = np.round(data.SUNACTIVITY.to_numpy()[49:149])
@@ -98,7 +97,7 @@ def test_sunspot_counts_as_poisson_with_an_ou_log_rate():
     check(result, means, sds, ll)
 
 
-def test_gdp_growth_with_stochastic_volatility():
+def test_gdp_growth_with_stochastic_volatility(sm):
     data = sm.datasets.macrodata.load_pandas().data
     growth = 100 * np.diff(np.log(data.realgdp.to_numpy()))
     growth = growth - growth.mean()

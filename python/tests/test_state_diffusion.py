@@ -11,12 +11,11 @@ import pytest
 
 import zakai
 
-sm = pytest.importorskip("statsmodels.api")
 
 NOISE = 0.04  # measurement variance (0.2 percentage points)
 
 
-def tbill():
+def tbill(sm):
     """The rate, with 1974 unknown and 1984Q1 left out."""
     data = sm.datasets.macrodata.load_pandas().data
     times = data.year.to_numpy(dtype=float) + (data.quarter.to_numpy(dtype=float) - 1) / 4
@@ -63,8 +62,8 @@ def point_mass(z, times, k, m, s, substep=0.0125, lo=-3.0, hi=30.0, cells=1100):
     return np.array(means), np.array(sds)
 
 
-def test_a_level_dependent_noise_fits_the_treasury_bill_rate_better():
-    z, times = tbill()
+def test_a_level_dependent_noise_fits_the_treasury_bill_rate_better(sm):
+    z, times = tbill(sm)
     cir = zakai.fit(scenario("s*sqrt(abs(x))", 0.8), z, "separation", times=times)
     vasicek = zakai.fit(scenario("s", 1.8), z, "separation", times=times)
     print(cir)
@@ -75,8 +74,8 @@ def test_a_level_dependent_noise_fits_the_treasury_bill_rate_better():
     assert cir.loglik > vasicek.loglik + 20
 
 
-def test_the_grid_and_particle_filters_follow_the_point_mass_filter_and_gaussians_say_why_not():
-    z, times = tbill()
+def test_the_grid_and_particle_filters_follow_the_point_mass_filter_and_gaussians_say_why_not(sm):
+    z, times = tbill(sm)
     k, m, s = 0.05, 4.5, 0.63
     methods = [
         {"method": "separation", "cells": [2000], "dt": 0.0025},
@@ -111,8 +110,8 @@ def test_the_grid_and_particle_filters_follow_the_point_mass_filter_and_gaussian
             assert said, f"{name}: no warning about Q at the mean in {result.warnings}"
 
 
-def test_methods_that_need_a_constant_diffusion_refuse_it():
-    z, times = tbill()
+def test_methods_that_need_a_constant_diffusion_refuse_it(sm):
+    z, times = tbill(sm)
     sc = scenario("s*sqrt(abs(x))", 0.6, ["gaussian_sum", "ukf"])
     result = zakai.filter(sc, z, times=times)
     refused = result.methods["GSF"].failure

@@ -13,12 +13,11 @@ import pytest
 import zakai
 from zakai.errors import DimensionError
 
-sm = pytest.importorskip("statsmodels.api")
 
 PRIOR = (1120.0, 1e7)
 
 
-def nile():
+def nile(sm):
     """The Nile's annual flow 1871–1970 (statsmodels' copy), 1890–1892 unknown, and the dam
     input: 1 from 1899 on."""
     data = sm.datasets.nile.load_pandas().data
@@ -46,8 +45,8 @@ def intervention(methods=("ekf",), q=1000.0, r=10000.0, b=0.0):
     )
 
 
-def test_the_dam_is_statsmodels_intervention_estimate():
-    years, flow, dam = nile()
+def test_the_dam_is_statsmodels_intervention_estimate(sm):
+    years, flow, dam = nile(sm)
     # Zakai gets the year 1900 dropped (a step of two years); statsmodels has it missing.
     keep = years != 1900
     fitted = zakai.fit(
@@ -82,8 +81,8 @@ def test_the_dam_is_statsmodels_intervention_estimate():
     assert fitted.loglik - without.loglik > 3.0
 
 
-def test_filter_takes_a_dataframe_and_the_grid_filter_agrees():
-    years, flow, dam = nile()
+def test_filter_takes_a_dataframe_and_the_grid_filter_agrees(sm):
+    years, flow, dam = nile(sm)
     keep = years != 1900
     sc = intervention(("ekf", "separation"), q=1400.0, r=15000.0, b=-250.0)
     inputs = pd.DataFrame({"u1": dam[keep]}, index=years[keep])
@@ -118,8 +117,8 @@ def test_a_simulated_driven_run_filters_back():
     assert flipped.methods["EKF"].mse > 2 * r.methods["EKF"].mse
 
 
-def test_missing_or_misshapen_inputs_are_refused():
-    years, flow, dam = nile()
+def test_missing_or_misshapen_inputs_are_refused(sm):
+    years, flow, dam = nile(sm)
     sc = intervention()
     with pytest.raises(DimensionError, match="known inputs"):
         zakai.filter(sc, flow, times=years)

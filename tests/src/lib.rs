@@ -9,6 +9,8 @@ pub use core::prelude::v1::test;
 #[cfg(target_arch = "wasm32")]
 pub use wasm_bindgen_test::wasm_bindgen_test as test;
 
+pub mod kalman_reference;
+
 /// The `.rs` files under `path` (or `path` itself), for the tests that read sources.
 pub fn rust_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();

@@ -34,38 +34,285 @@ fn layer(module: &str) -> Option<usize> {
     LAYERS.iter().position(|l| l.contains(&module))
 }
 
-/// A module name from the path after `crate::` (`lab::scenario` for the harness's modules).
-fn module_name(rest: &str) -> String {
-    let word = |s: &str| -> String {
-        s.chars()
-            .take_while(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '_')
-            .collect()
-    };
-    let first = word(rest);
-    match rest[first.len()..].strip_prefix("::") {
-        Some(after) if first == "lab" => format!("lab::{}", word(after)),
-        _ => first,
+/// `source` with its comments (`//…`, nested `/*…*/`) and the contents of its string and
+/// character literals (raw strings included) replaced by spaces: what is left is code, and a
+/// `crate::` inside a message or a doc comment is not a use.
+fn code_only(source: &str) -> String {
+    let chars: Vec<char> = source.chars().collect();
+    let mut out = String::with_capacity(source.len());
+    let mut i = 0;
+    let blank = |c: char| if c == '\n' { '\n' } else { ' ' };
+    while i < chars.len() {
+        let c = chars[i];
+        let next = chars.get(i + 1).copied();
+        if c == '/' && next == Some('/') {
+            while i < chars.len() && chars[i] != '\n' {
+                i += 1;
+            }
+        } else if c == '/' && next == Some('*') {
+            let mut depth = 0;
+            while i < chars.len() {
+                if chars[i] == '/' && chars.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    i += 2;
+                } else if chars[i] == '*' && chars.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    out.push(blank(chars[i]));
+                    i += 1;
+                }
+            }
+        } else if c == 'r'
+            && (next == Some('"') || next == Some('#'))
+            && !chars[..i]
+                .last()
+                .is_some_and(|p| p.is_alphanumeric() || *p == '_')
+        {
+            // A raw string r"…" or r#"…"#.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while chars.get(j) == Some(&'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if chars.get(j) != Some(&'"') {
+                out.push(c);
+                i += 1;
+                continue;
+            }
+            j += 1;
+            loop {
+                if j >= chars.len() {
+                    break;
+                }
+                if chars[j] == '"' && (0..hashes).all(|h| chars.get(j + 1 + h) == Some(&'#')) {
+                    j += 1 + hashes;
+                    break;
+                }
+                out.push(blank(chars[j]));
+                j += 1;
+            }
+            i = j;
+        } else if c == '"' {
+            i += 1;
+            while i < chars.len() && chars[i] != '"' {
+                if chars[i] == '\\' {
+                    i += 1;
+                }
+                out.push(blank(chars[i.min(chars.len() - 1)]));
+                i += 1;
+            }
+            i += 1;
+        } else if c == '\'' && (next == Some('\\') || chars.get(i + 2) == Some(&'\'')) {
+            // A character literal ('"', '\'', 'x'); a lifetime 'a has no closing quote.
+            i += if next == Some('\\') { 3 } else { 2 };
+            while i < chars.len() && chars[i] != '\'' {
+                i += 1;
+            }
+            i += 1;
+        } else {
+            out.push(c);
+            i += 1;
+        }
     }
+    out
 }
 
-/// The crate modules `file` uses outside comments.
-fn uses(file: &Path) -> BTreeSet<String> {
-    let text = std::fs::read_to_string(file).unwrap();
-    let mut found = BTreeSet::new();
-    for line in text.lines() {
-        let code = line.trim_start();
-        if code.starts_with("//") {
-            continue;
+/// The module path of `file` under `src` (`filters/kalman/ekf.rs` → filters, kalman, ekf; a
+/// `mod.rs` is its folder's module; `lib.rs` the crate's).
+fn module_of(src: &Path, file: &Path) -> Vec<String> {
+    let mut path: Vec<String> = file
+        .strip_prefix(src)
+        .unwrap()
+        .with_extension("")
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if matches!(path.last().map(String::as_str), Some("mod" | "lib")) {
+        path.pop();
+    }
+    path
+}
+
+fn is_ident(c: char) -> bool {
+    c.is_alphanumeric() || c == '_'
+}
+
+/// A tiny reader of paths in code.
+struct Paths<'a> {
+    code: &'a [char],
+    at: usize,
+}
+
+impl Paths<'_> {
+    fn skip_space(&mut self) {
+        while self.code.get(self.at).is_some_and(|c| c.is_whitespace()) {
+            self.at += 1;
         }
-        let code = code.split("//").next().unwrap_or("");
-        for (i, _) in code.match_indices("crate::") {
-            let name = module_name(&code[i + "crate::".len()..]);
-            if !name.is_empty() {
-                found.insert(name);
+    }
+
+    fn word(&mut self) -> String {
+        self.skip_space();
+        let start = self.at;
+        while self.code.get(self.at).is_some_and(|&c| is_ident(c)) {
+            self.at += 1;
+        }
+        self.code[start..self.at].iter().collect()
+    }
+
+    fn eat(&mut self, token: &str) -> bool {
+        self.skip_space();
+        let t: Vec<char> = token.chars().collect();
+        if self.code[self.at..].starts_with(&t) {
+            self.at += t.len();
+            true
+        } else {
+            false
+        }
+    }
+
+    /// The paths of a tree `a::b::{c, d::{e, self}}` from here, each as its segments.
+    fn tree(&mut self) -> Vec<Vec<String>> {
+        let mut prefix = Vec::new();
+        loop {
+            if self.eat("{") {
+                let mut out = Vec::new();
+                loop {
+                    if self.eat("}") {
+                        break;
+                    }
+                    for tail in self.tree() {
+                        let mut path = prefix.clone();
+                        path.extend(tail.into_iter().filter(|s| s != "self"));
+                        out.push(path);
+                    }
+                    self.eat(",");
+                    if self.at >= self.code.len() {
+                        break;
+                    }
+                    // `a as b` inside a group.
+                    if self.eat("as") {
+                        self.word();
+                    }
+                }
+                return out;
+            }
+            let word = self.word();
+            if word.is_empty() {
+                return vec![prefix];
+            }
+            prefix.push(word);
+            if !self.eat("::") {
+                return vec![prefix];
             }
         }
     }
+}
+
+/// Every path from `crate::` or `super::` in `source` (a file of module `module`), resolved
+/// to the crate's root: grouped imports `crate::{a, b::{c}}` give each leaf, and `super::`
+/// counts from the inline module it is written in (`mod tests { use super::… }` is the
+/// file's module).
+fn crate_paths(source: &str, module: &[String]) -> Vec<Vec<String>> {
+    let code: Vec<char> = code_only(source).chars().collect();
+    let mut found = Vec::new();
+    // Inline modules open around the reading position: (name, brace depth inside it).
+    let mut inline: Vec<(String, usize)> = Vec::new();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < code.len() {
+        let c = code[i];
+        if c == '{' {
+            depth += 1;
+            i += 1;
+            continue;
+        }
+        if c == '}' {
+            if inline.last().is_some_and(|(_, d)| *d == depth) {
+                inline.pop();
+            }
+            depth = depth.saturating_sub(1);
+            i += 1;
+            continue;
+        }
+        let starts_word = is_ident(c) && (i == 0 || !is_ident(code[i - 1]));
+        if !starts_word {
+            i += 1;
+            continue;
+        }
+        let mut reader = Paths { code: &code, at: i };
+        let word = reader.word();
+        if word == "mod" {
+            let name = reader.word();
+            if reader.eat("{") {
+                inline.push((name, depth + 1));
+                depth += 1;
+                i = reader.at;
+                continue;
+            }
+        }
+        let after_path = i >= 2 && code[i - 2] == ':' && code[i - 1] == ':';
+        if (word == "crate" || word == "super") && !after_path && reader.eat("::") {
+            let mut base: Vec<String> = if word == "crate" {
+                Vec::new()
+            } else {
+                let mut here: Vec<String> = module.to_vec();
+                here.extend(inline.iter().map(|(n, _)| n.clone()));
+                here.pop();
+                here
+            };
+            // Further `super::`s climb on.
+            loop {
+                let save = reader.at;
+                if reader.word() == "super" && reader.eat("::") {
+                    base.pop();
+                } else {
+                    reader.at = save;
+                    break;
+                }
+            }
+            for tail in reader.tree() {
+                let mut path = base.clone();
+                path.extend(tail);
+                found.push(path);
+            }
+            i = reader.at;
+            continue;
+        }
+        i = reader.at.max(i + 1);
+    }
     found
+}
+
+/// A layer module's name from a resolved path (`lab::scenario` for the harness's modules).
+fn module_name(path: &[String]) -> String {
+    match path {
+        [lab, inner, ..] if lab == "lab" => format!("lab::{inner}"),
+        [first, ..] => first.clone(),
+        [] => String::new(),
+    }
+}
+
+/// The layer violations of a file of module `own` (its layer name) with module path `module`.
+fn violations_in(source: &str, own: &str, module: &[String]) -> Vec<String> {
+    let own_layer = layer(own).expect("a placed module");
+    crate_paths(source, module)
+        .iter()
+        .filter_map(|path| {
+            let used = module_name(path);
+            let l = layer(&used)?; // None: an item of lib.rs (a re-export), not a module
+            (used != own && l >= own_layer).then(|| {
+                format!(
+                    "uses crate::{} (layer {l}, its own {own_layer})",
+                    path.join("::")
+                )
+            })
+        })
+        .collect()
 }
 
 #[test]
@@ -90,21 +337,17 @@ fn core_modules_use_only_lower_layers() {
         }
     }
     for (module, path) in modules {
-        let own = layer(&module).unwrap_or_else(|| {
+        layer(&module).unwrap_or_else(|| {
             panic!("core module `{module}` is not placed in a layer of this test")
         });
         seen.insert(module.clone());
         for file in zakai_tests::rust_files(&path) {
-            for used in uses(&file) {
-                let Some(l) = layer(&used) else {
-                    continue; // an item of lib.rs (a re-export), not a module
-                };
-                if used != module && l >= own {
-                    violations.push(format!(
-                        "{} uses crate::{used} (layer {l}, its own {own})",
-                        file.strip_prefix(&src).unwrap().display()
-                    ));
-                }
+            let source = std::fs::read_to_string(&file).unwrap();
+            for v in violations_in(&source, &module, &module_of(&src, &file)) {
+                violations.push(format!(
+                    "{} {v}",
+                    file.strip_prefix(&src).unwrap().display()
+                ));
             }
         }
     }
@@ -116,33 +359,6 @@ fn core_modules_use_only_lower_layers() {
     assert_eq!(seen, listed, "every layer module exists");
 }
 
-/// The code lines of `file` (comments dropped).
-fn code_lines(file: &Path) -> Vec<String> {
-    std::fs::read_to_string(file)
-        .unwrap()
-        .lines()
-        .map(|l| l.trim_start())
-        .filter(|l| !l.starts_with("//"))
-        .map(|l| l.split("//").next().unwrap_or("").to_string())
-        .collect()
-}
-
-/// Names after `prefix` in `line` (`super::` → the sibling named right after it).
-fn names_after(line: &str, prefix: &str) -> Vec<String> {
-    line.match_indices(prefix)
-        .filter(|(i, _)| {
-            // Not the tail of a longer path (`super::super::x` is the parent's sibling).
-            !line[..*i].ends_with("::")
-        })
-        .map(|(i, _)| {
-            line[i + prefix.len()..]
-                .chars()
-                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                .collect()
-        })
-        .collect()
-}
-
 /// Within every folder of the core, the files and subfolders side by side use each other
 /// without a circle (`a.rs` uses `b.rs` and `b.rs` uses `a.rs`, directly or round a longer
 /// loop); the folder's own `mod.rs`, which declares them, is left out.
@@ -152,13 +368,12 @@ fn no_import_circle_between_siblings() {
     let mut circles = Vec::new();
     let mut folders = vec![src.clone()];
     while let Some(dir) = folders.pop() {
-        let module_path = dir
+        let folder: Vec<String> = dir
             .strip_prefix(&src)
             .unwrap()
             .components()
             .map(|c| c.as_os_str().to_string_lossy().into_owned())
-            .collect::<Vec<_>>()
-            .join("::");
+            .collect();
         let mut siblings = Vec::new();
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
@@ -171,25 +386,20 @@ fn no_import_circle_between_siblings() {
             }
         }
         let names: BTreeSet<&str> = siblings.iter().map(|(s, _)| s.as_str()).collect();
-        let crate_prefix = if module_path.is_empty() {
-            "crate::".to_string()
-        } else {
-            format!("crate::{module_path}::")
-        };
-        // Edges: sibling → the siblings its code names.
+        // Edges: sibling → the siblings its code names (any path that resolves into this
+        // folder's module and on to a sibling).
         let mut edges: Vec<(String, BTreeSet<String>)> = Vec::new();
         for (stem, path) in &siblings {
             let mut used = BTreeSet::new();
             for file in zakai_tests::rust_files(path) {
-                let direct_child = file.parent() == Some(dir.as_path());
-                for line in code_lines(&file) {
-                    let mut found = names_after(&line, &crate_prefix);
-                    if direct_child {
-                        found.extend(names_after(&line, "super::"));
-                    }
-                    for name in found {
-                        if name != *stem && names.contains(name.as_str()) {
-                            used.insert(name);
+                let source = std::fs::read_to_string(&file).unwrap();
+                for resolved in crate_paths(&source, &module_of(&src, &file)) {
+                    let Some(rest) = resolved.strip_prefix(folder.as_slice()) else {
+                        continue;
+                    };
+                    if let Some(name) = rest.first() {
+                        if name != stem && names.contains(name.as_str()) {
+                            used.insert(name.clone());
                         }
                     }
                 }
@@ -225,4 +435,50 @@ fn no_import_circle_between_siblings() {
         "in a circle of imports: {}",
         circles.join(", ")
     );
+}
+
+/// The scanner finds what a line-by-line search for `crate::<module>` missed: a grouped
+/// import over several lines, a `super::super::` path (from an inline test module too) — and
+/// not a path inside a string or a comment.
+#[test]
+fn the_scan_finds_planted_violations_in_every_form() {
+    let module = |path: &str| -> Vec<String> { path.split("::").map(String::from).collect() };
+    let planted = [
+        // A grouped import spread over lines, from the grid (layer 4) up to the experiment.
+        (
+            "grid",
+            "grid::planted",
+            "use crate::{\n    linalg::Cholesky,\n    lab::{experiment::Experiment, scenario},\n};",
+            vec!["lab::experiment", "lab::scenario"],
+        ),
+        // super::super from filters::kalman::planted is crate::filters::…; one more reaches
+        // the crate's root.
+        (
+            "filters",
+            "filters::kalman::planted",
+            "use super::super::super::lab::fit::maximise;",
+            vec!["lab::fit"],
+        ),
+        // In an inline module, `super` is the file's own module.
+        (
+            "model",
+            "model::planted",
+            "fn f() {}\n#[cfg(test)]\nmod tests {\n    use super::super::super::simulate::Trajectory;\n}",
+            vec!["simulate"],
+        ),
+        // Text is not code.
+        (
+            "grid",
+            "grid::planted",
+            "// use crate::lab::fit;\nconst A: &str = \"crate::lab::fit\";\nlet c = '\"'; /* crate::filters */",
+            vec![],
+        ),
+    ];
+    for (own, path, source, expected) in planted {
+        let found = violations_in(source, own, &module(path));
+        assert_eq!(found.len(), expected.len(), "{source}: {found:?}");
+        for (v, name) in found.iter().zip(&expected) {
+            assert!(v.contains(&format!("crate::{name}")), "{source}: {v}");
+        }
+    }
 }

@@ -1,8 +1,12 @@
 //! Every method's log-likelihood of the data ([`Filter::log_likelihood`], summed over the
 //! steps) against an exact Kalman log-likelihood written here, independently of Zakai's
 //! filters, on linear-Gaussian models: an Ornstein–Uhlenbeck state dx = −x dt + dv,
-//! measured as z_k = x_k + v_k (R = 0.5) or observed continuously as dy = x dt + dw (S = 1),
-//! with a gap and a missing value in the data.
+//! measured as z_k = x_k + v_k (R = 0.5, every 0.2) or observed continuously as dy = x dt + dw
+//! (S = 1, increments over 0.05), with a gap and a missing value in the data.
+//!
+//! The approximate methods' tolerances are set from their measured errors, and each is shown
+//! to be tight enough to matter: the same method started from a wrong prior — the mean moved
+//! by 0.5, or the variance doubled — must fall outside it.
 //!
 //! The reference predicts exactly (x_{k+1} = e^{−Δτ} x_k + noise of variance
 //! (1 − e^{−2Δτ})/2) and takes, per step,
@@ -17,8 +21,24 @@
 use zakai::{Filter, Model, Noise, Observation};
 use zakai_tests::test;
 
+/// The interval between measurements, and between increments (shorter: the continuous-time
+/// methods' time discretisation errors must sit well below what a wrong prior changes).
 const DT: f64 = 0.2;
+const DT_INCREMENTS: f64 = 0.05;
 const STEPS: usize = 60;
+/// The prior every reference starts from, N(0, 1), and the two wrong ones a likelihood check
+/// must tell from it: the mean moved by 0.5 and the variance doubled.
+const PRIOR: (f64, f64) = (0.0, 1.0);
+const WRONG_PRIORS: [(f64, f64); 2] = [(0.5, 1.0), (0.0, 2.0)];
+
+/// The observation interval of the data.
+fn step_of(continuous: bool) -> f64 {
+    if continuous {
+        DT_INCREMENTS
+    } else {
+        DT
+    }
+}
 /// The step whose observation is missing, and the one that is a gap of two intervals.
 const MISSING: usize = 17;
 const GAP: usize = 31;
@@ -50,7 +70,7 @@ fn data(continuous: bool) -> Vec<(f64, f64)> {
     let mut x = 0.3;
     let mut out = Vec::new();
     for k in 0..STEPS {
-        let dt = if k == GAP { 2.0 * DT } else { DT };
+        let dt = step_of(continuous) * if k == GAP { 2.0 } else { 1.0 };
         let a = (-dt).exp();
         x = a * x + ((1.0 - a * a) / 2.0).sqrt() * e[3 * k];
         let value = if continuous {
@@ -63,9 +83,9 @@ fn data(continuous: bool) -> Vec<(f64, f64)> {
     out
 }
 
-/// The exact log-likelihood of `data`, its per-step terms summed.
-fn kalman_log_likelihood(data: &[(f64, f64)], continuous: bool) -> f64 {
-    let (mut m, mut p) = (0.0, 1.0);
+/// The exact log-likelihood of `data` from the prior `N(m₀, P₀)`, its per-step terms summed.
+fn kalman_log_likelihood(data: &[(f64, f64)], continuous: bool, (m0, p0): (f64, f64)) -> f64 {
+    let (mut m, mut p) = (m0, p0);
     let mut total = 0.0;
     for &(dt, value) in data {
         let a = (-dt).exp();
@@ -151,44 +171,96 @@ fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, 
 }
 
 /// The particle filter's (2000 particles) log-likelihood of `data`, its mean over 20 seeds,
-/// within four standard errors (plus `slack`) of `exact`.
+/// within four standard errors (plus `slack`) of `exact`. Where `tells_the_prior`, the same
+/// from each of [`WRONG_PRIORS`] must fall outside that band (on the increments, where the
+/// band is narrower than what a wrong prior changes; on the measurements four standard errors,
+/// about 0.15, are wider than the shifted mean's 0.021).
 fn particle_filter_matches(
     model: &Model,
     data: &[(f64, f64)],
     continuous: bool,
     exact: f64,
     slack: f64,
+    tells_the_prior: bool,
 ) {
-    let runs: Vec<f64> = (0..20)
-        .map(|seed| {
-            let mut pf = prior(zakai::Pf::builder(model))
-                .with(|p| {
-                    p.particles = 2000;
-                    // Euler–Maruyama steps of 0.005: the transition's own bias (the
-                    // stationary variance 1/(2 − h) instead of ½) stays below the check.
-                    p.substeps = Some(40);
-                })
-                .seed(seed)
-                .dt(DT)
-                .build()
-                .unwrap();
-            log_likelihood(&mut pf, data, continuous)
-        })
-        .collect();
-    let mean = runs.iter().sum::<f64>() / runs.len() as f64;
-    let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-        / (runs.len() * (runs.len() - 1)) as f64)
-        .sqrt();
+    let mean_and_se = |p: (f64, f64)| {
+        let runs: Vec<f64> = (0..20)
+            .map(|seed| {
+                let mut pf = prior_at(zakai::Pf::builder(model), p)
+                    .with(|p| {
+                        p.particles = 2000;
+                        // Euler–Maruyama steps of 0.005: the transition's own bias (the
+                        // stationary variance 1/(2 − h) instead of ½) stays below the check.
+                        p.substeps = Some((step_of(continuous) / 0.005).round() as usize);
+                    })
+                    .seed(seed)
+                    .dt(step_of(continuous))
+                    .build()
+                    .unwrap();
+                log_likelihood(&mut pf, data, continuous)
+            })
+            .collect();
+        let mean = runs.iter().sum::<f64>() / runs.len() as f64;
+        let se = (runs.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+            / (runs.len() * (runs.len() - 1)) as f64)
+            .sqrt();
+        (mean, se)
+    };
+    let (mean, se) = mean_and_se(PRIOR);
     println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
-    assert!(
-        (mean - exact).abs() < 4.0 * se + slack,
-        "{mean} ± {se} against {exact}"
-    );
+    let band = 4.0 * se + slack;
+    assert!((mean - exact).abs() < band, "{mean} ± {se} against {exact}");
+    if tells_the_prior {
+        for p in WRONG_PRIORS {
+            let (wrong, _) = mean_and_se(p);
+            println!("PF(2000) from N{p:?}: mean ℓ {wrong:.4} (band ±{band:.4})");
+            assert!(
+                (wrong - exact).abs() > band,
+                "PF from the wrong prior N{p:?}: {wrong} is within {band} of {exact}"
+            );
+        }
+    }
 }
 
 /// The builder with the prior N(0, 1) every reference starts from.
 fn prior<M: zakai::Method>(b: zakai::Builder<'_, M>) -> zakai::Builder<'_, M> {
-    b.prior_gaussian(&[0.0], &[[1.0]])
+    prior_at(b, PRIOR)
+}
+
+/// The builder with the prior `N(m₀, P₀)`.
+fn prior_at<M: zakai::Method>(
+    b: zakai::Builder<'_, M>,
+    (m0, p0): (f64, f64),
+) -> zakai::Builder<'_, M> {
+    b.prior_gaussian(&[m0], &[[p0]])
+}
+
+/// `ll(prior)`, a method's log-likelihood of the data from that prior, within `tolerance` of
+/// the exact value from [`PRIOR`] — and, from each of [`WRONG_PRIORS`], outside it: the check
+/// would catch a misplaced prior. Returns the error.
+fn holds_and_tells_the_prior(
+    name: &str,
+    tolerance: f64,
+    exact: f64,
+    ll: impl Fn((f64, f64)) -> f64,
+) -> f64 {
+    let error = (ll(PRIOR) - exact).abs();
+    let wrong = WRONG_PRIORS.map(|p| (ll(p) - exact).abs());
+    println!(
+        "{name}: |Δℓ| {error:.2e} (allowed {tolerance:.0e}); from a wrong prior {:.2e}, {:.2e}",
+        wrong[0], wrong[1]
+    );
+    assert!(
+        error < tolerance,
+        "{name}: |Δℓ| = {error:e} (allowed {tolerance:e})"
+    );
+    for (p, off) in WRONG_PRIORS.iter().zip(wrong) {
+        assert!(
+            off > tolerance,
+            "{name}: from the wrong prior N{p:?} ℓ is off by only {off:e}, within the tolerance"
+        );
+    }
+    error
 }
 
 fn model(continuous: bool) -> Model {
@@ -202,45 +274,63 @@ fn model(continuous: bool) -> Model {
 
 /// Discrete measurements: the Kalman and Gaussian-sum filters give the exact value to 10⁻⁹;
 /// the extended, unscented and iterated filters to their RK4 moment equations' error (10⁻⁶
-/// allowed; 1.2·10⁻⁸ measured); the grid filter of 001 converges to it (3.2·10⁻² on 400 cells,
-/// 9.0·10⁻³ on 1600 measured); the particle filter's mean over 20 seeds is within four
-/// standard errors of it.
+/// allowed; 1.2·10⁻⁸ measured); the grid filter of 001 converges to it (1.7·10⁻² on 800 cells,
+/// 4.6·10⁻³ on 3200 measured) and on 3200 cells holds it within TOL_SA, which a wrong prior
+/// breaks; the particle filter's mean over 20 seeds is within four standard errors of it.
 #[test]
 fn measurements_every_method_against_the_exact_likelihood() {
     let (data, model) = (data(false), model(false));
-    let exact = kalman_log_likelihood(&data, false);
+    let exact = kalman_log_likelihood(&data, false, PRIOR);
     assert!(exact.is_finite() && exact < 0.0, "{exact}");
+    let moved = WRONG_PRIORS.map(|p| kalman_log_likelihood(&data, false, p) - exact);
+    println!("a wrong prior moves the exact ℓ by {moved:.3?}");
     gaussian_filters_match(&model, &data, false, exact);
-    let grid = |cells: usize| {
-        let mut f = prior(zakai::Separation::builder(&model))
+    let grid = |cells: usize, p: (f64, f64)| {
+        let mut f = prior_at(zakai::Separation::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
             .dt(DT)
             .with(|p| p.cells = vec![cells])
             .build()
             .unwrap();
-        (log_likelihood(&mut f, &data, false) - exact).abs()
+        log_likelihood(&mut f, &data, false)
     };
-    let (coarse, fine) = (grid(400), grid(1600));
-    println!("SA: |Δℓ| {coarse:.2e} on 400 cells, {fine:.2e} on 1600 (ℓ = {exact:.4})");
-    assert!(fine < 0.5 * coarse && fine < 2e-2, "{coarse} → {fine}");
-    particle_filter_matches(&model, &data, false, exact, 1e-3);
+    let coarse = (grid(800, PRIOR) - exact).abs();
+    let fine = holds_and_tells_the_prior("SA (3200 cells)", TOL_SA, exact, |p| grid(3200, p));
+    println!("SA: |Δℓ| {coarse:.2e} on 800 cells, {fine:.2e} on 3200 (ℓ = {exact:.4})");
+    assert!(fine < 0.5 * coarse, "{coarse} → {fine}");
+    particle_filter_matches(&model, &data, false, exact, 1e-3, false);
 }
 
+/// Tolerances on |Δℓ|, each 1.5 to 2.5 times the measured error (in the comment), and below
+/// what a wrong prior changes: the shifted mean moves the exact ℓ of the increments by −0.085
+/// and the doubled variance by −0.119; of the measurements by +0.021 and −0.223.
+const TOL_SA: f64 = 8e-3; // 4.6e-3 (3200 cells)
+const TOL_QIEM: f64 = 5e-3; // 3.3e-3
+const TOL_QIEM_IN_OPERATOR: f64 = 5e-3; // 2.4e-3
+const TOL_IEM: f64 = 1e-3; // 4.1e-4
+const TOL_SPT: f64 = 5e-3; // 3.3e-3
+const TOL_SPECTRAL: f64 = 1e-3; // 3.9e-4 (64 functions)
+const TOL_DIRECT: f64 = 5e-3; // 3.0e-3
+
 /// Continuous observations: the Kalman–Bucy filter gives the exact value of the sampled model
-/// to 10⁻⁹, the EKF/UKF to their RK4 moment equations' error (10⁻⁶ allowed); QIEM converges
-/// to it as its grid and step are refined (6.4·10⁻² → 1.3·10⁻² measured), the spectral filter
-/// and the direct method (002) are within their time discretisation's error; the particle
-/// filter's mean over seeds is within four standard errors.
+/// to 10⁻⁹, the EKF/UKF to their RK4 moment equations' error (10⁻⁶ allowed). The grid and
+/// spectral methods converge to it as their resolution grows (QIEM from 101 points and
+/// Δt = 0.02 to 401 and 0.005; the spectral filter from 32 to 64 functions) and, at the finer
+/// resolution, hold it within their tolerances (the TOL_ constants, from the measured errors),
+/// which a wrong prior would break; so does the direct method (002). The particle filter's
+/// mean over seeds is within four standard errors, and from a wrong prior outside them.
 #[test]
 fn increments_every_method_against_the_exact_likelihood() {
     let (data, model) = (data(true), model(true));
-    let exact = kalman_log_likelihood(&data, true);
+    let exact = kalman_log_likelihood(&data, true, PRIOR);
     assert!(exact.is_finite(), "{exact}");
+    let moved = WRONG_PRIORS.map(|p| kalman_log_likelihood(&data, true, p) - exact);
+    println!("a wrong prior moves the exact ℓ by {moved:.3?}");
     gaussian_filters_match(&model, &data, true, exact);
-    let qiem = |points: usize, dt: f64, edit: fn(&mut zakai::YauYauParams)| {
-        let mut f = prior(zakai::Qiem::builder(&model))
+    let qiem = |points: usize, dt: f64, edit: fn(&mut zakai::YauYauParams), p: (f64, f64)| {
+        let mut f = prior_at(zakai::Qiem::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
-            .dt(DT)
+            .dt(DT_INCREMENTS)
             .with(|p| {
                 p.points = vec![points];
                 p.dt = dt;
@@ -248,89 +338,95 @@ fn increments_every_method_against_the_exact_likelihood() {
             })
             .build()
             .unwrap();
-        (log_likelihood(&mut f, &data, true) - exact).abs()
+        log_likelihood(&mut f, &data, true)
     };
-    let (coarse, fine) = (qiem(101, 0.02, |_| {}), qiem(401, 0.005, |_| {}));
+    let coarse = (qiem(101, 0.02, |_| {}, PRIOR) - exact).abs();
+    let fine = holds_and_tells_the_prior("QIEM (401, 0.005)", TOL_QIEM, exact, |p| {
+        qiem(401, 0.005, |_| {}, p)
+    });
     println!("QIEM: |Δℓ| {coarse:.2e} (101 points, Δt 0.02), {fine:.2e} (401, 0.005)");
-    assert!(fine < 0.5 * coarse && fine < 2e-2, "{coarse} → {fine}");
+    assert!(fine < 0.5 * coarse, "{coarse} → {fine}");
     // The same with the likelihood in the operator (000 (4): its implicit damping of
-    // −½hᵀS⁻¹h is the less accurate form; 3.2·10⁻² measured, 5·10⁻² allowed), and with the
-    // factor averaged over 3 samples per cell (1.3·10⁻², 2·10⁻² allowed).
-    let in_operator = qiem(401, 0.005, |p| p.likelihood = zakai::Likelihood::InOperator);
-    let cells = qiem(401, 0.005, |p| p.likelihood_samples = 3);
-    println!(
-        "QIEM (401, 0.005): in the operator {in_operator:.2e}, 3 samples per cell {cells:.2e}"
+    // −½hᵀS⁻¹h is the less accurate form), and with the factor averaged over 3 samples per
+    // cell.
+    holds_and_tells_the_prior(
+        "QIEM (401, 0.005), likelihood in the operator",
+        TOL_QIEM_IN_OPERATOR,
+        exact,
+        |p| {
+            qiem(
+                401,
+                0.005,
+                |q| q.likelihood = zakai::Likelihood::InOperator,
+                p,
+            )
+        },
     );
-    assert!(in_operator < 5e-2 && cells < 2e-2, "{in_operator}, {cells}");
-    // IEM and the superposition technique on the same grid and step (1.4·10⁻³ and 1.3·10⁻²
-    // measured; IEM takes the drift implicitly).
-    for (name, filter) in [
-        (
-            "IEM",
-            Box::new(
-                prior(zakai::Iem::builder(&model))
-                    .domain(&[(-6.0, 6.0)])
-                    .dt(DT)
-                    .with(|p| {
-                        p.points = vec![401];
-                        p.dt = 0.005;
-                    })
-                    .build()
-                    .unwrap(),
-            ) as Box<dyn Filter>,
-        ),
-        (
-            "SPT",
-            Box::new(
-                prior(zakai::Spt::builder(&model))
-                    .domain(&[(-6.0, 6.0)])
-                    .dt(DT)
-                    .with(|p| {
-                        p.points = vec![401];
-                        p.dt = 0.005;
-                    })
-                    .build()
-                    .unwrap(),
-            ),
-        ),
-    ] {
-        let mut filter = filter;
-        let error = (log_likelihood(filter.as_mut(), &data, true) - exact).abs();
-        println!("{name} (401, 0.005): |Δℓ| {error:.2e}");
-        assert!(error < 2e-2, "{name}: {error}");
-    }
-    let spectral = |basis: usize| {
-        let mut f = prior(zakai::Spectral::builder(&model))
+    holds_and_tells_the_prior(
+        "QIEM (401, 0.005), 3 samples per cell",
+        TOL_QIEM,
+        exact,
+        |p| qiem(401, 0.005, |q| q.likelihood_samples = 3, p),
+    );
+    // IEM (the drift implicit) and the superposition technique on the same grid and step.
+    let iem = |p: (f64, f64)| {
+        let mut f = prior_at(zakai::Iem::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
-            .dt(DT)
+            .dt(DT_INCREMENTS)
+            .with(|p| {
+                p.points = vec![401];
+                p.dt = 0.005;
+            })
+            .build()
+            .unwrap();
+        log_likelihood(&mut f, &data, true)
+    };
+    holds_and_tells_the_prior("IEM (401, 0.005)", TOL_IEM, exact, iem);
+    let spt = |p: (f64, f64)| {
+        let mut f = prior_at(zakai::Spt::builder(&model), p)
+            .domain(&[(-6.0, 6.0)])
+            .dt(DT_INCREMENTS)
+            .with(|p| {
+                p.points = vec![401];
+                p.dt = 0.005;
+            })
+            .build()
+            .unwrap();
+        log_likelihood(&mut f, &data, true)
+    };
+    holds_and_tells_the_prior("SPT (401, 0.005)", TOL_SPT, exact, spt);
+    let spectral = |basis: usize, p: (f64, f64)| {
+        let mut f = prior_at(zakai::Spectral::builder(&model), p)
+            .domain(&[(-6.0, 6.0)])
+            .dt(DT_INCREMENTS)
             .with(|p| {
                 p.offline_basis = Some(basis);
                 p.online_basis = Some(basis);
             })
             .build()
             .unwrap();
-        (log_likelihood(&mut f, &data, true) - exact).abs()
+        log_likelihood(&mut f, &data, true)
     };
     // The spectral filter's propagation over Δτ is one step (1 + Δτ𝓛) of 004's Algorithm 1
-    // (N′ = 1; N′ ≥ 2 loses the density's mass on this model, see the closing note of issue
-    // 43): its time error, not the basis, sets the likelihood's (3.0·10⁻² with 16 functions,
-    // 8.1·10⁻² with 32 measured; 0.1 allowed).
-    let (s16, s32) = (spectral(16), spectral(32));
-    println!("spectral: |Δℓ| {s16:.2e} (16 functions), {s32:.2e} (32)");
-    let mut direct = prior(zakai::Direct::builder(&model))
-        .domain(&[(-6.0, 6.0)])
-        .with(|p| p.linear = [-1.0, 0.0])
-        .build()
-        .unwrap();
-    let d = (log_likelihood(&mut direct, &data, true) - exact).abs();
-    println!("direct |Δℓ| {d:.2e} (ℓ = {exact:.4})");
-    // The direct method: 3.4·10⁻² measured (its first-order carry of the residual); 5·10⁻²
-    // allowed.
-    assert!(
-        s16 < 0.1 && s32 < 0.1 && d < 5e-2,
-        "spectral {s16}, {s32}, direct {d}"
-    );
-    particle_filter_matches(&model, &data, true, exact, 1e-2);
+    // (N′ = 1): at Δτ = 0.2 its time error outweighed the basis (3.0·10⁻² with 16 functions,
+    // 8.1·10⁻² with 32); at Δτ = 0.05 the basis sets the error (8.8·10⁻³ with 32 functions,
+    // 3.9·10⁻⁴ with 64 measured).
+    let s32 = (spectral(32, PRIOR) - exact).abs();
+    let s64 = holds_and_tells_the_prior("spectral (64 functions)", TOL_SPECTRAL, exact, |p| {
+        spectral(64, p)
+    });
+    println!("spectral: |Δℓ| {s32:.2e} (32 functions), {s64:.2e} (64)");
+    assert!(s64 < 0.7 * s32, "spectral: {s32} → {s64}");
+    let direct = |p: (f64, f64)| {
+        let mut f = prior_at(zakai::Direct::builder(&model), p)
+            .domain(&[(-6.0, 6.0)])
+            .with(|p| p.linear = [-1.0, 0.0])
+            .build()
+            .unwrap();
+        log_likelihood(&mut f, &data, true)
+    };
+    holds_and_tells_the_prior("direct", TOL_DIRECT, exact, direct);
+    particle_filter_matches(&model, &data, true, exact, 1e-2, true);
 }
 
 /// A step that observes nothing — a gap, or every component missing — adds nothing, and a
@@ -408,14 +504,14 @@ fn a_missing_component_is_the_one_sensor_likelihood() {
                 (
                     Box::new(
                         prior(zakai::Pf::builder(&two))
-                            .dt(DT)
+                            .dt(step_of(continuous))
                             .seed(3)
                             .build()
                             .unwrap(),
                     ),
                     Box::new(
                         prior(zakai::Pf::builder(&one))
-                            .dt(DT)
+                            .dt(step_of(continuous))
                             .seed(3)
                             .build()
                             .unwrap(),
@@ -428,7 +524,7 @@ fn a_missing_component_is_the_one_sensor_likelihood() {
                 Box::new(
                     prior(zakai::Qiem::builder(m))
                         .domain(&[(-6.0, 6.0)])
-                        .dt(DT)
+                        .dt(DT_INCREMENTS)
                         .with(|p| p.points = vec![201])
                         .build()
                         .unwrap(),
@@ -471,7 +567,7 @@ fn a_missing_component_is_the_one_sensor_likelihood() {
 #[test]
 fn the_direct_methods_partial_step_is_the_one_sensor_likelihood() {
     let data = data(true);
-    let exact = kalman_log_likelihood(&data, true);
+    let exact = kalman_log_likelihood(&data, true, PRIOR);
     let build = |m: &Model| {
         prior(zakai::Direct::builder(m))
             .domain(&[(-6.0, 6.0)])
@@ -491,7 +587,12 @@ fn the_direct_methods_partial_step_is_the_one_sensor_likelihood() {
         .sum();
     let whole = log_likelihood(&mut build(&model(true)), &data, true);
     println!("direct: partial {partial:.4}, whole {whole:.4}, exact {exact:.4}");
-    // 002's form and the in-update splitting differ at first order in Δτ = 0.2.
-    assert!((partial - whole).abs() < 5e-2, "{partial} against {whole}");
-    assert!((partial - exact).abs() < 5e-2, "{partial} against {exact}");
+    // 002's form and the in-update splitting differ at first order in Δτ = 0.05 (4.1·10⁻³
+    // measured; 10⁻² allowed); the partial step is within the direct method's tolerance of the
+    // exact value (1.1·10⁻³ measured).
+    assert!((partial - whole).abs() < 1e-2, "{partial} against {whole}");
+    assert!(
+        (partial - exact).abs() < TOL_DIRECT,
+        "{partial} against {exact}"
+    );
 }

@@ -5,11 +5,13 @@
 //! filter with the exact discretisation of an Ornstein–Uhlenbeck drift, and a point-mass
 //! filter on a fine grid whose transition is a Gaussian kernel of many small Euler steps.
 
+use nalgebra::{DMatrix, DVector};
 use zakai::lab::experiment::Experiment;
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 use zakai::FilterError;
 use zakai::{Estimate, Filter, Observation};
+use zakai_tests::kalman_reference::{LinearGaussian, Sensor};
 use zakai_tests::test;
 use zakai_tests::Lcg;
 use zakai_tests::{applicable_methods, observation_of, PRESETS_FOR_EVERY_METHOD};
@@ -344,13 +346,13 @@ fn gaps_irregular_times_and_multi_rate_sensors_against_an_exact_kalman_filter() 
     for m in &run.methods {
         assert!(m.failure.is_none(), "{}: {:?}", m.name, m.failure);
         assert_eq!(m.estimates.len(), reference.len(), "{}", m.name);
+        // Every method here carries a covariance: its variance is checked at every row.
+        assert_eq!(m.covariances.len(), reference.len(), "{}", m.name);
         let (mut mean_err, mut var_err) = (0.0f64, 0.0f64);
         for (k, &(mk, pk)) in reference.iter().enumerate() {
             let sd = pk.sqrt();
             mean_err = mean_err.max((m.estimates[k] - mk).abs() / sd);
-            if !m.covariances.is_empty() {
-                var_err = var_err.max((m.covariances[k] - pk).abs() / pk);
-            }
+            var_err = var_err.max((m.covariances[k] - pk).abs() / pk);
         }
         worst.push((m.name.clone(), mean_err, var_err));
         let (mean_tol, var_tol) = if m.name.starts_with("PF") {
@@ -446,7 +448,7 @@ fn reference_point_mass(r: &Recording, nodes: usize, micro: f64) -> Vec<(f64, f6
 /// operator and a remainder and matches the independent point-mass reference (1201 nodes,
 /// Euler steps of 10⁻³) within 2 % of the posterior sd in the mean and 5 % in the variance
 /// after every row (measured 1.0 % and 0.2 %); the UKF, a Gaussian approximation, is further
-/// from it after the gap (measured 0.76 sd; shown, not bounded).
+/// from it after the gap: more than 0.4 sd and 20 times the grid's worst (measured 0.76 sd).
 #[test]
 fn a_gap_is_crossed_by_the_grid_filter_as_by_a_fine_point_mass_filter() {
     let mut times = vec![0.0];
@@ -487,16 +489,24 @@ fn a_gap_is_crossed_by_the_grid_filter_as_by_a_fine_point_mass_filter() {
         "grid: mean within {mean_err:.2e} sd, variance within {var_err:.2e}; UKF after the gap {ukf_err:.2e} sd"
     );
     assert!(mean_err < 0.02 && var_err < 0.05, "{mean_err} {var_err}");
+    // The Gaussian approximation is the one that misses the spread over both wells: more than
+    // 0.4 sd off after the gap (measured 0.76), over 20 times the grid filter's worst row.
+    assert!(
+        ukf_err > 0.4 && ukf_err > 20.0 * mean_err,
+        "UKF {ukf_err} sd, grid {mean_err} sd"
+    );
 }
 
 /// A remainder operator is the same prediction as the scheme's own steps: on the cubic sensor
 /// (after 20 intervals of data) a grid or spectral filter built for Δτ predicting over 1.5 Δτ
 /// — one Δτ with its operator, then 0.5 Δτ with a remainder operator made for it — agrees
-/// with the same method built for Δτ/2 (three of its own intervals), in the mean and variance, to
-/// within 1 % of the posterior standard deviation and 2 % of the variance (measured: QIEM and
-/// IEM to round-off, 10⁻¹⁴, their steps being the same; SPT 2·10⁻⁸ and 10⁻⁷ — its bumps carry
-/// Δτ, the remainder is QIEM; spectral 0.15 % and 0.24 % — two off-line operators of different
-/// partitions of the same time).
+/// with the same method built for Δτ/2 (three of its own intervals), in the mean (in posterior
+/// sds) and the variance (relative), each method to its own tolerance, about a hundred times
+/// what was measured where the two computations differ and round-off where they do not:
+/// QIEM and IEM take the same steps either way (measured 10⁻¹⁴; 10⁻¹⁰ allowed); SPT's bumps
+/// carry Δτ and its remainder is QIEM (measured 2·10⁻⁸ and 10⁻⁷; 2·10⁻⁶ and 10⁻⁵ allowed); the
+/// spectral filter's are two off-line operators of different partitions of the same time
+/// (measured 0.15 % and 0.24 %; 0.5 % and 1 % allowed).
 #[test]
 fn remainders_predict_as_the_schemes_own_steps() {
     let config = zakai::lab::scenario::presets::preset("cubic-sensor-1d").unwrap();
@@ -509,7 +519,12 @@ fn remainders_predict_as_the_schemes_own_steps() {
     let data = e.simulate(3).unwrap();
     let dt = config.time.dt_obs;
     let mut tried = 0;
-    for key in ["qiem", "iem", "spt", "spectral"] {
+    for (key, mean_tol, var_tol) in [
+        ("qiem", 1e-10, 1e-10),
+        ("iem", 1e-10, 1e-10),
+        ("spt", 2e-6, 1e-5),
+        ("spectral", 5e-3, 1e-2),
+    ] {
         let m = zakai::lab::scenario::MethodConfig::from_key(key).unwrap();
         let mut f = e.build_method(&m, key.into(), 1).unwrap();
         let mut g = e_half.build_method(&m, key.into(), 1).unwrap();
@@ -528,8 +543,8 @@ fn remainders_predict_as_the_schemes_own_steps() {
         let var_gap = (va - vb).abs() / vb;
         eprintln!("{key}: mean {mean_gap:.2e} sd, variance {var_gap:.2e}");
         assert!(
-            mean_gap < 0.01 && var_gap < 0.02,
-            "{key}: {mean_gap} {var_gap}"
+            mean_gap < mean_tol && var_gap < var_tol,
+            "{key}: mean {mean_gap:e} sd (allowed {mean_tol:e}), variance {var_gap:e} (allowed {var_tol:e})"
         );
         tried += 1;
     }
@@ -541,7 +556,9 @@ fn remainders_predict_as_the_schemes_own_steps() {
 /// most Δτ/substeps as it needs (four over the whole gap would have |hλ| = 5, where RK4
 /// amplifies by 13.7 a step), and the particle filter in Euler steps of its chosen length; all
 /// stay within 2 % of the exact filter's posterior sd (RK4 at hλ = −0.5; measured 0.06 %), the
-/// particle filter within 5 Monte Carlo standard errors (measured 0.037 sd against 0.071).
+/// particle filter within 5 Monte Carlo standard errors (measured 0.037 sd against 0.071). The
+/// exact filter is the one written in the tests (`kalman_reference`), and Zakai's Kalman
+/// filter matches it to 10⁻⁹ of its sd.
 #[test]
 fn a_long_gap_on_a_stiff_model_is_crossed_in_short_steps() {
     let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
@@ -563,16 +580,38 @@ fn a_long_gap_on_a_stiff_model_is_crossed_in_short_steps() {
     let e = Experiment::new(config).unwrap();
     let z = [1.0, 0.2, 0.1, 0.0, -0.05];
     let times = vec![0.0, 0.1, 0.2, 1.2, 1.3];
+    let exact = LinearGaussian::scalar(
+        -20.0,
+        0.0,
+        1.0,
+        Sensor::Measurement {
+            h: DMatrix::identity(1, 1),
+            d: DVector::zeros(1),
+            r: DMatrix::from_element(1, 1, 0.01),
+        },
+    )
+    .filter(
+        &[1.0],
+        &DMatrix::from_element(1, 1, 0.1),
+        &times
+            .iter()
+            .zip(&z)
+            .enumerate()
+            .map(|(k, (t, v))| (if k == 0 { 0.0 } else { t - times[k - 1] }, vec![*v]))
+            .collect::<Vec<_>>(),
+    );
     let recording = Recording::measurements(1, 1, times, &z).unwrap();
     let run = e.filter_recorded(recording, 2).unwrap();
-    let exact = &run.methods[0];
-    for m in &run.methods[1..] {
+    for m in &run.methods {
         assert!(m.failure.is_none(), "{}: {:?}", m.name, m.failure);
+        assert_eq!(m.estimates.len(), exact.len(), "{}", m.name);
         let worst = (0..z.len())
-            .map(|k| (m.estimates[k] - exact.estimates[k]).abs() / exact.covariances[k].sqrt())
+            .map(|k| (m.estimates[k] - exact[k].mean[0]).abs() / exact[k].sd(0))
             .fold(0.0, f64::max);
         let tolerance = if m.name.starts_with("PF") {
             5.0 / (20000.0f64 / 4.0).sqrt()
+        } else if m.name == "KF" {
+            1e-9
         } else {
             0.02
         };

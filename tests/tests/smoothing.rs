@@ -610,7 +610,7 @@ mod references {
 
 /// The grid smoother under a memory cap: with room for every density it keeps them all; with
 /// less, checkpoints every ⌈√N⌉ steps and refilters each segment backward — the same smoothed
-/// estimates to 10⁻¹² — and says so; with too little it refuses before anything is kept,
+/// means and sds, row for row, to 10⁻¹² — and says so; with too little it refuses before anything is kept,
 /// naming the cap.
 #[test]
 fn the_grid_smoother_keeps_to_the_memory_cap() {
@@ -619,7 +619,7 @@ fn the_grid_smoother_keeps_to_the_memory_cap() {
     let e = Experiment::new(config.clone()).unwrap();
     let data = nile_with_gaps();
     let filter = e.build_method(&config.methods[0], "SA".into(), 1).unwrap();
-    let smooth = |cap: usize| -> Result<(Vec<f64>, Vec<String>), zakai::FilterError> {
+    let smooth = |cap: usize| -> Result<(Vec<(f64, f64)>, Vec<String>), zakai::FilterError> {
         let plan = SmoothingPlan {
             steps: data.times.len(),
             memory_cap: cap,
@@ -634,9 +634,12 @@ fn the_grid_smoother_keeps_to_the_memory_cap() {
             };
             s.step(&obs)?;
         }
-        let mut means = Vec::new();
-        s.smooth(&mut |step| means.push(step.estimate.mean[0]))?;
-        Ok((means, s.notes()))
+        let mut moments = Vec::new();
+        s.smooth(&mut |step| {
+            let variance = step.estimate.covariance.as_ref().expect("a variance")[(0, 0)];
+            moments.push((step.estimate.mean[0], variance.sqrt()))
+        })?;
+        Ok((moments, s.notes()))
     };
     let (all, notes) = smooth(64 << 20).unwrap();
     assert!(notes.is_empty(), "{notes:?}");
@@ -644,8 +647,14 @@ fn the_grid_smoother_keeps_to_the_memory_cap() {
     // and one segment.
     let (checkpointed, notes) = smooth(400 << 10).unwrap();
     assert!(notes[0].contains("every 10 steps"), "{notes:?}");
+    assert_eq!(all.len(), checkpointed.len());
+    assert_eq!(all.len(), data.times.len() + 1, "the prior and every row");
     for (a, b) in all.iter().zip(&checkpointed) {
-        assert!((a - b).abs() <= 1e-12 * a.abs(), "{a} vs {b}");
+        assert!(
+            (a.0 - b.0).abs() <= 1e-12 * a.0.abs(),
+            "means {a:?} vs {b:?}"
+        );
+        assert!((a.1 - b.1).abs() <= 1e-12 * a.1, "sds {a:?} vs {b:?}");
     }
     let refused = smooth(50 << 10).unwrap_err().to_string();
     assert!(refused.contains("memory cap"), "{refused}");

@@ -116,7 +116,10 @@ fn the_simulator_draws_with_the_state_dependent_variance() {
 #[cfg(not(target_arch = "wasm32"))]
 mod references {
     use super::*;
+    use nalgebra::{DMatrix, DVector};
     use zakai::lab::experiment::RunResult;
+    use zakai::lab::recording::Recording;
+    use zakai_tests::kalman_reference::{rows_of, LinearGaussian, Row, Sensor};
     use zakai_tests::test;
     use zakai_tests::worst_gap;
 
@@ -275,8 +278,11 @@ mod references {
 
     /// A 2-D linear model with a correlated constant diffusion, `Q = [[1, 0.6], [0.6, 0.8]]`,
     /// only x₁ measured: the mixed term carries what z says about x₂. The SA and FDM (mixed terms
-    /// as their explicit positive step) within 0.1 posterior sds of the exact Kalman filter at
-    /// every row (a gap and an irregular step included), the PF within 0.15; and with cells 4.5
+    /// as their explicit positive step) close to the exact Kalman filter (written in the tests,
+    /// `kalman_reference`; Zakai's matches it to 10⁻⁹) at every row, a gap and an irregular
+    /// step included: the SA within 0.05 posterior sds (0.022 measured), the FDM within 0.03
+    /// (0.010), the PF(20 000) within 0.08 (0.025; five Monte Carlo standard errors at an
+    /// effective sample size of N/4); and with cells 4.5
     /// times as long along x₂ as along x₁ the mixed term cannot be made positive (a₂₂ = 0.8 would
     /// have to be at least 0.6 · 4.5), and the SA says so.
     #[test]
@@ -309,48 +315,25 @@ mod references {
         let q = q.constant().unwrap();
         assert!((q[(0, 1)] - 0.6).abs() < 1e-12 && (q[(1, 1)] - 0.8).abs() < 1e-12);
         let recording = zakai_tests::with_gap_and_irregular_step(&e.simulate(4).unwrap(), 5..9, 15);
+        let exact = correlated_reference(
+            Sensor::Measurement {
+                h: DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+                d: DVector::zeros(1),
+                r: DMatrix::from_element(1, 1, 0.04),
+            },
+            &recording,
+        );
         let run = e.filter_recorded(recording, 3).unwrap();
-        let kalman = &run.methods[3];
-        assert!(kalman.failure.is_none(), "{:?}", kalman.failure);
-        for component in 0..2 {
-            let means: Vec<f64> = kalman
-                .estimates
-                .iter()
-                .skip(component)
-                .step_by(2)
-                .copied()
-                .collect();
-            let sds: Vec<f64> = kalman
-                .covariances
-                .chunks(4)
-                .map(|p| p[component * 3].sqrt())
-                .collect();
-            for (i, track) in run.methods.iter().take(3).enumerate() {
-                assert!(
-                    track.failure.is_none(),
-                    "{}: {:?}",
-                    track.name,
-                    track.failure
-                );
-                let gap = track
-                    .estimates
-                    .iter()
-                    .skip(component)
-                    .step_by(2)
-                    .zip(means.iter().zip(&sds))
-                    .map(|(e, (m, s))| (e - m).abs() / s)
-                    .fold(0.0, f64::max);
+        for (i, track) in run.methods.iter().enumerate() {
+            for component in 0..2 {
+                let gap = gap_to(track, &exact, component);
                 println!(
-                    "{} x{}: worst gap {gap:.4} Kalman sd",
+                    "{} x{}: worst gap {gap:.4} exact sd",
                     track.name,
                     component + 1
                 );
-                assert!(
-                    gap <= if i < 2 { 0.1 } else { 0.15 },
-                    "{} x{}: {gap}",
-                    track.name,
-                    component + 1
-                );
+                let tolerance = [0.05, 0.03, 0.08, 1e-9][i];
+                assert!(gap <= tolerance, "{} x{}: {gap}", track.name, component + 1);
             }
         }
         let refused = Experiment::new(config([90, 20])).unwrap().run(1).unwrap();
@@ -362,9 +345,11 @@ mod references {
     /// The same correlated diffusion observed continuously, `dy = x₁ dt + 0.5 dw`: IEM and QIEM
     /// (the mixed term as their explicit step) and the spectral filter (the mixed derivative
     /// in its off-line operator, with a basis of 30/36 per dimension: 0.45, 0.13 and 0.03 sd
-    /// at 22/28, 26/32 and 30/36 measured, its default 1.6) within 0.1 posterior sds of the exact Kalman–Bucy filter at
-    /// every row, for both components; the fourth-order QIEM, which the explicit step would
-    /// spoil, does not apply, and says why.
+    /// at 22/28, 26/32 and 30/36 measured, its default 1.6) close to the exact filter of the
+    /// sampled model (written in the tests; Zakai's Kalman–Bucy filter within 10⁻⁹ of it) at
+    /// every row, for both components: IEM and QIEM within 0.03 posterior sds (0.007 and 0.010
+    /// measured), the spectral filter within 0.06 (0.026); the fourth-order QIEM, which the
+    /// explicit step would spoil, does not apply, and says why.
     #[test]
     fn the_yau_yau_filters_take_a_correlated_diffusion() {
         let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
@@ -389,31 +374,23 @@ mod references {
         }))
         .unwrap();
         let run = Experiment::new(config).unwrap().run(6).unwrap();
-        let kalman = &run.methods[0];
-        assert!(kalman.failure.is_none());
-        for track in &run.methods[1..4] {
-            assert!(
-                track.failure.is_none(),
-                "{}: {:?}",
-                track.name,
-                track.failure
-            );
+        let exact = correlated_reference(
+            Sensor::Increment {
+                h: DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+                d: DVector::zeros(1),
+                s: DMatrix::from_element(1, 1, 0.25),
+            },
+            &run.recording,
+        );
+        for (track, tolerance) in run.methods[..4].iter().zip([1e-9, 0.03, 0.03, 0.06]) {
             for component in 0..2 {
-                let gap = track
-                    .estimates
-                    .iter()
-                    .skip(component)
-                    .step_by(2)
-                    .zip(kalman.estimates.iter().skip(component).step_by(2))
-                    .zip(kalman.covariances.chunks(4))
-                    .map(|((e, m), p)| (e - m).abs() / p[component * 3].sqrt())
-                    .fold(0.0, f64::max);
+                let gap = gap_to(track, &exact, component);
                 println!(
-                    "{} x{}: worst gap {gap:.4} Kalman sd",
+                    "{} x{}: worst gap {gap:.4} exact sd",
                     track.name,
                     component + 1
                 );
-                assert!(gap <= 0.1, "{} x{}: {gap}", track.name, component + 1);
+                assert!(gap <= tolerance, "{} x{}: {gap}", track.name, component + 1);
             }
         }
         let why = format!("{:?}", run.methods[4].failure);
@@ -422,5 +399,39 @@ mod references {
             why.contains("needs a diagonal Q") && why.contains("mixed terms"),
             "{why}"
         );
+    }
+
+    /// The exact filter of the correlated model `dx = A x dt + G dv`, A = [[−0.5, 0.3],
+    /// [0, −0.4]], Q = G Gᵀ = [[1, 0.6], [0.6, 0.8]], from N(0, 0.5 I), over `recording`.
+    fn correlated_reference(sensor: Sensor, recording: &Recording) -> Vec<Row> {
+        let model = LinearGaussian {
+            a: DMatrix::from_row_slice(2, 2, &[-0.5, 0.3, 0.0, -0.4]),
+            b: DVector::zeros(2),
+            q: DMatrix::from_row_slice(2, 2, &[1.0, 0.6, 0.6, 0.8]),
+            sensor,
+        };
+        model.filter(
+            &[0.0, 0.0],
+            &(DMatrix::identity(2, 2) * 0.5),
+            &rows_of(recording),
+        )
+    }
+
+    /// The largest gap of `track`'s component `i` to the exact mean, in exact sds (the track
+    /// must not have failed and must have every row).
+    fn gap_to(track: &zakai::lab::experiment::MethodTrack, exact: &[Row], i: usize) -> f64 {
+        assert!(
+            track.failure.is_none(),
+            "{}: {:?}",
+            track.name,
+            track.failure
+        );
+        let n = exact[0].mean.len();
+        assert_eq!(track.estimates.len(), exact.len() * n, "{}", track.name);
+        exact
+            .iter()
+            .enumerate()
+            .map(|(k, row)| (track.estimates[k * n + i] - row.mean[i]).abs() / row.sd(i))
+            .fold(0.0, f64::max)
     }
 }

@@ -149,8 +149,13 @@ fn the_inputs_are_read() {
 }
 
 /// A drift that reads the time alone, `dx = (−x + cos t) dt + G dv` with z = x + v: the
-/// Gaussian filters hold t at each interval's midpoint, within 0.01 sd of the exact filter
-/// (whose forcing term is ∫ e^{−(τ_k − s)} cos s ds in closed form).
+/// Gaussian filters hold t at each interval's midpoint. Three exact filters written here tell
+/// the holds apart — t held at the interval's midpoint, t held at its end, and the true
+/// forcing ∫ e^{−(τ_k − s)} cos s ds in closed form: the EKF and UKF match the midpoint hold to
+/// their RK4 error (10⁻⁴ sd allowed; 1.2·10⁻⁶ measured), lie more than 0.05 sd from the
+/// end-point hold (whose forcing is off by about (1 − e^{−Δτ}) · Δτ/2 · |sin t| ≈ 0.03;
+/// 0.13 sd measured), and within 0.01 sd of the true forcing (the hold's own error, about
+/// Δτ²/12 in the time; 0.0061 measured).
 #[test]
 fn a_drift_that_reads_the_time_is_held_at_the_midpoint() {
     let mut config = scenario(serde_json::json!([{ "method": "ekf" }, { "method": "ukf" }]));
@@ -161,27 +166,46 @@ fn a_drift_that_reads_the_time_is_held_at_the_midpoint() {
     assert_eq!(e.model().inputs, Some(0));
     let data = e.simulate(5).unwrap();
     let data: Recording = data.into();
-    let (mut m, mut p) = (0.0_f64, 1.0_f64);
-    let (mut means, mut sds) = (Vec::new(), Vec::new());
-    let antiderivative = |t: f64| (t.cos() + t.sin()) / 2.0;
-    for k in 0..data.times.len() {
-        if k > 0 {
-            let (t0, t1) = (data.times[k - 1], data.times[k]);
-            let a = (-(t1 - t0)).exp();
-            m = a * m + antiderivative(t1) - a * antiderivative(t0);
-            p = a * a * p + G * G * (1.0 - a * a) / 2.0;
+    // The exact filter with the forcing over (t0, t1] given by `forcing(t0, t1, a)`.
+    let exact = |forcing: &dyn Fn(f64, f64, f64) -> f64| {
+        let (mut m, mut p) = (0.0_f64, 1.0_f64);
+        let (mut means, mut sds) = (Vec::new(), Vec::new());
+        for k in 0..data.times.len() {
+            if k > 0 {
+                let (t0, t1) = (data.times[k - 1], data.times[k]);
+                let a = (-(t1 - t0)).exp();
+                m = a * m + forcing(t0, t1, a);
+                p = a * a * p + G * G * (1.0 - a * a) / 2.0;
+            }
+            let z = data.observation(k)[0];
+            let gain = p / (p + R);
+            m += gain * (z - m);
+            p *= 1.0 - gain;
+            means.push(m);
+            sds.push(p.sqrt());
         }
-        let z = data.observation(k)[0];
-        let gain = p / (p + R);
-        m += gain * (z - m);
-        p *= 1.0 - gain;
-        means.push(m);
-        sds.push(p.sqrt());
-    }
-    let run = e.filter_recorded(data, 1).unwrap();
+        (means, sds)
+    };
+    let antiderivative = |t: f64| (t.cos() + t.sin()) / 2.0;
+    let truly = exact(&|t0, t1, a| antiderivative(t1) - a * antiderivative(t0));
+    let midpoint = exact(&|t0, t1, a| (1.0 - a) * (0.5 * (t0 + t1)).cos());
+    let end = exact(&|_, t1, a| (1.0 - a) * t1.cos());
+    let run = e.filter_recorded(data.clone(), 1).unwrap();
     for i in 0..2 {
-        let gap = worst_gap(&run, i, &means, &sds);
-        assert!(gap <= 0.01, "{}: {gap} sd", run.methods[i].name);
+        let name = &run.methods[i].name;
+        let to_midpoint = worst_gap(&run, i, &midpoint.0, &midpoint.1);
+        let to_end = worst_gap(&run, i, &end.0, &end.1);
+        let to_truth = worst_gap(&run, i, &truly.0, &truly.1);
+        println!("{name}: {to_midpoint:.2e} sd from the midpoint hold, {to_end:.3} from the end-point hold, {to_truth:.4} from the true forcing");
+        assert!(
+            to_midpoint <= 1e-4,
+            "{name}: {to_midpoint} sd from the midpoint hold"
+        );
+        assert!(to_end > 0.05, "{name}: {to_end} sd from the end-point hold");
+        assert!(
+            to_truth <= 0.01,
+            "{name}: {to_truth} sd from the true forcing"
+        );
     }
 }
 

@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (`zakai._zakai`); use the `zakai` package above it."""
 
-from typing import Any, Optional, Union
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -27,7 +27,9 @@ def filter_recorded(
     seed: int,
     smooth: bool = False,
 ) -> dict[str, Any]: ...
-def monte_carlo_json(json: str, runs: int, seed: int) -> str: ...
+def monte_carlo_json(
+    json: str, runs: int, seed: int, progress: Optional[Callable[[int, int], Any]] = None
+) -> str: ...
 def run_json(json: str, seed: int) -> str: ...
 def monte_carlo_from_runs(json: str, runs: list[str], seed: int) -> str: ...
 def log_likelihood(

@@ -4,7 +4,7 @@ observations with every method, :func:`monte_carlo` the papers' tables."""
 from __future__ import annotations
 
 import json as _json
-from typing import Any, Optional, Union
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 
@@ -216,11 +216,16 @@ def monte_carlo(
     seed: Optional[int] = None,
     *,
     executor: Any = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> MonteCarloTable:
     """``runs`` runs with seeds ``seed, seed + 1, …`` on every core (the GIL released), or
     one task per run on ``executor`` — any ``concurrent.futures.Executor``, e.g. a Dask
     cluster's ``client.get_executor()`` (its workers need ``zakai`` installed); each run comes
     back bit for bit, so the table is the same as on this machine (times apart).
+
+    ``progress(done, runs)``, when given, is called after each run — from the thread that ran
+    it, so it may run beside other Python threads (a notebook's progress bar, say); an
+    exception it raises is raised once the runs are over.
 
     Returns the papers' table; ``.to_pandas()`` gives it as a DataFrame.
     """
@@ -228,11 +233,17 @@ def monte_carlo(
     if not isinstance(runs, (int, np.integer)) or runs < 1:
         raise ConfigError(f"runs: must be a positive integer (got {runs!r})")
     first = _seed(sc, seed)
+    if progress is not None and not callable(progress):
+        raise ConfigError(f"progress: must be callable as progress(done, runs) (got {progress!r})")
     if executor is None:
-        return MonteCarloTable(_json.loads(_zakai.monte_carlo_json(sc._text(), int(runs), first)))
+        text = _zakai.monte_carlo_json(sc._text(), int(runs), first, progress)
+        return MonteCarloTable(_json.loads(text))
     _check_executor(executor)
     text = sc._text()
     futures = [executor.submit(_run_task, (text, first + i)) for i in range(int(runs))]
-    return MonteCarloTable(
-        _json.loads(_zakai.monte_carlo_from_runs(text, [f.result() for f in futures], first))
-    )
+    results = []
+    for done, f in enumerate(futures, start=1):
+        results.append(f.result())
+        if progress is not None:
+            progress(done, int(runs))
+    return MonteCarloTable(_json.loads(_zakai.monte_carlo_from_runs(text, results, first)))
