@@ -43,6 +43,9 @@ pub struct LinearGaussian {
     pub sensor: Sensor,
 }
 
+/// A mean and covariance.
+pub type Moments = (DVector<f64>, DMatrix<f64>);
+
 /// The filter's moments after a row (and what the smoother needs to go back over it).
 #[derive(Clone, Debug)]
 pub struct Row {
@@ -159,9 +162,8 @@ impl LinearGaussian {
 
     /// The Rauch–Tung–Striebel smoother over the filter's rows: the mean and covariance of the
     /// state at each row given every row.
-    pub fn smooth(rows: &[Row]) -> Vec<(DVector<f64>, DMatrix<f64>)> {
-        let mut out: Vec<(DVector<f64>, DMatrix<f64>)> =
-            vec![(DVector::zeros(0), DMatrix::zeros(0, 0)); rows.len()];
+    pub fn smooth(rows: &[Row]) -> Vec<Moments> {
+        let mut out: Vec<Moments> = vec![(DVector::zeros(0), DMatrix::zeros(0, 0)); rows.len()];
         let last = rows.len() - 1;
         out[last] = (rows[last].mean.clone(), rows[last].cov.clone());
         for k in (0..last).rev() {

@@ -619,7 +619,9 @@ fn the_grid_smoother_keeps_to_the_memory_cap() {
     let e = Experiment::new(config.clone()).unwrap();
     let data = nile_with_gaps();
     let filter = e.build_method(&config.methods[0], "SA".into(), 1).unwrap();
-    let smooth = |cap: usize| -> Result<(Vec<(f64, f64)>, Vec<String>), zakai::FilterError> {
+    // The smoothed (mean, sd) of every row, and the smoother's notes.
+    type Smoothed = (Vec<(f64, f64)>, Vec<String>);
+    let smooth = |cap: usize| -> Result<Smoothed, zakai::FilterError> {
         let plan = SmoothingPlan {
             steps: data.times.len(),
             memory_cap: cap,
