@@ -74,7 +74,7 @@ export const LESSONS = [
     lookFor: [
       'KF, EKF and QIEM on top of each other in the main plot (the EKF is the Kalman–Bucy filter when the model is linear); the particle filter jitters around them.',
       'In the densities panel every curve is the same bell curve; the KF\'s standard deviation settles at 0.29, near $\\sqrt{P_\\infty} = 0.30$.',
-      'The table: the KF takes less time per step than the grid filter, for the same answer (in this browser\'s timer, steps of a few microseconds are measured only roughly).',
+      'The work per interval: the KF updates one mean and one variance, about a dozen arithmetic operations; QIEM takes $\\Delta\\tau/\\Delta t = 10$ steps, each transforming its 399 grid values to sines and back ($O(N\\log N)$: some $2 \\times 399 \\times \\log_2 399 \\approx 7000$ operations a step) — thousands of times the KF\'s work, for the same answer. (Measured times per step are in Diagnostics for researchers.)',
     ],
     tryThis: [
       {
@@ -139,7 +139,7 @@ export const LESSONS = [
       'Which filter is more accurate cannot be read off the error against the truth: all four here are close to the optimal filter, and the optimal estimate\'s own distance to the truth (the posterior\'s spread, a standard deviation of about 0.5) dwarfs their differences. What ranks them is the distance to the exact conditional mean. None is known here, so the convergence check estimates it: it reruns each method at doubled resolution on the same observations and measures how far the estimate moves.',
     ],
     lookFor: [
-      'The table\'s time per step: the particle filter\'s grows with $N$, and PF(5000) costs about as much as the grid filter.',
+      'The work per interval: the particle filter moves and weighs each particle once (here $f = 0$, so one Euler step suffices), so its work grows in proportion to $N$ — PF(5000) does a hundred times PF(50)\'s. QIEM\'s is fixed by its grid: 10 steps, each a sine transform of 399 values and back, some $7 \\cdot 10^4$ operations per interval in all. (Measured times per step are in Diagnostics for researchers.)',
       'The four estimates are hard to tell apart by their MSE on one run; the Monte Carlo and the convergence check below tell them apart, or show that they cannot.',
     ],
     tryThis: [
@@ -151,7 +151,7 @@ export const LESSONS = [
       {
         label: 'check convergence',
         check: true,
-        expect: 'doubling the particles moves PF(50)\'s estimate by about 0.12 (RMS over time, a quarter of the posterior standard deviation): not converged. Doubling QIEM\'s grid and halving its step moves it by about $10^{-4}$: converged. That, not the MSE, says the grid filter is the more accurate here, for about PF(5000)\'s time per step.',
+        expect: 'doubling the particles moves PF(50)\'s estimate by about 0.12 (RMS over time, a quarter of the posterior standard deviation): not converged. Doubling QIEM\'s grid and halving its step moves it by about $10^{-4}$: converged. That, not the MSE, says the grid filter is the more accurate here.',
       },
     ],
   },
@@ -234,13 +234,13 @@ export const LESSONS = [
     ],
     lookFor: [
       'Its self-check: with 16 functions on $[-4, 4]$ it fires from $t = 0$ — already the prior, with standard deviation 0.32, is too narrow for them — and the estimate strays far from QIEM\'s (by more than 1 at the worst).',
-      'The table: the spectral filter\'s time per step is a fraction of QIEM\'s.',
+      'The work per interval: the spectral filter evaluates $W c$ at its $N_{\\text{off}} + N_{\\text{on}} + 8 = 35$ on-line nodes, weighs them and projects back — two products of a $35 \\times 16$ matrix, about 1100 multiply–adds — where QIEM\'s 10 steps of sine transforms on 399 nodes take some $7 \\cdot 10^4$ operations: a small fraction. (Measured times per step are in Diagnostics for researchers.)',
     ],
     tryThis: [
       {
         label: 'enough functions: 64 on-line, 48 off-line',
         change: (c) => { for (const m of c.methods) if (m.method === 'spectral') { m.online_basis = 64; m.offline_basis = 48; } },
-        expect: 'the self-check is (nearly) silent and the estimate stays within 0.15 of QIEM\'s, still at a fraction of QIEM\'s time per step: the off-line work bought a cheap on-line filter.',
+        expect: 'the self-check is (nearly) silent and the estimate stays within 0.15 of QIEM\'s, still at a fraction of QIEM\'s work (120 nodes and 64 functions: about $2 \\times 120 \\times 64 \\approx 15\\,000$ multiply–adds per interval): the off-line work bought a cheap on-line filter.',
       },
     ],
   },

@@ -45,6 +45,7 @@ function finished(text) {
 // ln L along the parameter, a line per method, each maximum a dot with a drop line.
 function draw(result) {
   lik.result = result;
+  state.likelihood = result; // the values and each method's ln L, for the lessons' tests
   const { values, methods } = result;
   const peaks = methods.filter((m) => m.maximum).map((m) => m.maximum[1]);
   const best = Math.max(...peaks);

@@ -38,6 +38,7 @@ export const state = {
   diagnostics: null, // per method: mse, failed, failed_at, concerns … (the last frame's)
   summary: null, // the last frame's step summary (position, finished, failures)
   failures: new Map(), // method index → its failure line, for the run on screen
+  likelihood: null, // the Likelihood view's last result: {values, methods: [{method, log_likelihoods, maximum}]}
   preview: null, // the step in two halves: {phase: 'predicted' | 'updated', t, predicted, likelihood}
   history: [], // per drawn frame: {row, t, grid, densities, heat2d} — what the time slider shows
   lastDensity: null, // the latest of those

@@ -24,39 +24,6 @@ pub fn rust_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
     out
 }
 
-/// Wall-clock milliseconds since `start` (`Instant` natively; `Date.now()` on wasm32, where
-/// `Instant` panics).
-pub struct Stopwatch {
-    #[cfg(not(target_arch = "wasm32"))]
-    start: std::time::Instant,
-    #[cfg(target_arch = "wasm32")]
-    start: f64,
-}
-
-impl Stopwatch {
-    /// Starts now.
-    pub fn start() -> Self {
-        Stopwatch {
-            #[cfg(not(target_arch = "wasm32"))]
-            start: std::time::Instant::now(),
-            #[cfg(target_arch = "wasm32")]
-            start: js_sys::Date::now(),
-        }
-    }
-
-    /// Milliseconds since [`Stopwatch::start`].
-    pub fn elapsed_ms(&self) -> f64 {
-        #[cfg(not(target_arch = "wasm32"))]
-        {
-            self.start.elapsed().as_secs_f64() * 1e3
-        }
-        #[cfg(target_arch = "wasm32")]
-        {
-            js_sys::Date::now() - self.start
-        }
-    }
-}
-
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::ScenarioConfig;
 use zakai::lab::scenario::{catalogue, CatalogueEntry};

@@ -7,12 +7,22 @@ import { artifacts, browserTest, root, watchedPage } from './harness.mjs';
 
 await browserTest(async ({ browser, url, consoleErrors }) => {
   const page = await watchedPage(browser, { width: 1440, height: 1000 }, consoleErrors);
+  // While the worker steps, the main thread draws: two animation frames come round while new
+  // rows arrive. Structural, no clock read: a frozen page would never resolve the frames (the
+  // generous timeout only keeps a broken build from hanging the suite).
+  const drawsWhileStepping = async () => {
+    const before = await page.evaluate(() => window.zakaiPage.data.times.length);
+    const frames = page.evaluate(() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(() => done(true)))));
+    assert.equal(await Promise.race([frames, new Promise((_, fail) => setTimeout(() => fail(new Error('no animation frame while stepping')), 60000))]), true);
+    await page.waitForFunction((b) => window.zakaiPage.data.times.length > b || window.zakaiPage.data.times.length === window.zakaiPage.info.steps + 1, before, { timeout: 60000 });
+  };
 
   // 1. The cubic sensor with EKF, UKF and particle filters runs live.
   await page.goto(`${url}?preset=cubic-sensor-1d`);
   await page.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
   await page.click('#play');
-  await page.waitForTimeout(3000);
+  // Playing: rows arrive (waited for, not timed).
+  await page.waitForFunction(() => window.zakaiPage.data.times.length > 20, null, { timeout: 60000 });
   const run = await page.evaluate(() => {
     const s = window.zakaiPage;
     const finite = (a) => a.every((v) => v === null || Number.isFinite(v));
@@ -27,7 +37,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       fps: s.fps,
     };
   });
-  console.log('cubic sensor after 3 s:', JSON.stringify(run));
+  console.log('cubic sensor while playing:', JSON.stringify(run));
   assert.ok(run.rows > 20, 'the run advanced');
   assert.ok(run.truthFinite && run.estimatesFinite, 'plots received finite data');
   assert.ok(run.estimateRows.every((r) => r > 0), 'every method has estimates');
@@ -114,9 +124,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const perStep = await page.$$eval('#timing tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[1].textContent}`));
   console.log('frame rate while stepping EKF + UKF + PF(1000):', JSON.stringify(samples), perStep.join(', '));
   assert.ok(samples.every((s, i) => i === 0 || s.rows > samples[i - 1].rows), 'the run kept stepping while measured');
-  // A loose floor, not a benchmark (BENCHMARKS.md records the measured rates, 61 frames/s):
-  // the page must keep drawing while the worker steps, at least 15 frames per second.
-  assert.ok(samples.slice(1).every((s) => s.fps >= 15), `frame rate while stepping: ${JSON.stringify(samples)}`);
+  // The page keeps drawing while the worker steps: two animation frames come round on the
+  // main thread while rows keep arriving (a structural check, no clock read; the frame rate
+  // printed above is recorded in BENCHMARKS.md, not asserted).
+  await drawsWhileStepping();
   const isolated = await page.evaluate(() => self.crossOriginIsolated);
   assert.ok(isolated, 'cross-origin isolated (fine timer resolution)');
   await page.screenshot({ path: `${artifacts}/playground-pf1000.png` });
@@ -410,10 +421,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   }
   const perStep2d = await page.$$eval('#timing tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[1].textContent}`));
   console.log('frame rate of yau-2d with QIEM 127² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
-  // Loose floors (measured: 61 frames/s, about 60 new intervals per second): the page keeps
-  // drawing at ≥ 15 frames/s and the worker delivers ≥ 5 new intervals per second.
-  assert.ok(fps2d.every((s) => s.fps >= 15), `2-D frame rate: ${JSON.stringify(fps2d)}`);
-  assert.ok(fps2d.every((s, i) => i === 0 || s.rows - fps2d[i - 1].rows >= 5 || s.rows >= 201), `2-D new intervals per second: ${JSON.stringify(fps2d)}`);
+  // Printed for BENCHMARKS.md (measured: 61 frames/s, about 60 new intervals per second), not
+  // asserted: the worker delivers new intervals while the page keeps drawing.
+  assert.ok(fps2d.every((s, i) => i === 0 || s.rows > fps2d[i - 1].rows || s.rows >= 201), `2-D new intervals: ${JSON.stringify(fps2d)}`);
+  await drawsWhileStepping();
 
   // 13. Web safety: hostile strings in every text field and in a shared link's config are
   //     shown as text — nothing is parsed as HTML or run (and the CSP would refuse inline
