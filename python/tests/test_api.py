@@ -1,7 +1,6 @@
 """The Python surface: scenarios, own models, stepping filters, Monte Carlo tables."""
 
 import threading
-import time
 
 import numpy as np
 import pytest
