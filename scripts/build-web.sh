@@ -4,6 +4,7 @@
 # Cargo.lock, the npm packages).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/cache.sh
 
 rustup target list --installed | grep -qx wasm32-unknown-unknown \
   || rustup target add wasm32-unknown-unknown
@@ -20,11 +21,11 @@ fi
 # without wasm SIMD; the page's worker picks one with WebAssembly.validate.
 cargo build -p zakai-wasm --profile wasm-release --target wasm32-unknown-unknown
 wasm-bindgen --target web --out-dir web/pkg \
-  target/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
+  "$CARGO_TARGET_DIR/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm"
 RUSTFLAGS='--cfg getrandom_backend="wasm_js" -C link-arg=-zstack-size=8388608' cargo build -p zakai-wasm --profile wasm-release \
-  --target wasm32-unknown-unknown --no-default-features --target-dir target/scalar
+  --target wasm32-unknown-unknown --no-default-features --target-dir "$CARGO_TARGET_DIR/scalar"
 wasm-bindgen --target web --out-dir web/pkg-scalar \
-  target/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm
+  "$CARGO_TARGET_DIR/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm"
 
 if [ ! -d web/node_modules/uplot ] || [ ! -d web/node_modules/temml ] \
   || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then

@@ -4,6 +4,11 @@
 # Debian's chromium for the browser tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Cargo builds into a cache outside the clone, shared with earlier runs (scripts/cache.sh).
+source scripts/cache.sh
+# The CLI binary `cargo test --workspace` builds (its test profile is optimised; a release
+# build would compile the core a further time for the same results).
+export ZAKAI_CLI="$CARGO_TARGET_DIR/debug/zakai"
 
 # Each step prints its title and, when it ends, the seconds it took (the budget is 30 min).
 last=$SECONDS
@@ -36,7 +41,7 @@ step "examples (core/examples: own data, models from text and closures)"
 # The binaries `cargo test --workspace` above has built (same profile, same features; a
 # `cargo run -p zakai` would rebuild the core with the package's own feature set).
 for example in core/examples/*.rs; do
-  "target/debug/examples/$(basename "$example" .rs)"
+  "$CARGO_TARGET_DIR/debug/examples/$(basename "$example" .rs)"
 done
 
 step "cargo doc without warnings"
@@ -56,36 +61,33 @@ step "the tests in WebAssembly under node (wasm-pack test --node, as a user runs
 # 2.5 minutes for 1.5 s of tests, whose code the integration tests run in wasm anyway.
 command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 (cd wasm && wasm-pack test --node)
-# The integration tests in two halves at once: node runs one test binary at a time on one
-# core, and the two Monte Carlo reproductions alone take half of the whole.
-heavy=" reproduction_000 allocation "
-first_half=()
-second_half=()
-for file in tests/tests/*.rs; do
-  name=$(basename "$file" .rs)
-  if [[ "$heavy" == *" $name "* ]]; then first_half+=(--test "$name"); else second_half+=(--test "$name"); fi
-done
-(cd tests && wasm-pack test --node -- "${first_half[@]}") > target/wasm-tests-first-half.log 2>&1 &
+# The integration tests in two halves at once (node runs one test binary at a time on one
+# core): the counting-allocator binary and the suite's heaviest module (000's tables), then
+# everything else. The suite is one binary (tests/tests/suite): one link and one wasm-bindgen
+# pass instead of thirty.
+heavy=reproduction_000::
+(cd tests && wasm-pack test --node -- --test allocation \
+  && wasm-pack test --node -- --test suite -- "$heavy") > target/wasm-tests-first-half.log 2>&1 &
 first=$!
 status=0
-(cd tests && wasm-pack test --node -- --lib "${second_half[@]}") || status=$?
+(cd tests && wasm-pack test --node -- --lib --test suite -- --skip "$heavy") || status=$?
 wait "$first" || status=$?
 cat target/wasm-tests-first-half.log
 [ "$status" = 0 ]
 
 step "same seed, same truth: native CLI vs wasm"
-# The CLI binary `cargo test --workspace` built (its test profile is optimised; a release
-# build would compile the core a further time for the same results).
-ZAKAI_CLI=target/debug/zakai node tests/web/determinism.mjs
+node tests/web/determinism.mjs
 
 step "Python package: abi3 wheel (maturin) in a virtual environment, pytest, the example"
-venv=target/py-venv
+venv="$ZAKAI_CACHE/py-venv"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas statsmodels "dask[distributed]"
 rm -f target/wheels/zakai-*.whl
-"$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
+# The test profile (optimised, debug assertions on), whose dependencies the cache already
+# holds from the Rust tests; a user's `pip install` builds the release profile.
+"$venv/bin/maturin" build -q --profile dev -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
-ZAKAI_NO_SKIPS=1 ZAKAI_CLI=target/debug/zakai "$venv/bin/python" -m pytest -q python/tests
+ZAKAI_NO_SKIPS=1 "$venv/bin/python" -m pytest -q python/tests
 "$venv/bin/python" python/examples/tour.py > /dev/null
 
 step "browser end-to-end tests (headless chromium)"
@@ -96,7 +98,7 @@ if ! command -v chromium >/dev/null 2>&1; then
     sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
   fi
 fi
-ZAKAI_CLI=target/debug/zakai node tests/web/e2e.mjs
+node tests/web/e2e.mjs
 step "the lessons' claims against their own runs (headless chromium)"
 node tests/web/lessons.mjs
 

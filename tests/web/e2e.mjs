@@ -827,7 +827,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       }
       check(r, 'reference');
       // Innovations (discrete measurements only; their values against an exact Kalman filter
-      // are tests/tests/missing_data.rs's): one per measurement after τ₀, for every method.
+      // are tests/tests/suite/missing_data.rs's): one per measurement after τ₀, for every method.
       const innov = await page.evaluate(() => ({ hidden: document.getElementById('innovations-figure').hidden, m: window.zakaiPage.info.m, rows: window.zakaiPage.data.times.length, series: window.zakaiPage.innovPlot.data.slice(1).map((s) => s.filter((v) => v != null).length) }));
       if (preset === 'sa-example-1') {
         assert.ok(!innov.hidden, 'the innovations are shown for discrete measurements');

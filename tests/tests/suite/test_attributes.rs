@@ -9,8 +9,13 @@
 use std::path::Path;
 use zakai_tests::test;
 
-/// The imports that make `#[test]` mean `wasm_bindgen_test` on wasm32.
-const IMPORTS: [&str; 2] = ["use crate::testing::test", "use zakai_tests::test"];
+/// The imports that make `#[test]` mean `wasm_bindgen_test` on wasm32 (the core's, the
+/// integration tests', and the test helpers' own unit tests').
+const IMPORTS: [&str; 3] = [
+    "use crate::testing::test",
+    "use zakai_tests::test",
+    "use crate::test",
+];
 
 /// A `{ … }` block: a module's (or the file's) or any other.
 struct Scope {

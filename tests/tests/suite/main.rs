@@ -1,0 +1,39 @@
+//! Zakai's integration tests, one module per subject, in one test binary: one link instead
+//! of thirty, natively and in WebAssembly (`wasm-pack test --node`), where each binary also
+//! went through wasm-bindgen and a node process of its own. Run one subject with
+//! `cargo test -p zakai-tests --test suite likelihood::`.
+//!
+//! The counting-allocator tests (`allocation.rs`, `soak.rs`) stay binaries of their own: their
+//! global allocator counts every thread's allocations, and other tests would run beside them.
+
+mod config;
+mod dimensions;
+mod direct;
+mod estimates;
+mod exact_nonlinear;
+mod expressions;
+mod fit;
+mod fit_coverage;
+mod fpe_split;
+mod frontier;
+mod kalman;
+mod layering;
+mod likelihood;
+mod log_concavity;
+mod map_filters;
+mod measurement_families;
+mod missing_data;
+mod monte_carlo_table;
+mod own_data;
+mod parameters;
+mod particle;
+mod properties;
+mod reproduction_000;
+mod self_checks;
+mod simulator;
+mod smoothing;
+mod spectral;
+mod state_diffusion;
+mod test_attributes;
+mod time_and_inputs;
+mod yau_yau;
