@@ -12,3 +12,16 @@ export ZAKAI_CACHE="${ZAKAI_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/zakai}"
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$ZAKAI_CACHE/target}"
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 mkdir -p "$CARGO_TARGET_DIR" target
+
+# One run at a time builds into and tests from the cache: a second run waits for the first
+# (an flock on $ZAKAI_CACHE/lock, held until the script ends), so that no run tests binaries
+# another run has just rebuilt. A script started by one that holds it (build-web.sh from
+# test-all.sh) inherits the lock.
+if [ -z "${ZAKAI_CACHE_LOCKED:-}" ] && command -v flock >/dev/null 2>&1; then
+  exec 9>"$ZAKAI_CACHE/lock"
+  if ! flock -n 9; then
+    echo "waiting for another run that uses $ZAKAI_CACHE to finish …" >&2
+    flock 9
+  fi
+  export ZAKAI_CACHE_LOCKED=1
+fi

@@ -67,14 +67,14 @@ export const LESSONS = [
       'When the drift and the observation are linear, $f(x) = Ax$ and $h(x) = Hx$, and the prior is Gaussian, the conditional density stays Gaussian for ever. Its mean and covariance follow the Kalman–Bucy filter (Kalman & Bucy 1961):',
       '$$d\\hat x = A\\hat x\\,dt + P H^\\top S^{-1}\\big(dy - H\\hat x\\,dt\\big),$$',
       '$$\\dot P = AP + PA^\\top + GG^\\top - P H^\\top S^{-1} H P.$$',
-      'The gain $K = P H^\\top S^{-1}$ weighs the innovation $dy - H\\hat x\\,dt$ — the part of the observation the filter did not expect. The mean follows a stochastic differential equation driven by the observations; the covariance follows a Riccati equation, an ordinary differential equation that does not involve them, so $P$ can be computed before any observation arrives. Together they replace the Zakai equation. Zakai\'s Kalman filter (KF) is the discrete Kalman filter of the sampled model: an exact prediction over each interval $\\Delta\\tau$, then a Bayes update with $\\Delta y \\sim N(H x\\,\\Delta\\tau,\\ S\\,\\Delta\\tau)$ (the observation integral $\\int h\\,dt$ approximated by $H x\\,\\Delta\\tau$). It converges to the Kalman–Bucy filter as $\\Delta\\tau \\to 0$, its variance after each update sitting $O(\\Delta\\tau)$ below $P_\\infty$, at microseconds per step.',
+      'The gain $K = P H^\\top S^{-1}$ weighs the innovation $dy - H\\hat x\\,dt$ — the part of the observation the filter did not expect. The mean follows a stochastic differential equation driven by the observations; the covariance follows a Riccati equation, an ordinary differential equation that does not involve them, so $P$ can be computed before any observation arrives. Together they replace the Zakai equation. Zakai\'s Kalman filter (KF) is the discrete Kalman filter of the sampled model: an exact prediction over each interval $\\Delta\\tau$, then a Bayes update with $\\Delta y \\sim N(H x\\,\\Delta\\tau,\\ S\\,\\Delta\\tau)$ (the observation integral $\\int h\\,dt$ approximated by $H x\\,\\Delta\\tau$). It converges to the Kalman–Bucy filter as $\\Delta\\tau \\to 0$, its variance after each update sitting $O(\\Delta\\tau)$ below $P_\\infty$, with a handful of arithmetic operations per step.',
       'Here $A = -1$, $G = 1$, $H = 1$ and $S = 0.01$: an Ornstein–Uhlenbeck signal, whose own variance settles at $G^2/(2|A|) = 0.5$, seen through an accurate sensor. Setting $\\dot P = 0$ gives $P_\\infty = S\\big(\\sqrt{1 + G^2/S} - 1\\big) \\approx 0.090$: a posterior standard deviation of 0.30 against the signal\'s 0.71, so the estimate tracks the signal. (Updating once every $\\Delta\\tau = 0.01$, the KF settles a little lower, at 0.29.)',
       'The grid filter (QIEM) solves the Zakai equation without knowing that the answer is Gaussian, so agreeing with the Kalman–Bucy filter is a test of the grid: on this run they agree to within $5\\cdot 10^{-3}$.',
     ],
     lookFor: [
       'KF, EKF and QIEM on top of each other in the main plot (the EKF is the Kalman–Bucy filter when the model is linear); the particle filter jitters around them.',
       'In the densities panel every curve is the same bell curve; the KF\'s standard deviation settles at 0.29, near $\\sqrt{P_\\infty} = 0.30$.',
-      'The work per interval: the KF updates one mean and one variance, about a dozen arithmetic operations; QIEM takes $\\Delta\\tau/\\Delta t = 10$ steps, each transforming its 399 grid values to sines and back ($O(N\\log N)$: some $2 \\times 399 \\times \\log_2 399 \\approx 7000$ operations a step) — thousands of times the KF\'s work, for the same answer. (Measured times per step are in Diagnostics for researchers.)',
+      'The work per interval: the KF updates one mean and one variance, about a dozen arithmetic operations; QIEM takes $\\Delta\\tau/\\Delta t = 10$ steps, each transforming its 399 grid values to sines and back ($O(N\\log N)$: of order $2 \\times 399 \\times \\log_2 399 \\approx 7000$ operations a step) — thousands of times the KF\'s work, for the same answer. (Measured times per step are in Diagnostics for researchers.)',
     ],
     tryThis: [
       {
@@ -139,7 +139,7 @@ export const LESSONS = [
       'Which filter is more accurate cannot be read off the error against the truth: all four here are close to the optimal filter, and the optimal estimate\'s own distance to the truth (the posterior\'s spread, a standard deviation of about 0.5) dwarfs their differences. What ranks them is the distance to the exact conditional mean. None is known here, so the convergence check estimates it: it reruns each method at doubled resolution on the same observations and measures how far the estimate moves.',
     ],
     lookFor: [
-      'The work per interval: the particle filter moves and weighs each particle once (here $f = 0$, so one Euler step suffices), so its work grows in proportion to $N$ — PF(5000) does a hundred times PF(50)\'s. QIEM\'s is fixed by its grid: 10 steps, each a sine transform of 399 values and back, some $7 \\cdot 10^4$ operations per interval in all. (Measured times per step are in Diagnostics for researchers.)',
+      'The work per interval: the particle filter moves and weighs each particle once (here $f = 0$, so one Euler step suffices), so its work grows in proportion to $N$ — PF(5000) does a hundred times PF(50)\'s. QIEM\'s is fixed by its grid: 10 steps, each a sine transform of 399 values and back, of order $7 \\cdot 10^4$ operations per interval in all. (Measured times per step are in Diagnostics for researchers.)',
       'The four estimates are hard to tell apart by their MSE on one run; the Monte Carlo and the convergence check below tell them apart, or show that they cannot.',
     ],
     tryThis: [
@@ -234,7 +234,7 @@ export const LESSONS = [
     ],
     lookFor: [
       'Its self-check: with 16 functions on $[-4, 4]$ it fires from $t = 0$ — already the prior, with standard deviation 0.32, is too narrow for them — and the estimate strays far from QIEM\'s (by more than 1 at the worst).',
-      'The work per interval: the spectral filter evaluates $W c$ at its $N_{\\text{off}} + N_{\\text{on}} + 8 = 35$ on-line nodes, weighs them and projects back — two products of a $35 \\times 16$ matrix, about 1100 multiply–adds — where QIEM\'s 10 steps of sine transforms on 399 nodes take some $7 \\cdot 10^4$ operations: a small fraction. (Measured times per step are in Diagnostics for researchers.)',
+      'The work per interval: the spectral filter evaluates $W c$ at its $N_{\\text{off}} + N_{\\text{on}} + 8 = 35$ on-line nodes, weighs them and projects back — two products of a $35 \\times 16$ matrix, about 1100 multiply–adds — where QIEM\'s 10 steps of sine transforms on 399 nodes take of order $7 \\cdot 10^4$ operations: a small fraction. (Measured times per step are in Diagnostics for researchers.)',
     ],
     tryThis: [
       {

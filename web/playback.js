@@ -87,6 +87,7 @@ export function loop(ts) {
     state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
     state.lastIntervalAt = ts;
     render();
+    state.rendered += 1;
     worker.postMessage({ type: 'ack' });
   }
   while (state.intervalTimes.length && ts - state.intervalTimes[0][0] > 1000) state.intervalTimes.shift();

@@ -50,6 +50,7 @@ export const state = {
   queue: [], // frames from the worker waiting to be drawn
   fps: 0,
   lastFrameTimes: [],
+  rendered: 0, // frames drawn with new intervals in them (the end-to-end test watches it grow)
   intervalTimes: [], // [time, intervals] of the frames applied in the last second
   lastIntervalAt: null, // when the last interval arrived (the busy state)
   // The charts (charts.js) and the heat strip (canvas-plots.js).

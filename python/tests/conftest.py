@@ -5,18 +5,20 @@ With ``ZAKAI_NO_SKIPS=1`` (the README's test command sets it) a skipped test fai
 there every optional package is installed, so a skip would be a check that silently vanished."""
 
 import os
-import pathlib
 import shutil
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-
 
 @pytest.fixture(scope="session")
 def cli() -> str:
-    """The `zakai` binary: `ZAKAI_CLI`, else the one `cargo test --workspace` builds."""
-    path = os.environ.get("ZAKAI_CLI") or str(ROOT / "target" / "debug" / "zakai")
+    """The `zakai` binary: `ZAKAI_CLI`, else the one the test command's `cargo test --workspace`
+    builds into the shared cache (scripts/cache.sh)."""
+    cache = os.environ.get("ZAKAI_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "zakai"
+    )
+    target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(cache, "target")
+    path = os.environ.get("ZAKAI_CLI") or os.path.join(target, "debug", "zakai")
     if not os.path.exists(path):
         found = shutil.which("zakai")
         if found is None:

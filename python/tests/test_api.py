@@ -1,6 +1,7 @@
 """The Python surface: scenarios, own models, stepping filters, Monte Carlo tables."""
 
-import threading
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -131,42 +132,58 @@ def test_monte_carlo_table_pandas_and_parallel():
     assert isinstance(frame, pd.DataFrame) and frame.loc["PF(200)", "runs"] == 8
 
 
+# The GIL test's body, run in a child interpreter: a build that held the GIL through the runs
+# would leave its threads waiting for it for ever, and only a process can be stopped then.
+GIL_PROBE = """
+import sys, threading
+import zakai
+
+sc = zakai.Scenario.from_preset("cubic-sensor-1d")
+sc.methods = [{"method": "pf", "particles": 200}]
+started, main_ran = threading.Event(), threading.Event()
+callers, seen = [], []
+
+def progress(done, runs):
+    callers.append(threading.get_ident())
+    started.set()
+    seen.append(main_ran.wait(timeout=120))
+
+out = {}
+
+def job():
+    out["caller"] = threading.get_ident()
+    out["table"] = zakai.monte_carlo(sc, runs=8, seed=1, progress=progress)
+
+worker = threading.Thread(target=job, daemon=True)
+worker.start()
+if not started.wait(timeout=120):
+    sys.exit("no progress callback: the GIL was never released")
+main_ran.set()
+worker.join(timeout=300)
+if worker.is_alive():
+    sys.exit("the Monte Carlo job did not finish")
+assert len(callers) == 8 and all(seen), seen
+# Every callback came from a thread of the Rust job, not the Python thread that called it.
+assert out["caller"] not in callers, "a callback ran on the calling thread"
+assert out["table"].rows[0]["runs"] == 8
+print("ok")
+"""
+
+
 def test_monte_carlo_releases_the_gil():
-    """The runs take place on Rust's own threads with the GIL released: the job's first
-    progress callback (made from one of those threads, which must take the GIL to make it)
-    waits for an event that only the main thread sets, after it has seen that callback begin.
-    Were the GIL held by the calling thread through the runs, no callback could start (the
-    threads would wait for the GIL for ever) and the main thread's wait would time out. No
-    clock is read: the timeouts only keep a broken build from hanging the suite."""
-    sc = zakai.Scenario.from_preset("cubic-sensor-1d")
-    sc.methods = [{"method": "pf", "particles": 200}]
-    started, main_ran = threading.Event(), threading.Event()
-    callers, seen = [], []
-
-    def progress(done, runs):
-        callers.append(threading.get_ident())
-        if not started.is_set():
-            started.set()
-            seen.append(main_ran.wait(timeout=120))
-        else:
-            seen.append(main_ran.is_set())
-
-    out = {}
-
-    def job():
-        out["caller"] = threading.get_ident()
-        out["table"] = zakai.monte_carlo(sc, runs=8, seed=1, progress=progress)
-
-    worker = threading.Thread(target=job, daemon=True)
-    worker.start()
-    assert started.wait(timeout=120), "no progress callback: the GIL was never released"
-    main_ran.set()
-    worker.join(timeout=300)
-    assert not worker.is_alive(), "the Monte Carlo job did not finish"
-    assert len(callers) == 8 and all(seen), seen
-    # Every callback came from a thread of the Rust job, not the Python thread that called it.
-    assert out["caller"] not in callers
-    assert out["table"].rows[0]["runs"] == 8
+    """The runs take place on Rust's own threads with the GIL released: each progress callback
+    (made from one of those threads, which must take the GIL to make it) waits for an event
+    that only the main thread sets, after it has seen a callback begin. Were the GIL held by
+    the calling thread through the runs, no callback could start (the threads would wait for
+    the GIL for ever): the child process would not finish and the timeout fails the test. No
+    clock is read; the timeouts only keep a broken build from hanging the suite."""
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", GIL_PROBE], capture_output=True, text=True, timeout=600
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("the Monte Carlo job never let another Python thread run (GIL held?)")
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stdout + done.stderr
 
 
 def test_a_progress_callback_that_raises_stops_nothing_and_is_raised():

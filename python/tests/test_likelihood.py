@@ -39,10 +39,22 @@ def test_every_method_reports_the_log_likelihood_of_recorded_data():
         assert m.log_likelihoods[5] == 0.0 and m.log_likelihoods[6] == 0.0
     np.testing.assert_allclose(result.methods["KF"].log_likelihood, exact, rtol=1e-9)
     np.testing.assert_allclose(result.methods["GSF"].log_likelihood, exact, rtol=1e-9)
-    np.testing.assert_allclose(result.methods["UKF"].log_likelihood, exact, rtol=1e-6)
+    np.testing.assert_allclose(result.methods["UKF"].log_likelihood, exact, rtol=1e-9)
     grid = [m for n, m in result.methods.items() if n.startswith("SA")][0]
-    # The grid filter's normaliser on 1600 cells of [600, 1600]: within 0.05 of −131.
-    assert abs(grid.log_likelihood - exact) < 0.05, (grid.log_likelihood, exact)
+    # The grid filter's normaliser on 1600 cells of [600, 1600]: within 5e-3 of −131 (measured
+    # 2.3e-3). Tight enough to catch a misplaced prior: from N(1010, 400) (the mean half a
+    # prior sd off) or N(1000, 800) (the variance doubled) the exact value moves by 1.35 and
+    # 2.28, and the grid filter's falls outside the tolerance.
+    assert abs(grid.log_likelihood - exact) < 5e-3, (grid.log_likelihood, exact)
+    model = zakai.Model.discrete("0", "x", noise_cov=400.0, diffusion=20.0)
+    for wrong in [(1010.0, 400.0), (1000.0, 800.0)]:
+        sc = zakai.Scenario(
+            model, zakai.Prior.gaussian(*wrong), [{"method": "separation", "cells": [1600]}],
+            dt_obs=1.0, domain=[(600, 1600)],
+        )
+        off = zakai.filter(sc, z, times=years - years[0]).methods["SA"].log_likelihood
+        assert abs(off - exact) > 5e-3, (wrong, off, exact)
+        assert abs(off - kalman_log_likelihood(z, years - years[0], m=wrong[0], p=wrong[1])) < 5e-3
     frame = result.to_pandas()
     assert "KF loglik" in frame.columns
 

@@ -242,6 +242,16 @@ impl Lcg {
     }
 }
 
+/// The larger of `a` and `b`, NaN when either is: `f64::max` drops a NaN, so a fold with it
+/// would report a NaN estimate as no gap at all.
+pub fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
 /// The largest |x̂ − reference mean| over the rows, in reference sds, of method `index` of
 /// `run` (which must not have failed, and must have a row for every reference row).
 pub fn worst_gap(
@@ -263,7 +273,7 @@ pub fn worst_gap(
         .iter()
         .zip(means.iter().zip(sds))
         .map(|(e, (m, s))| (e - m).abs() / s)
-        .fold(0.0, f64::max)
+        .fold(0.0, max_or_nan)
 }
 
 /// Simulated measurements as a recorded series with a gap and an irregular step: the rows in

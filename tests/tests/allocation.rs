@@ -116,7 +116,8 @@ fn allocations_per_step(
 /// spectral filter) allocates nothing per step — the step and reading its estimate with
 /// `Filter::estimate_into` into one reused `Estimate` — after 5 warm-up steps, on five presets that
 /// between them apply every method: 10⁴ steps each, or 200 for the few whose step takes
-/// 0.25 ms or more (the 2-D grid and spectral filters, the Gaussian sum).
+/// 0.25 ms or more ([`HEAVY`]: the 2-D grid filters, the 1-D grid filters on direct-4.3's fine
+/// grid, the Gaussian sum).
 #[test]
 fn filters_allocate_nothing_per_step() {
     let mut held = 0;

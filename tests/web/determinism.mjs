@@ -9,16 +9,17 @@
 // along the edge, and last-bit rounding decides which end its mean goes to (seen: direct-4.3,
 // seed 123456789, QIEM at row 297, x = 46 outside [−45, 45]).
 // Usage: node tests/web/determinism.mjs  (after scripts/build-web.sh and a CLI build; ZAKAI_CLI
-// names the binary, by default the one `cargo test` builds, target/debug/zakai)
+// names the binary, by default the one the test command's `cargo test` builds in the shared
+// cache, ~/.cache/zakai/target/debug/zakai; see tests/web/cli.mjs)
 import { readFileSync } from 'node:fs';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
 import { initSync, Session, presets } from '../../web/pkg/zakai_wasm.js';
+import { cli } from './cli.mjs';
 
 const root = fileURLToPath(new URL('../../', import.meta.url));
 initSync({ module: readFileSync(`${root}web/pkg/zakai_wasm_bg.wasm`) });
-const cli = process.env.ZAKAI_CLI ?? `${root}target/debug/zakai`;
 
 const all = presets();
 const names = all.map((p) => p.name);

@@ -4,17 +4,18 @@
 // Usage: node tests/web/e2e.mjs   (after scripts/build-web.sh)
 import assert from 'node:assert/strict';
 import { artifacts, browserTest, root, watchedPage } from './harness.mjs';
+import { cli } from './cli.mjs';
 
 await browserTest(async ({ browser, url, consoleErrors }) => {
   const page = await watchedPage(browser, { width: 1440, height: 1000 }, consoleErrors);
-  // While the worker steps, the main thread draws: two animation frames come round while new
-  // rows arrive. Structural, no clock read: a frozen page would never resolve the frames (the
-  // generous timeout only keeps a broken build from hanging the suite).
+  // While the worker steps, the page draws what it delivers: with the run not finished, the
+  // page's count of frames drawn with new intervals grows by two. Structural, no clock read:
+  // a frozen page or a stalled worker would never get there (the generous timeout only keeps
+  // a broken build from hanging the suite).
   const drawsWhileStepping = async () => {
-    const before = await page.evaluate(() => window.zakaiPage.data.times.length);
-    const frames = page.evaluate(() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(() => done(true)))));
-    assert.equal(await Promise.race([frames, new Promise((_, fail) => setTimeout(() => fail(new Error('no animation frame while stepping')), 60000))]), true);
-    await page.waitForFunction((b) => window.zakaiPage.data.times.length > b || window.zakaiPage.data.times.length === window.zakaiPage.info.steps + 1, before, { timeout: 60000 });
+    const before = await page.evaluate(() => ({ rendered: window.zakaiPage.rendered, rows: window.zakaiPage.data.times.length, steps: window.zakaiPage.info.steps }));
+    assert.ok(before.rows < before.steps + 1, `the run is still going (${before.rows} of ${before.steps + 1} rows)`);
+    await page.waitForFunction((b) => window.zakaiPage.rendered >= b.rendered + 2 && window.zakaiPage.data.times.length > b.rows, before, { timeout: 60000 });
   };
 
   // 1. The cubic sensor with EKF, UKF and particle filters runs live.
@@ -123,10 +124,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   }
   const perStep = await page.$$eval('#timing tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[1].textContent}`));
   console.log('frame rate while stepping EKF + UKF + PF(1000):', JSON.stringify(samples), perStep.join(', '));
-  assert.ok(samples.every((s, i) => i === 0 || s.rows > samples[i - 1].rows), 'the run kept stepping while measured');
-  // The page keeps drawing while the worker steps: two animation frames come round on the
-  // main thread while rows keep arriving (a structural check, no clock read; the frame rate
-  // printed above is recorded in BENCHMARKS.md, not asserted).
+  // The frame rate printed above is recorded in BENCHMARKS.md, not asserted.
   await drawsWhileStepping();
   const isolated = await page.evaluate(() => self.crossOriginIsolated);
   assert.ok(isolated, 'cross-origin isolated (fine timer resolution)');
@@ -408,6 +406,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.selectOption('#add-method-kind', 'pf');
   await page.click('#add-method');
   await page.fill('#methods .method-row:last-child input[data-param="particles"]', '10000');
+  await page.fill('#t-final', '8'); // 800 intervals: still running when the page is watched
   await page.fill('#speed', '1');
   await page.dispatchEvent('#speed', 'input');
   await page.click('#apply');
@@ -422,8 +421,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const perStep2d = await page.$$eval('#timing tbody tr', (rows) => rows.map((r) => `${r.children[0].textContent}: ${r.children[1].textContent}`));
   console.log('frame rate of yau-2d with QIEM 127² + PF(10000), 1 interval per frame:', JSON.stringify(fps2d), perStep2d.join(', '));
   // Printed for BENCHMARKS.md (measured: 61 frames/s, about 60 new intervals per second), not
-  // asserted: the worker delivers new intervals while the page keeps drawing.
-  assert.ok(fps2d.every((s, i) => i === 0 || s.rows > fps2d[i - 1].rows || s.rows >= 201), `2-D new intervals: ${JSON.stringify(fps2d)}`);
+  // asserted: the page draws the new intervals the worker delivers.
   await drawsWhileStepping();
 
   // 13. Web safety: hostile strings in every text field and in a shared link's config are
@@ -491,7 +489,6 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   {
     const { execFileSync } = await import('node:child_process');
     const { writeFileSync, readFileSync } = await import('node:fs');
-    const cli = process.env.ZAKAI_CLI ?? `${root}target/debug/zakai`;
     const obsPath = `${artifacts}/recorded-obs.csv`;
     const truthPath = `${artifacts}/recorded-truth.csv`;
     execFileSync(cli, ['simulate', 'cubic-sensor-1d', '--seed', '3', '--format', 'csv', '--out', obsPath, '--truth-out', truthPath]);

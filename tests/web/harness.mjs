@@ -7,6 +7,7 @@ import { chromium } from '../../web/node_modules/playwright-core/index.mjs';
 
 export const root = fileURLToPath(new URL('../../', import.meta.url));
 export const artifacts = `${root}target/e2e`;
+
 mkdirSync(artifacts, { recursive: true });
 
 /** Serves target/site on a free port; resolves to `{ proc, url }`. */

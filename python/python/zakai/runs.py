@@ -223,9 +223,10 @@ def monte_carlo(
     cluster's ``client.get_executor()`` (its workers need ``zakai`` installed); each run comes
     back bit for bit, so the table is the same as on this machine (times apart).
 
-    ``progress(done, runs)``, when given, is called after each run — from the thread that ran
-    it, so it may run beside other Python threads (a notebook's progress bar, say); an
-    exception it raises is raised once the runs are over.
+    ``progress(done, runs)``, when given, is called after each run (a notebook's progress
+    bar, say): on every core, from the thread that ran it, beside other Python threads, and an
+    exception it raises is raised once the runs are over; with an ``executor``, on the calling
+    thread as each result comes back, and an exception stops the wait there.
 
     Returns the papers' table; ``.to_pandas()`` gives it as a DataFrame.
     """

@@ -75,10 +75,10 @@ fn chain_reference(recording: &zakai::lab::recording::Recording) -> (Vec<Row>, V
 }
 
 /// The Kalman filter and the EKF, UKF, IEKF and IOKF (which are the Kalman filter on a linear
-/// model) against the exact filter written in the tests: in 20 dimensions their means and sds
-/// agree with it to 10⁻⁶ (the Kalman filter's prediction is exact, 10⁻⁹ allowed; the others
-/// integrate the moment equations by RK4; 5·10⁻⁹ measured), and so do their smoothers with the
-/// exact RTS smoother. The particle filter converges to it at the Monte Carlo rate: ten times
+/// model) against the exact filter written in the tests: in 20 dimensions their means and sds,
+/// and their smoothers' against the exact RTS smoother's, agree with it — the Kalman filter's
+/// to 10⁻⁹ (its prediction is exact; 1.5·10⁻¹⁵ measured), the others' to 5·10⁻⁸ (they integrate
+/// the moment equations by RK4; 4.7·10⁻⁹ measured). The particle filter converges to it at the Monte Carlo rate: ten times
 /// the particles (4000 → 40 000) divide its mean gap by 2 to 5 (√10 ≈ 3.2 expected; 0.34 →
 /// 0.12 of the exact sd measured), and with 40 000 it is within 0.2 sd on average over
 /// components and rows and 1 sd everywhere (0.55 measured).
@@ -114,15 +114,25 @@ fn gaussian_and_particle_filters_take_twenty_dimensions() {
             let (sm, sp) = &exact_smoothed[k];
             for i in 0..N {
                 let scale = exact[k].sd(i);
-                worst = worst.max((track.estimates[k * N + i] - exact[k].mean[i]).abs() / scale);
-                worst = worst.max((sd(&track.covariances, k, i) - scale).abs() / scale);
+                worst = zakai_tests::max_or_nan(
+                    worst,
+                    (track.estimates[k * N + i] - exact[k].mean[i]).abs() / scale,
+                );
+                worst = zakai_tests::max_or_nan(
+                    worst,
+                    (sd(&track.covariances, k, i) - scale).abs() / scale,
+                );
                 let sscale = sp[(i, i)].sqrt();
-                worst = worst.max((s.estimates[k * N + i] - sm[i]).abs() / sscale);
-                worst = worst.max((sd(&s.covariances, k, i) - sscale).abs() / sscale);
+                worst =
+                    zakai_tests::max_or_nan(worst, (s.estimates[k * N + i] - sm[i]).abs() / sscale);
+                worst = zakai_tests::max_or_nan(
+                    worst,
+                    (sd(&s.covariances, k, i) - sscale).abs() / sscale,
+                );
             }
         }
         println!("{}: largest gap {worst:.2e} sd", track.name);
-        let tolerance = if index == 0 { 1e-9 } else { 1e-6 };
+        let tolerance = if index == 0 { 1e-9 } else { 5e-8 };
         assert!(worst < tolerance, "{}: {worst:e}", track.name);
     }
     // The particle filters' mean gap to the exact filter (in its sds, over components and
@@ -136,7 +146,7 @@ fn gaussian_and_particle_filters_take_twenty_dimensions() {
             for (k, row) in exact.iter().enumerate() {
                 for i in 0..N {
                     let gap = (pf.estimates[k * N + i] - row.mean[i]).abs() / row.sd(i);
-                    worst = worst.max(gap);
+                    worst = zakai_tests::max_or_nan(worst, gap);
                     total += gap / (rows * N) as f64;
                 }
             }

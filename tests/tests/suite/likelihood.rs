@@ -125,8 +125,9 @@ fn log_likelihood(filter: &mut dyn Filter, data: &[(f64, f64)], continuous: bool
 
 /// The Gaussian filters against `exact`: the Kalman and Gaussian-sum filters (exact
 /// discretisation and update) to 10⁻⁹ relative, the extended, unscented and iterated ones to
-/// their RK4 moment equations' error (4 substeps per interval), 10⁻⁶; the Gaussian-sum and
-/// MAP filters on measurements only.
+/// their RK4 moment equations' error (4 substeps per interval), 10⁻⁷ (1.2·10⁻⁸ measured on
+/// the measurements, 1.9·10⁻¹⁰ on the increments); the Gaussian-sum and MAP filters on
+/// measurements only.
 fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, exact: f64) {
     let mut methods: Vec<(&str, Box<dyn Filter>, f64)> = vec![
         (
@@ -137,12 +138,12 @@ fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, 
         (
             "EKF",
             Box::new(prior(zakai::Ekf::builder(model)).build().unwrap()),
-            1e-6,
+            1e-7,
         ),
         (
             "UKF",
             Box::new(prior(zakai::Ukf::builder(model)).build().unwrap()),
-            1e-6,
+            1e-7,
         ),
     ];
     if !continuous {
@@ -154,12 +155,12 @@ fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, 
         methods.push((
             "IEKF",
             Box::new(prior(zakai::Iekf::builder(model)).build().unwrap()),
-            1e-6,
+            1e-7,
         ));
         methods.push((
             "IOKF",
             Box::new(prior(zakai::Iokf::builder(model)).build().unwrap()),
-            1e-6,
+            1e-7,
         ));
     }
     for (name, f, tolerance) in &mut methods {
@@ -171,17 +172,17 @@ fn gaussian_filters_match(model: &Model, data: &[(f64, f64)], continuous: bool, 
 }
 
 /// The particle filter's (2000 particles) log-likelihood of `data`, its mean over 20 seeds,
-/// within four standard errors (plus `slack`) of `exact`. Where `tells_the_prior`, the same
-/// from each of [`WRONG_PRIORS`] must fall outside that band (on the increments, where the
-/// band is narrower than what a wrong prior changes; on the measurements four standard errors,
-/// about 0.15, are wider than the shifted mean's 0.021).
+/// within four standard errors (plus `slack`) of `exact`; from each prior of `wrong` it must
+/// fall outside that band. (On the increments both wrong priors are checked; on the
+/// measurements four standard errors, about 0.15, are wider than the shifted mean's 0.021, and
+/// only the doubled variance, 0.223, is.)
 fn particle_filter_matches(
     model: &Model,
     data: &[(f64, f64)],
     continuous: bool,
     exact: f64,
     slack: f64,
-    tells_the_prior: bool,
+    wrong: &[(f64, f64)],
 ) {
     let mean_and_se = |p: (f64, f64)| {
         let runs: Vec<f64> = (0..20)
@@ -210,15 +211,13 @@ fn particle_filter_matches(
     println!("PF(2000): mean ℓ {mean:.4} ± {se:.4} against {exact:.4}");
     let band = 4.0 * se + slack;
     assert!((mean - exact).abs() < band, "{mean} ± {se} against {exact}");
-    if tells_the_prior {
-        for p in WRONG_PRIORS {
-            let (wrong, _) = mean_and_se(p);
-            println!("PF(2000) from N{p:?}: mean ℓ {wrong:.4} (band ±{band:.4})");
-            assert!(
-                (wrong - exact).abs() > band,
-                "PF from the wrong prior N{p:?}: {wrong} is within {band} of {exact}"
-            );
-        }
+    for &p in wrong {
+        let (off, _) = mean_and_se(p);
+        println!("PF(2000) from N{p:?}: mean ℓ {off:.4} (band ±{band:.4})");
+        assert!(
+            (off - exact).abs() > band,
+            "PF from the wrong prior N{p:?}: {off} is within {band} of {exact}"
+        );
     }
 }
 
@@ -273,7 +272,7 @@ fn model(continuous: bool) -> Model {
 }
 
 /// Discrete measurements: the Kalman and Gaussian-sum filters give the exact value to 10⁻⁹;
-/// the extended, unscented and iterated filters to their RK4 moment equations' error (10⁻⁶
+/// the extended, unscented and iterated filters to their RK4 moment equations' error (10⁻⁷
 /// allowed; 1.2·10⁻⁸ measured); the grid filter of 001 converges to it (1.7·10⁻² on 800 cells,
 /// 4.6·10⁻³ on 3200 measured) and on 3200 cells holds it within TOL_SA, which a wrong prior
 /// breaks; the particle filter's mean over 20 seeds is within four standard errors of it.
@@ -298,24 +297,25 @@ fn measurements_every_method_against_the_exact_likelihood() {
     let fine = holds_and_tells_the_prior("SA (3200 cells)", TOL_SA, exact, |p| grid(3200, p));
     println!("SA: |Δℓ| {coarse:.2e} on 800 cells, {fine:.2e} on 3200 (ℓ = {exact:.4})");
     assert!(fine < 0.5 * coarse, "{coarse} → {fine}");
-    particle_filter_matches(&model, &data, false, exact, 1e-3, false);
+    particle_filter_matches(&model, &data, false, exact, 1e-3, &WRONG_PRIORS[1..]);
 }
 
 /// Tolerances on |Δℓ|, each 1.5 to 2.5 times the measured error (in the comment), and below
 /// what a wrong prior changes: the shifted mean moves the exact ℓ of the increments by −0.085
 /// and the doubled variance by −0.119; of the measurements by +0.021 and −0.223.
 const TOL_SA: f64 = 8e-3; // 4.6e-3 (3200 cells)
-const TOL_QIEM: f64 = 5e-3; // 3.3e-3
+const TOL_QIEM: f64 = 5e-3; // 3.3e-3 (3.3e-3 with 3 samples per cell)
 const TOL_QIEM_IN_OPERATOR: f64 = 5e-3; // 2.4e-3
 const TOL_IEM: f64 = 1e-3; // 4.1e-4
 const TOL_SPT: f64 = 5e-3; // 3.3e-3
-const TOL_SPECTRAL: f64 = 1e-3; // 3.9e-4 (64 functions)
+const TOL_SPECTRAL: f64 = 8e-4; // 3.9e-4 (64 functions)
 const TOL_DIRECT: f64 = 5e-3; // 3.0e-3
+const TOL_DIRECT_PARTIAL: f64 = 3e-3; // 1.1e-3 (a sensor that never reports)
 
 /// Continuous observations: the Kalman–Bucy filter gives the exact value of the sampled model
-/// to 10⁻⁹, the EKF/UKF to their RK4 moment equations' error (10⁻⁶ allowed). The grid and
-/// spectral methods converge to it as their resolution grows (QIEM from 101 points and
-/// Δt = 0.02 to 401 and 0.005; the spectral filter from 32 to 64 functions) and, at the finer
+/// to 10⁻⁹, the EKF/UKF to their RK4 moment equations' error (10⁻⁷ allowed). The grid and
+/// spectral methods converge to it as their resolution grows (QIEM, IEM and SPT from 101
+/// points and Δt = 0.02 to 401 and 0.005; the spectral filter from 32 to 64 functions) and, at the finer
 /// resolution, hold it within their tolerances (the TOL_ constants, from the measured errors),
 /// which a wrong prior would break; so does the direct method (002). The particle filter's
 /// mean over seeds is within four standard errors, and from a wrong prior outside them.
@@ -369,32 +369,40 @@ fn increments_every_method_against_the_exact_likelihood() {
         |p| qiem(401, 0.005, |q| q.likelihood_samples = 3, p),
     );
     // IEM (the drift implicit) and the superposition technique on the same grid and step.
-    let iem = |p: (f64, f64)| {
+    let iem = |points: usize, dt: f64, p: (f64, f64)| {
         let mut f = prior_at(zakai::Iem::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
             .dt(DT_INCREMENTS)
             .with(|p| {
-                p.points = vec![401];
-                p.dt = 0.005;
+                p.points = vec![points];
+                p.dt = dt;
             })
             .build()
             .unwrap();
         log_likelihood(&mut f, &data, true)
     };
-    holds_and_tells_the_prior("IEM (401, 0.005)", TOL_IEM, exact, iem);
-    let spt = |p: (f64, f64)| {
+    let coarse = (iem(101, 0.02, PRIOR) - exact).abs();
+    let fine =
+        holds_and_tells_the_prior("IEM (401, 0.005)", TOL_IEM, exact, |p| iem(401, 0.005, p));
+    println!("IEM: |Δℓ| {coarse:.2e} (101 points, Δt 0.02), {fine:.2e} (401, 0.005)");
+    assert!(fine < 0.5 * coarse, "IEM: {coarse} → {fine}");
+    let spt = |points: usize, dt: f64, p: (f64, f64)| {
         let mut f = prior_at(zakai::Spt::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
             .dt(DT_INCREMENTS)
             .with(|p| {
-                p.points = vec![401];
-                p.dt = 0.005;
+                p.points = vec![points];
+                p.dt = dt;
             })
             .build()
             .unwrap();
         log_likelihood(&mut f, &data, true)
     };
-    holds_and_tells_the_prior("SPT (401, 0.005)", TOL_SPT, exact, spt);
+    let coarse = (spt(101, 0.02, PRIOR) - exact).abs();
+    let fine =
+        holds_and_tells_the_prior("SPT (401, 0.005)", TOL_SPT, exact, |p| spt(401, 0.005, p));
+    println!("SPT: |Δℓ| {coarse:.2e} (101 points, Δt 0.02), {fine:.2e} (401, 0.005)");
+    assert!(fine < 0.5 * coarse, "SPT: {coarse} → {fine}");
     let spectral = |basis: usize, p: (f64, f64)| {
         let mut f = prior_at(zakai::Spectral::builder(&model), p)
             .domain(&[(-6.0, 6.0)])
@@ -426,7 +434,7 @@ fn increments_every_method_against_the_exact_likelihood() {
         log_likelihood(&mut f, &data, true)
     };
     holds_and_tells_the_prior("direct", TOL_DIRECT, exact, direct);
-    particle_filter_matches(&model, &data, true, exact, 1e-2, true);
+    particle_filter_matches(&model, &data, true, exact, 1e-2, &WRONG_PRIORS);
 }
 
 /// A step that observes nothing — a gap, or every component missing — adds nothing, and a
@@ -588,11 +596,11 @@ fn the_direct_methods_partial_step_is_the_one_sensor_likelihood() {
     let whole = log_likelihood(&mut build(&model(true)), &data, true);
     println!("direct: partial {partial:.4}, whole {whole:.4}, exact {exact:.4}");
     // 002's form and the in-update splitting differ at first order in Δτ = 0.05 (4.1·10⁻³
-    // measured; 10⁻² allowed); the partial step is within the direct method's tolerance of the
-    // exact value (1.1·10⁻³ measured).
+    // measured; 10⁻² allowed); the partial step is within TOL_DIRECT_PARTIAL of the exact
+    // value.
     assert!((partial - whole).abs() < 1e-2, "{partial} against {whole}");
     assert!(
-        (partial - exact).abs() < TOL_DIRECT,
+        (partial - exact).abs() < TOL_DIRECT_PARTIAL,
         "{partial} against {exact}"
     );
 }

@@ -351,8 +351,8 @@ fn gaps_irregular_times_and_multi_rate_sensors_against_an_exact_kalman_filter() 
         let (mut mean_err, mut var_err) = (0.0f64, 0.0f64);
         for (k, &(mk, pk)) in reference.iter().enumerate() {
             let sd = pk.sqrt();
-            mean_err = mean_err.max((m.estimates[k] - mk).abs() / sd);
-            var_err = var_err.max((m.covariances[k] - pk).abs() / pk);
+            mean_err = zakai_tests::max_or_nan(mean_err, (m.estimates[k] - mk).abs() / sd);
+            var_err = zakai_tests::max_or_nan(var_err, (m.covariances[k] - pk).abs() / pk);
         }
         worst.push((m.name.clone(), mean_err, var_err));
         let (mean_tol, var_tol) = if m.name.starts_with("PF") {
@@ -478,8 +478,8 @@ fn a_gap_is_crossed_by_the_grid_filter_as_by_a_fine_point_mass_filter() {
     assert!(grid.failure.is_none(), "{:?}", grid.failure);
     let (mut mean_err, mut var_err) = (0.0f64, 0.0f64);
     for (k, &(m, v)) in reference.iter().enumerate() {
-        mean_err = mean_err.max((grid.estimates[k] - m).abs() / v.sqrt());
-        var_err = var_err.max((grid.covariances[k] - v).abs() / v);
+        mean_err = zakai_tests::max_or_nan(mean_err, (grid.estimates[k] - m).abs() / v.sqrt());
+        var_err = zakai_tests::max_or_nan(var_err, (grid.covariances[k] - v).abs() / v);
     }
     let ukf = &run.methods[1];
     let after_gap = reference.len() - 5;
@@ -555,7 +555,7 @@ fn remainders_predict_as_the_schemes_own_steps() {
 /// the Gaussian filters integrate their moment equations over it in as many RK4 steps of at
 /// most Δτ/substeps as it needs (four over the whole gap would have |hλ| = 5, where RK4
 /// amplifies by 13.7 a step), and the particle filter in Euler steps of its chosen length; all
-/// stay within 2 % of the exact filter's posterior sd (RK4 at hλ = −0.5; measured 0.06 %), the
+/// stay within 0.2 % of the exact filter's posterior sd (RK4 at hλ = −0.5; measured 0.06 %), the
 /// particle filter within 5 Monte Carlo standard errors (measured 0.037 sd against 0.071). The
 /// exact filter is the one written in the tests (`kalman_reference`), and Zakai's Kalman
 /// filter matches it to 10⁻⁹ of its sd.
@@ -607,13 +607,13 @@ fn a_long_gap_on_a_stiff_model_is_crossed_in_short_steps() {
         assert_eq!(m.estimates.len(), exact.len(), "{}", m.name);
         let worst = (0..z.len())
             .map(|k| (m.estimates[k] - exact[k].mean[0]).abs() / exact[k].sd(0))
-            .fold(0.0, f64::max);
+            .fold(0.0, zakai_tests::max_or_nan);
         let tolerance = if m.name.starts_with("PF") {
             5.0 / (20000.0f64 / 4.0).sqrt()
         } else if m.name == "KF" {
             1e-9
         } else {
-            0.02
+            2e-3
         };
         eprintln!("{}: {worst:.2e} sd", m.name);
         assert!(

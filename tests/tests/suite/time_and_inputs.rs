@@ -152,7 +152,7 @@ fn the_inputs_are_read() {
 /// Gaussian filters hold t at each interval's midpoint. Three exact filters written here tell
 /// the holds apart — t held at the interval's midpoint, t held at its end, and the true
 /// forcing ∫ e^{−(τ_k − s)} cos s ds in closed form: the EKF and UKF match the midpoint hold to
-/// their RK4 error (10⁻⁴ sd allowed; 1.2·10⁻⁶ measured), lie more than 0.05 sd from the
+/// their RK4 error (10⁻⁵ sd allowed; 1.2·10⁻⁶ measured), lie more than 0.05 sd from the
 /// end-point hold (whose forcing is off by about (1 − e^{−Δτ}) · Δτ/2 · |sin t| ≈ 0.03;
 /// 0.13 sd measured), and within 0.01 sd of the true forcing (the hold's own error, about
 /// Δτ²/12 in the time; 0.0061 measured).
