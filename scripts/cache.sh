@@ -25,3 +25,14 @@ if [ -z "${ZAKAI_CACHE_LOCKED:-}" ] && command -v flock >/dev/null 2>&1; then
   fi
   export ZAKAI_CACHE_LOCKED=1
 fi
+
+# Cargo decides that a crate of this workspace is up to date by its sources' modification
+# times, and a crate's artifact does not depend on where the checkout is: an artifact built
+# from another checkout, newer than this one's files, would pass for this checkout's. So the
+# first script of a run marks every tracked file of this checkout as modified now: Zakai's own
+# crates are always compiled from these sources (as a fresh clone's would be anyway), while
+# the registry dependencies — never touched — are reused.
+if [ -z "${ZAKAI_CACHE_TOUCHED:-}" ]; then
+  git ls-files -z 2>/dev/null | xargs -0 -r touch -c
+  export ZAKAI_CACHE_TOUCHED=1
+fi

@@ -42,5 +42,17 @@ pub fn rows(array: &PyReadonlyArrayDyn<'_, f64>, what: &str) -> PyResult<(Vec<f6
             )))
         }
     };
+    // An unaligned buffer (one unpickled from a protocol-5 stream, or a `frombuffer` at an odd
+    // offset) cannot be read as f64 values in place: refused with the fix, never read (it
+    // would be undefined behaviour; ndarray's debug assertion panics on it). The package's own
+    // conversions (`_convert._array`) copy such arrays first.
+    let align = core::mem::align_of::<f64>();
+    if (array.data() as usize) % align != 0
+        || array.strides().iter().any(|s| s % align as isize != 0)
+    {
+        return Err(errors::dimension(format!(
+            "{what} is not aligned in memory for float64: pass numpy.require({what}, numpy.float64, 'CA')"
+        )));
+    }
     Ok((array.as_array().iter().copied().collect(), r, w))
 }

@@ -203,3 +203,24 @@ def test_smoothing_the_nile_matches_statsmodels():
     frame = result.to_pandas()
     np.testing.assert_array_equal(frame["KF smoothed x1"].to_numpy(), kf.estimates[:, 0])
     assert frame["GSF smoothed x1"].isna().all()
+
+
+def test_an_unaligned_array_is_copied_not_misread():
+    """A float64 buffer at an odd address (what a cluster's worker can get from a pickle, or
+    ``frombuffer`` at an offset): the package copies it to an aligned array first, and the
+    compiled core, given one directly, refuses it with the fix instead of reading it."""
+    years, z = flow_series()
+    raw = np.zeros(len(z) * 8 + 1, dtype=np.uint8)
+    unaligned = np.frombuffer(raw, dtype=np.float64, count=len(z), offset=1)
+    assert not unaligned.flags.aligned
+    unaligned.setflags(write=True)
+    unaligned[:] = z
+    sc = local_level(["kalman"])
+    times = years - years[0]
+    expected = zakai.filter(sc, z, times=times).methods["KF"].estimates
+    got = zakai.filter(sc, unaligned, times=times).methods["KF"].estimates
+    np.testing.assert_array_equal(got, expected)
+    from zakai import _zakai
+
+    with pytest.raises(zakai.DimensionError, match="not aligned"):
+        _zakai.log_likelihood(sc._text(), unaligned, np.ascontiguousarray(times), 0, [], 1, [], None)

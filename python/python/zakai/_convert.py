@@ -12,9 +12,6 @@ from .errors import ConfigError, DimensionError, ExpressionError
 
 
 ArrayLike = Union[np.ndarray, Sequence[float], Sequence[Sequence[float]]]
-
-
-ArrayLike = Union[np.ndarray, Sequence[float], Sequence[Sequence[float]]]
 MethodSpec = Union[str, Mapping[str, Any]]
 
 
@@ -126,12 +123,23 @@ def _array(value: Optional[ArrayLike], name: str) -> Optional[np.ndarray]:
     if value is None:
         return None
     try:
-        a = np.ascontiguousarray(value, dtype=np.float64)
+        # C-contiguous and aligned (a copy of an unaligned buffer, e.g. one unpickled by a
+        # cluster's worker): the core reads the values in place.
+        a = np.require(value, dtype=np.float64, requirements=["C", "A"])
     except (TypeError, ValueError) as e:
         raise DimensionError(f"{name} must be an array of numbers: {e}") from e
     if a.ndim == 0:
         a = a.reshape(1)
     return a
+
+
+def _aligned(args: tuple) -> tuple:
+    """``args`` with every array C-contiguous and aligned: arrays that crossed a process
+    boundary (a cluster's worker unpickles them from protocol-5 buffers) may be neither."""
+    return tuple(
+        np.require(a, dtype=np.float64, requirements=["C", "A"]) if isinstance(a, np.ndarray) else a
+        for a in args
+    )
 
 
 

@@ -40,6 +40,7 @@ def log_likelihood(
     names: list[str],
     seed: int,
     point: list[float],
+    inputs: Optional[npt.NDArray[np.float64]] = None,
 ) -> float: ...
 def fit(
     json: str,

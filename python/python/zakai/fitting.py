@@ -23,7 +23,7 @@ from typing import Any, Callable, Optional, Sequence, Union
 import numpy as np
 
 from . import _zakai
-from ._convert import ArrayLike, _array, _index_times, _times
+from ._convert import ArrayLike, _aligned, _array, _index_times, _times
 from .errors import ConfigError
 from .runs import _check_executor, _inputs, _scenario, _seed
 from .scenario import Scenario
@@ -66,7 +66,7 @@ def _method_index(sc: Scenario, method: Union[str, int, None]) -> tuple[Scenario
 def _task(args: tuple) -> float:
     """One likelihood evaluation, as an executor's worker runs it (module level, so that it
     pickles by reference)."""
-    return _zakai.log_likelihood(*args)
+    return _zakai.log_likelihood(*_aligned(args))
 
 
 
