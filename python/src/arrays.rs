@@ -47,9 +47,12 @@ pub fn rows(array: &PyReadonlyArrayDyn<'_, f64>, what: &str) -> PyResult<(Vec<f6
     // would be undefined behaviour; ndarray's debug assertion panics on it). The package's own
     // conversions (`_convert._array`) copy such arrays first.
     let align = core::mem::align_of::<f64>();
-    if (array.data() as usize) % align != 0
-        || array.strides().iter().any(|s| s % align as isize != 0)
-    {
+    let aligned = (array.data() as usize).is_multiple_of(align)
+        && array
+            .strides()
+            .iter()
+            .all(|s| s.unsigned_abs().is_multiple_of(align));
+    if !aligned {
         return Err(errors::dimension(format!(
             "{what} is not aligned in memory for float64: pass numpy.require({what}, numpy.float64, 'CA')"
         )));
