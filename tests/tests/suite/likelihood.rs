@@ -300,6 +300,29 @@ fn measurements_every_method_against_the_exact_likelihood() {
     particle_filter_matches(&model, &data, false, exact, 1e-3, &WRONG_PRIORS[1..]);
 }
 
+/// The log-likelihood of the increments `data` by the Yau–Yau method `M` (QIEM, IEM, SPT) on
+/// [−6, 6] with `(points, dt)` nodes and inner step, `edit` applied to its parameters, from
+/// the prior `p`.
+fn yau_yau_log_likelihood<M: zakai::Method<Params = zakai::YauYauParams>>(
+    model: &Model,
+    data: &[(f64, f64)],
+    (points, dt): (usize, f64),
+    edit: fn(&mut zakai::YauYauParams),
+    p: (f64, f64),
+) -> f64 {
+    let mut f = prior_at(zakai::Builder::<M>::new(model), p)
+        .domain(&[(-6.0, 6.0)])
+        .dt(DT_INCREMENTS)
+        .with(|q| {
+            q.points = vec![points];
+            q.dt = dt;
+            edit(q);
+        })
+        .build()
+        .unwrap();
+    log_likelihood(&mut f, data, true)
+}
+
 /// Tolerances on |Δℓ|, each 1.5 to 2.5 times the measured error (in the comment), and below
 /// what a wrong prior changes: the shifted mean moves the exact ℓ of the increments by −0.085
 /// and the doubled variance by −0.119; of the measurements by +0.021 and −0.223.
@@ -328,17 +351,7 @@ fn increments_every_method_against_the_exact_likelihood() {
     println!("a wrong prior moves the exact ℓ by {moved:.3?}");
     gaussian_filters_match(&model, &data, true, exact);
     let qiem = |points: usize, dt: f64, edit: fn(&mut zakai::YauYauParams), p: (f64, f64)| {
-        let mut f = prior_at(zakai::Qiem::builder(&model), p)
-            .domain(&[(-6.0, 6.0)])
-            .dt(DT_INCREMENTS)
-            .with(|p| {
-                p.points = vec![points];
-                p.dt = dt;
-                edit(p);
-            })
-            .build()
-            .unwrap();
-        log_likelihood(&mut f, &data, true)
+        yau_yau_log_likelihood::<zakai::Qiem>(&model, &data, (points, dt), edit, p)
     };
     let coarse = (qiem(101, 0.02, |_| {}, PRIOR) - exact).abs();
     let fine = holds_and_tells_the_prior("QIEM (401, 0.005)", TOL_QIEM, exact, |p| {
@@ -370,16 +383,7 @@ fn increments_every_method_against_the_exact_likelihood() {
     );
     // IEM (the drift implicit) and the superposition technique on the same grid and step.
     let iem = |points: usize, dt: f64, p: (f64, f64)| {
-        let mut f = prior_at(zakai::Iem::builder(&model), p)
-            .domain(&[(-6.0, 6.0)])
-            .dt(DT_INCREMENTS)
-            .with(|p| {
-                p.points = vec![points];
-                p.dt = dt;
-            })
-            .build()
-            .unwrap();
-        log_likelihood(&mut f, &data, true)
+        yau_yau_log_likelihood::<zakai::Iem>(&model, &data, (points, dt), |_| {}, p)
     };
     let coarse = (iem(101, 0.02, PRIOR) - exact).abs();
     let fine =
@@ -387,16 +391,7 @@ fn increments_every_method_against_the_exact_likelihood() {
     println!("IEM: |Δℓ| {coarse:.2e} (101 points, Δt 0.02), {fine:.2e} (401, 0.005)");
     assert!(fine < 0.5 * coarse, "IEM: {coarse} → {fine}");
     let spt = |points: usize, dt: f64, p: (f64, f64)| {
-        let mut f = prior_at(zakai::Spt::builder(&model), p)
-            .domain(&[(-6.0, 6.0)])
-            .dt(DT_INCREMENTS)
-            .with(|p| {
-                p.points = vec![points];
-                p.dt = dt;
-            })
-            .build()
-            .unwrap();
-        log_likelihood(&mut f, &data, true)
+        yau_yau_log_likelihood::<zakai::Spt>(&model, &data, (points, dt), |_| {}, p)
     };
     let coarse = (spt(101, 0.02, PRIOR) - exact).abs();
     let fine =
