@@ -183,6 +183,36 @@ impl LinearGaussian {
     }
 }
 
+/// The largest |x̂ − exact mean| and |P / exact P − 1| (diagonal) over every row and
+/// component of a track's estimates and covariances (row-major: n, and n × n, per row) against
+/// the exact filter's rows; a NaN anywhere is kept (see [`crate::max_or_nan`]).
+pub fn worst_mean_and_variance(
+    estimates: &[f64],
+    covariances: &[f64],
+    exact: &[Row],
+) -> (f64, f64) {
+    let n = exact[0].mean.len();
+    assert_eq!(
+        estimates.len(),
+        exact.len() * n,
+        "a mean per row and component"
+    );
+    assert_eq!(
+        covariances.len(),
+        exact.len() * n * n,
+        "a covariance per row"
+    );
+    let (mut mean, mut variance) = (0.0f64, 0.0f64);
+    for (k, row) in exact.iter().enumerate() {
+        for d in 0..n {
+            mean = crate::max_or_nan(mean, (estimates[k * n + d] - row.mean[d]).abs());
+            let p = covariances[k * n * n + d * n + d];
+            variance = crate::max_or_nan(variance, (p / row.cov[(d, d)] - 1.0).abs());
+        }
+    }
+    (mean, variance)
+}
+
 /// The rows of a recording as [`LinearGaussian::filter`] takes them: (step length,
 /// observation with NaN where missing); the start row of continuous observations (zeros: no
 /// increment yet) observes nothing.

@@ -219,7 +219,7 @@ fn linear_against_kalman(n: usize, basis: usize, w: f64) -> zakai::lab::scenario
 /// Kalman–Bucy filter must match to 10⁻⁹.
 fn worst_against_kalman(n: usize, basis: usize, w: f64) -> (f64, f64) {
     use nalgebra::{DMatrix, DVector};
-    use zakai_tests::kalman_reference::{rows_of, LinearGaussian, Sensor};
+    use zakai_tests::kalman_reference::{rows_of, worst_mean_and_variance, LinearGaussian, Sensor};
     let experiment = Experiment::new(linear_against_kalman(n, basis, w)).expect("valid");
     let result = experiment.run(3).expect("runs");
     // A: the rows of the drift above; G = I, H = 0.8 I, S = I.
@@ -247,15 +247,7 @@ fn worst_against_kalman(n: usize, basis: usize, w: f64) -> (f64, f64) {
             track.name,
             track.failure
         );
-        assert_eq!(track.estimates.len(), exact.len() * n, "{}", track.name);
-        let (mut m, mut v) = (0.0f64, 0.0f64);
-        for (k, row) in exact.iter().enumerate() {
-            for d in 0..n {
-                m = zakai_tests::max_or_nan(m, (track.estimates[k * n + d] - row.mean[d]).abs());
-                let p = track.covariances[k * n * n + d * n + d];
-                v = zakai_tests::max_or_nan(v, (p / row.cov[(d, d)] - 1.0).abs());
-            }
-        }
+        let (m, v) = worst_mean_and_variance(&track.estimates, &track.covariances, &exact);
         if index == 0 {
             assert!(
                 m < 1e-9 && v < 1e-9,

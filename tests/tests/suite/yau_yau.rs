@@ -74,7 +74,7 @@ fn linear_2d(points: usize, dt: f64) -> ScenarioConfig {
 #[test]
 fn grid_filters_track_the_kalman_bucy_posterior_on_a_linear_model() {
     use nalgebra::{DMatrix, DVector};
-    use zakai_tests::kalman_reference::{rows_of, LinearGaussian, Sensor};
+    use zakai_tests::kalman_reference::{rows_of, worst_mean_and_variance, LinearGaussian, Sensor};
     let run = Experiment::new(linear(400, 1e-3)).unwrap().run(4).unwrap();
     // dx = (−0.5x + 0.2) dt + dv, dy = 1.5x dt + dw, x₀ ~ N(0.5, 0.3).
     let exact = LinearGaussian::scalar(
@@ -103,16 +103,8 @@ fn grid_filters_track_the_kalman_bucy_posterior_on_a_linear_model() {
             track.name,
             track.failure
         );
-        assert_eq!(track.estimates.len(), exact.len(), "{}", track.name);
-        let (mut worst_mean, mut worst_var) = (0.0f64, 0.0f64);
-        for (k, row) in exact.iter().enumerate() {
-            worst_mean =
-                zakai_tests::max_or_nan(worst_mean, (track.estimates[k] - row.mean[0]).abs());
-            worst_var = zakai_tests::max_or_nan(
-                worst_var,
-                (track.covariances[k] / row.cov[(0, 0)] - 1.0).abs(),
-            );
-        }
+        let (worst_mean, worst_var) =
+            worst_mean_and_variance(&track.estimates, &track.covariances, &exact);
         println!(
             "{}: mean within {worst_mean:.2e}, variance within {worst_var:.2e}",
             track.name
