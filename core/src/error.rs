@@ -146,7 +146,9 @@ impl fmt::Display for ZakaiError {
         match self {
             ZakaiError::Expression(e) => write!(f, "{e}"),
             ZakaiError::Config(problems) => {
-                write!(f, "invalid scenario: ")?;
+                // The fields name what was built (`prior.cov`, `params.points`,
+                // `methods[2].particles`): a builder's problems are not a scenario's.
+                write!(f, "invalid configuration: ")?;
                 for (i, p) in problems.iter().enumerate() {
                     if i > 0 {
                         write!(f, "; ")?;
@@ -206,11 +208,15 @@ impl From<FilterError> for ZakaiError {
     }
 }
 
+/// The wrappers of an expression's and a filter's errors are transparent: their Display is
+/// the inner error's, so `source()` is the inner error's source (none), not the inner error
+/// itself — a report that walks the chain would otherwise print the message twice (the Rust
+/// API guidelines' rule: display the source or return it, not both).
 impl core::error::Error for ZakaiError {
     fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
         match self {
-            ZakaiError::Expression(e) => Some(e),
-            ZakaiError::Filter(e) => Some(e),
+            ZakaiError::Expression(e) => core::error::Error::source(e),
+            ZakaiError::Filter(e) => core::error::Error::source(e),
             _ => None,
         }
     }
@@ -322,18 +328,18 @@ pub(crate) fn is_input_name(name: &str) -> bool {
 mod tests {
     use super::*;
     use crate::testing::test;
+    use alloc::string::ToString;
     use core::error::Error;
 
-    /// The wrapped expression or filter error is the source, reachable as the concrete type;
-    /// errors of their own have none.
+    /// The expression and filter wrappers are transparent (issue 56, item 5): they display
+    /// the inner error and do not also return it as their source, so an error report that
+    /// walks the chain prints each message once; the concrete error is the variant's field.
     #[test]
-    fn a_wrapped_error_is_the_source() {
+    fn a_wrapper_displays_its_error_once() {
         let e = ZakaiError::from(FilterError::MassLost);
-        let source = e.source().expect("a source");
-        assert_eq!(
-            source.downcast_ref::<FilterError>(),
-            Some(&FilterError::MassLost)
-        );
+        assert_eq!(e.to_string(), FilterError::MassLost.to_string());
+        assert!(e.source().is_none());
+        assert!(matches!(e, ZakaiError::Filter(FilterError::MassLost)));
         let unknown = ExprError::UnknownVariable {
             expr: "y".into(),
             name: "y".into(),
@@ -341,10 +347,15 @@ mod tests {
             allowed: "x".into(),
         };
         let bad = ZakaiError::from(unknown.clone());
-        assert_eq!(
-            bad.source().unwrap().downcast_ref::<ExprError>(),
-            Some(&unknown)
-        );
+        assert_eq!(bad.to_string(), unknown.to_string());
+        assert!(bad.source().is_none());
+        let mut chain = alloc::vec![bad.to_string()];
+        let mut next = bad.source();
+        while let Some(s) = next {
+            chain.push(s.to_string());
+            next = s.source();
+        }
+        assert_eq!(chain, [unknown.to_string()]);
         assert!(ZakaiError::Dimension("n".into()).source().is_none());
     }
 }

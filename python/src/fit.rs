@@ -99,6 +99,34 @@ fn likelihood(
     Likelihood::new(&parse(json)?, recording, method, names, seed).map_err(errors::from_core)
 }
 
+/// ln p(data) under method `method` for the scenario as it stands (no parameter varied), and
+/// the method's failure on the data (`None` when it ran): the value is `-inf` exactly when
+/// there is one.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, method, seed, inputs=None))]
+pub fn scenario_log_likelihood<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    method: usize,
+    seed: u64,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<(f64, Option<String>)> {
+    let e = experiment(json)?;
+    let recording = recording_of(&e, &observations, times.as_ref(), None)?;
+    let recording = with_inputs(&e, recording, inputs.as_ref())?;
+    let l = Likelihood::of_scenario(&parse(json)?, recording, method, seed)
+        .map_err(errors::from_core)?;
+    match py.detach(|| l.log_likelihood(&[])) {
+        Ok(v) => Ok((v, None)),
+        Err(e @ zakai::ZakaiError::RunFailed { .. }) => {
+            Ok((f64::NEG_INFINITY, Some(e.to_string())))
+        }
+        Err(e) => Err(errors::from_core(e)),
+    }
+}
+
 /// ln p(data | θ) under method `method` at `point` (values of `names`); `-inf` where the method
 /// fails on the data there — one evaluation of a fit's or profile's batch, as an executor's
 /// task runs it.
@@ -154,6 +182,7 @@ pub fn fit<'py>(
     d.set_item("estimate", &result.estimate)?;
     d.set_item("stderr", &result.stderr)?;
     d.set_item("covariance", &result.covariance)?;
+    d.set_item("intervals", &result.intervals)?;
     d.set_item("log_likelihood", result.log_likelihood)?;
     d.set_item("evaluations", result.evaluations)?;
     d.set_item("iterations", result.iterations)?;

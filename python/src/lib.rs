@@ -33,6 +33,7 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::run_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_from_runs, m)?)?;
     m.add_function(wrap_pyfunction!(fit::log_likelihood, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::scenario_log_likelihood, m)?)?;
     m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
     m.add_function(wrap_pyfunction!(fit::profile, m)?)?;
     m.add_class::<stepping::Stepper>()?;

@@ -228,7 +228,7 @@ pub fn simulate<'py>(
 pub fn run<'py>(py: Python<'py>, json: &str, seed: u64) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
     let result = py.detach(|| e.run(seed)).map_err(errors::from_core)?;
-    result_dict(py, &result, e.chosen_defaults())
+    result_dict(py, &result, &e)
 }
 
 /// The times of a recording given without them: τ_k = k Δτ for `count` times.
@@ -263,7 +263,7 @@ pub fn filter_recorded<'py>(
             false => e.filter_recorded(recording, seed),
         })
         .map_err(errors::from_core)?;
-    result_dict(py, &result, e.chosen_defaults())
+    result_dict(py, &result, &e)
 }
 
 /// A user's observations (rows of m values; increments for continuous models, measurements for
@@ -460,8 +460,11 @@ fn concern_dict<'py>(py: Python<'py>, c: &ConcernRecord) -> PyResult<Bound<'py, 
 fn result_dict<'py>(
     py: Python<'py>,
     result: &RunResult,
-    chosen: &[String],
+    e: &Experiment,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let chosen = e.chosen_defaults();
+    // The scenario's methods, one track each and in order.
+    let keys: Vec<&str> = e.config().methods.iter().map(|m| m.key()).collect();
     let r = &result.recording;
     let (n, m, count) = (r.n, r.m, r.times.len());
     let d = PyDict::new(py);
@@ -480,6 +483,7 @@ fn result_dict<'py>(
     for (i, track) in result.methods.iter().enumerate() {
         let md = PyDict::new(py);
         md.set_item("name", &track.name)?;
+        md.set_item("key", keys.get(i).copied())?;
         md.set_item(
             "estimates",
             padded(py, track.estimates.clone(), count, &[n])?,

@@ -66,6 +66,13 @@ def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate(sm):
     assert list(frame.index) == ["q", "r"]
     assert (frame["ci_lower"] < frame["estimate"]).all()
     assert frame.loc["q", "lower"] == 0.0 and frame.loc["q", "upper"] is None
+    # The Wald interval is computed on u = ln q and mapped back (issue 56, item 5): inside
+    # q ≥ 0 (θ̂ − 1.96·se is negative here), and q̂·exp(±1.96·se/q̂) by the delta method.
+    q, se = fitted.params["q"], fitted.stderr["q"]
+    assert q - 1.96 * se < 0 < frame.loc["q", "ci_lower"]
+    spread = np.exp(1.959963984540054 * se / q)
+    assert frame.loc["q", "ci_lower"] == pytest.approx(q / spread, rel=1e-9)
+    assert frame.loc["q", "ci_upper"] == pytest.approx(q * spread, rel=1e-9)
 
 
 def test_fit_reads_a_pandas_series_and_a_grid_method(sm):

@@ -3,6 +3,7 @@ recorded series with gaps and an irregular step, against a Kalman log-likelihood
 and the stepping filter's per-step value."""
 
 import numpy as np
+import pytest
 
 import zakai
 from test_real_data import flow_series, local_level
@@ -70,3 +71,35 @@ def test_the_stepping_filter_gives_each_steps_term():
         terms.append(f.log_likelihood)
     np.testing.assert_allclose(sum(terms), kalman_log_likelihood(z, times), rtol=1e-9)
     assert terms[5] == 0.0
+
+
+def test_log_likelihood_without_keywords_is_the_scenario_as_it_stands():
+    """Issue 56, item 2: without parameter keywords, ``log_likelihood`` evaluates the scenario
+    at its own values (it returned -inf), and a scenario that declares no parameter has a
+    likelihood too (it raised "declares no parameter to fit"); a method that fails on the
+    data gives -inf with a FilterWarning naming the failure."""
+    years, z = flow_series()
+    times = years - years[0]
+    exact = kalman_log_likelihood(z, times)
+    model = zakai.Model.discrete("0", "x", noise_cov=400.0, diffusion=20.0)
+    plain = zakai.Scenario(model, zakai.Prior.gaussian(1000.0, 400.0), ["kalman"], dt_obs=1.0)
+    np.testing.assert_allclose(zakai.log_likelihood(plain, z, "kalman", times=times), exact, rtol=1e-9)
+    unknowns = zakai.Model.discrete("0", "x", noise_cov="r", diffusion="sqrt(q)")
+    declared = zakai.Scenario(
+        unknowns, zakai.Prior.gaussian(1000.0, 400.0), ["kalman"], dt_obs=1.0,
+        parameters={"q": (400.0, (0, None)), "r": (400.0, (0, None))},
+    )
+    np.testing.assert_allclose(zakai.log_likelihood(declared, z, "kalman", times=times), exact, rtol=1e-9)
+    np.testing.assert_allclose(
+        zakai.log_likelihood(declared, z, "kalman", times=times, q=900.0),
+        kalman_log_likelihood(z, times, q=900.0),
+        rtol=1e-9,
+    )
+    counts = zakai.Model.poisson("0", "exp(x)", diffusion=0.1)
+    poisson = zakai.Scenario(
+        counts, zakai.Prior.gaussian(0.0, 1.0), [{"method": "separation", "cells": [200]}],
+        dt_obs=1.0, domain=[(-4.0, 4.0)],
+    )
+    with pytest.warns(zakai.FilterWarning, match="SA"):
+        value = zakai.log_likelihood(poisson, np.array([1.0, 2.0, 2.5]), "separation")
+    assert value == -np.inf

@@ -70,44 +70,108 @@ def test_data_near_1000_with_gaps_and_an_irregular_step():
 
 
 def test_pandas_series_with_a_datetime_index():
+    """Issue 56, item 4: dates are read in the unit the user means. An irregular yearly
+    series (a year dropped) needs ``time_unit``; in years the model's rates are per year
+    and the result says so; a regular index with a frequency steps by 1 of it."""
     years, z = flow_series()
     index = pd.to_datetime([f"{int(y)}-07-01" for y in years])
     series = pd.Series(z, index=index, name="flow")
     sc = local_level(["kalman"])
-    # Times are seconds since the first: a year is ~3.16e7 s, so Δτ and rates are per second.
-    sc.dt_obs = 365.25 * 86400
-    sc.config["model"]["diffusion"] = [[20.0 / np.sqrt(365.25 * 86400)]]
-    result = zakai.filter(sc, series)
-    seconds = (index - index[0]).total_seconds().to_numpy()
-    np.testing.assert_allclose(result.times, seconds)
+    with pytest.raises(ConfigError, match="time_unit="):
+        zakai.filter(sc, series)  # irregular: a year was dropped
+    result = zakai.filter(sc, series, time_unit="Y")
+    assert result.time_unit == "Y"
+    np.testing.assert_array_equal(result.times, years - years[0])
     df = result.to_pandas()
     assert (df.index == index).all()
     assert np.isnan(df["z1"].iloc[5]) and df["KF x1"].notna().all()
-    ref = kalman_reference(z, seconds, q=400.0 / (365.25 * 86400))
+    ref = kalman_reference(z, years - years[0])
     np.testing.assert_allclose(df["KF x1"].to_numpy(), ref, rtol=1e-9)
+    # The same in days: Δτ and the rates per day.
+    days = (index - index[0]).days.to_numpy().astype(float)
+    sc_days = local_level(["kalman"])
+    sc_days.dt_obs = 365.25
+    sc_days.config["model"]["diffusion"] = [[20.0 / np.sqrt(365.25)]]
+    by_day = zakai.filter(sc_days, series, time_unit="D")
+    assert by_day.time_unit == "D"
+    np.testing.assert_array_equal(by_day.times, days)
+    np.testing.assert_allclose(
+        by_day.methods["KF"].estimates[:, 0], kalman_reference(z, days, q=400.0 / 365.25), rtol=1e-9
+    )
+    # A regular yearly index (missing years as NaN rows) has a frequency: it steps by 1.
+    full = np.arange(years[0], years[-1] + 1)
+    regular = pd.Series(
+        [z[list(years).index(y)] if y in years else np.nan for y in full],
+        index=pd.date_range(f"{int(full[0])}-01-01", periods=len(full), freq="YS"),
+    )
+    result = zakai.filter(sc, regular)
+    assert result.time_unit is not None and result.time_unit.startswith("YS")
+    np.testing.assert_array_equal(result.times, full - full[0])
+    periods = pd.Series(regular.to_numpy(), index=pd.period_range(str(int(full[0])), periods=len(full), freq="Y"))
+    by_period = zakai.filter(sc, periods)
+    np.testing.assert_array_equal(by_period.times, full - full[0])
+    np.testing.assert_allclose(by_period.methods["KF"].estimates, result.methods["KF"].estimates, rtol=1e-12)
 
 
 def test_datetime_times_are_converted_and_text_times_refused():
     years, z = flow_series()
     dates = np.array([f"{int(y)}-01-01" for y in years], dtype="datetime64[D]")
     sc = local_level(["kalman"])
+    with pytest.raises(ConfigError, match="time_unit="):
+        zakai.filter(sc, z, times=dates)  # irregular, no frequency
     with pytest.raises(ConfigError, match="set time.dt_obs"):
-        zakai.filter(sc, z, times=dates)  # Δτ = 1 s against yearly steps
+        zakai.filter(sc, z, times=dates, time_unit="s")  # Δτ = 1 s against yearly steps
     sc.dt_obs = 365.25 * 86400
-    result = zakai.filter(sc, z, times=dates)
-    assert result.times[0] == 0.0 and result.times[1] == 365 * 86400
+    result = zakai.filter(sc, z, times=dates, time_unit="s")
+    assert result.times[0] == 0.0 and result.times[1] == 365 * 86400 and result.time_unit == "s"
     with pytest.raises(ConfigError, match="numbers or datetimes"):
         zakai.filter(sc, z, times=[str(d) for d in dates])
+    with pytest.raises(ConfigError, match="time_unit: 'years' is not one of"):
+        zakai.filter(sc, z, times=dates, time_unit="years")
 
 
 def test_a_method_that_does_not_apply_is_marked_and_the_others_run():
     model = zakai.Model.discrete("-x^3", "x", noise_cov=0.1)
     sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["gaussian_sum", "ukf"], dt_obs=0.1)
     z = np.array([0.1, 0.2, np.nan, 0.1])
-    result = zakai.filter(sc, z)
+    # Issue 56, item 3: loud in Python — a FilterWarning naming the method, row and reason.
+    with pytest.warns(zakai.FilterWarning, match=r"GSF failed at row 0 .*does not apply here"):
+        result = zakai.filter(sc, z)
     gsf, ukf = result.methods.values()
     assert gsf.failure is not None and "does not apply here" in gsf.failure[2]
     assert ukf.failure is None and np.isfinite(ukf.estimates).all()
+    # Found by catalogue key as well as by display name (issue 56, item 5).
+    assert result.methods["gaussian_sum"] is gsf and result.methods["ukf"] is ukf
+    with pytest.raises(KeyError, match="GSF \\(gaussian_sum\\)"):
+        result.methods["kalman"]
+
+
+def test_a_failed_count_is_a_warning_and_the_others_stand():
+    """A Poisson count of -1 or 2.5 (issue 56, item 4): the grid filter fails at that row with
+    a FilterWarning; the UKF's Gaussian stand-in runs on."""
+    model = zakai.Model.poisson("0", "exp(x)", diffusion=0.3)
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0),
+                        [{"method": "separation", "cells": [200]}, "ukf"],
+                        dt_obs=1.0, domain=[(-5.0, 5.0)])
+    for bad in (-1.0, 2.5):
+        with pytest.warns(zakai.FilterWarning, match="SA.* failed at row 2"):
+            result = zakai.filter(sc, np.array([1.0, 2.0, bad, 1.0]))
+        assert result.methods["separation"].failure[0] == 2
+
+
+def test_unknown_attributes_are_refused():
+    """``f.x = …`` (a FilterPy habit) and misspelt result fields raise AttributeError
+    (issue 56, item 5) instead of being kept and ignored."""
+    model = zakai.Model.discrete("-x", "x", noise_cov=0.1)
+    f = zakai.Filter("ukf", model, zakai.Prior.gaussian(0.0, 1.0), dt_obs=0.1)
+    with pytest.raises(AttributeError):
+        f.x = np.array([1.0])
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["ukf"], dt_obs=0.1)
+    result = zakai.filter(sc, np.array([0.1, 0.2]))
+    with pytest.raises(AttributeError):
+        result.method = "ukf"
+    with pytest.raises(AttributeError):
+        result.methods["UKF"].estimate = None
 
 
 def test_filter_predicts_updates_and_copies():

@@ -31,6 +31,7 @@ pub mod marginal;
 pub mod method;
 pub mod params;
 pub mod particle;
+pub mod resolution;
 pub mod smoothing;
 pub mod spectral;
 pub mod yau_fd;

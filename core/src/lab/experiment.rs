@@ -126,7 +126,8 @@ pub struct Failure {
 }
 
 /// A self-check that warned during a run ([`Filter::self_check`]): when it first crossed its
-/// threshold, on how many steps, and its worst value.
+/// threshold, on how many steps, and its worst value — one record per side of a two-sided
+/// check (a band) that was crossed.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ConcernRecord {
     /// What is watched.
@@ -170,7 +171,12 @@ impl ConcernRecord {
     }
 
     fn record(records: &mut Vec<ConcernRecord>, c: &Concern, k: usize, t: f64) {
-        match records.iter_mut().find(|r| r.check == c.check) {
+        // A two-sided check (a band) keeps one record per side crossed, each with its own
+        // threshold and worst value.
+        match records
+            .iter_mut()
+            .find(|r| r.check == c.check && r.above == c.above)
+        {
             Some(r) => {
                 r.steps += 1;
                 let worse = if c.above {
@@ -1519,5 +1525,36 @@ mod tests {
         assert!(kf.failure.is_none(), "{:?}", kf.failure);
         let lost = ekf.failure.as_ref().expect("the EKF is lost");
         assert!(lost.message.starts_with("lost track"), "{}", lost.message);
+    }
+
+    /// A band crossed on both sides (the innovation check of issue 56: above 2.1 from one
+    /// time, below 0.31 from another) is two records, each pairing its own value with its own
+    /// threshold; the same side crossed again counts on its record and keeps the worst value.
+    #[test]
+    fn a_two_sided_check_keeps_one_record_per_side() {
+        let check = "normalised innovation squared";
+        let mut records = Vec::new();
+        let high = |v| Concern::above(check, v, 2.1, "larger than the model expects");
+        let low = |v| Concern::below(check, v, 0.31, "smaller than the model expects");
+        ConcernRecord::record(&mut records, &high(3.0), 10, 1981.0);
+        ConcernRecord::record(&mut records, &high(4.5), 11, 1982.0);
+        ConcernRecord::record(&mut records, &low(0.25), 25, 1996.0);
+        ConcernRecord::record(&mut records, &low(0.2), 26, 1997.0);
+        ConcernRecord::record(&mut records, &low(0.28), 27, 1998.0);
+        assert_eq!(records.len(), 2);
+        let (above, below) = (&records[0], &records[1]);
+        assert!(above.above && !below.above);
+        assert_eq!((above.worst, above.steps, above.first_t), (4.5, 2, 1981.0));
+        assert_eq!((below.worst, below.steps, below.first_t), (0.2, 3, 1996.0));
+        assert!(
+            above.describe().contains("4.500e0 > 2.1e0 from t = 1981"),
+            "{}",
+            above.describe()
+        );
+        assert!(
+            below.describe().contains("2.000e-1 < 3.1e-1 from t = 1996"),
+            "{}",
+            below.describe()
+        );
     }
 }

@@ -32,7 +32,14 @@ from __future__ import annotations
 from . import _zakai
 from ._convert import ArrayLike, MethodSpec
 from .fitting import FitResult, Profile, fit, log_likelihood, profile
-from .errors import ConfigError, DimensionError, ExpressionError, FilterError, ZakaiError
+from .errors import (
+    ConfigError,
+    DimensionError,
+    ExpressionError,
+    FilterError,
+    FilterWarning,
+    ZakaiError,
+)
 from .models import DOMAIN_SDS, Model, Prior
 from .results import MethodResult, MonteCarloTable, RunResult, Smoothed
 from .runs import filter, monte_carlo, run, simulate, smooth
@@ -69,4 +76,5 @@ __all__ = [
     "ExpressionError",
     "DimensionError",
     "FilterError",
+    "FilterWarning",
 ]

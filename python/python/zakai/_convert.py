@@ -143,36 +143,115 @@ def _aligned(args: tuple) -> tuple:
 
 
 
-def _times(value: Any) -> Optional[np.ndarray]:
-    """Times as seconds: numbers as they are; datetimes (NumPy ``datetime64``, pandas
-    ``DatetimeIndex`` or ``Series``, ``datetime`` objects) as seconds since the first;
-    ``timedelta64`` as seconds."""
+#: Calendar units of ``time_unit`` (counted in whole periods: a month is one step whatever
+#: its length) and the fixed ones (NumPy's timedelta units).
+CALENDAR_UNITS = ("M", "Q", "Y")
+FIXED_UNITS = ("W", "D", "h", "min", "s", "ms", "us", "ns")
+
+
+def _unit_error(what: str) -> ConfigError:
+    return ConfigError(
+        f"times: {what}: give time_unit= — one of {', '.join(FIXED_UNITS)} (fixed lengths) or "
+        f"{', '.join(CALENDAR_UNITS)} (calendar months, quarters, years) — the unit the "
+        "model's rates and dt_obs are in"
+    )
+
+
+def _period_steps(periods: Any) -> np.ndarray:
+    """Steps of a pandas PeriodIndex from its first period, in its frequency's unit."""
+    ordinals = np.asarray(periods.asi8, dtype=np.int64)
+    return (ordinals - ordinals[0]).astype(np.float64)
+
+
+def _times(value: Any, time_unit: Optional[str] = None) -> tuple[Optional[np.ndarray], Optional[str]]:
+    """Times as numbers, and their unit (``None`` for numbers given as numbers).
+
+    * Numbers: as they are.
+    * A pandas ``PeriodIndex``, or a ``DatetimeIndex`` with a frequency (set, or inferred
+      from regular dates): steps of that frequency from the first (a yearly index steps by
+      1), unless ``time_unit`` says otherwise.
+    * Other datetimes (NumPy ``datetime64``, ``datetime`` objects, an irregular index): need
+      ``time_unit``: fixed units (``"D"``, ``"h"``, ``"s"`` …) divide the time since the
+      first; calendar units (``"M"``, ``"Q"``, ``"Y"``) count whole periods.
+    * ``timedelta64``: in ``time_unit`` (fixed units), seconds when absent.
+    """
     if value is None:
-        return None
+        return None, None
+    if time_unit is not None and time_unit not in CALENDAR_UNITS + FIXED_UNITS:
+        raise ConfigError(
+            f"time_unit: {time_unit!r} is not one of {', '.join(FIXED_UNITS + CALENDAR_UNITS)}"
+        )
+    kind = type(value).__name__
+    if kind == "PeriodIndex" and time_unit is None:
+        if len(value) and value.isna().any():
+            raise ConfigError("times: a period is missing (NaT); every row needs its time")
+        return np.ascontiguousarray(_period_steps(value)), value.freqstr
+    if kind == "PeriodIndex":
+        value = value.to_timestamp()
     a = np.asarray(value)
     if a.dtype.kind == "O" and a.size and all(hasattr(v, "timestamp") for v in a.ravel()):
         a = np.asarray(a, dtype="datetime64[ns]")
     if a.dtype.kind == "M":
         if np.isnat(a).any():
             raise ConfigError("times: a time is missing (NaT); every row needs its time")
-        return np.ascontiguousarray((a - a.ravel()[0]) / np.timedelta64(1, "s"), dtype=np.float64)
+        if time_unit is None:
+            freq = getattr(value, "freq", None)
+            if freq is None and a.size >= 3:
+                import pandas as pd
+
+                inferred = pd.infer_freq(pd.DatetimeIndex(a.ravel()))
+                freq = None if inferred is None else pd.tseries.frequencies.to_offset(inferred)
+            if freq is None:
+                raise _unit_error(
+                    "datetimes without a frequency (irregular, or too few to infer one)"
+                )
+            # Regular in its frequency: row k is k steps from the first.
+            return np.arange(a.size, dtype=np.float64) * freq.n, freq.base.freqstr
+        if time_unit in CALENDAR_UNITS:
+            import pandas as pd
+
+            periods = pd.DatetimeIndex(a.ravel()).to_period(time_unit)
+            return np.ascontiguousarray(_period_steps(periods)), time_unit
+        step = np.timedelta64(1, time_unit if time_unit != "min" else "m")
+        return np.ascontiguousarray((a - a.ravel()[0]) / step, dtype=np.float64), time_unit
     if a.dtype.kind == "m":
-        return np.ascontiguousarray(a / np.timedelta64(1, "s"), dtype=np.float64)
+        if time_unit in CALENDAR_UNITS:
+            raise ConfigError(f"time_unit: durations have no calendar; use one of {', '.join(FIXED_UNITS)}")
+        unit = time_unit or "s"
+        step = np.timedelta64(1, unit if unit != "min" else "m")
+        return np.ascontiguousarray(a / step, dtype=np.float64), unit
     if a.dtype.kind not in "biuf":
         raise ConfigError(
             f"times: must be numbers or datetimes, got an array of {a.dtype} "
             "(convert text with pandas.to_datetime first)"
         )
-    return _array(a, "times")
+    if time_unit is not None:
+        raise ConfigError("time_unit: the times are numbers already, in the model's unit")
+    return _array(a, "times"), None
 
 
 
-def _index_times(observations: Any) -> tuple[Optional[np.ndarray], Any]:
-    """A pandas object's index as times (datetimes or numbers; a default ``RangeIndex``
-    gives none), and the index itself to label the result."""
+def _index_times(
+    observations: Any, time_unit: Optional[str] = None
+) -> tuple[Optional[np.ndarray], Optional[str], Any]:
+    """A pandas object's index as times and their unit (:func:`_times`; a default
+    ``RangeIndex`` gives none), and the index itself to label the result."""
     index = getattr(observations, "index", None)
     if index is None or not hasattr(observations, "to_numpy"):
-        return None, None
+        return None, None, None
     if type(index).__name__ == "RangeIndex":
-        return None, index
-    return _times(index), index
+        return None, None, index
+    times, unit = _times(index, time_unit)
+    return times, unit, index
+
+
+def _recording_times(
+    observations: Any, times: Any, time_unit: Optional[str]
+) -> tuple[Optional[np.ndarray], Optional[str], Any]:
+    """The times of a recording — given, else its pandas index's — with their unit, and the
+    index that labels the result."""
+    given, unit = _times(times, time_unit)
+    if given is not None:
+        index = getattr(observations, "index", None) if hasattr(observations, "to_numpy") else None
+        return given, unit, index
+    return _index_times(observations, time_unit)

@@ -42,6 +42,14 @@ def log_likelihood(
     point: list[float],
     inputs: Optional[npt.NDArray[np.float64]] = None,
 ) -> float: ...
+def scenario_log_likelihood(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    method: int,
+    seed: int,
+    inputs: Optional[npt.NDArray[np.float64]] = None,
+) -> tuple[float, Optional[str]]: ...
 def fit(
     json: str,
     observations: npt.NDArray[np.float64],

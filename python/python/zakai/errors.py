@@ -13,6 +13,7 @@ __all__ = [
     "ExpressionError",
     "DimensionError",
     "FilterError",
+    "FilterWarning",
 ]
 
 
@@ -47,3 +48,9 @@ class DimensionError(ZakaiError, ValueError):
 
 class FilterError(ZakaiError, RuntimeError):
     """A filter failed while stepping (non-finite numbers, lost mass, a wrong step length)."""
+
+
+class FilterWarning(RuntimeWarning):
+    """A method failed on the data where the call still returns a result: the log-likelihood
+    of a method that failed part-way is ``-inf``, and the message names the method, the step
+    and the reason."""

@@ -17,28 +17,31 @@ likelihood evaluation; the workers need ``zakai`` installed.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _zakai
-from ._convert import ArrayLike, _aligned, _array, _index_times, _times
-from .errors import ConfigError
+from ._convert import ArrayLike, _aligned, _array, _recording_times
+from .errors import ConfigError, FilterWarning
 from .runs import _check_executor, _inputs, _scenario, _seed
 from .scenario import Scenario
 
 
 
-def _observations(observations: Any, times: Optional[ArrayLike]) -> tuple[np.ndarray, Optional[np.ndarray]]:
-    """The observations as an array and their times (given, or a pandas index's)."""
-    index_times, _ = _index_times(observations)
+def _observations(
+    observations: Any, times: Optional[ArrayLike], time_unit: Optional[str] = None
+) -> tuple[np.ndarray, Optional[np.ndarray], Optional[str]]:
+    """The observations as an array, their times (given, or a pandas index's) and the
+    times' unit (see :func:`zakai.filter`)."""
+    t, unit, _ = _recording_times(observations, times, time_unit)
     obs = _array(
         observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
         "observations",
     )
-    given = _times(times)
-    return obs, given if given is not None else index_times
+    return obs, t, unit
 
 
 
@@ -95,7 +98,7 @@ def _evaluator(
 
 
 
-@dataclass
+@dataclass(slots=True)
 class FitResult:
     """A maximum-likelihood fit.
 
@@ -129,6 +132,13 @@ class FitResult:
         errors.
     chosen_defaults : list of str
         Sizes chosen from the problem at the starting values and held at every point.
+    intervals : dict
+        95 % Wald intervals ``(lower, upper)`` per parameter, computed on the scale the fit
+        moves on (``ln(θ − lo)`` for a lower bound, the logit for an interval) and mapped
+        back, so they stay inside the bounds; θ̂ ± 1.96·se for an unbounded parameter; NaN
+        without a standard error.
+    time_unit : str or None
+        The unit datetime times were read in (rates per that unit); ``None`` for numbers.
     """
 
     method: str
@@ -144,11 +154,13 @@ class FitResult:
     nobs: int
     notes: list[str] = field(default_factory=list)
     chosen_defaults: list[str] = field(default_factory=list)
+    intervals: dict[str, tuple[float, float]] = field(default_factory=dict)
+    time_unit: Optional[str] = None
 
     def to_pandas(self) -> Any:
         """The estimates as a DataFrame indexed by parameter: ``estimate``, ``stderr``, the
-        95 % Wald interval ``ci_lower``/``ci_upper`` (θ̂ ± 1.96·se), ``start``, ``lower``,
-        ``upper``."""
+        95 % Wald interval ``ci_lower``/``ci_upper`` (see :attr:`intervals`: inside the
+        bounds), ``start``, ``lower``, ``upper``."""
         import pandas as pd
 
         names = list(self.params)
@@ -158,8 +170,8 @@ class FitResult:
             {
                 "estimate": est,
                 "stderr": se,
-                "ci_lower": est - 1.96 * se,
-                "ci_upper": est + 1.96 * se,
+                "ci_lower": [self.intervals[n][0] for n in names],
+                "ci_upper": [self.intervals[n][1] for n in names],
                 "start": [self.start[n] for n in names],
                 "lower": [self.bounds[n][0] for n in names],
                 "upper": [self.bounds[n][1] for n in names],
@@ -185,6 +197,7 @@ def fit(
     params: Optional[Sequence[str]] = None,
     *,
     times: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
     seed: Optional[int] = None,
     executor: Any = None,
     inputs: Optional[ArrayLike] = None,
@@ -207,6 +220,8 @@ def fit(
         values).
     times : array_like, optional
         τ₀ … τ_N, as for :func:`zakai.filter`.
+    time_unit : str, optional
+        The unit of datetime times, as for :func:`zakai.filter`.
     seed : int, optional
         The method's random numbers (the same at every point); the scenario's when absent.
     executor : concurrent.futures.Executor, optional
@@ -220,7 +235,7 @@ def fit(
     FitResult
     """
     sc, index = _method_index(_scenario(scenario), method)
-    obs, t = _observations(observations, times)
+    obs, t, unit = _observations(observations, times, time_unit)
     s = _seed(sc, seed)
     text = sc._text()
     u = _inputs(inputs)
@@ -243,11 +258,13 @@ def fit(
         nobs=d["observations"],
         notes=list(d["notes"]),
         chosen_defaults=list(d["chosen_defaults"]),
+        intervals=dict(zip(names, [tuple(i) for i in d["intervals"]])),
+        time_unit=unit,
     )
 
 
 
-@dataclass
+@dataclass(slots=True)
 class Profile:
     """The log-likelihood along one parameter for every method of a scenario: the profile
     log-likelihood max over ``refit`` of ln L at each value when :func:`profile` was given
@@ -288,6 +305,7 @@ def profile(
     points: int = 41,
     refit: Optional[Sequence[str]] = None,
     times: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
     seed: Optional[int] = None,
     executor: Any = None,
     inputs: Optional[ArrayLike] = None,
@@ -299,10 +317,11 @@ def profile(
 
     ``values`` default to ``points`` values spanning the parameter's bounds (less 1 % at each
     end), or a quarter to four times its distance from a one-sided bound, or its value ± 3 when
-    unbounded. ``times``, ``seed``, ``executor`` and ``inputs`` are as for :func:`fit`.
+    unbounded. ``times``, ``time_unit``, ``seed``, ``executor`` and ``inputs`` are as for
+    :func:`fit`.
     """
     sc = _scenario(scenario)
-    obs, t = _observations(observations, times)
+    obs, t, unit = _observations(observations, times, time_unit)
     s = _seed(sc, seed)
     v = None
     if values is not None:
@@ -334,17 +353,28 @@ def log_likelihood(
     method: Union[str, int, None] = None,
     *,
     times: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
     seed: Optional[int] = None,
     inputs: Optional[ArrayLike] = None,
     **values: float,
 ) -> float:
     """ln p(observations | θ) under one method, with parameters set by keyword
-    (``log_likelihood(sc, z, "kalman", q=1400.0, r=15000.0)``; the others at their values);
-    ``-inf`` where the method fails on the data. ``inputs``: a driven model's known inputs,
-    as for :func:`zakai.filter`."""
+    (``log_likelihood(sc, z, "kalman", q=1400.0, r=15000.0)``; the others at their values).
+    Without keywords, the likelihood of the scenario as it stands (it need not declare any
+    parameter). ``-inf`` where the method fails on the data, with a
+    :class:`zakai.FilterWarning` naming the method, the step and the reason. ``inputs``: a
+    driven model's known inputs, and ``time_unit`` the unit of datetime times, as for
+    :func:`zakai.filter`."""
     sc, index = _method_index(_scenario(scenario), method)
-    obs, t = _observations(observations, times)
+    obs, t, unit = _observations(observations, times, time_unit)
     names = list(values)
+    if not names:
+        value, failure = _zakai.scenario_log_likelihood(
+            sc._text(), obs, t, index, _seed(sc, seed), _inputs(inputs)
+        )
+        if failure is not None:
+            warnings.warn(failure, FilterWarning, stacklevel=2)
+        return float(value)
     return _zakai.log_likelihood(
         sc._text(),
         obs,

@@ -11,7 +11,7 @@ import numpy as np
 
 
 
-@dataclass
+@dataclass(slots=True)
 class Smoothed:
     """One method's fixed-interval smoother over a run (:func:`zakai.smooth`): the best
     estimate of the state at every observation time from **all** the observations.
@@ -49,7 +49,7 @@ class Smoothed:
         return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
 
 
-@dataclass
+@dataclass(slots=True)
 class MethodResult:
     """One method's record in a run.
 
@@ -84,6 +84,9 @@ class MethodResult:
     smoothed : Smoothed or None
         The smoother's estimates in a run of :func:`zakai.smooth`; ``None`` in a filtering
         run.
+    key : str or None
+        The method's catalogue key (``"kalman"``, ``"pf"``); :attr:`RunResult.methods` finds
+        the result by it as well as by the display name.
     """
 
     name: str
@@ -97,6 +100,7 @@ class MethodResult:
     seconds_per_step: float
     build_seconds: float
     smoothed: Optional[Smoothed] = None
+    key: Optional[str] = None
 
     @property
     def warned(self) -> bool:
@@ -112,7 +116,25 @@ class MethodResult:
 
 
 
-@dataclass
+class Methods(dict):  # type: ignore[type-arg]
+    """The methods of a run by display name (``"KF"``, ``"PF(1000)"``, ``"SA(800)"``), in
+    the scenario's order; a catalogue key (``"kalman"``, ``"pf"``, ``"separation"``) that is
+    not a display name finds the one method with that key."""
+
+    def __missing__(self, key: str) -> "MethodResult":
+        found = [m for m in self.values() if m.key == key]
+        if len(found) == 1:
+            return found[0]
+        if found:
+            raise KeyError(
+                f"{key!r}: {len(found)} methods have this key; use a display name: "
+                + ", ".join(m.name for m in found)
+            )
+        raise KeyError(f"{key!r}: no method of this run has that name or key; the run has "
+                       + ", ".join(f"{n} ({m.key})" for n, m in self.items()))
+
+
+@dataclass(slots=True)
 class RunResult:
     """Every method's estimates on one set of observations.
 
@@ -123,8 +145,9 @@ class RunResult:
         Row 0 of continuous observations is the start (zeros); row k the increment over
         (τ_{k−1}, τ_k]. Discrete: the measurement at τ_k.
     truth : ndarray, shape (N + 1, n), or None
-    methods : dict of str to MethodResult
-        In the scenario's order, keyed by display name.
+    methods : Methods (a dict of str to MethodResult)
+        In the scenario's order, keyed by display name (``"KF"``, ``"PF(1000)"``); a method's
+        catalogue key (``"kalman"``, ``"pf"``) finds it too when one method has that key.
     warnings : list of (str, str)
         ``(method, message)`` about parameters (stability conditions and the like).
     chosen_defaults : list of str
@@ -136,11 +159,14 @@ class RunResult:
     times: np.ndarray
     observations: np.ndarray
     truth: Optional[np.ndarray]
-    methods: dict[str, MethodResult]
+    methods: Methods
     warnings: list[tuple[str, str]] = field(default_factory=list)
     chosen_defaults: list[str] = field(default_factory=list)
     #: The index of the pandas object the observations came in (labels :meth:`to_pandas`).
     index: Any = None
+    #: The unit datetime times were read in (``"Y"``, ``"D"``, ``"s"`` …: Δτ and the
+    #: model's rates are per it); ``None`` for times given as numbers.
+    time_unit: Optional[str] = None
 
     def to_pandas(self) -> Any:
         """The run as a pandas DataFrame, one row per time, indexed like the observations
@@ -177,7 +203,7 @@ class RunResult:
 
     @classmethod
     def _from_dict(cls, d: dict[str, Any]) -> "RunResult":
-        methods: dict[str, MethodResult] = {}
+        methods = Methods()
         for m in d["methods"]:
             name = m["name"]
             key, i = name, 2
@@ -197,6 +223,7 @@ class RunResult:
                 seconds_per_step=m["seconds_per_step"],
                 build_seconds=m["build_seconds"],
                 smoothed=None if sm is None else Smoothed(**sm),
+                key=m.get("key"),
             )
         return cls(
             seed=d["seed"],

@@ -4,13 +4,14 @@ observations with every method, :func:`monte_carlo` the papers' tables."""
 from __future__ import annotations
 
 import json as _json
+import warnings
 from typing import Any, Callable, Optional, Union
 
 import numpy as np
 
 from . import _zakai
-from .errors import ConfigError
-from ._convert import ArrayLike, _array, _times, _index_times
+from .errors import ConfigError, FilterWarning
+from ._convert import ArrayLike, _array, _recording_times
 from .scenario import Scenario
 from .results import RunResult, MonteCarloTable
 
@@ -65,7 +66,22 @@ def simulate(
 def run(scenario: Union[Scenario, str], seed: Optional[int] = None) -> RunResult:
     """Simulates the run with ``seed`` and filters it with every method of the scenario."""
     sc = _scenario(scenario)
-    return RunResult._from_dict(_zakai.run(sc._text(), _seed(sc, seed)))
+    return _warn_failures(RunResult._from_dict(_zakai.run(sc._text(), _seed(sc, seed))), 3)
+
+
+def _warn_failures(result: RunResult, stacklevel: int) -> RunResult:
+    """A :class:`zakai.FilterWarning` for every method that failed in ``result`` (the method,
+    the row, its time and the reason; the other methods' results stand), and ``result``."""
+    for m in result.methods.values():
+        if m.failure is not None:
+            k, t, message = m.failure
+            warnings.warn(
+                f"{m.name} failed at row {k} (t = {t:.6g}): {message}; its rows from there "
+                "are NaN, the other methods' results stand",
+                FilterWarning,
+                stacklevel=stacklevel,
+            )
+    return result
 
 
 
@@ -77,6 +93,7 @@ def filter(
     seed: Optional[int] = None,
     *,
     inputs: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
 ) -> RunResult:
     """Every method of the scenario on your observations.
 
@@ -94,9 +111,12 @@ def filter(
     times : array_like, optional
         τ₀ … τ_N (τ₀ the prior's time), increasing, possibly irregular: every method predicts
         over each step whatever its length (grid and spectral methods as whole Δτ and a
-        remainder). Datetimes (``datetime64``, pandas ``DatetimeIndex``, ``datetime`` objects) are
-        converted to **seconds since the first**, so Δτ and the model's rates are per
-        second (a step of more than 10⁴ Δτ is refused as a mis-set Δτ). Every Δτ from 0 when absent.
+        remainder). Every Δτ from 0 when absent. Datetimes are read **in a unit**, which Δτ
+        and the model's rates are per (and :attr:`RunResult.time_unit` names): a pandas
+        ``PeriodIndex``, or a ``DatetimeIndex`` with a frequency (set, or inferred from
+        regular dates), in steps of that frequency (a yearly index steps by 1, a daily one
+        by 1 per day); other datetimes need ``time_unit``. A step of more than 10⁴ Δτ is
+        refused as a mis-set Δτ or unit.
     truth : array_like, shape (N + 1, n), optional
         The true states, for errors (MSE) against them.
     seed : int, optional
@@ -106,8 +126,15 @@ def filter(
         time t): one row per time, row k held over (τ_{k−1}, τ_k] (for increments one row
         per interval also works). Required when the model reads inputs; methods that need a
         time-invariant model say so in their failure.
+    time_unit : str, optional
+        The unit of datetime times: ``"s"``, ``"min"``, ``"h"``, ``"D"``, ``"W"`` (time since
+        the first divided by it) or ``"M"``, ``"Q"``, ``"Y"`` (whole calendar periods since
+        the first: a month is one step whatever its length). Needed for datetimes without a
+        frequency; overrides an index's frequency.
     """
-    return _recorded(scenario, observations, times, truth, seed, smooth=False, inputs=inputs)
+    return _recorded(
+        scenario, observations, times, truth, seed, smooth=False, inputs=inputs, time_unit=time_unit
+    )
 
 
 
@@ -128,29 +155,30 @@ def _recorded(
     seed: Optional[int],
     smooth: bool,
     inputs: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
 ) -> RunResult:
     """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
-    index_times, index = _index_times(observations)
+    t, unit, index = _recording_times(observations, times, time_unit)
     obs = _array(
         observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
         "observations",
     )
-    given = _times(times)
     result = RunResult._from_dict(
         _zakai.filter_recorded(
             sc._text(),
             obs,
-            given if given is not None else index_times,
+            t,
             _array(truth, "truth"),
             _seed(sc, seed),
             smooth,
             _inputs(inputs),
         )
     )
+    result.time_unit = unit
     if index is not None and len(index) == len(result.times):
         result.index = index
-    return result
+    return _warn_failures(result, 4)
 
 
 def smooth(
@@ -161,6 +189,7 @@ def smooth(
     seed: Optional[int] = None,
     *,
     inputs: Optional[ArrayLike] = None,
+    time_unit: Optional[str] = None,
 ) -> RunResult:
     """Every method of the scenario as its fixed-interval smoother on your observations.
 
@@ -192,7 +221,9 @@ def smooth(
     >>> bool(s.sds[3, 0] < r.methods["KF"].sds[3, 0])  # the gap is bridged from both sides
     True
     """
-    return _recorded(scenario, observations, times, truth, seed, smooth=True, inputs=inputs)
+    return _recorded(
+        scenario, observations, times, truth, seed, smooth=True, inputs=inputs, time_unit=time_unit
+    )
 
 
 def _check_executor(executor: Any) -> None:

@@ -88,9 +88,10 @@ class Scenario:
 
     The same JSON as the command line's scenario files and the playground's "copy link".
     Fields a user changes most are attributes (``dt_obs``, ``t_final``, ``seed``, ``domain``,
-    ``methods``, ``initial_state``); everything else through :attr:`config` (a dict). Every
-    assignment is checked when the scenario is used (or by :meth:`validate`), all problems at
-    once, with their field paths.
+    ``methods``, ``initial_state``); everything else through :attr:`config` (a dict). The
+    constructor checks the whole scenario (every expression parsed, every name, dimension
+    and bound) and raises :class:`ConfigError` with all problems at once and their field
+    paths; a later assignment is checked when the scenario is used (or by :meth:`validate`).
 
     Parameters
     ----------
@@ -149,6 +150,9 @@ class Scenario:
         }
         if parameters:
             self.parameters = parameters
+        # Checked where the mistake is made (issue 56): every expression parsed, every name,
+        # dimension and bound, all problems at once with their field paths.
+        self.validate()
 
     @classmethod
     def from_json(cls, text: str) -> "Scenario":

@@ -55,6 +55,11 @@ class Filter:
     >>> float(f.mean[0])  # doctest: +SKIP
     """
 
+
+    # A misspelt or FilterPy-style attribute (``f.x = …``) raises AttributeError instead of
+    # being accepted and ignored.
+    __slots__ = ("scenario", "_inner", "_at_prior")
+
     def __init__(
         self,
         method: str,
@@ -75,7 +80,7 @@ class Filter:
             domain=domain,
             seed=seed,
         )
-        self.scenario: Scenario = scenario
+        self.scenario = scenario
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
         # Whether the filter is still at the prior's time (no step taken yet).
         self._at_prior = True

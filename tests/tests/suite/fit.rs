@@ -211,3 +211,36 @@ fn the_profile_likelihood_refits_the_others_and_peaks_at_the_fit() {
     assert!((q - fitted.estimate[0]).abs() < 20.0);
     assert!((l - fitted.log_likelihood).abs() < 1e-3);
 }
+
+/// Issue 56, item 2: the Nile with its near-diffuse prior N(1120, 10⁷) on the box a default
+/// would give (the prior mean ± 8 sd, [−24 178, 26 418]) and the separation approach's cells
+/// left to the problem. On the old fixed 200 cells (253 per cell against a posterior sd of
+/// about 50) a fit returned q = 10 838 where the Kalman MLE is 1 469; the cells chosen from the
+/// problem (ten per expected sd, at most 4000) put the log-likelihood at the MLE within 0.1 of
+/// the Kalman filter's, and the scenario as it stands — no parameter varied — has one too
+/// (`Likelihood::of_scenario`).
+#[test]
+fn a_diffuse_prior_on_a_wide_box_gets_cells_for_its_posterior() {
+    let mut config = local_level(r#"{"method": "separation"}"#);
+    let sd = PRIOR.1.sqrt();
+    config.domain = vec![[PRIOR.0 - 8.0 * sd, PRIOR.0 + 8.0 * sd]];
+    let l = Likelihood::new(&config, nile(), 0, &[], 1).unwrap();
+    assert!(
+        l.chosen_defaults().iter().any(|c| c.contains("cells 4000")),
+        "{:?}",
+        l.chosen_defaults()
+    );
+    let (q, r) = (1469.1, 15099.0);
+    let got = l.log_likelihood(&[q, r]).unwrap();
+    assert!(
+        (got - reference(q, r)).abs() < 0.1,
+        "{got} against {}",
+        reference(q, r)
+    );
+    // The scenario at its own values, q = 1000 and r = 10 000.
+    let as_it_stands = Likelihood::of_scenario(&config, nile(), 0, 1).unwrap();
+    assert!(as_it_stands.names().is_empty());
+    let own = as_it_stands.log_likelihood(&[]).unwrap();
+    assert!((own - reference(1000.0, 10_000.0)).abs() < 0.1, "{own}");
+    assert!(l.concerns(&[q, r]).is_empty(), "{:?}", l.concerns(&[q, r]));
+}

@@ -27,7 +27,7 @@ fn cubic_sensor() -> ScenarioConfig {
                    "noise": {{ "kind": "discrete", "mixture": [{{ "mean": [0], "cov": [["r"]] }}] }} }},
         "prior": {{ "kind": "gaussian", "mean": [0], "cov": [[0.25]] }},
         "domain": [[-4, 4]], "time": {{ "t_final": 60, "dt_obs": 0.2, "inner_steps": 20 }},
-        "methods": [{{ "method": "separation" }}, {{ "method": "ekf" }}] }}"#,
+        "methods": [{{ "method": "separation", "cells": [200] }}, {{ "method": "ekf" }}] }}"#,
         TRUTH[0], TRUTH[1]
     ))
     .unwrap()

@@ -540,6 +540,9 @@ fn a_missing_component_is_the_one_sensor_likelihood() {
                     prior(zakai::Separation::builder(m))
                         .domain(&[(-6.0, 6.0)])
                         .dt(DT)
+                        // The same grid for both models (left unset, the cells would follow
+                        // each model's information).
+                        .with(|p| p.cells = vec![200])
                         .build()
                         .unwrap(),
                 )

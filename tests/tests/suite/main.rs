@@ -34,6 +34,7 @@ mod simulator;
 mod smoothing;
 mod spectral;
 mod state_diffusion;
+mod stiff_edges;
 mod test_attributes;
 mod time_and_inputs;
 mod yau_yau;

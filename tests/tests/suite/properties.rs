@@ -175,11 +175,12 @@ fn run(config: ScenarioConfig) -> Result<Outcome, TestCaseError> {
         .start(seed)
         .map_err(|e| TestCaseError::fail(format!("starts: {e}")))?;
     // The conditions' warnings only: a note on the DST length (a large prime in N + 1, which
-    // makes a step slower) says nothing about the guarantees.
+    // makes a step slower) says nothing about the guarantees, and QIEM's note that it shortened
+    // its step to satisfy (31) says that they hold.
     let warned: Vec<String> = run.filters()[0]
         .warnings()
         .into_iter()
-        .filter(|w| !w.starts_with("DST length"))
+        .filter(|w| !w.starts_with("DST length") && !w.starts_with("(31) QIEM stability: Δt"))
         .collect();
     let mut outcome = Outcome {
         warned,
@@ -281,11 +282,12 @@ fn grid_methods_within_their_conditions_stay_nonnegative_finite_and_normalised()
             }
         })
         .unwrap();
-    // The strategy must actually exercise the "within" branch for most cases.
+    // The strategy must actually exercise the "within" branch for many cases (45 of 96 since
+    // QIEM's (31) is checked under the exponential potential too, where it had been skipped).
     let within = within.get();
     eprintln!("{within} of 96 cases within the conditions");
     assert!(
-        within >= 48,
+        within >= 40,
         "only {within} of 96 cases within the conditions"
     );
 }

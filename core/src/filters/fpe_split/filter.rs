@@ -308,10 +308,21 @@ impl ContinuousDiscreteGrid {
             }
         }
         if !steps.is_finite() || steps > MAX_SUBSTEPS as f64 {
+            // Say what asked for the steps, and the parameter that fixes it.
+            let why = if notes.is_empty() {
+                format!(
+                    "the interval {interval:.4e} in steps of the method's Δt = {:.4e}; raise the method's `dt` (or check the times' unit: a recording in seconds makes a yearly Δτ 3.2e7)",
+                    self.target_dt
+                )
+            } else {
+                format!(
+                    "{}; use fewer cells or a smaller domain (the conditions scale with Δx)",
+                    notes.join("; ")
+                )
+            };
             return Err(FilterError::Unsuitable(format!(
-                "{} would need {steps:.3e} FPE steps per observation interval (more than {MAX_SUBSTEPS}): {}; use fewer cells or a smaller domain",
+                "{} would need {steps:.3e} FPE steps per observation interval (more than {MAX_SUBSTEPS}): {why}",
                 self.name,
-                notes.join("; ")
             )));
         }
         Ok((steps as usize, notes))

@@ -13,7 +13,7 @@ use crate::filters::method::{
     problems_from, BuildContext, Method, MethodInfo, ProblemContext, Takes,
 };
 use crate::filters::params::Declared;
-use crate::filters::{per_dimension, product};
+use crate::filters::product;
 use crate::validate::ConfigProblem;
 
 fn info(key: &str, name: &str, summary: &str, paper: &str) -> MethodInfo {
@@ -33,7 +33,7 @@ fn memory(p: &FpeParams, n: usize) -> Option<usize> {
     // The factors of the implicit step and, per cell, the density, its copy, the
     // upwind fluxes, the likelihood, the diagonal of a and, for a correlated a, the rate and
     // direction of each mixed term (counted as two values per pair).
-    let cells = product(&per_dimension(&p.cells, n))?;
+    let cells = product(&p.shape(n))?;
     p.factor_values(n)?
         .checked_add(cells.checked_mul(6 + 3 * n + n * n.saturating_sub(1))?)?
         .checked_mul(8)
@@ -122,25 +122,46 @@ macro_rules! fpe_method {
             fn refined(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
                 refined_cells(p, n)
             }
+            fn problem_defaults(
+                p: &FpeParams,
+                problem: &ProblemContext,
+            ) -> Option<(FpeParams, String)> {
+                cells_from_problem(p, problem)
+            }
         }
     };
 }
 
+/// Bounds of the cells chosen from the problem: never fewer than 001 §4's 200.
+const CHOSEN_CELLS: (usize, usize) = (200, 4000);
+
+/// Unset 1-D cells from the problem ([`crate::filters::resolution::expected_width`]).
+fn cells_from_problem(p: &FpeParams, problem: &ProblemContext) -> Option<(FpeParams, String)> {
+    if !p.cells.is_empty() {
+        return None;
+    }
+    let width = crate::filters::resolution::expected_width(problem)?;
+    let cells = width.count(problem.bounds[0], CHOSEN_CELLS);
+    let note = format!("cells {cells}, {}", width.describe(CHOSEN_CELLS));
+    Some((
+        FpeParams {
+            cells: alloc::vec![cells],
+            ..p.clone()
+        },
+        note,
+    ))
+}
+
 /// Twice the cells per dimension and half the time step.
 fn refined_cells(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
-    let cells: Vec<usize> = crate::filters::per_dimension(&p.cells, n)
-        .iter()
-        .map(|&c| 2 * c)
-        .collect();
+    let from = p.shape(n);
+    let cells: Vec<usize> = from.iter().map(|&c| 2 * c).collect();
     let refined = FpeParams {
         cells: cells.clone(),
         dt: 0.5 * p.dt,
     };
     refined.problems(n).is_empty().then(|| {
-        let what = format!(
-            "cells {:?} → {cells:?}, Δt {} → {}",
-            p.cells, p.dt, refined.dt
-        );
+        let what = format!("cells {from:?} → {cells:?}, Δt {} → {}", p.dt, refined.dt);
         (refined, what)
     })
 }

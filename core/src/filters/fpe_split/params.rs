@@ -12,6 +12,10 @@ use crate::filters::{count_problem, per_dimension, product};
 /// Largest number of FPE steps per observation interval the automatic sub-stepping may take.
 pub const MAX_SUBSTEPS: usize = 1_000_000;
 
+/// Cells per dimension of a grid whose size is neither given nor chosen from the problem
+/// (2-D and 3-D; 001 §4's 1-D count).
+pub const DEFAULT_CELLS: usize = 200;
+
 /// Which numerical scheme solves the FPE between measurements.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FpeScheme {
@@ -26,8 +30,10 @@ parameters! {
     /// `separation` and `implicit_fdm`.
     pub struct FpeParams {
         /// Cells per dimension over the domain (one number: the same in every dimension;
+        /// empty: chosen from the problem in 1-D, ten per narrowest posterior standard
+        /// deviation to expect and at least 200, [`DEFAULT_CELLS`] per dimension else;
         /// 001 §4: 200 on ⟨−10, 10⟩, 35 × 35 on ⟨−2, 5⟩² in 2-D).
-        cells: Vec<usize> = alloc::vec![200] => int_list "cells", at_least(2);
+        cells: Vec<usize> = Vec::new() => int_list "cells", at_least(2);
         /// Time step Δt of the Fokker–Planck scheme, rounded down to divide Δτ and reduced
         /// further when the CFL condition 001 (16) / (23) needs it.
         dt: f64 = 0.01 => number "Δt", above(0);
@@ -35,9 +41,14 @@ parameters! {
 }
 
 impl FpeParams {
-    /// Cells per dimension for an `n`-dimensional model.
+    /// Cells per dimension for an `n`-dimensional model ([`DEFAULT_CELLS`] each when unset
+    /// and not chosen from the problem).
     pub fn shape(&self, n: usize) -> Vec<usize> {
-        per_dimension(&self.cells, n)
+        if self.cells.is_empty() {
+            alloc::vec![DEFAULT_CELLS; n]
+        } else {
+            per_dimension(&self.cells, n)
+        }
     }
 
     /// Values stored by the factors of the implicit step (`None` on overflow).
@@ -48,7 +59,9 @@ impl FpeParams {
     /// Every problem with the parameters for an `n`-dimensional model.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = self.range_problems();
-        count_problem("cells", &self.cells, n, &mut p);
+        if !self.cells.is_empty() {
+            count_problem("cells", &self.cells, n, &mut p);
+        }
         if p.is_empty() && product(&self.shape(n)).is_none_or(|c| c > crate::grid::MAX_NODES) {
             p.push((
                 "cells",

@@ -451,6 +451,12 @@ pub struct YauYauFilter {
     /// The last step's log-likelihood ([`Filter::log_likelihood`]).
     log_likelihood: f64,
     warnings: Vec<GuaranteeWarning>,
+    /// The longest substep the scheme takes: `dt`, or shorter where QIEM's stability
+    /// conditions (31) ask for it on this grid ([`guarantees::qiem_substeps`]).
+    step_bound: f64,
+    /// Whether even the most substeps leave QIEM's stability conditions violated: mass at
+    /// the edge is then the scheme's doing, not the posterior's.
+    unstable: bool,
     estimate: Estimate,
     /// Storage of the estimate's moments.
     moments: crate::grid::Moments,
@@ -589,6 +595,8 @@ impl YauYauFilter {
             remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
             prediction: None,
             warnings: Vec::new(),
+            step_bound: params.dt,
+            unstable: false,
             cell,
             partial: PartialIncrements::of(model, "the Yau–Yau filters")?,
             estimate: Estimate {
@@ -639,8 +647,24 @@ impl YauYauFilter {
     /// Builds the solver for observation interval `dt_obs` (Δt rounded so that it divides it)
     /// and evaluates the guarantees for that step.
     fn prepare(&mut self, dt_obs: f64) -> Result<(), FilterError> {
-        let substeps = self.substeps_for(dt_obs);
+        let chosen = match self.scheme {
+            Scheme::Iem => guarantees::QiemSubsteps {
+                substeps: substeps_of(dt_obs, self.params.dt),
+                stable: true,
+                warning: None,
+            },
+            _ => guarantees::qiem_substeps(
+                &self.op,
+                &self.grid,
+                dt_obs,
+                self.params.dt,
+                self.explicit_potential(),
+            ),
+        };
+        let substeps = chosen.substeps;
+        self.unstable = !chosen.stable;
         let dt = dt_obs / substeps as f64;
+        self.step_bound = dt.min(self.params.dt);
         let solver = match self.scheme {
             Scheme::Iem | Scheme::Qiem | Scheme::Qiem4 => self.stepper(dt),
             Scheme::Superposition => {
@@ -659,10 +683,9 @@ impl YauYauFilter {
                 w.extend(guarantees::iem_stability(&self.op, &self.grid));
                 w
             }
-            Scheme::Qiem | Scheme::Qiem4 if self.params.potential == PotentialTerm::Explicit => {
-                guarantees::qiem_stability(&self.op, &self.grid, dt)
+            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => {
+                chosen.warning.into_iter().collect()
             }
-            Scheme::Qiem | Scheme::Qiem4 | Scheme::Superposition => Vec::new(),
         };
         if self.scheme != Scheme::Iem {
             // Every scheme but IEM solves with the DST.
@@ -673,9 +696,19 @@ impl YauYauFilter {
         Ok(())
     }
 
-    /// Substeps of at most the scheme's Δt over `interval`.
+    /// Substeps over `interval` of at most the scheme's Δt, shortened as the stability
+    /// conditions asked for Δτ.
     fn substeps_for(&self, interval: f64) -> usize {
-        substeps_of(interval, self.params.dt)
+        substeps_of(interval, self.step_bound)
+    }
+
+    /// The potential term the scheme's explicit part takes (the superposition technique
+    /// carries its bumps with the exponential one).
+    fn explicit_potential(&self) -> PotentialTerm {
+        match self.scheme {
+            Scheme::Superposition => PotentialTerm::Exponential,
+            _ => self.params.potential,
+        }
     }
 
     /// The scheme's step of length `dt` (the superposition technique's remainders: QIEM with
@@ -764,11 +797,18 @@ impl YauYauFilter {
     /// [`YauYauFilter::predict_without_likelihood`], or with `transposed` its transpose.
     fn predict_without_likelihood_in(&mut self, interval: f64, transposed: bool) {
         let keep = crate::filters::REMAINDER_PLANS + 1;
+        let term = self.explicit_potential();
         let (op, cache) = self
             .prediction
             .get_or_insert_with(|| (self.op.without_observation_term(), LengthCache::new(keep)));
         if !cache.bring_to_front(interval) {
-            let substeps = substeps_of(interval, self.params.dt);
+            let substeps = match self.scheme {
+                Scheme::Iem => substeps_of(interval, self.params.dt),
+                _ => {
+                    guarantees::qiem_substeps(op, &self.grid, interval, self.step_bound, term)
+                        .substeps
+                }
+            };
             let solver = stepper_for(
                 self.scheme,
                 &self.params,
@@ -888,10 +928,7 @@ fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_ob
     shift
 }
 
-/// Substeps of at most `dt` over `interval`.
-fn substeps_of(interval: f64, dt: f64) -> usize {
-    libm::ceil(interval / dt - 1e-9).max(1.0) as usize
-}
+use super::guarantees::substeps_of;
 
 /// [`YauYauFilter::stepper`] for the operator `op`.
 fn stepper_for(
@@ -997,6 +1034,15 @@ impl Filter for YauYauFilter {
         self.remainders.check(out);
         if let Some((_, cache)) = &self.prediction {
             cache.check(out);
+        }
+        if self.unstable {
+            for c in out[from..]
+                .iter_mut()
+                .filter(|c| c.check == crate::filters::BOUNDARY_MASS_CHECK)
+            {
+                c.advice = "the density reaches the edge of the box, where QIEM's stability conditions (31) fail at any step it would take (see the warnings): the explicit drift there amplifies round-off, and a wider box makes |f| at its edge larger; shrink the domain or use IEM";
+            }
+            return;
         }
         if self.params.likelihood == Likelihood::InOperator {
             // With −½hᵀS⁻¹h in q the implicit step damps the tails by (1 + |q|Δt)⁻¹ per step

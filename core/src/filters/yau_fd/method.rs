@@ -354,70 +354,22 @@ yau_yau_method!(
     grid_memory
 );
 
-/// Points per posterior standard deviation a 1-D grid gets when its size is left unset: the
-/// self-check warns below [`crate::filters::WIDTH_IN_CELLS_THRESHOLD`] cells per sd, and 000's
-/// second-order schemes are within about 10⁻³ of the exact filter at this resolution (the
-/// Kalman–Bucy comparison in the tests).
-pub const POINTS_PER_SD: f64 = 10.0;
+pub use crate::filters::resolution::POINTS_PER_SD;
 
 /// Bounds of a grid chosen from the problem.
 const CHOSEN_POINTS: (usize, usize) = (101, 4001);
 
-/// An unset 1-D grid from the problem (rounded up to a fast transform length): spacing a tenth ([`POINTS_PER_SD`]) of the narrowest
-/// posterior standard deviation to expect — the prior's, or the steady state of the filter
-/// linearised at the narrowest point of the prior's ±3 sd within the box, whichever is
-/// smaller. For dx = G dv, dy = c x dt + dw with E[dw²] = S dt the Riccati equation
-/// P' = GGᵀ − c²P²/S settles at P = √(GGᵀ S)/|c|; with several observations c²/S becomes
-/// Σ_i (∂h_i/∂x)²/S_ii.
+/// An unset 1-D grid from the problem ([`crate::filters::resolution::expected_width`]),
+/// rounded up to a fast transform length.
 fn grid_from_problem(p: &YauYauParams, problem: &ProblemContext) -> Option<(YauYauParams, String)> {
-    let model = problem.model;
-    if !p.points.is_empty() || model.n != 1 {
+    if !p.points.is_empty() {
         return None;
     }
-    let crate::model::ObservationModel::Continuous { noise_cov } = &model.observations else {
-        return None;
-    };
-    let (lo, hi) = problem.bounds[0];
-    let prior_sd = libm::sqrt(problem.prior.covariance()[(0, 0)]);
-    let centre = problem.prior.mean()[0];
-    let (a, b) = (
-        (centre - 3.0 * prior_sd).max(lo),
-        (centre + 3.0 * prior_sd).min(hi),
-    );
-    // Q at the prior's mean (the linearised filter's steady state is only a guide).
-    let q = model.process_noise().at(&[centre])[(0, 0)];
-    let mut jacobian = vec![0.0; model.m];
-    let mut steady = f64::INFINITY;
-    const SAMPLES: usize = 64;
-    for k in 0..=SAMPLES {
-        let x = a + (b - a) * k as f64 / SAMPLES as f64;
-        model.observation.jacobian(&[x], &mut jacobian);
-        let information: f64 = jacobian
-            .iter()
-            .enumerate()
-            .map(|(i, c)| c * c / noise_cov[(i, i)])
-            .sum();
-        if information > 0.0 && information.is_finite() {
-            steady = steady.min(libm::sqrt(libm::sqrt(q / information)));
-        }
-    }
-    let width = prior_sd.min(steady);
-    if !(width > 0.0 && width.is_finite()) {
-        return None;
-    }
-    let wanted = libm::ceil((hi - lo) * POINTS_PER_SD / width);
-    let wanted = (wanted.min(CHOSEN_POINTS.1 as f64) as usize).max(CHOSEN_POINTS.0);
+    let width = crate::filters::resolution::expected_width(problem)?;
+    let wanted = width.count(problem.bounds[0], CHOSEN_POINTS);
     // The first count from there whose DST length N + 1 is fast (factors 2, 3, 5, 7 only).
     let points = super::guarantees::smooth_points(wanted - 1, true)?;
-    let steady_text = if steady.is_finite() {
-        format!("{steady:.3}")
-    } else {
-        "none (h is flat there)".into()
-    };
-    let note = format!(
-        "points {points}, {POINTS_PER_SD} per the narrowest posterior sd to expect on the prior's ±3 sd: the smaller of the prior's {prior_sd:.3} and the linearised filter's steady state {steady_text} (within {}–{})",
-        CHOSEN_POINTS.0, CHOSEN_POINTS.1
-    );
+    let note = format!("points {points}, {}", width.describe(CHOSEN_POINTS));
     Some((
         YauYauParams {
             points: vec![points],

@@ -24,7 +24,11 @@
 //! −10⁹ at the edge of a box for h = x⁶) the factor `1 + Δt q` is hugely negative and the
 //! scheme is unstable ((31) fails there). [`PotentialTerm::Exponential`] (the default) applies
 //! `e^{Δt q}` instead — the same first-order consistency, unconditionally stable for q ≤ 0;
-//! [`PotentialTerm::Explicit`] is (18) exactly.
+//! [`PotentialTerm::Explicit`] is (18) exactly. The drift stays explicit either way, and a
+//! steep one (f = −x³ reaches |f| = 125 at the edge of [−5, 5]) needs `Δt p² ≤ Q` at every
+//! node: QIEM, QIEM-4 and the superposition technique's bumps take as many substeps as
+//! (31) and that bound ask for on the grid ([`guarantees::qiem_substeps`]), at most `dt`
+//! long, and report the shortened step among the warnings.
 //!
 //! By default ([`Likelihood::InUpdate`]) the `−½hᵀS⁻¹h` part of q moves into the update, whose
 //! factor is then the bounded Gaussian likelihood of the increment (see [`operator`]);

@@ -26,12 +26,15 @@ pub struct Information {
 }
 
 /// −∇² ln L at `theta` (where ln L = `center`) by central differences with step
-/// `h_i = 10⁻³·max(|θ_i|, 10⁻²)` — the second differences of a likelihood that is smooth in θ
-/// (the Kalman, grid and spectral filters'; not the particle filter's) have an error of
-/// order h², with rounding at ε·|ln L|/h² far below it for data sets of up to 10⁶
-/// observations. A step that would leave the bounds is shrunk to fit; a parameter within
-/// 10⁻⁹ of a bound has no two-sided stencil and gets no standard error. All 2p² + … stencil
-/// points go to `evaluate` as one batch.
+/// `h_i = 10⁻³·|θ_i|` — relative to the parameter's own scale, so that the standard errors do
+/// not depend on its unit (a rate per second is 3·10⁷ times a rate per year; an absolute
+/// floor would be a large part of the one and nothing of the other); at θ_i = 0, 10⁻³ of the
+/// width of its bounds, or 10⁻⁵ when they are open. The second differences of a likelihood
+/// that is smooth in θ (the Kalman, grid and spectral filters'; not the particle filter's)
+/// have an error of order h², with rounding at ε·|ln L|/h² far below it for data sets of up
+/// to 10⁶ observations. A step that would leave the bounds is shrunk to fit; a parameter
+/// within 10⁻⁹ of its scale of a bound has no two-sided stencil and gets no standard error.
+/// All 2p² + … stencil points go to `evaluate` as one batch.
 pub fn observed_information(
     evaluate: &dyn Evaluate,
     theta: &[f64],
@@ -40,18 +43,25 @@ pub fn observed_information(
 ) -> Information {
     let p = theta.len();
     let mut notes = Vec::new();
+    let scales: Vec<f64> = theta
+        .iter()
+        .zip(bounds)
+        .map(|(&t, &(lo, hi))| match t.abs() {
+            0.0 if (hi - lo).is_finite() => hi - lo,
+            0.0 => 1e-2,
+            scale => scale,
+        })
+        .collect();
     let steps: Vec<f64> = theta
         .iter()
         .zip(bounds)
-        .map(|(&t, &(lo, hi))| {
-            let h = 1e-3 * t.abs().max(1e-2);
-            h.min(t - lo).min(hi - t)
-        })
+        .zip(&scales)
+        .map(|((&t, &(lo, hi)), &scale)| (1e-3 * scale).min(t - lo).min(hi - t))
         .collect();
     let usable: Vec<bool> = steps
         .iter()
-        .zip(theta)
-        .map(|(&h, &t)| h > 1e-9 * t.abs().max(1.0))
+        .zip(&scales)
+        .map(|(&h, &scale)| h > 1e-9 * scale)
         .collect();
     // The stencil: ±h_i e_i, and the four corners ±h_i e_i ± h_j e_j for i < j.
     let mut points = Vec::new();
@@ -176,5 +186,37 @@ mod tests {
         let i = observed_information(&Quadratic, &[1.0, -2.0], 0.0, &[(1.0, inf), (-inf, inf)]);
         assert!(standard_errors(&i, 2).iter().all(|s| s.is_nan()));
         assert!(i.notes[0].contains("bound"), "{:?}", i.notes);
+    }
+
+    /// The log-likelihood of n exponential waiting times with rate θ and mean 1/θ₀:
+    /// n (ln θ − θ/θ₀), maximal at θ₀ with information n/θ₀².
+    struct Rate(f64);
+    impl Evaluate for Rate {
+        fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+            points
+                .iter()
+                .map(|q| 400.0 * (q[0].ln() - q[0] / self.0))
+                .collect()
+        }
+    }
+
+    /// Issue 56, item 4: a rate per second (4.15e-5) and the same rate per year (1.31e3) have
+    /// the same relative standard error, 1/√n (the step is relative to θ; an absolute floor
+    /// of 10⁻⁵ was 24 % of the per-second rate and put its standard error 2 % off).
+    #[test]
+    fn standard_errors_do_not_depend_on_the_unit() {
+        for rate in [4.15e-5, 1.309, 1.309e3, 4.15e-5 * 3.156e7] {
+            let center = Rate(rate).log_likelihoods(&[vec![rate]])[0];
+            let i = observed_information(&Rate(rate), &[rate], center, &[(0.0, f64::INFINITY)]);
+            let se = standard_errors(&i, 1)[0];
+            assert!(
+                (se / rate - 0.05).abs() < 1e-6,
+                "rate {rate}: relative se {}",
+                se / rate
+            );
+        }
+        // At θ = 0 the step comes from the bounds' width.
+        let i = observed_information(&Quadratic, &[0.0, -2.0], 0.0, &[(-1.0, 3.0), (-10.0, 10.0)]);
+        assert!((i.steps[0] - 4e-3).abs() < 1e-15, "{:?}", i.steps);
     }
 }

@@ -66,6 +66,9 @@ pub struct FitResult {
     /// The estimate's asymptotic covariance, p × p row-major, when the information is
     /// positive definite.
     pub covariance: Option<Vec<f64>>,
+    /// 95 % Wald intervals, computed on the scale the fit moves on and mapped back, so they
+    /// respect the bounds ([`Transform::wald_interval`]); NaN without a standard error.
+    pub intervals: Vec<(f64, f64)>,
     /// ln L(θ̂).
     pub log_likelihood: f64,
     /// The number of log-likelihood evaluations (filter runs), the information's included.
@@ -224,6 +227,16 @@ pub fn maximise(
         }
     }
     notes.extend(information.notes.iter().cloned());
+    // The method's own doubts about the likelihood it gave, where the fit started and where
+    // it ended (one run each): a grid that warned, a stability condition violated.
+    for (when, theta) in [("at the start", &start), ("at the estimate", &estimate)] {
+        notes.extend(
+            likelihood
+                .concerns(theta)
+                .into_iter()
+                .map(|c| format!("{when}: {c}")),
+        );
+    }
     let (stderr, covariance) = if likelihood.config().methods[0].is_random() {
         notes.push(format!(
             "{} draws random numbers: its log-likelihood is a random function of the \
@@ -236,6 +249,12 @@ pub fn maximise(
     } else {
         (standard_errors(&information, p), information.covariance)
     };
+    let intervals = likelihood
+        .bounds()
+        .iter()
+        .zip(estimate.iter().zip(&stderr))
+        .map(|(&b, (&theta, &se))| Transform::of(b).wald_interval(theta, se, 1.959_963_984_540_054))
+        .collect();
     Ok(FitResult {
         method: likelihood.method().into(),
         names: likelihood.names().to_vec(),
@@ -243,6 +262,7 @@ pub fn maximise(
         estimate,
         stderr,
         covariance,
+        intervals,
         log_likelihood,
         evaluations: fit_evaluations + information.evaluations,
         iterations,

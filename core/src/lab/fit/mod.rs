@@ -99,9 +99,32 @@ impl Likelihood {
         if names.is_empty() {
             problems.push(ConfigProblem::new(
                 "parameters",
-                "the scenario declares no parameter to fit",
+                "the scenario declares no parameter to fit (Likelihood::of_scenario gives the likelihood of the scenario as it stands)",
             ));
         }
+        Self::with_names(config, recording, (method, seed), names, problems)
+    }
+
+    /// The likelihood of `recording` under method `method` for the scenario as it stands,
+    /// every parameter at its value (declared or not): [`Likelihood::log_likelihood`] at
+    /// the empty point `&[]`.
+    pub fn of_scenario(
+        config: &ScenarioConfig,
+        recording: Recording,
+        method: usize,
+        seed: u64,
+    ) -> Result<Self, ZakaiError> {
+        Self::with_names(config, recording, (method, seed), Vec::new(), Vec::new())
+    }
+
+    /// [`Likelihood::new`] once the names are settled, `problems` found so far.
+    fn with_names(
+        config: &ScenarioConfig,
+        recording: Recording,
+        (method, seed): (usize, u64),
+        names: Vec<String>,
+        mut problems: Vec<ConfigProblem>,
+    ) -> Result<Self, ZakaiError> {
         for (i, name) in names.iter().enumerate() {
             if let Err(problem) = config.parameter(name, "params") {
                 problems.push(problem);
@@ -214,9 +237,7 @@ impl Likelihood {
                 )]));
             }
         }
-        let values: Vec<(String, f64)> = self.names.iter().cloned().zip(theta.to_vec()).collect();
-        let experiment = Experiment::new(self.config.with_parameter_values(&values)?)?;
-        let run = experiment.filter_recorded(self.recording.clone(), self.seed)?;
+        let run = self.run_at(theta)?;
         let track = &run.methods[0];
         match (&track.failure, track.log_likelihood()) {
             (None, Some(l)) if !l.is_nan() => Ok(l),
@@ -231,6 +252,37 @@ impl Likelihood {
                 message: "it gives no log-likelihood".to_string(),
             }),
         }
+    }
+
+    /// One run of the method on the data at θ (checked by [`Likelihood::log_likelihood`]).
+    fn run_at(&self, theta: &[f64]) -> Result<crate::lab::experiment::RunResult, ZakaiError> {
+        let values: Vec<(String, f64)> = self.names.iter().cloned().zip(theta.to_vec()).collect();
+        let experiment = Experiment::new(self.config.with_parameter_values(&values)?)?;
+        experiment.filter_recorded(self.recording.clone(), self.seed)
+    }
+
+    /// What the method says about its own result at θ, from one run: the guarantees of its
+    /// chosen steps it reports as violated and its self-checks that warned
+    /// ([`crate::Filter::self_check`]), each with its advice — the reasons a likelihood
+    /// value may not be trustworthy there. Empty when it says nothing (and when θ is not
+    /// admissible: [`Likelihood::log_likelihood`] says why).
+    pub fn concerns(&self, theta: &[f64]) -> Vec<String> {
+        if theta.len() != self.names.len() {
+            return Vec::new();
+        }
+        let Ok(run) = self.run_at(theta) else {
+            return Vec::new();
+        };
+        let violated = run
+            .warnings
+            .iter()
+            .filter(|(_, w)| w.contains("violated"))
+            .map(|(who, w)| format!("{who}: {w}"));
+        let checks = run.methods[0]
+            .concerns
+            .iter()
+            .map(|c| format!("{}: self-check {}", run.methods[0].name, c.describe()));
+        violated.chain(checks).collect()
     }
 
     /// [`Likelihood::log_likelihood`] with a failure as `f64::NEG_INFINITY` (the value the

@@ -57,6 +57,32 @@ impl Transform {
     }
 }
 
+impl Transform {
+    /// dθ/du at θ.
+    fn slope(self, theta: f64) -> f64 {
+        match self {
+            Transform::Identity => 1.0,
+            Transform::Lower(lo) => theta - lo,
+            Transform::Upper(hi) => hi - theta,
+            Transform::Interval(lo, hi) => (theta - lo) * (hi - theta) / (hi - lo),
+        }
+    }
+
+    /// The Wald interval `θ̂ ± z·se` computed where the fit moved, on the unbounded scale
+    /// u, and mapped back: `θ(û ± z·se_u)` with `se_u = se/|dθ/du|` (the delta method), so
+    /// that it stays inside the bounds (a variance's interval is `lo + (θ̂ − lo)·e^(±z se/(θ̂ −
+    /// lo))`, never below its bound); on an unbounded parameter the usual `θ̂ ± z·se`. NaN
+    /// without a standard error or with θ̂ on a bound (where u is infinite).
+    pub fn wald_interval(self, theta: f64, se: f64, z: f64) -> (f64, f64) {
+        let slope = self.slope(theta);
+        if !(se.is_finite() && slope > 0.0 && slope.is_finite()) {
+            return (f64::NAN, f64::NAN);
+        }
+        let (u, half) = (self.to_free(theta), z * se / slope);
+        (self.to_bounded(u - half), self.to_bounded(u + half))
+    }
+}
+
 /// θ(u) componentwise.
 #[cfg(feature = "fit")]
 pub(crate) fn bounded(transforms: &[Transform], u: &[f64]) -> alloc::vec::Vec<f64> {
@@ -71,6 +97,31 @@ pub(crate) fn bounded(transforms: &[Transform], u: &[f64]) -> alloc::vec::Vec<f6
 mod tests {
     use super::*;
     use crate::testing::test;
+
+    /// Issue 56, item 5: a variance q ≥ 0 with θ̂ = 400 ± 717 had the interval
+    /// (−1005, 1805) on the θ scale; on u = ln q it is 400·e^(±1.96·717/400), inside the
+    /// bound, and to first order in se it is the symmetric one.
+    #[test]
+    fn wald_intervals_stay_inside_the_bounds() {
+        let lower = Transform::of((0.0, f64::INFINITY));
+        let (a, b) = lower.wald_interval(400.0, 717.0, 1.96);
+        let spread = (1.96f64 * 717.0 / 400.0).exp();
+        assert!(
+            (a - 400.0 / spread).abs() < 1e-9 && (b - 400.0 * spread).abs() < 1e-6,
+            "{a} {b}"
+        );
+        assert!(a > 0.0);
+        let (a, b) = lower.wald_interval(400.0, 1e-3, 1.96);
+        assert!((a - (400.0 - 1.96e-3)).abs() < 1e-8 && (b - (400.0 + 1.96e-3)).abs() < 1e-8);
+        let (a, b) = Transform::of((0.0, 1.0)).wald_interval(0.9, 0.2, 1.96);
+        assert!(0.0 < a && a < 0.9 && 0.9 < b && b < 1.0, "{a} {b}");
+        let (a, b) = Transform::of((f64::NEG_INFINITY, 2.0)).wald_interval(1.0, 3.0, 1.96);
+        assert!(b < 2.0 && a < 1.0 - 1.96 * 3.0, "{a} {b}");
+        let (a, b) = Transform::Identity.wald_interval(-3.0, 0.5, 2.0);
+        assert_eq!((a, b), (-4.0, -2.0));
+        assert!(lower.wald_interval(0.0, 1.0, 1.96).0.is_nan());
+        assert!(lower.wald_interval(3.0, f64::NAN, 1.96).1.is_nan());
+    }
 
     #[test]
     fn transforms_round_trip_and_stay_inside() {
