@@ -147,16 +147,22 @@ def test_a_method_that_does_not_apply_is_marked_and_the_others_run():
 
 
 def test_a_failed_count_is_a_warning_and_the_others_stand():
-    """A Poisson count of -1 or 2.5 (issue 56, item 4): the grid filter fails at that row with
-    a FilterWarning; the UKF's Gaussian stand-in runs on."""
+    """A Poisson count of -1 or 2.5 (issue 56, item 4): every method refuses it at that row,
+    each with a FilterWarning naming the method, the row and the reason, and the rows before
+    it stand."""
     model = zakai.Model.poisson("0", "exp(x)", diffusion=0.3)
     sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0),
                         [{"method": "separation", "cells": [200]}, "ukf"],
                         dt_obs=1.0, domain=[(-5.0, 5.0)])
     for bad in (-1.0, 2.5):
-        with pytest.warns(zakai.FilterWarning, match="SA.* failed at row 2"):
+        with pytest.warns(zakai.FilterWarning) as caught:
             result = zakai.filter(sc, np.array([1.0, 2.0, bad, 1.0]))
-        assert result.methods["separation"].failure[0] == 2
+        said = [str(w.message) for w in caught]
+        assert len(said) == 2, said
+        assert said[0].startswith("SA failed at row 2") and "Poisson count" in said[0], said
+        assert said[1].startswith("UKF failed at row 2"), said
+        for m in result.methods.values():
+            assert m.failure[0] == 2 and np.isfinite(m.estimates[:2]).all()
 
 
 def test_unknown_attributes_are_refused():
@@ -288,3 +294,15 @@ def test_an_unaligned_array_is_copied_not_misread():
 
     with pytest.raises(zakai.DimensionError, match="not aligned"):
         _zakai.log_likelihood(sc._text(), unaligned, np.ascontiguousarray(times), 0, [], 1, [], None)
+
+
+def test_a_column_that_is_not_numeric_is_named():
+    """Issue 56, item 7: a DataFrame column of text is refused by name, with the value,
+    instead of NumPy's "could not convert string to float"."""
+    model = zakai.Model.discrete("-x", "x", noise_cov=0.1)
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["ukf"], dt_obs=0.1)
+    frame = pd.DataFrame({"flow": [0.1, "a", 0.3]})
+    with pytest.raises(ConfigError, match=r"observations: column 'flow' is not numeric .*'a' is not a number"):
+        zakai.filter(sc, frame)
+    with pytest.raises(ConfigError, match="column 'flow'"):
+        zakai.log_likelihood(sc, frame, "ukf")

@@ -231,6 +231,33 @@ def _times(value: Any, time_unit: Optional[str] = None) -> tuple[Optional[np.nda
 
 
 
+def _table(value: Any, name: str) -> np.ndarray:
+    """A pandas Series/DataFrame (or anything else) as a float array: a column that is not
+    numeric is refused by name, with the first value that is not a number."""
+    if not hasattr(value, "to_numpy"):
+        return _array(value, name)
+    columns = value.items() if hasattr(value, "columns") else [(getattr(value, "name", None), value)]
+    for label, column in columns:
+        try:
+            np.asarray(column.to_numpy(), dtype=float)
+        except (TypeError, ValueError):
+            bad = next(v for v in column.to_numpy() if not _is_number(v))
+            which = f"column {label!r}" if label is not None else "the series"
+            raise ConfigError(
+                f"{name}: {which} is not numeric ({column.dtype}): {bad!r} is not a number "
+                "(NaN marks a missing value)"
+            ) from None
+    return _array(value.to_numpy(dtype=float), name)
+
+
+def _is_number(v: Any) -> bool:
+    try:
+        float(v)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
 def _index_times(
     observations: Any, time_unit: Optional[str] = None
 ) -> tuple[Optional[np.ndarray], Optional[str], Any]:

@@ -24,7 +24,7 @@ from typing import Any, Callable, Optional, Sequence, Union
 import numpy as np
 
 from . import _zakai
-from ._convert import ArrayLike, _aligned, _array, _recording_times
+from ._convert import ArrayLike, _aligned, _array, _recording_times, _table
 from .errors import ConfigError, FilterWarning
 from .runs import _check_executor, _inputs, _scenario, _seed
 from .scenario import Scenario
@@ -37,10 +37,7 @@ def _observations(
     """The observations as an array, their times (given, or a pandas index's) and the
     times' unit (see :func:`zakai.filter`)."""
     t, unit, _ = _recording_times(observations, times, time_unit)
-    obs = _array(
-        observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
-        "observations",
-    )
+    obs = _table(observations, "observations")
     return obs, t, unit
 
 

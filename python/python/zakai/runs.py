@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _zakai
 from .errors import ConfigError, FilterWarning
-from ._convert import ArrayLike, _array, _recording_times
+from ._convert import ArrayLike, _array, _recording_times, _table
 from .scenario import Scenario
 from .results import RunResult, MonteCarloTable
 
@@ -142,7 +142,7 @@ def _inputs(inputs: Optional[ArrayLike]) -> Optional[np.ndarray]:
     """Known inputs as a (rows, k) array (a 1-D array or Series is one input)."""
     if inputs is None:
         return None
-    a = _array(inputs.to_numpy(dtype=float) if hasattr(inputs, "to_numpy") else inputs, "inputs")
+    a = _table(inputs, "inputs")
     return a.reshape(-1, 1) if a.ndim == 1 else a
 
 
@@ -160,10 +160,7 @@ def _recorded(
     """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
     t, unit, index = _recording_times(observations, times, time_unit)
-    obs = _array(
-        observations.to_numpy(dtype=float) if hasattr(observations, "to_numpy") else observations,
-        "observations",
-    )
+    obs = _table(observations, "observations")
     result = RunResult._from_dict(
         _zakai.filter_recorded(
             sc._text(),

@@ -148,3 +148,30 @@ fn unknown_unused_and_ill_formed_parameters_are_reported_where_they_are() {
         .iter()
         .any(|p| p.field == "model.noise.mixture[0].cov"));
 }
+
+/// Issue 56, item 7: a parameter value that makes a coefficient invalid is named with the
+/// coefficient — `sqrt(q)` at q = −1 is NaN — at the entry's own path, not as "model.diffusion:
+/// entries must be finite".
+#[test]
+fn a_value_that_breaks_a_coefficient_is_named_with_it() {
+    let parameters = r#"{ "theta": { "value": 0.7 }, "q": { "value": -1 }, "r": { "value": 0.2 },
+        "m0": { "value": -1.5 } }"#;
+    let c = scenario(
+        "-theta*x",
+        "\"sqrt(q)\"",
+        "\"r\"",
+        "\"m0\"",
+        "1",
+        parameters,
+    );
+    let problems = c.validate();
+    let entry = problems
+        .iter()
+        .find(|p| p.field == "model.diffusion[0][0]")
+        .unwrap_or_else(|| panic!("{problems:?}"));
+    assert!(
+        entry.message.contains("`sqrt(q)` is NaN") && entry.message.contains("q = -1"),
+        "{}",
+        entry.message
+    );
+}

@@ -571,11 +571,28 @@ impl ScenarioConfig {
                     "model.diffusion",
                     format!("must be {n}×{n}"),
                 )),
-                Some(g) if g.iter().any(|v| !v.is_finite()) => p.push(ConfigProblem::new(
-                    "model.diffusion",
-                    "entries must be finite",
-                )),
-                Some(_) => {}
+                Some(values) => {
+                    // Each entry that is not finite, with the expression and the parameter
+                    // values that made it so (`sqrt(q)` at q = −1).
+                    let at = names
+                        .iter()
+                        .map(|(name, v)| format!("{name} = {v}"))
+                        .collect::<Vec<_>>()
+                        .join(", ");
+                    // Column-major: entry k is row k mod n, column k div n.
+                    for (k, v) in values.iter().enumerate().filter(|(_, v)| !v.is_finite()) {
+                        let (i, j) = (k % n, k / n);
+                        let entry = g.0.get(i).and_then(|row| row.get(j));
+                        let message = match entry.and_then(|c| c.text()) {
+                            Some(t) => format!("`{t}` is {v} at the parameters' values ({at}): make them such that it is a finite number"),
+                            None => format!("{v} is not a finite number"),
+                        };
+                        p.push(ConfigProblem::new(
+                            format!("model.diffusion[{i}][{j}]"),
+                            message,
+                        ));
+                    }
+                }
             }
         }
         match &self.model.noise {
