@@ -244,3 +244,30 @@ fn a_diffuse_prior_on_a_wide_box_gets_cells_for_its_posterior() {
     assert!((own - reference(1000.0, 10_000.0)).abs() < 0.1, "{own}");
     assert!(l.concerns(&[q, r]).is_empty(), "{:?}", l.concerns(&[q, r]));
 }
+
+/// Issue 56, item 2: a fit on a grid that warned says so. The same wide box on 200 cells —
+/// 253 per cell against a posterior sd of about 50 — runs off to q ≈ 10⁴ (the Kalman MLE is
+/// 1469); the fit's notes carry the grid's self-check at the start and at the estimate, with
+/// its advice.
+#[test]
+fn a_fit_on_a_grid_that_warned_carries_its_self_checks() {
+    let mut config = local_level(r#"{"method": "separation", "cells": [200]}"#);
+    let sd = PRIOR.1.sqrt();
+    config.domain = vec![[PRIOR.0 - 8.0 * sd, PRIOR.0 + 8.0 * sd]];
+    let l = Likelihood::new(&config, nile(), 0, &[], 1).unwrap();
+    let options = fit::FitOptions {
+        standard_errors: false,
+        ..fit::FitOptions::default()
+    };
+    let fitted = fit::maximise(&l, &l, &options, &|_, _| {}).unwrap();
+    for when in ["at the start: SA", "at the estimate: SA"] {
+        assert!(
+            fitted
+                .notes
+                .iter()
+                .any(|n| n.starts_with(when) && n.contains("posterior width in grid cells")),
+            "{when}: {:?}",
+            fitted.notes
+        );
+    }
+}
