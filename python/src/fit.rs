@@ -9,6 +9,8 @@ use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood};
+use zakai::lab::recording::Recording;
+use zakai::lab::scenario::ScenarioConfig;
 
 use crate::errors;
 use crate::runs::{experiment, parse, recording_of, with_inputs};
@@ -88,15 +90,23 @@ type Arrays<'a, 'py> = (
 /// The likelihood of the recording under method `method` as a function of `names`.
 fn likelihood(
     json: &str,
-    (observations, times, inputs): Arrays<'_, '_>,
+    arrays: Arrays<'_, '_>,
     method: usize,
     names: &[String],
     seed: u64,
 ) -> PyResult<Likelihood> {
+    let (config, recording) = recorded(json, arrays)?;
+    Likelihood::new(&config, recording, method, names, seed).map_err(errors::from_core)
+}
+
+/// The scenario of `json` and the recording of its arrays (checked against its model).
+fn recorded(
+    json: &str,
+    (observations, times, inputs): Arrays<'_, '_>,
+) -> PyResult<(ScenarioConfig, Recording)> {
     let e = experiment(json)?;
     let recording = recording_of(&e, observations, times, None)?;
-    let recording = with_inputs(&e, recording, inputs)?;
-    Likelihood::new(&parse(json)?, recording, method, names, seed).map_err(errors::from_core)
+    Ok((parse(json)?, with_inputs(&e, recording, inputs)?))
 }
 
 /// ln p(data) under method `method` for the scenario as it stands (no parameter varied), and
@@ -113,11 +123,8 @@ pub fn scenario_log_likelihood<'py>(
     seed: u64,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<(f64, Option<String>)> {
-    let e = experiment(json)?;
-    let recording = recording_of(&e, &observations, times.as_ref(), None)?;
-    let recording = with_inputs(&e, recording, inputs.as_ref())?;
-    let l = Likelihood::of_scenario(&parse(json)?, recording, method, seed)
-        .map_err(errors::from_core)?;
+    let (config, recording) = recorded(json, (&observations, times.as_ref(), inputs.as_ref()))?;
+    let l = Likelihood::of_scenario(&config, recording, method, seed).map_err(errors::from_core)?;
     match py.detach(|| l.log_likelihood(&[])) {
         Ok(v) => Ok((v, None)),
         Err(e @ zakai::ZakaiError::RunFailed { .. }) => {

@@ -249,6 +249,7 @@ fn a_diffuse_prior_on_a_wide_box_gets_cells_for_its_posterior() {
 /// 253 per cell against a posterior sd of about 50 — runs off to q ≈ 10⁴ (the Kalman MLE is
 /// 1469); the fit's notes carry the grid's self-check at the start and at the estimate, with
 /// its advice.
+#[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn a_fit_on_a_grid_that_warned_carries_its_self_checks() {
     let mut config = local_level(r#"{"method": "separation", "cells": [200]}"#);

@@ -6,16 +6,20 @@
 //! measurements for the continuous–discrete grid filters of 001). Every grid and spectral
 //! method is built with nothing but the prior, the box and Δτ, and its conditional mean is
 //! held against a reference density the test computes itself: within 0.05 reference
-//! posterior sd at every step, or loud — a build or step that fails, a guarantee the method
+//! posterior sd at every step (SA and FDM, first order: 0.3 for now, see
+//! [`FIRST_ORDER_TOLERANCE`]), or loud — a build or step that fails, a guarantee the method
 //! reports as violated, or a self-check whose cause the reference confirms (mass near the
 //! boundary only counts where the reference has mass there).
 //!
-//! The reference: the Fokker–Planck equation `∂p/∂t = −∂(f p)/∂x + ½G² ∂²p/∂x²` on a line
-//! much wider than the box, by finite volumes with Scharfetter–Gummel fluxes (exact for a
-//! drift constant across a cell face, so a stiff drift needs no upwinding that would smear
-//! it) and implicit Euler in time (positive and stable at any step), then Bayes' rule with
-//! the increment's likelihood `exp(h Δy/S − h² Δτ/(2S))` or the measurement's `N(z; h, S)`
-//! cell by cell. It is checked against itself at half the resolution in space and time.
+//! The reference: the Fokker–Planck equation `∂p/∂t = −∂(f p)/∂x + ½G² ∂²p/∂x²` on the line
+//! where the density lives (±(min(L, 5) + 1), doubled while mass reaches its ends, where the
+//! flux is zero), by finite volumes with Scharfetter–Gummel fluxes (exact for a drift constant
+//! across a cell face) on cells fine enough that the cell Péclet number |f| h/D stays below
+//! 1/4 on |x| ≤ 3, and implicit Euler in time (positive and stable at any step); then Bayes'
+//! rule with the increment's likelihood `exp(h Δy/S − h² Δτ/(2S))` or the measurement's
+//! `N(z; h, S)` cell by cell. It is checked against itself at half the resolution in space and
+//! time (within 0.02 sd). The issue asked for a point-mass reference; resolving a Gaussian
+//! transition kernel of width G√δ on these drifts needed far more nodes than this scheme.
 
 use zakai::nalgebra::DMatrix;
 use zakai::{Concern, Filter, Iem, ImplicitFdm, Model, Noise, Qiem, Separation, Spectral, Spt};
@@ -363,8 +367,8 @@ fn run(
 /// 6 problems (each drift twice, seed 56), each with increments (QIEM, IEM, SPT, the
 /// spectral filter) and with measurements (SA, FDM), 20 intervals of Δτ = 0.01: every
 /// method within 0.05 sd of the reference or loud (SA and FDM: 0.3 sd, see
-/// [`FIRST_ORDER_TOLERANCE`]), and the reference within 0.01 sd of
-/// itself (0.02 sd) at half the cells and twice the step.
+/// [`FIRST_ORDER_TOLERANCE`]), and the reference within 0.02 sd of
+/// itself at half the cells and twice the step.
 #[test]
 fn stiff_and_wide_problems_are_right_or_loud_at_the_defaults() {
     let mut rng = Lcg(56);
