@@ -10,12 +10,20 @@ from zakai.errors import ConfigError, DimensionError, ExpressionError, FilterErr
 
 
 def test_expression_error_names_the_field_and_position():
-    model = zakai.Model.continuous(["x +* 2"], ["x"])
+    # Refused where the mistake is made (issue 56, item 5): the Model constructor parses
+    # every expression; names, which may be a scenario's parameters, wait for the Scenario.
     with pytest.raises(ExpressionError) as e:
-        zakai.Scenario(model, zakai.Prior.gaussian(0, 1)).validate()
+        zakai.Model.continuous(["x +* 2"], ["x"])
     assert "model.drift" in str(e.value) and "position" in str(e.value)
     assert e.value.problems and e.value.problems[0][0].startswith("model.drift")
     assert isinstance(e.value, ValueError) and isinstance(e.value, ZakaiError)
+    with pytest.raises(ExpressionError, match=r"position 3 .*`\(` is never closed"):
+        zakai.Model.discrete("exp(x", "x", noise_cov=1.0)
+    with pytest.raises(ExpressionError, match=r"`\*\*` is not an operator here: write powers with `\^`"):
+        zakai.Model.discrete("-x**3", "x", noise_cov=1.0)
+    model = zakai.Model.discrete("-thta*x", "x", noise_cov=1.0)  # a name: the scenario's to check
+    with pytest.raises(ConfigError, match="unknown variable `thta`"):
+        zakai.Scenario(model, zakai.Prior.gaussian(0, 1), parameters={"theta": 1.0})
 
 
 def test_unknown_variable_is_an_expression_error():

@@ -10,6 +10,7 @@ from typing import Any, Iterable, Optional, Sequence, Union
 
 from . import _zakai
 from ._convert import ArrayLike, _matrix, _vector, _strings, _positive_definite
+from .errors import ExpressionError, ZakaiError
 
 #: Half-width of the domain chosen around the prior when none is given, in prior sds.
 DOMAIN_SDS: float = 8.0
@@ -181,8 +182,10 @@ class Model:
 
     @classmethod
     def _of(cls, drift: Any, observation: Any, diffusion: Any, noise: dict) -> "Model":
-        """The model of these texts, diffusion and noise block (of the scenario JSON)."""
-        return cls(
+        """The model of these texts, diffusion and noise block (of the scenario JSON), its
+        expressions' syntax checked at once (the names, which may be parameters of a
+        scenario yet to be built, are checked by :class:`Scenario`)."""
+        model = cls(
             {
                 "drift": _strings(drift, "drift"),
                 "observation": _strings(observation, "observation"),
@@ -190,6 +193,34 @@ class Model:
                 "noise": noise,
             }
         )
+        model._check_syntax()
+        return model
+
+    def _check_syntax(self) -> None:
+        """An :class:`ExpressionError` for every expression that does not parse (an unclosed
+        bracket, ``**`` for ``^``), with its field and position: the model checked inside a
+        scenario of its own, keeping only the syntax errors."""
+        n = len(self.config["drift"])
+        probe = {
+            "name": "model",
+            "model": self.config,
+            "prior": {
+                "kind": "gaussian",
+                "mean": [0.0] * n,
+                "cov": [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)],
+            },
+            "domain": [[-1.0, 1.0]] * n,
+            "time": {"t_final": 1.0, "dt_obs": 1.0, "inner_steps": 1},
+            "methods": [{"method": "ukf"}],
+        }
+        try:
+            _zakai.check_scenario(_json.dumps(probe))
+        except ZakaiError as e:
+            syntax = [(f, m) for f, m in e.problems if "syntax error" in m]
+            if syntax:
+                error = ExpressionError("; ".join(f"{f}: {m}" for f, m in syntax))
+                error.problems = syntax
+                raise error from None
 
 
 
