@@ -55,7 +55,7 @@ impl ExpectedWidth {
 /// whichever is smaller; `None` for n > 1 or a degenerate prior. With c = ∂h/∂x and Q = G Gᵀ
 /// (at the prior's mean):
 ///
-/// * increments dy = h dt + dw, E[dw²] = S dt: the Riccati equation P' = Q − c²P²/S settles at
+/// * increments dy = h dt + dw, E\[dw²\] = S dt: the Riccati equation P' = Q − c²P²/S settles at
 ///   P = √(Q S)/|c|, with c²/S summed over the components as Σ_j c_j²/S_jj;
 /// * measurements z = h(x) + v every Δτ with Var v_j = R_j (the noise's variance, or its
 ///   value at x for a state-dependent one): the discrete Riccati recursion

@@ -31,7 +31,7 @@ parameters! {
     pub struct FpeParams {
         /// Cells per dimension over the domain (one number: the same in every dimension;
         /// empty: chosen from the problem in 1-D, ten per narrowest posterior standard
-        /// deviation to expect and at least 200, [`DEFAULT_CELLS`] per dimension else;
+        /// deviation to expect and at least 200, 200 per dimension else;
         /// 001 §4: 200 on ⟨−10, 10⟩, 35 × 35 on ⟨−2, 5⟩² in 2-D).
         cells: Vec<usize> = Vec::new() => int_list "cells", at_least(2);
         /// Time step Δt of the Fokker–Planck scheme, rounded down to divide Δτ and reduced
@@ -41,7 +41,7 @@ parameters! {
 }
 
 impl FpeParams {
-    /// Cells per dimension for an `n`-dimensional model ([`DEFAULT_CELLS`] each when unset
+    /// Cells per dimension for an `n`-dimensional model (`DEFAULT_CELLS`, 200, each when unset
     /// and not chosen from the problem).
     pub fn shape(&self, n: usize) -> Vec<usize> {
         if self.cells.is_empty() {

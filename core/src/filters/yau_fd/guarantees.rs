@@ -241,7 +241,7 @@ pub struct QiemSubsteps {
 }
 
 /// QIEM's substeps of `interval`: each at most `dt_max` long, and as many more as its
-/// stability conditions (31) ask for on this grid ([`qiem_ratio`]), up to
+/// stability conditions (31) ask for on this grid (see the module doc and the guide), up to
 /// [`MAX_STABLE_SUBSTEPS`].
 pub fn qiem_substeps(
     op: &KolmogorovOperator,
