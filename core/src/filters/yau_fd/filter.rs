@@ -7,6 +7,7 @@ use alloc::vec::Vec;
 
 use nalgebra::DVector;
 
+use super::guarantees::substeps_of;
 use super::guarantees::{self, GuaranteeWarning};
 use super::operator::{explicit_part, KolmogorovOperator};
 use super::superposition::Superposition;
@@ -927,8 +928,6 @@ fn observation_factor(u: &mut [f64], a: &mut [f64], terms: &ObservedTerms, dt_ob
     linalg::scale_by_exp(u, a, shift, super::FLUSH_BELOW);
     shift
 }
-
-use super::guarantees::substeps_of;
 
 /// [`YauYauFilter::stepper`] for the operator `op`.
 fn stepper_for(

@@ -201,12 +201,9 @@ fn qiem_ratio(
 /// The limit of [`qiem_ratio`] as Δt → 0, over the grid: `(Δs)² q / Q` where q > 0 (the
 /// growth term of (31) no shorter step removes; only a finer grid does).
 fn qiem_floor(op: &KolmogorovOperator, grid: &TensorGrid) -> f64 {
+    let q_max = op.q.iter().fold(0.0f64, |m, &q| m.max(q));
     (0..grid.dim())
-        .map(|d| {
-            let ds2 = grid.spacing()[d] * grid.spacing()[d];
-            let q_max = op.q.iter().fold(0.0f64, |m, &q| m.max(q));
-            ds2 * q_max / op.diffusion[d]
-        })
+        .map(|d| grid.spacing()[d] * grid.spacing()[d] * q_max / op.diffusion[d])
         .fold(0.0, f64::max)
 }
 
