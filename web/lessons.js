@@ -266,7 +266,7 @@ export const LESSONS = [
       {
         label: 'draw the likelihood of r',
         likelihood: 'r',
-        expect: 'SA\'s $\\ln L(r)$ peaks near $r = 0.46$, about one standard error from the true 0.5 (even with $x$ known the standard error would be about $r\\sqrt{2/301} \\approx 0.04$): sampling error, not bias. The EKF\'s maximiser is exactly the mean square of the measurements, 0.947; the view reports 0.954 because it puts a parabola through the three nearest values, 0.097 apart, of a curve that is not a parabola. The UKF\'s lies near 0.6, in between on this run. The EKF\'s maximum is 48 below the SA\'s: the joint predictive density the EKF assigns to these data is about $e^{48}$ times smaller than the one the SA computes.',
+        expect: 'SA\'s $\\ln L(r)$ peaks near $r = 0.46$, about one standard error from the true 0.5 (even with $x$ known the standard error would be about $r\\sqrt{2/301} \\approx 0.04$): sampling error, not bias. The EKF\'s maximiser is exactly the mean square of the measurements, 0.947; the view reports 0.954 because it puts a parabola through the three nearest values, 0.097 apart, of a curve that is not a parabola. The UKF\'s lies near 0.6, in between on this run. The EKF\'s maximum is 48 below the SA\'s: the joint predictive density the EKF assigns to these data is about $e^{48}$ times smaller than the one the SA computes. The table\'s last column is what each method says about its own likelihood at its maximum (one more run there): the SA raises nothing; the EKF\'s normalised innovation squared rises above its band, 2.1 — its innovations are larger than its own covariance says, the sign of a filter whose likelihood should not be trusted.',
       },
     ],
   },

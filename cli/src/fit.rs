@@ -233,6 +233,9 @@ pub fn maxima(profiles: &[Profile]) -> String {
             ),
             None => writeln!(s, "{}: failed at every value", p.method),
         };
+        for note in &p.notes {
+            let _ = writeln!(s, "  note: {note}");
+        }
     }
     s
 }

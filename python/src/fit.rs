@@ -256,6 +256,7 @@ pub fn profile<'py>(
         d.set_item("method", &p.method)?;
         d.set_item("log_likelihoods", &p.log_likelihoods)?;
         d.set_item("maximum", p.maximum)?;
+        d.set_item("notes", &p.notes)?;
         out.append(d)?;
     }
     Ok((values, out))

@@ -165,3 +165,17 @@ def test_bad_input_is_refused_with_its_reason(sm):
     with pytest.raises(ConfigError, match=r"model.diffusion\[0\]\[0\]: unknown variable `qq` at position 5") as e:
         zakai.fit(bad, flow, times=years)
     assert "finite" not in str(e.value)
+
+
+def test_a_profile_says_what_the_method_doubts_at_its_maximum(sm):
+    """Issue 56: a profile carries the method's self-checks at its maximum. The separation
+    approach on 200 cells of the prior's ±8 sd (253 units a cell against a posterior sd of
+    about 50) says its grid is too coarse there; the Kalman filter says nothing."""
+    years, flow = nile(sm)
+    sc = local_level(["kalman", {"method": "separation", "cells": [200]}])
+    sd = PRIOR[1] ** 0.5
+    sc.config["domain"] = [[PRIOR[0] - 8 * sd, PRIOR[0] + 8 * sd]]
+    p = zakai.profile(sc, flow, "q", np.linspace(500, 2500, 5), times=years)
+    assert p.notes["KF"] == []
+    assert any(n.startswith("at the maximum q = ") and "posterior width in grid cells" in n
+               for n in next(v for k, v in p.notes.items() if k.startswith("SA"))), p.notes

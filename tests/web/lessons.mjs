@@ -358,6 +358,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.ok(Math.abs(maxima.UKF[0] - 0.6) < 0.03, 'UKF near 0.6');
   assert.ok(Math.abs(maxima.SA[1] - maxima.EKF[1] - 48) < 0.5, 'on this run: the EKF\'s peak 48 below the SA\'s');
   assert.ok(maxima.UKF[0] > maxima.SA[0] && maxima.UKF[0] < maxima.EKF[0], 'the UKF\'s in between');
+  const checks8 = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#lik-table tbody tr')].map((tr) => [tr.cells[0].textContent, tr.cells[4].textContent])));
+  console.log('lesson 8, self-checks at the maxima:', JSON.stringify(checks8));
+  assert.equal(checks8.SA, 'none', 'the SA raises nothing at its maximum');
+  assert.match(checks8.EKF, /normalised innovation squared .* > 2\.1e0/, 'the EKF\'s NIS above its band 2.1 at its maximum');
   await page.evaluate(() => document.getElementById('lik-panel').scrollIntoView());
   await page.screenshot({ path: `${artifacts}/lesson-likelihood.png` });
 

@@ -231,6 +231,8 @@ pub struct LikelihoodProfile {
     likelihoods: Vec<zakai::lab::fit::Likelihood>,
     values: Vec<f64>,
     done: Vec<Vec<f64>>,
+    /// Each finished method's concerns at its maximum ([`zakai::lab::fit::Profile::notes`]).
+    notes: Vec<Vec<String>>,
 }
 
 #[wasm_bindgen]
@@ -276,6 +278,7 @@ impl LikelihoodProfile {
             .collect::<Result<Vec<_>, _>>()?;
         Ok(LikelihoodProfile {
             done: vec![Vec::new(); likelihoods.len()],
+            notes: vec![Vec::new(); likelihoods.len()],
             likelihoods,
             values,
         })
@@ -286,7 +289,8 @@ impl LikelihoodProfile {
         self.likelihoods.len() * self.values.len()
     }
 
-    /// Runs the next evaluation; returns how many are done.
+    /// Runs the next evaluation (and, after a method's last value, one more run at its
+    /// maximum for its self-checks); returns how many are done.
     #[wasm_bindgen(js_name = runNext)]
     pub fn run_next(&mut self) -> usize {
         let count: usize = self.done.iter().map(Vec::len).sum();
@@ -294,13 +298,21 @@ impl LikelihoodProfile {
             let (m, k) = (count / self.values.len(), count % self.values.len());
             let value = self.likelihoods[m].value(&[self.values[k]]);
             self.done[m].push(value);
+            if self.done[m].len() == self.values.len() {
+                let l = &self.likelihoods[m];
+                let mut p =
+                    zakai::lab::fit::Profile::new(l, self.values.clone(), self.done[m].clone());
+                p.check_maximum(l);
+                self.notes[m] = p.notes;
+            }
         }
         self.done.iter().map(Vec::len).sum()
     }
 
     /// The profiles so far: `{parameter, values, methods: [{method, log_likelihoods (null
-    /// where the method failed), maximum: [value, ln L] or null}]}` (methods not reached yet
-    /// are left out).
+    /// where the method failed), maximum: [value, ln L] or null, complete, notes: the
+    /// method's concerns at its maximum once complete}]}` (methods not reached yet are left
+    /// out).
     pub fn result(&self) -> Result<JsValue, JsError> {
         #[derive(Serialize)]
         struct Row {
@@ -308,6 +320,7 @@ impl LikelihoodProfile {
             log_likelihoods: Vec<Option<f64>>,
             maximum: Option<(f64, f64)>,
             complete: bool,
+            notes: Vec<String>,
         }
         #[derive(Serialize)]
         struct Out {
@@ -319,8 +332,9 @@ impl LikelihoodProfile {
             .likelihoods
             .iter()
             .zip(&self.done)
-            .filter(|(_, d)| !d.is_empty())
-            .map(|(l, d)| {
+            .zip(&self.notes)
+            .filter(|((_, d), _)| !d.is_empty())
+            .map(|((l, d), notes)| {
                 let values = self.values[..d.len()].to_vec();
                 let p = zakai::lab::fit::Profile::new(l, values, d.clone());
                 Row {
@@ -328,6 +342,7 @@ impl LikelihoodProfile {
                     log_likelihoods: d.iter().map(|v| v.is_finite().then_some(*v)).collect(),
                     maximum: p.maximum,
                     complete: d.len() == self.values.len(),
+                    notes: notes.clone(),
                 }
             })
             .collect();

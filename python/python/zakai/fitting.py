@@ -278,12 +278,18 @@ class Profile:
     maxima : dict
         ``(θ*, ln L(θ*))`` by method name — the best value refined by a parabola through its
         neighbours — or ``None`` where the method failed everywhere.
+    notes : dict of list of str
+        By method name, what the method says about its likelihood at its maximum: the
+        guarantees of its chosen steps it reports as violated and its self-checks that warned,
+        each with its advice (one more run at the maximum). Empty when it says nothing — a
+        maximum with notes may not be trustworthy.
     """
 
     parameter: str
     values: np.ndarray
     loglik: dict[str, np.ndarray]
     maxima: dict[str, Optional[tuple[float, float]]]
+    notes: dict[str, list[str]]
 
     def to_pandas(self) -> Any:
         """A DataFrame indexed by the parameter's values, a column of ln L per method."""
@@ -340,6 +346,7 @@ def profile(
         values=np.array(grid),
         loglik={r["method"]: np.array(r["log_likelihoods"]) for r in rows},
         maxima={r["method"]: r["maximum"] for r in rows},
+        notes={r["method"]: list(r["notes"]) for r in rows},
     )
 
 

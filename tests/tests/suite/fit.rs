@@ -134,6 +134,39 @@ fn a_profile_peaks_where_the_likelihood_along_the_parameter_does() {
     // The parabola through three points 100 apart: within a fifth of the spacing.
     assert!((x - a).abs() < 20.0, "{x} vs {a}");
     assert!((l_max - reference(a, 10000.0)).abs() < 1e-3);
+    assert!(
+        p.notes.is_empty(),
+        "the Kalman filter has no doubts: {:?}",
+        p.notes
+    );
+}
+
+/// Issue 56, item 2: a profile carries the method's self-checks at its maximum. On the wide
+/// box of [`a_fit_on_a_grid_that_warned_carries_its_self_checks`] (200 cells, 253 units
+/// each) the separation approach's slice along q says, at its maximum, that the posterior
+/// is narrower than its grid resolves; on the scenario's own box (−2000, 4000) with the
+/// cells chosen from the problem it says nothing.
+#[test]
+fn a_profile_on_a_grid_that_warned_carries_its_self_checks() {
+    let values: Vec<f64> = (0..5).map(|i| 500.0 + 500.0 * i as f64).collect();
+    let mut coarse = local_level(r#"{"method": "separation", "cells": [200]}"#);
+    let sd = PRIOR.1.sqrt();
+    coarse.domain = vec![[PRIOR.0 - 8.0 * sd, PRIOR.0 + 8.0 * sd]];
+    let l = Likelihood::new(&coarse, nile(), 0, &["q".into()], 1).unwrap();
+    let p = fit::profile(&l, &l, &values);
+    let (at, _) = p.maximum.unwrap();
+    assert!(
+        p.notes.iter().any(
+            |n| n.starts_with(&format!("at the maximum q = {at:.6}: SA"))
+                && n.contains("posterior width in grid cells")
+        ),
+        "{:?}",
+        p.notes
+    );
+    let fine = local_level(r#"{"method": "separation"}"#);
+    let l = Likelihood::new(&fine, nile(), 0, &["q".into()], 1).unwrap();
+    let p = fit::profile(&l, &l, &values);
+    assert!(p.maximum.is_some() && p.notes.is_empty(), "{:?}", p.notes);
 }
 
 #[test]

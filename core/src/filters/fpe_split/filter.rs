@@ -7,6 +7,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::implicit::{ImplicitPart, ImplicitStep};
+use super::numerical_diffusion;
 use super::upwind::UpwindAdvection;
 use super::{FpeParams, FpeScheme, MAX_SUBSTEPS};
 use crate::error::{FilterError, ZakaiError};
@@ -154,6 +155,11 @@ pub struct ContinuousDiscreteGrid {
     /// Storage of the estimate's moments (see [`normalise_on_grid`]).
     moments: crate::grid::Moments,
     warnings: Vec<String>,
+    /// The FDM's steps per unit time that keep implicit Euler's numerical diffusion, weighted
+    /// by the prior, at [`numerical_diffusion::FDM_PRIOR_RATIO_TARGET`] of the model's (0 for SA,
+    /// whose numerical diffusion is the cells'; 0 where the model has no diffusion of its
+    /// own, which no step fixes).
+    accuracy_rate: f64,
     /// The last step's predicted density (before its update), kept for a smoother.
     predicted: Option<Vec<f64>>,
 }
@@ -199,6 +205,27 @@ impl ContinuousDiscreteGrid {
         };
         normalise_on_grid(&grid, &mut u, &mut moments, &mut estimate)?;
         let len = grid.len();
+        // The FDM's ratio is proportional to Δt: its value at Δt = 1 over the target is the
+        // rate of steps.
+        let accuracy_rate = match scheme {
+            FpeScheme::ImplicitFdm => {
+                let per_unit_time = numerical_diffusion::numerical_diffusion_ratio(
+                    scheme,
+                    &grid,
+                    &table.advection,
+                    &table.diffusion,
+                    1.0,
+                    &u,
+                );
+                let rate = per_unit_time / numerical_diffusion::FDM_PRIOR_RATIO_TARGET;
+                if rate.is_finite() {
+                    rate
+                } else {
+                    0.0
+                }
+            }
+            FpeScheme::Separation => 0.0,
+        };
         let mut filter = ContinuousDiscreteGrid {
             name,
             scheme,
@@ -218,6 +245,7 @@ impl ContinuousDiscreteGrid {
             estimate,
             moments,
             warnings: Vec::new(),
+            accuracy_rate,
             predicted: None,
         };
         let (_, notes) = filter.step_count(dt_obs)?;
@@ -283,6 +311,18 @@ impl ContinuousDiscreteGrid {
                 self.table.cross.rate_bound(self.grid.len()),
                 &mut steps,
             );
+        }
+        let needed = libm::ceil(self.accuracy_rate * interval);
+        if needed > steps {
+            notes.push(format!(
+                "implicit Euler's numerical diffusion ½f²Δt, weighted by the prior, is {:.3} of the model's ½a with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval) to bring it to {}",
+                self.accuracy_rate * numerical_diffusion::FDM_PRIOR_RATIO_TARGET * interval / steps,
+                interval / steps,
+                interval / needed,
+                needed,
+                numerical_diffusion::FDM_PRIOR_RATIO_TARGET
+            ));
+            steps = needed;
         }
         let (min_div, idx) =
             self.table
@@ -642,6 +682,17 @@ impl Filter for ContinuousDiscreteGrid {
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         crate::filters::grid_self_check(&self.grid, &self.u, &self.estimate, out);
+        if let Some(plan) = &self.plan {
+            let ratio = numerical_diffusion::numerical_diffusion_ratio(
+                self.scheme,
+                &self.grid,
+                &self.table.advection,
+                &self.table.diffusion,
+                plan.dt,
+                &self.u,
+            );
+            numerical_diffusion::check(self.scheme, ratio, out);
+        }
         self.remainders.check(out);
     }
 }

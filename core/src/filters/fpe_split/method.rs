@@ -126,7 +126,7 @@ macro_rules! fpe_method {
                 p: &FpeParams,
                 problem: &ProblemContext,
             ) -> Option<(FpeParams, String)> {
-                cells_from_problem(p, problem)
+                cells_from_problem(p, problem, $scheme)
             }
         }
     };
@@ -135,14 +135,44 @@ macro_rules! fpe_method {
 /// Bounds of the cells chosen from the problem: never fewer than 001 §4's 200.
 const CHOSEN_CELLS: (usize, usize) = (200, 4000);
 
-/// Unset 1-D cells from the problem ([`crate::filters::resolution::expected_width`]).
-fn cells_from_problem(p: &FpeParams, problem: &ProblemContext) -> Option<(FpeParams, String)> {
+/// Unset 1-D cells from the problem: ten per expected posterior sd
+/// ([`crate::filters::resolution::expected_width`]) and, for the separation approach, enough
+/// that the upwind step's numerical diffusion weighted by the prior is at most
+/// [`super::numerical_diffusion::PRIOR_RATIO_TARGET`] of the model's (it is proportional to
+/// Δx; the FDM's is its step's, which the filter shortens itself) — within
+/// [`CHOSEN_CELLS`], with a note that says which rule set the count.
+fn cells_from_problem(
+    p: &FpeParams,
+    problem: &ProblemContext,
+    scheme: FpeScheme,
+) -> Option<(FpeParams, String)> {
     if !p.cells.is_empty() {
         return None;
     }
     let width = crate::filters::resolution::expected_width(problem)?;
-    let cells = width.count(problem.bounds[0], CHOSEN_CELLS);
-    let note = format!("cells {cells}, {}", width.describe(CHOSEN_CELLS));
+    let resolved = width.count(problem.bounds[0], CHOSEN_CELLS);
+    let mut note = format!("cells {resolved}, {}", width.describe(CHOSEN_CELLS));
+    let mut cells = resolved;
+    if scheme == FpeScheme::Separation {
+        if let Some(ratio) = upwind_ratio_at_prior(problem, p, resolved) {
+            let wanted = libm::ceil(
+                resolved as f64 * ratio / super::numerical_diffusion::PRIOR_RATIO_TARGET,
+            );
+            if wanted > resolved as f64 {
+                cells = (wanted.min(CHOSEN_CELLS.1 as f64)) as usize;
+                note = format!(
+                    "cells {cells} (not {resolved}): the upwind step's numerical diffusion ½|f|Δx, weighted by the prior, is {ratio:.3} of the model's ½a with {resolved} cells; {} brings it to {:.3}{}",
+                    cells,
+                    ratio * resolved as f64 / cells as f64,
+                    if cells == CHOSEN_CELLS.1 {
+                        format!(" (the most chosen; the target {} needs {wanted})", super::numerical_diffusion::PRIOR_RATIO_TARGET)
+                    } else {
+                        String::new()
+                    }
+                );
+            }
+        }
+    }
     Some((
         FpeParams {
             cells: alloc::vec![cells],
@@ -150,6 +180,29 @@ fn cells_from_problem(p: &FpeParams, problem: &ProblemContext) -> Option<(FpePar
         },
         note,
     ))
+}
+
+/// The prior-weighted ratio of the upwind step's numerical diffusion to the model's on
+/// `cells` cells over the box (at the CFL number 0, its largest); `None` where it cannot be
+/// had (a model or prior that does not tabulate, a model without diffusion of its own).
+fn upwind_ratio_at_prior(problem: &ProblemContext, p: &FpeParams, cells: usize) -> Option<f64> {
+    let on = FpeParams {
+        cells: alloc::vec![cells],
+        ..p.clone()
+    };
+    let grid = super::filter::cell_grid(&on, problem.bounds).ok()?;
+    let advection = super::upwind::UpwindAdvection::new(&grid, &*problem.model.drift);
+    let (diffusion, _) = super::filter::diffusion_on("separation", problem.model, &grid).ok()?;
+    let prior = grid.tabulate(|x| problem.prior.density(x));
+    let ratio = super::numerical_diffusion::numerical_diffusion_ratio(
+        FpeScheme::Separation,
+        &grid,
+        &advection,
+        &diffusion,
+        0.0,
+        &prior,
+    );
+    ratio.is_finite().then_some(ratio)
 }
 
 /// Twice the cells per dimension and half the time step.

@@ -56,6 +56,7 @@
 mod filter;
 pub mod implicit;
 mod method;
+pub mod numerical_diffusion;
 mod params;
 pub mod upwind;
 

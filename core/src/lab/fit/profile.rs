@@ -23,6 +23,10 @@ pub struct Profile {
     /// its two neighbours (the best value itself at an end of the grid); `None` when the
     /// method failed everywhere.
     pub maximum: Option<(f64, f64)>,
+    /// What the method says about its likelihood at the maximum (its violated guarantees
+    /// and self-checks that warned, [`Likelihood::concerns`]; one more run), each with its
+    /// advice — empty when it says nothing, or before [`Profile::check_maximum`].
+    pub notes: Vec<String>,
 }
 
 /// `points` evenly spaced values of a parameter with bounds `(lo, hi)` and value `value`:
@@ -57,7 +61,9 @@ pub fn profile_grid(bounds: (f64, f64), value: f64, points: usize) -> Vec<f64> {
 pub fn profile(likelihood: &Likelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
     let points: Vec<Vec<f64>> = values.iter().map(|&v| alloc::vec![v]).collect();
     let log_likelihoods = evaluate.log_likelihoods(&points);
-    Profile::new(likelihood, values.to_vec(), log_likelihoods)
+    let mut profile = Profile::new(likelihood, values.to_vec(), log_likelihoods);
+    profile.check_maximum(likelihood);
+    profile
 }
 
 impl Profile {
@@ -71,7 +77,25 @@ impl Profile {
             maximum: maximum(&values, &log_likelihoods),
             values,
             log_likelihoods,
+            notes: Vec::new(),
         }
+    }
+
+    /// Fills [`Profile::notes`] with the concerns of `likelihood` (the one this profile was
+    /// drawn from, of its one parameter) at the maximum.
+    pub fn check_maximum(&mut self, likelihood: &Likelihood) {
+        self.notes = self
+            .maximum
+            .map(|(at, _)| self.notes_at(likelihood.concerns(&[at]), at))
+            .unwrap_or_default();
+    }
+
+    /// `concerns` at the maximum `at`, each prefixed with where.
+    fn notes_at(&self, concerns: Vec<String>, at: f64) -> Vec<String> {
+        concerns
+            .into_iter()
+            .map(|c| alloc::format!("at the maximum {} = {at:.6}: {c}", self.parameter))
+            .collect()
     }
 }
 
@@ -100,6 +124,8 @@ pub fn profile_refitted(
     };
     let mut start: Vec<f64> = full_likelihood.start()[1..].to_vec();
     let mut log_likelihoods = Vec::with_capacity(values.len());
+    // Each value's full θ (the value, then the others refitted), for the concerns at the best.
+    let mut thetas: Vec<Vec<f64>> = Vec::with_capacity(values.len());
     for (k, &v) in values.iter().enumerate() {
         let fixed = Fixed { full, value: v };
         let warm: Vec<(alloc::string::String, f64)> = core::iter::once((parameter.clone(), v))
@@ -125,15 +151,25 @@ pub fn profile_refitted(
             }
             Err(_) => log_likelihoods.push(f64::NEG_INFINITY),
         }
+        thetas.push(core::iter::once(v).chain(start.iter().copied()).collect());
         progress(k + 1, values.len());
     }
-    Profile {
+    let mut profile = Profile {
         method: full_likelihood.method().to_string(),
         parameter,
         maximum: maximum(values, &log_likelihoods),
         values: values.to_vec(),
         log_likelihoods,
+        notes: Vec::new(),
+    };
+    // The best value on the grid, with the others as refitted there.
+    let best = (0..values.len())
+        .filter(|&i| profile.log_likelihoods[i].is_finite())
+        .max_by(|&i, &j| profile.log_likelihoods[i].total_cmp(&profile.log_likelihoods[j]));
+    if let Some(i) = best {
+        profile.notes = profile.notes_at(full_likelihood.concerns(&thetas[i]), values[i]);
     }
+    profile
 }
 
 /// The likelihood of the refitted parameters with the profiled one fixed: each point gets the
