@@ -40,6 +40,29 @@ pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>>
     Ok(prior.covering_box(sds, &[]))
 }
 
+/// The box a scenario's measurements put a 1-D state in, within the scenario's domain, with
+/// what it was read from; `None` where the data cannot narrow it
+/// ([`zakai::lab::scenario::data_domain::domain_from_data`]).
+#[pyfunction]
+#[pyo3(signature = (json, observations, times=None))]
+pub fn domain_from_data(
+    json: &str,
+    observations: PyReadonlyArrayDyn<'_, f64>,
+    times: Option<PyReadonlyArrayDyn<'_, f64>>,
+) -> PyResult<Option<(Vec<[f64; 2]>, String)>> {
+    let e = experiment(json)?;
+    let recording = recording_of(&e, &observations, times.as_ref(), None)?;
+    let bounds = e.config().bounds();
+    Ok(
+        zakai::lab::scenario::data_domain::domain_from_data(e.model(), &recording, &bounds).map(
+            |d| {
+                let domain = d.bounds.iter().map(|&(lo, hi)| [lo, hi]).collect();
+                (domain, d.note)
+            },
+        ),
+    )
+}
+
 /// Sets the largest memory a scenario's methods may need together (bytes, or text such as
 /// `"8GiB"`), checked before anything is allocated; returns the previous cap in bytes.
 #[pyfunction]

@@ -179,3 +179,28 @@ def test_a_profile_says_what_the_method_doubts_at_its_maximum(sm):
     assert p.notes["KF"] == []
     assert any(n.startswith("at the maximum q = ") and "posterior width in grid cells" in n
                for n in next(v for k, v in p.notes.items() if k.startswith("SA"))), p.notes
+
+
+def test_a_diffuse_prior_without_a_domain_gets_its_box_from_the_data(sm):
+    """Issue 56, item 2: the Nile with a diffuse prior N(1120, 10⁷) and no domain. The box
+    around the prior, ±8 sd = [−24 178, 26 418], left about 253 per cell of the SA's 200 for a
+    posterior sd of about 50, and the fit ran off to q ≈ 10⁴ with no note; the measurements
+    (456 to 1370, noise sd √r = 100) put the box at about [−150, 2000] and the fit within 5 %
+    of the Kalman filter's q and r."""
+    years, flow = nile(sm)
+    model = zakai.Model.discrete("0", "x", noise_cov="r", diffusion="sqrt(q)")
+    params = {"q": (1000.0, (0, None)), "r": (10000.0, (0, None))}
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(*PRIOR), ["kalman", "separation"],
+                        dt_obs=1.0, parameters=params)
+    assert sc.domain[0][1] - sc.domain[0][0] > 5e4, sc.domain
+    kalman = zakai.fit(sc, flow, "kalman", times=years)
+    grid = zakai.fit(sc, flow, "separation", times=years)
+    assert grid.chosen_defaults[0].startswith("domain ["), grid.chosen_defaults
+    lo, hi = (float(v) for v in grid.chosen_defaults[0][len("domain ["):].split("]")[0].split(","))
+    assert -1000 < lo < 400 and 1400 < hi < 3000, (lo, hi)
+    for name in ("q", "r"):
+        assert abs(grid.params[name] / kalman.params[name] - 1) < 0.05, (grid.params, kalman.params)
+    # The domain the user gives is kept as given.
+    sc.domain = [(-24178.0, 26418.0)]
+    run = zakai.filter(sc, flow, times=years)
+    assert not any(c.startswith("domain [") for c in run.chosen_defaults)

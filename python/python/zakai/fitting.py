@@ -234,7 +234,7 @@ def fit(
     sc, index = _method_index(_scenario(scenario), method)
     obs, t, unit = _observations(observations, times, time_unit)
     s = _seed(sc, seed)
-    text = sc._text()
+    text, box = sc._text_for(obs, t)
     u = _inputs(inputs)
     d = _zakai.fit(
         text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s, u), u
@@ -254,7 +254,7 @@ def fit(
         bounds=dict(zip(names, [tuple(b) for b in d["bounds"]])),
         nobs=d["observations"],
         notes=list(d["notes"]),
-        chosen_defaults=list(d["chosen_defaults"]),
+        chosen_defaults=([box] if box else []) + list(d["chosen_defaults"]),
         intervals=dict(zip(names, [tuple(i) for i in d["intervals"]])),
         time_unit=unit,
     )
@@ -334,7 +334,7 @@ def profile(
         v = v.tolist()
     if not isinstance(points, (int, np.integer)) or not 2 <= points <= 10_000:
         raise ConfigError(f"points: must be an integer in [2, 10000], got {points!r}")
-    text = sc._text()
+    text, _ = sc._text_for(obs, t)
     u = _inputs(inputs)
     grid, rows = _zakai.profile(
         text, obs, t, str(param), v, int(points), s, [str(n) for n in (refit or [])],
@@ -372,15 +372,16 @@ def log_likelihood(
     sc, index = _method_index(_scenario(scenario), method)
     obs, t, unit = _observations(observations, times, time_unit)
     names = list(values)
+    text, _ = sc._text_for(obs, t)
     if not names:
         value, failure = _zakai.scenario_log_likelihood(
-            sc._text(), obs, t, index, _seed(sc, seed), _inputs(inputs)
+            text, obs, t, index, _seed(sc, seed), _inputs(inputs)
         )
         if failure is not None:
             warnings.warn(failure, FilterWarning, stacklevel=2)
         return float(value)
     return _zakai.log_likelihood(
-        sc._text(),
+        text,
         obs,
         t,
         index,

@@ -161,9 +161,10 @@ def _recorded(
     sc = _scenario(scenario)
     t, unit, index = _recording_times(observations, times, time_unit)
     obs = _table(observations, "observations")
+    text, box = sc._text_for(obs, t)
     result = RunResult._from_dict(
         _zakai.filter_recorded(
-            sc._text(),
+            text,
             obs,
             t,
             _array(truth, "truth"),
@@ -173,6 +174,8 @@ def _recorded(
         )
     )
     result.time_unit = unit
+    if box is not None:
+        result.chosen_defaults.insert(0, box)
     if index is not None and len(index) == len(result.times):
         result.index = index
     return _warn_failures(result, 4)

@@ -104,7 +104,12 @@ class Scenario:
     dt_obs, t_final : float
         Observation interval Δτ and horizon T (simulations; a recording brings its own times).
     domain : list of (low, high), optional
-        The box the grid and spectral methods live on; ``prior mean ± 8 sd`` when absent.
+        The box the grid and spectral methods live on; ``prior mean ± 8 sd`` when absent —
+        and, for a 1-D state with Gaussian measurements, narrowed on data to where the
+        measurements put it (h within 5 noise sds of their range, widened by the state's
+        motion) when that is less than half the prior's box; the result's
+        ``chosen_defaults`` then say so. A diffuse prior's ±8 sd would otherwise leave the
+        posterior between cells.
     initial_state : array_like, optional
         x₀ of simulations; drawn from the prior when absent.
     parameters : dict, optional
@@ -114,6 +119,10 @@ class Scenario:
         in expressions (``"-theta*x"``) and in the diffusion, noise covariance and prior as
         text (``diffusion="sqrt(q)"``, ``noise_cov="r"``).
     """
+
+    # The box set around the prior when no domain was given (issue 56): a run on data then
+    # narrows it to where the measurements put the state (``_text_for``).
+    _prior_box: Optional[list[list[float]]] = None
 
     def __init__(
         self,
@@ -129,6 +138,7 @@ class Scenario:
         name: str = "custom",
         parameters: Optional[Mapping[str, Any]] = None,
     ) -> None:
+        prior_box = domain is None
         if domain is None:
             domain = prior.covering_domain()
             if domain is None:
@@ -150,6 +160,8 @@ class Scenario:
         }
         if parameters:
             self.parameters = parameters
+        if prior_box:
+            self._prior_box = [list(b) for b in self.config["domain"]]
         # Checked where the mistake is made (issue 56): every expression parsed, every name,
         # dimension and bound, all problems at once with their field paths.
         self.validate()
@@ -173,7 +185,9 @@ class Scenario:
 
     def copy(self) -> "Scenario":
         """An independent copy."""
-        return Scenario.from_json(self.to_json())
+        copied = Scenario.from_json(self.to_json())
+        copied._prior_box = self._prior_box
+        return copied
 
     def validate(self) -> "Scenario":
         """Raises :class:`ConfigError` listing every problem; returns the scenario."""
@@ -182,6 +196,22 @@ class Scenario:
 
     def _text(self) -> str:
         return _json.dumps(self.config)
+
+    def _text_for(self, observations: Any, times: Any) -> tuple[str, Optional[str]]:
+        """The JSON for a run on ``observations`` (arrays as the extension takes them) and a
+        note: when the domain is still the box the constructor set around the prior and the
+        measurements put a 1-D state in less than half of it, that narrower box (where h is
+        within 5 noise sds of the measured range, widened by the state's motion) — a diffuse
+        prior's ±8 sd would leave the posterior between cells."""
+        if self._prior_box is None or self.config["domain"] != self._prior_box:
+            return self._text(), None
+        found = _zakai.domain_from_data(self._text(), observations, times)
+        if found is None:
+            return self._text(), None
+        domain, note = found
+        config = dict(self.config)
+        config["domain"] = [list(b) for b in domain]
+        return _json.dumps(config), note
 
     @property
     def name(self) -> str:
