@@ -42,7 +42,7 @@ pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>>
 
 /// The box a scenario's measurements put a 1-D state in, within the scenario's domain, with
 /// what it was read from; `None` where the data cannot narrow it
-/// ([`zakai::lab::scenario::data_domain::domain_from_data`]).
+/// ([`zakai::lab::recording::data_domain::domain_from_data`]).
 #[pyfunction]
 #[pyo3(signature = (json, observations, times=None))]
 pub fn domain_from_data(
@@ -54,7 +54,7 @@ pub fn domain_from_data(
     let recording = recording_of(&e, &observations, times.as_ref(), None)?;
     let bounds = e.config().bounds();
     Ok(
-        zakai::lab::scenario::data_domain::domain_from_data(e.model(), &recording, &bounds).map(
+        zakai::lab::recording::data_domain::domain_from_data(e.model(), &recording, &bounds).map(
             |d| {
                 let domain = d.bounds.iter().map(|&(lo, hi)| [lo, hi]).collect();
                 (domain, d.note)

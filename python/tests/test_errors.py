@@ -26,6 +26,22 @@ def test_expression_error_names_the_field_and_position():
         zakai.Scenario(model, zakai.Prior.gaussian(0, 1), parameters={"theta": 1.0})
 
 
+def test_the_prior_constructors_check_what_they_are_given():
+    # Issue 56, item 5: a density prior's syntax at once, with its field and position; its
+    # names wait for the scenario (the state's names depend on the model).
+    with pytest.raises(ExpressionError, match=r"prior.expression: .*position"):
+        zakai.Prior.density("exp(-x^2")
+    with pytest.raises(ExpressionError, match=r"`\*\*` is not an operator here"):
+        zakai.Prior.density("exp(-x**2)")
+    zakai.Prior.density("exp(-(x1^2 + x2^2))")  # names: the scenario's to check
+    with pytest.raises(ConfigError, match="component 1 weight: must be nonnegative and finite, got -0.5"):
+        zakai.Prior.mixture([(1.0, 0.0, 1.0), (-0.5, 1.0, 1.0)])
+    with pytest.raises(ConfigError, match="the weights are all zero"):
+        zakai.Prior.mixture([(0.0, 0.0, 1.0)])
+    with pytest.raises(ConfigError, match="needs at least one"):
+        zakai.Prior.mixture([])
+
+
 def test_unknown_variable_is_an_expression_error():
     with pytest.raises(ExpressionError, match="unknown variable `y`"):
         zakai.Filter("ukf", zakai.Model.continuous("y", "x"), zakai.Prior.gaussian(0, 1), dt_obs=0.1)

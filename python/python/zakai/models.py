@@ -8,9 +8,11 @@ import json as _json
 from dataclasses import dataclass
 from typing import Any, Iterable, Optional, Sequence, Union
 
+import numpy as np
+
 from . import _zakai
 from ._convert import ArrayLike, _matrix, _vector, _strings, _positive_definite
-from .errors import ExpressionError, ZakaiError
+from .errors import ConfigError, ExpressionError, ZakaiError
 
 #: Half-width of the domain chosen around the prior when none is given, in prior sds.
 DOMAIN_SDS: float = 8.0
@@ -198,30 +200,40 @@ class Model:
 
     def _check_syntax(self) -> None:
         """An :class:`ExpressionError` for every expression that does not parse (an unclosed
-        bracket, ``**`` for ``^``), with its field and position: the model checked inside a
-        scenario of its own, keeping only the syntax errors."""
+        bracket, ``**`` for ``^``), with its field and position."""
         n = len(self.config["drift"])
-        probe = {
-            "name": "model",
-            "model": self.config,
-            "prior": {
+        _check_syntax(
+            self.config,
+            {
                 "kind": "gaussian",
                 "mean": [0.0] * n,
                 "cov": [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)],
             },
-            "domain": [[-1.0, 1.0]] * n,
-            "time": {"t_final": 1.0, "dt_obs": 1.0, "inner_steps": 1},
-            "methods": [{"method": "ukf"}],
-        }
-        try:
-            _zakai.check_scenario(_json.dumps(probe))
-        except ZakaiError as e:
-            syntax = [(f, m) for f, m in e.problems if "syntax error" in m]
-            if syntax:
-                error = ExpressionError("; ".join(f"{f}: {m}" for f, m in syntax))
-                error.problems = syntax
-                raise error from None
+            n,
+        )
 
+
+def _check_syntax(model: dict[str, Any], prior: dict[str, Any], n: int) -> None:
+    """The syntax errors of a model and prior, checked inside a scenario of their own (on
+    [−1, 1]ⁿ, with the UKF), as one :class:`ExpressionError` with every field and position;
+    other problems — names, which may be a scenario's parameters, dimensions — are the
+    :class:`Scenario`'s to report."""
+    probe = {
+        "name": "probe",
+        "model": model,
+        "prior": prior,
+        "domain": [[-1.0, 1.0]] * n,
+        "time": {"t_final": 1.0, "dt_obs": 1.0, "inner_steps": 1},
+        "methods": [{"method": "ukf"}],
+    }
+    try:
+        _zakai.check_scenario(_json.dumps(probe))
+    except ZakaiError as e:
+        syntax = [(f, m) for f, m in e.problems if "syntax error" in m]
+        if syntax:
+            error = ExpressionError("; ".join(f"{f}: {m}" for f, m in syntax))
+            error.problems = syntax
+            raise error from None
 
 
 @dataclass(frozen=True)
@@ -239,7 +251,19 @@ class Prior:
 
     @classmethod
     def mixture(cls, components: Iterable[tuple[float, ArrayLike, ArrayLike]]) -> "Prior":
-        """Σ wᵢ N(meanᵢ, covᵢ) from ``(weight, mean, cov)`` triples (weights normalised)."""
+        """Σ wᵢ N(meanᵢ, covᵢ) from ``(weight, mean, cov)`` triples (weights normalised:
+        nonnegative and finite, not all zero)."""
+        components = list(components)
+        weights = [float(w) for w, _, _ in components]
+        if not weights:
+            raise ConfigError("prior components: needs at least one (weight, mean, cov)")
+        bad = [i for i, w in enumerate(weights) if not (np.isfinite(w) and w >= 0)]
+        if bad:
+            raise ConfigError(
+                f"prior component {bad[0]} weight: must be nonnegative and finite, got {weights[bad[0]]}"
+            )
+        if sum(weights) <= 0:
+            raise ConfigError("prior components: the weights are all zero")
         return cls(
             {
                 "kind": "mixture",
@@ -258,8 +282,20 @@ class Prior:
 
     @classmethod
     def density(cls, expression: str) -> "Prior":
-        """An unnormalised density as text, restricted to the domain (give one)."""
-        return cls({"kind": "density", "expression": expression})
+        """An unnormalised density as text, restricted to the domain (give one). Its syntax
+        is checked at once (:class:`ExpressionError` with the position); its names, against
+        the model's state and the scenario's parameters, by :class:`Scenario`."""
+        if not isinstance(expression, str):
+            raise ConfigError(f"prior density: an expression as text, not {type(expression).__name__}")
+        prior = {"kind": "density", "expression": expression}
+        # Syntax alone: a 1-D probe model (the state's names are the scenario's to check).
+        _check_syntax(
+            {"drift": ["0"], "observation": ["0"], "diffusion": None,
+             "noise": {"kind": "continuous", "cov": [[1.0]]}},
+            prior,
+            1,
+        )
+        return cls(prior)
 
     def covering_domain(self, sds: float = DOMAIN_SDS) -> Optional[list[list[float]]]:
         """``mean ± sds·sd`` per component (every mixture component covered), or ``None``

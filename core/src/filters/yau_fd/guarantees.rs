@@ -302,7 +302,7 @@ pub fn qiem_substeps(
         let floor = qiem_floor(op, grid);
         let why = if floor > 1.0 {
             format!(
-                "and no step satisfies them on this grid ((Δs)² q/Q reaches {floor:.3e} > 1 where q > 0): refine the grid (more points) or shrink the domain"
+                "and no step satisfies them on this grid ((Δs)² q/Q reaches {floor:.3e} > 1 where q > 0): refine the grid (more points), shrink the domain, or use IEM, which takes the drift implicitly"
             )
         } else {
             format!(

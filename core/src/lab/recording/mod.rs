@@ -26,6 +26,7 @@ use crate::validate::ConfigProblem;
 pub mod bits;
 #[cfg(feature = "std")]
 mod csv;
+pub mod data_domain;
 
 /// Which part of a recording a row problem is in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

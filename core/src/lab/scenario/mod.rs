@@ -2,7 +2,6 @@
 //! wasm `Session`, the page's URL and the tests all use it; nothing re-describes a scenario in
 //! another shape.
 
-pub mod data_domain;
 mod methods;
 pub mod noise_kinds;
 pub mod parameters;

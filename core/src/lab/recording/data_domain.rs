@@ -13,7 +13,7 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::lab::recording::Recording;
+use super::Recording;
 use crate::model::measurement::GaussianMatch;
 use crate::model::{Model, ObservationModel};
 
