@@ -72,7 +72,7 @@ function draw(result) {
     el('td', { className: 'lik-max', textContent: m.maximum ? m.maximum[1].toFixed(2) : '—' }),
     el('td', { textContent: m.maximum ? (best - m.maximum[1]).toFixed(2) : '—' }),
     // The notes less their "at the maximum θ = …: method: " prefix (the row says both).
-    el('td', { className: 'lik-notes', textContent: !m.complete ? '…' : m.notes.length ? m.notes.map((n) => n.replace(/^at the maximum [^:]*: [^:]*: /, '')).join('; ') : 'none' }),
+    el('td', { className: 'lik-notes', textContent: !m.complete ? '…' : m.notes.length ? m.notes.map((n) => n.replace(/^at the (maximum|best value) [^:]*: [^:]*: /, '')).join('; ') : 'none' }),
   )));
   $('lik-csv').disabled = false;
 }

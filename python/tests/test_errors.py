@@ -36,8 +36,10 @@ def test_the_prior_constructors_check_what_they_are_given():
     zakai.Prior.density("exp(-(x1^2 + x2^2))")  # names: the scenario's to check
     with pytest.raises(ConfigError, match="component 1 weight: must be nonnegative and finite, got -0.5"):
         zakai.Prior.mixture([(1.0, 0.0, 1.0), (-0.5, 1.0, 1.0)])
-    with pytest.raises(ConfigError, match="the weights are all zero"):
+    with pytest.raises(ConfigError, match="positive finite sum, got 0.0"):
         zakai.Prior.mixture([(0.0, 0.0, 1.0)])
+    with pytest.raises(ConfigError, match="component 0 weight: a number, not 'a'"):
+        zakai.Prior.mixture([("a", 0.0, 1.0)])
     with pytest.raises(ConfigError, match="needs at least one"):
         zakai.Prior.mixture([])
 

@@ -254,16 +254,22 @@ class Prior:
         """Σ wᵢ N(meanᵢ, covᵢ) from ``(weight, mean, cov)`` triples (weights normalised:
         nonnegative and finite, not all zero)."""
         components = list(components)
-        weights = [float(w) for w, _, _ in components]
-        if not weights:
+        if not components:
             raise ConfigError("prior components: needs at least one (weight, mean, cov)")
+        weights = []
+        for i, (w, _, _) in enumerate(components):
+            try:
+                weights.append(float(w))
+            except (TypeError, ValueError):
+                raise ConfigError(f"prior component {i} weight: a number, not {w!r}") from None
         bad = [i for i, w in enumerate(weights) if not (np.isfinite(w) and w >= 0)]
         if bad:
             raise ConfigError(
                 f"prior component {bad[0]} weight: must be nonnegative and finite, got {weights[bad[0]]}"
             )
-        if sum(weights) <= 0:
-            raise ConfigError("prior components: the weights are all zero")
+        total = sum(weights)
+        if not total > 0 or not np.isfinite(total):
+            raise ConfigError(f"prior components: the weights must have a positive finite sum, got {total}")
         return cls(
             {
                 "kind": "mixture",

