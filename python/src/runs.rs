@@ -42,7 +42,9 @@ pub fn covering_domain(prior: &str, sds: f64) -> PyResult<Option<Vec<[f64; 2]>>>
 
 /// The box a scenario's measurements put a 1-D state in, within the scenario's domain, with
 /// what it was read from; `None` where the data cannot narrow it
-/// ([`zakai::lab::recording::data_domain::domain_from_data`]).
+/// ([`zakai::lab::recording::data_domain::domain_from_data`]) and the scenario's box will do,
+/// a `ConfigError` on `domain` where it cannot and a grid method's grid cannot resolve the
+/// posterior to expect on that box ([`zakai::lab::experiment::Experiment::coarse_grids`]).
 #[pyfunction]
 #[pyo3(signature = (json, observations, times=None))]
 pub fn domain_from_data(
@@ -53,14 +55,30 @@ pub fn domain_from_data(
     let e = experiment(json)?;
     let recording = recording_of(&e, &observations, times.as_ref(), None)?;
     let bounds = e.config().bounds();
-    Ok(
-        zakai::lab::recording::data_domain::domain_from_data(e.model(), &recording, &bounds).map(
-            |d| {
-                let domain = d.bounds.iter().map(|&(lo, hi)| [lo, hi]).collect();
-                (domain, d.note)
-            },
-        ),
-    )
+    match zakai::lab::recording::data_domain::domain_from_data(e.model(), &recording, &bounds) {
+        Some(d) => {
+            let domain = d.bounds.iter().map(|&(lo, hi)| [lo, hi]).collect();
+            Ok(Some((domain, d.note)))
+        }
+        // The prior's box stands, unless a grid on it cannot resolve the posterior to expect.
+        None => match e.coarse_grids().as_slice() {
+            [] => Ok(None),
+            coarse => Err(errors::config(
+                "domain",
+                format!(
+                    "none given, the box around the prior is too wide for the grid methods and the data cannot narrow it (only a 1-D state with Gaussian measurements of constant variance can be): {}; give a domain about where the state will be",
+                    coarse.join("; ")
+                ),
+            )),
+        },
+    }
+}
+
+/// The scenario's grid methods whose grids cannot resolve the posterior to expect on its
+/// domain, each with why ([`zakai::lab::experiment::Experiment::coarse_grids`]).
+#[pyfunction]
+pub fn coarse_grids(json: &str) -> PyResult<Vec<String>> {
+    Ok(experiment(json)?.coarse_grids())
 }
 
 /// Sets the largest memory a scenario's methods may need together (bytes, or text such as

@@ -204,3 +204,23 @@ def test_a_diffuse_prior_without_a_domain_gets_its_box_from_the_data(sm):
     sc.domain = [(-24178.0, 26418.0)]
     run = zakai.filter(sc, flow, times=years)
     assert not any(c.startswith("domain [") for c in run.chosen_defaults)
+
+
+def test_a_diffuse_prior_the_data_cannot_narrow_is_refused_with_give_a_domain():
+    """Issue 56, item 2: where the measurements cannot narrow the prior's box (here continuous
+    observations dy = x dt + dw of x' = −x + v) and the grid cannot resolve the posterior on it
+    (N(0, 10⁸)'s ±8 sd is 1.6·10⁵ wide; the posterior sd to expect is about 1, and QIEM's 4001
+    points put 0.03 in it), a run, a fit and a stepping filter refuse with "give a domain"; a
+    given domain runs."""
+    model = zakai.Model.continuous("-x", "x", noise_cov=1.0)
+    prior = zakai.Prior.gaussian([0.0], [[1e8]])
+    sc = zakai.Scenario(model, prior, ["qiem"], dt_obs=0.01, t_final=0.5)
+    times, _, observations = zakai.simulate(sc, seed=3)
+    with pytest.raises(zakai.ConfigError, match="give a domain"):
+        zakai.filter(sc, observations, times=times)
+    with pytest.raises(zakai.ConfigError, match="give a domain"):
+        zakai.Filter("qiem", model, prior, dt_obs=0.01)
+    zakai.Filter("ekf", model, prior, dt_obs=0.01)  # no grid: nothing to refuse
+    sc.domain = [(-10.0, 10.0)]
+    run = zakai.filter(sc, observations, times=times)
+    assert run.methods["qiem"].estimates.shape[0] == observations.shape[0]

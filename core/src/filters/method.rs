@@ -190,6 +190,12 @@ pub trait Method {
     /// method (`"particles"`, `"init.mean"`; `"method"` when the method does not apply in n
     /// dimensions).
     fn problems(params: &Self::Params, n: usize) -> Vec<ConfigProblem>;
+    /// Points (or cells) per dimension of the grid the method lives on for an `n`-dimensional
+    /// state, `None` for a method without one: what [`crate::filters::resolution::too_coarse`]
+    /// weighs against the posterior width to expect on a box chosen for the user.
+    fn grid_shape(_params: &Self::Params, _n: usize) -> Option<Vec<usize>> {
+        None
+    }
     /// Why the method does not apply to this model and prior, or `Ok` (cheap: nothing built).
     fn suitability(_problem: &ProblemContext, _params: &Self::Params) -> Result<(), String> {
         Ok(())

@@ -130,3 +130,27 @@ pub fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> {
         steady,
     })
 }
+
+/// Why a 1-D grid of `shape` points on the problem's box cannot resolve the posterior to
+/// expect ([`expected_width`]): fewer than [`crate::filters::WIDTH_IN_CELLS_THRESHOLD`] points
+/// per its sd, the width self-check's bound, which a run would then report at every step.
+/// `None` when it can, or when nothing is expected (n > 1, a degenerate prior). For a box
+/// chosen around a diffuse prior (the Nile's N(1120, 10⁷): a box 38 000 wide for a posterior
+/// some 60 wide) this is the refusal "give a domain".
+pub fn too_coarse(problem: &ProblemContext, shape: &[usize]) -> Option<String> {
+    let width = expected_width(problem)?;
+    let (&points, &(lo, hi)) = (shape.first()?, problem.bounds.first()?);
+    let per_sd = points as f64 * width.width / (hi - lo);
+    (per_sd < crate::filters::WIDTH_IN_CELLS_THRESHOLD).then(|| {
+        format!(
+            "{points} points on [{lo:.4e}, {hi:.4e}] put {per_sd:.3} in the narrowest posterior sd to expect ({:.3e}; {}), fewer than the {} the grid needs to resolve it",
+            width.width,
+            if width.steady < width.prior_sd {
+                "the linearised filter's steady state"
+            } else {
+                "the prior's"
+            },
+            crate::filters::WIDTH_IN_CELLS_THRESHOLD
+        )
+    })
+}

@@ -490,6 +490,27 @@ impl Experiment {
         })
     }
 
+    /// The methods whose grid, at the sizes chosen for it, cannot resolve the posterior to
+    /// expect on this scenario's domain, each with why
+    /// ([`crate::filters::resolution::too_coarse`]): `"QIEM: 4001 points on … put 0.31 in
+    /// …"`. What a box chosen around a diffuse prior is refused with when the data cannot
+    /// narrow it.
+    pub fn coarse_grids(&self) -> Vec<String> {
+        let n = self.model.n;
+        self.with_problem(|problem| {
+            self.config
+                .methods
+                .iter()
+                .zip(&self.names)
+                .filter_map(|(method, name)| {
+                    let shape = method.grid_shape(n)?;
+                    let why = crate::filters::resolution::too_coarse(problem, &shape)?;
+                    Some(alloc::format!("{name}: {why}"))
+                })
+                .collect()
+        })
+    }
+
     /// `f` of this experiment's problem (model, prior, probe points, domain); a driven
     /// model as at its start ([`crate::filters::method::ProblemContext::at_start`]).
     pub(crate) fn with_problem<T>(

@@ -111,7 +111,9 @@ class Scenario:
         :func:`fit` (whose results' ``chosen_defaults`` then say so), :func:`profile` and
         :func:`log_likelihood` — not by a stepping :class:`Filter`, which sees no data up
         front, nor after a JSON round trip (:meth:`copy` keeps it). A diffuse prior's ±8 sd
-        would otherwise leave the posterior between cells.
+        would otherwise leave the posterior between cells; where the data cannot narrow the
+        box and a grid method cannot resolve the posterior to expect on it, those functions
+        raise :class:`ConfigError` asking for a domain.
     initial_state : array_like, optional
         x₀ of simulations; drawn from the prior when absent.
     parameters : dict, optional
@@ -204,7 +206,10 @@ class Scenario:
         note: when the domain is still the box the constructor set around the prior and the
         measurements put a 1-D state in less than half of it, that narrower box (where h is
         within 5 noise sds of the measured range, widened by the state's motion) — a diffuse
-        prior's ±8 sd would leave the posterior between cells."""
+        prior's ±8 sd would leave the posterior between cells. Where the data cannot narrow
+        it (n > 1, continuous observations, a non-Gaussian noise) and a grid method cannot
+        resolve the posterior to expect on the prior's box, :class:`ConfigError` asks for a
+        domain."""
         if self._prior_box is None or self.config["domain"] != self._prior_box:
             return self._text(), None
         found = _zakai.domain_from_data(self._text(), observations, times)

@@ -40,7 +40,9 @@ class Filter:
         for it and cross other steps as whole Δτ and a remainder). A method's own ``dt`` (the grid filters' time step) is one of
         ``params``.
     domain : list of (low, high), optional
-        The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent.
+        The box of grid and spectral methods; ``prior mean ± 8 sd`` when absent, refused
+        (:class:`ConfigError`) when a grid method's grid cannot resolve the posterior to expect
+        on it (a diffuse prior with sharp measurements).
     seed : int
         Seeds the method's random numbers.
     **params
@@ -80,6 +82,15 @@ class Filter:
             domain=domain,
             seed=seed,
         )
+        # A box set around the prior that the grid cannot resolve the posterior on is refused
+        # here: a stepping filter sees no data to narrow it with.
+        coarse = _zakai.coarse_grids(scenario._text()) if domain is None else []
+        if coarse:
+            raise ConfigError(
+                "domain: none given, and the box around the prior is too wide for the grid: "
+                + "; ".join(coarse)
+                + "; give a domain about where the state will be"
+            )
         self.scenario = scenario
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
         # Whether the filter is still at the prior's time (no step taken yet).

@@ -241,3 +241,59 @@ fn the_map_filters_warn_when_an_update_leaves_the_predicted_gaussian() {
         );
     }
 }
+
+/// Issue 56, item 2: a box around a diffuse prior that the grid cannot resolve the posterior
+/// on is named, so that the Python API (which sets that box when none is given) can refuse
+/// it with "give a domain". x' = −x + v (Q = 1), z = x + w (R = 1) every Δτ = 1: the steady
+/// posterior sd to expect is √0.618 = 0.786 (the positive root of P² + P − 1 = 0,
+/// `resolution::expected_width`). The prior N(0, 10⁸)'s ±6 sd, [−6·10⁴, 6·10⁴], at SA's
+/// most cells (4000) puts 0.026 cells in it; [−60, 60] (N(0, 100)'s box) puts 26, and the run
+/// there does not warn about the width. (The Rust builders ask for a domain themselves.)
+#[test]
+fn a_box_the_grid_cannot_resolve_the_expected_posterior_on_is_named() {
+    use zakai::lab::experiment::Experiment;
+    let scenario = |half: f64| {
+        let json = serde_json::json!({
+            "name": "diffuse",
+            "model": {"drift": ["-x"], "observation": ["x"],
+                      "noise": {"kind": "discrete", "mixture": [{"mean": [0.0], "cov": [[1.0]]}]}},
+            "prior": {"kind": "gaussian", "mean": [0.0], "cov": [[half * half / 36.0]]},
+            "domain": [[-half, half]],
+            "time": {"dt_obs": 1.0, "t_final": 5.0},
+            "methods": [{"method": "separation"}, {"method": "ekf"}]
+        });
+        Experiment::new(serde_json::from_value(json).unwrap()).unwrap()
+    };
+    let wide = scenario(6e4).coarse_grids();
+    assert_eq!(wide.len(), 1, "{wide:?}");
+    assert!(
+        wide[0].starts_with("SA: 4000 points") && wide[0].contains("fewer than the 2"),
+        "{wide:?}"
+    );
+    let per_sd: f64 = wide[0]
+        .split(" put ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((per_sd - 4000.0 * 0.786 / 1.2e5).abs() < 1e-3, "{per_sd}");
+    let narrow = scenario(60.0);
+    assert!(
+        narrow.coarse_grids().is_empty(),
+        "{:?}",
+        narrow.coarse_grids()
+    );
+    let run = narrow.run(1).unwrap();
+    let checks: Vec<&str> = run.methods[0]
+        .concerns
+        .iter()
+        .map(|c| c.check.as_ref())
+        .collect();
+    assert!(
+        !checks.contains(&"posterior width in grid cells"),
+        "{checks:?}"
+    );
+}

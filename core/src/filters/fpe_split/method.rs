@@ -95,6 +95,9 @@ macro_rules! fpe_method {
             fn display_name(_: &FpeParams) -> String {
                 $name.into()
             }
+            fn grid_shape(p: &FpeParams, n: usize) -> Option<Vec<usize>> {
+                Some(p.shape(n))
+            }
             fn label(p: &FpeParams, n: usize) -> String {
                 format!(
                     "{}({})",

@@ -141,6 +141,9 @@ macro_rules! yau_yau_method {
             fn display_name(_: &YauYauParams) -> String {
                 $name.into()
             }
+            fn grid_shape(p: &YauYauParams, n: usize) -> Option<Vec<usize>> {
+                Some(p.shape(n))
+            }
             fn label(p: &YauYauParams, n: usize) -> String {
                 format!(
                     "{}({})",

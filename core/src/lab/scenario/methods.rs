@@ -132,6 +132,12 @@ macro_rules! registry {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::problems(p, n),)* }
             }
 
+            /// Points per dimension of the method's grid, `None` without one
+            /// ([`Method::grid_shape`]).
+            pub fn grid_shape(&self, n: usize) -> Option<Vec<usize>> {
+                match self { $($(#[$attr])* MethodConfig::$variant(p) => <$method>::grid_shape(p, n),)* }
+            }
+
             /// Why the method does not apply to this problem, or `Ok` (cheap: nothing built).
             pub fn check_suitability(&self, problem: &ProblemContext) -> Result<(), String> {
                 match self { $($(#[$attr])* MethodConfig::$variant(p) => crate::filters::method::suitability_of::<$method>(problem, p),)* }
