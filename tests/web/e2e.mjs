@@ -920,6 +920,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.click('#play');
   console.log('batches at 0.1 interval per frame:', JSON.stringify(batches));
   assert.ok(batches.includes(1) && batches.every((k) => k <= 1), `at most one interval per batch: ${batches}`);
+  // Back to the default speed: the runs below play to their end (at 0.1 interval per frame,
+  // 500 intervals take 80 s).
+  await page.evaluate(() => { const s = document.getElementById('speed'); s.value = '5'; s.dispatchEvent(new Event('input')); });
+  assert.equal(await page.textContent('#speed-value'), '5');
 
   // 17. Edits are never silently ignored: the status says "changed — not applied", and
   //     ▶ play applies them before playing.

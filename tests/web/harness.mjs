@@ -10,6 +10,12 @@ export const artifacts = `${root}target/e2e`;
 
 mkdirSync(artifacts, { recursive: true });
 
+// Every line a browser test prints carries the seconds since it started, so that the test
+// command's slow sections can be found in its log.
+const started = Date.now();
+const print = console.log;
+console.log = (...args) => print(`[${((Date.now() - started) / 1000).toFixed(0)} s]`, ...args);
+
 /** Serves target/site on a free port; resolves to `{ proc, url }`. */
 export function serve() {
   return new Promise((resolve, reject) => {
