@@ -67,26 +67,15 @@ command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 (cd wasm && wasm-pack test --node)
 # The integration tests in two halves at once (node runs one test binary at a time on one
 # core): the counting-allocator binary, then everything else. The suite is one binary
-# (tests/tests/suite): one link and one wasm-bindgen pass instead of thirty.
-#
-# Heavy checks run once (natively, above): the paper reproductions and point-mass comparisons
-# below are numbers of the core's, which wasm computes as native does — the determinism step
-# after this one holds every method of every preset to 1e-9 of the native CLI — and took half
-# of this step's time here.
-native_only=(
-  reproduction_000::            # 000's tables and examples
-  direct::monte_carlo_tables::  # 002's Tables 3 and 4
-  smoothing::references::       # the smoothers against point-mass references
-  state_diffusion::references:: # the correlated-diffusion and point-mass references
-  exact_nonlinear::every_method_is_near_the_fine_grid_mean
-  map_filters::table_1_of_003
-)
-skips=()
-for module in "${native_only[@]}"; do skips+=(--skip "$module"); done
+# (tests/tests/suite): one link and one wasm-bindgen pass instead of thirty. Heavy checks run
+# once, natively: the paper reproductions and point-mass comparisons are marked native-only
+# in the suite (`#[cfg(not(target_arch = "wasm32"))]`); their numbers are the core's, which
+# wasm computes as native does — the determinism step after this one holds every method of
+# every preset to 1e-9 of the native CLI.
 (cd tests && wasm-pack test --node -- --test allocation) > target/wasm-tests-first-half.log 2>&1 &
 first=$!
 status=0
-(cd tests && wasm-pack test --node -- --lib --test suite -- "${skips[@]}") || status=$?
+(cd tests && wasm-pack test --node -- --lib --test suite) || status=$?
 wait "$first" || status=$?
 cat target/wasm-tests-first-half.log
 [ "$status" = 0 ]

@@ -43,6 +43,25 @@ function observationPaths(info, recorded) {
   return { times: recorded.times, obs };
 }
 
+// The About box describes the run on screen: the scenario's own text for a simulation, the
+// user's recording (rows, times, gaps, truth) and the scenario whose model filters it for a
+// file.
+function describeRun(recorded) {
+  const base = state.base ?? {};
+  const file = recorded && state.recording;
+  if (!file) {
+    $('description').textContent = base.description ?? '';
+    $('reference').textContent = base.reference ? `Source: ${base.reference}` : '';
+    return;
+  }
+  const t = recorded.times;
+  const missing = recorded.observations.filter((v) => v == null).length;
+  $('description').textContent = `Your recording ${file.name}: ${t.length} rows from t = ${t[0]} to t = ${t[t.length - 1]}`
+    + `${missing ? `, ${missing} values missing` : ''}, filtered with the model of the scenario “${base.name ?? ''}”${base.title ? ` (${base.title})` : ''}. `
+    + (file.truthText ? `The truth is read from ${file.truthName}.` : 'There is no truth: the plots show the estimates and their ±2σ bands, and no errors.');
+  $('reference').textContent = base.reference ? `The model's source: ${base.reference}` : '';
+}
+
 // A scale's range with a margin. A single value (the first frame: one time, every estimate
 // at the prior mean, some a rounding error away), a range within rounding of one, or a
 // non-finite one gets a unit range around it: uPlot's axis would otherwise divide a range of
@@ -63,6 +82,7 @@ function safeRange(u, min, max) {
 const ghostSeries = (i) => 2 + state.info.methods.length + i;
 
 export function makePlots(info, recorded = null) {
+  describeRun(recorded);
   const n = info.n;
   const names = info.labels ?? info.methods;
   const M = names.length;
@@ -226,8 +246,10 @@ function plotSize(id, which) {
 const clamp = (v, lo, hi) => Math.max(lo, Math.min(hi, v));
 const presenting = () => document.body.classList.contains('present');
 const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.34 : 0.3), 180, presenting() ? 520 : 340));
-const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.12, 90, presenting() ? 200 : 150));
-const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.2, 140, presenting() ? 320 : 240));
+// The observation and error plots sit below the fold: tall enough for a plot area of about
+// 100 px (three readable y ticks) under their time axis, at any window height.
+const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.18, 140, presenting() ? 260 : 200));
+const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.24, 180, presenting() ? 340 : 260));
 export const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 // The trajectory plot's legend: one chip per method with its line, which also chooses the
@@ -306,6 +328,10 @@ function drawFailureMarks(u) {
     if (t == null || y == null) return;
     const [px, py] = [u.valToPos(t, 'x', true), u.valToPos(y, 'y', true)];
     ctx.save();
+    // Solid and opaque whatever the series drawn last left set (the previous run's overlay
+    // is dotted and faint).
+    ctx.setLineDash([]);
+    ctx.globalAlpha = 1;
     for (const [c, w] of [['#fff', 5], [color(i), 3]]) {
       ctx.strokeStyle = c;
       ctx.lineWidth = w * (window.devicePixelRatio || 1);

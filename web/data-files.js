@@ -14,6 +14,15 @@ function showDataStatus() {
   if (r) $('data-section').open = true;
 }
 
+// A recording the scenario refused (its message is under "Your data"): the session before it
+// keeps running, and the status and Play follow that session — its recording, or the
+// simulation.
+export function dropRefusedRecording() {
+  state.recording = state.runRecording ?? null;
+  if (!state.recording) for (const id of ['file-observations', 'file-truth']) $(id).value = '';
+  showDataStatus();
+}
+
 // Reads one file into the form or the recording; `then` applies (false while more files of
 // one drop follow).
 async function loadFile(file, as, then = true) {

@@ -58,6 +58,11 @@ async function openLesson(page, id) {
   const status = (text, expect) => {
     const line = $('lesson-status');
     line.replaceChildren(text, ...(expect ? [el('br'), el('span', { className: 'expect' }, 'What you should see: ', ...richText(expect))] : []));
+    // The lesson column scrolls by itself beside the plots: bring the line into its view
+    // (the page itself is left where a panel the try opened put it).
+    const box = $('learn');
+    const [b, l] = [box.getBoundingClientRect(), line.getBoundingClientRect()];
+    if (box.scrollHeight > box.clientHeight && (l.bottom > b.bottom || l.top < b.top)) box.scrollTop += l.bottom - b.bottom + 8;
   };
   const action = (label, act, expect) => {
     const b = el('button', { type: 'button', className: 'try' }, label);
@@ -95,6 +100,8 @@ async function openLesson(page, id) {
     el('div', { className: 'tries' }, ...tries, replay),
     el('p', { id: 'lesson-status', className: 'hint', role: 'status' }, `scenario: ${lesson.preset} with seed ${lesson.seed}`),
   );
+  // The panels the lesson's text points to are open when it says to look there.
+  for (const id of lesson.opens ?? []) $(id).open = true;
   const refused = await page.run(lessonConfig(page, lesson));
   if (refused) status(`not run: ${refused}`);
 }

@@ -9,7 +9,8 @@
 // rule's track-loss test is off unless the lesson is about it (`trackLoss: true`). A "try
 // this" action's `change(config, method)` edits the running config in place; `mc` runs the
 // Monte Carlo panel and `check` the convergence check instead, `view` turns on a view; its
-// `expect` says what the changed run shows (asserted by tests/web/lessons.mjs).
+// `expect` says what the changed run shows (asserted by tests/web/lessons.mjs). `opens` lists
+// the panels (<details> ids) the lesson's text refers to, opened with the lesson.
 
 const methodsOf = (method, list) => list.map(([key, params]) => method(key, params ?? {}));
 
@@ -53,6 +54,8 @@ export const LESSONS = [
   },
   {
     id: 'kalman-bucy',
+    // Its text points to the timing table and notes in this panel: opened with the lesson.
+    opens: ['diagnostics-panel'],
     title: '2. Kalman–Bucy: the linear case, solved exactly',
     preset: 'cubic-sensor-1d',
     seed: 1,
@@ -119,7 +122,7 @@ export const LESSONS = [
       {
         label: 'another path: seed 1',
         change: (c) => { c.seed = 1; },
-        expect: 'the EKF is lost again (marked failed at $t \\approx 1.4$); the UKF with α = 0.05 holds on this time. One path proves little: the Monte Carlo panel says how often each fails.',
+        expect: 'the EKF is lost again (marked failed at $t \\approx 1.4$); the UKF with α = 0.05 is not marked failed this time — but on this path QIEM, the exact filter up to its grid, is also more than 1 from the truth for most of $[0.4, 1.4]$, so the UKF escapes the rule by luck, not by accuracy: the failure rule measures the error against the truth, not against the best any filter could do. One path proves little: the Monte Carlo panel says how often each fails.',
       },
     ],
   },
@@ -146,7 +149,7 @@ export const LESSONS = [
       {
         label: 'Monte Carlo: 20 runs',
         mc: 20,
-        expect: 'over 20 runs the four mean MSEs lie within about one standard error of each other (all near 0.31, with standard errors near 0.05): the error against the truth cannot rank filters that are all near the optimum.',
+        expect: 'over 20 runs the four mean MSEs lie within about one standard error of each other (all near 0.31, with standard errors near 0.05): the error against the truth cannot rank filters that are all near the optimum. The table\'s “paper” column is Table 1 of Shi, Chen & Yau (2021) for the same problem: its PF(50) had an MSE of 1.31, four times ours; 004 does not describe its particle filter, so where the difference comes from cannot be said (the reproduction notes, docs/reproduction.md, compare every row).',
       },
       {
         label: 'check convergence',
@@ -187,7 +190,7 @@ export const LESSONS = [
       {
         label: 'IEM with the likelihood in the update',
         change: (c) => { for (const m of c.methods) if (m.method === 'iem') m.likelihood = 'in_update'; },
-        expect: 'with the same grid and step, IEM now agrees with QIEM to within $10^{-2}$: where the observation term goes mattered, not the scheme.',
+        expect: 'with the same grid and step, IEM now equals QIEM to within $10^{-8}$ — not because the schemes agree in general: with $f = 0$ and the observation term in the update, only the Laplacian is left in the operator, and IEM\'s (14) and QIEM\'s (18) both solve $\\big(I - \\tfrac{\\Delta t}{2}\\Delta_h\\big)\\, u^{k+1} = u^k$. The first run\'s gap came from where the observation term went. The convergence table is the first run\'s (dimmed); check convergence again and IEM converges as QIEM does.',
       },
       {
         label: 'shrink IEM\'s step: Δt = 10⁻⁴',
@@ -198,19 +201,21 @@ export const LESSONS = [
   },
   {
     id: 'two-d',
+    // Its text points to the timing table and notes in this panel: opened with the lesson.
+    opens: ['diagnostics-panel'],
     title: '6. A 2-D posterior and log-concavity',
     preset: 'yau-2d',
     seed: 1,
     scenario: (c) => c,
     body: [
-      'In two dimensions the grid filter\'s density is an image: the heatmap shows the joint posterior of $(x_1, x_2)$ with the truth and every estimate marked. The example is (33) of Yueh, Lin & Yau (2014): the nonlinear drift $f(x) = (-\\cos x_1 - \\sin x_2,\\ \\cos x_1 + \\sin x_2)$ observed linearly, $h(x) = (x_1 - x_2,\\ x_1 + x_2)$.',
+      'In two dimensions the grid filter\'s density is an image: the heatmap shows the joint posterior of $(x_1, x_2)$ with the truth and every estimate marked. The example is (33) of Yueh, Lin & Yau (2014): the nonlinear drift $f(x) = (-\\cos x_1 - \\sin x_2,\\ \\cos x_1 + \\sin x_2)$ observed linearly, $h(x) = (x_1 - x_2,\\ x_1 + x_2)$. QIEM-4 in the legend is their Algorithm 4, “fourth-order QIEM”: the same quasi-implicit step on the same grid with the Laplacian taken by the 9-point stencil of their (20)–(21), which also uses the four diagonal neighbours, in place of the 5-point one.',
       'Gaussian filters (EKF, UKF) and the MAP filters of Kang, Salmon & Yau (2023) work best when the posterior is log-concave, that is when',
       '$$-\\nabla^2 \\log p(x) \\succeq 0$$',
       'everywhere: then its maximisers form a convex set (a single mode when it is strictly log-concave) and finding the MAP point is a convex problem (their §4, (4.5)); their §3 gives conditions under which the posterior is log-concave. Where the Hessian of $-\\log p$ has a negative eigenvalue the density can bend into a banana or split into modes. With a linear $h$ only the drift can bend the posterior, and here it does so little.',
     ],
     lookFor: [
       'The heatmap: one compact blob following the truth; EKF, UKF, the particle filter and QIEM nearly agree (their MSEs within 10 % of each other).',
-      'The note under the plot: the smallest curvature of $-\\log p$ (the smallest eigenvalue of $-\\nabla^2 \\log p$) where the density is above $10^{-3}$ of its maximum. On this run it stays positive — log-concave — until $t \\approx 1.3$, and then dips a little below 0 (never below $-0.5$) away from the mode: the drift bends the posterior\'s outer part slightly, one compact mode still.',
+      'The note at the top of “Diagnostics for researchers” (opened, below the plots): the smallest curvature of $-\\log p$ (the smallest eigenvalue of $-\\nabla^2 \\log p$) where the density is above $10^{-3}$ of its maximum. On this run it stays positive — log-concave — until $t \\approx 1.3$, and then dips a little below 0 (never below $-0.5$) away from the mode: the drift bends the posterior\'s outer part slightly, one compact mode still.',
     ],
     tryThis: [
       { label: 'show the log-concavity layer', view: 'lc-layer', expect: 'the heatmap marks in red the cells, at the time shown, where $-\\nabla^2 \\log p$ has a negative eigenvalue.' },
@@ -218,6 +223,8 @@ export const LESSONS = [
   },
   {
     id: 'spectral',
+    // Its text points to the timing table and notes in this panel: opened with the lesson.
+    opens: ['diagnostics-panel'],
     title: '7. The spectral method: off-line and on-line',
     preset: 'cubic-sensor-1d',
     seed: 3,
@@ -251,7 +258,7 @@ export const LESSONS = [
     seed: 3,
     scenario: (c) => c,
     body: [
-      'Every lesson so far took the model as known. In practice its noise levels rarely are. Here the state moves by $dx = -x\\,dt + \\sqrt q\\,dw$, $w$ a standard Brownian motion, and is measured every $\\Delta\\tau = 0.2$ as $z_k = x_k^3 + v_k$, $v_k \\sim N(0, r)$, with the measurement noise variance $r$ unknown. The data say which values of $r$ are plausible, through their likelihood.',
+      'Every lesson so far took the model as known. In practice its noise levels rarely are. Here the state moves by $dx = -x\\,dt + \\sqrt q\\,dv$, $v$ a standard Brownian motion (the signal noise, lesson 1\'s $v$), and is measured every $\\Delta\\tau = 0.2$ as $z_k = x_k^3 + \\varepsilon_k$, $\\varepsilon_k \\sim N(0, r)$, with the measurement noise variance $r$ unknown. The data say which values of $r$ are plausible, through their likelihood.',
       'The exact filter predicts each measurement before it sees it, with the density $p(z_k \\mid z_0, \\dots, z_{k-1}, r)$. The likelihood of all the data is the product of these predictive densities at the measured values (the prediction-error decomposition; the first against the prior):',
       '$$\\ln L(r) = \\ln p(z_0, \\dots, z_N \\mid r) = \\sum_{k=0}^{N} \\ln p(z_k \\mid z_0, \\dots, z_{k-1}, r).$$',
       'Each predictive density is the normalising constant of the Bayes update, the denominator of (3) of Šimandl & Švácha (2005):',
@@ -277,7 +284,7 @@ export const LESSONS = [
     seed: 5,
     scenario: (c) => c,
     body: [
-      'Three questions can be asked about the state $x(t)$ from observations $y(s)$ on $[0, T]$. Filtering: what do the observations up to $t$ say about $x(t)$, the density $p\big(x(t) \mid y(s), s \le t\big)$ — what every lesson so far computed. Forecasting: what do they say about a later $x(t + u)$, $p\big(x(t+u) \mid y(s), s \le t\big)$. Smoothing: what do all of them, before and after $t$, say about $x(t)$, $p\big(x(t) \mid y(s), s \le T\big)$ — the best estimate of the past.',
+      'Three questions can be asked about the state $x(t)$ from observations $y(s)$ on $[0, T]$. Filtering: what do the observations up to $t$ say about $x(t)$, the density $p\\big(x(t) \\mid y(s), s \\le t\\big)$ — what every lesson so far computed. Forecasting: what do they say about a later $x(t + u)$, $p\\big(x(t+u) \\mid y(s), s \\le t\\big)$. Smoothing: what do all of them, before and after $t$, say about $x(t)$, $p\\big(x(t) \\mid y(s), s \\le T\\big)$ — the best estimate of the past.',
       'The forecast density evolves in $u$ by the Fokker–Planck (forward Kolmogorov) equation alone, lesson 1\'s operator without the observation term, starting from the filter at $t$:',
       '$$\\partial_t p = \\mathcal L^* p = \\tfrac12 \\sum_{i,j} \\partial_i \\partial_j \\big((GG^\\top)_{ij}\\, p\\big) - \\sum_i \\partial_i (f_i\\, p).$$',
       'When nothing is observed between $t$ and $t + u$, the filter is this forecast: a filter whose sensor is out only predicts.',
@@ -319,8 +326,8 @@ export const LESSONS = [
     ],
     lookFor: [
       'The UKF\'s and EKF\'s estimates are 0 at every time, and their standard deviation stays at 0.67, the prior\'s $\\sqrt{0.45}$ (the prior is the stationary law, so prediction alone keeps it there): they never learn from the data (MSE 0.571, this path\'s mean of $x_t^2$, whose expectation is 0.45). The SA follows the swings of the log-variance (MSE 0.306), as does the particle filter (0.310).',
-      'The SA\'s density (the heat strip, and the densities plot when you look back) leans to the right: its skewness is positive at each of the 61 times the page keeps for looking back (every 5 time units), between 0.01 and 0.21. Each measurement\'s log-likelihood in $x$, $-x/2 - z^2 e^{-x}/2$ up to a constant, falls off double-exponentially towards low volatility and only linearly towards high, so the data rule out low volatilities more sharply than high ones.',
-      'The warnings under the plots name the moment match for the UKF and the EKF, and for neither the SA nor the particle filter.',
+      'The SA\'s density (the heat strip, and the densities plot when you look back) leans to the right: its skewness is positive at each of the 61 times the page keeps for looking back (every 5 time units), between 0.01 and 0.21. Each measurement\'s log-likelihood in $x$ is $-x/2 - z^2 e^{-x}/2$ up to a constant: it falls exponentially towards low volatility and only linearly towards high (so the likelihood itself falls double-exponentially towards low volatility), so the data rule out low volatilities more sharply than high ones.',
+      'The warnings above the plots name the moment match for the UKF and the EKF, and for neither the SA nor the particle filter.',
     ],
     tryThis: [
       {
@@ -357,7 +364,7 @@ export const LESSONS = [
       'The SA\'s density (the heat strip, and the densities plot at the time shown) is skewed to the right at each of the 41 times the page keeps for looking back (every 1.25 time units): its skewness is between 0.27 and 1.09, largest at the time where its mean is lowest ($t = 45$) and smallest where its mean is highest ($t = 3.75$). Below the mean the noise $\\sigma\\sqrt x$ is smaller than above it, and the drift pushes up from 0, so the density is squeezed between 0 and its mode and spreads upwards, the more so the closer its mean is to 0. It never puts more than 0.5 % of its mass below 0 (0.46 % at $t = 45$; the exact density has none there: this is the discretisation\'s error).',
       'The UKF\'s Gaussian gives a negative rate a probability above 5 % at 16 of those 41 times, and 20.5 % at $t = 41.25$ (mean 0.087, standard deviation 0.106), where the SA\'s density has 0.39 % below 0.',
       'The estimates are close all the same: MSE 0.0111 for the SA, 0.0110 for the particle filter and 0.0105 for the UKF on this path (one run cannot rank them). The measurement noise\'s standard deviation, 0.3, is 1.7 to 4 times the SA\'s posterior one (0.075 to 0.18 at the kept times), and between updates the UKF propagates its own mean and variance exactly (see above).',
-      'The warnings under the plots name the UKF\'s approximation (the process noise taken at the mean), and say nothing of the SA or the particle filter.',
+      'The warnings above the plots name the UKF\'s approximation (the process noise taken at the mean), and say nothing of the SA or the particle filter.',
     ],
     tryThis: [
       {

@@ -10,14 +10,22 @@ import { apply, settleLoad, setupSession, worker } from './session.js';
 import { plainWords } from './problems.js';
 import { loop, setupPlayback } from './playback.js';
 import { setupExport } from './export.js';
-import { setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
-import { setupFiles } from './data-files.js';
+import { markStaleTables, setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
+import { dropRefusedRecording, setupFiles } from './data-files.js';
 import { setupLikelihood, startProfile } from './likelihood.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
 window.zakaiPage = state; // for the end-to-end tests
 state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), dash: dash(i) }));
+
+// A panel a lesson's "try this" opened: scrolled to beside the lesson (which stays in view,
+// sticky); on a narrow screen, where the lesson comes first and the panels last, the lesson's
+// status line (what to look for) is brought to the top instead, the panel further down.
+function showPanel(id) {
+  if (matchMedia('(max-width: 900px)').matches) $('lesson-status').scrollIntoView({ block: 'start' });
+  else $(id).scrollIntoView({ block: 'start' });
+}
 
 // Learn mode's view of the page (learn.js): presets, the catalogue's defaults, runs and panels.
 const learnHooks = {
@@ -40,18 +48,18 @@ const learnHooks = {
     $('mc-panel').open = true;
     $('mc-seed').value = String(state.info?.seed ?? readForm().seed ?? 1);
     startConvergenceCheck();
-    $('mc-panel').scrollIntoView({ block: 'start' });
+    showPanel('mc-panel');
   },
   monteCarlo(runs) {
     $('mc-panel').open = true;
     $('mc-runs').value = String(runs);
     startMonteCarlo();
-    $('mc-panel').scrollIntoView({ block: 'start' });
+    showPanel('mc-panel');
   },
   likelihood(parameter) {
     $('lik-panel').open = true;
     startProfile(parameter);
-    $('lik-panel').scrollIntoView({ block: 'start' });
+    showPanel('lik-panel');
   },
   view(name) {
     const box = $(name);
@@ -65,7 +73,7 @@ const learnHooks = {
 state.learnRun = (config) => learnHooks.run(config); // for the lessons' browser test
 
 setupForm();
-setupSession({ onReady: () => setupLearn(learnHooks) });
+setupSession({ onReady: () => setupLearn(learnHooks), onLoaded: markStaleTables, onDataRefused: dropRefusedRecording });
 setupPlayback();
 setupExport();
 setupMonteCarlo();

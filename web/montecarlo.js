@@ -4,7 +4,21 @@ import { $ } from './dom.js';
 import { checkedForm, worker, workerUrl } from './session.js';
 import { csvCell, csvName, download, share } from './export.js';
 
-const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {} };
+const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {}, scenarios: {} };
+
+// The scenario a table was computed for, without its seed (the tables run their own seeds).
+const scenarioKey = (config) => JSON.stringify({ ...config, seed: undefined });
+
+// A table computed for another scenario than the one now loaded says so, dimmed, until it is
+// run again (or the scenario is changed back): `config` is the scenario just loaded.
+export function markStaleTables(config) {
+  const key = scenarioKey(config);
+  for (const [table, status] of [['mc-table', 'mc-status'], ['check-table', 'check-status']]) {
+    const stale = mc.scenarios[table] != null && mc.scenarios[table] !== key;
+    $(table).classList.toggle('stale', stale);
+    $(status).dataset.stale = String(stale);
+  }
+}
 
 // Other panels' jobs in the same worker (the Likelihood view): their messages by type.
 export function onJobMessage(type, handler) {
@@ -75,6 +89,8 @@ export function startMonteCarlo() {
   $('mc-table').querySelector('tbody').replaceChildren();
   $('mc-notes').replaceChildren();
   $('mc-rule').hidden = true;
+  mc.scenarios['mc-table'] = scenarioKey(config);
+  markStaleTables(config);
   postJob({ type: 'mcStart', config, seed, runs });
 }
 
@@ -86,6 +102,8 @@ export function startConvergenceCheck() {
   const seed = Math.max(0, Number($('mc-seed').value) | 0);
   $('check-start').disabled = true;
   $('check-status').textContent = `checking on the observations of seed ${seed}…`;
+  mc.scenarios['check-table'] = scenarioKey(config);
+  markStaleTables(config);
   postJob({ type: 'check', config, seed });
 }
 

@@ -55,6 +55,7 @@ export function apply() {
   else worker.postMessage({ type: 'load', id, config, seed: config.seed });
   state.pendingConfig = structuredClone(config); // the form keeps editing its own rows
   state.pendingRows = state.enabledRows.slice();
+  state.pendingRecording = r;
   return true;
 }
 
@@ -141,7 +142,10 @@ export function setupSession(hooks = {}) {
           state.base = state.pendingConfig;
           state.pendingConfig = null;
           state.runRows = state.pendingRows;
+          // The recording of the session now running (null: simulated).
+          state.runRecording = state.pendingRecording;
         }
+        sessionHooks.onLoaded?.(state.base);
         $('run-error').textContent = '';
         state.failures = new Map();
         $('data-error').textContent = '';
@@ -169,6 +173,7 @@ export function setupSession(hooks = {}) {
       case 'dataError':
         // The recording was refused: its message goes under "Your data".
         loadRefused(data, 'data-error');
+        sessionHooks.onDataRefused?.();
         $('data-section').open = true;
         settleLoad(data.refused, data.message);
         break;

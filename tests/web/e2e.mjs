@@ -384,6 +384,20 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   }
   await page.locator('#mc-panel').scrollIntoViewIfNeeded();
   await page.screenshot({ path: `${artifacts}/playground-monte-carlo.png`, fullPage: true });
+  // 11d. A table of another scenario says so: after a change it is dimmed and its status
+  //      starts "for the scenario before the last change"; changed back, it is current again.
+  const staleness = () => page.evaluate(() => ({ table: document.getElementById('mc-table').classList.contains('stale'), status: document.getElementById('mc-status').dataset.stale, before: getComputedStyle(document.getElementById('mc-status'), '::before').content }));
+  const tFinal = await page.inputValue('#t-final');
+  assert.equal((await staleness()).table, false, 'current after its run');
+  await page.fill('#t-final', '4');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.base.time.t_final === 4, null, { timeout: 20000 });
+  const stale = await staleness();
+  assert.ok(stale.table && stale.status === 'true' && stale.before.includes('before the last change'), `marked stale: ${JSON.stringify(stale)}`);
+  await page.fill('#t-final', tFinal);
+  await page.click('#apply');
+  await page.waitForFunction((t) => window.zakaiPage.base.time.t_final === Number(t), tFinal, { timeout: 20000 });
+  assert.equal((await staleness()).table, false, 'current again with the scenario it was run on');
 
   // 12a. The SIMD build is used where the engine has wasm SIMD; the scalar fallback build
   //      loads and steps too (forced with ?wasm=scalar).
@@ -498,8 +512,17 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     data.on('pageerror', (e) => consoleErrors.push(String(e)));
     await data.goto(`${url}?preset=cubic-sensor-1d`);
     await data.waitForFunction(() => window.zakaiPage?.info?.name === 'cubic-sensor-1d', null, { timeout: 30000 });
+    // A file the scenario refuses on a simulation: the message says why, and the status and
+    // Play go on with the simulation (not "filtering" a file that never loaded).
+    const badPath = `${artifacts}/recorded-bad.csv`;
+    writeFileSync(badPath, 't,dy1\n0,0\n0.01,oops\n');
+    await data.setInputFiles('#file-observations', badPath);
+    await data.waitForFunction(() => document.getElementById('data-error').textContent.includes('line 3'), null, { timeout: 10000 });
+    assert.equal(await data.textContent('#data-status'), 'simulated data');
+    assert.match(await data.textContent('#description'), /^(?!Your recording)/, 'the About box describes the simulation');
     await data.setInputFiles('#file-observations', obsPath);
     await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
+    assert.match(await data.textContent('#description'), /^Your recording recorded-obs\.csv: \d+ rows from t = 0 to t = [\d.]+, filtered with the model of the scenario “cubic-sensor-1d”/);
     assert.match(await data.textContent("#data-status"), /filtering recorded-obs\.csv under the scenario “cubic-sensor-1d” \(no truth/);
     // The recording is drawn whole at once, before any step: its path y = Σ Δy row by row.
     {
@@ -540,13 +563,13 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await data.setInputFiles('#file-truth', truthPath);
     await data.waitForFunction(() => window.zakaiPage.info?.has_truth === true, null, { timeout: 10000 });
     assert.match(await data.textContent('#data-status'), /with the truth from recorded-truth\.csv/);
-    // A broken file: the message names the line and column; the running session stays.
-    const badPath = `${artifacts}/recorded-bad.csv`;
-    writeFileSync(badPath, 't,dy1\n0,0\n0.01,oops\n');
+    // A broken file: the message names the line and column; the running session stays, and
+    // so does the status that describes it.
     await data.setInputFiles('#file-observations', badPath);
     await data.waitForFunction(() => document.getElementById('data-error').textContent.includes('line 3'), null, { timeout: 10000 });
     await data.waitForTimeout(500); // the validation that follows must not clear it
     assert.match(await data.textContent('#data-error'), /observations line 3, column dy1: `oops` is not a finite number/);
+    assert.match(await data.textContent('#data-status'), /filtering recorded-obs\.csv under the scenario “cubic-sensor-1d” with the truth from recorded-truth\.csv/);
     // Drag and drop: a scenario JSON and an observations CSV dropped together load the
     // scenario first, then filter the observations under it.
     const scenarioJson = execFileSync(cli, ['show', 'sa-example-1']).toString();
@@ -738,7 +761,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     const file = await browser.newPage({ viewport: { width: 800, height: 400 } });
     await file.goto(`file://${root}target/site/index.html`);
     await file.waitForTimeout(500);
-    assert.match(await file.textContent('#served-note'), /served over HTTP: .*scripts\/serve\.sh/);
+    // One line a student holding only the built site can follow, and no dead controls.
+    assert.match(await file.textContent('#served-note'), /served over HTTP: in the folder that holds this index\.html, run python3 -m http\.server 8000 --bind 127\.0\.0\.1/);
+    for (const sel of ['header', '#play', '#form', '#trajectory-plot']) assert.ok(!(await file.isVisible(sel)), `${sel} hidden from file://`);
+    assert.ok(await file.isVisible('#served-note'));
     await file.close();
   }
 
@@ -871,6 +897,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   //     deuteranopia emulation is kept to look at.
   const looks = await page.evaluate(() => window.zakaiPage.looks(28));
   assert.equal(new Set(looks.map((l) => `${l.color}/${l.dash.join(',')}`)).size, 28, 'every look distinct');
+  // Ten methods (the cubic sensor's default set) in ten colours: none shares one.
+  assert.equal(new Set(looks.slice(0, 10).map((l) => l.color)).size, 10, 'ten methods, ten colours');
   const CVD = {
     normal: [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
     deuteranopia: [[0.367322, 0.860646, -0.227968], [0.280085, 0.672501, 0.047413], [-0.011820, 0.042940, 0.968881]],
@@ -974,6 +1002,21 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const hex = (c) => [1, 3, 5].map((i) => parseInt(c.slice(i, i + 2), 16));
   assert.ok(hex(lost.ekfColour).every((v, i) => Math.abs(v - lost.pixel[i]) < 40), `✕ in the EKF's colour at its failure: ${lost.pixel}`);
   await page.screenshot({ path: `${artifacts}/playground-failed-drawn-on.png` });
+  // Rerun: the previous run's overlay (faint, dotted) is drawn first; the ✕ stays solid and
+  // opaque in the EKF's colour (its dash and alpha were once the overlay's).
+  await page.check('#previous');
+  await page.click('#reset');
+  await page.click('#play');
+  await finished();
+  const rerunPixel = await page.evaluate(() => {
+    const s = window.zakaiPage;
+    const k = s.diagnostics[0].failed_at;
+    const u = s.trajPlot;
+    const dpr = window.devicePixelRatio || 1;
+    const [px, py] = [u.valToPos(s.data.times[k], 'x', true), u.valToPos(s.data.ghost[0][0][k], 'y', true)];
+    return [...u.ctx.getImageData(Math.round(px + 3 * dpr), Math.round(py + 3 * dpr), 1, 1).data];
+  });
+  assert.ok(hex(lost.ekfColour).every((v, i) => Math.abs(v - rerunPixel[i]) < 40), `after a rerun the ✕ is solid in the EKF's colour: ${rerunPixel}`);
   // The rule is editable: without track loss the EKF does not fail, and what it estimates is
   // what the dashed line showed.
   await page.fill('#fail-error', '');

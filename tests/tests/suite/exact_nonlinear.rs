@@ -238,6 +238,9 @@ impl FineGrid {
 /// of 586 for the IEKF, 492 of 585 for the IOKF; the steps left are the first 20, before the
 /// watch has found and followed the second mode, and those where the two modes have nearly
 /// merged, less than a quarter of a standard deviation from the mean).
+// A Monte Carlo reproduction: run once, natively (its numbers are the core's, which the
+// determinism test holds the wasm build to).
+#[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn every_method_is_near_the_fine_grid_mean_on_a_bimodal_posterior_or_warns() {
     let config = zakai_tests::bimodal_scenario(3.0);

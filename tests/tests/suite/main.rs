@@ -28,6 +28,8 @@ mod own_data;
 mod parameters;
 mod particle;
 mod properties;
+// 000's Monte Carlo reproductions run once, natively, as the stiff property test below.
+#[cfg(not(target_arch = "wasm32"))]
 mod reproduction_000;
 mod self_checks;
 mod simulator;

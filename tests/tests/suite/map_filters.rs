@@ -137,6 +137,9 @@ fn guarded_newton_finds_the_map_point_of_a_cubic_measurement() {
 /// MAP update is almost linear, so what this table can check is weaker and is what is
 /// asserted: the three filters tie (within 0.1 % of each other) with no failed run. Where
 /// the IOKF does beat the IEKF is shown by the large-residual test below.
+// A Monte Carlo reproduction: run once, natively (its numbers are the core's, which the
+// determinism test holds the wasm build to).
+#[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn table_1_of_003_cells_and_the_tie() {
     const H_OMITTED: &str = "003 omits h of (5.2); with the preset's two-sensor bearings in degrees the three filters tie at 1.430, about twice 003's values";

@@ -62,20 +62,16 @@ fn the_2d_example_33_is_tracked() {
 }
 
 /// Why the EKF column of 000 Table 1 does not reproduce.
-#[cfg(not(target_arch = "wasm32"))]
 const EKF_START: &str = "000 does not say how its EKF started; ours starts uninformed (x̂₀ = 0, P₀ = 1) and is carried by cos x to π/2, where it tracks: it does not grow with n as 000's does";
 
 /// Why QIEM's x⁴–x⁶ rows do not reproduce.
-#[cfg(not(target_arch = "wasm32"))]
 const QIEM_BELOW: &str = "ours is below (better than) 000's; 000 gives neither σ₀, x₀ nor T, and the presets average the likelihood over each cell (000's point values leave the mirror mode of even n to discretisation noise)";
 
-/// 000 Table 1, 100 runs per row (native only: 600 runs take two minutes under node; the
-/// trackers above run the same QIEM in the WebAssembly run of the suite), each cell against the paper's value with k = 3 standard
+/// 000 Table 1, 100 runs per row, each cell against the paper's value with k = 3 standard
 /// errors of the difference ([`zakai_tests::compare_with_paper`]): QIEM reproduces for
 /// h = x² and x³; the EKF for x². The other cells are listed with the reason (and in
 /// docs/reproduction.md). What holds throughout: QIEM's E_RMS is below the uninformed EKF's
 /// for every n.
-#[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn table_1_of_000_row_by_row() {
     use zakai_tests::Deviation;
