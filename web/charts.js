@@ -194,7 +194,9 @@ export function makeCharts() {
   state.obsPlot = new uPlot({
     ...plotSize('observations-plot', 'observations'), series: oseries,
     scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
-    axes: [{ ...axisFont, label: '' }, { label: info.continuous ? 'y' : 'z', ...axisFont, space: 24 }],
+    // The time axis without a label (the trajectory plot's above names it): uPlot reserves a
+    // label's height for any label, even an empty one.
+    axes: [{ ...axisFont, size: timeTicksSize() }, { label: info.continuous ? 'y' : 'z', ...axisFont, space: 24 }],
     legend: { show: info.m > 1 },
   }, state.data ? observationData() : oseries.map(() => []), $('observations-plot'));
   const dseries = [{}];
@@ -209,7 +211,7 @@ export function makeCharts() {
   state.innovPlot = new uPlot({
     ...plotSize('innovations-plot', 'errors'), series: iseries,
     scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
-    axes: [{ ...axisFont, label: '' }, { label: 'z − h(x̂⁻)', ...axisFont, space: 24 }],
+    axes: [{ ...axisFont, size: timeTicksSize() }, { label: 'z − h(x̂⁻)', ...axisFont, space: 24 }],
     legend: { show: false },
   }, state.data?.times.length ? innovationData() : iseries.map(() => []), $('innovations-plot'));
   // The errors: against the reference filter (exact, else the finest grid filter) or the
@@ -249,7 +251,9 @@ const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting
 // The observation and error plots sit below the fold: tall enough for a plot area of about
 // 100 px (three readable y ticks) under their time axis, at any window height.
 const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.18, 140, presenting() ? 260 : 200));
-const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.24, 180, presenting() ? 340 : 260));
+const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.26, 200, presenting() ? 340 : 280));
+// The height of a time axis's tick labels without an axis label.
+const timeTicksSize = () => (presenting() ? 40 : 30);
 export const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 // The trajectory plot's legend: one chip per method with its line, which also chooses the

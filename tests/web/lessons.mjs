@@ -128,6 +128,11 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     { name: '1920x1080-present', width: 1920, height: 1080, present: true },
     { name: '390x844', width: 390, height: 844, present: false },
   ];
+  // The plots refit after a resize (100 ms after the last event): waited for by their widths.
+  const refitted = () => page.waitForFunction(() => ['obsPlot', 'trajPlot'].every((k) => {
+    const u = window.zakaiPage[k];
+    return Math.abs(u.width - (u.root.parentElement.clientWidth - 2)) <= 1;
+  }), null, { timeout: 10000 });
   const present = (on) => page.evaluate((o) => { if (document.body.classList.contains('present') !== o) document.getElementById('present').click(); }, on);
   const checkLesson = async (id) => {
     assert.ok((await page.$$eval('#lesson math', (m) => m.length)) >= 2, `${id}: equations rendered as MathML`);
@@ -143,8 +148,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     for (const size of sizes) {
       await page.setViewportSize({ width: size.width, height: size.height });
       await present(size.present);
-      // The plots refit after a resize (100 ms after the last event): waited for by size.
-      await page.waitForFunction(() => Math.abs(window.zakaiPage.obsPlot.width - (document.getElementById('observations-plot').clientWidth - 2)) <= 1, null, { timeout: 10000 });
+      await refitted();
       // The observation and error plots: a plot area of at least 80 px with y tick labels.
       const plots = await page.evaluate(() => ['obsPlot', 'errPlot'].map((k) => {
         const u = window.zakaiPage[k];
@@ -165,6 +169,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     }
     await present(false);
     await page.setViewportSize({ width: 1280, height: 720 });
+    await refitted();
     const texErrors = await page.$$eval('#lesson .temml-error', (e) => e.map((x) => x.textContent.split('\n').pop()));
     assert.deepEqual(texErrors, [], `${id}: TeX the renderer refused`);
     assert.deepEqual(consoleErrors, [], `${id}: no console errors`);
@@ -319,7 +324,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.waitForFunction(() => {
     const seen = (e) => { const r = e?.getBoundingClientRect(); return r && r.width > 0 && r.top >= 0 && r.bottom <= innerHeight; };
     const panel = document.getElementById('mc-panel').getBoundingClientRect();
-    return seen(document.querySelector('#lesson-status .expect')) && panel.top >= 0 && panel.top < innerHeight / 2;
+    // (The page scrolls the panel up as far as the page's end allows.)
+    return seen(document.querySelector('#lesson-status .expect')) && panel.top >= 0 && panel.top < innerHeight - 200;
   }, null, { timeout: 5000 });
   await page.screenshot({ path: `${artifacts}/lesson-particles-grids-monte-carlo.png` });
   await page.waitForFunction(() => document.getElementById('mc-status').textContent.startsWith('finished: 20'), null, { timeout: 180000 });

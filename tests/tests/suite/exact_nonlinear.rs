@@ -177,13 +177,15 @@ fn the_convergence_check_agrees_with_the_exact_filter() {
 /// in space, forward Euler in time, steps within the stability bound Δt ≤ Δs²/2) and the
 /// likelihood `exp(h Δy − ½h² Δτ)` of each increment — written here, sharing no code with
 /// the filters. h = x² cannot tell x from −x, so the posterior of a prior straddling 0 keeps
-/// two modes.
+/// two modes. (Native only, as the test that uses it.)
+#[cfg(not(target_arch = "wasm32"))]
 struct FineGrid {
     x: Vec<f64>,
     p: Vec<f64>,
     ds: f64,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl FineGrid {
     fn new(lo: f64, hi: f64, points: usize, mean: f64, var: f64) -> Self {
         let ds = (hi - lo) / (points - 1) as f64;

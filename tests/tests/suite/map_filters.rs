@@ -4,8 +4,8 @@
 use zakai::internals::filters::kalman::map::MAP_UNCONVERGED_THRESHOLD;
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::{
-    presets, FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig,
-    PriorConfig, ScenarioConfig, TimeConfig,
+    FailureRule, GaussianComponent, MethodConfig, ModelConfig, ObservationNoiseConfig, PriorConfig,
+    ScenarioConfig, TimeConfig,
 };
 use zakai::{Concern, Filter, Observation, ObservationKind};
 use zakai::{Iekf, Iokf, Model, Noise};
@@ -166,7 +166,7 @@ fn table_1_of_003_cells_and_the_tie() {
     for (name, v) in [("IEKF", iekf), ("UKF", ukf)] {
         assert!((iokf - v).abs() <= 1e-3 * iokf, "IOKF {iokf} vs {name} {v}");
     }
-    let preset = presets::preset("bearings-only").unwrap();
+    let preset = zakai::lab::scenario::presets::preset("bearings-only").unwrap();
     assert_eq!(preset.time.t_final / preset.time.dt_obs, 1000.0);
 }
 
