@@ -48,7 +48,7 @@ function observationPaths(info, recorded) {
 // file.
 function describeRun(recorded) {
   const base = state.base ?? {};
-  const file = recorded && state.recording;
+  const file = recorded && state.runRecording;
   if (!file) {
     $('description').textContent = base.description ?? '';
     $('reference').textContent = base.reference ? `Source: ${base.reference}` : '';

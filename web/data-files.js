@@ -14,12 +14,13 @@ function showDataStatus() {
   if (r) $('data-section').open = true;
 }
 
-// A recording the scenario refused (its message is under "Your data"): the session before it
-// keeps running, and the status and Play follow that session — its recording, or the
-// simulation.
-export function dropRefusedRecording() {
-  state.recording = state.runRecording ?? null;
-  if (!state.recording) for (const id of ['file-observations', 'file-truth']) $(id).value = '';
+// A load the page refused (a file the scenario refused, or a scenario): the session before it
+// keeps running, and the status and Play follow that session — its recording (a copy), or the
+// simulation. The file pickers are cleared, so that picking a corrected file of the same name
+// loads it.
+export function restoreRunningRecording() {
+  state.recording = state.runRecording ? { ...state.runRecording } : null;
+  for (const id of ['file-observations', 'file-truth']) $(id).value = '';
   showDataStatus();
 }
 

@@ -7,8 +7,9 @@ import { markerShape } from './canvas-plots.js';
 // Okabe & Ito's colour-blind-safe palette (black is the truth's) and four darker colours of
 // Paul Tol's (wine, indigo, brown, purple), eleven in all so that the page's largest default
 // set, ten methods, has ten colours; four line styles cycle with them, so no two of the first
-// 44 methods share a look, and methods that share a line style stay apart in colour also
-// under colour-vision deficiency (checked by the browser tests).
+// 44 methods share a look, and among the first 12 those that share a line style stay apart in
+// colour also under colour-vision deficiency (checked by the browser tests; further on, some
+// pairs come close under it).
 const COLORS = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#C9B400', '#882255', '#332288', '#661100', '#AA4499'];
 const DASHES = [[], [7, 3], [2, 3], [9, 3, 2, 3]];
 export const color = (i) => COLORS[i % COLORS.length];

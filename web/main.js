@@ -11,7 +11,7 @@ import { plainWords } from './problems.js';
 import { loop, setupPlayback } from './playback.js';
 import { setupExport } from './export.js';
 import { markStaleTables, setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
-import { dropRefusedRecording, setupFiles } from './data-files.js';
+import { restoreRunningRecording, setupFiles } from './data-files.js';
 import { setupLikelihood, startProfile } from './likelihood.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
@@ -73,7 +73,7 @@ const learnHooks = {
 state.learnRun = (config) => learnHooks.run(config); // for the lessons' browser test
 
 setupForm();
-setupSession({ onReady: () => setupLearn(learnHooks), onLoaded: markStaleTables, onDataRefused: dropRefusedRecording });
+setupSession({ onReady: () => setupLearn(learnHooks), onLoaded: markStaleTables, onLoadRefused: restoreRunningRecording });
 setupPlayback();
 setupExport();
 setupMonteCarlo();

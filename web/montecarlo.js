@@ -4,19 +4,25 @@ import { $ } from './dom.js';
 import { checkedForm, worker, workerUrl } from './session.js';
 import { csvCell, csvName, download, share } from './export.js';
 
-const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {}, scenarios: {} };
+const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {}, scenarios: {}, loaded: null, checking: null };
 
-// The scenario a table was computed for, without its seed (the tables run their own seeds).
+// What a table was computed for: the scenario without its seed (the Monte Carlo runs seeds of
+// its own), and for the convergence check the seed whose observations it used.
 const scenarioKey = (config) => JSON.stringify({ ...config, seed: undefined });
+const checkKey = (config, seed) => `${scenarioKey(config)}#${seed}`;
 
-// A table computed for another scenario than the one now loaded says so, dimmed, until it is
-// run again (or the scenario is changed back): `config` is the scenario just loaded.
+// A table computed for another scenario than the one now loaded (the check: or another seed)
+// says so, dimmed, until it is run again or the scenario is changed back; `config` is the
+// scenario just loaded (none: the last one).
 export function markStaleTables(config) {
-  const key = scenarioKey(config);
+  if (config) mc.loaded = config;
+  if (!mc.loaded) return;
+  const now = { 'mc-table': scenarioKey(mc.loaded), 'check-table': checkKey(mc.loaded, mc.loaded.seed) };
   for (const [table, status] of [['mc-table', 'mc-status'], ['check-table', 'check-status']]) {
-    const stale = mc.scenarios[table] != null && mc.scenarios[table] !== key;
+    // A check under way: its old rows are the previous check's until it is done.
+    const stale = (table === 'check-table' && mc.checking != null) || (mc.scenarios[table] != null && mc.scenarios[table] !== now[table]);
     $(table).classList.toggle('stale', stale);
-    $(status).dataset.stale = String(stale);
+    $(status).dataset.stale = String(stale && !(table === 'check-table' && mc.checking != null));
   }
 }
 
@@ -61,11 +67,16 @@ function mcWorker() {
         break;
       case 'checkDone':
         $('check-start').disabled = false;
+        mc.scenarios['check-table'] = mc.checking;
+        mc.checking = null;
         showConvergence(data.result);
+        markStaleTables();
         break;
       case 'checkError':
         $('check-start').disabled = false;
+        mc.checking = null;
         $('check-status').textContent = `error: ${data.message}`;
+        markStaleTables();
         break;
       default:
         mc.handlers[data.type]?.(data);
@@ -90,7 +101,7 @@ export function startMonteCarlo() {
   $('mc-notes').replaceChildren();
   $('mc-rule').hidden = true;
   mc.scenarios['mc-table'] = scenarioKey(config);
-  markStaleTables(config);
+  markStaleTables();
   postJob({ type: 'mcStart', config, seed, runs });
 }
 
@@ -102,8 +113,8 @@ export function startConvergenceCheck() {
   const seed = Math.max(0, Number($('mc-seed').value) | 0);
   $('check-start').disabled = true;
   $('check-status').textContent = `checking on the observations of seed ${seed}…`;
-  mc.scenarios['check-table'] = scenarioKey(config);
-  markStaleTables(config);
+  mc.checking = checkKey(config, seed);
+  markStaleTables();
   postJob({ type: 'check', config, seed });
 }
 

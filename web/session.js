@@ -55,7 +55,8 @@ export function apply() {
   else worker.postMessage({ type: 'load', id, config, seed: config.seed });
   state.pendingConfig = structuredClone(config); // the form keeps editing its own rows
   state.pendingRows = state.enabledRows.slice();
-  state.pendingRecording = r;
+  // A copy: a truth file loaded later changes state.recording in place.
+  state.pendingRecording = r && { ...r };
   return true;
 }
 
@@ -86,6 +87,9 @@ function loadRefused(data, where) {
   setPlaying(false);
   $(where).textContent = data.message;
   $('form-status').textContent = 'not applied';
+  // The session before it keeps running: the data status follows it (its recording, or the
+  // simulation), whatever the refused load was to filter.
+  sessionHooks.onLoadRefused?.();
 }
 
 // Wires the controls of this part of the page (called once, by main.js).
@@ -173,7 +177,6 @@ export function setupSession(hooks = {}) {
       case 'dataError':
         // The recording was refused: its message goes under "Your data".
         loadRefused(data, 'data-error');
-        sessionHooks.onDataRefused?.();
         $('data-section').open = true;
         settleLoad(data.refused, data.message);
         break;

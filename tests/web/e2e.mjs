@@ -519,7 +519,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await data.setInputFiles('#file-observations', badPath);
     await data.waitForFunction(() => document.getElementById('data-error').textContent.includes('line 3'), null, { timeout: 10000 });
     assert.equal(await data.textContent('#data-status'), 'simulated data');
-    assert.match(await data.textContent('#description'), /^(?!Your recording)/, 'the About box describes the simulation');
+    const presetText = await data.evaluate(() => window.zakaiPage.presets.find((p) => p.name === 'cubic-sensor-1d').description);
+    assert.ok(presetText.length > 20 && (await data.textContent('#description')) === presetText, 'the About box describes the simulation');
     await data.setInputFiles('#file-observations', obsPath);
     await data.waitForFunction(() => window.zakaiPage.info && window.zakaiPage.info.has_truth === false, null, { timeout: 10000 });
     assert.match(await data.textContent('#description'), /^Your recording recorded-obs\.csv: \d+ rows from t = 0 to t = [\d.]+, filtered with the model of the scenario “cubic-sensor-1d”/);
@@ -762,7 +763,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await file.goto(`file://${root}target/site/index.html`);
     await file.waitForTimeout(500);
     // One line a student holding only the built site can follow, and no dead controls.
-    assert.match(await file.textContent('#served-note'), /served over HTTP: in the folder that holds this index\.html, run python3 -m http\.server 8000 --bind 127\.0\.0\.1/);
+    assert.match(await file.textContent('#served-note'), /served over HTTP: in the folder that holds this index\.html \(the built site, target\/site\), run python3 -m http\.server 8000 --bind 127\.0\.0\.1/);
     for (const sel of ['header', '#play', '#form', '#trajectory-plot']) assert.ok(!(await file.isVisible(sel)), `${sel} hidden from file://`);
     assert.ok(await file.isVisible('#served-note'));
     await file.close();

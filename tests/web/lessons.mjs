@@ -10,12 +10,12 @@ import { artifacts, browserTest, root, watchedPage } from './harness.mjs';
 import { LESSONS, REFERENCES } from '../../web/lessons.js';
 
 // Every lesson string is what Temml should see. In a JS string `\\big` is `\big`, while a
-// single backslash before a letter is an escape (`\b` a backspace, `\m` a plain m): the
-// source holds none, and no string holds a control character.
+// single backslash is an escape (`\b` a backspace, `\m` a plain m, `\,` a plain comma): the
+// source holds none but a quote's, and no string holds a control character.
 {
   const source = readFileSync(`${root}web/lessons.js`, 'utf8');
-  const escapes = [...source.matchAll(/(?<!\\)(?:\\\\)*\\[a-zA-Z]/g)].map((m) => `line ${source.slice(0, m.index).split('\n').length}: ${m[0]}`);
-  assert.deepEqual(escapes, [], 'web/lessons.js: a single backslash before a letter (write \\\\ for TeX)');
+  const escapes = [...source.matchAll(/(?<!\\)(?:\\\\)*\\(?![\\'"\n])/g)].map((m) => `line ${source.slice(0, m.index).split('\n').length}: ${source.slice(m.index, m.index + 12)}`);
+  assert.deepEqual(escapes, [], 'web/lessons.js: a single backslash that is not \\\\ or a quote\'s escape (write \\\\ for TeX)');
   const strings = [];
   const walk = (v, path) => {
     if (typeof v === 'string') strings.push([path, v]);
@@ -143,7 +143,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     if (pointsTo) {
       assert.deepEqual(LESSONS.find((l) => l.id === id).opens, ['diagnostics-panel'], `${id} opens the diagnostics panel`);
       assert.ok(await page.isVisible(pointsTo), `${id}: ${pointsTo} visible`);
-      assert.ok((await page.textContent(pointsTo)).trim().length > 0, `${id}: ${pointsTo} has text`);
+      const filled = pointsTo === '#timing' ? (await page.$$('#timing tbody tr')).length > 0 : (await page.textContent(pointsTo)).trim().length > 0;
+      assert.ok(filled, `${id}: ${pointsTo} filled by the run`);
     }
     for (const size of sizes) {
       await page.setViewportSize({ width: size.width, height: size.height });
@@ -170,7 +171,9 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     await present(false);
     await page.setViewportSize({ width: 1280, height: 720 });
     await refitted();
-    const texErrors = await page.$$eval('#lesson .temml-error', (e) => e.map((x) => x.textContent.split('\n').pop()));
+    // A parse error is a .temml-error element; an unknown command is its name in Temml's
+    // error colour.
+    const texErrors = await page.$$eval('#lesson .temml-error, #lesson [mathcolor="#b22222"]', (e) => e.map((x) => x.textContent.split('\n').pop()));
     assert.deepEqual(texErrors, [], `${id}: TeX the renderer refused`);
     assert.deepEqual(consoleErrors, [], `${id}: no console errors`);
     await page.screenshot({ path: `${artifacts}/lesson-${id}-1280x720.png` });
