@@ -19,10 +19,11 @@ export function markStaleTables(config) {
   if (!mc.loaded) return;
   const now = { 'mc-table': scenarioKey(mc.loaded), 'check-table': checkKey(mc.loaded, mc.loaded.seed) };
   for (const [table, status] of [['mc-table', 'mc-status'], ['check-table', 'check-status']]) {
-    // A check under way: its old rows are the previous check's until it is done.
-    const stale = (table === 'check-table' && mc.checking != null) || (mc.scenarios[table] != null && mc.scenarios[table] !== now[table]);
-    $(table).classList.toggle('stale', stale);
-    $(status).dataset.stale = String(stale && !(table === 'check-table' && mc.checking != null));
+    // A check under way: its old rows are dimmed until it is done, and its status says so.
+    const checking = table === 'check-table' && mc.checking != null;
+    const other = mc.scenarios[table] != null && mc.scenarios[table] !== now[table];
+    $(table).classList.toggle('stale', checking || other);
+    $(status).dataset.stale = String(other && !checking);
   }
 }
 

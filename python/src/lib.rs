@@ -25,7 +25,7 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::check_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(runs::covering_domain, m)?)?;
     m.add_function(wrap_pyfunction!(runs::domain_from_data, m)?)?;
-    m.add_function(wrap_pyfunction!(runs::coarse_grids, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::refuse_coarse_prior_box, m)?)?;
     m.add_function(wrap_pyfunction!(runs::set_memory_cap, m)?)?;
     m.add_function(wrap_pyfunction!(runs::method_defaults_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::simulate, m)?)?;

@@ -61,24 +61,39 @@ pub fn domain_from_data(
             Ok(Some((domain, d.note)))
         }
         // The prior's box stands, unless a grid on it cannot resolve the posterior to expect.
-        None => match e.coarse_grids().as_slice() {
-            [] => Ok(None),
-            coarse => Err(errors::config(
-                "domain",
-                format!(
-                    "none given, the box around the prior is too wide for the grid methods and the data cannot narrow it (only a 1-D state with Gaussian measurements of constant variance can be): {}; give a domain about where the state will be",
-                    coarse.join("; ")
-                ),
-            )),
-        },
+        None => refuse_coarse_box(
+            &e,
+            "the data cannot narrow it (only a 1-D state with Gaussian measurements of constant variance can be)",
+        )
+        .map(|()| None),
     }
 }
 
-/// The scenario's grid methods whose grids cannot resolve the posterior to expect on its
-/// domain, each with why ([`zakai::lab::experiment::Experiment::coarse_grids`]).
+/// `Err` (a `ConfigError` on `domain` asking for one) when a grid method of `e` cannot resolve
+/// the posterior to expect on the box set around the prior
+/// ([`zakai::lab::experiment::Experiment::coarse_grids`]); `why` says why that box stands.
+fn refuse_coarse_box(e: &Experiment, why: &str) -> PyResult<()> {
+    match e.coarse_grids().as_slice() {
+        [] => Ok(()),
+        coarse => Err(errors::config(
+            "domain",
+            format!(
+                "none given, the box around the prior is too wide for the grid methods and {why}: {}; give a domain about where the state will be",
+                coarse.join("; ")
+            ),
+        )),
+    }
+}
+
+/// Refuses a scenario whose domain is the box set around the prior when a grid method cannot
+/// resolve the posterior to expect on it, for a stepping filter (which sees no data to narrow
+/// the box with; see [`refuse_coarse_box`]).
 #[pyfunction]
-pub fn coarse_grids(json: &str) -> PyResult<Vec<String>> {
-    Ok(experiment(json)?.coarse_grids())
+pub fn refuse_coarse_prior_box(json: &str) -> PyResult<()> {
+    refuse_coarse_box(
+        &experiment(json)?,
+        "a stepping filter sees no data to narrow it with",
+    )
 }
 
 /// Sets the largest memory a scenario's methods may need together (bytes, or text such as

@@ -84,13 +84,8 @@ class Filter:
         )
         # A box set around the prior that the grid cannot resolve the posterior on is refused
         # here: a stepping filter sees no data to narrow it with.
-        coarse = _zakai.coarse_grids(scenario._text()) if domain is None else []
-        if coarse:
-            raise ConfigError(
-                "domain: none given, and the box around the prior is too wide for the grid: "
-                + "; ".join(coarse)
-                + "; give a domain about where the state will be"
-            )
+        if domain is None:
+            _zakai.refuse_coarse_prior_box(scenario._text())
         self.scenario = scenario
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
         # Whether the filter is still at the prior's time (no step taken yet).
