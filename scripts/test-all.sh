@@ -37,6 +37,10 @@ cargo clippy -p zakai-wasm -p zakai -p zakai-tests --target wasm32-unknown-unkno
 
 step "cargo test --workspace"
 cargo test --workspace
+# The core's unit tests, at opt-level 0 (see core/Cargo.toml: the lib is `test = false` in a
+# workspace-wide run): a build of 25 s instead of the 100 s the second compilation of the
+# crate at opt-level 2 took, for 7 s of tests instead of 0.5.
+cargo test -p zakai --lib --features fit --config 'profile.test.package.zakai.opt-level=0'
 
 step "examples (core/examples: own data, models from text and closures)"
 # The binaries `cargo test --workspace` above has built (same profile, same features; a
@@ -59,12 +63,13 @@ step "playground build (wasm package, npm packages)"
 bash scripts/build-web.sh
 
 step "the tests in WebAssembly under node (wasm-pack test --node, as a user runs them)"
-# The wasm adapter's tests and the integration tests of tests/ (all but those that read files
-# or start threads, and the Monte Carlo reproductions), compiled to wasm32 and run in node.
-# The core's own unit tests run once, natively, above: compiling them for wasm32 took
-# 2.5 minutes for 1.5 s of tests, whose code the integration tests run in wasm anyway.
+# The integration tests of tests/ (all but those that read files or start threads, and the
+# Monte Carlo reproductions) and the wasm adapter's Session tests (suite/wasm_session.rs: in
+# the same build, one compilation of the core for wasm32 instead of two), compiled to wasm32
+# and run in node. The core's own unit tests run once, natively, above: compiling them for
+# wasm32 took 2.5 minutes for 1.5 s of tests, whose code the integration tests run in wasm
+# anyway.
 command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
-(cd wasm && wasm-pack test --node)
 # The integration tests in two halves at once (node runs one test binary at a time on one
 # core): the counting-allocator binary, then everything else. The suite is one binary
 # (tests/tests/suite): one link and one wasm-bindgen pass instead of thirty. Heavy checks run

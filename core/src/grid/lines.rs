@@ -22,10 +22,13 @@ pub struct LineSystems {
     n: usize,
     /// Elimination multipliers, per node (zero at the first node of a line).
     mult: Vec<f64>,
-    /// The diagonal of U, per node.
-    diag: Vec<f64>,
+    /// The reciprocal of U's diagonal (the pivots), per node: the back substitution multiplies
+    /// by it, a chain of one multiply-add and one multiply per node instead of a division.
+    inv_pivot: Vec<f64>,
     /// The coupling to the next node of the line (the super-diagonal), per node.
     upper: Vec<f64>,
+    /// The first node whose pivot vanished (see [`LineSystems::vanishing_pivot`]).
+    vanishing: Option<usize>,
 }
 
 impl LineSystems {
@@ -49,46 +52,94 @@ impl LineSystems {
                 diag[i] -= mult[i] * upper[i - stride];
             }
         });
+        let vanishing = (0..len).find(|&i| {
+            let d = libm::fabs(diag[i]);
+            let scale = libm::fabs(upper[i]) + libm::fabs(mult[i]) + d;
+            !(d > 1e-14 * scale && d.is_finite())
+        });
+        for d in &mut diag {
+            *d = 1.0 / *d;
+        }
         LineSystems {
             stride,
             n,
             mult,
-            diag,
+            inv_pivot: diag,
             upper,
+            vanishing,
         }
     }
 
     /// The first node whose pivot is zero, non-finite or below 10⁻¹⁴ of its row's scale (the
     /// factors are then unusable), if any.
     pub fn vanishing_pivot(&self) -> Option<usize> {
-        (0..self.diag.len()).find(|&i| {
-            let d = libm::fabs(self.diag[i]);
-            let scale = libm::fabs(self.upper[i]) + libm::fabs(self.mult[i]) + d;
-            !(d > 1e-14 * scale && d.is_finite())
-        })
+        self.vanishing
     }
 
     /// Solves along the line starting at node `start`: `rhs` holds the right-hand side there
     /// and is overwritten by the forward elimination; the solution is written to `x`.
-    pub fn solve_line(&self, start: usize, rhs: &mut [f64], x: &mut [f64]) {
+    fn solve_line(&self, start: usize, rhs: &mut [f64], x: &mut [f64]) {
         let (stride, n) = (self.stride, self.n);
+        // The value just computed is carried in a register to the next node (read back from
+        // memory, it waited for its store each time).
+        let mut previous = rhs[start];
         for j in 1..n {
             let i = start + j * stride;
-            rhs[i] -= self.mult[i] * rhs[i - stride];
+            previous = rhs[i] - self.mult[i] * previous;
+            rhs[i] = previous;
         }
         let last = start + (n - 1) * stride;
-        x[last] = rhs[last] / self.diag[last];
+        let mut next = rhs[last] * self.inv_pivot[last];
+        x[last] = next;
         for j in (0..n - 1).rev() {
             let i = start + j * stride;
-            x[i] = (rhs[i] - self.upper[i] * x[i + stride]) / self.diag[i];
+            next = (rhs[i] - self.upper[i] * next) * self.inv_pivot[i];
+            x[i] = next;
         }
     }
 
     /// Solves every line: `rhs` is overwritten and the solution is written to `x`.
+    ///
+    /// Along an axis whose lines are `stride > 1` apart the `stride` lines of a block are
+    /// eliminated together, node row by node row: each row is a contiguous run of memory
+    /// whose nodes belong to different lines (independent, so the loop vectorises), where one
+    /// line at a time would stride through memory with a dependency chain. Every node's
+    /// arithmetic is the same as [`LineSystems::solve_line`]'s, so the results are too.
     pub fn solve(&self, rhs: &mut [f64], x: &mut [f64]) {
-        for_each_line(rhs.len(), self.stride, self.n, |start| {
-            self.solve_line(start, rhs, x)
-        });
+        let (stride, n) = (self.stride, self.n);
+        if stride == 1 {
+            for_each_line(rhs.len(), stride, n, |start| self.solve_line(start, rhs, x));
+            return;
+        }
+        for outer in (0..rhs.len()).step_by(stride * n) {
+            for j in 1..n {
+                let row = outer + j * stride;
+                let (previous, current) = rhs[row - stride..row + stride].split_at_mut(stride);
+                let mult = &self.mult[row..row + stride];
+                for ((r, p), m) in current.iter_mut().zip(previous.iter()).zip(mult) {
+                    *r -= m * p;
+                }
+            }
+            let last = outer + (n - 1) * stride;
+            for k in last..last + stride {
+                x[k] = rhs[k] * self.inv_pivot[k];
+            }
+            for j in (0..n - 1).rev() {
+                let row = outer + j * stride;
+                let (current, next) = x[row..row + 2 * stride].split_at_mut(stride);
+                let coefficients = self.upper[row..row + stride]
+                    .iter()
+                    .zip(&self.inv_pivot[row..row + stride]);
+                for (((x, r), x_next), (u, inv)) in current
+                    .iter_mut()
+                    .zip(&rhs[row..row + stride])
+                    .zip(next.iter())
+                    .zip(coefficients)
+                {
+                    *x = (r - u * x_next) * inv;
+                }
+            }
+        }
     }
 
     /// Solves the transposed systems `Aᵀ x = rhs` along every line with the same factors
@@ -99,10 +150,10 @@ impl LineSystems {
         let (stride, n) = (self.stride, self.n);
         for_each_line(rhs.len(), stride, n, |start| {
             // Uᵀ y = rhs: y_0 = rhs_0 / d_0, y_j = (rhs_j − upper_{j−1} y_{j−1}) / d_j.
-            rhs[start] /= self.diag[start];
+            rhs[start] *= self.inv_pivot[start];
             for j in 1..n {
                 let i = start + j * stride;
-                rhs[i] = (rhs[i] - self.upper[i - stride] * rhs[i - stride]) / self.diag[i];
+                rhs[i] = (rhs[i] - self.upper[i - stride] * rhs[i - stride]) * self.inv_pivot[i];
             }
             // Lᵀ x = y: x_last = y_last, x_j = y_j − mult_{j+1} x_{j+1}.
             let last = start + (n - 1) * stride;

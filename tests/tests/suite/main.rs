@@ -42,4 +42,7 @@ mod state_diffusion;
 mod stiff_edges;
 mod test_attributes;
 mod time_and_inputs;
+// The playground's wasm `Session`, in a wasm runtime.
+#[cfg(target_arch = "wasm32")]
+mod wasm_session;
 mod yau_yau;

@@ -151,8 +151,8 @@ impl SplitIem {
                     let right = if j + 1 < n { u[i + stride] } else { 0.0 };
                     tmp[i] = s[i] * left + d[i] * u[i] + p[i] * right;
                 }
-                ax.implicit.solve_line(start, tmp, u);
             });
+            ax.implicit.solve(tmp, u);
         }
     }
 }

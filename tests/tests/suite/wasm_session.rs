@@ -1,6 +1,5 @@
-//! The wasm Session in a real wasm runtime (node, through wasm-bindgen-test-runner):
-//! round trip, errors for bad configs, determinism.
-#![cfg(target_arch = "wasm32")]
+//! The playground's wasm `Session` (crate `zakai-wasm`) in a real wasm runtime (node, through
+//! wasm-bindgen-test-runner): round trip, errors for bad configs, determinism.
 
 use wasm_bindgen::JsValue;
 use wasm_bindgen_test::*;
