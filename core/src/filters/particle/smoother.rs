@@ -173,16 +173,33 @@ impl Ffbsi {
         drift.resize(n * count, 0.0);
         self.filter.model.drift.eval_batch(cloud, drift, scratch);
         let scale = 0.5 / h;
-        let mut diff = DVector::zeros(n);
+        // The kernel's whitened means `W (x_i + f(x_i) h)` (W the whitening of the Euler
+        // step's covariance), in `drift`'s place, once per particle; each trajectory's point is
+        // whitened once too, and the exponent of a pair is then a squared distance.
+        let mut centre = DVector::zeros(n);
         let mut white = DVector::zeros(n);
+        for i in 0..count {
+            for j in 0..n {
+                centre[j] = cloud[j * count + i] + drift[j * count + i] * h;
+            }
+            white.gemv(1.0, &self.whiten, &centre, 0.0);
+            for j in 0..n {
+                drift[j * count + i] = white[j];
+            }
+        }
         let mut chosen = vec![0usize; m];
         for (t, pick) in chosen.iter_mut().enumerate() {
-            for (i, lp) in log_p.iter_mut().enumerate() {
-                for j in 0..n {
-                    diff[j] = points[j * m + t] - cloud[j * count + i] - drift[j * count + i] * h;
+            for j in 0..n {
+                centre[j] = points[j * m + t];
+            }
+            white.gemv(1.0, &self.whiten, &centre, 0.0);
+            log_p.copy_from_slice(log_w);
+            for j in 0..n {
+                let w = white[j];
+                for (lp, &mean) in log_p.iter_mut().zip(&drift[j * count..(j + 1) * count]) {
+                    let d = w - mean;
+                    *lp -= scale * d * d;
                 }
-                white.gemv(1.0, &self.whiten, &diff, 0.0);
-                *lp = log_w[i] - scale * white.norm_squared();
             }
             *pick = draw(log_p, &mut self.rng);
         }
