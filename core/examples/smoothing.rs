@@ -61,16 +61,14 @@ fn main() -> Result<(), zakai::ZakaiError> {
         // smoothed[0] is the prior's time before the first update; smoothed[k + 1] is year k.
         for k in [10, 25, 35, 45] {
             let (f, s) = (&filtered[k], &smoothed[k + 1]);
-            let sd =
-                |e: &zakai::Estimate| e.covariance.as_ref().map_or(f64::NAN, |p| p[(0, 0)].sqrt());
             println!(
                 "{}   {:<10} {:>8.1} ± {:>5.1}      {:>8.1} ± {:>5.1}",
                 1871 + k,
                 filter.name(),
                 f.mean[0],
-                sd(f),
+                f.sd(0),
                 s.mean[0],
-                sd(s)
+                s.sd(0)
             );
         }
     }

@@ -42,7 +42,7 @@
 //!     ukf.step_measurement(0.1, &[z]).unwrap();
 //! }
 //! let estimate = ukf.estimate();
-//! println!("mean {}, variance {}", estimate.mean[0], estimate.covariance.unwrap()[(0, 0)]);
+//! println!("mean {}, variance {}", estimate.mean[0], estimate.variance(0));
 //! # }
 //! ```
 //!

@@ -177,6 +177,30 @@ impl Estimate {
         (&mut self.mean, cov)
     }
 
+    /// The variance of component `i`, `covariance[(i, i)]`; NaN for a method without a
+    /// covariance.
+    ///
+    /// # Panics
+    ///
+    /// If `i` is not below the state's dimension.
+    pub fn variance(&self, i: usize) -> f64 {
+        assert!(
+            i < self.mean.len(),
+            "component {i} of a {}-dimensional estimate",
+            self.mean.len()
+        );
+        self.covariance.as_ref().map_or(f64::NAN, |c| c[(i, i)])
+    }
+
+    /// The standard deviation of component `i`, the square root of [`Estimate::variance`].
+    ///
+    /// # Panics
+    ///
+    /// If `i` is not below the state's dimension.
+    pub fn sd(&self, i: usize) -> f64 {
+        libm::sqrt(self.variance(i))
+    }
+
     /// Makes this a copy of `src`, reusing this estimate's storage where the shapes agree (no
     /// allocation when they do).
     pub fn copy_from(&mut self, src: &Estimate) {

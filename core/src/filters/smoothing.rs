@@ -168,7 +168,28 @@ pub trait Smoother: Filter {
     }
 }
 
-/// The smoothed estimates of `smoother`, in time order (index 0 first).
+/// The smoothed estimates of `smoother`, in time order: n + 1 of them after n steps, entry 0
+/// at the time the forward pass started (the prior, smoothed by every observation) and entry
+/// `i` at the time after the i-th step — so entry `i` pairs with the filter's estimate after
+/// step `i`, and with observation `i − 1` of the steps' sequence (0-based).
+///
+/// ```
+/// # #[cfg(feature = "std")] {
+/// use zakai::{smoothed_estimates, Filter, Model, Noise, SmoothingPlan, Ukf};
+///
+/// let model = Model::from_text(&["-x"], &["x"], Noise::discrete(0.1)).unwrap();
+/// let ukf = Ukf::builder(&model).prior_gaussian(&[0.0], &[[1.0]]).build().unwrap();
+/// let mut smoother = ukf.smoother(&SmoothingPlan::for_steps(3)).unwrap();
+/// for z in [0.3, 0.5, 0.4] {
+///     smoother.step_measurement(0.1, &[z]).unwrap();
+/// }
+/// let smoothed = smoothed_estimates(smoother.as_mut()).unwrap();
+/// assert_eq!(smoothed.len(), 4); // the start and the three steps
+/// // At the last step the smoothed estimate is the filter's.
+/// assert!((smoothed[3].mean[0] - smoother.estimate().mean[0]).abs() < 1e-12);
+/// println!("sd at the start, smoothed: {}", smoothed[0].sd(0));
+/// # }
+/// ```
 pub fn smoothed_estimates(smoother: &mut dyn Smoother) -> Result<Vec<Estimate>, FilterError> {
     let mut out: Vec<Estimate> = Vec::new();
     smoother.smooth(&mut |step| out.push(step.estimate.clone()))?;

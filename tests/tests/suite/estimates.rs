@@ -38,3 +38,31 @@ fn estimate_into_is_the_estimate() {
         }
     }
 }
+
+/// `variance(i)` and `sd(i)` read the covariance's diagonal (NaN without a covariance) and
+/// refuse a component the state does not have.
+#[test]
+fn variance_and_sd_read_the_diagonal() {
+    let e = Estimate {
+        mean: nalgebra::DVector::from_vec(vec![1.0, -2.0]),
+        covariance: Some(nalgebra::DMatrix::from_row_slice(
+            2,
+            2,
+            &[4.0, 0.5, 0.5, 0.25],
+        )),
+        map: None,
+    };
+    assert_eq!((e.variance(0), e.variance(1)), (4.0, 0.25));
+    assert_eq!((e.sd(0), e.sd(1)), (2.0, 0.5));
+    let point = Estimate {
+        covariance: None,
+        ..e.clone()
+    };
+    assert!(point.variance(1).is_nan() && point.sd(0).is_nan());
+    // A panic aborts in wasm32 (no unwinding to catch): natively only.
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let outside = std::panic::catch_unwind(|| e.variance(2));
+        assert!(outside.is_err(), "component 2 of a 2-D estimate was read");
+    }
+}
