@@ -112,9 +112,16 @@
 //!
 //! ## Features
 //!
-//! The crate is `no_std` + `alloc` (text expressions included). The default `std` feature adds
-//! FFT plans (the Yau–Yau schemes) and wall-clock timing; `parallel` runs Monte Carlo
-//! repetitions on rayon.
+//! The crate is `no_std` + `alloc` (text expressions included). Its features:
+//!
+//! | feature | default | adds |
+//! |---|---|---|
+//! | `std` | yes | FFT plans (the Yau–Yau schemes' DSTs, rustfft), wall-clock timing, CSV files of observations |
+//! | `parallel` | yes | Monte Carlo repetitions, frontiers and a fit's likelihood evaluations on rayon's pool (implies `std`) |
+//! | `fit` | no | maximum-likelihood fits of a scenario's parameters, `lab::fit::maximise`, and profiles that refit the other parameters, `lab::fit::profile_refitted` (argmin's optimisers; implies `std`) |
+//!
+//! Without `fit`, [`lab::fit`] still gives the likelihood of given parameters, its observed
+//! information and standard errors, and profiles over a grid of values.
 #![no_std]
 #![warn(missing_docs)]
 #![warn(missing_debug_implementations)]

@@ -149,13 +149,11 @@ impl Stepper {
                 format!("must be finite and nonnegative (got {dt})"),
             ));
         }
-        let u = u.unwrap_or_default();
-        let obs = zakai::Observation::nothing(dt);
-        let obs = match t {
-            Some(t) => obs.with_inputs(t, &u),
-            None => obs,
-        };
-        self.filter.step(&obs).map_err(errors::from_filter)
+        match t {
+            Some(t) => self.filter.predict_with(dt, t, &u.unwrap_or_default()),
+            None => self.filter.predict(dt),
+        }
+        .map_err(errors::from_filter)
     }
 
     /// Assimilates the measurement `z` at the current time (discrete models).

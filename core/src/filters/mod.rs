@@ -914,6 +914,12 @@ pub trait Filter: core::fmt::Debug + Fork {
     fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
         self.step(&Observation::nothing(dt))
     }
+    /// [`Filter::predict`] for a driven model ([`crate::model::inputs`]): predicts over `dt`
+    /// to the time `t` with the known inputs `u` over the interval, as a step of
+    /// `Observation::nothing(dt).with_inputs(t, u)`. An autonomous model ignores `t` and `u`.
+    fn predict_with(&mut self, dt: f64, t: f64, u: &[f64]) -> Result<(), FilterError> {
+        self.step(&Observation::nothing(dt).with_inputs(t, u))
+    }
     /// Assimilates the measurement `z` at the current time, without predicting (discrete
     /// measurements; NaN components are missing). Continuous observations come as increments
     /// over an interval: step with them ([`Filter::step_increment`]).
@@ -930,6 +936,19 @@ pub trait Filter: core::fmt::Debug + Fork {
             .map(|_| {
                 ahead.predict(dt)?;
                 Ok(ahead.estimate())
+            })
+            .collect()
+    }
+    /// [`Filter::forecast`] for a driven model: the predictive estimates at the ends of the
+    /// intervals `ahead`, each `(dt, t, u)` — its length, the time it ends at and the known
+    /// inputs over it ([`Filter::predict_with`]) — from a fork of the filter.
+    fn forecast_with(&self, ahead: &[(f64, f64, &[f64])]) -> Result<Vec<Estimate>, FilterError> {
+        let mut fork = self.fork();
+        ahead
+            .iter()
+            .map(|&(dt, t, u)| {
+                fork.predict_with(dt, t, u)?;
+                Ok(fork.estimate())
             })
             .collect()
     }

@@ -431,3 +431,65 @@ fn the_yau_yau_filters_take_a_driven_model() {
     let spt = run.methods[5].failure.as_ref().expect("SPT refuses");
     assert!(spt.message.contains("time-invariant"), "{}", spt.message);
 }
+
+/// `predict_with` and `forecast_with` carry the time and inputs a driven model reads: on the
+/// linear model above, with u1 held at 0.8 over intervals of 0.25 ending at 0.25, 0.5, 0.75,
+/// the EKF's mean and variance follow the exact `x ← a x + 2 u1 (1 − a)`,
+/// `P ← a² P + G²(1 − a²)/2` (a = e^{−Δ}) to 1e-5 (its moment equations are exact here up to
+/// RK4; the bound of the test above), and the particle filter's mean within 0.15; `predict` without inputs is refused and
+/// leaves the filter as it was; the forecast leaves the filter where it was.
+#[test]
+fn driven_models_predict_and_forecast_with_their_inputs() {
+    let e = Experiment::new(scenario(serde_json::json!([
+        { "method": "ekf" }, { "method": "pf", "particles": 4000 }
+    ])))
+    .unwrap();
+    let u = [0.8, 1.0];
+    let ahead: Vec<(f64, f64, &[f64])> = (1..=3).map(|k| (DT, DT * k as f64, &u[..])).collect();
+    let a = (-DT).exp();
+    let (mut mean, mut var) = (0.0, 1.0);
+    let mut exact = Vec::new();
+    for _ in 0..3 {
+        mean = a * mean + 2.0 * u[0] * (1.0 - a);
+        var = a * a * var + G * G * (1.0 - a * a) / 2.0;
+        exact.push((mean, var));
+    }
+    for (method, tolerance) in e.config().methods.iter().zip([1e-5, 0.15]) {
+        let mut filter = e.build_method(method, method.display_name(), 3).unwrap();
+        let before = filter.estimate();
+        let refused = filter.predict(DT).unwrap_err().to_string();
+        assert!(refused.contains("inputs"), "{}: {refused}", filter.name());
+        assert_eq!(filter.estimate(), before, "{}", filter.name());
+        let forecast = filter.forecast_with(&ahead).unwrap();
+        assert_eq!(
+            filter.estimate(),
+            before,
+            "{}: the forecast moved it",
+            filter.name()
+        );
+        for (k, (f, &(m, v))) in forecast.iter().zip(&exact).enumerate() {
+            assert!(
+                (f.mean[0] - m).abs() < tolerance,
+                "{} at {k}: mean {} against {m}",
+                filter.name(),
+                f.mean[0]
+            );
+            if tolerance < 1e-3 {
+                assert!(
+                    (f.variance(0) - v).abs() < tolerance,
+                    "{} at {k}",
+                    filter.name()
+                );
+            }
+        }
+        for &(dt, t, u) in &ahead {
+            filter.predict_with(dt, t, u).unwrap();
+        }
+        let moved = filter.estimate().mean[0];
+        assert!(
+            (moved - exact[2].0).abs() < tolerance,
+            "{}: predict_with reached {moved}",
+            filter.name()
+        );
+    }
+}
