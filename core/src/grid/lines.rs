@@ -23,7 +23,8 @@ pub struct LineSystems {
     /// Elimination multipliers, per node (zero at the first node of a line).
     mult: Vec<f64>,
     /// The reciprocal of U's diagonal (the pivots), per node: the back substitution multiplies
-    /// by it, a chain of one multiply-add and one multiply per node instead of a division.
+    /// by it (a multiply, a subtraction and a multiply per node on its dependency chain,
+    /// instead of a division).
     inv_pivot: Vec<f64>,
     /// The coupling to the next node of the line (the super-diagonal), per node.
     upper: Vec<f64>,
