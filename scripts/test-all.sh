@@ -97,7 +97,12 @@ venv="$ZAKAI_CACHE/py-venv"
 rm -f target/wheels/zakai-*.whl
 # The test profile (optimised, debug assertions on), whose dependencies the cache already
 # holds from the Rust tests; a user's `pip install` builds the release profile.
-"$venv/bin/maturin" build -q --profile dev -m python/Cargo.toml -o target/wheels
+# python/Cargo.toml asks for the features the workspace's build unified, so the wheel links the
+# core that `cargo test --workspace` compiled instead of compiling it again.
+"$venv/bin/maturin" build --profile dev -m python/Cargo.toml -o target/wheels 2>&1 | tee target/wheel.log
+if grep -q "Compiling zakai v" target/wheel.log; then
+  echo "warning: the wheel compiled the core again (about 70 s): the features in python/Cargo.toml no longer match the workspace's build" >&2
+fi
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
 ZAKAI_NO_SKIPS=1 "$venv/bin/python" -m pytest -q python/tests
 "$venv/bin/python" python/examples/tour.py > /dev/null
