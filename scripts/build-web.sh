@@ -18,12 +18,20 @@ if [ "$have" != "$want" ]; then
 fi
 
 # The SIMD build (rustfft's wasm SIMD kernels, +simd128) and a scalar fallback for browsers
-# without wasm SIMD; the page's worker picks one with WebAssembly.validate.
+# without wasm SIMD; the page's worker picks one with WebAssembly.validate. The two compile
+# side by side (their own target directories; one crate's type checking leaves a core idle).
+mkdir -p target
+RUSTFLAGS='--cfg getrandom_backend="wasm_js" -C link-arg=-zstack-size=8388608' cargo build -p zakai-wasm --profile wasm-release \
+  --target wasm32-unknown-unknown --no-default-features --target-dir "$CARGO_TARGET_DIR/scalar" \
+  > target/scalar-build.log 2>&1 &
+scalar=$!
 cargo build -p zakai-wasm --profile wasm-release --target wasm32-unknown-unknown
+scalar_status=0
+wait "$scalar" || scalar_status=$?
+cat target/scalar-build.log
+[ "$scalar_status" = 0 ]
 wasm-bindgen --target web --out-dir web/pkg \
   "$CARGO_TARGET_DIR/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm"
-RUSTFLAGS='--cfg getrandom_backend="wasm_js" -C link-arg=-zstack-size=8388608' cargo build -p zakai-wasm --profile wasm-release \
-  --target wasm32-unknown-unknown --no-default-features --target-dir "$CARGO_TARGET_DIR/scalar"
 wasm-bindgen --target web --out-dir web/pkg-scalar \
   "$CARGO_TARGET_DIR/scalar/wasm32-unknown-unknown/wasm-release/zakai_wasm.wasm"
 

@@ -19,6 +19,21 @@ step() {
   printf '\n==> %s\n' "$*"
 }
 
+# `behind NAME COMMAND…` runs a command in the background, its output kept in
+# target/NAME.log; `joined NAME` waits for it, prints that log, and fails like the command
+# did. Work that leaves a core idle (one crate's type checking, one node or browser thread)
+# runs beside other work this way; nothing is skipped when one side fails.
+mkdir -p target
+behind() { local name=$1; shift; ("$@") > "target/$name.log" 2>&1 & eval "behind_$name=\$!"; }
+joined() {
+  local pid_var="behind_$1" status=0
+  wait "${!pid_var}" || status=$?
+  cat "target/$1.log"
+  return "$status"
+}
+# `timed COMMAND…` runs it and prints its seconds (inside a step of several commands).
+timed() { local t=$SECONDS; "$@"; printf '    [%d s] %s\n' $((SECONDS - t)) "$*"; }
+
 step "toolchain targets"
 installed=$(rustup target list --installed)
 for t in wasm32-unknown-unknown thumbv7em-none-eabihf; do
@@ -31,16 +46,36 @@ python3 scripts/check-rust-version.py
 step "cargo fmt --check"
 cargo fmt --all --check
 
-step "cargo clippy --all-targets -- -D warnings"
-cargo clippy --workspace --all-targets -- -D warnings
-cargo clippy -p zakai-wasm -p zakai -p zakai-tests --target wasm32-unknown-unknown --all-targets -- -D warnings
+step "clippy, docs, no_std, the core's unit tests, and the test build (two lanes)"
+# Compiling leaves a core idle for long stretches (one crate's type checking runs on one
+# thread), so the checks that share nothing with the test build run beside it, in a target
+# directory of their own (two cargo processes on one directory wait for each other's lock);
+# what one lane finds fails the step all the same. Each lane prints its own commands' times.
+side="$CARGO_TARGET_DIR/side"
+side_lane() {
+  set -e
+  timed cargo clippy -p zakai-wasm -p zakai -p zakai-tests --target wasm32-unknown-unknown \
+    --all-targets --target-dir "$side" -- -D warnings
+  # No warning in the documentation (broken or private intra-doc links included).
+  timed env RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps --target-dir "$side"
+  # The core without the `std` feature for both targets, up to code generation (`cargo
+  # check`: every name, type and borrow; generating its code took a minute here without
+  # finding anything a check does not).
+  timed cargo check -p zakai --no-default-features --target wasm32-unknown-unknown --target-dir "$side"
+  timed cargo check -p zakai --no-default-features --target thumbv7em-none-eabihf --target-dir "$side"
+  # The core's unit tests, at opt-level 0 (see core/Cargo.toml: the lib is `test = false` in
+  # a workspace-wide run): a build of 25 s instead of the 100 s the second compilation of the
+  # crate at opt-level 2 took, for 7 s of tests instead of 0.5.
+  timed cargo test -p zakai --lib --features fit --target-dir "$side" \
+    --config 'profile.test.package.zakai.opt-level=0'
+}
+behind side_lane side_lane
+timed cargo clippy --workspace --all-targets -- -D warnings
+timed cargo test --workspace --no-run
+joined side_lane
 
 step "cargo test --workspace"
 cargo test --workspace
-# The core's unit tests, at opt-level 0 (see core/Cargo.toml: the lib is `test = false` in a
-# workspace-wide run): a build of 25 s instead of the 100 s the second compilation of the
-# crate at opt-level 2 took, for 7 s of tests instead of 0.5.
-cargo test -p zakai --lib --features fit --config 'profile.test.package.zakai.opt-level=0'
 
 step "examples (core/examples: own data, models from text and closures)"
 # The binaries `cargo test --workspace` above has built (same profile, same features; a
@@ -48,16 +83,6 @@ step "examples (core/examples: own data, models from text and closures)"
 for example in core/examples/*.rs; do
   "$CARGO_TARGET_DIR/debug/examples/$(basename "$example" .rs)"
 done
-
-step "cargo doc without warnings"
-RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
-
-step "no_std builds of the core"
-# Compiled without the `std` feature for both targets up to code generation (`cargo check`:
-# every name, type and borrow; the library is not linked either way, and generating its code
-# took a minute here without finding anything a check does not).
-cargo check -p zakai --no-default-features --target wasm32-unknown-unknown
-cargo check -p zakai --no-default-features --target thumbv7em-none-eabihf
 
 step "playground build (wasm package, npm packages)"
 bash scripts/build-web.sh
@@ -78,19 +103,19 @@ command -v wasm-pack >/dev/null 2>&1 || cargo install wasm-pack --locked
 # in the suite (`#[cfg(not(target_arch = "wasm32"))]`); their numbers are the core's, which
 # wasm computes as native does — the determinism step after this one holds every method of
 # every preset to 1e-9 of the native CLI.
-(cd tests && wasm-pack test --node -- --test allocation \
-  && wasm-pack test --node -- --test suite -- yau_yau::) > target/wasm-tests-first-half.log 2>&1 &
-first=$!
-status=0
-(cd tests && wasm-pack test --node -- --lib --test suite -- --skip yau_yau::) || status=$?
-wait "$first" || status=$?
-cat target/wasm-tests-first-half.log
-[ "$status" = 0 ]
+wasm_first_half() {
+  cd tests
+  wasm-pack test --node -- --test allocation
+  wasm-pack test --node -- --test suite -- yau_yau::
+}
+behind wasm_first_half wasm_first_half
+(cd tests && wasm-pack test --node -- --lib --test suite -- --skip yau_yau::)
+joined wasm_first_half
 
-step "same seed, same truth: native CLI vs wasm"
-node tests/web/determinism.mjs
-
-step "Python package: abi3 wheel (maturin) in a virtual environment, pytest, the example"
+step "same seed, same truth: native CLI vs wasm; the Python package (wheel, pytest, example)"
+# Side by side: the determinism check is one node thread (about 30 s), the Python step
+# mostly one Python thread.
+behind determinism node tests/web/determinism.mjs
 venv="$ZAKAI_CACHE/py-venv"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas statsmodels "dask[distributed]"
@@ -106,8 +131,9 @@ fi
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
 ZAKAI_NO_SKIPS=1 "$venv/bin/python" -m pytest -q python/tests
 "$venv/bin/python" python/examples/tour.py > /dev/null
+joined determinism
 
-step "browser end-to-end tests (headless chromium)"
+step "browser end-to-end tests and the lessons' claims against their own runs (headless chromium)"
 if ! command -v chromium >/dev/null 2>&1; then
   if [ "$(id -u)" = 0 ]; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
@@ -115,9 +141,11 @@ if ! command -v chromium >/dev/null 2>&1; then
     sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
   fi
 fi
+# Two browsers side by side (each keeps about one and a half cores busy: 245 s one after the
+# other, 190 s together here).
+behind lessons node tests/web/lessons.mjs
 node tests/web/e2e.mjs
-step "the lessons' claims against their own runs (headless chromium)"
-node tests/web/lessons.mjs
+joined lessons
 
 if [ "${ZAKAI_SOAK:-0}" = 1 ]; then
   step "soak: every 1-D method, 10^6 intervals of the cubic sensor (ZAKAI_SOAK=1)"

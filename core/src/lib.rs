@@ -118,10 +118,12 @@
 //! |---|---|---|
 //! | `std` | yes | FFT plans (the Yau–Yau schemes' DSTs, rustfft), wall-clock timing, CSV files of observations |
 //! | `parallel` | yes | Monte Carlo repetitions, frontiers and a fit's likelihood evaluations on rayon's pool (implies `std`) |
-//! | `fit` | no | maximum-likelihood fits of a scenario's parameters, `lab::fit::maximise`, and profiles that refit the other parameters, `lab::fit::profile_refitted` (argmin's optimisers; implies `std`) |
+//! | `fit` | no | maximum-likelihood fits with standard errors, `lab::fit::maximise` (of a scenario's parameters, or of a model built in Rust), and profiles that refit the other parameters, `lab::fit::profile_refitted` (argmin's optimisers; implies `std`) |
 //!
-//! Without `fit`, [`lab::fit`] still gives the likelihood of given parameters, its observed
-//! information and standard errors, and profiles over a grid of values.
+//! Without `fit`, [`lab::fit`] still gives the likelihood of given parameters — of a
+//! scenario ([`lab::fit::Likelihood`]) or of the filters a closure builds from them
+//! ([`lab::fit::FilterLikelihood`]) — its observed information and standard errors, and
+//! profiles over a grid of values.
 #![no_std]
 #![warn(missing_docs)]
 #![warn(missing_debug_implementations)]

@@ -170,7 +170,7 @@ impl ConcernRecord {
         )
     }
 
-    fn record(records: &mut Vec<ConcernRecord>, c: &Concern, k: usize, t: f64) {
+    pub(crate) fn record(records: &mut Vec<ConcernRecord>, c: &Concern, k: usize, t: f64) {
         // A two-sided check (a band) keeps one record per side crossed, each with its own
         // threshold and worst value.
         match records

@@ -18,7 +18,7 @@ use argmin::solver::neldermead::NelderMead;
 
 use super::information::{observed_information, standard_errors, Information};
 use super::transform::{bounded, Transform};
-use super::{Evaluate, Likelihood};
+use super::{Evaluate, LogLikelihood};
 use crate::error::ZakaiError;
 
 /// How long a fit may run and when it has converged.
@@ -49,7 +49,7 @@ impl Default for FitOptions {
     }
 }
 
-/// A maximum-likelihood fit of some of a scenario's parameters under one method.
+/// A maximum-likelihood fit of some parameters under one method.
 #[derive(Clone, Debug)]
 pub struct FitResult {
     /// The method's display name.
@@ -137,7 +137,7 @@ impl CostFunction for Objective<'_> {
 /// An error when the likelihood cannot be evaluated at the start (the method fails on the
 /// data there: a fit from nowhere would be meaningless).
 pub fn maximise(
-    likelihood: &Likelihood,
+    likelihood: &dyn LogLikelihood,
     evaluate: &dyn Evaluate,
     options: &FitOptions,
     progress: &dyn Fn(usize, f64),
@@ -237,13 +237,12 @@ pub fn maximise(
                 .map(|c| format!("{when}: {c}")),
         );
     }
-    let (stderr, covariance) = if likelihood.config().methods[0].is_random() {
+    let (stderr, covariance) = if let Some(held) = likelihood.random_numbers() {
         notes.push(format!(
             "{} draws random numbers: its log-likelihood is a random function of the \
-             parameters (common random numbers, seed {}), so finite differences give no \
-             standard errors; refit with other seeds to see the spread, or profile",
+             parameters ({held}), so finite differences give no standard errors; refit with \
+             other seeds to see the spread, or profile",
             likelihood.method(),
-            likelihood.seed()
         ));
         (vec![f64::NAN; p], None)
     } else {
@@ -273,24 +272,31 @@ pub fn maximise(
 }
 
 impl FitResult {
-    /// One line: `θ̂ = …, ln L = …, n evaluations`.
+    /// One line: each parameter's estimate with its standard error (`a = 1.02 (s.e.
+    /// 5.1e-2)`, or `(no s.e.)` where there is none: [`FitResult::notes`] say why), then
+    /// `ln L = …, n evaluations`, and how many notes there are.
     pub fn summary(&self) -> String {
+        let parameters = self
+            .names
+            .iter()
+            .zip(self.estimate.iter().zip(&self.stderr))
+            .map(|(n, (v, se))| {
+                if se.is_finite() {
+                    format!("{n} = {v} (s.e. {se:.2e})")
+                } else {
+                    format!("{n} = {v} (no s.e.)")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let notes = match self.notes.len() {
+            0 => String::new(),
+            1 => String::from("; 1 note"),
+            k => format!("; {k} notes"),
+        };
         format!(
-            "{}: {} (ln L = {:.4}, {} evaluations)",
-            self.method,
-            describe(&self.names, &self.estimate),
-            self.log_likelihood,
-            self.evaluations
+            "{}: {parameters} (ln L = {:.4}, {} evaluations{notes})",
+            self.method, self.log_likelihood, self.evaluations
         )
     }
-}
-
-/// The parameters' names and values as `name = value` for messages.
-fn describe(names: &[String], values: &[f64]) -> String {
-    names
-        .iter()
-        .zip(values)
-        .map(|(n, v)| format!("{n} = {v}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }

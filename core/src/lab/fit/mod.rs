@@ -32,6 +32,7 @@
 mod information;
 #[cfg(feature = "fit")]
 mod maximise;
+mod of_filter;
 mod profile;
 mod transform;
 
@@ -48,6 +49,7 @@ use crate::validate::ConfigProblem;
 pub use information::{observed_information, standard_errors, Information};
 #[cfg(feature = "fit")]
 pub use maximise::{maximise, FitOptions, FitResult};
+pub use of_filter::FilterLikelihood;
 #[cfg(feature = "fit")]
 pub use profile::profile_refitted;
 pub use profile::{profile, profile_grid, Profile};
@@ -58,6 +60,34 @@ pub trait Evaluate {
     /// ln p(data | θ) at every point of `points`; `f64::NEG_INFINITY` where the method
     /// failed on the data (its run stopped or gave no likelihood) at that point.
     fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64>;
+}
+
+/// What a fit and a profile need of a log-likelihood ln L(θ): the parameters it varies, their
+/// bounds and starting values, one evaluation that says why it failed, and the method's own
+/// doubts. A scenario's [`Likelihood`] and a [`FilterLikelihood`] (a closure building a filter
+/// from θ, and observations) are the two.
+pub trait LogLikelihood: Evaluate {
+    /// The parameters it varies, in order.
+    fn names(&self) -> &[String];
+    /// Their bounds, `(lower, upper)`, infinite where open.
+    fn bounds(&self) -> &[(f64, f64)];
+    /// Their starting values.
+    fn start(&self) -> &[f64];
+    /// ln L(θ) from one run; an error that names the problem when θ is not admissible, the
+    /// filter does not build at θ or the method fails on the data.
+    fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError>;
+    /// What the method says about its own result at θ, from one run: the guarantees of its
+    /// chosen steps it reports as violated and its self-checks that warned
+    /// ([`crate::Filter::self_check`]), each with its advice. Empty when it says nothing.
+    fn concerns(&self, theta: &[f64]) -> Vec<String>;
+    /// The method's name.
+    fn method(&self) -> &str;
+    /// `None` for a method that draws no random numbers; else how its random numbers are held
+    /// fixed across θ (common random numbers), for the note that explains why a fit gives no
+    /// standard errors from finite differences.
+    fn random_numbers(&self) -> Option<String>;
+    /// The number of observations the likelihood is of.
+    fn observations(&self) -> usize;
 }
 
 /// The log-likelihood of recorded data as a function of some of a scenario's parameters,
@@ -289,6 +319,35 @@ impl Likelihood {
     /// optimisers and [`Evaluate`] work with).
     pub fn value(&self, theta: &[f64]) -> f64 {
         self.log_likelihood(theta).unwrap_or(f64::NEG_INFINITY)
+    }
+}
+
+impl LogLikelihood for Likelihood {
+    fn names(&self) -> &[String] {
+        Likelihood::names(self)
+    }
+    fn bounds(&self) -> &[(f64, f64)] {
+        Likelihood::bounds(self)
+    }
+    fn start(&self) -> &[f64] {
+        Likelihood::start(self)
+    }
+    fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
+        Likelihood::log_likelihood(self, theta)
+    }
+    fn concerns(&self, theta: &[f64]) -> Vec<String> {
+        Likelihood::concerns(self, theta)
+    }
+    fn method(&self) -> &str {
+        Likelihood::method(self)
+    }
+    fn random_numbers(&self) -> Option<String> {
+        self.config.methods[0]
+            .is_random()
+            .then(|| format!("common random numbers, seed {}", self.seed))
+    }
+    fn observations(&self) -> usize {
+        Likelihood::observations(self)
     }
 }
 

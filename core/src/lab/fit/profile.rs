@@ -6,7 +6,7 @@
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use super::{Evaluate, Likelihood};
+use super::{Evaluate, Likelihood, LogLikelihood};
 
 /// One method's log-likelihood along one parameter.
 #[derive(Clone, Debug)]
@@ -24,7 +24,7 @@ pub struct Profile {
     /// method failed everywhere.
     pub maximum: Option<(f64, f64)>,
     /// What the method says about its likelihood at the maximum (its violated guarantees
-    /// and self-checks that warned, [`Likelihood::concerns`]; one more run), each with its
+    /// and self-checks that warned, [`LogLikelihood::concerns`]; one more run), each with its
     /// advice — empty when it says nothing, or before [`Profile::check_maximum`]. A refitted
     /// profile's are at its best grid value, where the refitted parameters are known.
     pub notes: Vec<String>,
@@ -57,9 +57,10 @@ pub fn profile_grid(bounds: (f64, f64), value: f64, points: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The log-likelihood of `likelihood` (a [`Likelihood`] of one parameter) at `values`, one
+/// The log-likelihood of `likelihood` (of one parameter: a [`Likelihood`], a
+/// [`super::FilterLikelihood`]) at `values`, one
 /// batch through `evaluate` (`likelihood` itself runs them on every core).
-pub fn profile(likelihood: &Likelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
+pub fn profile(likelihood: &dyn LogLikelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
     let points: Vec<Vec<f64>> = values.iter().map(|&v| alloc::vec![v]).collect();
     let log_likelihoods = evaluate.log_likelihoods(&points);
     let mut profile = Profile::new(likelihood, values.to_vec(), log_likelihoods);
@@ -71,7 +72,11 @@ impl Profile {
     /// The profile of `likelihood` (of one parameter) from its values at `values`, computed
     /// elsewhere (one at a time, as the playground does between frames); the maximum is
     /// found here.
-    pub fn new(likelihood: &Likelihood, values: Vec<f64>, log_likelihoods: Vec<f64>) -> Profile {
+    pub fn new(
+        likelihood: &dyn LogLikelihood,
+        values: Vec<f64>,
+        log_likelihoods: Vec<f64>,
+    ) -> Profile {
         Profile {
             method: likelihood.method().into(),
             parameter: likelihood.names()[0].clone(),
@@ -84,7 +89,7 @@ impl Profile {
 
     /// Fills [`Profile::notes`] with the concerns of `likelihood` (the one this profile was
     /// drawn from, of its one parameter) at the maximum.
-    pub fn check_maximum(&mut self, likelihood: &Likelihood) {
+    pub fn check_maximum(&mut self, likelihood: &dyn LogLikelihood) {
         self.notes = self
             .maximum
             .map(|(at, _)| self.notes_at(likelihood.concerns(&[at]), "the maximum", at))
