@@ -2,12 +2,9 @@
 //! local-level model against a Kalman log-likelihood written here and Durbin & Koopman's
 //! published estimates; problems reported before any run.
 
-use nalgebra::DMatrix;
-use zakai::lab::fit::{self, FilterLikelihood, Likelihood, LogLikelihood};
+use zakai::lab::fit::{self, Likelihood};
 use zakai::lab::recording::Recording;
-use zakai::lab::scenario::parameters::ParameterConfig;
 use zakai::lab::scenario::ScenarioConfig;
-use zakai::{Kalman, KalmanBucy, Model, Noise, Observation, Pf};
 use zakai_tests::test;
 use zakai_tests::NILE;
 
@@ -104,6 +101,7 @@ fn the_kalman_fit_of_the_nile_is_durbin_and_koopmans_estimate() {
 
 /// Standard errors at (q, r): the observed information of the reference by its own
 /// differences (steps of 1 %), inverted.
+#[cfg(not(target_arch = "wasm32"))]
 fn reference_standard_errors(q: f64, r: f64) -> (f64, f64) {
     let (hq, hr) = (0.01 * q, 0.01 * r);
     let d2 = |f: &dyn Fn(f64) -> f64, h: f64| (f(h) - 2.0 * f(0.0) + f(-h)) / (h * h);
@@ -116,189 +114,199 @@ fn reference_standard_errors(q: f64, r: f64) -> (f64, f64) {
     ((irr / det).sqrt(), (iqq / det).sqrt())
 }
 
-/// The Nile's observations as a Rust user holds them: the first at the prior's time (Δτ = 0,
-/// no prediction), then one a year.
-fn nile_observations() -> Vec<Observation<'static>> {
-    NILE.iter()
-        .enumerate()
-        .map(|(k, z)| {
-            Observation::measurement(if k == 0 { 0.0 } else { 1.0 }, std::slice::from_ref(z))
-        })
-        .collect()
-}
-
-/// The local level built in Rust at θ = (q, r): dx = √q dW, z = x + v with Var v = r, the
-/// Kalman filter from N(1120, 10⁷).
-fn local_level_in_rust(theta: &[f64]) -> Result<KalmanBucy, zakai::ZakaiError> {
-    let model = Model::from_text(&["0"], &["x"], Noise::discrete(theta[1]))?
-        .with_diffusion(DMatrix::from_element(1, 1, theta[0].sqrt()))?;
-    Kalman::builder(&model)
-        .prior_gaussian(&[PRIOR.0], &[[PRIOR.1]])
-        .build()
-}
-
-/// (q, r), both positive, starting at (1000, 10000).
-fn positive_q_and_r() -> [(&'static str, ParameterConfig); 2] {
-    [
-        ("q", ParameterConfig::bounded(1000.0, 0.0, f64::INFINITY)),
-        ("r", ParameterConfig::bounded(10000.0, 0.0, f64::INFINITY)),
-    ]
-}
-
-/// A model built in Rust is fitted without a scenario or JSON ([`FilterLikelihood`]: a
-/// closure from θ to a filter, and the observations): its log-likelihood is the reference's
-/// at every point (1e-9 relative), its fit Durbin & Koopman's estimate (1e-3) with the
-/// reference's standard errors (1 %), and the summary shows both.
+/// Fits of models built in Rust (natively: argmin's executor reads the clock).
 #[cfg(not(target_arch = "wasm32"))]
-#[test]
-fn a_model_built_in_rust_is_fitted_without_a_scenario() {
-    let observations = nile_observations();
-    let l = FilterLikelihood::new(
-        Kalman,
-        &observations,
-        &positive_q_and_r(),
-        local_level_in_rust,
-    )
-    .unwrap();
-    assert_eq!(l.names(), ["q", "r"]);
-    assert_eq!(l.random_numbers(), None, "the Kalman filter draws nothing");
-    for (q, r) in [(1469.1, 15099.0), (100.0, 30000.0)] {
-        let (got, want) = (l.log_likelihood(&[q, r]).unwrap(), reference(q, r));
-        assert!(
-            (got - want).abs() < 1e-9 * want.abs(),
-            "{q} {r}: {got} vs {want}"
-        );
-    }
-    let result = fit::maximise(&l, &l, &fit::FitOptions::default(), &|_, _| {}).unwrap();
-    let summary = result.summary();
-    println!("{summary}");
-    let (q, r) = (result.estimate[0], result.estimate[1]);
-    assert!((q / 1469.1 - 1.0).abs() < 1e-3, "q = {q}");
-    assert!((r / 15099.0 - 1.0).abs() < 1e-3, "r = {r}");
-    assert!(
-        result.converged && result.notes.is_empty(),
-        "{:?}",
-        result.notes
-    );
-    assert_eq!(result.observations, 100);
-    let (se_q, se_r) = reference_standard_errors(q, r);
-    assert!(
-        (result.stderr[0] / se_q - 1.0).abs() < 0.01,
-        "{} vs {se_q}",
-        result.stderr[0]
-    );
-    assert!(
-        (result.stderr[1] / se_r - 1.0).abs() < 0.01,
-        "{} vs {se_r}",
-        result.stderr[1]
-    );
-    for (name, se) in [("q", result.stderr[0]), ("r", result.stderr[1])] {
-        assert!(
-            summary.contains(&format!("{name} = "))
-                && summary.contains(&format!("(s.e. {se:.2e})")),
-            "{summary}"
-        );
-    }
-    // A profile along q (r held): the same values as the reference.
-    let along_q = FilterLikelihood::new(
-        Kalman,
-        &observations,
-        &[("q", ParameterConfig::bounded(1000.0, 0.0, f64::INFINITY))],
-        |theta: &[f64]| local_level_in_rust(&[theta[0], 15099.0]),
-    )
-    .unwrap();
-    let p = fit::profile(&along_q, &along_q, &[1000.0, 1469.1, 2000.0]);
-    for (v, got) in p.values.iter().zip(&p.log_likelihoods) {
-        assert!((got - reference(*v, 15099.0)).abs() < 1e-9 * got.abs());
-    }
-}
+mod built_in_rust {
+    use super::*;
+    use nalgebra::DMatrix;
+    use zakai::lab::fit::{FilterLikelihood, LogLikelihood};
+    use zakai::lab::scenario::parameters::ParameterConfig;
+    use zakai::{Kalman, KalmanBucy, Model, Noise, Observation, Pf};
 
-/// A particle filter's likelihood is a random function of θ: the fit says so and gives no
-/// standard errors; a filter that fails on the data names the step; every problem with the
-/// parameters or the data is reported at once, before any run.
-#[cfg(not(target_arch = "wasm32"))]
-#[test]
-fn a_model_built_in_rust_says_what_it_cannot_vouch_for() {
-    let observations = nile_observations();
-    let pf = FilterLikelihood::new(Pf, &observations, &positive_q_and_r(), |theta: &[f64]| {
+    /// The Nile's observations as a Rust user holds them: the first at the prior's time (Δτ = 0,
+    /// no prediction), then one a year.
+    fn nile_observations() -> Vec<Observation<'static>> {
+        NILE.iter()
+            .enumerate()
+            .map(|(k, z)| {
+                Observation::measurement(if k == 0 { 0.0 } else { 1.0 }, std::slice::from_ref(z))
+            })
+            .collect()
+    }
+
+    /// The local level built in Rust at θ = (q, r): dx = √q dW, z = x + v with Var v = r, the
+    /// Kalman filter from N(1120, 10⁷).
+    fn local_level_in_rust(theta: &[f64]) -> Result<KalmanBucy, zakai::ZakaiError> {
         let model = Model::from_text(&["0"], &["x"], Noise::discrete(theta[1]))?
             .with_diffusion(DMatrix::from_element(1, 1, theta[0].sqrt()))?;
-        Pf::builder(&model)
+        Kalman::builder(&model)
             .prior_gaussian(&[PRIOR.0], &[[PRIOR.1]])
-            .seed(7)
-            .with(|p| p.particles = 200)
             .build()
-    })
-    .unwrap();
-    assert!(pf.random_numbers().is_some());
-    let options = fit::FitOptions {
-        max_iterations: 3,
-        ..fit::FitOptions::default()
-    };
-    let result = fit::maximise(&pf, &pf, &options, &|_, _| {}).unwrap();
-    assert!(
-        result.stderr.iter().all(|s| s.is_nan()),
-        "{:?}",
-        result.stderr
-    );
-    assert!(
-        result
-            .notes
-            .iter()
-            .any(|n| n.contains("draws random numbers")),
-        "{:?}",
-        result.notes
-    );
-    assert!(
-        result.summary().contains("(no s.e.)"),
-        "{}",
-        result.summary()
-    );
-
-    // The fourth observation has two components where the model observes one.
-    let mut bad = nile_observations();
-    let two = [1120.0, 1120.0];
-    bad[3] = Observation::measurement(1.0, &two);
-    let l = FilterLikelihood::new(Kalman, &bad, &positive_q_and_r(), local_level_in_rust).unwrap();
-    match l.log_likelihood(&[1469.1, 15099.0]) {
-        Err(zakai::ZakaiError::RunFailed { step, .. }) => assert_eq!(step, 3),
-        other => panic!("expected the run to fail at step 3: {other:?}"),
     }
-    assert!(
-        l.log_likelihood(&[1469.1]).is_err(),
-        "one value for two parameters"
-    );
-    assert!(
-        l.log_likelihood(&[-1.0, 15099.0]).is_err(),
-        "q outside its bounds"
-    );
 
-    let problems = match FilterLikelihood::new(
-        Kalman,
-        &[],
-        &[
-            ("q", ParameterConfig::bounded(-1.0, 0.0, f64::INFINITY)),
-            ("q", ParameterConfig::new(1.0)),
-            ("r", ParameterConfig::bounded(1.0, 2.0, 1.0)),
-            ("s", ParameterConfig::new(f64::NAN)),
-        ],
-        local_level_in_rust,
-    ) {
-        Err(zakai::ZakaiError::Config(p)) => p,
-        other => panic!("expected the problems: {other:?}"),
-    };
-    let fields: Vec<&str> = problems.iter().map(|p| p.field.as_str()).collect();
-    assert_eq!(
-        fields,
+    /// (q, r), both positive, starting at (1000, 10000).
+    fn positive_q_and_r() -> [(&'static str, ParameterConfig); 2] {
         [
-            "observations",
-            "parameters.q",
-            "parameters.q",
-            "parameters.r",
-            "parameters.s"
-        ],
-        "{problems:?}"
-    );
+            ("q", ParameterConfig::bounded(1000.0, 0.0, f64::INFINITY)),
+            ("r", ParameterConfig::bounded(10000.0, 0.0, f64::INFINITY)),
+        ]
+    }
+
+    /// A model built in Rust is fitted without a scenario or JSON ([`FilterLikelihood`]: a
+    /// closure from θ to a filter, and the observations): its log-likelihood is the reference's
+    /// at every point (1e-9 relative), its fit Durbin & Koopman's estimate (1e-3) with the
+    /// reference's standard errors (1 %), and the summary shows both.
+    #[test]
+    fn a_model_built_in_rust_is_fitted_without_a_scenario() {
+        let observations = nile_observations();
+        let l = FilterLikelihood::new(
+            Kalman,
+            &observations,
+            &positive_q_and_r(),
+            local_level_in_rust,
+        )
+        .unwrap();
+        assert_eq!(l.names(), ["q", "r"]);
+        assert_eq!(l.random_numbers(), None, "the Kalman filter draws nothing");
+        for (q, r) in [(1469.1, 15099.0), (100.0, 30000.0)] {
+            let (got, want) = (l.log_likelihood(&[q, r]).unwrap(), reference(q, r));
+            assert!(
+                (got - want).abs() < 1e-9 * want.abs(),
+                "{q} {r}: {got} vs {want}"
+            );
+        }
+        let result = fit::maximise(&l, &l, &fit::FitOptions::default(), &|_, _| {}).unwrap();
+        let summary = result.summary();
+        println!("{summary}");
+        let (q, r) = (result.estimate[0], result.estimate[1]);
+        assert!((q / 1469.1 - 1.0).abs() < 1e-3, "q = {q}");
+        assert!((r / 15099.0 - 1.0).abs() < 1e-3, "r = {r}");
+        assert!(
+            result.converged && result.notes.is_empty(),
+            "{:?}",
+            result.notes
+        );
+        assert_eq!(result.observations, 100);
+        let (se_q, se_r) = reference_standard_errors(q, r);
+        assert!(
+            (result.stderr[0] / se_q - 1.0).abs() < 0.01,
+            "{} vs {se_q}",
+            result.stderr[0]
+        );
+        assert!(
+            (result.stderr[1] / se_r - 1.0).abs() < 0.01,
+            "{} vs {se_r}",
+            result.stderr[1]
+        );
+        for (name, se) in [("q", result.stderr[0]), ("r", result.stderr[1])] {
+            assert!(
+                summary.contains(&format!("{name} = "))
+                    && summary.contains(&format!("(s.e. {se:.2e})")),
+                "{summary}"
+            );
+        }
+        // A profile along q (r held): the same values as the reference.
+        let along_q = FilterLikelihood::new(
+            Kalman,
+            &observations,
+            &[("q", ParameterConfig::bounded(1000.0, 0.0, f64::INFINITY))],
+            |theta: &[f64]| local_level_in_rust(&[theta[0], 15099.0]),
+        )
+        .unwrap();
+        let p = fit::profile(&along_q, &along_q, &[1000.0, 1469.1, 2000.0]);
+        for (v, got) in p.values.iter().zip(&p.log_likelihoods) {
+            assert!((got - reference(*v, 15099.0)).abs() < 1e-9 * got.abs());
+        }
+    }
+
+    /// A particle filter's likelihood is a random function of θ: the fit says so and gives no
+    /// standard errors; a filter that fails on the data names the step; every problem with the
+    /// parameters or the data is reported at once, before any run.
+    #[test]
+    fn a_model_built_in_rust_says_what_it_cannot_vouch_for() {
+        let observations = nile_observations();
+        let pf =
+            FilterLikelihood::new(Pf, &observations, &positive_q_and_r(), |theta: &[f64]| {
+                let model = Model::from_text(&["0"], &["x"], Noise::discrete(theta[1]))?
+                    .with_diffusion(DMatrix::from_element(1, 1, theta[0].sqrt()))?;
+                Pf::builder(&model)
+                    .prior_gaussian(&[PRIOR.0], &[[PRIOR.1]])
+                    .seed(7)
+                    .with(|p| p.particles = 200)
+                    .build()
+            })
+            .unwrap();
+        assert!(pf.random_numbers().is_some());
+        let options = fit::FitOptions {
+            max_iterations: 3,
+            ..fit::FitOptions::default()
+        };
+        let result = fit::maximise(&pf, &pf, &options, &|_, _| {}).unwrap();
+        assert!(
+            result.stderr.iter().all(|s| s.is_nan()),
+            "{:?}",
+            result.stderr
+        );
+        assert!(
+            result
+                .notes
+                .iter()
+                .any(|n| n.contains("draws random numbers")),
+            "{:?}",
+            result.notes
+        );
+        assert!(
+            result.summary().contains("(no s.e.)"),
+            "{}",
+            result.summary()
+        );
+
+        // The fourth observation has two components where the model observes one.
+        let mut bad = nile_observations();
+        let two = [1120.0, 1120.0];
+        bad[3] = Observation::measurement(1.0, &two);
+        let l =
+            FilterLikelihood::new(Kalman, &bad, &positive_q_and_r(), local_level_in_rust).unwrap();
+        match l.log_likelihood(&[1469.1, 15099.0]) {
+            Err(zakai::ZakaiError::RunFailed { step, .. }) => assert_eq!(step, 3),
+            other => panic!("expected the run to fail at step 3: {other:?}"),
+        }
+        assert!(
+            l.log_likelihood(&[1469.1]).is_err(),
+            "one value for two parameters"
+        );
+        assert!(
+            l.log_likelihood(&[-1.0, 15099.0]).is_err(),
+            "q outside its bounds"
+        );
+
+        let problems = match FilterLikelihood::new(
+            Kalman,
+            &[],
+            &[
+                ("q", ParameterConfig::bounded(-1.0, 0.0, f64::INFINITY)),
+                ("q", ParameterConfig::new(1.0)),
+                ("r", ParameterConfig::bounded(1.0, 2.0, 1.0)),
+                ("s", ParameterConfig::new(f64::NAN)),
+            ],
+            local_level_in_rust,
+        ) {
+            Err(zakai::ZakaiError::Config(p)) => p,
+            other => panic!("expected the problems: {other:?}"),
+        };
+        let fields: Vec<&str> = problems.iter().map(|p| p.field.as_str()).collect();
+        assert_eq!(
+            fields,
+            [
+                "observations",
+                "parameters.q",
+                "parameters.q",
+                "parameters.r",
+                "parameters.s"
+            ],
+            "{problems:?}"
+        );
+    }
 }
 
 #[test]

@@ -6,7 +6,9 @@
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use super::{Evaluate, Likelihood, LogLikelihood};
+#[cfg(feature = "fit")]
+use super::Likelihood;
+use super::{Evaluate, LogLikelihood};
 
 /// One method's log-likelihood along one parameter.
 #[derive(Clone, Debug)]
@@ -57,7 +59,7 @@ pub fn profile_grid(bounds: (f64, f64), value: f64, points: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The log-likelihood of `likelihood` (of one parameter: a [`Likelihood`], a
+/// The log-likelihood of `likelihood` (of one parameter: a [`super::Likelihood`], a
 /// [`super::FilterLikelihood`]) at `values`, one
 /// batch through `evaluate` (`likelihood` itself runs them on every core).
 pub fn profile(likelihood: &dyn LogLikelihood, evaluate: &dyn Evaluate, values: &[f64]) -> Profile {
