@@ -6,7 +6,7 @@
 //! inverse DST) without the once-per-interval update (15) and moments.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use zakai::internals::grid::dst::DstPlan;
+use zakai::internals::DstPlan;
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::{presets, MethodConfig};
 use zakai::YauYauParams;

@@ -108,7 +108,8 @@
 //! [`lab`] (bibliography → scenario → recording, metrics, papers → experiment → study →
 //! reproduction). A module uses only modules to its left, and files side by side in a folder
 //! never import each other in a circle (both tested). The modules without a link are
-//! internal: the crate root re-exports what of them a user needs.
+//! internal: the crate root re-exports what of them a user needs, and nothing else in them is
+//! `pub` (`#![warn(unreachable_pub)]`).
 //!
 //! ## Features
 //!
@@ -119,6 +120,7 @@
 //! | `std` | yes | FFT plans (the Yau–Yau schemes' DSTs, rustfft), wall-clock timing, CSV files of observations |
 //! | `parallel` | yes | Monte Carlo repetitions, frontiers and a fit's likelihood evaluations on rayon's pool (implies `std`) |
 //! | `fit` | no | maximum-likelihood fits with standard errors, `lab::fit::maximise` (of a scenario's parameters, or of a model built in Rust), and profiles that refit the other parameters, `lab::fit::profile_refitted` (argmin's optimisers; implies `std`) |
+//! | `unstable-internals` | no | not covered by semver, and not built on docs.rs: `zakai::internals`, the one type Zakai's own benchmarks reach below the surface (the DST of the Yau–Yau schemes) |
 //!
 //! Without `fit`, [`lab::fit`] still gives the likelihood of given parameters — of a
 //! scenario ([`lab::fit::Likelihood`]) or of the filters a closure builds from them
@@ -127,6 +129,7 @@
 #![no_std]
 #![warn(missing_docs)]
 #![warn(missing_debug_implementations)]
+#![warn(unreachable_pub)]
 
 extern crate alloc;
 #[cfg(feature = "std")]
@@ -138,7 +141,13 @@ pub mod simulate;
 #[cfg(test)]
 mod testing;
 
-use internals::{error, filters, grid, linalg, model, random, validate};
+mod error;
+mod filters;
+mod grid;
+mod linalg;
+mod model;
+mod random;
+mod validate;
 
 pub use nalgebra;
 
@@ -179,7 +188,23 @@ pub use filters::yau_fd::{
     Iem, Likelihood, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
 };
 
-/// The one door to internals, for Zakai's own benchmarks, tests and fuzz targets: not part
-/// of the chosen surface, and not covered by semver.
+/// What Zakai's own benchmarks reach below the surface (feature `unstable-internals`, which
+/// docs.rs does not build): not part of the chosen surface, and not covered by semver.
+#[cfg(feature = "unstable-internals")]
 #[doc(hidden)]
-pub mod internals;
+pub mod internals {
+    /// The DST-I of the Yau–Yau schemes, for the benchmark of a bare transform pair.
+    pub use crate::grid::dst::DstPlan;
+}
+
+/// The fuzz targets' door (compiled only under cargo-fuzz's `--cfg fuzzing`).
+#[cfg(fuzzing)]
+#[doc(hidden)]
+pub mod fuzzing {
+    /// Panics unless the exact normal form of `text` in `n` variables either is refused with
+    /// a reason, or exists, displays as text that reads back to it, and differentiates or
+    /// refuses to in every variable.
+    pub fn normal_form_reads_back(text: &str, n: usize) {
+        crate::model::symbolic::check_normal_form(text, n);
+    }
+}

@@ -1,7 +1,7 @@
 //! Expression parsing + symbolic differentiation: any text, in 1 to 3 state variables, either
 //! parses or returns an `ExprError` whose position lies inside the text; parsed functions
 //! evaluate, differentiate (Jacobian and Hessian) and report affinity without panicking. The
-//! exact normal form (`model::symbolic`) of each component either exists — and then its
+//! exact normal form (`model::symbolic`, through `zakai::fuzzing`) of each component either exists — and then its
 //! display reads back to the same normal form, and its derivatives exist or are refused — or
 //! is refused with a reason.
 #![no_main]
@@ -10,7 +10,6 @@ use libfuzzer_sys::fuzz_target;
 use zakai::ExpressionFunction;
 use zakai::ExprError;
 use zakai::VectorFunction;
-use zakai::internals::model::symbolic;
 
 fuzz_target!(|data: &[u8]| {
     let Some((&head, rest)) = data.split_first() else {
@@ -24,18 +23,7 @@ fuzz_target!(|data: &[u8]| {
     let texts: Vec<String> = text.split(';').take(3).map(str::to_string).collect();
     let m = texts.len();
     for t in &texts {
-        match symbolic::parse(t, n) {
-            Ok(p) => {
-                let shown = p.display(n).to_string();
-                let again = symbolic::parse(&shown, n)
-                    .unwrap_or_else(|e| panic!("{t}: its display {shown} does not read back: {e}"));
-                assert!(again == p, "{t}: {shown} reads back differently");
-                for j in 0..n {
-                    let _ = p.derivative(j);
-                }
-            }
-            Err(e) => assert!(!e.0.is_empty()),
-        }
+        zakai::fuzzing::normal_form_reads_back(t, n);
     }
     match ExpressionFunction::parse("fuzzed", &texts, n, m) {
         Ok(f) => {

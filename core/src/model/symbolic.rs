@@ -606,10 +606,50 @@ impl fmt::Display for Shown<'_> {
     }
 }
 
+/// The fuzz target's property of the normal form (fuzz/fuzz_targets/expression.rs, through
+/// `zakai::fuzzing`): `text` in `n` variables either is refused with a reason, or has a normal
+/// form whose display reads back to the same form and whose derivative in every variable
+/// exists or is refused. Panics, naming the text, when it does not hold.
+#[cfg(any(test, fuzzing))]
+pub(crate) fn check_normal_form(text: &str, n: usize) {
+    use alloc::string::ToString;
+    match parse(text, n) {
+        Ok(p) => {
+            let shown = p.display(n).to_string();
+            let again = parse(&shown, n)
+                .unwrap_or_else(|e| panic!("{text}: its display {shown} does not read back: {e}"));
+            assert!(again == p, "{text}: {shown} reads back differently");
+            for j in 0..n {
+                let _ = p.derivative(j);
+            }
+        }
+        Err(e) => assert!(!e.0.is_empty(), "{text}: refused without a reason"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::testing::test;
+
+    /// The fuzz target's property on texts of each kind: polynomials, elementary functions
+    /// of them, quotients, powers, refused and malformed text.
+    #[test]
+    fn normal_forms_read_back_from_their_display() {
+        for (text, n) in [
+            ("(x + 1)^2", 1),
+            ("x1*x2 - 3*x2^3", 2),
+            ("sin(x) + cos(2*x)", 1),
+            ("exp(-x1^2)*x3", 3),
+            ("1/(1 + x^2)", 1),
+            ("sqrt(abs(x))", 1),
+            ("x^^3", 1),
+            ("y + 1", 1),
+            ("", 2),
+        ] {
+            check_normal_form(text, n);
+        }
+    }
 
     fn form(text: &str, n: usize) -> Poly {
         parse(text, n).unwrap_or_else(|e| panic!("{text}: {e}"))

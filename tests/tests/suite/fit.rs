@@ -118,6 +118,7 @@ fn reference_standard_errors(q: f64, r: f64) -> (f64, f64) {
 #[cfg(not(target_arch = "wasm32"))]
 mod built_in_rust {
     use super::*;
+    use zakai_tests::test;
     use nalgebra::DMatrix;
     use zakai::lab::fit::{FilterLikelihood, LogLikelihood};
     use zakai::lab::scenario::parameters::ParameterConfig;

@@ -380,7 +380,7 @@ fn core_modules_use_only_lower_layers() {
                     modules.push((format!("lab::{stem}"), inner));
                 }
             }
-        } else if stem != "lib" && stem != "internals" {
+        } else if stem != "lib" {
             modules.push((stem, path));
         }
     }
@@ -429,7 +429,7 @@ fn no_import_circle_between_siblings() {
                 folders.push(path.clone());
             }
             let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
-            if stem != "mod" && stem != "lib" && stem != "internals" {
+            if stem != "mod" && stem != "lib" {
                 siblings.push((stem, path));
             }
         }

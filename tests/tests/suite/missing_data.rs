@@ -935,7 +935,7 @@ fn reports_rebuilds(f: &dyn Filter) -> bool {
     f.self_check(&mut concerns);
     concerns
         .iter()
-        .any(|c| c.check == zakai::internals::filters::REBUILT_SHARE_CHECK)
+        .any(|c| c.check == "share of irregular steps that made a new operator")
 }
 
 /// Steps whose lengths keep changing (jittered time stamps, Δτ(1 + u/100)) make an operator

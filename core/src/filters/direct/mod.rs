@@ -28,6 +28,8 @@ pub mod gaussian_approximation;
 mod method;
 mod params;
 pub mod riccati;
+#[cfg(test)]
+mod tests;
 
 pub use filter::{check_model, check_system, DirectFilter, RESIDUAL_SHARE_THRESHOLD};
 pub use method::Direct;

@@ -42,8 +42,7 @@
 //! ```
 
 mod filter;
-// The building blocks of the filter, reached by the benches and the accuracy tests through
-// `zakai::internals`, not part of the chosen surface.
+// The building blocks of the filter.
 pub mod legendre;
 mod method;
 pub mod offline;
