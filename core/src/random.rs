@@ -42,7 +42,7 @@ const ZIGGURAT_AREA: f64 = 4.928_673_233_99e-3;
 /// so the stream is the same on every platform. The particle filter draws its noise here; the
 /// simulators keep [`standard_normal`] so that the simulated truth does not depend on it.
 #[derive(Clone, Debug)]
-pub struct NormalZiggurat {
+pub(crate) struct NormalZiggurat {
     /// `x[i]`: right edge of strip i (x[0] = v/f(r) for the base strip, x[1] = r, x[256] = 0).
     x: [f64; ZIGGURAT_LAYERS + 1],
     /// `f[i] = exp(−x[i]²/2)`.
@@ -57,7 +57,7 @@ impl Default for NormalZiggurat {
 
 impl NormalZiggurat {
     /// Builds the tables: x₁ = r, x_{i+1} = √(−2 ln(v/x_i + f(x_i))).
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let density = |x: f64| libm::exp(-0.5 * x * x);
         let mut x = [0.0; ZIGGURAT_LAYERS + 1];
         x[0] = ZIGGURAT_AREA / density(ZIGGURAT_R);
@@ -75,7 +75,7 @@ impl NormalZiggurat {
 
     /// One N(0, 1) draw.
     #[inline]
-    pub fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+    pub(crate) fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         loop {
             let bits = rng.next_u64();
             let i = (bits & 0xff) as usize;
@@ -109,7 +109,7 @@ impl NormalZiggurat {
     }
 
     /// Fills `out` with independent N(0, 1) draws.
-    pub fn fill<R: rand::Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+    pub(crate) fn fill<R: rand::Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
         for v in out {
             *v = self.sample(rng);
         }
@@ -126,7 +126,7 @@ fn open_uniform<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
 /// c = 1/√(9d), v = (1 + cξ)³ for a normal ξ is accepted when ln u < ξ²/2 + d − dv + d ln v;
 /// for a < 1, Gamma(a) = Gamma(a + 1) · u^{1/a} (their §6). With `libm`, so the stream is the
 /// same on every platform.
-pub fn gamma<R: rand::Rng + ?Sized>(rng: &mut R, shape: f64) -> f64 {
+pub(crate) fn gamma<R: rand::Rng + ?Sized>(rng: &mut R, shape: f64) -> f64 {
     // Not a shape (NaN, infinite, ≤ 0): no draw, and no endless rejection loop.
     if !(shape > 0.0 && shape.is_finite()) {
         return f64::NAN;
@@ -153,7 +153,7 @@ pub fn gamma<R: rand::Rng + ?Sized>(rng: &mut R, shape: f64) -> f64 {
 
 /// One draw of Student's t with ν = `dof` > 0 degrees of freedom: ξ / √(χ²_ν / ν), with
 /// χ²_ν = 2 Gamma(ν/2).
-pub fn student_t<R: rand::Rng + ?Sized>(rng: &mut R, dof: f64) -> f64 {
+pub(crate) fn student_t<R: rand::Rng + ?Sized>(rng: &mut R, dof: f64) -> f64 {
     let xi = standard_normal(rng);
     let chi2 = 2.0 * gamma(rng, 0.5 * dof);
     xi / libm::sqrt(chi2 / dof)
@@ -164,7 +164,7 @@ pub fn student_t<R: rand::Rng + ?Sized>(rng: &mut R, dof: f64) -> f64 {
 /// from 10 on by Hörmann's transformed rejection with squeeze, PTRS (1993, "The transformed
 /// rejection method for generating Poisson random variables", Insurance: Mathematics and
 /// Economics 12), whose cost does not grow with λ.
-pub fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, rate: f64) -> f64 {
+pub(crate) fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, rate: f64) -> f64 {
     // Not a rate (NaN, infinite, < 0): no draw, and no endless loop.
     if !(rate >= 0.0 && rate.is_finite()) {
         return f64::NAN;

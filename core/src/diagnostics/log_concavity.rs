@@ -28,7 +28,7 @@ pub struct LogConcavity {
 
 /// Log-concavity map of a 1-D or 2-D grid density (`None` for other dimensions). Grid nodes
 /// are `lower + (i + 1) Δs` with `Δs = (upper − lower)/(N + 1)`, as on a
-/// [`TensorGrid`](crate::grid::TensorGrid).
+/// `TensorGrid`.
 pub fn log_concavity(
     view: &DensityView,
     relative_floor: f64,

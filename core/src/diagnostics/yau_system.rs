@@ -10,7 +10,7 @@
 //! * (C3) `η = Σ f_i² + Σ ∂f_i/∂x_i + Σ h_i²` (7) is a quadratic polynomial.
 //!
 //! Each condition is decided symbolically when f and h are text expressions with normal forms
-//! ([`crate::model::symbolic`]: polynomials over x and sin, cos, tan, sinh, cosh, tanh, exp of
+//! (`model::symbolic`: polynomials over x and sin, cos, tan, sinh, cosh, tanh, exp of
 //! polynomials, with the Pythagorean and exponential identities): the curl's normal forms must
 //! be the constants l needs, and Σh², η must normalise to polynomials of degree ≤ 2 — a
 //! polynomial normal form of higher degree fails, exactly. So 002's example 4.3 (f = tanh x,

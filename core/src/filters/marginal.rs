@@ -4,7 +4,7 @@
 
 /// Writes the N(mean, variance) density at `grid` into `out` (zeros for a non-positive or
 /// non-finite variance).
-pub fn gaussian(mean: f64, variance: f64, grid: &[f64], out: &mut [f64]) {
+pub(crate) fn gaussian(mean: f64, variance: f64, grid: &[f64], out: &mut [f64]) {
     if !(variance > 0.0 && variance.is_finite() && mean.is_finite()) {
         out.iter_mut().for_each(|o| *o = 0.0);
         return;
@@ -19,7 +19,7 @@ pub fn gaussian(mean: f64, variance: f64, grid: &[f64], out: &mut [f64]) {
 /// Writes a Gaussian kernel density estimate of weighted samples at `grid` into `out`.
 /// The bandwidth is Silverman's rule `1.06 σ N_eff^{−1/5}` with the weighted standard deviation
 /// σ and the effective sample size `N_eff = 1/Σwᵢ²`; `weights` must sum to one.
-pub fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut [f64]) {
+pub(crate) fn kernel_density(samples: &[f64], weights: &[f64], grid: &[f64], out: &mut [f64]) {
     let mean: f64 = samples.iter().zip(weights).map(|(x, w)| x * w).sum();
     let var: f64 = samples
         .iter()
@@ -92,7 +92,13 @@ fn binned(samples: &[f64], weights: &[f64], grid: &[f64], h: f64, norm: f64, out
 
 /// Writes the 2-D Gaussian density `N(mean, cov)` on the raster `xs × ys` (`xs` fastest) into
 /// `out` (zeros when `cov` is not positive definite or not finite).
-pub fn gaussian_2d(mean: [f64; 2], cov: [[f64; 2]; 2], xs: &[f64], ys: &[f64], out: &mut [f64]) {
+pub(crate) fn gaussian_2d(
+    mean: [f64; 2],
+    cov: [[f64; 2]; 2],
+    xs: &[f64],
+    ys: &[f64],
+    out: &mut [f64],
+) {
     let det = cov[0][0] * cov[1][1] - cov[0][1] * cov[1][0];
     if !(det > 0.0 && cov[0][0] > 0.0 && det.is_finite() && mean.iter().all(|m| m.is_finite())) {
         out.iter_mut().for_each(|o| *o = 0.0);
@@ -112,7 +118,7 @@ pub fn gaussian_2d(mean: [f64; 2], cov: [[f64; 2]; 2], xs: &[f64], ys: &[f64], o
 /// Adds `weight`-weighted samples `(x, y)` as a density histogram on the raster `xs × ys`
 /// (`xs` fastest; each raster point owns the cell around it; samples outside are dropped)
 /// into `out`, which is cleared first. The raster must be evenly spaced.
-pub fn histogram_2d(
+pub(crate) fn histogram_2d(
     points: impl Iterator<Item = (f64, f64, f64)>,
     xs: &[f64],
     ys: &[f64],

@@ -15,7 +15,7 @@ use core::fmt::Debug;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-pub use super::params::{Declared, ParamInfo, ParamKind};
+pub(crate) use super::params::{Declared, ParamInfo};
 use super::Filter;
 use crate::error::ZakaiError;
 use crate::model::{Model, Prior};
@@ -99,7 +99,7 @@ pub enum Takes {
 }
 
 /// What a method does with a model beyond its papers' — a state-dependent diffusion `G(x)`
-/// ([`crate::model::diffusion`]), time and known inputs ([`crate::model::inputs`]).
+/// ([`crate::Diffusion`]), time and known inputs ([`crate::Inputs`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", content = "how", rename_all = "snake_case")]
 pub enum Support {
@@ -163,13 +163,13 @@ pub trait Method {
     /// from its finite differences ([`crate::lab::fit`]).
     const RANDOM: bool = false;
     /// The method's fixed-interval smoother, or why it has none
-    /// ([`crate::filters::smoothing`]).
+    /// ([`crate::Smoother`]).
     const SMOOTHING: super::smoothing::Smoothing =
         super::smoothing::Smoothing::NotAvailable("no smoother is implemented for this method");
     /// What the method does with a state-dependent diffusion `G(x)`.
     const STATE_DIFFUSION: Support;
     /// What the method does with a driven model, whose functions read the time `t` and known
-    /// inputs `u1..uk` ([`crate::model::inputs`]).
+    /// inputs `u1..uk` ([`crate::Inputs`]).
     const INPUTS: Support;
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
@@ -191,7 +191,7 @@ pub trait Method {
     /// dimensions).
     fn problems(params: &Self::Params, n: usize) -> Vec<ConfigProblem>;
     /// Points (or cells) per dimension of the grid the method lives on for an `n`-dimensional
-    /// state, `None` for a method without one: what [`crate::filters::resolution::too_coarse`]
+    /// state, `None` for a method without one: what `too_coarse`
     /// weighs against the posterior width to expect on a box chosen for the user.
     fn grid_shape(_params: &Self::Params, _n: usize) -> Option<Vec<usize>> {
         None
@@ -242,7 +242,7 @@ pub trait Method {
 
 /// Why method `M` does not take `model` at all: a state-dependent diffusion it refuses
 /// ([`Method::STATE_DIFFUSION`]) or a driven model it refuses ([`Method::INPUTS`]).
-pub fn refusal<M: Method>(model: &Model) -> Option<String> {
+pub(crate) fn refusal<M: Method>(model: &Model) -> Option<String> {
     if let Support::Refused(why) = M::STATE_DIFFUSION {
         if model.diffusion.constant().is_none() {
             return Some(format!(
@@ -264,7 +264,7 @@ pub fn refusal<M: Method>(model: &Model) -> Option<String> {
 
 /// Why method `M` does not apply to the problem: its [`refusal`] of the model, then its own
 /// [`Method::suitability`].
-pub fn suitability_of<M: Method>(
+pub(crate) fn suitability_of<M: Method>(
     problem: &ProblemContext,
     params: &M::Params,
 ) -> Result<(), String> {
@@ -277,7 +277,7 @@ pub fn suitability_of<M: Method>(
 /// [`Method::build`], refused first when the method does not take the model at all
 /// ([`refusal`]): every path that builds a filter — the builders, an experiment, a
 /// convergence check, the Python `Filter` — goes through it.
-pub fn build_of<M: Method>(
+pub(crate) fn build_of<M: Method>(
     ctx: &BuildContext,
     params: &M::Params,
     name: String,
@@ -290,7 +290,7 @@ pub fn build_of<M: Method>(
 
 /// The sizes `M` chooses from the problem ([`Method::problem_defaults`]), read on the model
 /// at its start when it is driven ([`ProblemContext::at_start`]).
-pub fn problem_defaults_of<M: Method>(
+pub(crate) fn problem_defaults_of<M: Method>(
     problem: &ProblemContext,
     params: &M::Params,
 ) -> Option<(M::Params, String)> {
@@ -306,11 +306,11 @@ pub(crate) fn double(what: &str, value: usize, max: usize) -> Option<(usize, Str
 
 /// The memory floor every filter is counted with (its state, scratch vectors and name):
 /// 64 KiB. The Gaussian filters need no more.
-pub const SMALL_MEMORY: usize = 64 << 10;
+pub(crate) const SMALL_MEMORY: usize = 64 << 10;
 
 /// [`Method::memory`] with the [`SMALL_MEMORY`] floor: what every estimate shown or checked
 /// against the cap uses.
-pub fn memory_estimate<M: Method>(params: &M::Params, n: usize) -> Option<usize> {
+pub(crate) fn memory_estimate<M: Method>(params: &M::Params, n: usize) -> Option<usize> {
     M::memory(params, n).map(|b| b.max(SMALL_MEMORY))
 }
 
@@ -323,7 +323,7 @@ pub(crate) fn problems_from(list: Vec<(&'static str, String)>) -> Vec<ConfigProb
 
 /// Points spread over the box `bounds` (corners pulled inwards and one more) where methods
 /// check structural assumptions such as linearity.
-pub fn probe_points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
+pub(crate) fn probe_points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
     let n = bounds.len();
     let mut probes = Vec::new();
     for corner in 0..(1usize << n.min(6)) {
@@ -342,7 +342,7 @@ pub fn probe_points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
 }
 
 /// The box `mean ± width · sd` of the prior, per dimension.
-pub fn prior_box(prior: &Prior, width: f64) -> Vec<(f64, f64)> {
+pub(crate) fn prior_box(prior: &Prior, width: f64) -> Vec<(f64, f64)> {
     let (m, p) = (prior.mean(), prior.covariance());
     (0..m.len())
         .map(|d| {

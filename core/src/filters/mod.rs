@@ -22,19 +22,19 @@
 //! consumes the same [`Observation`]s, and exposes its [`Estimate`]; grid methods also expose
 //! their density through [`DensityView`].
 
-pub mod builder;
-pub mod direct;
-pub mod fpe_split;
-pub mod gaussian_sum;
-pub mod kalman;
-pub mod marginal;
-pub mod method;
-pub mod params;
-pub mod particle;
-pub mod resolution;
-pub mod smoothing;
-pub mod spectral;
-pub mod yau_fd;
+pub(crate) mod builder;
+pub(crate) mod direct;
+pub(crate) mod fpe_split;
+pub(crate) mod gaussian_sum;
+pub(crate) mod kalman;
+pub(crate) mod marginal;
+pub(crate) mod method;
+pub(crate) mod params;
+pub(crate) mod particle;
+pub(crate) mod resolution;
+pub(crate) mod smoothing;
+pub(crate) mod spectral;
+pub(crate) mod yau_fd;
 
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -65,7 +65,7 @@ pub struct Observation<'a> {
     /// Increment or measurement.
     pub kind: ObservationKind,
     /// The time τ_k and the known inputs over the interval ending at it, for a driven model
-    /// ([`crate::model::inputs`]); `None` for an autonomous one.
+    /// ([`crate::Inputs`]); `None` for an autonomous one.
     pub inputs: Option<crate::model::Inputs<'a>>,
 }
 
@@ -90,7 +90,7 @@ impl<'a> Observation<'a> {
     }
 
     /// The same observation at time `t` = τ_k with the known inputs `u` over the interval
-    /// ending at it, for a driven model ([`crate::model::inputs`]).
+    /// ending at it, for a driven model ([`crate::Inputs`]).
     pub fn with_inputs(self, t: f64, u: &'a [f64]) -> Self {
         Observation {
             inputs: Some(crate::model::Inputs { t, u }),
@@ -262,7 +262,7 @@ impl Observation<'_> {
     }
 
     /// The two models a step over this observation uses, for a driven `model`
-    /// ([`crate::model::inputs`]): the dynamics' at the interval's midpoint and the
+    /// ([`crate::Inputs`]): the dynamics' at the interval's midpoint and the
     /// measurement's at its end (an increment's, over the interval, is the dynamics'), both
     /// with the observation's inputs. `None` for an autonomous model; an error when a driven
     /// model's observation carries no inputs, or inputs that do not fit it.
@@ -588,12 +588,12 @@ impl SavedDensity {
 /// schemes, outflow for the separation approach) loses mass that reaches the edge of the box,
 /// and the renormalisation after each update hides the loss; a density still this close to
 /// the boundary is being cut off.
-pub const BOUNDARY_MASS_THRESHOLD: f64 = 1e-4;
+pub(crate) const BOUNDARY_MASS_THRESHOLD: f64 = 1e-4;
 
 /// The grid self-check's second threshold: the posterior's smallest standard deviation in
 /// grid spacings, below which the grid cannot resolve it (the observation factor then weighs
 /// nodes, not mass).
-pub const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
+pub(crate) const WIDTH_IN_CELLS_THRESHOLD: f64 = 2.0;
 
 /// The log-likelihood of `obs` at each state of `states`, up to a constant in the state: for
 /// an increment Δy over Δt, `hᵀS⁻¹Δy − ½hᵀS⁻¹h Δt` (the observation factor of the Yau–Yau
@@ -750,7 +750,7 @@ impl Substeps {
 
 /// How many plans for interval lengths other than Δτ a grid filter keeps (the remainders of
 /// irregular intervals): each is one factorisation or spectral solve of the grid's size.
-pub const REMAINDER_PLANS: usize = 4;
+pub(crate) const REMAINDER_PLANS: usize = 4;
 
 /// Operators (solvers, plans, off-line matrices) made for interval lengths other than Δτ, the
 /// most recently used first and at most `keep` of them, with a count of how often a step
@@ -768,7 +768,7 @@ pub(crate) struct LengthCache<T> {
 /// The self-check of the grid and spectral filters' caches of operators for interval lengths
 /// other than Δτ: the share of the irregular steps whose length had to get an operator of its own
 /// (reported above one half once more were made than are kept).
-pub const REBUILT_SHARE_CHECK: &str = "share of irregular steps that made a new operator";
+pub(crate) const REBUILT_SHARE_CHECK: &str = "share of irregular steps that made a new operator";
 
 impl<T> LengthCache<T> {
     /// Empty, keeping at most `keep` operators.
@@ -914,7 +914,7 @@ pub trait Filter: core::fmt::Debug + Fork {
     fn predict(&mut self, dt: f64) -> Result<(), FilterError> {
         self.step(&Observation::nothing(dt))
     }
-    /// [`Filter::predict`] for a driven model ([`crate::model::inputs`]): predicts over `dt`
+    /// [`Filter::predict`] for a driven model ([`crate::Inputs`]): predicts over `dt`
     /// to the time `t` with the known inputs `u` over the interval, as a step of
     /// `Observation::nothing(dt).with_inputs(t, u)`. An autonomous model ignores `t` and `u`.
     fn predict_with(&mut self, dt: f64, t: f64, u: &[f64]) -> Result<(), FilterError> {
@@ -985,7 +985,7 @@ pub trait Filter: core::fmt::Debug + Fork {
         None
     }
     /// This filter, from its current state, as the forward pass of its fixed-interval smoother
-    /// ([`smoothing`]): a filter that steps exactly as this one does and keeps what the
+    /// ([`smoothing::Smoother`]): a filter that steps exactly as this one does and keeps what the
     /// backward pass needs, with its memory checked against `plan` before anything is kept.
     /// An error for methods without a smoother (the catalogue says why,
     /// [`method::Method::SMOOTHING`]).

@@ -171,7 +171,7 @@ pub trait Declared {
 }
 
 /// An enum a choice parameter takes: its values as JSON writes them.
-pub trait Choices {
+pub(crate) trait Choices {
     /// The values, as serde names them.
     const NAMES: &'static [&'static str];
 }
@@ -182,7 +182,7 @@ impl Choices for crate::model::dmz::Likelihood {
 }
 
 /// A parameter value whose numbers a range check reads.
-pub trait ParamValue {
+pub(crate) trait ParamValue {
     /// The problem with the first number outside `info`'s bounds, if any.
     fn range_problem(&self, info: &ParamInfo) -> Option<String>;
 }

@@ -14,11 +14,11 @@ use crate::model::ObservationModel;
 /// problem: the self-check warns below [`crate::filters::WIDTH_IN_CELLS_THRESHOLD`] per sd,
 /// and 000's second-order schemes are within about 10⁻³ of the exact filter at this
 /// resolution (the Kalman–Bucy comparison in the tests).
-pub const POINTS_PER_SD: f64 = 10.0;
+pub(crate) const POINTS_PER_SD: f64 = 10.0;
 
 /// The expected posterior width and what it came from.
 #[derive(Clone, Copy, Debug)]
-pub struct ExpectedWidth {
+pub(crate) struct ExpectedWidth {
     /// The smaller of the two below.
     pub width: f64,
     /// The prior's standard deviation.
@@ -31,13 +31,13 @@ pub struct ExpectedWidth {
 impl ExpectedWidth {
     /// `count` points or cells per [`POINTS_PER_SD`] of the width over `[lo, hi]`, within
     /// `range`.
-    pub fn count(&self, (lo, hi): (f64, f64), range: (usize, usize)) -> usize {
+    pub(crate) fn count(&self, (lo, hi): (f64, f64), range: (usize, usize)) -> usize {
         let wanted = libm::ceil((hi - lo) * POINTS_PER_SD / self.width);
         (wanted.min(range.1 as f64) as usize).max(range.0)
     }
 
     /// What the count was chosen from, for the note beside it.
-    pub fn describe(&self, range: (usize, usize)) -> String {
+    pub(crate) fn describe(&self, range: (usize, usize)) -> String {
         let steady = if self.steady.is_finite() {
             format!("{:.3}", self.steady)
         } else {
@@ -62,7 +62,7 @@ impl ExpectedWidth {
 ///   P = (P + V)/(1 + (P + V) I), V = Q Δτ, I = Σ_j c_j²/R_j, settles at the positive root
 ///   of P² + V P − V/I = 0. A measurement density without a variance (a log-density, Student-t
 ///   with ν ≤ 2) or an unknown Δτ contributes no steady state.
-pub fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> {
+pub(crate) fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> {
     let model = problem.model;
     if model.n != 1 {
         return None;
@@ -137,7 +137,7 @@ pub fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> {
 /// `None` when it can, or when nothing is expected (n > 1, a degenerate prior). For a box
 /// chosen around a diffuse prior (the Nile's N(1120, 10⁷): a box 38 000 wide for a posterior
 /// some 60 wide) this is the refusal "give a domain".
-pub fn too_coarse(problem: &ProblemContext, shape: &[usize]) -> Option<String> {
+pub(crate) fn too_coarse(problem: &ProblemContext, shape: &[usize]) -> Option<String> {
     let width = expected_width(problem)?;
     let (&points, &(lo, hi)) = (shape.first()?, problem.bounds.first()?);
     let per_sd = points as f64 * width.width / (hi - lo);

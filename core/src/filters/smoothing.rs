@@ -1,42 +1,4 @@
-//! Fixed-interval smoothing: the best estimate of the state at every observation time from
-//! **all** the data, `p(x_k | z_1:N)`, where a filter gives `p(x_k | z_1:k)`.
-//!
-//! Every smoother is a forward pass and a backward pass. The forward pass is the method's own
-//! filter, which a [`Smoother`] wraps: it steps exactly as the filter does and keeps what the
-//! backward pass needs. [`Smoother::smooth`] then runs backward over the steps taken. A filter
-//! becomes its smoother with [`Filter::smoother`](super::Filter::smoother); a method without
-//! one returns an error saying why (and says so in the catalogue, [`Smoothing`]).
-//!
-//! * **Gaussian filters** (Kalman–Bucy, EKF, UKF, IEKF, IOKF): the Rauch–Tung–Striebel
-//!   recursion in its general Gaussian form (Särkkä 2013, *Bayesian Filtering and Smoothing*,
-//!   ch. 8–10):
-//!   `G_k = C_{k,k+1} P⁻_{k+1}⁻¹`, `m^s_k = m_k + G_k (m^s_{k+1} − m⁻_{k+1})`,
-//!   `P^s_k = P_k + G_k (P^s_{k+1} − P⁻_{k+1}) G_kᵀ` (S1)
-//!   with `C_{k,k+1} = Cov(x_k, x_{k+1} | z_1:k) = P_k Φ_kᵀ`, where Φ_k solves `dΦ/dt = A(t) Φ`,
-//!   `Φ(0) = I`, along the filter's own moment equations: A = ∂f/∂x at the mean for the EKF
-//!   (the extended RTS smoother), A = E[f(x)(x − m)ᵀ] P⁻¹ by the sigma points for the UKF
-//!   (the statistically linearised drift of Särkkä's continuous–discrete unscented RTS
-//!   smoother), A the drift matrix for the Kalman–Bucy filter (Φ = e^{AΔτ}: the exact RTS
-//!   smoother of the sampled model, the one the filter updates with).
-//! * **Grid filters**: the forward–backward recursion on the filter's own grid. If one step of
-//!   the scheme carries the density as `p⁻_{k+1} = T_k p_k` (the discrete Fokker–Planck or
-//!   Kolmogorov operator, exactly as the filter applies it) and then multiplies by the
-//!   likelihood, the smoothed densities of that discrete model are
-//!   `p^s_k = p_k ⊙ T_kᵀ (p^s_{k+1} ⊘ p⁻_{k+1})` (S2)
-//!   (the discrete form of `p(x_k | z_1:N) = p(x_k | z_1:k)
-//!   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`, whose Gaussian case
-//!   is the RTS recursion), so the smoothed
-//!   density is consistent with the filter's, and converges with it as the grid is refined.
-//!   `T_kᵀ` — one step of the backward equation's solution operator in the scheme's
-//!   discretisation — is each
-//!   scheme's transposed step (`GridTransition::carry_back`: the θ-scheme's and 001's
-//!   tridiagonal solves transposed with the same factors, QIEM's symmetric DST solve and
-//!   antisymmetric drift differences, the superposition map transposed, 001's upwind part).
-//! * **Particle filter**: forward filtering, backward simulation (FFBSi; Godsill, Doucet &
-//!   West 2004): trajectories drawn backward through the stored particle clouds with
-//!   probabilities `∝ w_k^i p(x_{k+1} | x_k^i)`, the transition density of the filter's own
-//!   Euler–Maruyama steps. Its cost is O(M N) per Euler step for M trajectories and N
-//!   particles.
+//! Fixed-interval smoothing ([`Smoother`] documents it).
 
 use alloc::boxed::Box;
 use alloc::format;
@@ -157,7 +119,47 @@ impl SmoothedStep<'_> {
 }
 
 /// A fixed-interval smoother: a filter (its forward pass, which steps exactly as the method's
-/// filter does) that keeps what its backward pass needs (see the module doc).
+/// filter does) that keeps what its backward pass needs.
+///
+/// Fixed-interval smoothing: the best estimate of the state at every observation time from
+/// **all** the data, `p(x_k | z_1:N)`, where a filter gives `p(x_k | z_1:k)`.
+///
+/// Every smoother is a forward pass and a backward pass. The forward pass is the method's own
+/// filter, which a [`Smoother`] wraps: it steps exactly as the filter does and keeps what the
+/// backward pass needs. [`Smoother::smooth`] then runs backward over the steps taken. A filter
+/// becomes its smoother with [`Filter::smoother`](super::Filter::smoother); a method without
+/// one returns an error saying why (and says so in the catalogue, [`Smoothing`]).
+///
+/// * **Gaussian filters** (Kalman–Bucy, EKF, UKF, IEKF, IOKF): the Rauch–Tung–Striebel
+///   recursion in its general Gaussian form (Särkkä 2013, *Bayesian Filtering and Smoothing*,
+///   ch. 8–10):
+///   `G_k = C_{k,k+1} P⁻_{k+1}⁻¹`, `m^s_k = m_k + G_k (m^s_{k+1} − m⁻_{k+1})`,
+///   `P^s_k = P_k + G_k (P^s_{k+1} − P⁻_{k+1}) G_kᵀ` (S1)
+///   with `C_{k,k+1} = Cov(x_k, x_{k+1} | z_1:k) = P_k Φ_kᵀ`, where Φ_k solves `dΦ/dt = A(t) Φ`,
+///   `Φ(0) = I`, along the filter's own moment equations: A = ∂f/∂x at the mean for the EKF
+///   (the extended RTS smoother), A = E[f(x)(x − m)ᵀ] P⁻¹ by the sigma points for the UKF
+///   (the statistically linearised drift of Särkkä's continuous–discrete unscented RTS
+///   smoother), A the drift matrix for the Kalman–Bucy filter (Φ = e^{AΔτ}: the exact RTS
+///   smoother of the sampled model, the one the filter updates with).
+/// * **Grid filters**: the forward–backward recursion on the filter's own grid. If one step of
+///   the scheme carries the density as `p⁻_{k+1} = T_k p_k` (the discrete Fokker–Planck or
+///   Kolmogorov operator, exactly as the filter applies it) and then multiplies by the
+///   likelihood, the smoothed densities of that discrete model are
+///   `p^s_k = p_k ⊙ T_kᵀ (p^s_{k+1} ⊘ p⁻_{k+1})` (S2)
+///   (the discrete form of `p(x_k | z_1:N) = p(x_k | z_1:k)
+///   ∫ p(x_{k+1} | x_k) p(x_{k+1} | z_1:N) / p(x_{k+1} | z_1:k) dx_{k+1}`, whose Gaussian case
+///   is the RTS recursion), so the smoothed
+///   density is consistent with the filter's, and converges with it as the grid is refined.
+///   `T_kᵀ` — one step of the backward equation's solution operator in the scheme's
+///   discretisation — is each
+///   scheme's transposed step (`GridTransition::carry_back`: the θ-scheme's and 001's
+///   tridiagonal solves transposed with the same factors, QIEM's symmetric DST solve and
+///   antisymmetric drift differences, the superposition map transposed, 001's upwind part).
+/// * **Particle filter**: forward filtering, backward simulation (FFBSi; Godsill, Doucet &
+///   West 2004): trajectories drawn backward through the stored particle clouds with
+///   probabilities `∝ w_k^i p(x_{k+1} | x_k^i)`, the transition density of the filter's own
+///   Euler–Maruyama steps. Its cost is O(M N) per Euler step for M trajectories and N
+///   particles.
 pub trait Smoother: Filter {
     /// The backward pass over the steps taken so far: `visit` sees every smoothed time, from
     /// the last to the first (index 0). The forward pass is not changed and may go on.

@@ -45,13 +45,13 @@ struct Pair {
 
 /// The mixed terms of `a` on a grid (see the module doc).
 #[derive(Clone, Debug, Default)]
-pub struct CrossDiffusion {
+pub(crate) struct CrossDiffusion {
     pairs: Vec<Pair>,
 }
 
 impl CrossDiffusion {
     /// From the off-diagonal entries `(l, k, a_lk at every node)`, l < k.
-    pub fn new(grid: &TensorGrid, entries: &[(usize, usize, Vec<f64>)]) -> Self {
+    pub(crate) fn new(grid: &TensorGrid, entries: &[(usize, usize, Vec<f64>)]) -> Self {
         let pairs = entries
             .iter()
             .filter(|(_, _, a)| a.iter().any(|&v| v != 0.0))
@@ -69,12 +69,12 @@ impl CrossDiffusion {
     }
 
     /// Whether there is any mixed term.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.pairs.is_empty()
     }
 
     /// The share of `a_ll` the pairs take, `Σ_k |a_lk(m)| Δ_l/Δ_k`, per dimension and node.
-    pub fn lent(&self, grid: &TensorGrid) -> Vec<Vec<f64>> {
+    pub(crate) fn lent(&self, grid: &TensorGrid) -> Vec<Vec<f64>> {
         let mut out = alloc::vec![alloc::vec![0.0; grid.len()]; grid.dim()];
         for p in &self.pairs {
             let (dl, dk) = (grid.spacing()[p.l], grid.spacing()[p.k]);
@@ -90,7 +90,7 @@ impl CrossDiffusion {
     /// The diagonal `a_ll` less the share the mixed terms take, per dimension and node; `name`'s
     /// refusal where it would be negative (the mixed terms are then larger than the diagonal can
     /// make positive on these cells: `a_ll ≥ Σ_k |a_lk| Δx_l/Δx_k` is needed).
-    pub fn diagonal_left(
+    pub(crate) fn diagonal_left(
         &self,
         name: &str,
         grid: &TensorGrid,
@@ -122,7 +122,7 @@ impl CrossDiffusion {
 
     /// The largest `Σ_{l<k} |a_lk(m)|/(Δ_lΔ_k)` over the nodes and where: the explicit step is
     /// nonnegative for `Δt ≤ 1 / rate`.
-    pub fn rate_bound(&self, len: usize) -> (f64, usize) {
+    pub(crate) fn rate_bound(&self, len: usize) -> (f64, usize) {
         let mut worst = (0.0, 0);
         for m in 0..len {
             let total: f64 = self.pairs.iter().map(|p| 2.0 * p.rate[m]).sum();
@@ -154,7 +154,7 @@ impl CrossDiffusion {
 
     /// One explicit step on a density: `out = (I + Δt Lᵀ) p`, each node's share moved to its
     /// diagonal neighbours (lost where they are off the grid).
-    pub fn step(&self, grid: &TensorGrid, dt: f64, p: &[f64], out: &mut [f64]) {
+    pub(crate) fn step(&self, grid: &TensorGrid, dt: f64, p: &[f64], out: &mut [f64]) {
         out.copy_from_slice(p);
         for pair in &self.pairs {
             for m in 0..p.len() {
@@ -172,7 +172,7 @@ impl CrossDiffusion {
 
     /// The transposed step (the backward equation's, for a smoother):
     /// `out[m] = r[m] + Δt Σ_pairs rate(m) (r[m + d] + r[m − d] − 2r[m])`, r = 0 off the grid.
-    pub fn step_transposed(&self, grid: &TensorGrid, dt: f64, r: &[f64], out: &mut [f64]) {
+    pub(crate) fn step_transposed(&self, grid: &TensorGrid, dt: f64, r: &[f64], out: &mut [f64]) {
         out.copy_from_slice(r);
         for pair in &self.pairs {
             for m in 0..r.len() {

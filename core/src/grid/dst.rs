@@ -26,8 +26,11 @@ use alloc::vec::Vec;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
-/// A planned DST-I of one length with its scratch buffers.
+/// A planned DST-I of one length with its scratch buffers. (Public for the benchmark of a bare
+/// transform pair, through `zakai::internals` with the feature `unstable-internals`; without
+/// it, unreachable.)
 #[derive(Clone)]
+#[cfg_attr(not(feature = "unstable-internals"), allow(unreachable_pub))]
 pub struct DstPlan {
     n: usize,
     /// One line's real DFT through a complex FFT of half the length (M even).
@@ -188,6 +191,7 @@ crate::linalg::simd::per_node_kernel! {
     }
 }
 
+#[cfg_attr(not(feature = "unstable-internals"), allow(unreachable_pub))]
 impl DstPlan {
     /// Plans the transform of length `n` (allocates here; a whole-axis batch grows once on
     /// the first [`DstPlan::transform_axis`], never in later ones).
@@ -223,16 +227,6 @@ impl DstPlan {
             line: Vec::new(),
             pair_fft,
         }
-    }
-
-    /// The length N.
-    pub fn len(&self) -> usize {
-        self.n
-    }
-
-    /// Always false.
-    pub fn is_empty(&self) -> bool {
-        self.n == 0
     }
 
     /// Transforms one line of length N in place.

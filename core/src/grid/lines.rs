@@ -17,7 +17,7 @@ use super::for_each_line;
 /// (see the module doc). The row of node `i` couples it to its neighbours `i ∓ stride` on the
 /// same line; a line's ends have no neighbour outside (the unknown is zero there).
 #[derive(Clone, Debug)]
-pub struct LineSystems {
+pub(crate) struct LineSystems {
     stride: usize,
     n: usize,
     /// Elimination multipliers, per node (zero at the first node of a line).
@@ -37,7 +37,7 @@ impl LineSystems {
     /// `lower[i] u[i − stride] + diag[i] u[i] + upper[i] u[i + stride]`, on a grid of
     /// `diag.len()` nodes whose lines along this axis have `n` nodes `stride` apart (`lower` at a
     /// line's first node and `upper` at its last are ignored).
-    pub fn factor(
+    pub(crate) fn factor(
         stride: usize,
         n: usize,
         lower: &[f64],
@@ -73,7 +73,7 @@ impl LineSystems {
 
     /// The first node whose pivot is zero, non-finite or below 10⁻¹⁴ of its row's scale (the
     /// factors are then unusable), if any.
-    pub fn vanishing_pivot(&self) -> Option<usize> {
+    pub(crate) fn vanishing_pivot(&self) -> Option<usize> {
         self.vanishing
     }
 
@@ -106,7 +106,7 @@ impl LineSystems {
     /// whose nodes belong to different lines (independent, so the loop vectorises), where one
     /// line at a time would stride through memory with a dependency chain. Every node's
     /// arithmetic is the same as [`LineSystems::solve_line`]'s, so the results are too.
-    pub fn solve(&self, rhs: &mut [f64], x: &mut [f64]) {
+    pub(crate) fn solve(&self, rhs: &mut [f64], x: &mut [f64]) {
         let (stride, n) = (self.stride, self.n);
         if stride == 1 {
             for_each_line(rhs.len(), stride, n, |start| self.solve_line(start, rhs, x));
@@ -147,7 +147,7 @@ impl LineSystems {
     /// (`A = L U` gives `Aᵀ = Uᵀ Lᵀ`: a forward substitution with Uᵀ, then a backward one
     /// with the unit Lᵀ) — the adjoint of [`LineSystems::solve`], for the backward equation
     /// of a smoother. `rhs` is overwritten and the solution is written to `x`.
-    pub fn solve_transposed(&self, rhs: &mut [f64], x: &mut [f64]) {
+    pub(crate) fn solve_transposed(&self, rhs: &mut [f64], x: &mut [f64]) {
         let (stride, n) = (self.stride, self.n);
         for_each_line(rhs.len(), stride, n, |start| {
             // Uᵀ y = rhs: y_0 = rhs_0 / d_0, y_j = (rhs_j − upper_{j−1} y_{j−1}) / d_j.

@@ -9,7 +9,7 @@
 pub(crate) mod cross;
 #[cfg(feature = "std")]
 #[doc(hidden)]
-pub mod dst;
+pub(crate) mod dst;
 /// Tridiagonal systems along grid lines (the dimension-split implicit steps).
 pub(crate) mod lines;
 
@@ -23,7 +23,7 @@ use crate::error::ZakaiError;
 
 /// Largest number of grid nodes any method may allocate (2²⁴ ≈ 16.8 million, 128 MiB per
 /// array of f64).
-pub const MAX_NODES: usize = 1 << 24;
+pub(crate) const MAX_NODES: usize = 1 << 24;
 
 /// Calls `f(start)` for the first node of every grid line along the dimension with `stride`
 /// and `n` nodes per line.

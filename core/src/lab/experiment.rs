@@ -263,7 +263,7 @@ pub struct MethodTrack {
     pub smoothed: Option<SmoothedTrack>,
 }
 
-/// One method's fixed-interval smoother over a run ([`crate::filters::smoothing`]): the
+/// One method's fixed-interval smoother over a run ([`crate::Smoother`]): the
 /// best estimates of the states at the observation times given all the observations.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SmoothedTrack {
@@ -492,7 +492,7 @@ impl Experiment {
 
     /// The methods whose grid, at the sizes chosen for it, cannot resolve the posterior to
     /// expect on this scenario's domain, each with why
-    /// ([`crate::filters::resolution::too_coarse`]): `"QIEM: 4001 points on … put 0.31 in
+    /// (`too_coarse`): `"QIEM: 4001 points on … put 0.31 in
     /// …"`. What a box chosen around a diffuse prior is refused with when the data cannot
     /// narrow it.
     pub fn coarse_grids(&self) -> Vec<String> {
@@ -702,7 +702,7 @@ impl Experiment {
     }
 
     /// Every method over the whole `recording` as its fixed-interval smoother
-    /// ([`crate::filters::smoothing`]): the filtering run of
+    /// ([`crate::Smoother`]): the filtering run of
     /// [`Experiment::filter_recorded`], and in each [`MethodTrack::smoothed`] the smoothed
     /// means and covariances at the same rows — or why there are none (the method has no
     /// smoother, its filter failed, or its smoother's memory would exceed the cap, checked

@@ -9,7 +9,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use crate::error::FilterError;
 
 /// `(P + Pᵀ)/2`: keeps covariances symmetric against round-off.
-pub fn symmetrize(p: &mut DMatrix<f64>) {
+pub(crate) fn symmetrize(p: &mut DMatrix<f64>) {
     let n = p.nrows();
     for i in 0..n {
         for j in (i + 1)..n {
@@ -21,7 +21,10 @@ pub fn symmetrize(p: &mut DMatrix<f64>) {
 }
 
 /// Cholesky factor of a symmetric positive-definite matrix, or a typed error naming it.
-pub fn cholesky(p: &DMatrix<f64>, what: &'static str) -> Result<Cholesky<f64, Dyn>, FilterError> {
+pub(crate) fn cholesky(
+    p: &DMatrix<f64>,
+    what: &'static str,
+) -> Result<Cholesky<f64, Dyn>, FilterError> {
     if p.iter().any(|v| !v.is_finite()) {
         return Err(FilterError::NonFinite { what });
     }
@@ -33,7 +36,7 @@ pub fn cholesky(p: &DMatrix<f64>, what: &'static str) -> Result<Cholesky<f64, Dy
 /// `*storage = chol.unpack_dirty()` when done. A matrix that is not positive definite
 /// leaves `storage` with a's shape again (allocated anew: only on that path), so the caller
 /// may retry, e.g. damped.
-pub fn cholesky_in(
+pub(crate) fn cholesky_in(
     storage: &mut DMatrix<f64>,
     a: &DMatrix<f64>,
     what: &'static str,
@@ -53,7 +56,7 @@ pub fn cholesky_in(
 /// triangle of `l` (same shape; the upper triangle is not touched), or false when `a` is not
 /// positive definite — `l` is then partly written but keeps its storage, so a caller that
 /// damps and retries (the IOKF's Levenberg loop) allocates nothing.
-pub fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
+pub(crate) fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
     let n = a.nrows();
     for j in 0..n {
         let mut d = a[(j, j)];
@@ -77,14 +80,14 @@ pub fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
 }
 
 /// `x ← (L Lᵀ)⁻¹ x` with L from [`lower_cholesky_into`].
-pub fn lower_cholesky_solve(l: &DMatrix<f64>, x: &mut DVector<f64>) {
+pub(crate) fn lower_cholesky_solve(l: &DMatrix<f64>, x: &mut DVector<f64>) {
     // A Cholesky factor has a positive diagonal: neither substitution can fail.
     let _ = l.solve_lower_triangular_mut(x);
     let _ = l.tr_solve_lower_triangular_mut(x);
 }
 
 /// Fails when any entry is NaN or infinite.
-pub fn check_finite_vector(v: &DVector<f64>, what: &'static str) -> Result<(), FilterError> {
+pub(crate) fn check_finite_vector(v: &DVector<f64>, what: &'static str) -> Result<(), FilterError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
@@ -93,7 +96,7 @@ pub fn check_finite_vector(v: &DVector<f64>, what: &'static str) -> Result<(), F
 }
 
 /// Fails when any entry is NaN or infinite.
-pub fn check_finite_matrix(m: &DMatrix<f64>, what: &'static str) -> Result<(), FilterError> {
+pub(crate) fn check_finite_matrix(m: &DMatrix<f64>, what: &'static str) -> Result<(), FilterError> {
     if m.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
@@ -102,19 +105,23 @@ pub fn check_finite_matrix(m: &DMatrix<f64>, what: &'static str) -> Result<(), F
 }
 
 /// `log N(r; 0, Σ)` from the Cholesky factor of Σ.
-pub fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> f64 {
+pub(crate) fn gaussian_log_density(residual: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> f64 {
     let l = chol.l_dirty();
     gaussian_log_density_factored(l, log_det_from_factor(l), &mut residual.clone())
 }
 
 /// `log det Σ = 2 Σᵢ log Lᵢᵢ` from the Cholesky factor L of Σ (the diagonal of `l`).
-pub fn log_det_from_factor(l: &DMatrix<f64>) -> f64 {
+pub(crate) fn log_det_from_factor(l: &DMatrix<f64>) -> f64 {
     2.0 * (0..l.nrows()).map(|i| libm::log(l[(i, i)])).sum::<f64>()
 }
 
 /// `log N(r; 0, Σ)` from `L` (lower triangle of `l`; the upper is not read) with `Σ = L Lᵀ`
 /// and `log det Σ`, overwriting `r` with `L⁻¹ r`: no allocation.
-pub fn gaussian_log_density_factored(l: &DMatrix<f64>, log_det: f64, r: &mut DVector<f64>) -> f64 {
+pub(crate) fn gaussian_log_density_factored(
+    l: &DMatrix<f64>,
+    log_det: f64,
+    r: &mut DVector<f64>,
+) -> f64 {
     let n = r.len();
     // A Cholesky factor has a positive diagonal, so the substitution cannot fail.
     let _ = l.solve_lower_triangular_mut(r);
@@ -129,7 +136,8 @@ pub fn gaussian_log_density_factored(l: &DMatrix<f64>, log_det: f64, r: &mut DVe
 /// Only float compares, integer bit operations and float arithmetic (the exponent field is
 /// turned into a float by writing it under the mantissa of 2⁵²), so loops over it vectorise.
 #[inline]
-pub fn binary_split(v: f64) -> (f64, f64) {
+#[cfg(feature = "std")]
+pub(crate) fn binary_split(v: f64) -> (f64, f64) {
     const EXPONENT: u64 = 0x7ff << 52;
     const TWO_52: f64 = 4_503_599_627_370_496.0;
     // Subnormals (and anything not positive, whose result the callers discard) are scaled
@@ -153,7 +161,7 @@ pub fn binary_split(v: f64) -> (f64, f64) {
 /// call of libm's `fmax` per value, which also keeps the loop around it from vectorising.
 /// Elsewhere `f64::max` itself, which x86-64 vectorises (there the select form is the slower).
 #[inline(always)]
-pub fn larger(m: f64, v: f64) -> f64 {
+pub(crate) fn larger(m: f64, v: f64) -> f64 {
     if cfg!(target_arch = "wasm32") {
         select_larger(m, v)
     } else {
@@ -174,7 +182,7 @@ fn select_larger(m: f64, v: f64) -> f64 {
 /// `min(x, 0)`, 0 for a NaN `x` like `x.min(0.0)`; a comparison and a select on wasm (see
 /// [`larger`]).
 #[inline(always)]
-pub fn at_most_zero(x: f64) -> f64 {
+pub(crate) fn at_most_zero(x: f64) -> f64 {
     if cfg!(target_arch = "wasm32") {
         select_at_most_zero(x)
     } else {
@@ -201,7 +209,7 @@ fn select_at_most_zero(x: f64) -> f64 {
 /// of degree 13 (truncation `(½ ln 2)¹⁴/14! < 10⁻¹⁸`) in Estrin's scheme, and `2^k` written
 /// into the exponent bits.
 #[inline]
-pub fn exp_nonpositive(x: f64) -> f64 {
+pub(crate) fn exp_nonpositive(x: f64) -> f64 {
     exp_nonpositive_with(x, separate)
 }
 
@@ -273,7 +281,7 @@ fn exp_nonpositive_with(x: f64, madd: impl Fn(f64, f64, f64) -> f64) -> f64 {
 /// in the update's most expensive loop, and one rounding instead of two per step, so the
 /// factors can differ from [`exp_nonpositive`]'s in the last bit; elsewhere they are
 /// its bits exactly.
-pub fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
+pub(crate) fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
     if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU supports AVX2 and FMA, checked just above.
@@ -313,7 +321,7 @@ per_node_kernel! {
     /// skipped. Four columns at a time: each entry of `out` is read and written once per four
     /// columns instead of once per column (its additions still in column order, so the bits are
     /// those of one column at a time).
-    pub fn combine_columns(out: &mut [f64], columns: &[f64], x: &[f64]) {
+    pub(crate) fn combine_columns(out: &mut [f64], columns: &[f64], x: &[f64]) {
         let len = out.len();
         out.iter_mut().for_each(|v| *v = 0.0);
         if len == 0 {
@@ -350,7 +358,8 @@ per_node_kernel! {
 
 per_node_kernel! {
     /// `u_i ← u_i w_i`.
-    pub fn multiply_in_place(u: &mut [f64], w: &[f64]) {
+#[cfg(feature = "std")]
+    pub(crate) fn multiply_in_place(u: &mut [f64], w: &[f64]) {
         for (u, w) in u.iter_mut().zip(w) {
             *u *= w;
         }
@@ -361,7 +370,7 @@ per_node_kernel! {
 /// compiler vectorises (one running sum waits on every addition's latency, a visible share of
 /// a particle filter's step), whose result does not depend on the vector width.
 #[inline(always)]
-pub fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
     const LANES: usize = 8;
     let mut s = [0.0; LANES];
     let mut chunks = x.chunks_exact(LANES);
@@ -391,7 +400,7 @@ pub(crate) fn lanes_total<const L: usize>(mut s: [f64; L]) -> f64 {
 }
 
 /// `log Σ exp(a_i)` without overflow; `-∞` for an empty or all `-∞` input.
-pub fn log_sum_exp(a: impl Iterator<Item = f64> + Clone) -> f64 {
+pub(crate) fn log_sum_exp(a: impl Iterator<Item = f64> + Clone) -> f64 {
     let max = a.clone().fold(f64::NEG_INFINITY, f64::max);
     if !max.is_finite() {
         return max;
@@ -403,7 +412,7 @@ pub fn log_sum_exp(a: impl Iterator<Item = f64> + Clone) -> f64 {
 /// 2^{-s} until its ∞-norm is below 1/2, the series is summed until the next term is below
 /// machine precision (at most 30 terms), and the result is squared s times. Meant for the
 /// small matrices of exact linear discretisations (Van Loan's method).
-pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
     let n = a.nrows();
     let norm = a
         .row_iter()

@@ -1,18 +1,4 @@
-//! The diffusion `G` of `dx = f(x) dt + G(x) dv`: a constant matrix (the five papers' case)
-//! or a matrix of functions of the state (a population or interest-rate model whose noise
-//! scales with the state, `G(x) = σ√x`).
-//!
-//! The Fokker–Planck operator it enters is `½ Σ_ij ∂_i∂_j (a_ij p)` with `a = G Gᵀ` (Risken
-//! 1984); the papers write it for an `a` that does not depend on the state (001 (4), 000 (2),
-//! 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family says what it does with a
-//! state-dependent `a` (the catalogue's `state_diffusion`): the grid filters difference `a p`
-//! itself (conservative, so mass is kept) and take its mixed terms as a positive explicit step
-//! (`grid::cross`), the spectral filter's off-line operator applies it at its quadrature
-//! nodes, the particle filter and the simulator take `G` at each particle in every
-//! Euler–Maruyama substep, the Kalman family uses `Q(x̂)` at the current mean (an
-//! approximation each names in its warnings), and methods whose derivation needs a constant `G`
-//! (the direct method of 002, the exact Kalman–Bucy and Gaussian-sum references, QIEM's
-//! DST solve) refuse the model with the reason.
+//! A diffusion G(x) that depends on the state ([`Diffusion`] documents it).
 
 use alloc::format;
 use alloc::sync::Arc;
@@ -24,7 +10,23 @@ use nalgebra::DMatrix;
 use super::VectorFunction;
 use crate::error::{FilterError, ZakaiError};
 
-/// `G` in `dx = f(x) dt + G(x) dv` (see the module doc).
+/// `G` in `dx = f(x) dt + G(x) dv`.
+///
+/// The diffusion `G` of `dx = f(x) dt + G(x) dv`: a constant matrix (the five papers' case)
+/// or a matrix of functions of the state (a population or interest-rate model whose noise
+/// scales with the state, `G(x) = σ√x`).
+///
+/// The Fokker–Planck operator it enters is `½ Σ_ij ∂_i∂_j (a_ij p)` with `a = G Gᵀ` (Risken
+/// 1984); the papers write it for an `a` that does not depend on the state (001 (4), 000 (2),
+/// 004 (20)), where it is `½ Σ a_ij ∂_i∂_j p`. Each family says what it does with a
+/// state-dependent `a` (the catalogue's `state_diffusion`): the grid filters difference `a p`
+/// itself (conservative, so mass is kept) and take its mixed terms as a positive explicit step
+/// (`grid::cross`), the spectral filter's off-line operator applies it at its quadrature
+/// nodes, the particle filter and the simulator take `G` at each particle in every
+/// Euler–Maruyama substep, the Kalman family uses `Q(x̂)` at the current mean (an
+/// approximation each names in its warnings), and methods whose derivation needs a constant `G`
+/// (the direct method of 002, the exact Kalman–Bucy and Gaussian-sum references, QIEM's
+/// DST solve) refuse the model with the reason.
 #[derive(Clone, Debug)]
 pub enum Diffusion {
     /// A constant n × n matrix.

@@ -29,7 +29,7 @@ pub enum Likelihood {
 
 /// f, ∇·f, S⁻¹h and ½hᵀS⁻¹h at `len` points.
 #[derive(Clone, Debug)]
-pub struct DmzCoefficients {
+pub(crate) struct DmzCoefficients {
     /// `f[d][i] = f_d(x_i)`.
     pub f: Vec<Vec<f64>>,
     /// `∇·f(x_i)`.
@@ -42,7 +42,10 @@ pub struct DmzCoefficients {
 
 /// S⁻¹ of a continuous observation model; refuses discrete observations (`who` names the
 /// method, plural: "the Yau–Yau filters need …").
-pub fn continuous_noise_inverse(model: &Model, who: &str) -> Result<DMatrix<f64>, FilterError> {
+pub(crate) fn continuous_noise_inverse(
+    model: &Model,
+    who: &str,
+) -> Result<DMatrix<f64>, FilterError> {
     let ObservationModel::Continuous { noise_cov } = &model.observations else {
         return Err(FilterError::Unsuitable(alloc::format!(
             "{who} need continuous observations dy = h dt + dw"
@@ -59,7 +62,7 @@ pub fn continuous_noise_inverse(model: &Model, who: &str) -> Result<DMatrix<f64>
 impl DmzCoefficients {
     /// Evaluates the model at `len` points; `point(i, x)` writes point i into x. Non-finite
     /// values are refused with a message naming `who`.
-    pub fn tabulate(
+    pub(crate) fn tabulate(
         model: &Model,
         who: &str,
         len: usize,
@@ -125,7 +128,7 @@ impl DmzCoefficients {
 }
 
 /// How many patterns of missing components [`PartialIncrements`] keeps (the most recently used).
-pub const PARTIAL_PATTERNS: usize = 8;
+pub(crate) const PARTIAL_PATTERNS: usize = 8;
 
 /// The likelihood terms of an increment of which only some components are observed (the
 /// others NaN): with O the observed components, `dy_O ~ N(h_O Δτ, S_OO Δτ)` given the state,
@@ -134,7 +137,7 @@ pub const PARTIAL_PATTERNS: usize = 8;
 /// correlation of the missing components with the observed ones accounted for by taking the
 /// marginal S_OO (not by dropping rows of S⁻¹).
 #[derive(Clone, Debug)]
-pub struct PartialIncrements {
+pub(crate) struct PartialIncrements {
     noise_cov: DMatrix<f64>,
     /// The patterns met so far, the most recently used first.
     parts: Vec<Pattern>,
@@ -157,7 +160,7 @@ struct Pattern {
 /// `S_OO⁻¹ h_O` and `½ h_Oᵀ S_OO⁻¹ h_O` at every point (see [`PartialIncrements::terms`]; for a
 /// whole increment, `S⁻¹h` and `½ hᵀS⁻¹h`).
 #[derive(Clone, Copy, Debug)]
-pub struct ObservedTerms<'a> {
+pub(crate) struct ObservedTerms<'a> {
     /// `Δy_O`, the observed components in order.
     pub dy: &'a [f64],
     /// `(S_OO⁻¹ h_O)_j` at every point, one row per observed component.
@@ -169,7 +172,7 @@ pub struct ObservedTerms<'a> {
 impl ObservedTerms<'_> {
     /// The factor's exponent at every point, `out_i = Σ_j Δy_j gain_j(x_i) − scale · half(x_i)`
     /// (`scale` is Δτ, or the number of intervals when `half` already holds `½hᵀS⁻¹h T₀`).
-    pub fn exponents(&self, scale: f64, out: &mut [f64]) {
+    pub(crate) fn exponents(&self, scale: f64, out: &mut [f64]) {
         for (a, h) in out.iter_mut().zip(self.half) {
             *a = -scale * h;
         }
@@ -183,7 +186,7 @@ impl ObservedTerms<'_> {
 
 impl PartialIncrements {
     /// For the observation noise covariance S (positive definite).
-    pub fn new(noise_cov: DMatrix<f64>) -> Self {
+    pub(crate) fn new(noise_cov: DMatrix<f64>) -> Self {
         PartialIncrements {
             noise_cov,
             parts: Vec::new(),
@@ -193,7 +196,7 @@ impl PartialIncrements {
 
     /// For `model`'s continuous observations; refuses discrete ones (`who` names the method,
     /// plural, as in [`continuous_noise_inverse`]).
-    pub fn of(model: &Model, who: &str) -> Result<Self, FilterError> {
+    pub(crate) fn of(model: &Model, who: &str) -> Result<Self, FilterError> {
         match &model.observations {
             ObservationModel::Continuous { noise_cov } => Ok(Self::new(noise_cov.clone())),
             ObservationModel::Discrete { .. } => Err(FilterError::Unsuitable(alloc::format!(
@@ -205,7 +208,7 @@ impl PartialIncrements {
     /// The terms for the pattern of missing components (NaN) of `dy`, from `S⁻¹h` at the points
     /// (`s_inv_h[j][i]`, as [`DmzCoefficients`] tabulates it): made the first time the pattern
     /// occurs (h is recovered as `S (S⁻¹h)`), kept among the last [`PARTIAL_PATTERNS`].
-    pub fn terms(
+    pub(crate) fn terms(
         &mut self,
         s_inv_h: &[Vec<f64>],
         dy: &[f64],

@@ -60,19 +60,15 @@ pub struct ExpressionFunction {
 
 /// The value of `text`, an expression in `names` (a scenario's parameters) and constants
 /// alone, e.g. `sqrt(2*q)`; errors carry the position, like any expression's.
-pub fn constant_value(text: &str, names: &[(String, f64)]) -> Result<f64, ExprError> {
+pub(crate) fn constant_value(text: &str, names: &[(String, f64)]) -> Result<f64, ExprError> {
     super::compile::Expression::constant_value(text, names)
 }
 
-/// Reads `text` as [`ExpressionFunction::parse`] reads one component, with `names` (a
-/// scenario's parameters) standing for their values: every mistake, an unknown name among
-/// them, is reported at its position in `text` as written.
-pub fn check_with_names(text: &str, n: usize, names: &[(String, f64)]) -> Result<(), ExprError> {
-    check_in(text, &Variables::state(n), names)
-}
-
-/// [`check_with_names`] in `variables` (the state and, for a log-density, the measurement).
-pub fn check_in(
+/// Reads `text` as [`ExpressionFunction::parse`] reads one component, in `variables` (the state
+/// and, for a log-density, the measurement), with `names` (a scenario's parameters) standing
+/// for their values: every mistake, an unknown name among them, is reported at its position in
+/// `text` as written.
+pub(crate) fn check_in(
     text: &str,
     variables: &Variables,
     names: &[(String, f64)],
@@ -159,9 +155,9 @@ impl ExpressionFunction {
 
 /// Most operations (operators, functions and parentheses) in one component for which exact
 /// symbolic derivatives are computed; larger expressions get numerical derivatives.
-pub const MAX_SYMBOLIC_OPERATIONS: usize = 16;
+pub(crate) const MAX_SYMBOLIC_OPERATIONS: usize = 16;
 /// Deepest parenthesis nesting for which exact symbolic derivatives are computed.
-pub const MAX_SYMBOLIC_DEPTH: usize = 6;
+pub(crate) const MAX_SYMBOLIC_DEPTH: usize = 6;
 
 /// The compiled expression and its symbolic cost: the number of operations (operators,
 /// functions, parentheses), or `usize::MAX` when it nests deeper than [`MAX_SYMBOLIC_DEPTH`].

@@ -37,7 +37,7 @@ pub trait VectorFunction: Send + Sync {
     fn derivatives(&self) -> Derivatives;
 
     /// The text expressions of the components, when the function was given as text (for
-    /// symbolic checks, [`super::symbolic`]).
+    /// symbolic checks, `model::symbolic`).
     fn expressions(&self) -> Option<&[String]> {
         None
     }
@@ -162,7 +162,7 @@ fn central_differences(
 }
 
 /// Central-difference Jacobian of `eval` at `x` (step ∝ ε^(1/3), error O(ε^(2/3))).
-pub fn numerical_jacobian(
+pub(crate) fn numerical_jacobian(
     eval: &dyn Fn(&[f64], &mut [f64]),
     n: usize,
     m: usize,
@@ -177,7 +177,7 @@ pub fn numerical_jacobian(
 }
 
 /// Central-difference Hessian of component `i` built from a Jacobian (step ∝ ε^(1/3)).
-pub fn numerical_hessian(
+pub(crate) fn numerical_hessian(
     jacobian: &dyn Fn(&[f64], &mut [f64]),
     n: usize,
     m: usize,

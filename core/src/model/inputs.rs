@@ -1,34 +1,4 @@
-//! Time and known inputs: a *driven* model
-//!
-//! ```text
-//!     dx = f(x, t, u) dt + G(x, t, u) dv,      y or z observed through h(x, t, u)
-//! ```
-//!
-//! where `u = (u1, …, uk)` is a series known to the filter — an actuator command, a forcing
-//! series — recorded beside the observations. Its functions read the state, then (after the
-//! measurement `z` of a log-density) the time `t` and the inputs, in that order
-//! ([`super::syntax::Variables::driven`]).
-//!
-//! **What a step uses.** The inputs recorded with observation k are those over the interval
-//! `(τ_{k−1}, τ_k]` that ends at it, held constant there (a zero-order hold: the convention
-//! of the increments, whose row k is also the interval's), and at the measurement `z_k`. The
-//! time the dynamics read is held at the interval's midpoint `τ_{k−1} + Δτ/2` (the midpoint
-//! rule, second order in Δτ for a drift smooth in t); a measurement at `τ_k` reads `t = τ_k`.
-//! Each step therefore sees two *frozen* models ([`Model::at`]; `Observation::frozen` gives
-//! the pair): an autonomous model whose functions are the driven ones with `(t, u)` fixed.
-//!
-//! **Which methods.** The EKF, UKF and particle filter take the frozen models step by step;
-//! the continuous–discrete grid filters (Šimandl & Švácha 2005, 001) and the Yau–Yau IEM,
-//! QIEM and QIEM-4 (Yueh, Lin & Yau 2014, 000) tabulate and factorise their operator anew at
-//! every step. Methods whose operator is made once for the whole run refuse a driven model
-//! with that reason (the catalogue's `inputs`): the spectral filter's off-line operator
-//! (Shi, Chen & Yau 2021, 004 Algorithm 1), the superposition technique (000 §2.5), the
-//! direct method's Riccati solution (Shi, Yang & Yau 2018, 002), the Kalman–Bucy and
-//! Gaussian-sum filters' fixed matrices — and the IEKF and IOKF (Kang, Salmon & Yau 2023,
-//! 003), whose second-mode watch carries the model over several intervals at once.
-//!
-//! A step that fails (inputs missing or not finite, a function undefined at them) leaves the
-//! filter's density or moments and estimate as they were.
+//! Time and known inputs: a driven model ([`Inputs`] documents it).
 
 use alloc::sync::Arc;
 use alloc::vec;
@@ -41,7 +11,38 @@ use super::{Model, ObservationModel};
 use crate::error::FilterError;
 
 /// The time and inputs recorded with an observation: `t = τ_k` and the inputs `u` over the
-/// interval `(τ_{k−1}, τ_k]` (see the module doc).
+/// interval `(τ_{k−1}, τ_k]`.
+///
+/// Time and known inputs: a *driven* model
+///
+/// ```text
+///     dx = f(x, t, u) dt + G(x, t, u) dv,      y or z observed through h(x, t, u)
+/// ```
+///
+/// where `u = (u1, …, uk)` is a series known to the filter — an actuator command, a forcing
+/// series — recorded beside the observations. Its functions read the state, then (after the
+/// measurement `z` of a log-density) the time `t` and the inputs `u1..uk`, in that order.
+///
+/// **What a step uses.** The inputs recorded with observation k are those over the interval
+/// `(τ_{k−1}, τ_k]` that ends at it, held constant there (a zero-order hold: the convention
+/// of the increments, whose row k is also the interval's), and at the measurement `z_k`. The
+/// time the dynamics read is held at the interval's midpoint `τ_{k−1} + Δτ/2` (the midpoint
+/// rule, second order in Δτ for a drift smooth in t); a measurement at `τ_k` reads `t = τ_k`.
+/// Each step therefore sees two *frozen* models ([`Model::at`]; `Observation::frozen` gives
+/// the pair): an autonomous model whose functions are the driven ones with `(t, u)` fixed.
+///
+/// **Which methods.** The EKF, UKF and particle filter take the frozen models step by step;
+/// the continuous–discrete grid filters (Šimandl & Švácha 2005, 001) and the Yau–Yau IEM,
+/// QIEM and QIEM-4 (Yueh, Lin & Yau 2014, 000) tabulate and factorise their operator anew at
+/// every step. Methods whose operator is made once for the whole run refuse a driven model
+/// with that reason (the catalogue's `inputs`): the spectral filter's off-line operator
+/// (Shi, Chen & Yau 2021, 004 Algorithm 1), the superposition technique (000 §2.5), the
+/// direct method's Riccati solution (Shi, Yang & Yau 2018, 002), the Kalman–Bucy and
+/// Gaussian-sum filters' fixed matrices — and the IEKF and IOKF (Kang, Salmon & Yau 2023,
+/// 003), whose second-mode watch carries the model over several intervals at once.
+///
+/// A step that fails (inputs missing or not finite, a function undefined at them) leaves the
+/// filter's density or moments and estimate as they were.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs<'a> {
     /// τ_k, the observation's time.

@@ -11,17 +11,17 @@
 //! a function of the state here when a model needs one: [`diffusion`]).
 
 mod compile;
-pub mod diffusion;
-pub mod dmz;
-pub mod expression;
-pub mod function;
-pub mod inputs;
-pub mod measurement;
-pub mod noise;
-pub mod prior;
-pub mod program;
-pub mod symbolic;
-pub mod syntax;
+pub(crate) mod diffusion;
+pub(crate) mod dmz;
+pub(crate) mod expression;
+pub(crate) mod function;
+pub(crate) mod inputs;
+pub(crate) mod measurement;
+pub(crate) mod noise;
+pub(crate) mod prior;
+pub(crate) mod program;
+pub(crate) mod symbolic;
+pub(crate) mod syntax;
 
 use alloc::format;
 use alloc::sync::Arc;
@@ -138,7 +138,7 @@ pub struct Model {
     /// Continuous or discrete observations.
     pub observations: ObservationModel,
     /// `Some(k)` for a driven model: its functions read the state, then the time `t` and k
-    /// known inputs `u1..uk` ([`inputs`]); `None` for an autonomous model.
+    /// known inputs `u1..uk` ([`Inputs`]); `None` for an autonomous model.
     pub inputs: Option<usize>,
 }
 
@@ -172,7 +172,7 @@ impl Model {
         )
     }
 
-    /// A driven model ([`inputs`]): `drift`, `observation` and the functions of `diffusion`
+    /// A driven model ([`Inputs`]): `drift`, `observation` and the functions of `diffusion`
     /// and of the measurement density read the state, then the time `t` and the `inputs`
     /// known inputs `u1..uk` (the drift's n outputs give the state dimension). Each filter
     /// step fixes `(t, u)` from its observation ([`Model::at`]).
@@ -243,7 +243,7 @@ impl Model {
         Self::text_model(drift, observation, noise, None)
     }
 
-    /// A driven model from text ([`inputs`]): expressions in the state, the time `t` and the
+    /// A driven model from text ([`Inputs`]): expressions in the state, the time `t` and the
     /// `inputs` known inputs `u1..uk`, with G = I:
     /// `Model::driven_from_text(&["-x + 2*u1"], &["x"], Noise::discrete(0.1), 1)`.
     pub fn driven_from_text(
@@ -335,7 +335,7 @@ impl Model {
     }
 
     /// The same model with a state-dependent diffusion `G(x)`: `g` maps the n state
-    /// components to the n² entries of G, row-major (see [`diffusion`] for what each method
+    /// components to the n² entries of G, row-major (see [`Diffusion`] for what each method
     /// does with it).
     pub fn with_state_diffusion(self, g: Arc<dyn VectorFunction>) -> Result<Self, ZakaiError> {
         let diffusion = Diffusion::StateDependent(g);
@@ -348,7 +348,7 @@ impl Model {
         ProcessNoise::of(&self.diffusion)
     }
 
-    /// True for a driven model, whose functions read the time and known inputs ([`inputs`]).
+    /// True for a driven model, whose functions read the time and known inputs ([`Inputs`]).
     pub fn is_driven(&self) -> bool {
         self.inputs.is_some()
     }

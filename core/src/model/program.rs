@@ -18,16 +18,16 @@ use alloc::vec::Vec;
 
 /// Points per pass: a register holds one block (2 KiB), so a program's registers stay in the
 /// first-level cache.
-pub const BLOCK: usize = 256;
+pub(crate) const BLOCK: usize = 256;
 
 /// A real function of one real variable.
-pub type UnaryFn = fn(f64) -> f64;
+pub(crate) type UnaryFn = fn(f64) -> f64;
 /// A real function of two real variables.
-pub type BinaryFn = fn(f64, f64) -> f64;
+pub(crate) type BinaryFn = fn(f64, f64) -> f64;
 
 /// Where an instruction reads one of its arguments.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Operand {
+pub(crate) enum Operand {
     /// State component j of the point.
     Var(usize),
     /// A constant.
@@ -38,7 +38,7 @@ pub enum Operand {
 
 /// An elementwise operation.
 #[derive(Clone, Copy, Debug)]
-pub enum Operation {
+pub(crate) enum Operation {
     /// `-a`.
     Neg(Operand),
     /// `f(a)`.
@@ -58,23 +58,8 @@ pub enum Operation {
 }
 
 impl Operation {
-    /// The operation applied to constants (used for constant folding at compile time, so a
-    /// folded constant has the bits the evaluation would have produced).
-    pub fn apply_scalar(&self, a: f64, b: f64) -> f64 {
-        match *self {
-            Operation::Neg(_) => -a,
-            Operation::Unary(f, _) => f(a),
-            Operation::Add(..) => a + b,
-            Operation::Sub(..) => a - b,
-            Operation::Mul(..) => a * b,
-            Operation::Div(..) => a / b,
-            Operation::PowI(_, k) => pow_int(a, k),
-            Operation::Binary(f, ..) => f(a, b),
-        }
-    }
-
     /// The operands read.
-    pub fn operands(&self) -> [Option<Operand>; 2] {
+    pub(crate) fn operands(&self) -> [Option<Operand>; 2] {
         match *self {
             Operation::Neg(a) | Operation::Unary(_, a) | Operation::PowI(a, _) => [Some(a), None],
             Operation::Add(a, b)
@@ -100,11 +85,11 @@ impl Operation {
 }
 
 /// Largest k of `x^k` that [`Operation::PowI`] computes by multiplication.
-pub const MAX_POWI: i32 = 4;
+pub(crate) const MAX_POWI: i32 = 4;
 
 /// `a^k` by repeated multiplication (0 ≤ k ≤ [`MAX_POWI`]).
 #[inline(always)]
-pub fn pow_int(a: f64, k: i32) -> f64 {
+pub(crate) fn pow_int(a: f64, k: i32) -> f64 {
     match k {
         0 => 1.0,
         1 => a,
@@ -127,7 +112,7 @@ struct Instruction {
 /// A compiled scalar function of the state: instructions over registers and the operand that
 /// holds the result.
 #[derive(Clone, Debug)]
-pub struct Program {
+pub(crate) struct Program {
     code: Vec<Instruction>,
     registers: usize,
     result: Operand,
@@ -137,7 +122,7 @@ impl Program {
     /// A program from operations in single assignment form (`ssa[i]` defines value i, read as
     /// `Operand::Reg(i)` by later operations) and the operand holding the result. Registers
     /// are reused once a value has been read for the last time.
-    pub fn from_ssa(ssa: &[Operation], result: Operand) -> Program {
+    pub(crate) fn from_ssa(ssa: &[Operation], result: Operand) -> Program {
         let mut last_use = alloc::vec![usize::MAX; ssa.len()];
         for (i, op) in ssa.iter().enumerate() {
             for r in op.operands().into_iter().flatten() {
@@ -188,22 +173,19 @@ impl Program {
     }
 
     /// Number of registers, each [`BLOCK`] values long during a batch evaluation.
-    pub fn registers(&self) -> usize {
+    pub(crate) fn registers(&self) -> usize {
         self.registers
     }
 
     /// Number of instructions.
-    pub fn len(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
         self.code.len()
     }
 
-    /// True for a constant or a bare variable (no instruction).
-    pub fn is_empty(&self) -> bool {
-        self.code.is_empty()
-    }
-
     /// The constant value, when the program is one.
-    pub fn constant(&self) -> Option<f64> {
+    #[cfg(test)]
+    pub(crate) fn constant(&self) -> Option<f64> {
         match self.result {
             Operand::Const(c) => Some(c),
             _ => None,
@@ -213,7 +195,13 @@ impl Program {
     /// Evaluates at `lanes` points: `inputs[j]` holds component j of every point (at least
     /// `lanes` values each), `registers` at least `self.registers() * lanes` values; the value
     /// at point p is written to `out[p]`.
-    pub fn run(&self, inputs: &[&[f64]], lanes: usize, registers: &mut [f64], out: &mut [f64]) {
+    pub(crate) fn run(
+        &self,
+        inputs: &[&[f64]],
+        lanes: usize,
+        registers: &mut [f64],
+        out: &mut [f64],
+    ) {
         for ins in &self.code {
             let (dst, a, b) = operands(registers, lanes, ins.dst, &ins.operation, inputs);
             apply(&ins.operation, dst, a, b);
@@ -227,7 +215,7 @@ impl Program {
 
     /// The value at one point `x` (inputs and registers on the stack for up to
     /// [`MAX_INPUTS`] components and 32 registers).
-    pub fn eval(&self, x: &[f64]) -> f64 {
+    pub(crate) fn eval(&self, x: &[f64]) -> f64 {
         let mut out = [0.0];
         let mut on_stack = [0.0; 32];
         let mut on_heap = Vec::new();
@@ -253,7 +241,7 @@ impl Program {
 
 /// Most state components whose slices a batch evaluation keeps on the stack (more are
 /// gathered into a vector).
-pub const MAX_INPUTS: usize = 64;
+pub(crate) const MAX_INPUTS: usize = 64;
 
 /// An argument of an elementwise operation: a block of values or a constant.
 #[derive(Clone, Copy)]

@@ -40,9 +40,9 @@ use core::fmt;
 use super::syntax::{Function, Node, Op, Syntax};
 
 /// Most terms a normal form may have; larger expressions are [`Unsupported`].
-pub const MAX_TERMS: usize = 4096;
+pub(crate) const MAX_TERMS: usize = 4096;
 /// Largest integer power of a non-constant expanded.
-pub const MAX_POWER: u32 = 64;
+pub(crate) const MAX_POWER: u32 = 64;
 
 /// Most term-by-term products one multiplication may form.
 const MAX_PRODUCTS: usize = 1 << 18;
@@ -52,7 +52,7 @@ const ROUNDING: f64 = 1e-12;
 
 /// Why an expression has no normal form.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Unsupported(pub String);
+pub(crate) struct Unsupported(pub String);
 
 impl fmt::Display for Unsupported {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -64,7 +64,7 @@ type Sym = Result<Poly, Unsupported>;
 
 /// The elementary functions kept as atoms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Elementary {
+pub(crate) enum Elementary {
     /// sin
     Sin,
     /// cos
@@ -100,7 +100,7 @@ impl Elementary {
     ];
 
     /// The name in expressions.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Elementary::Sin => "sin",
             Elementary::Cos => "cos",
@@ -113,7 +113,7 @@ impl Elementary {
     }
 
     /// Its value at `v`, as the evaluator computes it.
-    pub fn value(self, v: f64) -> f64 {
+    pub(crate) fn value(self, v: f64) -> f64 {
         (Function::named(self.name())
             .expect("a function of the language")
             .apply)(v)
@@ -130,7 +130,7 @@ impl Elementary {
 
 /// A variable `x_i` or an elementary function of a normal form.
 #[derive(Clone, Debug)]
-pub enum Atom {
+pub(crate) enum Atom {
     /// The state variable `x_{i+1}`.
     Var(usize),
     /// `f(u)`, u in normal form and not constant.
@@ -160,7 +160,7 @@ impl PartialEq for Atom {
 impl Eq for Atom {}
 
 /// A product of atoms with positive exponents, sorted by atom, each atom once.
-pub type Monomial = Vec<(Atom, u32)>;
+pub(crate) type Monomial = Vec<(Atom, u32)>;
 
 /// The product of two monomials.
 fn times(a: &[(Atom, u32)], b: &[(Atom, u32)]) -> Monomial {
@@ -201,7 +201,7 @@ fn lowered(m: &[(Atom, u32)], idx: usize, by: u32) -> Monomial {
 
 /// A normal form: terms sorted by monomial, no zero coefficient.
 #[derive(Clone, Debug, Default)]
-pub struct Poly {
+pub(crate) struct Poly {
     terms: Vec<(Monomial, f64)>,
 }
 
@@ -230,12 +230,12 @@ impl Eq for Poly {}
 
 impl Poly {
     /// The constant `c`.
-    pub fn constant(c: f64) -> Poly {
+    pub(crate) fn constant(c: f64) -> Poly {
         Poly::monomial(Vec::new(), c)
     }
 
     /// The state variable `x_{i+1}`.
-    pub fn variable(i: usize) -> Poly {
+    pub(crate) fn variable(i: usize) -> Poly {
         Poly::monomial(vec![(Atom::Var(i), 1)], 1.0)
     }
 
@@ -247,12 +247,12 @@ impl Poly {
     }
 
     /// The terms: each monomial with its coefficient.
-    pub fn terms(&self) -> impl Iterator<Item = (&[(Atom, u32)], f64)> {
+    pub(crate) fn terms(&self) -> impl Iterator<Item = (&[(Atom, u32)], f64)> {
         self.terms.iter().map(|(m, c)| (m.as_slice(), *c))
     }
 
     /// The value when the normal form is a constant.
-    pub fn as_constant(&self) -> Option<f64> {
+    pub(crate) fn as_constant(&self) -> Option<f64> {
         match self.terms.as_slice() {
             [] => Some(0.0),
             [(m, c)] if m.is_empty() => Some(*c),
@@ -261,14 +261,14 @@ impl Poly {
     }
 
     /// True when no function atom is left: the normal form is a polynomial in x.
-    pub fn is_polynomial(&self) -> bool {
+    pub(crate) fn is_polynomial(&self) -> bool {
         self.terms
             .iter()
             .all(|(m, _)| m.iter().all(|(a, _)| matches!(a, Atom::Var(_))))
     }
 
     /// The largest total exponent of a term (0 for constants).
-    pub fn degree(&self) -> u32 {
+    pub(crate) fn degree(&self) -> u32 {
         self.terms
             .iter()
             .map(|(m, _)| m.iter().map(|(_, k)| k).sum())
@@ -278,12 +278,12 @@ impl Poly {
 
     /// `self + other` (sums of normal monomials need no rewriting; the sum can still exceed
     /// [`MAX_TERMS`] or overflow).
-    pub fn add(&self, other: &Poly) -> Sym {
+    pub(crate) fn add(&self, other: &Poly) -> Sym {
         collect(self.terms.iter().chain(&other.terms).cloned(), false)
     }
 
     /// `c · self`.
-    pub fn scale(&self, c: f64) -> Poly {
+    pub(crate) fn scale(&self, c: f64) -> Poly {
         if c == 0.0 {
             return Poly::default();
         }
@@ -293,7 +293,7 @@ impl Poly {
     }
 
     /// `self · other`.
-    pub fn mul(&self, other: &Poly) -> Sym {
+    pub(crate) fn mul(&self, other: &Poly) -> Sym {
         if self.terms.len().saturating_mul(other.terms.len()) > MAX_PRODUCTS {
             return Err(too_large());
         }
@@ -307,7 +307,7 @@ impl Poly {
     }
 
     /// `selfᵏ`.
-    pub fn pow(&self, k: u32) -> Sym {
+    pub(crate) fn pow(&self, k: u32) -> Sym {
         let mut result = Poly::constant(1.0);
         let mut square = self.clone();
         let mut k = k;
@@ -324,7 +324,7 @@ impl Poly {
     }
 
     /// `f(arg)` in normal form.
-    pub fn apply(f: Elementary, arg: Poly) -> Sym {
+    pub(crate) fn apply(f: Elementary, arg: Poly) -> Sym {
         if let Some(c) = arg.as_constant() {
             return finite_constant(f.value(c), f.name());
         }
@@ -351,7 +351,7 @@ impl Poly {
     }
 
     /// `∂/∂x_{i+1}`.
-    pub fn derivative(&self, i: usize) -> Sym {
+    pub(crate) fn derivative(&self, i: usize) -> Sym {
         let mut total = Poly::default();
         for (m, c) in &self.terms {
             for (idx, (atom, k)) in m.iter().enumerate() {
@@ -368,7 +368,7 @@ impl Poly {
 
     /// The normal form written as an expression in the state variables of an `n`-dimensional
     /// model (`x` when n = 1), which [`parse`] reads back to the same normal form.
-    pub fn display(&self, n: usize) -> impl fmt::Display + '_ {
+    pub(crate) fn display(&self, n: usize) -> impl fmt::Display + '_ {
         Shown { poly: self, n }
     }
 }
@@ -491,7 +491,7 @@ fn rewritten(m: &[(Atom, u32)]) -> Result<Option<Vec<(Monomial, f64)>>, Unsuppor
 
 /// The normal form of the text expression `text` in the state variables of an
 /// `n`-dimensional model.
-pub fn parse(text: &str, n: usize) -> Sym {
+pub(crate) fn parse(text: &str, n: usize) -> Sym {
     let syntax = Syntax::parse(text, n).map_err(|e| Unsupported(e.to_string()))?;
     // Children come before their parents: one pass, each child taken by its one parent.
     let mut forms: Vec<Option<Poly>> = Vec::with_capacity(syntax.nodes.len());

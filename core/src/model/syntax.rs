@@ -1,6 +1,6 @@
 //! The one front end of text expressions: a lexer and a parser that read `f` and `h` as typed
 //! into a syntax tree, which compilation (`model::compile`), exact differentiation and
-//! the polynomial normal form ([`super::symbolic`]) all read.
+//! the polynomial normal form (`model::symbolic`) all read.
 //!
 //! Every mistake is reported with the character position a user can fix: a stray character,
 //! unbalanced parentheses, a missing operand or operator, an unknown name, a constant that
@@ -9,7 +9,7 @@
 //! The language, with the usual mathematical conventions:
 //!
 //! * numbers (`2`, `.5`, `2.5e-3`), the constants `pi`/`PI`, `e`/`E`, `TAU`, the state
-//!   variables `x1..xn` (and `x` when n = 1), the functions of [`FUNCTIONS`] applied to a
+//!   variables `x1..xn` (and `x` when n = 1), the functions of `FUNCTIONS` applied to a
 //!   parenthesised argument;
 //! * `+ − * / ^`, with `^` binding tightest and a leading minus looser than `^`: `-x^2` is
 //!   −(x²) and `exp(-(x-1)^2)` is exp(−((x−1)²)); right after `^` a sign belongs to the
@@ -30,7 +30,8 @@ use alloc::vec::Vec;
 
 /// Functions an expression may call. All have exact derivatives except `abs`, `signum`,
 /// `floor`, `ceil`, `round`, `trunc`, `fract`, `cbrt`, `erf`, `erfc` (numerical derivatives).
-pub const FUNCTIONS: &[&str] = &[
+#[cfg(test)]
+pub(crate) const FUNCTIONS: &[&str] = &[
     "abs", "signum", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "asinh",
     "acosh", "atanh", "floor", "round", "ceil", "trunc", "fract", "exp", "sqrt", "cbrt", "ln",
     "log", "log2", "log10", "erf", "erfc",
@@ -55,7 +56,7 @@ fn fract(v: f64) -> f64 {
     v - libm::trunc(v)
 }
 
-/// The functions of [`FUNCTIONS`], by name, every transcendental one computed by the pure-Rust
+/// The functions of `FUNCTIONS`, by name, every transcendental one computed by the pure-Rust
 /// `libm` crate rather than the platform's maths library, so that an expression gives
 /// bit-identical values natively and in wasm (same seed → same trajectory everywhere).
 const FUNCTION_TABLE: &[(&str, RealFn)] = &[
@@ -107,7 +108,8 @@ impl Function {
 }
 
 /// Named constants an expression may use.
-pub const CONSTANTS: &[&str] = &["PI", "pi", "E", "e", "TAU"];
+#[cfg(test)]
+pub(crate) const CONSTANTS: &[&str] = &["PI", "pi", "E", "e", "TAU"];
 
 fn constant(name: &str) -> Option<f64> {
     match name {
@@ -168,10 +170,10 @@ impl Op {
     }
 }
 
-pub use crate::error::ExprError;
+pub(crate) use crate::error::ExprError;
 
 /// The state variable names of an `n`-dimensional model: `x1..xn`, and `x` when `n = 1`.
-pub fn variable_names(n: usize) -> Vec<String> {
+pub(crate) fn variable_names(n: usize) -> Vec<String> {
     let mut names: Vec<String> = (1..=n).map(|i| format!("x{i}")).collect();
     if n == 1 {
         names.push("x".to_string());
@@ -180,7 +182,7 @@ pub fn variable_names(n: usize) -> Vec<String> {
 }
 
 /// Index of the state variable `name` (`x` ↦ 0 when n = 1), if it is one.
-pub fn variable_index(name: &str, n: usize) -> Option<usize> {
+pub(crate) fn variable_index(name: &str, n: usize) -> Option<usize> {
     if n == 1 && name == "x" {
         return Some(0);
     }
@@ -190,7 +192,7 @@ pub fn variable_index(name: &str, n: usize) -> Option<usize> {
 
 /// The variables an expression may read, in the order of its inputs: the state `x1..xn` (`x`
 /// when n = 1), then the measurement `z1..zm` of a log-density `log p(z | x)` (`z` when
-/// m = 1), then, in a driven model ([`crate::model::inputs`]), the time `t` and the known
+/// m = 1), then, in a driven model ([`crate::Inputs`]), the time `t` and the known
 /// inputs `u1..uk`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Variables {
@@ -274,11 +276,11 @@ impl Variables {
 }
 
 /// Longest expression accepted, in characters.
-pub const MAX_EXPRESSION_CHARS: usize = 1000;
+pub(crate) const MAX_EXPRESSION_CHARS: usize = 1000;
 /// Deepest nesting of parentheses and stacked unary signs accepted.
-pub const MAX_NESTING: usize = 32;
+pub(crate) const MAX_NESTING: usize = 32;
 /// Most distinct state variables one expression may use.
-pub const MAX_VARIABLES: usize = 16;
+pub(crate) const MAX_VARIABLES: usize = 16;
 
 /// What a token is.
 #[derive(Clone, Copy, Debug)]
@@ -897,7 +899,7 @@ pub(crate) fn reads_state(text: &str, n: usize) -> bool {
 }
 
 /// Whether `text` reads the time `t` or a known input `u1`, `u2`, … of a driven model
-/// ([`crate::model::inputs`]).
+/// ([`crate::Inputs`]).
 pub(crate) fn reads_drive(text: &str) -> bool {
     free_names(text)
         .iter()

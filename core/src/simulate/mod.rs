@@ -98,7 +98,7 @@ pub fn simulate(
     simulate_driven(model, x0, time, &[], rng)
 }
 
-/// [`simulate`] for a driven model ([`crate::model::inputs`]) with the known `inputs`, k per
+/// [`simulate`] for a driven model ([`crate::Inputs`]) with the known `inputs`, k per
 /// row for the N + 1 times (row k held over `(τ_{k−1}, τ_k]`, row 0 read by the measurement
 /// at τ₀): each Euler–Maruyama step reads the time at its start, each measurement its own
 /// time. An autonomous model takes no inputs.

@@ -118,11 +118,11 @@ fn reference_standard_errors(q: f64, r: f64) -> (f64, f64) {
 #[cfg(not(target_arch = "wasm32"))]
 mod built_in_rust {
     use super::*;
-    use zakai_tests::test;
     use nalgebra::DMatrix;
     use zakai::lab::fit::{FilterLikelihood, LogLikelihood};
     use zakai::lab::scenario::parameters::ParameterConfig;
     use zakai::{Kalman, KalmanBucy, Model, Noise, Observation, Pf};
+    use zakai_tests::test;
 
     /// The Nile's observations as a Rust user holds them: the first at the prior's time (Δτ = 0,
     /// no prediction), then one a year.

@@ -42,7 +42,7 @@ use crate::model::{Model, ObservationModel, Prior};
 /// direct method's MSE against QIEM's 0.181: α = 0.01 (the default) 0.022 → 0.174, α = 0.1
 /// 0.21 → 0.174, α = 0.2 0.36 → 0.178, α = 0.4 0.47 → 0.187; `direct-4.4` (Δt = 10⁻³) 0.020.
 /// Above a quarter the first-order carry starts to cost accuracy.
-pub const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
+pub(crate) const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
 
 /// The direct method of 002 (see the module doc).
 #[derive(Clone, Debug)]
@@ -97,7 +97,7 @@ struct StepWork {
 }
 
 /// The model fits the direct method as 002 writes it: continuous observations, G = I, S = I.
-pub fn check_model(model: &Model) -> Result<(), FilterError> {
+pub(crate) fn check_model(model: &Model) -> Result<(), FilterError> {
     let ObservationModel::Continuous { noise_cov } = &model.observations else {
         return Err(FilterError::Unsuitable(
             "the direct method needs continuous observations dy = h dt + dw".into(),
@@ -155,7 +155,7 @@ fn kolmogorov_quadratic(
 
 /// Whether the direct method applies to `model` on `bounds` with `params` — the model checks
 /// and (C1)–(C3) — without building anything else.
-pub fn check_system(
+pub(crate) fn check_system(
     model: &Model,
     params: &DirectParams,
     bounds: &[(f64, f64)],

@@ -13,7 +13,7 @@ use alloc::vec::Vec;
 
 /// One term `c exp(−(x − μ)²/(2σ²))`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GaussianTerm {
+pub(crate) struct GaussianTerm {
     /// Weight c (the height at the mean; negative for the negative-residual pass).
     pub weight: f64,
     /// Mean μ.
@@ -24,14 +24,16 @@ pub struct GaussianTerm {
 
 impl GaussianTerm {
     /// The term's value at x.
-    pub fn value(&self, x: f64) -> f64 {
+    pub(crate) fn value(&self, x: f64) -> f64 {
         let d = (x - self.mean) / self.sigma;
         self.weight * libm::exp(-0.5 * d * d)
     }
 }
 
 /// The sum of the terms at every grid point.
-pub fn evaluate(terms: &[GaussianTerm], grid: &[f64]) -> Vec<f64> {
+/// (The tests' form of the algorithm; the filter runs [`Decomposition`].)
+#[cfg(test)]
+pub(crate) fn evaluate(terms: &[GaussianTerm], grid: &[f64]) -> Vec<f64> {
     grid.iter()
         .map(|&x| terms.iter().map(|t| t.value(x)).sum())
         .collect()
@@ -181,7 +183,9 @@ fn minimise(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
 }
 
 /// 002 Algorithm 1 on the uniform grid `grid` (ascending) for the values `phi`.
-pub fn gaussian_approximation(
+/// (The tests' form of the algorithm; the filter runs [`Decomposition`].)
+#[cfg(test)]
+pub(crate) fn gaussian_approximation(
     grid: &[f64],
     phi: &[f64],
     alpha: f64,
@@ -191,7 +195,9 @@ pub fn gaussian_approximation(
 }
 
 /// Algorithm 1 with what it leaves: the terms and the residual `phi − Σ terms` on the grid.
-pub fn decompose(
+/// (The tests' form of the algorithm; the filter runs [`Decomposition`].)
+#[cfg(test)]
+pub(crate) fn decompose(
     grid: &[f64],
     phi: &[f64],
     alpha: f64,
@@ -206,7 +212,7 @@ pub fn decompose(
 /// residual in `terms` and `residual` and allocates nothing once its buffers have reached
 /// their working size.
 #[derive(Clone, Debug, Default)]
-pub struct Decomposition {
+pub(crate) struct Decomposition {
     /// The Gaussians found.
     pub terms: Vec<GaussianTerm>,
     /// `phi − Σ terms` on the grid.
@@ -218,7 +224,7 @@ pub struct Decomposition {
 
 impl Decomposition {
     /// Storage for `points` grid values and up to `max_terms` terms.
-    pub fn with_capacity(points: usize, max_terms: usize) -> Self {
+    pub(crate) fn with_capacity(points: usize, max_terms: usize) -> Self {
         Decomposition {
             terms: Vec::with_capacity(max_terms),
             residual: Vec::with_capacity(points),
@@ -229,7 +235,7 @@ impl Decomposition {
     }
 
     /// Algorithm 1 on the uniform grid `grid` (ascending) for the values `phi`.
-    pub fn run(&mut self, grid: &[f64], phi: &[f64], alpha: f64, max_terms: usize) {
+    pub(crate) fn run(&mut self, grid: &[f64], phi: &[f64], alpha: f64, max_terms: usize) {
         let Decomposition {
             terms,
             residual,

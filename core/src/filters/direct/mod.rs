@@ -24,13 +24,13 @@
 //! ```
 
 mod filter;
-pub mod gaussian_approximation;
+pub(crate) mod gaussian_approximation;
 mod method;
 mod params;
-pub mod riccati;
+pub(crate) mod riccati;
 #[cfg(test)]
 mod tests;
 
-pub use filter::{check_model, check_system, DirectFilter, RESIDUAL_SHARE_THRESHOLD};
+pub use filter::DirectFilter;
 pub use method::Direct;
 pub use params::DirectParams;

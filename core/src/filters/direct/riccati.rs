@@ -11,11 +11,15 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::gaussian_approximation::GaussianTerm;
+#[cfg(test)]
 use crate::linalg::symmetrize;
 
-/// `exp(xᵀAx + Bᵀx + C)` with A symmetric.
+/// `exp(xᵀAx + Bᵀx + C)` with A symmetric: the Riccati ODEs (35)–(37) in n dimensions, which
+/// the tests hold to the Kolmogorov equation (32); the filter, 1-D, runs their scalar form
+/// ([`propagate_scalar_term`]).
+#[cfg(test)]
 #[derive(Clone, Debug, PartialEq)]
-pub struct QuadraticExponent {
+pub(crate) struct QuadraticExponent {
     /// A (n × n, symmetric).
     pub a: DMatrix<f64>,
     /// B.
@@ -26,7 +30,7 @@ pub struct QuadraticExponent {
 
 /// The coefficients of (32)–(33): `l(x) = Dx + d`, `q(x) = xᵀQx + pᵀx + r`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct KolmogorovCoefficients {
+pub(crate) struct KolmogorovCoefficients {
     /// D.
     pub d_mat: DMatrix<f64>,
     /// d.
@@ -39,10 +43,11 @@ pub struct KolmogorovCoefficients {
     pub r: f64,
 }
 
+#[cfg(test)]
 impl QuadraticExponent {
     /// A 1-D Gaussian term `|c| exp(−(x − μ)²/(2σ²))` (the sign of c is kept by the caller):
     /// `A = −1/(2σ²)`, `B = μ/σ²`, `C = ln|c| − μ²/(2σ²)`.
-    pub fn from_term(term: &GaussianTerm) -> Self {
+    pub(crate) fn from_term(term: &GaussianTerm) -> Self {
         let [a, b, c] = scalar_exponent(term);
         QuadraticExponent {
             a: DMatrix::from_element(1, 1, a),
@@ -52,7 +57,7 @@ impl QuadraticExponent {
     }
 
     /// The value `exp(xᵀAx + Bᵀx + C)` at x.
-    pub fn value(&self, x: &[f64]) -> f64 {
+    pub(crate) fn value(&self, x: &[f64]) -> f64 {
         let v = DVector::from_column_slice(x);
         libm::exp((v.transpose() * &self.a * &v)[(0, 0)] + self.b.dot(&v) + self.c)
     }
@@ -81,7 +86,7 @@ impl QuadraticExponent {
     /// Integrates (35)–(37) over `dt` in at least `substeps` RK4 steps — more when A is large:
     /// (35) behaves like `dA/dt = 2A²`, whose explicit steps are stable only for
     /// `h · 4‖A‖ ≲ 2.7`, so a narrow Gaussian (‖A‖ = 1/(2σ²)) gets `h ≤ 1/(4‖A‖)`.
-    pub fn propagate(&mut self, k: &KolmogorovCoefficients, dt: f64, substeps: usize) {
+    pub(crate) fn propagate(&mut self, k: &KolmogorovCoefficients, dt: f64, substeps: usize) {
         let steps = steps_for(dt, self.a.amax().max(k.d_mat.amax()), substeps);
         let h = dt / steps as f64;
         if self.a.nrows() == 1 {
@@ -106,7 +111,7 @@ impl QuadraticExponent {
 
 /// `(a, b, c)` with `exp(a x² + b x + c)` the 1-D Gaussian term (the scalar
 /// [`QuadraticExponent::from_term`]).
-pub fn scalar_exponent(term: &GaussianTerm) -> [f64; 3] {
+pub(crate) fn scalar_exponent(term: &GaussianTerm) -> [f64; 3] {
     let s2 = term.sigma * term.sigma;
     [
         -0.5 / s2,
@@ -117,7 +122,7 @@ pub fn scalar_exponent(term: &GaussianTerm) -> [f64; 3] {
 
 /// The 1-D term carried over `dt` by (35)–(37): [`QuadraticExponent::propagate`] on
 /// scalars, without allocating.
-pub fn propagate_scalar_term(
+pub(crate) fn propagate_scalar_term(
     term: &GaussianTerm,
     k: &KolmogorovCoefficients,
     dt: f64,

@@ -10,14 +10,7 @@ use crate::testing::test;
 
 /// Runs Algorithm 1 on `[lo, hi]` with step 0.01; returns the terms and the fit's MSE over
 /// the grid points.
-fn approximate(
-    lo: f64,
-    hi: f64,
-    f: &dyn Fn(f64) -> f64,
-) -> (
-    Vec<GaussianTerm>,
-    f64,
-) {
+fn approximate(lo: f64, hi: f64, f: &dyn Fn(f64) -> f64) -> (Vec<GaussianTerm>, f64) {
     let n = ((hi - lo) / 0.01).round() as usize + 1;
     let grid: Vec<f64> = (0..n).map(|i| lo + i as f64 * 0.01).collect();
     let phi: Vec<f64> = grid.iter().map(|&x| f(x)).collect();
@@ -34,12 +27,7 @@ fn approximate(
 
 /// `(c, μ, σ)` of the paper's table against ours, term by term: c within `dc`, μ within one
 /// grid step, σ within `ds` relative.
-fn compare(
-    ours: &[GaussianTerm],
-    paper: &[(f64, f64, f64)],
-    dc: f64,
-    ds: f64,
-) {
+fn compare(ours: &[GaussianTerm], paper: &[(f64, f64, f64)], dc: f64, ds: f64) {
     for (i, (t, &(c, mu, sigma))) in ours.iter().zip(paper).enumerate() {
         assert!(
             (t.weight - c).abs() <= dc
@@ -216,4 +204,3 @@ mod riccati {
         }
     }
 }
-

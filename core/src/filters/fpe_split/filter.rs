@@ -23,7 +23,7 @@ use crate::model::{MeasurementDensity, Model, ObservationModel, Prior};
 /// any family, the update (6) multiplies it in node by node). Mixed terms of `Q = G Gᵀ`
 /// (which 001 (24) does not have) are checked for diagonal dominance on the grid when the
 /// filter is built (`grid::cross`).
-pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, FilterError> {
+pub(crate) fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, FilterError> {
     let noise = match &model.observations {
         ObservationModel::Discrete { density } => density.clone(),
         ObservationModel::Continuous { .. } => {
@@ -36,7 +36,10 @@ pub fn check_model(name: &str, model: &Model) -> Result<MeasurementDensity, Filt
 }
 
 /// The grid of cells whose centres tile `bounds` (the ends of the box are cell centres).
-pub fn cell_grid(params: &FpeParams, bounds: &[(f64, f64)]) -> Result<TensorGrid, ZakaiError> {
+pub(super) fn cell_grid(
+    params: &FpeParams,
+    bounds: &[(f64, f64)],
+) -> Result<TensorGrid, ZakaiError> {
     let shape = params.shape(bounds.len());
     let cell_bounds: Vec<(f64, f64)> = bounds
         .iter()
@@ -53,7 +56,7 @@ pub fn cell_grid(params: &FpeParams, bounds: &[(f64, f64)]) -> Result<TensorGrid
 /// terms' explicit step; refused where `a` is not finite or its mixed terms cannot be made
 /// positive on these cells (see `CrossDiffusion::diagonal_left`). Checked before a run as well (the method's
 /// suitability), so that such a model is "not applicable" rather than a failed build.
-pub fn diffusion_on(
+pub(super) fn diffusion_on(
     name: &str,
     model: &Model,
     grid: &TensorGrid,
@@ -68,7 +71,7 @@ pub fn diffusion_on(
 }
 
 /// What the filter tabulates from the model on its cells: once for an autonomous model, at
-/// every step for a driven one ([`crate::model::inputs`]: the dynamics at the interval's
+/// every step for a driven one ([`crate::Inputs`]: the dynamics at the interval's
 /// midpoint, the measurement at its end).
 #[derive(Clone, Debug)]
 struct Tabulated {
@@ -134,7 +137,7 @@ pub struct ContinuousDiscreteGrid {
     /// The model on the cells.
     table: Tabulated,
     m: usize,
-    /// A driven model ([`crate::model::inputs`]), tabulated anew at every step.
+    /// A driven model ([`crate::Inputs`]), tabulated anew at every step.
     driven: Option<Model>,
     target_dt: f64,
     /// Δτ, the observation interval the filter is built for.

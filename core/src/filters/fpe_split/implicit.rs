@@ -40,7 +40,7 @@ use super::upwind::UpwindAdvection;
 
 /// Which equation the implicit step discretises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ImplicitPart {
+pub(crate) enum ImplicitPart {
     /// The parabolic part (10): divergence and diffusion (001 (17), (24)).
     Parabolic,
     /// The whole FPE (4): advection by central differences too (the classic FDM).
@@ -49,7 +49,7 @@ pub enum ImplicitPart {
 
 /// The factored implicit step: the tridiagonal systems of each axis, solved in turn.
 #[derive(Clone, Debug)]
-pub struct ImplicitStep {
+pub(crate) struct ImplicitStep {
     axes: Vec<LineSystems>,
 }
 
@@ -57,7 +57,7 @@ impl ImplicitStep {
     /// Assembles and factors the implicit step of `part` for the time step `dt`, with
     /// `diffusion[l][i]` = `a_ll` at cell i; a vanishing pivot (a matrix far from diagonal
     /// dominance) is an error.
-    pub fn new(
+    pub(crate) fn new(
         grid: &TensorGrid,
         advection: &UpwindAdvection,
         divergence: &[f64],
@@ -108,7 +108,7 @@ impl ImplicitStep {
     }
 
     /// Solves the step for the density `u` in place, with `tmp` as scratch.
-    pub fn solve(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+    pub(crate) fn solve(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
         for axis in &self.axes {
             axis.solve(u, tmp);
             core::mem::swap(u, tmp);
@@ -117,7 +117,7 @@ impl ImplicitStep {
 
     /// Solves the transposed step `Πᵀ` in place: the axes' transposed systems in the reverse
     /// order (the adjoint of [`ImplicitStep::solve`], for a smoother).
-    pub fn solve_transposed(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
+    pub(crate) fn solve_transposed(&self, u: &mut Vec<f64>, tmp: &mut Vec<f64>) {
         for axis in self.axes.iter().rev() {
             axis.solve_transposed(u, tmp);
             core::mem::swap(u, tmp);
@@ -125,7 +125,7 @@ impl ImplicitStep {
     }
 
     /// Values the factors store.
-    pub fn values(cells: usize, dims: usize) -> Option<usize> {
+    pub(crate) fn values(cells: usize, dims: usize) -> Option<usize> {
         cells.checked_mul(3 * dims)
     }
 }

@@ -54,12 +54,15 @@
 //! ```
 
 mod filter;
-pub mod implicit;
+pub(crate) mod implicit;
 mod method;
-pub mod numerical_diffusion;
+pub(crate) mod numerical_diffusion;
 mod params;
-pub mod upwind;
+pub(crate) mod upwind;
 
-pub use filter::{check_model, ContinuousDiscreteGrid};
+pub(crate) use filter::check_model;
+pub use filter::ContinuousDiscreteGrid;
 pub use method::{ImplicitFdm, Separation};
-pub use params::{FpeParams, FpeScheme, MAX_SUBSTEPS};
+pub use params::FpeParams;
+pub use params::FpeScheme;
+pub(crate) use params::MAX_SUBSTEPS;

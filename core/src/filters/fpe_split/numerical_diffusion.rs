@@ -36,35 +36,35 @@ use super::FpeScheme;
 
 /// The largest density-weighted ratio of numerical to model diffusion before the self-check
 /// warns (see the module doc).
-pub const NUMERICAL_DIFFUSION_THRESHOLD: f64 = 0.1;
+pub(crate) const NUMERICAL_DIFFUSION_THRESHOLD: f64 = 0.1;
 
 /// The ratio the separation approach's cells chosen from the problem aim for under the
 /// prior: half the threshold, room for a posterior that moves to steeper drift.
-pub const PRIOR_RATIO_TARGET: f64 = 0.5 * NUMERICAL_DIFFUSION_THRESHOLD;
+pub(crate) const PRIOR_RATIO_TARGET: f64 = 0.5 * NUMERICAL_DIFFUSION_THRESHOLD;
 
 /// The FDM's threshold: half the separation approach's. On the double well of the stiff
 /// tests a ratio of 0.071 left the FDM 0.057 sd off (a hundredth of the step: 0.005), while
 /// on the same problems the separation approach was within 0.03 sd at 0.23.
-pub const FDM_NUMERICAL_DIFFUSION_THRESHOLD: f64 = 0.5 * NUMERICAL_DIFFUSION_THRESHOLD;
+pub(crate) const FDM_NUMERICAL_DIFFUSION_THRESHOLD: f64 = 0.5 * NUMERICAL_DIFFUSION_THRESHOLD;
 
 /// The ratio the FDM's steps aim for under the prior: a quarter of its threshold (its steps
 /// are cheap — a tridiagonal solve per grid line — and the density moves on to steeper
 /// drift).
-pub const FDM_PRIOR_RATIO_TARGET: f64 = 0.25 * FDM_NUMERICAL_DIFFUSION_THRESHOLD;
+pub(crate) const FDM_PRIOR_RATIO_TARGET: f64 = 0.25 * FDM_NUMERICAL_DIFFUSION_THRESHOLD;
 
 /// The most FPE steps per observation interval the FDM takes for that target; beyond, it
 /// keeps this many and the self-check reports the ratio.
-pub const FDM_ACCURACY_SUBSTEPS: usize = 10_000;
+pub(crate) const FDM_ACCURACY_SUBSTEPS: usize = 10_000;
 
 /// The self-check's name.
-pub const NUMERICAL_DIFFUSION_CHECK: &str = "numerical diffusion / model diffusion";
+pub(crate) const NUMERICAL_DIFFUSION_CHECK: &str = "numerical diffusion / model diffusion";
 
 /// `max_l Σ_i u_i ν_l(i) / Σ_i u_i ½ a_ll(i)` for the density `u` on `grid` with steps of `dt`:
 /// the scheme's numerical diffusion against the model's along the worst axis, where the
 /// density is — over the axes the model diffuses along (0 for a density at rest; NaN where
 /// the drift or diffusion is not finite there). `diffusion` is the diagonal the implicit step
 /// takes (a_ll less what a correlated Q lends its mixed terms, `grid::cross`).
-pub fn numerical_diffusion_ratio(
+pub(crate) fn numerical_diffusion_ratio(
     scheme: FpeScheme,
     grid: &TensorGrid,
     advection: &UpwindAdvection,
@@ -98,7 +98,7 @@ pub fn numerical_diffusion_ratio(
 }
 
 /// Pushes the concern when the ratio exceeds the threshold, with the parameter that lowers it.
-pub fn check(scheme: FpeScheme, ratio: f64, out: &mut alloc::vec::Vec<Concern>) {
+pub(crate) fn check(scheme: FpeScheme, ratio: f64, out: &mut alloc::vec::Vec<Concern>) {
     let threshold = match scheme {
         FpeScheme::Separation => NUMERICAL_DIFFUSION_THRESHOLD,
         FpeScheme::ImplicitFdm => FDM_NUMERICAL_DIFFUSION_THRESHOLD,

@@ -10,11 +10,11 @@ use super::implicit::ImplicitStep;
 use crate::filters::{count_problem, per_dimension, product};
 
 /// Largest number of FPE steps per observation interval the automatic sub-stepping may take.
-pub const MAX_SUBSTEPS: usize = 1_000_000;
+pub(crate) const MAX_SUBSTEPS: usize = 1_000_000;
 
 /// Cells per dimension of a grid whose size is neither given nor chosen from the problem
 /// (2-D and 3-D; 001 §4's 1-D count).
-pub const DEFAULT_CELLS: usize = 200;
+pub(super) const DEFAULT_CELLS: usize = 200;
 
 /// Which numerical scheme solves the FPE between measurements.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -18,13 +18,13 @@ use crate::model::VectorFunction;
 
 /// The drift at the cell centres, per dimension.
 #[derive(Clone, Debug)]
-pub struct UpwindAdvection {
+pub(crate) struct UpwindAdvection {
     velocity: Vec<Vec<f64>>,
 }
 
 impl UpwindAdvection {
     /// Tabulates `f` at the centres of `grid`.
-    pub fn new(grid: &TensorGrid, drift: &dyn VectorFunction) -> Self {
+    pub(crate) fn new(grid: &TensorGrid, drift: &dyn VectorFunction) -> Self {
         let n = grid.dim();
         let mut velocity = alloc::vec![Vec::with_capacity(grid.len()); n];
         let mut fx = alloc::vec![0.0; n];
@@ -38,13 +38,13 @@ impl UpwindAdvection {
     }
 
     /// `f_l` at every centre.
-    pub fn velocity(&self, l: usize) -> &[f64] {
+    pub(crate) fn velocity(&self, l: usize) -> &[f64] {
         &self.velocity[l]
     }
 
     /// The CFL number per unit Δt, `max_i Σ_l |f_l(x[i])| / Δx_l`, and the cell where it is
     /// largest: (23) holds for `Δt ≤ 1 / rate`.
-    pub fn courant_rate(&self, grid: &TensorGrid) -> (f64, usize) {
+    pub(crate) fn courant_rate(&self, grid: &TensorGrid) -> (f64, usize) {
         let mut worst = (0.0, 0);
         for idx in 0..grid.len() {
             let rate: f64 = self
@@ -67,7 +67,7 @@ impl UpwindAdvection {
     /// `f⁻ = max(−f, 0)`): each term is applied to a whole block of lines at once, a
     /// contiguous run of memory without a branch (the first and last cells of a line have no
     /// neighbour outside the grid, whose density is zero).
-    pub fn step(&self, grid: &TensorGrid, dt: f64, p: &[f64], out: &mut [f64]) {
+    pub(crate) fn step(&self, grid: &TensorGrid, dt: f64, p: &[f64], out: &mut [f64]) {
         out.copy_from_slice(p);
         for (l, velocity) in self.velocity.iter().enumerate() {
             let (stride, cells) = (grid.stride(l), grid.shape()[l]);
@@ -109,7 +109,7 @@ impl UpwindAdvection {
     /// `(1 − Σ_l λ_l |f_l(i)|) P[i] + Σ_l λ_l (f_l⁺(i) P[i_l − 1] + f_l⁻(i) P[i_l + 1])` with
     /// `λ_l = Δt/Δx_l`, `f⁺ = max(f, 0)`, `f⁻ = max(−f, 0)`; so
     /// `(Tᵀ r)[j] = (1 − Σ_l λ_l |f_l(j)|) r[j] + Σ_l λ_l (f_l⁺(j_l + 1) r[j_l + 1] + f_l⁻(j_l − 1) r[j_l − 1])`.
-    pub fn step_transposed(&self, grid: &TensorGrid, dt: f64, r: &[f64], out: &mut [f64]) {
+    pub(crate) fn step_transposed(&self, grid: &TensorGrid, dt: f64, r: &[f64], out: &mut [f64]) {
         out.copy_from_slice(r);
         for (l, velocity) in self.velocity.iter().enumerate() {
             let (stride, cells) = (grid.stride(l), grid.shape()[l]);

@@ -77,7 +77,7 @@ impl Component {
 
 /// A model the Gaussian-sum filter fits: `dx = (A x + b) dt + G dw`, `z = C x + c + v`.
 #[derive(Clone, Debug)]
-pub struct LinearMixtureModel<'p> {
+pub(crate) struct LinearMixtureModel<'p> {
     a: DMatrix<f64>,
     b: DVector<f64>,
     c: DMatrix<f64>,
@@ -88,7 +88,7 @@ pub struct LinearMixtureModel<'p> {
 
 /// The model's affine parts, noise and prior mixture when the filter fits it (linear,
 /// discrete measurements, Gaussian-mixture prior), or why it does not fit.
-pub fn check_model<'p>(
+pub(crate) fn check_model<'p>(
     model: &Model,
     prior: &'p Prior,
     probes: &[Vec<f64>],

@@ -35,6 +35,7 @@ mod filter;
 mod method;
 mod params;
 
-pub use filter::{check_model, GaussianSumFilter, LinearMixtureModel, Reduction};
+pub use filter::GaussianSumFilter;
+pub(crate) use filter::{check_model, Reduction};
 pub use method::GaussianSum;
 pub use params::GaussianSumParams;

@@ -24,7 +24,7 @@ pub struct ExtendedKalman {
 
 impl ExtendedKalman {
     /// Builds the filter from the model and the prior's moments; fails for measurements
-    /// without the two moments its update needs ([`MeasurementForm::new`]).
+    /// without the two moments its update needs (`MeasurementForm::new`).
     pub fn new(
         name: String,
         model: &Model,

@@ -36,7 +36,7 @@ fn jacobian_at(g: &dyn VectorFunction, x: &[f64]) -> DMatrix<f64> {
 
 /// `(J, g(0))` of an affine `g`, or an error (for `method`) naming the first probe where `J`
 /// differs.
-pub fn affine_parts(
+pub(crate) fn affine_parts(
     g: &dyn VectorFunction,
     method: &str,
     what: &str,
@@ -58,7 +58,7 @@ pub fn affine_parts(
 }
 
 /// Exact discretisation of `dx = (A x + b) dt + G dv` over `dt`: `(Φ, Γ b, Q_d)`.
-pub fn discretize(
+pub(crate) fn discretize(
     a: &DMatrix<f64>,
     b: &DVector<f64>,
     q: &DMatrix<f64>,

@@ -43,7 +43,7 @@ use crate::model::{Model, Prior};
 /// `cos-x4` 0.056 / 0.12, `yau-2d` and `sa-example-2` at rounding; `direct-4.3` (Δτ = 0.1)
 /// IOKF 0.006, IEKF 0.05–0.09 in three runs, 0.89 in one and 3.19 in the run where it loses
 /// the state (MSE 38 against 0.13–0.22).
-pub const MAP_UNCONVERGED_THRESHOLD: f64 = 1.0;
+pub(crate) const MAP_UNCONVERGED_THRESHOLD: f64 = 1.0;
 
 /// The MAP filters' self-check threshold on `√((x_MAP − m)ᵀ P⁻¹ (x_MAP − m))`, the distance
 /// of one update's MAP point from the predicted mean in predicted standard deviations: an
@@ -51,7 +51,7 @@ pub const MAP_UNCONVERGED_THRESHOLD: f64 = 1.0;
 /// the posterior. Largest per run, seeds 1–5, IEKF and IOKF alike: `yau-2d` 0.35–0.53,
 /// `cos-x2` 0.44–0.71, `bearings-only` 1.09–1.39, `sa-example-1` 1.37–1.80, `cubic-sensor-1d`
 /// 0.65–2.06, `direct-4.3` (Δτ = 0.1, where the EKF family loses the state) 2.54–3.26.
-pub const MAP_JUMP_THRESHOLD: f64 = 3.0;
+pub(crate) const MAP_JUMP_THRESHOLD: f64 = 3.0;
 
 /// A Gaussian filter whose update is the MAP point of 003 §4 (IEKF or IOKF).
 #[derive(Clone, Debug)]
@@ -72,7 +72,7 @@ pub struct MapKalman {
 
 impl MapKalman {
     /// Builds the filter from the model and the prior's moments; fails for measurements
-    /// without the two moments its update needs ([`MeasurementForm::new`]).
+    /// without the two moments its update needs (`MeasurementForm::new`).
     pub fn new(
         name: String,
         model: &Model,

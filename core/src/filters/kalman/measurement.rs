@@ -26,7 +26,7 @@ use crate::model::{MeasurementDensity, Model, ObservationModel};
 /// The measurement equation `z = scale · h(x) + offset + noise(R)` for one observation, and
 /// the storage of the current one (written by [`MeasurementForm::at`] without allocating).
 #[derive(Clone, Debug)]
-pub struct MeasurementForm {
+pub(crate) struct MeasurementForm {
     /// Said when the measurement density is not additive Gaussian noise.
     approximation: Option<alloc::string::String>,
     continuous: bool,
@@ -37,7 +37,7 @@ pub struct MeasurementForm {
 
 /// The measurement equation for one observation.
 #[derive(Clone, Debug)]
-pub struct Measurement {
+pub(crate) struct Measurement {
     /// Whether this is an increment of a continuous observation.
     pub continuous: bool,
     /// Multiplies h (Δτ for increments, 1 for measurements).
@@ -61,7 +61,7 @@ pub struct Measurement {
 impl MeasurementForm {
     /// From the model's observation noise (`name` is the filter's); fails for a measurement
     /// density without the two moments the update needs.
-    pub fn new(name: &str, model: &Model) -> Result<Self, FilterError> {
+    pub(crate) fn new(name: &str, model: &Model) -> Result<Self, FilterError> {
         let m = model.m;
         let mut state_noise = None;
         let (continuous, offset, noise_cov) = match &model.observations {
@@ -110,7 +110,7 @@ impl MeasurementForm {
 
     /// What the filter should say about its measurement update before the first step: that
     /// it is a moment match, when the measurements are not additive Gaussian noise.
-    pub fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
+    pub(crate) fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
         self.approximation.iter().cloned().collect()
     }
 
@@ -118,7 +118,7 @@ impl MeasurementForm {
     /// bad (see [`Observation::check`]); `None` when nothing was observed (a prediction only).
     /// Its R is the one to use once [`Measurement::noise_at`] has evaluated it at the
     /// predicted mean (a no-op when R does not depend on the state).
-    pub fn at(
+    pub(crate) fn at(
         &mut self,
         name: &str,
         obs: &Observation,
@@ -166,7 +166,7 @@ impl MeasurementForm {
 impl Measurement {
     /// Sets R to `diag Var[z_j | x]` at `x` (the predicted mean) when it depends on the
     /// state (Poisson counts, a variance s(x)); fails where a variance is not positive.
-    pub fn noise_at(&mut self, model: &Model, x: &[f64]) -> Result<(), FilterError> {
+    pub(crate) fn noise_at(&mut self, model: &Model, x: &[f64]) -> Result<(), FilterError> {
         let Some(density) = &self.state_noise else {
             return Ok(());
         };
@@ -181,31 +181,18 @@ impl Measurement {
         Ok(())
     }
 
-    /// `scale · h(x)` (the offset is already taken out of `value`; 0 in missing rows).
-    pub fn predict(&self, model: &Model, x: &[f64]) -> DVector<f64> {
-        let mut out = DVector::zeros(model.m);
-        self.predict_into(model, x, out.as_mut_slice());
-        out
-    }
-
-    /// [`Measurement::predict`] into `out` (length m).
-    pub fn predict_into(&self, model: &Model, x: &[f64], out: &mut [f64]) {
+    /// `scale · h(x)` into `out` (length m; the offset is already taken out of `value`; 0 in
+    /// missing rows).
+    pub(crate) fn predict_into(&self, model: &Model, x: &[f64], out: &mut [f64]) {
         model.observation.eval(x, out);
         for (v, seen) in out.iter_mut().zip(&self.observed) {
             *v = if *seen { *v * self.scale } else { 0.0 };
         }
     }
 
-    /// `scale · ∂h/∂x` at x (m × n; 0 in missing rows).
-    pub fn jacobian(&self, model: &Model, x: &[f64]) -> DMatrix<f64> {
-        let mut out = DMatrix::zeros(model.m, model.n);
-        let mut rows = alloc::vec![0.0; model.m * model.n];
-        self.jacobian_into(model, x, &mut rows, &mut out);
-        out
-    }
-
-    /// [`Measurement::jacobian`] into `out` (m × n), through `rows` (m·n, row-major).
-    pub fn jacobian_into(
+    /// `scale · ∂h/∂x` at x into `out` (m × n; 0 in missing rows), through `rows` (m·n,
+    /// row-major).
+    pub(crate) fn jacobian_into(
         &self,
         model: &Model,
         x: &[f64],

@@ -4,24 +4,29 @@
 //! `N(m, P)`, the observation-as-measurement form of [`measurement`], and the
 //! continuous-time propagation of [`propagate`].
 
-pub mod ekf;
-pub mod linear;
-pub mod map;
-pub mod map_point;
-pub mod measurement;
+pub(crate) mod ekf;
+pub(crate) mod linear;
+pub(crate) mod map;
+pub(crate) mod map_point;
+pub(crate) mod measurement;
 mod method;
 mod params;
-pub mod propagate;
-pub mod second_mode;
+pub(crate) mod propagate;
+pub(crate) mod second_mode;
 pub(crate) mod smoother;
-pub mod ukf;
+pub(crate) mod ukf;
 
 pub use ekf::ExtendedKalman;
 pub use linear::KalmanBucy;
 pub use map::MapKalman;
 pub use map_point::MapSolver;
 pub use method::{Ekf, Iekf, Iokf, Kalman, Ukf};
-pub use params::{EkfParams, IekfParams, IokfParams, KalmanParams, UkfParams, MAX_SUBSTEPS};
+pub use params::EkfParams;
+pub use params::IekfParams;
+pub use params::IokfParams;
+pub use params::KalmanParams;
+pub use params::UkfParams;
+pub(crate) use params::MAX_SUBSTEPS;
 pub use ukf::UnscentedKalman;
 
 use alloc::vec::Vec;
@@ -63,7 +68,7 @@ pub(crate) fn approximations(
 }
 
 /// Updates over which the innovation self-check averages the normalised innovation squared.
-pub const NIS_WINDOW: usize = 50;
+pub(crate) const NIS_WINDOW: usize = 50;
 
 /// The innovation self-check's band: the mean per observed component of the last
 /// [`NIS_WINDOW`] NIS values `νᵀ P_zz⁻¹ ν` of a consistent filter is χ²(k)/k-distributed, with
@@ -71,7 +76,7 @@ pub const NIS_WINDOW: usize = 50;
 /// two-sided 1 − 10⁻⁵ interval (Wilson–Hilferty, z = 4.4), so a well-specified Kalman filter
 /// warns on a window about once in 10⁵. Outside it, the filter's covariance does not describe
 /// its errors (too small above the band — the usual way an EKF loses track —, too large below).
-pub fn nis_band(k: usize) -> (f64, f64) {
+pub(crate) fn nis_band(k: usize) -> (f64, f64) {
     let k = k as f64;
     let (a, b) = (1.0 - 2.0 / (9.0 * k), 4.4 * libm::sqrt(2.0 / (9.0 * k)));
     let cube = |x: f64| x * x * x;
@@ -81,7 +86,7 @@ pub fn nis_band(k: usize) -> (f64, f64) {
 /// The last [`NIS_WINDOW`] normalised innovations squared with the number of components
 /// each had observed, in a ring (no allocation).
 #[derive(Clone, Debug)]
-pub struct InnovationWindow {
+pub(crate) struct InnovationWindow {
     values: [f64; NIS_WINDOW],
     components: [usize; NIS_WINDOW],
     count: usize,
@@ -100,7 +105,7 @@ impl Default for InnovationWindow {
 
 impl InnovationWindow {
     /// An empty window.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         InnovationWindow {
             values: [0.0; NIS_WINDOW],
             components: [0; NIS_WINDOW],
@@ -111,7 +116,7 @@ impl InnovationWindow {
     }
 
     /// Records one normalised innovation squared of an update that observed `components`.
-    pub fn push(&mut self, nis: f64, components: usize) {
+    pub(crate) fn push(&mut self, nis: f64, components: usize) {
         let slot = self.count % NIS_WINDOW;
         let old = core::mem::replace(&mut self.values[slot], nis);
         let old_components = core::mem::replace(&mut self.components[slot], components);
@@ -126,14 +131,14 @@ impl InnovationWindow {
 
     /// The mean NIS per observed component over the last window, once it is full, with the
     /// number of components observed over it.
-    pub fn mean(&self) -> Option<(f64, usize)> {
+    pub(crate) fn mean(&self) -> Option<(f64, usize)> {
         (self.count >= NIS_WINDOW && self.observed > 0)
             .then(|| (self.sum / self.observed as f64, self.observed))
     }
 
     /// The innovation self-check: a [`crate::filters::Concern`] when the window's mean is
     /// outside [`nis_band`].
-    pub fn check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
+    pub(crate) fn check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {
         let Some((mean, observed)) = self.mean() else {
             return;
         };
@@ -160,7 +165,7 @@ impl InnovationWindow {
 /// The Gaussian state `N(m, P)` of the Kalman family, with the storage its steps work in
 /// (made once: a step allocates nothing).
 #[derive(Clone, Debug)]
-pub struct GaussianState {
+pub(crate) struct GaussianState {
     /// Mean m.
     pub mean: DVector<f64>,
     /// Covariance P.
@@ -182,7 +187,7 @@ pub struct GaussianState {
 /// The residual `r = z − ẑ` (m), the cross covariance `P_xz` (n × m) and the innovation
 /// covariance `P_zz` (m × m) of one update.
 #[derive(Clone, Debug)]
-pub struct UpdateParts {
+pub(crate) struct UpdateParts {
     /// r.
     pub residual: DVector<f64>,
     /// P_xz.
@@ -210,7 +215,7 @@ struct UpdateWork {
 impl GaussianState {
     /// From the prior moments, overridden by `init` where it says so, for `m` observation
     /// components.
-    pub fn initial(
+    pub(crate) fn initial(
         prior_mean: DVector<f64>,
         prior_cov: DMatrix<f64>,
         init: &GaussianInit,
@@ -262,7 +267,7 @@ impl GaussianState {
     /// Keeps the mean, covariance, innovation window and log-likelihood (no allocation), so
     /// that [`GaussianState::restore`] can undo a step that fails; the step to come starts
     /// with a log-likelihood of 0 (nothing observed yet).
-    pub fn save(&mut self) {
+    pub(crate) fn save(&mut self) {
         self.saved.0.copy_from(&self.mean);
         self.saved.1.copy_from(&self.cov);
         self.saved.2.clone_from(&self.innovations);
@@ -271,7 +276,7 @@ impl GaussianState {
     }
 
     /// Back to the state of the last [`GaussianState::save`].
-    pub fn restore(&mut self) {
+    pub(crate) fn restore(&mut self) {
         self.mean.copy_from(&self.saved.0);
         self.cov.copy_from(&self.saved.1);
         self.innovations.clone_from(&self.saved.2);
@@ -280,7 +285,7 @@ impl GaussianState {
 
     /// Runs `step` on the state; when it fails, the state is restored to what it was before
     /// (the [`crate::filters::Filter`] contract).
-    pub fn transaction<T>(
+    pub(crate) fn transaction<T>(
         &mut self,
         step: impl FnOnce(&mut Self) -> Result<T, FilterError>,
     ) -> Result<T, FilterError> {
@@ -295,7 +300,7 @@ impl GaussianState {
     /// The linear(ised) update from [`GaussianState::parts`] (residual `r = z − ẑ`, `P_xz`,
     /// `P_zz`) of the measurement `meas`: gain `K = P_xz P_zz⁻¹`, `m += K r`,
     /// `P −= K P_zz Kᵀ = P_xz Kᵀ`; the log-likelihood from the innovation's density.
-    pub fn update(&mut self, meas: &measurement::Measurement) -> Result<(), FilterError> {
+    pub(crate) fn update(&mut self, meas: &measurement::Measurement) -> Result<(), FilterError> {
         let nis = self.gain()?;
         self.innovations.push(nis, self.parts.observed);
         let log_density = self.innovation_log_density(nis);
@@ -309,7 +314,7 @@ impl GaussianState {
     /// `r ~ N(0, P_zz)`, `−½ rᵀP_zz⁻¹r − ½ ln det P_zz` (without the constant `−(m/2) ln 2π`),
     /// from the Cholesky factor of `P_zz` that the gain left — the weight of one observation in
     /// a comparison of Gaussian hypotheses, as in the Gaussian-sum filter.
-    pub fn innovation_log_density(&self, nis: f64) -> f64 {
+    pub(crate) fn innovation_log_density(&self, nis: f64) -> f64 {
         let factor = &self.work.factor;
         -0.5 * nis
             - (0..factor.nrows())
@@ -324,7 +329,7 @@ impl GaussianState {
     /// that it estimates the Kallianpur–Striebel normaliser of the interval
     /// `E[exp(ΔyᵀS⁻¹h − ½hᵀS⁻¹h Δτ)]`. Missing components add nothing (their rows of P_zz and
     /// R are identity rows, their values 0).
-    pub fn record_log_likelihood(
+    pub(crate) fn record_log_likelihood(
         &mut self,
         log_density: f64,
         meas: &measurement::Measurement,
@@ -356,7 +361,7 @@ impl GaussianState {
     /// The gain of the update in [`GaussianState::parts`]: `Kᵀ = P_zz⁻¹ P_xzᵀ` into the
     /// state's storage; returns the normalised
     /// innovation squared `rᵀ P_zz⁻¹ r`.
-    pub fn gain(&mut self) -> Result<f64, FilterError> {
+    pub(crate) fn gain(&mut self) -> Result<f64, FilterError> {
         let UpdateParts {
             residual, pxz, pzz, ..
         } = &self.parts;
@@ -372,7 +377,7 @@ impl GaussianState {
     }
 
     /// `P −= P_xz Kᵀ` with the gain of the last [`GaussianState::gain`], kept symmetric.
-    pub fn downdate_covariance(&mut self) -> Result<(), FilterError> {
+    pub(crate) fn downdate_covariance(&mut self) -> Result<(), FilterError> {
         self.cov.gemm(-1.0, &self.parts.pxz, &self.work.gain_t, 1.0);
         symmetrize(&mut self.cov);
         self.check()
@@ -381,7 +386,7 @@ impl GaussianState {
     /// Writes into [`GaussianState::parts`] the update with h linearised at `at` (the mean
     /// when `None`): `H = scale · ∂h/∂x`, `r = z − scale · h`, `P_xz = P Hᵀ`,
     /// `P_zz = H P Hᵀ + R`.
-    pub fn linearize(
+    pub(crate) fn linearize(
         &mut self,
         model: &crate::model::Model,
         meas: &measurement::Measurement,
@@ -406,7 +411,7 @@ impl GaussianState {
 
     /// The Kalman update with h linearised at the current mean (KF, EKF):
     /// [`GaussianState::linearize`] then [`GaussianState::update`].
-    pub fn linearized_update(
+    pub(crate) fn linearized_update(
         &mut self,
         model: &crate::model::Model,
         meas: &measurement::Measurement,
@@ -417,7 +422,7 @@ impl GaussianState {
 
     /// The EKF prediction over `dt`: the linearised moment equations (Jazwinski) in
     /// `substeps` RK4 steps.
-    pub fn predict_linearized(
+    pub(crate) fn predict_linearized(
         &mut self,
         model: &crate::model::Model,
         q: &crate::model::ProcessNoise,
@@ -432,7 +437,7 @@ impl GaussianState {
 
     /// Integrates moment equations given by `rates` over `dt` in `substeps` RK4 steps (see
     /// [`propagate::rk4_moments`]), in the state's own storage.
-    pub fn predict_with(
+    pub(crate) fn predict_with(
         &mut self,
         dt: f64,
         substeps: usize,
@@ -458,7 +463,7 @@ impl GaussianState {
     /// errors), then the linearised prediction over `obs.dt` and R at the predicted mean;
     /// `None` when there is nothing to assimilate (a prediction only, or the zero increment at
     /// τ₀).
-    pub fn predict_then_measure<'f>(
+    pub(crate) fn predict_then_measure<'f>(
         &mut self,
         name: &str,
         step: &StepModels<'_>,
@@ -480,7 +485,7 @@ impl GaussianState {
     }
 
     /// Mean and covariance as an [`Estimate`](crate::filters::Estimate).
-    pub fn estimate(&self) -> crate::filters::Estimate {
+    pub(crate) fn estimate(&self) -> crate::filters::Estimate {
         crate::filters::Estimate {
             mean: self.mean.clone(),
             covariance: Some(self.cov.clone()),
@@ -490,7 +495,11 @@ impl GaussianState {
 
     /// [`GaussianState::estimate`] into `out`, reusing its storage, with `map` as its MAP
     /// point.
-    pub fn estimate_into(&self, out: &mut crate::filters::Estimate, map: Option<&DVector<f64>>) {
+    pub(crate) fn estimate_into(
+        &self,
+        out: &mut crate::filters::Estimate,
+        map: Option<&DVector<f64>>,
+    ) {
         crate::filters::copy_vector(&mut out.mean, &self.mean);
         crate::filters::copy_matrix(&mut out.covariance, &self.cov);
         crate::filters::copy_optional_vector(&mut out.map, map);
@@ -498,19 +507,19 @@ impl GaussianState {
 
     /// Tracks the transition of every prediction from now on ([`propagate::Sensitivity`]),
     /// for an RTS smoother.
-    pub fn track_transitions(&mut self) {
+    pub(crate) fn track_transitions(&mut self) {
         self.moments.sensitivity = Some(propagate::Sensitivity::new(self.mean.len()));
     }
 
     /// The tracked transition, when [`GaussianState::track_transitions`] was called.
-    pub fn transition(&self) -> Option<&propagate::Sensitivity> {
+    pub(crate) fn transition(&self) -> Option<&propagate::Sensitivity> {
         self.moments.sensitivity.as_ref()
     }
 
     /// After a prediction made without the moment equations (the Kalman–Bucy filter's exact
     /// one, with transition matrix `phi`): Φ ← phi Φ and the predicted moments, when the
     /// transitions are tracked (nothing is done, nor allocated, otherwise).
-    pub fn record_prediction(&mut self, phi: &DMatrix<f64>) {
+    pub(crate) fn record_prediction(&mut self, phi: &DMatrix<f64>) {
         if let Some(s) = self.moments.sensitivity.as_mut() {
             s.phi = phi * &s.phi;
             s.predicted.0.copy_from(&self.mean);
@@ -520,21 +529,21 @@ impl GaussianState {
 
     /// A step begins, when the transitions are tracked: Φ = I, and the prediction is the
     /// current (m, P) until one is made ([`propagate::Sensitivity::begin`]).
-    pub fn begin_tracked_step(&mut self) {
+    pub(crate) fn begin_tracked_step(&mut self) {
         if let Some(s) = self.moments.sensitivity.as_mut() {
             s.begin(&self.mean, &self.cov);
         }
     }
 
     /// Fails when m or P is non-finite.
-    pub fn check(&self) -> Result<(), FilterError> {
+    pub(crate) fn check(&self) -> Result<(), FilterError> {
         check_finite_vector(&self.mean, "mean")?;
         check_finite_matrix(&self.cov, "covariance")
     }
 }
 
 /// Validates a [`GaussianInit`] against the state dimension, appending problems.
-pub fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::ConfigProblem> {
+pub(crate) fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::ConfigProblem> {
     use crate::validate::{check_spd, check_vector, ConfigProblem};
     let mut problems = Vec::new();
     if let Some(m) = &init.mean {
@@ -556,9 +565,9 @@ pub fn validate_init(init: &GaussianInit, n: usize) -> Vec<crate::validate::Conf
 
 /// The models one step of a Gaussian filter uses: the dynamics' (with its process noise Q)
 /// over the interval and the measurement's at its end — the filter's own model for both, or,
-/// for a driven model, those frozen for the step ([`crate::model::inputs`]).
+/// for a driven model, those frozen for the step ([`crate::Inputs`]).
 #[derive(Debug)]
-pub struct StepModels<'a> {
+pub(crate) struct StepModels<'a> {
     /// The model over the interval.
     pub dynamics: &'a crate::model::Model,
     /// Its process noise Q.

@@ -8,7 +8,7 @@ use super::GaussianInit;
 use crate::filters::params::{parameters, Declared};
 
 /// Most RK4 substeps per interval (the convergence check doubles up to it).
-pub const MAX_SUBSTEPS: usize = 4096;
+pub(crate) const MAX_SUBSTEPS: usize = 4096;
 
 parameters! {
     /// Parameters of the Kalman–Bucy filter ([`KalmanBucy`](super::KalmanBucy)).

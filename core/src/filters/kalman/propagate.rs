@@ -15,7 +15,7 @@ use crate::model::Model;
 
 /// Storage of one RK4 step of the moment equations for an n-dimensional state.
 #[derive(Clone, Debug)]
-pub struct MomentWork {
+pub(crate) struct MomentWork {
     /// The four stages' rates of m and of P.
     km: [DVector<f64>; 4],
     kp: [DMatrix<f64>; 4],
@@ -32,9 +32,9 @@ pub struct MomentWork {
 /// `dΦ/dt = A(t) Φ` with `A` the drift's linearisation the rates leave in their `jacobian`
 /// storage (∂f/∂x at the mean for the EKF, the statistical linearisation for the UKF), and the
 /// predicted moments of the last prediction: what an RTS smoother needs of a step
-/// ([`crate::filters::smoothing`] (S1)).
+/// ([`crate::Smoother`] (S1)).
 #[derive(Clone, Debug)]
-pub struct Sensitivity {
+pub(crate) struct Sensitivity {
     /// Φ since the step began ([`Sensitivity::begin`]).
     pub phi: DMatrix<f64>,
     /// The predicted mean and covariance (the moments the step started from until it
@@ -47,7 +47,7 @@ pub struct Sensitivity {
 
 impl Sensitivity {
     /// Storage for an `n`-dimensional state.
-    pub fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         Sensitivity {
             phi: DMatrix::identity(n, n),
             predicted: (DVector::zeros(n), DMatrix::zeros(n, n)),
@@ -58,7 +58,7 @@ impl Sensitivity {
     }
 
     /// A step begins at (m, P): Φ = I, and the prediction is (m, P) until one is made.
-    pub fn begin(&mut self, m: &DVector<f64>, p: &DMatrix<f64>) {
+    pub(crate) fn begin(&mut self, m: &DVector<f64>, p: &DMatrix<f64>) {
         self.phi.fill_with_identity();
         self.predicted.0.copy_from(m);
         self.predicted.1.copy_from(p);
@@ -83,7 +83,7 @@ impl Sensitivity {
 
 impl MomentWork {
     /// Storage for an `n`-dimensional state.
-    pub fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         MomentWork {
             km: core::array::from_fn(|_| DVector::zeros(n)),
             kp: core::array::from_fn(|_| DMatrix::zeros(n, n)),
@@ -98,7 +98,7 @@ impl MomentWork {
 /// The EKF's moment rates: `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q(m)` (Q at the mean
 /// when G depends on the state), written into
 /// `dm`, `dp`; `jacobian` holds n² values.
-pub fn linearized_rates(
+pub(crate) fn linearized_rates(
     model: &Model,
     q: &crate::model::ProcessNoise,
     jacobian: &mut [f64],
@@ -126,7 +126,7 @@ pub fn linearized_rates(
 /// `rates((m, P), (dm, dP), jacobian)` writes the rates at (m, P), with n² values of scratch
 /// in which it leaves the drift's linearisation A (row-major) when the work tracks the
 /// [`Sensitivity`] (which is then integrated alongside).
-pub fn rk4_moments(
+pub(crate) fn rk4_moments(
     m: &mut DVector<f64>,
     p: &mut DMatrix<f64>,
     dt: f64,

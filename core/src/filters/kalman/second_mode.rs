@@ -53,23 +53,23 @@ use crate::linalg::{lower_cholesky_into, lower_cholesky_solve};
 use crate::model::Model;
 
 /// Updates between two searches, and how long a second mode is followed before it counts.
-pub const SEARCH_EVERY: usize = 10;
+pub(crate) const SEARCH_EVERY: usize = 10;
 
 /// The self-check threshold on the distance of the two modes' weighted mean from the
 /// estimate, in the estimate's standard deviations; a second mode closer than this to the
 /// estimate (which could not move the mean that far) is neither taken nor followed.
-pub const SECOND_MODE_THRESHOLD: f64 = 0.25;
+pub(crate) const SECOND_MODE_THRESHOLD: f64 = 0.25;
 
 /// A second mode whose weight ratio falls below this is dropped.
-pub const DROP_BELOW: f64 = 1e-3;
+pub(crate) const DROP_BELOW: f64 = 1e-3;
 
 /// Updates a second mode is followed before it counts.
-pub const CONFIRM: usize = 20;
+pub(crate) const CONFIRM: usize = 20;
 
 /// Largest `(z − h(x))ᵀR⁻¹(z − h(x))` of a candidate: h(x) equals h(x̂) to 10⁻³ of one
 /// observation's noise — a state the observation function cannot tell from the estimate, not
 /// one it tells apart only slowly.
-pub const MATCH: f64 = 1e-6;
+pub(crate) const MATCH: f64 = 1e-6;
 
 /// Levenberg–Marquardt steps of one search.
 const SEARCH_STEPS: usize = 30;
@@ -88,7 +88,7 @@ pub(super) struct Interval<'a> {
 
 /// The second-mode watch of one MAP filter (module doc). Allocates only when built.
 #[derive(Clone, Debug)]
-pub struct ModeWatch {
+pub(crate) struct ModeWatch {
     /// The filter's initial Gaussian carried by the model alone, propagated at each search.
     free: GaussianState,
     /// Time and observation intervals since `free` was propagated.
@@ -117,7 +117,7 @@ pub struct ModeWatch {
 
 impl ModeWatch {
     /// A watch for a filter starting from `initial`, with m observation components.
-    pub fn new(initial: &GaussianState, m: usize) -> Self {
+    pub(crate) fn new(initial: &GaussianState, m: usize) -> Self {
         let n = initial.mean.len();
         ModeWatch {
             free: initial.clone(),
@@ -290,7 +290,7 @@ impl ModeWatch {
     /// The distance of the two modes' mean from the estimate, in the estimate's standard
     /// deviations, `w·d` with `w = Λ/(1 + Λ)` the second mode's share of their weight and d
     /// their distance — once a second mode has been followed for [`CONFIRM`] updates.
-    pub fn shift(&self) -> Option<f64> {
+    pub(crate) fn shift(&self) -> Option<f64> {
         if !self.following || self.followed < CONFIRM {
             return None;
         }
@@ -299,7 +299,7 @@ impl ModeWatch {
     }
 
     /// The self-check (module doc).
-    pub fn check(&self, out: &mut alloc::vec::Vec<Concern>) {
+    pub(crate) fn check(&self, out: &mut alloc::vec::Vec<Concern>) {
         let Some(shift) = self.shift() else {
             return;
         };

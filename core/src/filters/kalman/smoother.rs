@@ -1,5 +1,5 @@
 //! The Rauch–Tung–Striebel smoothers of the Gaussian filters, one recursion for all of them
-//! ([`crate::filters::smoothing`] (S1)): each step keeps the filtered moments, the predicted
+//! ([`crate::Smoother`] (S1)): each step keeps the filtered moments, the predicted
 //! ones and the transition's sensitivity Φ that the filter's own prediction gives
 //! ([`super::propagate::Sensitivity`]), and the backward pass is
 //!

@@ -177,7 +177,7 @@ impl UnscentedKalman {
     /// The sigma-point moment rates at (m, P) into (dm, dP) (see the module doc): f over all
     /// sigma points in one batch. With `linearisation`, also the statistically linearised
     /// drift `A = E[(f(x) − f̄)(x − m)ᵀ] P⁻¹` there (row-major), for the unscented RTS
-    /// smoother ([`crate::filters::smoothing`] (S1)).
+    /// smoother ([`crate::Smoother`] (S1)).
     fn rates(
         model: &Model,
         q: &crate::model::ProcessNoise,

@@ -16,12 +16,12 @@ use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
 /// resampling) as a share of N. Below 1 % the posterior rests on a handful of particles.
-pub const ESS_SHARE_THRESHOLD: f64 = 0.01;
+pub(crate) const ESS_SHARE_THRESHOLD: f64 = 0.01;
 
 /// The particle filter's second self-check: distinct particles kept by the last resampling as
 /// a share of N (N when the last step did not resample). Below 1 % the cloud is a few points
 /// repeated: its spread, and the density drawn from it, say little about the posterior.
-pub const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
+pub(crate) const UNIQUE_SHARE_THRESHOLD: f64 = 0.01;
 
 /// How a particle filter weighs its particles.
 #[derive(Clone, Debug)]
@@ -58,7 +58,7 @@ pub struct ParticleFilter {
     name: String,
     /// The model of the current step (for a driven model, frozen for it).
     pub(super) model: Model,
-    /// A driven model ([`crate::model::inputs`]), frozen into `model` at each step.
+    /// A driven model ([`crate::Inputs`]), frozen into `model` at each step.
     pub(super) driven: Option<Model>,
     pub(super) params: PfParams,
     pub(super) rng: SimRng,

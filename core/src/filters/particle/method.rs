@@ -98,15 +98,15 @@ impl Method for Pf {
 /// The largest `‖∂f/∂x‖∞ · Δt` of an Euler–Maruyama step chosen from the problem: the drift
 /// then changes by at most a tenth over a step, where the scheme's bias (first order in Δt) is
 /// small against the particles' own error.
-pub const EULER_RATE_STEP: f64 = 0.1;
+pub(crate) const EULER_RATE_STEP: f64 = 0.1;
 
 /// Most Euler–Maruyama substeps per interval chosen from the problem.
-pub const MAX_CHOSEN_SUBSTEPS: usize = 1000;
+pub(crate) const MAX_CHOSEN_SUBSTEPS: usize = 1000;
 
 /// Substeps per interval `dt` for the particle filter on `model`, and the rate they follow:
 /// the largest `‖∂f/∂x‖∞` (row sums of |∂f/∂x|, at least the spectral radius) over `probes`,
 /// L, gives `⌈L dt / 0.1⌉` steps ([`EULER_RATE_STEP`]; 1 to [`MAX_CHOSEN_SUBSTEPS`]).
-pub fn substeps_for(model: &Model, probes: &[Vec<f64>], dt: f64) -> (usize, f64) {
+pub(crate) fn substeps_for(model: &Model, probes: &[Vec<f64>], dt: f64) -> (usize, f64) {
     let n = model.n;
     let mut jacobian = vec![0.0; n * n];
     let mut rate: f64 = 0.0;

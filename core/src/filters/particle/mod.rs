@@ -29,6 +29,7 @@ mod method;
 mod params;
 mod smoother;
 
-pub use filter::{ParticleFilter, ESS_SHARE_THRESHOLD, UNIQUE_SHARE_THRESHOLD};
-pub use method::{substeps_for, Pf, EULER_RATE_STEP, MAX_CHOSEN_SUBSTEPS};
-pub use params::{PfParams, MAX_PARTICLES};
+pub use filter::ParticleFilter;
+pub use method::Pf;
+pub use params::PfParams;
+pub(crate) use params::MAX_PARTICLES;

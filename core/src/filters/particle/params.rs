@@ -6,7 +6,7 @@ use alloc::vec::Vec;
 use crate::filters::params::{parameters, Declared};
 
 /// Most particles.
-pub const MAX_PARTICLES: usize = 10_000_000;
+pub(crate) const MAX_PARTICLES: usize = 10_000_000;
 
 parameters! {
     /// Parameters of the bootstrap particle filter ([`ParticleFilter`](super::ParticleFilter)).

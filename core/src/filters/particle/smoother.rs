@@ -1,5 +1,5 @@
 //! Forward filtering, backward simulation (FFBSi; Godsill, Doucet & West 2004) for the
-//! particle filter ([`crate::filters::smoothing`]).
+//! particle filter ([`crate::Smoother`]).
 //!
 //! The forward pass is the particle filter, keeping after every step its particles and
 //! weights, and the clouds between the Euler–Maruyama steps of each prediction. Between two

@@ -530,7 +530,7 @@ fn estimate_at_nodes<const N: usize>(
 /// with 20 5.9e-3 → 1.3e-2, with 24 5.9e-4 → 8.3e-4, with 30 1.6e-5 → 7.3e-4; on [−6, 6] with
 /// 16 3.1e-2 → 2.4, with 40 1.0e-4 → 6.5e-4. A box too small for the state's path is a
 /// different failure this check does not see (on [−2, 2]: 1.7e-7, yet 0.048 off).
-pub const TAIL_ENERGY_THRESHOLD: f64 = 1e-3;
+pub(crate) const TAIL_ENERGY_THRESHOLD: f64 = 1e-3;
 
 impl SpectralFilter {
     /// The largest share, over the dimensions, of Σc² in the top quarter of the degrees.

@@ -19,7 +19,7 @@ use alloc::vec::Vec;
 use nalgebra::DMatrix;
 
 /// `L_0(x) … L_{count−1}(x)` and their first and second derivatives.
-pub fn legendre(x: f64, count: usize) -> [Vec<f64>; 3] {
+pub(crate) fn legendre(x: f64, count: usize) -> [Vec<f64>; 3] {
     let mut l = vec![0.0; count];
     let mut d1 = vec![0.0; count];
     let mut d2 = vec![0.0; count];
@@ -45,7 +45,7 @@ fn scale(k: usize) -> f64 {
 }
 
 /// `φ_0(x) … φ_{count−1}(x)` with first and second derivatives.
-pub fn basis(x: f64, count: usize) -> [Vec<f64>; 3] {
+pub(crate) fn basis(x: f64, count: usize) -> [Vec<f64>; 3] {
     let all = legendre(x, count + 2);
     let mut out = [vec![0.0; count], vec![0.0; count], vec![0.0; count]];
     for (o, l) in out.iter_mut().zip(&all) {
@@ -57,7 +57,7 @@ pub fn basis(x: f64, count: usize) -> [Vec<f64>; 3] {
 }
 
 /// The mass matrix `b_kj = ⟨φ_k, φ_j⟩` on [−1, 1], (49).
-pub fn mass_matrix(count: usize) -> DMatrix<f64> {
+pub(crate) fn mass_matrix(count: usize) -> DMatrix<f64> {
     DMatrix::from_fn(count, count, |k, j| {
         let (lo, hi) = (k.min(j), k.max(j));
         if k == j {
@@ -72,7 +72,7 @@ pub fn mass_matrix(count: usize) -> DMatrix<f64> {
 }
 
 /// `∫_{−1}^{1} φ_k dx` (only φ_0 has a nonzero integral: 2 c_0).
-pub fn basis_integral(k: usize) -> f64 {
+pub(crate) fn basis_integral(k: usize) -> f64 {
     if k == 0 {
         2.0 * scale(0)
     } else {
@@ -81,7 +81,7 @@ pub fn basis_integral(k: usize) -> f64 {
 }
 
 /// Gauss–Legendre nodes (ascending) and weights of `n` points on [−1, 1].
-pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut nodes = vec![0.0; n];
     let mut weights = vec![0.0; n];
     for i in 0..n.div_ceil(2) {
@@ -108,7 +108,7 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// The differentiation matrix of the interpolating polynomial on `nodes`.
-pub fn differentiation_matrix(nodes: &[f64]) -> DMatrix<f64> {
+pub(crate) fn differentiation_matrix(nodes: &[f64]) -> DMatrix<f64> {
     let n = nodes.len();
     // Barycentric weights, scaled by a common factor (only their ratios matter).
     let lambda: Vec<f64> = (0..n)

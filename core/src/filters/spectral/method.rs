@@ -93,7 +93,7 @@ impl Method for Spectral {
         )?)
     }
     /// In 1-D an unset basis size follows the domain against the prior's width (see
-    /// [`super::FUNCTIONS_PER_SD`]); in 2-D and 3-D, whose off-line operator grows with the
+    /// `FUNCTIONS_PER_SD`); in 2-D and 3-D, whose off-line operator grows with the
     /// fourth and sixth power of the size, 004's sizes stay.
     fn problem_defaults(
         p: &SpectralParams,
@@ -141,11 +141,11 @@ impl Method for Spectral {
 /// 1-D basis left unset gets: `N = ⌈4 L / σ₀⌉`, at least 004's 16 and at most [`MAX_BASIS`].
 /// On the cubic sensor's [−4, 4] with σ₀ = 0.32 that is 51 (004 used 16, whose self-check
 /// warns there); on [−12, 12] with σ₀ ≈ 1.1 it is 44.
-pub const FUNCTIONS_PER_SD: f64 = 4.0;
+pub(crate) const FUNCTIONS_PER_SD: f64 = 4.0;
 
 /// The basis size [`FUNCTIONS_PER_SD`] gives for half-width `half` and prior sd `sd`, or
 /// `None` when either is not positive and finite.
-pub fn basis_for(half: f64, sd: f64) -> Option<usize> {
+pub(crate) fn basis_for(half: f64, sd: f64) -> Option<usize> {
     let ratio = half / sd;
     (ratio.is_finite() && ratio > 0.0)
         .then(|| (libm::ceil(FUNCTIONS_PER_SD * ratio) as usize).clamp(16, MAX_BASIS))

@@ -43,12 +43,15 @@
 
 mod filter;
 // The building blocks of the filter.
-pub mod legendre;
+pub(crate) mod legendre;
 mod method;
-pub mod offline;
+pub(crate) mod offline;
 mod params;
-pub mod tensor;
+pub(crate) mod tensor;
 
-pub use filter::{Layout, SpectralFilter, TAIL_ENERGY_THRESHOLD};
-pub use method::{basis_for, Spectral, FUNCTIONS_PER_SD};
-pub use params::{SpectralParams, MAX_BASIS, MAX_NODES};
+pub(crate) use filter::Layout;
+pub use filter::SpectralFilter;
+pub use method::Spectral;
+pub(crate) use method::{basis_for, FUNCTIONS_PER_SD};
+pub use params::SpectralParams;
+pub(crate) use params::MAX_BASIS;

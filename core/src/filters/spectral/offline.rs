@@ -162,7 +162,7 @@ fn tabulate_basis(nodes: &Nodes, counts: &[usize]) -> DMatrix<f64> {
 /// Algorithm 1: the matrix W (off-line basis × on-line basis) whose column k holds the
 /// coefficients of ρ̃_k(·, T₀).
 /// `(t0, partitions)` are T₀ and N′; `potential_in_operator` keeps `½hᵀS⁻¹h` in 𝓛 (20).
-pub fn propagation_matrix(
+pub(crate) fn propagation_matrix(
     model: &Model,
     layout: &Layout,
     (t0, partitions): (f64, usize),

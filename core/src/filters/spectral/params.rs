@@ -10,9 +10,9 @@ use crate::model::dmz::Likelihood;
 use super::tensor;
 
 /// Largest number of basis functions per dimension.
-pub const MAX_BASIS: usize = 128;
+pub(crate) const MAX_BASIS: usize = 128;
 /// Largest number of quadrature nodes per dimension.
-pub const MAX_NODES: usize = 512;
+pub(crate) const MAX_NODES: usize = 512;
 parameters! {
     /// Parameters of the spectral filter (004 Algorithm 1–2). Counts are per dimension.
     pub struct SpectralParams {

@@ -20,7 +20,7 @@ use nalgebra::DMatrix;
 use crate::linalg;
 
 /// Largest dimension of a tensor here.
-pub const MAX_DIMS: usize = 3;
+pub(crate) const MAX_DIMS: usize = 3;
 
 /// Number of entries of a tensor of this shape.
 fn entries(shape: &[usize]) -> usize {
@@ -29,7 +29,13 @@ fn entries(shape: &[usize]) -> usize {
 
 /// `out = x ×_d a` for x of shape `shape` (first dimension fastest); `out` holds at least
 /// `entries(shape) / shape[d] · a.nrows()` values, of which that many are written.
-pub fn mode_product(a: &DMatrix<f64>, x: &[f64], shape: &[usize], d: usize, out: &mut [f64]) {
+pub(crate) fn mode_product(
+    a: &DMatrix<f64>,
+    x: &[f64],
+    shape: &[usize],
+    d: usize,
+    out: &mut [f64],
+) {
     let (m, n_d) = a.shape();
     debug_assert_eq!(
         n_d, shape[d],
@@ -187,7 +193,7 @@ impl Tiling {
 
 /// `out = x ×_0 A_0 ×_1 A_1 ⋯ ×_{n−1} A_{n−1}` (one factor per dimension of x, `n ≤
 /// MAX_DIMS`); the intermediates go to `scratch`, grown on first use and reused after.
-pub fn multilinear(
+pub(crate) fn multilinear(
     factors: &[DMatrix<f64>],
     x: &[f64],
     shape: &[usize],

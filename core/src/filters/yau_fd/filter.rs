@@ -432,7 +432,7 @@ pub struct YauYauFilter {
     params: YauYauParams,
     grid: TensorGrid,
     op: KolmogorovOperator,
-    /// A driven model ([`crate::model::inputs`]): the operator is made anew at every step from
+    /// A driven model ([`crate::Inputs`]): the operator is made anew at every step from
     /// the model at the interval's midpoint with its inputs.
     driven: Option<Model>,
     /// The density, normalised to unit mass.

@@ -29,7 +29,7 @@ use crate::grid::TensorGrid;
 
 /// One violated condition.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct GuaranteeWarning {
+pub(crate) struct GuaranteeWarning {
     /// The condition, e.g. `"(31) QIEM stability"`.
     pub condition: String,
     /// A readable statement with the worst point and value.
@@ -59,7 +59,11 @@ fn point(grid: &TensorGrid, idx: usize) -> Vec<f64> {
 }
 
 /// (22): the M-matrix condition for the step `dt`.
-pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<GuaranteeWarning> {
+pub(crate) fn m_matrix(
+    op: &KolmogorovOperator,
+    grid: &TensorGrid,
+    dt: f64,
+) -> Vec<GuaranteeWarning> {
     let mut out = Vec::new();
     for d in 0..grid.dim() {
         let ds = grid.spacing()[d];
@@ -137,7 +141,7 @@ pub fn m_matrix(op: &KolmogorovOperator, grid: &TensorGrid, dt: f64) -> Vec<Guar
 
 /// (30): IEM stability, ∇·f ≥ 0 on the grid — proven in 000 for a constant Q; with a
 /// state-dependent one the warning says that no stability condition is checked.
-pub fn iem_stability(op: &KolmogorovOperator, grid: &TensorGrid) -> Vec<GuaranteeWarning> {
+pub(crate) fn iem_stability(op: &KolmogorovOperator, grid: &TensorGrid) -> Vec<GuaranteeWarning> {
     if op.varying.is_some() {
         return alloc::vec![GuaranteeWarning {
             condition: "(30) IEM stability".into(),
@@ -163,7 +167,7 @@ pub fn iem_stability(op: &KolmogorovOperator, grid: &TensorGrid) -> Vec<Guarante
 
 /// The most substeps per observation interval QIEM takes to satisfy its stability
 /// conditions; a problem that needs more is run at the Δt it was given, with a warning.
-pub const MAX_STABLE_SUBSTEPS: usize = 20_000;
+pub(crate) const MAX_STABLE_SUBSTEPS: usize = 20_000;
 
 /// How far the step `dt` is from QIEM's stability conditions at node `i` in dimension `d`:
 /// the larger of the two ratios below to their bounds (stable where at most 1).
@@ -226,7 +230,7 @@ fn qiem_worst(
 
 /// The substeps QIEM takes over one interval ([`qiem_substeps`]).
 #[derive(Clone, Debug)]
-pub struct QiemSubsteps {
+pub(crate) struct QiemSubsteps {
     /// How many.
     pub substeps: usize,
     /// Whether they satisfy the stability conditions everywhere on the grid.
@@ -240,7 +244,7 @@ pub struct QiemSubsteps {
 /// QIEM's substeps of `interval`: each at most `dt_max` long, and as many more as its
 /// stability conditions (31) ask for on this grid (see the module doc and the guide), up to
 /// [`MAX_STABLE_SUBSTEPS`].
-pub fn qiem_substeps(
+pub(crate) fn qiem_substeps(
     op: &KolmogorovOperator,
     grid: &TensorGrid,
     interval: f64,
@@ -332,7 +336,7 @@ pub(crate) fn substeps_of(interval: f64, dt: f64) -> usize {
 /// The largest prime rustfft transforms with its own butterflies and mixed-radix algorithms; a
 /// length with a larger prime factor goes through Rader's or Bluestein's algorithm, several
 /// times slower per QIEM step.
-pub const FAST_PRIME_LIMIT: usize = 31;
+pub(crate) const FAST_PRIME_LIMIT: usize = 31;
 
 /// The prime factors of `m` in increasing order, with repetition (none for m ≤ 1).
 fn prime_factors(mut m: usize) -> Vec<usize> {
@@ -371,7 +375,7 @@ pub(crate) fn smooth_points(n: usize, up: bool) -> Option<usize> {
 /// The FFT-based schemes' transform length: a warning for every dimension whose N + 1 has a
 /// prime factor above [`FAST_PRIME_LIMIT`], with nearby point counts whose N + 1 has only
 /// the factors 2, 3, 5 and 7.
-pub fn transform_length(grid: &TensorGrid) -> Vec<GuaranteeWarning> {
+pub(crate) fn transform_length(grid: &TensorGrid) -> Vec<GuaranteeWarning> {
     let mut out = Vec::new();
     for (d, &n) in grid.shape().iter().enumerate() {
         let factors = prime_factors(n + 1);

@@ -357,8 +357,6 @@ yau_yau_method!(
     grid_memory
 );
 
-pub use crate::filters::resolution::POINTS_PER_SD;
-
 /// Bounds of a grid chosen from the problem.
 const CHOSEN_POINTS: (usize, usize) = (101, 4001);
 

@@ -42,8 +42,12 @@
 
 #[cfg(feature = "std")]
 mod filter;
-pub mod guarantees;
-pub mod operator;
+// The filter's parts. Without `std` there is no filter (below), and of these only the
+// defaults' choice of a grid size (`guarantees::smooth_points`) is used.
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
+pub(crate) mod guarantees;
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
+pub(crate) mod operator;
 #[cfg(feature = "std")]
 mod superposition;
 
@@ -52,11 +56,16 @@ mod params;
 
 #[cfg(feature = "std")]
 pub use filter::YauYauFilter;
-pub use method::{Iem, Qiem, Qiem4, Spt, POINTS_PER_SD};
-pub use params::{
-    Likelihood, PotentialTerm, Scheme, YauYauParams, DEFAULT_POINTS, FLUSH_BELOW,
-    MAX_SUPERPOSITION_ENTRIES,
-};
+pub use method::Iem;
+pub use method::Qiem;
+pub use method::Qiem4;
+pub use method::Spt;
+pub use params::Likelihood;
+pub use params::PotentialTerm;
+pub use params::Scheme;
+pub use params::YauYauParams;
+#[cfg(feature = "std")]
+pub(crate) use params::FLUSH_BELOW;
 
 /// Without the `std` feature there are no FFT plans and so no Yau–Yau filter: the methods
 /// stay registered (scenarios still parse and validate) and building one is an error.

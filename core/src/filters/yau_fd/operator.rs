@@ -26,7 +26,7 @@ use crate::model::Model;
 
 /// p, q, ∇·f and S⁻¹h at every grid node.
 #[derive(Clone, Debug)]
-pub struct KolmogorovOperator {
+pub(crate) struct KolmogorovOperator {
     /// `p[d][i] = −f_d(s_i)`.
     pub p: Vec<Vec<f64>>,
     /// `q[i] = −(∇·f + ½ hᵀS⁻¹h)(s_i)`, or `−∇·f(s_i)` when the likelihood is applied in
@@ -53,7 +53,7 @@ pub struct KolmogorovOperator {
 impl KolmogorovOperator {
     /// Tabulates the operator of `model` on `grid`; refuses discrete observations and a
     /// non-diagonal Q.
-    pub fn new(
+    pub(crate) fn new(
         model: &Model,
         grid: &TensorGrid,
         likelihood_in_update: bool,
@@ -119,7 +119,7 @@ impl KolmogorovOperator {
     }
 
     /// `a_dd` at node `i`.
-    pub fn a(&self, d: usize, i: usize) -> f64 {
+    pub(crate) fn a(&self, d: usize, i: usize) -> f64 {
         match &self.varying {
             Some(a) => a[d][i],
             None => self.diffusion[d],
@@ -128,7 +128,7 @@ impl KolmogorovOperator {
 
     /// The operator of an interval without an observation: the Fokker–Planck part alone,
     /// `q = −∇·f` (000 (4) without the term −½Σh_j², which belongs to the observation).
-    pub fn without_observation_term(&self) -> Self {
+    pub(crate) fn without_observation_term(&self) -> Self {
         KolmogorovOperator {
             q: self.div_f.iter().map(|d| -d).collect(),
             half_hsh: vec![0.0; self.div_f.len()],
@@ -145,7 +145,7 @@ impl KolmogorovOperator {
 /// zero values beyond the boundary). Walks every grid line once per dimension, without per-node
 /// index arithmetic; along the first (contiguous) dimension the weighting and the difference are
 /// one pass.
-pub fn explicit_part(
+pub(crate) fn explicit_part(
     grid: &TensorGrid,
     weighted_drift: &[Vec<f64>],
     weight: &[f64],
@@ -224,8 +224,8 @@ pub fn explicit_part(
 
 /// The transpose of [`explicit_part`]: `out = w ⊙ r − Δt Σ_d K_d (p̃_d ⊙ r)` — the central
 /// (and the fourth-order) first differences are antisymmetric stencils, so `K_dᵀ = −K_d` with
-/// the same zero boundary. The backward step of a smoother ([`crate::filters::smoothing`]).
-pub fn explicit_part_transposed(
+/// the same zero boundary. The backward step of a smoother ([`crate::Smoother`]).
+pub(crate) fn explicit_part_transposed(
     grid: &TensorGrid,
     weighted_drift: &[Vec<f64>],
     weight: &[f64],

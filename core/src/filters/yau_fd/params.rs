@@ -37,14 +37,15 @@ pub enum PotentialTerm {
 
 /// Density values below this (the density is normalised to unit mass) are set to zero after
 /// an update: they carry no information and, once subnormal, make every later operation slow.
-pub const FLUSH_BELOW: f64 = 1e-250;
+#[cfg(feature = "std")]
+pub(crate) const FLUSH_BELOW: f64 = 1e-250;
 
 /// Interior points per dimension of a grid whose size is neither given nor chosen from the
 /// problem (2-D and 3-D).
-pub const DEFAULT_POINTS: usize = 201;
+pub(crate) const DEFAULT_POINTS: usize = 201;
 
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
-pub const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
+pub(crate) const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
 pub use crate::model::dmz::Likelihood;
 
@@ -87,7 +88,7 @@ impl Choices for PotentialTerm {
 }
 
 impl YauYauParams {
-    /// Points per dimension for an `n`-dimensional model ([`DEFAULT_POINTS`] each when unset
+    /// Points per dimension for an `n`-dimensional model (`DEFAULT_POINTS` each when unset
     /// and not chosen from the problem).
     pub fn shape(&self, n: usize) -> Vec<usize> {
         if self.points.is_empty() {

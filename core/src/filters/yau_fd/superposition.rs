@@ -19,7 +19,7 @@ use crate::grid::TensorGrid;
 
 /// The stored bumps, their solutions and the factored normal matrix.
 #[derive(Clone, Debug)]
-pub struct Superposition {
+pub(super) struct Superposition {
     /// Bᵀ (N_δ × nodes).
     bumps_t: DMatrix<f64>,
     /// V (nodes × N_δ).
@@ -30,7 +30,7 @@ pub struct Superposition {
 
 impl Superposition {
     /// Builds the bumps on `grid` and carries each over one interval with `propagate`.
-    pub fn new(
+    pub(super) fn new(
         grid: &TensorGrid,
         params: &YauYauParams,
         mut propagate: impl FnMut(&mut Vec<f64>, &mut Vec<f64>),
@@ -93,7 +93,7 @@ impl Superposition {
 
     /// The transpose of [`Superposition::apply`]: `r ← B (BᵀB + λI)⁻¹ Vᵀ r` (the backward
     /// step of a smoother).
-    pub fn apply_transposed(&mut self, r: &mut [f64]) {
+    pub(super) fn apply_transposed(&mut self, r: &mut [f64]) {
         let len = r.len();
         self.coeff
             .gemv_tr(1.0, &self.evolved, &DVectorView::from_slice(r, len), 0.0);
@@ -102,7 +102,7 @@ impl Superposition {
     }
 
     /// `u ← V (BᵀB + λI)⁻¹ Bᵀ u`.
-    pub fn apply(&mut self, u: &mut [f64]) {
+    pub(super) fn apply(&mut self, u: &mut [f64]) {
         let len = u.len();
         self.coeff
             .gemv(1.0, &self.bumps_t, &DVectorView::from_slice(u, len), 0.0);

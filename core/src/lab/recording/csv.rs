@@ -6,7 +6,7 @@
 //!   `t,z1,…,zm` (measurements); the first row is the prior's time τ₀ — for increments it
 //!   holds zeros (the increment over `(τ_{k−1}, τ_k]` is on row k), for measurements it is a
 //!   measurement at τ₀.
-//! * Known inputs of a driven model ([`crate::model::inputs`]): further columns `u1,…,uk`
+//! * Known inputs of a driven model ([`crate::Inputs`]): further columns `u1,…,uk`
 //!   after the observations, every field a number — row k's are those over `(τ_{k−1}, τ_k]`.
 //! * Truth (optional): header `t,x1,…,xn`, one row per observation row, at the same times.
 //!

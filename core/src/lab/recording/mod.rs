@@ -56,7 +56,7 @@ pub struct Recording {
     #[serde(with = "bits")]
     pub truth: Option<Vec<f64>>,
     /// k, the number of known inputs u1..uk on each row (0: none) of a driven model
-    /// ([`crate::model::inputs`]).
+    /// ([`crate::Inputs`]).
     #[serde(default)]
     pub input_count: usize,
     /// The known inputs, row k at `inputs[k*input_count..]`: those over `(τ_{k−1}, τ_k]`
@@ -118,7 +118,7 @@ impl Recording {
         .checked()
     }
 
-    /// With the known inputs of a driven model ([`crate::model::inputs`]): `count` per row,
+    /// With the known inputs of a driven model ([`crate::Inputs`]): `count` per row,
     /// row-major, one row per time (those over the interval ending at it), every one finite.
     pub fn with_inputs(
         mut self,

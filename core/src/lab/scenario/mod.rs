@@ -135,7 +135,7 @@ pub struct ModelConfig {
     pub diffusion: Option<CoefficientMatrix>,
     /// Observation noise.
     pub noise: ObservationNoiseConfig,
-    /// The known inputs `u1..uk` of a driven model ([`crate::model::inputs`]): one expression
+    /// The known inputs `u1..uk` of a driven model ([`crate::Inputs`]): one expression
     /// in the time `t` and the parameters per input, the series a simulated run records
     /// beside its observations (row k holds u at the midpoint of `(τ_{k−1}, τ_k]`, row 0 at
     /// τ₀). Recorded observations bring their own (the CSV columns `u1..uk`), which replace
@@ -302,7 +302,7 @@ impl PriorConfig {
     }
 
     /// The box `mean ± sds · sd` of a Gaussian or mixture prior (its overall mean and
-    /// covariance, [`crate::filters::method::prior_box`]): the default domain for a model given
+    /// covariance, `prior_box`): the default domain for a model given
     /// without one. `None` for a density prior, which is only defined on a domain, or a
     /// prior too malformed to give a box.
     /// Coefficients are resolved with `names` (a scenario's [`named_values`]).
@@ -1019,7 +1019,7 @@ impl ScenarioConfig {
         }
     }
 
-    /// `Some(k)` for a driven model ([`crate::model::inputs`]): the k inputs of
+    /// `Some(k)` for a driven model ([`crate::Inputs`]): the k inputs of
     /// [`ModelConfig::inputs`], or none when only the time `t` is read; `None` when no
     /// expression of the model reads `t` or an input.
     pub fn driven(&self) -> Option<usize> {

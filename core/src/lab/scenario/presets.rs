@@ -487,7 +487,7 @@ pub fn all() -> Vec<ScenarioConfig> {
     v
 }
 
-/// A diffusion that depends on the state ([`crate::model::diffusion`]): an interest rate of the
+/// A diffusion that depends on the state ([`crate::Diffusion`]): an interest rate of the
 /// Cox–Ingersoll–Ross kind, `dx = κ(θ − x) dt + σ√|x| dv`, measured with noise; the separation
 /// approach of 001 differences `a(x) p` itself, the particle filter moves each particle with
 /// its own G(x), the UKF takes Q at its mean. The numbers in the description are those of the
