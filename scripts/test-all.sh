@@ -56,6 +56,9 @@ side_lane() {
   set -e
   timed cargo clippy -p zakai-wasm -p zakai -p zakai-tests --target wasm32-unknown-unknown \
     --all-targets --target-dir "$side" -- -D warnings
+  # The benchmark that times a bare DST reaches it through `zakai::internals` (feature
+  # `unstable-internals`, which no other build turns on).
+  timed cargo clippy -p zakai --benches --features unstable-internals --target-dir "$side" -- -D warnings
   # No warning in the documentation (broken or private intra-doc links included).
   timed env RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps --target-dir "$side"
   # The core without the `std` feature for both targets, up to code generation (`cargo

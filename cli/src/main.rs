@@ -913,10 +913,10 @@ fn list() -> String {
             m.info.key, m.info.summary, m.info.paper
         ));
     }
-    let support = |title: &str, of: fn(&zakai::lab::scenario::CatalogueEntry) -> zakai::Support| {
+    let support = |title: &str, of: fn(&zakai::lab::scenario::CatalogueEntry) -> zakai::method::Support| {
         let mut s = format!("\n{title}:\n");
         for m in catalogue() {
-            use zakai::Support;
+            use zakai::method::Support;
             let (kind, how) = match of(&m) {
                 Support::Exact(how) => ("uses it", how),
                 Support::Approximate(how) => ("approximates it", how),

@@ -83,8 +83,9 @@
 //! | [`Spectral`] | [`SpectralFilter`] | [`SpectralParams`] |
 //! | [`GaussianSum`] | [`GaussianSumFilter`] | [`GaussianSumParams`] |
 //!
-//! * building: [`Builder`], and the [`Method`] trait every family registers with (its
-//!   parameter schema [`MethodInfo`], [`ParamInfo`]);
+//! * building: [`Builder`] (each marker's `builder()`); for method authors and tools that
+//!   list methods, the [`method`] module: the [`method::Method`] trait every family registers
+//!   with, its parameter schema ([`method::MethodInfo`], [`method::ParamInfo`]);
 //! * errors: [`ZakaiError`], [`ExprError`], [`FilterError`], [`ConfigProblem`], and the
 //!   memory cap every allocation is checked against ([`memory_cap`], [`set_memory_cap`]).
 //!
@@ -104,7 +105,7 @@
 //! ## Modules, bottom to top
 //!
 //! validate → error → linalg, random → grid, model → [`simulate`] → [`diagnostics`] →
-//! filters (one folder per method family, each registering itself through [`Method`]) →
+//! filters (one folder per method family, each registering itself through [`method::Method`]) →
 //! [`lab`] (bibliography → scenario → recording, metrics, papers → experiment → study →
 //! reproduction). A module uses only modules to its left, and files side by side in a folder
 //! never import each other in a circle (both tested). The modules without a link are
@@ -161,8 +162,17 @@ pub use model::{
 };
 
 pub use filters::builder::Builder;
-pub use filters::method::{BuildContext, Method, MethodInfo, ProblemContext, Support, Takes};
-pub use filters::params::{ParamInfo, ParamKind};
+
+/// For method authors and tools that list methods: the [`method::Method`] trait every family
+/// registers with (its key, what it takes, its parameter schema, its filter type), what a
+/// method is built from, and what its catalogue entry says. A user who builds filters needs
+/// none of it: each method's marker has `builder()` (the crate root).
+pub mod method {
+    pub use crate::filters::method::{
+        BuildContext, Method, MethodInfo, ProblemContext, Support, Takes,
+    };
+    pub use crate::filters::params::{ParamInfo, ParamKind};
+}
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,
 };
@@ -185,7 +195,7 @@ pub use filters::kalman::{
 pub use filters::particle::{ParticleFilter, Pf, PfParams};
 pub use filters::spectral::{Spectral, SpectralFilter, SpectralParams};
 pub use filters::yau_fd::{
-    Iem, Likelihood, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
+    Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
 };
 
 /// What Zakai's own benchmarks reach below the surface (feature `unstable-internals`, which

@@ -220,10 +220,10 @@ pub fn method_defaults_json(key: &str, params: &str) -> PyResult<String> {
 /// A parameter value as its kind wants it: Python's `1e3` or `400.0` where a count is
 /// expected is the whole number it equals; a fraction there is refused in words.
 fn whole_numbers(
-    kind: Option<zakai::ParamKind>,
+    kind: Option<zakai::method::ParamKind>,
     v: serde_json::Value,
 ) -> Result<serde_json::Value, String> {
-    use zakai::ParamKind;
+    use zakai::method::ParamKind;
     let whole = |v: serde_json::Value| -> Result<serde_json::Value, String> {
         match v.as_f64() {
             Some(x) if v.is_f64() => {

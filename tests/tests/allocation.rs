@@ -263,7 +263,7 @@ fn closure_models_and_missing_data_allocate_nothing() {
         Noise::discrete(0.05),
     )
     .unwrap();
-    fn built<M: zakai::Method>(model: &Model) -> Box<dyn Filter> {
+    fn built<M: zakai::method::Method>(model: &Model) -> Box<dyn Filter> {
         let (mean, cov) = ([0.5, 0.0], [[0.2, 0.0], [0.0, 0.2]]);
         let filter = zakai::Builder::<M>::new(model)
             .prior_gaussian(&mean, &cov)

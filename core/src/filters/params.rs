@@ -177,7 +177,7 @@ pub(crate) trait Choices {
 }
 
 /// Shared by the Yau–Yau and spectral filters.
-impl Choices for crate::model::dmz::Likelihood {
+impl Choices for crate::model::dmz::LikelihoodPlacement {
     const NAMES: &'static [&'static str] = &["in_update", "in_operator"];
 }
 
@@ -342,18 +342,21 @@ pub(crate) use parameters;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::dmz::Likelihood;
+    use crate::model::dmz::LikelihoodPlacement;
     use crate::testing::test;
     use alloc::vec;
 
     /// A choice's names are the ones serde writes.
     #[test]
     fn choice_names_are_the_json_names() {
-        let names: Vec<String> = [Likelihood::InUpdate, Likelihood::InOperator]
-            .iter()
-            .map(|l| serde_json::to_value(l).unwrap().as_str().unwrap().into())
-            .collect();
-        assert_eq!(names, Likelihood::NAMES);
+        let names: Vec<String> = [
+            LikelihoodPlacement::InUpdate,
+            LikelihoodPlacement::InOperator,
+        ]
+        .iter()
+        .map(|l| serde_json::to_value(l).unwrap().as_str().unwrap().into())
+        .collect();
+        assert_eq!(names, LikelihoodPlacement::NAMES);
     }
 
     /// Bounds read every number of a value, NaN and infinities included.

@@ -16,7 +16,7 @@ use crate::error::FilterError;
 /// Where the `−½ hᵀS⁻¹h` term of the potential (4) is applied.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Likelihood {
+pub enum LikelihoodPlacement {
     /// In the update, with 000 (15) / 004 (42): `exp(Δyᵀ S⁻¹ h − ½ hᵀ S⁻¹ h Δτ)`, the Gaussian
     /// likelihood of the increment (bounded, so round-off far out in the domain cannot be
     /// amplified by `exp(Δyᵀ S⁻¹ h)` for steep h) — the same Lie splitting of the same

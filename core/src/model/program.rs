@@ -183,6 +183,12 @@ impl Program {
         self.code.len()
     }
 
+    /// True for a constant or a bare variable (no instruction).
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
+        self.code.is_empty()
+    }
+
     /// The constant value, when the program is one.
     #[cfg(test)]
     pub(crate) fn constant(&self) -> Option<f64> {

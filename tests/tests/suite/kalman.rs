@@ -206,7 +206,7 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
     let config = linear_2d(ObservationNoiseConfig::Continuous { cov: None }, 0.01);
     let experiment = Experiment::new(config).unwrap();
     let bounds = experiment.config().bounds();
-    let ctx = zakai::BuildContext {
+    let ctx = zakai::method::BuildContext {
         model: experiment.model(),
         prior: experiment.prior(),
         seed: 1,

@@ -222,12 +222,12 @@ fn particle_filter_matches(
 }
 
 /// The builder with the prior N(0, 1) every reference starts from.
-fn prior<M: zakai::Method>(b: zakai::Builder<'_, M>) -> zakai::Builder<'_, M> {
+fn prior<M: zakai::method::Method>(b: zakai::Builder<'_, M>) -> zakai::Builder<'_, M> {
     prior_at(b, PRIOR)
 }
 
 /// The builder with the prior `N(m₀, P₀)`.
-fn prior_at<M: zakai::Method>(
+fn prior_at<M: zakai::method::Method>(
     b: zakai::Builder<'_, M>,
     (m0, p0): (f64, f64),
 ) -> zakai::Builder<'_, M> {
@@ -303,7 +303,7 @@ fn measurements_every_method_against_the_exact_likelihood() {
 /// The log-likelihood of the increments `data` by the Yau–Yau method `M` (QIEM, IEM, SPT) on
 /// [−6, 6] with `(points, dt)` nodes and inner step, `edit` applied to its parameters, from
 /// the prior `p`.
-fn yau_yau_log_likelihood<M: zakai::Method<Params = zakai::YauYauParams>>(
+fn yau_yau_log_likelihood<M: zakai::method::Method<Params = zakai::YauYauParams>>(
     model: &Model,
     data: &[(f64, f64)],
     (points, dt): (usize, f64),
@@ -370,7 +370,7 @@ fn increments_every_method_against_the_exact_likelihood() {
             qiem(
                 401,
                 0.005,
-                |q| q.likelihood = zakai::Likelihood::InOperator,
+                |q| q.likelihood = zakai::LikelihoodPlacement::InOperator,
                 p,
             )
         },

@@ -227,7 +227,7 @@ fn time_invariant_methods_refuse_with_the_reason() {
     }
     // The catalogue says the same for the grid and spectral methods of 000, 002 and 004.
     for entry in zakai::lab::scenario::catalogue() {
-        let refused = matches!(entry.inputs, zakai::Support::Refused(_));
+        let refused = matches!(entry.inputs, zakai::method::Support::Refused(_));
         let expected = [
             "kalman",
             "iekf",

@@ -8,7 +8,7 @@ use zakai::lab::scenario::{
     TimeConfig,
 };
 use zakai::KalmanParams;
-use zakai::{Likelihood, PotentialTerm, YauYauParams};
+use zakai::{LikelihoodPlacement, PotentialTerm, YauYauParams};
 use zakai_tests::test;
 
 fn linear(points: usize, dt: f64) -> ScenarioConfig {
@@ -147,13 +147,13 @@ fn guarantee_checks_name_the_condition_and_the_worst_point() {
             points: vec![100],
             dt: 0.05,
             potential: PotentialTerm::Explicit,
-            likelihood: Likelihood::InOperator,
+            likelihood: LikelihoodPlacement::InOperator,
             ..YauYauParams::default()
         }),
         MethodConfig::Iem(YauYauParams {
             points: vec![100],
             dt: 0.05,
-            likelihood: Likelihood::InOperator,
+            likelihood: LikelihoodPlacement::InOperator,
             ..YauYauParams::default()
         }),
     ];

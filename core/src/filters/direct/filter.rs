@@ -44,7 +44,12 @@ use crate::model::{Model, ObservationModel, Prior};
 /// Above a quarter the first-order carry starts to cost accuracy.
 pub(crate) const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
 
-/// The direct method of 002 (see the module doc).
+/// The direct method of 002.
+///
+/// The direct method of 002 for Yau filtering systems. Built: the Gaussian
+/// approximation of Algorithm 1 (`gaussian_approximation`) and the Riccati ODEs (35)–(37)
+/// that carry one Gaussian through the Kolmogorov equation (32) (`riccati`), and the filter
+/// of Algorithm 2 with its (C2)/(C3) check and the transformations (29)–(31) (`filter.rs`).
 #[derive(Clone, Debug)]
 pub struct DirectFilter {
     name: String,

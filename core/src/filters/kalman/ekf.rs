@@ -1,7 +1,4 @@
-//! The continuous–discrete extended Kalman filter (Jazwinski): between observations the mean
-//! and covariance follow the linearised moment equations ([`super::propagate::rk4_moments`]);
-//! at each observation the update linearises h at the predicted mean. This is the EKF that
-//! 000 §4.2, 002 §4.2 and 004 §4 compare against.
+//! The extended Kalman filter ([`ExtendedKalman`] documents it).
 
 use alloc::string::String;
 
@@ -11,7 +8,12 @@ use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
 use crate::model::{Model, Prior};
 
-/// The extended Kalman filter (see the module doc).
+/// The extended Kalman filter.
+///
+/// The continuous–discrete extended Kalman filter (Jazwinski): between observations the mean
+/// and covariance follow the linearised moment equations (`rk4_moments`);
+/// at each observation the update linearises h at the predicted mean. This is the EKF that
+/// 000 §4.2, 002 §4.2 and 004 §4 compare against.
 #[derive(Clone, Debug)]
 pub struct ExtendedKalman {
     name: String,

@@ -1,17 +1,4 @@
-//! The Kalman–Bucy filter for linear Gaussian models — the exact reference.
-//!
-//! For `dx = (A x + b) dt + G dv` the prediction over Δτ is exact:
-//! `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` with `Φ = e^{AΔτ}`, `Γ = ∫₀^Δτ e^{As} ds` and
-//! `Q_d = ∫₀^Δτ e^{As} Q e^{Aᵀs} ds` (Van Loan's block exponential). The update uses the
-//! observation as a measurement ([`super::measurement`]): exact for discrete linear
-//! measurements; for increments, the discrete Kalman filter of the sampled model
-//! `Δy = C x Δτ + w`, `w ~ N(0, S Δτ)` (the observation integral `∫ C x dt` by its value at the
-//! interval's end), which converges to the Kalman–Bucy filter as Δτ → 0 — its variance after
-//! an update sits O(Δτ) below the Riccati equation's (lesson 2 of the playground: 0.0865
-//! against P∞ = 0.0905 with S = 0.01, Δτ = 0.01).
-//!
-//! The model must be affine: A, b, C, c are read off at the origin and the Jacobians are
-//! checked at probe points spread over the domain; a nonlinear model is refused with an error.
+//! The Kalman–Bucy filter ([`KalmanBucy`] documents it).
 
 use alloc::format;
 use alloc::string::String;
@@ -83,7 +70,22 @@ pub(crate) fn discretize(
     (phi, gamma_b, qd)
 }
 
-/// The Kalman–Bucy filter (see the module doc).
+/// The Kalman–Bucy filter.
+///
+/// The Kalman–Bucy filter for linear Gaussian models — the exact reference.
+///
+/// For `dx = (A x + b) dt + G dv` the prediction over Δτ is exact:
+/// `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` with `Φ = e^{AΔτ}`, `Γ = ∫₀^Δτ e^{As} ds` and
+/// `Q_d = ∫₀^Δτ e^{As} Q e^{Aᵀs} ds` (Van Loan's block exponential). The update uses the
+/// observation as a measurement (`measurement`): exact for discrete linear
+/// measurements; for increments, the discrete Kalman filter of the sampled model
+/// `Δy = C x Δτ + w`, `w ~ N(0, S Δτ)` (the observation integral `∫ C x dt` by its value at the
+/// interval's end), which converges to the Kalman–Bucy filter as Δτ → 0 — its variance after
+/// an update sits O(Δτ) below the Riccati equation's (lesson 2 of the playground: 0.0865
+/// against P∞ = 0.0905 with S = 0.01, Δτ = 0.01).
+///
+/// The model must be affine: A, b, C, c are read off at the origin and the Jacobians are
+/// checked at probe points spread over the domain; a nonlinear model is refused with an error.
 #[derive(Clone, Debug)]
 pub struct KalmanBucy {
     name: String,

@@ -1,24 +1,4 @@
-//! The MAP framework of 003 §4: between observations the Gaussian approximation (4.2) is
-//! carried exactly as in the EKF (mean by (4.3), covariance by the linearised moment
-//! equations); at an observation the update is the maximiser of the approximate posterior,
-//! i.e. the minimiser of
-//!
-//! `L_λ(x) = (x − m)ᵀ P⁻¹ (x − m) + λ (z − h(x))ᵀ R⁻¹ (z − h(x))`  (4.5), (4.8)
-//!
-//! with λ = 1, computed by
-//!
-//! * **IEKF** — Gauss–Newton on (4.5): `x ← m + K(x)(z − h(x) − H(x)(m − x))`,
-//!   `K = P Hᵀ(H P Hᵀ + R)⁻¹`, until the step is below the tolerance or the iteration count
-//!   is reached;
-//! * **IOKF** (Algorithm 4.1) — the λ-homotopy (4.6)–(4.8): `λ_j = j/l`, j = 1..l, and m
-//!   Newton steps on `L_{λ_j}` from the previous minimiser, with the exact Hessian
-//!   `2P⁻¹ + 2λ HᵀR⁻¹H − 2λ Σ_i (R⁻¹ r)_i ∇²h_i`. A Hessian that is not positive definite is
-//!   damped (Levenberg: `+ μ I`, μ growing tenfold), and every step is cut back (Armijo) until
-//!   L decreases; a step that finds neither is a reported failure, never NaN.
-//!
-//! Both leave the covariance of the Laplace approximation at the final point,
-//! `P ← P − K H P` with H at that point. For continuous observations h and R are those of the
-//! increment (`h Δτ`, `S Δτ`), as for the EKF.
+//! The MAP-update filters (IEKF, IOKF) ([`MapKalman`] documents it).
 
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -54,6 +34,28 @@ pub(crate) const MAP_UNCONVERGED_THRESHOLD: f64 = 1.0;
 pub(crate) const MAP_JUMP_THRESHOLD: f64 = 3.0;
 
 /// A Gaussian filter whose update is the MAP point of 003 §4 (IEKF or IOKF).
+///
+/// The MAP framework of 003 §4: between observations the Gaussian approximation (4.2) is
+/// carried exactly as in the EKF (mean by (4.3), covariance by the linearised moment
+/// equations); at an observation the update is the maximiser of the approximate posterior,
+/// i.e. the minimiser of
+///
+/// `L_λ(x) = (x − m)ᵀ P⁻¹ (x − m) + λ (z − h(x))ᵀ R⁻¹ (z − h(x))`  (4.5), (4.8)
+///
+/// with λ = 1, computed by
+///
+/// * **IEKF** — Gauss–Newton on (4.5): `x ← m + K(x)(z − h(x) − H(x)(m − x))`,
+///   `K = P Hᵀ(H P Hᵀ + R)⁻¹`, until the step is below the tolerance or the iteration count
+///   is reached;
+/// * **IOKF** (Algorithm 4.1) — the λ-homotopy (4.6)–(4.8): `λ_j = j/l`, j = 1..l, and m
+///   Newton steps on `L_{λ_j}` from the previous minimiser, with the exact Hessian
+///   `2P⁻¹ + 2λ HᵀR⁻¹H − 2λ Σ_i (R⁻¹ r)_i ∇²h_i`. A Hessian that is not positive definite is
+///   damped (Levenberg: `+ μ I`, μ growing tenfold), and every step is cut back (Armijo) until
+///   L decreases; a step that finds neither is a reported failure, never NaN.
+///
+/// Both leave the covariance of the Laplace approximation at the final point,
+/// `P ← P − K H P` with H at that point. For continuous observations h and R are those of the
+/// increment (`h Δτ`, `S Δτ`), as for the EKF.
 #[derive(Clone, Debug)]
 pub struct MapKalman {
     name: String,

@@ -1,14 +1,4 @@
-//! The unscented Kalman filter with van der Merwe's scaled sigma points (α, β, κ as in 003 §5
-//! and 004 §4): `λ = α²(n + κ) − n`, points `m` and `m ± √(n+λ) Lᵢ` (L the Cholesky factor of
-//! P), weights `W₀ᵐ = λ/(n+λ)`, `W₀ᶜ = W₀ᵐ + 1 − α² + β`, `Wᵢ = 1/(2(n+λ))`.
-//!
-//! Prediction integrates the sigma-point moment equations of the continuous–discrete UKF
-//! (Särkkä 2007) by RK4: with sigma points χᵢ of (m, P),
-//! `dm/dt = Σ Wᵢᵐ f(χᵢ)`, `dP/dt = Σ Wᵢᶜ [(f(χᵢ) − dm/dt)(χᵢ − m)ᵀ + (χᵢ − m)(f(χᵢ) − dm/dt)ᵀ] + Q`
-//! (exact for linear drifts, where it reduces to the Kalman–Bucy moment equations). The
-//! update uses the observation as a measurement ([`super::measurement`]). P is
-//! symmetrised after each step; a failed Cholesky factorisation is returned as
-//! [`FilterError::NotPositiveDefinite`], never a panic.
+//! The unscented Kalman filter ([`UnscentedKalman`] documents it).
 
 use alloc::format;
 use alloc::string::String;
@@ -130,7 +120,19 @@ impl SigmaPoints {
     }
 }
 
-/// The unscented Kalman filter (see the module doc).
+/// The unscented Kalman filter.
+///
+/// The unscented Kalman filter with van der Merwe's scaled sigma points (α, β, κ as in 003 §5
+/// and 004 §4): `λ = α²(n + κ) − n`, points `m` and `m ± √(n+λ) Lᵢ` (L the Cholesky factor of
+/// P), weights `W₀ᵐ = λ/(n+λ)`, `W₀ᶜ = W₀ᵐ + 1 − α² + β`, `Wᵢ = 1/(2(n+λ))`.
+///
+/// Prediction integrates the sigma-point moment equations of the continuous–discrete UKF
+/// (Särkkä 2007) by RK4: with sigma points χᵢ of (m, P),
+/// `dm/dt = Σ Wᵢᵐ f(χᵢ)`, `dP/dt = Σ Wᵢᶜ [(f(χᵢ) − dm/dt)(χᵢ − m)ᵀ + (χᵢ − m)(f(χᵢ) − dm/dt)ᵀ] + Q`
+/// (exact for linear drifts, where it reduces to the Kalman–Bucy moment equations). The
+/// update uses the observation as a measurement (`measurement`). P is
+/// symmetrised after each step; a failed Cholesky factorisation is returned as
+/// [`FilterError::NotPositiveDefinite`], never a panic.
 #[derive(Clone, Debug)]
 pub struct UnscentedKalman {
     name: String,

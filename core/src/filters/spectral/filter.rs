@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, LengthCache, Observation, ObservationKind, Observed};
 use crate::linalg;
-use crate::model::dmz::{DmzCoefficients, Likelihood, ObservedTerms, PartialIncrements};
+use crate::model::dmz::{DmzCoefficients, LikelihoodPlacement, ObservedTerms, PartialIncrements};
 use crate::model::{Model, Prior};
 
 use super::params::SpectralParams;
@@ -120,6 +120,29 @@ enum Propagation {
 }
 
 /// The spectral Yau–Yau filter of 004.
+///
+/// The off-line/on-line spectral Yau–Yau filter of 004 ("DMZ method"), on the generalized
+/// Legendre basis of its appendix, for n = 1, 2 and 3.
+///
+/// The domain box is mapped affinely onto U = [−1, 1]ⁿ. Off-line (`offline`, Algorithm 1):
+/// the Kolmogorov equation (17) over one observation interval T₀ becomes a matrix W from the
+/// coefficients of the density on the on-line basis (N₂ functions per dimension) to those of
+/// the propagated density on the off-line basis (N₁ per dimension). On-line (Algorithm 2),
+/// per observation interval and without keeping any past observation:
+///
+/// 1. propagation (40): `g = W c`;
+/// 2. the density at the on-line Gauss–Legendre nodes, the robust-form factor
+///    `exp(hᵀS⁻¹Δy)` of (42) there (shifted by its largest exponent, so it cannot overflow;
+///    the constant cancels in the normalisation);
+/// 3. estimate (41): mean, covariance and the largest node from the nodal values;
+/// 4. projection (39) of the updated density onto the on-line basis: `c = B⁻¹⟨ρ, φ_k⟩`, the
+///    mass matrix B of (49) being the tensor product of the closed form.
+///
+/// Steps 2 and 4 use the tensor structure: one matrix product per dimension (`tensor`); in
+/// 1-D the evaluation of step 2 is folded into W off-line, so steps 1–2 are one product, and
+/// the whole step is about a thousand multiply–adds and 35 exponentials. The density is a
+/// polynomial and can dip below zero where it is small; the factor (42) sets those nodal
+/// values to zero before the update, and the plotted marginals are clipped at zero.
 #[derive(Clone, Debug)]
 pub struct SpectralFilter {
     name: String,
@@ -210,7 +233,7 @@ impl SpectralFilter {
             )));
         }
         let layout = params.layout(n, bounds);
-        let in_operator = params.likelihood == Likelihood::InOperator;
+        let in_operator = params.likelihood == LikelihoodPlacement::InOperator;
         let propagation =
             offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);

@@ -5,7 +5,7 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use crate::filters::params::{parameters, Declared};
-use crate::model::dmz::Likelihood;
+use crate::model::dmz::LikelihoodPlacement;
 
 use super::tensor;
 
@@ -37,7 +37,7 @@ parameters! {
         /// likelihood; in_operator, into the operator as 004 (17) writes it, which the implicit
         /// off-line step damps only by 1/(1 + ½hᵀS⁻¹h Δs) — for steep h far out in the domain
         /// that loses against exp(hᵀS⁻¹Δy) and the filter blows up.
-        likelihood: Likelihood = Likelihood::InUpdate => choice "−½hᵀS⁻¹h goes";
+        likelihood: LikelihoodPlacement = LikelihoodPlacement::InUpdate => choice "−½hᵀS⁻¹h goes";
     }
 }
 

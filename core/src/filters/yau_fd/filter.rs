@@ -11,7 +11,7 @@ use super::guarantees::substeps_of;
 use super::guarantees::{self, GuaranteeWarning};
 use super::operator::{explicit_part, KolmogorovOperator};
 use super::superposition::Superposition;
-use super::{Likelihood, PotentialTerm, Scheme, YauYauParams};
+use super::{LikelihoodPlacement, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
 use crate::filters::{
     DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind, Observed,
@@ -424,7 +424,49 @@ enum Solver {
 /// A solver with the interval length it is made for and its substeps.
 type SolverFor = (f64, usize, Solver);
 
-/// A Yau–Yau finite-difference filter (see the module doc).
+/// A Yau–Yau finite-difference filter.
+///
+/// The finite-difference Yau–Yau filters of 000 (Yueh, Lin, Yau).
+///
+/// Between observations the unnormalised density solves the Kolmogorov equation (2) on a
+/// tensor grid with zero Dirichlet boundary (`operator`); at each observation time it is
+/// multiplied by the robust-DMZ factor `exp(Δyᵀ S⁻¹ h)` (15). Schemes:
+///
+/// * [`Scheme::Iem`] — the θ-scheme (12)–(14), Algorithm 2:
+///   `[I − αΔt A] Uⁿ = [I + βΔt A] Uⁿ⁻¹`, α + β = 1; in 1-D a tridiagonal (Thomas) solve
+///   factored once, in 2-D and 3-D the documented alternative of Lie operator splitting into
+///   one such tridiagonal θ-step per dimension (O(Δt) splitting error, the scheme's own order);
+/// * [`Scheme::Qiem`] — the quasi-implicit scheme (17)–(18), Algorithm 3: drift and potential
+///   explicit, the Laplacian implicit, solved by a DST-I in every dimension (rustfft plans
+///   built once, no allocation per step);
+/// * [`Scheme::Qiem4`] — the fourth-order 2-D QIEM of (20)–(21), Algorithm 4: 9-point
+///   Laplacian diagonalised by the same DSTs, fourth-order first differences for the drift, and
+///   (our addition, see `SpectralSolve::new_fourth_order`) the compact right-hand side without
+///   which the 9-point stencil is only second order;
+/// * [`Scheme::Superposition`] — the superposition technique of §2.5: off-line, QIEM carries
+///   Gaussian bumps `e^{−η‖s − c_k‖²}` over one observation interval; on-line, the density is
+///   projected onto the bumps by least squares and the prediction is the same combination of
+///   their stored solutions (two matrix–vector products per interval, no allocation).
+///
+/// The potential term `q u` of QIEM is explicit in (18); for steep h (`q = −½ h²` reaches
+/// −10⁹ at the edge of a box for h = x⁶) the factor `1 + Δt q` is hugely negative and the
+/// scheme is unstable ((31) fails there). [`PotentialTerm::Exponential`] (the default) applies
+/// `e^{Δt q}` instead — the same first-order consistency, unconditionally stable for q ≤ 0;
+/// [`PotentialTerm::Explicit`] is (18) exactly. The drift stays explicit either way, and a
+/// steep one (f = −x³ reaches |f| = 125 at the edge of [−5, 5]) needs `Δt p² ≤ Q` at every
+/// node: QIEM, QIEM-4 and the superposition technique's bumps take as many substeps as
+/// (31) and that bound ask for on the grid (`qiem_substeps`), at most `dt`
+/// long, and report the shortened step among the warnings.
+///
+/// By default ([`LikelihoodPlacement::InUpdate`]) the `−½hᵀS⁻¹h` part of q moves into the update, whose
+/// factor is then the bounded Gaussian likelihood of the increment (see `operator`);
+/// [`LikelihoodPlacement::InOperator`] keeps 000's form.
+///
+/// The update (15) is evaluated in the log domain — `u_i ← exp(a_i + ln u_i − max_j(a_j + ln u_j))`
+/// with `a = Δyᵀ S⁻¹ h` — so it neither overflows nor underflows the largest value; the density
+/// is then renormalised. Negative values left by the explicit drift are set to zero there. A
+/// density whose mass vanishes or turns non-finite is a [`crate::FilterError::MassLost`] /
+/// [`crate::FilterError::NonFinite`], never NaN.
 #[derive(Clone, Debug)]
 pub struct YauYauFilter {
     name: String,
@@ -453,7 +495,7 @@ pub struct YauYauFilter {
     log_likelihood: f64,
     warnings: Vec<GuaranteeWarning>,
     /// The longest substep the scheme takes: `dt`, or shorter where QIEM's stability
-    /// conditions (31) ask for it on this grid ([`guarantees::qiem_substeps`]).
+    /// conditions (31) ask for it on this grid (`qiem_substeps`).
     step_bound: f64,
     /// Whether even the most substeps leave QIEM's stability conditions violated: mass at
     /// the edge is then the scheme's doing, not the posterior's.
@@ -550,7 +592,11 @@ impl YauYauFilter {
         // warnings below; each step tabulates it anew.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
         let model = &start;
-        let op = KolmogorovOperator::new(model, &grid, params.likelihood == Likelihood::InUpdate)?;
+        let op = KolmogorovOperator::new(
+            model,
+            &grid,
+            params.likelihood == LikelihoodPlacement::InUpdate,
+        )?;
         if op.state_dependent && scheme != Scheme::Iem {
             return Err(FilterError::Unsuitable(format!(
                 "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
@@ -576,7 +622,7 @@ impl YauYauFilter {
                 model,
                 &grid,
                 params.likelihood_samples,
-                params.likelihood == Likelihood::InUpdate,
+                params.likelihood == LikelihoodPlacement::InUpdate,
             )?)
         } else {
             None
@@ -621,7 +667,7 @@ impl YauYauFilter {
     /// The operator, the observation factor's terms and the solver for Δτ made from `model`,
     /// a driven model frozen for the step (the other lengths' solvers are dropped).
     fn retabulate(&mut self, model: &Model) -> Result<(), FilterError> {
-        let in_update = self.params.likelihood == Likelihood::InUpdate;
+        let in_update = self.params.likelihood == LikelihoodPlacement::InUpdate;
         let op = KolmogorovOperator::new(model, &self.grid, in_update)?;
         if op.state_dependent && self.scheme != Scheme::Iem {
             return Err(FilterError::Unsuitable(format!(
@@ -843,7 +889,9 @@ impl YauYauFilter {
         )?;
         if obs.dt > 0.0 {
             core::mem::swap(&mut self.u, values);
-            if observed != Observed::All && self.params.likelihood == Likelihood::InOperator {
+            if observed != Observed::All
+                && self.params.likelihood == LikelihoodPlacement::InOperator
+            {
                 self.predict_without_likelihood_in(obs.dt, transposed);
             } else {
                 self.carry_over(obs.dt, transposed);
@@ -870,7 +918,7 @@ impl YauYauFilter {
             // With the likelihood in the operator, only a fully observed increment has its
             // −½hᵀS⁻¹h there; otherwise the Fokker–Planck part alone, and the observed
             // components' factor with their ½h_Oᵀ S_OO⁻¹ h_O.
-            let in_operator = self.params.likelihood == Likelihood::InOperator;
+            let in_operator = self.params.likelihood == LikelihoodPlacement::InOperator;
             if observed != Observed::All && in_operator {
                 self.predict_without_likelihood(obs.dt);
             } else {
@@ -1043,7 +1091,7 @@ impl Filter for YauYauFilter {
             }
             return;
         }
-        if self.params.likelihood == Likelihood::InOperator {
+        if self.params.likelihood == LikelihoodPlacement::InOperator {
             // With −½hᵀS⁻¹h in q the implicit step damps the tails by (1 + |q|Δt)⁻¹ per step
             // instead of e^{−|q|Δt}: mass at the edge is then the time step's doing, and a
             // wider box (larger |q| at its edge) would make it worse.
@@ -1159,48 +1207,48 @@ mod tests {
     fn the_backward_step_is_the_transposed_forward_step() {
         use crate::filters::smoothing::GridTransition;
         use crate::model::GaussianMixture;
-        let cases: [(&[&str], &[&str], Scheme, Likelihood); 7] = [
+        let cases: [(&[&str], &[&str], Scheme, LikelihoodPlacement); 7] = [
             (
                 &["-x^3 + x"],
                 &["x", "x^2"],
                 Scheme::Iem,
-                Likelihood::InUpdate,
+                LikelihoodPlacement::InUpdate,
             ),
             (
                 &["-x^3 + x"],
                 &["x", "x^2"],
                 Scheme::Qiem,
-                Likelihood::InOperator,
+                LikelihoodPlacement::InOperator,
             ),
             (
                 &["-x^3 + x"],
                 &["x", "x^2"],
                 Scheme::Superposition,
-                Likelihood::InUpdate,
+                LikelihoodPlacement::InUpdate,
             ),
             (
                 &["x2", "-sin(x1) - 0.5*x2"],
                 &["x1", "x2"],
                 Scheme::Iem,
-                Likelihood::InOperator,
+                LikelihoodPlacement::InOperator,
             ),
             (
                 &["x2", "-sin(x1) - 0.5*x2"],
                 &["x1", "x2"],
                 Scheme::Qiem,
-                Likelihood::InUpdate,
+                LikelihoodPlacement::InUpdate,
             ),
             (
                 &["x2", "-sin(x1) - 0.5*x2"],
                 &["x1", "x2"],
                 Scheme::Qiem4,
-                Likelihood::InUpdate,
+                LikelihoodPlacement::InUpdate,
             ),
             (
                 &["x2", "-sin(x1) - 0.5*x2"],
                 &["x1", "x2"],
                 Scheme::Superposition,
-                Likelihood::InOperator,
+                LikelihoodPlacement::InOperator,
             ),
         ];
         for (drift, obs, scheme, likelihood) in cases {

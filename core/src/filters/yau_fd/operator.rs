@@ -8,7 +8,7 @@
 //! Q (constant or not), as IEM's explicit step [`KolmogorovOperator::cross`] with the share of
 //! the diagonal they take. The observation factor of (15) needs `S⁻¹ h`, tabulated too.
 //!
-//! With [`super::Likelihood::InUpdate`] the `−½ hᵀS⁻¹h` part of q is taken out of the
+//! With [`super::LikelihoodPlacement::InUpdate`] the `−½ hᵀS⁻¹h` part of q is taken out of the
 //! operator and applied with the factor (15) at the observation time instead (the same Lie
 //! splitting of the same equation, first order in Δτ either way): the factor becomes
 //! `exp(Δyᵀ S⁻¹ h − ½ hᵀ S⁻¹ h Δτ)`, the Gaussian likelihood of the increment, which is

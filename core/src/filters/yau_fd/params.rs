@@ -47,7 +47,7 @@ pub(crate) const DEFAULT_POINTS: usize = 201;
 /// Largest number of stored values (grid nodes × bumps) of the superposition technique.
 pub(crate) const MAX_SUPERPOSITION_ENTRIES: usize = 1 << 23;
 
-pub use crate::model::dmz::Likelihood;
+pub use crate::model::dmz::LikelihoodPlacement;
 
 parameters! {
     /// Parameters of the Yau–Yau finite-difference filters (000, Yueh, Lin & Yau 2014); each
@@ -68,7 +68,7 @@ parameters! {
         /// Where −½hᵀS⁻¹h goes: in_update, into the observation factor, the bounded Gaussian
         /// likelihood of the increment; in_operator, into the potential q, as 000 (4) writes
         /// it.
-        likelihood: Likelihood = Likelihood::InUpdate => choice "−½hᵀS⁻¹h goes";
+        likelihood: LikelihoodPlacement = LikelihoodPlacement::InUpdate => choice "−½hᵀS⁻¹h goes";
         /// Samples per dimension averaging the observation factor (15) over each cell (1:
         /// its value at the node, as 000): when one interval's likelihood is narrower than
         /// the grid, point values weigh separate modes by where the nodes fall, the cell
