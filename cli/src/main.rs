@@ -913,19 +913,20 @@ fn list() -> String {
             m.info.key, m.info.summary, m.info.paper
         ));
     }
-    let support = |title: &str, of: fn(&zakai::lab::scenario::CatalogueEntry) -> zakai::method::Support| {
-        let mut s = format!("\n{title}:\n");
-        for m in catalogue() {
-            use zakai::method::Support;
-            let (kind, how) = match of(&m) {
-                Support::Exact(how) => ("uses it", how),
-                Support::Approximate(how) => ("approximates it", how),
-                Support::Refused(how) => ("refuses it", how),
-            };
-            s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
-        }
-        s
-    };
+    let support =
+        |title: &str, of: fn(&zakai::lab::scenario::CatalogueEntry) -> zakai::method::Support| {
+            let mut s = format!("\n{title}:\n");
+            for m in catalogue() {
+                use zakai::method::Support;
+                let (kind, how) = match of(&m) {
+                    Support::Exact(how) => ("uses it", how),
+                    Support::Approximate(how) => ("approximates it", how),
+                    Support::Refused(how) => ("refuses it", how),
+                };
+                s.push_str(&format!("  {:<18} {kind}: {how}\n", m.info.key));
+            }
+            s
+        };
     s.push_str(&support(
         "A diffusion G(x) that depends on the state (model.diffusion entries in x)",
         |m| m.state_diffusion,

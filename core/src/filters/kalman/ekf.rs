@@ -14,6 +14,38 @@ use crate::model::{Model, Prior};
 /// and covariance follow the linearised moment equations (`rk4_moments`);
 /// at each observation the update linearises h at the predicted mean. This is the EKF that
 /// 000 §4.2, 002 §4.2 and 004 §4 compare against.
+///
+/// # Example
+///
+/// ```
+/// # #[cfg(feature = "std")] {
+/// use zakai::{Ekf, Filter, Model, Noise};
+///
+/// // dx = −x³ dt + dv, z_k = x_k + v_k (Var v = 0.1) every 0.1.
+/// let model = Model::from_text(&["-x^3"], &["x"], Noise::discrete(0.1)).unwrap();
+/// let mut ekf = Ekf::builder(&model).prior_gaussian(&[0.0], &[[1.0]]).build().unwrap();
+/// for z in [0.3, 0.5, 0.4] {
+///     ekf.step_measurement(0.1, &[z]).unwrap();
+/// }
+/// let estimate = ekf.estimate();
+/// assert!(estimate.mean[0] > 0.0 && estimate.variance(0) < 1.0);
+/// # }
+/// ```
+///
+/// # Cost
+///
+/// Per step, the RK4 substeps of the moment equations (each stage evaluates f, its Jacobian and
+/// a few n × n products) and one update with an m × m solve: O(substeps · n³ + m³); no
+/// allocation after construction.
+///
+/// # When it fails
+///
+/// Where f or h bends across the spread of the prior or posterior the linearisation is wrong,
+/// and nothing in the Gaussian says so: with h = x³ started at x̂ = 0 the gain `H = h′(0) = 0`
+/// and the filter never moves (docs/guide.md, "Fitting a model's parameters"); on the cubic
+/// sensor it loses the state (the playground's lesson 3); a posterior with two modes (h = x²
+/// with a prior straddling 0) is carried as one Gaussian. Its self-check watches the innovations
+/// ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
 pub struct ExtendedKalman {
     name: String,

@@ -56,6 +56,36 @@ pub(crate) const MAP_JUMP_THRESHOLD: f64 = 3.0;
 /// Both leave the covariance of the Laplace approximation at the final point,
 /// `P ← P − K H P` with H at that point. For continuous observations h and R are those of the
 /// increment (`h Δτ`, `S Δτ`), as for the EKF.
+///
+/// # Example
+///
+/// ```
+/// # #[cfg(feature = "std")] {
+/// use zakai::{Filter, Iekf, Iokf, Model, Noise};
+///
+/// // dx = −x dt + dv, z = x² + v (Var v = 0.1): the MAP point moves with the measurement.
+/// let model = Model::from_text(&["-x"], &["x^2"], Noise::discrete(0.1)).unwrap();
+/// let mut iekf = Iekf::builder(&model).prior_gaussian(&[1.0], &[[0.5]]).build().unwrap();
+/// let mut iokf = Iokf::builder(&model).prior_gaussian(&[1.0], &[[0.5]]).build().unwrap();
+/// for filter in [&mut iekf, &mut iokf] {
+///     filter.step_measurement(0.1, &[1.2]).unwrap();
+///     assert!(filter.estimate().mean[0] > 0.5);
+/// }
+/// # }
+/// ```
+///
+/// # Cost
+///
+/// The EKF's prediction, then per update up to the iteration count of Gauss–Newton (IEKF) or
+/// l × m Newton steps (IOKF), each with h, its Jacobian (and for the IOKF its Hessians) and an
+/// n × n or m × m solve: O(iterations · (n³ + m³)).
+///
+/// # When it fails
+///
+/// The MAP point of a posterior with two modes is one of them, and the Laplace covariance there
+/// says nothing of the other; the filter watches for a second mode and reports it (its
+/// self-check), as it reports an update that stopped before reaching the MAP point (the step
+/// still left, in standard deviations) — [`crate::Filter::self_check`].
 #[derive(Clone, Debug)]
 pub struct MapKalman {
     name: String,

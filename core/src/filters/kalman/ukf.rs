@@ -133,6 +133,35 @@ impl SigmaPoints {
 /// update uses the observation as a measurement (`measurement`). P is
 /// symmetrised after each step; a failed Cholesky factorisation is returned as
 /// [`FilterError::NotPositiveDefinite`], never a panic.
+///
+/// # Example
+///
+/// ```
+/// # #[cfg(feature = "std")] {
+/// use zakai::{Filter, Model, Noise, Ukf};
+///
+/// // dx = −x³ dt + dv, z_k = x_k + v_k (Var v = 0.1) every 0.1.
+/// let model = Model::from_text(&["-x^3"], &["x"], Noise::discrete(0.1)).unwrap();
+/// let mut ukf = Ukf::builder(&model).prior_gaussian(&[0.0], &[[1.0]]).build().unwrap();
+/// for z in [0.3, 0.5, 0.4] {
+///     ukf.step_measurement(0.1, &[z]).unwrap();
+/// }
+/// assert!(ukf.estimate().mean[0] > 0.0);
+/// # }
+/// ```
+///
+/// # Cost
+///
+/// Per RK4 stage, f at the 2n + 1 sigma points and a Cholesky factorisation of P; per update, h
+/// at the sigma points and an m × m solve: O(substeps · (n · cost(f) + n³) + m³).
+///
+/// # When it fails
+///
+/// Its Gaussian holds one mode: a posterior with two (h = x² with a prior straddling 0, the
+/// cubic sensor early on) is averaged into one, whose mean can sit between the modes where the
+/// state never is. The sigma points see f and h only within about √(n + λ) standard deviations of
+/// the mean. A covariance that is no longer positive definite is an error, never a panic; its
+/// self-check watches the innovations ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
 pub struct UnscentedKalman {
     name: String,

@@ -467,6 +467,41 @@ type SolverFor = (f64, usize, Solver);
 /// is then renormalised. Negative values left by the explicit drift are set to zero there. A
 /// density whose mass vanishes or turns non-finite is a [`crate::FilterError::MassLost`] /
 /// [`crate::FilterError::NonFinite`], never NaN.
+///
+/// # Example
+///
+/// ```
+/// use zakai::{Filter, Model, Noise, Qiem};
+///
+/// // The cubic sensor of 000 §4.1: dx = dv, dy = x³ dt + dw, observed every 0.01.
+/// let model = Model::from_text(&["0"], &["x^3"], Noise::continuous(1.0)).unwrap();
+/// let mut qiem = Qiem::builder(&model)
+///     .prior_gaussian(&[0.0], &[[1.0]])
+///     .domain(&[(-6.0, 6.0)])
+///     .dt(0.01)
+///     .build()
+///     .unwrap();
+/// for dy in [0.002, 0.004, -0.001] {
+///     qiem.step_increment(0.01, &[dy]).unwrap();
+/// }
+/// assert!(qiem.density().is_some() && qiem.estimate().mean[0].is_finite());
+/// ```
+///
+/// # Cost
+///
+/// Per substep on N nodes in d dimensions: IEM one tridiagonal solve per grid line, O(d · N);
+/// QIEM an explicit sweep and a forward and inverse DST per dimension, O(d · N log N); QIEM-4
+/// the same with five-point stencils; the superposition technique one product with its
+/// precomputed operator. Then the update (15), O(N · m). The grid is checked against the memory
+/// cap before anything is allocated.
+///
+/// # When it fails
+///
+/// On a box too small for the posterior (mass reaching the edge), a grid too coarse for it
+/// (fewer than a few nodes per posterior standard deviation), or substeps beyond the stability
+/// conditions (22)/(30)/(31) of 000: each is reported — as a warning for the chosen steps, and by
+/// the self-checks while it runs ([`crate::Filter::self_check`]) — rather than returned as a
+/// silently wrong density; a density whose mass vanishes or turns non-finite is an error.
 #[derive(Clone, Debug)]
 pub struct YauYauFilter {
     name: String,
