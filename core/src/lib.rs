@@ -81,7 +81,7 @@
 //! | [`Separation`], [`ImplicitFdm`] | [`ContinuousDiscreteGrid`] | [`FpeParams`] |
 //! | [`Direct`] | [`DirectFilter`] | [`DirectParams`] |
 //! | [`Spectral`] | [`SpectralFilter`] | [`SpectralParams`] |
-//! | [`GaussianSum`] | [`GaussianSumFilter`] | [`GaussianSumParams`] |
+//! | [`GaussianSum`] | [`GaussianSumFilter`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
 //!
 //! * building: [`Builder`] (each marker's `builder()`); for method authors and tools that
 //!   list methods, the [`method`] module: the [`method::Method`] trait every family registers
@@ -187,7 +187,7 @@ pub use filters::direct::{DirectFilter, DirectParams};
 pub use filters::fpe_split::{
     ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation,
 };
-pub use filters::gaussian_sum::{GaussianSum, GaussianSumFilter, GaussianSumParams};
+pub use filters::gaussian_sum::{GaussianSum, GaussianSumFilter, GaussianSumParams, Reduction};
 pub use filters::kalman::{
     Ekf, EkfParams, ExtendedKalman, GaussianInit, Iekf, IekfParams, Iokf, IokfParams, Kalman,
     KalmanBucy, KalmanParams, MapKalman, MapSolver, Ukf, UkfParams, UnscentedKalman,

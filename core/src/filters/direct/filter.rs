@@ -50,6 +50,13 @@ pub(crate) const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
 /// approximation of Algorithm 1 (`gaussian_approximation`) and the Riccati ODEs (35)–(37)
 /// that carry one Gaussian through the Kolmogorov equation (32) (`riccati`), and the filter
 /// of Algorithm 2 with its (C2)/(C3) check and the transformations (29)–(31) (`filter.rs`).
+///
+/// # When it fails
+///
+/// Only Yau filtering systems are taken: a model outside the conditions (C1)–(C3) of 002 is
+/// refused at construction with the condition that fails ([`crate::diagnostics`] decides them).
+/// Within them, when Algorithm 1 leaves a large share of the density in its residual (the
+/// Gaussians no longer hold it), the self-check says so ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
 pub struct DirectFilter {
     name: String,

@@ -184,6 +184,13 @@ struct StepPlan {
 /// filter.step_measurement(0.5, &[0.3]).unwrap();
 /// assert!(filter.estimate().mean[0] > 0.0);
 /// ```
+///
+/// # When it fails
+///
+/// On a box too small for the posterior (mass at its edge) or cells too coarse for it, the
+/// self-checks say so ([`crate::Filter::self_check`]); the step choice above keeps the CFL and
+/// positivity conditions, and says when it had to sub-step, and the FDM's Péclet condition, which
+/// no step can fix, is a warning ([`crate::Filter::warnings`]).
 #[derive(Clone, Debug)]
 pub struct ContinuousDiscreteGrid {
     name: String,

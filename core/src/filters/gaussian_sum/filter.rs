@@ -174,6 +174,13 @@ pub struct Reduction {
 /// gsf.step_measurement(0.5, &[0.3]).unwrap();
 /// assert!(gsf.estimate().mean[0] > 0.0);
 /// ```
+///
+/// # When it fails
+///
+/// Exact for linear, time-invariant models with Gaussian-mixture noise and prior, up to its
+/// mixture reduction: the components multiply at every update and are pruned and merged back to
+/// the cap, and what that moved is reported ([`Reduction`]). A nonlinear model, or one that reads
+/// the time or known inputs, is refused.
 #[derive(Clone, Debug)]
 pub struct GaussianSumFilter {
     name: String,

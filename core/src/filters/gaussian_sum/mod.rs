@@ -4,7 +4,8 @@ mod filter;
 mod method;
 mod params;
 
+pub(crate) use filter::check_model;
 pub use filter::GaussianSumFilter;
-pub(crate) use filter::{check_model, Reduction};
+pub use filter::Reduction;
 pub use method::GaussianSum;
 pub use params::GaussianSumParams;

@@ -79,6 +79,16 @@ enum ParticleDiffusion {
 /// pf.step_measurement(0.1, &[0.4]).unwrap();
 /// assert!(pf.estimate().mean[0] > 0.0);
 /// ```
+///
+/// # When it fails
+///
+/// With too few particles for the posterior — a sharp likelihood (small observation noise), a
+/// long gap, a prior far from the data — the weights collapse onto a handful of particles and
+/// the estimate's spread no longer measures its error. The self-check says so: the effective
+/// sample size after weighting below 1 % of N, or the distinct particles a resampling kept below
+/// 1 % ([`crate::Filter::self_check`]). Its log-likelihood is the logarithm of an unbiased
+/// estimate, so it is biased low by about half its variance, and a random function of the
+/// parameters.
 #[derive(Clone, Debug)]
 pub struct ParticleFilter {
     name: String,

@@ -143,6 +143,14 @@ enum Propagation {
 /// the whole step is about a thousand multiply–adds and 35 exponentials. The density is a
 /// polynomial and can dip below zero where it is small; the factor (42) sets those nodal
 /// values to zero before the update, and the plotted marginals are clipped at zero.
+///
+/// # When it fails
+///
+/// The Legendre basis must hold the posterior on its box: when the energy in the highest degrees
+/// passes its threshold the self-check says the basis is too small for the posterior (raise the
+/// on-line or off-line basis, or narrow the box; the playground's lesson 7 shows it) —
+/// [`crate::Filter::self_check`]. Its off-line operator is made once, so a driven model is
+/// refused.
 #[derive(Clone, Debug)]
 pub struct SpectralFilter {
     name: String,
