@@ -251,22 +251,7 @@ impl Likelihood {
     /// covariance that is no longer positive definite …), or when the method fails on the
     /// data (the failure is named).
     pub fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
-        if theta.len() != self.names.len() {
-            return Err(ZakaiError::Dimension(format!(
-                "{} parameter values given for {} parameters ({})",
-                theta.len(),
-                self.names.len(),
-                self.names.join(", ")
-            )));
-        }
-        for ((name, &v), &(lo, hi)) in self.names.iter().zip(theta).zip(&self.bounds) {
-            if !(v.is_finite() && lo <= v && v <= hi) {
-                return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
-                    format!("parameters.{name}"),
-                    format!("{v} is not a finite value in [{lo}, {hi}]"),
-                )]));
-            }
-        }
+        check_point(&self.names, &self.bounds, theta)?;
         let run = self.run_at(theta)?;
         let track = &run.methods[0];
         match (&track.failure, track.log_likelihood()) {
@@ -320,6 +305,28 @@ impl Likelihood {
     pub fn value(&self, theta: &[f64]) -> f64 {
         self.log_likelihood(theta).unwrap_or(f64::NEG_INFINITY)
     }
+}
+
+/// θ for the parameters `names` within `bounds`: an error when it has the wrong length or a
+/// value is not finite or lies outside its bounds.
+fn check_point(names: &[String], bounds: &[(f64, f64)], theta: &[f64]) -> Result<(), ZakaiError> {
+    if theta.len() != names.len() {
+        return Err(ZakaiError::Dimension(format!(
+            "{} parameter values given for {} parameters ({})",
+            theta.len(),
+            names.len(),
+            names.join(", ")
+        )));
+    }
+    for ((name, &v), &(lo, hi)) in names.iter().zip(theta).zip(bounds) {
+        if !(v.is_finite() && lo <= v && v <= hi) {
+            return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                format!("parameters.{name}"),
+                format!("{v} is not a finite value in [{lo}, {hi}]"),
+            )]));
+        }
+    }
+    Ok(())
 }
 
 impl LogLikelihood for Likelihood {

@@ -149,22 +149,7 @@ impl<'a> FilterLikelihood<'a> {
     /// One run at θ: the summed log-likelihood, and what the filter's self-checks and
     /// violated guarantees said along the way (`concerns`).
     fn run(&self, theta: &[f64], concerns: Option<&mut Vec<String>>) -> Result<f64, ZakaiError> {
-        if theta.len() != self.names.len() {
-            return Err(ZakaiError::Dimension(format!(
-                "{} parameter values given for {} parameters ({})",
-                theta.len(),
-                self.names.len(),
-                self.names.join(", ")
-            )));
-        }
-        for ((name, &v), &(lo, hi)) in self.names.iter().zip(theta).zip(&self.bounds) {
-            if !(v.is_finite() && lo <= v && v <= hi) {
-                return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
-                    format!("parameters.{name}"),
-                    format!("{v} is not a finite value in [{lo}, {hi}]"),
-                )]));
-            }
-        }
+        super::check_point(&self.names, &self.bounds, theta)?;
         let mut filter = (self.build)(theta)?;
         let failed = |k: usize, message: String| ZakaiError::RunFailed {
             method: self.method.clone(),
