@@ -6,6 +6,7 @@
 use alloc::format;
 use alloc::string::String;
 use alloc::vec;
+use alloc::vec::Vec;
 
 use crate::filters::method::ProblemContext;
 use crate::model::ObservationModel;
@@ -153,4 +154,31 @@ pub(crate) fn too_coarse(problem: &ProblemContext, shape: &[usize]) -> Option<St
             crate::filters::WIDTH_IN_CELLS_THRESHOLD
         )
     })
+}
+/// One count for every dimension, or the per-dimension list as given.
+pub(crate) fn per_dimension(counts: &[usize], n: usize) -> Vec<usize> {
+    match counts.len() {
+        1 => alloc::vec![counts[0]; n],
+        _ => counts.to_vec(),
+    }
+}
+
+/// The product of `counts`, or `None` on overflow.
+pub(crate) fn product(counts: &[usize]) -> Option<usize> {
+    counts.iter().try_fold(1usize, |a, &k| a.checked_mul(k))
+}
+
+/// A per-dimension count list must have one entry or `n`.
+pub(crate) fn count_problem(
+    field: &'static str,
+    counts: &[usize],
+    n: usize,
+    problems: &mut Vec<(&'static str, String)>,
+) {
+    if counts.len() != 1 && counts.len() != n {
+        problems.push((
+            field,
+            alloc::format!("give one count or {n}, got {}", counts.len()),
+        ));
+    }
 }

@@ -1120,7 +1120,7 @@ impl Filter for YauYauFilter {
         if self.unstable {
             for c in out[from..]
                 .iter_mut()
-                .filter(|c| c.check == crate::filters::BOUNDARY_MASS_CHECK)
+                .filter(|c| c.check == crate::filters::self_check::BOUNDARY_MASS_CHECK)
             {
                 c.advice = "the density reaches the edge of the box, where QIEM's stability conditions (31) fail at any step it would take (see the warnings): the explicit drift there amplifies round-off, and a wider box makes |f| at its edge larger; shrink the domain or use IEM";
             }
@@ -1132,7 +1132,7 @@ impl Filter for YauYauFilter {
             // wider box (larger |q| at its edge) would make it worse.
             for c in out[from..]
                 .iter_mut()
-                .filter(|c| c.check == crate::filters::BOUNDARY_MASS_CHECK)
+                .filter(|c| c.check == crate::filters::self_check::BOUNDARY_MASS_CHECK)
             {
                 c.advice = "the density reaches the edge of the box: with the likelihood in the operator the implicit step damps −½hᵀS⁻¹h at the edge as (1 + |q|Δt)⁻¹ per step instead of e^(−|q|Δt), so the tails are too heavy; shrink Δt or use likelihood = in_update (widening the box makes |q| at its edge larger)";
             }

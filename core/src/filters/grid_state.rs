@@ -1,0 +1,90 @@
+//! A grid filter's density between steps: normalised to unit mass with its estimate read off
+//! ([`normalise_on_grid`]), and kept before each step so that a failed step leaves the filter
+//! as it was ([`SavedDensity`]).
+
+use alloc::vec::Vec;
+
+use super::Estimate;
+
+/// The state a grid filter's step starts from — its density and estimate —, kept so that a
+/// step that fails can be undone (the [`Filter`](super::Filter) contract): one copy of the density per step,
+/// into storage made once.
+#[derive(Clone, Debug)]
+pub(crate) struct SavedDensity {
+    u: Vec<f64>,
+    estimate: Estimate,
+}
+
+impl SavedDensity {
+    /// Storage for a density of `len` values and an estimate like `estimate`.
+    pub(crate) fn new(len: usize, estimate: &Estimate) -> Self {
+        SavedDensity {
+            u: alloc::vec![0.0; len],
+            estimate: estimate.clone(),
+        }
+    }
+
+    /// Keeps `u` and `estimate`.
+    pub(crate) fn save(&mut self, u: &[f64], estimate: &Estimate) {
+        self.u.copy_from_slice(u);
+        self.estimate.copy_from(estimate);
+    }
+
+    /// Puts back what [`SavedDensity::save`] kept.
+    pub(crate) fn restore(&self, u: &mut [f64], estimate: &mut Estimate) {
+        u.copy_from_slice(&self.u);
+        estimate.copy_from(&self.estimate);
+    }
+
+    /// Ends a step that returned `result` (its log-likelihood, or why it failed): a success
+    /// records the log-likelihood, a failure puts back what [`SavedDensity::save`] kept and
+    /// leaves the last log-likelihood.
+    pub(crate) fn settle(
+        &self,
+        result: Result<f64, crate::error::FilterError>,
+        u: &mut [f64],
+        estimate: &mut Estimate,
+        log_likelihood: &mut f64,
+    ) -> Result<(), crate::error::FilterError> {
+        match result {
+            Ok(ll) => {
+                *log_likelihood = ll;
+                Ok(())
+            }
+            Err(e) => {
+                self.restore(u, estimate);
+                Err(e)
+            }
+        }
+    }
+}
+/// Normalises a grid density to unit mass in place and writes its estimate (mean,
+/// covariance, MAP node) into `estimate`, through `moments` (storage of the grid's dimension,
+/// so that nothing is allocated once the estimate has its covariance and MAP); a non-finite or
+/// vanished mass is an error, never NaN, and leaves `estimate` as it was.
+pub(crate) fn normalise_on_grid(
+    grid: &crate::grid::TensorGrid,
+    u: &mut [f64],
+    moments: &mut crate::grid::Moments,
+    estimate: &mut Estimate,
+) -> Result<(), crate::error::FilterError> {
+    grid.moments_into(u, moments);
+    if !moments.mass.is_finite() {
+        return Err(crate::error::FilterError::NonFinite { what: "density" });
+    }
+    if moments.mass <= 0.0 {
+        return Err(crate::error::FilterError::MassLost);
+    }
+    let inv = 1.0 / moments.mass;
+    u.iter_mut().for_each(|v| *v *= inv);
+    estimate.mean.copy_from(&moments.mean);
+    match &mut estimate.covariance {
+        Some(c) => c.copy_from(&moments.covariance),
+        none => *none = Some(moments.covariance.clone()),
+    }
+    match &mut estimate.map {
+        Some(m) => m.copy_from(&moments.map),
+        none => *none = Some(moments.map.clone()),
+    }
+    Ok(())
+}
