@@ -10,6 +10,15 @@ pub(crate) mod guarantees;
 pub(crate) mod operator;
 #[cfg(feature = "std")]
 mod superposition;
+// The schemes' kernels and the update (15), each in its own file.
+#[cfg(feature = "std")]
+mod iem;
+#[cfg(feature = "std")]
+mod qiem;
+#[cfg(feature = "std")]
+mod qiem4;
+#[cfg(feature = "std")]
+mod update;
 
 mod method;
 mod params;
