@@ -8,8 +8,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::presets;
 use zakai::Filter;
-use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
-use zakai::{GaussianSumFilter, GaussianSumParams};
+use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation};
+use zakai::{GaussianSum, GaussianSumFilter};
 
 /// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
 /// measurement `z0` at τ₀.
@@ -20,18 +20,31 @@ fn grid_filter(
     dt: f64,
     z0: &[f64],
 ) -> ContinuousDiscreteGrid {
-    let mut filter = ContinuousDiscreteGrid::new(
-        label.into(),
-        scheme,
-        experiment.model(),
-        experiment.prior(),
-        &FpeParams {
-            cells: vec![cells],
-            dt,
-        },
-        &experiment.config().bounds(),
+    let (model, prior) = (experiment.model(), experiment.prior().clone());
+    let (bounds, dt_obs) = (
+        experiment.config().bounds(),
         experiment.config().time.dt_obs,
-    )
+    );
+    let params = FpeParams {
+        cells: vec![cells],
+        dt,
+    };
+    let mut filter = match scheme {
+        FpeScheme::Separation => Separation::builder(model)
+            .prior(prior)
+            .domain(&bounds)
+            .dt(dt_obs)
+            .name(label)
+            .params(params)
+            .build(),
+        FpeScheme::ImplicitFdm => ImplicitFdm::builder(model)
+            .prior(prior)
+            .domain(&bounds)
+            .dt(dt_obs)
+            .name(label)
+            .params(params)
+            .build(),
+    }
     .expect("filter");
     filter.update(z0).expect("update");
     filter
@@ -61,14 +74,11 @@ fn fpe_split(c: &mut Criterion) {
                 })
             });
         }
-        let mut gsf = GaussianSumFilter::new(
-            "GSF".into(),
-            experiment.model(),
-            experiment.prior(),
-            &GaussianSumParams::default(),
-            &experiment.config().probe_points(),
-        )
-        .expect("gsf");
+        let mut gsf: GaussianSumFilter = GaussianSum::builder(experiment.model())
+            .prior(experiment.prior().clone())
+            .domain(&experiment.config().bounds())
+            .build()
+            .expect("gsf");
         // Fill the mixture up to its cap first so that the step reduces a full mixture.
         for k in 0..=traj.steps() {
             if k > 0 {

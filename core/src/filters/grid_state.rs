@@ -88,3 +88,39 @@ pub(crate) fn normalise_on_grid(
     }
     Ok(())
 }
+
+/// The [`Filter`](super::Filter) accessors of a filter that keeps its `name`, its last step's
+/// `log_likelihood` and its `estimate` in fields of those names (the grid and spectral
+/// filters), expanded inside its `impl Filter`; with `density in u`, also its density on
+/// `self.grid` held in `self.u`, and its marginals.
+macro_rules! kept_estimate_accessors {
+    () => {
+        fn name(&self) -> &str {
+            &self.name
+        }
+
+        fn log_likelihood(&self) -> Option<f64> {
+            Some(self.log_likelihood)
+        }
+
+        fn estimate(&self) -> crate::filters::Estimate {
+            self.estimate.clone()
+        }
+
+        fn estimate_into(&self, out: &mut crate::filters::Estimate) {
+            out.copy_from(&self.estimate);
+        }
+    };
+    (density in $u:ident) => {
+        crate::filters::kept_estimate_accessors!();
+
+        fn density(&self) -> Option<crate::filters::DensityView<'_>> {
+            Some(self.grid.view(&self.$u))
+        }
+
+        fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
+            self.grid.marginal(&self.$u, dim, grid, out);
+        }
+    };
+}
+pub(crate) use kept_estimate_accessors;

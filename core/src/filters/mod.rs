@@ -55,7 +55,7 @@ pub use crate::grid::DensityView;
 
 pub use estimate::Estimate;
 pub(crate) use estimate::{copy_matrix, copy_optional_vector, copy_vector};
-pub(crate) use grid_state::{normalise_on_grid, SavedDensity};
+pub(crate) use grid_state::{kept_estimate_accessors, normalise_on_grid, SavedDensity};
 pub use intervals::INTERVAL_TOLERANCE;
 pub(crate) use intervals::{whole_intervals, LengthCache, Substeps, REMAINDER_PLANS};
 pub use likelihood::observation_log_likelihoods;

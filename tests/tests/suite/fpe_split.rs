@@ -5,30 +5,58 @@ use nalgebra::DVector;
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::{presets, GaussianComponent, ObservationNoiseConfig, ScenarioConfig};
 use zakai::lab::study::density_error::{j_curve, JKind};
-use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme};
-use zakai::{Filter, Observation, ObservationKind};
-use zakai::{GaussianSumFilter, GaussianSumParams};
-use zakai::{KalmanBucy, KalmanParams};
+use zakai::method::Method;
+use zakai::{Builder, Filter, Observation, ObservationKind, ZakaiError};
+use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation};
+use zakai::{GaussianSum, GaussianSumFilter, GaussianSumParams, Kalman, KalmanBucy};
 use zakai_tests::test;
 
 fn experiment(config: ScenarioConfig) -> Experiment {
     Experiment::new(config).expect("valid scenario")
 }
 
+/// `builder` given the scenario's prior and box, as a user builds a filter.
+fn on_scenario<'e, M: Method>(builder: Builder<'e, M>, e: &Experiment) -> Builder<'e, M> {
+    builder
+        .prior(e.prior().clone())
+        .domain(&e.config().bounds())
+}
+
+/// The grid filter of `scheme` with `params` for observation interval `dt_obs`.
+fn build_grid(
+    e: &Experiment,
+    scheme: FpeScheme,
+    params: FpeParams,
+    dt_obs: f64,
+) -> Result<ContinuousDiscreteGrid, ZakaiError> {
+    match scheme {
+        FpeScheme::Separation => on_scenario(Separation::builder(e.model()), e)
+            .dt(dt_obs)
+            .params(params)
+            .build(),
+        FpeScheme::ImplicitFdm => on_scenario(ImplicitFdm::builder(e.model()), e)
+            .dt(dt_obs)
+            .params(params)
+            .build(),
+    }
+}
+
 fn grid_filter(e: &Experiment, scheme: FpeScheme, cells: usize, dt: f64) -> ContinuousDiscreteGrid {
-    ContinuousDiscreteGrid::new(
-        "grid".into(),
-        scheme,
-        e.model(),
-        e.prior(),
-        &FpeParams {
-            cells: vec![cells],
-            dt,
-        },
-        &e.config().bounds(),
-        e.config().time.dt_obs,
-    )
-    .expect("filter")
+    let params = FpeParams {
+        cells: vec![cells],
+        dt,
+    };
+    build_grid(e, scheme, params, e.config().time.dt_obs).expect("filter")
+}
+
+/// The Gaussian-sum reference with `params`.
+fn gaussian_sum(
+    e: &Experiment,
+    params: GaussianSumParams,
+) -> Result<GaussianSumFilter, ZakaiError> {
+    on_scenario(GaussianSum::builder(e.model()), e)
+        .params(params)
+        .build()
 }
 
 /// An Ornstein–Uhlenbeck model dx = −x dt + dw with a Gaussian prior N(1, 0.2) on [−6, 6].
@@ -126,16 +154,8 @@ fn unsuitable_models_are_refused_with_the_reason() {
     let mut c = ornstein_uhlenbeck();
     c.model.noise = ObservationNoiseConfig::Continuous { cov: None };
     let e = experiment(c);
-    let err = ContinuousDiscreteGrid::new(
-        "SA".into(),
-        FpeScheme::Separation,
-        e.model(),
-        e.prior(),
-        &FpeParams::default(),
-        &e.config().bounds(),
-        0.1,
-    )
-    .expect_err("refused");
+    let err =
+        build_grid(&e, FpeScheme::Separation, FpeParams::default(), 0.1).expect_err("refused");
     assert!(err.to_string().contains("discrete measurements"), "{err}");
 
     // A correlated Q (a₁₂ = 0.5): taken on square cells, refused on cells 4 times as long
@@ -144,13 +164,10 @@ fn unsuitable_models_are_refused_with_the_reason() {
     c.model.diffusion = Some(vec![vec![1.0, 0.0], vec![0.5, 1.0]].into());
     let e = experiment(c);
     let build = |cells: Vec<usize>| {
-        ContinuousDiscreteGrid::new(
-            "SA".into(),
+        build_grid(
+            &e,
             FpeScheme::Separation,
-            e.model(),
-            e.prior(),
-            &FpeParams { cells, dt: 0.01 },
-            &e.config().bounds(),
+            FpeParams { cells, dt: 0.01 },
             0.2,
         )
     };
@@ -164,14 +181,7 @@ fn unsuitable_models_are_refused_with_the_reason() {
     let mut c = presets::preset("sa-example-1").expect("preset");
     c.model.drift = vec!["0.1*x^2".into()];
     let e = experiment(c);
-    let err = GaussianSumFilter::new(
-        "GSF".into(),
-        e.model(),
-        e.prior(),
-        &GaussianSumParams::default(),
-        &e.config().probe_points(),
-    )
-    .expect_err("refused");
+    let err = gaussian_sum(&e, GaussianSumParams::default()).expect_err("refused");
     assert!(err.to_string().contains("linear model"), "{err}");
 }
 
@@ -192,23 +202,10 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
         cov: vec![vec![0.3, 0.1], vec![0.1, 0.2]].into(),
     };
     let e = experiment(c);
-    let probes = e.config().probe_points();
-    let mut gsf = GaussianSumFilter::new(
-        "GSF".into(),
-        e.model(),
-        e.prior(),
-        &GaussianSumParams::default(),
-        &probes,
-    )
-    .expect("gsf");
-    let mut kf = KalmanBucy::new(
-        "KF".into(),
-        e.model(),
-        e.prior(),
-        &KalmanParams::default(),
-        &probes,
-    )
-    .expect("kf");
+    let mut gsf = gaussian_sum(&e, GaussianSumParams::default()).expect("gsf");
+    let mut kf: KalmanBucy = on_scenario(Kalman::builder(e.model()), &e)
+        .build()
+        .expect("kf");
     let traj = e.simulate(4).unwrap();
     for k in 0..=traj.steps() {
         let obs = Observation {
@@ -232,14 +229,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
 #[test]
 fn gaussian_sum_update_matches_the_brute_force_posterior() {
     let e = experiment(presets::preset("sa-example-1").expect("preset"));
-    let mut gsf = GaussianSumFilter::new(
-        "GSF".into(),
-        e.model(),
-        e.prior(),
-        &GaussianSumParams::default(),
-        &e.config().probe_points(),
-    )
-    .expect("gsf");
+    let mut gsf = gaussian_sum(&e, GaussianSumParams::default()).expect("gsf");
     let z = -3.1;
     gsf.update(&[z]).expect("update");
     let normal = |x: f64, m: f64, v: f64| {
@@ -273,17 +263,11 @@ fn gaussian_sum_reduction_is_controlled() {
     let e = experiment(presets::preset("sa-example-1").expect("preset"));
     let traj = e.simulate(2).unwrap();
     let run = |cap: usize| {
-        let mut gsf = GaussianSumFilter::new(
-            "GSF".into(),
-            e.model(),
-            e.prior(),
-            &GaussianSumParams {
-                max_components: cap,
-                ..GaussianSumParams::default()
-            },
-            &e.config().probe_points(),
-        )
-        .expect("gsf");
+        let params = GaussianSumParams {
+            max_components: cap,
+            ..GaussianSumParams::default()
+        };
+        let mut gsf = gaussian_sum(&e, params).expect("gsf");
         for k in 0..=traj.steps() {
             if k > 0 {
                 gsf.predict(traj.dt_obs).expect("predict");

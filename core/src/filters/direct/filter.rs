@@ -33,7 +33,7 @@ use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
 use crate::model::dmz::PartialIncrements;
-use crate::model::{Model, ObservationModel, Prior};
+use crate::model::{Model, ObservationModel};
 
 /// The direct method's self-check threshold: the share `Σ|r| / Σ|û|` of û that Algorithm 1
 /// leaves to the residual r, which is carried over the interval with the zeroth-order factor
@@ -178,13 +178,12 @@ pub(crate) fn check_system(
 
 impl DirectFilter {
     /// Checks (C1)–(C3) on the domain, tabulates F and the prior.
-    pub fn new(
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &DirectParams,
-        bounds: &[(f64, f64)],
     ) -> Result<Self, FilterError> {
+        let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         if let Some((field, msg)) = params.problems(model.n).into_iter().next() {
             return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
         }
@@ -470,9 +469,7 @@ impl DirectFilter {
 }
 
 impl Filter for DirectFilter {
-    fn name(&self) -> &str {
-        &self.name
-    }
+    crate::filters::kept_estimate_accessors!(density in density);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Increment, self.h.len())?;
@@ -499,18 +496,6 @@ impl Filter for DirectFilter {
         }
     }
 
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.estimate.clone()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        out.copy_from(&self.estimate);
-    }
-
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         if self.residual_share > RESIDUAL_SHARE_THRESHOLD {
             out.push(crate::filters::Concern::above(
@@ -520,13 +505,5 @@ impl Filter for DirectFilter {
                 "the Gaussian approximation leaves much of the density to the residual, whose propagation neglects diffusion and drift: lower alpha or raise max_terms",
             ));
         }
-    }
-
-    fn density(&self) -> Option<crate::filters::DensityView<'_>> {
-        Some(self.grid.view(&self.density))
-    }
-
-    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        self.grid.marginal(&self.density, dim, grid, out);
     }
 }

@@ -70,9 +70,7 @@ impl Method for Direct {
         p: &DirectParams,
         name: String,
     ) -> Result<DirectFilter, ZakaiError> {
-        Ok(DirectFilter::new(
-            name, ctx.model, ctx.prior, p, ctx.bounds,
-        )?)
+        Ok(DirectFilter::new(name, ctx, p)?)
     }
     /// Half the grid spacing (`2N − 1` points keep the old ones), half Algorithm 1's
     /// threshold α and twice the Riccati substeps.

@@ -12,12 +12,12 @@ use super::upwind::UpwindAdvection;
 use super::{FpeParams, FpeScheme, MAX_SUBSTEPS};
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::{
-    normalise_on_grid, DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind,
-    Observed, REMAINDER_PLANS,
+    normalise_on_grid, Estimate, Filter, LengthCache, Observation, ObservationKind, Observed,
+    REMAINDER_PLANS,
 };
 use crate::grid::cross::CrossDiffusion;
 use crate::grid::TensorGrid;
-use crate::model::{MeasurementDensity, Model, ObservationModel, Prior};
+use crate::model::{MeasurementDensity, Model, ObservationModel};
 
 /// The model fits the filter: discrete measurements (their density `p(z | x)` is returned;
 /// any family, the update (6) multiplies it in node by node). Mixed terms of `Q = G Gᵀ`
@@ -232,15 +232,14 @@ pub struct ContinuousDiscreteGrid {
 impl ContinuousDiscreteGrid {
     /// Builds the filter on `bounds` (the cells tile the box) for observation interval
     /// `dt_obs` (used for the step-choice warnings).
-    pub fn new(
+    pub(crate) fn new(
         name: String,
         scheme: FpeScheme,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &FpeParams,
-        bounds: &[(f64, f64)],
-        dt_obs: f64,
     ) -> Result<Self, ZakaiError> {
+        let dt_obs = ctx.interval(&name)?;
+        let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let n = model.n;
         let problems = params.problems(n);
         if let Some((field, msg)) = problems.first() {
@@ -688,9 +687,7 @@ fn rounded(x: &[f64]) -> Vec<f64> {
 }
 
 impl Filter for ContinuousDiscreteGrid {
-    fn name(&self) -> &str {
-        &self.name
-    }
+    crate::filters::kept_estimate_accessors!(density in u);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Measurement, self.m)?;
@@ -711,10 +708,6 @@ impl Filter for ContinuousDiscreteGrid {
             .settle(result, u, estimate, &mut self.log_likelihood)
     }
 
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.log_likelihood)
-    }
-
     fn smoother(
         &self,
         plan: &crate::filters::smoothing::SmoothingPlan,
@@ -726,22 +719,6 @@ impl Filter for ContinuousDiscreteGrid {
             ));
         }
         crate::filters::smoothing::grid_smoother(self, plan)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.estimate.clone()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        out.copy_from(&self.estimate);
-    }
-
-    fn density(&self) -> Option<DensityView<'_>> {
-        Some(self.grid.view(&self.u))
-    }
-
-    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        self.grid.marginal(&self.u, dim, grid, out);
     }
 
     fn warnings(&self) -> Vec<String> {

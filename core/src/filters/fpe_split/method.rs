@@ -61,8 +61,7 @@ fn build(
     p: &FpeParams,
     name: String,
 ) -> Result<ContinuousDiscreteGrid, ZakaiError> {
-    let dt_obs = ctx.interval(&name)?;
-    ContinuousDiscreteGrid::new(name, scheme, ctx.model, ctx.prior, p, ctx.bounds, dt_obs)
+    ContinuousDiscreteGrid::new(name, scheme, ctx, p)
 }
 
 macro_rules! fpe_method {

@@ -226,13 +226,12 @@ struct UpdateWork {
 impl GaussianSumFilter {
     /// Builds the filter; the model must be linear with discrete measurements and the prior a
     /// Gaussian mixture. `probes` are the points where linearity is checked.
-    pub fn new(
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &GaussianSumParams,
-        probes: &[Vec<f64>],
     ) -> Result<Self, ZakaiError> {
+        let (model, prior, probes) = (ctx.model, ctx.prior, ctx.probes);
         if let Some((field, msg)) = params.problems().first() {
             return Err(ZakaiError::InvalidParameter {
                 method: name,

@@ -75,6 +75,6 @@ impl Method for GaussianSum {
         p: &GaussianSumParams,
         name: String,
     ) -> Result<GaussianSumFilter, ZakaiError> {
-        GaussianSumFilter::new(name, ctx.model, ctx.prior, p, ctx.probes)
+        GaussianSumFilter::new(name, ctx, p)
     }
 }

@@ -5,8 +5,8 @@ use alloc::string::String;
 use super::measurement::MeasurementForm;
 use super::{EkfParams, GaussianState};
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation};
-use crate::model::{Model, Prior};
+use crate::filters::{Filter, Observation};
+use crate::model::Model;
 
 /// The extended Kalman filter.
 ///
@@ -57,47 +57,31 @@ pub struct ExtendedKalman {
 }
 
 impl ExtendedKalman {
-    /// Builds the filter from the model and the prior's moments; fails for measurements
-    /// without the two moments its update needs (`MeasurementForm::new`).
-    pub fn new(
+    /// Builds the filter from the model and the prior's moments, for observation interval
+    /// Δτ when the context has one (a step of another length then takes as many RK4 steps of
+    /// at most Δτ/substeps as it needs); fails for measurements without the two moments its
+    /// update needs (`MeasurementForm::new`).
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &EkfParams,
     ) -> Result<Self, crate::error::FilterError> {
+        let (model, prior) = (ctx.model, ctx.prior);
         Ok(ExtendedKalman {
             form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             q: model.process_noise(),
-            substeps: crate::filters::Substeps::new(params.substeps, None),
+            substeps: crate::filters::Substeps::new(params.substeps, ctx.dt_obs),
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
         })
-    }
-}
-
-impl ExtendedKalman {
-    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
-    /// steps of at most Δτ/substeps as it needs.
-    pub(crate) fn with_interval(mut self, params: &EkfParams, dt_obs: Option<f64>) -> Self {
-        self.substeps = crate::filters::Substeps::new(params.substeps, dt_obs);
-        self
     }
 }
 
 super::smoother::gaussian_filter!(ExtendedKalman);
 
 impl Filter for ExtendedKalman {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn smoother(
-        &self,
-        plan: &crate::filters::smoothing::SmoothingPlan,
-    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
-        super::smoother::rts(self, plan)
-    }
+    super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let ExtendedKalman {
@@ -117,18 +101,6 @@ impl Filter for ExtendedKalman {
                 None => Ok(()),
             }
         })
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.state.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.state.estimate()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out, None);
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {

@@ -10,8 +10,8 @@ use nalgebra::{DMatrix, DVector};
 use super::measurement::MeasurementForm;
 use super::{GaussianState, KalmanParams};
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation};
-use crate::model::{Model, Prior, VectorFunction};
+use crate::filters::{Filter, Observation};
+use crate::model::{Model, VectorFunction};
 
 /// Jacobian of `g` at `x` as a matrix.
 fn jacobian_at(g: &dyn VectorFunction, x: &[f64]) -> DMatrix<f64> {
@@ -183,14 +183,13 @@ impl Discretization {
 }
 
 impl KalmanBucy {
-    /// Builds the filter; `probes` are points where linearity is checked.
-    pub fn new(
+    /// Builds the filter; linearity is checked at the context's probe points.
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &KalmanParams,
-        probes: &[Vec<f64>],
     ) -> Result<Self, FilterError> {
+        let (model, prior, probes) = (ctx.model, ctx.prior, ctx.probes);
         let (a, b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
         affine_parts(
             &*model.observation,
@@ -221,16 +220,7 @@ impl KalmanBucy {
 super::smoother::gaussian_filter!(KalmanBucy);
 
 impl Filter for KalmanBucy {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn smoother(
-        &self,
-        plan: &crate::filters::smoothing::SmoothingPlan,
-    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
-        super::smoother::rts(self, plan)
-    }
+    super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the state.
@@ -260,18 +250,6 @@ impl Filter for KalmanBucy {
                 None => state.check(),
             }
         })
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.state.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.state.estimate()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out, None);
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {

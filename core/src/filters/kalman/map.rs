@@ -9,7 +9,7 @@ use super::second_mode::{Interval, ModeWatch};
 use super::{GaussianInit, GaussianState};
 use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, Observation};
-use crate::model::{Model, Prior};
+use crate::model::Model;
 
 /// The MAP filters' convergence self-check threshold: the Gauss–Newton step still left at the
 /// point an update returns, in standard deviations of the Laplace covariance there. At a MAP
@@ -105,21 +105,21 @@ pub struct MapKalman {
 impl MapKalman {
     /// Builds the filter from the model and the prior's moments; fails for measurements
     /// without the two moments its update needs (`MeasurementForm::new`).
-    pub fn new(
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        solver: MapSolver,
+        ctx: &crate::filters::method::BuildContext,
         init: &GaussianInit,
         substeps: usize,
-        solver: MapSolver,
     ) -> Result<Self, crate::error::FilterError> {
+        let (model, prior) = (ctx.model, ctx.prior);
         let state = GaussianState::initial(prior.mean(), prior.covariance(), init, model.m);
         Ok(MapKalman {
             form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
             q: model.process_noise(),
-            substeps: crate::filters::Substeps::new(substeps, None),
+            substeps: crate::filters::Substeps::new(substeps, ctx.dt_obs),
             solver,
             watch: ModeWatch::new(&state, model.m),
             state,
@@ -133,13 +133,6 @@ impl MapKalman {
         })
     }
 
-    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
-    /// steps of at most Δτ/substeps as it needs.
-    pub(crate) fn with_interval(mut self, substeps: usize, dt_obs: Option<f64>) -> Self {
-        self.substeps = crate::filters::Substeps::new(substeps, dt_obs);
-        self
-    }
-
     /// Iterations or Newton steps of the last update.
     pub fn last_iterations(&self) -> usize {
         self.last.iterations
@@ -149,16 +142,7 @@ impl MapKalman {
 super::smoother::gaussian_filter!(MapKalman);
 
 impl Filter for MapKalman {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn smoother(
-        &self,
-        plan: &crate::filters::smoothing::SmoothingPlan,
-    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
-        super::smoother::rts(self, plan)
-    }
+    super::smoother::gaussian_filter_opening!();
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let MapKalman {
@@ -204,10 +188,6 @@ impl Filter for MapKalman {
         };
         watch.after_update(&interval, state, last.log_density);
         Ok(())
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.state.log_likelihood)
     }
 
     fn estimate(&self) -> Estimate {

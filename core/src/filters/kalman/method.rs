@@ -39,10 +39,7 @@ fn map_kalman(
     solver: MapSolver,
     name: String,
 ) -> Result<MapKalman, ZakaiError> {
-    Ok(
-        MapKalman::new(name, ctx.model, ctx.prior, init, substeps, solver)?
-            .with_interval(substeps, ctx.dt_obs),
-    )
+    Ok(MapKalman::new(name, solver, ctx, init, substeps)?)
 }
 
 /// How the Gaussian filters treat a state-dependent G(x).
@@ -119,7 +116,7 @@ impl Method for Kalman {
         Some(SMALL_MEMORY)
     }
     fn build(ctx: &BuildContext, p: &KalmanParams, name: String) -> Result<KalmanBucy, ZakaiError> {
-        Ok(KalmanBucy::new(name, ctx.model, ctx.prior, p, ctx.probes)?)
+        Ok(KalmanBucy::new(name, ctx, p)?)
     }
 }
 
@@ -163,7 +160,7 @@ impl Method for Ekf {
         p: &EkfParams,
         name: String,
     ) -> Result<ExtendedKalman, ZakaiError> {
-        Ok(ExtendedKalman::new(name, ctx.model, ctx.prior, p)?.with_interval(p, ctx.dt_obs))
+        Ok(ExtendedKalman::new(name, ctx, p)?)
     }
     fn refined(p: &EkfParams, _: usize) -> Option<(EkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
@@ -217,7 +214,7 @@ impl Method for Ukf {
         p: &UkfParams,
         name: String,
     ) -> Result<UnscentedKalman, ZakaiError> {
-        Ok(UnscentedKalman::new(name, ctx.model, ctx.prior, p)?.with_interval(p, ctx.dt_obs))
+        Ok(UnscentedKalman::new(name, ctx, p)?)
     }
     fn refined(p: &UkfParams, _: usize) -> Option<(UkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;

@@ -169,3 +169,41 @@ macro_rules! gaussian_filter {
     };
 }
 pub(crate) use gaussian_filter;
+
+/// The [`Filter`](crate::Filter) methods every Gaussian filter writes alike — its name, the
+/// RTS smoother ([`rts`]) and the last step's log-likelihood (the predictive density of the
+/// innovation) — expanded inside its `impl Filter`; with `estimate`, also the estimate from
+/// the mean and covariance (the MAP filters add their MAP point instead).
+macro_rules! gaussian_filter_opening {
+    () => {
+        fn name(&self) -> &str {
+            &self.name
+        }
+
+        fn smoother(
+            &self,
+            plan: &crate::filters::smoothing::SmoothingPlan,
+        ) -> Result<
+            alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>,
+            crate::error::FilterError,
+        > {
+            super::smoother::rts(self, plan)
+        }
+
+        fn log_likelihood(&self) -> Option<f64> {
+            Some(self.state.log_likelihood)
+        }
+    };
+    (estimate) => {
+        super::smoother::gaussian_filter_opening!();
+
+        fn estimate(&self) -> crate::filters::Estimate {
+            self.state.estimate()
+        }
+
+        fn estimate_into(&self, out: &mut crate::filters::Estimate) {
+            self.state.estimate_into(out, None);
+        }
+    };
+}
+pub(crate) use gaussian_filter_opening;

@@ -10,9 +10,9 @@ use nalgebra::{DMatrix, DVector};
 use super::measurement::{Measurement, MeasurementForm};
 use super::{GaussianState, UkfParams};
 use crate::error::FilterError;
-use crate::filters::{Estimate, Filter, Observation};
+use crate::filters::{Filter, Observation};
 use crate::linalg::cholesky_in;
-use crate::model::{BatchScratch, Model, Prior};
+use crate::model::{BatchScratch, Model};
 
 /// Sigma-point weights.
 #[derive(Clone, Debug)]
@@ -175,13 +175,15 @@ pub struct UnscentedKalman {
 }
 
 impl UnscentedKalman {
-    /// Builds the filter; fails on invalid parameters.
-    pub fn new(
+    /// Builds the filter, for observation interval Δτ when the context has one (a step of
+    /// another length then takes as many RK4 steps of at most Δτ/substeps as it needs); fails
+    /// on invalid parameters.
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &UkfParams,
     ) -> Result<Self, FilterError> {
+        let (model, prior) = (ctx.model, ctx.prior);
         let n = model.n as f64;
         if let Some((field, msg)) = params.problems(model.n).into_iter().next() {
             return Err(FilterError::Unsuitable(format!("UKF {field}: {msg}")));
@@ -198,7 +200,7 @@ impl UnscentedKalman {
             name,
             model: model.clone(),
             q: model.process_noise(),
-            substeps: crate::filters::Substeps::new(params.substeps, None),
+            substeps: crate::filters::Substeps::new(params.substeps, ctx.dt_obs),
             weights,
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
             sigma: SigmaPoints::new(model.n, model.m),
@@ -297,28 +299,10 @@ impl UnscentedKalman {
     }
 }
 
-impl UnscentedKalman {
-    /// Built for observation interval `dt_obs`: a step of another length takes as many RK4
-    /// steps of at most Δτ/substeps as it needs.
-    pub(crate) fn with_interval(mut self, params: &UkfParams, dt_obs: Option<f64>) -> Self {
-        self.substeps = crate::filters::Substeps::new(params.substeps, dt_obs);
-        self
-    }
-}
-
 super::smoother::gaussian_filter!(UnscentedKalman);
 
 impl Filter for UnscentedKalman {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn smoother(
-        &self,
-        plan: &crate::filters::smoothing::SmoothingPlan,
-    ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
-        super::smoother::rts(self, plan)
-    }
+    super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let UnscentedKalman {
@@ -358,18 +342,6 @@ impl Filter for UnscentedKalman {
                 None => Ok(()),
             }
         })
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.state.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.state.estimate()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        self.state.estimate_into(out, None);
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {

@@ -11,7 +11,7 @@ use super::PfParams;
 use crate::error::FilterError;
 use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
-use crate::model::{BatchScratch, Diffusion, Model, ObservationModel, Prior};
+use crate::model::{BatchScratch, Diffusion, Model, ObservationModel};
 use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
@@ -146,13 +146,12 @@ pub struct ParticleFilter {
 
 impl ParticleFilter {
     /// Draws N particles from the prior with a generator seeded by `seed`.
-    pub fn new(
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &PfParams,
-        seed: u64,
     ) -> Result<Self, FilterError> {
+        let (model, prior, seed) = (ctx.model, ctx.prior, ctx.seed);
         if let Some((field, msg)) = params.problems().into_iter().next() {
             return Err(FilterError::Unsuitable(format!("PF {field}: {msg}")));
         }
@@ -227,7 +226,7 @@ impl ParticleFilter {
             resamples: 0,
             last_ess: count as f64,
             last_unique: count,
-            substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), None),
+            substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), ctx.dt_obs),
             trail: None,
         })
     }

@@ -62,9 +62,7 @@ impl Method for Pf {
         p.particles.checked_mul(5 * n + 4)?.checked_mul(8)
     }
     fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
-        let mut pf = ParticleFilter::new(name, ctx.model, ctx.prior, p, ctx.seed)?;
-        pf.substeps = crate::filters::Substeps::new(p.substeps.unwrap_or(1), ctx.dt_obs);
-        Ok(pf)
+        Ok(ParticleFilter::new(name, ctx, p)?)
     }
     fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
         if p.substeps.is_some() {

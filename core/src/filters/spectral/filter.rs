@@ -12,7 +12,7 @@ use crate::error::FilterError;
 use crate::filters::{Estimate, Filter, LengthCache, Observation, ObservationKind, Observed};
 use crate::linalg;
 use crate::model::dmz::{DmzCoefficients, LikelihoodPlacement, ObservedTerms, PartialIncrements};
-use crate::model::{Model, Prior};
+use crate::model::Model;
 
 use super::params::SpectralParams;
 use super::{legendre, offline, tensor};
@@ -222,23 +222,24 @@ enum Leg {
 
 impl SpectralFilter {
     /// Runs the off-line part for `model` on `bounds` and projects the prior.
-    pub fn new(
+    pub(crate) fn new(
         name: String,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &SpectralParams,
-        bounds: &[(f64, f64)],
-        dt_obs: f64,
-    ) -> Result<Self, FilterError> {
+    ) -> Result<Self, crate::error::ZakaiError> {
+        let dt_obs = ctx.interval(&name)?;
+        let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let n = model.n;
         if let Some((field, msg)) = params.problems(n).into_iter().next() {
-            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
+            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(
+                format!("{name} {field}: {msg}"),
+            )));
         }
         let t0 = params.t0.unwrap_or(dt_obs);
         if (t0 - dt_obs).abs() > 1e-9 * dt_obs {
-            return Err(FilterError::Unsuitable(format!(
+            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
                 "{name}: T₀ = {t0} must equal the observation interval Δτ = {dt_obs} (004 propagates one interval per observation)"
-            )));
+            ))));
         }
         let layout = params.layout(n, bounds);
         let in_operator = params.likelihood == LikelihoodPlacement::InOperator;
@@ -636,9 +637,7 @@ fn scale_and_measure(coeffs: &mut [f64], scale: f64, counts: &[usize]) -> Energy
 }
 
 impl Filter for SpectralFilter {
-    fn name(&self) -> &str {
-        &self.name
-    }
+    crate::filters::kept_estimate_accessors!();
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.remainders.check(out);
@@ -726,18 +725,6 @@ impl Filter for SpectralFilter {
             }
         }
         stepped
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.estimate.clone()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        out.copy_from(&self.estimate);
     }
 
     /// The marginal of the projected density (39) on the on-line basis, clipped at zero;

@@ -87,10 +87,7 @@ impl Method for Spectral {
         p: &SpectralParams,
         name: String,
     ) -> Result<SpectralFilter, ZakaiError> {
-        let dt_obs = ctx.interval(&name)?;
-        Ok(SpectralFilter::new(
-            name, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
-        )?)
+        SpectralFilter::new(name, ctx, p)
     }
     /// In 1-D an unset basis size follows the domain against the prior's width (see
     /// `FUNCTIONS_PER_SD`); in 2-D and 3-D, whose off-line operator grows with the

@@ -16,12 +16,10 @@ use super::superposition::Superposition;
 use super::update::{observation_factor, CellSamples};
 use super::{LikelihoodPlacement, PotentialTerm, Scheme, YauYauParams};
 use crate::error::FilterError;
-use crate::filters::{
-    DensityView, Estimate, Filter, LengthCache, Observation, ObservationKind, Observed,
-};
+use crate::filters::{Estimate, Filter, LengthCache, Observation, ObservationKind, Observed};
 use crate::grid::TensorGrid;
 use crate::model::dmz::{ObservedTerms, PartialIncrements};
-use crate::model::{Model, Prior};
+use crate::model::Model;
 
 #[derive(Clone, Debug)]
 enum Solver {
@@ -157,15 +155,14 @@ pub struct YauYauFilter {
 
 impl YauYauFilter {
     /// Tabulates the operator and the prior on the grid over `bounds`.
-    pub fn new(
+    pub(crate) fn new(
         name: String,
         scheme: Scheme,
-        model: &Model,
-        prior: &Prior,
+        ctx: &crate::filters::method::BuildContext,
         params: &YauYauParams,
-        bounds: &[(f64, f64)],
-        dt_obs: f64,
-    ) -> Result<Self, FilterError> {
+    ) -> Result<Self, crate::error::ZakaiError> {
+        let dt_obs = ctx.interval(&name)?;
+        let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let mut problems = params.problems(model.n);
         if scheme == Scheme::Superposition {
             problems.extend(params.superposition_problems(model.n));
@@ -174,7 +171,9 @@ impl YauYauFilter {
             problems.extend(params.fourth_order_problems(model.n));
         }
         if let Some((field, msg)) = problems.into_iter().next() {
-            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")));
+            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(
+                format!("{name} {field}: {msg}"),
+            )));
         }
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
@@ -189,22 +188,22 @@ impl YauYauFilter {
             params.likelihood == LikelihoodPlacement::InUpdate,
         )?;
         if op.state_dependent && scheme != Scheme::Iem {
-            return Err(FilterError::Unsuitable(format!(
+            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
                 "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
-            )));
+            ))));
         }
         if !op.cross.is_empty() && scheme == Scheme::Qiem4 {
-            return Err(FilterError::Unsuitable(format!(
+            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
                 "{name} needs a diagonal Q = G Gᵀ: the mixed terms' explicit step is second order and would spoil the fourth-order scheme; QIEM and IEM take them"
-            )));
+            ))));
         }
         if scheme == Scheme::Qiem4 {
             let (a, b) = (grid.spacing()[0], grid.spacing()[1]);
             if (a - b).abs() > 1e-9 * a || op.diffusion[0] != op.diffusion[1] {
-                return Err(FilterError::Unsuitable(format!(
+                return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
                     "{name}: the 9-point scheme needs square cells and equal diffusion, got Δs = ({a:.4}, {b:.4}) and Q = ({}, {}); make the domain square or adjust the points",
                     op.diffusion[0], op.diffusion[1]
-                )));
+                ))));
             }
         }
         let u = grid.tabulate(|x| prior.density(x));
@@ -621,9 +620,7 @@ impl crate::filters::smoothing::GridTransition for YauYauFilter {
 }
 
 impl Filter for YauYauFilter {
-    fn name(&self) -> &str {
-        &self.name
-    }
+    crate::filters::kept_estimate_accessors!(density in u);
 
     fn smoother(
         &self,
@@ -682,26 +679,6 @@ impl Filter for YauYauFilter {
         let (u, estimate) = (&mut self.u, &mut self.estimate);
         self.saved
             .settle(result, u, estimate, &mut self.log_likelihood)
-    }
-
-    fn log_likelihood(&self) -> Option<f64> {
-        Some(self.log_likelihood)
-    }
-
-    fn estimate(&self) -> Estimate {
-        self.estimate.clone()
-    }
-
-    fn estimate_into(&self, out: &mut Estimate) {
-        out.copy_from(&self.estimate);
-    }
-
-    fn density(&self) -> Option<DensityView<'_>> {
-        Some(self.grid.view(&self.u))
-    }
-
-    fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
-        self.grid.marginal(&self.u, dim, grid, out);
     }
 
     fn warnings(&self) -> Vec<String> {
@@ -817,7 +794,7 @@ mod tests {
         for (drift, obs, scheme, likelihood) in cases {
             let n = drift.len();
             let model = Model::from_text(drift, obs, Noise::continuous(0.5)).expect("model");
-            let prior = Prior::Mixture(
+            let prior = crate::model::Prior::Mixture(
                 GaussianMixture::gaussian(DVector::zeros(n), nalgebra::DMatrix::identity(n, n))
                     .expect("prior"),
             );
@@ -829,9 +806,15 @@ mod tests {
                 ..Default::default()
             };
             let bounds = vec![(-3.0, 3.0); n];
-            let mut f =
-                YauYauFilter::new("t".into(), scheme, &model, &prior, &params, &bounds, 0.01)
-                    .expect("filter");
+            let ctx = crate::filters::method::BuildContext {
+                model: &model,
+                prior: &prior,
+                seed: 0,
+                probes: &[],
+                bounds: &bounds,
+                dt_obs: Some(0.01),
+            };
+            let mut f = YauYauFilter::new("t".into(), scheme, &ctx, &params).expect("filter");
             let len = f.grid().len();
             let a: Vec<f64> = (0..len).map(|i| libm::sin(i as f64 * 0.37) + 1.1).collect();
             let b: Vec<f64> = (0..len).map(|i| libm::cos(i as f64 * 0.91)).collect();

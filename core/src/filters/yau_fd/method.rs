@@ -74,14 +74,11 @@ fn build(
     p: &YauYauParams,
     name: String,
 ) -> Result<YauYauFilter, ZakaiError> {
-    let dt_obs = ctx.interval(&name)?;
     #[cfg(feature = "std")]
-    return Ok(YauYauFilter::new(
-        name, scheme, ctx.model, ctx.prior, p, ctx.bounds, dt_obs,
-    )?);
+    return YauYauFilter::new(name, scheme, ctx, p);
     #[cfg(not(feature = "std"))]
     {
-        let _ = (scheme, p, dt_obs);
+        let _ = (scheme, ctx, p);
         Err(ZakaiError::NeedsFeature {
             what: format!("{name} (FFT plans)"),
             feature: "std",

@@ -113,6 +113,15 @@ pub fn j_curve(
     }
     let bounds = config.bounds();
     let dt_obs = config.time.dt_obs;
+    let probes = config.probe_points();
+    let ctx = crate::filters::method::BuildContext {
+        model,
+        prior,
+        seed,
+        probes: &probes,
+        bounds: &bounds,
+        dt_obs: Some(dt_obs),
+    };
     let mut grids = Vec::new();
     let mut gsf_params = GaussianSumParams::default();
     for (method, name) in config.methods.iter().zip(experiment.method_names()) {
@@ -128,11 +137,8 @@ pub fn j_curve(
         grids.push(ContinuousDiscreteGrid::new(
             name.clone(),
             scheme,
-            model,
-            prior,
+            &ctx,
             params,
-            &bounds,
-            dt_obs,
         )?);
     }
     if grids.is_empty() {
@@ -140,13 +146,7 @@ pub fn j_curve(
             "J(t) needs at least one `separation` or `implicit_fdm` method in the scenario".into(),
         ));
     }
-    let mut gsf = GaussianSumFilter::new(
-        "GSF".into(),
-        model,
-        prior,
-        &gsf_params,
-        &config.probe_points(),
-    )?;
+    let mut gsf = GaussianSumFilter::new("GSF".into(), &ctx, &gsf_params)?;
     let per_interval = per_interval.max(1);
     let trajectory = experiment.simulate(seed)?;
     let mut scratch: Vec<Vec<f64>> = grids.iter().map(|g| vec![0.0; g.grid().len()]).collect();
