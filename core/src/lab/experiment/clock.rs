@@ -35,7 +35,7 @@ mod standard_clock {
         }
     }
 
-    /// Calls `f` with the standard clock ([`StdClock`]).
+    /// Calls `f` with the standard clock (`std::time::Instant`).
     pub fn with_standard_clock<T>(f: impl FnOnce(Option<&dyn Clock>) -> T) -> T {
         f(Some(&StdClock::default()))
     }
