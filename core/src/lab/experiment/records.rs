@@ -145,7 +145,7 @@ pub struct MethodTrack {
     /// `estimates`, NaN where a component is missing or the prediction failed), with
     /// `x̂_{k|k−1}` the mean the method predicts for τ_k before it sees `z_k` (on a fork): the
     /// part of each measurement its prediction did not expect. Empty unless the run records
-    /// them ([`ExperimentRun::record_innovations`]).
+    /// them ([`ExperimentRun::record_innovations`](super::ExperimentRun::record_innovations)).
     #[serde(with = "crate::lab::recording::bits")]
     pub innovations: Vec<f64>,
     /// The log-likelihood of each row's observation given the ones before it
@@ -157,7 +157,7 @@ pub struct MethodTrack {
     /// track-loss rule or the divergence bound, not a failed step or non-finite numbers),
     /// rows `failure.k ..`, row-major — for display only (a failed run's numbers never reach a
     /// table). Empty unless the run follows failed methods
-    /// ([`ExperimentRun::follow_failed_methods`]).
+    /// ([`ExperimentRun::follow_failed_methods`](super::ExperimentRun::follow_failed_methods)).
     #[serde(with = "crate::lab::recording::bits")]
     pub after_failure: Vec<f64>,
     /// Since when the error has been above the track-loss threshold.
@@ -166,7 +166,7 @@ pub struct MethodTrack {
     /// Whether the method is still stepped after its failure (a followed run, the state
     /// intact; see `after_failure`).
     pub(super) following: bool,
-    /// The smoothed estimates of a smoothing run ([`Experiment::smooth_recorded`]); `None`
+    /// The smoothed estimates of a smoothing run ([`Experiment::smooth_recorded`](super::Experiment::smooth_recorded)); `None`
     /// in a filtering run.
     #[serde(default)]
     pub smoothed: Option<SmoothedTrack>,

@@ -16,7 +16,7 @@ use crate::model::Model;
 use crate::validate::ConfigProblem;
 
 /// The longest step of a recording, in observation intervals Δτ: a longer one is refused
-/// before the run (see [`Experiment::recording_problems`]).
+/// before the run (see [`Experiment::recording_problems`](super::Experiment::recording_problems)).
 pub const MAX_INTERVALS_PER_STEP: f64 = 1.0e4;
 
 /// How the failure of a method that does not apply to the model starts (the run records it
@@ -55,7 +55,7 @@ impl Filter for NotApplicable {
     }
 }
 
-/// A run in progress (see [`Experiment::start`]).
+/// A run in progress (see [`Experiment::start`](super::Experiment::start)).
 #[derive(Clone, Debug)]
 pub struct ExperimentRun {
     pub(super) seed: u64,
@@ -385,7 +385,7 @@ impl ExperimentRun {
     /// ([`Recording::push`]: refused, the run left as it was, when it does not fit, or when
     /// the step is more than [`MAX_INTERVALS_PER_STEP`] intervals Δτ); the next
     /// [`ExperimentRun::advance`] processes it. A live feed: start with
-    /// [`Experiment::start_recorded`] on the rows so far and push each new one.
+    /// [`Experiment::start_recorded`](super::Experiment::start_recorded) on the rows so far and push each new one.
     pub fn push(&mut self, t: f64, value: &[f64]) -> Result<(), ZakaiError> {
         let (k, last) = (self.data.times.len(), self.data.times.last().copied());
         if let Some(problem) = last.and_then(|last| long_step(k, t - last, self.dt_obs)) {
@@ -427,7 +427,7 @@ impl ExperimentRun {
     }
 
     /// The backward pass of every method's smoother (a run started as a smoothing run,
-    /// [`Experiment::smooth_recorded`], once every observation is processed): fills
+    /// [`Experiment::smooth_recorded`](super::Experiment::smooth_recorded), once every observation is processed): fills
     /// [`MethodTrack::smoothed`] with the smoothed rows, or why there are none.
     pub(super) fn smooth(
         &mut self,
