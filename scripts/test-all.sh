@@ -151,6 +151,7 @@ if ! command -v chromium >/dev/null 2>&1; then
     sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
   fi
 fi
+node tests/web/imports.mjs
 # Two browsers side by side (each keeps about one and a half cores busy: 245 s one after the
 # other, 190 s together here).
 behind lessons node tests/web/lessons.mjs

@@ -3,22 +3,16 @@
 
 import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
-import { drawHeatmap2d, HeatStrip } from './canvas-plots.js';
+import { HeatStrip } from './canvas-plots.js';
 import { color, dash, lineSample, markerSymbol, OBS_COLORS } from './looks.js';
 import { labels, state } from './state.js';
-import { worker } from './session.js';
-import { showStepPhase, updateScrub } from './playback.js';
+import { worker } from './channel.js';
+import {
+  clamp, densityHeight, densityPoints, observationData, presenting, showStepPhase, shownDim, shownFrame, shownRow,
+  smoothedDensity, smoothedShown, updateScrub,
+} from './view.js';
 import { densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
-import { smoothedDensity, smoothedShown } from './smoothing.js';
 
-// Points of the density grid the worker samples for the plots (the form's "grid points").
-export const densityPoints = () => Math.max(16, Math.min(4096, Number($('grid-points').value) | 0 || 200));
-// The observation plot's series: a recording whole from the start, a simulation's observations
-// as far as the run has gone.
-export function observationData() {
-  const d = state.data;
-  return d.full ? [d.full.times, ...d.full.obs] : [d.times, ...d.obs];
-}
 
 // Labels of a log axis: whole decades only, at most five of them (every k-th decade when the
 // errors span many, e.g. a scheme equal to the reference to round-off).
@@ -234,9 +228,6 @@ export function makeCharts() {
   showMethods();
 }
 
-// The ±2σ bands: always without a truth (they are then the only measure of error), on request
-// with one.
-export const bandsShown = () => !state.info.has_truth || $('bands').checked;
 
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
@@ -244,9 +235,6 @@ function plotSize(id, which) {
   const height = { trajectory: trajectoryHeight, density: densityHeight, observations: observationsHeight, errors: errorsHeight }[which]();
   return { width: width - 2, height };
 }
-// Heights from the window's: the main plot and a density panel fit a 1280 × 720 projector.
-const clamp = (v, lo, hi) => Math.max(lo, Math.min(hi, v));
-const presenting = () => document.body.classList.contains('present');
 const trajectoryHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.34 : 0.3), 180, presenting() ? 520 : 340));
 // The observation and error plots sit below the fold: tall enough for a plot area of about
 // 100 px (three readable y ticks) under their time axis, at any window height.
@@ -254,7 +242,6 @@ const observationsHeight = () => Math.round(clamp(window.innerHeight * 0.18, 140
 const errorsHeight = () => Math.round(clamp(window.innerHeight * 0.26, 200, presenting() ? 340 : 280));
 // The height of a time axis's tick labels without an axis label.
 const timeTicksSize = () => (presenting() ? 40 : 30);
-export const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 
 // The trajectory plot's legend: one chip per method with its line, which also chooses the
 // methods every plot shows (a lecture's subset).
@@ -305,17 +292,6 @@ export function resetHeatStrip() {
   for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
 }
 
-// The state component on screen.
-export const shownDim = () => Number($('component').value) || 0;
-// The row on screen: the time slider's, or the latest.
-export const shownRow = () => (state.scrub ?? state.data.times.length - 1);
-// The kept frame at or before the shown row (its densities).
-export function shownFrame() {
-  if (state.scrub == null) return state.lastDensity;
-  let best = null;
-  for (const h of state.history) if (h.row <= state.scrub) best = h;
-  return best;
-}
 
 // ✕ where a method failed, at its estimate there, in its colour.
 function drawFailureMarks(u) {
@@ -366,19 +342,6 @@ function drawCursor(u) {
   ctx.restore();
 }
 
-// The 2-D heatmap of the shown frame, with the truth and every shown estimate then.
-export function drawHeatmap() {
-  const f = shownFrame();
-  const h2 = f?.heat2d;
-  const d = state.data;
-  const row = f?.row ?? shownRow();
-  const marks = d.est.map((e, i) => ({ x: e[0][row] ?? d.ghost[i][0][row], y: e[1][row] ?? d.ghost[i][1][row], color: color(i), i }))
-    .filter((m, i) => m.x != null && m.y != null && !state.hidden.has(i));
-  drawHeatmap2d($('heatmap'), {
-    height: densityHeight() + 60, values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
-    truth: state.info.has_truth && d.truth[0][row] != null ? [d.truth[0][row], d.truth[1][row]] : null,
-  });
-}
 
 function drawTruthMarker(u) {
   const d = state.data;

@@ -3,7 +3,8 @@
 import { $ } from './dom.js';
 import { state } from './state.js';
 import { fillForm } from './form.js';
-import { apply, completeScenario } from './session.js';
+import { completeScenario } from './channel.js';
+import { apply } from './session.js';
 
 function showDataStatus() {
   const r = state.recording;

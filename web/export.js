@@ -2,9 +2,9 @@
 
 import { $ } from './dom.js';
 import { color, dash } from './looks.js';
-import { shownDim, shownRow } from './charts.js';
+import { shownDim, shownRow } from './view.js';
 import { labels, state } from './state.js';
-import { checkedForm } from './session.js';
+import { checkedForm } from './problems.js';
 
 // The whole configuration (seed included) as base64url JSON in the address's fragment.
 function encodeConfig(config) {

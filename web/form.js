@@ -6,8 +6,13 @@ import { coefficient, identity, matrixEditor, readMatrix, resizeMatrix } from '.
 import { mixtureEditor, readMixture, resizeMixture } from './mixture.js';
 import { fillParameters, readParameters, setupParameters } from './parameters.js';
 import { methodEntry, state } from './state.js';
-import { apply, scheduleValidate, worker } from './session.js';
+import { worker } from './channel.js';
 import { loadTemml, richText } from './tex.js';
+
+// An edit of the scenario, announced as an event on the form's panel (session.js validates
+// the form on it): the form knows nothing of the run it configures.
+export const EDITED = 'scenario-edited';
+const edited = () => $('form').dispatchEvent(new Event(EDITED));
 
 // One form field for a parameter described by the schema (ParamInfo: name, label, help,
 // kind, min, max, choices).
@@ -58,7 +63,7 @@ function exprInputs(container, label, field, values, { argument = 'x', numbered 
     const input = document.createElement('input');
     input.value = v;
     input.dataset.field = `${field}[${i}]`;
-    input.addEventListener('input', scheduleValidate);
+    input.addEventListener('input', edited);
     l.appendChild(input);
     const err = document.createElement('span');
     err.className = 'error';
@@ -82,7 +87,7 @@ function domainInputs(domain) {
     err.dataset.error = `domain[${i}]`;
     c.append(row, err);
   });
-  c.querySelectorAll('input').forEach((el) => el.addEventListener('input', scheduleValidate));
+  c.querySelectorAll('input').forEach((el) => el.addEventListener('input', edited));
 }
 
 function methodRowsUI() {
@@ -105,14 +110,14 @@ function methodRowsUI() {
   });
   c.querySelectorAll('.enable').forEach((el) => el.addEventListener('change', () => {
     state.methodRows[el.dataset.row].enabled = el.checked;
-    scheduleValidate();
+    edited();
   }));
   c.querySelectorAll('.remove').forEach((el) => el.addEventListener('click', () => {
     state.methodRows.splice(Number(el.dataset.row), 1);
     methodRowsUI();
-    scheduleValidate();
+    edited();
   }));
-  c.querySelectorAll('[data-param]').forEach((el) => el.addEventListener('input', scheduleValidate));
+  c.querySelectorAll('[data-param]').forEach((el) => el.addEventListener('input', edited));
   showRowSuitability();
 }
 
@@ -216,7 +221,7 @@ function showNoiseKind(kind, noise = readNoise(), m = observationCount()) {
       box.append(c);
     } else {
       const input = el('input', { type: 'text', className: f.kind === 'expression' ? 'wide' : 'short', value: String(given ?? adapt(f.default)), dataset: { field, noiseField: f.key } });
-      input.addEventListener('input', scheduleValidate);
+      input.addEventListener('input', edited);
       box.append(el('label', { title: f.title }, `${f.label} `, input), el('span', { className: 'error', dataset: { error: field } }));
     }
   }
@@ -267,22 +272,22 @@ export function fillForm(config) {
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
   knownInputs(config.model.inputs ?? []);
-  fillParameters(config.parameters, scheduleValidate);
-  matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, expressions: true, onInput: scheduleValidate });
+  fillParameters(config.parameters, edited);
+  matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, expressions: true, onInput: edited });
   const noise = config.model.noise;
   $('noise-kind').value = noise.kind;
   const m = config.model.observation.length;
-  matrixEditor($('noise-cov'), { value: noise.kind === 'continuous' ? noise.cov ?? null : null, rows: m, identityAllowed: true, onInput: scheduleValidate });
-  mixtureEditor($('noise-mix'), { value: noise.kind === 'discrete' ? noise.mixture : null, dim: m, onInput: scheduleValidate });
+  matrixEditor($('noise-cov'), { value: noise.kind === 'continuous' ? noise.cov ?? null : null, rows: m, identityAllowed: true, onInput: edited });
+  mixtureEditor($('noise-mix'), { value: noise.kind === 'discrete' ? noise.mixture : null, dim: m, onInput: edited });
   showNoiseKind(noise.kind, noise, m);
   const prior = config.prior;
   $('prior-kind').value = prior.kind;
   $('prior-mean').value = prior.kind === 'gaussian' ? prior.mean.join(', ') : Array(n).fill(0).join(', ');
-  matrixEditor($('prior-cov'), { value: prior.kind === 'gaussian' ? prior.cov : identity(n), rows: n, onInput: scheduleValidate });
+  matrixEditor($('prior-cov'), { value: prior.kind === 'gaussian' ? prior.cov : identity(n), rows: n, onInput: edited });
   // A switch from a Gaussian prior to a mixture starts from that Gaussian as one component.
   const components = prior.kind === 'mixture' ? prior.components
     : prior.kind === 'gaussian' ? [{ weight: 1, mean: prior.mean, cov: prior.cov }] : null;
-  mixtureEditor($('prior-mix'), { value: components, dim: n, onInput: scheduleValidate });
+  mixtureEditor($('prior-mix'), { value: components, dim: n, onInput: edited });
   $('prior-expr').value = prior.kind === 'density' ? prior.expression : '';
   showPriorKind(prior.kind);
   $('x0').value = config.initial_state ? config.initial_state.join(', ') : '';
@@ -397,21 +402,15 @@ function changeDimension() {
   fillForm(c);
   state.methodRows = rows;
   methodRowsUI();
-  scheduleValidate();
+  edited();
 }
 
 // Wires the controls of this part of the page (called once, by main.js).
 export function setupForm() {
   setupParameters();
-  $('preset').addEventListener('change', () => {
-    const p = state.presets.find((x) => x.name === $('preset').value);
-    fillForm(p);
-    apply();
-  });
-  $('apply').addEventListener('click', apply);
   $('random-seed').addEventListener('click', () => worker.postMessage({ type: 'randomSeed' }));
-  $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); scheduleValidate(); });
-  $('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); scheduleValidate(); });
+  $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); edited(); });
+  $('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); edited(); });
   $('dim').addEventListener('change', changeDimension);
   $('add-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
@@ -420,15 +419,15 @@ export function setupForm() {
     resizeMatrix($('noise-cov'), values.length + 1);
     resizeMixture($('noise-mix'), values.length + 1);
     showNoiseKind(noise.kind, noise);
-    scheduleValidate();
+    edited();
   });
   $('add-u').addEventListener('click', () => {
     knownInputs([...$('inputs').querySelectorAll('input')].map((el) => el.value).concat(['sin(t)']));
-    scheduleValidate();
+    edited();
   });
   $('remove-u').addEventListener('click', () => {
     knownInputs([...$('inputs').querySelectorAll('input')].map((el) => el.value).slice(0, -1));
-    scheduleValidate();
+    edited();
   });
   $('remove-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
@@ -439,15 +438,15 @@ export function setupForm() {
       resizeMixture($('noise-mix'), values.length - 1);
       showNoiseKind(noise.kind, noise);
     }
-    scheduleValidate();
+    edited();
   });
   $('add-method').addEventListener('click', () => {
     const key = $('add-method-kind').value;
     state.methodRows.push({ enabled: true, config: structuredClone(methodEntry(key).defaults) });
     methodRowsUI();
-    scheduleValidate();
+    edited();
   });
   for (const id of ['prior-mean', 'prior-expr', 'x0', 't-final', 'dt-obs', 'inner', 'seed', 'fail-bound', 'fail-error', 'fail-duration']) {
-    $(id).addEventListener('input', scheduleValidate);
+    $(id).addEventListener('input', edited);
   }
 }

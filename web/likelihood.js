@@ -4,7 +4,7 @@
 
 import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
-import { checkedForm } from './session.js';
+import { checkedForm } from './problems.js';
 import { color, dash } from './looks.js';
 import { state } from './state.js';
 import { csvCell, csvName, download } from './export.js';

@@ -1,7 +1,8 @@
 // Monte Carlo (its own worker, so the live run keeps going) and the convergence check.
 
 import { $ } from './dom.js';
-import { checkedForm, worker, workerUrl } from './session.js';
+import { worker, workerUrl } from './channel.js';
+import { checkedForm } from './problems.js';
 import { csvCell, csvName, download, share } from './export.js';
 
 const mc = { worker: null, ready: false, summary: null, pending: null, handlers: {}, scenarios: {}, loaded: null, checking: null };

@@ -2,12 +2,15 @@
 // presentation mode, window resizing and the keyboard shortcuts.
 
 import { $ } from './dom.js';
-import { densityHeight, densityPoints, makeCharts, resetHeatStrip, shownRow } from './charts.js';
 import { state } from './state.js';
-import { formChanged } from './form.js';
-import { apply, checkedForm, worker } from './session.js';
+import { worker } from './channel.js';
+import { densityHeight, densityPoints, setPlaying, showStepPhase, shownRow } from './view.js';
 import { applyFrame, render } from './series.js';
-import { requestSmoothing, setupSmoothing } from './smoothing.js';
+import { makeCharts, resetHeatStrip } from './charts.js';
+import { dropSmoothed, requestSmoothing, setupSmoothing } from './smoothing.js';
+import { formChanged } from './form.js';
+import { checkedForm } from './problems.js';
+import { apply } from './session.js';
 
 // ▶ play (and space) applies edits first, so a run never silently ignores them.
 function togglePlay() {
@@ -16,6 +19,11 @@ function togglePlay() {
     state.playAfterLoad = true;
     apply();
     return;
+  }
+  // Playing goes back to the present when the time slider looks back.
+  if (!state.playing && state.scrub != null) {
+    state.scrub = null;
+    render();
   }
   setPlaying(!state.playing);
 }
@@ -33,23 +41,6 @@ function stepInHalves() {
   worker.postMessage({ type: 'preview' });
 }
 
-export function showStepPhase() {
-  const p = state.preview;
-  $('step-phase').textContent = !p ? ''
-    : p.phase === 'predicted'
-      ? `predict: every method moved to t = ${p.t.toFixed(3)} without the observation (dashed)${p.likelihood ? '; grey: the likelihood of the observation there' : ''}. Step again to update.`
-      : `update at t = ${p.t.toFixed(3)}: the posterior (solid) is the prediction (dashed) times the likelihood${p.likelihood ? ' (grey)' : ''}, normalised.`;
-  $('step').textContent = p?.phase === 'predicted' ? 'update' : 'step';
-}
-// The time slider spans the rows so far; live, it sits at the end.
-export function updateScrub() {
-  const rows = state.data?.times.length ?? 0;
-  const s = $('scrub');
-  s.max = String(Math.max(0, rows - 1));
-  s.value = String(state.scrub ?? Math.max(0, rows - 1));
-  $('scrub-live').hidden = state.scrub == null;
-  $('scrub-time').textContent = state.scrub == null ? 'live' : `t = ${(state.data.times[state.scrub] ?? 0).toFixed(3)}`;
-}
 
 function scrubTo(row) {
   const last = state.data.times.length - 1;
@@ -58,20 +49,6 @@ function scrubTo(row) {
   render();
 }
 
-export function setPlaying(p) {
-  state.playing = p;
-  if (p && state.preview) {
-    state.preview = null;
-    showStepPhase();
-  }
-  state.lastIntervalAt = performance.now();
-  if (p && state.scrub != null) {
-    state.scrub = null;
-    render();
-  }
-  $('play').textContent = p ? '❚❚ pause' : '▶ play';
-  worker.postMessage({ type: p ? 'play' : 'pause' });
-}
 
 // The busy state: while playing, the intervals computed per second (over the last second)
 // beside the page's frame rate, and "computing…" when no interval has arrived for half a
@@ -82,11 +59,13 @@ export function loop(ts) {
   state.fps = state.lastFrameTimes.length;
   if (state.queue.length) {
     const frames = state.queue.splice(0);
+    if (state.smoothed && frames.some((f) => f.to > f.from)) dropSmoothed('the run moved on: tick "smoothed" again to smooth the rows so far');
     frames.forEach(applyFrame);
     if (state.preview?.phase === 'updated') showStepPhase();
     state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
     state.lastIntervalAt = ts;
     render();
+    if (state.summary?.finished && state.playing) setPlaying(false);
     state.rendered += 1;
     worker.postMessage({ type: 'ack' });
   }

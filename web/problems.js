@@ -3,7 +3,7 @@
 
 import { $, el } from './dom.js';
 import { methodEntry, state } from './state.js';
-import { showFormStatus } from './form.js';
+import { readForm, showFormStatus } from './form.js';
 
 // Local problems the wasm validator cannot see (JSON typed into text fields).
 export function localProblems(config) {
@@ -107,4 +107,16 @@ export function plainWords(message) {
 export function revealFirstProblem() {
   const first = [...document.querySelectorAll('#form .error, #form .invalid')].find((e) => e.textContent || e.classList.contains('invalid'));
   first?.scrollIntoView({ block: 'center' });
+}
+
+// The form's scenario, or null after showing the problems only the page can see.
+export function checkedForm(reveal = false) {
+  const config = readForm();
+  const local = localProblems(config);
+  if (local.length) {
+    showProblems(local);
+    if (reveal) revealFirstProblem();
+    return null;
+  }
+  return config;
 }

@@ -4,10 +4,10 @@
 
 import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
-import { bandsShown, drawHeatmap, observationData, shownDim, shownFrame, shownRow } from './charts.js';
+import { drawHeatmap2d } from './canvas-plots.js';
+import { color } from './looks.js';
 import { labels, state } from './state.js';
-import { setPlaying, updateScrub } from './playback.js';
-import { dropSmoothed, smoothedShown } from './smoothing.js';
+import { bandsShown, densityHeight, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
 function showLogConcavity(c) {
@@ -31,7 +31,6 @@ export function applyFrame(frame) {
   const info = state.info;
   const n = info.n;
   const rows = frame.to - frame.from;
-  if (rows > 0 && state.smoothed) dropSmoothed('the run moved on: tick "smoothed" again to smooth the rows so far');
   for (let r = 0; r < rows; r++) {
     d.times.push(frame.times[r]);
     if (frame.truth.length) for (let j = 0; j < n; j++) d.truth[j].push(frame.truth[r * n + j]);
@@ -281,5 +280,18 @@ export function render() {
     if (el) el.textContent = m.warnings.join('\n');
   });
   updateScrub();
-  if (state.summary?.finished) setPlaying(false);
+}
+
+// The 2-D heatmap of the shown frame, with the truth and every shown estimate then.
+export function drawHeatmap() {
+  const f = shownFrame();
+  const h2 = f?.heat2d;
+  const d = state.data;
+  const row = f?.row ?? shownRow();
+  const marks = d.est.map((e, i) => ({ x: e[0][row] ?? d.ghost[i][0][row], y: e[1][row] ?? d.ghost[i][1][row], color: color(i), i }))
+    .filter((m, i) => m.x != null && m.y != null && !state.hidden.has(i));
+  drawHeatmap2d($('heatmap'), {
+    height: densityHeight() + 60, values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
+    truth: state.info.has_truth && d.truth[0][row] != null ? [d.truth[0][row], d.truth[1][row]] : null,
+  });
 }

@@ -2,18 +2,16 @@
 // form's scenario, and the dispatch of the worker's messages.
 
 import { $, fillOptions } from './dom.js';
-import { makePlots } from './charts.js';
 import { labels, state } from './state.js';
-import { fillForm, noiseKindOptions, readForm, showStructure, showSuitability } from './form.js';
-import { localProblems, revealFirstProblem, showProblems } from './problems.js';
-import { setPlaying, showStepPhase } from './playback.js';
+import { worker } from './channel.js';
+import { setPlaying, showStepPhase } from './view.js';
 import { render } from './series.js';
-import { configFromAddress } from './export.js';
+import { makePlots } from './charts.js';
 import { dropSmoothed, receiveSmoothed } from './smoothing.js';
+import { EDITED, fillForm, noiseKindOptions, showStructure, showSuitability } from './form.js';
+import { checkedForm, revealFirstProblem, showProblems } from './problems.js';
+import { configFromAddress } from './export.js';
 
-// The worker learns `?wasm=scalar` (force the fallback build) from its own URL.
-export const workerUrl = () => new URL(`./worker.js${location.search.includes('wasm=') ? `?wasm=${new URLSearchParams(location.search).get('wasm')}` : ''}`, import.meta.url);
-export const worker = new Worker(workerUrl(), { type: 'module' });
 let validateTimer = null;
 // What main.js gives setupSession: `onReady()`, called once the worker has the catalogue.
 let sessionHooks = {};
@@ -22,17 +20,6 @@ export function scheduleValidate() {
   validateTimer = setTimeout(validate, 150);
 }
 
-// The form's scenario, or null after showing the problems only the page can see.
-export function checkedForm(reveal = false) {
-  const config = readForm();
-  const local = localProblems(config);
-  if (local.length) {
-    showProblems(local);
-    if (reveal) revealFirstProblem();
-    return null;
-  }
-  return config;
-}
 
 function validate() {
   const config = checkedForm();
@@ -70,14 +57,6 @@ export function settleLoad(id, refused) {
   waiting.resolve(refused);
 }
 
-// The scenario as Zakai reads it (the worker's answer: `{config}` or `{error}`).
-export function completeScenario(config) {
-  const id = (state.completeId = (state.completeId ?? 0) + 1);
-  return new Promise((resolve) => {
-    state.completing.set(id, resolve);
-    worker.postMessage({ type: 'complete', config, id });
-  });
-}
 
 // A load the worker refused: the session before it (if any) keeps running and its frames are
 // drawn again; the message goes to the element `where`.
@@ -95,6 +74,12 @@ function loadRefused(data, where) {
 // Wires the controls of this part of the page (called once, by main.js).
 export function setupSession(hooks = {}) {
   sessionHooks = hooks;
+  $('form').addEventListener(EDITED, scheduleValidate);
+  $('preset').addEventListener('change', () => {
+    fillForm(state.presets.find((x) => x.name === $('preset').value));
+    apply();
+  });
+  $('apply').addEventListener('click', apply);
   worker.onmessage = ({ data }) => {
     switch (data.type) {
       case 'ready': {

@@ -4,14 +4,12 @@
 // estimates faint and dotted beside them) and the heat strip the smoothed density.
 
 import { $ } from './dom.js';
-import { densityPoints, makeCharts, resetHeatStrip, shownDim } from './charts.js';
 import { labels, state } from './state.js';
-import { worker } from './session.js';
-import { setPlaying } from './playback.js';
+import { worker } from './channel.js';
+import { densityPoints, setPlaying, shownDim, smoothedShown } from './view.js';
 import { render } from './series.js';
+import { makeCharts, resetHeatStrip } from './charts.js';
 
-// Whether the smoothed estimates are on screen.
-export const smoothedShown = () => $('smoothed').checked && state.smoothed != null;
 
 // Asks the worker for the smoothers over the rows so far (pausing the run: smoothing is of
 // the past, and a run that moves on makes it stale).
@@ -62,12 +60,6 @@ function redraw() {
   render();
 }
 
-// The smoothed density of the heat strip's method and component at `row`, or null.
-export function smoothedDensity(row, dim, method) {
-  const s = state.smoothed;
-  if (!smoothedShown() || s.dim !== dim || s.method !== method || !s.densities || row >= s.rows) return null;
-  return s.densities.slice(row * s.points, (row + 1) * s.points).map((v) => v ?? 0);
-}
 
 // Wires the checkbox (called once, by playback.js).
 export function setupSmoothing() {
