@@ -109,8 +109,9 @@
 //! [`lab`] (bibliography → scenario → recording, metrics, papers → experiment → study →
 //! reproduction). A module uses only modules to its left, and files side by side in a folder
 //! never import each other in a circle (both tested). The modules without a link are
-//! internal: the crate root re-exports what of them a user needs, and nothing else in them is
-//! `pub` (`#![warn(unreachable_pub)]`).
+//! internal: the crate root re-exports what of them a user needs, nothing else in them is
+//! `pub`, and every type a public item hands out can be named
+//! (`#![warn(unreachable_pub, unnameable_types)]`).
 //!
 //! ## Features
 //!
@@ -130,7 +131,7 @@
 #![no_std]
 #![warn(missing_docs)]
 #![warn(missing_debug_implementations)]
-#![warn(unreachable_pub)]
+#![warn(unreachable_pub, unnameable_types)]
 
 extern crate alloc;
 #[cfg(feature = "std")]
@@ -158,7 +159,8 @@ pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
 pub use model::expression::ExpressionFunction;
 pub use model::{
     BatchScratch, ClosureFunction, Derivatives, Diffusion, GaussianMixture, Inputs,
-    MeasurementDensity, Model, Noise, ObservationModel, Prior, ProcessNoise, VectorFunction,
+    MeasurementDensity, MixtureComponent, Model, Noise, ObservationModel, Prior, ProcessNoise,
+    TabulatedDensity, VectorFunction,
 };
 
 pub use filters::builder::Builder;
@@ -171,7 +173,7 @@ pub mod method {
     pub use crate::filters::method::{
         BuildContext, Method, MethodInfo, ProblemContext, Support, Takes,
     };
-    pub use crate::filters::params::{ParamInfo, ParamKind};
+    pub use crate::filters::params::{Declared, ParamInfo, ParamKind};
 }
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,
@@ -180,6 +182,9 @@ pub use filters::{
     observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
     ObservationKind, Observed,
 };
+/// The tensor grid a grid filter lives on ([`YauYauFilter::grid`],
+/// [`ContinuousDiscreteGrid::grid`]), and the moments of a density on it.
+pub use grid::{Moments, TensorGrid};
 
 // Each method family: its markers, the filter type they build, and its parameters.
 pub use filters::direct::Direct;

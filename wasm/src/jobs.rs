@@ -67,7 +67,7 @@ pub struct LikelihoodProfile {
 impl LikelihoodProfile {
     /// The profile of `parameter` at `points` values from its bounds and value
     /// ([`zakai::lab::fit::profile_grid`]) on the recording `observations` (CSV text, as for
-    /// [`Session::from_recording`]) or, when absent, on the run simulated with `seed`.
+    /// [`Session::from_recording`](crate::Session::from_recording)) or, when absent, on the run simulated with `seed`.
     #[wasm_bindgen(constructor)]
     pub fn new(
         config: JsValue,

@@ -86,7 +86,7 @@ impl Moments {
 
 impl TensorGrid {
     /// A grid with `shape[d]` interior nodes on `[bounds[d].0, bounds[d].1]`; refuses grids
-    /// beyond [`MAX_NODES`] before allocating anything.
+    /// beyond 2²⁴ nodes before allocating anything.
     pub fn new(bounds: &[(f64, f64)], shape: &[usize]) -> Result<Self, ZakaiError> {
         if bounds.len() != shape.len() || shape.is_empty() {
             return Err(ZakaiError::Dimension(format!(
@@ -227,7 +227,7 @@ impl TensorGrid {
     }
 
     /// Mass Σ u Δs^D (rectangle rule; the boundary values are zero). The sum runs in eight
-    /// lanes ([`crate::linalg::sum_in_lanes`]): the drivers' self-check takes it after every
+    /// lanes: the drivers' self-check takes it after every
     /// step, and as one chain of dependent additions it was a sizeable share of a QIEM run.
     pub fn mass(&self, u: &[f64]) -> f64 {
         crate::linalg::sum_in_lanes(u, |v| v) * self.cell_volume()

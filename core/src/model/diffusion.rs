@@ -183,7 +183,7 @@ impl ProcessNoise {
     /// `a(x)` at each point given by `point(i, x)` for i < len: the diagonal, one vector per
     /// dimension, the off-diagonal entries that are not zero everywhere, and the first point
     /// where it is not finite.
-    pub fn tabulate(
+    pub(crate) fn tabulate(
         &self,
         n: usize,
         len: usize,
@@ -233,7 +233,7 @@ impl ProcessNoise {
 
 /// `a(x)` at the points of a grid, and where it is not finite.
 #[derive(Clone, Debug)]
-pub struct DiffusionTable {
+pub(crate) struct DiffusionTable {
     /// `diagonal[d][i] = a_dd(x_i)`.
     pub diagonal: Vec<Vec<f64>>,
     /// `(i, j, a_ij at every point)` for i < j, where not zero everywhere.
@@ -244,7 +244,7 @@ pub struct DiffusionTable {
 
 impl DiffusionTable {
     /// The refusal of a method when Q is not finite at a point of its grid.
-    pub fn require_finite(&self, method: &str) -> Result<(), FilterError> {
+    pub(crate) fn require_finite(&self, method: &str) -> Result<(), FilterError> {
         match &self.undefined {
             Some(x) => Err(FilterError::Unsuitable(format!(
                 "{method}: the diffusion G(x) is not finite at the grid point x = {x:.4?}; write G so that it is defined on the whole domain (e.g. sqrt(abs(x)) rather than sqrt(x))"

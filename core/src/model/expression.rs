@@ -86,7 +86,7 @@ impl ExpressionFunction {
     /// As [`ExpressionFunction::parse`], in `variables`: the function's inputs are the state
     /// and then the other variables, in their order (a log-density `log p(z | x)` reads
     /// `[x, z]`).
-    pub fn parse_in(
+    pub(crate) fn parse_in(
         what: &str,
         texts: &[String],
         variables: &Variables,

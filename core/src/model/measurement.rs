@@ -77,7 +77,7 @@ impl core::fmt::Debug for MeasurementDensity {
 /// What the Kalman-type filters use for a measurement: `z ≈ h(x) + offset + v`,
 /// `v ~ N(0, R)`, with R fixed or evaluated at the predicted mean.
 #[derive(Clone, Debug)]
-pub enum GaussianMatch {
+pub(crate) enum GaussianMatch {
     /// R and the offset (the noise mean) do not depend on the state.
     Constant {
         /// The noise mean (0 but for a mixture's).
@@ -326,7 +326,7 @@ impl MeasurementDensity {
 
     /// What the Kalman-type filters use for this family (see the module's notes), or why
     /// none applies.
-    pub fn gaussian_match(&self, m: usize) -> Result<GaussianMatch, String> {
+    pub(crate) fn gaussian_match(&self, m: usize) -> Result<GaussianMatch, String> {
         match self {
             MeasurementDensity::Additive(noise) => Ok(GaussianMatch::Constant {
                 offset: noise.mean().as_slice().to_vec(),
@@ -350,7 +350,7 @@ impl MeasurementDensity {
     }
 
     /// `Var[z_j | x]` into `out` (length m), given `hx = h(x)`, for the families whose
-    /// [`MeasurementDensity::gaussian_match`] is state-dependent; an `Err` when the variance
+    /// Gaussian match is state-dependent (a variance that depends on x); an `Err` when the variance
     /// of an `observed` component is not positive and finite there.
     pub fn conditional_variance(
         &self,

@@ -32,8 +32,8 @@ pub use diffusion::{Diffusion, ProcessNoise};
 pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
 pub use inputs::Inputs;
 pub use measurement::MeasurementDensity;
-pub use noise::GaussianMixture;
-pub use prior::Prior;
+pub use noise::{GaussianMixture, MixtureComponent};
+pub use prior::{Prior, TabulatedDensity};
 
 use crate::error::ZakaiError;
 

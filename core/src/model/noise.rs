@@ -11,7 +11,7 @@ use crate::linalg::{gaussian_log_density, log_sum_exp};
 
 /// One weighted Gaussian component `α N(μ, Σ)`.
 #[derive(Clone, Debug)]
-pub struct Component {
+pub struct MixtureComponent {
     /// Weight α (the weights of a mixture sum to one).
     pub weight: f64,
     /// Mean μ.
@@ -26,7 +26,7 @@ pub struct Component {
 /// A Gaussian mixture `Σ_i α_i N(μ_i, Σ_i)`; a single Gaussian is a mixture of one.
 #[derive(Clone, Debug)]
 pub struct GaussianMixture {
-    components: Vec<Component>,
+    components: Vec<MixtureComponent>,
 }
 
 impl GaussianMixture {
@@ -65,7 +65,7 @@ impl GaussianMixture {
             let log_scale = libm::log(w / total)
                 - log_det
                 - 0.5 * d as f64 * libm::log(2.0 * core::f64::consts::PI);
-            components.push(Component {
+            components.push(MixtureComponent {
                 log_scale,
                 weight: w / total,
                 mean,
@@ -87,7 +87,7 @@ impl GaussianMixture {
     }
 
     /// The components.
-    pub fn components(&self) -> &[Component] {
+    pub fn components(&self) -> &[MixtureComponent] {
         &self.components
     }
 
@@ -154,7 +154,7 @@ impl GaussianMixture {
     /// A mixture with a component made by `f` from each of these.
     fn new_like(
         &self,
-        f: impl Fn(&Component) -> (f64, DVector<f64>, DMatrix<f64>),
+        f: impl Fn(&MixtureComponent) -> (f64, DVector<f64>, DMatrix<f64>),
     ) -> Result<Self, ZakaiError> {
         Self::new(self.components.iter().map(f).collect())
     }

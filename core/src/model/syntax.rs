@@ -195,7 +195,7 @@ pub(crate) fn variable_index(name: &str, n: usize) -> Option<usize> {
 /// m = 1), then, in a driven model ([`crate::Inputs`]), the time `t` and the known
 /// inputs `u1..uk`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Variables {
+pub(crate) struct Variables {
     n: usize,
     m: usize,
     inputs: Option<usize>,
@@ -203,7 +203,7 @@ pub struct Variables {
 
 impl Variables {
     /// The state variables of an `n`-dimensional model alone.
-    pub fn state(n: usize) -> Self {
+    pub(crate) fn state(n: usize) -> Self {
         Variables {
             n,
             m: 0,
@@ -213,12 +213,12 @@ impl Variables {
 
     /// The state variables, then the measurement `z1..zm` (and `z` when m = 1, as `x` for
     /// the state).
-    pub fn state_and_measurement(n: usize, m: usize) -> Self {
+    pub(crate) fn state_and_measurement(n: usize, m: usize) -> Self {
         Variables { n, m, inputs: None }
     }
 
     /// The time `t` alone: what a known input's expression reads.
-    pub const fn time() -> Self {
+    pub(crate) const fn time() -> Self {
         Variables {
             n: 0,
             m: 0,
@@ -228,18 +228,18 @@ impl Variables {
 
     /// These variables followed by the time `t` and the `k` known inputs `u1..uk` of a driven
     /// model (`None`: an autonomous model, whose expressions may not read `t`).
-    pub fn driven(self, inputs: Option<usize>) -> Self {
+    pub(crate) fn driven(self, inputs: Option<usize>) -> Self {
         Variables { inputs, ..self }
     }
 
     /// How many inputs an expression in these variables takes.
-    pub fn count(&self) -> usize {
+    pub(crate) fn count(&self) -> usize {
         self.n + self.m + self.inputs.map_or(0, |k| 1 + k)
     }
 
     /// The input `name` stands for, if it is one of these variables (`z` is `z1` when it is
     /// the only measurement component).
-    pub fn index(&self, name: &str) -> Option<usize> {
+    pub(crate) fn index(&self, name: &str) -> Option<usize> {
         let numbered = |prefix: char, count: usize| {
             let i: usize = name.strip_prefix(prefix)?.parse().ok()?;
             (i >= 1 && i <= count && !name[1..].starts_with('0')).then(|| i - 1)
@@ -261,7 +261,7 @@ impl Variables {
     }
 
     /// Every name, for messages.
-    pub fn names(&self) -> Vec<String> {
+    pub(crate) fn names(&self) -> Vec<String> {
         let mut names = variable_names(self.n);
         names.extend((1..=self.m).map(|i| format!("z{i}")));
         if self.m == 1 {

@@ -19,7 +19,7 @@ use super::{legendre, offline, tensor};
 
 /// The resolved sizes for an n-dimensional model.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Layout {
+pub(crate) struct Layout {
     /// Off-line basis functions per dimension.
     pub offline: Vec<usize>,
     /// On-line basis functions per dimension.
@@ -36,18 +36,18 @@ pub struct Layout {
 
 impl Layout {
     /// Dimension n.
-    pub fn dims(&self) -> usize {
+    pub(crate) fn dims(&self) -> usize {
         self.offline.len()
     }
     /// `x = centre + half_width · ξ`.
-    pub fn to_domain(&self, d: usize, xi: f64) -> f64 {
+    pub(crate) fn to_domain(&self, d: usize, xi: f64) -> f64 {
         self.centre[d] + self.half_width[d] * xi
     }
 }
 
 impl SpectralParams {
     /// The sizes for an n-dimensional model on `bounds`.
-    pub fn layout(&self, n: usize, bounds: &[(f64, f64)]) -> Layout {
+    pub(crate) fn layout(&self, n: usize, bounds: &[(f64, f64)]) -> Layout {
         let (off, on) = self.counts(n);
         Layout {
             offline: vec![off; n],
@@ -321,11 +321,6 @@ impl SpectralFilter {
         };
         filter.normalise_and_project()?;
         Ok(filter)
-    }
-
-    /// The resolved sizes.
-    pub fn layout(&self) -> &Layout {
-        &self.layout
     }
 
     /// Takes the estimate (41) from the nodal values, projects them onto the on-line basis

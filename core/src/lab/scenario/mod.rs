@@ -417,7 +417,7 @@ fn check_expression(
 const INPUT_VARIABLES: Variables = Variables::time();
 
 /// Parses a text vector function with `m` components in `variables`.
-pub fn parse_function(
+pub(crate) fn parse_function(
     what: &str,
     texts: &[String],
     variables: &Variables,
@@ -1033,7 +1033,7 @@ impl ScenarioConfig {
 
     /// The variables the model's expressions read: the state, and the time and inputs of a
     /// driven model.
-    pub fn variables(&self) -> Variables {
+    pub(crate) fn variables(&self) -> Variables {
         Variables::state(self.state_dim()).driven(self.driven())
     }
 
