@@ -9,7 +9,7 @@ use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::presets;
 use zakai::Filter;
 use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation};
-use zakai::{GaussianSum, GaussianSumFilter};
+use zakai::{GaussianSum};
 
 /// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
 /// measurement `z0` at τ₀.
@@ -74,7 +74,7 @@ fn fpe_split(c: &mut Criterion) {
                 })
             });
         }
-        let mut gsf: GaussianSumFilter = GaussianSum::builder(experiment.model())
+        let mut gsf: GaussianSum = GaussianSum::builder(experiment.model())
             .prior(experiment.prior().clone())
             .domain(&experiment.config().bounds())
             .build()

@@ -39,7 +39,7 @@ fn main() -> Result<(), ZakaiError> {
     ];
     let (prior_mean, prior_var) = ([1120.0], [[1e5]]);
 
-    let kalman = FilterLikelihood::new(Kalman, &observations, &parameters, |theta: &[f64]| {
+    let kalman = FilterLikelihood::new::<Kalman>(&observations, &parameters, |theta: &[f64]| {
         Kalman::builder(&local_level(theta)?)
             .prior_gaussian(&prior_mean, &prior_var)
             .build()
@@ -48,14 +48,15 @@ fn main() -> Result<(), ZakaiError> {
     println!("{}", fit.summary());
 
     // The separation filter (001) on a grid of 601 cells over the flows' range.
-    let grid = FilterLikelihood::new(Separation, &observations, &parameters, |theta: &[f64]| {
-        Separation::builder(&local_level(theta)?)
-            .prior_gaussian(&prior_mean, &prior_var)
-            .domain(&[(-400.0, 2600.0)])
-            .dt(1.0)
-            .with(|p| p.cells = vec![601])
-            .build()
-    })?;
+    let grid =
+        FilterLikelihood::new::<Separation>(&observations, &parameters, |theta: &[f64]| {
+            Separation::builder(&local_level(theta)?)
+                .prior_gaussian(&prior_mean, &prior_var)
+                .domain(&[(-400.0, 2600.0)])
+                .dt(1.0)
+                .with(|p| p.cells = vec![601])
+                .build()
+        })?;
     let fit = maximise(&grid, &grid, &FitOptions::default(), &|_, _| {})?;
     println!("{}", fit.summary());
     for note in &fit.notes {

@@ -68,22 +68,25 @@
 //!   [`ClosureFunction`], [`Derivatives`]);
 //! * the filters: [`Filter`] (with [`Fork`]), what it reads ([`Observation`],
 //!   [`ObservationKind`], [`Observed`]) and gives ([`Estimate`], [`DensityView`],
-//!   [`Concern`]); per family, the markers, the filter type they build and the parameters:
+//!   [`Concern`]); per family, its methods and parameters. A method with one scheme is its
+//!   filter type (`Ukf::builder(&model)…build()` gives a [`Ukf`]); a family with several
+//!   schemes has a marker per scheme, all building one filter type:
 //!
-//! | markers | builds | parameters |
+//! | filter types (one scheme each) | parameters |
+//! |---|---|
+//! | [`Kalman`] (Kalman–Bucy), [`Ekf`], [`Ukf`] | [`KalmanParams`], [`EkfParams`], [`UkfParams`] |
+//! | [`Pf`] | [`PfParams`] |
+//! | [`Direct`] | [`DirectParams`] |
+//! | [`Spectral`] | [`SpectralParams`] |
+//! | [`GaussianSum`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
+//!
+//! | markers (schemes) | filter type | parameters |
 //! |---|---|---|
-//! | [`Kalman`] | [`KalmanBucy`] | [`KalmanParams`] |
-//! | [`Ekf`] | [`ExtendedKalman`] | [`EkfParams`] |
-//! | [`Ukf`] | [`UnscentedKalman`] | [`UkfParams`] |
 //! | [`Iekf`], [`Iokf`] | [`MapKalman`] | [`IekfParams`], [`IokfParams`] |
-//! | [`Pf`] | [`ParticleFilter`] | [`PfParams`] |
 //! | [`Iem`], [`Qiem`], [`Spt`], [`Qiem4`] | [`YauYauFilter`] | [`YauYauParams`] |
 //! | [`Separation`], [`ImplicitFdm`] | [`ContinuousDiscreteGrid`] | [`FpeParams`] |
-//! | [`Direct`] | [`DirectFilter`] | [`DirectParams`] |
-//! | [`Spectral`] | [`SpectralFilter`] | [`SpectralParams`] |
-//! | [`GaussianSum`] | [`GaussianSumFilter`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
 //!
-//! * building: [`Builder`] (each marker's `builder()`); for method authors and tools that
+//! * building: [`Builder`] (each method's `builder()`); for method authors and tools that
 //!   list methods, the [`method`] module: the [`method::Method`] trait every family registers
 //!   with, its parameter schema ([`method::MethodInfo`], [`method::ParamInfo`]);
 //! * errors: [`ZakaiError`], [`ExprError`], [`FilterError`], [`ConfigProblem`], and the
@@ -168,7 +171,7 @@ pub use filters::builder::Builder;
 /// For method authors and tools that list methods: the [`method::Method`] trait every family
 /// registers with (its key, what it takes, its parameter schema, its filter type), what a
 /// method is built from, and what its catalogue entry says. A user who builds filters needs
-/// none of it: each method's marker has `builder()` (the crate root).
+/// none of it: each method has `builder()` (the crate root).
 pub mod method {
     pub use crate::filters::method::{
         BuildContext, Method, MethodInfo, ProblemContext, Support, Takes,
@@ -186,19 +189,20 @@ pub use filters::{
 /// [`ContinuousDiscreteGrid::grid`]), and the moments of a density on it.
 pub use grid::{Moments, TensorGrid};
 
-// Each method family: its markers, the filter type they build, and its parameters.
-pub use filters::direct::Direct;
-pub use filters::direct::{DirectFilter, DirectParams};
+// Each method family: its filter types (a method with one scheme is its filter type; a
+// family with several schemes has a marker per scheme and one filter type), and its
+// parameters.
+pub use filters::direct::{Direct, DirectParams};
 pub use filters::fpe_split::{
     ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation,
 };
-pub use filters::gaussian_sum::{GaussianSum, GaussianSumFilter, GaussianSumParams, Reduction};
+pub use filters::gaussian_sum::{GaussianSum, GaussianSumParams, Reduction};
 pub use filters::kalman::{
-    Ekf, EkfParams, ExtendedKalman, GaussianInit, Iekf, IekfParams, Iokf, IokfParams, Kalman,
-    KalmanBucy, KalmanParams, MapKalman, MapSolver, Ukf, UkfParams, UnscentedKalman,
+    Ekf, EkfParams, GaussianInit, Iekf, IekfParams, Iokf, IokfParams, Kalman, KalmanParams,
+    MapKalman, MapSolver, Ukf, UkfParams,
 };
-pub use filters::particle::{ParticleFilter, Pf, PfParams};
-pub use filters::spectral::{Spectral, SpectralFilter, SpectralParams};
+pub use filters::particle::{Pf, PfParams};
+pub use filters::spectral::{Spectral, SpectralParams};
 pub use filters::yau_fd::{
     Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
 };

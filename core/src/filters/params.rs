@@ -10,7 +10,7 @@
 //!
 //! ```text
 //! parameters! {
-//!     /// Parameters of [`ParticleFilter`].
+//!     /// Parameters of [`Pf`].
 //!     pub struct PfParams {
 //!         /// Number of particles; the error falls like 1/√N.
 //!         particles: usize = 200 => int "particles N", range(1, 1e7);

@@ -127,7 +127,7 @@ mod built_in_rust {
     use nalgebra::DMatrix;
     use zakai::lab::fit::{FilterLikelihood, LogLikelihood};
     use zakai::lab::scenario::parameters::ParameterConfig;
-    use zakai::{Kalman, KalmanBucy, Model, Noise, Observation, Pf};
+    use zakai::{Kalman, Model, Noise, Observation, Pf};
     use zakai_tests::test;
 
     /// The Nile's observations as a Rust user holds them: the first at the prior's time (Δτ = 0,
@@ -143,7 +143,7 @@ mod built_in_rust {
 
     /// The local level built in Rust at θ = (q, r): dx = √q dW, z = x + v with Var v = r, the
     /// Kalman filter from N(1120, 10⁷).
-    fn local_level_in_rust(theta: &[f64]) -> Result<KalmanBucy, zakai::ZakaiError> {
+    fn local_level_in_rust(theta: &[f64]) -> Result<Kalman, zakai::ZakaiError> {
         let model = Model::from_text(&["0"], &["x"], Noise::discrete(theta[1]))?
             .with_diffusion(DMatrix::from_element(1, 1, theta[0].sqrt()))?;
         Kalman::builder(&model)
@@ -166,8 +166,7 @@ mod built_in_rust {
     #[test]
     fn a_model_built_in_rust_is_fitted_without_a_scenario() {
         let observations = nile_observations();
-        let l = FilterLikelihood::new(
-            Kalman,
+        let l = FilterLikelihood::new::<Kalman>(
             &observations,
             &positive_q_and_r(),
             local_level_in_rust,
@@ -207,8 +206,7 @@ mod built_in_rust {
             );
         }
         // A profile along q (r held): the same values as the reference.
-        let along_q = FilterLikelihood::new(
-            Kalman,
+        let along_q = FilterLikelihood::new::<Kalman>(
             &observations,
             &[("q", ParameterConfig::bounded(1000.0, 0.0, f64::INFINITY))],
             |theta: &[f64]| local_level_in_rust(&[theta[0], 15099.0]),
@@ -227,7 +225,7 @@ mod built_in_rust {
     fn a_model_built_in_rust_says_what_it_cannot_vouch_for() {
         let observations = nile_observations();
         let pf =
-            FilterLikelihood::new(Pf, &observations, &positive_q_and_r(), |theta: &[f64]| {
+            FilterLikelihood::new::<Pf>(&observations, &positive_q_and_r(), |theta: &[f64]| {
                 let model = Model::from_text(&["0"], &["x"], Noise::discrete(theta[1]))?
                     .with_diffusion(DMatrix::from_element(1, 1, theta[0].sqrt()))?;
                 Pf::builder(&model)
@@ -266,8 +264,8 @@ mod built_in_rust {
         let mut bad = nile_observations();
         let two = [1120.0, 1120.0];
         bad[3] = Observation::measurement(1.0, &two);
-        let l =
-            FilterLikelihood::new(Kalman, &bad, &positive_q_and_r(), local_level_in_rust).unwrap();
+        let l = FilterLikelihood::new::<Kalman>(&bad, &positive_q_and_r(), local_level_in_rust)
+            .unwrap();
         match l.log_likelihood(&[1469.1, 15099.0]) {
             Err(zakai::ZakaiError::RunFailed { step, .. }) => assert_eq!(step, 3),
             other => panic!("expected the run to fail at step 3: {other:?}"),
@@ -281,8 +279,7 @@ mod built_in_rust {
             "q outside its bounds"
         );
 
-        let problems = match FilterLikelihood::new(
-            Kalman,
+        let problems = match FilterLikelihood::new::<Kalman>(
             &[],
             &[
                 ("q", ParameterConfig::bounded(-1.0, 0.0, f64::INFINITY)),

@@ -8,7 +8,7 @@ use zakai::lab::study::density_error::{j_curve, JKind};
 use zakai::method::Method;
 use zakai::{Builder, Filter, Observation, ObservationKind, ZakaiError};
 use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation};
-use zakai::{GaussianSum, GaussianSumFilter, GaussianSumParams, Kalman, KalmanBucy};
+use zakai::{GaussianSum, GaussianSumParams, Kalman};
 use zakai_tests::test;
 
 fn experiment(config: ScenarioConfig) -> Experiment {
@@ -50,10 +50,7 @@ fn grid_filter(e: &Experiment, scheme: FpeScheme, cells: usize, dt: f64) -> Cont
 }
 
 /// The Gaussian-sum reference with `params`.
-fn gaussian_sum(
-    e: &Experiment,
-    params: GaussianSumParams,
-) -> Result<GaussianSumFilter, ZakaiError> {
+fn gaussian_sum(e: &Experiment, params: GaussianSumParams) -> Result<GaussianSum, ZakaiError> {
     on_scenario(GaussianSum::builder(e.model()), e)
         .params(params)
         .build()
@@ -203,7 +200,7 @@ fn gaussian_sum_with_one_component_is_the_kalman_filter() {
     };
     let e = experiment(c);
     let mut gsf = gaussian_sum(&e, GaussianSumParams::default()).expect("gsf");
-    let mut kf: KalmanBucy = on_scenario(Kalman::builder(e.model()), &e)
+    let mut kf: Kalman = on_scenario(Kalman::builder(e.model()), &e)
         .build()
         .expect("kf");
     let traj = e.simulate(4).unwrap();

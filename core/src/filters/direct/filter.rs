@@ -58,7 +58,7 @@ pub(crate) const RESIDUAL_SHARE_THRESHOLD: f64 = 0.25;
 /// Within them, when Algorithm 1 leaves a large share of the density in its residual (the
 /// Gaussians no longer hold it), the self-check says so ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
-pub struct DirectFilter {
+pub struct Direct {
     name: String,
     grid: TensorGrid,
     params: DirectParams,
@@ -176,7 +176,7 @@ pub(crate) fn check_system(
     kolmogorov_quadratic(model, bounds, params.linear).map(|_| ())
 }
 
-impl DirectFilter {
+impl Direct {
     /// Checks (C1)–(C3) on the domain, tabulates F and the prior.
     pub(crate) fn new(
         name: String,
@@ -231,7 +231,7 @@ impl DirectFilter {
             .zip(&potential)
             .map(|(&xi, &big_f)| libm::log(prior.density(&[xi])) - big_f)
             .collect();
-        let mut filter = DirectFilter {
+        let mut filter = Direct {
             name,
             params: params.clone(),
             coefficients: [coefficients(full), coefficients(without_h2)],
@@ -318,7 +318,7 @@ fn exp_shifted(log: &[f64], out: &mut [f64]) -> f64 {
     shift
 }
 
-impl DirectFilter {
+impl Direct {
     /// One interval of Algorithm 2 with a checked increment over Δτ > 0 (it may fail
     /// half-way). With every component observed, (32) carries η's Σh² and the factor is
     /// `exp(Δyᵀh)` (30); otherwise (32) carries no observation term and the factor is the
@@ -468,7 +468,7 @@ impl DirectFilter {
     }
 }
 
-impl Filter for DirectFilter {
+impl Filter for Direct {
     crate::filters::kept_estimate_accessors!(density in density);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {

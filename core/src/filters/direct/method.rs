@@ -5,7 +5,7 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use super::filter::{check_system, DirectFilter};
+use super::filter::{check_system, Direct};
 use super::DirectParams;
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
@@ -15,10 +15,6 @@ use crate::filters::method::{
 use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
 
-/// The direct method for Yau filtering systems: Gaussian approximation of the density and
-/// Riccati ODEs per Gaussian.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Direct;
 builder_fn!(Direct);
 
 impl Method for Direct {
@@ -36,7 +32,7 @@ impl Method for Direct {
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     type Params = DirectParams;
-    type Filter = DirectFilter;
+    type Filter = Direct;
 
     fn info() -> MethodInfo {
         MethodInfo {
@@ -65,12 +61,8 @@ impl Method for Direct {
         // Per grid point: F, the prior, h, the density and 4 values per Gaussian term.
         p.points.checked_mul(4 * p.max_terms + 8)?.checked_mul(8)
     }
-    fn build(
-        ctx: &BuildContext,
-        p: &DirectParams,
-        name: String,
-    ) -> Result<DirectFilter, ZakaiError> {
-        Ok(DirectFilter::new(name, ctx, p)?)
+    fn build(ctx: &BuildContext, p: &DirectParams, name: String) -> Result<Direct, ZakaiError> {
+        Ok(Direct::new(name, ctx, p)?)
     }
     /// Half the grid spacing (`2N − 1` points keep the old ones), half Algorithm 1's
     /// threshold α and twice the Riccati substeps.

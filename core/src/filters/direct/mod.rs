@@ -1,4 +1,4 @@
-//! The direct method of 002 ([`DirectFilter`] documents it).
+//! The direct method of 002 ([`Direct`] documents it).
 
 //!
 //! Cost: per observation interval, one decomposition of the density on `points` nodes into at
@@ -28,6 +28,5 @@ pub(crate) mod riccati;
 #[cfg(test)]
 mod tests;
 
-pub use filter::DirectFilter;
-pub use method::Direct;
+pub use filter::Direct;
 pub use params::DirectParams;

@@ -159,7 +159,7 @@ pub struct Reduction {
 ///   (moment-preserving) in order of Runnalls' bound on the Kullback–Leibler discrepancy
 ///   `B_ij = ½ [(w_i + w_j) log det P_ij − w_i log det P_i − w_j log det P_j]`, while
 ///   `B ≤ merge_cost` or the count exceeds `max_components`. The largest cost accepted and the
-///   pruned weight are reported ([`GaussianSumFilter::reduction`]), so how exact the reference
+///   pruned weight are reported ([`GaussianSum::reduction`]), so how exact the reference
 ///   is stays visible; with no pruning or cap-forced merging the density is exact.
 ///
 /// Cost: per measurement, one Kalman update per pair of a prior and a noise component, then
@@ -182,7 +182,7 @@ pub struct Reduction {
 /// the cap, and what that moved is reported ([`Reduction`]). A nonlinear model, or one that reads
 /// the time or known inputs, is refused.
 #[derive(Clone, Debug)]
-pub struct GaussianSumFilter {
+pub struct GaussianSum {
     name: String,
     a: DMatrix<f64>,
     b: DVector<f64>,
@@ -223,7 +223,7 @@ struct UpdateWork {
     alive: Vec<bool>,
 }
 
-impl GaussianSumFilter {
+impl GaussianSum {
     /// Builds the filter; the model must be linear with discrete measurements and the prior a
     /// Gaussian mixture. `probes` are the points where linearity is checked.
     pub(crate) fn new(
@@ -255,7 +255,7 @@ impl GaussianSumFilter {
         for (slot, c) in components.iter_mut().zip(mixture.components()) {
             *slot = Component::new(c.weight, &c.mean, &c.cov)?;
         }
-        Ok(GaussianSumFilter {
+        Ok(GaussianSum {
             name,
             q: model
                 .process_noise()
@@ -324,7 +324,7 @@ impl GaussianSumFilter {
         *reduction = self.reduction;
     }
 
-    /// Back to the mixture [`GaussianSumFilter::save`] kept.
+    /// Back to the mixture [`GaussianSum::save`] kept.
     fn restore(&mut self) {
         let (saved, len, reduction, log_likelihood) = &self.saved;
         self.log_likelihood = *log_likelihood;
@@ -402,7 +402,7 @@ impl GaussianSumFilter {
                 .iter()
                 .map(|v| if Observation::is_missing(*v) { 0.0 } else { *v })
                 .collect();
-            let GaussianSumFilter {
+            let GaussianSum {
                 components,
                 len,
                 work,
@@ -413,7 +413,7 @@ impl GaussianSumFilter {
             let missing = seen.iter().filter(|s| !**s).count() as f64;
             self.log_likelihood = total + 0.5 * missing * libm::log(core::f64::consts::TAU);
         } else {
-            let GaussianSumFilter {
+            let GaussianSum {
                 c,
                 c0,
                 noise,
@@ -508,7 +508,7 @@ impl GaussianSumFilter {
 
     /// Pruning, then merging by Runnalls' cost (see the module doc).
     fn reduce(&mut self) {
-        let GaussianSumFilter {
+        let GaussianSum {
             params,
             components,
             len,
@@ -632,7 +632,7 @@ fn merge(a: &Component, b: &Component, out: &mut Component) -> f64 {
     }
 }
 
-impl Filter for GaussianSumFilter {
+impl Filter for GaussianSum {
     fn name(&self) -> &str {
         &self.name
     }

@@ -5,7 +5,7 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use super::{check_model, GaussianSumFilter, GaussianSumParams};
+use super::{check_model, GaussianSum, GaussianSumParams};
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
 use crate::filters::method::{
@@ -14,9 +14,6 @@ use crate::filters::method::{
 use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
 
-/// The Gaussian-sum filter registered as a [`Method`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct GaussianSum;
 builder_fn!(GaussianSum);
 
 impl Method for GaussianSum {
@@ -34,7 +31,7 @@ impl Method for GaussianSum {
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["gsf"];
     type Params = GaussianSumParams;
-    type Filter = GaussianSumFilter;
+    type Filter = GaussianSum;
 
     fn info() -> MethodInfo {
         MethodInfo {
@@ -74,7 +71,7 @@ impl Method for GaussianSum {
         ctx: &BuildContext,
         p: &GaussianSumParams,
         name: String,
-    ) -> Result<GaussianSumFilter, ZakaiError> {
-        GaussianSumFilter::new(name, ctx, p)
+    ) -> Result<GaussianSum, ZakaiError> {
+        GaussianSum::new(name, ctx, p)
     }
 }

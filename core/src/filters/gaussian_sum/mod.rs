@@ -1,11 +1,10 @@
-//! The Gaussian-sum filter ([`GaussianSumFilter`] documents it).
+//! The Gaussian-sum filter ([`GaussianSum`] documents it).
 
 mod filter;
 mod method;
 mod params;
 
 pub(crate) use filter::check_model;
-pub use filter::GaussianSumFilter;
+pub use filter::GaussianSum;
 pub use filter::Reduction;
-pub use method::GaussianSum;
 pub use params::GaussianSumParams;

@@ -6,7 +6,7 @@ use alloc::vec::Vec;
 use crate::filters::params::{parameters, Declared};
 
 parameters! {
-    /// Parameters of the Gaussian-sum filter ([`GaussianSumFilter`](super::GaussianSumFilter)):
+    /// Parameters of the Gaussian-sum filter ([`GaussianSum`](super::GaussianSum)):
     /// its mixture reduction.
     pub struct GaussianSumParams {
         /// Most Gaussians kept after a measurement (pairs are merged beyond it).

@@ -1,4 +1,4 @@
-//! The extended Kalman filter ([`ExtendedKalman`] documents it).
+//! The extended Kalman filter ([`Ekf`] documents it).
 
 use alloc::string::String;
 
@@ -47,7 +47,7 @@ use crate::model::Model;
 /// with a prior straddling 0) is carried as one Gaussian. Its self-check watches the innovations
 /// ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
-pub struct ExtendedKalman {
+pub struct Ekf {
     name: String,
     model: Model,
     q: crate::model::ProcessNoise,
@@ -56,7 +56,7 @@ pub struct ExtendedKalman {
     state: GaussianState,
 }
 
-impl ExtendedKalman {
+impl Ekf {
     /// Builds the filter from the model and the prior's moments, for observation interval
     /// Δτ when the context has one (a step of another length then takes as many RK4 steps of
     /// at most Δτ/substeps as it needs); fails for measurements without the two moments its
@@ -67,7 +67,7 @@ impl ExtendedKalman {
         params: &EkfParams,
     ) -> Result<Self, crate::error::FilterError> {
         let (model, prior) = (ctx.model, ctx.prior);
-        Ok(ExtendedKalman {
+        Ok(Ekf {
             form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
@@ -78,13 +78,13 @@ impl ExtendedKalman {
     }
 }
 
-super::smoother::gaussian_filter!(ExtendedKalman);
+super::smoother::gaussian_filter!(Ekf);
 
-impl Filter for ExtendedKalman {
+impl Filter for Ekf {
     super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let ExtendedKalman {
+        let Ekf {
             name,
             model,
             q,

@@ -1,4 +1,4 @@
-//! The Kalman–Bucy filter ([`KalmanBucy`] documents it).
+//! The Kalman–Bucy filter ([`Kalman`] documents it).
 
 use alloc::format;
 use alloc::string::String;
@@ -118,7 +118,7 @@ pub(crate) fn discretize(
 /// prior that is a mixture is used through its first two moments, which is no longer exact (the
 /// Gaussian-sum filter is).
 #[derive(Clone, Debug)]
-pub struct KalmanBucy {
+pub struct Kalman {
     name: String,
     model: Model,
     a: DMatrix<f64>,
@@ -182,7 +182,7 @@ impl Discretization {
     }
 }
 
-impl KalmanBucy {
+impl Kalman {
     /// Builds the filter; linearity is checked at the context's probe points.
     pub(crate) fn new(
         name: String,
@@ -197,7 +197,7 @@ impl KalmanBucy {
             "observation h",
             probes,
         )?;
-        Ok(KalmanBucy {
+        Ok(Kalman {
             form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
@@ -217,14 +217,14 @@ impl KalmanBucy {
     }
 }
 
-super::smoother::gaussian_filter!(KalmanBucy);
+super::smoother::gaussian_filter!(Kalman);
 
-impl Filter for KalmanBucy {
+impl Filter for Kalman {
     super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         // Checked before anything moves: a refused observation leaves the state.
-        let KalmanBucy {
+        let Kalman {
             name,
             model,
             a,

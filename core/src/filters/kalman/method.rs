@@ -8,8 +8,8 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use super::{
-    validate_init, EkfParams, ExtendedKalman, IekfParams, IokfParams, KalmanBucy, KalmanParams,
-    MapKalman, MapSolver, UkfParams, UnscentedKalman, MAX_SUBSTEPS,
+    validate_init, Ekf, EkfParams, IekfParams, IokfParams, Kalman, KalmanParams, MapKalman,
+    MapSolver, Ukf, UkfParams, MAX_SUBSTEPS,
 };
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
@@ -66,9 +66,6 @@ fn info<P: Declared>(key: &str, name: &str, summary: &str, paper: &str) -> Metho
     }
 }
 
-/// The Kalman–Bucy filter: exact for linear models with Gaussian noise and prior.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Kalman;
 builder_fn!(Kalman);
 
 impl Method for Kalman {
@@ -87,7 +84,7 @@ impl Method for Kalman {
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
     type Params = KalmanParams;
-    type Filter = KalmanBucy;
+    type Filter = Kalman;
 
     fn info() -> MethodInfo {
         info::<Self::Params>(
@@ -115,14 +112,11 @@ impl Method for Kalman {
     fn memory(_: &KalmanParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
     }
-    fn build(ctx: &BuildContext, p: &KalmanParams, name: String) -> Result<KalmanBucy, ZakaiError> {
-        Ok(KalmanBucy::new(name, ctx, p)?)
+    fn build(ctx: &BuildContext, p: &KalmanParams, name: String) -> Result<Kalman, ZakaiError> {
+        Ok(Kalman::new(name, ctx, p)?)
     }
 }
 
-/// The extended Kalman filter (continuous–discrete, RK4 moment equations).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Ekf;
 builder_fn!(Ekf);
 
 impl Method for Ekf {
@@ -136,7 +130,7 @@ impl Method for Ekf {
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
     type Params = EkfParams;
-    type Filter = ExtendedKalman;
+    type Filter = Ekf;
 
     fn info() -> MethodInfo {
         info::<Self::Params>(
@@ -155,12 +149,8 @@ impl Method for Ekf {
     fn memory(_: &EkfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
     }
-    fn build(
-        ctx: &BuildContext,
-        p: &EkfParams,
-        name: String,
-    ) -> Result<ExtendedKalman, ZakaiError> {
-        Ok(ExtendedKalman::new(name, ctx, p)?)
+    fn build(ctx: &BuildContext, p: &EkfParams, name: String) -> Result<Ekf, ZakaiError> {
+        Ok(Ekf::new(name, ctx, p)?)
     }
     fn refined(p: &EkfParams, _: usize) -> Option<(EkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;
@@ -174,9 +164,6 @@ impl Method for Ekf {
     }
 }
 
-/// The unscented Kalman filter (van der Merwe's scaled sigma points).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Ukf;
 builder_fn!(Ukf);
 
 impl Method for Ukf {
@@ -190,7 +177,7 @@ impl Method for Ukf {
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
     type Params = UkfParams;
-    type Filter = UnscentedKalman;
+    type Filter = Ukf;
 
     fn info() -> MethodInfo {
         info::<Self::Params>(
@@ -209,12 +196,8 @@ impl Method for Ukf {
     fn memory(_: &UkfParams, _: usize) -> Option<usize> {
         Some(SMALL_MEMORY)
     }
-    fn build(
-        ctx: &BuildContext,
-        p: &UkfParams,
-        name: String,
-    ) -> Result<UnscentedKalman, ZakaiError> {
-        Ok(UnscentedKalman::new(name, ctx, p)?)
+    fn build(ctx: &BuildContext, p: &UkfParams, name: String) -> Result<Ukf, ZakaiError> {
+        Ok(Ukf::new(name, ctx, p)?)
     }
     fn refined(p: &UkfParams, _: usize) -> Option<(UkfParams, String)> {
         let (substeps, what) = double("substeps", p.substeps, MAX_SUBSTEPS)?;

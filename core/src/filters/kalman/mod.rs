@@ -1,5 +1,5 @@
-//! Gaussian filters on nalgebra, n-dimensional: [`KalmanBucy`] (exact for linear Gaussian
-//! models), [`ExtendedKalman`], [`UnscentedKalman`] and the MAP-update filters of 003
+//! Gaussian filters on nalgebra, n-dimensional: [`Kalman`] (exact for linear Gaussian
+//! models), [`Ekf`], [`Ukf`] and the MAP-update filters of 003
 //! ([`MapKalman`]: IEKF and IOKF). They share the Gaussian state
 //! `N(m, P)`, the observation-as-measurement form of [`measurement`], and the
 //! continuous-time propagation of [`propagate`].
@@ -16,18 +16,18 @@ pub(crate) mod second_mode;
 pub(crate) mod smoother;
 pub(crate) mod ukf;
 
-pub use ekf::ExtendedKalman;
-pub use linear::KalmanBucy;
+pub use ekf::Ekf;
+pub use linear::Kalman;
 pub use map::MapKalman;
 pub use map_point::MapSolver;
-pub use method::{Ekf, Iekf, Iokf, Kalman, Ukf};
+pub use method::{Iekf, Iokf};
 pub use params::EkfParams;
 pub use params::IekfParams;
 pub use params::IokfParams;
 pub use params::KalmanParams;
 pub use params::UkfParams;
 pub(crate) use params::MAX_SUBSTEPS;
-pub use ukf::UnscentedKalman;
+pub use ukf::Ukf;
 
 use alloc::vec::Vec;
 

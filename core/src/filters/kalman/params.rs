@@ -11,7 +11,7 @@ use crate::filters::params::{parameters, Declared};
 pub(crate) const MAX_SUBSTEPS: usize = 4096;
 
 parameters! {
-    /// Parameters of the Kalman–Bucy filter ([`KalmanBucy`](super::KalmanBucy)).
+    /// Parameters of the Kalman–Bucy filter ([`Kalman`](super::Kalman)).
     pub struct KalmanParams {
         /// A starting Gaussian other than the prior's mean and covariance.
         init: GaussianInit = GaussianInit::default() => json;
@@ -19,7 +19,7 @@ parameters! {
 }
 
 parameters! {
-    /// Parameters of the extended Kalman filter ([`ExtendedKalman`](super::ExtendedKalman)).
+    /// Parameters of the extended Kalman filter ([`Ekf`](super::Ekf)).
     pub struct EkfParams {
         /// RK4 steps of the moment equations per observation interval.
         substeps: usize = 4 => int "substeps", range(1, MAX_SUBSTEPS);
@@ -29,7 +29,7 @@ parameters! {
 }
 
 parameters! {
-    /// Parameters of the unscented Kalman filter ([`UnscentedKalman`](super::UnscentedKalman)):
+    /// Parameters of the unscented Kalman filter ([`Ukf`](super::Ukf)):
     /// van der Merwe's scaled sigma points.
     pub struct UkfParams {
         /// Spread α of the sigma points around the mean, 0 < α ≤ 1.

@@ -1,4 +1,4 @@
-//! The unscented Kalman filter ([`UnscentedKalman`] documents it).
+//! The unscented Kalman filter ([`Ukf`] documents it).
 
 use alloc::format;
 use alloc::string::String;
@@ -163,7 +163,7 @@ impl SigmaPoints {
 /// the mean. A covariance that is no longer positive definite is an error, never a panic; its
 /// self-check watches the innovations ([`crate::Filter::self_check`]).
 #[derive(Clone, Debug)]
-pub struct UnscentedKalman {
+pub struct Ukf {
     name: String,
     model: Model,
     q: crate::model::ProcessNoise,
@@ -174,7 +174,7 @@ pub struct UnscentedKalman {
     sigma: SigmaPoints,
 }
 
-impl UnscentedKalman {
+impl Ukf {
     /// Builds the filter, for observation interval Δτ when the context has one (a step of
     /// another length then takes as many RK4 steps of at most Δτ/substeps as it needs); fails
     /// on invalid parameters.
@@ -195,7 +195,7 @@ impl UnscentedKalman {
             cov0: lambda / (n + lambda) + 1.0 - params.alpha * params.alpha + params.beta,
             rest: 0.5 / (n + lambda),
         };
-        Ok(UnscentedKalman {
+        Ok(Ukf {
             form: MeasurementForm::new(&name, model)?,
             name,
             model: model.clone(),
@@ -299,13 +299,13 @@ impl UnscentedKalman {
     }
 }
 
-super::smoother::gaussian_filter!(UnscentedKalman);
+super::smoother::gaussian_filter!(Ukf);
 
-impl Filter for UnscentedKalman {
+impl Filter for Ukf {
     super::smoother::gaussian_filter_opening!(estimate);
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
-        let UnscentedKalman {
+        let Ukf {
             name,
             model,
             q,

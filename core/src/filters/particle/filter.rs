@@ -90,7 +90,7 @@ enum ParticleDiffusion {
 /// estimate, so it is biased low by about half its variance, and a random function of the
 /// parameters.
 #[derive(Clone, Debug)]
-pub struct ParticleFilter {
+pub struct Pf {
     name: String,
     /// The model of the current step (for a driven model, frozen for it).
     pub(super) model: Model,
@@ -144,7 +144,7 @@ pub struct ParticleFilter {
     pub(super) trail: Option<Vec<f64>>,
 }
 
-impl ParticleFilter {
+impl Pf {
     /// Draws N particles from the prior with a generator seeded by `seed`.
     pub(crate) fn new(
         name: String,
@@ -189,7 +189,7 @@ impl ParticleFilter {
             }
         };
         let uniform = 1.0 / count as f64;
-        Ok(ParticleFilter {
+        Ok(Pf {
             name,
             model: model.clone(),
             driven: model.is_driven().then(|| model.clone()),
@@ -541,7 +541,7 @@ crate::linalg::simd::per_node_kernel! {
     }
 }
 
-impl Filter for ParticleFilter {
+impl Filter for Pf {
     fn name(&self) -> &str {
         &self.name
     }

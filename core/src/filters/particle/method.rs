@@ -8,7 +8,7 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use super::{ParticleFilter, PfParams};
+use super::{Pf, PfParams};
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
 use crate::filters::method::{
@@ -17,9 +17,6 @@ use crate::filters::method::{
 use crate::model::Model;
 use crate::validate::ConfigProblem;
 
-/// The bootstrap particle filter registered as a [`Method`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Pf;
 builder_fn!(Pf);
 
 impl Method for Pf {
@@ -36,7 +33,7 @@ impl Method for Pf {
         "forward filtering, backward simulation: M trajectories drawn backward through the stored particle clouds with the transition density of the filter's Euler–Maruyama steps (needs a nonsingular G Gᵀ); consistent for the discretised model, with errors of order N^−½ (particles) and M^−½ (trajectories), at O(M N) per Euler step",
     );
     type Params = PfParams;
-    type Filter = ParticleFilter;
+    type Filter = Pf;
 
     fn info() -> MethodInfo {
         MethodInfo {
@@ -61,8 +58,8 @@ impl Method for Pf {
         // resampling's slot starts and ancestors.
         p.particles.checked_mul(5 * n + 4)?.checked_mul(8)
     }
-    fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<ParticleFilter, ZakaiError> {
-        Ok(ParticleFilter::new(name, ctx, p)?)
+    fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<Pf, ZakaiError> {
+        Ok(Pf::new(name, ctx, p)?)
     }
     fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
         if p.substeps.is_some() {

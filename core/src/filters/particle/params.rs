@@ -9,7 +9,7 @@ use crate::filters::params::{parameters, Declared};
 pub(crate) const MAX_PARTICLES: usize = 10_000_000;
 
 parameters! {
-    /// Parameters of the bootstrap particle filter ([`ParticleFilter`](super::ParticleFilter)).
+    /// Parameters of the bootstrap particle filter ([`Pf`](super::Pf)).
     pub struct PfParams {
         /// Number of particles N; the error falls like 1/√N.
         particles: usize = 200 => int "particles N", range(1, MAX_PARTICLES);

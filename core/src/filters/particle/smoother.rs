@@ -27,7 +27,7 @@ use alloc::vec::Vec;
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, RngExt};
 
-use super::ParticleFilter;
+use super::Pf;
 use crate::error::FilterError;
 use crate::filters::smoothing::{no_smoother, SmoothedStep, Smoother, SmoothingPlan};
 use crate::filters::{Estimate, Filter, Observation};
@@ -50,7 +50,7 @@ struct Record {
 /// The FFBSi smoother of the particle filter (see the module doc).
 #[derive(Clone, Debug)]
 pub(crate) struct Ffbsi {
-    filter: ParticleFilter,
+    filter: Pf,
     start: (Vec<f64>, Vec<f64>),
     records: Vec<Record>,
     /// L⁻¹ with `Q = L Lᵀ`.
@@ -58,7 +58,7 @@ pub(crate) struct Ffbsi {
     rng: SimRng,
 }
 
-impl ParticleFilter {
+impl Pf {
     /// The FFBSi smoother from the filter's current state (see the module doc).
     pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
         if self.driven.is_some() {

@@ -152,7 +152,7 @@ enum Propagation {
 /// [`crate::Filter::self_check`]. Its off-line operator is made once, so a driven model is
 /// refused.
 #[derive(Clone, Debug)]
-pub struct SpectralFilter {
+pub struct Spectral {
     name: String,
     layout: Layout,
     t0: f64,
@@ -220,7 +220,7 @@ enum Leg {
     RemainderGap,
 }
 
-impl SpectralFilter {
+impl Spectral {
     /// Runs the off-line part for `model` on `bounds` and projects the prior.
     pub(crate) fn new(
         name: String,
@@ -280,7 +280,7 @@ impl SpectralFilter {
             .collect();
         let offline_len: usize = layout.offline.iter().product();
         let online_len: usize = layout.online.iter().product();
-        let mut filter = SpectralFilter {
+        let mut filter = Spectral {
             name,
             t0,
             propagation,
@@ -483,7 +483,7 @@ impl SpectralFilter {
 }
 
 /// `values ← values · exp(Δyᵀg − scale · half − shift)` at the nodes ([`ObservedTerms`]), with
-/// `shift` the largest exponent (see [`SpectralFilter::update`]), returned; `a` is scratch.
+/// `shift` the largest exponent (see [`Spectral::update`]), returned; `a` is scratch.
 fn observation_factor(values: &mut [f64], a: &mut [f64], terms: &ObservedTerms, scale: f64) -> f64 {
     terms.exponents(scale, a);
     let shift = a.iter().copied().fold(f64::NEG_INFINITY, linalg::larger);
@@ -559,7 +559,7 @@ fn estimate_at_nodes<const N: usize>(
 /// different failure this check does not see (on [−2, 2]: 1.7e-7, yet 0.048 off).
 pub(crate) const TAIL_ENERGY_THRESHOLD: f64 = 1e-3;
 
-impl SpectralFilter {
+impl Spectral {
     /// The largest share, over the dimensions, of Σc² in the top quarter of the degrees.
     pub fn tail_energy(&self) -> f64 {
         self.energy.share()
@@ -631,7 +631,7 @@ fn scale_and_measure(coeffs: &mut [f64], scale: f64, counts: &[usize]) -> Energy
     }
 }
 
-impl Filter for SpectralFilter {
+impl Filter for Spectral {
     crate::filters::kept_estimate_accessors!();
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -7,7 +7,7 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use super::params::MAX_BASIS;
-use super::{SpectralFilter, SpectralParams};
+use super::{Spectral, SpectralParams};
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
 use crate::filters::method::{
@@ -15,9 +15,6 @@ use crate::filters::method::{
 };
 use crate::validate::ConfigProblem;
 
-/// The off-line/on-line spectral Yau–Yau filter (generalized Legendre basis).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Spectral;
 builder_fn!(Spectral);
 
 impl Method for Spectral {
@@ -35,7 +32,7 @@ impl Method for Spectral {
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     type Params = SpectralParams;
-    type Filter = SpectralFilter;
+    type Filter = Spectral;
 
     fn info() -> MethodInfo {
         MethodInfo {
@@ -82,12 +79,8 @@ impl Method for Spectral {
             .checked_add(off.checked_mul(off)?)?;
         values.checked_mul(8)
     }
-    fn build(
-        ctx: &BuildContext,
-        p: &SpectralParams,
-        name: String,
-    ) -> Result<SpectralFilter, ZakaiError> {
-        SpectralFilter::new(name, ctx, p)
+    fn build(ctx: &BuildContext, p: &SpectralParams, name: String) -> Result<Spectral, ZakaiError> {
+        Spectral::new(name, ctx, p)
     }
     /// In 1-D an unset basis size follows the domain against the prior's width (see
     /// `FUNCTIONS_PER_SD`); in 2-D and 3-D, whose off-line operator grows with the

@@ -1,4 +1,4 @@
-//! The spectral Yau–Yau filter of 004 ([`SpectralFilter`] documents it).
+//! The spectral Yau–Yau filter of 004 ([`Spectral`] documents it).
 
 //!
 //! Cost: per observation interval, one product with W and, in 2-D and 3-D, one tensor
@@ -29,8 +29,7 @@ mod params;
 pub(crate) mod tensor;
 
 pub(crate) use filter::Layout;
-pub use filter::SpectralFilter;
-pub use method::Spectral;
+pub use filter::Spectral;
 pub(crate) use method::{basis_for, FUNCTIONS_PER_SD};
 pub use params::SpectralParams;
 pub(crate) use params::MAX_BASIS;

@@ -288,16 +288,11 @@ impl Likelihood {
         let Ok(run) = self.run_at(theta) else {
             return Vec::new();
         };
-        let violated = run
+        let warnings = run
             .warnings
             .iter()
-            .filter(|(_, w)| w.contains("violated"))
-            .map(|(who, w)| format!("{who}: {w}"));
-        let checks = run.methods[0]
-            .concerns
-            .iter()
-            .map(|c| format!("{}: self-check {}", run.methods[0].name, c.describe()));
-        violated.chain(checks).collect()
+            .map(|(who, w)| (who.as_str(), w.as_str()));
+        concern_lines(warnings, &run.methods[0].name, &run.methods[0].concerns)
     }
 
     /// [`Likelihood::log_likelihood`] with a failure as `f64::NEG_INFINITY` (the value the
@@ -305,6 +300,25 @@ impl Likelihood {
     pub fn value(&self, theta: &[f64]) -> f64 {
         self.log_likelihood(theta).unwrap_or(f64::NEG_INFINITY)
     }
+}
+
+/// What a run at a fit's point warns of, one line each with who says it: the warnings of a
+/// violated condition (`(who, warning)`), then the self-checks of method `name` that warned
+/// during the run.
+fn concern_lines<'w>(
+    warnings: impl Iterator<Item = (&'w str, &'w str)>,
+    name: &str,
+    records: &[crate::lab::experiment::ConcernRecord],
+) -> Vec<String> {
+    warnings
+        .filter(|(_, w)| w.contains("violated"))
+        .map(|(who, w)| format!("{who}: {w}"))
+        .chain(
+            records
+                .iter()
+                .map(|r| format!("{name}: self-check {}", r.describe())),
+        )
+        .collect()
 }
 
 /// θ for the parameters `names` within `bounds`: an error when it has the wrong length or a

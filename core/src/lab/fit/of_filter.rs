@@ -25,9 +25,9 @@ type Build<'b> = dyn Fn(&[f64]) -> Result<Box<dyn Filter>, ZakaiError> + Sync + 
 /// the grid, an unbiased estimate's logarithm, a Gaussian approximation — depends on the
 /// method, as for a scenario's [`crate::lab::fit::Likelihood`].
 ///
-/// The method marker passed to [`FilterLikelihood::new`] (`Kalman`, `Ukf`, `Pf`, …) names the
-/// method and says whether it draws random numbers: a particle filter's log-likelihood is then
-/// a random function of θ, which the closure should make smooth-looking by building every
+/// The method named in [`FilterLikelihood::new`]'s type parameter (`new::<Kalman>`,
+/// `new::<Pf>`, `new::<Iekf>`, `new::<Separation>`, …) gives its name and says whether it
+/// draws random numbers: a particle filter's log-likelihood is then a random function of θ, which the closure should make smooth-looking by building every
 /// filter with the same seed (`.seed(s)` on its builder: common random numbers), and a fit
 /// gives no standard errors from finite differences of it (it says so).
 ///
@@ -46,8 +46,7 @@ type Build<'b> = dyn Fn(&[f64]) -> Result<Box<dyn Filter>, ZakaiError> + Sync + 
 /// let zs = [0.3, 0.1, -0.2, 0.05, 0.4, 0.2, -0.1, 0.0];
 /// let observations: Vec<Observation> =
 ///     zs.iter().map(|z| Observation::measurement(0.1, core::slice::from_ref(z))).collect();
-/// let likelihood = FilterLikelihood::new(
-///     Kalman,
+/// let likelihood = FilterLikelihood::new::<Kalman>(
 ///     &observations,
 ///     &[("a", ParameterConfig::bounded(1.0, 0.0, 10.0))],
 ///     |theta: &[f64]| {
@@ -87,18 +86,16 @@ impl core::fmt::Debug for FilterLikelihood<'_> {
 impl<'a> FilterLikelihood<'a> {
     /// The likelihood of `observations` under the filters `build` makes, as a function of
     /// `parameters` (name, starting value and bounds each; θ reaches `build` in this order).
-    /// `method` is the marker of the method `build` builds (its name and randomness).
+    /// `M` is the method whose filter `build` builds (its name and randomness).
     ///
     /// Every problem — no parameter, a name given twice, a starting value that is not finite
     /// or lies outside its bounds, empty bounds, no observation — is reported at once, before
     /// any run.
     pub fn new<M: Method>(
-        method: M,
         observations: &'a [Observation<'a>],
         parameters: &[(&str, ParameterConfig)],
         build: impl Fn(&[f64]) -> Result<M::Filter, ZakaiError> + Sync + 'a,
     ) -> Result<Self, ZakaiError> {
-        let _ = method;
         let mut problems = Vec::new();
         if parameters.is_empty() {
             problems.push(ConfigProblem::new("parameters", "no parameter to vary"));
@@ -176,19 +173,9 @@ impl<'a> FilterLikelihood<'a> {
             }
         }
         if let Some(out) = concerns {
-            let name = filter.name().to_string();
-            out.extend(
-                filter
-                    .warnings()
-                    .into_iter()
-                    .filter(|w| w.contains("violated"))
-                    .map(|w| format!("{name}: {w}")),
-            );
-            out.extend(
-                records
-                    .iter()
-                    .map(|r| format!("{name}: self-check {}", r.describe())),
-            );
+            let (name, warnings) = (filter.name(), filter.warnings());
+            let warnings = warnings.iter().map(|w| (name, w.as_str()));
+            out.extend(super::concern_lines(warnings, name, &records));
         }
         Ok(total)
     }

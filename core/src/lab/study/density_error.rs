@@ -14,7 +14,7 @@ use alloc::vec::Vec;
 
 use crate::error::ZakaiError;
 use crate::filters::fpe_split::{ContinuousDiscreteGrid, FpeScheme};
-use crate::filters::gaussian_sum::{GaussianSumFilter, GaussianSumParams, Reduction};
+use crate::filters::gaussian_sum::{GaussianSum, GaussianSumParams, Reduction};
 use crate::filters::Filter;
 use crate::lab::experiment::Experiment;
 use crate::lab::scenario::MethodConfig;
@@ -84,7 +84,7 @@ impl JCurve {
 /// `∫ (p̂ − p)² dx` on the filter's cells, with `reference` scratch for p at the centres.
 fn integrated_squared_error(
     filter: &ContinuousDiscreteGrid,
-    gsf: &GaussianSumFilter,
+    gsf: &GaussianSum,
     reference: &mut [f64],
 ) -> f64 {
     let grid = filter.grid();
@@ -146,7 +146,7 @@ pub fn j_curve(
             "J(t) needs at least one `separation` or `implicit_fdm` method in the scenario".into(),
         ));
     }
-    let mut gsf = GaussianSumFilter::new("GSF".into(), &ctx, &gsf_params)?;
+    let mut gsf = GaussianSum::new("GSF".into(), &ctx, &gsf_params)?;
     let per_interval = per_interval.max(1);
     let trajectory = experiment.simulate(seed)?;
     let mut scratch: Vec<Vec<f64>> = grids.iter().map(|g| vec![0.0; g.grid().len()]).collect();
@@ -155,7 +155,7 @@ pub fn j_curve(
     let mut sample = |t: f64,
                       kind: JKind,
                       grids: &[ContinuousDiscreteGrid],
-                      gsf: &GaussianSumFilter,
+                      gsf: &GaussianSum,
                       samples: &mut Vec<JSample>| {
         let values = grids
             .iter()
