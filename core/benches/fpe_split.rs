@@ -7,9 +7,31 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use zakai::lab::experiment::Experiment;
 use zakai::lab::scenario::presets;
-use zakai::Filter;
+use zakai::method::Method;
+use zakai::GaussianSum;
+use zakai::{Builder, Filter};
 use zakai::{ContinuousDiscreteGrid, FpeParams, FpeScheme, ImplicitFdm, Separation};
-use zakai::{GaussianSum};
+
+/// `builder` on the experiment's prior, box and observation interval, named `label`, with
+/// `cells` cells per dimension and time step `dt`.
+fn on_experiment<M: Method<Params = FpeParams, Filter = ContinuousDiscreteGrid>>(
+    builder: Builder<'_, M>,
+    experiment: &Experiment,
+    label: &str,
+    (cells, dt): (usize, f64),
+) -> ContinuousDiscreteGrid {
+    builder
+        .prior(experiment.prior().clone())
+        .domain(&experiment.config().bounds())
+        .dt(experiment.config().time.dt_obs)
+        .name(label)
+        .params(FpeParams {
+            cells: vec![cells],
+            dt,
+        })
+        .build()
+        .expect("filter")
+}
 
 /// The scheme's filter on `cells` cells per dimension with time step `dt`, after the
 /// measurement `z0` at τ₀.
@@ -20,32 +42,15 @@ fn grid_filter(
     dt: f64,
     z0: &[f64],
 ) -> ContinuousDiscreteGrid {
-    let (model, prior) = (experiment.model(), experiment.prior().clone());
-    let (bounds, dt_obs) = (
-        experiment.config().bounds(),
-        experiment.config().time.dt_obs,
-    );
-    let params = FpeParams {
-        cells: vec![cells],
-        dt,
-    };
+    let model = experiment.model();
     let mut filter = match scheme {
-        FpeScheme::Separation => Separation::builder(model)
-            .prior(prior)
-            .domain(&bounds)
-            .dt(dt_obs)
-            .name(label)
-            .params(params)
-            .build(),
-        FpeScheme::ImplicitFdm => ImplicitFdm::builder(model)
-            .prior(prior)
-            .domain(&bounds)
-            .dt(dt_obs)
-            .name(label)
-            .params(params)
-            .build(),
-    }
-    .expect("filter");
+        FpeScheme::Separation => {
+            on_experiment(Separation::builder(model), experiment, label, (cells, dt))
+        }
+        FpeScheme::ImplicitFdm => {
+            on_experiment(ImplicitFdm::builder(model), experiment, label, (cells, dt))
+        }
+    };
     filter.update(z0).expect("update");
     filter
 }

@@ -81,17 +81,22 @@ pub struct Session {
     recording: Option<zakai::lab::recording::Recording>,
 }
 
+/// The scenario object's experiment, and the run's seed (`seed`, else the scenario's).
+fn experiment_and_seed(config: JsValue, seed: Option<f64>) -> Result<(Experiment, u64), JsError> {
+    let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+    let seed = match seed {
+        Some(s) => seed_from_js(s)?,
+        None => config.seed,
+    };
+    Ok((Experiment::new(config).map_err(js_error)?, seed))
+}
+
 #[wasm_bindgen]
 impl Session {
     /// Builds a session from a scenario object; `seed` overrides the scenario's seed.
     #[wasm_bindgen(constructor)]
     pub fn new(config: JsValue, seed: Option<f64>) -> Result<Session, JsError> {
-        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
-        let seed = match seed {
-            Some(s) => seed_from_js(s)?,
-            None => config.seed,
-        };
-        let experiment = Experiment::new(config).map_err(js_error)?;
+        let (experiment, seed) = experiment_and_seed(config, seed)?;
         let mut run = experiment.start(seed).map_err(js_error)?;
         run.follow_failed_methods(true);
         run.record_innovations(experiment.model());
@@ -114,12 +119,7 @@ impl Session {
         truth: Option<String>,
         seed: Option<f64>,
     ) -> Result<Session, JsError> {
-        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
-        let seed = match seed {
-            Some(s) => seed_from_js(s)?,
-            None => config.seed,
-        };
-        let experiment = Experiment::new(config).map_err(js_error)?;
+        let (experiment, seed) = experiment_and_seed(config, seed)?;
         let recording = zakai::lab::recording::Recording::from_csv(
             experiment.model().n,
             observations.as_bytes(),
