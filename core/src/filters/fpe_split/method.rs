@@ -223,6 +223,9 @@ fn refined_cells(p: &FpeParams, n: usize) -> Option<(FpeParams, String)> {
 
 /// The separation approach: upwind finite volumes for the advection, implicit finite
 /// differences for the diffusion (001 §3).
+///
+/// Builds a [`ContinuousDiscreteGrid`] (001, Šimandl & Švácha 2005), whose page gives the
+/// idea, an example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Separation;
 fpe_method!(
@@ -237,6 +240,9 @@ fpe_method!(
 
 /// The classic implicit finite-difference method on the unsplit Fokker–Planck equation (001
 /// §4's comparison).
+///
+/// Builds a [`ContinuousDiscreteGrid`] (001, Šimandl & Švácha 2005), whose page gives the
+/// idea, an example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ImplicitFdm;
 fpe_method!(

@@ -212,6 +212,9 @@ impl Method for Ukf {
 }
 
 /// The iterated EKF: Gauss–Newton on the MAP problem of each update (003 (4.5)).
+///
+/// Builds a [`MapKalman`] (003, Kang, Salmon & Yau 2023), whose page gives the idea, an example,
+/// the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Iekf;
 builder_fn!(Iekf);
@@ -267,6 +270,9 @@ impl Method for Iekf {
 
 /// The iterated optimisation Kalman filter: a λ-homotopy from the prior to the MAP problem
 /// with guarded Newton steps (003 Algorithm 4.1).
+///
+/// Builds a [`MapKalman`] (003, Kang, Salmon & Yau 2023), whose page gives the idea, an example,
+/// the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Iokf;
 builder_fn!(Iokf);

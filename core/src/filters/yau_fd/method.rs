@@ -262,6 +262,9 @@ fn refined_grid(p: &YauYauParams, n: usize) -> Option<(YauYauParams, String)> {
 ///
 /// Needs the `std` feature: without it the method's checks say so before anything is built
 /// (and `build` returns [`ZakaiError::NeedsFeature`]).
+///
+/// Builds a [`YauYauFilter`] (000, Yueh, Lin & Yau 2014), whose page gives the idea, an
+/// example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Iem;
 yau_yau_method!(
@@ -285,6 +288,9 @@ yau_yau_method!(
 ///
 /// Needs the `std` feature: without it the method's checks say so before anything is built
 /// (and `build` returns [`ZakaiError::NeedsFeature`]).
+///
+/// Builds a [`YauYauFilter`] (000, Yueh, Lin & Yau 2014), whose page gives the idea, an
+/// example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem;
 yau_yau_method!(
@@ -308,6 +314,9 @@ yau_yau_method!(
 ///
 /// Needs the `std` feature: without it the method's checks say so before anything is built
 /// (and `build` returns [`ZakaiError::NeedsFeature`]).
+///
+/// Builds a [`YauYauFilter`] (000, Yueh, Lin & Yau 2014), whose page gives the idea, an
+/// example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Spt;
 yau_yau_method!(
@@ -335,6 +344,9 @@ yau_yau_method!(
 ///
 /// Needs the `std` feature: without it the method's checks say so before anything is built
 /// (and `build` returns [`ZakaiError::NeedsFeature`]).
+///
+/// Builds a [`YauYauFilter`] (000, Yueh, Lin & Yau 2014), whose page gives the idea, an
+/// example, the cost per step and when it fails.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Qiem4;
 yau_yau_method!(
