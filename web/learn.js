@@ -10,7 +10,7 @@ import { loadTemml, richText } from './tex.js';
 /**
  * Sets up Learn mode. `page` is the playground's side: `presets()`, `method(key, params)`,
  * `run(config)` (load and play; resolves to the reason when the page refuses the run, else
- * null), `current()` (the running config), `monteCarlo(runs)`, `checkConvergence()` (on the
+ * null), `monteCarlo(runs)`, `checkConvergence()` (on the
  * running scenario's seed), `view(name)` (turn on a view such as the log-concavity layer).
  */
 export function setupLearn(page) {
@@ -52,9 +52,9 @@ async function openLesson(page, id) {
   url.searchParams.delete('preset');
   history.replaceState(null, '', url);
   await loadTemml();
-  // The status line names every change made since the lesson was opened, in order, and what
-  // the last one should show; a run the page refuses says so there, with the reason.
-  const applied = [];
+  // The status line names the change on screen and what it should show; a run the page refuses
+  // says so there, with the reason. Each change is made to the lesson's own scenario (not to
+  // the run a previous try left), so that what it should show holds whatever was tried before.
   const status = (text, expect) => {
     const line = $('lesson-status');
     line.replaceChildren(text, ...(expect ? [el('br'), el('span', { className: 'expect' }, 'What you should see: ', ...richText(expect))] : []));
@@ -64,32 +64,38 @@ async function openLesson(page, id) {
     const [b, l] = [box.getBoundingClientRect(), line.getBoundingClientRect()];
     if (box.scrollHeight > box.clientHeight && (l.bottom > b.bottom || l.top < b.top)) box.scrollTop += l.bottom - b.bottom + 8;
   };
+  // What the run on screen is: the lesson's scenario, or it with one try's change.
+  let shown = `scenario: ${lesson.preset} with seed ${lesson.seed}`;
   const action = (label, act, expect) => {
     const b = el('button', { type: 'button', className: 'try' }, label);
     b.addEventListener('click', async () => {
       const refused = await act();
       if (refused) return status(`not run (${label}): ${refused}`);
-      status(applied.length ? `changed: ${applied.join('; then ')}` : `scenario: ${lesson.preset} with seed ${lesson.seed}`, expect);
+      status(shown, expect);
     });
     return b;
   };
-  const replay = action('▶ run the lesson again', () => {
-    applied.length = 0;
-    return page.run(lessonConfig(page, lesson));
+  const run = (config, what) => page.run(config).then((refused) => {
+    if (!refused) shown = what;
+    return refused;
   });
+  const replay = action('▶ run the lesson again', () => run(lessonConfig(page, lesson), `scenario: ${lesson.preset} with seed ${lesson.seed}`));
   const tries = lesson.tryThis.map((t) => action(t.label, () => {
+    // A view of the run on screen (Monte Carlo, convergence, likelihood, a plot's setting).
     if (t.mc) return page.monteCarlo(t.mc);
     if (t.check) return page.checkConvergence();
     if (t.likelihood) return page.likelihood(t.likelihood);
     if (t.view) return page.view(t.view);
-    // A try with `preset` runs that preset with the lesson's seed; else `change` edits the run.
-    const config = t.preset ? structuredClone(page.presets().find((p) => p.name === t.preset)) : page.current();
-    if (t.preset) config.seed = lesson.seed;
-    else t.change(config, page.method);
-    return page.run(config).then((refused) => {
-      if (!refused) applied.push(t.label);
-      return refused;
-    });
+    // A try with `preset` runs that preset with the lesson's seed; else `change` edits the
+    // lesson's scenario.
+    if (t.preset) {
+      const config = structuredClone(page.presets().find((p) => p.name === t.preset));
+      config.seed = lesson.seed;
+      return run(config, `changed: ${t.label} (the preset ${t.preset}, seed ${lesson.seed})`);
+    }
+    const config = lessonConfig(page, lesson);
+    t.change(config, page.method);
+    return run(config, `changed: ${t.label} (in the lesson's scenario)`);
   }, t.expect));
   $('lesson').replaceChildren(
     el('h2', {}, lesson.title),

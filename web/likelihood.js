@@ -10,7 +10,19 @@ import { state } from './state.js';
 import { csvCell, csvName, download } from './export.js';
 import { onJobMessage, postJob } from './montecarlo.js';
 
-const lik = { result: null, plot: null };
+const lik = { result: null, plot: null, key: null };
+
+// The run a profile is of: the scenario with its seed, and the recording it filters.
+const runKey = (config) => JSON.stringify([config, state.recording?.text ?? null]);
+
+// After a load: a profile drawn for another run is dimmed and says so (as the Monte Carlo and
+// convergence tables do).
+export function markStaleProfile(config) {
+  const stale = lik.key != null && config != null && lik.key !== runKey(config);
+  $('lik-plot').classList.toggle('stale', stale);
+  $('lik-table').classList.toggle('stale', stale);
+  $('lik-status').dataset.stale = String(stale);
+}
 
 // The parameters the form's scenario declares, in the parameter menu.
 function showParameters(names) {
@@ -33,6 +45,8 @@ export function startProfile(parameter) {
   $('lik-csv').disabled = true;
   $('lik-status').textContent = 'starting…';
   lik.result = null;
+  lik.key = runKey(config);
+  markStaleProfile(config);
   postJob({ type: 'profileStart', config, parameter: $('lik-param').value, points, seed: config.seed, observations });
 }
 

@@ -13,7 +13,7 @@ import { loop, setupPlayback } from './playback.js';
 import { setupExport } from './export.js';
 import { markStaleTables, setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
 import { restoreRunningRecording, setupFiles } from './data-files.js';
-import { setupLikelihood, startProfile } from './likelihood.js';
+import { markStaleProfile, setupLikelihood, startProfile } from './likelihood.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
@@ -32,7 +32,6 @@ function showPanel(id) {
 const learnHooks = {
   presets: () => state.presets,
   method: (key, params = {}) => ({ ...structuredClone(methodEntry(key).defaults), ...params }),
-  current: () => readForm(),
   run(config) {
     if (state.presets.some((p) => p.name === config.name)) $('preset').value = config.name;
     fillForm(config);
@@ -74,12 +73,18 @@ const learnHooks = {
 state.learnRun = (config) => learnHooks.run(config); // for the lessons' browser test
 
 setupForm();
-setupSession({ onReady: () => setupLearn(learnHooks), onLoaded: markStaleTables, onLoadRefused: restoreRunningRecording });
+setupSession({
+  onReady: () => setupLearn(learnHooks),
+  onLoaded: (config) => {
+    markStaleTables(config);
+    markStaleProfile(config);
+  },
+  onLoadRefused: restoreRunningRecording,
+});
 setupPlayback();
 setupExport();
 setupMonteCarlo();
 setupLikelihood();
 setupFiles();
-if (new URLSearchParams(location.search).get('present') === '1') document.body.classList.add('present');
 worker.postMessage({ type: 'init' });
 requestAnimationFrame(loop);

@@ -131,6 +131,8 @@ export function setupPlayback() {
   $('scrub').addEventListener('input', () => scrubTo(Number($('scrub').value)));
   $('scrub-live').addEventListener('click', () => scrubTo(Infinity));
   $('present').addEventListener('click', () => setPresent(!document.body.classList.contains('present')));
+  // A link with ?present=1 opens in presentation mode, its button saying so.
+  if (new URLSearchParams(location.search).get('present') === '1') setPresent(true);
 
   let resizeTimer = null;
   window.addEventListener('resize', () => {
