@@ -243,7 +243,7 @@ export const LESSONS = [
     ],
     lookFor: [
       'Its self-check: with 16 functions on $[-4, 4]$ it fires from $t = 0$ — already the prior, with standard deviation 0.32, is too narrow for them — and the estimate strays far from QIEM\'s (by more than 1 at the worst).',
-      'The work per interval: the spectral filter evaluates $W c$ at its $N_{\\text{off}} + N_{\\text{on}} + 8 = 35$ on-line nodes, weighs them and projects back — two products of a $35 \\times 16$ matrix, about 1100 multiply–adds — where QIEM\'s 10 steps of sine transforms on 399 nodes take of order $7 \\cdot 10^4$ operations: a small fraction. (Measured times per step are in Diagnostics for researchers.)',
+      'The work per interval: the spectral filter evaluates $W c$ at its on-line Gauss–Legendre nodes — $N_{\\text{off}} + N_{\\text{on}} + 8 = 11 + 16 + 8 = 35$ of them, Zakai\'s default for $N_{\\text{off}} = 11$ functions off-line and $N_{\\text{on}} = 16$ on-line (35 Gauss–Legendre nodes integrate every polynomial of degree up to 69 exactly; a product of two basis functions has degree at most 25, and the margin is for the observation factor, which is not a polynomial) —, weighs them and projects back — two products of a $35 \\times 16$ matrix, about 1100 multiply–adds — where QIEM\'s 10 steps of sine transforms on 399 nodes take of order $7 \\cdot 10^4$ operations: a small fraction. (Measured times per step are in Diagnostics for researchers.)',
     ],
     tryThis: [
       {

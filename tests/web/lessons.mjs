@@ -198,6 +198,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   for (const id of ['000', '001', '002', '003', '004']) assert.ok(refs.some((r) => r.startsWith(`${id} — `)), `reference ${id}`);
   assert.ok(!(await page.isVisible('#form')) && (await page.isVisible('#learn')), 'Learn mode hides the form');
   assert.ok(!(await page.isVisible('#about')), 'the preset\'s About box is hidden in Learn mode');
+  assert.ok(!(await page.isVisible('#preset')), 'so is the preset picker (the lessons change their presets)');
 
   // 1. The Zakai equation: the cubic sensor, QIEM, seed 3 (open since the lesson list was
   //    read).
