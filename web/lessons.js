@@ -216,7 +216,7 @@ export const LESSONS = [
       'everywhere: then its maximisers form a convex set (a single mode when it is strictly log-concave) and finding the MAP point is a convex problem (their §4, (4.5)); their §3 gives conditions under which the posterior is log-concave. Where the Hessian of $-\\log p$ has a negative eigenvalue the density can bend into a banana or split into modes. With a linear $h$ only the drift can bend the posterior, and here it does so little.',
     ],
     lookFor: [
-      'The heatmap: one compact blob following the truth; EKF, UKF, the particle filter and QIEM nearly agree (their MSEs within 10 % of each other).',
+      'The heatmap: one compact blob around the estimates; EKF, UKF, the particle filter and QIEM nearly agree (their MSEs within 10 % of each other) — also where they are all off the truth together: between $t \\approx 0.9$ and $2$ every one of them estimates $x_1$ about two thirds of a unit above it (0.65 on average). Agreeing methods are not the truth; the observations there say little.',
       'The note at the top of “Diagnostics for researchers” (opened, below the plots): the smallest curvature of $-\\log p$ (the smallest eigenvalue of $-\\nabla^2 \\log p$) where the density is above $10^{-3}$ of its maximum. On this run it stays positive — log-concave — until $t \\approx 1.3$, and then dips a little below 0 (never below $-0.5$) away from the mode: the drift bends the posterior\'s outer part slightly, one compact mode still.',
     ],
     tryThis: [
@@ -288,7 +288,7 @@ export const LESSONS = [
     body: [
       'Three questions can be asked about the state $x(t)$ from observations $y(s)$ on $[0, T]$. Filtering: what do the observations up to $t$ say about $x(t)$, the density $p\\big(x(t) \\mid y(s), s \\le t\\big)$ — what every lesson so far computed. Forecasting: what do they say about a later $x(t + u)$, $p\\big(x(t+u) \\mid y(s), s \\le t\\big)$. Smoothing: what do all of them, before and after $t$, say about $x(t)$, $p\\big(x(t) \\mid y(s), s \\le T\\big)$ — the best estimate of the past.',
       'The forecast density evolves in $u$ by the Fokker–Planck (forward Kolmogorov) equation alone, lesson 1\'s operator without the observation term, starting from the filter at $t$:',
-      '$$\\partial_t p = \\mathcal L^* p = \\tfrac12 \\sum_{i,j} \\partial_i \\partial_j \\big((GG^\\top)_{ij}\\, p\\big) - \\sum_i \\partial_i (f_i\\, p).$$',
+      '$$\\partial_u p = \\mathcal L^* p = \\tfrac12 \\sum_{i,j} \\partial_i \\partial_j \\big((GG^\\top)_{ij}\\, p\\big) - \\sum_i \\partial_i (f_i\\, p).$$',
       'When nothing is observed between $t$ and $t + u$, the filter is this forecast: a filter whose sensor is out only predicts.',
       'The smoothed density is the filtered one reweighted by what the later observations say about each starting point, $\\beta_t(x)$, the likelihood of the observations after $t$ given $x(t) = x$:',
       '$$p\\big(x(t) \\mid y_{[0,T]}\\big) \\propto p\\big(x(t) \\mid y_{[0,t]}\\big)\\, \\beta_t(x).$$',

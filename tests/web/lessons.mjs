@@ -411,6 +411,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   r = await run();
   const mses = await page.$$eval('#metrics tbody tr', (rows) => rows.map((row) => Number(row.children[1].textContent)));
   assert.ok(Math.max(...mses) / Math.min(...mses) < 1.1, `MSEs within 10 % (${mses})`);
+  // All off the truth together between t ≈ 0.9 and 2: each method's x1 about 0.65 above.
+  const offsets6 = Object.fromEntries(Object.entries(r.methods).map(([m, v]) => [m, mean(between(r, 0.9, 2, v.est.map((e, k) => e - r.truth[k])))]));
+  console.log('lesson 6: mean x1 − truth on [0.9, 2]', JSON.stringify(offsets6));
+  assert.ok(Object.values(offsets6).every((d) => Math.abs(d - 0.65) < 0.05), 'every method about 0.65 above the truth on [0.9, 2]');
   assert.ok(await page.isVisible('#heatmap-figure'));
   await page.click('#lesson button.try:has-text("log-concavity")');
   assert.ok(await page.isChecked('#lc-layer'));
