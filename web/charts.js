@@ -13,7 +13,6 @@ import {
 } from './view.js';
 import { densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
 
-
 // Labels of a log axis: whole decades only, at most five of them (every k-th decade when the
 // errors span many, e.g. a scheme equal to the reference to round-off).
 function decadeLabels(u, ticks) {
@@ -228,7 +227,6 @@ export function makeCharts() {
   showMethods();
 }
 
-
 // Plot sizes follow the panel (and presentation mode's larger type).
 function plotSize(id, which) {
   const width = $(id).clientWidth || (which === 'density' ? 360 : 800);
@@ -292,7 +290,6 @@ export function resetHeatStrip() {
   for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
 }
 
-
 // ✕ where a method failed, at its estimate there, in its colour.
 function drawFailureMarks(u) {
   const d = state.data;
@@ -341,7 +338,6 @@ function drawCursor(u) {
   ctx.stroke();
   ctx.restore();
 }
-
 
 function drawTruthMarker(u) {
   const d = state.data;

@@ -41,14 +41,12 @@ function stepInHalves() {
   worker.postMessage({ type: 'preview' });
 }
 
-
 function scrubTo(row) {
   const last = state.data.times.length - 1;
   if (state.playing) setPlaying(false);
   state.scrub = row >= last ? null : Math.max(0, row);
   render();
 }
-
 
 // The busy state: while playing, the intervals computed per second (over the last second)
 // beside the page's frame rate, and "computing…" when no interval has arrived for half a

@@ -15,11 +15,10 @@ import { configFromAddress } from './export.js';
 let validateTimer = null;
 // What main.js gives setupSession: `onReady()`, called once the worker has the catalogue.
 let sessionHooks = {};
-export function scheduleValidate() {
+function scheduleValidate() {
   clearTimeout(validateTimer);
   validateTimer = setTimeout(validate, 150);
 }
-
 
 function validate() {
   const config = checkedForm();
@@ -56,7 +55,6 @@ export function settleLoad(id, refused) {
   state.loadWaiter = null;
   waiting.resolve(refused);
 }
-
 
 // A load the worker refused: the session before it (if any) keeps running and its frames are
 // drawn again; the message goes to the element `where`.

@@ -10,7 +10,6 @@ import { densityPoints, setPlaying, shownDim, smoothedShown } from './view.js';
 import { render } from './series.js';
 import { makeCharts, resetHeatStrip } from './charts.js';
 
-
 // Asks the worker for the smoothers over the rows so far (pausing the run: smoothing is of
 // the past, and a run that moves on makes it stale).
 export function requestSmoothing() {
@@ -59,7 +58,6 @@ function redraw() {
   resetHeatStrip();
   render();
 }
-
 
 // Wires the checkbox (called once, by playback.js).
 export function setupSmoothing() {

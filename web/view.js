@@ -58,8 +58,8 @@ export function updateScrub() {
   $('scrub-live').hidden = state.scrub == null;
   $('scrub-time').textContent = state.scrub == null ? 'live' : `t = ${(state.data.times[state.scrub] ?? 0).toFixed(3)}`;
 }
-// Plays or pauses the run (a play that should also leave the time slider's look back is
-// playback.js's `play`).
+// Plays or pauses the run (playback.js's ▶ also brings the time slider back to the present
+// first).
 export function setPlaying(p) {
   state.playing = p;
   if (p && state.preview) {
