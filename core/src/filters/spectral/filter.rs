@@ -231,15 +231,13 @@ impl Spectral {
         let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let n = model.n;
         if let Some((field, msg)) = params.problems(n).into_iter().next() {
-            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(
-                format!("{name} {field}: {msg}"),
-            )));
+            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")).into());
         }
         let t0 = params.t0.unwrap_or(dt_obs);
         if (t0 - dt_obs).abs() > 1e-9 * dt_obs {
-            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
+            return Err(FilterError::Unsuitable(format!(
                 "{name}: T₀ = {t0} must equal the observation interval Δτ = {dt_obs} (004 propagates one interval per observation)"
-            ))));
+            )).into());
         }
         let layout = params.layout(n, bounds);
         let in_operator = params.likelihood == LikelihoodPlacement::InOperator;

@@ -171,9 +171,7 @@ impl YauYauFilter {
             problems.extend(params.fourth_order_problems(model.n));
         }
         if let Some((field, msg)) = problems.into_iter().next() {
-            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(
-                format!("{name} {field}: {msg}"),
-            )));
+            return Err(FilterError::Unsuitable(format!("{name} {field}: {msg}")).into());
         }
         let grid = TensorGrid::new(bounds, &params.shape(model.n))
             .map_err(|e| FilterError::Unsuitable(format!("{e}")))?;
@@ -188,22 +186,22 @@ impl YauYauFilter {
             params.likelihood == LikelihoodPlacement::InUpdate,
         )?;
         if op.state_dependent && scheme != Scheme::Iem {
-            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
+            return Err(FilterError::Unsuitable(format!(
                 "{name} needs a constant diffusion G: its DST solve (000 (18)) diagonalises the constant-coefficient ½ Σ Q_dd ∂²/∂s_d², and this model's G depends on the state; IEM's tridiagonal systems take a(x) node by node"
-            ))));
+            )).into());
         }
         if !op.cross.is_empty() && scheme == Scheme::Qiem4 {
-            return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
+            return Err(FilterError::Unsuitable(format!(
                 "{name} needs a diagonal Q = G Gᵀ: the mixed terms' explicit step is second order and would spoil the fourth-order scheme; QIEM and IEM take them"
-            ))));
+            )).into());
         }
         if scheme == Scheme::Qiem4 {
             let (a, b) = (grid.spacing()[0], grid.spacing()[1]);
             if (a - b).abs() > 1e-9 * a || op.diffusion[0] != op.diffusion[1] {
-                return Err(crate::error::ZakaiError::from(FilterError::Unsuitable(format!(
+                return Err(FilterError::Unsuitable(format!(
                     "{name}: the 9-point scheme needs square cells and equal diffusion, got Δs = ({a:.4}, {b:.4}) and Q = ({}, {}); make the domain square or adjust the points",
                     op.diffusion[0], op.diffusion[1]
-                ))));
+                )).into());
             }
         }
         let u = grid.tabulate(|x| prior.density(x));
