@@ -81,6 +81,23 @@ pub struct Session {
     recording: Option<zakai::lab::recording::Recording>,
 }
 
+/// A run of `experiment` with `seed`, on `recording` when given, simulated otherwise: failed
+/// methods followed on and the innovations recorded, as the page draws them.
+fn start(
+    experiment: &Experiment,
+    recording: Option<&zakai::lab::recording::Recording>,
+    seed: u64,
+) -> Result<ExperimentRun, JsError> {
+    let mut run = match recording {
+        Some(r) => experiment.start_recorded(r.clone(), seed),
+        None => experiment.start(seed),
+    }
+    .map_err(js_error)?;
+    run.follow_failed_methods(true);
+    run.record_innovations(experiment.model());
+    Ok(run)
+}
+
 /// The scenario object's experiment, and the run's seed (`seed`, else the scenario's).
 fn experiment_and_seed(config: JsValue, seed: Option<f64>) -> Result<(Experiment, u64), JsError> {
     let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
@@ -97,9 +114,7 @@ impl Session {
     #[wasm_bindgen(constructor)]
     pub fn new(config: JsValue, seed: Option<f64>) -> Result<Session, JsError> {
         let (experiment, seed) = experiment_and_seed(config, seed)?;
-        let mut run = experiment.start(seed).map_err(js_error)?;
-        run.follow_failed_methods(true);
-        run.record_innovations(experiment.model());
+        let run = start(&experiment, None, seed)?;
         Ok(Session {
             experiment,
             run,
@@ -126,11 +141,7 @@ impl Session {
             truth.as_deref().map(str::as_bytes),
         )
         .map_err(js_error)?;
-        let mut run = experiment
-            .start_recorded(recording.clone(), seed)
-            .map_err(js_error)?;
-        run.follow_failed_methods(true);
-        run.record_innovations(experiment.model());
+        let run = start(&experiment, Some(&recording), seed)?;
         Ok(Session {
             experiment,
             run,
@@ -182,13 +193,7 @@ impl Session {
     /// Restarts the same scenario with a new seed.
     pub fn reset(&mut self, seed: f64) -> Result<(), JsError> {
         let seed = seed_from_js(seed)?;
-        self.run = match &self.recording {
-            Some(r) => self.experiment.start_recorded(r.clone(), seed),
-            None => self.experiment.start(seed),
-        }
-        .map_err(js_error)?;
-        self.run.follow_failed_methods(true);
-        self.run.record_innovations(self.experiment.model());
+        self.run = start(&self.experiment, self.recording.as_ref(), seed)?;
         self.seed = seed;
         Ok(())
     }
