@@ -65,7 +65,8 @@ async function openLesson(page, id) {
     if (box.scrollHeight > box.clientHeight && (l.bottom > b.bottom || l.top < b.top)) box.scrollTop += l.bottom - b.bottom + 8;
   };
   // What the run on screen is: the lesson's scenario, or it with one try's change.
-  let shown = `scenario: ${lesson.preset} with seed ${lesson.seed}`;
+  const own = `scenario: ${lesson.preset} with seed ${lesson.seed}`;
+  let shown = own;
   const action = (label, act, expect) => {
     const b = el('button', { type: 'button', className: 'try' }, label);
     b.addEventListener('click', async () => {
@@ -79,7 +80,7 @@ async function openLesson(page, id) {
     if (!refused) shown = what;
     return refused;
   });
-  const replay = action('▶ run the lesson again', () => run(lessonConfig(page, lesson), `scenario: ${lesson.preset} with seed ${lesson.seed}`));
+  const replay = action('▶ run the lesson again', () => run(lessonConfig(page, lesson), own));
   const tries = lesson.tryThis.map((t) => action(t.label, () => {
     // A view of the run on screen (Monte Carlo, convergence, likelihood, a plot's setting).
     if (t.mc) return page.monteCarlo(t.mc);
@@ -104,7 +105,7 @@ async function openLesson(page, id) {
     el('ul', {}, ...lesson.lookFor.map((t) => el('li', {}, ...richText(t)))),
     el('h3', {}, 'Try this'),
     el('div', { className: 'tries' }, ...tries, replay),
-    el('p', { id: 'lesson-status', className: 'hint', role: 'status' }, `scenario: ${lesson.preset} with seed ${lesson.seed}`),
+    el('p', { id: 'lesson-status', className: 'hint', role: 'status' }, own),
   );
   // The panels the lesson's text points to are open when it says to look there.
   for (const id of lesson.opens ?? []) $(id).open = true;
