@@ -248,7 +248,9 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   assert.ok(structure.some((t) => t.includes('η = 1 + x^2 (symbolic)')), 'η of example 4.3 is proved quadratic');
   await page.fill('#observation input >> nth=0', 'x^3');
   await page.fill('#observation input >> nth=1', 'x');
-  await page.waitForFunction(() => document.querySelector('#structure-verdict').textContent === 'no', null, { timeout: 10000 });
+  // Both edits are re-checked (the first alone, h = (x³, x cos x), already fails numerically).
+  await page.waitForFunction(() => document.querySelector('#structure-verdict').textContent === 'no'
+    && [...document.querySelectorAll('#structure-list li.fails')].some((l) => l.textContent.includes('(symbolic)')), null, { timeout: 10000 });
   const edited = await page.$$eval('#structure-list li.fails', (lis) => lis.map((l) => l.textContent));
   assert.ok(edited.some((t) => t.includes('has degree 6 (symbolic)')), `the edit is re-checked: ${JSON.stringify(edited)}`);
 
