@@ -344,6 +344,10 @@ fn list() -> String {
         "A driven model: expressions in the time t and known inputs u1..uk (model.inputs; CSV columns u1..uk)",
         |m| m.inputs,
     ));
+    s.push_str(&support(
+        "A discrete-time model x_k = F(x_(k-1), t_k, u_k) + w_k (model.dynamics: \"discrete\")",
+        |m| m.discrete_time,
+    ));
     s
 }
 

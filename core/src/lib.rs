@@ -24,6 +24,7 @@
 //! | MAP updates: iterated EKF, iterated optimisation Kalman filter | [`Iekf`], [`Iokf`] | 003: Kang, Salmon & Yau (2023) |
 //! | off-line/on-line spectral (Legendre) Yau–Yau filter | [`Spectral`] | 004: Shi, Chen & Yau (2021) |
 //! | Gaussian-sum filter (exact for linear models with mixtures) | [`GaussianSum`] | Sorenson & Alspach (1971) |
+//! | point-mass filter for discrete-time models `x_k = F(x_(k−1)) + w_k` ([`Dynamics`]) | [`PointMass`] | Šimandl, Královec & Söderström (2006) |
 //!
 //! ## Filtering your own observations
 //!
@@ -79,6 +80,7 @@
 //! | [`Direct`] | [`DirectParams`] |
 //! | [`Spectral`] | [`SpectralParams`] |
 //! | [`GaussianSum`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
+//! | [`PointMass`] | [`PointMassParams`] |
 //!
 //! | markers (schemes) | filter type | parameters |
 //! |---|---|---|
@@ -161,7 +163,7 @@ pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
 
 pub use model::expression::ExpressionFunction;
 pub use model::{
-    BatchScratch, ClosureFunction, Derivatives, Diffusion, GaussianMixture, Inputs,
+    BatchScratch, ClosureFunction, Derivatives, Diffusion, Dynamics, GaussianMixture, Inputs,
     MeasurementDensity, MixtureComponent, Model, Noise, ObservationModel, Prior, ProcessNoise,
     TabulatedDensity, VectorFunction,
 };
@@ -202,6 +204,7 @@ pub use filters::kalman::{
     MapKalman, MapSolver, Ukf, UkfParams,
 };
 pub use filters::particle::{Pf, PfParams};
+pub use filters::point_mass::{PointMass, PointMassParams};
 pub use filters::spectral::{Spectral, SpectralParams};
 pub use filters::yau_fd::{
     Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,

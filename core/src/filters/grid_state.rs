@@ -89,6 +89,77 @@ pub(crate) fn normalise_on_grid(
     Ok(())
 }
 
+/// A measurement's density on a grid's nodes: `p(z | x)` and h tabulated once (m values
+/// per node).
+#[derive(Clone, Debug)]
+pub(crate) struct GridMeasurement {
+    pub(crate) likelihood: super::MeasurementLikelihood,
+    /// h at the nodes, row per node.
+    pub(crate) h_nodes: Vec<f64>,
+    pub(crate) m: usize,
+}
+
+impl GridMeasurement {
+    /// The density `noise` of the model `measurement` (whose h is tabulated) on `grid`.
+    pub(crate) fn new(
+        grid: &crate::grid::TensorGrid,
+        measurement: &crate::model::Model,
+        noise: &crate::model::MeasurementDensity,
+    ) -> Self {
+        let m = measurement.m;
+        let mut h_nodes = Vec::with_capacity(grid.len() * m);
+        let mut hx = alloc::vec![0.0; m];
+        grid.for_each_node(|_, x| {
+            measurement.observation.eval(x, &mut hx);
+            h_nodes.extend_from_slice(&hx);
+        });
+        GridMeasurement {
+            likelihood: super::MeasurementLikelihood::new(noise, m),
+            h_nodes,
+            m,
+        }
+    }
+
+    /// Bayes' rule on the nodes (001 (6)): `u ← u · p(z | x)` for the observed components of
+    /// `z` (NaN = missing), in the log domain so that a sharp likelihood cannot underflow the
+    /// whole grid, and rescaled by its largest value; `log` and `node` are storage (a value per
+    /// node, a point). Returns the log of what the rescaling and the predicted mass took away:
+    /// after the caller normalises to `mass`, the step's log-likelihood
+    /// `ln p(z | past)` is `ln mass + ` this.
+    pub(crate) fn multiply(
+        &mut self,
+        grid: &crate::grid::TensorGrid,
+        (u, log): (&mut [f64], &mut [f64]),
+        node: &mut [f64],
+        z: &[f64],
+    ) -> Result<f64, crate::error::FilterError> {
+        // The update keeps only the positive values (a negative one becomes 0).
+        let before = grid.positive_mass(u);
+        let m = self.m;
+        let reads_state = self.likelihood.reads_state();
+        let mut max = f64::NEG_INFINITY;
+        for (idx, (u, log)) in u.iter().zip(log.iter_mut()).enumerate() {
+            if *u > 0.0 {
+                let h = &self.h_nodes[idx * m..(idx + 1) * m];
+                if reads_state {
+                    grid.node(idx, node);
+                }
+                *log = self.likelihood.log_at(z, node, h)? + libm::log(*u);
+                max = max.max(*log);
+            } else {
+                *log = f64::NEG_INFINITY;
+            }
+        }
+        if max == f64::NEG_INFINITY || max.is_nan() {
+            return Err(crate::error::FilterError::MassLost);
+        }
+        for (u, log) in u.iter_mut().zip(log.iter()) {
+            *u = libm::exp(log - max);
+        }
+        Ok(max - libm::log(before))
+    }
+}
+
 /// The [`Filter`](super::Filter) accessors of a filter that keeps its `name`, its last step's
 /// `log_likelihood` and its `estimate` in fields of those names (the grid and spectral
 /// filters), expanded inside its `impl Filter`; with `density in u`, also its density on

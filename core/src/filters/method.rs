@@ -171,6 +171,9 @@ pub trait Method {
     /// What the method does with a driven model, whose functions read the time `t` and known
     /// inputs `u1..uk` ([`crate::Inputs`]).
     const INPUTS: Support;
+    /// What the method does with a discrete-time model `x_k = F(x_{k−1}, t_k, u_k) + w_k`
+    /// ([`crate::Dynamics::Discrete`]).
+    const DISCRETE_TIME: Support;
     /// The method's parameters (serde, with defaults).
     type Params: Declared + Clone + Default + PartialEq + Debug + Serialize + DeserializeOwned;
     /// The filter it builds.
@@ -241,12 +244,21 @@ pub trait Method {
 }
 
 /// Why method `M` does not take `model` at all: a state-dependent diffusion it refuses
-/// ([`Method::STATE_DIFFUSION`]) or a driven model it refuses ([`Method::INPUTS`]).
+/// ([`Method::STATE_DIFFUSION`]), a discrete-time model it refuses
+/// ([`Method::DISCRETE_TIME`]) or a driven model it refuses ([`Method::INPUTS`]).
 pub(crate) fn refusal<M: Method>(model: &Model) -> Option<String> {
     if let Support::Refused(why) = M::STATE_DIFFUSION {
         if model.diffusion.constant().is_none() {
             return Some(format!(
                 "{} needs a constant diffusion G ({why}), and this model's G depends on the state",
+                M::info().name
+            ));
+        }
+    }
+    if let Support::Refused(why) = M::DISCRETE_TIME {
+        if model.is_discrete_time() {
+            return Some(format!(
+                "{} needs a model in continuous time ({why}), and this model is a discrete-time map x_k = F(x_(k−1)) + w_k",
                 M::info().name
             ));
         }

@@ -41,6 +41,7 @@ pub(crate) mod method;
 mod observation;
 pub(crate) mod params;
 pub(crate) mod particle;
+pub(crate) mod point_mass;
 pub(crate) mod resolution;
 mod self_check;
 pub(crate) mod smoothing;

@@ -82,7 +82,8 @@ impl Observation<'_> {
     }
 
     /// The two models a step over this observation uses, for a driven `model`
-    /// ([`crate::Inputs`]): the dynamics' at the interval's midpoint and the
+    /// ([`crate::Inputs`]): the dynamics' at the interval's midpoint (a discrete-time map's
+    /// at its end, the time its transition reaches) and the
     /// measurement's at its end (an increment's, over the interval, is the dynamics'), both
     /// with the observation's inputs. `None` for an autonomous model; an error when a driven
     /// model's observation carries no inputs, or inputs that do not fit it.
@@ -98,7 +99,12 @@ impl Observation<'_> {
                 "the model reads the time t and known inputs: give each step the observation's time and inputs (Observation::with_inputs)".into(),
             ));
         };
-        let dynamics = model.at(t - 0.5 * self.dt, u)?;
+        // A discrete-time map's transition reaches τ_k and reads its time.
+        let at = match model.is_discrete_time() {
+            true => t,
+            false => t - 0.5 * self.dt,
+        };
+        let dynamics = model.at(at, u)?;
         let measurement = match self.kind {
             ObservationKind::Increment => dynamics.clone(),
             ObservationKind::Measurement => model.at(t, u)?,

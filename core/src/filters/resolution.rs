@@ -60,7 +60,7 @@ impl ExpectedWidth {
 ///   P = √(Q S)/|c|, with c²/S summed over the components as Σ_j c_j²/S_jj;
 /// * measurements z = h(x) + v every Δτ with Var v_j = R_j (the noise's variance, or its
 ///   value at x for a state-dependent one): the discrete Riccati recursion
-///   P = (P + V)/(1 + (P + V) I), V = Q Δτ, I = Σ_j c_j²/R_j, settles at the positive root
+///   P = (P + V)/(1 + (P + V) I), V = Q Δτ (Q for a discrete-time map), I = Σ_j c_j²/R_j, settles at the positive root
 ///   of P² + V P − V/I = 0. A measurement density without a variance (a log-density, Student-t
 ///   with ν ≤ 2) or an unknown Δτ contributes no steady state.
 pub(crate) fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> {
@@ -116,7 +116,12 @@ pub(crate) fn expected_width(problem: &ProblemContext) -> Option<ExpectedWidth> 
                     Err(_) => continue,
                 }
                 let information: f64 = jacobian.iter().zip(&variance).map(|(c, r)| c * c / r).sum();
-                let v = q * dt_obs;
+                // A discrete-time map's noise is per transition (one per Δτ).
+                let v = if model.is_discrete_time() {
+                    q
+                } else {
+                    q * dt_obs
+                };
                 libm::sqrt(0.5 * (-v + libm::sqrt(v * v + 4.0 * v / information)))
             }
         };

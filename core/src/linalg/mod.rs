@@ -31,6 +31,32 @@ pub(crate) fn cholesky(
     Cholesky::new(p.clone()).ok_or(FilterError::NotPositiveDefinite { what })
 }
 
+/// A square root G of a symmetric positive-semidefinite matrix Q (`G Gᵀ = Q`,
+/// `G = V √Λ Vᵀ`), or a typed error naming it: refused when not finite, not symmetric or with
+/// an eigenvalue below `−1e-12·‖Q‖` (rounding; such values are taken as 0).
+pub(crate) fn psd_square_root(
+    q: &DMatrix<f64>,
+    what: &'static str,
+) -> Result<DMatrix<f64>, FilterError> {
+    if q.iter().any(|v| !v.is_finite()) {
+        return Err(FilterError::NonFinite { what });
+    }
+    let scale = q.iter().fold(0.0f64, |a, v| a.max(libm::fabs(*v)));
+    if !q.is_square()
+        || (q - q.transpose())
+            .iter()
+            .any(|v| libm::fabs(*v) > 1e-12 * scale)
+    {
+        return Err(FilterError::NotPositiveDefinite { what });
+    }
+    let eigen = q.clone().symmetric_eigen();
+    if eigen.eigenvalues.iter().any(|&l| l < -1e-12 * scale) {
+        return Err(FilterError::NotPositiveDefinite { what });
+    }
+    let roots = eigen.eigenvalues.map(|l| libm::sqrt(l.max(0.0)));
+    Ok(&eigen.eigenvectors * DMatrix::from_diagonal(&roots) * eigen.eigenvectors.transpose())
+}
+
 /// The Cholesky factorisation of `a` made in `storage` (a matrix of a's shape, moved into
 /// the factorisation): no allocation. Give the storage back with
 /// `*storage = chol.unpack_dirty()` when done. A matrix that is not positive definite

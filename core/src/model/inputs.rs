@@ -196,6 +196,7 @@ impl Model {
             diffusion,
             observations,
             inputs: None,
+            dynamics: self.dynamics,
         })
     }
 }

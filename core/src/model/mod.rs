@@ -9,6 +9,17 @@
 //!
 //! with Q = G Gᵀ (the identity by default, as in 000, 002 and 004; constant in all five papers,
 //! a function of the state here when a model needs one: [`diffusion`]).
+//!
+//! A **discrete-time** model ([`Dynamics::Discrete`], [`Model::discrete_time`]) replaces the SDE
+//! by a map from one observation time to the next, the form of FilterPy, statsmodels and
+//! `particles`:
+//!
+//! ```text
+//!     x_k = F(x_{k−1}, t_k, u_k) + w_k,   w_k ~ N(0, G Gᵀ)      (one transition per Δτ)
+//! ```
+//!
+//! F is held where the drift is (`drift`) and G where the diffusion is, so that expressions,
+//! closures, state-dependent noise, known inputs and fits carry over unchanged.
 
 mod compile;
 pub(crate) mod diffusion;
@@ -122,6 +133,48 @@ impl ObservationModel {
     }
 }
 
+/// How the signal moves between observation times.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Dynamics {
+    /// The SDE `dx = f(x) dt + G(x) dv` of the five papers: every method discretises it in
+    /// time (its own scheme and step).
+    #[default]
+    Continuous,
+    /// The map `x_k = F(x_{k−1}, t_k, u_k) + w_k`, `w_k ~ N(0, G Gᵀ)`, one transition per
+    /// `period` (the observation interval Δτ the map is written for), with F held in
+    /// [`Model::drift`] and G in [`Model::diffusion`]. A step over `k·period` applies k
+    /// transitions; a step that is not a whole number of periods is refused
+    /// ([`Model::transitions`]). Exact for the Kalman filter (linear F), the point-mass
+    /// filter and the particle filter; the EKF, UKF, IEKF and IOKF predict through F by their
+    /// own linearisation; the methods of the continuous-time equations (Yau–Yau, spectral,
+    /// direct, Kalman–Bucy, the Fokker–Planck grids) refuse it.
+    Discrete {
+        /// The time between two transitions (Δτ).
+        period: f64,
+    },
+}
+
+impl Dynamics {
+    /// The number of transitions a discrete-time model makes over a step of length `dt` (k
+    /// when `dt = k·period` to within 1e-9 relative; an error otherwise, and for a
+    /// continuous-time model, whose filters never ask).
+    pub fn transitions(&self, dt: f64) -> Result<usize, crate::error::FilterError> {
+        let Dynamics::Discrete { period } = *self else {
+            return Err(crate::error::FilterError::Unsuitable(
+                "a continuous-time model makes no transitions".into(),
+            ));
+        };
+        let k = libm::round(dt / period);
+        if (0.0..1e12).contains(&k) && libm::fabs(k * period - dt) <= 1e-9 * dt.max(period) {
+            Ok(k as usize)
+        } else {
+            Err(crate::error::FilterError::BadObservation(format!(
+                "the step's interval {dt} is not a whole number of the discrete-time model's period {period} (one transition x_k = F(x_(k−1)) + w_k per period)"
+            )))
+        }
+    }
+}
+
 /// A filtering model: dimensions, drift, observation function, diffusion and noise.
 #[derive(Clone)]
 pub struct Model {
@@ -129,17 +182,21 @@ pub struct Model {
     pub n: usize,
     /// Observation dimension m.
     pub m: usize,
-    /// Drift f: Rⁿ → Rⁿ.
+    /// Drift f: Rⁿ → Rⁿ; for a discrete-time model ([`Dynamics::Discrete`]), the
+    /// transition map F.
     pub drift: Arc<dyn VectorFunction>,
     /// Observation function h: Rⁿ → Rᵐ.
     pub observation: Arc<dyn VectorFunction>,
-    /// Diffusion G (n × n, constant or a function of the state), Q = G Gᵀ.
+    /// Diffusion G (n × n, constant or a function of the state), Q = G Gᵀ; for a
+    /// discrete-time model, the factor of the transition noise, `w_k ~ N(0, G Gᵀ)`.
     pub diffusion: Diffusion,
     /// Continuous or discrete observations.
     pub observations: ObservationModel,
     /// `Some(k)` for a driven model: its functions read the state, then the time `t` and k
     /// known inputs `u1..uk` ([`Inputs`]); `None` for an autonomous model.
     pub inputs: Option<usize>,
+    /// An SDE or a map from one observation time to the next.
+    pub dynamics: Dynamics,
 }
 
 impl core::fmt::Debug for Model {
@@ -151,6 +208,7 @@ impl core::fmt::Debug for Model {
             .field("diffusion", &self.diffusion)
             .field("observations", &self.observations)
             .field("inputs", &self.inputs)
+            .field("dynamics", &self.dynamics)
             .finish_non_exhaustive()
     }
 }
@@ -229,7 +287,96 @@ impl Model {
             diffusion,
             observations,
             inputs,
+            dynamics: Dynamics::Continuous,
         })
+    }
+
+    /// The same model in discrete time ([`Dynamics::Discrete`]): its drift read as the
+    /// transition map F and G Gᵀ as the covariance of `w_k` in
+    /// `x_k = F(x_{k−1}, t_k, u_k) + w_k`, one transition per observation interval. Refused
+    /// for continuous observations `dy = h dt + dw`, which need a signal in continuous time.
+    ///
+    /// ```
+    /// use zakai::{Dynamics, Model, Noise};
+    ///
+    /// // An AR(1) observed in noise, one transition per unit of time:
+    /// // x_k = 0.9 x_{k−1} + w_k, w_k ~ N(0, 0.5), z_k = x_k + v_k, v_k ~ N(0, 1).
+    /// let model = Model::from_text(&["0.9*x"], &["x"], Noise::discrete(1.0))
+    ///     .unwrap()
+    ///     .discrete_time(1.0)
+    ///     .unwrap()
+    ///     .with_transition_noise(&[[0.5]])
+    ///     .unwrap();
+    /// assert_eq!(model.dynamics, Dynamics::Discrete { period: 1.0 });
+    /// assert_eq!(model.transitions(3.0).unwrap(), 3);
+    /// assert!(model.transitions(2.5).is_err());
+    /// ```
+    pub fn discrete_time(self, period: f64) -> Result<Self, ZakaiError> {
+        if !(period > 0.0 && period.is_finite()) {
+            return Err(ZakaiError::OutOfRange {
+                what: "the period of a discrete-time model's transition".into(),
+                value: period,
+                requirement: "positive and finite",
+            });
+        }
+        if self.is_continuous() {
+            return Err(ZakaiError::Config(alloc::vec![
+                crate::validate::ConfigProblem::new(
+                    "model.dynamics",
+                    "a discrete-time model needs discrete measurements z_k ~ p(z | x_k): continuous observations dy = h dt + dw need a signal in continuous time",
+                )
+            ]));
+        }
+        Ok(Model {
+            dynamics: Dynamics::Discrete { period },
+            ..self
+        })
+    }
+
+    /// The number of transitions a discrete-time model makes over a step of length `dt`
+    /// ([`Dynamics::transitions`]).
+    pub fn transitions(&self, dt: f64) -> Result<usize, crate::error::FilterError> {
+        self.dynamics.transitions(dt)
+    }
+
+    /// The model of transition `j` of the `k` a step over `k` periods ending at time `t`
+    /// makes, for a driven discrete-time model (transition j reaches time
+    /// `t − (k − 1 − j)·period`, with the step's inputs `u`); the model itself when it is
+    /// autonomous.
+    pub fn transition_at(
+        &self,
+        inputs: Option<Inputs<'_>>,
+        j: usize,
+        k: usize,
+    ) -> Result<alloc::borrow::Cow<'_, Model>, crate::error::FilterError> {
+        use alloc::borrow::Cow;
+        if !self.is_driven() {
+            return Ok(Cow::Borrowed(self));
+        }
+        let Some(Inputs { t, u }) = inputs else {
+            return Err(crate::error::FilterError::BadObservation(
+                "the model reads the time t and known inputs: give each step the observation's time and inputs (Observation::with_inputs)".into(),
+            ));
+        };
+        let period = match self.dynamics {
+            Dynamics::Discrete { period } => period,
+            Dynamics::Continuous => 0.0,
+        };
+        Ok(Cow::Owned(self.at(t - (k - 1 - j) as f64 * period, u)?))
+    }
+
+    /// The same model with the transition noise `w_k ~ N(0, Q)` (a discrete-time model's
+    /// covariance, rows of Q; positive semidefinite — a zero row is a component without
+    /// noise): G becomes a square root of Q.
+    pub fn with_transition_noise<const N: usize>(self, q: &[[f64; N]]) -> Result<Self, ZakaiError> {
+        let q = DMatrix::from_fn(q.len(), N, |i, j| q[i][j]);
+        let g = crate::linalg::psd_square_root(&q, "transition noise covariance Q")?;
+        self.with_diffusion(g)
+    }
+
+    /// True for a discrete-time model ([`Dynamics::Discrete`]).
+    pub fn is_discrete_time(&self) -> bool {
+        matches!(self.dynamics, Dynamics::Discrete { .. })
     }
 
     /// A model from text expressions in `x` (1-D) or `x1..xn`, with G = I:
@@ -325,13 +472,17 @@ impl Model {
 
     /// The same model with diffusion G (n × n; Q = G Gᵀ).
     pub fn with_diffusion(self, diffusion: DMatrix<f64>) -> Result<Self, ZakaiError> {
-        Model::assemble(
-            self.drift,
-            self.observation,
-            Diffusion::Constant(diffusion),
-            self.observations,
-            self.inputs,
-        )
+        let dynamics = self.dynamics;
+        Ok(Model {
+            dynamics,
+            ..Model::assemble(
+                self.drift,
+                self.observation,
+                Diffusion::Constant(diffusion),
+                self.observations,
+                self.inputs,
+            )?
+        })
     }
 
     /// The same model with a state-dependent diffusion `G(x)`: `g` maps the n state

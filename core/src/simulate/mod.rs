@@ -101,7 +101,9 @@ pub fn simulate(
 /// [`simulate`] for a driven model ([`crate::Inputs`]) with the known `inputs`, k per
 /// row for the N + 1 times (row k held over `(τ_{k−1}, τ_k]`, row 0 read by the measurement
 /// at τ₀): each Euler–Maruyama step reads the time at its start, each measurement its own
-/// time. An autonomous model takes no inputs.
+/// time. An autonomous model takes no inputs. A discrete-time model
+/// ([`crate::Dynamics::Discrete`]) makes one transition per Δτ instead, reading the time it
+/// reaches, τ_k, and row k's inputs (`inner_steps` is not used).
 pub fn simulate_driven(
     model: &Model,
     x0: &[f64],
@@ -176,9 +178,22 @@ pub fn simulate_driven(
         &mut observations[0..m],
         &mut hx,
     )?;
+    let discrete = model.is_discrete_time();
     for k in 1..=steps {
         let row = &mut observations[k * m..(k + 1) * m];
-        for i in 0..inner {
+        if discrete {
+            // x_k = F(x_(k−1), t_k, u_k) + w_k, w_k ~ N(0, G Gᵀ): one transition per Δτ.
+            let tk = k as f64 * time.dt_obs;
+            let frozen = at(tk, k)?;
+            let model = frozen.as_ref().unwrap_or(model);
+            model.drift.eval(&x, &mut fx);
+            noise_factor(model, &x, tk, &mut g)?;
+            let xi = standard_normal_vector(rng, n);
+            for (i, row) in g.chunks_exact(n).enumerate() {
+                x[i] = fx[i] + row.iter().zip(xi.iter()).map(|(g, xi)| g * xi).sum::<f64>();
+            }
+        }
+        for i in 0..if discrete { 0 } else { inner } {
             let t = (k - 1) as f64 * time.dt_obs + i as f64 * dt;
             let frozen = at(t, k)?;
             let model = frozen.as_ref().unwrap_or(model);
@@ -190,12 +205,7 @@ pub fn simulate_driven(
                     row[j] += hx[j] * dt + w[j] * sqrt_dt;
                 }
             }
-            model.diffusion.eval(&x, &mut g);
-            if g.iter().any(|v| !v.is_finite()) {
-                return Err(ZakaiError::Other(format!(
-                    "simulating the state: the diffusion G(x) is not finite at x = {x:.4?} (t = {t:.4}); write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))"
-                )));
-            }
+            noise_factor(model, &x, t, &mut g)?;
             let xi = standard_normal_vector(rng, n);
             for (i, row) in g.chunks_exact(n).enumerate() {
                 let v: f64 = row.iter().zip(xi.iter()).map(|(g, xi)| g * xi).sum();
@@ -219,4 +229,15 @@ pub fn simulate_driven(
         input_count: k_inputs,
         inputs: inputs.to_vec(),
     })
+}
+
+/// G(x) into `g` (row-major), refused where it is not finite.
+fn noise_factor(model: &Model, x: &[f64], t: f64, g: &mut [f64]) -> Result<(), ZakaiError> {
+    model.diffusion.eval(x, g);
+    if g.iter().any(|v| !v.is_finite()) {
+        return Err(ZakaiError::Other(format!(
+            "simulating the state: the diffusion G(x) is not finite at x = {x:.4?} (t = {t:.4}); write G so that it is defined wherever the state can go (e.g. sqrt(abs(x)) rather than sqrt(x))"
+        )));
+    }
+    Ok(())
 }

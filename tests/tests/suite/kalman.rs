@@ -24,6 +24,7 @@ fn scalar_linear(
         reference: String::new(),
         description: String::new(),
         model: ModelConfig {
+            dynamics: Default::default(),
             drift: vec![format!("{a}*x")],
             observation: vec![format!("{c}*x")],
             diffusion: Some(vec![vec![0.7]].into()),

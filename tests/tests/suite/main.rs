@@ -9,6 +9,7 @@
 mod config;
 mod dimensions;
 mod direct;
+mod discrete_time;
 mod estimates;
 mod exact_nonlinear;
 mod expressions;

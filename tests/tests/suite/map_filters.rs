@@ -24,6 +24,7 @@ fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> Scen
         reference: String::new(),
         description: String::new(),
         model: ModelConfig {
+            dynamics: Default::default(),
             drift: vec!["-0.3*x".into()],
             observation: vec![observation.into()],
             diffusion: Some(vec![vec![0.5]].into()),

@@ -117,6 +117,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
         reference: String::new(),
         description: String::new(),
         model: ModelConfig {
+            dynamics: Default::default(),
             drift: vec![format!("{a} + {b}*x + {cc}*x^3 + {d}*sin(x)")],
             observation: vec![format!("{e}*x + {g}*x^2")],
             diffusion: None,
@@ -345,6 +346,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                 reference: String::new(),
                 description: String::new(),
                 model: ModelConfig {
+                    dynamics: Default::default(),
                     drift: vec![format!("{a}*x1 + {b}*x2"), format!("{c}*x1 + {d}*x2")],
                     observation: vec![format!("{e}*x1"), format!("{g}*x1 + x2")],
                     diffusion: None,

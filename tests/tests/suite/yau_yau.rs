@@ -24,6 +24,7 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
         reference: String::new(),
         description: String::new(),
         model: ModelConfig {
+            dynamics: Default::default(),
             drift: vec!["-0.5*x + 0.2".into()],
             observation: vec!["1.5*x".into()],
             diffusion: None,

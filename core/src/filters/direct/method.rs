@@ -29,6 +29,9 @@ impl Method for Direct {
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
         "the Gaussian approximation of the initial density and the Riccati ODEs are solved once for the whole run (002 §3)",
     );
+    const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "the Riccati ODEs of 002 (3.5) are the continuous-time evolution of the Kolmogorov equation",
+    );
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     type Params = DirectParams;

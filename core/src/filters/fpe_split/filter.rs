@@ -40,16 +40,21 @@ pub(super) fn cell_grid(
     params: &FpeParams,
     bounds: &[(f64, f64)],
 ) -> Result<TensorGrid, ZakaiError> {
-    let shape = params.shape(bounds.len());
+    cells_over(bounds, &params.shape(bounds.len()))
+}
+
+/// The grid of `shape` cells whose centres tile `bounds` (the ends of the box are cell
+/// centres): the finite volumes of 001 (11), and the point-mass filter's points.
+pub(crate) fn cells_over(bounds: &[(f64, f64)], shape: &[usize]) -> Result<TensorGrid, ZakaiError> {
     let cell_bounds: Vec<(f64, f64)> = bounds
         .iter()
-        .zip(&shape)
+        .zip(shape)
         .map(|(&(a, b), &c)| {
             let half = 0.5 * (b - a) / c as f64;
             (a - half, b + half)
         })
         .collect();
-    TensorGrid::new(&cell_bounds, &shape)
+    TensorGrid::new(&cell_bounds, shape)
 }
 
 /// `a = G Gᵀ` on the cells of `grid`: the diagonal the implicit step takes and the mixed
@@ -81,9 +86,8 @@ struct Tabulated {
     diffusion: Vec<Vec<f64>>,
     /// The mixed terms of `a`, a positive explicit step (`grid::cross`).
     cross: CrossDiffusion,
-    likelihood: crate::filters::MeasurementLikelihood,
-    /// h at the cell centres, row per cell, with m components.
-    h_nodes: Vec<f64>,
+    /// p(z | x) and h at the cell centres.
+    measurement: crate::filters::grid_state::GridMeasurement,
 }
 
 impl Tabulated {
@@ -99,14 +103,9 @@ impl Tabulated {
         let advection = UpwindAdvection::new(grid, &*dynamics.drift);
         let mut jac = vec![0.0; n * n];
         let mut divergence = Vec::with_capacity(grid.len());
-        let m = measurement.m;
-        let mut h_nodes = Vec::with_capacity(grid.len() * m);
-        let mut hx = vec![0.0; m];
         grid.for_each_node(|_, x| {
             dynamics.drift.jacobian(x, &mut jac);
             divergence.push((0..n).map(|l| jac[l * n + l]).sum());
-            measurement.observation.eval(x, &mut hx);
-            h_nodes.extend_from_slice(&hx);
         });
         let (diffusion, cross) = diffusion_on(name, dynamics, grid)?;
         Ok(Tabulated {
@@ -114,8 +113,11 @@ impl Tabulated {
             divergence,
             diffusion,
             cross,
-            likelihood: crate::filters::MeasurementLikelihood::new(&noise, m),
-            h_nodes,
+            measurement: crate::filters::grid_state::GridMeasurement::new(
+                grid,
+                measurement,
+                &noise,
+            ),
         })
     }
 }
@@ -599,31 +601,14 @@ impl ContinuousDiscreteGrid {
     /// returns the log-likelihood `ln p(z | past) = ln(c'_k / ∫ p̂)`, the normaliser against
     /// the predicted density's mass.
     fn assimilate(&mut self, z: &[f64]) -> Result<f64, FilterError> {
-        // The update keeps only the positive values (a negative one becomes 0).
-        let before = self.grid.positive_mass(&self.u);
-        let m = self.m;
-        let reads_state = self.table.likelihood.reads_state();
-        let mut max = f64::NEG_INFINITY;
-        for (idx, (u, log)) in self.u.iter().zip(self.tmp.iter_mut()).enumerate() {
-            if *u > 0.0 {
-                let h = &self.table.h_nodes[idx * m..(idx + 1) * m];
-                if reads_state {
-                    self.grid.node(idx, &mut self.node);
-                }
-                *log = self.table.likelihood.log_at(z, &self.node, h)? + libm::log(*u);
-                max = max.max(*log);
-            } else {
-                *log = f64::NEG_INFINITY;
-            }
-        }
-        if max == f64::NEG_INFINITY || max.is_nan() {
-            return Err(FilterError::MassLost);
-        }
-        for (u, log) in self.u.iter_mut().zip(&self.tmp) {
-            *u = libm::exp(log - max);
-        }
+        let shift = self.table.measurement.multiply(
+            &self.grid,
+            (&mut self.u, &mut self.tmp),
+            &mut self.node,
+            z,
+        )?;
         self.normalise()?;
-        Ok(libm::log(self.moments.mass) + max - libm::log(before))
+        Ok(libm::log(self.moments.mass) + shift)
     }
 
     /// Normalises the density and refreshes the estimate.
@@ -700,7 +685,10 @@ impl Filter for ContinuousDiscreteGrid {
                 &measurement,
             )?)?;
         }
-        self.table.likelihood.check(&self.name, obs.value)?;
+        self.table
+            .measurement
+            .likelihood
+            .check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);
         let result = self.advance(obs, observed);
         let (u, estimate) = (&mut self.u, &mut self.estimate);

@@ -77,6 +77,9 @@ macro_rules! fpe_method {
             const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
                 "f, a = G Gᵀ and the implicit step (001 (24)) tabulated and factorised anew at every step, at the interval's midpoint and with its inputs; h at τ_k in the update (6) (no smoother)",
             );
+            const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Refused(
+                "the Fokker–Planck equation 001 (4) is the prediction of an SDE; the point-mass filter is its discrete-time counterpart",
+            );
             const ALIASES: &'static [&'static str] = &[$alias];
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;

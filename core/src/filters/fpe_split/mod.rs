@@ -7,8 +7,8 @@ pub(crate) mod numerical_diffusion;
 mod params;
 pub(crate) mod upwind;
 
-pub(crate) use filter::check_model;
 pub use filter::ContinuousDiscreteGrid;
+pub(crate) use filter::{cells_over, check_model};
 pub use method::{ImplicitFdm, Separation};
 pub use params::FpeParams;
 pub use params::FpeScheme;

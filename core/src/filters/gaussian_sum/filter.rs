@@ -184,6 +184,8 @@ pub struct Reduction {
 #[derive(Clone, Debug)]
 pub struct GaussianSum {
     name: String,
+    /// An SDE or a discrete-time map (`A` its matrix then).
+    dynamics: crate::model::Dynamics,
     a: DMatrix<f64>,
     b: DVector<f64>,
     q: DMatrix<f64>,
@@ -257,6 +259,7 @@ impl GaussianSum {
         }
         Ok(GaussianSum {
             name,
+            dynamics: model.dynamics,
             q: model
                 .process_noise()
                 .require_constant("the Gaussian-sum filter", "checked above")?
@@ -350,7 +353,12 @@ impl GaussianSum {
 
     /// Predicts every component over `dt` (exact).
     fn propagate(&mut self, dt: f64) -> Result<(), FilterError> {
-        let d = Discretization::for_step(&mut self.cached, &self.a, &self.b, &self.q, dt);
+        let d = Discretization::for_step(
+            &mut self.cached,
+            (&self.a, &self.b, &self.q),
+            &self.dynamics,
+            dt,
+        )?;
         for comp in &mut self.components[..self.len] {
             d.propagate(&mut comp.m, &mut comp.p, &mut self.work.moved);
             comp.refactor()?;

@@ -28,6 +28,9 @@ impl Method for GaussianSum {
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
         "its transition matrices are computed once, for a time-invariant linear model",
     );
+    const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
+        "x_k = A x_(k−1) + b + w_k: each component through the linear map, P ← A P Aᵀ + Q",
+    );
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["gsf"];
     type Params = GaussianSumParams;

@@ -93,7 +93,7 @@ impl Filter for Ekf {
             state,
         } = self;
         let mut driven = super::DrivenStep::of(name, model, obs)?;
-        let (step, form) = super::DrivenStep::parts(&mut driven, model, q, form);
+        let (step, form) = super::DrivenStep::parts(&mut driven, (model, obs.inputs), q, form);
         state.transaction(|state| {
             let steps = substeps.over(obs.dt);
             match state.predict_then_measure(name, &step, steps, form, obs)? {

@@ -44,6 +44,30 @@ pub(crate) fn affine_parts(
     Ok((j0, DVector::from_vec(g.value(&origin))))
 }
 
+/// k transitions of the map `x_k = A x_(k−1) + b + w_k`, `w_k ~ N(0, Q)`, as one:
+/// `(Φ, Γ b, Q_d) = (A^k, Σ_(i<k) A^i b, Σ_(i<k) A^i Q A^iᵀ)` (the discrete Kalman filter's
+/// prediction, k times).
+pub(crate) fn transitions(
+    a: &DMatrix<f64>,
+    b: &DVector<f64>,
+    q: &DMatrix<f64>,
+    k: usize,
+) -> (DMatrix<f64>, DVector<f64>, DMatrix<f64>) {
+    let n = a.nrows();
+    let (mut phi, mut gamma_b, mut qd) = (
+        DMatrix::identity(n, n),
+        DVector::zeros(n),
+        DMatrix::zeros(n, n),
+    );
+    for _ in 0..k {
+        gamma_b = a * gamma_b + b;
+        qd = a * qd * a.transpose() + q;
+        phi = a * phi;
+    }
+    crate::linalg::symmetrize(&mut qd);
+    (phi, gamma_b, qd)
+}
+
 /// Exact discretisation of `dx = (A x + b) dt + G dv` over `dt`: `(Φ, Γ b, Q_d)`.
 pub(crate) fn discretize(
     a: &DMatrix<f64>,
@@ -73,6 +97,9 @@ pub(crate) fn discretize(
 /// The Kalman–Bucy filter.
 ///
 /// The Kalman–Bucy filter for linear Gaussian models — the exact reference.
+///
+/// For a discrete-time map `x_k = A x_(k−1) + b + w_k` ([`crate::Dynamics::Discrete`]) it is
+/// the Kalman filter itself: `m ← A m + b`, `P ← A P Aᵀ + Q` per transition.
 ///
 /// For `dx = (A x + b) dt + G dv` the prediction over Δτ is exact:
 /// `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d` with `Φ = e^{AΔτ}`, `Γ = ∫₀^Δτ e^{As} ds` and
@@ -144,16 +171,21 @@ pub(crate) struct Discretization {
 }
 
 impl Discretization {
-    /// The exact discretisation over `dt`, reusing `cache` while Δτ does not change.
+    /// The exact discretisation over `dt`, reusing `cache` while Δτ does not change: of the
+    /// SDE, or of the k transitions of a discrete-time map ([`transitions`]).
     pub(crate) fn for_step<'c>(
         cache: &'c mut Option<Discretization>,
-        a: &DMatrix<f64>,
-        b: &DVector<f64>,
-        q: &DMatrix<f64>,
+        (a, b, q): (&DMatrix<f64>, &DVector<f64>, &DMatrix<f64>),
+        dynamics: &crate::model::Dynamics,
         dt: f64,
-    ) -> &'c Discretization {
+    ) -> Result<&'c Discretization, FilterError> {
         if cache.as_ref().map(|d| d.dt) != Some(dt) {
-            let (phi, gamma_b, qd) = discretize(a, b, q, dt);
+            let (phi, gamma_b, qd) = match dynamics {
+                crate::model::Dynamics::Continuous => discretize(a, b, q, dt),
+                crate::model::Dynamics::Discrete { .. } => {
+                    transitions(a, b, q, dynamics.transitions(dt)?)
+                }
+            };
             *cache = Some(Discretization {
                 dt,
                 phi_t: phi.transpose(),
@@ -162,7 +194,7 @@ impl Discretization {
                 qd,
             });
         }
-        cache.as_ref().expect("just filled")
+        Ok(cache.as_ref().expect("just filled"))
     }
 
     /// Moves `N(m, P)` over the interval in place: `m ← Φ m + Γ b`, `P ← Φ P Φᵀ + Q_d`, with
@@ -238,7 +270,7 @@ impl Filter for Kalman {
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
             if obs.dt > 0.0 {
-                let d = Discretization::for_step(cached, a, b, q, obs.dt);
+                let d = Discretization::for_step(cached, (a, b, q), &model.dynamics, obs.dt)?;
                 d.propagate(&mut state.mean, &mut state.cov, moved);
                 state.record_prediction(&d.phi);
             }

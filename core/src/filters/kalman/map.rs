@@ -164,6 +164,7 @@ impl Filter for MapKalman {
                 dynamics: model,
                 q,
                 measurement: model,
+                unfrozen: None,
             };
             let Some(meas) = state.predict_then_measure(name, &own, steps, form, obs)? else {
                 return Ok(None);

@@ -47,6 +47,9 @@ const GAUSSIAN_Q: &str =
     "Q(x̂) = G(x̂)G(x̂)ᵀ at the current mean in the covariance equation dP/dt = FP + PFᵀ + Q";
 
 /// How the Gaussian filters treat time and known inputs.
+/// How the EKF-type filters predict through a discrete-time map.
+const EKF_MAP: &str = "m ← F(m), P ← J P Jᵀ + Q(m) with J = ∂F/∂x at the mean, per transition";
+
 const GAUSSIAN_INPUTS: &str = "each step's inputs held over its interval, t at the interval's midpoint in the moment equations and at τ_k in the update";
 
 /// Why the MAP filters refuse time and known inputs.
@@ -80,6 +83,9 @@ impl Method for Kalman {
         );
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
         "its matrices F, H and the transition over Δτ are computed once, for a time-invariant model",
+    );
+    const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
+        "x_k = A x_(k−1) + b + w_k: m ← A m + b, P ← A P Aᵀ + Q (the Kalman filter itself)",
     );
     const EXACT: bool = true;
     const ALIASES: &'static [&'static str] = &["kf"];
@@ -129,6 +135,8 @@ impl Method for Ekf {
         crate::filters::method::Support::Approximate(GAUSSIAN_Q);
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
+    const DISCRETE_TIME: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(EKF_MAP);
     type Params = EkfParams;
     type Filter = Ekf;
 
@@ -176,6 +184,10 @@ impl Method for Ukf {
         crate::filters::method::Support::Approximate(GAUSSIAN_Q);
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Exact(GAUSSIAN_INPUTS);
+    const DISCRETE_TIME: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(
+            "the sigma points through F, m and P their weighted moments plus Q, per transition",
+        );
     type Params = UkfParams;
     type Filter = Ukf;
 
@@ -229,6 +241,8 @@ impl Method for Iekf {
         crate::filters::method::Support::Approximate(GAUSSIAN_Q);
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Refused(MAP_INPUTS);
+    const DISCRETE_TIME: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(EKF_MAP);
     type Params = IekfParams;
     type Filter = MapKalman;
 
@@ -287,6 +301,8 @@ impl Method for Iokf {
         crate::filters::method::Support::Approximate(GAUSSIAN_Q);
     const INPUTS: crate::filters::method::Support =
         crate::filters::method::Support::Refused(MAP_INPUTS);
+    const DISCRETE_TIME: crate::filters::method::Support =
+        crate::filters::method::Support::Approximate(EKF_MAP);
     type Params = IokfParams;
     type Filter = MapKalman;
 

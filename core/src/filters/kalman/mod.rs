@@ -422,6 +422,8 @@ impl GaussianState {
 
     /// The EKF prediction over `dt`: the linearised moment equations (Jazwinski) in
     /// `substeps` RK4 steps.
+    /// A discrete-time map is predicted by its transitions instead, each through its
+    /// Jacobian ([`GaussianState::predict_transitions`]).
     pub(crate) fn predict_linearized(
         &mut self,
         model: &crate::model::Model,
@@ -429,10 +431,52 @@ impl GaussianState {
         dt: f64,
         substeps: usize,
     ) -> Result<(), FilterError> {
+        if model.is_discrete_time() {
+            let step = StepModels {
+                dynamics: model,
+                q,
+                measurement: model,
+                unfrozen: None,
+            };
+            return self.predict_transitions(&step, dt, &mut propagate::linearized_map);
+        }
         self.predict_with(dt, substeps, |at, rates, jacobian| {
             propagate::linearized_rates(model, q, jacobian, at, rates);
             Ok(())
         })
+    }
+
+    /// The prediction through a discrete-time map over `dt`: its k transitions
+    /// ([`crate::Model::transitions`]), each by [`propagate::transition`] with the map's
+    /// `moments`; the earlier transitions of a driven model at the times they reach.
+    pub(crate) fn predict_transitions(
+        &mut self,
+        step: &StepModels<'_>,
+        dt: f64,
+        moments: &mut propagate::MapMoments<'_>,
+    ) -> Result<(), FilterError> {
+        let k = step.dynamics.transitions(dt)?;
+        for j in 0..k {
+            let earlier = match step.unfrozen {
+                Some((model, inputs)) if j + 1 < k => Some(model.transition_at(inputs, j, k)?),
+                _ => None,
+            };
+            let q = earlier.as_ref().map(|model| model.process_noise());
+            let (model, q) = match (&earlier, &q) {
+                (Some(model), Some(q)) => (&**model, q),
+                _ => (step.dynamics, step.q),
+            };
+            propagate::transition(
+                model,
+                q,
+                &mut self.mean,
+                &mut self.cov,
+                &mut self.moments,
+                moments,
+            )?;
+            self.check()?;
+        }
+        Ok(())
     }
 
     /// Integrates moment equations given by `rates` over `dt` in `substeps` RK4 steps (see
@@ -472,7 +516,9 @@ impl GaussianState {
         obs: &crate::filters::Observation,
     ) -> Result<Option<&'f measurement::Measurement>, FilterError> {
         let meas = form.at(name, obs)?;
-        if obs.dt > 0.0 {
+        if obs.dt > 0.0 && step.dynamics.is_discrete_time() {
+            self.predict_transitions(step, obs.dt, &mut propagate::linearized_map)?;
+        } else if obs.dt > 0.0 {
             self.predict_linearized(step.dynamics, step.q, obs.dt, substeps)?;
         }
         match meas {
@@ -574,6 +620,10 @@ pub(crate) struct StepModels<'a> {
     pub q: &'a crate::model::ProcessNoise,
     /// The model at the measurement.
     pub measurement: &'a crate::model::Model,
+    /// A driven model before it was frozen, with the step's inputs: what the earlier
+    /// transitions of a discrete-time map over several periods read
+    /// ([`crate::Model::transition_at`]); `None` for an autonomous model.
+    pub unfrozen: Option<(&'a crate::model::Model, Option<crate::model::Inputs<'a>>)>,
 }
 
 /// What a driven model's step uses in place of the filter's own model, process noise and
@@ -608,7 +658,7 @@ impl DrivenStep {
     /// filter's own.
     pub(crate) fn parts<'a>(
         driven: &'a mut Option<DrivenStep>,
-        model: &'a crate::model::Model,
+        (model, inputs): (&'a crate::model::Model, Option<crate::model::Inputs<'a>>),
         q: &'a crate::model::ProcessNoise,
         form: &'a mut measurement::MeasurementForm,
     ) -> (StepModels<'a>, &'a mut measurement::MeasurementForm) {
@@ -618,6 +668,7 @@ impl DrivenStep {
                     dynamics: &d.dynamics,
                     q: &d.q,
                     measurement: &d.measurement,
+                    unfrozen: Some((model, inputs)),
                 },
                 &mut d.form,
             ),
@@ -626,6 +677,7 @@ impl DrivenStep {
                     dynamics: model,
                     q,
                     measurement: model,
+                    unfrozen: None,
                 },
                 form,
             ),

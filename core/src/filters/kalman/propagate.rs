@@ -4,6 +4,10 @@
 //!   linearised rates (Jazwinski) `dm/dt = f(m)`, `dP/dt = F(m) P + P F(m)ᵀ + Q`,
 //!   `F = ∂f/∂x`, or the UKF's sigma-point rates (Särkkä's continuous–discrete UKF).
 //! Every intermediate lives in a [`MomentWork`] made once per filter: a step allocates nothing.
+//!
+//! A discrete-time map `x_k = F(x_(k−1)) + w_k` ([`crate::Dynamics::Discrete`]) is predicted
+//! one transition at a time instead ([`transition`]): `m ← F̄`, `P ← C + Q` with the map's
+//! moments taken by linearisation (EKF) or by sigma points (UKF).
 
 use alloc::vec;
 use alloc::vec::Vec;
@@ -181,5 +185,63 @@ pub(crate) fn rk4_moments(
         s.predicted.0.copy_from(m);
         s.predicted.1.copy_from(p);
     }
+    Ok(())
+}
+
+/// A transition's moments through the map, `(F̄, Cov F, A)` into `(mean, cov, a)` with `A` the
+/// map's linearisation (row-major n², its Jacobian at the mean for the EKF, the statistical
+/// linearisation `Cov(F(x), x) P⁻¹` for the UKF) — what [`transition`] asks of a filter.
+pub(crate) type MapMoments<'a> = dyn FnMut(
+        &Model,
+        (&DVector<f64>, &DMatrix<f64>),
+        (&mut DVector<f64>, &mut DMatrix<f64>),
+        &mut [f64],
+    ) -> Result<(), FilterError>
+    + 'a;
+
+/// One transition of a discrete-time map, in place: `m ← F̄`, `P ← Cov F + Q(m)` (Q at the
+/// mean the transition starts from), from `moments`; with the [`Sensitivity`] tracked,
+/// `Φ ← A Φ` and the predicted moments.
+pub(crate) fn transition(
+    model: &Model,
+    q: &crate::model::ProcessNoise,
+    m: &mut DVector<f64>,
+    p: &mut DMatrix<f64>,
+    work: &mut MomentWork,
+    moments: &mut MapMoments<'_>,
+) -> Result<(), FilterError> {
+    let MomentWork {
+        km,
+        kp,
+        jacobian,
+        sensitivity,
+        ..
+    } = work;
+    moments(model, (m, p), (&mut km[0], &mut kp[0]), jacobian)?;
+    q.add_at(m.as_slice(), 1.0, &mut kp[0]);
+    m.copy_from(&km[0]);
+    p.copy_from(&kp[0]);
+    crate::linalg::symmetrize(p);
+    if let Some(s) = sensitivity.as_mut() {
+        s.stage(0, 0.0, jacobian);
+        s.phi.copy_from(&s.kphi[0]);
+        s.predicted.0.copy_from(m);
+        s.predicted.1.copy_from(p);
+    }
+    Ok(())
+}
+
+/// The EKF's moments of a transition: `F̄ = F(m)`, `Cov F = J P Jᵀ`, `A = J = ∂F/∂x(m)`.
+pub(crate) fn linearized_map(
+    model: &Model,
+    (m, p): (&DVector<f64>, &DMatrix<f64>),
+    (mean, cov): (&mut DVector<f64>, &mut DMatrix<f64>),
+    jacobian: &mut [f64],
+) -> Result<(), FilterError> {
+    let n = model.n;
+    model.drift.eval(m.as_slice(), mean.as_mut_slice());
+    model.drift.jacobian(m.as_slice(), jacobian);
+    let j = DMatrix::from_row_slice(n, n, jacobian);
+    cov.copy_from(&(&j * p * j.transpose()));
     Ok(())
 }

@@ -126,6 +126,10 @@ impl SigmaPoints {
 /// and 004 §4): `λ = α²(n + κ) − n`, points `m` and `m ± √(n+λ) Lᵢ` (L the Cholesky factor of
 /// P), weights `W₀ᵐ = λ/(n+λ)`, `W₀ᶜ = W₀ᵐ + 1 − α² + β`, `Wᵢ = 1/(2(n+λ))`.
 ///
+/// A discrete-time map ([`crate::Dynamics::Discrete`]) is predicted by the unscented
+/// transform itself, one transition at a time: `m ← Σ Wᵐ F(χᵢ)`,
+/// `P ← Σ Wᶜ (F(χᵢ) − m)(F(χᵢ) − m)ᵀ + Q` (Wan & van der Merwe 2000).
+///
 /// Prediction integrates the sigma-point moment equations of the continuous–discrete UKF
 /// (Särkkä 2007) by RK4: with sigma points χᵢ of (m, P),
 /// `dm/dt = Σ Wᵢᵐ f(χᵢ)`, `dP/dt = Σ Wᵢᶜ [(f(χᵢ) − dm/dt)(χᵢ − m)ᵀ + (χᵢ − m)(f(χᵢ) − dm/dt)ᵀ] + Q`
@@ -257,6 +261,47 @@ impl Ukf {
         Ok(())
     }
 
+    /// A discrete-time transition's moments through the sigma points χᵢ of (m, P):
+    /// `F̄ = Σ Wᵐ F(χᵢ)`, `Cov F = Σ Wᶜ (F(χᵢ) − F̄)(F(χᵢ) − F̄)ᵀ` (Q is added by the caller),
+    /// and with `linearisation` the statistical linearisation `A = Cov(F(x), x) P⁻¹`
+    /// (row-major) for the unscented RTS smoother.
+    fn map_moments(
+        model: &Model,
+        w: &Weights,
+        sigma: &mut SigmaPoints,
+        (m, p): (&DVector<f64>, &DMatrix<f64>),
+        (mean, cov): (&mut DVector<f64>, &mut DMatrix<f64>),
+        linearisation: Option<&mut [f64]>,
+    ) -> Result<(), FilterError> {
+        let n = model.n;
+        sigma.place(w, m, p)?;
+        let c = sigma.count;
+        let images = &mut sigma.images[..n * c];
+        model
+            .drift
+            .eval_batch(&sigma.points, images, &mut sigma.scratch);
+        let images = &sigma.images[..n * c];
+        sigma.mean(w, images, mean.as_mut_slice());
+        sigma.cross_cov(w, (images, mean.as_slice()), (images, mean.as_slice()), cov);
+        if let Some(a) = linearisation {
+            let mut cross = DMatrix::zeros(n, n);
+            sigma.cross_cov(
+                w,
+                (images, mean.as_slice()),
+                (&sigma.points, m.as_slice()),
+                &mut cross,
+            );
+            // Aᵀ = P⁻¹ Crossᵀ.
+            let at = crate::linalg::cholesky(p, "covariance")?.solve(&cross.transpose());
+            for i in 0..n {
+                for j in 0..n {
+                    a[i * n + j] = at[(j, i)];
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The update with h over all sigma points in one batch: `ẑ = Σ Wᵐ scale·h(χᵢ)`,
     /// `P_zz = Σ Wᶜ (zᵢ − ẑ)(zᵢ − ẑ)ᵀ + R`, `P_xz = Σ Wᶜ (χᵢ − m)(zᵢ − ẑ)ᵀ`.
     fn update(
@@ -317,10 +362,15 @@ impl Filter for Ukf {
         } = self;
         // Checked before anything moves: a refused observation leaves the state.
         let mut driven = super::DrivenStep::of(name, model, obs)?;
-        let (step, form) = super::DrivenStep::parts(&mut driven, model, q, form);
+        let (step, form) = super::DrivenStep::parts(&mut driven, (model, obs.inputs), q, form);
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
-            if obs.dt > 0.0 {
+            if obs.dt > 0.0 && step.dynamics.is_discrete_time() {
+                let tracking = state.transition().is_some();
+                state.predict_transitions(&step, obs.dt, &mut |model, at, moments, a| {
+                    Self::map_moments(model, weights, sigma, at, moments, tracking.then_some(a))
+                })?;
+            } else if obs.dt > 0.0 {
                 let tracking = state.transition().is_some();
                 state.predict_with(obs.dt, substeps.over(obs.dt), |at, rates, a| {
                     Self::rates(

@@ -242,6 +242,17 @@ impl Pf {
         self.model = dynamics.clone();
     }
 
+    /// The moves of a prediction over `dt` and the length each stands for: the
+    /// Euler–Maruyama substeps ([`crate::filters::Substeps`]), or for a discrete-time model
+    /// its transitions, each counted as length 1 (the transition's noise is `G Gᵀ` itself).
+    pub(super) fn moves(&self, dt: f64) -> Result<(usize, f64), FilterError> {
+        if self.model.is_discrete_time() {
+            return Ok((self.model.transitions(dt)?, 1.0));
+        }
+        let substeps = self.substeps.over(dt);
+        Ok((substeps, dt / substeps as f64))
+    }
+
     /// How many times the filter has resampled.
     pub fn resample_count(&self) -> usize {
         self.resamples
@@ -251,12 +262,26 @@ impl Pf {
     /// [`crate::filters::Substeps`] gives for `dt`, from `particles` into `resampled` (the
     /// particles move only when the step succeeds). A state-dependent G is evaluated at every
     /// particle at the start of each substep; where it is not finite the step fails.
-    fn predict_into_spare(&mut self, dt: f64) -> Result<(), FilterError> {
+    ///
+    /// For a discrete-time model the moves are its transitions instead, `x ← F(x) + G(x) ξ`
+    /// (one per period in `dt`, each of a driven model at the time it reaches, with the
+    /// step's `inputs`): the particles are drawn from the transition itself.
+    fn predict_into_spare(
+        &mut self,
+        dt: f64,
+        inputs: Option<crate::model::Inputs<'_>>,
+    ) -> Result<(), FilterError> {
         let (n, count) = (self.model.n, self.params.particles);
-        let substeps = self.substeps.over(dt);
-        let h = dt / substeps as f64;
+        let (substeps, h) = self.moves(dt)?;
+        let discrete = self.model.is_discrete_time();
         let sqrt_h = libm::sqrt(h);
         for substep in 0..substeps {
+            if let (true, Some(driven)) = (discrete && substeps > 1, &self.driven) {
+                let model = driven
+                    .transition_at(inputs, substep, substeps)?
+                    .into_owned();
+                self.freeze_dynamics(&model);
+            }
             let from = if substep == 0 {
                 &self.particles
             } else {
@@ -285,7 +310,10 @@ impl Pf {
             for j in 0..n {
                 let x = &mut self.resampled[j * count..(j + 1) * count];
                 let f = &self.drift[j * count..(j + 1) * count];
-                x.iter_mut().zip(f).for_each(|(x, f)| *x += f * h);
+                match discrete {
+                    true => x.copy_from_slice(f),
+                    false => x.iter_mut().zip(f).for_each(|(x, f)| *x += f * h),
+                }
                 for l in 0..n {
                     let xi = &self.noise[l * count..(l + 1) * count];
                     match &self.diffusion {
@@ -578,7 +606,7 @@ impl Filter for Pf {
         }
         if moved {
             let trail_len = self.trail.as_ref().map(Vec::len);
-            if let Err(e) = self.predict_into_spare(obs.dt) {
+            if let Err(e) = self.predict_into_spare(obs.dt, obs.inputs) {
                 self.rng = rng;
                 if let (Some(trail), Some(len)) = (&mut self.trail, trail_len) {
                     trail.truncate(len);

@@ -27,6 +27,9 @@ impl Method for Pf {
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
         "each step's inputs held over its interval, t at the interval's midpoint in the Euler–Maruyama substeps and at τ_k in the weights",
     );
+    const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
+        "each particle drawn from the transition itself, x_k = F(x_(k−1)) + w_k (no Euler steps); FFBSi weighs with the transition density N(x_k; F(x_(k−1)), Q)",
+    );
     const RANDOM: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(
         "FFBSi",

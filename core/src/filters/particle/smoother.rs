@@ -9,7 +9,8 @@
 //! backward pass draws M trajectories: the last point from the final weights, then each
 //! earlier point among the cloud before it with probability
 //! `∝ w^i N(x' ; x^i + f(x^i) h, Q h)` (the backward kernel of the discretised chain), down to
-//! the start. The smoothed mean and covariance at an observation time are those of the M
+//! the start. For a discrete-time model the steps are its transitions and the kernel is the
+//! transition density itself, `∝ w^i N(x'; F(x^i), Q)`. The smoothed mean and covariance at an observation time are those of the M
 //! trajectories' points there: consistent for the discretised model's smoother, with an error of
 //! order N^−½ from the particle clouds plus M^−½ from the trajectories. A step of length 0 (the update at τ₀) does not move
 //! a trajectory.
@@ -115,15 +116,13 @@ impl Filter for Ffbsi {
             t.clear();
         }
         self.filter.step(obs)?;
-        let moved = obs.dt > 0.0;
-        let substeps = if moved {
-            self.filter.substeps.over(obs.dt)
-        } else {
-            0
+        let (substeps, h) = match obs.dt > 0.0 {
+            true => self.filter.moves(obs.dt)?,
+            false => (0, 0.0),
         };
         self.records.push(Record {
             substeps,
-            h: if moved { obs.dt / substeps as f64 } else { 0.0 },
+            h,
             trail: self
                 .filter
                 .trail
@@ -178,9 +177,14 @@ impl Ffbsi {
         // whitened once too, and the exponent of a pair is then a squared distance.
         let mut centre = DVector::zeros(n);
         let mut white = DVector::zeros(n);
+        // A discrete-time transition's mean is F(x_i) itself (and h = 1).
+        let discrete = self.filter.model.is_discrete_time();
         for i in 0..count {
             for j in 0..n {
-                centre[j] = cloud[j * count + i] + drift[j * count + i] * h;
+                centre[j] = match discrete {
+                    true => drift[j * count + i],
+                    false => cloud[j * count + i] + drift[j * count + i] * h,
+                };
             }
             white.gemv(1.0, &self.whiten, &centre, 0.0);
             for j in 0..n {

@@ -28,6 +28,9 @@ impl Method for Spectral {
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Refused(
         "the off-line operator of 004 Algorithm 1 is computed once, before any observation, for a time-invariant generator",
     );
+    const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Refused(
+        "the Legendre–Galerkin operator of 004 (3.3) is the generator of a continuous-time process",
+    );
     const NEEDS_INTERVAL: bool = true;
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;

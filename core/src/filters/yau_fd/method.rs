@@ -122,6 +122,9 @@ macro_rules! yau_yau_method {
             const STATE_DIFFUSION: crate::filters::method::Support =
                 state_diffusion($scheme);
             const INPUTS: crate::filters::method::Support = inputs($scheme);
+            const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Refused(
+                "the robust DMZ equation (000 (5)) evolves the density in continuous time",
+            );
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
             const DENSITY: bool = true;

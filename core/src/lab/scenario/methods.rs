@@ -20,6 +20,7 @@ use crate::filters::kalman::{Ekf, Iekf, Iokf, Kalman, Ukf};
 use crate::filters::method::memory_estimate;
 use crate::filters::method::{BuildContext, Method, MethodInfo, ProblemContext};
 use crate::filters::particle::Pf;
+use crate::filters::point_mass::PointMass;
 use crate::filters::spectral::Spectral;
 use crate::filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
 use crate::filters::Filter;
@@ -51,6 +52,8 @@ pub struct CatalogueEntry {
     pub state_diffusion: crate::filters::method::Support,
     /// What it does with a driven model (time and known inputs).
     pub inputs: crate::filters::method::Support,
+    /// What it does with a discrete-time model `x_k = F(x_(k−1), t_k, u_k) + w_k`.
+    pub discrete_time: crate::filters::method::Support,
     /// The default parameters.
     pub defaults: MethodConfig,
 }
@@ -190,6 +193,7 @@ macro_rules! registry {
                 smoother: <$method>::SMOOTHING.into(),
                 state_diffusion: <$method>::STATE_DIFFUSION,
                 inputs: <$method>::INPUTS,
+                discrete_time: <$method>::DISCRETE_TIME,
                 defaults: MethodConfig::$variant(Default::default()),
             },)*]
         }
@@ -212,6 +216,7 @@ registry! {
     Separation => Separation,
     ImplicitFdm => ImplicitFdm,
     GaussianSum => GaussianSum,
+    PointMass => PointMass,
 }
 
 impl MethodConfig {

@@ -121,11 +121,36 @@ pub enum ObservationNoiseConfig {
     },
 }
 
+/// Whether [`ModelConfig::drift`] is the drift of an SDE or a discrete-time map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DynamicsKind {
+    /// `dx = f dt + G dv` ([`crate::Dynamics::Continuous`]).
+    #[default]
+    Continuous,
+    /// `x_k = F(x_(k−1), t_k, u_k) + w_k`, `w_k ~ N(0, G Gᵀ)`, one transition per
+    /// `time.dt_obs` ([`crate::Dynamics::Discrete`]).
+    Discrete,
+}
+
+impl DynamicsKind {
+    fn is_continuous(&self) -> bool {
+        *self == DynamicsKind::Continuous
+    }
+}
+
 /// The model as text.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelConfig {
-    /// Drift f, one expression per state component, in `x1..xn` (`x` when n = 1).
+    /// `"continuous"` (the default) or `"discrete"`: then `drift` (also spelled
+    /// `transition`) is the map F of `x_k = F(x_(k−1), t_k, u_k) + w_k` and `diffusion` the
+    /// factor G of `w_k ~ N(0, G Gᵀ)`, one transition per `time.dt_obs`.
+    #[serde(default, skip_serializing_if = "DynamicsKind::is_continuous")]
+    pub dynamics: DynamicsKind,
+    /// Drift f, one expression per state component, in `x1..xn` (`x` when n = 1); the
+    /// transition map F of a discrete-time model (the key `transition` is read as well).
+    #[serde(alias = "transition")]
     pub drift: Vec<String>,
     /// Observation h, one expression per observation component.
     pub observation: Vec<String>,
@@ -1005,7 +1030,7 @@ impl ScenarioConfig {
             Some(g) => crate::model::Diffusion::StateDependent(g),
             None => crate::model::Diffusion::Constant(diffusion),
         };
-        match self.driven() {
+        let model = match self.driven() {
             Some(k) => Model::driven(drift, observation, diffusion, observations, k),
             None => match diffusion {
                 crate::model::Diffusion::Constant(g) => {
@@ -1016,6 +1041,10 @@ impl ScenarioConfig {
                         .with_state_diffusion(g)
                 }
             },
+        }?;
+        match self.model.dynamics {
+            DynamicsKind::Continuous => Ok(model),
+            DynamicsKind::Discrete => model.discrete_time(self.time.dt_obs),
         }
     }
 

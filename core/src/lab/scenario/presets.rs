@@ -141,6 +141,7 @@ fn build(s: Spec) -> ScenarioConfig {
         reference: alloc::format!("{citation}, {}", s.reference),
         description: s.description.into(),
         model: ModelConfig {
+            dynamics: Default::default(),
             drift: strings(s.drift),
             observation: strings(s.observation),
             diffusion: None,

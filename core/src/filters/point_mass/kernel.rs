@@ -1,0 +1,313 @@
+//! The transition kernel on the grid: `T[i, j] = P(x_k ∈ cell i | x_(k−1) = ξ_j)` for
+//! `x_k = F(ξ_j) + w_k`, `w_k ~ N(0, Q(ξ_j))`, cut at `radius` standard deviations.
+//!
+//! * **Diagonal Q** (constant or a function of the state): `T` is a product over the
+//!   dimensions of the Gaussian's mass in each cell's interval,
+//!   `Φ((x_i + Δ/2 − F_l)/σ_l) − Φ((x_i − Δ/2 − F_l)/σ_l)` — the cell-integrated kernel, which
+//!   keeps the mass of a kernel narrower than a cell (σ = 0 puts it all in the cell holding
+//!   F_l); renormalised over the cut window.
+//! * **Correlated constant Q**: `T ∝ exp(−½ dᵀQ⁻¹d)`, `d = x_i − F(ξ_j)`, at the cell
+//!   centres of the window, renormalised over the window.
+//!
+//! In both, a window is that of the unbounded lattice of cells: what it puts beyond the box is
+//! lost (counted, for the self-check), never folded back. Cost: per source cell, the product
+//! of the window widths `2·radius·σ_l/Δx_l + 1`.
+
+use alloc::format;
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::DMatrix;
+
+use crate::error::FilterError;
+use crate::grid::TensorGrid;
+use crate::model::{Model, ProcessNoise};
+
+/// The shape of w_k's covariance on the grid.
+#[derive(Clone, Debug)]
+enum Spread {
+    /// σ_l at every cell, n per cell (constant Q: one row).
+    Diagonal { sd: Vec<f64>, constant: bool },
+    /// Q⁻¹ (row-major) and the window's half-widths σ_l = √Q_ll.
+    Correlated { inverse: Vec<f64>, sd: Vec<f64> },
+}
+
+/// The kernel tabulated for one transition: F at every cell and the spread of w_k.
+#[derive(Clone, Debug)]
+pub(super) struct TransitionKernel {
+    /// F(ξ_j), n per cell.
+    centres: Vec<f64>,
+    spread: Spread,
+    radius: f64,
+    /// Per dimension: the first cell of the window and its weights (reused).
+    first: Vec<isize>,
+    weights: Vec<Vec<f64>>,
+    /// An odometer over the window and one displacement (correlated Q).
+    counter: Vec<usize>,
+    d: Vec<f64>,
+}
+
+/// A walk over one source cell's window (on the unbounded lattice of cells).
+struct Odometer<'a> {
+    grid: &'a TensorGrid,
+    first: &'a [isize],
+    weights: &'a [Vec<f64>],
+    counter: &'a mut [usize],
+    d: &'a mut [f64],
+    centre: &'a [f64],
+}
+
+impl Odometer<'_> {
+    /// Calls `f(index in the box or None, weight)` for every cell of the window: the
+    /// product of the per-dimension weights, or with `inverse` (Q⁻¹, row-major) the
+    /// unnormalised Gaussian `exp(−½ dᵀQ⁻¹d)` at the cell's centre.
+    fn each(&mut self, inverse: Option<&[f64]>, mut f: impl FnMut(Option<usize>, f64)) {
+        let n = self.grid.dim();
+        self.counter.iter_mut().for_each(|c| *c = 0);
+        loop {
+            let mut idx = Some(0usize);
+            let mut w = 1.0;
+            for l in 0..n {
+                let i = self.first[l] + self.counter[l] as isize;
+                idx = idx
+                    .filter(|_| i >= 0 && i < self.grid.shape()[l] as isize)
+                    .map(|idx| idx + i as usize * self.grid.stride(l));
+                match inverse {
+                    None => w *= self.weights[l][self.counter[l]],
+                    Some(_) => {
+                        self.d[l] = self.grid.coordinate(l, 0) + i as f64 * self.grid.spacing()[l]
+                            - self.centre[l];
+                    }
+                }
+            }
+            if let Some(inverse) = inverse {
+                let mut quad = 0.0;
+                for a in 0..n {
+                    for b in 0..n {
+                        quad += self.d[a] * inverse[a * n + b] * self.d[b];
+                    }
+                }
+                w = libm::exp(-0.5 * quad);
+            }
+            f(idx, w);
+            let mut l = 0;
+            loop {
+                if l == n {
+                    return;
+                }
+                self.counter[l] += 1;
+                if self.counter[l] < self.weights[l].len() {
+                    break;
+                }
+                self.counter[l] = 0;
+                l += 1;
+            }
+        }
+    }
+}
+
+/// Φ, the standard normal distribution function.
+fn normal_cdf(x: f64) -> f64 {
+    0.5 * libm::erfc(-x * core::f64::consts::FRAC_1_SQRT_2)
+}
+
+impl TransitionKernel {
+    /// Tabulates `model`'s transition on `grid` (F at every cell; Q, or Q(ξ) at every cell).
+    /// A state-dependent Q with mixed terms is refused (not implemented), as is a correlated
+    /// Q that is singular (its density does not exist).
+    pub(super) fn new(
+        name: &str,
+        model: &Model,
+        grid: &TensorGrid,
+        radius: f64,
+    ) -> Result<Self, FilterError> {
+        let n = model.n;
+        let mut centres = Vec::with_capacity(grid.len() * n);
+        let mut fx = vec![0.0; n];
+        grid.for_each_node(|_, x| {
+            model.drift.eval(x, &mut fx);
+            centres.extend_from_slice(&fx);
+        });
+        if centres.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "transition map F on the grid",
+            });
+        }
+        let spread = match model.process_noise() {
+            ProcessNoise::Constant(q) => spread_of_constant(name, &q)?,
+            ProcessNoise::StateDependent(_) => {
+                let table = model
+                    .process_noise()
+                    .tabulate(n, grid.len(), |i, x| grid.node(i, x));
+                table.require_finite(name)?;
+                if table
+                    .off
+                    .iter()
+                    .any(|(_, _, o)| o.iter().any(|v| *v != 0.0))
+                {
+                    return Err(FilterError::Unsuitable(format!(
+                        "{name}: a transition noise Q(x) = G(x) G(x)ᵀ with mixed terms is not implemented (a diagonal Q(x), or a constant correlated Q, is)"
+                    )));
+                }
+                let mut sd = vec![0.0; grid.len() * n];
+                for (l, column) in table.diagonal.iter().enumerate() {
+                    for (j, q) in column.iter().enumerate() {
+                        sd[j * n + l] = libm::sqrt(q.max(0.0));
+                    }
+                }
+                Spread::Diagonal {
+                    sd,
+                    constant: false,
+                }
+            }
+        };
+        Ok(TransitionKernel {
+            centres,
+            spread,
+            radius,
+            first: vec![0; n],
+            weights: vec![Vec::new(); n],
+            counter: vec![0; n],
+            d: vec![0.0; n],
+        })
+    }
+
+    /// Cells in the window of the widest kernel (for the cost and memory estimates).
+    pub(super) fn widest_window(&self, grid: &TensorGrid) -> f64 {
+        let n = grid.dim();
+        let sd: &[f64] = match &self.spread {
+            Spread::Diagonal { sd, .. } | Spread::Correlated { sd, .. } => sd,
+        };
+        (0..n)
+            .map(|l| {
+                let widest = sd.iter().skip(l).step_by(n).fold(0.0f64, |a, &b| a.max(b));
+                2.0 * self.radius * widest / grid.spacing()[l] + 1.0
+            })
+            .product()
+    }
+
+    /// The window of source cell `j`: per dimension its first cell (on the unbounded
+    /// lattice) and its weights, normalised over the window; false when F(ξ_j) is so far
+    /// outside the box that the window misses it.
+    fn window(&mut self, grid: &TensorGrid, j: usize) -> bool {
+        let n = grid.dim();
+        let centre = &self.centres[j * n..(j + 1) * n];
+        let mut inside = true;
+        for l in 0..n {
+            let (dx, x0, cells) = (grid.spacing()[l], grid.coordinate(l, 0), grid.shape()[l]);
+            let sd = match &self.spread {
+                Spread::Diagonal { sd, constant } => sd[if *constant { l } else { j * n + l }],
+                Spread::Correlated { sd, .. } => sd[l],
+            };
+            let reach = self.radius * sd;
+            let lo = libm::floor((centre[l] - reach - x0) / dx + 0.5);
+            let hi = libm::floor((centre[l] + reach - x0) / dx + 0.5);
+            let w = &mut self.weights[l];
+            w.clear();
+            if hi < 0.0 || lo > (cells - 1) as f64 || !(hi - lo < 1e9) {
+                inside = false;
+                continue;
+            }
+            self.first[l] = lo as isize;
+            if let Spread::Correlated { .. } = self.spread {
+                // Only the range: the weights are of the whole displacement.
+                w.resize((hi - lo) as usize + 1, 1.0);
+                continue;
+            }
+            for i in lo as isize..=hi as isize {
+                let x = x0 + i as f64 * dx;
+                let mass = if sd > 0.0 {
+                    normal_cdf((x + 0.5 * dx - centre[l]) / sd)
+                        - normal_cdf((x - 0.5 * dx - centre[l]) / sd)
+                } else {
+                    1.0
+                };
+                w.push(mass);
+            }
+            let total: f64 = w.iter().sum();
+            if total > 0.0 {
+                w.iter_mut().for_each(|v| *v /= total);
+            }
+        }
+        inside
+    }
+
+    /// Visits every cell `i` of the box in source cell `j`'s window with `T[i, j]`; returns the
+    /// weight its window puts outside the box.
+    fn visit(&mut self, grid: &TensorGrid, j: usize, mut f: impl FnMut(usize, f64)) -> f64 {
+        if !self.window(grid, j) {
+            return 1.0;
+        }
+        let n = grid.dim();
+        let centre = &self.centres[j * n..(j + 1) * n];
+        let mut odometer = Odometer {
+            grid,
+            first: &self.first,
+            weights: &self.weights,
+            counter: &mut self.counter,
+            d: &mut self.d,
+            centre,
+        };
+        let (scale, inverse) = match &self.spread {
+            Spread::Correlated { inverse, .. } => {
+                let mut total = 0.0;
+                odometer.each(Some(inverse), |_, w| total += w);
+                if total > 0.0 {
+                    (1.0 / total, Some(&inverse[..]))
+                } else {
+                    return 1.0;
+                }
+            }
+            Spread::Diagonal { .. } => (1.0, None),
+        };
+        let mut inside = 0.0;
+        odometer.each(inverse, |idx, w| {
+            if let Some(idx) = idx {
+                inside += w * scale;
+                f(idx, w * scale);
+            }
+        });
+        (1.0 - inside).max(0.0)
+    }
+
+    /// The prediction `out = T p` (`out` overwritten); returns the mass carried outside the
+    /// box.
+    pub(super) fn predict(&mut self, grid: &TensorGrid, p: &[f64], out: &mut [f64]) -> f64 {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut lost = 0.0;
+        for (j, &pj) in p.iter().enumerate() {
+            if pj > 0.0 {
+                lost += pj * self.visit(grid, j, |i, w| out[i] += w * pj);
+            }
+        }
+        lost
+    }
+
+    /// The transposed step `out = Tᵀ β` (`out` overwritten): the smoother's backward pass.
+    pub(super) fn predict_transposed(&mut self, grid: &TensorGrid, beta: &[f64], out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate() {
+            let mut sum = 0.0;
+            self.visit(grid, j, |i, w| sum += w * beta[i]);
+            *o = sum;
+        }
+    }
+}
+
+/// The spread of a constant Q: its diagonal's square roots, or Q⁻¹ when it has mixed terms.
+fn spread_of_constant(name: &str, q: &DMatrix<f64>) -> Result<Spread, FilterError> {
+    let n = q.nrows();
+    let sd: Vec<f64> = (0..n).map(|l| libm::sqrt(q[(l, l)].max(0.0))).collect();
+    let correlated = (0..n).any(|a| (0..n).any(|b| a != b && q[(a, b)] != 0.0));
+    if !correlated {
+        return Ok(Spread::Diagonal { sd, constant: true });
+    }
+    let inverse = q.clone().try_inverse().filter(|_| q.clone().cholesky().is_some()).ok_or_else(|| {
+        FilterError::Unsuitable(format!(
+            "{name}: the transition noise Q = G Gᵀ is correlated and singular, so w_k has no density on the grid (make Q diagonal or nonsingular)"
+        ))
+    })?;
+    Ok(Spread::Correlated {
+        inverse: inverse.transpose().as_slice().to_vec(),
+        sd,
+    })
+}
