@@ -269,6 +269,7 @@ export function fillForm(config) {
   state.base = structuredClone(config);
   const n = config.model.drift.length;
   $('dim').value = n;
+  $('dynamics').value = config.model.dynamics ?? 'continuous';
   exprInputs($('drift'), 'f', 'model.drift', config.model.drift);
   exprInputs($('observation'), 'h', 'model.observation', config.model.observation);
   knownInputs(config.model.inputs ?? []);
@@ -323,6 +324,8 @@ export function readForm() {
   const values = (id) => [...$(id).querySelectorAll('input')].map((el) => el.value);
   c.model.drift = values('drift');
   c.model.observation = values('observation');
+  if ($('dynamics').value === 'discrete') c.model.dynamics = 'discrete';
+  else delete c.model.dynamics;
   const inputs = values('inputs');
   if (inputs.length) c.model.inputs = inputs;
   else delete c.model.inputs;
@@ -412,6 +415,7 @@ export function setupForm() {
   $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); edited(); });
   $('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); edited(); });
   $('dim').addEventListener('change', changeDimension);
+  $('dynamics').addEventListener('change', edited);
   $('add-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
     const noise = readNoise();

@@ -29,12 +29,13 @@ use zakai::lab::scenario::ScenarioConfig;
 use zakai::lab::scenario::{catalogue, CatalogueEntry};
 
 /// Presets that between them apply every method of the catalogue.
-pub const PRESETS_FOR_EVERY_METHOD: [&str; 5] = [
+pub const PRESETS_FOR_EVERY_METHOD: [&str; 6] = [
     "cubic-sensor-1d",
     "sa-example-1",
     "direct-4.3",
     "yau-2d",
     "bearings-only",
+    "sv-ar1",
 ];
 
 /// Observation row k of a simulated run, as the increment or measurement its model takes.

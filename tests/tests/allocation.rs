@@ -169,15 +169,20 @@ fn every_method_allocates_nothing_on_yau_2d() {
 fn every_method_allocates_nothing_on_bearings_only() {
     every_method_allocates_nothing_on(zakai_tests::PRESETS_FOR_EVERY_METHOD[4]);
 }
+#[test]
+fn every_method_allocates_nothing_on_sv_ar1() {
+    every_method_allocates_nothing_on(zakai_tests::PRESETS_FOR_EVERY_METHOD[5]);
+}
 
-/// The five tests above cover the catalogue: every filter (the Kalman–Bucy filter, EKF, UKF,
+/// The six tests above cover the catalogue: every filter (the Kalman–Bucy filter, EKF, UKF,
 /// IEKF, IOKF, PF, the Gaussian-sum reference, every Yau–Yau and SA/FDM grid filter, the
-/// direct method and the spectral filter) applies on at least one of the presets, 42
-/// (preset, method) pairs in all, and every preset of the list has its test.
+/// direct method, the spectral filter and the point-mass filter of the discrete-time AR(1))
+/// applies on at least one of the presets, 42 (preset, method) pairs and more, and every
+/// preset of the list has its test.
 #[test]
 fn the_presets_apply_every_method() {
     let presets = zakai_tests::PRESETS_FOR_EVERY_METHOD;
-    assert_eq!(presets.len(), 5, "one test above per preset");
+    assert_eq!(presets.len(), 6, "one test above per preset");
     let mut pairs = 0;
     let mut keys = std::collections::BTreeSet::new();
     for preset in presets {

@@ -15,7 +15,6 @@
 
 use nalgebra::{DMatrix, DVector};
 use zakai::lab::experiment::Experiment;
-use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 use zakai::{Filter, Model, Noise, Observation};
 use zakai_tests::test;
@@ -226,13 +225,9 @@ fn the_point_mass_filter_converges_to_the_kalman_filter_on_an_ar1() {
     assert!(errors[3] < 1e-3, "{errors:?}");
 }
 
-/// The growth model's transition `F(x, k)` and the log-density of `z` given x.
+/// The growth model's transition `F(x, k)`.
 fn growth(x: f64, k: f64) -> f64 {
     x / 2.0 + 25.0 * x / (1.0 + x * x) + 8.0 * (1.2 * k).cos()
-}
-fn growth_log_likelihood(z: f64, x: f64) -> f64 {
-    let d = z - x * x / 20.0;
-    -0.5 * d * d - 0.5 * (2.0 * std::f64::consts::PI).ln()
 }
 
 /// The growth model as a scenario (Kitagawa's settings: w_k ~ N(0, 10), v_k ~ N(0, 1),
@@ -256,91 +251,105 @@ fn growth_scenario(t_final: f64, methods: serde_json::Value) -> ScenarioConfig {
     .expect("a valid scenario")
 }
 
-/// The reference point-mass filter of the growth model on 4001 points of [−40, 40]: the
-/// node-sampled kernel N(x_i; F(x_j, k), 10), each column normalised, then the likelihood.
-/// Means and sds at every row of `z` (row 0 at k = 0, NaN = missing).
-fn growth_reference(times: &[f64], z: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let points = 4001;
-    let dx = 80.0 / (points - 1) as f64;
-    let x: Vec<f64> = (0..points).map(|i| -40.0 + i as f64 * dx).collect();
-    let mut p: Vec<f64> = x.iter().map(|v| (-v * v / 10.0).exp()).collect();
-    let (mut means, mut sds) = (Vec::new(), Vec::new());
-    for (row, &t) in times.iter().enumerate() {
-        if row > 0 {
-            let steps = (t - times[row - 1]).round() as usize;
-            for s in 0..steps {
-                let k = t - (steps - 1 - s) as f64;
-                let mut next = vec![0.0; points];
-                for (j, &pj) in p.iter().enumerate() {
-                    if pj < 1e-300 {
-                        continue;
-                    }
-                    let centre = growth(x[j], k);
-                    let lo = ((centre - 25.0 + 40.0) / dx).floor().max(0.0) as usize;
-                    let hi = (((centre + 25.0 + 40.0) / dx).ceil() as usize).min(points - 1);
-                    if lo > hi {
-                        continue;
-                    }
-                    let column: Vec<f64> = (lo..=hi)
-                        .map(|i| (-(x[i] - centre).powi(2) / 20.0).exp())
-                        .collect();
-                    let total: f64 = column.iter().sum::<f64>().max(1e-300);
-                    for (i, c) in (lo..=hi).zip(column) {
-                        next[i] += pj * c / total;
-                    }
-                }
-                p = next;
-            }
-        }
-        if z[row].is_finite() {
-            for (pi, &xi) in p.iter_mut().zip(&x) {
-                *pi *= growth_log_likelihood(z[row], xi).exp();
-            }
-        }
-        let mass: f64 = p.iter().sum();
-        p.iter_mut().for_each(|v| *v /= mass);
-        let mean: f64 = x.iter().zip(&p).map(|(a, b)| a * b).sum();
-        let var: f64 = x.iter().zip(&p).map(|(a, b)| (a - mean).powi(2) * b).sum();
-        means.push(mean);
-        sds.push(var.sqrt());
-    }
-    (means, sds)
-}
-
-/// On a simulated run of the growth model with a gap of three periods, Zakai's point-mass
-/// filter (800 cells) is within 0.05 reference sds of the reference at every row, and its
-/// particle filter (10⁴ particles, drawn from the transition) within 0.25 (Monte Carlo); the
-/// EKF's error, for scale, is printed.
+/// The growth model's references: native only (seconds natively; the WebAssembly run of the
+/// suite keeps to the light tests).
 #[cfg(not(target_arch = "wasm32"))]
-#[test]
-fn the_point_mass_and_particle_filters_follow_the_bimodal_growth_model() {
-    let mut config = growth_scenario(
-        30.0,
-        serde_json::json!([
-            { "method": "point_mass", "cells": [800] },
-            { "method": "pf", "particles": 10000 },
-            { "method": "ekf" }
-        ]),
-    );
-    config.time.unobserved = vec![[10.5, 13.5]];
-    let e = Experiment::new(config).unwrap();
-    let run = e.run(11).unwrap();
-    let recording: &Recording = &run.recording;
-    let z: Vec<f64> = recording.observations.clone();
-    let (means, sds) = growth_reference(&recording.times, &z);
-    for (i, bound) in [(0usize, 0.05), (1, 0.25)] {
-        let gap = zakai_tests::worst_gap(&run, i, &means, &sds);
-        println!("{}: worst gap {gap:.4} reference sd", run.methods[i].name);
-        assert!(gap < bound, "{}: {gap}", run.methods[i].name);
+mod growth_references {
+    use super::*;
+    use zakai::lab::recording::Recording;
+    use zakai_tests::test;
+
+    /// The log-density of `z` given x.
+    fn growth_log_likelihood(z: f64, x: f64) -> f64 {
+        let d = z - x * x / 20.0;
+        -0.5 * d * d - 0.5 * (2.0 * std::f64::consts::PI).ln()
     }
-    let ekf = &run.methods[2];
-    let worst = ekf
-        .estimates
-        .iter()
-        .zip(means.iter().zip(&sds))
-        .map(|(e, (m, s))| (e - m).abs() / s)
-        .fold(0.0, f64::max);
-    println!("EKF: worst gap {worst:.2} reference sd");
+
+    /// The reference point-mass filter of the growth model on 4001 points of [−40, 40]: the
+    /// node-sampled kernel N(x_i; F(x_j, k), 10), each column normalised, then the likelihood.
+    /// Means and sds at every row of `z` (row 0 at k = 0, NaN = missing).
+    fn growth_reference(times: &[f64], z: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let points = 4001;
+        let dx = 80.0 / (points - 1) as f64;
+        let x: Vec<f64> = (0..points).map(|i| -40.0 + i as f64 * dx).collect();
+        let mut p: Vec<f64> = x.iter().map(|v| (-v * v / 10.0).exp()).collect();
+        let (mut means, mut sds) = (Vec::new(), Vec::new());
+        for (row, &t) in times.iter().enumerate() {
+            if row > 0 {
+                let steps = (t - times[row - 1]).round() as usize;
+                for s in 0..steps {
+                    let k = t - (steps - 1 - s) as f64;
+                    let mut next = vec![0.0; points];
+                    for (j, &pj) in p.iter().enumerate() {
+                        if pj < 1e-300 {
+                            continue;
+                        }
+                        let centre = growth(x[j], k);
+                        let lo = ((centre - 25.0 + 40.0) / dx).floor().max(0.0) as usize;
+                        let hi = (((centre + 25.0 + 40.0) / dx).ceil() as usize).min(points - 1);
+                        if lo > hi {
+                            continue;
+                        }
+                        let column: Vec<f64> = (lo..=hi)
+                            .map(|i| (-(x[i] - centre).powi(2) / 20.0).exp())
+                            .collect();
+                        let total: f64 = column.iter().sum::<f64>().max(1e-300);
+                        for (i, c) in (lo..=hi).zip(column) {
+                            next[i] += pj * c / total;
+                        }
+                    }
+                    p = next;
+                }
+            }
+            if z[row].is_finite() {
+                for (pi, &xi) in p.iter_mut().zip(&x) {
+                    *pi *= growth_log_likelihood(z[row], xi).exp();
+                }
+            }
+            let mass: f64 = p.iter().sum();
+            p.iter_mut().for_each(|v| *v /= mass);
+            let mean: f64 = x.iter().zip(&p).map(|(a, b)| a * b).sum();
+            let var: f64 = x.iter().zip(&p).map(|(a, b)| (a - mean).powi(2) * b).sum();
+            means.push(mean);
+            sds.push(var.sqrt());
+        }
+        (means, sds)
+    }
+
+    /// On a simulated run of the growth model with a gap of three periods, Zakai's point-mass
+    /// filter (800 cells) is within 0.05 reference sds of the reference at every row, and its
+    /// particle filter (10⁴ particles, drawn from the transition) within 0.25 (Monte Carlo); the
+    /// EKF's error, for scale, is printed.
+    #[test]
+    fn the_point_mass_and_particle_filters_follow_the_bimodal_growth_model() {
+        let mut config = growth_scenario(
+            30.0,
+            serde_json::json!([
+                { "method": "point_mass", "cells": [800] },
+                { "method": "pf", "particles": 10000 },
+                { "method": "ekf" }
+            ]),
+        );
+        config.time.unobserved = vec![[10.5, 13.5]];
+        let e = Experiment::new(config).unwrap();
+        let run = e.run(11).unwrap();
+        let recording: &Recording = &run.recording;
+        let z: Vec<f64> = recording.observations.clone();
+        let (means, sds) = growth_reference(&recording.times, &z);
+        for (i, bound) in [(0usize, 0.05), (1, 0.25)] {
+            let gap = zakai_tests::worst_gap(&run, i, &means, &sds);
+            println!("{}: worst gap {gap:.4} reference sd", run.methods[i].name);
+            assert!(gap < bound, "{}: {gap}", run.methods[i].name);
+        }
+        let ekf = &run.methods[2];
+        let worst = ekf
+            .estimates
+            .iter()
+            .zip(means.iter().zip(&sds))
+            .map(|(e, (m, s))| (e - m).abs() / s)
+            .fold(0.0, f64::max);
+        println!("EKF: worst gap {worst:.2} reference sd");
+    }
 }
 
 /// The methods of the continuous-time equations refuse a discrete-time map, each with the

@@ -241,7 +241,17 @@ pub(crate) fn linearized_map(
     let n = model.n;
     model.drift.eval(m.as_slice(), mean.as_mut_slice());
     model.drift.jacobian(m.as_slice(), jacobian);
-    let j = DMatrix::from_row_slice(n, n, jacobian);
-    cov.copy_from(&(&j * p * j.transpose()));
+    // J P Jᵀ entry by entry (no temporaries: a step allocates nothing).
+    for a in 0..n {
+        for b in a..n {
+            let mut sum = 0.0;
+            for k in 0..n {
+                let row: f64 = (0..n).map(|l| p[(k, l)] * jacobian[b * n + l]).sum();
+                sum += jacobian[a * n + k] * row;
+            }
+            cov[(a, b)] = sum;
+            cov[(b, a)] = sum;
+        }
+    }
     Ok(())
 }

@@ -204,7 +204,7 @@ impl TransitionKernel {
             let hi = libm::floor((centre[l] + reach - x0) / dx + 0.5);
             let w = &mut self.weights[l];
             w.clear();
-            if hi < 0.0 || lo > (cells - 1) as f64 || !(hi - lo < 1e9) {
+            if hi < 0.0 || lo > (cells - 1) as f64 || (hi - lo).is_nan() || hi - lo >= 1e9 {
                 inside = false;
                 continue;
             }
@@ -214,11 +214,15 @@ impl TransitionKernel {
                 w.resize((hi - lo) as usize + 1, 1.0);
                 continue;
             }
+            // Φ at the cells' edges, each edge once: a cell's mass is the difference.
+            let edge = |i: isize| normal_cdf((x0 + (i as f64 - 0.5) * dx - centre[l]) / sd);
+            let mut below = if sd > 0.0 { edge(lo as isize) } else { 0.0 };
             for i in lo as isize..=hi as isize {
-                let x = x0 + i as f64 * dx;
                 let mass = if sd > 0.0 {
-                    normal_cdf((x + 0.5 * dx - centre[l]) / sd)
-                        - normal_cdf((x - 0.5 * dx - centre[l]) / sd)
+                    let above = edge(i + 1);
+                    let mass = above - below;
+                    below = above;
+                    mass
                 } else {
                     1.0
                 };

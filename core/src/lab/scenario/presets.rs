@@ -485,7 +485,107 @@ pub fn all() -> Vec<ScenarioConfig> {
     v.push(outage());
     v.extend(measurement_families());
     v.push(interest_rate());
+    v.push(growth_model());
+    v.push(stochastic_volatility_ar1());
     v
+}
+
+/// The stochastic-volatility model as `particles` writes it (Chopin & Papaspiliopoulos 2020,
+/// `StochVol`): an AR(1) log-variance, a discrete-time map with no time in it.
+fn stochastic_volatility_ar1() -> ScenarioConfig {
+    let (mu, rho, sigma) = (-1.02, 0.9702, 0.178);
+    let stationary = sigma * sigma / (1.0 - rho * rho);
+    let mut c = build(Spec {
+        name: "sv-ar1",
+        paper: "001",
+        title: "Stochastic volatility as an AR(1): x_k = μ + ρ(x_(k−1) − μ) + σ w_k, z_k ~ N(0, e^(x_k))",
+        place: "the grid filter's discrete-time counterpart, the point-mass method",
+        reference: "the point-mass method (Šimandl, Královec & Söderström 2006) on the \
+            stochastic-volatility model of Chopin & Papaspiliopoulos (2020, `particles`' StochVol: \
+            μ = −1.02, ρ = 0.9702, σ = 0.178)",
+        description: "The log-variance of daily returns as an AR(1), a map with one transition \
+            per day (model.dynamics: discrete): x_k = −1.02 + 0.9702 (x_(k−1) + 1.02) + \
+            0.178 w_k, returns z_k ~ N(0, e^(x_k)), from the stationary law N(−1.02, 0.54), for \
+            200 days. The point-mass filter (400 cells of [−5, 3]) multiplies the returns' \
+            density into the grid; the particle filter draws from the AR(1) itself; the UKF and \
+            EKF match the returns' variance. Look for: the point-mass density skewed by the \
+            returns (a large |z| moves the variance up more than a small one moves it down), and \
+            the Gaussian filters' bands beside it.",
+        drift: &["-1.02 + 0.9702*(x + 1.02)"],
+        observation: &["0"],
+        noise: ObservationNoiseConfig::Heteroscedastic {
+            variance: strings(&["exp(x)"]),
+        },
+        prior: gaussian(&[mu], stationary),
+        initial_state: None,
+        domain: vec![[-5.0, 3.0]],
+        time: (200.0, 1.0),
+        track_loss: None,
+        methods: vec![
+            MethodConfig::PointMass(crate::filters::point_mass::PointMassParams {
+                cells: vec![400],
+                ..Default::default()
+            }),
+            pf(1000),
+            ukf(1.0, 2.0, 0.0),
+            MethodConfig::Ekf(EkfParams::default()),
+        ],
+    });
+    c.model.dynamics = super::DynamicsKind::Discrete;
+    c.model.diffusion = Some(super::parameters::CoefficientMatrix(vec![vec![
+        super::parameters::Coefficient::Value(sigma),
+    ]]));
+    c
+}
+
+/// The univariate non-stationary growth model, a discrete-time map
+/// ([`crate::Dynamics::Discrete`]): the benchmark of the particle-filter literature
+/// (Kitagawa 1996; Gordon, Salmond & Smith 1993), with its time-varying term and Kitagawa's
+/// settings.
+fn growth_model() -> ScenarioConfig {
+    let mut c = build(Spec {
+        name: "ungm",
+        paper: "001",
+        title: "The growth model x_k = x/2 + 25x/(1 + x²) + 8 cos(1.2k) + w_k, seen through x²/20",
+        place: "the grid filter's discrete-time counterpart, the point-mass method",
+        reference: "the point-mass method (Šimandl, Královec & Söderström 2006, Automatica 42) \
+            on the univariate non-stationary growth model of Kitagawa (1996) and Gordon, Salmond \
+            & Smith (1993)",
+        description: "A map, not an SDE (model.dynamics: discrete): x_k = x_(k−1)/2 + \
+            25 x_(k−1)/(1 + x_(k−1)²) + 8 cos(1.2k) + w_k, w_k ~ N(0, 10), one transition per \
+            Δτ = 1, measured as z_k = x_k²/20 + v_k, v_k ~ N(0, 1), from x₀ ~ N(0, 5), for 50 \
+            steps. The point-mass filter (800 cells of [−40, 40]) carries the density through \
+            the transition kernel; the particle filter draws each particle from the transition \
+            itself; the EKF and UKF carry one Gaussian. The Yau–Yau, spectral, direct and \
+            Fokker–Planck methods solve continuous-time equations and refuse the map. Look for: \
+            the measurement sees x² only, so p(z | x) is the same at x and −x, and the \
+            point-mass density has a mode on each side of 0 whenever the prediction puts mass \
+            on both; a single Gaussian sits between them or on one side.",
+        drift: &["x/2 + 25*x/(1 + x^2) + 8*cos(1.2*t)"],
+        observation: &["x^2/20"],
+        noise: ObservationNoiseConfig::Discrete {
+            mixture: vec![component(1.0, &[0.0], 1.0)],
+        },
+        prior: gaussian(&[0.0], 5.0),
+        initial_state: None,
+        domain: vec![[-40.0, 40.0]],
+        time: (50.0, 1.0),
+        track_loss: None,
+        methods: vec![
+            MethodConfig::PointMass(crate::filters::point_mass::PointMassParams {
+                cells: vec![800],
+                ..Default::default()
+            }),
+            pf(1000),
+            MethodConfig::Ekf(EkfParams::default()),
+            ukf(1.0, 2.0, 0.0),
+        ],
+    });
+    c.model.dynamics = super::DynamicsKind::Discrete;
+    c.model.diffusion = Some(super::parameters::CoefficientMatrix(vec![vec![
+        super::parameters::Coefficient::Expression("sqrt(10)".into()),
+    ]]));
+    c
 }
 
 /// A diffusion that depends on the state ([`crate::Diffusion`]): an interest rate of the
