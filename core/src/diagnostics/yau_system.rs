@@ -161,6 +161,22 @@ fn fmt_matrix(m: &DMatrix<f64>) -> String {
 pub fn check(model: &Model, bounds: &[(f64, f64)], linear: Option<&Affine>) -> YauSystem {
     let n = model.n;
     let theorem = "Yau filtering system (002 (C1)–(C3))".to_string();
+    if model.is_discrete_time() {
+        return YauSystem {
+            report: ConditionReport {
+                theorem,
+                conditions: vec![Condition {
+                    name: "(C1)–(C3)".into(),
+                    holds: false,
+                    detail: "a Yau filtering system is a model in continuous time (002 (1)); this model is a discrete-time map x_k = F(x_(k−1)) + w_k".into(),
+                }],
+                note: None,
+            },
+            linear: linear.cloned().unwrap_or_else(|| Affine::zero(n)),
+            sum_h2: None,
+            eta: None,
+        };
+    }
     if n > MAX_DIMENSION || bounds.len() != n {
         return YauSystem {
             report: ConditionReport {

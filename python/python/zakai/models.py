@@ -165,6 +165,71 @@ class Model:
             drift, observation, diffusion, {"kind": "log_density", "expression": log_density}
         )
 
+    @classmethod
+    def discrete_time(
+        cls,
+        transition: Union[str, Sequence[str]],
+        observation: Union[str, Sequence[str]],
+        transition_cov: ArrayLike,
+        noise_cov: ArrayLike,
+    ) -> "Model":
+        """A map from one observation time to the next, as FilterPy, statsmodels and
+        ``particles`` write models: ``x_k = F(x_(k−1), t_k, u_k) + w_k``, ``w_k ~ N(0, Q)``,
+        one transition per ``dt_obs``, measured as ``z_k = h(x_k) + v_k``,
+        ``v_k ~ N(0, R)``. For another measurement density, build it with
+        :meth:`poisson`, :meth:`heteroscedastic`, … and call :meth:`in_discrete_time`.
+
+        The Kalman and Gaussian-sum filters are exact for a linear F, the particle filter
+        draws from the transition, the EKF/UKF/IEKF/IOKF predict through F, ``"point_mass"``
+        carries the exact density on a grid; the Yau–Yau, spectral, direct and Fokker–Planck
+        methods refuse the model (they solve continuous-time equations).
+
+        Parameters
+        ----------
+        transition : str or list of str
+            F, one expression per state component (it may read ``t``, the time the
+            transition reaches, and known inputs).
+        observation : str or list of str
+            h, one expression per measurement component.
+        transition_cov : array_like
+            Q (n × n, symmetric positive semidefinite; a scalar when n = 1).
+        noise_cov : array_like
+            R (m × m; a scalar when m = 1).
+
+        >>> import zakai
+        >>> ar1 = zakai.Model.discrete_time("0.9*x", "x", transition_cov=0.5, noise_cov=1.0)
+        >>> ar1.config["dynamics"]
+        'discrete'
+        """
+        return cls.discrete(transition, observation, noise_cov).in_discrete_time(transition_cov)
+
+    def in_discrete_time(self, transition_cov: Optional[ArrayLike] = None) -> "Model":
+        """The same model read in discrete time: its drift as the map F of
+        ``x_k = F(x_(k−1), t_k, u_k) + w_k`` and its diffusion G as the factor of
+        ``w_k ~ N(0, G Gᵀ)``, one transition per ``dt_obs`` (the scenario's
+        ``"dynamics": "discrete"``). ``transition_cov`` gives Q instead of G (numbers; G
+        becomes its symmetric square root).
+        """
+        config = {**self.config, "dynamics": "discrete"}
+        if transition_cov is not None:
+            try:
+                q = np.array(_matrix(transition_cov, "transition_cov"), dtype=float)
+            except (TypeError, ValueError):
+                raise ConfigError(
+                    "transition_cov: Q must be numbers (for expressions, give G as diffusion= "
+                    "and call in_discrete_time())"
+                ) from None
+            if not np.all(np.isfinite(q)) or not np.allclose(q, q.T):
+                raise ConfigError("transition_cov: Q must be finite and symmetric")
+            values, vectors = np.linalg.eigh(q)
+            if values.min() < -1e-12 * max(1.0, float(np.abs(q).max())):
+                raise ConfigError(
+                    f"transition_cov: Q must be positive semidefinite (eigenvalue {values.min():.3g})"
+                )
+            g = vectors @ np.diag(np.sqrt(np.clip(values, 0.0, None))) @ vectors.T
+            config["diffusion"] = g.tolist()
+        return Model(config)
+
     def with_inputs(self, *inputs: str) -> "Model":
         """The same model driven by known inputs ``u1 … uk``: its expressions may then read
         them and the time ``t`` (``"-x + 2*u1"``). Each argument is the input as an

@@ -65,7 +65,8 @@ impl Method for Pf {
         Ok(Pf::new(name, ctx, p)?)
     }
     fn problem_defaults(p: &PfParams, problem: &ProblemContext) -> Option<(PfParams, String)> {
-        if p.substeps.is_some() {
+        // A discrete-time map is drawn from, not stepped through: no substeps to choose.
+        if p.substeps.is_some() || problem.model.is_discrete_time() {
             return None;
         }
         let dt = problem.dt_obs?;

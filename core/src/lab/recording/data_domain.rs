@@ -108,7 +108,12 @@ pub fn domain_from_data(
         .map(|k| recording.step_length(k))
         .fold(0.0, f64::max);
     let q = model.process_noise().at(&[0.5 * (lo + hi)])[(0, 0)];
-    let motion = MOTION_SDS * libm::sqrt((q * longest).max(0.0));
+    // Q is per unit time for an SDE, per transition for a discrete-time map.
+    let elapsed = match model.dynamics {
+        crate::model::Dynamics::Discrete { period } => longest / period,
+        crate::model::Dynamics::Continuous => longest,
+    };
+    let motion = MOTION_SDS * libm::sqrt((q * elapsed).max(0.0));
     let margin = motion + 0.1 * (hi - lo);
     let bounds = ((lo - margin).max(a), (hi + margin).min(b));
     // (NaN-safe: a width that is not positive, or not narrower, keeps the prior's box.)
