@@ -51,6 +51,10 @@ async function openLesson(page, id) {
   url.searchParams.set('lesson', lesson.id);
   url.searchParams.delete('preset');
   history.replaceState(null, '', url);
+  // The playback speed the lesson's text counts frames with (intervals per frame; 5 unless
+  // it says otherwise): the page keeps one density per frame for looking back.
+  $('speed').value = String(lesson.speed ?? 5);
+  $('speed').dispatchEvent(new Event('input'));
   await loadTemml();
   // The status line names the change on screen and what it should show; a run the page refuses
   // says so there, with the reason. Each change is made to the lesson's own scenario (not to

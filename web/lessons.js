@@ -10,7 +10,8 @@
 // this" action's `change(config, method)` edits the running config in place; `mc` runs the
 // Monte Carlo panel and `check` the convergence check instead, `view` turns on a view; its
 // `expect` says what the changed run shows (asserted by tests/web/lessons.mjs). `opens` lists
-// the panels (<details> ids) the lesson's text refers to, opened with the lesson.
+// the panels (<details> ids) the lesson's text refers to, opened with the lesson; `speed` the
+// observation intervals played per frame (5 unless given), one kept density per frame.
 
 const methodsOf = (method, list) => list.map(([key, params]) => method(key, params ?? {}));
 
@@ -376,6 +377,36 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'growth-model',
+    title: '12. A map, not an SDE: the growth model\'s two modes',
+    preset: 'ungm',
+    seed: 1,
+    speed: 1,
+    scenario: (c) => c,
+    body: [
+      'Every lesson so far wrote the signal as a stochastic differential equation, which each method discretises in time. Many models are given instead as a map from one observation time to the next — an autoregression, a sampled tracking model — and that is how FilterPy, statsmodels and the Python package particles write their models. The benchmark of the particle-filter literature is such a map, the univariate non-stationary growth model (Kitagawa 1996; Gordon, Salmond & Smith 1993):',
+      '$$\\begin{gathered}x_k = \\tfrac12 x_{k-1} + \\frac{25\\,x_{k-1}}{1 + x_{k-1}^2} + 8\\cos(1.2k) + w_k, \\\\ z_k = \\frac{x_k^2}{20} + v_k,\\end{gathered}$$',
+      'with $w_k \\sim N(0, 10)$, $v_k \\sim N(0, 1)$, $x_0 \\sim N(0, 5)$ and one transition per unit of time ("signal in time: discrete" in the model form). Write $F(x, k)$ for the right-hand side without $w_k$.',
+      'Between measurements the density moves by the Chapman–Kolmogorov equation, the discrete-time counterpart of lesson 1\'s Fokker–Planck equation:',
+      '$$p^-_k(x) = \\int N\\big(x;\\ F(\\xi, k),\\ 10\\big)\\, p_{k-1}(\\xi)\\, d\\xi.$$',
+      'The point-mass filter (PMF; Šimandl, Královec & Söderström 2006) computes it on a grid: with the density held on 800 cells of $[-40, 40]$, the predicted value in cell $i$ is $\\sum_j T_{ij}\\, p[j]$, where $T_{ij}$ is the probability that $N\\big(F(\\xi_j, k), 10\\big)$ gives cell $i$ — a difference of two normal distribution functions at the cell\'s edges, left out beyond 6 standard deviations. Bayes\' rule then multiplies in $p(z_k \\mid x)$ cell by cell, as the separation approach of Šimandl & Švácha (2005) [001] does in its (6). The particle filter draws each particle from the transition itself, $x \\leftarrow F(x, k) + \\sqrt{10}\\,\\xi$ with $\\xi \\sim N(0, 1)$: no Euler steps. The methods that solve continuous-time equations (Yau–Yau, spectral, direct, Fokker–Planck) do not apply to a map and say so.',
+      'The measurement sees $x^2$ only: $p(z \\mid x) = p(z \\mid -x)$, largest at $x = \\pm\\sqrt{20 z_k}$ when $z_k > 0$. Whether the posterior has one mode or two depends on the prediction: where it puts mass near both $+\\sqrt{20 z_k}$ and $-\\sqrt{20 z_k}$, both survive the update. A Gaussian filter carries one mode. The EKF linearises $h$ at its predicted mean $\\hat x$, $H = \\hat x / 10$: near $\\hat x = 0$ its gain vanishes (lesson 3\'s cubic sensor again), and elsewhere the linearisation reads a measurement that says $|x| \\approx \\sqrt{20 z_k}$ on the side of 0 where $\\hat x$ is.',
+    ],
+    lookFor: [
+      'The point-mass filter\'s density (the heat strip; the densities plot at the time shown) has two peaks, one on each side of 0, at 16 of the 51 times (counting the peaks above a tenth of its maximum on the plot\'s 200 points): at $t = 17$ they are at $x = \\pm 13.5$, with 58 % of the mass below 0, and the truth is at $-13.13$. The measurement says $|x| \\approx 13$; which sign is the prediction\'s to say, and here it cannot.',
+      'There the point-mass filter\'s mean is $-2.16$ with standard deviation 13.25: the conditional mean sits between the modes, where the density is nearly 0, and its standard deviation says how far off it may be. The EKF is at $14.68$ with standard deviation 1.14, on the wrong mode and sure of it (24 of its standard deviations from the truth); the UKF, at $0.24$ with standard deviation 15.31, says as much as the point-mass filter about its uncertainty but nothing of the two modes.',
+      'At $t = 18$ the next measurement settles the sign: the point-mass filter is at $-18.91$ (standard deviation 0.52; truth $-18.50$), and so is the particle filter, while the EKF stays on the positive side until $t = 20$ ($25.17$, $17.47$, $11.83$ against the truth\'s $-18.50$, $-15.64$, $-10.86$).',
+      'The particle filter (1000 particles drawn from the transition) is within 0.53 of the point-mass filter\'s standard deviation of its mean at every time. Mean squared errors on this run: point mass 34.19, particle filter 35.78, UKF 65.69, EKF 218.53.',
+    ],
+    tryThis: [
+      {
+        label: 'an odd map: drop 8 cos(1.2k)',
+        change: (c) => { c.model.drift = ['x/2 + 25*x/(1 + x^2)']; },
+        expect: 'without the cosine $F(-x) = -F(x)$: an even density through an odd map with noise symmetric about 0 stays even, the likelihood $p(z \\mid x)$ is even, and the prior is even, so by induction the posterior is even at every step and its mean is exactly 0. The point-mass filter\'s mean stays within $10^{-11}$ of 0, and from $t = 1$ on its density has two mirrored peaks, one on each side of 0, at every time (at $t = 0$, after the first measurement, one peak, at 0), while the truth, one path, is within 3 of the map\'s stable fixed points $\\pm 7$ ($x = F(x)$ gives $x = 0$ or $x^2 = 49$) at 31 of the 51 times. Its MSE, 65.51, is the mean square of the truth. The EKF and UKF are at 0 too, the EKF because its gain is 0 at $\\hat x = 0$ and $F(0) = 0$, the UKF because its sigma points are symmetric: same MSE. The particle filter\'s MSE is 92.95: its finite cloud does not keep the two modes equal, and its mean wanders off 0.',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */
@@ -394,4 +425,6 @@ export const REFERENCES = [
   ['', 'H. E. Rauch, F. Tung and C. T. Striebel, “Maximum likelihood estimates of linear dynamic systems”, AIAA Journal 3(8), 1965.'],
   ['', 'É. Pardoux, “Équations du filtrage non linéaire, de la prédiction et du lissage”, Stochastics 6(3–4), 1982.'],
   ['', 'S. J. Godsill, A. Doucet and M. West, “Monte Carlo smoothing for nonlinear time series”, Journal of the American Statistical Association 99(465), 2004.'],
+  ['', 'G. Kitagawa, “Monte Carlo filter and smoother for non-Gaussian nonlinear state space models”, Journal of Computational and Graphical Statistics 5(1), 1996.'],
+  ['', 'M. Šimandl, J. Královec and T. Söderström, “Advanced point-mass method for nonlinear state estimation”, Automatica 42(7), 2006.'],
 ];

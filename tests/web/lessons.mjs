@@ -692,6 +692,67 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(near(sc.SA.mse, 0.0112, 0.00005) && near(sc.UKF.mse, 0.0111, 0.00005), 'on this run: MSE 0.0112 and 0.0111');
   }
 
+  // Lesson 12: a discrete-time map, the growth model. The point-mass filter's density at
+  // every kept frame (one per row: the lesson plays one interval per frame): its peaks above a
+  // tenth of its maximum on the plot's points, and its mass below 0.
+  {
+    const near = (a, b, tol) => Math.abs(a - b) <= tol;
+    const frames = () => page.evaluate(() => window.zakaiPage.history.map((h) => {
+      const v = Array.from(h.densities[0]); const g = Array.from(h.grid);
+      const max = Math.max(...v);
+      const peaks = [];
+      for (let i = 1; i < v.length - 1; i++) if (v[i] > v[i - 1] && v[i] >= v[i + 1] && v[i] > 0.1 * max) peaks.push(g[i]);
+      let mass = 0, below = 0;
+      v.forEach((p, i) => { mass += p; if (g[i] < 0) below += p; });
+      return { t: h.t, row: h.row, peaks, below: below / mass, points: v.length };
+    }));
+    await openLesson('growth-model');
+    r = await run();
+    let sc = await scores();
+    let kept = await frames();
+    console.log('lesson 12:', JSON.stringify(sc), kept.length);
+    assert.deepEqual(await page.evaluate(() => window.zakaiPage.info.methods), ['PMF', 'PF(1000)', 'EKF', 'UKF'], 'the densities are the point-mass filter\'s');
+    assert.ok(kept.length === 51 && kept.every((f, i) => f.row === i && f.points === 200), 'a kept density at each of the 51 times, on 200 points');
+    const two = kept.filter((f) => f.peaks.length === 2 && f.peaks[0] < 0 && f.peaks[1] > 0);
+    assert.equal(two.length, 16, `two peaks, one each side of 0, at 16 times: ${two.map((f) => f.t)}`);
+    assert.ok(kept.every((f) => f.peaks.length <= 2 && (f.peaks.length < 2 || two.includes(f))), 'never more than two, nor two on one side');
+    const at17 = kept[17];
+    assert.ok(near(at17.peaks[0], -13.5, 0.05) && near(at17.peaks[1], 13.5, 0.05) && near(at17.below, 0.58, 0.005), `t = 17: peaks ±13.5, 58 % below 0: ${JSON.stringify(at17)}`);
+    const m = r.methods;
+    const pmf = m.PMF, pf = m['PF(1000)'];
+    assert.ok(near(r.truth[17], -13.13, 0.005), 'the truth at −13.13');
+    assert.ok(near(pmf.est[17], -2.16, 0.005) && near(pmf.sd[17], 13.25, 0.005), 'PMF: −2.16, sd 13.25');
+    assert.ok(near(m.EKF.est[17], 14.68, 0.005) && near(m.EKF.sd[17], 1.14, 0.005), 'EKF: 14.68, sd 1.14');
+    assert.ok(near((m.EKF.est[17] - r.truth[17]) / m.EKF.sd[17], 24, 0.5), '24 of its sds from the truth');
+    assert.ok(near(m.UKF.est[17], 0.24, 0.005) && near(m.UKF.sd[17], 15.31, 0.005), 'UKF: 0.24, sd 15.31');
+    assert.ok(near(pmf.est[18], -18.91, 0.005) && near(pmf.sd[18], 0.52, 0.005) && near(r.truth[18], -18.50, 0.005), 't = 18: −18.91 (0.52), truth −18.50');
+    assert.ok(near(pf.est[18], pmf.est[18], 0.05), 'and so is the particle filter');
+    [[18, 25.17, -18.50], [19, 17.47, -15.64], [20, 11.83, -10.86]].forEach(([k, ekf, truth]) => {
+      assert.ok(near(m.EKF.est[k], ekf, 0.005) && near(r.truth[k], truth, 0.005), `EKF at t = ${k}: ${ekf} against ${truth}`);
+    });
+    assert.ok(m.EKF.est[21] > 0 && m.EKF.est.slice(18, 21).every((v) => v > 0), 'positive until t = 20');
+    const pfGap = Math.max(...pf.est.map((v, k) => Math.abs(v - pmf.est[k]) / pmf.sd[k]));
+    assert.ok(pfGap <= 0.53 && pfGap > 0.5, `the PF within 0.53 PMF sds: ${pfGap}`);
+    assert.ok(near(sc.PMF.mse, 34.19, 0.005) && near(sc['PF(1000)'].mse, 35.78, 0.005) && near(sc.UKF.mse, 65.69, 0.005) && near(sc.EKF.mse, 218.53, 0.005), 'MSEs 34.19, 35.78, 65.69, 218.53');
+    await page.screenshot({ path: `${artifacts}/lesson-growth-model.png` });
+    await tryThis('an odd map: drop 8 cos(1.2k)');
+    r = await run();
+    sc = await scores();
+    kept = await frames();
+    console.log('lesson 12, odd map:', JSON.stringify(sc));
+    const odd = r.methods.PMF;
+    assert.ok(odd.est.every((v) => Math.abs(v) < 1e-11), `the PMF's mean within 1e-11 of 0: ${Math.max(...odd.est.map(Math.abs))}`);
+    assert.ok(kept.length === 51 && kept.slice(1).every((f) => f.peaks.length === 2 && near(f.peaks[0], -f.peaks[1], 1e-9) && f.peaks[1] > 0), 'mirrored peaks, one each side, at every time from t = 1');
+    assert.ok(kept[0].peaks.length === 1 && Math.abs(kept[0].peaks[0]) < 0.25, 'at t = 0 one peak, at 0 (the plot\'s points nearest it are ±0.2)');
+    const meanSquare = r.truth.reduce((a, x) => a + x * x, 0) / r.truth.length;
+    assert.ok(near(sc.PMF.mse, 65.51, 0.005) && near(meanSquare, 65.51, 0.005), `MSE 65.51, the truth's mean square ${meanSquare}`);
+    assert.ok(near(sc.EKF.mse, 65.51, 0.005) && near(sc.UKF.mse, 65.51, 0.005), 'the EKF and UKF the same');
+    assert.ok(r.methods.EKF.est.every((v) => v === 0) && r.methods.UKF.est.every((v) => Math.abs(v) < 1e-9), 'both at 0');
+    assert.ok(near(sc['PF(1000)'].mse, 92.95, 0.005), 'the PF 92.95');
+    const lingering = r.truth.filter((x) => Math.abs(Math.abs(x) - 7) < 3).length;
+    assert.equal(lingering, 31, 'the truth within 3 of ±7 at 31 of the 51 times');
+  }
+
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
   await openLesson('kalman-bucy');
