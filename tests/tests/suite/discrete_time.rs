@@ -225,6 +225,78 @@ fn the_point_mass_filter_converges_to_the_kalman_filter_on_an_ar1() {
     assert!(errors[3] < 1e-3, "{errors:?}");
 }
 
+/// The RTS smoother of [`discrete_kalman`]'s run: the smoothed means and variances at every
+/// row, from the filtered and one-transition-predicted moments (1-D).
+fn rts_1d(a: f64, q: f64, filtered: &[(f64, f64)], rows: &[(usize, f64)]) -> Vec<(f64, f64)> {
+    let mut out = vec![*filtered.last().unwrap()];
+    for k in (0..filtered.len() - 1).rev() {
+        let (m, p) = filtered[k];
+        // k transitions to the next row: Φ = a^j, predicted P⁻ = Φ P Φ + Σ a^(2i) q.
+        let j = rows[k + 1].0 as i32;
+        let phi = a.powi(j);
+        let qd: f64 = (0..j).map(|i| a.powi(2 * i) * q).sum();
+        let (mp, pp) = (phi * m, phi * phi * p + qd);
+        let gain = p * phi / pp;
+        let (ms, ps) = out[0];
+        out.insert(0, (m + gain * (ms - mp), p + gain * gain * (ps - pp)));
+    }
+    out
+}
+
+/// The smoothers on the AR(1) with a gap: the Kalman filter's RTS smoother is the RTS
+/// smoother written here to 1e-9, and the point-mass filter's forward–backward smoother (the
+/// transposed kernel) is within 2e-3 of its sd at every row on 400 cells.
+#[test]
+fn the_smoothers_are_the_rts_smoother_on_an_ar1() {
+    use zakai::{smoothed_estimates, SmoothingPlan};
+    let model = Model::from_text(&["0.9*x"], &["x"], Noise::discrete(1.0))
+        .unwrap()
+        .discrete_time(1.0)
+        .unwrap()
+        .with_transition_noise(&[[0.5]])
+        .unwrap();
+    let one = |v: f64| DMatrix::from_element(1, 1, v);
+    let rows = linear_rows();
+    let (means, covs, _) = discrete_kalman(
+        (&one(0.9), &one(0.5), &one(1.0), &one(1.0)),
+        (DVector::from_element(1, 0.0), one(1.0)),
+        &rows,
+    );
+    let filtered: Vec<(f64, f64)> = means.iter().zip(&covs).map(|(m, p)| (m[0], p[(0, 0)])).collect();
+    let reference = rts_1d(0.9, 0.5, &filtered, &rows);
+    let kalman = zakai::Kalman::builder(&model)
+        .prior_gaussian(&[0.0], &[[1.0]])
+        .build()
+        .unwrap();
+    let pmf = zakai::PointMass::builder(&model)
+        .prior_gaussian(&[0.0], &[[1.0]])
+        .domain(&[(-8.0, 14.0)])
+        .with(|p| p.cells = vec![400])
+        .build()
+        .unwrap();
+    for (filter, tolerance) in [(&kalman as &dyn Filter, 1e-9), (&pmf as &dyn Filter, 2e-3)] {
+        let mut smoother = filter.smoother(&SmoothingPlan::for_steps(rows.len())).unwrap();
+        for &(transitions, z) in &rows {
+            smoother
+                .step(&Observation::measurement(transitions as f64, &[z]))
+                .unwrap();
+        }
+        // The prior, then every row.
+        let smoothed = smoothed_estimates(smoother.as_mut()).unwrap();
+        assert_eq!(smoothed.len(), rows.len() + 1);
+        let worst = smoothed[1..]
+            .iter()
+            .zip(&reference)
+            .map(|(e, (m, p))| {
+                let var = e.covariance.as_ref().unwrap()[(0, 0)];
+                ((e.mean[0] - m).abs() / p.sqrt()).max((var / p - 1.0).abs())
+            })
+            .fold(0.0, f64::max);
+        println!("{}: worst smoothed difference {worst:.2e}", filter.name());
+        assert!(worst < tolerance, "{}: {worst:e}", filter.name());
+    }
+}
+
 /// The growth model's transition `F(x, k)`.
 fn growth(x: f64, k: f64) -> f64 {
     x / 2.0 + 25.0 * x / (1.0 + x * x) + 8.0 * (1.2 * k).cos()
