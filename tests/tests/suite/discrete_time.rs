@@ -262,7 +262,11 @@ fn the_smoothers_are_the_rts_smoother_on_an_ar1() {
         (DVector::from_element(1, 0.0), one(1.0)),
         &rows,
     );
-    let filtered: Vec<(f64, f64)> = means.iter().zip(&covs).map(|(m, p)| (m[0], p[(0, 0)])).collect();
+    let filtered: Vec<(f64, f64)> = means
+        .iter()
+        .zip(&covs)
+        .map(|(m, p)| (m[0], p[(0, 0)]))
+        .collect();
     let reference = rts_1d(0.9, 0.5, &filtered, &rows);
     let kalman = zakai::Kalman::builder(&model)
         .prior_gaussian(&[0.0], &[[1.0]])
@@ -275,7 +279,9 @@ fn the_smoothers_are_the_rts_smoother_on_an_ar1() {
         .build()
         .unwrap();
     for (filter, tolerance) in [(&kalman as &dyn Filter, 1e-9), (&pmf as &dyn Filter, 2e-3)] {
-        let mut smoother = filter.smoother(&SmoothingPlan::for_steps(rows.len())).unwrap();
+        let mut smoother = filter
+            .smoother(&SmoothingPlan::for_steps(rows.len()))
+            .unwrap();
         for &(transitions, z) in &rows {
             smoother
                 .step(&Observation::measurement(transitions as f64, &[z]))

@@ -130,7 +130,8 @@ impl PointMass {
         let grid = crate::filters::fpe_split::cells_over(bounds, &params.shape(n))?;
         // A driven model at its start (t = 0, inputs 0) until its first step.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
-        let kernel = TransitionKernel::new(&name, &start, &grid, params.radius)?;
+        let kernel =
+            TransitionKernel::new(&name, &start, &grid, params.radius, !model.is_driven())?;
         let measurement = GridMeasurement::new(&grid, &start, &noise);
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
@@ -192,7 +193,8 @@ impl PointMass {
             let j = if transposed { k - 1 - j } else { j };
             if self.model.is_driven() {
                 let model = self.model.transition_at(inputs, j, k)?;
-                self.kernel = TransitionKernel::new(&self.name, &model, &self.grid, self.radius)?;
+                self.kernel =
+                    TransitionKernel::new(&self.name, &model, &self.grid, self.radius, false)?;
             }
             if transposed {
                 self.kernel

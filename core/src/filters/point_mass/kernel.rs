@@ -45,6 +45,22 @@ pub(super) struct TransitionKernel {
     /// An odometer over the window and one displacement (correlated Q).
     counter: Vec<usize>,
     d: Vec<f64>,
+    /// Every source cell's windows, computed once for a kernel that does not change (an
+    /// autonomous model with a diagonal Q) when they fit in [`CACHED_VALUES`].
+    cache: Option<WindowCache>,
+}
+
+/// Most window weights a kernel keeps (64 MiB): the memory estimate counts up to this many.
+pub(super) const CACHED_VALUES: usize = 8 << 20;
+
+/// The windows of every source cell: per (cell, dimension) the first cell and the weights
+/// `values[start[i]..start[i + 1]]`, and whether the window meets the box.
+#[derive(Clone, Debug)]
+struct WindowCache {
+    first: Vec<isize>,
+    start: Vec<usize>,
+    values: Vec<f64>,
+    meets: Vec<bool>,
 }
 
 /// A walk over one source cell's window (on the unbounded lattice of cells).
@@ -115,11 +131,14 @@ impl TransitionKernel {
     /// Tabulates `model`'s transition on `grid` (F at every cell; Q, or Q(ξ) at every cell).
     /// A state-dependent Q with mixed terms is refused (not implemented), as is a correlated
     /// Q that is singular (its density does not exist).
+    /// With `keep`, the windows are computed once and kept when they fit in
+    /// [`CACHED_VALUES`] (for a kernel used at every step: an autonomous model's).
     pub(super) fn new(
         name: &str,
         model: &Model,
         grid: &TensorGrid,
         radius: f64,
+        keep: bool,
     ) -> Result<Self, FilterError> {
         let n = model.n;
         let mut centres = Vec::with_capacity(grid.len() * n);
@@ -161,7 +180,7 @@ impl TransitionKernel {
                 }
             }
         };
-        Ok(TransitionKernel {
+        let mut kernel = TransitionKernel {
             centres,
             spread,
             radius,
@@ -169,7 +188,35 @@ impl TransitionKernel {
             weights: vec![Vec::new(); n],
             counter: vec![0; n],
             d: vec![0.0; n],
-        })
+            cache: None,
+        };
+        if keep && matches!(kernel.spread, Spread::Diagonal { .. }) {
+            kernel.cache = kernel.windows_of_every_cell(grid);
+        }
+        Ok(kernel)
+    }
+
+    /// Every source cell's windows ([`WindowCache`]), or `None` past [`CACHED_VALUES`].
+    fn windows_of_every_cell(&mut self, grid: &TensorGrid) -> Option<WindowCache> {
+        let n = grid.dim();
+        let mut cache = WindowCache {
+            first: Vec::with_capacity(grid.len() * n),
+            start: vec![0],
+            values: Vec::new(),
+            meets: Vec::with_capacity(grid.len()),
+        };
+        for j in 0..grid.len() {
+            cache.meets.push(self.window(grid, j));
+            for l in 0..n {
+                if cache.values.len() + self.weights[l].len() > CACHED_VALUES {
+                    return None;
+                }
+                cache.first.push(self.first[l]);
+                cache.values.extend_from_slice(&self.weights[l]);
+                cache.start.push(cache.values.len());
+            }
+        }
+        Some(cache)
     }
 
     /// Cells in the window of the widest kernel (for the cost and memory estimates).
@@ -191,6 +238,16 @@ impl TransitionKernel {
     /// outside the box that the window misses it.
     fn window(&mut self, grid: &TensorGrid, j: usize) -> bool {
         let n = grid.dim();
+        if let Some(cache) = &self.cache {
+            for l in 0..n {
+                let i = j * n + l;
+                self.first[l] = cache.first[i];
+                self.weights[l].clear();
+                self.weights[l]
+                    .extend_from_slice(&cache.values[cache.start[i]..cache.start[i + 1]]);
+            }
+            return cache.meets[j];
+        }
         let centre = &self.centres[j * n..(j + 1) * n];
         let mut inside = true;
         for l in 0..n {

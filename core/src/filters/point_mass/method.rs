@@ -80,8 +80,18 @@ impl Method for PointMass {
     }
     fn memory(p: &PointMassParams, n: usize) -> Option<usize> {
         // Per cell: the density, its copy and the saved one, F (n), the kernel's sd (n) and h
-        // (counted as n).
-        product(&p.shape(n))?.checked_mul(3 + 3 * n)?.checked_mul(8)
+        // (counted as n); the kept windows, at most a row of cells per cell and dimension and
+        // at most CACHED_VALUES.
+        let shape = p.shape(n);
+        let cells = product(&shape)?;
+        let windows = shape
+            .iter()
+            .try_fold(0usize, |a, &c| a.checked_add(cells.checked_mul(c + 1)?))?
+            .min(super::kernel::CACHED_VALUES);
+        cells
+            .checked_mul(3 + 3 * n)?
+            .checked_add(windows)?
+            .checked_mul(8)
     }
     fn build(
         ctx: &BuildContext,
