@@ -727,10 +727,11 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(near(m.UKF.est[17], 0.24, 0.005) && near(m.UKF.sd[17], 15.31, 0.005), 'UKF: 0.24, sd 15.31');
     assert.ok(near(pmf.est[18], -18.91, 0.005) && near(pmf.sd[18], 0.52, 0.005) && near(r.truth[18], -18.50, 0.005), 't = 18: −18.91 (0.52), truth −18.50');
     assert.ok(near(pf.est[18], pmf.est[18], 0.05), 'and so is the particle filter');
-    [[18, 25.17, -18.50], [19, 17.47, -15.64], [20, 11.83, -10.86]].forEach(([k, ekf, truth]) => {
-      assert.ok(near(m.EKF.est[k], ekf, 0.005) && near(r.truth[k], truth, 0.005), `EKF at t = ${k}: ${ekf} against ${truth}`);
-    });
-    assert.ok(m.EKF.est[21] > 0 && m.EKF.est.slice(18, 21).every((v) => v > 0), 'positive until t = 20');
+    const growth = (x, k) => x / 2 + 25 * x / (1 + x * x) + 8 * Math.cos(1.2 * k);
+    assert.ok(near(growth(13.5, 18), 1.2, 0.05) && near(growth(-13.5, 18), -16.0, 0.05) && near(8 * Math.cos(21.6), -7.4, 0.05), 'F(±13.5, 18) ≈ 1.2 and −16.0');
+    assert.ok(near(m.EKF.est[18], 25.17, 0.005) && near(m.EKF.est[25], 7.74, 0.005), 'EKF 25.17 at t = 18, 7.74 at t = 25');
+    assert.ok(m.EKF.est.slice(17, 26).every((v) => v > 0) && r.truth.slice(17, 26).every((v) => v < 0), 'the EKF above 0 from t = 17 to 25, the truth below');
+    assert.ok(near(m.EKF.est[17] - r.truth[17], 27.8, 0.05), '27.8 from the truth');
     const pfGap = Math.max(...pf.est.map((v, k) => Math.abs(v - pmf.est[k]) / pmf.sd[k]));
     assert.ok(pfGap <= 0.53 && pfGap > 0.5, `the PF within 0.53 PMF sds: ${pfGap}`);
     assert.ok(near(sc.PMF.mse, 34.19, 0.005) && near(sc['PF(1000)'].mse, 35.78, 0.005) && near(sc.UKF.mse, 65.69, 0.005) && near(sc.EKF.mse, 218.53, 0.005), 'MSEs 34.19, 35.78, 65.69, 218.53');

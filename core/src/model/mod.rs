@@ -144,10 +144,11 @@ pub enum Dynamics {
     /// `period` (the observation interval Δτ the map is written for), with F held in
     /// [`Model::drift`] and G in [`Model::diffusion`]. A step over `k·period` applies k
     /// transitions; a step that is not a whole number of periods is refused
-    /// ([`Model::transitions`]). Exact for the Kalman filter (linear F), the point-mass
-    /// filter and the particle filter; the EKF, UKF, IEKF and IOKF predict through F by their
-    /// own linearisation; the methods of the continuous-time equations (Yau–Yau, spectral,
-    /// direct, Kalman–Bucy, the Fokker–Planck grids) refuse it.
+    /// ([`Model::transitions`]). The Kalman and Gaussian-sum filters are exact for a linear
+    /// F; the point-mass and particle filters use the transition itself (no time
+    /// discretisation); the EKF, UKF, IEKF and IOKF predict through F by their own
+    /// linearisation; the methods of the continuous-time equations (Yau–Yau, spectral,
+    /// direct, the Fokker–Planck grids) refuse it.
     Discrete {
         /// The time between two transitions (Δτ).
         period: f64,
@@ -156,16 +157,17 @@ pub enum Dynamics {
 
 impl Dynamics {
     /// The number of transitions a discrete-time model makes over a step of length `dt` (k
-    /// when `dt = k·period` to within 1e-9 relative; an error otherwise, and for a
-    /// continuous-time model, whose filters never ask).
+    /// when `dt/period` is within 10⁻⁶ of the whole number k, at most [`MAX_TRANSITIONS`];
+    /// an error otherwise, and for a continuous-time model, whose filters never ask).
     pub fn transitions(&self, dt: f64) -> Result<usize, crate::error::FilterError> {
         let Dynamics::Discrete { period } = *self else {
             return Err(crate::error::FilterError::Unsuitable(
                 "a continuous-time model makes no transitions".into(),
             ));
         };
-        let k = libm::round(dt / period);
-        if (0.0..1e12).contains(&k) && libm::fabs(k * period - dt) <= 1e-9 * dt.max(period) {
+        let periods = dt / period;
+        let k = libm::round(periods);
+        if (0.0..=MAX_TRANSITIONS as f64).contains(&k) && libm::fabs(periods - k) <= 1e-6 {
             Ok(k as usize)
         } else {
             Err(crate::error::FilterError::BadObservation(format!(
@@ -174,6 +176,10 @@ impl Dynamics {
         }
     }
 }
+
+/// Most transitions one step of a discrete-time model may make (a longer gap is an error
+/// naming it, not a step that runs for hours).
+pub const MAX_TRANSITIONS: usize = 10_000_000;
 
 /// A filtering model: dimensions, drift, observation function, diffusion and noise.
 #[derive(Clone)]

@@ -102,8 +102,8 @@ pub fn simulate(
 /// row for the N + 1 times (row k held over `(τ_{k−1}, τ_k]`, row 0 read by the measurement
 /// at τ₀): each Euler–Maruyama step reads the time at its start, each measurement its own
 /// time. An autonomous model takes no inputs. A discrete-time model
-/// ([`crate::Dynamics::Discrete`]) makes one transition per Δτ instead, reading the time it
-/// reaches, τ_k, and row k's inputs (`inner_steps` is not used).
+/// ([`crate::Dynamics::Discrete`]) makes its transitions instead (Δτ/period of them per
+/// interval, each reading the time it reaches and row k's inputs; `inner_steps` is not used).
 pub fn simulate_driven(
     model: &Model,
     x0: &[f64],
@@ -181,16 +181,23 @@ pub fn simulate_driven(
     let discrete = model.is_discrete_time();
     for k in 1..=steps {
         let row = &mut observations[k * m..(k + 1) * m];
-        if discrete {
-            // x_k = F(x_(k−1), t_k, u_k) + w_k, w_k ~ N(0, G Gᵀ): one transition per Δτ.
+        if let crate::model::Dynamics::Discrete { period } = model.dynamics {
+            // x_j = F(x_(j−1), t_j, u_k) + w_j, w_j ~ N(0, G Gᵀ): the transitions of one Δτ,
+            // each at the time it reaches.
+            let transitions = model
+                .transitions(time.dt_obs)
+                .map_err(|e| ZakaiError::Other(format!("simulating the map: {e}")))?;
             let tk = k as f64 * time.dt_obs;
-            let frozen = at(tk, k)?;
-            let model = frozen.as_ref().unwrap_or(model);
-            model.drift.eval(&x, &mut fx);
-            noise_factor(model, &x, tk, &mut g)?;
-            let xi = standard_normal_vector(rng, n);
-            for (i, row) in g.chunks_exact(n).enumerate() {
-                x[i] = fx[i] + row.iter().zip(xi.iter()).map(|(g, xi)| g * xi).sum::<f64>();
+            for j in 0..transitions {
+                let t = tk - (transitions - 1 - j) as f64 * period;
+                let frozen = at(t, k)?;
+                let model = frozen.as_ref().unwrap_or(model);
+                model.drift.eval(&x, &mut fx);
+                noise_factor(model, &x, t, &mut g)?;
+                let xi = standard_normal_vector(rng, n);
+                for (i, row) in g.chunks_exact(n).enumerate() {
+                    x[i] = fx[i] + row.iter().zip(xi.iter()).map(|(g, xi)| g * xi).sum::<f64>();
+                }
             }
         }
         for i in 0..if discrete { 0 } else { inner } {

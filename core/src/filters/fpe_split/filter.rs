@@ -35,7 +35,7 @@ pub(crate) fn check_model(name: &str, model: &Model) -> Result<MeasurementDensit
     Ok(noise)
 }
 
-/// The grid of cells whose centres tile `bounds` (the ends of the box are cell centres).
+/// The grid of cells that tile `bounds` (the ends of the box are cell faces).
 pub(super) fn cell_grid(
     params: &FpeParams,
     bounds: &[(f64, f64)],
@@ -43,8 +43,9 @@ pub(super) fn cell_grid(
     cells_over(bounds, &params.shape(bounds.len()))
 }
 
-/// The grid of `shape` cells whose centres tile `bounds` (the ends of the box are cell
-/// centres): the finite volumes of 001 (11), and the point-mass filter's points.
+/// The grid of `shape` cells that tile `bounds` (the ends of the box are cell faces; the
+/// centres at `a + (i + ½)Δ`): the finite volumes of 001 (11), and the point-mass filter's
+/// points.
 pub(crate) fn cells_over(bounds: &[(f64, f64)], shape: &[usize]) -> Result<TensorGrid, ZakaiError> {
     let cell_bounds: Vec<(f64, f64)> = bounds
         .iter()

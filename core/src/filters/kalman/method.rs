@@ -46,11 +46,11 @@ fn map_kalman(
 const GAUSSIAN_Q: &str =
     "Q(x̂) = G(x̂)G(x̂)ᵀ at the current mean in the covariance equation dP/dt = FP + PFᵀ + Q";
 
-/// How the Gaussian filters treat time and known inputs.
 /// How the EKF-type filters predict through a discrete-time map.
 const EKF_MAP: &str = "m ← F(m), P ← J P Jᵀ + Q(m) with J = ∂F/∂x at the mean, per transition";
 
-const GAUSSIAN_INPUTS: &str = "each step's inputs held over its interval, t at the interval's midpoint in the moment equations and at τ_k in the update";
+/// How the Gaussian filters treat time and known inputs.
+const GAUSSIAN_INPUTS: &str = "each step's inputs held over its interval, t at the interval's midpoint in the moment equations (a discrete-time map's transition at the time it reaches) and at τ_k in the update";
 
 /// Why the MAP filters refuse time and known inputs.
 const MAP_INPUTS: &str = "the second-mode watch of 003 carries the model's free distribution over several intervals at once, which a time-varying model does not allow; not implemented";

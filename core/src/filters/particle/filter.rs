@@ -274,6 +274,10 @@ impl Pf {
         let (n, count) = (self.model.n, self.params.particles);
         let (substeps, h) = self.moves(dt)?;
         let discrete = self.model.is_discrete_time();
+        if substeps == 0 {
+            // No transition (a step shorter than rounding of the period): the particles stay.
+            self.resampled.copy_from_slice(&self.particles);
+        }
         let sqrt_h = libm::sqrt(h);
         for substep in 0..substeps {
             if let (true, Some(driven)) = (discrete && substeps > 1, &self.driven) {

@@ -25,7 +25,7 @@ impl Method for Pf {
         "G(x) at each particle in every Euler–Maruyama substep (FFBSi smoothing refuses it)",
     );
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
-        "each step's inputs held over its interval, t at the interval's midpoint in the Euler–Maruyama substeps and at τ_k in the weights",
+        "each step's inputs held over its interval, t at the interval's midpoint in the Euler–Maruyama substeps (a discrete-time map's transition at the time it reaches) and at τ_k in the weights",
     );
     const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
         "each particle drawn from the transition itself, x_k = F(x_(k−1)) + w_k (no Euler steps); FFBSi weighs with the transition density N(x_k; F(x_(k−1)), Q)",

@@ -48,7 +48,7 @@ pub(super) fn check_model(name: &str, model: &Model) -> Result<MeasurementDensit
 ///   density at the cell centre for a correlated one —, the kernel cut at `radius` standard
 ///   deviations and renormalised there, so that the cost is cells × window and no mass is
 ///   made or lost inside the box; what lands beyond it is lost and reported by the
-///   self-check. A row over k periods applies k transitions ([`Model::transitions`]).
+///   self-check. A step over k periods applies k transitions ([`Model::transitions`]).
 /// * **Update** at each measurement (001 (6)–(7)): `P ← P · p(z_k | x[i]) / c_k`, in the log
 ///   domain; its normaliser is the step's likelihood.
 ///
@@ -91,11 +91,10 @@ pub struct PointMass {
     name: String,
     grid: TensorGrid,
     /// The transition on the cells (an autonomous model's, made once; a driven model's, made
-    /// for every transition).
-    kernel: TransitionKernel,
-    /// p(z | x) and h on the cells.
+    /// for every transition: `None` until the first).
+    kernel: Option<TransitionKernel>,
+    /// p(z | x) and h on the cells (a driven model's frozen for each step).
     measurement: GridMeasurement,
-    noise: MeasurementDensity,
     model: Model,
     radius: f64,
     u: Vec<f64>,
@@ -126,13 +125,23 @@ impl PointMass {
                 message: msg.clone(),
             });
         }
-        let noise = check_model(&name, model)?;
+        check_model(&name, model)?;
         let grid = crate::filters::fpe_split::cells_over(bounds, &params.shape(n))?;
-        // A driven model at its start (t = 0, inputs 0) until its first step.
+        // A driven model's kernel and measurement are made for each step, from the model at
+        // the step's time and inputs; here, at its start (t = 0, inputs 0), only the
+        // measurement's tabulation is set up.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
-        let kernel =
-            TransitionKernel::new(&name, &start, &grid, params.radius, !model.is_driven())?;
-        let measurement = GridMeasurement::new(&grid, &start, &noise);
+        let kernel = match model.is_driven() {
+            false => Some(TransitionKernel::new(
+                &name,
+                model,
+                &grid,
+                params.radius,
+                true,
+            )?),
+            true => None,
+        };
+        let measurement = GridMeasurement::new(&grid, &start, &check_model(&name, &start)?);
         let mut u = grid.tabulate(|x| prior.density(x));
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FilterError::NonFinite {
@@ -152,7 +161,6 @@ impl PointMass {
             name,
             kernel,
             measurement,
-            noise,
             model: model.clone(),
             radius: params.radius,
             saved: crate::filters::SavedDensity::new(len, &estimate),
@@ -175,7 +183,9 @@ impl PointMass {
 
     /// Cells in the window of the widest kernel: the prediction's cost per cell.
     pub fn kernel_window(&self) -> f64 {
-        self.kernel.widest_window(&self.grid)
+        self.kernel
+            .as_ref()
+            .map_or(0.0, |k| k.widest_window(&self.grid))
     }
 
     /// The transitions over `dt` (each of a driven model at the time it reaches), on
@@ -193,15 +203,20 @@ impl PointMass {
             let j = if transposed { k - 1 - j } else { j };
             if self.model.is_driven() {
                 let model = self.model.transition_at(inputs, j, k)?;
-                self.kernel =
-                    TransitionKernel::new(&self.name, &model, &self.grid, self.radius, false)?;
+                self.kernel = Some(TransitionKernel::new(
+                    &self.name,
+                    &model,
+                    &self.grid,
+                    self.radius,
+                    false,
+                )?);
             }
+            let kernel = self.kernel.as_mut().expect("made in new, or just above");
             if transposed {
-                self.kernel
-                    .predict_transposed(&self.grid, &self.u, &mut self.tmp);
+                kernel.predict_transposed(&self.grid, &self.u, &mut self.tmp);
             } else {
                 let mass = self.grid.mass(&self.u) / self.grid.cell_volume();
-                let out = self.kernel.predict(&self.grid, &self.u, &mut self.tmp);
+                let out = kernel.predict(&self.grid, &self.u, &mut self.tmp);
                 if mass > 0.0 {
                     lost = 1.0 - (1.0 - lost) * (1.0 - out / mass);
                 }
@@ -292,8 +307,15 @@ impl Filter for PointMass {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, ObservationKind::Measurement, self.model.m)?;
-        if let Some((_, measurement)) = obs.frozen(&self.model)? {
-            self.measurement = GridMeasurement::new(&self.grid, &measurement, &self.noise);
+        if self.model.is_driven() {
+            let Some(crate::model::Inputs { t, u }) = obs.inputs else {
+                return Err(FilterError::BadObservation(
+                    "the model reads the time t and known inputs: give each step the observation's time and inputs (Observation::with_inputs)".into(),
+                ));
+            };
+            let measurement = self.model.at(t, u)?;
+            let noise = check_model(&self.name, &measurement)?;
+            self.measurement = GridMeasurement::new(&self.grid, &measurement, &noise);
         }
         self.measurement.likelihood.check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);

@@ -47,8 +47,12 @@ pub(super) struct TransitionKernel {
     d: Vec<f64>,
     /// Every source cell's windows, computed once for a kernel that does not change (an
     /// autonomous model with a diagonal Q) when they fit in [`CACHED_VALUES`].
-    cache: Option<WindowCache>,
+    cache: Option<alloc::sync::Arc<WindowCache>>,
 }
+
+/// Most cells a correlated Q's window may have (its weights are summed over the whole window
+/// for every cell at every transition).
+pub(super) const MAX_CORRELATED_WINDOW: usize = 1 << 20;
 
 /// Most window weights a kernel keeps (64 MiB): the memory estimate counts up to this many.
 pub(super) const CACHED_VALUES: usize = 8 << 20;
@@ -74,9 +78,9 @@ struct Odometer<'a> {
 }
 
 impl Odometer<'_> {
-    /// Calls `f(index in the box or None, weight)` for every cell of the window: the
-    /// product of the per-dimension weights, or with `inverse` (Q⁻¹, row-major) the
-    /// unnormalised Gaussian `exp(−½ dᵀQ⁻¹d)` at the cell's centre.
+    /// Calls `f(index in the box or None, value)` for every cell of the window: the product
+    /// of the per-dimension weights, or with `inverse` (Q⁻¹, row-major) the quadratic form
+    /// `dᵀQ⁻¹d` at the cell's centre.
     fn each(&mut self, inverse: Option<&[f64]>, mut f: impl FnMut(Option<usize>, f64)) {
         let n = self.grid.dim();
         self.counter.iter_mut().for_each(|c| *c = 0);
@@ -103,7 +107,8 @@ impl Odometer<'_> {
                         quad += self.d[a] * inverse[a * n + b] * self.d[b];
                     }
                 }
-                w = libm::exp(-0.5 * quad);
+                // The quadratic form itself: the caller shifts it before the exponential.
+                w = quad;
             }
             f(idx, w);
             let mut l = 0;
@@ -152,34 +157,7 @@ impl TransitionKernel {
                 what: "transition map F on the grid",
             });
         }
-        let spread = match model.process_noise() {
-            ProcessNoise::Constant(q) => spread_of_constant(name, &q)?,
-            ProcessNoise::StateDependent(_) => {
-                let table = model
-                    .process_noise()
-                    .tabulate(n, grid.len(), |i, x| grid.node(i, x));
-                table.require_finite(name)?;
-                if table
-                    .off
-                    .iter()
-                    .any(|(_, _, o)| o.iter().any(|v| *v != 0.0))
-                {
-                    return Err(FilterError::Unsuitable(format!(
-                        "{name}: a transition noise Q(x) = G(x) G(x)ᵀ with mixed terms is not implemented (a diagonal Q(x), or a constant correlated Q, is)"
-                    )));
-                }
-                let mut sd = vec![0.0; grid.len() * n];
-                for (l, column) in table.diagonal.iter().enumerate() {
-                    for (j, q) in column.iter().enumerate() {
-                        sd[j * n + l] = libm::sqrt(q.max(0.0));
-                    }
-                }
-                Spread::Diagonal {
-                    sd,
-                    constant: false,
-                }
-            }
-        };
+        let spread = spread_on(name, model, grid, radius)?;
         let mut kernel = TransitionKernel {
             centres,
             spread,
@@ -191,7 +169,10 @@ impl TransitionKernel {
             cache: None,
         };
         if keep && matches!(kernel.spread, Spread::Diagonal { .. }) {
-            kernel.cache = kernel.windows_of_every_cell(grid);
+            // Shared, not copied, by the filter's clones (a smoother's, a fork).
+            kernel.cache = kernel
+                .windows_of_every_cell(grid)
+                .map(alloc::sync::Arc::new);
         }
         Ok(kernel)
     }
@@ -261,31 +242,35 @@ impl TransitionKernel {
             let hi = libm::floor((centre[l] + reach - x0) / dx + 0.5);
             let w = &mut self.weights[l];
             w.clear();
-            if hi < 0.0 || lo > (cells - 1) as f64 || (hi - lo).is_nan() || hi - lo >= 1e9 {
+            if hi < 0.0 || lo > (cells - 1) as f64 || (hi - lo).is_nan() {
                 inside = false;
                 continue;
             }
-            self.first[l] = lo as isize;
             if let Spread::Correlated { .. } = self.spread {
-                // Only the range: the weights are of the whole displacement.
+                // Only the range (checked against MAX_WINDOW when the kernel is made): the
+                // weights are of the whole displacement, normalised over the whole window.
+                self.first[l] = lo as isize;
                 w.resize((hi - lo) as usize + 1, 1.0);
                 continue;
             }
-            // Φ at the cells' edges, each edge once: a cell's mass is the difference.
-            let edge = |i: isize| normal_cdf((x0 + (i as f64 - 0.5) * dx - centre[l]) / sd);
-            let mut below = if sd > 0.0 { edge(lo as isize) } else { 0.0 };
-            for i in lo as isize..=hi as isize {
-                let mass = if sd > 0.0 {
-                    let above = edge(i + 1);
-                    let mass = above - below;
-                    below = above;
-                    mass
-                } else {
-                    1.0
-                };
-                w.push(mass);
+            // Only the cells in the box are kept; the normaliser is the whole window's mass,
+            // Φ at its outer edges, so what falls beyond the box is lost (and counted).
+            let (lo_in, hi_in) = (lo.max(0.0) as isize, hi.min((cells - 1) as f64) as isize);
+            self.first[l] = lo_in;
+            if sd == 0.0 {
+                // All of it in the cell that holds F (lo = hi).
+                w.push(1.0);
+                continue;
             }
-            let total: f64 = w.iter().sum();
+            // Φ at the cells' edges, each edge once: a cell's mass is the difference.
+            let edge = |i: f64| normal_cdf((x0 + (i - 0.5) * dx - centre[l]) / sd);
+            let total = edge(hi + 1.0) - edge(lo);
+            let mut below = edge(lo_in as f64);
+            for i in lo_in..=hi_in {
+                let above = edge((i + 1) as f64);
+                w.push(above - below);
+                below = above;
+            }
             if total > 0.0 {
                 w.iter_mut().for_each(|v| *v /= total);
             }
@@ -309,25 +294,33 @@ impl TransitionKernel {
             d: &mut self.d,
             centre,
         };
-        let (scale, inverse) = match &self.spread {
+        let mut inside = 0.0;
+        match &self.spread {
             Spread::Correlated { inverse, .. } => {
+                // exp(−½(q − q_min)): a kernel narrower than a cell keeps its mass in the
+                // nearest cells instead of underflowing everywhere.
+                let mut least = f64::INFINITY;
+                odometer.each(Some(inverse), |_, q| least = least.min(q));
                 let mut total = 0.0;
-                odometer.each(Some(inverse), |_, w| total += w);
-                if total > 0.0 {
-                    (1.0 / total, Some(&inverse[..]))
-                } else {
+                odometer.each(Some(inverse), |_, q| total += libm::exp(-0.5 * (q - least)));
+                if !(total > 0.0 && total.is_finite()) {
                     return 1.0;
                 }
+                odometer.each(Some(inverse), |idx, q| {
+                    if let Some(idx) = idx {
+                        let w = libm::exp(-0.5 * (q - least)) / total;
+                        inside += w;
+                        f(idx, w);
+                    }
+                });
             }
-            Spread::Diagonal { .. } => (1.0, None),
-        };
-        let mut inside = 0.0;
-        odometer.each(inverse, |idx, w| {
-            if let Some(idx) = idx {
-                inside += w * scale;
-                f(idx, w * scale);
-            }
-        });
+            Spread::Diagonal { .. } => odometer.each(None, |idx, w| {
+                if let Some(idx) = idx {
+                    inside += w;
+                    f(idx, w);
+                }
+            }),
+        }
         (1.0 - inside).max(0.0)
     }
 
@@ -352,6 +345,69 @@ impl TransitionKernel {
             *o = sum;
         }
     }
+}
+
+/// The spread of w_k on `grid` (Q, or Q(ξ) at every cell): refused for a state-dependent Q
+/// with mixed terms (not implemented), a correlated Q that is singular or whose window of
+/// `radius` sd holds more than [`MAX_CORRELATED_WINDOW`] cells. What the method's
+/// suitability checks before a run, and the kernel uses.
+fn spread_on(
+    name: &str,
+    model: &Model,
+    grid: &TensorGrid,
+    radius: f64,
+) -> Result<Spread, FilterError> {
+    let n = model.n;
+    let spread = match model.process_noise() {
+        ProcessNoise::Constant(q) => spread_of_constant(name, &q)?,
+        ProcessNoise::StateDependent(_) => {
+            let table = model
+                .process_noise()
+                .tabulate(n, grid.len(), |i, x| grid.node(i, x));
+            table.require_finite(name)?;
+            if table
+                .off
+                .iter()
+                .any(|(_, _, o)| o.iter().any(|v| *v != 0.0))
+            {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name}: a transition noise Q(x) = G(x) G(x)ᵀ with mixed terms is not implemented (a diagonal Q(x), or a constant correlated Q, is)"
+                )));
+            }
+            let mut sd = vec![0.0; grid.len() * n];
+            for (l, column) in table.diagonal.iter().enumerate() {
+                for (j, q) in column.iter().enumerate() {
+                    sd[j * n + l] = libm::sqrt(q.max(0.0));
+                }
+            }
+            Spread::Diagonal {
+                sd,
+                constant: false,
+            }
+        }
+    };
+    if let Spread::Correlated { sd, .. } = &spread {
+        let window: f64 = (0..n)
+            .map(|l| 2.0 * radius * sd[l] / grid.spacing()[l] + 2.0)
+            .product();
+        if window > MAX_CORRELATED_WINDOW as f64 {
+            return Err(FilterError::Unsuitable(format!(
+                "{name}: the correlated transition noise reaches {window:.3e} cells from each cell (its window of ±{radius} sd), more than {MAX_CORRELATED_WINDOW}: use fewer cells, a smaller `radius`, or a diagonal Q"
+            )));
+        }
+    }
+    Ok(spread)
+}
+
+/// Why the model's transition noise does not fit the point-mass filter on `grid`, or `Ok`
+/// ([`spread_on`]).
+pub(super) fn check_noise(
+    name: &str,
+    model: &Model,
+    grid: &TensorGrid,
+    radius: f64,
+) -> Result<(), FilterError> {
+    spread_on(name, model, grid, radius).map(|_| ())
 }
 
 /// The spread of a constant Q: its diagonal's square roots, or Q⁻¹ when it has mixed terms.

@@ -73,9 +73,16 @@ impl Method for PointMass {
         }
         problems
     }
-    fn suitability(problem: &ProblemContext, _: &PointMassParams) -> Result<(), String> {
-        check_model("PMF", problem.model)
-            .map(|_| ())
+    fn suitability(problem: &ProblemContext, p: &PointMassParams) -> Result<(), String> {
+        check_model("PMF", problem.model).map_err(|e| format!("{e}"))?;
+        let n = problem.model.n;
+        if !p.problems(n).is_empty() || problem.bounds.len() != n {
+            return Ok(()); // reported with the parameters and the domain
+        }
+        // The transition noise's structure on the grid the filter would build.
+        let grid = crate::filters::fpe_split::cells_over(problem.bounds, &p.shape(n))
+            .map_err(|e| format!("{e}"))?;
+        super::kernel::check_noise("PMF", problem.model, &grid, p.radius)
             .map_err(|e| format!("{e}"))
     }
     fn memory(p: &PointMassParams, n: usize) -> Option<usize> {

@@ -249,7 +249,8 @@ impl Experiment {
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
     /// ([`Recording::problems`]), and its dimensions and observation kind against the model
-    /// (every method takes steps of any positive length).
+    /// (every method takes steps of any positive length; a discrete-time map, steps of whole
+    /// periods).
     pub fn recording_problems(&self, recording: &Recording) -> Vec<ConfigProblem> {
         let mut p = recording.problems();
         let dt_obs = self.config.time.dt_obs;
@@ -257,6 +258,17 @@ impl Experiment {
             (1..recording.times.len()).find_map(|k| long_step(k, recording.step_length(k), dt_obs)),
         );
         let model = &self.model;
+        // A discrete-time map moves by whole periods: every step must be a number of them.
+        if model.is_discrete_time() {
+            p.extend((1..recording.times.len()).find_map(|k| {
+                model.transitions(recording.step_length(k)).err().map(|e| {
+                    ConfigProblem::new(
+                        "observations",
+                        alloc::format!("row {k} (t = {}): {e}", recording.times[k]),
+                    )
+                })
+            }));
+        }
         if recording.n != model.n {
             p.push(ConfigProblem::new(
                 "recording.n",

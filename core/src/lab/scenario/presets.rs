@@ -539,18 +539,19 @@ fn stochastic_volatility_ar1() -> ScenarioConfig {
 }
 
 /// The univariate non-stationary growth model, a discrete-time map
-/// ([`crate::Dynamics::Discrete`]): the benchmark of the particle-filter literature
-/// (Kitagawa 1996; Gordon, Salmond & Smith 1993), with its time-varying term and Kitagawa's
-/// settings.
+/// ([`crate::Dynamics::Discrete`]): a standard benchmark of the particle-filter literature
+/// (Kitagawa 1996; Gordon, Salmond & Smith 1993), in the form of Arulampalam, Maskell, Gordon
+/// & Clapp (2002): the time-varying term 8 cos(1.2k), Var w = 10, Var v = 1.
 fn growth_model() -> ScenarioConfig {
     let mut c = build(Spec {
         name: "ungm",
         paper: "001",
         title: "The growth model x_k = x/2 + 25x/(1 + x²) + 8 cos(1.2k) + w_k, seen through x²/20",
         place: "the grid filter's discrete-time counterpart, the point-mass method",
-        reference: "the point-mass method (Šimandl, Královec & Söderström 2006, Automatica 42) \
-            on the univariate non-stationary growth model of Kitagawa (1996) and Gordon, Salmond \
-            & Smith (1993)",
+        reference: "the point-mass method (Bucy & Senne 1971, in the form of Šimandl, Královec \
+            & Söderström 2006) on the univariate non-stationary growth model (Kitagawa 1996; \
+            Gordon, Salmond & Smith 1993) in the form of Arulampalam, Maskell, Gordon & Clapp \
+            (2002): cos(1.2k), Var w = 10, Var v = 1",
         description: "A map, not an SDE (model.dynamics: discrete): x_k = x_(k−1)/2 + \
             25 x_(k−1)/(1 + x_(k−1)²) + 8 cos(1.2k) + w_k, w_k ~ N(0, 10), one transition per \
             Δτ = 1, measured as z_k = x_k²/20 + v_k, v_k ~ N(0, 1), from x₀ ~ N(0, 5), for 50 \

@@ -101,6 +101,12 @@ pub fn convergence_check(
             let Some((refined, what)) = method.refined(n) else {
                 return row;
             };
+            // The Gaussian filters' knob is their RK4 substeps, which a discrete-time map's
+            // transitions do not have: no resolution to refine (not "converged").
+            let substeps_only = matches!(method, MethodConfig::Ekf(_) | MethodConfig::Ukf(_));
+            if substeps_only && experiment.model().is_discrete_time() {
+                return row;
+            }
             row.refined = Some(what);
             if refined.memory_bytes(n).is_none_or(|b| b > memory_cap) {
                 row.failure = Some(format!(

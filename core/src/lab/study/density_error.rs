@@ -106,8 +106,10 @@ pub fn j_curve(
 ) -> Result<JCurve, ZakaiError> {
     let config = experiment.config();
     let (model, prior) = (experiment.model(), experiment.prior());
-    if let Some(why) =
-        crate::filters::method::refusal::<crate::filters::gaussian_sum::GaussianSum>(model)
+    if let Some(why) = crate::filters::method::refusal::<crate::filters::gaussian_sum::GaussianSum>(
+        model,
+    )
+    .or_else(|| crate::filters::method::refusal::<crate::filters::fpe_split::Separation>(model))
     {
         return Err(crate::error::FilterError::Unsuitable(why).into());
     }
