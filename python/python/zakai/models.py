@@ -24,7 +24,8 @@ class Model:
     discrete times (``z_k = h(x_k) + v_k``, or ``z_k ~ p(z | x_k)``).
 
     Build it with :meth:`continuous` or :meth:`discrete` (additive Gaussian noise), or with
-    one of the measurement families beyond it: :meth:`poisson` (counts), :meth:`student_t`
+    :meth:`discrete_time` for a map ``x_k = F(x_(k−1)) + w_k`` (any model becomes one with
+    :meth:`in_discrete_time`), or with one of the measurement families beyond it: :meth:`poisson` (counts), :meth:`student_t`
     (outliers), :meth:`heteroscedastic` (a variance s(x): stochastic volatility) and
     :meth:`log_density` (any ``log p(z | x)``). Expressions are text in ``x``
     (``x1 … xn`` when n > 1) with ``+ - * / ^``, ``sin cos tan exp log sqrt tanh abs`` and
