@@ -161,40 +161,31 @@ fn fmt_matrix(m: &DMatrix<f64>) -> String {
 pub fn check(model: &Model, bounds: &[(f64, f64)], linear: Option<&Affine>) -> YauSystem {
     let n = model.n;
     let theorem = "Yau filtering system (002 (C1)–(C3))".to_string();
+    // Not checked, with the reason: (C1)–(C3) as one failing condition.
+    let unchecked = |detail: String| YauSystem {
+        report: ConditionReport {
+            theorem: theorem.clone(),
+            conditions: vec![Condition {
+                name: "(C1)–(C3)".into(),
+                holds: false,
+                detail,
+            }],
+            note: None,
+        },
+        linear: linear.cloned().unwrap_or_else(|| Affine::zero(n)),
+        sum_h2: None,
+        eta: None,
+    };
     if model.is_discrete_time() {
-        return YauSystem {
-            report: ConditionReport {
-                theorem,
-                conditions: vec![Condition {
-                    name: "(C1)–(C3)".into(),
-                    holds: false,
-                    detail: "a Yau filtering system is a model in continuous time (002 (1)); this model is a discrete-time map x_k = F(x_(k−1)) + w_k".into(),
-                }],
-                note: None,
-            },
-            linear: linear.cloned().unwrap_or_else(|| Affine::zero(n)),
-            sum_h2: None,
-            eta: None,
-        };
+        return unchecked(
+            "a Yau filtering system is a model in continuous time (002 (1)); this model is a discrete-time map x_k = F(x_(k−1)) + w_k".into(),
+        );
     }
     if n > MAX_DIMENSION || bounds.len() != n {
-        return YauSystem {
-            report: ConditionReport {
-                theorem,
-                conditions: vec![Condition {
-                    name: "(C1)–(C3)".into(),
-                    holds: false,
-                    detail: format!(
-                        "checked for n ≤ {MAX_DIMENSION} on an n-dimensional domain; the model has n = {n} and the domain {} dimensions",
-                        bounds.len()
-                    ),
-                }],
-                note: None,
-            },
-            linear: linear.cloned().unwrap_or_else(|| Affine::zero(n)),
-            sum_h2: None,
-            eta: None,
-        };
+        return unchecked(format!(
+            "checked for n ≤ {MAX_DIMENSION} on an n-dimensional domain; the model has n = {n} and the domain {} dimensions",
+            bounds.len()
+        ));
     }
     let per = per_dimension(n);
     let pts = interior_points(bounds, per);

@@ -89,6 +89,29 @@ pub(crate) fn normalise_on_grid(
     Ok(())
 }
 
+/// The prior σ₀ on `grid`'s nodes, normalised, with its moments and estimate (a density that
+/// is not finite on the grid, or has no mass there, is an error): where a grid filter starts.
+pub(crate) fn prior_on_grid(
+    grid: &crate::grid::TensorGrid,
+    prior: &crate::model::Prior,
+) -> Result<(Vec<f64>, crate::grid::Moments, Estimate), crate::error::FilterError> {
+    let n = grid.dim();
+    let mut u = grid.tabulate(|x| prior.density(x));
+    if u.iter().any(|v| !v.is_finite()) {
+        return Err(crate::error::FilterError::NonFinite {
+            what: "prior density",
+        });
+    }
+    let mut moments = crate::grid::Moments::zeros(n);
+    let mut estimate = Estimate {
+        mean: nalgebra::DVector::zeros(n),
+        covariance: None,
+        map: None,
+    };
+    normalise_on_grid(grid, &mut u, &mut moments, &mut estimate)?;
+    Ok((u, moments, estimate))
+}
+
 /// A measurement's density on a grid's nodes: `p(z | x)` and h tabulated once (m values
 /// per node).
 #[derive(Clone, Debug)]

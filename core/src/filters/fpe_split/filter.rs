@@ -257,20 +257,7 @@ impl ContinuousDiscreteGrid {
         // for the step-choice warnings; every step tabulates it anew.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
         let table = Tabulated::of(&name, &grid, &start, &start)?;
-        let mut u = grid.tabulate(|x| prior.density(x));
-        if u.iter().any(|v| !v.is_finite()) {
-            return Err(FilterError::NonFinite {
-                what: "prior density",
-            }
-            .into());
-        }
-        let mut moments = crate::grid::Moments::zeros(n);
-        let mut estimate = Estimate {
-            mean: nalgebra::DVector::zeros(n),
-            covariance: None,
-            map: None,
-        };
-        normalise_on_grid(&grid, &mut u, &mut moments, &mut estimate)?;
+        let (u, moments, estimate) = crate::filters::grid_state::prior_on_grid(&grid, prior)?;
         let len = grid.len();
         // The FDM's ratio is proportional to Δt: its value at Δt = 1 over the target is the
         // rate of steps.

@@ -65,6 +65,20 @@ impl SigmaPoints {
         }
     }
 
+    /// Places the sigma points of `N(m, P)` and their images under `f` (in one batch, into
+    /// `images`, component-major); returns how many values the images take.
+    fn map_points(
+        &mut self,
+        f: &dyn crate::model::VectorFunction,
+        w: &Weights,
+        (m, p): (&DVector<f64>, &DMatrix<f64>),
+    ) -> Result<usize, FilterError> {
+        self.place(w, m, p)?;
+        let len = f.output_dim() * self.count;
+        f.eval_batch(&self.points, &mut self.images[..len], &mut self.scratch);
+        Ok(len)
+    }
+
     /// The sigma points of `N(m, P)`: `m` and `m ± √(n+λ) Lᵢ`.
     fn place(
         &mut self,
@@ -122,6 +136,19 @@ impl SigmaPoints {
 
 /// The unscented Kalman filter.
 ///
+/// The statistical linearisation `A = C P⁻¹` of a map with cross-covariance
+/// `C = Cov(f(x), x)`, into `a` (row-major): `Aᵀ = P⁻¹ Cᵀ` by P's Cholesky factor.
+fn linearise(p: &DMatrix<f64>, c: &DMatrix<f64>, a: &mut [f64]) -> Result<(), FilterError> {
+    let n = p.nrows();
+    let at = crate::linalg::cholesky(p, "covariance")?.solve(&c.transpose());
+    for i in 0..n {
+        for j in 0..n {
+            a[i * n + j] = at[(j, i)];
+        }
+    }
+    Ok(())
+}
+
 /// The unscented Kalman filter with van der Merwe's scaled sigma points (α, β, κ as in 003 §5
 /// and 004 §4): `λ = α²(n + κ) − n`, points `m` and `m ± √(n+λ) Lᵢ` (L the Cholesky factor of
 /// P), weights `W₀ᵐ = λ/(n+λ)`, `W₀ᶜ = W₀ᵐ + 1 − α² + β`, `Wᵢ = 1/(2(n+λ))`.
@@ -225,13 +252,8 @@ impl Ukf {
         linearisation: Option<&mut [f64]>,
     ) -> Result<(), FilterError> {
         let n = model.n;
-        sigma.place(w, m, p)?;
-        let c = sigma.count;
-        let images = &mut sigma.images[..n * c];
-        model
-            .drift
-            .eval_batch(&sigma.points, images, &mut sigma.scratch);
-        let images = &sigma.images[..n * c];
+        let len = sigma.map_points(&*model.drift, w, (m, p))?;
+        let images = &sigma.images[..len];
         sigma.mean(w, images, dm.as_mut_slice());
         sigma.cross_cov(
             w,
@@ -240,14 +262,7 @@ impl Ukf {
             dp,
         );
         if let Some(a) = linearisation {
-            // Aᵀ = P⁻¹ Cᵀ.
-            let chol = crate::linalg::cholesky(p, "covariance")?;
-            let at = chol.solve(&dp.transpose());
-            for i in 0..n {
-                for j in 0..n {
-                    a[i * n + j] = at[(j, i)];
-                }
-            }
+            linearise(p, dp, a)?;
         }
         // dP = C + Cᵀ + Q(m).
         for a in 0..n {
@@ -274,13 +289,8 @@ impl Ukf {
         linearisation: Option<&mut [f64]>,
     ) -> Result<(), FilterError> {
         let n = model.n;
-        sigma.place(w, m, p)?;
-        let c = sigma.count;
-        let images = &mut sigma.images[..n * c];
-        model
-            .drift
-            .eval_batch(&sigma.points, images, &mut sigma.scratch);
-        let images = &sigma.images[..n * c];
+        let len = sigma.map_points(&*model.drift, w, (m, p))?;
+        let images = &sigma.images[..len];
         sigma.mean(w, images, mean.as_mut_slice());
         sigma.cross_cov(w, (images, mean.as_slice()), (images, mean.as_slice()), cov);
         if let Some(a) = linearisation {
@@ -291,13 +301,7 @@ impl Ukf {
                 (&sigma.points, m.as_slice()),
                 &mut cross,
             );
-            // Aᵀ = P⁻¹ Crossᵀ.
-            let at = crate::linalg::cholesky(p, "covariance")?.solve(&cross.transpose());
-            for i in 0..n {
-                for j in 0..n {
-                    a[i * n + j] = at[(j, i)];
-                }
-            }
+            linearise(p, &cross, a)?;
         }
         Ok(())
     }

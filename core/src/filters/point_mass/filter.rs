@@ -142,20 +142,7 @@ impl PointMass {
             true => None,
         };
         let measurement = GridMeasurement::new(&grid, &start, &check_model(&name, &start)?);
-        let mut u = grid.tabulate(|x| prior.density(x));
-        if u.iter().any(|v| !v.is_finite()) {
-            return Err(FilterError::NonFinite {
-                what: "prior density",
-            }
-            .into());
-        }
-        let mut moments = crate::grid::Moments::zeros(n);
-        let mut estimate = Estimate {
-            mean: nalgebra::DVector::zeros(n),
-            covariance: None,
-            map: None,
-        };
-        normalise_on_grid(&grid, &mut u, &mut moments, &mut estimate)?;
+        let (u, moments, estimate) = crate::filters::grid_state::prior_on_grid(&grid, prior)?;
         let len = grid.len();
         Ok(PointMass {
             name,
