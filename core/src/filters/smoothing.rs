@@ -236,8 +236,39 @@ pub(crate) use forward_pass;
 
 /// [`GridTransition`]'s storage methods for a grid filter whose density is its field `u`,
 /// normalised by its `normalise()`, and whose field `predicted: Option<Vec<f64>>` keeps the
-/// last step's predicted density when asked (invoked in the filter's own module).
+/// last step's predicted density when asked (invoked in the filter's own module); with
+/// `carried by forward, backward`, also `carry` and `carry_back` by the filter's methods
+/// `forward(dt)` and `backward(dt)` (its prediction over `dt` on `u` and its transpose) run
+/// on the values in `u`'s place.
 macro_rules! density_storage {
+    (carried by $forward:ident, $backward:ident) => {
+        #[cfg(test)]
+        fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
+            if obs.dt > 0.0 {
+                core::mem::swap(&mut self.u, values);
+                let carried = self.$forward(obs.dt);
+                core::mem::swap(&mut self.u, values);
+                carried?;
+            }
+            Ok(())
+        }
+
+        fn carry_back(
+            &mut self,
+            obs: &Observation,
+            values: &mut Vec<f64>,
+        ) -> Result<(), FilterError> {
+            if obs.dt > 0.0 {
+                core::mem::swap(&mut self.u, values);
+                let carried = self.$backward(obs.dt);
+                core::mem::swap(&mut self.u, values);
+                carried?;
+            }
+            Ok(())
+        }
+
+        crate::filters::smoothing::density_storage!();
+    };
     () => {
         fn restore(&mut self, values: &[f64]) -> Result<(), FilterError> {
             self.u.copy_from_slice(values);

@@ -630,28 +630,7 @@ impl crate::filters::smoothing::GridTransition for ContinuousDiscreteGrid {
         (&self.grid, &self.u)
     }
 
-    #[cfg(test)]
-    fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            core::mem::swap(&mut self.u, values);
-            let carried = self.propagate(obs.dt);
-            core::mem::swap(&mut self.u, values);
-            carried?;
-        }
-        Ok(())
-    }
-
-    fn carry_back(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            core::mem::swap(&mut self.u, values);
-            let carried = self.propagate_back(obs.dt);
-            core::mem::swap(&mut self.u, values);
-            carried?;
-        }
-        Ok(())
-    }
-
-    crate::filters::smoothing::density_storage!();
+    crate::filters::smoothing::density_storage!(carried by propagate, propagate_back);
 }
 
 /// Coordinates rounded to 4 significant decimals for messages.

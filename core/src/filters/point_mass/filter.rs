@@ -218,6 +218,17 @@ impl PointMass {
         Ok(lost)
     }
 
+    /// The transitions over `dt` on `u` (an autonomous model's: the smoother's forward pass).
+    #[cfg(test)]
+    fn propagate(&mut self, dt: f64) -> Result<f64, FilterError> {
+        self.transitions(dt, None, false)
+    }
+
+    /// Their transpose over `dt` on `u` (the smoother's backward pass).
+    fn propagate_back(&mut self, dt: f64) -> Result<f64, FilterError> {
+        self.transitions(dt, None, true)
+    }
+
     /// Normalises the density and refreshes the estimate.
     fn normalise(&mut self) -> Result<(), FilterError> {
         normalise_on_grid(
@@ -265,28 +276,7 @@ impl crate::filters::smoothing::GridTransition for PointMass {
         (&self.grid, &self.u)
     }
 
-    #[cfg(test)]
-    fn carry(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            core::mem::swap(&mut self.u, values);
-            let carried = self.transitions(obs.dt, None, false);
-            core::mem::swap(&mut self.u, values);
-            carried?;
-        }
-        Ok(())
-    }
-
-    fn carry_back(&mut self, obs: &Observation, values: &mut Vec<f64>) -> Result<(), FilterError> {
-        if obs.dt > 0.0 {
-            core::mem::swap(&mut self.u, values);
-            let carried = self.transitions(obs.dt, None, true);
-            core::mem::swap(&mut self.u, values);
-            carried?;
-        }
-        Ok(())
-    }
-
-    crate::filters::smoothing::density_storage!();
+    crate::filters::smoothing::density_storage!(carried by propagate, propagate_back);
 }
 
 impl Filter for PointMass {
