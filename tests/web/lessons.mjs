@@ -791,4 +791,28 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.waitForFunction(() => document.body.classList.contains('present') && document.querySelectorAll('#lesson math').length > 0, null, { timeout: 30000 });
   assert.equal(await page.getAttribute('#present', 'aria-pressed'), 'true', '?present=1: the button is pressed');
   assert.equal((await page.textContent('#present')).trim(), 'end presentation');
+
+  // A phone held in the hand (390 × 844, touch, a mobile viewport): tapping Learn brings the
+  // lesson's picker and text into view, before the plots; a tapped "try this" leaves its
+  // "What you should see" on screen, and the run's plots follow the lesson.
+  const phone = await browser.newContext({ viewport: { width: 390, height: 844 }, hasTouch: true, isMobile: true, deviceScaleFactor: 2 });
+  const touch = await phone.newPage();
+  touch.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  touch.on('pageerror', (e) => consoleErrors.push(String(e)));
+  await touch.goto(url);
+  await touch.waitForFunction(() => window.zakaiPage?.info, null, { timeout: 30000 });
+  await touch.tap('#mode-learn');
+  await touch.waitForFunction(() => document.querySelectorAll('#lesson math').length > 0, null, { timeout: 30000 });
+  const inView = (sel) => touch.evaluate((s) => { const r = document.querySelector(s).getBoundingClientRect(); return { top: Math.round(r.top), bottom: Math.round(r.bottom), shown: r.top >= 0 && r.top < innerHeight }; }, sel);
+  const picker = await inView('#lesson-select');
+  assert.ok(picker.shown, `phone: after tapping Learn the lesson picker is on screen (top ${picker.top} of 844)`);
+  const order = await touch.evaluate(() => [document.getElementById('learn').getBoundingClientRect().top, document.getElementById('stage').getBoundingClientRect().top]);
+  assert.ok(order[0] < order[1], `phone: the lesson (${order[0]}) before the plots (${order[1]})`);
+  await touch.tap('#lesson button.try:has-text("less observation noise")');
+  await touch.waitForFunction(() => document.getElementById('lesson-status').textContent.includes('What you should see'), null, { timeout: 60000 });
+  await touch.waitForFunction(() => { const s = window.zakaiPage; const t = s.data?.times; return !s.playing && t?.length > 1 && t[t.length - 1] >= s.info.t_end - 1e-9; }, null, { timeout: 120000 });
+  const said = await inView('#lesson-status');
+  assert.ok(said.shown, `phone: after a tapped try its "What you should see" is on screen (top ${said.top})`);
+  await touch.screenshot({ path: `${artifacts}/lesson-phone-touch-after-try.png` });
+  await phone.close();
 });
