@@ -165,7 +165,7 @@ pub use model::expression::ExpressionFunction;
 pub use model::{
     BatchScratch, ClosureFunction, Derivatives, Diffusion, Dynamics, GaussianMixture, Inputs,
     MeasurementDensity, MixtureComponent, Model, Noise, ObservationModel, Prior, ProcessNoise,
-    TabulatedDensity, VectorFunction, MAX_TRANSITIONS,
+    TabulatedDensity, TransitionMixture, VectorFunction, MAX_TRANSITIONS,
 };
 
 pub use filters::builder::Builder;

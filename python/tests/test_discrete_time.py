@@ -93,3 +93,46 @@ def test_a_discrete_time_scenario_refuses_the_continuous_time_methods():
     assert r.methods["point_mass"].failure is None and r.methods["pf"].failure is None
     with pytest.raises(ConfigError, match="positive semidefinite"):
         zakai.Model.discrete_time("x", "x", transition_cov=-1.0, noise_cov=1.0)
+
+
+def test_a_mixture_transition_noise_is_carried_by_the_gaussian_sum_filter():
+    """Jumps in the signal, ``w_k ~ 0.8 N(0, 0.1) + 0.2 N(1.5, 2)``, on ``x_k = 0.8 x + w_k``
+    seen in N(0, 0.5) noise: the Gaussian-sum filter (no pruning, a cap above the 2⁵
+    components of five transitions) is the exact mixture recursion written here in NumPy;
+    the point-mass filter is within its grid's error of it; the UKF, which takes the
+    mixture's mean and variance only, says so."""
+    jumps = [(0.8, 0.0, 0.1), (0.2, 1.5, 2.0)]
+    model = zakai.Model.discrete("0.8*x", "x", noise_cov=0.5).in_discrete_time(
+        transition_mixture=[(w, [m], [[q]]) for w, m, q in jumps]
+    )
+    prior = zakai.Prior.gaussian(0.0, 1.0)
+    gsf = zakai.Filter("gaussian_sum", model, prior, dt_obs=1.0, max_components=64, prune=0.0, merge_cost=0.0)
+    grid = zakai.Filter("point_mass", model, prior, dt_obs=1.0, domain=[(-8.0, 16.0)], cells=[800])
+    ukf = zakai.Filter("ukf", model, prior, dt_obs=1.0)
+    w, m, p = np.array([1.0]), np.array([0.0]), np.array([1.0])
+    for z in [0.3, 2.1, -0.4, 1.2, 3.4]:
+        w = np.concatenate([w * pi for pi, _, _ in jumps])
+        m = np.concatenate([0.8 * m + mu for _, mu, _ in jumps])
+        p = np.concatenate([0.64 * p + q for _, _, q in jumps])
+        s = p + 0.5
+        w = w * np.exp(-0.5 * (z - m) ** 2 / s) / np.sqrt(2 * np.pi * s)
+        w, k = w / w.sum(), p / s
+        m, p = m + k * (z - m), (1 - k) * p
+        mean = float(w @ m)
+        var = float(w @ (p + (m - mean) ** 2))
+        for f in (gsf, grid, ukf):
+            f.step([z], 1.0)
+        assert abs(gsf.mean[0] - mean) < 1e-9 and abs(gsf.cov[0, 0] - var) < 1e-9
+        assert abs(grid.mean[0] - mean) < 2e-3 * np.sqrt(var)
+    assert any("Gaussian mixture" in warning for warning in ukf.warnings)
+
+
+def test_transition_mixture_and_cov_are_given_once():
+    with pytest.raises(ConfigError, match="not both"):
+        zakai.Model.discrete("0.8*x", "x", noise_cov=0.5).in_discrete_time(
+            transition_cov=1.0, transition_mixture=[(1.0, [0.0], [[1.0]])]
+        )
+    with pytest.raises(ConfigError, match="weight"):
+        zakai.Model.discrete("0.8*x", "x", noise_cov=0.5).in_discrete_time(
+            transition_mixture=[(-1.0, [0.0], [[1.0]])]
+        )

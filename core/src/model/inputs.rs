@@ -197,6 +197,7 @@ impl Model {
             observations,
             inputs: None,
             dynamics: self.dynamics,
+            transition_mixture: self.transition_mixture.clone(),
         })
     }
 }

@@ -16,6 +16,7 @@
 //!
 //! ```text
 //!     x_k = F(x_{k−1}, t_k, u_k) + w_k,   w_k ~ N(0, G Gᵀ)      (one transition per Δτ)
+//!                                          or w_k ~ Σ_j π_j N(μ_j, Q_j)   (a mixture)
 //! ```
 //!
 //! F is held where the drift is (`drift`) and G where the diffusion is, so that expressions,
@@ -203,6 +204,42 @@ pub struct Model {
     pub inputs: Option<usize>,
     /// An SDE or a map from one observation time to the next.
     pub dynamics: Dynamics,
+    /// A discrete-time model's transition noise when it is a Gaussian mixture
+    /// ([`Model::with_transition_mixture`]); `None` for `w_k ~ N(0, G Gᵀ)`.
+    pub transition_mixture: Option<Arc<TransitionMixture>>,
+}
+
+/// Transition noise that is a Gaussian mixture, `w_k ~ Σ_j π_j N(μ_j, Q_j)` (outliers in the
+/// signal, jumps, a noise with a heavy tail), with its first two moments.
+///
+/// The filters that carry a density take it exactly: the particle filter draws `w_k` from it,
+/// the point-mass filter's kernel is the mixture of the components' kernels, the Gaussian-sum
+/// filter (linear F) splits every component into one per noise component (Sorenson & Alspach
+/// 1971), exactly, before its mixture reduction. The Gaussian filters (Kalman, EKF, UKF, IEKF,
+/// IOKF) see it through its mean `μ̄ = Σ π_j μ_j` and covariance
+/// `Σ π_j (Q_j + μ_j μ_jᵀ) − μ̄ μ̄ᵀ` (the model's G is a square root of it): the Kalman filter
+/// is then the best *linear* filter, not the exact one, and each says so in its warnings.
+#[derive(Clone, Debug)]
+pub struct TransitionMixture {
+    mixture: GaussianMixture,
+    mean: DVector<f64>,
+}
+
+impl TransitionMixture {
+    /// The mixture `Σ_j π_j N(μ_j, Q_j)`.
+    pub fn mixture(&self) -> &GaussianMixture {
+        &self.mixture
+    }
+
+    /// Its mean `μ̄ = Σ π_j μ_j`.
+    pub fn mean(&self) -> &DVector<f64> {
+        &self.mean
+    }
+
+    /// Draws one `w_k` into `out` (n): a component by its weight, then its Gaussian.
+    pub fn sample_into<R: rand::Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        self.mixture.sample_into(rng, out);
+    }
 }
 
 impl core::fmt::Debug for Model {
@@ -294,6 +331,7 @@ impl Model {
             observations,
             inputs,
             dynamics: Dynamics::Continuous,
+            transition_mixture: None,
         })
     }
 
@@ -378,6 +416,71 @@ impl Model {
         let q = DMatrix::from_fn(q.len(), N, |i, j| q[i][j]);
         let g = crate::linalg::psd_square_root(&q, "transition noise covariance Q")?;
         self.with_diffusion(g)
+    }
+
+    /// The same discrete-time model with transition noise that is a Gaussian mixture,
+    /// `w_k ~ Σ_j π_j N(μ_j, Q_j)` ([`TransitionMixture`] says how each family takes it); G
+    /// becomes a square root of its covariance. Refused for a continuous-time model (a
+    /// Brownian increment is Gaussian) and for a mixture of another dimension.
+    ///
+    /// ```
+    /// use nalgebra::{dmatrix, dvector};
+    /// use zakai::{GaussianMixture, Model, Noise};
+    ///
+    /// // A random walk that mostly creeps and now and then jumps:
+    /// // w_k ~ 0.9 N(0, 0.01) + 0.1 N(0, 4).
+    /// let jumps = GaussianMixture::new(vec![
+    ///     (0.9, dvector![0.0], dmatrix![0.01]),
+    ///     (0.1, dvector![0.0], dmatrix![4.0]),
+    /// ])
+    /// .unwrap();
+    /// let model = Model::from_text(&["x"], &["x"], Noise::discrete(0.1))
+    ///     .unwrap()
+    ///     .discrete_time(1.0)
+    ///     .unwrap()
+    ///     .with_transition_mixture(jumps)
+    ///     .unwrap();
+    /// // G Gᵀ is the mixture's variance, 0.9 · 0.01 + 0.1 · 4.
+    /// let g = model.diffusion.constant().unwrap()[(0, 0)];
+    /// assert!((g * g - 0.409).abs() < 1e-12);
+    /// ```
+    pub fn with_transition_mixture(self, noise: GaussianMixture) -> Result<Self, ZakaiError> {
+        if !self.is_discrete_time() {
+            return Err(ZakaiError::Config(alloc::vec![
+                crate::validate::ConfigProblem::new(
+                    "model.transition_noise",
+                    "a mixture transition noise needs a discrete-time model (model.dynamics = discrete): the noise of an SDE is a Brownian increment, Gaussian",
+                )
+            ]));
+        }
+        if noise.dim() != self.n {
+            return Err(ZakaiError::Dimension(format!(
+                "the transition noise mixture is {}-dimensional, the state {}",
+                noise.dim(),
+                self.n
+            )));
+        }
+        let g = crate::linalg::psd_square_root(
+            &noise.covariance(),
+            "transition noise mixture's covariance",
+        )?;
+        let mean = noise.mean();
+        let model = self.with_diffusion(g)?;
+        Ok(Model {
+            transition_mixture: Some(Arc::new(TransitionMixture {
+                mixture: noise,
+                mean,
+            })),
+            ..model
+        })
+    }
+
+    /// A warning for the Gaussian filters, which take a mixture transition noise through its
+    /// first two moments ([`TransitionMixture`]); `None` when the noise is Gaussian.
+    pub(crate) fn moments_only(&self, method: &str) -> Option<alloc::string::String> {
+        self.transition_mixture.as_ref().map(|_| {
+            format!("the transition noise is a Gaussian mixture: {method} takes it through its mean and covariance only (the Gaussian-sum, point-mass and particle filters carry the mixture itself)")
+        })
     }
 
     /// True for a discrete-time model ([`Dynamics::Discrete`]).
@@ -497,7 +600,11 @@ impl Model {
     pub fn with_state_diffusion(self, g: Arc<dyn VectorFunction>) -> Result<Self, ZakaiError> {
         let diffusion = Diffusion::StateDependent(g);
         diffusion.check(self.n, self.inputs.map_or(0, |k| 1 + k))?;
-        Ok(Model { diffusion, ..self })
+        Ok(Model {
+            diffusion,
+            transition_mixture: None,
+            ..self
+        })
     }
 
     /// Q = G Gᵀ: a matrix when G is constant, a function of the state otherwise.

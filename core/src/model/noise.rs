@@ -182,17 +182,51 @@ impl GaussianMixture {
 
     /// One draw: a component by its weight, then μ + L ξ with ξ ~ N(0, I).
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> DVector<f64> {
-        let u: f64 = rand::RngExt::random(rng);
+        let mut out = DVector::zeros(self.dim());
+        self.sample_into(rng, out.as_mut_slice());
+        out
+    }
+
+    /// One draw into `out` (its dimension), without allocating: a component by its weight,
+    /// then μ + L ξ with ξ ~ N(0, I) drawn into `out` and multiplied in place (L is lower
+    /// triangular, so row i reads only ξ_0..ξ_i: from the last row up).
+    pub fn sample_into<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        let chosen = self.pick(rand::RngExt::random(rng));
+        for v in out.iter_mut() {
+            *v = crate::random::standard_normal(rng);
+        }
+        chosen.transform(out);
+    }
+
+    /// The component a uniform `u` in [0, 1) picks by the cumulative weights.
+    pub(crate) fn pick(&self, u: f64) -> &MixtureComponent {
         let mut acc = 0.0;
-        let mut chosen = &self.components[self.components.len() - 1];
         for c in &self.components {
             acc += c.weight;
             if u < acc {
-                chosen = c;
-                break;
+                return c;
             }
         }
-        let xi = crate::random::standard_normal_vector(rng, self.dim());
-        &chosen.mean + chosen.chol.l() * xi
+        &self.components[self.components.len() - 1]
+    }
+}
+
+impl MixtureComponent {
+    /// The lower-triangular Cholesky factor L of Σ = L Lᵀ (its upper triangle is not read).
+    pub(crate) fn factor(&self) -> &DMatrix<f64> {
+        self.chol.l_dirty()
+    }
+
+    /// `ξ ← μ + L ξ` in place (L lower triangular, so row i reads only ξ_0..ξ_i: from the
+    /// last row up): a standard normal ξ becomes a draw of this component.
+    pub(crate) fn transform(&self, xi: &mut [f64]) {
+        let l = self.chol.l_dirty();
+        for i in (0..xi.len()).rev() {
+            let mut v = 0.0;
+            for k in 0..=i {
+                v += l[(i, k)] * xi[k];
+            }
+            xi[i] = self.mean[i] + v;
+        }
     }
 }

@@ -182,7 +182,8 @@ pub fn simulate_driven(
     for k in 1..=steps {
         let row = &mut observations[k * m..(k + 1) * m];
         if let crate::model::Dynamics::Discrete { period } = model.dynamics {
-            // x_j = F(x_(j−1), t_j, u_k) + w_j, w_j ~ N(0, G Gᵀ): the transitions of one Δτ,
+            // x_j = F(x_(j−1), t_j, u_k) + w_j, w_j ~ N(0, G Gᵀ) (or the model's mixture):
+            // the transitions of one Δτ,
             // each at the time it reaches.
             let transitions = model
                 .transitions(time.dt_obs)
@@ -193,6 +194,12 @@ pub fn simulate_driven(
                 let frozen = at(t, k)?;
                 let model = frozen.as_ref().unwrap_or(model);
                 model.drift.eval(&x, &mut fx);
+                if let Some(w) = &model.transition_mixture {
+                    // w_j from the mixture itself.
+                    w.sample_into(rng, &mut x);
+                    x.iter_mut().zip(&fx).for_each(|(x, f)| *x += f);
+                    continue;
+                }
                 noise_factor(model, &x, t, &mut g)?;
                 let xi = standard_normal_vector(rng, n);
                 for (i, row) in g.chunks_exact(n).enumerate() {

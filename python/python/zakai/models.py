@@ -204,14 +204,34 @@ class Model:
         """
         return cls.discrete(transition, observation, noise_cov).in_discrete_time(transition_cov)
 
-    def in_discrete_time(self, transition_cov: Optional[ArrayLike] = None) -> "Model":
+    def in_discrete_time(
+        self,
+        transition_cov: Optional[ArrayLike] = None,
+        transition_mixture: Optional[Iterable[tuple[float, ArrayLike, ArrayLike]]] = None,
+    ) -> "Model":
         """The same model read in discrete time: its drift as the map F of
         ``x_k = F(x_(k−1), t_k, u_k) + w_k`` and its diffusion G as the factor of
         ``w_k ~ N(0, G Gᵀ)``, one transition per ``dt_obs`` (the scenario's
         ``"dynamics": "discrete"``). ``transition_cov`` gives Q instead of G (numbers; G
         becomes its symmetric square root).
+
+        ``transition_mixture`` gives ``w_k ~ Σ_j π_j N(μ_j, Q_j)`` instead, as
+        ``(weight, mean, cov)`` triples (jumps, outliers in the signal): the particle,
+        point-mass and Gaussian-sum filters carry the mixture itself; the Kalman, EKF, UKF,
+        IEKF and IOKF filters its mean and covariance, and say so in their warnings.
+
+        >>> import zakai
+        >>> jumps = zakai.Model.discrete("0.8*x", "x", noise_cov=0.5).in_discrete_time(
+        ...     transition_mixture=[(0.8, [0.0], [[0.1]]), (0.2, [1.5], [[2.0]])])
+        >>> len(jumps.config["transition_noise"])
+        2
         """
         config = {**self.config, "dynamics": "discrete"}
+        if transition_mixture is not None:
+            if transition_cov is not None:
+                raise ConfigError("give transition_cov or transition_mixture, not both")
+            config.pop("diffusion", None)
+            config["transition_noise"] = _mixture_components(transition_mixture, "transition_mixture")
         if transition_cov is not None:
             try:
                 q = np.array(_matrix(transition_cov, "transition_cov"), dtype=float)
@@ -319,38 +339,7 @@ class Prior:
     def mixture(cls, components: Iterable[tuple[float, ArrayLike, ArrayLike]]) -> "Prior":
         """Σ wᵢ N(meanᵢ, covᵢ) from ``(weight, mean, cov)`` triples (weights normalised:
         nonnegative and finite, not all zero)."""
-        components = list(components)
-        if not components:
-            raise ConfigError("prior components: needs at least one (weight, mean, cov)")
-        weights = []
-        for i, (w, _, _) in enumerate(components):
-            try:
-                weights.append(float(w))
-            except (TypeError, ValueError):
-                raise ConfigError(f"prior component {i} weight: a number, not {w!r}") from None
-        bad = [i for i, w in enumerate(weights) if not (np.isfinite(w) and w >= 0)]
-        if bad:
-            raise ConfigError(
-                f"prior component {bad[0]} weight: must be nonnegative and finite, got {weights[bad[0]]}"
-            )
-        total = sum(weights)
-        if not total > 0 or not np.isfinite(total):
-            raise ConfigError(f"prior components: the weights must have a positive finite sum, got {total}")
-        return cls(
-            {
-                "kind": "mixture",
-                "components": [
-                    {
-                        "weight": float(w),
-                        "mean": _vector(m, f"prior component {i} mean"),
-                        "cov": _positive_definite(
-                            _matrix(c, f"prior component {i} cov"), f"prior component {i} cov"
-                        ),
-                    }
-                    for i, (w, m, c) in enumerate(components)
-                ],
-            }
-        )
+        return cls({"kind": "mixture", "components": _mixture_components(components, "prior")})
 
     @classmethod
     def density(cls, expression: str) -> "Prior":
@@ -373,3 +362,33 @@ class Prior:
         """``mean ± sds·sd`` per component (every mixture component covered), or ``None``
         for a density prior."""
         return _zakai.covering_domain(_json.dumps(self.config), float(sds))
+
+
+def _mixture_components(components: Iterable[tuple[float, ArrayLike, ArrayLike]], what: str) -> list:
+    """``(weight, mean, cov)`` triples as a scenario's mixture components, checked: weights
+    nonnegative and finite with a positive sum, covariances positive definite."""
+    components = list(components)
+    if not components:
+        raise ConfigError(f"{what} components: needs at least one (weight, mean, cov)")
+    weights = []
+    for i, (w, _, _) in enumerate(components):
+        try:
+            weights.append(float(w))
+        except (TypeError, ValueError):
+            raise ConfigError(f"{what} component {i} weight: a number, not {w!r}") from None
+    bad = [i for i, w in enumerate(weights) if not (np.isfinite(w) and w >= 0)]
+    if bad:
+        raise ConfigError(
+            f"{what} component {bad[0]} weight: must be nonnegative and finite, got {weights[bad[0]]}"
+        )
+    total = sum(weights)
+    if not total > 0 or not np.isfinite(total):
+        raise ConfigError(f"{what} components: the weights must have a positive finite sum, got {total}")
+    return [
+        {
+            "weight": float(w),
+            "mean": _vector(m, f"{what} component {i} mean"),
+            "cov": _positive_definite(_matrix(c, f"{what} component {i} cov"), f"{what} component {i} cov"),
+        }
+        for i, (w, m, c) in enumerate(components)
+    ]

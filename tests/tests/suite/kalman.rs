@@ -29,6 +29,7 @@ fn scalar_linear(
             observation: vec![format!("{c}*x")],
             diffusion: Some(vec![vec![0.7]].into()),
             noise,
+            transition_noise: Vec::new(),
             inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {

@@ -35,6 +35,7 @@ fn scalar(observation: &str, methods: Vec<MethodConfig>, prior_var: f64) -> Scen
                     cov: vec![vec![0.2]].into(),
                 }],
             },
+            transition_noise: Vec::new(),
             inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {

@@ -132,6 +132,7 @@ fn scenario(c: &Case) -> ScenarioConfig {
             } else {
                 ObservationNoiseConfig::Continuous { cov: None }
             },
+            transition_noise: Vec::new(),
             inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {
@@ -351,6 +352,7 @@ fn fourth_order_qiem_within_its_conditions_stays_nonnegative_finite_and_normalis
                     observation: vec![format!("{e}*x1"), format!("{g}*x1 + x2")],
                     diffusion: None,
                     noise: ObservationNoiseConfig::Continuous { cov: None },
+                    transition_noise: Vec::new(),
                     inputs: Vec::new(),
                 },
                 prior: PriorConfig::Gaussian {

@@ -29,6 +29,7 @@ fn linear(points: usize, dt: f64) -> ScenarioConfig {
             observation: vec!["1.5*x".into()],
             diffusion: None,
             noise: ObservationNoiseConfig::Continuous { cov: None },
+            transition_noise: Vec::new(),
             inputs: Vec::new(),
         },
         prior: PriorConfig::Gaussian {

@@ -192,6 +192,9 @@ pub struct GaussianSum {
     c: DMatrix<f64>,
     c0: DVector<f64>,
     noise: GaussianMixture,
+    /// A discrete-time map's transition noise when it is a mixture (`q` is then zero and each
+    /// transition splits every component into one per noise component).
+    transition_noise: Option<GaussianMixture>,
     params: GaussianSumParams,
     /// The mixture: the first `len` slots of `components`.
     components: Vec<Component>,
@@ -251,7 +254,16 @@ impl GaussianSum {
         } = check_model(model, prior, probes)?;
         let n = a.nrows();
         let m = c.nrows();
-        let j = noise.components().len();
+        let transition_noise = model
+            .transition_mixture
+            .as_ref()
+            .map(|w| w.mixture().clone());
+        // Candidates after an update (a component per noise component) or a transition.
+        let j = noise.components().len().max(
+            transition_noise
+                .as_ref()
+                .map_or(1, |w| w.components().len()),
+        );
         let slots = mixture.components().len().max(params.max_components) * j;
         let mut components = (0..slots).map(|_| Component::zeros(n)).collect::<Vec<_>>();
         for (slot, c) in components.iter_mut().zip(mixture.components()) {
@@ -260,10 +272,14 @@ impl GaussianSum {
         Ok(GaussianSum {
             name,
             dynamics: model.dynamics,
-            q: model
-                .process_noise()
-                .require_constant("the Gaussian-sum filter", "checked above")?
-                .clone(),
+            q: match &transition_noise {
+                Some(_) => DMatrix::zeros(n, n),
+                None => model
+                    .process_noise()
+                    .require_constant("the Gaussian-sum filter", "checked above")?
+                    .clone(),
+            },
+            transition_noise,
             len: mixture.components().len(),
             work: UpdateWork {
                 next: (0..slots).map(|_| Component::zeros(n)).collect(),
@@ -351,8 +367,60 @@ impl GaussianSum {
         self.reduction
     }
 
+    /// The transitions of a map whose noise is a mixture, one at a time, each splitting every
+    /// component i into one per noise component c — `w_i π_c N(A m_i + b + μ_c,
+    /// A P_i Aᵀ + Q_c)`, exact — then the reduction.
+    fn split_transitions(
+        &mut self,
+        noise: &GaussianMixture,
+        period: f64,
+        dt: f64,
+    ) -> Result<(), FilterError> {
+        let transitions = self.dynamics.transitions(dt)?;
+        let mut cached = self.cached.take();
+        let d = Discretization::for_step(
+            &mut cached,
+            (&self.a, &self.b, &self.q),
+            &self.dynamics,
+            period,
+        )?;
+        let n = self.a.nrows();
+        for _ in 0..transitions {
+            let count = self.len * noise.components().len();
+            let work = &mut self.work;
+            work.next
+                .resize_with(work.next.len().max(count), || Component::zeros(n));
+            let mut slots = work.next.iter_mut();
+            for comp in &mut self.components[..self.len] {
+                d.propagate(&mut comp.m, &mut comp.p, &mut work.moved);
+                for c in noise.components() {
+                    let slot = slots.next().expect("slots for every pair");
+                    slot.w = comp.w * c.weight;
+                    slot.m.copy_from(&comp.m);
+                    slot.m += &c.mean;
+                    slot.p.copy_from(&comp.p);
+                    slot.p += &c.cov;
+                    slot.refactor()?;
+                }
+            }
+            core::mem::swap(&mut self.components, &mut work.next);
+            self.len = count;
+            self.reduce();
+        }
+        self.cached = cached;
+        Ok(())
+    }
+
     /// Predicts every component over `dt` (exact).
     fn propagate(&mut self, dt: f64) -> Result<(), FilterError> {
+        if let (Some(noise), crate::model::Dynamics::Discrete { period }) =
+            (self.transition_noise.take(), self.dynamics)
+        {
+            // Taken out while the reduction borrows the filter, and put back.
+            let split = self.split_transitions(&noise, period, dt);
+            self.transition_noise = Some(noise);
+            return split;
+        }
         let d = Discretization::for_step(
             &mut self.cached,
             (&self.a, &self.b, &self.q),

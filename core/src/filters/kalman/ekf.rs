@@ -104,7 +104,7 @@ impl Filter for Ekf {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        super::approximations(&self.form, &self.q)
+        super::approximations(&self.form, &self.q, &self.model, &self.name)
     }
 
     fn self_check(&self, out: &mut alloc::vec::Vec<crate::filters::Concern>) {

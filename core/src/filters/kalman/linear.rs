@@ -222,7 +222,11 @@ impl Kalman {
         params: &KalmanParams,
     ) -> Result<Self, FilterError> {
         let (model, prior, probes) = (ctx.model, ctx.prior, ctx.probes);
-        let (a, b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
+        let (a, mut b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
+        // A mixture transition noise by its mean: x_k = A x + (b + μ̄) + (w_k − μ̄).
+        if let Some(w) = &model.transition_mixture {
+            b += w.mean();
+        }
         affine_parts(
             &*model.observation,
             "the Kalman–Bucy filter",
@@ -285,7 +289,9 @@ impl Filter for Kalman {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        self.form.warnings()
+        let mut out = self.form.warnings();
+        out.extend(self.model.moments_only(&self.name));
+        out
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

@@ -52,12 +52,16 @@ pub struct GaussianInit {
 
 /// The approximations a Gaussian filter makes of this model, for its warnings: the
 /// measurements' moment match ([`measurement::MeasurementForm::warnings`]) and, when G depends
-/// on the state, the process noise taken at the mean.
+/// on the state, the process noise taken at the mean; a mixture transition noise taken by its
+/// moments ([`crate::TransitionMixture`]).
 pub(crate) fn approximations(
     form: &measurement::MeasurementForm,
     q: &crate::model::ProcessNoise,
+    model: &crate::model::Model,
+    name: &str,
 ) -> Vec<alloc::string::String> {
     let mut out = form.warnings();
+    out.extend(model.moments_only(name));
     if q.constant().is_none() {
         out.push(
             "replaces the state-dependent process noise Q(x) = G(x)G(x)ᵀ by Q at the current mean in dP/dt = FP + PFᵀ + Q (E[Q(x)] ≠ Q(E[x]) where Q is not affine): an approximation that grows with the spread of the posterior"

@@ -219,6 +219,10 @@ pub(crate) fn transition(
     } = work;
     moments(model, (m, p), (&mut km[0], &mut kp[0]), jacobian)?;
     q.add_at(m.as_slice(), 1.0, &mut kp[0]);
+    // A mixture noise by its moments: its covariance is G Gᵀ (in q), its mean added here.
+    if let Some(w) = &model.transition_mixture {
+        km[0] += w.mean();
+    }
     m.copy_from(&km[0]);
     p.copy_from(&kp[0]);
     crate::linalg::symmetrize(p);

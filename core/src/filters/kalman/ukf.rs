@@ -399,7 +399,7 @@ impl Filter for Ukf {
     }
 
     fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {
-        super::approximations(&self.form, &self.q)
+        super::approximations(&self.form, &self.q, &self.model, &self.name)
     }
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {

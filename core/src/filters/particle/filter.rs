@@ -311,6 +311,19 @@ impl Pf {
                 trail.extend_from_slice(&self.resampled);
             }
             self.normal.fill(&mut self.rng, &mut self.noise);
+            if let (true, Some(w)) = (discrete, &self.model.transition_mixture) {
+                // x ← F(x) + w, w drawn from the mixture: a component per particle, then
+                // w = μ + L ξ with the particle's normals ξ.
+                for i in 0..count {
+                    let c = w.mixture().pick(self.rng.random());
+                    let l = c.factor();
+                    for j in 0..n {
+                        let lw: f64 = (0..=j).map(|k| l[(j, k)] * self.noise[k * count + i]).sum();
+                        self.resampled[j * count + i] = self.drift[j * count + i] + c.mean[j] + lw;
+                    }
+                }
+                continue;
+            }
             for j in 0..n {
                 let x = &mut self.resampled[j * count..(j + 1) * count];
                 let f = &self.drift[j * count..(j + 1) * count];

@@ -171,6 +171,29 @@ impl Ffbsi {
         let m = points.len() / n;
         drift.resize(n * count, 0.0);
         self.filter.model.drift.eval_batch(cloud, drift, scratch);
+        let chosen = match self.filter.model.transition_mixture.clone() {
+            Some(noise) => self.back_mixture(noise.mixture(), (points, m), drift, log_w, log_p),
+            None => self.back_gaussian(cloud, log_w, h, (points, m), drift, log_p),
+        };
+        for (t, &i) in chosen.iter().enumerate() {
+            for j in 0..n {
+                points[j * m + t] = cloud[j * count + i];
+            }
+        }
+    }
+
+    /// The backward draws of a Gaussian transition kernel `N(x'; x_i + f(x_i) h, Q h)` (or
+    /// `N(x'; F(x_i), Q)` for a map): one particle index per trajectory point.
+    fn back_gaussian(
+        &mut self,
+        cloud: &[f64],
+        log_w: &[f64],
+        h: f64,
+        (points, m): (&[f64], usize),
+        drift: &mut [f64],
+        log_p: &mut [f64],
+    ) -> Vec<usize> {
+        let (n, count) = (self.filter.model.n, log_w.len());
         let scale = 0.5 / h;
         // The kernel's whitened means `W (x_i + f(x_i) h)` (W the whitening of the Euler
         // step's covariance), in `drift`'s place, once per particle; each trajectory's point is
@@ -207,11 +230,32 @@ impl Ffbsi {
             }
             *pick = draw(log_p, &mut self.rng);
         }
-        for (t, &i) in chosen.iter().enumerate() {
-            for j in 0..n {
-                points[j * m + t] = cloud[j * count + i];
+        chosen
+    }
+
+    /// The backward draws of a discrete-time map whose noise is a Gaussian mixture: the
+    /// transition density `Σ_c π_c N(x' − F(x_i); μ_c, Q_c)` at every pair.
+    fn back_mixture(
+        &mut self,
+        noise: &crate::model::GaussianMixture,
+        (points, m): (&[f64], usize),
+        drift: &[f64],
+        log_w: &[f64],
+        log_p: &mut [f64],
+    ) -> Vec<usize> {
+        let (n, count) = (self.filter.model.n, log_w.len());
+        let (mut r, mut work) = (vec![0.0; n], vec![0.0; n]);
+        let mut chosen = vec![0usize; m];
+        for (t, pick) in chosen.iter_mut().enumerate() {
+            for (i, lp) in log_p.iter_mut().enumerate() {
+                for (j, r) in r.iter_mut().enumerate() {
+                    *r = points[j * m + t] - drift[j * count + i];
+                }
+                *lp = log_w[i] + noise.log_pdf_slice(&r, &mut work);
             }
+            *pick = draw(log_p, &mut self.rng);
         }
+        chosen
     }
 }
 

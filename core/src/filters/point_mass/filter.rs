@@ -6,7 +6,7 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use super::kernel::TransitionKernel;
+use super::kernel::Kernel;
 use super::PointMassParams;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::grid_state::GridMeasurement;
@@ -92,7 +92,7 @@ pub struct PointMass {
     grid: TensorGrid,
     /// The transition on the cells (an autonomous model's, made once; a driven model's, made
     /// for every transition: `None` until the first).
-    kernel: Option<TransitionKernel>,
+    kernel: Option<Kernel>,
     /// p(z | x) and h on the cells (a driven model's frozen for each step).
     measurement: GridMeasurement,
     model: Model,
@@ -132,13 +132,7 @@ impl PointMass {
         // measurement's tabulation is set up.
         let start = model.at(0.0, &vec![0.0; model.inputs.unwrap_or(0)])?;
         let kernel = match model.is_driven() {
-            false => Some(TransitionKernel::new(
-                &name,
-                model,
-                &grid,
-                params.radius,
-                true,
-            )?),
+            false => Some(Kernel::new(&name, model, &grid, params.radius, true)?),
             true => None,
         };
         let measurement = GridMeasurement::new(&grid, &start, &check_model(&name, &start)?);
@@ -190,7 +184,7 @@ impl PointMass {
             let j = if transposed { k - 1 - j } else { j };
             if self.model.is_driven() {
                 let model = self.model.transition_at(inputs, j, k)?;
-                self.kernel = Some(TransitionKernel::new(
+                self.kernel = Some(Kernel::new(
                     &self.name,
                     &model,
                     &self.grid,

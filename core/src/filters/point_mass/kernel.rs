@@ -9,7 +9,11 @@
 //! * **Correlated constant Q**: `T ∝ exp(−½ dᵀQ⁻¹d)`, `d = x_i − F(ξ_j)`, at the cell
 //!   centres of the window, renormalised over the window.
 //!
-//! In both, a window is that of the unbounded lattice of cells: what it puts beyond the box is
+//! * **Gaussian-mixture w_k** `Σ_c π_c N(μ_c, Q_c)` ([`crate::TransitionMixture`]): the
+//!   kernel is the mixture of the components' kernels, `T = Σ_c π_c T_c`, each `T_c` that of
+//!   `F + μ_c` with `Q_c` as above ([`Kernel`]).
+//!
+//! In all, a window is that of the unbounded lattice of cells: what it puts beyond the box is
 //! lost (counted, for the self-check), never folded back. Cost: per source cell, the product
 //! of the window widths `2·radius·σ_l/Δx_l + 1`.
 
@@ -21,7 +25,7 @@ use nalgebra::DMatrix;
 
 use crate::error::FilterError;
 use crate::grid::TensorGrid;
-use crate::model::{Model, ProcessNoise};
+use crate::model::{MixtureComponent, Model, ProcessNoise};
 
 /// The shape of w_k's covariance on the grid.
 #[derive(Clone, Debug)]
@@ -35,8 +39,12 @@ enum Spread {
 /// The kernel tabulated for one transition: F at every cell and the spread of w_k.
 #[derive(Clone, Debug)]
 pub(super) struct TransitionKernel {
-    /// F(ξ_j), n per cell.
-    centres: Vec<f64>,
+    /// F(ξ_j), n per cell (shared by a mixture's components).
+    centres: alloc::sync::Arc<Vec<f64>>,
+    /// The component's mean μ_c added to F (zeros for `N(0, Q)` noise), and the centre
+    /// `F(ξ_j) + μ_c` of the cell being visited.
+    shift: Vec<f64>,
+    centre: Vec<f64>,
     spread: Spread,
     radius: f64,
     /// Per dimension: the first cell of the window and its weights (reused).
@@ -133,33 +141,25 @@ fn normal_cdf(x: f64) -> f64 {
 }
 
 impl TransitionKernel {
-    /// Tabulates `model`'s transition on `grid` (F at every cell; Q, or Q(ξ) at every cell).
-    /// A state-dependent Q with mixed terms is refused (not implemented), as is a correlated
-    /// Q that is singular (its density does not exist).
-    /// With `keep`, the windows are computed once and kept when they fit in
-    /// [`CACHED_VALUES`] (for a kernel used at every step: an autonomous model's).
-    pub(super) fn new(
+    /// The kernel of `centres` (F at every cell) with the model's Q, or Q(ξ) at every cell;
+    /// with `component`, that of one component `N(μ_c, Q_c)` of a mixture noise. A
+    /// state-dependent Q with mixed terms is refused (not implemented), as is a correlated Q
+    /// that is singular (its density does not exist). With a `keep` budget, the windows are
+    /// computed once and kept when they fit in it (for a kernel used at every step: an
+    /// autonomous model's).
+    fn new(
         name: &str,
         model: &Model,
         grid: &TensorGrid,
-        radius: f64,
-        keep: bool,
+        (centres, radius, keep): (&alloc::sync::Arc<Vec<f64>>, f64, usize),
+        component: Option<&MixtureComponent>,
     ) -> Result<Self, FilterError> {
         let n = model.n;
-        let mut centres = Vec::with_capacity(grid.len() * n);
-        let mut fx = vec![0.0; n];
-        grid.for_each_node(|_, x| {
-            model.drift.eval(x, &mut fx);
-            centres.extend_from_slice(&fx);
-        });
-        if centres.iter().any(|v| !v.is_finite()) {
-            return Err(FilterError::NonFinite {
-                what: "transition map F on the grid",
-            });
-        }
-        let spread = spread_on(name, model, grid, radius)?;
+        let spread = spread_on(name, model, grid, radius, component)?;
         let mut kernel = TransitionKernel {
-            centres,
+            centres: centres.clone(),
+            shift: component.map_or_else(|| vec![0.0; n], |c| c.mean.as_slice().to_vec()),
+            centre: vec![0.0; n],
             spread,
             radius,
             first: vec![0; n],
@@ -168,17 +168,30 @@ impl TransitionKernel {
             d: vec![0.0; n],
             cache: None,
         };
-        if keep && matches!(kernel.spread, Spread::Diagonal { .. }) {
+        if keep > 0 && matches!(kernel.spread, Spread::Diagonal { .. }) {
             // Shared, not copied, by the filter's clones (a smoother's, a fork).
             kernel.cache = kernel
-                .windows_of_every_cell(grid)
+                .windows_of_every_cell(grid, keep)
                 .map(alloc::sync::Arc::new);
         }
         Ok(kernel)
     }
 
-    /// Every source cell's windows ([`WindowCache`]), or `None` past [`CACHED_VALUES`].
-    fn windows_of_every_cell(&mut self, grid: &TensorGrid) -> Option<WindowCache> {
+    /// Sets `self.centre` to cell j's `F(ξ_j) + μ_c`.
+    fn centre_of(&mut self, j: usize) {
+        let n = self.shift.len();
+        for ((c, f), s) in self
+            .centre
+            .iter_mut()
+            .zip(&self.centres[j * n..(j + 1) * n])
+            .zip(&self.shift)
+        {
+            *c = f + s;
+        }
+    }
+
+    /// Every source cell's windows ([`WindowCache`]), or `None` past `budget` values.
+    fn windows_of_every_cell(&mut self, grid: &TensorGrid, budget: usize) -> Option<WindowCache> {
         let n = grid.dim();
         let mut cache = WindowCache {
             first: Vec::with_capacity(grid.len() * n),
@@ -189,7 +202,7 @@ impl TransitionKernel {
         for j in 0..grid.len() {
             cache.meets.push(self.window(grid, j));
             for l in 0..n {
-                if cache.values.len() + self.weights[l].len() > CACHED_VALUES {
+                if cache.values.len() + self.weights[l].len() > budget {
                     return None;
                 }
                 cache.first.push(self.first[l]);
@@ -229,7 +242,8 @@ impl TransitionKernel {
             }
             return cache.meets[j];
         }
-        let centre = &self.centres[j * n..(j + 1) * n];
+        self.centre_of(j);
+        let centre = &self.centre;
         let mut inside = true;
         for l in 0..n {
             let (dx, x0, cells) = (grid.spacing()[l], grid.coordinate(l, 0), grid.shape()[l]);
@@ -284,15 +298,13 @@ impl TransitionKernel {
         if !self.window(grid, j) {
             return 1.0;
         }
-        let n = grid.dim();
-        let centre = &self.centres[j * n..(j + 1) * n];
         let mut odometer = Odometer {
             grid,
             first: &self.first,
             weights: &self.weights,
             counter: &mut self.counter,
             d: &mut self.d,
-            centre,
+            centre: &self.centre,
         };
         let mut inside = 0.0;
         match &self.spread {
@@ -324,25 +336,107 @@ impl TransitionKernel {
         (1.0 - inside).max(0.0)
     }
 
-    /// The prediction `out = T p` (`out` overwritten); returns the mass carried outside the
-    /// box.
-    pub(super) fn predict(&mut self, grid: &TensorGrid, p: &[f64], out: &mut [f64]) -> f64 {
-        out.iter_mut().for_each(|v| *v = 0.0);
+    /// Adds `scale · T p` to `out`; returns the mass (of `scale · p`) carried outside the box.
+    fn add_predicted(&mut self, grid: &TensorGrid, p: &[f64], scale: f64, out: &mut [f64]) -> f64 {
         let mut lost = 0.0;
         for (j, &pj) in p.iter().enumerate() {
             if pj > 0.0 {
+                let pj = scale * pj;
                 lost += pj * self.visit(grid, j, |i, w| out[i] += w * pj);
             }
         }
         lost
     }
 
-    /// The transposed step `out = Tᵀ β` (`out` overwritten): the smoother's backward pass.
-    pub(super) fn predict_transposed(&mut self, grid: &TensorGrid, beta: &[f64], out: &mut [f64]) {
+    /// Adds `scale · Tᵀ β` to `out`: the smoother's backward pass.
+    fn add_transposed(&mut self, grid: &TensorGrid, beta: &[f64], scale: f64, out: &mut [f64]) {
         for (j, o) in out.iter_mut().enumerate() {
             let mut sum = 0.0;
             self.visit(grid, j, |i, w| sum += w * beta[i]);
-            *o = sum;
+            *o += scale * sum;
+        }
+    }
+}
+
+/// The model's transition kernel on the grid: that of `N(0, Q)` noise, or for a mixture noise
+/// the weighted kernels of its components, `T = Σ_c π_c T_c`.
+#[derive(Clone, Debug)]
+pub(super) struct Kernel {
+    parts: Vec<(f64, TransitionKernel)>,
+}
+
+impl Kernel {
+    /// Tabulates `model`'s transition on `grid` ([`TransitionKernel::new`], once per
+    /// component of a mixture noise).
+    pub(super) fn new(
+        name: &str,
+        model: &Model,
+        grid: &TensorGrid,
+        radius: f64,
+        keep: bool,
+    ) -> Result<Self, FilterError> {
+        let n = model.n;
+        let mut centres = Vec::with_capacity(grid.len() * n);
+        let mut fx = vec![0.0; n];
+        grid.for_each_node(|_, x| {
+            model.drift.eval(x, &mut fx);
+            centres.extend_from_slice(&fx);
+        });
+        if centres.iter().any(|v| !v.is_finite()) {
+            return Err(FilterError::NonFinite {
+                what: "transition map F on the grid",
+            });
+        }
+        let centres = alloc::sync::Arc::new(centres);
+        let parts = match &model.transition_mixture {
+            None => {
+                let keep = if keep { CACHED_VALUES } else { 0 };
+                vec![(
+                    1.0,
+                    TransitionKernel::new(name, model, grid, (&centres, radius, keep), None)?,
+                )]
+            }
+            Some(w) => {
+                // The kept windows share one budget.
+                let components = w.mixture().components();
+                let keep = if keep {
+                    CACHED_VALUES / components.len()
+                } else {
+                    0
+                };
+                components
+                    .iter()
+                    .map(|c| {
+                        TransitionKernel::new(name, model, grid, (&centres, radius, keep), Some(c))
+                            .map(|k| (c.weight, k))
+                    })
+                    .collect::<Result<_, _>>()?
+            }
+        };
+        Ok(Kernel { parts })
+    }
+
+    /// Cells the kernel's windows reach from the cell where they are widest, summed over a
+    /// mixture's components (for the cost and memory estimates).
+    pub(super) fn widest_window(&self, grid: &TensorGrid) -> f64 {
+        self.parts.iter().map(|(_, k)| k.widest_window(grid)).sum()
+    }
+
+    /// The prediction `out = T p` (`out` overwritten); returns the mass carried outside the
+    /// box.
+    pub(super) fn predict(&mut self, grid: &TensorGrid, p: &[f64], out: &mut [f64]) -> f64 {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        self.parts
+            .iter_mut()
+            .map(|(w, k)| k.add_predicted(grid, p, *w, out))
+            .sum()
+    }
+
+    /// The transposed step `out = Tᵀ β` (`out` overwritten): the smoother's backward pass.
+    pub(super) fn predict_transposed(&mut self, grid: &TensorGrid, beta: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for (w, k) in &mut self.parts {
+            k.add_transposed(grid, beta, *w, out);
         }
     }
 }
@@ -356,11 +450,13 @@ fn spread_on(
     model: &Model,
     grid: &TensorGrid,
     radius: f64,
+    component: Option<&MixtureComponent>,
 ) -> Result<Spread, FilterError> {
     let n = model.n;
-    let spread = match model.process_noise() {
-        ProcessNoise::Constant(q) => spread_of_constant(name, &q)?,
-        ProcessNoise::StateDependent(_) => {
+    let spread = match (component, model.process_noise()) {
+        (Some(c), _) => spread_of_constant(name, &c.cov)?,
+        (None, ProcessNoise::Constant(q)) => spread_of_constant(name, &q)?,
+        (None, ProcessNoise::StateDependent(_)) => {
             let table = model
                 .process_noise()
                 .tabulate(n, grid.len(), |i, x| grid.node(i, x));
@@ -407,7 +503,14 @@ pub(super) fn check_noise(
     grid: &TensorGrid,
     radius: f64,
 ) -> Result<(), FilterError> {
-    spread_on(name, model, grid, radius).map(|_| ())
+    match &model.transition_mixture {
+        Some(w) => w
+            .mixture()
+            .components()
+            .iter()
+            .try_for_each(|c| spread_on(name, model, grid, radius, Some(c)).map(|_| ())),
+        None => spread_on(name, model, grid, radius, None).map(|_| ()),
+    }
 }
 
 /// The spread of a constant Q: its diagonal's square roots, or Q⁻¹ when it has mixed terms.

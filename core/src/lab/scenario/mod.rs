@@ -160,6 +160,11 @@ pub struct ModelConfig {
     pub diffusion: Option<CoefficientMatrix>,
     /// Observation noise.
     pub noise: ObservationNoiseConfig,
+    /// A discrete-time model's transition noise as a Gaussian mixture,
+    /// `w_k ~ Σ_j π_j N(μ_j, Q_j)` (components as in `noise.mixture`), in place of
+    /// `diffusion` ([`crate::TransitionMixture`]); empty for `w_k ~ N(0, G Gᵀ)`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub transition_noise: Vec<GaussianComponent>,
     /// The known inputs `u1..uk` of a driven model ([`crate::Inputs`]): one expression
     /// in the time `t` and the parameters per input, the series a simulated run records
     /// beside its observations (row k holds u at the midpoint of `(τ_{k−1}, τ_k]`, row 0 at
@@ -620,6 +625,31 @@ impl ScenarioConfig {
                 }
             }
         }
+        if !self.model.transition_noise.is_empty() {
+            let field = "model.transition_noise";
+            if self.model.dynamics.is_continuous() {
+                p.push(ConfigProblem::new(
+                    field,
+                    "a mixture transition noise needs model.dynamics = discrete (the noise of an SDE is a Brownian increment, Gaussian)",
+                ));
+            } else if self.model.diffusion.is_some() {
+                p.push(ConfigProblem::new(
+                    field,
+                    "give the transition noise once: as a mixture here, or as its factor G in model.diffusion",
+                ));
+            }
+            let before = p.len();
+            let comps: Vec<_> = self
+                .model
+                .transition_noise
+                .iter()
+                .enumerate()
+                .map(|(i, c)| c.resolve(&names, &format!("{field}[{i}]"), &mut p))
+                .collect();
+            if !unresolved(&p, before) {
+                check_mixture(&comps, n, field, &mut p)
+            }
+        }
         match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov: Some(s) } => {
                 let before = p.len();
@@ -869,6 +899,8 @@ impl ScenarioConfig {
             }
             PriorConfig::Density { expression } => texts.push(expression),
         }
+        vectors.extend(self.model.transition_noise.iter().map(|c| &c.mean));
+        matrices.extend(self.model.transition_noise.iter().map(|c| &c.cov));
         texts.extend(self.model.inputs.iter().map(String::as_str));
         texts.extend(coefficient_texts(vectors, matrices));
         texts
@@ -1042,10 +1074,22 @@ impl ScenarioConfig {
                 }
             },
         }?;
-        match self.model.dynamics {
-            DynamicsKind::Continuous => Ok(model),
-            DynamicsKind::Discrete => model.discrete_time(self.time.dt_obs),
+        let model = match self.model.dynamics {
+            DynamicsKind::Continuous => return Ok(model),
+            DynamicsKind::Discrete => model.discrete_time(self.time.dt_obs)?,
+        };
+        if self.model.transition_noise.is_empty() {
+            return Ok(model);
         }
+        let comps = self.resolved(|names, p| {
+            self.model
+                .transition_noise
+                .iter()
+                .enumerate()
+                .map(|(i, c)| c.resolve(names, &format!("model.transition_noise[{i}]"), p))
+                .collect::<Vec<_>>()
+        })?;
+        model.with_transition_mixture(mixture(&comps, n)?)
     }
 
     /// `Some(k)` for a driven model ([`crate::Inputs`]): the k inputs of

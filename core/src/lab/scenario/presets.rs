@@ -146,6 +146,7 @@ fn build(s: Spec) -> ScenarioConfig {
             observation: strings(s.observation),
             diffusion: None,
             noise: s.noise,
+            transition_noise: Vec::new(),
             inputs: Vec::new(),
         },
         prior: s.prior,
