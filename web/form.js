@@ -182,6 +182,15 @@ export function showStructure(report) {
   $('structure-note').textContent = report.note ?? '';
 }
 
+// The transition noise's choice is a map's only; G or the mixture editor, as chosen.
+function showTransitionKind() {
+  const map = $('dynamics').value === 'discrete';
+  const mixture = map && $('transition-kind').value === 'mixture';
+  document.querySelectorAll('.map-only').forEach((el) => { el.hidden = !map; });
+  document.querySelectorAll('.gaussian-transition').forEach((el) => { el.hidden = mixture; });
+  document.querySelectorAll('.mixture-transition').forEach((el) => { el.hidden = !mixture; });
+}
+
 function showPriorKind(kind) {
   for (const k of ['gaussian', 'mixture', 'density']) {
     document.querySelectorAll(`.prior-${k}`).forEach((el) => { el.style.display = k === kind ? '' : 'none'; });
@@ -275,6 +284,11 @@ export function fillForm(config) {
   knownInputs(config.model.inputs ?? []);
   fillParameters(config.parameters, edited);
   matrixEditor($('diffusion'), { value: config.model.diffusion ?? null, rows: n, identityAllowed: true, expressions: true, onInput: edited });
+  const jumps = config.model.transition_noise ?? [];
+  $('transition-kind').value = jumps.length ? 'mixture' : 'gaussian';
+  // A switch to a mixture starts from N(0, I) as one component.
+  mixtureEditor($('transition-mix'), { value: jumps.length ? jumps : [{ weight: 1, mean: Array(n).fill(0), cov: identity(n) }], dim: n, onInput: edited });
+  showTransitionKind();
   const noise = config.model.noise;
   $('noise-kind').value = noise.kind;
   const m = config.model.observation.length;
@@ -333,6 +347,12 @@ export function readForm() {
   if (Object.keys(parameters).length) c.parameters = parameters;
   else delete c.parameters;
   c.model.diffusion = readMatrix($('diffusion'));
+  if (c.model.dynamics === 'discrete' && $('transition-kind').value === 'mixture') {
+    c.model.transition_noise = readMixture($('transition-mix'));
+    delete c.model.diffusion;
+  } else {
+    delete c.model.transition_noise;
+  }
   c.model.noise = readNoise();
   const kind = $('prior-kind').value;
   if (kind === 'gaussian') {
@@ -400,6 +420,9 @@ function changeDimension() {
   }
   if (c.initial_state) c.initial_state = resize(c.initial_state, () => 0);
   c.model.diffusion = null;
+  if (c.model.transition_noise) {
+    c.model.transition_noise = c.model.transition_noise.map((comp) => ({ ...comp, mean: resize(comp.mean, () => 0), cov: embed(comp.cov) }));
+  }
   c.methods = state.methodRows.map((r) => r.config);
   const rows = state.methodRows;
   fillForm(c);
@@ -415,7 +438,8 @@ export function setupForm() {
   $('prior-kind').addEventListener('change', () => { showPriorKind($('prior-kind').value); edited(); });
   $('noise-kind').addEventListener('change', () => { showNoiseKind($('noise-kind').value); edited(); });
   $('dim').addEventListener('change', changeDimension);
-  $('dynamics').addEventListener('change', edited);
+  $('dynamics').addEventListener('change', () => { showTransitionKind(); edited(); });
+  $('transition-kind').addEventListener('change', () => { showTransitionKind(); edited(); });
   $('add-h').addEventListener('click', () => {
     const values = [...$('observation').querySelectorAll('input')].map((el) => el.value);
     const noise = readNoise();

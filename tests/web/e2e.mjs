@@ -1162,6 +1162,16 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.waitForFunction(() => document.querySelector('[data-error="model.diffusion"]').textContent === '', null, { timeout: 5000 });
   await page.click('#apply');
   await page.waitForFunction(() => JSON.stringify(window.zakaiPage.base.model.diffusion) === '[["0.4*sqrt(abs(x))"]]', null, { timeout: 10000 });
+  // A map's transition noise: the choice is shown for a discrete-time model only; a mixture
+  // replaces G by the mixture editor, and the applied scenario carries it (and no G).
+  assert.ok(!(await page.isVisible('#transition-kind')), 'no transition-noise choice for an SDE');
+  await load(`${url}?preset=sv-ar1`, 'sv-ar1');
+  assert.ok(await page.isVisible('#transition-kind') && await page.isVisible('#diffusion') && !(await page.isVisible('#transition-mix')), 'a map: Gaussian w_k with its G');
+  await page.selectOption('#transition-kind', 'mixture');
+  assert.ok(await page.isVisible('#transition-mix') && !(await page.isVisible('#diffusion')), 'a mixture w_k: its editor instead of G');
+  await page.click('#apply');
+  await page.waitForFunction(() => window.zakaiPage.base.model.transition_noise?.length === 1, null, { timeout: 10000 });
+  assert.equal(await page.evaluate(() => window.zakaiPage.base.model.diffusion), undefined, 'the mixture replaces G');
   // A known input u1(t): the drift may then read u1 and t (before, u1 is an unknown name);
   // the methods made once for the whole run are listed as not applicable with the reason, and
   // the run carries the input.

@@ -424,15 +424,13 @@ impl Model {
     /// Brownian increment is Gaussian) and for a mixture of another dimension.
     ///
     /// ```
-    /// use nalgebra::{dmatrix, dvector};
+    /// use nalgebra::{DMatrix, DVector};
     /// use zakai::{GaussianMixture, Model, Noise};
     ///
     /// // A random walk that mostly creeps and now and then jumps:
     /// // w_k ~ 0.9 N(0, 0.01) + 0.1 N(0, 4).
-    /// let jumps = GaussianMixture::new(vec![
-    ///     (0.9, dvector![0.0], dmatrix![0.01]),
-    ///     (0.1, dvector![0.0], dmatrix![4.0]),
-    /// ])
+    /// let part = |w: f64, var: f64| (w, DVector::from_element(1, 0.0), DMatrix::from_element(1, 1, var));
+    /// let jumps = GaussianMixture::new(vec![part(0.9, 0.01), part(0.1, 4.0)])
     /// .unwrap();
     /// let model = Model::from_text(&["x"], &["x"], Noise::discrete(0.1))
     ///     .unwrap()
