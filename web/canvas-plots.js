@@ -234,8 +234,8 @@ export const markerShape = (i) => MARKERS[i % MARKERS.length];
  * The 2-D heatmap: `values` on a `P × P` raster over `domain` (first component fastest),
  * coloured against its maximum with a numeric colour bar, at most `height` CSS pixels high; `curvature` (optional) tints in
  * red where ∇²(−log p) is not positive semidefinite; `marks` are estimates `{x, y, color, i}`
- * (hollow markers growing with the method's index, so coinciding ones stay visible) and
- * `truth` a white disc.
+ * (thin hollow markers growing with the method's index, so coinciding ones stay visible) and
+ * `truth` a white disc drawn over them.
  */
 export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = null, marks = [], truth = null }) {
   // The plot box square: the canvas is a little wider than high (colour bar on the right).
@@ -275,23 +275,24 @@ export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = n
   ctx.beginPath();
   ctx.rect(b.x, b.y, b.w, b.h);
   ctx.clip();
+  // Thin hollow markers, small beside a posterior a few cells wide, and the truth on top.
+  for (const m of marks) {
+    const r = (4 + 1.5 * m.i) * scale;
+    ctx.lineWidth = 2.4 * scale;
+    ctx.strokeStyle = '#000';
+    marker(ctx, markerShape(m.i), px(m.x), py(m.y), r);
+    ctx.stroke();
+    ctx.lineWidth = 1.3 * scale;
+    ctx.strokeStyle = m.color;
+    ctx.stroke();
+  }
   if (truth) {
     ctx.beginPath();
-    ctx.arc(px(truth[0]), py(truth[1]), 5 * scale, 0, 2 * Math.PI);
+    ctx.arc(px(truth[0]), py(truth[1]), 4 * scale, 0, 2 * Math.PI);
     ctx.fillStyle = '#fff';
     ctx.fill();
     ctx.strokeStyle = '#000';
     ctx.lineWidth = scale;
-    ctx.stroke();
-  }
-  for (const m of marks) {
-    const r = (5 + 2.5 * m.i) * scale;
-    ctx.lineWidth = 3.5 * scale;
-    ctx.strokeStyle = '#000';
-    marker(ctx, markerShape(m.i), px(m.x), py(m.y), r);
-    ctx.stroke();
-    ctx.lineWidth = 2 * scale;
-    ctx.strokeStyle = m.color;
     ctx.stroke();
   }
   ctx.restore();

@@ -6,7 +6,7 @@ import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
 import { drawHeatmap2d } from './canvas-plots.js';
 import { color } from './looks.js';
-import { labels, state } from './state.js';
+import { labels, runPath, state } from './state.js';
 import { bandsShown, densityHeight, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
@@ -112,8 +112,9 @@ export function trajectoryData() {
   const p = state.previous;
   if (!p) return now;
   // The previous run on its own times, joined with this one's (nulls where a run has no row);
-  // hidden by the "previous run" box, or where it has fewer components than the one shown.
-  const shown = $('previous').checked && dim < p.n;
+  // hidden by the "previous run" box, where it has fewer components than the one shown, or
+  // when it filtered another path (another seed, model or recording).
+  const shown = $('previous').checked && dim < p.n && p.path === runPath();
   const before = [p.times, ...p.est.map((e) => (shown ? e[dim] : p.times.map(() => null)))];
   // Nulls stay breaks (a failure, a missing value); rows only one run has are spanned.
   return uPlot.join([now, before], [now.map(() => 1), before.map(() => 1)]);
@@ -144,13 +145,16 @@ export function errorChoices() {
   state.reference = ref;
   const names = labels();
   const choices = [];
-  if (ref >= 0) choices.push(['reference', `${names[ref]} (${info.exact[ref] ? 'exact' : 'the finest grid filter'})`]);
+  // A reference is worth plotting against only beside other methods (alone, its error
+  // against itself would leave the plot empty).
+  const alone = info.methods.length < 2;
+  if (ref >= 0 && !alone) choices.push(['reference', `${names[ref]} (${info.exact[ref] ? 'exact' : 'the finest grid filter'})`]);
   if (info.has_truth) choices.push(['truth', 'the truth']);
   const was = $('error-against').value;
   fillOptions($('error-against'), choices);
   if (choices.some(([v]) => v === was)) $('error-against').value = was;
   $('errors-figure').hidden = !choices.length;
-  $('error-note').textContent = ref >= 0 && !info.exact[ref]
+  $('error-note').textContent = ref >= 0 && !alone && !info.exact[ref]
     ? '(a grid filter is a reference only as far as it has converged: "check convergence" in the Monte Carlo panel says)'
     : '';
 }

@@ -2,7 +2,7 @@
 // form's scenario, and the dispatch of the worker's messages.
 
 import { $, fillOptions } from './dom.js';
-import { labels, state } from './state.js';
+import { labels, runPath, state } from './state.js';
 import { worker } from './channel.js';
 import { setPlaying, showStepPhase } from './view.js';
 import { render } from './series.js';
@@ -122,7 +122,7 @@ export function setupSession(hooks = {}) {
         dropSmoothed('');
         // The run on screen becomes the previous run, drawn faintly under the new one.
         if (state.data?.times.length > 1 && state.info) {
-          state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n };
+          state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n, path: runPath() };
         }
         state.info = data.info;
         if (state.pendingConfig) {

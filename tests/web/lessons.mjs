@@ -735,6 +735,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     const pfGap = Math.max(...pf.est.map((v, k) => Math.abs(v - pmf.est[k]) / pmf.sd[k]));
     assert.ok(pfGap <= 0.53 && pfGap > 0.5, `the PF within 0.53 PMF sds: ${pfGap}`);
     assert.ok(near(sc.PMF.mse, 34.19, 0.005) && near(sc['PF(1000)'].mse, 35.78, 0.005) && near(sc.UKF.mse, 65.69, 0.005) && near(sc.EKF.mse, 218.53, 0.005), 'MSEs 34.19, 35.78, 65.69, 218.53');
+    console.log('lesson 12, PF self-check:', JSON.stringify(pf.concerns));
+    assert.ok(pf.concerns.length === 1 && /^effective sample size after weighting.* < 1\.0e-2 from t = 42\.0+ on 2 step/.test(pf.concerns[0]), `the PF's self-check flags two steps from t = 42: ${JSON.stringify(pf.concerns)}`);
     await page.screenshot({ path: `${artifacts}/lesson-growth-model.png` });
     await tryThis('an odd map: drop 8 cos(1.2k)');
     r = await run();
