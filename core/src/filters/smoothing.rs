@@ -260,7 +260,7 @@ macro_rules! density_storage {
         ) -> Result<(), FilterError> {
             if obs.dt > 0.0 {
                 core::mem::swap(&mut self.u, values);
-                let carried = self.$backward(obs.dt);
+                let carried = self.$backward(obs.dt, obs.inputs);
                 core::mem::swap(&mut self.u, values);
                 carried?;
             }
@@ -312,13 +312,15 @@ pub(crate) trait GridTransition: Filter + Clone + 'static {
     fn last_predicted(&self) -> &[f64];
 }
 
-/// A recorded step: its length and observation (kept so that the backward pass can redo the
-/// step's operator, and a segment between checkpoints can be refiltered).
+/// A recorded step: its length, observation and, for a driven model, its time and inputs
+/// (kept so that the backward pass can redo the step's operator, and a segment between
+/// checkpoints can be refiltered).
 #[derive(Clone, Debug)]
 struct StepRecord {
     dt: f64,
     value: Vec<f64>,
     kind: super::ObservationKind,
+    inputs: Option<(f64, Vec<f64>)>,
 }
 
 impl StepRecord {
@@ -327,7 +329,10 @@ impl StepRecord {
             dt: self.dt,
             value: &self.value,
             kind: self.kind,
-            inputs: None,
+            inputs: self
+                .inputs
+                .as_ref()
+                .map(|(t, u)| crate::model::Inputs { t: *t, u }),
         }
     }
 }
@@ -421,6 +426,7 @@ impl<F: GridTransition> Filter for GridSmoother<F> {
             dt: obs.dt,
             value: obs.value.to_vec(),
             kind: obs.kind,
+            inputs: obs.inputs.map(|i| (i.t, i.u.to_vec())),
         });
         if self.stride == 1 {
             self.predicted.push(self.filter.last_predicted().to_vec());

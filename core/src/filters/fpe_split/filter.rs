@@ -516,7 +516,12 @@ impl ContinuousDiscreteGrid {
     /// The transposed prediction over `interval` on `self.u` (the adjoint of
     /// [`ContinuousDiscreteGrid::propagate`]: the remainder's plan first, then the whole
     /// intervals, each FPE step as its implicit part transposed, then its upwind part).
-    fn propagate_back(&mut self, interval: f64) -> Result<(), FilterError> {
+    /// (A driven model has no smoother here, so the step's inputs are not read.)
+    fn propagate_back(
+        &mut self,
+        interval: f64,
+        _: Option<crate::model::Inputs<'_>>,
+    ) -> Result<(), FilterError> {
         let (whole, rest) = crate::filters::whole_intervals(interval, self.dt_obs);
         if rest > 0.0 {
             if !self.remainders.bring_to_front(rest) {

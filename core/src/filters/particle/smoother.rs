@@ -46,6 +46,9 @@ struct Record {
     /// Particles and log-weights after the step.
     particles: Vec<f64>,
     log_weights: Vec<f64>,
+    /// A driven model's step: its length, time and inputs (the backward pass freezes the
+    /// model for each of its moves as the forward pass did).
+    inputs: Option<(f64, f64, Vec<f64>)>,
 }
 
 /// The FFBSi smoother of the particle filter (see the module doc).
@@ -62,12 +65,6 @@ pub(crate) struct Ffbsi {
 impl Pf {
     /// The FFBSi smoother from the filter's current state (see the module doc).
     pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
-        if self.driven.is_some() {
-            return Err(no_smoother(
-                self.name(),
-                "FFBSi here replays one transition density for every interval, and this model's changes with the time and inputs (not implemented)",
-            ));
-        }
         let q = self.model.process_noise();
         let q = q.constant().ok_or_else(|| {
             no_smoother(
@@ -130,6 +127,7 @@ impl Filter for Ffbsi {
                 .map_or_else(Vec::new, |t| t.clone()),
             particles: self.filter.particles.clone(),
             log_weights: self.filter.log_weights.clone(),
+            inputs: obs.inputs.map(|i| (obs.dt, i.t, i.u.to_vec())),
         });
         Ok(())
     }
@@ -154,11 +152,37 @@ fn draw(log_p: &mut [f64], rng: &mut SimRng) -> usize {
 }
 
 impl Ffbsi {
+    /// The model of move `s` of a recorded step: the filter's own for an autonomous model; a
+    /// driven one frozen as the forward pass froze it (a map's transition s at the time it
+    /// reaches, an SDE's at the interval's midpoint).
+    fn dynamics_of(
+        &self,
+        record: &Record,
+        s: usize,
+    ) -> Result<alloc::borrow::Cow<'_, crate::model::Model>, FilterError> {
+        use alloc::borrow::Cow;
+        let (Some(driven), Some((dt, t, u))) = (&self.filter.driven, &record.inputs) else {
+            return Ok(Cow::Borrowed(&self.filter.model));
+        };
+        let inputs = Some(crate::model::Inputs { t: *t, u });
+        if driven.is_discrete_time() {
+            return Ok(Cow::Owned(
+                driven
+                    .transition_at(inputs, s, record.substeps)?
+                    .into_owned(),
+            ));
+        }
+        let obs = Observation::nothing(*dt).with_inputs(*t, u);
+        let (dynamics, _) = obs.frozen(driven)?.expect("a driven model");
+        Ok(Cow::Owned(dynamics))
+    }
+
     /// Moves every trajectory in `points` (n·M, component-major) one Euler step back, onto
     /// the cloud `cloud` (n·N) with log-weights `log_w`: the backward kernel of the module doc.
     #[allow(clippy::too_many_arguments)]
     fn back_one(
         &mut self,
+        dynamics: &crate::model::Model,
         cloud: &[f64],
         log_w: &[f64],
         h: f64,
@@ -167,11 +191,11 @@ impl Ffbsi {
         scratch: &mut BatchScratch,
         log_p: &mut [f64],
     ) {
-        let (n, count) = (self.filter.model.n, log_w.len());
+        let (n, count) = (dynamics.n, log_w.len());
         let m = points.len() / n;
         drift.resize(n * count, 0.0);
-        self.filter.model.drift.eval_batch(cloud, drift, scratch);
-        let chosen = match self.filter.model.transition_mixture.clone() {
+        dynamics.drift.eval_batch(cloud, drift, scratch);
+        let chosen = match dynamics.transition_mixture.clone() {
             Some(noise) => self.back_mixture(noise.mixture(), (points, m), drift, log_w, log_p),
             None => self.back_gaussian(cloud, log_w, h, (points, m), drift, log_p),
         };
@@ -325,7 +349,9 @@ impl Smoother for Ffbsi {
                         0 => &before[..],
                         _ => &record.trail[(s - 1) * n * count..s * n * count],
                     };
+                    let dynamics = self.dynamics_of(&record, s)?.into_owned();
                     self.back_one(
+                        &dynamics,
                         cloud,
                         &before_w,
                         record.h,

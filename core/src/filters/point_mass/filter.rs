@@ -218,9 +218,14 @@ impl PointMass {
         self.transitions(dt, None, false)
     }
 
-    /// Their transpose over `dt` on `u` (the smoother's backward pass).
-    fn propagate_back(&mut self, dt: f64) -> Result<f64, FilterError> {
-        self.transitions(dt, None, true)
+    /// Their transpose over `dt` on `u` (the smoother's backward pass), each of a driven
+    /// model at the time it reaches with the step's `inputs`.
+    fn propagate_back(
+        &mut self,
+        dt: f64,
+        inputs: Option<crate::model::Inputs<'_>>,
+    ) -> Result<f64, FilterError> {
+        self.transitions(dt, inputs, true)
     }
 
     /// Normalises the density and refreshes the estimate.
@@ -306,12 +311,6 @@ impl Filter for PointMass {
         &self,
         plan: &crate::filters::smoothing::SmoothingPlan,
     ) -> Result<alloc::boxed::Box<dyn crate::filters::smoothing::Smoother>, FilterError> {
-        if self.model.is_driven() {
-            return Err(crate::filters::smoothing::no_smoother(
-                &self.name,
-                "its backward pass replays one kernel for every transition, and a driven model's changes with the time and inputs (not implemented)",
-            ));
-        }
         crate::filters::smoothing::grid_smoother(self, plan)
     }
 
