@@ -10,7 +10,9 @@
 //! earlier point among the cloud before it with probability
 //! `∝ w^i N(x' ; x^i + f(x^i) h, Q h)` (the backward kernel of the discretised chain), down to
 //! the start. For a discrete-time model the steps are its transitions and the kernel is the
-//! transition density itself, `∝ w^i N(x'; F(x^i), Q)`. The smoothed mean and covariance at an observation time are those of the M
+//! transition density itself, `∝ w^i N(x'; F(x^i), Q)` (or the mixture's density when w_k is
+//! a Gaussian mixture). A driven model's moves are weighed with the model the forward pass froze
+//! for them, from each step's recorded time and inputs. The smoothed mean and covariance at an observation time are those of the M
 //! trajectories' points there: consistent for the discretised model's smoother, with an error of
 //! order N^−½ from the particle clouds plus M^−½ from the trajectories. A step of length 0 (the update at τ₀) does not move
 //! a trajectory.
@@ -382,10 +384,14 @@ impl Smoother for Ffbsi {
             self.filter.params.particles,
             self.filter.params.trajectories,
         );
-        let euler: usize = self.records.iter().map(|r| r.substeps).sum();
+        let moves: usize = self.records.iter().map(|r| r.substeps).sum();
+        let kind = match self.filter.model.is_discrete_time() {
+            true => "transitions",
+            false => "Euler–Maruyama steps",
+        };
         vec![format!(
-            "FFBSi: {m} trajectories through {count} particles over {euler} Euler–Maruyama steps ({:.2e} kernel evaluations); Monte Carlo error ~ 1/√{m}",
-            (m * count * euler) as f64
+            "FFBSi: {m} trajectories through {count} particles over {moves} {kind} ({:.2e} kernel evaluations); Monte Carlo error ~ 1/√{m}",
+            (m * count * moves) as f64
         )]
     }
 }
