@@ -11,7 +11,7 @@ import {
   clamp, densityHeight, densityPoints, observationData, presenting, showStepPhase, shownDim, shownFrame, shownRow,
   smoothedDensity, smoothedShown, updateScrub,
 } from './view.js';
-import { densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
+import { blindSpans, densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
 
 // Labels of a log axis: whole decades only, at most five of them (every k-th decade when the
 // errors span many, e.g. a scheme equal to the reference to round-off).
@@ -175,7 +175,7 @@ export function makeCharts() {
     legend: { show: false },
     // The failed-part and band series are drawn but not listed; failures get a ✕ and the
     // time slider's cursor a red line.
-    hooks: { draw: [drawFailureMarks, (u) => drawCursor(u)] },
+    hooks: { drawAxes: [drawBlindSpans], draw: [drawFailureMarks, (u) => drawCursor(u)] },
     // Made with the data on screen, if any: a chart made empty and given its data in the same
     // task keeps the empty chart's y range (a resize or presentation mode would clip the truth).
   }, state.data?.times.length ? trajectoryData() : series.map(() => []), $('trajectory-plot'));
@@ -288,6 +288,28 @@ export function resetHeatStrip() {
     return;
   }
   for (const h of state.history) if (h.dim === dim) state.heatStrip.column(h.t, h.densities[method]);
+}
+
+// Grey where nothing was measured (blindSpans: an outage, missing rows, a recording's gap),
+// under the lines, labelled "no measurements" where there is room.
+function drawBlindSpans(u) {
+  if (!state.data) return;
+  const ctx = u.ctx;
+  const dpr = window.devicePixelRatio || 1;
+  const { top, height } = u.bbox;
+  ctx.save();
+  for (const [a, b] of blindSpans()) {
+    const [x0, x1] = [u.valToPos(a, 'x', true), u.valToPos(b, 'x', true)];
+    ctx.fillStyle = 'rgba(90, 100, 120, 0.12)';
+    ctx.fillRect(x0, top, x1 - x0, height);
+    const label = 'no measurements';
+    ctx.font = `${11 * dpr}px system-ui, sans-serif`;
+    if (ctx.measureText(label).width + 8 * dpr < x1 - x0) {
+      ctx.fillStyle = '#4a5261';
+      ctx.fillText(label, x0 + 4 * dpr, top + 14 * dpr);
+    }
+  }
+  ctx.restore();
 }
 
 // ✕ where a method failed, at its estimate there, in its colour.

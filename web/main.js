@@ -23,9 +23,13 @@ state.looks = (n) => Array.from({ length: n }, (_, i) => ({ color: color(i), das
 // A panel a lesson's "try this" opened: scrolled to beside the lesson (which stays in view,
 // sticky); on a narrow screen, where the lesson comes first and the panels last, the lesson's
 // status line (what to look for) is brought to the top instead, the panel further down.
-function showPanel(id) {
+function showPanel(id, end = null) {
   if (matchMedia('(max-width: 900px)').matches) $('lesson-status').scrollIntoView({ block: 'start' });
-  else $(id).scrollIntoView({ block: 'start' });
+  else {
+    $(id).scrollIntoView({ block: 'start' });
+    // What the try draws (the likelihood's curve), when it falls below the screen.
+    if (end && $(end).getBoundingClientRect().bottom > innerHeight) $(end).scrollIntoView({ block: 'end' });
+  }
 }
 
 // Learn mode's view of the page (learn.js): presets, the catalogue's defaults, runs and panels.
@@ -59,7 +63,7 @@ const learnHooks = {
   likelihood(parameter) {
     $('lik-panel').open = true;
     startProfile(parameter);
-    showPanel('lik-panel');
+    showPanel('lik-panel', 'lik-plot');
   },
   view(name) {
     const box = $(name);

@@ -159,6 +159,24 @@ export function errorChoices() {
     : '';
 }
 
+// The spans of time without a measurement: [t_(k−1), t_k] for a row k whose every component
+// is missing, or which comes more than 1.5 Δτ after the row before it (a gap in a recording);
+// adjacent spans joined. What the trajectory plot shades.
+export function blindSpans() {
+  const d = state.data;
+  const dt = state.info?.dt_obs ?? Infinity;
+  const spans = [];
+  for (let k = 1; k < d.times.length; k++) {
+    const missing = d.obs.length > 0 && d.obs.every((o) => o[k] == null);
+    const gap = d.times[k] - d.times[k - 1] > 1.5 * dt;
+    if (!missing && !gap) continue;
+    const last = spans[spans.length - 1];
+    if (last && Math.abs(last[1] - d.times[k - 1]) < 1e-12) last[1] = d.times[k];
+    else spans.push([d.times[k - 1], d.times[k]]);
+  }
+  return spans;
+}
+
 // The error plot's series: |x̂_i − reference| (or − truth) of the shown component, null where
 // either is missing or the difference is exactly 0 (the reference itself; log scale).
 export function errorData() {

@@ -458,6 +458,10 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await page.click('#lesson button.try:has-text("draw the likelihood of r")');
   await page.waitForFunction(() => /finished|error/.test(document.getElementById('lik-status').textContent), null, { timeout: 120000 });
   assert.match(await page.textContent('#lik-status'), /finished: 123 filter runs/);
+  // The curve the try draws is on screen beside the lesson (1280 × 720), not below the fold.
+  const curve = await page.evaluate(() => { const r = document.getElementById('lik-plot').getBoundingClientRect(); return { top: r.top, bottom: r.bottom, height: innerHeight }; });
+  assert.ok(curve.bottom <= curve.height + 1 && curve.top >= 0, `the likelihood's curve in view: ${JSON.stringify(curve)}`);
+  assert.ok(await page.isVisible('#lesson-status'), 'and the lesson\'s "What you should see"');
   const maxima = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#lik-table tbody tr')].map((tr) => [tr.cells[0].textContent, [Number(tr.cells[1].textContent), Number(tr.cells[2].textContent)]])));
   console.log('lesson 8, maxima of ln L(r):', JSON.stringify(maxima));
   assert.ok(Math.abs(maxima.SA[0] - 0.46) < 0.01 && Math.abs(maxima.SA[0] - 0.5) < 0.06, 'SA near 0.46, about one standard error (0.04) from 0.5');
@@ -503,6 +507,9 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const at9 = (t) => r.times.findIndex((x) => x >= t - 1e-9);
   const qiem9 = Object.keys(r.methods).find((m) => m.startsWith('QIEM'));
   const q9 = r.methods[qiem9];
+  // The outage is shaded on the trajectory plot: one span without measurements, [3, 5.5].
+  const spans = await page.evaluate(async () => (await import('./series.js')).blindSpans());
+  assert.ok(spans.length === 1 && Math.abs(spans[0][0] - 3) < 1e-9 && Math.abs(spans[0][1] - 5.5) < 1e-9, `the outage shaded: ${JSON.stringify(spans)}`);
   console.log('lesson 9: QIEM sd at 3 and 5.5', q9.sd[at9(3)], q9.sd[at9(5.5)], 'estimate at 4.25', q9.est[at9(4.25)], 'truth', r.truth[at9(3)], r.truth[at9(4.25)]);
   assert.ok(Math.abs(q9.sd[at9(3)] - 0.70) < 0.01 && Math.abs(q9.sd[at9(4.25)] - 0.88) < 0.01 && Math.abs(q9.sd[at9(5.5)] - 0.90) < 0.01, 'the sd 0.70, 0.88, 0.90 in the outage');
   assert.ok(Math.abs(r.methods.UKF.est[at9(4.25)] - 0.02) < 0.01, 'the UKF filtered at 0.02 at t = 4.25');

@@ -90,8 +90,50 @@ pub(crate) enum GaussianMatch {
 }
 
 /// ln Γ(x), x > 0.
-fn ln_gamma(x: f64) -> f64 {
+pub(crate) fn ln_gamma(x: f64) -> f64 {
     libm::lgamma(x)
+}
+
+/// One Poisson count's `ln p(z | rate) = z ln(rate) − rate − ln Γ(z + 1)`, given
+/// `log_factorial` = ln Γ(z + 1); `None` when the rate is negative or not finite
+/// ([`rate_error`] says so).
+pub(crate) fn poisson_log(z: f64, rate: f64, log_factorial: f64) -> Option<f64> {
+    if !(rate >= 0.0 && rate.is_finite()) {
+        return None;
+    }
+    Some(if z == 0.0 {
+        -rate
+    } else if rate == 0.0 {
+        f64::NEG_INFINITY
+    } else {
+        z * libm::log(rate) - rate - log_factorial
+    })
+}
+
+/// Why component `j`'s Poisson rate cannot be used at the state `x`.
+pub(crate) fn rate_error(j: usize, rate: f64, x: &[f64]) -> String {
+    format!(
+        "the Poisson rate h{}(x) is {rate} at x = {x:?}; a rate must be nonnegative and finite wherever the filter evaluates it",
+        j + 1
+    )
+}
+
+/// One component's `ln N(z; h, v)` of a variance s(x) = v; `None` when v is not positive and
+/// finite ([`variance_error`] says so).
+pub(crate) fn variance_log(z: f64, h: f64, v: f64) -> Option<f64> {
+    if !(v > 0.0 && v.is_finite()) {
+        return None;
+    }
+    let r = z - h;
+    Some(-0.5 * (LN_TAU + libm::log(v) + r * r / v))
+}
+
+/// Why component `j`'s variance cannot be used at the state `x`.
+pub(crate) fn variance_error(j: usize, v: f64, x: &[f64]) -> String {
+    format!(
+        "the variance s{}(x) is {v} at x = {x:?}; it must be positive and finite wherever the filter evaluates it",
+        j + 1
+    )
 }
 
 /// `ln Γ((ν+1)/2) − ln Γ(ν/2) − ½ ln(νπ) − ln σ`, the log of Student-t's normalising
@@ -122,7 +164,7 @@ pub(crate) fn student_t_log_density(
 }
 
 /// `ln(2π)`.
-const LN_TAU: f64 = 1.837_877_066_409_345_5;
+pub(crate) const LN_TAU: f64 = 1.837_877_066_409_345_5;
 
 impl MeasurementDensity {
     /// Student-t noise with `dof` ν and `scale` σ, both positive and finite.
@@ -263,20 +305,8 @@ impl MeasurementDensity {
             MeasurementDensity::Poisson => {
                 let mut sum = 0.0;
                 for j in (0..z.len()).filter(seen) {
-                    let rate = hx[j];
-                    if !(rate >= 0.0 && rate.is_finite()) {
-                        return Err(format!(
-                            "the Poisson rate h{}(x) is {rate} at x = {x:?}; a rate must be nonnegative and finite wherever the filter evaluates it",
-                            j + 1
-                        ));
-                    }
-                    sum += if z[j] == 0.0 {
-                        -rate
-                    } else if rate == 0.0 {
-                        f64::NEG_INFINITY
-                    } else {
-                        z[j] * libm::log(rate) - rate - ln_gamma(z[j] + 1.0)
-                    };
+                    sum += poisson_log(z[j], hx[j], ln_gamma(z[j] + 1.0))
+                        .ok_or_else(|| rate_error(j, hx[j], x))?;
                 }
                 Ok(sum)
             }
@@ -292,15 +322,8 @@ impl MeasurementDensity {
                 s.eval(x, scratch);
                 let mut sum = 0.0;
                 for j in (0..z.len()).filter(seen) {
-                    let v = scratch[j];
-                    if !(v > 0.0 && v.is_finite()) {
-                        return Err(format!(
-                            "the variance s{}(x) is {v} at x = {x:?}; it must be positive and finite wherever the filter evaluates it",
-                            j + 1
-                        ));
-                    }
-                    let r = z[j] - hx[j];
-                    sum -= 0.5 * (LN_TAU + libm::log(v) + r * r / v);
+                    sum += variance_log(z[j], hx[j], scratch[j])
+                        .ok_or_else(|| variance_error(j, scratch[j], x))?;
                 }
                 Ok(sum)
             }

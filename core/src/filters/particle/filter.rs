@@ -406,8 +406,14 @@ impl Pf {
                         };
                         *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
                     }
-                } else {
-                    // ln p(z | xᵢ) of the observed components, whatever the family.
+                } else if !likelihood.add_batch(
+                    obs.value,
+                    (particles, &self.predicted, count),
+                    lw,
+                    &mut self.scratch,
+                )? {
+                    // ln p(z | xᵢ) of the observed components, particle by particle for the
+                    // families with no expression of the state to batch.
                     let reads_state = likelihood.reads_state();
                     for (i, w) in lw.iter_mut().enumerate() {
                         if reads_state {
