@@ -120,7 +120,16 @@ pub(crate) struct GridMeasurement {
     /// h at the nodes, row per node.
     pub(crate) h_nodes: Vec<f64>,
     pub(crate) m: usize,
+    /// A chunk of [`BATCH`] nodes with positive density, for the families the likelihood
+    /// evaluates as a batch ([`super::MeasurementLikelihood::add_batch`]): their indices,
+    /// coordinates and h (structure of arrays) and log-likelihoods; grown on first use.
+    chunk: (Vec<usize>, Vec<f64>, Vec<f64>, Vec<f64>),
+    scratch: crate::model::BatchScratch,
 }
+
+/// Nodes per batch of the likelihood on a grid (a few kB of coordinates per chunk, whatever
+/// the grid's size).
+const BATCH: usize = 256;
 
 impl GridMeasurement {
     /// The density `noise` of the model `measurement` (whose h is tabulated) on `grid`.
@@ -140,7 +149,37 @@ impl GridMeasurement {
             likelihood: super::MeasurementLikelihood::new(noise, m),
             h_nodes,
             m,
+            chunk: Default::default(),
+            scratch: Default::default(),
         }
+    }
+
+    /// `log[i] = ln p(z | x_i)` at the nodes `chunk.0` (their coordinates and h gathered
+    /// into the chunk), as a batch; false when the family has none.
+    fn chunk_log_likelihoods(
+        &mut self,
+        grid: &crate::grid::TensorGrid,
+        node: &mut [f64],
+        z: &[f64],
+    ) -> Result<bool, crate::error::FilterError> {
+        let (n, m) = (grid.dim(), self.m);
+        let (indices, points, h, out) = &mut self.chunk;
+        let count = indices.len();
+        points.resize(n * count, 0.0);
+        h.resize(m * count, 0.0);
+        for (i, &idx) in indices.iter().enumerate() {
+            grid.node(idx, node);
+            for (j, x) in node.iter().enumerate() {
+                points[j * count + i] = *x;
+            }
+            for j in 0..m {
+                h[j * count + i] = self.h_nodes[idx * m + j];
+            }
+        }
+        out.clear();
+        out.resize(count, 0.0);
+        self.likelihood
+            .add_batch(z, (points, h, count), out, &mut self.scratch)
     }
 
     /// Bayes' rule on the nodes (001 (6)): `u ← u · p(z | x)` for the observed components of
@@ -161,16 +200,38 @@ impl GridMeasurement {
         let m = self.m;
         let reads_state = self.likelihood.reads_state();
         let mut max = f64::NEG_INFINITY;
-        for (idx, (u, log)) in u.iter().zip(log.iter_mut()).enumerate() {
-            if *u > 0.0 {
-                let h = &self.h_nodes[idx * m..(idx + 1) * m];
-                if reads_state {
-                    grid.node(idx, node);
+        if self.likelihood.batches() {
+            // As a batch, in chunks of the nodes with positive density.
+            let mut start = 0;
+            while start < u.len() {
+                self.chunk.0.clear();
+                let mut end = start;
+                while end < u.len() && self.chunk.0.len() < BATCH {
+                    match u[end] > 0.0 {
+                        true => self.chunk.0.push(end),
+                        false => log[end] = f64::NEG_INFINITY,
+                    }
+                    end += 1;
                 }
-                *log = self.likelihood.log_at(z, node, h)? + libm::log(*u);
-                max = max.max(*log);
-            } else {
-                *log = f64::NEG_INFINITY;
+                self.chunk_log_likelihoods(grid, node, z)?;
+                for (&idx, l) in self.chunk.0.iter().zip(&self.chunk.3) {
+                    log[idx] = l + libm::log(u[idx]);
+                    max = max.max(log[idx]);
+                }
+                start = end;
+            }
+        } else {
+            for (idx, (u, log)) in u.iter().zip(log.iter_mut()).enumerate() {
+                if *u > 0.0 {
+                    let h = &self.h_nodes[idx * m..(idx + 1) * m];
+                    if reads_state {
+                        grid.node(idx, node);
+                    }
+                    *log = self.likelihood.log_at(z, node, h)? + libm::log(*u);
+                    max = max.max(*log);
+                } else {
+                    *log = f64::NEG_INFINITY;
+                }
             }
         }
         if max == f64::NEG_INFINITY || max.is_nan() {

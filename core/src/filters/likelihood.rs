@@ -111,6 +111,16 @@ impl MeasurementLikelihood {
         }
     }
 
+    /// Whether [`MeasurementLikelihood::add_batch`] takes this family.
+    pub(crate) fn batches(&self) -> bool {
+        matches!(
+            self.density,
+            crate::model::MeasurementDensity::Heteroscedastic(_)
+                | crate::model::MeasurementDensity::LogDensity(_)
+                | crate::model::MeasurementDensity::Poisson
+        )
+    }
+
     /// Adds `ln p(z | x)` at every one of `count` points to `out`, as a batch: a variance s(x)
     /// or a log-density runs its compiled program one pass per operation over all the points,
     /// like h, instead of point by point; Poisson counts take ln Γ(z + 1) once per component.
