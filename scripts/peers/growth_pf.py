@@ -25,6 +25,7 @@ from particles import distributions as dists
 from particles import state_space_models as ssm
 
 import zakai
+from side_by_side import compare
 
 N, T, REPEATS = 10_000, 100, 3
 
@@ -81,17 +82,8 @@ def run_zakai(z, seed):
 
 def main():
     z = data()
-    steps = len(z)
-    rows = []
-    for name, run in [("particles (Bootstrap, SMC)", run_particles), ("Zakai (pf, Filter.step)", run_zakai)]:
-        results = [run(z, seed) for seed in range(REPEATS)]
-        best = min(r[0] for r in results)
-        lls = [r[1] for r in results]
-        rows.append((name, best / steps * 1e6, np.mean(lls), np.std(lls)))
-    print(f"growth model, N = {N}, T = {T} ({steps} measurements), least of {REPEATS} runs")
-    for name, per_step, ll, sd in rows:
-        print(f"{name:<28} {per_step:10.1f} µs/step   ln L {ll:9.3f} (sd over runs {sd:.3f})")
-    print(f"ratio particles / Zakai: {rows[0][1] / rows[1][1]:.2f}")
+    runs = [("particles (Bootstrap, SMC)", run_particles), ("Zakai (pf, Filter.step)", run_zakai)]
+    compare(f"growth model, N = {N}, T = {T} ({len(z)} measurements)", z, runs, REPEATS)
 
 
 if __name__ == "__main__":
