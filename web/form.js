@@ -420,7 +420,7 @@ function changeDimension() {
   }
   if (c.initial_state) c.initial_state = resize(c.initial_state, () => 0);
   c.model.diffusion = null;
-  if (c.model.transition_noise) {
+  if (Array.isArray(c.model.transition_noise)) {
     c.model.transition_noise = c.model.transition_noise.map((comp) => ({ ...comp, mean: resize(comp.mean, () => 0), cov: embed(comp.cov) }));
   }
   c.methods = state.methodRows.map((r) => r.config);

@@ -14,6 +14,7 @@ export function localProblems(config) {
   check(config.model.diffusion, 'model.diffusion');
   check(config.model.noise.cov, 'model.noise.cov');
   check(config.model.noise.mixture, 'model.noise.mixture');
+  check(config.model.transition_noise, 'model.transition_noise');
   check(config.prior.cov, 'prior.cov');
   check(config.prior.components, 'prior.components');
   if (config.initial_state && config.initial_state.some((v) => Number.isNaN(v))) {

@@ -6,7 +6,7 @@ import uPlot from './vendor/uplot/uPlot.esm.js';
 import { $, el, fillOptions } from './dom.js';
 import { drawHeatmap2d } from './canvas-plots.js';
 import { color } from './looks.js';
-import { labels, runPath, state } from './state.js';
+import { labels, state } from './state.js';
 import { bandsShown, densityHeight, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
@@ -114,7 +114,7 @@ export function trajectoryData() {
   // The previous run on its own times, joined with this one's (nulls where a run has no row);
   // hidden by the "previous run" box, where it has fewer components than the one shown, or
   // when it filtered another path (another seed, model or recording).
-  const shown = $('previous').checked && dim < p.n && p.path === runPath();
+  const shown = $('previous').checked && dim < p.n && p.path === state.shownPath;
   const before = [p.times, ...p.est.map((e) => (shown ? e[dim] : p.times.map(() => null)))];
   // Nulls stay breaks (a failure, a missing value); rows only one run has are spanned.
   return uPlot.join([now, before], [now.map(() => 1), before.map(() => 1)]);
@@ -160,11 +160,13 @@ export function errorChoices() {
 }
 
 // The spans of time without a measurement: [t_(k−1), t_k] for a row k whose every component
-// is missing, or which comes more than 1.5 Δτ after the row before it (a gap in a recording);
-// adjacent spans joined. What the trajectory plot shades.
+// is missing, or which comes more than 1.5 times the typical step (the median of the first
+// 200) after the row before it (a gap in a recording); adjacent spans joined. What the
+// trajectory plot shades.
 export function blindSpans() {
   const d = state.data;
-  const dt = state.info?.dt_obs ?? Infinity;
+  const steps = d.times.slice(1, 201).map((t, k) => t - d.times[k]).sort((a, b) => a - b);
+  const dt = steps.length ? steps[Math.floor(steps.length / 2)] : Infinity;
   const spans = [];
   for (let k = 1; k < d.times.length; k++) {
     const missing = d.obs.length > 0 && d.obs.every((o) => o[k] == null);

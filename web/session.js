@@ -122,7 +122,7 @@ export function setupSession(hooks = {}) {
         dropSmoothed('');
         // The run on screen becomes the previous run, drawn faintly under the new one.
         if (state.data?.times.length > 1 && state.info) {
-          state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n, path: runPath() };
+          state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n, path: state.shownPath };
         }
         state.info = data.info;
         if (state.pendingConfig) {
@@ -132,6 +132,8 @@ export function setupSession(hooks = {}) {
           // The recording of the session now running (null: simulated).
           state.runRecording = state.pendingRecording;
         }
+        // The path of the run now on screen (the form may have set state.base before).
+        state.shownPath = runPath();
         sessionHooks.onLoaded?.(state.base);
         $('run-error').textContent = '';
         state.failures = new Map();

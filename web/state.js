@@ -33,6 +33,7 @@ export const state = {
   info: null, // the Session's info: name, n, m, times, methods, labels, keys, exact, density, nodes …
   data: null, // times, truth, est, ghost, lo, hi, obs, ySum, innov: per method and component
   previous: null, // {times, est, labels, n, path} of the run before the last change, drawn faintly
+  shownPath: null, // runPath() of the run on screen, taken when it loaded
   smoothed: null, // the smoothers over the rows so far (smoothing.js): {rows, dim, method, grid, points, densities, methods, est, lo, hi}
   reference: -1, // the method the error plot measures against (-1: none)
   diagnostics: null, // per method: mse, failed, failed_at, concerns … (the last frame's)
@@ -65,12 +66,14 @@ export const state = {
 // The methods' labels with their resolution (QIEM(399), PF(2000)) for legends and rows.
 export const labels = () => state.info.labels ?? state.info.methods;
 
-// What draws the path the run on screen filters: the seed, model, prior and x₀ of a
-// simulation, or the recording's file. The previous run is drawn under a run of the same path
-// only (another seed or model would put its estimates over a truth they never saw).
+// What draws the path a run filters: the seed, model, parameters, prior, x₀ and time step of
+// a simulation (a longer t_final extends the same path), or the recording's file. The
+// previous run is drawn under a run of the same path only (another seed, model or step would
+// put its estimates over a truth they never saw).
 export const runPath = () => {
   const base = state.base;
   if (!base) return null;
   const file = state.runRecording?.name ?? null;
-  return JSON.stringify([file ?? base.seed, base.model, base.prior, base.initial_state ?? null]);
+  const time = base.time ?? {};
+  return JSON.stringify([file ?? base.seed, base.model, base.parameters ?? null, base.prior, base.initial_state ?? null, time.dt_obs, time.inner_steps]);
 };

@@ -870,13 +870,13 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       check(r, 'truth');
       await page.locator('#errors-figure').screenshot({ path: `${artifacts}/errors-${preset}.png` });
     }
-    // The previous run stays on the trajectory plot after a change (here Δτ 0.01 → 0.02, so
-    // the two runs have different times): each of its methods' estimates at its own times,
-    // faint, until the "previous run" box is cleared.
-    const before = await page.evaluate(() => ({ times: window.zakaiPage.data.times, est: window.zakaiPage.data.est.map((e) => e[0]), labels: window.zakaiPage.info.labels }));
-    await page.fill('#dt-obs', '0.02');
+    // The previous run stays on the trajectory plot after a change that keeps its path (here
+    // a longer run, so the two runs have different times): each of its methods' estimates at
+    // its own times, faint, until the "previous run" box is cleared.
+    const before = await page.evaluate(() => ({ times: window.zakaiPage.data.times, est: window.zakaiPage.data.est.map((e) => e[0]), labels: window.zakaiPage.info.labels, t: window.zakaiPage.info.t_end }));
+    await page.fill('#t-final', String(before.t + 1));
     await page.click('#apply');
-    await page.waitForFunction(() => window.zakaiPage.info?.dt_obs === 0.02, null, { timeout: 30000 });
+    await page.waitForFunction((t) => window.zakaiPage.info?.t_end > t, before.t, { timeout: 30000 });
     await page.click('#play');
     await page.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 60000 });
     await page.waitForTimeout(300);
@@ -896,6 +896,15 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     shownBefore = await overlay();
     assert.ok(shownBefore.ys.every((y) => y.every((v) => v == null)), 'cleared: the previous run is not drawn');
     await page.check('#previous');
+    // Another seed is another path: its previous run is not drawn over the new truth.
+    await page.fill('#seed', String((await page.evaluate(() => window.zakaiPage.info.seed)) + 1));
+    await page.click('#apply');
+    await page.waitForFunction((s) => window.zakaiPage.info?.seed === s, Number(await page.inputValue('#seed')), { timeout: 30000 });
+    await page.click('#play');
+    await page.waitForFunction(() => window.zakaiPage.summary?.finished, null, { timeout: 60000 });
+    await page.waitForTimeout(300);
+    shownBefore = await overlay();
+    assert.ok(shownBefore.ys.every((y) => y.every((v) => v == null)), 'another seed: the previous run is not drawn');
   }
 
   // 16. Looks: Okabe–Ito colours with cycling line styles. No two of the first 28 methods

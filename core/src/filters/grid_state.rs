@@ -138,20 +138,38 @@ impl GridMeasurement {
         measurement: &crate::model::Model,
         noise: &crate::model::MeasurementDensity,
     ) -> Self {
-        let m = measurement.m;
-        let mut h_nodes = Vec::with_capacity(grid.len() * m);
-        let mut hx = alloc::vec![0.0; m];
+        let mut made = GridMeasurement {
+            likelihood: super::MeasurementLikelihood::new(noise, measurement.m),
+            h_nodes: Vec::with_capacity(grid.len() * measurement.m),
+            m: measurement.m,
+            chunk: Default::default(),
+            scratch: Default::default(),
+        };
+        made.tabulate(grid, measurement);
+        made
+    }
+
+    /// The same storage for another measurement of as many components (a driven model's,
+    /// frozen for the next step): h tabulated again, the density replaced.
+    pub(crate) fn refresh(
+        &mut self,
+        grid: &crate::grid::TensorGrid,
+        measurement: &crate::model::Model,
+        noise: &crate::model::MeasurementDensity,
+    ) {
+        self.likelihood.set_density(noise);
+        self.tabulate(grid, measurement);
+    }
+
+    /// h at every node of `grid`, a row per node.
+    fn tabulate(&mut self, grid: &crate::grid::TensorGrid, measurement: &crate::model::Model) {
+        let h_nodes = &mut self.h_nodes;
+        h_nodes.clear();
+        let mut hx = alloc::vec![0.0; self.m];
         grid.for_each_node(|_, x| {
             measurement.observation.eval(x, &mut hx);
             h_nodes.extend_from_slice(&hx);
         });
-        GridMeasurement {
-            likelihood: super::MeasurementLikelihood::new(noise, m),
-            h_nodes,
-            m,
-            chunk: Default::default(),
-            scratch: Default::default(),
-        }
     }
 
     /// `log[i] = ln p(z | x_i)` at the nodes `chunk.0` (their coordinates and h gathered

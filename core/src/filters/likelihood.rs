@@ -94,21 +94,32 @@ pub(crate) struct MeasurementLikelihood {
 impl MeasurementLikelihood {
     /// For `density` and `m` measurement components.
     pub(crate) fn new(density: &crate::model::MeasurementDensity, m: usize) -> Self {
-        MeasurementLikelihood {
+        let mut likelihood = MeasurementLikelihood {
             density: density.clone(),
-            noise: density.additive().cloned().map(ObservedNoise::new),
+            noise: None,
             pattern: None,
-            constant: match density {
-                crate::model::MeasurementDensity::StudentT { dof, scale } => {
-                    crate::model::measurement::student_t_log_constant(*dof, *scale)
-                }
-                _ => 0.0,
-            },
+            constant: 0.0,
             residual: alloc::vec![0.0; m],
             work: alloc::vec![0.0; m],
             batch_in: Vec::new(),
             batch_out: Vec::new(),
-        }
+        };
+        likelihood.set_density(density);
+        likelihood
+    }
+
+    /// The same storage for another `density` of as many components (a driven model's, frozen
+    /// for the next step): what it computes once per density is computed again.
+    pub(crate) fn set_density(&mut self, density: &crate::model::MeasurementDensity) {
+        self.density = density.clone();
+        self.noise = density.additive().cloned().map(ObservedNoise::new);
+        self.pattern = None;
+        self.constant = match density {
+            crate::model::MeasurementDensity::StudentT { dof, scale } => {
+                crate::model::measurement::student_t_log_constant(*dof, *scale)
+            }
+            _ => 0.0,
+        };
     }
 
     /// Whether [`MeasurementLikelihood::add_batch`] takes this family.

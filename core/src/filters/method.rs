@@ -153,6 +153,12 @@ pub trait Method {
     /// reported mixture reduction). The failure rule's track-loss test never marks them
     /// failed: an exact filter far from the truth is the problem's uncertainty, not a fault.
     const EXACT: bool = false;
+    /// Whether the method is an exact reference on this model and prior ([`Method::EXACT`]
+    /// unless a method says otherwise: the Kalman filter is exact only when every noise and
+    /// the prior are single Gaussians).
+    fn exact_on(_model: &crate::model::Model, _prior: &crate::model::Prior) -> bool {
+        Self::EXACT
+    }
     /// True for methods whose posterior is a density on a grid or a basis (the grid,
     /// spectral and direct methods), which the page draws: the grid methods give it by
     /// [`Filter::density`], the spectral filter (a Legendre expansion) through

@@ -205,8 +205,9 @@ pub struct Model {
     /// An SDE or a map from one observation time to the next.
     pub dynamics: Dynamics,
     /// A discrete-time model's transition noise when it is a Gaussian mixture
-    /// ([`Model::with_transition_mixture`]); `None` for `w_k ~ N(0, G Gᵀ)`.
-    pub transition_mixture: Option<Arc<TransitionMixture>>,
+    /// ([`Model::with_transition_mixture`], which keeps it consistent with `dynamics`, `n` and
+    /// G; read with [`Model::transition_mixture`]); `None` for `w_k ~ N(0, G Gᵀ)`.
+    pub(crate) transition_mixture: Option<Arc<TransitionMixture>>,
 }
 
 /// Transition noise that is a Gaussian mixture, `w_k ~ Σ_j π_j N(μ_j, Q_j)` (outliers in the
@@ -252,6 +253,7 @@ impl core::fmt::Debug for Model {
             .field("observations", &self.observations)
             .field("inputs", &self.inputs)
             .field("dynamics", &self.dynamics)
+            .field("transition_mixture", &self.transition_mixture)
             .finish_non_exhaustive()
     }
 }
@@ -473,6 +475,12 @@ impl Model {
         })
     }
 
+    /// The transition noise when it is a Gaussian mixture ([`Model::with_transition_mixture`]);
+    /// `None` for `w_k ~ N(0, G Gᵀ)`.
+    pub fn transition_mixture(&self) -> Option<&TransitionMixture> {
+        self.transition_mixture.as_deref()
+    }
+
     /// A warning for the Gaussian filters, which take a mixture transition noise through its
     /// first two moments ([`TransitionMixture`]); `None` when the noise is Gaussian.
     pub(crate) fn moments_only(&self, method: &str) -> Option<alloc::string::String> {
@@ -577,7 +585,8 @@ impl Model {
         )
     }
 
-    /// The same model with diffusion G (n × n; Q = G Gᵀ).
+    /// The same model with diffusion G (n × n; Q = G Gᵀ), which replaces a mixture transition
+    /// noise if there was one.
     pub fn with_diffusion(self, diffusion: DMatrix<f64>) -> Result<Self, ZakaiError> {
         let dynamics = self.dynamics;
         Ok(Model {

@@ -212,11 +212,6 @@ impl GaussianMixture {
 }
 
 impl MixtureComponent {
-    /// The lower-triangular Cholesky factor L of Σ = L Lᵀ (its upper triangle is not read).
-    pub(crate) fn factor(&self) -> &DMatrix<f64> {
-        self.chol.l_dirty()
-    }
-
     /// `ξ ← μ + L ξ` in place (L lower triangular, so row i reads only ξ_0..ξ_i: from the
     /// last row up): a standard normal ξ becomes a draw of this component.
     pub(crate) fn transform(&self, xi: &mut [f64]) {

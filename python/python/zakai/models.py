@@ -233,6 +233,7 @@ class Model:
             config.pop("diffusion", None)
             config["transition_noise"] = _mixture_components(transition_mixture, "transition_mixture")
         if transition_cov is not None:
+            config.pop("transition_noise", None)
             try:
                 q = np.array(_matrix(transition_cov, "transition_cov"), dtype=float)
             except (TypeError, ValueError):

@@ -1107,6 +1107,20 @@ fn a_scenario_gives_the_transition_noise_as_a_mixture() {
         println!("{}: {:?}", track.name, track.failure);
         assert!(track.failure.is_none(), "{} failed", track.name);
     }
+    // The exact references here: the Gaussian-sum filter, not the Kalman filter, which takes
+    // the mixture by its moments (the page's error reference and the track-loss exemption
+    // follow this); with Gaussian noise the Kalman filter is exact again.
+    let exact: Vec<bool> = config
+        .methods
+        .iter()
+        .map(|m| m.is_exact_on(e.model(), e.prior()))
+        .collect();
+    assert_eq!(exact, [false, false, false, true, false, false]);
+    let gaussian = Model::from_text(&["0.8*x"], &["x"], Noise::discrete(0.5))
+        .unwrap()
+        .discrete_time(1.0)
+        .unwrap();
+    assert!(config.methods[0].is_exact_on(&gaussian, e.prior()));
 
     for (extra, says) in [
         (

@@ -218,7 +218,11 @@ impl Session {
             chosen: self.experiment.chosen_defaults().to_vec(),
             seed: self.seed,
             keys: c.methods.iter().map(|m| m.key().to_string()).collect(),
-            exact: c.methods.iter().map(|m| m.is_exact()).collect(),
+            exact: c
+                .methods
+                .iter()
+                .map(|m| m.is_exact_on(self.experiment.model(), self.experiment.prior()))
+                .collect(),
             density: c.methods.iter().map(|m| m.has_density()).collect(),
             nodes: self
                 .run

@@ -413,13 +413,13 @@ impl GaussianSum {
 
     /// Predicts every component over `dt` (exact).
     fn propagate(&mut self, dt: f64) -> Result<(), FilterError> {
-        if let (Some(noise), crate::model::Dynamics::Discrete { period }) =
-            (self.transition_noise.take(), self.dynamics)
-        {
-            // Taken out while the reduction borrows the filter, and put back.
-            let split = self.split_transitions(&noise, period, dt);
-            self.transition_noise = Some(noise);
-            return split;
+        if let crate::model::Dynamics::Discrete { period } = self.dynamics {
+            if let Some(noise) = self.transition_noise.take() {
+                // Taken out while the reduction borrows the filter, and put back.
+                let split = self.split_transitions(&noise, period, dt);
+                self.transition_noise = Some(noise);
+                return split;
+            }
         }
         let d = Discretization::for_step(
             &mut self.cached,

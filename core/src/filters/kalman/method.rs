@@ -92,6 +92,21 @@ impl Method for Kalman {
     type Params = KalmanParams;
     type Filter = Kalman;
 
+    /// Exact where the model is linear-Gaussian: a mixture (the measurement noise, the
+    /// transition noise or the prior) is taken by its first two moments — the best linear
+    /// filter, not the exact one (the Gaussian-sum filter is).
+    fn exact_on(model: &crate::model::Model, prior: &crate::model::Prior) -> bool {
+        let single = |m: &crate::model::GaussianMixture| m.components().len() == 1;
+        let noise = match &model.observations {
+            crate::model::ObservationModel::Continuous { .. } => true,
+            crate::model::ObservationModel::Discrete { density } => {
+                density.additive().is_some_and(single)
+            }
+        };
+        let start = matches!(prior, crate::model::Prior::Mixture(m) if single(m));
+        noise && start && model.transition_mixture.is_none()
+    }
+
     fn info() -> MethodInfo {
         info::<Self::Params>(
             Self::KEY,

@@ -263,8 +263,8 @@ impl Pf {
     /// particles move only when the step succeeds). A state-dependent G is evaluated at every
     /// particle at the start of each substep; where it is not finite the step fails.
     ///
-    /// For a discrete-time model the moves are its transitions instead, `x ← F(x) + G(x) ξ`
-    /// (one per period in `dt`, each of a driven model at the time it reaches, with the
+    /// For a discrete-time model the moves are its transitions instead, `x ← F(x) + G(x) ξ`,
+    /// or `F(x) + w` with w drawn from a mixture transition noise (one per period in `dt`, each of a driven model at the time it reaches, with the
     /// step's `inputs`): the particles are drawn from the transition itself.
     fn predict_into_spare(
         &mut self,
@@ -313,13 +313,15 @@ impl Pf {
             self.normal.fill(&mut self.rng, &mut self.noise);
             if let (true, Some(w)) = (discrete, &self.model.transition_mixture) {
                 // x ← F(x) + w, w drawn from the mixture: a component per particle, then
-                // w = μ + L ξ with the particle's normals ξ.
+                // its mean and factor applied to the particle's normals.
                 for i in 0..count {
                     let c = w.mixture().pick(self.rng.random());
-                    let l = c.factor();
-                    for j in 0..n {
-                        let lw: f64 = (0..=j).map(|k| l[(j, k)] * self.noise[k * count + i]).sum();
-                        self.resampled[j * count + i] = self.drift[j * count + i] + c.mean[j] + lw;
+                    for (l, xi) in self.point.iter_mut().enumerate() {
+                        *xi = self.noise[l * count + i];
+                    }
+                    c.transform(&mut self.point);
+                    for (j, w) in self.point.iter().enumerate() {
+                        self.resampled[j * count + i] = self.drift[j * count + i] + w;
                     }
                 }
                 continue;
@@ -605,10 +607,15 @@ impl Filter for Pf {
         };
         if let Some((_, measurement)) = &frozen {
             if let ObservationModel::Discrete { density } = &measurement.observations {
-                self.weighing = Weighing::Measurements(crate::filters::MeasurementLikelihood::new(
-                    density,
-                    measurement.m,
-                ));
+                // The likelihood's storage kept from step to step, its density the step's.
+                match &mut self.weighing {
+                    Weighing::Measurements(likelihood) => likelihood.set_density(density),
+                    weighing => {
+                        *weighing = Weighing::Measurements(
+                            crate::filters::MeasurementLikelihood::new(density, measurement.m),
+                        )
+                    }
+                }
             }
         }
         let mut observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;

@@ -28,7 +28,7 @@ impl Method for Pf {
         "each step's inputs held over its interval, t at the interval's midpoint in the Euler–Maruyama substeps (a discrete-time map's transition at the time it reaches) and at τ_k in the weights",
     );
     const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
-        "each particle drawn from the transition itself, x_k = F(x_(k−1)) + w_k (no Euler steps); FFBSi weighs with the transition density N(x_k; F(x_(k−1)), Q)",
+        "each particle drawn from the transition itself, x_k = F(x_(k−1)) + w_k (no Euler steps; w_k from its mixture when it is one); FFBSi weighs with the transition density, N(x_k; F(x_(k−1)), Q) or the mixture's",
     );
     const RANDOM: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(

@@ -334,6 +334,8 @@ impl Smoother for Ffbsi {
         });
         let mut drift = Vec::new();
         let mut scratch = BatchScratch::default();
+        // An autonomous model's moves all have the filter's own model (cloned once).
+        let own = self.filter.model.clone();
         for k in (0..last).rev() {
             let record = self.records[k].clone();
             if record.substeps > 0 {
@@ -351,9 +353,12 @@ impl Smoother for Ffbsi {
                         0 => &before[..],
                         _ => &record.trail[(s - 1) * n * count..s * n * count],
                     };
-                    let dynamics = self.dynamics_of(&record, s)?.into_owned();
+                    let frozen = match self.filter.driven.is_some() {
+                        true => Some(self.dynamics_of(&record, s)?.into_owned()),
+                        false => None,
+                    };
                     self.back_one(
-                        &dynamics,
+                        frozen.as_ref().unwrap_or(&own),
                         cloud,
                         &before_w,
                         record.h,

@@ -162,7 +162,8 @@ impl PointMass {
         &self.grid
     }
 
-    /// Cells in the window of the widest kernel: the prediction's cost per cell.
+    /// Cells in the window of the widest kernel (summed over a mixture noise's components): the
+    /// prediction's cost per cell.
     pub fn kernel_window(&self) -> f64 {
         self.kernel
             .as_ref()
@@ -291,7 +292,7 @@ impl Filter for PointMass {
             };
             let measurement = self.model.at(t, u)?;
             let noise = check_model(&self.name, &measurement)?;
-            self.measurement = GridMeasurement::new(&self.grid, &measurement, &noise);
+            self.measurement.refresh(&self.grid, &measurement, &noise);
         }
         self.measurement.likelihood.check(&self.name, obs.value)?;
         self.saved.save(&self.u, &self.estimate);

@@ -15,7 +15,7 @@
 //!
 //! In all, a window is that of the unbounded lattice of cells: what it puts beyond the box is
 //! lost (counted, for the self-check), never folded back. Cost: per source cell, the product
-//! of the window widths `2·radius·σ_l/Δx_l + 1`.
+//! of the window widths `2·radius·σ_l/Δx_l + 1` (summed over a mixture's components).
 
 use alloc::format;
 use alloc::vec;

@@ -30,10 +30,10 @@ impl Method for PointMass {
         "w_k ~ N(0, Q(x_(k−1))): the kernel of each cell with its own Q (diagonal; mixed terms of a state-dependent Q are refused)",
     );
     const INPUTS: crate::filters::method::Support = crate::filters::method::Support::Exact(
-        "F and Q tabulated anew for every transition, at the time it reaches, with the step's inputs; h at τ_k (no smoother)",
+        "F and Q tabulated anew for every transition, at the time it reaches, with the step's inputs (forward and, in the smoother, backward); h at τ_k",
     );
     const DISCRETE_TIME: crate::filters::method::Support = crate::filters::method::Support::Exact(
-        "the transition kernel N(x; F(ξ), Q(ξ)) on the grid, cell-integrated, cut at `radius` sd (Šimandl, Královec & Söderström 2006)",
+        "the transition kernel N(x; F(ξ), Q(ξ)) on the grid (for a mixture w_k, the mixture of its components' kernels), cell-integrated, cut at `radius` sd (Šimandl, Královec & Söderström 2006)",
     );
     const SMOOTHING: Smoothing = Smoothing::By(
         "forward–backward",

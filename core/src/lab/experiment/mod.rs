@@ -480,7 +480,12 @@ impl Experiment {
             next: 0,
             bound: self.config.divergence_bound(&self.prior),
             track_loss: self.config.failure.track_loss,
-            exact: self.config.methods.iter().map(|m| m.is_exact()).collect(),
+            exact: self
+                .config
+                .methods
+                .iter()
+                .map(|m| m.is_exact_on(&self.model, &self.prior))
+                .collect(),
             follow_failed: false,
             innovations: None,
         };

@@ -119,9 +119,10 @@ macro_rules! registry {
             pub fn smoothing(&self) -> crate::filters::smoothing::Smoothing {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::SMOOTHING,)* }
             }
-            /// Whether the method is an exact reference ([`Method::EXACT`]).
-            pub fn is_exact(&self) -> bool {
-                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::EXACT,)* }
+            /// Whether the method is an exact reference on this model and prior
+            /// ([`Method::exact_on`]).
+            pub fn is_exact_on(&self, model: &crate::model::Model, prior: &crate::model::Prior) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::exact_on(model, prior),)* }
             }
 
             /// Whether the method's posterior is a density on a grid or basis ([`Method::DENSITY`]).

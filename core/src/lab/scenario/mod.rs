@@ -639,13 +639,7 @@ impl ScenarioConfig {
                 ));
             }
             let before = p.len();
-            let comps: Vec<_> = self
-                .model
-                .transition_noise
-                .iter()
-                .enumerate()
-                .map(|(i, c)| c.resolve(&names, &format!("{field}[{i}]"), &mut p))
-                .collect();
+            let comps = self.transition_components(&names, &mut p);
             if !unresolved(&p, before) {
                 check_mixture(&comps, n, field, &mut p)
             }
@@ -1075,21 +1069,36 @@ impl ScenarioConfig {
             },
         }?;
         let model = match self.model.dynamics {
-            DynamicsKind::Continuous => return Ok(model),
+            DynamicsKind::Continuous => model,
             DynamicsKind::Discrete => model.discrete_time(self.time.dt_obs)?,
         };
         if self.model.transition_noise.is_empty() {
             return Ok(model);
         }
-        let comps = self.resolved(|names, p| {
-            self.model
-                .transition_noise
-                .iter()
-                .enumerate()
-                .map(|(i, c)| c.resolve(names, &format!("model.transition_noise[{i}]"), p))
-                .collect::<Vec<_>>()
-        })?;
+        if self.model.diffusion.is_some() {
+            return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                "model.transition_noise",
+                "give the transition noise once: as a mixture here, or as its factor G in model.diffusion",
+            )]));
+        }
+        // (A continuous-time model is refused by with_transition_mixture, with the reason.)
+        let comps = self.resolved(|names, p| self.transition_components(names, p))?;
         model.with_transition_mixture(mixture(&comps, n)?)
+    }
+
+    /// `model.transition_noise`'s components with their coefficients resolved (problems into
+    /// `problems`).
+    fn transition_components(
+        &self,
+        names: &[(String, f64)],
+        problems: &mut Vec<ConfigProblem>,
+    ) -> Vec<NumericComponent> {
+        self.model
+            .transition_noise
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c.resolve(names, &format!("model.transition_noise[{i}]"), problems))
+            .collect()
     }
 
     /// `Some(k)` for a driven model ([`crate::Inputs`]): the k inputs of
