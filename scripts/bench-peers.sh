@@ -3,15 +3,20 @@
 # a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
 # nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
 # from Python (the `zakai` package, per step() call and per run() call).
-# Installs NumPy, SciPy, FilterPy and this checkout's wheel into target/peers-venv. Prints tables.
+# Then the particle filter beside `particles` (Chopin & Papaspiliopoulos 2020) on its growth
+# model and its own stochastic-volatility model (scripts/peers/growth_pf.py, sv_pf.py).
+# Installs NumPy, SciPy, FilterPy, particles and this checkout's wheel into target/peers-venv.
+# Prints tables.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 venv=target/peers-venv
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
-  "$venv/bin/pip" install -q numpy scipy filterpy
 fi
+# particles needs numpy < 2; pip resolves the four together.
+"$venv/bin/python" -c 'import numpy, scipy, filterpy, particles' 2>/dev/null \
+  || "$venv/bin/pip" install -q numpy scipy filterpy particles
 # Zakai's Python package into the same environment, built from this checkout.
 "$venv/bin/pip" install -q maturin
 rm -f target/wheels/zakai-*.whl
@@ -79,3 +84,8 @@ for k, (work, peer) in names.items():
     p, s, r = peers[k], from_python[k]["step"], from_python[k]["run"]
     print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {s * 1e6:>8.2f}µs {p / s:>6.1f}× {r * 1e6:>8.2f}µs {p / r:>6.1f}×")
 PY
+
+echo
+(cd scripts/peers && "../../$venv/bin/python" growth_pf.py)
+echo
+(cd scripts/peers && "../../$venv/bin/python" sv_pf.py)

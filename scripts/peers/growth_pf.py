@@ -10,7 +10,8 @@ default ESSrmin = 0.5; Zakai's ess_threshold = 0.5). Zakai steps through its Pyt
 `SMC.run()`. Prints each one's time per step (the least of `REPEATS` runs) and log-likelihood
 estimate, which agree within their Monte Carlo error when the two filter the same model.
 
-Needs an environment with `particles` (numpy < 2) and Zakai's wheel, e.g.:
+`bash scripts/bench-peers.sh` runs it (it installs what it needs); by hand, an environment with
+`particles` (numpy < 2) and Zakai's wheel:
     python3 -m venv /tmp/pvenv && /tmp/pvenv/bin/pip install particles
     maturin build --release -m python/Cargo.toml -o /tmp/wheels
     /tmp/pvenv/bin/pip install --no-deps /tmp/wheels/zakai-*.whl

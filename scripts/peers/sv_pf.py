@@ -12,8 +12,8 @@ evaluated as a batch. Both resample systematically when the effective sample siz
 below N/2. Prints each one's time per step (the least of `REPEATS` runs) and log-likelihood
 estimate, which agree within their Monte Carlo error when the two filter the same model.
 
-Set-up as in `growth_pf.py` (an environment with `particles`, numpy < 2, and a release wheel
-of Zakai):
+`bash scripts/bench-peers.sh` runs it (it installs what it needs); by hand, an environment with
+`particles` (numpy < 2) and a release wheel of Zakai:
     python3 -m venv /tmp/pvenv && /tmp/pvenv/bin/pip install particles
     maturin build --release -m python/Cargo.toml -o /tmp/wheels
     /tmp/pvenv/bin/pip install --no-deps /tmp/wheels/zakai-*.whl

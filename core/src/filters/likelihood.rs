@@ -138,8 +138,9 @@ impl MeasurementLikelihood {
     /// `points` (n·count) and `hx` (m·count) are in structure-of-arrays layout
     /// ([`crate::VectorFunction::eval_batch`]). Returns false, adding nothing, for the other
     /// families (additive noise has its own batch in the filters; Student-t's per-point
-    /// arithmetic reads no expression). The values and the errors are those of
-    /// [`MeasurementLikelihood::log_at`].
+    /// arithmetic reads no expression). The values and the messages are those of
+    /// [`MeasurementLikelihood::log_at`]; where several points are bad, the one named is the
+    /// first in component order (the pointwise path names the first point).
     pub(crate) fn add_batch(
         &mut self,
         z: &[f64],
