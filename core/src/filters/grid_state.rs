@@ -173,13 +173,13 @@ impl GridMeasurement {
     }
 
     /// `log[i] = ln p(z | x_i)` at the nodes `chunk.0` (their coordinates and h gathered
-    /// into the chunk), as a batch; false when the family has none.
+    /// into the chunk), as a batch (for a family that [`super::MeasurementLikelihood::batches`]).
     fn chunk_log_likelihoods(
         &mut self,
         grid: &crate::grid::TensorGrid,
         node: &mut [f64],
         z: &[f64],
-    ) -> Result<bool, crate::error::FilterError> {
+    ) -> Result<(), crate::error::FilterError> {
         let (n, m) = (grid.dim(), self.m);
         let (indices, points, h, out) = &mut self.chunk;
         let count = indices.len();
@@ -196,8 +196,11 @@ impl GridMeasurement {
         }
         out.clear();
         out.resize(count, 0.0);
-        self.likelihood
-            .add_batch(z, (points, h, count), out, &mut self.scratch)
+        let batched = self
+            .likelihood
+            .add_batch(z, (points, h, count), out, &mut self.scratch)?;
+        debug_assert!(batched, "called for a family with a batch only");
+        Ok(())
     }
 
     /// Bayes' rule on the nodes (001 (6)): `u ← u · p(z | x)` for the observed components of
