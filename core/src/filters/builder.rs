@@ -209,6 +209,7 @@ impl<'m, M: Method> Builder<'m, M> {
                     probes: &probes,
                     bounds: &bounds,
                     dt_obs: self.dt,
+                    frozen_at_start: false,
                 };
                 if let Err(why) = crate::filters::method::suitability_of::<M>(&ctx, &self.params) {
                     problems.push(ConfigProblem::new("method", why));
@@ -241,6 +242,7 @@ impl<'m, M: Method> Builder<'m, M> {
             probes: &probes,
             bounds: &bounds,
             dt_obs: self.dt,
+            frozen_at_start: false,
         };
         let params = crate::filters::method::problem_defaults_of::<M>(&problem, &self.params)
             .map(|(p, _)| p)

@@ -6,7 +6,10 @@ use alloc::vec::Vec;
 
 use super::Observation;
 use crate::error::FilterError;
-use crate::model::measurement::{ln_gamma, poisson_log, rate_error, variance_error, variance_log};
+use crate::model::measurement::{
+    ln_gamma, poisson_log_of_valid, rate_error, rate_is_valid, variance_error, variance_is_valid,
+    variance_log_of_valid,
+};
 
 /// The observation noise density of the components an observation has (001's mixtures, or a
 /// Gaussian), with the marginal of each pattern of missing components met so far: built the
@@ -163,11 +166,11 @@ impl MeasurementLikelihood {
                     }
                     let v = &self.batch_out[j * count..(j + 1) * count];
                     let h = &hx[j * count..(j + 1) * count];
-                    for (i, ((o, &v), &h)) in out.iter_mut().zip(v).zip(h).enumerate() {
-                        *o += variance_log(zj, h, v).ok_or_else(|| {
-                            FilterError::Likelihood(variance_error(j, v, &point(i)))
-                        })?;
+                    if !all_valid_variances(v) {
+                        let i = v.iter().position(|&v| !variance_is_valid(v)).unwrap_or(0);
+                        return Err(FilterError::Likelihood(variance_error(j, v[i], &point(i))));
                     }
+                    add_variance_logs(out, zj, h, v);
                 }
                 Ok(true)
             }
@@ -202,11 +205,11 @@ impl MeasurementLikelihood {
                     }
                     let log_factorial = ln_gamma(zj + 1.0);
                     let rates = &hx[j * count..(j + 1) * count];
-                    for (i, (o, &rate)) in out.iter_mut().zip(rates).enumerate() {
-                        *o += poisson_log(zj, rate, log_factorial).ok_or_else(|| {
-                            FilterError::Likelihood(rate_error(j, rate, &point(i)))
-                        })?;
+                    if !all_valid_rates(rates) {
+                        let i = rates.iter().position(|&r| !rate_is_valid(r)).unwrap_or(0);
+                        return Err(FilterError::Likelihood(rate_error(j, rates[i], &point(i))));
                     }
+                    add_poisson_logs(out, zj, rates, log_factorial);
                 }
                 Ok(true)
             }
@@ -421,5 +424,38 @@ mod tests {
             .log_at(&z, &[points[0], points[count]], &[hx[0], hx[count]])
             .unwrap_err();
         assert_eq!(format!("{e}"), format!("{one}"));
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `out_i += ln N(z; h_i, v_i)` for variances already checked.
+    fn add_variance_logs(out: &mut [f64], z: f64, h: &[f64], v: &[f64]) {
+        for ((o, &h), &v) in out.iter_mut().zip(h).zip(v) {
+            *o += variance_log_of_valid(z, h, v);
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `out_i += ln Poisson(z; rate_i)` for rates already checked.
+    fn add_poisson_logs(out: &mut [f64], z: f64, rates: &[f64], log_factorial: f64) {
+        for (o, &rate) in out.iter_mut().zip(rates) {
+            *o += poisson_log_of_valid(z, rate, log_factorial);
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// Whether every variance is positive and finite (a pass without an early exit, which
+    /// vectorises; the caller finds the first bad one only when there is one).
+    fn all_valid_variances(v: &[f64]) -> bool {
+        v.iter().fold(true, |ok, &v| ok & variance_is_valid(v))
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// Whether every Poisson rate is nonnegative and finite (as [`all_valid_variances`]).
+    fn all_valid_rates(rates: &[f64]) -> bool {
+        rates.iter().fold(true, |ok, &r| ok & rate_is_valid(r))
     }
 }

@@ -61,6 +61,10 @@ pub struct ProblemContext<'a> {
     pub bounds: &'a [(f64, f64)],
     /// Δτ, the observation interval, where it is known.
     pub dt_obs: Option<f64>,
+    /// True when `model` is a driven model's model at its start, put there by
+    /// [`ProblemContext::at_start`]: a default that holds only for a time-invariant model
+    /// (the particle filter's exact linear transition) must not be chosen from it.
+    pub frozen_at_start: bool,
 }
 
 impl ProblemContext<'_> {
@@ -79,6 +83,7 @@ impl ProblemContext<'_> {
                 probes: self.probes,
                 bounds: self.bounds,
                 dt_obs: self.dt_obs,
+                frozen_at_start: true,
             }),
             // Zeros are finite and as many as the model reads: not reached.
             Err(_) => f(self),

@@ -1,5 +1,6 @@
 //! Small dense linear-algebra helpers on nalgebra shared by the filters.
 
+pub(crate) mod elementary;
 pub(crate) mod simd;
 
 use simd::per_node_kernel;
@@ -246,37 +247,6 @@ pub(crate) fn separate(p: f64, r: f64, c: f64) -> f64 {
     p * r + c
 }
 
-/// `Σ_{i ≤ 13} rⁱ/i!` in Estrin's scheme: pairs `c_{2j} + c_{2j+1} r`, then pairs of those
-/// with r², r⁴, r⁸ — five multiply–adds `madd(p, r, c) = p r + c` deep instead of Horner's
-/// fourteen, so that a loop of exponentials runs at the machine's throughput rather than
-/// waiting on one long chain per value.
-#[inline(always)]
-fn taylor_by_estrin(r: f64, madd: &impl Fn(f64, f64, f64) -> f64) -> f64 {
-    const C: [f64; 14] = [
-        1.0,
-        1.0,
-        0.5,
-        1.0 / 6.0,
-        1.0 / 24.0,
-        1.0 / 120.0,
-        1.0 / 720.0,
-        1.0 / 5_040.0,
-        1.0 / 40_320.0,
-        1.0 / 362_880.0,
-        1.0 / 3_628_800.0,
-        1.0 / 39_916_800.0,
-        1.0 / 479_001_600.0,
-        1.0 / 6_227_020_800.0,
-    ];
-    let r2 = r * r;
-    let r4 = r2 * r2;
-    let r8 = r4 * r4;
-    let pair = |j: usize| madd(C[2 * j + 1], r, C[2 * j]);
-    let low = madd(madd(pair(3), r2, pair(2)), r4, madd(pair(1), r2, pair(0)));
-    let high = madd(pair(6), r4, madd(pair(5), r2, pair(4)));
-    madd(high, r8, low)
-}
-
 /// [`exp_nonpositive`] with the polynomial's multiply–adds `madd`; with [`separate`] the
 /// scalar function itself.
 #[inline(always)]
@@ -290,7 +260,7 @@ fn exp_nonpositive_with(x: f64, madd: impl Fn(f64, f64, f64) -> f64) -> f64 {
     let t = x * core::f64::consts::LOG2_E + ROUND;
     let k = t - ROUND;
     let r = (x - k * LN2_HI) - k * LN2_LO;
-    let p = taylor_by_estrin(r, &madd);
+    let p = elementary::exp_taylor(r, &madd);
     // The low bits of t hold k; k + 1023 lies in [13, 1024] here, a normal exponent.
     let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
     if below {
@@ -397,16 +367,32 @@ per_node_kernel! {
 /// a particle filter's step), whose result does not depend on the vector width.
 #[inline(always)]
 pub(crate) fn sum_in_lanes(x: &[f64], f: impl Fn(f64) -> f64) -> f64 {
+    sum_zipped_in_lanes([x], |[v]| f(v))
+}
+
+/// [`sum_in_lanes`] of `f` over K slices read side by side (`f([a_i, b_i, …])`, up to the
+/// shortest length): weighted sums, moments about a mean.
+#[inline(always)]
+pub(crate) fn sum_zipped_in_lanes<const K: usize>(
+    columns: [&[f64]; K],
+    f: impl Fn([f64; K]) -> f64,
+) -> f64 {
     const LANES: usize = 8;
+    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    let whole = len - len % LANES;
     let mut s = [0.0; LANES];
-    let mut chunks = x.chunks_exact(LANES);
-    for c in &mut chunks {
-        for l in 0..LANES {
-            s[l] += f(c[l]);
+    for start in (0..whole).step_by(LANES) {
+        let block: [&[f64; LANES]; K] = columns.map(|c| {
+            c[start..start + LANES]
+                .try_into()
+                .expect("a whole block of lanes")
+        });
+        for (l, s) in s.iter_mut().enumerate() {
+            *s += f(block.map(|b| b[l]));
         }
     }
-    for (l, &v) in chunks.remainder().iter().enumerate() {
-        s[l] += f(v);
+    for (l, i) in (whole..len).enumerate() {
+        s[l] += f(columns.map(|c| c[i]));
     }
     lanes_total(s)
 }

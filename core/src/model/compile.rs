@@ -353,7 +353,14 @@ impl Expression {
             Node::Const(c) => return Operand::Const(c),
             Node::Var(j) => return Operand::Var(j),
             Node::Neg(a) => Operation::Neg(self.emit(a, ssa, done)),
-            Node::Unary(_, f, a) => Operation::Unary(f, self.emit(a, ssa, done)),
+            Node::Unary(name, f, a) => {
+                let a = self.emit(a, ssa, done);
+                match name {
+                    "exp" => Operation::Exp(a),
+                    "ln" | "log" => Operation::Ln(a),
+                    _ => Operation::Unary(f, a),
+                }
+            }
             Node::Binary(op, a, b) => {
                 let (x, y) = (self.emit(a, ssa, done), self.emit(b, ssa, done));
                 match op {

@@ -98,16 +98,24 @@ pub(crate) fn ln_gamma(x: f64) -> f64 {
 /// `log_factorial` = ln Γ(z + 1); `None` when the rate is negative or not finite
 /// ([`rate_error`] says so).
 pub(crate) fn poisson_log(z: f64, rate: f64, log_factorial: f64) -> Option<f64> {
-    if !(rate >= 0.0 && rate.is_finite()) {
-        return None;
-    }
-    Some(if z == 0.0 {
+    rate_is_valid(rate).then(|| poisson_log_of_valid(z, rate, log_factorial))
+}
+
+/// Whether a Poisson rate can be used: nonnegative and finite.
+#[inline(always)]
+pub(crate) fn rate_is_valid(rate: f64) -> bool {
+    (0.0..f64::INFINITY).contains(&rate)
+}
+
+/// [`poisson_log`] of a rate [`rate_is_valid`] accepts (−∞ for a positive count at rate 0);
+/// branch-free in the rate, so a loop of it vectorises.
+#[inline(always)]
+pub(crate) fn poisson_log_of_valid(z: f64, rate: f64, log_factorial: f64) -> f64 {
+    if z == 0.0 {
         -rate
-    } else if rate == 0.0 {
-        f64::NEG_INFINITY
     } else {
-        z * libm::log(rate) - rate - log_factorial
-    })
+        z * crate::linalg::elementary::ln(rate) - rate - log_factorial
+    }
 }
 
 /// Why component `j`'s Poisson rate cannot be used at the state `x`.
@@ -121,11 +129,21 @@ pub(crate) fn rate_error(j: usize, rate: f64, x: &[f64]) -> String {
 /// One component's `ln N(z; h, v)` of a variance s(x) = v; `None` when v is not positive and
 /// finite ([`variance_error`] says so).
 pub(crate) fn variance_log(z: f64, h: f64, v: f64) -> Option<f64> {
-    if !(v > 0.0 && v.is_finite()) {
-        return None;
-    }
+    variance_is_valid(v).then(|| variance_log_of_valid(z, h, v))
+}
+
+/// Whether a variance can be used: positive and finite.
+#[inline(always)]
+pub(crate) fn variance_is_valid(v: f64) -> bool {
+    (v > 0.0) & (v < f64::INFINITY)
+}
+
+/// [`variance_log`] of a variance [`variance_is_valid`] accepts; branch-free, so a loop of it
+/// vectorises.
+#[inline(always)]
+pub(crate) fn variance_log_of_valid(z: f64, h: f64, v: f64) -> f64 {
     let r = z - h;
-    Some(-0.5 * (LN_TAU + libm::log(v) + r * r / v))
+    -0.5 * (LN_TAU + crate::linalg::elementary::ln(v) + r * r / v)
 }
 
 /// Why component `j`'s variance cannot be used at the state `x`.

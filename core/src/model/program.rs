@@ -6,7 +6,8 @@
 //! registers reused once a value is dead. Evaluation runs one pass per instruction over a
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
 //! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
-//! (`sin`, `exp`, …) are called per element without any interpretation per point.
+//! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp` and `ln`
+//! are passes that vectorise ([`crate::linalg::elementary`]).
 //!
 //! The per-point value of an expression is the same program on a block of one point, so the
 //! batch and the point-wise results are equal to the last bit. Against an interpreter of the
@@ -43,6 +44,10 @@ pub(crate) enum Operation {
     Neg(Operand),
     /// `f(a)`.
     Unary(UnaryFn, Operand),
+    /// `e^a` ([`crate::linalg::elementary::exp`], a pass that vectorises).
+    Exp(Operand),
+    /// `ln a` ([`crate::linalg::elementary::ln`], a pass that vectorises).
+    Ln(Operand),
     /// `a + b`.
     Add(Operand, Operand),
     /// `a - b`.
@@ -61,7 +66,11 @@ impl Operation {
     /// The operands read.
     pub(crate) fn operands(&self) -> [Option<Operand>; 2] {
         match *self {
-            Operation::Neg(a) | Operation::Unary(_, a) | Operation::PowI(a, _) => [Some(a), None],
+            Operation::Neg(a)
+            | Operation::Unary(_, a)
+            | Operation::Exp(a)
+            | Operation::Ln(a)
+            | Operation::PowI(a, _) => [Some(a), None],
             Operation::Add(a, b)
             | Operation::Sub(a, b)
             | Operation::Mul(a, b)
@@ -74,6 +83,8 @@ impl Operation {
         match self {
             Operation::Neg(a) => Operation::Neg(f(a)),
             Operation::Unary(g, a) => Operation::Unary(g, f(a)),
+            Operation::Exp(a) => Operation::Exp(f(a)),
+            Operation::Ln(a) => Operation::Ln(f(a)),
             Operation::PowI(a, k) => Operation::PowI(f(a), k),
             Operation::Add(a, b) => Operation::Add(f(a), f(b)),
             Operation::Sub(a, b) => Operation::Sub(f(a), f(b)),
@@ -333,6 +344,14 @@ fn apply(operation: &Operation, dst: &mut [f64], a: Arg, b: Arg) {
     match *operation {
         Operation::Neg(_) => map1(dst, a, |x| -x),
         Operation::Unary(f, _) => map1(dst, a, f),
+        Operation::Exp(_) => match a {
+            Arg::Slice(a) => crate::linalg::elementary::exp_into(dst, a),
+            Arg::Scalar(x) => dst.fill(crate::linalg::elementary::exp(x)),
+        },
+        Operation::Ln(_) => match a {
+            Arg::Slice(a) => crate::linalg::elementary::ln_into(dst, a),
+            Arg::Scalar(x) => dst.fill(crate::linalg::elementary::ln(x)),
+        },
         Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
         Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
         Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),

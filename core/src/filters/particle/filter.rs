@@ -55,7 +55,9 @@ enum ParticleDiffusion {
 /// constructor, so a step allocates nothing.
 ///
 /// The bootstrap particle filter (Gordon, Salmond & Smith): particles follow the signal SDE by
-/// Euler–Maruyama, weights are multiplied by the observation likelihood and kept in the log
+/// Euler–Maruyama — or, for a linear SDE `dx = (A x + b) dt + G dv` with constant G, by its
+/// exact Gaussian transition `N(e^{AΔτ} x + Γb, Q_Δτ)` in one draw per interval, whatever its
+/// length —, weights are multiplied by the observation likelihood and kept in the log
 /// domain, and systematic resampling runs whenever the effective sample size
 /// `ESS = 1 / Σ wᵢ²` falls below `ess_threshold · N`.
 ///
@@ -142,6 +144,9 @@ pub struct Pf {
     /// The clouds between the Euler–Maruyama steps of the last prediction (after 1, …, S − 1
     /// of its S steps, n·N values each), kept when a smoother asks for them.
     pub(super) trail: Option<Vec<f64>>,
+    /// The exact Gaussian transition of a linear SDE, drawn from in one move per interval
+    /// instead of Euler–Maruyama substeps ([`super::exact`]).
+    pub(super) exact: Option<super::exact::LinearTransition>,
 }
 
 impl Pf {
@@ -228,6 +233,7 @@ impl Pf {
             last_unique: count,
             substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), ctx.dt_obs),
             trail: None,
+            exact: super::exact::LinearTransition::of(model, ctx.probes),
         })
     }
 
@@ -243,11 +249,15 @@ impl Pf {
     }
 
     /// The moves of a prediction over `dt` and the length each stands for: the
-    /// Euler–Maruyama substeps ([`crate::filters::Substeps`]), or for a discrete-time model
-    /// its transitions, each counted as length 1 (the transition's noise is `G Gᵀ` itself).
+    /// Euler–Maruyama substeps ([`crate::filters::Substeps`]), one move of length `dt` for a
+    /// linear SDE's exact transition, or for a discrete-time model its transitions, each
+    /// counted as length 1 (the transition's noise is `G Gᵀ` itself).
     pub(super) fn moves(&self, dt: f64) -> Result<(usize, f64), FilterError> {
         if self.model.is_discrete_time() {
             return Ok((self.model.transitions(dt)?, 1.0));
+        }
+        if self.exact.is_some() {
+            return Ok((1, dt));
         }
         let substeps = self.substeps.over(dt);
         Ok((substeps, dt / substeps as f64))
@@ -277,6 +287,17 @@ impl Pf {
         if substeps == 0 {
             // No transition (a step shorter than rounding of the period): the particles stay.
             self.resampled.copy_from_slice(&self.particles);
+        }
+        if let Some(exact) = &mut self.exact {
+            // x' ~ N(Φ x + Γb, Q_Δ): one draw over the whole interval.
+            self.normal.fill(&mut self.rng, &mut self.noise);
+            super::exact::draw(
+                exact.over(dt),
+                &self.particles,
+                &self.noise,
+                &mut self.resampled,
+            );
+            return Ok(());
         }
         let sqrt_h = libm::sqrt(h);
         for substep in 0..substeps {
@@ -731,24 +752,34 @@ impl Filter for Pf {
         let n = self.model.n;
         let (mean, cov) = out.mean_and_covariance(n);
         for j in 0..n {
-            mean[j] = self
-                .component(j)
-                .iter()
-                .zip(&self.weights)
-                .map(|(x, w)| w * x)
-                .sum::<f64>();
+            mean[j] = weighted_sum(self.component(j), &self.weights);
         }
         for a in 0..n {
-            for b in 0..n {
-                let (xa, xb) = (self.component(a), self.component(b));
-                cov[(a, b)] = xa
-                    .iter()
-                    .zip(xb)
-                    .zip(&self.weights)
-                    .map(|((x, y), w)| w * (x - mean[a]) * (y - mean[b]))
-                    .sum::<f64>();
+            for b in 0..=a {
+                let c = weighted_product_about(
+                    (self.component(a), mean[a]),
+                    (self.component(b), mean[b]),
+                    &self.weights,
+                );
+                cov[(a, b)] = c;
+                cov[(b, a)] = c;
             }
         }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `Σ w_i x_i`, in lanes.
+    fn weighted_sum(x: &[f64], w: &[f64]) -> f64 {
+        crate::linalg::sum_zipped_in_lanes([x, w], |[x, w]| w * x)
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `Σ w_i (x_i − m_x)(y_i − m_y)`, in lanes.
+    fn weighted_product_about(x: (&[f64], f64), y: (&[f64], f64), w: &[f64]) -> f64 {
+        let ((x, mx), (y, my)) = (x, y);
+        crate::linalg::sum_zipped_in_lanes([x, y, w], |[x, y, w]| w * (x - mx) * (y - my))
     }
 }
 

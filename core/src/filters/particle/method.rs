@@ -69,6 +69,17 @@ impl Method for Pf {
         if p.substeps.is_some() || problem.model.is_discrete_time() {
             return None;
         }
+        let exact = !problem.frozen_at_start
+            && super::exact::LinearTransition::of(problem.model, problem.probes).is_some();
+        if exact {
+            return Some((
+                PfParams {
+                    substeps: Some(1),
+                    ..p.clone()
+                },
+                "exact linear transition: each particle drawn from N(e^{AΔτ} x + Γb, Q_Δτ) over the whole interval (Van Loan), no Euler–Maruyama substeps".into(),
+            ));
+        }
         let dt = problem.dt_obs?;
         let (substeps, rate) = substeps_for(problem.model, problem.probes, dt);
         Some((

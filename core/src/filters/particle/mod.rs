@@ -1,5 +1,6 @@
 //! The bootstrap particle filter ([`Pf`] documents it).
 
+mod exact;
 mod filter;
 mod method;
 mod params;

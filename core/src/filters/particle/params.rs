@@ -18,7 +18,8 @@ parameters! {
         ess_threshold: f64 = 0.5 => number "resample below ESS/N", range(0, 1);
         /// Euler–Maruyama steps of each particle per observation interval Δτ (a step of
         /// another length takes as many steps of at most Δτ/substeps as it needs); empty:
-        /// chosen so that ‖∂f/∂x‖∞ times the step is at most 0.1 over the domain.
+        /// chosen so that ‖∂f/∂x‖∞ times the step is at most 0.1 over the domain. Not used by
+        /// a linear SDE with constant G, whose particles are drawn from its exact transition.
         substeps: Option<usize> = None => optional_int "substeps", at_least(1);
         /// Trajectories M the smoother (FFBSi) draws backward through the particle clouds:
         /// its error falls like 1/√M, its cost is O(M N) per Euler–Maruyama step.

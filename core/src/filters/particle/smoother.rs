@@ -11,7 +11,8 @@
 //! `∝ w^i N(x' ; x^i + f(x^i) h, Q h)` (the backward kernel of the discretised chain), down to
 //! the start. For a discrete-time model the steps are its transitions and the kernel is the
 //! transition density itself, `∝ w^i N(x'; F(x^i), Q)` (or the mixture's density when w_k is
-//! a Gaussian mixture). A driven model's moves are weighed with the model the forward pass froze
+//! a Gaussian mixture); for a linear SDE, whose particles move by its exact transition, one
+//! move per interval with the kernel `∝ w^i N(x'; Φ x^i + Γb, Q_Δ)` (`super::exact`). A driven model's moves are weighed with the model the forward pass froze
 //! for them, from each step's recorded time and inputs. The smoothed mean and covariance at an observation time are those of the M
 //! trajectories' points there: consistent for the discretised model's smoother, with an error of
 //! order N^−½ from the particle clouds plus M^−½ from the trajectories. A step of length 0 (the update at τ₀) does not move
@@ -19,7 +20,8 @@
 //!
 //! Cost: O(M N n²) per Euler–Maruyama step backward (every trajectory weighs every particle),
 //! and n·N·S values kept per step. The density exists only for a nonsingular Q, so a model
-//! whose noise drives fewer components than it has is refused.
+//! whose noise drives fewer components than it has is refused — unless it is a linear SDE
+//! whose drift carries the noise into every component (then `Q_Δ` is nonsingular).
 
 use alloc::boxed::Box;
 use alloc::format;
@@ -67,6 +69,47 @@ pub(crate) struct Ffbsi {
 impl Pf {
     /// The FFBSi smoother from the filter's current state (see the module doc).
     pub(super) fn ffbsi(&self, plan: &SmoothingPlan) -> Result<Box<dyn Smoother>, FilterError> {
+        let whiten = match &self.exact {
+            // A linear SDE's exact transition: its covariance Q_Δ is nonsingular for every
+            // Δ > 0 or for none (the pair (A, G) controllable), so one length tells.
+            Some(exact) => {
+                let mut exact = exact.clone();
+                exact.over(1.0).whiten.clone().ok_or_else(|| {
+                    no_smoother(
+                        self.name(),
+                        "FFBSi weighs backward draws with the exact transition density N(Φx + Γb, Q_Δ), and this model's Q_Δ is singular: the noise G never reaches some direction of the state",
+                    )
+                })?
+            }
+            None => self.euler_whitening()?,
+        };
+        let (n, count) = (self.model.n, self.params.particles);
+        let substeps = match self.exact {
+            Some(_) => 1,
+            None => self.substeps.per_interval(),
+        };
+        let per_step = (n * substeps + 1) * count * core::mem::size_of::<f64>();
+        plan.check(
+            self.name(),
+            per_step,
+            "the particle clouds of every Euler step",
+        )?;
+        let mut filter = self.clone();
+        filter.trail = Some(Vec::new());
+        // The backward draws use a stream of their own, seeded from the filter's.
+        let rng = rng_from_seed(filter.rng.clone().next_u64() ^ 0x9e37_79b9_7f4a_7c15);
+        Ok(Box::new(Ffbsi {
+            start: (filter.particles.clone(), filter.log_weights.clone()),
+            filter,
+            records: Vec::with_capacity(plan.steps),
+            whiten,
+            rng,
+        }))
+    }
+
+    /// `L⁻¹` with `Q = G Gᵀ = L Lᵀ`, which whitens an Euler–Maruyama step's (or a map's)
+    /// Gaussian transition; an error when Q depends on the state or is singular.
+    fn euler_whitening(&self) -> Result<DMatrix<f64>, FilterError> {
         let q = self.model.process_noise();
         let q = q.constant().ok_or_else(|| {
             no_smoother(
@@ -80,31 +123,11 @@ impl Pf {
                 "FFBSi needs the transition density of the Euler–Maruyama step, and this model's diffusion G Gᵀ is singular",
             )
         })?;
-        let (n, count) = (self.model.n, self.params.particles);
-        let substeps = self.substeps.per_interval();
-        let per_step = (n * substeps + 1) * count * core::mem::size_of::<f64>();
-        plan.check(
-            self.name(),
-            per_step,
-            "the particle clouds of every Euler step",
-        )?;
-        let whiten = chol
-            .l()
+        chol.l()
             .try_inverse()
             .ok_or(FilterError::NotPositiveDefinite {
                 what: "diffusion G Gᵀ",
-            })?;
-        let mut filter = self.clone();
-        filter.trail = Some(Vec::new());
-        // The backward draws use a stream of their own, seeded from the filter's.
-        let rng = rng_from_seed(filter.rng.clone().next_u64() ^ 0x9e37_79b9_7f4a_7c15);
-        Ok(Box::new(Ffbsi {
-            start: (filter.particles.clone(), filter.log_weights.clone()),
-            filter,
-            records: Vec::with_capacity(plan.steps),
-            whiten,
-            rng,
-        }))
+            })
     }
 }
 
@@ -192,71 +215,59 @@ impl Ffbsi {
         drift: &mut Vec<f64>,
         scratch: &mut BatchScratch,
         log_p: &mut [f64],
-    ) {
+    ) -> Result<(), FilterError> {
         let (n, count) = (dynamics.n, log_w.len());
         let m = points.len() / n;
         drift.resize(n * count, 0.0);
-        dynamics.drift.eval_batch(cloud, drift, scratch);
-        let chosen = match dynamics.transition_mixture.clone() {
-            Some(noise) => self.back_mixture(noise.mixture(), (points, m), drift, log_w, log_p),
-            None => self.back_gaussian(cloud, log_w, h, (points, m), drift, log_p),
+        let chosen = if let Some(exact) = &mut self.filter.exact {
+            // The exact transition over the step: N(x'; Φ x_i + Γb, Q_Δ).
+            let t = exact.over(h);
+            super::exact::means(t, cloud, drift);
+            let whiten = t.whiten.clone().ok_or_else(|| {
+                no_smoother(
+                    self.filter.name(),
+                    "the exact transition's covariance Q_Δ is singular over this step",
+                )
+            })?;
+            back_gaussian(
+                &whiten,
+                0.5,
+                (points, m),
+                drift,
+                log_w,
+                log_p,
+                &mut self.rng,
+            )
+        } else {
+            dynamics.drift.eval_batch(cloud, drift, scratch);
+            match dynamics.transition_mixture.clone() {
+                Some(noise) => self.back_mixture(noise.mixture(), (points, m), drift, log_w, log_p),
+                None => {
+                    // The Euler step's mean x_i + f(x_i) h, or a map's F(x_i) itself (h = 1).
+                    if !dynamics.is_discrete_time() {
+                        drift
+                            .iter_mut()
+                            .zip(cloud)
+                            .for_each(|(d, x)| *d = x + *d * h);
+                    }
+                    back_gaussian(
+                        &self.whiten,
+                        0.5 / h,
+                        (points, m),
+                        drift,
+                        log_w,
+                        log_p,
+                        &mut self.rng,
+                    )
+                }
+            }
         };
         for (t, &i) in chosen.iter().enumerate() {
             for j in 0..n {
                 points[j * m + t] = cloud[j * count + i];
             }
         }
-    }
-
-    /// The backward draws of a Gaussian transition kernel `N(x'; x_i + f(x_i) h, Q h)` (or
-    /// `N(x'; F(x_i), Q)` for a map): one particle index per trajectory point.
-    fn back_gaussian(
-        &mut self,
-        cloud: &[f64],
-        log_w: &[f64],
-        h: f64,
-        (points, m): (&[f64], usize),
-        drift: &mut [f64],
-        log_p: &mut [f64],
-    ) -> Vec<usize> {
-        let (n, count) = (self.filter.model.n, log_w.len());
-        let scale = 0.5 / h;
-        // The kernel's whitened means `W (x_i + f(x_i) h)` (W the whitening of the Euler
-        // step's covariance), in `drift`'s place, once per particle; each trajectory's point is
-        // whitened once too, and the exponent of a pair is then a squared distance.
-        let mut centre = DVector::zeros(n);
-        let mut white = DVector::zeros(n);
-        // A discrete-time transition's mean is F(x_i) itself (and h = 1).
-        let discrete = self.filter.model.is_discrete_time();
-        for i in 0..count {
-            for j in 0..n {
-                centre[j] = match discrete {
-                    true => drift[j * count + i],
-                    false => cloud[j * count + i] + drift[j * count + i] * h,
-                };
-            }
-            white.gemv(1.0, &self.whiten, &centre, 0.0);
-            for j in 0..n {
-                drift[j * count + i] = white[j];
-            }
-        }
-        let mut chosen = vec![0usize; m];
-        for (t, pick) in chosen.iter_mut().enumerate() {
-            for j in 0..n {
-                centre[j] = points[j * m + t];
-            }
-            white.gemv(1.0, &self.whiten, &centre, 0.0);
-            log_p.copy_from_slice(log_w);
-            for j in 0..n {
-                let w = white[j];
-                for (lp, &mean) in log_p.iter_mut().zip(&drift[j * count..(j + 1) * count]) {
-                    let d = w - mean;
-                    *lp -= scale * d * d;
-                }
-            }
-            *pick = draw(log_p, &mut self.rng);
-        }
-        chosen
+        Ok(())
     }
 
     /// The backward draws of a discrete-time map whose noise is a Gaussian mixture: the
@@ -283,6 +294,52 @@ impl Ffbsi {
         }
         chosen
     }
+}
+
+/// The backward draws of a Gaussian transition kernel whose means at the particles are
+/// `centres` (n·N, overwritten): `N(x'; centre_i, C)` with `whiten = L⁻¹` of a factor of
+/// `C = L Lᵀ / (2 scale)` — `Q h` of an Euler step (scale ½h⁻¹), a map's Q or the exact
+/// transition's `Q_Δ` (scale ½). One particle index per trajectory point.
+fn back_gaussian(
+    whiten: &DMatrix<f64>,
+    scale: f64,
+    (points, m): (&[f64], usize),
+    centres: &mut [f64],
+    log_w: &[f64],
+    log_p: &mut [f64],
+    rng: &mut SimRng,
+) -> Vec<usize> {
+    let (n, count) = (whiten.nrows(), log_w.len());
+    // The whitened means, once per particle; each trajectory's point is whitened once too,
+    // and the exponent of a pair is then a squared distance.
+    let mut centre = DVector::zeros(n);
+    let mut white = DVector::zeros(n);
+    for i in 0..count {
+        for j in 0..n {
+            centre[j] = centres[j * count + i];
+        }
+        white.gemv(1.0, whiten, &centre, 0.0);
+        for j in 0..n {
+            centres[j * count + i] = white[j];
+        }
+    }
+    let mut chosen = vec![0usize; m];
+    for (t, pick) in chosen.iter_mut().enumerate() {
+        for j in 0..n {
+            centre[j] = points[j * m + t];
+        }
+        white.gemv(1.0, whiten, &centre, 0.0);
+        log_p.copy_from_slice(log_w);
+        for j in 0..n {
+            let w = white[j];
+            for (lp, &mean) in log_p.iter_mut().zip(&centres[j * count..(j + 1) * count]) {
+                let d = w - mean;
+                *lp -= scale * d * d;
+            }
+        }
+        *pick = draw(log_p, rng);
+    }
+    chosen
 }
 
 /// The mean and covariance of `points` (n·M, component-major).
@@ -366,7 +423,7 @@ impl Smoother for Ffbsi {
                         &mut drift,
                         &mut scratch,
                         &mut log_p,
-                    );
+                    )?;
                 }
             }
             if points.iter().any(|v| !v.is_finite()) {

@@ -174,6 +174,7 @@ impl Experiment {
             probes: &self.probes,
             bounds: &bounds,
             dt_obs: Some(self.config.time.dt_obs),
+            frozen_at_start: false,
         }
         .at_start(f)
     }

@@ -256,6 +256,7 @@ impl MethodConfig {
             probes,
             bounds,
             dt_obs: None,
+            frozen_at_start: false,
         };
         self.check_suitability(&problem).err()
     }

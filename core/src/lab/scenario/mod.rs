@@ -1257,6 +1257,7 @@ impl ScenarioConfig {
             probes: &probes,
             bounds: &bounds,
             dt_obs: Some(self.time.dt_obs).filter(|dt| *dt > 0.0 && dt.is_finite()),
+            frozen_at_start: false,
         };
         let mut notes = Vec::new();
         for m in &mut self.methods {
