@@ -5,8 +5,11 @@
 //! [`Expression::derivative`] differentiates symbolically by the rules in its doc and
 //! [`Expression::program`] writes out in single assignment form (every node once). Every
 //! operation applies the function of the syntax's tables (libm), so values agree bit for bit
-//! natively and in wasm; the one deliberate change is `x^k` for an integer 0 ≤ k ≤ 4,
-//! recorded as multiplications ([`Operation::PowI`], within 2 ulp of `libm::pow`).
+//! natively and in wasm. The deliberate changes: `x^k` for an integer 0 ≤ k ≤ 4, recorded as
+//! multiplications ([`Operation::PowI`], within 2 ulp of `libm::pow`), and three identities
+//! that save a function or a division — `ln(e^u) = u`, `ln(c e^u) = ln c + u` (c > 0) and
+//! `a / e^u = a e^{−u}` — exact in the reals, and within rounding of the written form (closer
+//! where e^u would overflow: `ln(exp(800))` is 800, not ∞).
 
 use alloc::vec::Vec;
 
@@ -102,21 +105,60 @@ impl Expression {
     fn apply(&mut self, op: Op, a: usize, b: usize) -> usize {
         match (self.constant(a), self.constant(b)) {
             (Some(x), Some(y)) => self.push(Node::Const((op.apply())(x, y))),
-            _ => self.push(Node::Binary(op, a, b)),
+            _ => match (op, self.nodes[b]) {
+                // a / e^u = a e^{−u}: a product where a quotient was (the precision 1/s(x) of
+                // a variance s = e^g).
+                (Op::Div, Node::Unary("exp", f, u)) => {
+                    let minus_u = self.negate(u);
+                    let e = self.call("exp", f, minus_u);
+                    match self.constant(a) {
+                        Some(1.0) => e,
+                        _ => self.push(Node::Binary(Op::Mul, a, e)),
+                    }
+                }
+                _ => self.push(Node::Binary(op, a, b)),
+            },
         }
     }
 
     fn negate(&mut self, a: usize) -> usize {
         match self.nodes[a] {
             Node::Const(c) => self.push(Node::Const(-c)),
+            Node::Neg(u) => u,
             _ => self.push(Node::Neg(a)),
         }
     }
 
     fn call(&mut self, name: &'static str, f: UnaryFn, a: usize) -> usize {
-        match self.constant(a) {
-            Some(c) => self.push(Node::Const(f(c))),
-            None => self.push(Node::Unary(name, f, a)),
+        if let Some(c) = self.constant(a) {
+            return self.push(Node::Const(f(c)));
+        }
+        // ln(e^u) = u and ln(c e^u) = ln c + u for a constant c > 0: the logarithm of an
+        // exponential is its exponent, with no exp or ln to compute (the variance e^x of a
+        // stochastic-volatility model, whose log-density reads ln s(x)).
+        if matches!(name, "ln" | "log") {
+            if let Some(u) = self.exponent_of(a) {
+                return u;
+            }
+            if let Node::Binary(Op::Mul, x, y) = self.nodes[a] {
+                for (c, e) in [(x, y), (y, x)] {
+                    if let (Some(c), Some(u)) = (self.constant(c), self.exponent_of(e)) {
+                        if c > 0.0 {
+                            let ln_c = self.number(f(c));
+                            return self.apply(Op::Add, ln_c, u);
+                        }
+                    }
+                }
+            }
+        }
+        self.push(Node::Unary(name, f, a))
+    }
+
+    /// u when node `id` is `exp(u)`.
+    fn exponent_of(&self, id: usize) -> Option<usize> {
+        match self.nodes[id] {
+            Node::Unary("exp", _, u) => Some(u),
+            _ => None,
         }
     }
 
@@ -488,6 +530,32 @@ mod tests {
         }
     }
 
+    /// `ln(e^u) = u`, `ln(c e^u) = ln c + u` and `a / e^u = a e^{−u}` compile without the
+    /// logarithm, the exponential or the division they save, and give the written form's
+    /// values to a few ulp — and past e^u's overflow, where the written form gives ∞.
+    #[test]
+    fn logarithms_of_exponentials_and_quotients_by_them_are_rewritten() {
+        let ln_exp = compile("ln(exp(x1 + 2*x2))", 2).unwrap();
+        assert_eq!(ln_exp.len(), compile("x1 + 2*x2", 2).unwrap().len());
+        let scaled = compile("log(3*exp(x1))", 1).unwrap();
+        assert_eq!(scaled.len(), 1, "one addition");
+        let reciprocal = compile("1/exp(x1)", 1).unwrap();
+        assert_eq!(reciprocal.len(), 2, "a negation and an exponential");
+        let quotient = compile("x2/exp(x1)", 2).unwrap();
+        assert_eq!(
+            quotient.len(),
+            3,
+            "a negation, an exponential and a product"
+        );
+        let close = |a: f64, b: f64| (a - b).abs() <= 4.0 * f64::EPSILON * b.abs().max(1.0);
+        for x in points(2, 200) {
+            assert_eq!(ln_exp.eval(&x), x[0] + 2.0 * x[1]);
+            assert!(close(scaled.eval(&x), libm::log(3.0 * libm::exp(x[0]))));
+            assert!(close(reciprocal.eval(&x), 1.0 / libm::exp(x[0])));
+            assert!(close(quotient.eval(&x), x[1] / libm::exp(x[0])));
+        }
+        assert_eq!(compile("ln(exp(x1))", 1).unwrap().eval(&[800.0]), 800.0);
+    }
     #[test]
     fn every_function_constant_and_operator_reads() {
         let texts = FUNCTIONS
