@@ -109,7 +109,7 @@
 //!
 //! ## Modules, bottom to top
 //!
-//! validate → error → linalg, random → grid, model → [`simulate`] → [`diagnostics`] →
+//! validate → error → linalg → random → grid, model → [`simulate`] → [`diagnostics`] →
 //! filters (one folder per method family, each registering itself through [`method::Method`]) →
 //! [`lab`] (bibliography → scenario → recording, metrics, papers → experiment → study →
 //! reproduction). A module uses only modules to its left, and files side by side in a folder

@@ -89,7 +89,7 @@ impl NormalZiggurat {
                 return self.tail(rng, u < 0.0);
             }
             let y = self.f[i + 1] + (self.f[i] - self.f[i + 1]) * rng.random::<f64>();
-            if y < libm::exp(-0.5 * x * x) {
+            if y < crate::linalg::elementary::exp(-0.5 * x * x) {
                 return x;
             }
         }

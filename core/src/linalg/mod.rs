@@ -397,6 +397,25 @@ pub(crate) fn sum_zipped_in_lanes<const K: usize>(
     lanes_total(s)
 }
 
+/// The largest of `x` (NaN ignored as by [`larger`]; −∞ for none) in eight interleaved running
+/// maxima: a loop the compiler vectorises, where one running maximum waits on every
+/// comparison.
+#[inline(always)]
+pub(crate) fn largest_in_lanes(x: &[f64]) -> f64 {
+    const LANES: usize = 8;
+    let mut top = [f64::NEG_INFINITY; LANES];
+    let mut chunks = x.chunks_exact(LANES);
+    for c in &mut chunks {
+        for l in 0..LANES {
+            top[l] = larger(top[l], c[l]);
+        }
+    }
+    for (l, &v) in chunks.remainder().iter().enumerate() {
+        top[l] = larger(top[l], v);
+    }
+    top.iter().fold(f64::NEG_INFINITY, |m, &t| larger(m, t))
+}
+
 /// The total of partial sums kept in lanes, added pairwise in a fixed order (lane l with lane
 /// l + L/2, and so on), so that it does not depend on the vector width. L a power of two.
 #[inline(always)]

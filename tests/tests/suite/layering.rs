@@ -3,7 +3,7 @@
 //! modules included (a test may use its own module's layer and those below, nothing above).
 //! The harness floor `lab` counts each of its modules as one (`crate::lab::scenario` is
 //! `lab::scenario`). Order, bottom to top (as the crate doc lists it; `testing`, the unit
-//! tests' attribute, sits below them all): validate → error → linalg, random → grid, model →
+//! tests' attribute, sits below them all): validate → error → linalg → random → grid, model →
 //! simulate → diagnostics → filters → lab: bibliography → scenario → recording, metrics,
 //! papers → experiment → study, fit → reproduction.
 // Reads the core's sources from the file system: native only.
@@ -17,7 +17,8 @@ const LAYERS: &[&[&str]] = &[
     &["testing"],
     &["validate"],
     &["error"],
-    &["linalg", "random"],
+    &["linalg"],
+    &["random"],
     &["grid", "model"],
     &["simulate"],
     &["diagnostics"],

@@ -541,9 +541,7 @@ impl Pf {
 /// returns the log of their total before, or [`FilterError::MassLost`] when no weight is left
 /// (nothing finite, or NaN).
 fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<f64, FilterError> {
-    let max = log_weights
-        .iter()
-        .fold(f64::NEG_INFINITY, |a, &b| crate::linalg::larger(a, b));
+    let max = largest(log_weights);
     if !max.is_finite() {
         return Err(FilterError::MassLost);
     }
@@ -552,10 +550,23 @@ fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<f64, Filter
         return Err(FilterError::MassLost);
     }
     let shift = max + libm::log(total);
-    let inv = 1.0 / total;
-    weights.iter_mut().for_each(|w| *w *= inv);
-    log_weights.iter_mut().for_each(|w| *w -= shift);
+    rescale(weights, log_weights, 1.0 / total, shift);
     Ok(shift)
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// The largest log-weight ([`crate::linalg::largest_in_lanes`]).
+    fn largest(lw: &[f64]) -> f64 {
+        crate::linalg::largest_in_lanes(lw)
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `w_i ← w_i · inv` and `lw_i ← lw_i − shift`: the weights normalised in both domains.
+    fn rescale(w: &mut [f64], lw: &mut [f64], inv: f64, shift: f64) {
+        w.iter_mut().for_each(|w| *w *= inv);
+        lw.iter_mut().for_each(|w| *w -= shift);
+    }
 }
 
 /// Systematic resampling's ancestors: points `t_j = (u + j)/N` on the CDF `c_i` of the
