@@ -162,6 +162,8 @@ pub use error::{ExprError, FilterError, ZakaiError};
 pub use validate::{memory_cap, set_memory_cap, ConfigProblem, MAX_MEMORY_BYTES};
 
 pub use model::expression::ExpressionFunction;
+#[doc(hidden)]
+pub use model::FixedPrograms;
 pub use model::{
     BatchScratch, ClosureFunction, Derivatives, Diffusion, Dynamics, GaussianMixture, Inputs,
     MeasurementDensity, MixtureComponent, Model, Noise, ObservationModel, Prior, ProcessNoise,

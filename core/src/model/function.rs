@@ -61,6 +61,15 @@ pub trait VectorFunction: Send + Sync {
         per_point(n, m, points, out, scratch, |x, o| self.eval(x, o));
     }
 
+    /// The function with its inputs `first..` fixed to `values`, compiled for that (a driven
+    /// model frozen for one step): text expressions fold what depends on the fixed inputs
+    /// alone; `None` (the default) when the function has no such form, and then a frozen
+    /// function appends the fixed values to every point instead.
+    #[doc(hidden)]
+    fn with_inputs_fixed(&self, _first: usize, _values: &[f64]) -> Option<FixedPrograms> {
+        None
+    }
+
     /// The Jacobian at k points at once (layout as [`VectorFunction::eval_batch`]): entry
     /// ∂g_i/∂x_j at point p is written to `out[(i * n + j) * k + p]`.
     fn jacobian_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
@@ -68,6 +77,12 @@ pub trait VectorFunction: Send + Sync {
         per_point(n, m * n, points, out, scratch, |x, o| self.jacobian(x, o));
     }
 }
+
+/// A function's compiled components with some inputs fixed
+/// ([`VectorFunction::with_inputs_fixed`]); opaque.
+#[doc(hidden)]
+#[derive(Clone, Debug)]
+pub struct FixedPrograms(pub(crate) Vec<super::program::Program>);
 
 impl core::fmt::Debug for dyn VectorFunction {
     /// Its dimensions and, when it has them, its expressions (closures are opaque).

@@ -57,6 +57,10 @@ struct Frozen {
     inner: Arc<dyn VectorFunction>,
     /// t, then u1..uk.
     fixed: Vec<f64>,
+    /// The inner function's components compiled with the fixed values folded in, when it has
+    /// them ([`VectorFunction::with_inputs_fixed`]): its values at points and batches. Its
+    /// derivatives keep to the inner function with the point extended.
+    programs: Option<super::FixedPrograms>,
 }
 
 impl Frozen {
@@ -97,7 +101,15 @@ impl VectorFunction for Frozen {
         self.inner.output_dim()
     }
     fn eval(&self, x: &[f64], out: &mut [f64]) {
-        with_extended(self, x, |x| self.inner.eval(x, out))
+        match &self.programs {
+            Some(p) => {
+                let n = self.inputs();
+                for (o, program) in out.iter_mut().zip(&p.0) {
+                    *o = program.eval(&x[..n]);
+                }
+            }
+            None => with_extended(self, x, |x| self.inner.eval(x, out)),
+        }
     }
     /// The first n columns of the driven function's Jacobian.
     fn jacobian(&self, x: &[f64], out: &mut [f64]) {
@@ -120,10 +132,15 @@ impl VectorFunction for Frozen {
     fn derivatives(&self) -> Derivatives {
         self.inner.derivatives()
     }
-    /// The points followed by one row per fixed value (structure of arrays), evaluated by
-    /// the driven function's own batch.
+    /// The programs with the fixed values folded in, over the points; otherwise the points
+    /// followed by one row per fixed value (structure of arrays), evaluated by the driven
+    /// function's own batch.
     fn eval_batch(&self, points: &[f64], out: &mut [f64], scratch: &mut BatchScratch) {
         let n = self.inputs();
+        if let Some(p) = &self.programs {
+            let table = p.0.iter().map(Some);
+            return super::expression::eval_programs_batch(table, n, points, out, scratch);
+        }
         let k = points.len() / n.max(1);
         let mut extended = Vec::with_capacity(self.inner.input_dim() * k);
         extended.extend_from_slice(&points[..n * k]);
@@ -136,9 +153,11 @@ impl VectorFunction for Frozen {
 
 /// `g` with `fixed` appended to its inputs.
 fn freeze(g: &Arc<dyn VectorFunction>, fixed: &[f64]) -> Arc<dyn VectorFunction> {
+    let first = g.input_dim() - fixed.len();
     Arc::new(Frozen {
         inner: g.clone(),
         fixed: fixed.to_vec(),
+        programs: g.with_inputs_fixed(first, fixed),
     })
 }
 

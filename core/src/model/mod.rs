@@ -41,7 +41,7 @@ use alloc::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 
 pub use diffusion::{Diffusion, ProcessNoise};
-pub use function::{BatchScratch, ClosureFunction, Derivatives, VectorFunction};
+pub use function::{BatchScratch, ClosureFunction, Derivatives, FixedPrograms, VectorFunction};
 pub use inputs::Inputs;
 pub use measurement::MeasurementDensity;
 pub use noise::{GaussianMixture, MixtureComponent};

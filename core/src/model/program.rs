@@ -230,6 +230,49 @@ impl Program {
         }
     }
 
+    /// The program with inputs `first..` fixed to `values` (a driven model's time and inputs,
+    /// frozen for one step): every operation on those and on constants alone is computed once
+    /// here, with the function evaluation would apply (the same bits), and the rest reads the
+    /// results as constants — so `cos(1.2*t)` costs one cosine per step, not one per point.
+    /// The result reads inputs `0..first` only.
+    pub(crate) fn with_inputs_fixed(&self, first: usize, values: &[f64]) -> Program {
+        let mut known: Vec<Option<f64>> = alloc::vec![None; self.registers];
+        let fixed = |o: Operand, known: &[Option<f64>]| match o {
+            Operand::Var(j) if j >= first => Operand::Const(values[j - first]),
+            Operand::Reg(r) => known[r].map_or(o, Operand::Const),
+            o => o,
+        };
+        let mut code = Vec::with_capacity(self.code.len());
+        for ins in &self.code {
+            let operation = ins.operation.map_operands(|o| fixed(o, &known));
+            let [a, b] = operation.operands();
+            let constant = |o: Option<Operand>| match o {
+                None => Some(0.0),
+                Some(Operand::Const(c)) => Some(c),
+                Some(_) => None,
+            };
+            match (constant(a), constant(b)) {
+                (Some(x), Some(y)) => {
+                    let mut value = [0.0];
+                    apply(&operation, &mut value, Arg::Scalar(x), Arg::Scalar(y));
+                    known[ins.dst] = Some(value[0]);
+                }
+                _ => {
+                    known[ins.dst] = None;
+                    code.push(Instruction {
+                        dst: ins.dst,
+                        operation,
+                    });
+                }
+            }
+        }
+        Program {
+            code,
+            registers: self.registers,
+            result: fixed(self.result, &known),
+        }
+    }
+
     /// The value at one point `x` (inputs and registers on the stack for up to
     /// [`MAX_INPUTS`] components and 32 registers).
     pub(crate) fn eval(&self, x: &[f64]) -> f64 {

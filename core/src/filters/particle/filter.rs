@@ -133,6 +133,8 @@ pub struct Pf {
     residual: Vec<f64>,
     point: Vec<f64>,
     work: Vec<f64>,
+    /// The rows of the observed components of the current measurement.
+    observed_rows: Vec<usize>,
     scratch: BatchScratch,
     resamples: usize,
     /// The effective sample size after the last weighting.
@@ -227,6 +229,7 @@ impl Pf {
             residual: vec![0.0; m],
             point: vec![0.0; n],
             work: vec![0.0; m],
+            observed_rows: Vec::with_capacity(m),
             scratch: BatchScratch::default(),
             resamples: 0,
             last_ess: count as f64,
@@ -407,28 +410,21 @@ impl Pf {
             Weighing::Measurements(likelihood) => {
                 if let Some(noise) = likelihood.additive_density() {
                     // Additive noise: the residuals z − h(x) as a batch, then the noise
-                    // density of the observed components at each particle's.
+                    // density of the observed components at every particle's, as a batch.
+                    self.observed_rows.clear();
                     for (a, z) in obs.value.iter().enumerate() {
                         self.predicted[a * count..(a + 1) * count]
                             .iter_mut()
                             .for_each(|r| *r = z - *r);
+                        if observed == Observed::All || !Observation::is_missing(*z) {
+                            self.observed_rows.push(a);
+                        }
                     }
-                    let predicted = &self.predicted;
-                    for (i, w) in lw.iter_mut().enumerate() {
-                        let k = if observed == Observed::All {
-                            for (a, r) in self.residual.iter_mut().enumerate() {
-                                *r = predicted[a * count + i];
-                            }
-                            m
-                        } else {
-                            crate::filters::observed_residual(
-                                obs.value,
-                                |a| predicted[a * count + i],
-                                &mut self.residual,
-                            )
-                        };
-                        *w += noise.log_pdf_slice(&self.residual[..k], &mut self.work);
-                    }
+                    noise.add_log_pdf_batch(
+                        (&self.predicted, &self.observed_rows),
+                        lw,
+                        &mut self.work,
+                    );
                 } else if !likelihood.add_batch(
                     obs.value,
                     (particles, &self.predicted, count),

@@ -58,8 +58,9 @@ impl Method for Pf {
     }
     fn memory(p: &PfParams, n: usize) -> Option<usize> {
         // Particles, f, noise, the resampling target and h (n ≥ m assumed), two weights, the
-        // resampling's slot starts and ancestors.
-        p.particles.checked_mul(5 * n + 4)?.checked_mul(8)
+        // resampling's slot starts and ancestors; a measurement density's batch work (its
+        // whitened residuals, m ≤ n rows, and four more).
+        p.particles.checked_mul(6 * n + 8)?.checked_mul(8)
     }
     fn build(ctx: &BuildContext, p: &PfParams, name: String) -> Result<Pf, ZakaiError> {
         Ok(Pf::new(name, ctx, p)?)
