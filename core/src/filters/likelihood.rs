@@ -147,6 +147,7 @@ impl MeasurementLikelihood {
             crate::model::MeasurementDensity::Heteroscedastic(_)
                 | crate::model::MeasurementDensity::LogDensity(_)
                 | crate::model::MeasurementDensity::Poisson
+                | crate::model::MeasurementDensity::StudentT { .. }
         )
     }
 
@@ -154,9 +155,9 @@ impl MeasurementLikelihood {
     /// or a log-density runs its compiled program one pass per operation over all the points,
     /// like h, instead of point by point; Poisson counts take ln Γ(z + 1) once per component.
     /// `points` (n·count) and `hx` (m·count) are in structure-of-arrays layout
-    /// ([`crate::VectorFunction::eval_batch`]). Returns false, adding nothing, for the other
-    /// families (additive noise has its own batch in the filters; Student-t's per-point
-    /// arithmetic reads no expression). The values and the messages are those of
+    /// ([`crate::VectorFunction::eval_batch`]); Student-t's arithmetic runs in lanes. Returns
+    /// false, adding nothing, for additive noise (which has its own batch in the filters,
+    /// [`crate::GaussianMixture`]'s). The values and the messages are those of
     /// [`MeasurementLikelihood::log_at`]; where several points are bad, the one named is the
     /// first in component order (the pointwise path names the first point).
     pub(crate) fn add_batch(
@@ -219,22 +220,46 @@ impl MeasurementLikelihood {
                 if z.iter().all(|v| v.is_nan()) {
                     return Ok(true);
                 }
-                // The states, then the measurement as constant rows.
-                self.batch_in.clear();
-                self.batch_in.extend_from_slice(points);
-                for &zj in z {
-                    self.batch_in.extend(core::iter::repeat_n(zj, count));
-                }
                 self.batch_out.resize(count, 0.0);
-                l.eval_batch(&self.batch_in, &mut self.batch_out, scratch);
-                for (i, (o, &v)) in out.iter_mut().zip(&self.batch_out).enumerate() {
-                    if v.is_nan() || v == f64::INFINITY {
-                        return Err(FilterError::Likelihood(alloc::format!(
-                            "the log-density is {v} at x = {:?}, z = {z:?}",
-                            point(i)
-                        )));
+                let n = points.len() / count;
+                match l.with_inputs_fixed(n, z) {
+                    // The measurement folded into the program: one pass per operation that
+                    // reads the state.
+                    Some(fixed) => crate::model::expression::eval_programs_batch(
+                        fixed.0.iter().map(Some),
+                        n,
+                        points,
+                        &mut self.batch_out,
+                        scratch,
+                    ),
+                    None => {
+                        // The states, then the measurement as constant rows.
+                        self.batch_in.clear();
+                        self.batch_in.extend_from_slice(points);
+                        for &zj in z {
+                            self.batch_in.extend(core::iter::repeat_n(zj, count));
+                        }
+                        l.eval_batch(&self.batch_in, &mut self.batch_out, scratch);
                     }
-                    *o += v;
+                }
+                let bad = |v: f64| v.is_nan() || v == f64::INFINITY;
+                if !all_valid_log_densities(&self.batch_out) {
+                    let i = self.batch_out.iter().position(|&v| bad(v)).unwrap_or(0);
+                    return Err(FilterError::Likelihood(alloc::format!(
+                        "the log-density is {} at x = {:?}, z = {z:?}",
+                        self.batch_out[i],
+                        point(i)
+                    )));
+                }
+                crate::linalg::add_in_place(out, &self.batch_out);
+                Ok(true)
+            }
+            crate::model::MeasurementDensity::StudentT { dof, scale } => {
+                for (j, &zj) in z.iter().enumerate() {
+                    if !Observation::is_missing(zj) {
+                        let h = &hx[j * count..(j + 1) * count];
+                        add_student_t_logs(out, zj, h, (*dof, *scale), self.constant);
+                    }
                 }
                 Ok(true)
             }
@@ -394,8 +419,9 @@ mod tests {
     use alloc::sync::Arc;
     use alloc::{format, vec};
 
-    /// The batch (one pass of the programs of ln s(x) and 1/s(x), or of the log-density's, over
-    /// the points; Poisson's ln Γ once per component) gives what the point-by-point path gives
+    /// The batch (one pass of the programs of ln s(x) and 1/s(x), or of the log-density's with
+    /// z folded in, over the points; Poisson's ln Γ once per component; Student-t's arithmetic
+    /// in lanes) gives what the point-by-point path gives
     /// to 10⁻¹², at 7 points of a 2-D
     /// state with 2 measurement components, a missing one included; and the same error when
     /// a variance is not positive.
@@ -416,6 +442,7 @@ mod tests {
             MeasurementDensity::Heteroscedastic(Arc::new(variance)),
             MeasurementDensity::LogDensity(Arc::new(log_density)),
             MeasurementDensity::Poisson,
+            MeasurementDensity::student_t(3.5, 0.7).unwrap(),
         ];
         let count = 7;
         let points: Vec<f64> = (0..2 * count).map(|k| 0.3 * k as f64 - 1.1).collect();
@@ -540,6 +567,25 @@ crate::linalg::simd::per_node_kernel! {
     /// vectorises; the caller finds the first bad one only when there is one).
     fn all_valid_variances(v: &[f64]) -> bool {
         v.iter().fold(true, |ok, &v| ok & variance_is_valid(v))
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// Whether no log-density value is NaN or +∞ (−∞ is a point the measurement rules out).
+    fn all_valid_log_densities(v: &[f64]) -> bool {
+        v.iter().fold(true, |ok, &v| ok & (v < f64::INFINITY || v == f64::NEG_INFINITY))
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    /// `out_i += ln t_ν((z − h_i)/σ)/σ` (Student-t's log-density with its log normalising
+    /// constant `constant`), as [`crate::model::measurement::student_t_log_density`] at
+    /// one point.
+    fn add_student_t_logs(out: &mut [f64], z: f64, h: &[f64], t: (f64, f64), constant: f64) {
+        let (dof, scale) = t;
+        for (o, &h) in out.iter_mut().zip(h) {
+            *o += crate::model::measurement::student_t_log_term(z - h, dof, scale, constant);
+        }
     }
 }
 

@@ -124,6 +124,26 @@ pub(crate) fn ln(x: f64) -> f64 {
     }
 }
 
+/// `ln(1 + y)` for y ≥ −1, accurate for small y too: `u = 1 + y` rounded, then
+/// `ln u − ((u − 1) − y)/u`, which corrects for the rounding of u to first order (Goldberg
+/// 1991, "What every computer scientist should know about floating-point arithmetic", Thm 4's
+/// idea); within a few ulp of `libm::log1p`.
+#[inline(always)]
+pub(crate) fn ln_1p(y: f64) -> f64 {
+    let u = 1.0 + y;
+    let value = ln(u) - ((u - 1.0) - y) / u;
+    if u == f64::INFINITY {
+        f64::INFINITY
+    } else if u == 0.0 {
+        f64::NEG_INFINITY
+    } else if u == 1.0 {
+        // ln(1 + y) = y to rounding when 1 + y rounds to 1.
+        y
+    } else {
+        value
+    }
+}
+
 /// `R(z) = Σ_{j=1}^{10} 2 z^j/(2j + 1)`, in Estrin's scheme.
 #[inline(always)]
 fn atanh_tail(z: f64) -> f64 {
@@ -264,6 +284,23 @@ mod tests {
         assert!(ln(f64::NAN).is_nan());
         assert_eq!(ln(2.0), core::f64::consts::LN_2);
         assert!(ulps(ln(core::f64::consts::E), 1.0) <= 1);
+    }
+
+    #[test]
+    fn ln_1p_is_within_four_ulp_of_libm() {
+        for (lo, hi) in [(-0.9, 1.0), (-1e-6, 1e-6), (1e-300, 1e-10), (1.0, 1e300)] {
+            for y in spread(lo, hi, 20_000) {
+                let (got, want) = (ln_1p(y), libm::log1p(y));
+                assert!(
+                    ulps(got, want) <= 4,
+                    "ln_1p({y:e}): {got:e} against libm {want:e}"
+                );
+            }
+        }
+        assert_eq!(ln_1p(0.0), 0.0);
+        assert_eq!(ln_1p(f64::INFINITY), f64::INFINITY);
+        assert_eq!(ln_1p(-1.0), f64::NEG_INFINITY);
+        assert!(ln_1p(-2.0).is_nan());
     }
 
     #[test]

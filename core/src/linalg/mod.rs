@@ -353,6 +353,15 @@ per_node_kernel! {
 }
 
 per_node_kernel! {
+    /// `u_i ← u_i + w_i`.
+    pub(crate) fn add_in_place(u: &mut [f64], w: &[f64]) {
+        for (u, w) in u.iter_mut().zip(w) {
+            *u += w;
+        }
+    }
+}
+
+per_node_kernel! {
     /// `u_i ← u_i w_i`.
 #[cfg(feature = "std")]
     pub(crate) fn multiply_in_place(u: &mut [f64], w: &[f64]) {

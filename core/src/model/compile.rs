@@ -400,6 +400,7 @@ impl Expression {
                 match name {
                     "exp" => Operation::Exp(a),
                     "ln" | "log" => Operation::Ln(a),
+                    "abs" => Operation::Abs(a),
                     _ => Operation::Unary(f, a),
                 }
             }

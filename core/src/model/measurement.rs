@@ -174,11 +174,16 @@ pub(crate) fn student_t_log_density(
 ) -> f64 {
     (0..z.len())
         .filter(|&j| !z[j].is_nan())
-        .map(|j| {
-            let r = (z[j] - hx[j]) / scale;
-            constant - 0.5 * (dof + 1.0) * libm::log1p(r * r / dof)
-        })
+        .map(|j| student_t_log_term(z[j] - hx[j], dof, scale, constant))
         .sum()
+}
+
+/// One component's `ln t_ν(r/σ)/σ = constant − ½(ν + 1) ln(1 + (r/σ)²/ν)` of a residual r;
+/// branch-free, so a loop of it vectorises.
+#[inline(always)]
+pub(crate) fn student_t_log_term(r: f64, dof: f64, scale: f64, constant: f64) -> f64 {
+    let r = r / scale;
+    constant - 0.5 * (dof + 1.0) * crate::linalg::elementary::ln_1p(r * r / dof)
 }
 
 /// `ln(2π)`.

@@ -7,7 +7,7 @@
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
 //! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
 //! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp` and `ln`
-//! are passes that vectorise ([`crate::linalg::elementary`]).
+//! are passes that vectorise ([`crate::linalg::elementary`]), and so is `abs`.
 //!
 //! The per-point value of an expression is the same program on a block of one point, so the
 //! batch and the point-wise results are equal to the last bit. Against an interpreter of the
@@ -48,6 +48,8 @@ pub(crate) enum Operation {
     Exp(Operand),
     /// `ln a` ([`crate::linalg::elementary::ln`], a pass that vectorises).
     Ln(Operand),
+    /// `|a|` (a pass that vectorises).
+    Abs(Operand),
     /// `a + b`.
     Add(Operand, Operand),
     /// `a - b`.
@@ -70,6 +72,7 @@ impl Operation {
             | Operation::Unary(_, a)
             | Operation::Exp(a)
             | Operation::Ln(a)
+            | Operation::Abs(a)
             | Operation::PowI(a, _) => [Some(a), None],
             Operation::Add(a, b)
             | Operation::Sub(a, b)
@@ -85,6 +88,7 @@ impl Operation {
             Operation::Unary(g, a) => Operation::Unary(g, f(a)),
             Operation::Exp(a) => Operation::Exp(f(a)),
             Operation::Ln(a) => Operation::Ln(f(a)),
+            Operation::Abs(a) => Operation::Abs(f(a)),
             Operation::PowI(a, k) => Operation::PowI(f(a), k),
             Operation::Add(a, b) => Operation::Add(f(a), f(b)),
             Operation::Sub(a, b) => Operation::Sub(f(a), f(b)),
@@ -395,6 +399,7 @@ fn apply(operation: &Operation, dst: &mut [f64], a: Arg, b: Arg) {
             Arg::Slice(a) => crate::linalg::elementary::ln_into(dst, a),
             Arg::Scalar(x) => dst.fill(crate::linalg::elementary::ln(x)),
         },
+        Operation::Abs(_) => map1(dst, a, libm::fabs),
         Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
         Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
         Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
