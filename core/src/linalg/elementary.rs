@@ -169,24 +169,6 @@ fn atanh_tail(z: f64) -> f64 {
     p * z
 }
 
-crate::linalg::simd::per_node_kernel! {
-    /// `out_i = e^{x_i}`.
-    pub(crate) fn exp_into(out: &mut [f64], x: &[f64]) {
-        for (o, &x) in out.iter_mut().zip(x) {
-            *o = exp(x);
-        }
-    }
-}
-
-crate::linalg::simd::per_node_kernel! {
-    /// `out_i = ln x_i`.
-    pub(crate) fn ln_into(out: &mut [f64], x: &[f64]) {
-        for (o, &x) in out.iter_mut().zip(x) {
-            *o = ln(x);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -301,22 +283,5 @@ mod tests {
         assert_eq!(ln_1p(f64::INFINITY), f64::INFINITY);
         assert_eq!(ln_1p(-1.0), f64::NEG_INFINITY);
         assert!(ln_1p(-2.0).is_nan());
-    }
-
-    #[test]
-    fn batches_are_the_scalar_functions() {
-        let x: alloc::vec::Vec<f64> = spread(-30.0, 30.0, 1001).collect();
-        let mut out = alloc::vec![0.0; x.len()];
-        exp_into(&mut out, &x);
-        assert!(out
-            .iter()
-            .zip(&x)
-            .all(|(o, &x)| o.to_bits() == exp(x).to_bits()));
-        let positive: alloc::vec::Vec<f64> = out.clone();
-        ln_into(&mut out, &positive);
-        assert!(out
-            .iter()
-            .zip(&positive)
-            .all(|(o, &x)| o.to_bits() == ln(x).to_bits()));
     }
 }

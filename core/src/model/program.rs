@@ -386,30 +386,28 @@ fn map2(dst: &mut [f64], a: Arg, b: Arg, f: impl Fn(f64, f64) -> f64) {
     }
 }
 
-/// One pass of `operation` over the block; the arithmetic arms are monomorphic loops.
-fn apply(operation: &Operation, dst: &mut [f64], a: Arg, b: Arg) {
-    match *operation {
-        Operation::Neg(_) => map1(dst, a, |x| -x),
-        Operation::Unary(f, _) => map1(dst, a, f),
-        Operation::Exp(_) => match a {
-            Arg::Slice(a) => crate::linalg::elementary::exp_into(dst, a),
-            Arg::Scalar(x) => dst.fill(crate::linalg::elementary::exp(x)),
-        },
-        Operation::Ln(_) => match a {
-            Arg::Slice(a) => crate::linalg::elementary::ln_into(dst, a),
-            Arg::Scalar(x) => dst.fill(crate::linalg::elementary::ln(x)),
-        },
-        Operation::Abs(_) => map1(dst, a, libm::fabs),
-        Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
-        Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
-        Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
-        Operation::Div(..) => map2(dst, a, b, |x, y| x / y),
-        Operation::PowI(_, k) => match k {
-            2 => map1(dst, a, |x| x * x),
-            3 => map1(dst, a, |x| x * x * x),
-            _ => map1(dst, a, |x| pow_int(x, k)),
-        },
-        Operation::Binary(f, ..) => map2(dst, a, b, f),
+crate::linalg::simd::per_node_kernel! {
+    /// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln` and `abs`
+    /// are monomorphic loops that vectorise (compiled for AVX2 and AVX-512 too, see
+    /// [`crate::linalg::simd`]); other functions are called per value.
+    fn apply(operation: &Operation, dst: &mut [f64], a: Arg<'_>, b: Arg<'_>) {
+        match *operation {
+            Operation::Neg(_) => map1(dst, a, |x| -x),
+            Operation::Unary(f, _) => map1(dst, a, f),
+            Operation::Exp(_) => map1(dst, a, crate::linalg::elementary::exp),
+            Operation::Ln(_) => map1(dst, a, crate::linalg::elementary::ln),
+            Operation::Abs(_) => map1(dst, a, libm::fabs),
+            Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
+            Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
+            Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
+            Operation::Div(..) => map2(dst, a, b, |x, y| x / y),
+            Operation::PowI(_, k) => match k {
+                2 => map1(dst, a, |x| x * x),
+                3 => map1(dst, a, |x| x * x * x),
+                _ => map1(dst, a, |x| pow_int(x, k)),
+            },
+            Operation::Binary(f, ..) => map2(dst, a, b, f),
+        }
     }
 }
 
