@@ -502,6 +502,7 @@ mod tests {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += ln N(z; h_i, v_i)` for variances already checked.
     fn add_variance_logs(out: &mut [f64], z: f64, h: &[f64], v: &[f64]) {
         for ((o, &h), &v) in out.iter_mut().zip(h).zip(v) {
@@ -511,6 +512,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += ln Poisson(z; rate_i)` for rates already checked.
     fn add_poisson_logs(out: &mut [f64], z: f64, rates: &[f64], log_factorial: f64) {
         for (o, &rate) in out.iter_mut().zip(rates) {
@@ -542,6 +544,7 @@ fn log_form_is_valid(log_s: f64, precision: f64) -> bool {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// Whether every point's `ln s` and `1/s` are valid ([`log_form_is_valid`]), in one pass.
     fn all_valid_log_forms(log_s: &[f64], precision: &[f64]) -> bool {
         log_s
@@ -552,6 +555,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += ln N(z; h_i, s_i) = −½ (ln 2π + ln s_i + (z − h_i)² / s_i)` from `ln s_i` and
     /// `1/s_i`, checked.
     fn add_log_form_logs(out: &mut [f64], z: f64, h: &[f64], log_s: &[f64], precision: &[f64]) {
@@ -563,6 +567,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// Whether every variance is positive and finite (a pass without an early exit, which
     /// vectorises; the caller finds the first bad one only when there is one).
     fn all_valid_variances(v: &[f64]) -> bool {
@@ -571,6 +576,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// Whether no log-density value is NaN or +∞ (−∞ is a point the measurement rules out).
     fn all_valid_log_densities(v: &[f64]) -> bool {
         v.iter().fold(true, |ok, &v| ok & (v < f64::INFINITY || v == f64::NEG_INFINITY))
@@ -578,6 +584,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += ln t_ν((z − h_i)/σ)/σ` (Student-t's log-density with its log normalising
     /// constant `constant`), as [`crate::model::measurement::student_t_log_density`] at
     /// one point.
@@ -590,6 +597,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// Whether every Poisson rate is nonnegative and finite (as [`all_valid_variances`]).
     fn all_valid_rates(rates: &[f64]) -> bool {
         rates.iter().fold(true, |ok, &r| ok & rate_is_valid(r))

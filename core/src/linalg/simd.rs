@@ -18,8 +18,22 @@
 /// Defines a function whose body is compiled for the target and, on x86-64 with `std`, once
 /// more with AVX2 enabled, and runs the AVX2 copy when the CPU has it (see the module doc).
 /// Plain functions only: no generics, no `self`.
+///
+/// Written `per_node_kernel! { wide: … }`, the function is compiled a third time with
+/// AVX-512F, run where the CPU has it: eight lanes and 32 registers, which the loops of many
+/// exponentials and logarithms (the particle filter's weights, the expression programs' passes)
+/// use well — 20 % off the stochastic-volatility PF step on the machine of `BENCHMARKS.md`. Not
+/// the default: some loops the compiler vectorises for AVX2 it leaves scalar for AVX-512 (the
+/// factor (15)'s exponent split made QIEM's step 27 % slower), so a kernel opts in where its
+/// benchmark says so. Bits are the same in every copy (no FMA either way).
 macro_rules! per_node_kernel {
+    (wide: $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $crate::linalg::simd::per_node_kernel!(@emit true $(#[$meta])* $vis fn $name($($arg: $ty),*) $(-> $ret)? $body);
+    };
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $crate::linalg::simd::per_node_kernel!(@emit false $(#[$meta])* $vis fn $name($($arg: $ty),*) $(-> $ret)? $body);
+    };
+    (@emit $wide:literal $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
@@ -30,13 +44,15 @@ macro_rules! per_node_kernel {
                 unsafe fn avx512($($arg: $ty),*) $(-> $ret)? {
                     body($($arg),*)
                 }
+                // Constant: the optimiser drops the branch and the copy of a kernel that is
+                // not wide.
+                if $wide && std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the CPU supports AVX-512F, checked just above.
+                    return unsafe { avx512($($arg),*) };
+                }
                 #[target_feature(enable = "avx2")]
                 unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
                     body($($arg),*)
-                }
-                if std::is_x86_feature_detected!("avx512f") {
-                    // SAFETY: the CPU supports AVX-512F, checked just above.
-                    return unsafe { avx512($($arg),*) };
                 }
                 if std::is_x86_feature_detected!("avx2") {
                     // SAFETY: the CPU supports AVX2, checked just above.

@@ -281,6 +281,7 @@ impl MixtureComponent {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `w_i = r_i − μ`.
     fn centred(w: &mut [f64], r: &[f64], mean: f64) {
         w.iter_mut().zip(r).for_each(|(w, r)| *w = r - mean);
@@ -288,6 +289,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `w_i −= a v_i`.
     fn subtract_scaled(w: &mut [f64], v: &[f64], a: f64) {
         w.iter_mut().zip(v).for_each(|(w, v)| *w -= a * v);
@@ -295,6 +297,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `w_i /= a`.
     fn divide(w: &mut [f64], a: f64) {
         w.iter_mut().for_each(|w| *w /= a);
@@ -302,6 +305,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `q_i = w_i²`.
     fn squares(q: &mut [f64], w: &[f64]) {
         q.iter_mut().zip(w).for_each(|(q, w)| *q = w * w);
@@ -309,6 +313,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `q_i += w_i²`.
     fn add_squares(q: &mut [f64], w: &[f64]) {
         q.iter_mut().zip(w).for_each(|(q, w)| *q += w * w);
@@ -316,6 +321,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += c − ½ q_i`.
     fn add_log_gaussian(out: &mut [f64], q: &[f64], c: f64) {
         out.iter_mut().zip(q).for_each(|(o, q)| *o += c - 0.5 * q);
@@ -323,6 +329,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i = c − ½ q_i`.
     fn set_log_gaussian(out: &mut [f64], q: &[f64], c: f64) {
         out.iter_mut().zip(q).for_each(|(o, q)| *o = c - 0.5 * q);
@@ -330,6 +337,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `top_i = max(top_i, v_i)`, a NaN `v_i` ignored.
     fn keep_larger(top: &mut [f64], v: &[f64]) {
         top.iter_mut()
@@ -339,6 +347,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `s_i += e^{v_i − top_i}` (0 for a NaN `v_i`, or where every value is −∞).
     fn add_exp_below(s: &mut [f64], v: &[f64], top: &[f64]) {
         for ((s, &v), &t) in s.iter_mut().zip(v).zip(top) {
@@ -349,6 +358,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `out_i += top_i + ln s_i` (−∞ where every component is −∞ or NaN).
     fn add_log_sum(out: &mut [f64], top: &[f64], s: &[f64]) {
         for ((o, &t), &s) in out.iter_mut().zip(top).zip(s) {

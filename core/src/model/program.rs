@@ -387,6 +387,7 @@ fn map2(dst: &mut [f64], a: Arg, b: Arg, f: impl Fn(f64, f64) -> f64) {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln` and `abs`
     /// are monomorphic loops that vectorise (compiled for AVX2 and AVX-512 too, see
     /// [`crate::linalg::simd`]); other functions are called per value.

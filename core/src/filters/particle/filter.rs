@@ -551,6 +551,7 @@ fn normalise(log_weights: &mut [f64], weights: &mut [f64]) -> Result<f64, Filter
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// The largest log-weight ([`crate::linalg::largest_in_lanes`]).
     fn largest(lw: &[f64]) -> f64 {
         crate::linalg::largest_in_lanes(lw)
@@ -558,6 +559,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `w_i ← w_i · inv` and `lw_i ← lw_i − shift`: the weights normalised in both domains.
     fn rescale(w: &mut [f64], lw: &mut [f64], inv: f64, shift: f64) {
         w.iter_mut().for_each(|w| *w *= inv);
@@ -603,6 +605,7 @@ fn systematic_ancestors(
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `w_i = e^{lw_i − max}` for every particle (all exponents ≤ 0, so
     /// [`linalg::exp_nonpositive`](crate::linalg::exp_nonpositive), which vectorises, where
     /// `libm::exp` does not) and their sum, in lanes. No FMA, so the weights, and the
@@ -616,6 +619,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `Σ w_i²`.
     fn sum_of_squares(w: &[f64]) -> f64 {
         crate::linalg::sum_in_lanes(w, |w| w * w)
@@ -776,6 +780,7 @@ impl Filter for Pf {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `Σ w_i x_i`, in lanes.
     fn weighted_sum(x: &[f64], w: &[f64]) -> f64 {
         crate::linalg::sum_zipped_in_lanes([x, w], |[x, w]| w * x)
@@ -783,6 +788,7 @@ crate::linalg::simd::per_node_kernel! {
 }
 
 crate::linalg::simd::per_node_kernel! {
+    wide:
     /// `Σ w_i (x_i − m_x)(y_i − m_y)`, in lanes.
     fn weighted_product_about(x: (&[f64], f64), y: (&[f64], f64), w: &[f64]) -> f64 {
         let ((x, mx), (y, my)) = (x, y);
