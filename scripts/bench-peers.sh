@@ -3,8 +3,9 @@
 # a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
 # nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
 # from Python (the `zakai` package, per step() call and per run() call).
-# Then the particle filter beside `particles` (Chopin & Papaspiliopoulos 2020) on its growth
-# model and its own stochastic-volatility model (scripts/peers/growth_pf.py, sv_pf.py).
+# Then the same PF in JAX (jit + lax.scan, scripts/peers/jax_pf.py, in target/jax-venv), and
+# the particle filter beside `particles` (Chopin & Papaspiliopoulos 2020) on its growth model
+# and its own stochastic-volatility model (scripts/peers/growth_pf.py, sv_pf.py).
 # Installs NumPy, SciPy, FilterPy, particles and this checkout's wheel into target/peers-venv.
 # Prints tables.
 set -euo pipefail
@@ -83,6 +84,20 @@ print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'step()':>10} {'ratio':>7} 
 for k, (work, peer) in names.items():
     p, s, r = peers[k], from_python[k]["step"], from_python[k]["run"]
     print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {s * 1e6:>8.2f}µs {p / s:>6.1f}× {r * 1e6:>8.2f}µs {p / r:>6.1f}×")
+PY
+
+# The JAX PF (jit + lax.scan) in a venv of its own: JAX needs numpy >= 2, `particles` < 2.
+jax_venv=target/jax-venv
+if [ ! -x "$jax_venv/bin/python" ]; then
+  python3 -m venv "$jax_venv"
+fi
+"$jax_venv/bin/python" -c 'import jax' 2>/dev/null || "$jax_venv/bin/pip" install -q jax
+jax_pf=$("$jax_venv/bin/python" scripts/peers/jax_pf.py)
+"$venv/bin/python" - "$jax_pf" "${ours[pf]}" <<'PY'
+import json, sys
+peer, z = json.loads(sys.argv[1])["pf_jax"], float(sys.argv[2])
+print()
+print(f"{'bootstrap PF, 10^4 particles, resampling every step':<54} {'JAX jit':<10} {peer * 1e6:>10.2f}µs {z * 1e6:>10.2f}µs {peer / z:>7.1f}×")
 PY
 
 echo

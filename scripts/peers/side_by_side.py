@@ -7,7 +7,7 @@ import numpy as np
 
 def compare(title, z, runs, repeats):
     """`runs` is [(name, run)], `run(z, seed)` returning (seconds, log-likelihood); the first
-    is the peer, the second Zakai."""
+    is the peer, the others Zakai's forms of the same filter."""
     steps = len(z)
     rows = []
     for name, run in runs:
@@ -18,4 +18,5 @@ def compare(title, z, runs, repeats):
     print(f"{title}, least of {repeats} runs")
     for name, per_step, ll, sd in rows:
         print(f"{name:<28} {per_step:10.1f} µs/step   ln L {ll:9.3f} (sd over runs {sd:.3f})")
-    print(f"ratio particles / Zakai: {rows[0][1] / rows[1][1]:.2f}")
+    for name, per_step, _, _ in rows[1:]:
+        print(f"ratio particles / {name}: {rows[0][1] / per_step:.2f}")
