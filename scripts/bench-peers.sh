@@ -3,7 +3,8 @@
 # a bootstrap PF with 10^4 particles (NumPy), a 1-D UKF (FilterPy) and a 1-D QIEM step on 2001
 # nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
 # from Python (the `zakai` package, per step() call and per run() call).
-# Then the same PF in JAX (jit + lax.scan, scripts/peers/jax_pf.py, in target/jax-venv), and
+# Then the same PF in JAX (jit + lax.scan, scripts/peers/jax_pf.py) and the EKF and UKF beside
+# dynamax's (scripts/peers/dynamax_kf.py), both in target/jax-venv, and
 # the particle filter beside `particles` (Chopin & Papaspiliopoulos 2020) on its growth model
 # and its own stochastic-volatility model (scripts/peers/growth_pf.py, sv_pf.py).
 # Installs NumPy, SciPy, FilterPy, particles and this checkout's wheel into target/peers-venv.
@@ -91,13 +92,25 @@ jax_venv=target/jax-venv
 if [ ! -x "$jax_venv/bin/python" ]; then
   python3 -m venv "$jax_venv"
 fi
-"$jax_venv/bin/python" -c 'import jax' 2>/dev/null || "$jax_venv/bin/pip" install -q jax
+"$jax_venv/bin/python" -c 'import jax, dynamax' 2>/dev/null || "$jax_venv/bin/pip" install -q jax dynamax
+"$jax_venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 jax_pf=$("$jax_venv/bin/python" scripts/peers/jax_pf.py)
+kf=$(cd scripts/peers && "../../$jax_venv/bin/python" dynamax_kf.py)
 "$venv/bin/python" - "$jax_pf" "${ours[pf]}" <<'PY'
 import json, sys
 peer, z = json.loads(sys.argv[1])["pf_jax"], float(sys.argv[2])
 print()
 print(f"{'bootstrap PF, 10^4 particles, resampling every step':<54} {'JAX jit':<10} {peer * 1e6:>10.2f}µs {z * 1e6:>10.2f}µs {peer / z:>7.1f}×")
+PY
+"$venv/bin/python" - "$kf" <<'PY'
+import json, sys
+print()
+print("EKF and UKF over 500 measurements, whole series in one call: dynamax (jit) and Zakai's Filter.run")
+print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':>8} {'|means gap|':>12}")
+for title, rows in json.loads(sys.argv[1]):
+    for method, r in rows.items():
+        work = f"{method.upper()} {title}"
+        print(f"{work:<54} {'dynamax':<10} {r['dynamax'] * 1e6:>10.2f}µs {r['zakai'] * 1e6:>10.2f}µs {r['dynamax'] / r['zakai']:>7.1f}× {r['gap']:>12.1e}")
 PY
 
 echo
