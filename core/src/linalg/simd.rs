@@ -28,12 +28,6 @@
 /// benchmark says so. Bits are the same in every copy (no FMA either way).
 macro_rules! per_node_kernel {
     (wide: $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
-        $crate::linalg::simd::per_node_kernel!(@emit true $(#[$meta])* $vis fn $name($($arg: $ty),*) $(-> $ret)? $body);
-    };
-    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
-        $crate::linalg::simd::per_node_kernel!(@emit false $(#[$meta])* $vis fn $name($($arg: $ty),*) $(-> $ret)? $body);
-    };
-    (@emit $wide:literal $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
@@ -44,24 +38,37 @@ macro_rules! per_node_kernel {
                 unsafe fn avx512($($arg: $ty),*) $(-> $ret)? {
                     body($($arg),*)
                 }
-                // Constant: the optimiser drops the branch and the copy of a kernel that is
-                // not wide.
-                if $wide && std::is_x86_feature_detected!("avx512f") {
+                if std::is_x86_feature_detected!("avx512f") {
                     // SAFETY: the CPU supports AVX-512F, checked just above.
                     return unsafe { avx512($($arg),*) };
                 }
-                #[target_feature(enable = "avx2")]
-                unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
-                    body($($arg),*)
-                }
-                if std::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the CPU supports AVX2, checked just above.
-                    return unsafe { avx2($($arg),*) };
-                }
             }
-            body($($arg),*)
+            $crate::linalg::simd::per_node_kernel!(@narrow body ($($arg: $ty),*) $(-> $ret)?)
         }
     };
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn body($($arg: $ty),*) $(-> $ret)? $body
+            $crate::linalg::simd::per_node_kernel!(@narrow body ($($arg: $ty),*) $(-> $ret)?)
+        }
+    };
+    // The AVX2 copy and the plain one, calling `$body_fn`.
+    (@narrow $body_fn:ident ($($arg:ident: $ty:ty),*) $(-> $ret:ty)?) => {{
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        {
+            #[target_feature(enable = "avx2")]
+            unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
+                $body_fn($($arg),*)
+            }
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                return unsafe { avx2($($arg),*) };
+            }
+        }
+        $body_fn($($arg),*)
+    }};
 }
 
 pub(crate) use per_node_kernel;
