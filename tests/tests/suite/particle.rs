@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 use zakai::lab::experiment::Experiment;
-use zakai::lab::scenario::{presets, MethodConfig, PriorConfig, ScenarioConfig, TimeConfig};
+use zakai::lab::scenario::{presets, MethodConfig, PriorConfig, TimeConfig};
 use zakai::KalmanParams;
 use zakai::PfParams;
 use zakai_tests::kalman_reference::{rows_of, LinearGaussian, Sensor};
@@ -161,8 +161,11 @@ fn substeps_follow_the_models_time_scale() {
 /// velocity's time constant — with rows 10–19 missing (a gap of eleven intervals) and one step
 /// of 2.5. Rows of (times, measurements) from a fixed generator.
 #[cfg(not(target_arch = "wasm32"))]
-fn velocity_target() -> (ScenarioConfig, zakai::lab::recording::Recording) {
-    let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
+fn velocity_target() -> (
+    zakai::lab::scenario::ScenarioConfig,
+    zakai::lab::recording::Recording,
+) {
+    let config: zakai::lab::scenario::ScenarioConfig = serde_json::from_value(serde_json::json!({
         "name": "velocity-target",
         "model": {
             "drift": ["x2", "-0.5*x2"],
