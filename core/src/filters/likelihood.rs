@@ -221,27 +221,13 @@ impl MeasurementLikelihood {
                     return Ok(true);
                 }
                 self.batch_out.resize(count, 0.0);
-                let n = points.len() / count;
-                match l.with_inputs_fixed(n, z) {
-                    // The measurement folded into the program: one pass per operation that
-                    // reads the state.
-                    Some(fixed) => crate::model::expression::eval_programs_batch(
-                        fixed.0.iter().map(Some),
-                        n,
-                        points,
-                        &mut self.batch_out,
-                        scratch,
-                    ),
-                    None => {
-                        // The states, then the measurement as constant rows.
-                        self.batch_in.clear();
-                        self.batch_in.extend_from_slice(points);
-                        for &zj in z {
-                            self.batch_in.extend(core::iter::repeat_n(zj, count));
-                        }
-                        l.eval_batch(&self.batch_in, &mut self.batch_out, scratch);
-                    }
+                // The states, then the measurement as constant rows (grown on first use).
+                self.batch_in.clear();
+                self.batch_in.extend_from_slice(points);
+                for &zj in z {
+                    self.batch_in.extend(core::iter::repeat_n(zj, count));
                 }
+                l.eval_batch(&self.batch_in, &mut self.batch_out, scratch);
                 let bad = |v: f64| v.is_nan() || v == f64::INFINITY;
                 if !all_valid_log_densities(&self.batch_out) {
                     let i = self.batch_out.iter().position(|&v| bad(v)).unwrap_or(0);
@@ -419,8 +405,8 @@ mod tests {
     use alloc::sync::Arc;
     use alloc::{format, vec};
 
-    /// The batch (one pass of the programs of ln s(x) and 1/s(x), or of the log-density's with
-    /// z folded in, over the points; Poisson's ln Γ once per component; Student-t's arithmetic
+    /// The batch (one pass of the programs of ln s(x) and 1/s(x), or of the log-density's, over
+    /// the points; Poisson's ln Γ once per component; Student-t's arithmetic
     /// in lanes) gives what the point-by-point path gives
     /// to 10⁻¹², at 7 points of a 2-D
     /// state with 2 measurement components, a missing one included; and the same error when

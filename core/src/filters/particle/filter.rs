@@ -52,7 +52,8 @@ enum ParticleDiffusion {
 /// operation over all of them: f and h are evaluated on the whole population at once
 /// ([`VectorFunction::eval_batch`](crate::model::VectorFunction::eval_batch)), the noise comes
 /// from the ziggurat, weights take one `exp` per particle, and every buffer is allocated in the
-/// constructor, so a step allocates nothing.
+/// constructor (the measurement density's batch buffers on the first step), so a step after the
+/// first allocates nothing.
 ///
 /// The bootstrap particle filter (Gordon, Salmond & Smith): particles follow the signal SDE by
 /// Euler–Maruyama — or, for a linear SDE `dx = (A x + b) dt + G dv` with constant G, by its
