@@ -92,10 +92,11 @@ impl LinearTransition {
     fn discretise(&self, dt: f64) -> Discretised {
         let (phi, offset, qd) =
             crate::filters::kalman::linear::discretize(&self.a, &self.b, &self.q, dt);
-        let whiten = qd.clone().cholesky().and_then(|c| c.l().try_inverse());
-        // The Cholesky factor where it exists, else the symmetric square root (Q_Δ singular:
-        // some direction gets no noise at all).
-        let factor = match qd.clone().cholesky() {
+        // The Cholesky factor where Q_Δ is positive definite (its inverse whitens FFBSi's
+        // kernel), else the symmetric square root (Q_Δ singular: some direction gets no noise).
+        let chol = qd.clone().cholesky();
+        let whiten = chol.as_ref().and_then(|c| c.l().try_inverse());
+        let factor = match &chol {
             Some(c) => c.l(),
             None => crate::linalg::psd_square_root(&qd, "exact transition covariance")
                 .unwrap_or_else(|_| DMatrix::zeros(qd.nrows(), qd.ncols())),
