@@ -228,9 +228,12 @@ impl MeasurementLikelihood {
                     self.batch_in.extend(core::iter::repeat_n(zj, count));
                 }
                 l.eval_batch(&self.batch_in, &mut self.batch_out, scratch);
-                let bad = |v: f64| v.is_nan() || v == f64::INFINITY;
                 if !all_valid_log_densities(&self.batch_out) {
-                    let i = self.batch_out.iter().position(|&v| bad(v)).unwrap_or(0);
+                    let i = self
+                        .batch_out
+                        .iter()
+                        .position(|&v| !log_density_is_valid(v))
+                        .unwrap_or(0);
                     return Err(FilterError::Likelihood(alloc::format!(
                         "the log-density is {} at x = {:?}, z = {z:?}",
                         self.batch_out[i],
@@ -561,11 +564,18 @@ crate::linalg::simd::per_node_kernel! {
     }
 }
 
+/// Whether a log-density value can be used: not NaN and not +∞ (−∞ is a point the
+/// measurement rules out).
+#[inline(always)]
+fn log_density_is_valid(v: f64) -> bool {
+    (v < f64::INFINITY) | (v == f64::NEG_INFINITY)
+}
+
 crate::linalg::simd::per_node_kernel! {
     wide:
-    /// Whether no log-density value is NaN or +∞ (−∞ is a point the measurement rules out).
+    /// Whether every log-density value is valid ([`log_density_is_valid`]), in one pass.
     fn all_valid_log_densities(v: &[f64]) -> bool {
-        v.iter().fold(true, |ok, &v| ok & (v < f64::INFINITY || v == f64::NEG_INFINITY))
+        v.iter().fold(true, |ok, &v| ok & log_density_is_valid(v))
     }
 }
 
