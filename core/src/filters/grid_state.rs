@@ -220,7 +220,8 @@ impl GridMeasurement {
         let before = grid.positive_mass(u);
         let m = self.m;
         let reads_state = self.likelihood.reads_state();
-        let mut max = f64::NEG_INFINITY;
+        // ln u in one pass (−∞ where u ≤ 0), each node's log-likelihood added to it.
+        logs_of_positive(u, log);
         if self.likelihood.batches() {
             // As a batch, in chunks of the nodes with positive density.
             let mut start = 0;
@@ -228,16 +229,14 @@ impl GridMeasurement {
                 self.chunk.0.clear();
                 let mut end = start;
                 while end < u.len() && self.chunk.0.len() < BATCH {
-                    match u[end] > 0.0 {
-                        true => self.chunk.0.push(end),
-                        false => log[end] = f64::NEG_INFINITY,
+                    if u[end] > 0.0 {
+                        self.chunk.0.push(end);
                     }
                     end += 1;
                 }
                 self.chunk_log_likelihoods(grid, node, z)?;
                 for (&idx, l) in self.chunk.0.iter().zip(&self.chunk.3) {
-                    log[idx] = l + libm::log(u[idx]);
-                    max = max.max(log[idx]);
+                    log[idx] += l;
                 }
                 start = end;
             }
@@ -248,20 +247,37 @@ impl GridMeasurement {
                     if reads_state {
                         grid.node(idx, node);
                     }
-                    *log = self.likelihood.log_at(z, node, h)? + libm::log(*u);
-                    max = max.max(*log);
-                } else {
-                    *log = f64::NEG_INFINITY;
+                    *log += self.likelihood.log_at(z, node, h)?;
                 }
             }
         }
+        let max = crate::linalg::largest_in_lanes(log);
         if max == f64::NEG_INFINITY || max.is_nan() {
             return Err(crate::error::FilterError::MassLost);
         }
-        for (u, log) in u.iter_mut().zip(log.iter()) {
-            *u = libm::exp(log - max);
-        }
+        exps_shifted(log, max, u);
         Ok(max - libm::log(before))
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    wide:
+    /// `log_i ← ln u_i`, −∞ where `u_i ≤ 0` (the update keeps only the positive values).
+    fn logs_of_positive(u: &[f64], log: &mut [f64]) {
+        for (l, &u) in log.iter_mut().zip(u) {
+            let value = crate::linalg::elementary::ln(u);
+            *l = if u > 0.0 { value } else { f64::NEG_INFINITY };
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    wide:
+    /// `u_i ← e^(log_i − shift)`.
+    fn exps_shifted(log: &[f64], shift: f64, u: &mut [f64]) {
+        for (u, l) in u.iter_mut().zip(log) {
+            *u = crate::linalg::elementary::exp(l - shift);
+        }
     }
 }
 

@@ -362,6 +362,24 @@ per_node_kernel! {
 }
 
 per_node_kernel! {
+    wide:
+    /// `u_i ← u_i + s w_i` (the point-mass filter's prediction, a kernel's window at a time).
+    pub(crate) fn add_scaled(u: &mut [f64], s: f64, w: &[f64]) {
+        for (u, w) in u.iter_mut().zip(w) {
+            *u += s * w;
+        }
+    }
+}
+
+per_node_kernel! {
+    wide:
+    /// `Σ a_i b_i` in lanes ([`sum_zipped_in_lanes`]).
+    pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+        sum_zipped_in_lanes([a, b], |[a, b]| a * b)
+    }
+}
+
+per_node_kernel! {
     /// `u_i ← u_i w_i`.
 #[cfg(feature = "std")]
     pub(crate) fn multiply_in_place(u: &mut [f64], w: &[f64]) {

@@ -66,16 +66,18 @@ pub(super) const MAX_CORRELATED_WINDOW: usize = 1 << 20;
 pub(super) const CACHED_VALUES: usize = 8 << 20;
 
 /// The windows of every source cell: per (cell, dimension) the first cell and the weights
-/// `values[start[i]..start[i + 1]]`, and whether the window meets the box.
+/// `values[start[i]..start[i + 1]]`, and per cell the window's mass inside the box (0 where it
+/// misses the box).
 #[derive(Clone, Debug)]
 struct WindowCache {
     first: Vec<isize>,
     start: Vec<usize>,
     values: Vec<f64>,
-    meets: Vec<bool>,
+    inside: Vec<f64>,
 }
 
-/// A walk over one source cell's window (on the unbounded lattice of cells).
+/// A walk over a correlated Q's window (on the unbounded lattice of cells; its extent per
+/// dimension is `weights[l].len()`).
 struct Odometer<'a> {
     grid: &'a TensorGrid,
     first: &'a [isize],
@@ -86,37 +88,26 @@ struct Odometer<'a> {
 }
 
 impl Odometer<'_> {
-    /// Calls `f(index in the box or None, value)` for every cell of the window: the product
-    /// of the per-dimension weights, or with `inverse` (Q⁻¹, row-major) the quadratic form
-    /// `dᵀQ⁻¹d` at the cell's centre.
-    fn each(&mut self, inverse: Option<&[f64]>, mut f: impl FnMut(Option<usize>, f64)) {
+    /// Calls `f(index in the box or None, dᵀQ⁻¹d)` for every cell of the window, d the
+    /// cell's centre less the kernel's (`inverse` is Q⁻¹, row-major).
+    fn each(&mut self, inverse: &[f64], mut f: impl FnMut(Option<usize>, f64)) {
         let n = self.grid.dim();
         self.counter.iter_mut().for_each(|c| *c = 0);
         loop {
             let mut idx = Some(0usize);
-            let mut w = 1.0;
             for l in 0..n {
                 let i = self.first[l] + self.counter[l] as isize;
                 idx = idx
                     .filter(|_| i >= 0 && i < self.grid.shape()[l] as isize)
                     .map(|idx| idx + i as usize * self.grid.stride(l));
-                match inverse {
-                    None => w *= self.weights[l][self.counter[l]],
-                    Some(_) => {
-                        self.d[l] = self.grid.coordinate(l, 0) + i as f64 * self.grid.spacing()[l]
-                            - self.centre[l];
-                    }
-                }
+                self.d[l] =
+                    self.grid.coordinate(l, 0) + i as f64 * self.grid.spacing()[l] - self.centre[l];
             }
-            if let Some(inverse) = inverse {
-                let mut quad = 0.0;
-                for a in 0..n {
-                    for b in 0..n {
-                        quad += self.d[a] * inverse[a * n + b] * self.d[b];
-                    }
+            let mut w = 0.0;
+            for a in 0..n {
+                for b in 0..n {
+                    w += self.d[a] * inverse[a * n + b] * self.d[b];
                 }
-                // The quadratic form itself: the caller shifts it before the exponential.
-                w = quad;
             }
             f(idx, w);
             let mut l = 0;
@@ -197,10 +188,14 @@ impl TransitionKernel {
             first: Vec::with_capacity(grid.len() * n),
             start: vec![0],
             values: Vec::new(),
-            meets: Vec::with_capacity(grid.len()),
+            inside: Vec::with_capacity(grid.len()),
         };
         for j in 0..grid.len() {
-            cache.meets.push(self.window(grid, j));
+            let meets = self.window(grid, j);
+            cache.inside.push(match meets {
+                true => window_mass(&self.weights),
+                false => 0.0,
+            });
             for l in 0..n {
                 if cache.values.len() + self.weights[l].len() > budget {
                     return None;
@@ -227,21 +222,11 @@ impl TransitionKernel {
             .product()
     }
 
-    /// The window of source cell `j`: per dimension its first cell (on the unbounded
-    /// lattice) and its weights, normalised over the window; false when F(ξ_j) is so far
-    /// outside the box that the window misses it.
+    /// The window of source cell `j` (computed, not read from the cache): per dimension its
+    /// first cell (on the unbounded lattice) and its weights, normalised over the window; false
+    /// when F(ξ_j) is so far outside the box that the window misses it.
     fn window(&mut self, grid: &TensorGrid, j: usize) -> bool {
         let n = grid.dim();
-        if let Some(cache) = &self.cache {
-            for l in 0..n {
-                let i = j * n + l;
-                self.first[l] = cache.first[i];
-                self.weights[l].clear();
-                self.weights[l]
-                    .extend_from_slice(&cache.values[cache.start[i]..cache.start[i + 1]]);
-            }
-            return cache.meets[j];
-        }
         self.centre_of(j);
         let centre = &self.centre;
         let mut inside = true;
@@ -292,47 +277,79 @@ impl TransitionKernel {
         inside
     }
 
-    /// Visits every cell `i` of the box in source cell `j`'s window with `T[i, j]`; returns the
-    /// weight its window puts outside the box.
-    fn visit(&mut self, grid: &TensorGrid, j: usize, mut f: impl FnMut(usize, f64)) -> f64 {
-        if !self.window(grid, j) {
-            return 1.0;
-        }
-        let mut odometer = Odometer {
-            grid,
-            first: &self.first,
-            weights: &self.weights,
-            counter: &mut self.counter,
-            d: &mut self.d,
-            centre: &self.centre,
-        };
-        let mut inside = 0.0;
-        match &self.spread {
-            Spread::Correlated { inverse, .. } => {
-                // exp(−½(q − q_min)): a kernel narrower than a cell keeps its mass in the
-                // nearest cells instead of underflowing everywhere.
-                let mut least = f64::INFINITY;
-                odometer.each(Some(inverse), |_, q| least = least.min(q));
-                let mut total = 0.0;
-                odometer.each(Some(inverse), |_, q| total += libm::exp(-0.5 * (q - least)));
-                if !(total > 0.0 && total.is_finite()) {
-                    return 1.0;
-                }
-                odometer.each(Some(inverse), |idx, q| {
-                    if let Some(idx) = idx {
-                        let w = libm::exp(-0.5 * (q - least)) / total;
-                        inside += w;
-                        f(idx, w);
-                    }
-                });
+    /// Visits source cell `j`'s window by lines along dimension 0 (contiguous in the grid):
+    /// `row(offset, factor, w)` says that cells `offset..offset + w.len()` of the box have
+    /// `T[i, j] = factor · w[i − offset]`. Returns the weight the window puts outside the box.
+    ///
+    /// A diagonal Q's window is a product over the dimensions of weights already clipped to
+    /// the box, so each line is one contiguous run (a loop the compiler vectorises) and the
+    /// mass inside is the product of the per-dimension sums; a correlated Q's is visited cell
+    /// by cell (lines of one).
+    fn visit(
+        &mut self,
+        grid: &TensorGrid,
+        j: usize,
+        mut row: impl FnMut(usize, f64, &[f64]),
+    ) -> f64 {
+        if matches!(self.spread, Spread::Correlated { .. }) {
+            if !self.window(grid, j) {
+                return 1.0;
             }
-            Spread::Diagonal { .. } => odometer.each(None, |idx, w| {
+            let Spread::Correlated { inverse, .. } = &self.spread else {
+                unreachable!("matched above")
+            };
+            let mut odometer = Odometer {
+                grid,
+                first: &self.first,
+                weights: &self.weights,
+                counter: &mut self.counter,
+                d: &mut self.d,
+                centre: &self.centre,
+            };
+            // exp(−½(q − q_min)): a kernel narrower than a cell keeps its mass in the
+            // nearest cells instead of underflowing everywhere.
+            let mut least = f64::INFINITY;
+            odometer.each(inverse, |_, q| least = least.min(q));
+            let mut total = 0.0;
+            odometer.each(inverse, |_, q| total += libm::exp(-0.5 * (q - least)));
+            if !(total > 0.0 && total.is_finite()) {
+                return 1.0;
+            }
+            let mut inside = 0.0;
+            odometer.each(inverse, |idx, q| {
                 if let Some(idx) = idx {
+                    let w = libm::exp(-0.5 * (q - least)) / total;
                     inside += w;
-                    f(idx, w);
+                    row(idx, w, &[1.0]);
                 }
-            }),
+            });
+            return (1.0 - inside).max(0.0);
         }
+        let n = grid.dim();
+        let inside = match &self.cache {
+            Some(cache) if cache.inside[j] == 0.0 => 0.0,
+            Some(cache) => {
+                let at =
+                    |l: usize| &cache.values[cache.start[j * n + l]..cache.start[j * n + l + 1]];
+                window_lines(
+                    grid,
+                    &cache.first[j * n..(j + 1) * n],
+                    at,
+                    &mut self.counter,
+                    row,
+                );
+                cache.inside[j]
+            }
+            None => match self.window(grid, j) {
+                false => 0.0,
+                true => {
+                    let weights = &self.weights;
+                    let at = |l: usize| weights[l].as_slice();
+                    window_lines(grid, &self.first, at, &mut self.counter, row);
+                    window_mass(weights)
+                }
+            },
+        };
         (1.0 - inside).max(0.0)
     }
 
@@ -342,7 +359,14 @@ impl TransitionKernel {
         for (j, &pj) in p.iter().enumerate() {
             if pj > 0.0 {
                 let pj = scale * pj;
-                lost += pj * self.visit(grid, j, |i, w| out[i] += w * pj);
+                lost += pj
+                    * self.visit(grid, j, |offset, factor, w| {
+                        crate::linalg::add_scaled(
+                            &mut out[offset..offset + w.len()],
+                            pj * factor,
+                            w,
+                        )
+                    });
             }
         }
         lost
@@ -352,8 +376,58 @@ impl TransitionKernel {
     fn add_transposed(&mut self, grid: &TensorGrid, beta: &[f64], scale: f64, out: &mut [f64]) {
         for (j, o) in out.iter_mut().enumerate() {
             let mut sum = 0.0;
-            self.visit(grid, j, |i, w| sum += w * beta[i]);
+            self.visit(grid, j, |offset, factor, w| {
+                let line = &beta[offset..offset + w.len()];
+                sum += factor * crate::linalg::dot(line, w);
+            });
             *o += scale * sum;
+        }
+    }
+}
+
+/// The mass of a product window clipped to the box: the product of the per-dimension sums.
+fn window_mass(weights: &[Vec<f64>]) -> f64 {
+    weights
+        .iter()
+        .map(|w| crate::linalg::sum_in_lanes(w, |v| v))
+        .product()
+}
+
+/// The lines along dimension 0 of a product window (per dimension l its first cell `first[l]`
+/// in the box and its weights `weights(l)`, clipped to the box): `row(offset, factor, w₀)`
+/// for each, with `factor` the product of the other dimensions' weights.
+fn window_lines<'a>(
+    grid: &TensorGrid,
+    first: &[isize],
+    weights: impl Fn(usize) -> &'a [f64],
+    counter: &mut [usize],
+    mut row: impl FnMut(usize, f64, &[f64]),
+) {
+    let n = first.len();
+    if (0..n).any(|l| weights(l).is_empty()) {
+        return;
+    }
+    let w0 = weights(0);
+    counter.iter_mut().for_each(|c| *c = 0);
+    loop {
+        let mut offset = first[0] as usize;
+        let mut factor = 1.0;
+        for l in 1..n {
+            offset += (first[l] as usize + counter[l]) * grid.stride(l);
+            factor *= weights(l)[counter[l]];
+        }
+        row(offset, factor, w0);
+        let mut l = 1;
+        loop {
+            if l >= n {
+                return;
+            }
+            counter[l] += 1;
+            if counter[l] < weights(l).len() {
+                break;
+            }
+            counter[l] = 0;
+            l += 1;
         }
     }
 }
