@@ -143,8 +143,23 @@ pub(crate) struct FitArgs {
     /// Where to draw the profile (SVG).
     #[arg(long)]
     pub(crate) svg: Option<PathBuf>,
+    /// The optimiser: `auto` (L-BFGS on the method's score where it gives one — the
+    /// point-mass filter —, else Nelder–Mead), `nelder-mead` or `lbfgs`.
+    #[arg(long, value_enum, default_value_t = OptimiserArg::Auto)]
+    pub(crate) optimiser: OptimiserArg,
     #[command(flatten)]
     pub(crate) output: Output,
+}
+
+/// `zakai fit --optimiser`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OptimiserArg {
+    /// L-BFGS where the method gives its score, else Nelder–Mead.
+    Auto,
+    /// Nelder–Mead (no gradient).
+    NelderMead,
+    /// L-BFGS on the method's score (an error for a method without one).
+    Lbfgs,
 }
 
 /// Which methods of the scenario run, and with which seed (`run`, `filter`).

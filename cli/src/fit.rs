@@ -39,6 +39,7 @@ pub fn fit(
     method: usize,
     names: &[String],
     seed: u64,
+    optimiser: fit::Optimiser,
 ) -> Result<FitResult, String> {
     let likelihood =
         Likelihood::new(config, recording, method, names, seed).map_err(|e| e.to_string())?;
@@ -50,8 +51,12 @@ pub fn fit(
         bar.set_message(format!("{count} evaluations, best ln L {best:.4}"));
         bar.tick();
     };
-    let result = fit::maximise(&likelihood, &likelihood, &FitOptions::default(), &progress)
-        .map_err(|e| e.to_string());
+    let options = FitOptions {
+        optimiser,
+        ..FitOptions::default()
+    };
+    let result =
+        fit::maximise(&likelihood, &likelihood, &options, &progress).map_err(|e| e.to_string());
     bar.finish_and_clear();
     result
 }
@@ -75,10 +80,15 @@ pub fn render_fit(r: &FitResult, config: &ScenarioConfig, format: Format) -> Str
             }
             let _ = writeln!(
                 s,
-                "ln L = {:.6} at the estimate; {} evaluations, {} simplex iterations{}",
+                "ln L = {:.6} at the estimate; {}: {} iterations, {}{} evaluations{}",
                 r.log_likelihood,
-                r.evaluations,
+                r.optimiser,
                 r.iterations,
+                match r.scores {
+                    0 => String::new(),
+                    k => format!("{k} scores (ln L and gradient) and "),
+                },
+                r.evaluations,
                 if r.converged { ", converged" } else { "" }
             );
             for note in &r.notes {
@@ -105,6 +115,8 @@ pub fn render_fit(r: &FitResult, config: &ScenarioConfig, format: Format) -> Str
                 "parameters": parameters,
                 "log_likelihood": r.log_likelihood,
                 "covariance": r.covariance,
+                "optimiser": r.optimiser,
+                "scores": r.scores,
                 "evaluations": r.evaluations,
                 "iterations": r.iterations,
                 "converged": r.converged,

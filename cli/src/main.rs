@@ -211,7 +211,12 @@ fn fit_command(a: &FitArgs) -> Result<(), String> {
         select_methods(&mut config, std::slice::from_ref(key))?;
     }
     let names = a.params.clone().unwrap_or_default();
-    let result = fit::fit(&config, recording, 0, &names, seed)?;
+    let optimiser = match a.optimiser {
+        args::OptimiserArg::Auto => zakai::lab::fit::Optimiser::Automatic,
+        args::OptimiserArg::NelderMead => zakai::lab::fit::Optimiser::NelderMead,
+        args::OptimiserArg::Lbfgs => zakai::lab::fit::Optimiser::Lbfgs,
+    };
+    let result = fit::fit(&config, recording, 0, &names, seed, optimiser)?;
     emit(
         &fit::render_fit(&result, &config, a.output.format()),
         a.output.out.as_deref(),

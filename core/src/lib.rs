@@ -187,7 +187,7 @@ pub use filters::smoothing::{
 };
 pub use filters::{
     observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
-    ObservationKind, Observed,
+    ObservationKind, Observed, Perturbation, Score,
 };
 /// The tensor grid a grid filter lives on ([`YauYauFilter::grid`],
 /// [`ContinuousDiscreteGrid::grid`]), and the moments of a density on it.

@@ -8,7 +8,7 @@ use std::cell::RefCell;
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood};
+use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood, Optimiser};
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 
@@ -159,7 +159,7 @@ pub fn log_likelihood<'py>(
 /// The maximum-likelihood fit of `names` (all the scenario's when empty) under method
 /// `method`, as a dict; `evaluator(method, names, points)` runs the batches when given.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, method, names, seed, evaluator=None, inputs=None))]
+#[pyo3(signature = (json, observations, times, method, names, seed, evaluator=None, inputs=None, optimiser="auto"))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
@@ -171,10 +171,24 @@ pub fn fit<'py>(
     seed: u64,
     evaluator: Option<Py<PyAny>>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+    optimiser: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let optimiser = match optimiser {
+        "auto" => Optimiser::Automatic,
+        "nelder-mead" => Optimiser::NelderMead,
+        "lbfgs" => Optimiser::Lbfgs,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "optimiser must be 'auto', 'nelder-mead' or 'lbfgs', got {other:?}"
+            )))
+        }
+    };
     let arrays = (&observations, times.as_ref(), inputs.as_ref());
     let l = likelihood(json, arrays, method, &names, seed)?;
-    let options = FitOptions::default();
+    let options = FitOptions {
+        optimiser,
+        ..FitOptions::default()
+    };
     let result = match &evaluator {
         None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
         Some(callable) => through(callable, method, l.names(), |remote| {
@@ -192,6 +206,8 @@ pub fn fit<'py>(
     d.set_item("intervals", &result.intervals)?;
     d.set_item("log_likelihood", result.log_likelihood)?;
     d.set_item("evaluations", result.evaluations)?;
+    d.set_item("scores", result.scores)?;
+    d.set_item("optimiser", &result.optimiser)?;
     d.set_item("iterations", result.iterations)?;
     d.set_item("converged", result.converged)?;
     d.set_item("observations", result.observations)?;

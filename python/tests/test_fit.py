@@ -86,6 +86,39 @@ def test_fit_reads_a_pandas_series_and_a_grid_method(sm):
     assert abs(fitted.params["r"] - exact.params["r"]) < 0.1 * exact.stderr["r"]
 
 
+def test_the_point_mass_fit_uses_its_score_and_lands_where_nelder_mead_does(sm):
+    """The local level as a map x_k = x_(k−1) + w_k: the point-mass filter gives its score,
+    so ``optimiser="auto"`` is L-BFGS; Nelder–Mead on the same likelihood lands within a
+    hundredth of a standard error of it, and the Kalman filter's exact estimate is within a
+    tenth (the grid's resolution). L-BFGS on a method without a score is a ConfigError."""
+    years, flow = nile(sm)
+    series = pd.Series(flow, index=years)
+    model = zakai.Model.discrete("x", "x", noise_cov="r", diffusion="sqrt(q)").in_discrete_time()
+    scenario = zakai.Scenario(
+        model,
+        zakai.Prior.gaussian(PRIOR[0], PRIOR[1]),
+        ["point_mass", "kalman"],
+        dt_obs=1.0,
+        domain=[(-2000, 4000)],
+        parameters={"q": (1000.0, (0, None)), "r": (10000.0, (0, None))},
+    )
+    quasi_newton = zakai.fit(scenario, series, "point_mass")
+    simplex = zakai.fit(scenario, series, "point_mass", optimiser="nelder-mead")
+    exact = zakai.fit(scenario, series, "kalman")
+    assert quasi_newton.optimiser == "L-BFGS" and quasi_newton.njev > 0
+    assert simplex.optimiser == "Nelder–Mead" and simplex.njev == 0
+    assert quasi_newton.converged and simplex.converged
+    for name in ("q", "r"):
+        se = quasi_newton.stderr[name]
+        assert abs(quasi_newton.params[name] - simplex.params[name]) < 0.01 * se
+        assert abs(quasi_newton.params[name] - exact.params[name]) < 0.1 * exact.stderr[name]
+    assert "L-BFGS" in str(quasi_newton)
+    with pytest.raises(ConfigError, match="gives no score"):
+        zakai.fit(scenario, series, "kalman", optimiser="lbfgs")
+    with pytest.raises(ValueError, match="optimiser must be"):
+        zakai.fit(scenario, series, "kalman", optimiser="bfgs")
+
+
 def test_a_profile_peaks_where_the_fit_does_for_one_parameter(sm):
     years, flow = nile(sm)
     sc = local_level(["kalman", "ukf"])

@@ -43,6 +43,7 @@ pub(crate) mod params;
 pub(crate) mod particle;
 pub(crate) mod point_mass;
 pub(crate) mod resolution;
+pub(crate) mod score;
 mod self_check;
 pub(crate) mod smoothing;
 pub(crate) mod spectral;
@@ -64,6 +65,7 @@ pub(crate) use likelihood::{observed_residual, MeasurementLikelihood, ObservedNo
 pub(crate) use observation::kind_of;
 pub use observation::{Observation, ObservationKind, Observed};
 pub(crate) use resolution::{count_problem, per_dimension, product};
+pub use score::{Perturbation, Score};
 pub use self_check::Concern;
 pub(crate) use self_check::{grid_self_check, WIDTH_IN_CELLS_THRESHOLD};
 
@@ -179,6 +181,19 @@ pub trait Filter: core::fmt::Debug + Fork {
     /// the log of its weights' mean (whose exponential is unbiased for the likelihood); the
     /// EKF, UKF, IEKF and IOKF give their Gaussian predictive density's, an approximation.
     fn log_likelihood(&self) -> Option<f64> {
+        None
+    }
+    /// The log-likelihood of `observations` (the first at the filter's time: a step of
+    /// length 0) from the filter as built, and its gradient in the parameters the model was
+    /// built from — the model and prior at two points around the filter's for each parameter
+    /// in `perturbed` ([`Perturbation`]). `None` for the methods that do not give it (a fit then
+    /// needs no gradient: Nelder–Mead); an error when this filter's model or data are outside
+    /// what its score covers (which the error names). The filter itself is not stepped.
+    fn score(
+        &self,
+        _observations: &[Observation<'_>],
+        _perturbed: &[Perturbation],
+    ) -> Option<Result<Score, FilterError>> {
         None
     }
     /// This filter, from its current state, as the forward pass of its fixed-interval smoother

@@ -112,10 +112,16 @@ class FitResult:
         ln L(θ̂).
     nfev : int
         Likelihood evaluations (filter runs), the information's included.
+    njev : int
+        Scores — ln L with its gradient, one forward and one backward pass — taken by
+        L-BFGS (0 with Nelder–Mead).
     nit : int
-        Simplex iterations (Nelder–Mead, argmin).
+        Iterations of the optimiser.
     converged : bool
-        Whether the simplex met its tolerance.
+        Whether the optimiser met its tolerance.
+    optimiser : str
+        ``"L-BFGS"`` (argmin's, on the method's score: the point-mass filter) or
+        ``"Nelder–Mead"`` (argmin's simplex: every other method).
     cov : ndarray, shape (p, p), or None
         The estimate's asymptotic covariance (the information's inverse).
     start : dict
@@ -153,6 +159,8 @@ class FitResult:
     chosen_defaults: list[str] = field(default_factory=list)
     intervals: dict[str, tuple[float, float]] = field(default_factory=dict)
     time_unit: Optional[str] = None
+    njev: int = 0
+    optimiser: str = "Nelder–Mead"
 
     def to_pandas(self) -> Any:
         """The estimates as a DataFrame indexed by parameter: ``estimate``, ``stderr``, the
@@ -180,8 +188,9 @@ class FitResult:
         lines = [f"Maximum-likelihood fit — {self.method}, {self.nobs} observations"]
         for n in self.params:
             lines.append(f"  {n:<12} {self.params[n]:>14.6g} ± {self.stderr[n]:.4g}")
-        lines.append(f"  ln L = {self.loglik:.6f}; {self.nfev} evaluations, {self.nit} iterations"
-                     + (", converged" if self.converged else ""))
+        scores = f"{self.njev} scores and " if self.njev else ""
+        lines.append(f"  ln L = {self.loglik:.6f}; {self.optimiser}: {self.nit} iterations, "
+                     f"{scores}{self.nfev} evaluations" + (", converged" if self.converged else ""))
         lines.extend(f"  note: {n}" for n in self.notes)
         return "\n".join(lines)
 
@@ -198,6 +207,7 @@ def fit(
     seed: Optional[int] = None,
     executor: Any = None,
     inputs: Optional[ArrayLike] = None,
+    optimiser: str = "auto",
 ) -> FitResult:
     """Maximum-likelihood estimate of the scenario's parameters from your observations.
 
@@ -226,6 +236,11 @@ def fit(
         ``client.get_executor()``); every core of this machine when absent.
     inputs : array_like, shape (rows, k), optional
         The known inputs of a driven model, as for :func:`zakai.filter`.
+    optimiser : {"auto", "nelder-mead", "lbfgs"}, optional
+        ``"auto"`` (default): L-BFGS on the method's score — its log-likelihood's gradient
+        from one forward and one backward pass — where the method gives one (the point-mass
+        filter), else Nelder–Mead; ``"lbfgs"`` raises ``ValueError`` for a method without
+        a score.
 
     Returns
     -------
@@ -237,7 +252,8 @@ def fit(
     text, box = sc._text_for(obs, t)
     u = _inputs(inputs)
     d = _zakai.fit(
-        text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s, u), u
+        text, obs, t, index, list(params or []), s, _evaluator(executor, text, obs, t, s, u), u,
+        optimiser,
     )
     names = d["names"]
     cov = d["covariance"]
@@ -257,6 +273,8 @@ def fit(
         chosen_defaults=([box] if box else []) + list(d["chosen_defaults"]),
         intervals=dict(zip(names, [tuple(i) for i in d["intervals"]])),
         time_unit=unit,
+        njev=d["scores"],
+        optimiser=d["optimiser"],
     )
 
 

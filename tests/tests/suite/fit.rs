@@ -89,6 +89,19 @@ fn the_kalman_fit_of_the_nile_is_durbin_and_koopmans_estimate() {
     println!("reference standard errors {se_q} {se_r}");
     assert!((result.stderr[0] / se_q - 1.0).abs() < 0.01);
     assert!((result.stderr[1] / se_r - 1.0).abs() < 0.01);
+    // The Kalman filter gives no score: the fit is Nelder–Mead's, and L-BFGS is refused.
+    assert_eq!(
+        (result.optimiser.as_str(), result.scores),
+        ("Nelder–Mead", 0)
+    );
+    let lbfgs = fit::FitOptions {
+        optimiser: fit::Optimiser::Lbfgs,
+        ..fit::FitOptions::default()
+    };
+    let refused = fit::maximise(&l, &l, &lbfgs, &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("gives no score"), "{refused}");
 }
 
 /// Durbin & Koopman (2012), §2.10.3: σ²_η = 1469.1, σ²_ε = 15099 (diffuse prior; ours is

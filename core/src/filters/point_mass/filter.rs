@@ -88,16 +88,16 @@ pub(super) fn check_model(name: &str, model: &Model) -> Result<MeasurementDensit
 /// prediction is the Fokker–Planck equation ([`crate::Separation`]).
 #[derive(Clone, Debug)]
 pub struct PointMass {
-    name: String,
-    grid: TensorGrid,
+    pub(super) name: String,
+    pub(super) grid: TensorGrid,
     /// The transition on the cells (an autonomous model's, made once; a driven model's, made
     /// for every transition: `None` until the first).
-    kernel: Option<Kernel>,
+    pub(super) kernel: Option<Kernel>,
     /// p(z | x) and h on the cells (a driven model's frozen for each step).
-    measurement: GridMeasurement,
-    model: Model,
-    radius: f64,
-    u: Vec<f64>,
+    pub(super) measurement: GridMeasurement,
+    pub(super) model: Model,
+    pub(super) radius: f64,
+    pub(super) u: Vec<f64>,
     tmp: Vec<f64>,
     node: Vec<f64>,
     saved: crate::filters::SavedDensity,
@@ -306,6 +306,14 @@ impl Filter for PointMass {
             .settle(result, u, estimate, &mut self.log_likelihood)?;
         self.lost = lost;
         Ok(())
+    }
+
+    fn score(
+        &self,
+        observations: &[Observation<'_>],
+        perturbed: &[crate::filters::Perturbation],
+    ) -> Option<Result<crate::filters::Score, FilterError>> {
+        Some(self.score_of(observations, perturbed))
     }
 
     fn smoother(

@@ -236,15 +236,12 @@ impl TransitionKernel {
                 Spread::Diagonal { sd, constant } => sd[if *constant { l } else { j * n + l }],
                 Spread::Correlated { sd, .. } => sd[l],
             };
-            let reach = self.radius * sd;
-            let lo = libm::floor((centre[l] - reach - x0) / dx + 0.5);
-            let hi = libm::floor((centre[l] + reach - x0) / dx + 0.5);
             let w = &mut self.weights[l];
             w.clear();
-            if hi < 0.0 || lo > (cells - 1) as f64 || (hi - lo).is_nan() {
+            let Some((lo, hi)) = extent(grid, l, centre[l], self.radius * sd) else {
                 inside = false;
                 continue;
-            }
+            };
             if let Spread::Correlated { .. } = self.spread {
                 // Only the range (checked against MAX_WINDOW when the kernel is made): the
                 // weights are of the whole displacement, normalised over the whole window.
@@ -385,6 +382,231 @@ impl TransitionKernel {
     }
 }
 
+/// The cells (on the unbounded lattice of dimension `l`, as reals) whose centres lie within
+/// `reach` of `centre`, rounded to the nearest: `(lo, hi)`, or `None` when they miss the box.
+fn extent(grid: &TensorGrid, l: usize, centre: f64, reach: f64) -> Option<(f64, f64)> {
+    let (dx, x0, cells) = (grid.spacing()[l], grid.coordinate(l, 0), grid.shape()[l]);
+    let lo = libm::floor((centre - reach - x0) / dx + 0.5);
+    let hi = libm::floor((centre + reach - x0) / dx + 0.5);
+    match hi < 0.0 || lo > (cells - 1) as f64 || (hi - lo).is_nan() {
+        true => None,
+        false => Some((lo, hi)),
+    }
+}
+
+/// φ, the standard normal density.
+fn normal_pdf(x: f64) -> f64 {
+    libm::exp(-0.5 * x * x) / libm::sqrt(core::f64::consts::TAU)
+}
+
+/// A diagonal Q's kernel with its derivatives in the centre `c_l = F_l(ξ_j)` and the spread
+/// `σ_l` of each source cell's window: per (cell j, dimension l) the window's first cell in
+/// the box, its weights `w = (Φ(b) − Φ(a))/Z` (a, b the cells' edges less c over σ; Z the whole
+/// window's mass, which renormalises it) and
+///
+/// ```text
+/// ∂w/∂c = (−(φ(b) − φ(a))/σ − w ∂Z/∂c)/Z,    ∂w/∂σ = (−(bφ(b) − aφ(a))/σ − w ∂Z/∂σ)/Z,
+/// ```
+///
+/// with `∂Z` the same differences at the window's outer edges (the window's extent held: a
+/// cell entering it as c moves carries a mass below `Φ(−radius)`). What the gradient of the
+/// point-mass likelihood needs ([`super::score`]).
+#[derive(Clone, Debug)]
+pub(super) struct KernelDerivatives {
+    first: Vec<isize>,
+    start: Vec<usize>,
+    weights: Vec<f64>,
+    by_centre: Vec<f64>,
+    by_spread: Vec<f64>,
+    /// c and σ per (cell, dimension).
+    centre: Vec<f64>,
+    spread: Vec<f64>,
+    counter: Vec<usize>,
+}
+
+impl KernelDerivatives {
+    /// c per (source cell, dimension), row-major.
+    pub(super) fn centres(&self) -> &[f64] {
+        &self.centre
+    }
+
+    /// σ per (source cell, dimension), row-major.
+    pub(super) fn spreads(&self) -> &[f64] {
+        &self.spread
+    }
+
+    /// For source cell `j`: `(Tᵀv)_j = Σ_i v_i T[i, j]`, returned, and for every dimension l
+    /// `by_centre[l] = Σ_i v_i ∂T[i, j]/∂c_l`, `by_spread[l] = Σ_i v_i ∂T[i, j]/∂σ_l` (T the
+    /// product of the dimensions' weights) — one walk over the window's lines along dimension
+    /// 0, three sums per line ([`dot3`]).
+    pub(super) fn adjoint(
+        &mut self,
+        grid: &TensorGrid,
+        j: usize,
+        v: &[f64],
+        by_centre: &mut [f64],
+        by_spread: &mut [f64],
+    ) -> f64 {
+        let n = self.counter.len();
+        by_centre.iter_mut().for_each(|b| *b = 0.0);
+        by_spread.iter_mut().for_each(|b| *b = 0.0);
+        let range = |l: usize| self.start[j * n + l]..self.start[j * n + l + 1];
+        if (0..n).any(|l| range(l).is_empty()) {
+            return 0.0;
+        }
+        let (w, dc, ds) = (&self.weights, &self.by_centre, &self.by_spread);
+        let first = &self.first[j * n..(j + 1) * n];
+        let line = range(0);
+        let counter = &mut self.counter;
+        counter.iter_mut().for_each(|c| *c = 0);
+        let mut total = 0.0;
+        loop {
+            let mut offset = first[0] as usize;
+            let mut factor = 1.0;
+            for l in 1..n {
+                offset += (first[l] as usize + counter[l]) * grid.stride(l);
+                factor *= w[range(l)][counter[l]];
+            }
+            let [plain, centre, spread] = dot3(
+                &v[offset..offset + line.len()],
+                &w[line.clone()],
+                &dc[line.clone()],
+                &ds[line.clone()],
+            );
+            total += factor * plain;
+            by_centre[0] += factor * centre;
+            by_spread[0] += factor * spread;
+            for l in 1..n {
+                let others: f64 = (1..n)
+                    .filter(|&m| m != l)
+                    .map(|m| w[range(m)][counter[m]])
+                    .product();
+                let at = range(l).start + counter[l];
+                by_centre[l] += dc[at] * others * plain;
+                by_spread[l] += ds[at] * others * plain;
+            }
+            let mut l = 1;
+            loop {
+                if l >= n {
+                    return total;
+                }
+                counter[l] += 1;
+                if counter[l] < range(l).len() {
+                    break;
+                }
+                counter[l] = 0;
+                l += 1;
+            }
+        }
+    }
+}
+
+crate::linalg::simd::per_node_kernel! {
+    wide:
+    /// `[Σ v_i a_i, Σ v_i b_i, Σ v_i c_i]` in one pass over v, each in eight lanes added in a
+    /// fixed order ([`crate::linalg::lanes_total`]).
+    fn dot3(v: &[f64], a: &[f64], b: &[f64], c: &[f64]) -> [f64; 3] {
+        const LANES: usize = 8;
+        let len = v.len().min(a.len()).min(b.len()).min(c.len());
+        let whole = len - len % LANES;
+        let mut s = [[0.0; LANES]; 3];
+        for start in (0..whole).step_by(LANES) {
+            for l in 0..LANES {
+                let x = v[start + l];
+                s[0][l] += x * a[start + l];
+                s[1][l] += x * b[start + l];
+                s[2][l] += x * c[start + l];
+            }
+        }
+        for (l, i) in (whole..len).enumerate() {
+            s[0][l] += v[i] * a[i];
+            s[1][l] += v[i] * b[i];
+            s[2][l] += v[i] * c[i];
+        }
+        s.map(crate::linalg::lanes_total)
+    }
+}
+
+impl TransitionKernel {
+    /// [`KernelDerivatives`] of this kernel (only c and σ without `windows`): an error for a
+    /// correlated Q, a component of a mixture noise and a zero spread (whose kernel has no
+    /// derivative in c).
+    fn derivatives(
+        &mut self,
+        grid: &TensorGrid,
+        windows: bool,
+    ) -> Result<KernelDerivatives, FilterError> {
+        let n = grid.dim();
+        let Spread::Diagonal { sd, constant } = &self.spread else {
+            return Err(FilterError::Unsuitable(
+                "the gradient of the point-mass likelihood is implemented for a diagonal transition noise Q, and this one is correlated".into(),
+            ));
+        };
+        if self.shift.iter().any(|&s| s != 0.0) {
+            return Err(FilterError::Unsuitable(
+                "the gradient of the point-mass likelihood is not implemented for a Gaussian-mixture transition noise".into(),
+            ));
+        }
+        let (sd, constant) = (sd.clone(), *constant);
+        let mut d = KernelDerivatives {
+            first: Vec::with_capacity(grid.len() * n),
+            start: vec![0],
+            weights: Vec::new(),
+            by_centre: Vec::new(),
+            by_spread: Vec::new(),
+            centre: Vec::with_capacity(grid.len() * n),
+            spread: Vec::with_capacity(grid.len() * n),
+            counter: vec![0; n],
+        };
+        for j in 0..grid.len() {
+            self.centre_of(j);
+            for l in 0..n {
+                let (c, s) = (self.centre[l], sd[if constant { l } else { j * n + l }]);
+                if s.is_nan() || s <= 0.0 {
+                    return Err(FilterError::Unsuitable(
+                        "the gradient of the point-mass likelihood needs a transition noise in every component (a zero sd puts the mass in one cell, which does not move smoothly with F)".into(),
+                    ));
+                }
+                d.centre.push(c);
+                d.spread.push(s);
+                if !windows {
+                    continue;
+                }
+                let (dx, x0, cells) = (grid.spacing()[l], grid.coordinate(l, 0), grid.shape()[l]);
+                let Some((lo, hi)) = extent(grid, l, c, self.radius * s) else {
+                    d.first.push(0);
+                    d.start.push(d.weights.len());
+                    continue;
+                };
+                let (lo_in, hi_in) = (lo.max(0.0) as isize, hi.min((cells - 1) as f64) as isize);
+                d.first.push(lo_in);
+                // Φ, φ/σ and aφ/σ at an edge: the mass below it and its derivatives' negatives.
+                let edge = |i: f64| {
+                    let a = (x0 + (i - 0.5) * dx - c) / s;
+                    let density = normal_pdf(a) / s;
+                    (normal_cdf(a), density, a * density)
+                };
+                let (low, high) = (edge(lo), edge(hi + 1.0));
+                let total = high.0 - low.0;
+                let (total_c, total_s) = (-(high.1 - low.1), -(high.2 - low.2));
+                let mut below = edge(lo_in as f64);
+                for i in lo_in..=hi_in {
+                    let above = edge((i + 1) as f64);
+                    let w = (above.0 - below.0) / total;
+                    d.weights.push(w);
+                    d.by_centre
+                        .push((-(above.1 - below.1) - w * total_c) / total);
+                    d.by_spread
+                        .push((-(above.2 - below.2) - w * total_s) / total);
+                    below = above;
+                }
+                d.start.push(d.weights.len());
+            }
+        }
+        Ok(d)
+    }
+}
+
 /// The mass of a product window clipped to the box: the product of the per-dimension sums.
 fn window_mass(weights: &[Vec<f64>]) -> f64 {
     weights
@@ -494,6 +716,21 @@ impl Kernel {
     /// mixture's components (for the cost and memory estimates).
     pub(super) fn widest_window(&self, grid: &TensorGrid) -> f64 {
         self.parts.iter().map(|(_, k)| k.widest_window(grid)).sum()
+    }
+
+    /// The kernel's [`KernelDerivatives`] (only its c and σ without `windows`): an error for
+    /// a Gaussian-mixture noise, a correlated Q or a zero spread.
+    pub(super) fn derivatives(
+        &mut self,
+        grid: &TensorGrid,
+        windows: bool,
+    ) -> Result<KernelDerivatives, FilterError> {
+        match self.parts.as_mut_slice() {
+            [(_, kernel)] => kernel.derivatives(grid, windows),
+            _ => Err(FilterError::Unsuitable(
+                "the gradient of the point-mass likelihood is not implemented for a Gaussian-mixture transition noise".into(),
+            )),
+        }
     }
 
     /// The prediction `out = T p` (`out` overwritten); returns the mass carried outside the

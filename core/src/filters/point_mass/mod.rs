@@ -8,6 +8,7 @@ mod filter;
 mod kernel;
 mod method;
 mod params;
+mod score;
 
 pub use filter::PointMass;
 pub use params::PointMassParams;

@@ -37,6 +37,7 @@ pub use clock::{with_standard_clock, Clock, SAMPLED_BELOW, SAMPLE_EVERY};
 pub use records::{
     ConcernRecord, Failure, MethodTrack, Observer, RunResult, Silent, SmoothedTrack,
 };
+pub(crate) use run::observation_at;
 use run::{long_step, NotApplicable};
 pub use run::{ExperimentRun, MAX_INTERVALS_PER_STEP, NOT_APPLICABLE};
 

@@ -126,7 +126,7 @@ pub(super) fn long_step(k: usize, step: f64, dt_obs: f64) -> Option<ConfigProble
 /// Row `k` of `data` as the observation a filter steps with: exactly Δτ when the step is Δτ up
 /// to rounding (τ_k − τ_{k−1} rounds differently from step to step, and a recording written
 /// from a simulation then filters bit for bit as the simulation did).
-pub(super) fn observation_at(data: &Recording, k: usize, dt_obs: f64) -> Observation<'_> {
+pub(crate) fn observation_at(data: &Recording, k: usize, dt_obs: f64) -> Observation<'_> {
     let step = data.step_length(k);
     Observation {
         dt: if is_interval(step, dt_obs) {

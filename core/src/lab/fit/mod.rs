@@ -17,8 +17,10 @@
 //!   which would refit the others at each value), for one or several methods: what the
 //!   page's Likelihood view and `zakai fit --profile` draw.
 //! * `maximise` (feature `fit`) — the maximum-likelihood estimate within the parameters'
-//!   bounds with argmin's Nelder–Mead simplex, and standard errors from the observed
-//!   information, −∇² ln L at the optimum by central differences ([`observed_information`]).
+//!   bounds: argmin's L-BFGS on the method's score where it gives one
+//!   ([`crate::Filter::score`]: the point-mass filter), else argmin's Nelder–Mead simplex;
+//!   standard errors from the observed information, −∇² ln L at the optimum by central
+//!   differences ([`observed_information`]).
 //!
 //! Every batch of evaluations (a simplex's first vertices, a profile, the information's
 //! stencil) goes through an [`Evaluate`], so that they run on every core natively
@@ -48,7 +50,7 @@ use crate::validate::ConfigProblem;
 
 pub use information::{observed_information, standard_errors, Information};
 #[cfg(feature = "fit")]
-pub use maximise::{maximise, FitOptions, FitResult};
+pub use maximise::{maximise, FitOptions, FitResult, Optimiser};
 pub use of_filter::FilterLikelihood;
 #[cfg(feature = "fit")]
 pub use profile::profile_refitted;
@@ -88,6 +90,11 @@ pub trait LogLikelihood: Evaluate {
     fn random_numbers(&self) -> Option<String>;
     /// The number of observations the likelihood is of.
     fn observations(&self) -> usize;
+    /// ln L(θ) and its gradient ([`crate::Filter::score`]), where the method gives them
+    /// (`None` by default: the fit then uses Nelder–Mead).
+    fn score(&self, _theta: &[f64]) -> Option<Result<crate::filters::Score, ZakaiError>> {
+        None
+    }
 }
 
 /// The log-likelihood of recorded data as a function of some of a scenario's parameters,
@@ -269,6 +276,70 @@ impl Likelihood {
         }
     }
 
+    /// ln L(θ) and its gradient from the method's [`crate::Filter::score`] — `None` for a
+    /// method that gives none (it then needs Nelder–Mead), an error as for
+    /// [`Likelihood::log_likelihood`] or when the method's score does not cover the model.
+    /// The model's derivatives in each θ_p come from the model built at θ ± h_p, h_p =
+    /// 10⁻⁵ max(|θ_p|, 1), cut at the bounds ([`crate::filters::Perturbation`]); the
+    /// measurement's only for the parameters its texts name
+    /// ([`ScenarioConfig::measurement_texts`]).
+    pub fn score(&self, theta: &[f64]) -> Option<Result<crate::filters::Score, ZakaiError>> {
+        if let Err(e) = check_point(&self.names, &self.bounds, theta) {
+            return Some(Err(e));
+        }
+        let at = |theta: &[f64]| -> Result<Experiment, ZakaiError> {
+            let values: Vec<(String, f64)> =
+                self.names.iter().cloned().zip(theta.to_vec()).collect();
+            Experiment::new(self.config.with_parameter_values(&values)?)
+        };
+        let experiment = match at(theta) {
+            Ok(e) => e,
+            Err(e) => return Some(Err(e)),
+        };
+        let method = &experiment.config().methods[0];
+        let seed = crate::lab::experiment::method_seed(self.seed, 0);
+        let filter = match experiment.build_method(method, self.method.clone(), seed) {
+            Ok(f) => f,
+            Err(e) => return Some(Err(e)),
+        };
+        let measurement_texts = self.config.measurement_texts();
+        let names_in_measurement: Vec<String> = measurement_texts
+            .iter()
+            .flat_map(|t| crate::model::syntax::free_names(t))
+            .map(|(name, _)| name)
+            .collect();
+        let measurement_names: Vec<&str> =
+            names_in_measurement.iter().map(String::as_str).collect();
+        let perturbed = (0..theta.len()).map(|p| {
+            let (lo, hi) = self.bounds[p];
+            let h = 1e-5 * theta[p].abs().max(1.0);
+            let (below, above) = ((theta[p] - h).max(lo), (theta[p] + h).min(hi));
+            let model_at = |v: f64| -> Result<(crate::Model, crate::Prior), ZakaiError> {
+                let mut point = theta.to_vec();
+                point[p] = v;
+                let e = at(&point)?;
+                Ok((e.model().clone(), e.prior().clone()))
+            };
+            Ok(crate::filters::Perturbation {
+                below: model_at(below)?,
+                above: model_at(above)?,
+                width: above - below,
+                measurement: measurement_names.contains(&self.names[p].as_str()),
+            })
+        });
+        let perturbed = match perturbed.collect::<Result<Vec<_>, ZakaiError>>() {
+            Ok(p) => p,
+            Err(e) => return Some(Err(e)),
+        };
+        let dt_obs = self.config.time.dt_obs;
+        let observations: Vec<_> = (0..self.recording.times.len())
+            .map(|k| crate::lab::experiment::observation_at(&self.recording, k, dt_obs))
+            .collect();
+        filter
+            .score(&observations, &perturbed)
+            .map(|r| r.map_err(ZakaiError::Filter))
+    }
+
     /// One run of the method on the data at θ (checked by [`Likelihood::log_likelihood`]).
     fn run_at(&self, theta: &[f64]) -> Result<crate::lab::experiment::RunResult, ZakaiError> {
         let values: Vec<(String, f64)> = self.names.iter().cloned().zip(theta.to_vec()).collect();
@@ -369,6 +440,9 @@ impl LogLikelihood for Likelihood {
     }
     fn observations(&self) -> usize {
         Likelihood::observations(self)
+    }
+    fn score(&self, theta: &[f64]) -> Option<Result<crate::filters::Score, ZakaiError>> {
+        Likelihood::score(self, theta)
     }
 }
 

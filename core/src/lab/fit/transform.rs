@@ -59,7 +59,7 @@ impl Transform {
 
 impl Transform {
     /// dθ/du at θ.
-    fn slope(self, theta: f64) -> f64 {
+    pub(crate) fn slope(self, theta: f64) -> f64 {
         match self {
             Transform::Identity => 1.0,
             Transform::Lower(lo) => theta - lo,

@@ -858,15 +858,32 @@ impl ScenarioConfig {
     /// Every expression of the scenario — drift, observation, density prior and the
     /// coefficients given as expressions — as written.
     pub fn expression_texts(&self) -> Vec<&str> {
-        let mut texts: Vec<&str> = self
-            .model
-            .drift
-            .iter()
-            .chain(&self.model.observation)
-            .map(String::as_str)
-            .collect();
+        let mut texts: Vec<&str> = self.model.drift.iter().map(String::as_str).collect();
+        texts.extend(self.measurement_texts());
         let mut vectors = Vec::new();
         let mut matrices: Vec<&CoefficientMatrix> = self.model.diffusion.iter().collect();
+        match &self.prior {
+            PriorConfig::Gaussian { mean, cov } => {
+                vectors.push(mean);
+                matrices.push(cov);
+            }
+            PriorConfig::Mixture { components } => {
+                vectors.extend(components.iter().map(|c| &c.mean));
+                matrices.extend(components.iter().map(|c| &c.cov));
+            }
+            PriorConfig::Density { expression } => texts.push(expression),
+        }
+        vectors.extend(self.model.transition_noise.iter().map(|c| &c.mean));
+        matrices.extend(self.model.transition_noise.iter().map(|c| &c.cov));
+        texts.extend(coefficient_texts(vectors, matrices));
+        texts
+    }
+
+    /// The texts the measurement's density p(z | x) is read from: the observation h, the
+    /// noise's expressions and coefficients, and the inputs (which h may read).
+    pub fn measurement_texts(&self) -> Vec<&str> {
+        let mut texts: Vec<&str> = self.model.observation.iter().map(String::as_str).collect();
+        let (mut vectors, mut matrices) = (Vec::new(), Vec::new());
         match &self.model.noise {
             ObservationNoiseConfig::Continuous { cov } => matrices.extend(cov),
             ObservationNoiseConfig::Discrete { mixture } => {
@@ -882,19 +899,6 @@ impl ScenarioConfig {
             }
             ObservationNoiseConfig::LogDensity { expression } => texts.push(expression),
         }
-        match &self.prior {
-            PriorConfig::Gaussian { mean, cov } => {
-                vectors.push(mean);
-                matrices.push(cov);
-            }
-            PriorConfig::Mixture { components } => {
-                vectors.extend(components.iter().map(|c| &c.mean));
-                matrices.extend(components.iter().map(|c| &c.cov));
-            }
-            PriorConfig::Density { expression } => texts.push(expression),
-        }
-        vectors.extend(self.model.transition_noise.iter().map(|c| &c.mean));
-        matrices.extend(self.model.transition_noise.iter().map(|c| &c.cov));
         texts.extend(self.model.inputs.iter().map(String::as_str));
         texts.extend(coefficient_texts(vectors, matrices));
         texts
