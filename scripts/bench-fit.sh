@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build -q --release -p zakai-cli
-zakai=target/release/zakai
+zakai="${CARGO_TARGET_DIR:-target}/release/zakai"
 dir=target/bench-fit
 mkdir -p "$dir"
 "$zakai" show cubic-sensor-fit | python3 -c '
@@ -26,3 +26,32 @@ start=$(date +%s.%N)
 "$zakai" filter "$dir/scenario.json" --observations "$dir/obs.csv" --methods separation --format json > /dev/null
 end=$(date +%s.%N)
 printf 'one zakai filter run of the separation filter: %.3f s\n' "$(echo "$end - $start" | bc)"
+
+# Issue 61, item 4: the three parameters μ, ρ, σ of the AR(1) stochastic-volatility model
+# (the sv-ar1 preset with them unknown, started at −1, 0.9, 0.3) fitted to 750 returns
+# simulated from particles' values (seed 11) by the point-mass filter at its 400 cells — by
+# L-BFGS on its score (the default) and by Nelder–Mead.
+"$zakai" show sv-ar1 | python3 -c '
+import json, sys
+c = json.load(sys.stdin)
+c["time"]["t_final"] = 749.0
+json.dump(c, sys.stdout)' > "$dir/sv-truth.json"
+"$zakai" simulate "$dir/sv-truth.json" --seed 11 --format csv --out "$dir/sv.csv"
+python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))
+c["parameters"] = {"mu": {"value": -1.0, "bounds": [-3, 1]},
+                   "rho": {"value": 0.9, "bounds": [0.0, 0.999]},
+                   "sigma": {"value": 0.3, "bounds": [0.01, 1.0]}}
+c["model"]["drift"] = ["mu + rho*(x - mu)"]
+c["model"]["diffusion"] = [["sigma"]]
+c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["sigma^2/(1 - rho^2)"]]}
+c["methods"] = [m for m in c["methods"] if m["method"] == "point_mass"]
+json.dump(c, sys.stdout)' "$dir/sv-truth.json" > "$dir/sv-fit.json"
+for optimiser in lbfgs nelder-mead; do
+  start=$(date +%s.%N)
+  "$zakai" fit "$dir/sv-fit.json" --observations "$dir/sv.csv" --optimiser "$optimiser" > "$dir/sv-$optimiser.txt"
+  end=$(date +%s.%N)
+  printf 'SV, point-mass, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(tail -n 1 "$dir/sv-$optimiser.txt")"
+  sed -n '3,5p' "$dir/sv-$optimiser.txt"
+done

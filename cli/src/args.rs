@@ -106,8 +106,8 @@ pub(crate) enum Command {
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
     /// Fit the scenario's parameters to recorded observations by maximum likelihood under
-    /// one method (Nelder–Mead within the bounds, standard errors from the observed
-    /// information), or with --profile draw the log-likelihood along one parameter for every
+    /// one method (within the bounds: L-BFGS on the method's score where it gives one, else
+    /// Nelder–Mead; standard errors from the observed information), or with --profile draw the log-likelihood along one parameter for every
     /// selected method.
     Fit(FitArgs),
 }
