@@ -89,8 +89,9 @@ def test_fit_reads_a_pandas_series_and_a_grid_method(sm):
 def test_the_point_mass_fit_uses_its_score_and_lands_where_nelder_mead_does(sm):
     """The local level as a map x_k = x_(k−1) + w_k: the point-mass filter gives its score,
     so ``optimiser="auto"`` is L-BFGS; Nelder–Mead on the same likelihood lands within a
-    hundredth of a standard error of it, and the Kalman filter's exact estimate is within a
-    tenth (the grid's resolution). L-BFGS on a method without a score is a ConfigError."""
+    hundredth of a standard error of it, and the Kalman filter's exact estimate (also by
+    L-BFGS on its score) is within a tenth (the grid's resolution). L-BFGS on a method without
+    a score (the UKF) is a ConfigError."""
     years, flow = nile(sm)
     series = pd.Series(flow, index=years)
     model = zakai.Model.discrete("x", "x", noise_cov="r", diffusion="sqrt(q)").in_discrete_time()
@@ -113,8 +114,9 @@ def test_the_point_mass_fit_uses_its_score_and_lands_where_nelder_mead_does(sm):
         assert abs(quasi_newton.params[name] - simplex.params[name]) < 0.01 * se
         assert abs(quasi_newton.params[name] - exact.params[name]) < 0.1 * exact.stderr[name]
     assert "L-BFGS" in str(quasi_newton)
+    assert exact.optimiser == "L-BFGS"
     with pytest.raises(ConfigError, match="gives no score"):
-        zakai.fit(scenario, series, "kalman", optimiser="lbfgs")
+        zakai.fit(scenario, series, "ukf", optimiser="lbfgs")
     with pytest.raises(ValueError, match="optimiser must be"):
         zakai.fit(scenario, series, "kalman", optimiser="bfgs")
 

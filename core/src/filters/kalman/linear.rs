@@ -94,6 +94,31 @@ pub(crate) fn discretize(
     (phi, gamma_b, qd)
 }
 
+/// `(A, b, Q)`: a linear model's dynamics, or `(Φ, Γb, Q_d)` of one interval.
+pub(crate) type LinearParts = (DMatrix<f64>, DVector<f64>, DMatrix<f64>);
+
+/// `(A, b, Q)` of the linear dynamics `dx = (A x + b) dt + G dv` (or the map `A x + b + w_k`),
+/// a mixture transition noise taken by its mean and covariance; an error when the drift is
+/// not affine over `probes` or G depends on the state.
+pub(crate) fn linear_dynamics(
+    model: &Model,
+    probes: &[Vec<f64>],
+) -> Result<LinearParts, FilterError> {
+    let (a, mut b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
+    // A mixture transition noise by its mean: x_k = A x + (b + μ̄) + (w_k − μ̄).
+    if let Some(w) = &model.transition_mixture {
+        b += w.mean();
+    }
+    let q = model
+        .process_noise()
+        .require_constant(
+            "the Kalman–Bucy filter",
+            "it is the exact filter of a linear-Gaussian model",
+        )?
+        .clone();
+    Ok((a, b, q))
+}
+
 /// The Kalman–Bucy filter.
 ///
 /// The Kalman–Bucy filter for linear Gaussian models — the exact reference.
@@ -146,13 +171,15 @@ pub(crate) fn discretize(
 /// Gaussian-sum filter is).
 #[derive(Clone, Debug)]
 pub struct Kalman {
-    name: String,
-    model: Model,
-    a: DMatrix<f64>,
-    b: DVector<f64>,
-    q: DMatrix<f64>,
+    pub(super) name: String,
+    pub(super) model: Model,
+    pub(super) a: DMatrix<f64>,
+    pub(super) b: DVector<f64>,
+    pub(super) q: DMatrix<f64>,
     form: MeasurementForm,
-    state: GaussianState,
+    pub(super) state: GaussianState,
+    /// The method's overrides of the prior's moments (for its score's perturbed priors).
+    pub(super) init: super::GaussianInit,
     /// The exact discretisation of the last interval, reused while Δτ does not change.
     cached: Option<Discretization>,
     /// Storage of the prediction: Φ m and Φ P.
@@ -222,11 +249,7 @@ impl Kalman {
         params: &KalmanParams,
     ) -> Result<Self, FilterError> {
         let (model, prior, probes) = (ctx.model, ctx.prior, ctx.probes);
-        let (a, mut b) = affine_parts(&*model.drift, "the Kalman–Bucy filter", "drift f", probes)?;
-        // A mixture transition noise by its mean: x_k = A x + (b + μ̄) + (w_k − μ̄).
-        if let Some(w) = &model.transition_mixture {
-            b += w.mean();
-        }
+        let (a, b, q) = linear_dynamics(model, probes)?;
         affine_parts(
             &*model.observation,
             "the Kalman–Bucy filter",
@@ -239,14 +262,9 @@ impl Kalman {
             model: model.clone(),
             a,
             b,
-            q: model
-                .process_noise()
-                .require_constant(
-                    "the Kalman–Bucy filter",
-                    "it is the exact filter of a linear-Gaussian model",
-                )?
-                .clone(),
+            q,
             state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
+            init: params.init.clone(),
             cached: None,
             moved: (DVector::zeros(model.n), DMatrix::zeros(model.n, model.n)),
         })
@@ -270,6 +288,7 @@ impl Filter for Kalman {
             state,
             cached,
             moved,
+            ..
         } = self;
         let meas = form.at(name, obs)?;
         state.transaction(|state| {
@@ -296,5 +315,13 @@ impl Filter for Kalman {
 
     fn self_check(&self, out: &mut Vec<crate::filters::Concern>) {
         self.state.innovations.check(out);
+    }
+
+    fn score(
+        &self,
+        observations: &[Observation<'_>],
+        perturbed: &[crate::filters::Perturbation],
+    ) -> Option<Result<crate::filters::Score, FilterError>> {
+        Some(self.score_of(observations, perturbed))
     }
 }

@@ -108,6 +108,15 @@ impl MeasurementForm {
         })
     }
 
+    /// The noise's mean and covariance (S for increments) when they do not depend on the
+    /// state; `None` for a moment match whose R is evaluated at the mean.
+    pub(crate) fn constant_noise(&self) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        match self.current.state_noise {
+            Some(_) => None,
+            None => Some((self.offset.clone(), self.noise_cov.clone())),
+        }
+    }
+
     /// What the filter should say about its measurement update before the first step: that
     /// it is a moment match, when the measurements are not additive Gaussian noise.
     pub(crate) fn warnings(&self) -> alloc::vec::Vec<alloc::string::String> {

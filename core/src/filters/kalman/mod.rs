@@ -12,6 +12,7 @@ pub(crate) mod measurement;
 mod method;
 mod params;
 pub(crate) mod propagate;
+mod score;
 pub(crate) mod second_mode;
 pub(crate) mod smoother;
 pub(crate) mod ukf;
