@@ -11,6 +11,50 @@ pub use wasm_bindgen_test::wasm_bindgen_test as test;
 
 pub mod kalman_reference;
 
+/// `l.score(θ)` (the method's ln L and its gradient) against `l.log_likelihood`: the same ln L
+/// to 1e-10 relative, and a gradient equal to central differences of ln L (steps `step` and
+/// 2·`step` times max(|θ_p|, 1), Richardson-extrapolated) to `tolerance` of the gradient's
+/// size.
+pub fn assert_score_is_the_derivative(
+    l: &zakai::lab::fit::Likelihood,
+    theta: &[f64],
+    step: f64,
+    tolerance: f64,
+) {
+    let score = l.score(theta).expect("a score").unwrap();
+    let value = l.log_likelihood(theta).unwrap();
+    println!(
+        "θ = {theta:?}: ln L {} (run {value}), gradient {:?}",
+        score.log_likelihood, score.gradient
+    );
+    assert!(
+        (score.log_likelihood - value).abs() < 1e-10 * value.abs(),
+        "{} vs {value}",
+        score.log_likelihood
+    );
+    let size = score.gradient.iter().fold(0.0f64, |a, g| a.max(g.abs()));
+    for p in 0..theta.len() {
+        let difference = |h: f64| {
+            let (mut up, mut down) = (theta.to_vec(), theta.to_vec());
+            up[p] += h;
+            down[p] -= h;
+            (l.log_likelihood(&up).unwrap() - l.log_likelihood(&down).unwrap()) / (2.0 * h)
+        };
+        let h = step * theta[p].abs().max(1.0);
+        let (coarse, fine) = (difference(2.0 * h), difference(h));
+        let extrapolated = fine + (fine - coarse) / 3.0;
+        println!(
+            "  ∂/∂θ{p}: score {:.10e}, differences {extrapolated:.10e}",
+            score.gradient[p]
+        );
+        assert!(
+            (score.gradient[p] - extrapolated).abs() < tolerance * size,
+            "θ{p}: {} vs {extrapolated}",
+            score.gradient[p]
+        );
+    }
+}
+
 /// The `.rs` files under `path` (or `path` itself), for the tests that read sources.
 pub fn rust_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();

@@ -944,9 +944,9 @@ fn a_fit_of_the_stochastic_volatility_model_is_the_reference_mle() {
 /// The point-mass filter's score (its log-likelihood's gradient by reverse mode through its
 /// recursion, [`zakai::Filter::score`]) on the stochastic-volatility model, 150 returns with
 /// NaN rows (t = 60.5 to 65.5 unobserved) and rows 100 to 103 left out (a step of five
-/// periods): its ln L is the filter's run to 1e-9, and its gradient in (μ, ρ, σ) is central
+/// periods): its ln L is the filter's run to 1e-10, and its gradient in (μ, ρ, σ) is central
 /// differences of that ln L (steps 10⁻³, Richardson-extrapolated) to 10⁻⁵ of the gradient's
-/// size, at two points.
+/// size, at two points (`zakai_tests::assert_score_is_the_derivative`).
 #[test]
 fn the_point_mass_score_is_the_derivative_of_its_log_likelihood() {
     use zakai::lab::fit::Likelihood;
@@ -966,37 +966,7 @@ fn the_point_mass_score_is_the_derivative_of_its_log_likelihood() {
     let recording = zakai::lab::recording::Recording::measurements(1, 1, times, &z).unwrap();
     let l = Likelihood::new(&config, recording, 0, &[], 1).unwrap();
     for theta in [[-1.1, 0.93, 0.25], [-0.6, 0.8, 0.4]] {
-        let score = l.score(&theta).expect("the PMF has a score").unwrap();
-        let value = l.log_likelihood(&theta).unwrap();
-        println!(
-            "θ = {theta:?}: ln L {} (run {value}), gradient {:?}",
-            score.log_likelihood, score.gradient
-        );
-        assert!(
-            (score.log_likelihood - value).abs() < 1e-9 * value.abs(),
-            "{} vs {value}",
-            score.log_likelihood
-        );
-        let size = score.gradient.iter().fold(0.0f64, |a, g| a.max(g.abs()));
-        for p in 0..3 {
-            let difference = |h: f64| {
-                let (mut up, mut down) = (theta, theta);
-                up[p] += h;
-                down[p] -= h;
-                (l.log_likelihood(&up).unwrap() - l.log_likelihood(&down).unwrap()) / (2.0 * h)
-            };
-            let (coarse, fine) = (difference(2e-3), difference(1e-3));
-            let extrapolated = fine + (fine - coarse) / 3.0;
-            println!(
-                "  ∂/∂θ{p}: score {:.9}, differences {extrapolated:.9}",
-                score.gradient[p]
-            );
-            assert!(
-                (score.gradient[p] - extrapolated).abs() < 1e-5 * size,
-                "θ{p}: {} vs {extrapolated}",
-                score.gradient[p]
-            );
-        }
+        zakai_tests::assert_score_is_the_derivative(&l, &theta, 1e-3, 1e-5);
     }
 }
 
