@@ -173,6 +173,9 @@ pub trait Method {
     /// is a random function of the model's parameters, so a fit reports no standard errors
     /// from its finite differences ([`crate::lab::fit`]).
     const RANDOM: bool = false;
+    /// True for methods that give their score, ln L with its gradient in the model's
+    /// parameters ([`Filter::score`]): a fit then uses L-BFGS ([`crate::lab::fit`]).
+    const SCORE: bool = false;
     /// The method's fixed-interval smoother, or why it has none
     /// ([`crate::Smoother`]).
     const SMOOTHING: super::smoothing::Smoothing =

@@ -348,7 +348,7 @@ fn recorded_data_needs_no_domain_and_no_final_time() {
 }
 
 /// The catalogue's `density` flag (what the page's density panel picks by default) says
-/// which methods have a density: every registered method, built on the presets that apply
+/// which methods have a density, and its `score` flag which give their score: every registered method, built on the presets that apply
 /// them all, has a grid density exactly when its entry says so — but for the spectral filter,
 /// whose density is a Legendre expansion (drawn through its marginals, which then are not the
 /// Gaussian of its estimate).
@@ -383,6 +383,19 @@ fn the_catalogue_says_which_methods_have_a_density() {
                 assert_eq!(f.density().is_some(), entry.density, "{preset} {key}");
             }
             assert_eq!(entry.defaults.has_density(), entry.density);
+            // The `score` flag likewise: a filter gives its score (here of no observations:
+            // ln L = 0, an empty gradient), or says why it cannot on this model (the Kalman
+            // filter's moment match of sv-ar1's variance), exactly when its entry says so.
+            let score = f.score(&[], &[]);
+            assert_eq!(score.is_some(), entry.score, "{preset} {key}");
+            assert_eq!(entry.defaults.has_score(), entry.score);
+            match score {
+                Some(Ok(score)) => {
+                    assert_eq!((score.log_likelihood, score.gradient.len()), (0.0, 0))
+                }
+                Some(Err(e)) => assert!(e.to_string().contains(key), "{preset}: {e}"),
+                None => {}
+            }
             seen.insert(entry.info.key.clone());
         }
     }

@@ -970,6 +970,47 @@ fn the_point_mass_score_is_the_derivative_of_its_log_likelihood() {
     }
 }
 
+/// Where the point-mass filter's score does not reach — here a map that reads the time —, a
+/// fit falls back to Nelder–Mead and its notes say why; asking for L-BFGS is an error that
+/// names the reason.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn a_fit_says_why_it_used_nelder_mead_where_the_score_does_not_reach() {
+    use zakai::lab::fit::{self, Likelihood};
+    let mut config = stochastic_volatility(serde_json::json!([{ "method": "point_mass" }]));
+    config.model.drift = vec!["mu + rho*(x - mu) + 0.05*sin(t)".into()];
+    config.time.t_final = 100.0;
+    let recording = Experiment::new(config.clone())
+        .unwrap()
+        .run(2)
+        .unwrap()
+        .recording;
+    let l = Likelihood::new(&config, recording, 0, &["rho".to_string()], 1).unwrap();
+    let options = fit::FitOptions {
+        standard_errors: false,
+        ..fit::FitOptions::default()
+    };
+    let result = fit::maximise(&l, &l, &options, &|_, _| {}).unwrap();
+    assert_eq!(result.optimiser, "Nelder–Mead");
+    assert!(
+        result
+            .notes
+            .iter()
+            .any(|n| n.contains("gives no score on this model")
+                && n.contains("reads the time or inputs")),
+        "{:?}",
+        result.notes
+    );
+    let lbfgs = fit::FitOptions {
+        optimiser: fit::Optimiser::Lbfgs,
+        ..options
+    };
+    let refused = fit::maximise(&l, &l, &lbfgs, &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("reads the time or inputs"), "{refused}");
+}
+
 /// The methods of the continuous-time equations refuse a discrete-time map, each with the
 /// reason; the point-mass filter refuses an SDE.
 #[test]

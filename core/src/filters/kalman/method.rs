@@ -72,6 +72,7 @@ fn info<P: Declared>(key: &str, name: &str, summary: &str, paper: &str) -> Metho
 builder_fn!(Kalman);
 
 impl Method for Kalman {
+    const SCORE: bool = true;
     const SMOOTHING: Smoothing = Smoothing::By(
         "RTS",
         "the Rauch–Tung–Striebel smoother of the sampled model the filter updates with (Φ = e^{AΔτ}): exact on linear-Gaussian models",

@@ -24,6 +24,7 @@ builder_fn!(PointMass);
 impl Method for PointMass {
     const KEY: &'static str = "point_mass";
     const ALIASES: &'static [&'static str] = &["pmf"];
+    const SCORE: bool = true;
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     const STATE_DIFFUSION: crate::filters::method::Support = crate::filters::method::Support::Exact(

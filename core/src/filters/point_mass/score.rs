@@ -82,7 +82,7 @@ impl PointMass {
             .kernel
             .clone()
             .expect("an autonomous model's, made in new");
-        let mut derivatives = kernel.derivatives(grid, true)?;
+        let mut derivatives = kernel.derivatives(grid, true).map_err(|e| self.named(e))?;
         let sides = perturbed
             .iter()
             .map(|p| Ok([self.side(&p.below)?, self.side(&p.above)?]))
@@ -266,6 +266,16 @@ impl PointMass {
         })
     }
 
+    /// `e` with this filter's name in front of what it says does not fit.
+    fn named(&self, e: FilterError) -> FilterError {
+        match e {
+            FilterError::Unsuitable(why) => {
+                FilterError::Unsuitable(format!("{}: {why}", self.name))
+            }
+            other => other,
+        }
+    }
+
     /// The model's functions at one perturbed point (model, prior) on this filter's grid.
     fn side(
         &self,
@@ -273,7 +283,7 @@ impl PointMass {
     ) -> Result<Side, FilterError> {
         let grid = &self.grid;
         let mut kernel = super::kernel::Kernel::new(&self.name, model, grid, self.radius, false)?;
-        let kernel = kernel.derivatives(grid, false)?;
+        let kernel = kernel.derivatives(grid, false).map_err(|e| self.named(e))?;
         let measurement = GridMeasurement::new(grid, model, &check_model(&self.name, model)?);
         let (u, _, _) = prior_on_grid(grid, prior)?;
         Ok(Side {

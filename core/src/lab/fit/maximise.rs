@@ -370,6 +370,13 @@ pub fn maximise(
     let first = match (first, options.optimiser) {
         (Some(Ok(score)), _) => Some(score),
         (Some(Err(e)), Optimiser::Lbfgs) => return Err(e),
+        (Some(Err(e)), _) => {
+            notes.push(format!(
+                "{} gives no score on this model ({e}): the fit used Nelder–Mead",
+                likelihood.method()
+            ));
+            None
+        }
         (None, Optimiser::Lbfgs) => {
             return Err(ZakaiError::Config(vec![crate::validate::ConfigProblem::new(
                 "optimiser",

@@ -284,6 +284,10 @@ impl Likelihood {
     /// measurement's only for the parameters its texts name
     /// ([`ScenarioConfig::measurement_texts`]).
     pub fn score(&self, theta: &[f64]) -> Option<Result<crate::filters::Score, ZakaiError>> {
+        // Nothing is built for a method without one.
+        if !self.config.methods[0].has_score() {
+            return None;
+        }
         if let Err(e) = check_point(&self.names, &self.bounds, theta) {
             return Some(Err(e));
         }

@@ -46,6 +46,9 @@ pub struct CatalogueEntry {
     pub density: bool,
     /// Whether the method draws random numbers (its likelihood is random in the parameters).
     pub random: bool,
+    /// Whether the method gives its score, ln L with its gradient in the parameters (a fit then
+    /// uses L-BFGS).
+    pub score: bool,
     /// Its fixed-interval smoother, or why it has none.
     pub smoother: crate::filters::smoothing::SmootherInfo,
     /// What it does with a state-dependent diffusion G(x).
@@ -114,6 +117,10 @@ macro_rules! registry {
             /// Whether the method draws random numbers ([`Method::RANDOM`]).
             pub fn is_random(&self) -> bool {
                 match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::RANDOM,)* }
+            }
+            /// Whether the method gives its score ([`Method::SCORE`]).
+            pub fn has_score(&self) -> bool {
+                match self { $($(#[$attr])* MethodConfig::$variant(_) => <$method>::SCORE,)* }
             }
             /// The method's smoother, or why it has none ([`Method::SMOOTHING`]).
             pub fn smoothing(&self) -> crate::filters::smoothing::Smoothing {
@@ -191,6 +198,7 @@ macro_rules! registry {
                 exact: <$method>::EXACT,
                 density: <$method>::DENSITY,
                 random: <$method>::RANDOM,
+                score: <$method>::SCORE,
                 smoother: <$method>::SMOOTHING.into(),
                 state_diffusion: <$method>::STATE_DIFFUSION,
                 inputs: <$method>::INPUTS,
