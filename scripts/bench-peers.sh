@@ -92,7 +92,7 @@ jax_venv=target/jax-venv
 if [ ! -x "$jax_venv/bin/python" ]; then
   python3 -m venv "$jax_venv"
 fi
-"$jax_venv/bin/python" -c 'import jax, dynamax' 2>/dev/null || "$jax_venv/bin/pip" install -q jax dynamax
+"$jax_venv/bin/python" -c 'import jax, dynamax, filterpy' 2>/dev/null || "$jax_venv/bin/pip" install -q jax dynamax filterpy
 "$jax_venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 jax_pf=$("$jax_venv/bin/python" scripts/peers/jax_pf.py)
 kf=$(cd scripts/peers && "../../$jax_venv/bin/python" dynamax_kf.py)
@@ -105,12 +105,13 @@ PY
 "$venv/bin/python" - "$kf" <<'PY'
 import json, sys
 print()
-print("EKF and UKF over 500 measurements, whole series in one call: dynamax (jit) and Zakai's Filter.run")
+print("EKF and UKF over 500 measurements: dynamax (jit, whole series), FilterPy (its Python loop) and Zakai's Filter.run")
 print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':>8} {'|means gap|':>12}")
 for title, rows in json.loads(sys.argv[1]):
     for method, r in rows.items():
         work = f"{method.upper()} {title}"
-        print(f"{work:<54} {'dynamax':<10} {r['dynamax'] * 1e6:>10.2f}µs {r['zakai'] * 1e6:>10.2f}µs {r['dynamax'] / r['zakai']:>7.1f}× {r['gap']:>12.1e}")
+        for peer, gap in (("dynamax", "gap"), ("filterpy", "filterpy_gap")):
+            print(f"{work:<54} {peer:<10} {r[peer] * 1e6:>10.2f}µs {r['zakai'] * 1e6:>10.2f}µs {r[peer] / r['zakai']:>7.1f}× {r[gap]:>12.1e}")
 PY
 
 echo

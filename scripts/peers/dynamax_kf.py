@@ -1,6 +1,7 @@
-"""Zakai's EKF and UKF beside dynamax's (JAX, `jit` over the whole series), on the same data,
-in one process (issue 61, item 3: "UKF and EKF: >= 5x dynamax on the 1-D model and on a 4-D
-constant-velocity target with range-bearing measurements").
+"""Zakai's EKF and UKF beside dynamax's (JAX, `jit` over the whole series) and FilterPy's
+(NumPy, its `predict`/`update` loop), on the same data, in one process (issue 61, item 3: "UKF
+and EKF: >= 5x dynamax on the 1-D model and on a 4-D constant-velocity target with
+range-bearing measurements (also against FilterPy)").
 
 * 1-D: peers.py's UKF model as a map, x_k = x_(k-1) + w_k (Var w = 0.01), z_k = x_k^3 + v_k
   (Var v = 0.1), x_0 ~ N(1, 0.1); 500 measurements.
@@ -9,9 +10,11 @@ constant-velocity target with range-bearing measurements").
   and bearing, z = (|p|, atan(p2/p1)) + v, sd 0.1 and 0.01 rad (the target stays where
   p1 > 0: Zakai's expressions have no atan2); 500 measurements from a fixed generator.
 
-Both sides filter the whole series in one call: dynamax's `extended_kalman_filter` /
+dynamax and Zakai filter the whole series in one call: dynamax's `extended_kalman_filter` /
 `unscented_kalman_filter` under `jax.jit` (compiled before the clock, 64-bit), Zakai's
-`Filter.run` (the loop in Rust). UKF points alpha = 0.5 (1-D; 1.0 in 4-D), beta = 2, kappa = 0
+`Filter.run` (the loop in Rust); FilterPy's `ExtendedKalmanFilter` (its Jacobian written
+here) and `UnscentedKalmanFilter` (`MerweScaledSigmaPoints`) step in a Python loop, as its
+users run it. UKF points alpha = 0.5 (1-D; 1.0 in 4-D), beta = 2, kappa = 0
 on both. Prints each one's seconds per step (the least of 5 runs) and the largest difference
 of the filtered means, which is round-off when the two compute the same filter.
 
@@ -30,6 +33,8 @@ from dynamax.nonlinear_gaussian_ssm import (
     extended_kalman_filter,
     unscented_kalman_filter,
 )
+
+from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 import zakai
 
@@ -61,7 +66,12 @@ def one_d():
     )
     model = zakai.Model.discrete_time("x", "x^3", transition_cov=0.01, noise_cov=0.1)
     prior = zakai.Prior.gaussian(1.0, 0.1)
-    return "1-D, z = x^3 + v", params, model, prior, z[:, None], 0.5
+    numpy_model = dict(
+        f=lambda x: x, jac_f=np.eye(1), h=lambda x: x**3,
+        jac_h=lambda x: np.array([[3 * x[0] ** 2]]), q=np.array([[0.01]]), r=np.array([[0.1]]),
+        mean=np.array([1.0]), cov=np.array([[0.1]]),
+    )
+    return "1-D, z = x^3 + v", params, model, prior, z[:, None], 0.5, numpy_model
 
 
 def cv_track():
@@ -95,11 +105,53 @@ def cv_track():
         noise_cov=r.tolist(),
     )
     prior = zakai.Prior.gaussian([10.0, 5.0, 0.5, 1.0], (np.eye(4) * 0.5).tolist())
-    return "4-D constant velocity, range-bearing", params, model, prior, z, 1.0
+
+    def jac_h(x):
+        rho2 = x[0] ** 2 + x[1] ** 2
+        rho = np.sqrt(rho2)
+        return np.array([[x[0] / rho, x[1] / rho, 0.0, 0.0],
+                         [-x[1] / rho2, x[0] / rho2, 0.0, 0.0]])
+
+    numpy_model = dict(
+        f=lambda x: f @ x, jac_f=f,
+        h=lambda x: np.array([np.hypot(x[0], x[1]), np.arctan(x[1] / x[0])]),
+        jac_h=jac_h, q=cov, r=r, mean=np.array([10.0, 5.0, 0.5, 1.0]), cov=np.eye(4) * 0.5,
+    )
+    return "4-D constant velocity, range-bearing", params, model, prior, z, 1.0, numpy_model
+
+
+def filterpy_run(method, m, z, alpha):
+    """FilterPy's EKF or UKF over the rows of z (the first a measurement of the prior's
+    state, as in the other two); the filtered means."""
+    n = len(m["mean"])
+    if method == "ekf":
+        kf = ExtendedKalmanFilter(dim_x=n, dim_z=z.shape[1])
+        kf.F, kf.Q, kf.R = m["jac_f"], m["q"], m["r"]
+    else:
+        points = MerweScaledSigmaPoints(n, alpha=alpha, beta=2.0, kappa=0.0)
+        kf = UnscentedKalmanFilter(dim_x=n, dim_z=z.shape[1], dt=1.0, hx=m["h"],
+                                   fx=lambda x, dt: m["f"](x), points=points)
+        kf.Q, kf.R = m["q"], m["r"]
+    kf.x, kf.P = m["mean"].copy(), m["cov"].copy()
+    means = np.empty((len(z), n))
+    for k, zk in enumerate(z):
+        if k:
+            # The EKF's x = F x, P = F P Fᵀ + Q (both maps here are linear); the UKF's
+            # sigma points through fx.
+            kf.predict()
+        elif method == "ukf":
+            # The first update is of the prior itself: its sigma points, not moved.
+            kf.sigmas_f = kf.points_fn.sigma_points(kf.x, kf.P)
+        if method == "ekf":
+            kf.update(zk, m["jac_h"], m["h"])
+        else:
+            kf.update(zk)
+        means[k] = kf.x
+    return means
 
 
 def compare(case):
-    title, params, model, prior, z, alpha = case
+    title, params, model, prior, z, alpha, numpy_model = case
     ez = jnp.asarray(z)
     runs = {
         "ekf": jax.jit(lambda e: extended_kalman_filter(
@@ -120,7 +172,10 @@ def compare(case):
         make = lambda: zakai.Filter(method, model, prior, dt_obs=1.0, **options)  # noqa: E731
         ours, (zmeans, _) = least(lambda: make().run(z))
         gap = float(np.max(np.abs(np.asarray(means) - zmeans)))
-        rows[method] = {"dynamax": peer, "zakai": ours, "gap": gap}
+        numpy_time, numpy_means = least(lambda: filterpy_run(method, numpy_model, z, alpha))
+        numpy_gap = float(np.max(np.abs(numpy_means - zmeans)))
+        rows[method] = {"dynamax": peer, "zakai": ours, "gap": gap,
+                        "filterpy": numpy_time, "filterpy_gap": numpy_gap}
     return title, rows
 
 
