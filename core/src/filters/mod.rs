@@ -32,6 +32,7 @@ pub(crate) mod direct;
 mod estimate;
 pub(crate) mod fpe_split;
 pub(crate) mod gaussian_sum;
+pub(crate) mod grid_score;
 mod grid_state;
 mod intervals;
 pub(crate) mod kalman;
