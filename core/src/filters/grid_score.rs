@@ -53,6 +53,10 @@ pub(crate) trait GridAdjoint {
         bar: &mut Vec<f64>,
         gradient: &mut [f64],
     ) -> Result<(), FilterError>;
+    /// After the last [`GridAdjoint::backward`]: adds to `gradient` what the method gathered
+    /// over all the intervals instead of adding it in each (the operators' coefficient
+    /// sensitivities, multiplied by the coefficients' derivatives once).
+    fn finish(&mut self, _gradient: &mut [f64]) {}
 }
 
 /// What the recursion reads of the model besides the transition: at the filter's θ, the
@@ -224,6 +228,7 @@ pub(crate) fn grid_score(
         }
         core::mem::swap(&mut lambda, &mut bar);
     }
+    transition.finish(&mut gradient);
     for ((grad, (_, [below, above])), perturbation) in
         gradient.iter_mut().zip(&pieces.sides).zip(perturbed)
     {

@@ -80,20 +80,20 @@ pub(super) fn diffusion_on(
 /// every step for a driven one ([`crate::Inputs`]: the dynamics at the interval's
 /// midpoint, the measurement at its end).
 #[derive(Clone, Debug)]
-struct Tabulated {
-    advection: UpwindAdvection,
-    divergence: Vec<f64>,
+pub(super) struct Tabulated {
+    pub(super) advection: UpwindAdvection,
+    pub(super) divergence: Vec<f64>,
     /// `a_ll = (G Gᵀ)_ll` at every cell, per dimension.
-    diffusion: Vec<Vec<f64>>,
+    pub(super) diffusion: Vec<Vec<f64>>,
     /// The mixed terms of `a`, a positive explicit step (`grid::cross`).
-    cross: CrossDiffusion,
+    pub(super) cross: CrossDiffusion,
     /// p(z | x) and h at the cell centres.
-    measurement: crate::filters::grid_state::GridMeasurement,
+    pub(super) measurement: crate::filters::grid_state::GridMeasurement,
 }
 
 impl Tabulated {
     /// f, ∇·f and a = G Gᵀ of `dynamics`, h and p(z | x) of `measurement`, on `grid`.
-    fn of(
+    pub(super) fn of(
         name: &str,
         grid: &TensorGrid,
         dynamics: &Model,
@@ -125,10 +125,10 @@ impl Tabulated {
 
 /// How an observation interval is cut into FPE steps.
 #[derive(Clone, Debug)]
-struct StepPlan {
-    substeps: usize,
-    dt: f64,
-    implicit: ImplicitStep,
+pub(super) struct StepPlan {
+    pub(super) substeps: usize,
+    pub(super) dt: f64,
+    pub(super) implicit: ImplicitStep,
 }
 
 /// The continuous–discrete grid filter.
@@ -196,22 +196,22 @@ struct StepPlan {
 /// no step can fix, is a warning ([`crate::Filter::warnings`]).
 #[derive(Clone, Debug)]
 pub struct ContinuousDiscreteGrid {
-    name: String,
-    scheme: FpeScheme,
-    grid: TensorGrid,
+    pub(super) name: String,
+    pub(super) scheme: FpeScheme,
+    pub(super) grid: TensorGrid,
     /// The model on the cells.
-    table: Tabulated,
-    m: usize,
+    pub(super) table: Tabulated,
+    pub(super) m: usize,
     /// A driven model ([`crate::Inputs`]), tabulated anew at every step.
-    driven: Option<Model>,
+    pub(super) driven: Option<Model>,
     target_dt: f64,
     /// Δτ, the observation interval the filter is built for.
-    dt_obs: f64,
+    pub(super) dt_obs: f64,
     /// The plan for Δτ, and for up to [`REMAINDER_PLANS`] other lengths (the remainders of
     /// irregular intervals after whole Δτ), the most recently used first.
     plan: Option<StepPlan>,
     remainders: LengthCache<StepPlan>,
-    u: Vec<f64>,
+    pub(super) u: Vec<f64>,
     /// The density and estimate a step started from.
     saved: crate::filters::SavedDensity,
     /// The last step's log-likelihood ([`Filter::log_likelihood`]).
@@ -454,7 +454,7 @@ impl ContinuousDiscreteGrid {
     }
 
     /// The plan of the implicit step for intervals of length `interval`.
-    fn plan_of(&self, interval: f64) -> Result<StepPlan, FilterError> {
+    pub(super) fn plan_of(&self, interval: f64) -> Result<StepPlan, FilterError> {
         let (substeps, _) = self.step_count(interval)?;
         let dt = interval / substeps as f64;
         let part = match self.scheme {
@@ -666,6 +666,14 @@ impl Filter for ContinuousDiscreteGrid {
         let (u, estimate) = (&mut self.u, &mut self.estimate);
         self.saved
             .settle(result, u, estimate, &mut self.log_likelihood)
+    }
+
+    fn score(
+        &self,
+        observations: &[Observation<'_>],
+        perturbed: &[crate::filters::Perturbation],
+    ) -> Option<Result<crate::filters::Score, FilterError>> {
+        Some(self.score_of(observations, perturbed))
     }
 
     fn smoother(

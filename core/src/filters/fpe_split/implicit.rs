@@ -124,6 +124,12 @@ impl ImplicitStep {
         }
     }
 
+    /// The axes' systems, solved in turn by [`ImplicitStep::solve`] (for the score's adjoint,
+    /// which needs the density after each).
+    pub(crate) fn axes(&self) -> &[LineSystems] {
+        &self.axes
+    }
+
     /// Values the factors store.
     pub(crate) fn values(cells: usize, dims: usize) -> Option<usize> {
         cells.checked_mul(3 * dims)

@@ -84,6 +84,7 @@ macro_rules! fpe_method {
             const NEEDS_INTERVAL: bool = true;
             const NEEDS_DOMAIN: bool = true;
             const DENSITY: bool = true;
+            const SCORE: bool = true;
             const SMOOTHING: Smoothing = Smoothing::By(
                 "forward–backward",
                 "the smoothed density on the filter's grid by the forward–backward recursion p^s_k = p_k ⊙ T_kᵀ(p^s_(k+1) ⊘ p⁻_(k+1)) with the transposed FPE step of the scheme (the backward equation in its discretisation): exact for the discrete model the filter solves, converging with it; at most 3 passes of the filter's cost",

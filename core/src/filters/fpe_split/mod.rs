@@ -5,6 +5,7 @@ pub(crate) mod implicit;
 mod method;
 pub(crate) mod numerical_diffusion;
 mod params;
+mod score;
 pub(crate) mod upwind;
 
 pub use filter::ContinuousDiscreteGrid;
