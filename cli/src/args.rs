@@ -144,7 +144,7 @@ pub(crate) struct FitArgs {
     #[arg(long)]
     pub(crate) svg: Option<PathBuf>,
     /// The optimiser: `auto` (L-BFGS on the method's score where it gives one — the
-    /// Kalman and point-mass filters —, else Nelder–Mead), `nelder-mead` or `lbfgs`.
+    /// Kalman, point-mass, SA and FDM filters —, else Nelder–Mead), `nelder-mead` or `lbfgs`.
     #[arg(long, value_enum, default_value_t = OptimiserArg::Auto)]
     pub(crate) optimiser: OptimiserArg,
     #[command(flatten)]

@@ -120,7 +120,8 @@ class FitResult:
     converged : bool
         Whether the optimiser met its tolerance.
     optimiser : str
-        ``"L-BFGS"`` (argmin's, on the method's score: the Kalman and point-mass filters) or
+        ``"L-BFGS"`` (argmin's, on the method's score: the Kalman, point-mass, separation and
+        implicit FDM filters) or
         ``"Nelder–Mead"`` (argmin's simplex: every other method).
     cov : ndarray, shape (p, p), or None
         The estimate's asymptotic covariance (the information's inverse).
@@ -238,8 +239,8 @@ def fit(
         The known inputs of a driven model, as for :func:`zakai.filter`.
     optimiser : {"auto", "nelder-mead", "lbfgs"}, optional
         ``"auto"`` (default): L-BFGS on the method's score — its log-likelihood's gradient
-        from one forward and one backward pass — where the method gives one (the Kalman and
-        point-mass filters), else Nelder–Mead; ``"lbfgs"`` raises ``ValueError`` for a method without
+        from one forward and one backward pass — where the method gives one (the Kalman,
+        point-mass, separation and implicit FDM filters), else Nelder–Mead; ``"lbfgs"`` raises ``ValueError`` for a method without
         a score.
 
     Returns

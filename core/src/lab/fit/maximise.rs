@@ -3,7 +3,7 @@
 //!
 //! * **L-BFGS** (Liu and Nocedal 1989; argmin's, with the Moré–Thuente line search) where the
 //!   method gives its score — ln L and its gradient from one forward and one backward pass
-//!   ([`crate::Filter::score`]: the Kalman and point-mass filters) —, the gradient carried to the
+//!   ([`crate::Filter::score`]: the Kalman, point-mass, SA and FDM filters) —, the gradient carried to the
 //!   unbounded variables by `∂θ/∂u` ([`Transform::slope`]).
 //! * **Nelder–Mead** (Nelder and Mead 1965; argmin's simplex) for every other method: it needs
 //!   no gradient, so it serves the particle filter's likelihood — a random function of θ

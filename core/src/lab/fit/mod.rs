@@ -18,7 +18,7 @@
 //!   page's Likelihood view and `zakai fit --profile` draw.
 //! * `maximise` (feature `fit`) — the maximum-likelihood estimate within the parameters'
 //!   bounds: argmin's L-BFGS on the method's score where it gives one
-//!   ([`crate::Filter::score`]: the Kalman and point-mass filters), else argmin's Nelder–Mead simplex;
+//!   ([`crate::Filter::score`]: the Kalman, point-mass, SA and FDM filters), else argmin's Nelder–Mead simplex;
 //!   standard errors from the observed information, −∇² ln L at the optimum by central
 //!   differences ([`observed_information`]).
 //!
