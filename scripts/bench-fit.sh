@@ -55,3 +55,25 @@ for optimiser in lbfgs nelder-mead; do
   printf 'SV, point-mass, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(tail -n 1 "$dir/sv-$optimiser.txt")"
   sed -n '3,5p' "$dir/sv-$optimiser.txt"
 done
+
+# The same returns, the model written as the SDE dx = −κ(x − μ) dt + s dv whose daily
+# transition the AR(1) is, fitted by the separation filter at its size (κ, μ, s).
+python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))
+c["model"].pop("dynamics", None)
+c["parameters"] = {"kappa": {"value": 0.1, "bounds": [0.001, 2.0]},
+                   "mu": {"value": -1.0, "bounds": [-3, 1]},
+                   "s": {"value": 0.3, "bounds": [0.01, 2.0]}}
+c["model"]["drift"] = ["-kappa*(x - mu)"]
+c["model"]["diffusion"] = [["s"]]
+c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["s^2/(2*kappa)"]]}
+c["methods"] = [{"method": "separation"}]
+json.dump(c, sys.stdout)' "$dir/sv-fit.json" > "$dir/sv-sde-fit.json"
+for optimiser in lbfgs nelder-mead; do
+  start=$(date +%s.%N)
+  "$zakai" fit "$dir/sv-sde-fit.json" --observations "$dir/sv.csv" --optimiser "$optimiser" > "$dir/sv-sde-$optimiser.txt" 2>/dev/null
+  end=$(date +%s.%N)
+  printf 'SV as an SDE, separation, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(tail -n 1 "$dir/sv-sde-$optimiser.txt")"
+  sed -n '3,5p' "$dir/sv-sde-$optimiser.txt"
+done
