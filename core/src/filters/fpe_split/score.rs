@@ -32,6 +32,7 @@ use super::FpeScheme;
 use crate::error::FilterError;
 use crate::filters::grid_score::{difference, grid_score, log_prior, GridAdjoint, GridPieces};
 use crate::filters::{Observation, Perturbation, Score};
+use crate::grid::TensorGrid;
 
 /// Most bytes an interval's recomputed densities may take.
 const MAX_INTERVAL_BYTES: usize = 256 << 20;
@@ -119,26 +120,28 @@ impl FpeSteps<'_> {
             let dx = grid.spacing()[l];
             let diffusion = 0.5 * dt / (dx * dx);
             let advection = dt / (2.0 * dx);
-            for i in 0..grid.len() {
-                let [below, above] = grid.neighbours(i, l);
-                let (w_below, w_above) = (below.map_or(0.0, |b| w[b]), above.map_or(0.0, |b| w[b]));
-                self.diffusion[l][i] -= diffusion * u[i] * (2.0 * w[i] - w_below - w_above);
-                self.divergence[i] -= dt / n as f64 * w[i] * u[i];
+            let (g_diffusion, g_divergence, g_velocity) = (
+                &mut self.diffusion[l],
+                &mut self.divergence,
+                &mut self.velocity[l],
+            );
+            along(grid, l, |i, below, above| {
+                let at = |v: &[f64], j: Option<usize>| j.map_or(0.0, |j| v[j]);
+                g_diffusion[i] -= diffusion * u[i] * (2.0 * w[i] - at(w, below) - at(w, above));
+                g_divergence[i] -= dt / n as f64 * w[i] * u[i];
                 if unsplit {
-                    let (u_below, u_above) =
-                        (below.map_or(0.0, |b| u[b]), above.map_or(0.0, |b| u[b]));
-                    self.velocity[l][i] += advection * w[i] * (u_below - u_above);
+                    g_velocity[i] += advection * w[i] * (at(u, below) - at(u, above));
                 }
-            }
+            });
         }
         if filter.scheme == FpeScheme::Separation {
             let x = kept_at(0);
             for l in 0..n {
                 let ratio = dt / grid.spacing()[l];
                 let velocity = filter.table.advection.velocity(l);
-                for i in 0..grid.len() {
+                let g_velocity = &mut self.velocity[l];
+                along(grid, l, |i, below, above| {
                     let f = velocity[i];
-                    let [below, above] = grid.neighbours(i, l);
                     let sensitivity = if f > 0.0 {
                         -x[i] + below.map_or(0.0, |b| x[b])
                     } else if f < 0.0 {
@@ -146,8 +149,8 @@ impl FpeSteps<'_> {
                     } else {
                         0.0
                     };
-                    self.velocity[l][i] += ratio * bar[i] * sensitivity;
-                }
+                    g_velocity[i] += ratio * bar[i] * sensitivity;
+                });
             }
             filter
                 .table
@@ -156,6 +159,22 @@ impl FpeSteps<'_> {
             core::mem::swap(bar, &mut self.tmp);
         }
     }
+}
+
+/// Calls `f(i, below, above)` for every cell i with its neighbours along dimension `l` (`None`
+/// past the box's edge), line by line.
+fn along(grid: &TensorGrid, l: usize, mut f: impl FnMut(usize, Option<usize>, Option<usize>)) {
+    let (stride, cells) = (grid.stride(l), grid.shape()[l]);
+    crate::grid::for_each_line(grid.len(), stride, cells, |start| {
+        for j in 0..cells {
+            let i = start + j * stride;
+            f(
+                i,
+                (j > 0).then(|| i - stride),
+                (j + 1 < cells).then(|| i + stride),
+            );
+        }
+    });
 }
 
 impl GridAdjoint for FpeSteps<'_> {
