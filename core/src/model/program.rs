@@ -82,6 +82,24 @@ impl Operation {
         }
     }
 
+    /// The operation on scalars: the value [`apply`]'s pass writes for `a` (and `b`).
+    #[inline(always)]
+    fn at(&self, a: f64, b: f64) -> f64 {
+        match *self {
+            Operation::Neg(_) => -a,
+            Operation::Unary(f, _) => f(a),
+            Operation::Exp(_) => crate::linalg::elementary::exp(a),
+            Operation::Ln(_) => crate::linalg::elementary::ln(a),
+            Operation::Abs(_) => libm::fabs(a),
+            Operation::Add(..) => a + b,
+            Operation::Sub(..) => a - b,
+            Operation::Mul(..) => a * b,
+            Operation::Div(..) => a / b,
+            Operation::PowI(_, k) => pow_int(a, k),
+            Operation::Binary(f, ..) => f(a, b),
+        }
+    }
+
     fn map_operands(self, f: impl Fn(Operand) -> Operand) -> Operation {
         match self {
             Operation::Neg(a) => Operation::Neg(f(a)),
@@ -256,11 +274,7 @@ impl Program {
                 Some(_) => None,
             };
             match (constant(a), constant(b)) {
-                (Some(x), Some(y)) => {
-                    let mut value = [0.0];
-                    apply(&operation, &mut value, Arg::Scalar(x), Arg::Scalar(y));
-                    known[ins.dst] = Some(value[0]);
-                }
+                (Some(x), Some(y)) => known[ins.dst] = Some(operation.at(x, y)),
                 _ => {
                     known[ins.dst] = None;
                     code.push(Instruction {
@@ -277,10 +291,10 @@ impl Program {
         }
     }
 
-    /// The value at one point `x` (inputs and registers on the stack for up to
-    /// [`MAX_INPUTS`] components and 32 registers).
+    /// The value at one point `x`, instruction by instruction on scalars ([`Operation::at`]:
+    /// the same operations as a batch's passes, so the same bits), registers on the stack up
+    /// to 32.
     pub(crate) fn eval(&self, x: &[f64]) -> f64 {
-        let mut out = [0.0];
         let mut on_stack = [0.0; 32];
         let mut on_heap = Vec::new();
         let registers = if self.registers <= on_stack.len() {
@@ -289,17 +303,18 @@ impl Program {
             on_heap.resize(self.registers, 0.0);
             &mut on_heap[..]
         };
-        if x.len() <= MAX_INPUTS {
-            let mut inputs = [&[][..]; MAX_INPUTS];
-            for (slot, v) in inputs.iter_mut().zip(x.chunks_exact(1)) {
-                *slot = v;
-            }
-            self.run(&inputs[..x.len()], 1, registers, &mut out);
-        } else {
-            let inputs: Vec<&[f64]> = x.chunks_exact(1).collect();
-            self.run(&inputs, 1, registers, &mut out);
+        let read = |o: Operand, registers: &[f64]| match o {
+            Operand::Var(j) => x[j],
+            Operand::Const(c) => c,
+            Operand::Reg(r) => registers[r],
+        };
+        for ins in &self.code {
+            let [a, b] = ins.operation.operands();
+            let a = a.map_or(0.0, |o| read(o, registers));
+            let b = b.map_or(0.0, |o| read(o, registers));
+            registers[ins.dst] = ins.operation.at(a, b);
         }
-        out[0]
+        read(self.result, registers)
     }
 }
 

@@ -487,7 +487,7 @@ impl GaussianSum {
             let total = Self::update_with(components, len, work, (&c, &c0, &noise), &z)?;
             // A masked row's density is N(0; 0, 1): take its 1/√(2π) out again.
             let missing = seen.iter().filter(|s| !**s).count() as f64;
-            self.log_likelihood = total + 0.5 * missing * libm::log(core::f64::consts::TAU);
+            self.log_likelihood = total + 0.5 * missing * crate::model::measurement::LN_TAU;
         } else {
             let GaussianSum {
                 c,

@@ -340,7 +340,7 @@ impl GaussianState {
         meas: &measurement::Measurement,
     ) -> Result<(), FilterError> {
         let observed = meas.count as f64;
-        let mut ll = log_density - 0.5 * observed * libm::log(core::f64::consts::TAU);
+        let mut ll = log_density - 0.5 * observed * crate::model::measurement::LN_TAU;
         if meas.continuous {
             let work = &mut self.work;
             let chol = crate::linalg::cholesky_in(
@@ -357,7 +357,7 @@ impl GaussianState {
                 .sum();
             ll -= -0.5 * quadratic
                 - half_log_det
-                - 0.5 * observed * libm::log(core::f64::consts::TAU);
+                - 0.5 * observed * crate::model::measurement::LN_TAU;
         }
         self.log_likelihood = ll;
         Ok(())

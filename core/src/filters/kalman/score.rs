@@ -130,7 +130,7 @@ fn gaussian_log_density(
     let half_log_det: f64 = chol.l().diagonal().iter().map(|v| libm::log(*v)).sum();
     let whitened = chol.solve(r);
     let k = r.len() as f64;
-    let value = -0.5 * (k * libm::log(core::f64::consts::TAU) + r.dot(&whitened)) - half_log_det;
+    let value = -0.5 * (k * crate::model::measurement::LN_TAU + r.dot(&whitened)) - half_log_det;
     Ok((value, chol.inverse()))
 }
 
