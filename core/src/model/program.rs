@@ -9,8 +9,9 @@
 //! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp` and `ln`
 //! are passes that vectorise ([`crate::linalg::elementary`]), and so is `abs`.
 //!
-//! The per-point value of an expression is the same program on a block of one point, so the
-//! batch and the point-wise results are equal to the last bit. Against an interpreter of the
+//! The per-point value of an expression runs the same operations on scalars, instruction by
+//! instruction (without a pass's dispatch per instruction), so the batch and the point-wise
+//! results are equal to the last bit (tested in `model::compile`). Against an interpreter of the
 //! same operations in the same order (exmex, in the tests) the program differs only where it strength-reduces an integer power `x^k` (0 ≤ k ≤ 4) to
 //! multiplications, which is within 2 ulp of `libm::pow` (tested here and, on whole
 //! expressions, in `model::compile`).
