@@ -91,6 +91,7 @@ pub fn render_fit(r: &FitResult, config: &ScenarioConfig, format: Format) -> Str
                 r.evaluations,
                 if r.converged { ", converged" } else { "" }
             );
+            let _ = writeln!(s, "AIC = {:.4}, BIC = {:.4}", r.aic(), r.bic());
             for note in &r.notes {
                 let _ = writeln!(s, "note: {note}");
             }
@@ -114,6 +115,8 @@ pub fn render_fit(r: &FitResult, config: &ScenarioConfig, format: Format) -> Str
                 "observations": r.observations,
                 "parameters": parameters,
                 "log_likelihood": r.log_likelihood,
+                "aic": r.aic(),
+                "bic": r.bic(),
                 "covariance": r.covariance,
                 "optimiser": r.optimiser,
                 "scores": r.scores,

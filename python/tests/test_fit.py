@@ -61,6 +61,11 @@ def test_the_kalman_fit_is_statsmodels_maximum_likelihood_estimate(sm):
     same_point = mod.loglike([fitted.params["r"], fitted.params["q"]])
     assert fitted.loglik - first == pytest.approx(same_point, rel=1e-9)
     assert fitted.loglik - first >= res.llf - 1e-6
+    # AIC and BIC: statsmodels' of its ln L (without the first observation) over its 99
+    # effective observations; Zakai's ln L has that observation, and 99 rows (1900 dropped).
+    assert fitted.aic + 2 * first == pytest.approx(res.aic, abs=1e-5)
+    assert fitted.bic + 2 * first == pytest.approx(res.bic, abs=1e-5)
+    assert fitted.nobs == 99 and res.nobs_effective == 99
     assert fitted.converged and not fitted.notes
     frame = fitted.to_pandas()
     assert list(frame.index) == ["q", "r"]

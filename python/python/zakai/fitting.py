@@ -163,6 +163,24 @@ class FitResult:
     njev: int = 0
     optimiser: str = "Nelder–Mead"
 
+    @property
+    def aic(self) -> float:
+        """Akaike's information criterion, ``2p − 2 ln L(θ̂)`` (p the parameters fitted).
+
+        >>> import math
+        >>> r = FitResult("KF", {"q": 1.0}, {"q": 0.1}, -10.0, 5, 2, True, None, {"q": 1.0},
+        ...               {"q": (0.0, None)}, 100)
+        >>> r.aic
+        22.0
+        """
+        return 2.0 * len(self.params) - 2.0 * self.loglik
+
+    @property
+    def bic(self) -> float:
+        """The Bayesian (Schwarz) information criterion, ``p ln n − 2 ln L(θ̂)``, n the
+        number of observations (``nobs``)."""
+        return len(self.params) * float(np.log(self.nobs)) - 2.0 * self.loglik
+
     def to_pandas(self) -> Any:
         """The estimates as a DataFrame indexed by parameter: ``estimate``, ``stderr``, the
         95 % Wald interval ``ci_lower``/``ci_upper`` (see :attr:`intervals`: inside the
@@ -192,6 +210,7 @@ class FitResult:
         scores = f"{self.njev} scores and " if self.njev else ""
         lines.append(f"  ln L = {self.loglik:.6f}; {self.optimiser}: {self.nit} iterations, "
                      f"{scores}{self.nfev} evaluations" + (", converged" if self.converged else ""))
+        lines.append(f"  AIC = {self.aic:.4f}, BIC = {self.bic:.4f}")
         lines.extend(f"  note: {n}" for n in self.notes)
         return "\n".join(lines)
 

@@ -254,6 +254,9 @@ fn the_kalman_fit_of_the_nile_is_durbin_and_koopmans_estimate() {
     // A maximum of the likelihood written here: every move by a thousandth lowers it.
     let top = reference(q, r);
     assert!((result.log_likelihood - top).abs() < 1e-9 * top.abs());
+    // AIC and BIC from the likelihood written here: two parameters, 100 observations.
+    assert!((result.aic() - (4.0 - 2.0 * top)).abs() < 1e-8 * top.abs());
+    assert!((result.bic() - (2.0 * 100f64.ln() - 2.0 * top)).abs() < 1e-8 * top.abs());
     for (dq, dr) in [(1.001, 1.0), (0.999, 1.0), (1.0, 1.001), (1.0, 0.999)] {
         assert!(reference(q * dq, r * dr) < top, "{dq} {dr}");
     }

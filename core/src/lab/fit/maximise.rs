@@ -492,6 +492,18 @@ pub fn maximise(
 }
 
 impl FitResult {
+    /// Akaike's information criterion, `2p − 2 ln L(θ̂)` (p the parameters fitted): lower is
+    /// better among models fitted to the same data.
+    pub fn aic(&self) -> f64 {
+        2.0 * self.names.len() as f64 - 2.0 * self.log_likelihood
+    }
+
+    /// The Bayesian (Schwarz) information criterion, `p ln n − 2 ln L(θ̂)`, n the number of
+    /// observations.
+    pub fn bic(&self) -> f64 {
+        self.names.len() as f64 * libm::log(self.observations as f64) - 2.0 * self.log_likelihood
+    }
+
     /// One line: each parameter's estimate with its standard error (`a = 1.02 (s.e.
     /// 5.1e-2)`, or `(no s.e.)` where there is none: [`FitResult::notes`] say why), then
     /// `ln L = …, n evaluations`, and how many notes there are.
