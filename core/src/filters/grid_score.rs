@@ -22,8 +22,10 @@
 //!
 //! and the prior adds `Σ_i λ_i P_0(i) ∂ln P_0(i)/∂θ` (λ of the first step). The transition's
 //! part is the method's ([`GridAdjoint`]); the rest is here. The forward pass keeps each
-//! step's starting density, its predicted density and likelihood — three densities per
+//! step's starting, predicted and updated densities and its likelihood — four per
 //! observation —, and a method recomputes what it needs inside an interval from its start.
+//! A derivative of ln g or ln P_0 that is not finite where the density has weight (a support
+//! that moves with θ) is refused, not skipped.
 //! The derivatives of ln g and ln P_0 in θ are central differences of those functions between
 //! the [`Perturbation`]'s two models ([`crate::filters::score`]).
 
@@ -112,7 +114,8 @@ pub(crate) fn grid_score(
         observed_kinds.push(obs.check(name, ObservationKind::Measurement, pieces.m)?);
         pieces.measurement.likelihood.check(name, obs.value)?;
     }
-    let vectors = 3 * observations.len();
+    // Kept per observation: its start, predicted density, likelihood and posterior.
+    let vectors = 4 * observations.len();
     if vectors.saturating_mul(len * 8) > MAX_KEPT_BYTES {
         return Err(FilterError::Unsuitable(format!(
             "{name}: the gradient of its likelihood would keep {vectors} densities of {len} cells, more than {} MiB",
@@ -203,14 +206,18 @@ pub(crate) fn grid_score(
                         scaled_likelihood(below, grid, &mut tmp, &mut node, obs.value)?;
                     let (g_above, l_above) =
                         scaled_likelihood(above, grid, &mut tmp, &mut node, obs.value)?;
-                    for i in 0..len {
-                        let q = g[i] * step.predicted[i].max(0.0);
+                    let weight: Vec<f64> = (0..len)
+                        .map(|i| g[i] * step.predicted[i].max(0.0))
+                        .collect();
+                    let heaviest = crate::linalg::largest_in_lanes(&weight);
+                    for (i, &q) in weight.iter().enumerate() {
                         if q > 0.0 {
                             let d =
                                 (libm::log(g_above[i]) + l_above - libm::log(g_below[i]) - l_below)
                                     / perturbation.width;
-                            if d.is_finite() {
-                                *grad += bar[i] * q * d;
+                            match d.is_finite() {
+                                true => *grad += bar[i] * q * d,
+                                false => moving_support(name, "p(z | x)", q, heaviest)?,
                             }
                         }
                     }
@@ -232,10 +239,14 @@ pub(crate) fn grid_score(
     for ((grad, (_, [below, above])), perturbation) in
         gradient.iter_mut().zip(&pieces.sides).zip(perturbed)
     {
+        let heaviest = crate::linalg::largest_in_lanes(&pieces.prior);
         for (i, &p0) in pieces.prior.iter().enumerate() {
             let d = (above[i] - below[i]) / perturbation.width;
-            if p0 > 0.0 && d.is_finite() {
-                *grad += lambda[i] * p0 * d;
+            if p0 > 0.0 {
+                match d.is_finite() {
+                    true => *grad += lambda[i] * p0 * d,
+                    false => moving_support(name, "prior density", p0, heaviest)?,
+                }
             }
         }
     }
@@ -243,6 +254,19 @@ pub(crate) fn grid_score(
         log_likelihood,
         gradient,
     })
+}
+
+/// Ok when a cell whose derivative of ln `what` is not finite carries a negligible `weight`
+/// (below 10⁻¹² of the `heaviest`: a density that underflows at one of the two points); an
+/// error otherwise — the density's support moves with the parameter, and its score is not
+/// a derivative.
+fn moving_support(name: &str, what: &str, weight: f64, heaviest: f64) -> Result<(), FilterError> {
+    match weight <= 1e-12 * heaviest {
+        true => Ok(()),
+        false => Err(FilterError::Unsuitable(format!(
+            "{name}: the {what} vanishes around θ where the data give it weight (its support moves with a parameter): no score"
+        ))),
+    }
 }
 
 /// `e` with the filter's `name` in front of what it says does not fit.

@@ -189,7 +189,9 @@ pub trait Filter: core::fmt::Debug + Fork {
     /// built from — the model and prior at two points around the filter's for each parameter
     /// in `perturbed` ([`Perturbation`]). `None` for the methods that do not give it (a fit then
     /// needs no gradient: Nelder–Mead); an error when this filter's model or data are outside
-    /// what its score covers (which the error names). The filter itself is not stepped.
+    /// what its score covers (which the error names). The filter itself is not stepped; it
+    /// must not have been either (the recursion starts from its state, the prior's derivative
+    /// is taken there: a stepped filter's score is wrong).
     fn score(
         &self,
         _observations: &[Observation<'_>],

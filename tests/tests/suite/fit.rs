@@ -235,6 +235,41 @@ fn the_grid_filters_score_is_the_derivative_of_their_log_likelihood() {
     assert_score_is_the_derivative(&l, &[0.4, 0.7], 1e-4, 1e-5);
 }
 
+/// A correlation of the diffusion that is 0 at θ has no mixed terms there but has them around
+/// it: the separation filter's score, which does not cover them, refuses rather than give
+/// ∂ln L/∂ρ = 0 (which would hold L-BFGS at ρ = 0); the fit says so and uses Nelder–Mead.
+#[test]
+fn a_grid_score_refuses_mixed_terms_that_appear_around_theta() {
+    let config: ScenarioConfig = serde_json::from_value(serde_json::json!({
+        "name": "correlated",
+        "parameters": { "rho": { "value": 0.0, "bounds": [-0.9, 0.9] } },
+        "model": {
+            "drift": ["-x1", "-x2"],
+            "observation": ["x1 + x2"],
+            "diffusion": [[1.0, 0.0], ["rho", "sqrt(1 - rho^2)"]],
+            "noise": { "kind": "discrete", "mixture": [{ "mean": [0.0], "cov": [[0.2]] }] }
+        },
+        "prior": { "kind": "gaussian", "mean": [0.0, 0.0], "cov": [[0.5, 0.0], [0.0, 0.5]] },
+        "domain": [[-4.0, 4.0], [-4.0, 4.0]],
+        "time": { "dt_obs": 0.5, "t_final": 3.0 },
+        "seed": 2,
+        "methods": [{ "method": "separation", "cells": [24, 24] }]
+    }))
+    .unwrap();
+    let recording = zakai::lab::experiment::Experiment::new(config.clone())
+        .unwrap()
+        .run(2)
+        .unwrap()
+        .recording;
+    let l = Likelihood::new(&config, recording, 0, &[], 1).unwrap();
+    let refused = l
+        .score(&[0.0])
+        .expect("SA has a score")
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("mixed terms"), "{refused}");
+}
+
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn the_kalman_fit_of_the_nile_is_durbin_and_koopmans_estimate() {

@@ -287,6 +287,12 @@ impl ContinuousDiscreteGrid {
         for p in perturbed {
             let [below, above] = [&p.below, &p.above].map(|(model, prior)| {
                 let table = Tabulated::of(name, grid, model, model)?;
+                // Mixed terms that vanish at θ but not around it (a correlation at 0).
+                if !table.cross.is_empty() {
+                    return Err(FilterError::Unsuitable(format!(
+                        "{name}: the gradient of its likelihood is not implemented for a diffusion with mixed terms (they appear when a parameter moves)"
+                    )));
+                }
                 Ok::<_, FilterError>((tables(&table), table.measurement, log_prior(grid, prior)?))
             });
             let (

@@ -24,6 +24,9 @@ use crate::filters::{Observation, Perturbation, Score};
 use crate::grid::TensorGrid;
 use crate::model::Model;
 
+/// Most bytes the densities of one interval's transitions may take in the backward pass.
+const MAX_INTERVAL_BYTES: usize = 256 << 20;
+
 /// The point-mass transition, forward and adjoint.
 struct Transitions<'a> {
     grid: &'a TensorGrid,
@@ -58,6 +61,13 @@ impl GridAdjoint for Transitions<'_> {
         let (grid, n) = (self.grid, self.grid.dim());
         // The densities each transition of the interval started from.
         let k = self.model.transitions(dt)?;
+        if k.saturating_mul(grid.len() * 8) > MAX_INTERVAL_BYTES {
+            return Err(FilterError::Unsuitable(format!(
+                "the gradient of the point-mass likelihood would keep {k} densities of {} cells over one interval, more than {} MiB",
+                grid.len(),
+                MAX_INTERVAL_BYTES >> 20
+            )));
+        }
         self.states.truncate(0);
         self.states.push(start.to_vec());
         for t in 1..k {

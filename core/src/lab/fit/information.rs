@@ -25,6 +25,16 @@ pub struct Information {
     pub notes: Vec<String>,
 }
 
+/// The scale of a parameter's finite differences: |θ|, or at θ = 0 the width of its bounds
+/// (10⁻² when they are open).
+pub(crate) fn scale_of(theta: f64, (lo, hi): (f64, f64)) -> f64 {
+    match theta.abs() {
+        0.0 if (hi - lo).is_finite() => hi - lo,
+        0.0 => 1e-2,
+        scale => scale,
+    }
+}
+
 /// −∇² ln L at `theta` (where ln L = `center`) by central differences with step
 /// `h_i = 10⁻³·|θ_i|` — relative to the parameter's own scale, so that the standard errors do
 /// not depend on its unit (a rate per second is 3·10⁷ times a rate per year; an absolute
@@ -46,11 +56,7 @@ pub fn observed_information(
     let scales: Vec<f64> = theta
         .iter()
         .zip(bounds)
-        .map(|(&t, &(lo, hi))| match t.abs() {
-            0.0 if (hi - lo).is_finite() => hi - lo,
-            0.0 => 1e-2,
-            scale => scale,
-        })
+        .map(|(&t, &b)| scale_of(t, b))
         .collect();
     let steps: Vec<f64> = theta
         .iter()

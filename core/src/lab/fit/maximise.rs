@@ -170,6 +170,8 @@ struct Scored<'a> {
     transforms: Vec<Transform>,
     count: Cell<usize>,
     best: Cell<f64>,
+    /// The best point scored so far (kept outside, for a restart when the search fails).
+    best_point: &'a RefCell<Vec<f64>>,
     /// `(u, −ln L, −∇_u ln L)` at the last point scored.
     last: RefCell<Option<ScoredPoint>>,
     progress: &'a dyn Fn(usize, f64),
@@ -181,6 +183,7 @@ impl Scored<'_> {
         self.count.set(self.count.get() + 1);
         if score.log_likelihood > self.best.get() {
             self.best.set(score.log_likelihood);
+            *self.best_point.borrow_mut() = u.to_vec();
         }
         (self.progress)(self.count.get(), self.best.get());
         let gradient: Vec<f64> = score
@@ -295,24 +298,32 @@ fn simplex(
 }
 
 /// L-BFGS from `u0` on the method's score (Moré–Thuente line search, memory 7), `first` the
-/// score at u0.
+/// score at u0; when it stops on an error (a score that fails at a trial point), the error
+/// and the best point scored.
 fn quasi_newton(
     likelihood: &dyn LogLikelihood,
     options: &FitOptions,
     (transforms, u0): (&[Transform], &[f64]),
     first: crate::filters::Score,
     progress: &dyn Fn(usize, f64),
-) -> Result<Optimum, ZakaiError> {
+) -> Result<Optimum, (ZakaiError, Vec<f64>)> {
+    let best_point = RefCell::new(u0.to_vec());
     let objective = Scored {
         likelihood,
         transforms: transforms.to_vec(),
         count: Cell::new(0),
         best: Cell::new(f64::NEG_INFINITY),
+        best_point: &best_point,
         last: RefCell::new(None),
         progress,
     };
     objective.keep(u0, first);
-    let stopped = |e: Error| ZakaiError::Other(format!("L-BFGS stopped: {e}"));
+    let stopped = |e: Error| {
+        (
+            ZakaiError::Other(format!("L-BFGS stopped: {e}")),
+            best_point.borrow().clone(),
+        )
+    };
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), 7)
         .with_tolerance_grad(libm::sqrt(options.tolerance))
         .and_then(|s| s.with_tolerance_cost(1e-14))
@@ -392,8 +403,14 @@ pub fn maximise(
     let (optimum, optimiser) = match first {
         Some(first) => match quasi_newton(likelihood, options, at, first, progress) {
             Ok(optimum) => (optimum, "L-BFGS"),
-            Err(e) => {
-                notes.push(format!("{e}; the fit fell back to Nelder–Mead"));
+            // Asked for, L-BFGS reports its failure; chosen, it hands over to the simplex from
+            // the best point it reached.
+            Err((e, _)) if options.optimiser == Optimiser::Lbfgs => return Err(e),
+            Err((e, best)) => {
+                notes.push(format!(
+                    "{e}; the fit went on with Nelder–Mead from the best point L-BFGS reached"
+                ));
+                let at = (transforms.as_slice(), best.as_slice());
                 (
                     simplex(likelihood, evaluate, options, at, progress)?,
                     "Nelder–Mead",

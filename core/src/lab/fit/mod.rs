@@ -279,8 +279,9 @@ impl Likelihood {
     /// ln L(θ) and its gradient from the method's [`crate::Filter::score`] — `None` for a
     /// method that gives none (it then needs Nelder–Mead), an error as for
     /// [`Likelihood::log_likelihood`] or when the method's score does not cover the model.
-    /// The model's derivatives in each θ_p come from the model built at θ ± h_p, h_p =
-    /// 10⁻⁵ max(|θ_p|, 1), cut at the bounds ([`crate::filters::Perturbation`]); the
+    /// The model's derivatives in each θ_p come from the model built at two points around
+    /// θ_p ([`crate::filters::Perturbation`]): `θ_p ± h` with h 10⁻⁵ of its scale (|θ_p|, or
+    /// the bounds' width at 0), shrunk to stay inside the bounds, one-sided on a bound; the
     /// measurement's only for the parameters its texts name
     /// ([`ScenarioConfig::measurement_texts`]).
     pub fn score(&self, theta: &[f64]) -> Option<Result<crate::filters::Score, ZakaiError>> {
@@ -315,9 +316,7 @@ impl Likelihood {
         let measurement_names: Vec<&str> =
             names_in_measurement.iter().map(String::as_str).collect();
         let perturbed = (0..theta.len()).map(|p| {
-            let (lo, hi) = self.bounds[p];
-            let h = 1e-5 * theta[p].abs().max(1.0);
-            let (below, above) = ((theta[p] - h).max(lo), (theta[p] + h).min(hi));
+            let (below, above) = difference_points(theta[p], self.bounds[p]);
             let model_at = |v: f64| -> Result<(crate::Model, crate::Prior), ZakaiError> {
                 let mut point = theta.to_vec();
                 point[p] = v;
@@ -374,6 +373,22 @@ impl Likelihood {
     /// optimisers and [`Evaluate`] work with).
     pub fn value(&self, theta: &[f64]) -> f64 {
         self.log_likelihood(theta).unwrap_or(f64::NEG_INFINITY)
+    }
+}
+
+/// The two points a score differences the model's pieces between, for a parameter at `theta`
+/// within `bounds`: `θ ± h` with `h = 10⁻⁵` of its scale ([`information::scale_of`]: |θ|, or
+/// the bounds' width at 0), shrunk to stay inside the bounds; on a bound (or within 10⁻³ h of
+/// it), the one-sided pair `θ, θ ± h` into the bounds.
+fn difference_points(theta: f64, (lo, hi): (f64, f64)) -> (f64, f64) {
+    let h = 1e-5 * information::scale_of(theta, (lo, hi));
+    let room = h.min(theta - lo).min(hi - theta);
+    if room > 1e-3 * h {
+        (theta - room, theta + room)
+    } else if hi - theta > theta - lo {
+        (theta, theta + h.min(hi - theta))
+    } else {
+        (theta - h.min(theta - lo), theta)
     }
 }
 
@@ -462,5 +477,45 @@ impl Evaluate for Likelihood {
         {
             points.iter().map(|p| self.value(p)).collect()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::difference_points;
+    use crate::testing::test;
+
+    /// The score's two points: 10⁻⁵ of θ's own scale (a variance of 10⁻⁴ is not moved by
+    /// 10⁻⁵ absolute, a tenth of it), shrunk near a bound, one-sided on it, and 10⁻⁵ of the
+    /// bounds' width at 0.
+    #[test]
+    fn the_score_differences_at_the_parameters_scale_inside_the_bounds() {
+        let open = (f64::NEG_INFINITY, f64::INFINITY);
+        let (a, b) = difference_points(1e-4, (0.0, f64::INFINITY));
+        assert!(((b - a) / 2e-9 - 1.0).abs() < 1e-9, "{a} {b}");
+        let (a, b) = difference_points(3.0, open);
+        assert!((a - (3.0 - 3e-5)).abs() < 1e-15 && (b - (3.0 + 3e-5)).abs() < 1e-15);
+        // Near the upper bound: shrunk to the room left, still central; closer than 10⁻³ h,
+        // one-sided away from it.
+        let theta = 0.999_999;
+        let (a, b) = difference_points(theta, (0.0, 1.0));
+        assert!(
+            b <= 1.0 && ((theta - a) - (b - theta)).abs() < 1e-12,
+            "{a} {b}"
+        );
+        assert!(((b - a) / 2e-6 - 1.0).abs() < 1e-6, "{a} {b}");
+        let theta = 0.999_999_995;
+        let (a, b) = difference_points(theta, (0.0, 1.0));
+        assert_eq!(b, theta);
+        assert!(((b - a) / 1e-5 - 1.0).abs() < 1e-6, "{a} {b}");
+        // On the lower bound: one-sided into the bounds.
+        let (a, b) = difference_points(0.0, (0.0, 4.0));
+        assert_eq!(a, 0.0);
+        assert!((b - 4e-5).abs() < 1e-18, "{b}");
+        let (a, b) = difference_points(0.0, open);
+        assert!(
+            (a + 1e-7).abs() < 1e-20 && (b - 1e-7).abs() < 1e-20,
+            "{a} {b}"
+        );
     }
 }
