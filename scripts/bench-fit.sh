@@ -52,7 +52,7 @@ for optimiser in lbfgs nelder-mead; do
   start=$(date +%s.%N)
   "$zakai" fit "$dir/sv-fit.json" --observations "$dir/sv.csv" --optimiser "$optimiser" > "$dir/sv-$optimiser.txt"
   end=$(date +%s.%N)
-  printf 'SV, point-mass, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(tail -n 1 "$dir/sv-$optimiser.txt")"
+  printf 'SV, point-mass, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(grep "^ln L" "$dir/sv-$optimiser.txt")"
   sed -n '3,5p' "$dir/sv-$optimiser.txt"
 done
 
@@ -74,6 +74,6 @@ for optimiser in lbfgs nelder-mead; do
   start=$(date +%s.%N)
   "$zakai" fit "$dir/sv-sde-fit.json" --observations "$dir/sv.csv" --optimiser "$optimiser" > "$dir/sv-sde-$optimiser.txt" 2>/dev/null
   end=$(date +%s.%N)
-  printf 'SV as an SDE, separation, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(tail -n 1 "$dir/sv-sde-$optimiser.txt")"
+  printf 'SV as an SDE, separation, %-11s %6.2f s   %s\n' "$optimiser" "$(echo "$end - $start" | bc)" "$(grep "^ln L" "$dir/sv-sde-$optimiser.txt")"
   sed -n '3,5p' "$dir/sv-sde-$optimiser.txt"
 done
