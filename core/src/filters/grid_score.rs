@@ -61,6 +61,32 @@ pub(crate) trait GridAdjoint {
     fn finish(&mut self, _gradient: &mut [f64]) {}
 }
 
+/// The measurement's density and ln P_0 at the two points of one parameter.
+pub(crate) type Side = ([GridMeasurement; 2], [Vec<f64>; 2]);
+
+/// For each of `perturbed`, the method's tables at its two points — `tables(model)` gives them
+/// with the measurement's density on `grid` — as `(below, above, width)`, and the [`Side`]s
+/// [`GridPieces`] reads.
+#[allow(clippy::type_complexity)]
+pub(crate) fn perturbed_tables<T>(
+    grid: &TensorGrid,
+    perturbed: &[Perturbation],
+    tables: impl Fn(&crate::model::Model) -> Result<(T, GridMeasurement), FilterError>,
+) -> Result<(Vec<(T, T, f64)>, Vec<Side>), FilterError> {
+    let mut pairs = Vec::with_capacity(perturbed.len());
+    let mut sides = Vec::with_capacity(perturbed.len());
+    for p in perturbed {
+        let (below, measurement_below) = tables(&p.below.0)?;
+        let (above, measurement_above) = tables(&p.above.0)?;
+        pairs.push((below, above, p.width));
+        sides.push((
+            [measurement_below, measurement_above],
+            [log_prior(grid, &p.below.1)?, log_prior(grid, &p.above.1)?],
+        ));
+    }
+    Ok((pairs, sides))
+}
+
 /// What the recursion reads of the model besides the transition: at the filter's θ, the
 /// measurement's density on the grid and the prior (normalised); at the two points around θ
 /// of each [`Perturbation`], the measurement's density (where it depends on the parameter)
@@ -72,7 +98,7 @@ pub(crate) struct GridPieces<'a> {
     pub measurement: GridMeasurement,
     pub prior: Vec<f64>,
     /// Per parameter: the measurement at θ ∓ h (when it depends on it) and ln P_0 there.
-    pub sides: Vec<([GridMeasurement; 2], [Vec<f64>; 2])>,
+    pub sides: Vec<Side>,
 }
 
 /// One observation's forward pass.

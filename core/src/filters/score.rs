@@ -37,3 +37,18 @@ pub struct Score {
     /// Its gradient.
     pub gradient: alloc::vec::Vec<f64>,
 }
+
+/// The [`super::Filter::score`] of a filter whose own `score_of(observations, perturbed)` gives
+/// it, expanded inside its `impl Filter`.
+macro_rules! score_of_filter {
+    () => {
+        fn score(
+            &self,
+            observations: &[crate::filters::Observation<'_>],
+            perturbed: &[crate::filters::Perturbation],
+        ) -> Option<Result<crate::filters::Score, crate::error::FilterError>> {
+            Some(self.score_of(observations, perturbed))
+        }
+    };
+}
+pub(crate) use score_of_filter;

@@ -30,7 +30,9 @@ use alloc::vec::Vec;
 use super::filter::{ContinuousDiscreteGrid, StepPlan, Tabulated};
 use super::FpeScheme;
 use crate::error::FilterError;
-use crate::filters::grid_score::{difference, grid_score, log_prior, GridAdjoint, GridPieces};
+use crate::filters::grid_score::{
+    difference, grid_score, perturbed_tables, GridAdjoint, GridPieces,
+};
 use crate::filters::{Observation, Perturbation, Score};
 use crate::grid::TensorGrid;
 
@@ -282,39 +284,32 @@ impl ContinuousDiscreteGrid {
                 t.diffusion.clone(),
             )
         };
-        let mut tables_by = Vec::with_capacity(perturbed.len());
-        let mut sides = Vec::with_capacity(perturbed.len());
-        for p in perturbed {
-            let [below, above] = [&p.below, &p.above].map(|(model, prior)| {
-                let table = Tabulated::of(name, grid, model, model)?;
-                // Mixed terms that vanish at θ but not around it (a correlation at 0).
-                if !table.cross.is_empty() {
-                    return Err(FilterError::Unsuitable(format!(
-                        "{name}: the gradient of its likelihood is not implemented for a diffusion with mixed terms (they appear when a parameter moves)"
-                    )));
-                }
-                Ok::<_, FilterError>((tables(&table), table.measurement, log_prior(grid, prior)?))
-            });
-            let (
-                (tables_below, measurement_below, prior_below),
-                (tables_above, measurement_above, prior_above),
-            ) = (below?, above?);
-            let by = |a: &[Vec<f64>], b: &[Vec<f64>]| -> Vec<Vec<f64>> {
-                a.iter()
-                    .zip(b)
-                    .map(|(a, b)| difference(a, b, p.width))
-                    .collect()
-            };
-            tables_by.push((
-                by(&tables_above.0, &tables_below.0),
-                difference(&tables_above.1, &tables_below.1, p.width),
-                by(&tables_above.2, &tables_below.2),
-            ));
-            sides.push((
-                [measurement_below, measurement_above],
-                [prior_below, prior_above],
-            ));
-        }
+        let (pairs, sides) = perturbed_tables(grid, perturbed, |model| {
+            let table = Tabulated::of(name, grid, model, model)?;
+            // Mixed terms that vanish at θ but not around it (a correlation at 0).
+            if !table.cross.is_empty() {
+                return Err(FilterError::Unsuitable(format!(
+                    "{name}: the gradient of its likelihood is not implemented for a diffusion with mixed terms (they appear when a parameter moves)"
+                )));
+            }
+            Ok((tables(&table), table.measurement))
+        })?;
+        let tables_by = pairs
+            .iter()
+            .map(|(below, above, width)| {
+                let by = |a: &[Vec<f64>], b: &[Vec<f64>]| -> Vec<Vec<f64>> {
+                    a.iter()
+                        .zip(b)
+                        .map(|(a, b)| difference(a, b, *width))
+                        .collect()
+                };
+                (
+                    by(&above.0, &below.0),
+                    difference(&above.1, &below.1, *width),
+                    by(&above.2, &below.2),
+                )
+            })
+            .collect();
         let pieces = GridPieces {
             name,
             grid,

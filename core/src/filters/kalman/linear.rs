@@ -317,11 +317,5 @@ impl Filter for Kalman {
         self.state.innovations.check(out);
     }
 
-    fn score(
-        &self,
-        observations: &[Observation<'_>],
-        perturbed: &[crate::filters::Perturbation],
-    ) -> Option<Result<crate::filters::Score, FilterError>> {
-        Some(self.score_of(observations, perturbed))
-    }
+    crate::filters::score::score_of_filter!();
 }

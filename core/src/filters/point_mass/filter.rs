@@ -308,13 +308,7 @@ impl Filter for PointMass {
         Ok(())
     }
 
-    fn score(
-        &self,
-        observations: &[Observation<'_>],
-        perturbed: &[crate::filters::Perturbation],
-    ) -> Option<Result<crate::filters::Score, FilterError>> {
-        Some(self.score_of(observations, perturbed))
-    }
+    crate::filters::score::score_of_filter!();
 
     fn smoother(
         &self,

@@ -17,7 +17,7 @@ use super::kernel::{Kernel, KernelDerivatives};
 use super::PointMass;
 use crate::error::FilterError;
 use crate::filters::grid_score::{
-    difference, grid_score, log_prior, named, GridAdjoint, GridPieces,
+    difference, grid_score, named, perturbed_tables, GridAdjoint, GridPieces,
 };
 use crate::filters::grid_state::GridMeasurement;
 use crate::filters::{Observation, Perturbation, Score};
@@ -131,36 +131,24 @@ impl PointMass {
         let derivatives = kernel.derivatives(grid, true).map_err(|e| named(name, e))?;
         // The model at the two points around θ of each parameter: its kernel's c and σ, its
         // measurement and ln P_0.
-        let mut centre_by = Vec::with_capacity(perturbed.len());
-        let mut spread_by = Vec::with_capacity(perturbed.len());
-        let mut sides = Vec::with_capacity(perturbed.len());
-        for p in perturbed {
-            let [below, above] = [&p.below, &p.above].map(|(model, prior)| {
-                let table = Kernel::new(name, model, grid, self.radius, false)?
-                    .derivatives(grid, false)
-                    .map_err(|e| named(name, e))?;
-                let measurement = GridMeasurement::new(grid, model, &check_model(name, model)?);
-                Ok::<_, FilterError>((table, measurement, log_prior(grid, prior)?))
-            });
-            let (
-                (kernel_below, measurement_below, prior_below),
-                (kernel_above, measurement_above, prior_above),
-            ) = (below?, above?);
-            centre_by.push(difference(
-                kernel_above.centres(),
-                kernel_below.centres(),
-                p.width,
-            ));
-            spread_by.push(difference(
-                kernel_above.spreads(),
-                kernel_below.spreads(),
-                p.width,
-            ));
-            sides.push((
-                [measurement_below, measurement_above],
-                [prior_below, prior_above],
-            ));
-        }
+        let (pairs, sides) = perturbed_tables(grid, perturbed, |model| {
+            let table = Kernel::new(name, model, grid, self.radius, false)?
+                .derivatives(grid, false)
+                .map_err(|e| named(name, e))?;
+            Ok((
+                table,
+                GridMeasurement::new(grid, model, &check_model(name, model)?),
+            ))
+        })?;
+        let (centre_by, spread_by) = pairs
+            .iter()
+            .map(|(below, above, width)| {
+                (
+                    difference(above.centres(), below.centres(), *width),
+                    difference(above.spreads(), below.spreads(), *width),
+                )
+            })
+            .unzip();
         let pieces = GridPieces {
             name,
             grid,
