@@ -52,3 +52,14 @@ macro_rules! score_of_filter {
     };
 }
 pub(crate) use score_of_filter;
+
+/// The error of a score asked of a driven model's filter (`driven`), which no method gives
+/// yet: its pieces change with the time and inputs at every step.
+pub(crate) fn refuse_driven(name: &str, driven: bool) -> Result<(), crate::error::FilterError> {
+    match driven {
+        false => Ok(()),
+        true => Err(crate::error::FilterError::Unsuitable(alloc::format!(
+            "{name}: the gradient of its likelihood is not implemented for a model that reads the time or inputs"
+        ))),
+    }
+}

@@ -265,11 +265,7 @@ impl ContinuousDiscreteGrid {
         perturbed: &[Perturbation],
     ) -> Result<Score, FilterError> {
         let name = self.name.as_str();
-        if self.driven.is_some() {
-            return Err(FilterError::Unsuitable(format!(
-                "{name}: the gradient of its likelihood is not implemented for a model that reads the time or inputs"
-            )));
-        }
+        crate::filters::score::refuse_driven(name, self.driven.is_some())?;
         if !self.table.cross.is_empty() {
             return Err(FilterError::Unsuitable(format!(
                 "{name}: the gradient of its likelihood is not implemented for a diffusion with mixed terms"

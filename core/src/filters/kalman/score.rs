@@ -144,11 +144,7 @@ impl Kalman {
     ) -> Result<Score, FilterError> {
         let name = &self.name;
         let model = &self.model;
-        if model.is_driven() {
-            return Err(FilterError::Unsuitable(format!(
-                "{name}: the score is not implemented for a model that reads the time or inputs"
-            )));
-        }
+        crate::filters::score::refuse_driven(name, model.is_driven())?;
         let (offset, noise_cov) = constant_noise(name, model)?;
         let mut at = Pieces {
             dynamics: (self.a.clone(), self.b.clone(), self.q.clone()),

@@ -118,11 +118,7 @@ impl PointMass {
         perturbed: &[Perturbation],
     ) -> Result<Score, FilterError> {
         let name = self.name.as_str();
-        if self.model.is_driven() {
-            return Err(FilterError::Unsuitable(format!(
-                "{name}: the gradient of the point-mass likelihood is not implemented for a model that reads the time or inputs"
-            )));
-        }
+        crate::filters::score::refuse_driven(name, self.model.is_driven())?;
         let grid = &self.grid;
         let mut kernel = self
             .kernel
