@@ -22,8 +22,9 @@
 //!
 //! and the prior adds `Σ_i λ_i P_0(i) ∂ln P_0(i)/∂θ` (λ of the first step). The transition's
 //! part is the method's ([`GridAdjoint`]); the rest is here. The forward pass keeps each
-//! step's starting, predicted and updated densities and its likelihood — four per
-//! observation —, and a method recomputes what it needs inside an interval from its start.
+//! step's predicted and updated densities and its likelihood — three per observation; an
+//! interval starts from the step before's updated density —, and a method recomputes what it
+//! needs inside an interval from its start.
 //! A derivative of ln g or ln P_0 that is not finite where the density has weight (a support
 //! that moves with θ) is refused, not skipped.
 //! The derivatives of ln g and ln P_0 in θ are central differences of those functions between
@@ -103,7 +104,6 @@ pub(crate) struct GridPieces<'a> {
 
 /// One observation's forward pass.
 struct Kept {
-    start: Vec<f64>,
     predicted: Vec<f64>,
     likelihood: Option<Vec<f64>>,
     predicted_mass: f64,
@@ -140,8 +140,8 @@ pub(crate) fn grid_score(
         observed_kinds.push(obs.check(name, ObservationKind::Measurement, pieces.m)?);
         pieces.measurement.likelihood.check(name, obs.value)?;
     }
-    // Kept per observation: its start, predicted density, likelihood and posterior.
-    let vectors = 4 * observations.len();
+    // Kept per observation: its predicted density, likelihood and posterior.
+    let vectors = 3 * observations.len();
     if vectors.saturating_mul(len * 8) > MAX_KEPT_BYTES {
         return Err(FilterError::Unsuitable(format!(
             "{name}: the gradient of its likelihood would keep {vectors} densities of {len} cells, more than {} MiB",
@@ -155,7 +155,7 @@ pub(crate) fn grid_score(
     let mut kept: Vec<Kept> = Vec::with_capacity(observations.len());
     let mut x = pieces.prior.clone();
     for (obs, &observed) in observations.iter().zip(&observed_kinds) {
-        let start = x.clone();
+        // `x` holds the step's start: the prior, then the step before's posterior.
         if obs.dt > 0.0 {
             transition.forward(obs.dt, &mut x)?;
         }
@@ -192,7 +192,6 @@ pub(crate) fn grid_score(
         log_likelihood += libm::log(mass) - libm::log(predicted_mass);
         let posterior: Vec<f64> = q.iter().map(|v| v / mass).collect();
         kept.push(Kept {
-            start,
             predicted: core::mem::replace(&mut x, posterior.clone()),
             likelihood,
             predicted_mass,
@@ -206,7 +205,13 @@ pub(crate) fn grid_score(
     let mut gradient = vec![0.0; perturbed.len()];
     let mut lambda = vec![0.0; len];
     let mut bar = vec![0.0; len];
-    for ((obs, step), &observed) in observations.iter().zip(&kept).zip(&observed_kinds).rev() {
+    for (k, ((obs, step), &observed)) in observations
+        .iter()
+        .zip(&kept)
+        .zip(&observed_kinds)
+        .enumerate()
+        .rev()
+    {
         let held = dv * crate::linalg::dot(&lambda, &step.posterior);
         match &step.likelihood {
             None => {
@@ -215,10 +220,16 @@ pub(crate) fn grid_score(
                 }
             }
             Some(g) => {
-                // q̄ in `bar` first, for the likelihood's derivatives.
+                // q̄ in `bar` first, for the likelihood's derivatives, with the weights q.
                 for (b, l) in bar.iter_mut().zip(&lambda) {
                     *b = (dv + l - held) / step.mass;
                 }
+                let weight: Vec<f64> = g
+                    .iter()
+                    .zip(&step.predicted)
+                    .map(|(g, x)| g * x.max(0.0))
+                    .collect();
+                let heaviest = crate::linalg::largest_in_lanes(&weight);
                 for ((([below, above], _), grad), perturbation) in pieces
                     .sides
                     .iter_mut()
@@ -232,10 +243,6 @@ pub(crate) fn grid_score(
                         scaled_likelihood(below, grid, &mut tmp, &mut node, obs.value)?;
                     let (g_above, l_above) =
                         scaled_likelihood(above, grid, &mut tmp, &mut node, obs.value)?;
-                    let weight: Vec<f64> = (0..len)
-                        .map(|i| g[i] * step.predicted[i].max(0.0))
-                        .collect();
-                    let heaviest = crate::linalg::largest_in_lanes(&weight);
                     for (i, &q) in weight.iter().enumerate() {
                         if q > 0.0 {
                             let d =
@@ -257,7 +264,11 @@ pub(crate) fn grid_score(
             }
         }
         if obs.dt > 0.0 {
-            transition.backward(obs.dt, &step.start, &mut bar, &mut gradient)?;
+            let start = match k {
+                0 => &pieces.prior,
+                _ => &kept[k - 1].posterior,
+            };
+            transition.backward(obs.dt, start, &mut bar, &mut gradient)?;
         }
         core::mem::swap(&mut lambda, &mut bar);
     }

@@ -176,7 +176,7 @@ pub struct Kalman {
     pub(super) a: DMatrix<f64>,
     pub(super) b: DVector<f64>,
     pub(super) q: DMatrix<f64>,
-    form: MeasurementForm,
+    pub(super) form: MeasurementForm,
     pub(super) state: GaussianState,
     /// The method's overrides of the prior's moments (for its score's perturbed priors).
     pub(super) init: super::GaussianInit,

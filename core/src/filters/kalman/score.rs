@@ -85,11 +85,16 @@ impl Pieces {
 /// The measurement noise's mean and covariance, or an error when it depends on the state (a
 /// moment match, whose derivative the score does not cover).
 fn constant_noise(name: &str, model: &Model) -> Result<(DVector<f64>, DMatrix<f64>), FilterError> {
-    MeasurementForm::new(name, model)?.constant_noise().ok_or_else(|| {
-        FilterError::Unsuitable(format!(
-            "{name}: the score covers additive measurement noise, and this model's variance depends on the state"
-        ))
-    })
+    MeasurementForm::new(name, model)?
+        .constant_noise()
+        .ok_or_else(|| varying_noise(name))
+}
+
+/// The refusal of a measurement variance that depends on the state.
+fn varying_noise(name: &str) -> FilterError {
+    FilterError::Unsuitable(format!(
+        "{name}: the score covers additive measurement noise, and this model's variance depends on the state"
+    ))
 }
 
 /// `(above − below) / width` of matrices and vectors alike.
@@ -145,7 +150,10 @@ impl Kalman {
         let name = &self.name;
         let model = &self.model;
         crate::filters::score::refuse_driven(name, model.is_driven())?;
-        let (offset, noise_cov) = constant_noise(name, model)?;
+        let (offset, noise_cov) = self
+            .form
+            .constant_noise()
+            .ok_or_else(|| varying_noise(name))?;
         let mut at = Pieces {
             dynamics: (self.a.clone(), self.b.clone(), self.q.clone()),
             cache: None,

@@ -292,12 +292,7 @@ impl Likelihood {
         if let Err(e) = check_point(&self.names, &self.bounds, theta) {
             return Some(Err(e));
         }
-        let at = |theta: &[f64]| -> Result<Experiment, ZakaiError> {
-            let values: Vec<(String, f64)> =
-                self.names.iter().cloned().zip(theta.to_vec()).collect();
-            Experiment::new(self.config.with_parameter_values(&values)?)
-        };
-        let experiment = match at(theta) {
+        let experiment = match self.experiment_at(theta) {
             Ok(e) => e,
             Err(e) => return Some(Err(e)),
         };
@@ -320,7 +315,7 @@ impl Likelihood {
             let model_at = |v: f64| -> Result<(crate::Model, crate::Prior), ZakaiError> {
                 let mut point = theta.to_vec();
                 point[p] = v;
-                let e = at(&point)?;
+                let e = self.experiment_at(&point)?;
                 Ok((e.model().clone(), e.prior().clone()))
             };
             Ok(crate::filters::Perturbation {
@@ -345,9 +340,14 @@ impl Likelihood {
 
     /// One run of the method on the data at θ (checked by [`Likelihood::log_likelihood`]).
     fn run_at(&self, theta: &[f64]) -> Result<crate::lab::experiment::RunResult, ZakaiError> {
+        self.experiment_at(theta)?
+            .filter_recorded(self.recording.clone(), self.seed)
+    }
+
+    /// The scenario at θ, its sizes as chosen at the start.
+    fn experiment_at(&self, theta: &[f64]) -> Result<Experiment, ZakaiError> {
         let values: Vec<(String, f64)> = self.names.iter().cloned().zip(theta.to_vec()).collect();
-        let experiment = Experiment::new(self.config.with_parameter_values(&values)?)?;
-        experiment.filter_recorded(self.recording.clone(), self.seed)
+        Experiment::new(self.config.with_parameter_values(&values)?)
     }
 
     /// What the method says about its own result at θ, from one run: the guarantees of its
