@@ -4,7 +4,7 @@
 # nodes (SciPy's DST), each timed per step; Zakai through `zakai run` (the driver included) and
 # from Python (the `zakai` package, per step() call and per run() call).
 # Then the same PF in JAX (jit + lax.scan, scripts/peers/jax_pf.py) and the EKF and UKF beside
-# dynamax's (scripts/peers/dynamax_kf.py), both in target/jax-venv, and
+# dynamax's and cd-dynamax's (scripts/peers/dynamax_kf.py), both in target/jax-venv, and
 # the particle filter beside `particles` (Chopin & Papaspiliopoulos 2020) on its growth model
 # and its own stochastic-volatility model (scripts/peers/growth_pf.py, sv_pf.py).
 # Installs NumPy, SciPy, FilterPy, particles and this checkout's wheel into target/peers-venv.
@@ -92,7 +92,8 @@ jax_venv=target/jax-venv
 if [ ! -x "$jax_venv/bin/python" ]; then
   python3 -m venv "$jax_venv"
 fi
-"$jax_venv/bin/python" -c 'import jax, dynamax, filterpy' 2>/dev/null || "$jax_venv/bin/pip" install -q jax dynamax filterpy
+"$jax_venv/bin/python" -c 'import jax, dynamax, cd_dynamax, filterpy' 2>/dev/null \
+  || "$jax_venv/bin/pip" install -q jax dynamax cd-dynamax filterpy
 "$jax_venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 jax_pf=$("$jax_venv/bin/python" scripts/peers/jax_pf.py)
 kf=$(cd scripts/peers && "../../$jax_venv/bin/python" dynamax_kf.py)
@@ -105,13 +106,13 @@ PY
 "$venv/bin/python" - "$kf" <<'PY'
 import json, sys
 print()
-print("EKF and UKF over 500 measurements: dynamax (jit, whole series), FilterPy (its Python loop) and Zakai's Filter.run")
+print("EKF and UKF over 500 measurements: dynamax and cd-dynamax (jit, whole series), FilterPy (its Python loop) and Zakai's Filter.run")
 print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':>8} {'|means gap|':>12}")
 for title, rows in json.loads(sys.argv[1]):
     for method, r in rows.items():
         work = f"{method.upper()} {title}"
-        for peer, gap in (("dynamax", "gap"), ("filterpy", "filterpy_gap")):
-            print(f"{work:<54} {peer:<10} {r[peer] * 1e6:>10.2f}µs {r['zakai'] * 1e6:>10.2f}µs {r[peer] / r['zakai']:>7.1f}× {r[gap]:>12.1e}")
+        for peer, (t, gap) in r["peers"].items():
+            print(f"{work[:54]:<54} {peer:<10} {t * 1e6:>10.2f}µs {r['zakai'] * 1e6:>10.2f}µs {t / r['zakai']:>7.1f}× {gap:>12.1e}")
 PY
 
 echo

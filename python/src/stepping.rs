@@ -210,14 +210,16 @@ impl Stepper {
         let (n, m) = (self.n, self.m);
         let mut means = Vec::with_capacity(count * n);
         let mut covs = Vec::new();
+        // One estimate's storage for the whole run (filled in place after each step).
+        let mut est = self.filter.estimate();
         for (k, dt) in dts.iter().enumerate() {
             self.step_values(&values[k * m..(k + 1) * m], *dt, None)
                 .map_err(|e| errors::raise("FilterError", format!("row {k}: {e}"), &[]))?;
-            let est = self.filter.estimate();
+            self.filter.estimate_into(&mut est);
             means.extend_from_slice(est.mean.as_slice());
-            if let Some(p) = est.covariance {
-                // nalgebra is column-major; rows of a symmetric P are its columns.
-                covs.extend(p.transpose().iter().copied());
+            if let Some(p) = &est.covariance {
+                // Row by row (nalgebra is column-major).
+                covs.extend((0..n).flat_map(|i| (0..n).map(move |j| p[(i, j)])));
             }
         }
         let covs = if covs.len() == count * n * n && count > 0 {

@@ -106,11 +106,47 @@ pub(crate) fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> boo
     true
 }
 
+/// [`lower_cholesky_into`] with the filters' errors: a non-finite `a` is
+/// [`FilterError::NonFinite`], one that is not positive definite
+/// [`FilterError::NotPositiveDefinite`] (`what` names it in both).
+pub(crate) fn lower_cholesky_checked(
+    a: &DMatrix<f64>,
+    l: &mut DMatrix<f64>,
+    what: &'static str,
+) -> Result<(), FilterError> {
+    if a.iter().any(|v| !v.is_finite()) {
+        return Err(FilterError::NonFinite { what });
+    }
+    match lower_cholesky_into(a, l) {
+        true => Ok(()),
+        false => Err(FilterError::NotPositiveDefinite { what }),
+    }
+}
+
 /// `x ← (L Lᵀ)⁻¹ x` with L from [`lower_cholesky_into`].
 pub(crate) fn lower_cholesky_solve(l: &DMatrix<f64>, x: &mut DVector<f64>) {
-    // A Cholesky factor has a positive diagonal: neither substitution can fail.
-    let _ = l.solve_lower_triangular_mut(x);
-    let _ = l.tr_solve_lower_triangular_mut(x);
+    lower_cholesky_solve_slice(l, x.as_mut_slice());
+}
+
+/// [`lower_cholesky_solve`] on a slice (a column of a matrix): forward then back
+/// substitution, reading only the lower triangle of `l` (its diagonal is positive: neither
+/// can fail).
+pub(crate) fn lower_cholesky_solve_slice(l: &DMatrix<f64>, x: &mut [f64]) {
+    let n = x.len();
+    for i in 0..n {
+        let mut v = x[i];
+        for k in 0..i {
+            v -= l[(i, k)] * x[k];
+        }
+        x[i] = v / l[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut v = x[i];
+        for k in i + 1..n {
+            v -= l[(k, i)] * x[k];
+        }
+        x[i] = v / l[(i, i)];
+    }
 }
 
 /// Fails when any entry is NaN or infinite.

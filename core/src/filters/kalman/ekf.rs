@@ -73,7 +73,8 @@ impl Ekf {
             model: model.clone(),
             q: model.process_noise(),
             substeps: crate::filters::Substeps::new(params.substeps, ctx.dt_obs),
-            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m)
+                .with_affine_map(model, ctx.probes),
         })
     }
 }

@@ -44,6 +44,27 @@ pub(crate) fn affine_parts(
     Ok((j0, DVector::from_vec(g.value(&origin))))
 }
 
+/// `(A, b)` when `f` is affine over `probes` — its Jacobian the same at every probe as at 0
+/// and its values `A p + b` there —, else `None`: what lets a filter treat a model that is
+/// linear, whatever its text, as the linear model it is (the particle filter's exact
+/// transition, the EKF's and UKF's moments of an affine map).
+pub(crate) fn affine_over(
+    f: &dyn VectorFunction,
+    probes: &[Vec<f64>],
+) -> Option<(DMatrix<f64>, DVector<f64>)> {
+    if probes.is_empty() {
+        return None;
+    }
+    let (a, b) = affine_parts(f, "", "", probes).ok()?;
+    // The values too, not only the slopes: f(p) = A p + b at every probe.
+    let affine = probes.iter().all(|p| {
+        let value = DVector::from_vec(f.value(p));
+        let affine = &a * DVector::from_column_slice(p) + &b;
+        (value - &affine).amax() <= 1e-9 * (1.0 + affine.amax())
+    });
+    affine.then_some((a, b))
+}
+
 /// k transitions of the map `x_k = A x_(k−1) + b + w_k`, `w_k ~ N(0, Q)`, as one:
 /// `(Φ, Γ b, Q_d) = (A^k, Σ_(i<k) A^i b, Σ_(i<k) A^i Q A^iᵀ)` (the discrete Kalman filter's
 /// prediction, k times).

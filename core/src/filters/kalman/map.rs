@@ -113,7 +113,8 @@ impl MapKalman {
         substeps: usize,
     ) -> Result<Self, crate::error::FilterError> {
         let (model, prior) = (ctx.model, ctx.prior);
-        let state = GaussianState::initial(prior.mean(), prior.covariance(), init, model.m);
+        let state = GaussianState::initial(prior.mean(), prior.covariance(), init, model.m)
+            .with_affine_map(model, ctx.probes);
         Ok(MapKalman {
             form: MeasurementForm::new(&name, model)?,
             name,

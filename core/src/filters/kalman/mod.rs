@@ -36,7 +36,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FilterError;
-use crate::linalg::{check_finite_matrix, check_finite_vector, symmetrize};
+use crate::linalg::{check_finite_matrix, check_finite_vector, lower_cholesky_solve, symmetrize};
 
 /// An optional initial Gaussian that overrides the prior's moments (002 starts its EKF at
 /// x̂₀ = 1 with P₀ ∈ {1, 5, 10} whatever σ₀ is).
@@ -134,6 +134,29 @@ impl InnovationWindow {
         };
     }
 
+    /// What [`InnovationWindow::rollback`] needs to undo the next push (a step pushes at
+    /// most once): the running totals and the slot it will overwrite — a few numbers, not
+    /// the window.
+    pub(crate) fn mark(&self) -> WindowMark {
+        let slot = self.count % NIS_WINDOW;
+        WindowMark {
+            count: self.count,
+            sum: self.sum,
+            observed: self.observed,
+            slot: (self.values[slot], self.components[slot]),
+        }
+    }
+
+    /// Back to the window of `mark`, undoing the push made since, if any.
+    pub(crate) fn rollback(&mut self, mark: &WindowMark) {
+        debug_assert!(self.count <= mark.count + 1, "one push per step");
+        let slot = mark.count % NIS_WINDOW;
+        (self.values[slot], self.components[slot]) = mark.slot;
+        self.count = mark.count;
+        self.sum = mark.sum;
+        self.observed = mark.observed;
+    }
+
     /// The mean NIS per observed component over the last window, once it is full, with the
     /// number of components observed over it.
     pub(crate) fn mean(&self) -> Option<(f64, usize)> {
@@ -167,6 +190,15 @@ impl InnovationWindow {
     }
 }
 
+/// An [`InnovationWindow`] before a push ([`InnovationWindow::mark`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct WindowMark {
+    count: usize,
+    sum: f64,
+    observed: usize,
+    slot: (f64, usize),
+}
+
 /// The Gaussian state `N(m, P)` of the Kalman family, with the storage its steps work in
 /// (made once: a step allocates nothing).
 #[derive(Clone, Debug)]
@@ -186,7 +218,10 @@ pub(crate) struct GaussianState {
     /// from the Gaussian predictive density of the update, 0 after a step without one.
     pub log_likelihood: f64,
     /// The state a step started from ([`GaussianState::save`]).
-    saved: (DVector<f64>, DMatrix<f64>, InnovationWindow, f64),
+    saved: (DVector<f64>, DMatrix<f64>, WindowMark, f64),
+    /// The model's map when it is affine ([`GaussianState::with_affine_map`]): its transitions'
+    /// moments taken exactly instead of by the filter's own approximation.
+    affine: Option<propagate::AffineMap>,
 }
 
 /// The residual `r = z − ẑ` (m), the cross covariance `P_xz` (n × m) and the innovation
@@ -263,10 +298,24 @@ impl GaussianState {
             saved: (
                 DVector::zeros(n),
                 DMatrix::zeros(n, n),
-                InnovationWindow::new(),
+                WindowMark::default(),
                 0.0,
             ),
+            affine: None,
         }
+    }
+
+    /// Predicts the transitions of `model`'s map by their exact moments when it is affine over
+    /// `probes` ([`propagate::AffineMap`]), whatever the filter's own moments of a map: the
+    /// same moments (the EKF's linearisation and the UKF's unscented transform are exact for
+    /// an affine map) without evaluating the map.
+    pub(crate) fn with_affine_map(
+        mut self,
+        model: &crate::model::Model,
+        probes: &[Vec<f64>],
+    ) -> Self {
+        self.affine = propagate::AffineMap::of(model, probes);
+        self
     }
 
     /// Keeps the mean, covariance, innovation window and log-likelihood (no allocation), so
@@ -275,7 +324,7 @@ impl GaussianState {
     pub(crate) fn save(&mut self) {
         self.saved.0.copy_from(&self.mean);
         self.saved.1.copy_from(&self.cov);
-        self.saved.2.clone_from(&self.innovations);
+        self.saved.2 = self.innovations.mark();
         self.saved.3 = self.log_likelihood;
         self.log_likelihood = 0.0;
     }
@@ -284,7 +333,7 @@ impl GaussianState {
     pub(crate) fn restore(&mut self) {
         self.mean.copy_from(&self.saved.0);
         self.cov.copy_from(&self.saved.1);
-        self.innovations.clone_from(&self.saved.2);
+        self.innovations.rollback(&self.saved.2);
         self.log_likelihood = self.saved.3;
     }
 
@@ -371,13 +420,14 @@ impl GaussianState {
             residual, pxz, pzz, ..
         } = &self.parts;
         let work = &mut self.work;
-        let chol = crate::linalg::cholesky_in(&mut work.factor, pzz, "innovation covariance")?;
+        crate::linalg::lower_cholesky_checked(pzz, &mut work.factor, "innovation covariance")?;
         work.whitened.copy_from(residual);
-        chol.solve_mut(&mut work.whitened);
-        // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ.
+        lower_cholesky_solve(&work.factor, &mut work.whitened);
+        // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ, column by column.
         work.gain_t.tr_copy_from(pxz);
-        chol.solve_mut(&mut work.gain_t);
-        work.factor = chol.unpack_dirty();
+        for mut column in work.gain_t.column_iter_mut() {
+            crate::linalg::lower_cholesky_solve_slice(&work.factor, column.as_mut_slice());
+        }
         Ok(residual.dot(&work.whitened))
     }
 
@@ -461,6 +511,21 @@ impl GaussianState {
         moments: &mut propagate::MapMoments<'_>,
     ) -> Result<(), FilterError> {
         let k = step.dynamics.transitions(dt)?;
+        // The filter's own map (not a driven model's) by its exact moments when it is affine.
+        let mut exact;
+        let moments: &mut propagate::MapMoments<'_> = match (&mut self.affine, &step.unfrozen) {
+            (Some(map), None) => {
+                exact = |_: &crate::model::Model,
+                         at: (&DVector<f64>, &DMatrix<f64>),
+                         out: (&mut DVector<f64>, &mut DMatrix<f64>),
+                         jacobian: &mut [f64]| {
+                    map.moments(at, out, jacobian);
+                    Ok(())
+                };
+                &mut exact
+            }
+            _ => moments,
+        };
         for j in 0..k {
             let earlier = match step.unfrozen {
                 Some((model, inputs)) if j + 1 < k => Some(model.transition_at(inputs, j, k)?),
@@ -479,7 +544,7 @@ impl GaussianState {
                 &mut self.moments,
                 moments,
             )?;
-            self.check()?;
+            check_moments(&self.mean, &self.cov)?;
         }
         Ok(())
     }
@@ -588,9 +653,14 @@ impl GaussianState {
 
     /// Fails when m or P is non-finite.
     pub(crate) fn check(&self) -> Result<(), FilterError> {
-        check_finite_vector(&self.mean, "mean")?;
-        check_finite_matrix(&self.cov, "covariance")
+        check_moments(&self.mean, &self.cov)
     }
+}
+
+/// Fails when m or P is non-finite.
+fn check_moments(mean: &DVector<f64>, cov: &DMatrix<f64>) -> Result<(), FilterError> {
+    check_finite_vector(mean, "mean")?;
+    check_finite_matrix(cov, "covariance")
 }
 
 /// Validates a [`GaussianInit`] against the state dimension, appending problems.
@@ -694,6 +764,25 @@ impl DrivenStep {
 mod tests {
     use super::{InnovationWindow, NIS_WINDOW};
     use crate::testing::test;
+
+    /// A push undone by a rollback leaves the window as it was — its mean, and the means
+    /// after the same later pushes — at every position of the ring, the wrap included.
+    #[test]
+    fn a_rolled_back_push_leaves_the_window_as_it_was() {
+        let mut window = InnovationWindow::new();
+        for k in 0..3 * NIS_WINDOW {
+            let before = window.clone();
+            let mark = window.mark();
+            window.push(1e3 + k as f64, 1 + k % 2);
+            window.rollback(&mark);
+            assert_eq!(window.mean(), before.mean(), "push {k}");
+            let mut twin = before;
+            let nis = libm::exp(libm::cos(k as f64));
+            window.push(nis, 2);
+            twin.push(nis, 2);
+            assert_eq!(window.mean(), twin.mean(), "push {k}");
+        }
+    }
 
     /// The running sum against the window's values summed afresh, over 10 windows with an
     /// infinite value among them (which leaves the window after 50 pushes).

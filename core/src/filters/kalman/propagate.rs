@@ -259,3 +259,94 @@ pub(crate) fn linearized_map(
     }
     Ok(())
 }
+
+/// A discrete-time map that is affine, `F(x) = A x + b` over the domain
+/// ([`super::linear::affine_over`]): a transition's moments are then exact, `F̄ = A m + b`,
+/// `Cov F = A P Aᵀ` with linearisation `A` — what the EKF's Jacobian and the UKF's sigma
+/// points both give (the unscented transform is exact for an affine map), here without
+/// evaluating F and its Jacobian, or F at 2n + 1 points, at every transition.
+#[derive(Clone, Debug)]
+pub(crate) struct AffineMap {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+    /// Aᵀ (column-major: A row by row, the linearisation a tracked [`Sensitivity`] reads).
+    at: DMatrix<f64>,
+    /// P Aᵀ.
+    pat: DMatrix<f64>,
+}
+
+impl AffineMap {
+    /// The map of an autonomous discrete-time `model` whose F is affine over `probes`, else
+    /// `None` (a driven model's map changes with its inputs).
+    pub(crate) fn of(model: &Model, probes: &[Vec<f64>]) -> Option<Self> {
+        if !model.is_discrete_time() || model.is_driven() {
+            return None;
+        }
+        let (a, b) = super::linear::affine_over(&*model.drift, probes)?;
+        let n = a.nrows();
+        Some(AffineMap {
+            at: a.transpose(),
+            pat: DMatrix::zeros(n, n),
+            a,
+            b,
+        })
+    }
+
+    /// The transition's moments `(A m + b, A P Aᵀ, A)` into `(mean, cov, jacobian)`: a
+    /// [`MapMoments`] for the filter's own map.
+    pub(crate) fn moments(
+        &mut self,
+        (m, p): (&DVector<f64>, &DMatrix<f64>),
+        (mean, cov): (&mut DVector<f64>, &mut DMatrix<f64>),
+        jacobian: &mut [f64],
+    ) {
+        mean.copy_from(&self.b);
+        mean.gemv(1.0, &self.a, m, 1.0);
+        self.pat.gemm(1.0, p, &self.at, 0.0);
+        cov.gemm(1.0, &self.a, &self.pat, 0.0);
+        jacobian.copy_from_slice(self.at.as_slice());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::AffineMap;
+    use crate::model::{Model, Noise};
+    use crate::testing::test;
+    use nalgebra::{DMatrix, DVector};
+
+    fn map(drift: &[&str]) -> Model {
+        let observation: alloc::vec::Vec<&str> = drift.iter().map(|_| "x1").collect();
+        Model::from_text(drift, &observation[..1], Noise::discrete(1.0))
+            .unwrap()
+            .discrete_time(1.0)
+            .unwrap()
+    }
+
+    /// An affine map is found with its A and b, and its moments are `A m + b` and `A P Aᵀ`
+    /// computed here by hand; a map that bends anywhere on the box, a continuous-time drift
+    /// and a map without probes are not taken for affine.
+    #[test]
+    fn an_affine_map_gives_its_exact_moments_and_only_it() {
+        let probes = crate::filters::method::probe_points(&[(-3.0, 3.0), (-2.0, 5.0)]);
+        let mut affine =
+            AffineMap::of(&map(&["x1 + 0.1*x2 - 1", "0.9*x2 + 2"]), &probes).expect("affine");
+        let (m, p) = (
+            DVector::from_vec(alloc::vec![0.5, -1.5]),
+            DMatrix::from_row_slice(2, 2, &[2.0, 0.3, 0.3, 0.7]),
+        );
+        let (mut mean, mut cov, mut jacobian) = (DVector::zeros(2), DMatrix::zeros(2, 2), [0.0; 4]);
+        affine.moments((&m, &p), (&mut mean, &mut cov), &mut jacobian);
+        let a = DMatrix::from_row_slice(2, 2, &[1.0, 0.1, 0.0, 0.9]);
+        let expected_mean = &a * &m + DVector::from_vec(alloc::vec![-1.0, 2.0]);
+        let expected_cov = &a * &p * a.transpose();
+        assert!((mean - expected_mean).amax() < 1e-14);
+        assert!((cov - expected_cov).amax() < 1e-14);
+        assert_eq!(jacobian, [1.0, 0.1, 0.0, 0.9]);
+        // Bends only far from 0 (x1³/1000 is 0.027 at the box's edge): still not affine.
+        assert!(AffineMap::of(&map(&["x1 + x1^3/1000", "x2"]), &probes).is_none());
+        assert!(AffineMap::of(&map(&["x1", "x2"]), &[]).is_none());
+        let sde = Model::from_text(&["-x1", "x2"], &["x1"], Noise::discrete(1.0)).unwrap();
+        assert!(AffineMap::of(&sde, &probes).is_none());
+    }
+}

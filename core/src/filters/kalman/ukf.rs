@@ -11,7 +11,6 @@ use super::measurement::{Measurement, MeasurementForm};
 use super::{GaussianState, UkfParams};
 use crate::error::FilterError;
 use crate::filters::{Filter, Observation};
-use crate::linalg::cholesky_in;
 use crate::model::{BatchScratch, Model};
 
 /// Sigma-point weights.
@@ -27,14 +26,6 @@ impl Weights {
     fn mean(&self, i: usize) -> f64 {
         if i == 0 {
             self.mean0
-        } else {
-            self.rest
-        }
-    }
-
-    fn cov(&self, i: usize) -> f64 {
-        if i == 0 {
-            self.cov0
         } else {
             self.rest
         }
@@ -87,8 +78,8 @@ impl SigmaPoints {
         p: &DMatrix<f64>,
     ) -> Result<(), FilterError> {
         let (n, c) = (m.len(), self.count);
-        let chol = cholesky_in(&mut self.factor, p, "covariance")?;
-        let l = chol.l_dirty();
+        crate::linalg::lower_cholesky_checked(p, &mut self.factor, "covariance")?;
+        let l = &self.factor;
         for j in 0..n {
             let row = &mut self.points[j * c..(j + 1) * c];
             row[0] = m[j];
@@ -99,7 +90,6 @@ impl SigmaPoints {
                 row[1 + n + i] = m[j] - v;
             }
         }
-        self.factor = chol.unpack_dirty();
         Ok(())
     }
 
@@ -113,7 +103,8 @@ impl SigmaPoints {
         }
     }
 
-    /// `out[(r, s)] = Σᵢ Wᵢᶜ (a_r,i − ma_r)(b_s,i − mb_s)`.
+    /// `out[(r, s)] = Σᵢ Wᵢᶜ (a_r,i − ma_r)(b_s,i − mb_s)`; one triangle and its mirror
+    /// when `a` and `b` are the same points about the same mean.
     fn cross_cov(
         &self,
         w: &Weights,
@@ -122,12 +113,22 @@ impl SigmaPoints {
         out: &mut DMatrix<f64>,
     ) {
         let c = self.count;
-        out.fill(0.0);
-        for i in 0..c {
-            for (r, mr) in ma.iter().enumerate() {
-                let da = a[r * c + i] - mr;
-                for (s, ms) in mb.iter().enumerate() {
-                    out[(r, s)] += da * (b[s * c + i] - ms) * w.cov(i);
+        let symmetric = core::ptr::eq(a, b) && core::ptr::eq(ma, mb);
+        for (r, mr) in ma.iter().enumerate() {
+            let ar = &a[r * c..(r + 1) * c];
+            let first = if symmetric { r } else { 0 };
+            for (s, ms) in mb.iter().enumerate().skip(first) {
+                let bs = &b[s * c..(s + 1) * c];
+                // The centre point's weight differs; the 2n others share one.
+                let rest: f64 = ar[1..]
+                    .iter()
+                    .zip(&bs[1..])
+                    .map(|(x, y)| (x - mr) * (y - ms))
+                    .sum();
+                let value = w.cov0 * (ar[0] - mr) * (bs[0] - ms) + w.rest * rest;
+                out[(r, s)] = value;
+                if symmetric {
+                    out[(s, r)] = value;
                 }
             }
         }
@@ -233,7 +234,8 @@ impl Ukf {
             q: model.process_noise(),
             substeps: crate::filters::Substeps::new(params.substeps, ctx.dt_obs),
             weights,
-            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m),
+            state: GaussianState::initial(prior.mean(), prior.covariance(), &params.init, model.m)
+                .with_affine_map(model, ctx.probes),
             sigma: SigmaPoints::new(model.n, model.m),
         })
     }

@@ -50,25 +50,13 @@ impl LinearTransition {
     /// values are affine there — or `None` (the particle filter then takes Euler–Maruyama
     /// steps).
     pub(crate) fn of(model: &Model, probes: &[Vec<f64>]) -> Option<Self> {
-        if model.is_discrete_time() || model.is_driven() || probes.is_empty() {
+        if model.is_discrete_time() || model.is_driven() {
             return None;
         }
         let Diffusion::Constant(g) = &model.diffusion else {
             return None;
         };
-        let (a, b) =
-            crate::filters::kalman::linear::affine_parts(&*model.drift, "", "drift", probes)
-                .ok()?;
-        // The values too, not only the slopes: f(p) = A p + b at every probe.
-        for p in probes {
-            let value = DVector::from_vec(model.drift.value(p));
-            let affine = &a * DVector::from_column_slice(p) + &b;
-            let scale = 1.0 + affine.amax();
-            let within = (value - affine).amax() <= 1e-9 * scale;
-            if !within {
-                return None;
-            }
-        }
+        let (a, b) = crate::filters::kalman::linear::affine_over(&*model.drift, probes)?;
         let q = g * g.transpose();
         Some(LinearTransition {
             a,
