@@ -112,18 +112,27 @@ pub(crate) fn linearized_rates(
     let n = model.n;
     model.drift.eval(m.as_slice(), dm.as_mut_slice());
     model.drift.jacobian(m.as_slice(), jacobian);
-    for i in 0..n {
-        for j in 0..n {
-            let mut fp = 0.0;
-            let mut pf = 0.0;
-            for k in 0..n {
-                fp += jacobian[i * n + k] * p[(k, j)];
-                pf += p[(i, k)] * jacobian[j * n + k];
-            }
-            dp[(i, j)] = fp + pf;
+    // (F P)_ij = Σ_k F_ik P_kj, and P Fᵀ = (F P)ᵀ (P symmetric): F P once, then its
+    // transpose added (P column-major: column j is P's row j).
+    let (p, out) = (p.as_slice(), dp.as_mut_slice());
+    for j in 0..n {
+        let column = &p[j * n..(j + 1) * n];
+        for i in 0..n {
+            let row = &jacobian[i * n..(i + 1) * n];
+            out[j * n + i] = row.iter().zip(column).map(|(f, p)| f * p).sum();
         }
     }
-    q.add_at(m.as_slice(), 1.0, dp);
+    for j in 0..n {
+        for i in 0..=j {
+            let s = out[j * n + i] + out[i * n + j];
+            out[j * n + i] = s;
+            out[i * n + j] = s;
+        }
+    }
+    match q.constant() {
+        Some(q) => out.iter_mut().zip(q.as_slice()).for_each(|(o, q)| *o += q),
+        None => q.add_at(m.as_slice(), 1.0, dp),
+    }
 }
 
 /// Integrates `(dm/dt, dP/dt) = rates(m, P)` over `dt` in `substeps` RK4 steps, in place;
@@ -162,22 +171,38 @@ pub(crate) fn rk4_moments(
             }
             // Stages 2 and 3 at half a step along the previous rates, stage 4 at a whole one.
             let along = if stage == 3 { h } else { 0.5 * h };
-            mt.copy_from(m);
-            mt.axpy(along, &km[stage - 1], 1.0);
-            pt.copy_from(p);
-            pt.zip_apply(&kp[stage - 1], |a, b| *a += b * along);
+            along_rates(
+                mt.as_mut_slice(),
+                m.as_slice(),
+                km[stage - 1].as_slice(),
+                along,
+            );
+            along_rates(
+                pt.as_mut_slice(),
+                p.as_slice(),
+                kp[stage - 1].as_slice(),
+                along,
+            );
             rates((mt, pt), (&mut km[stage], &mut kp[stage]), jacobian)?;
             if let Some(s) = sensitivity.as_mut() {
                 s.stage(stage, along, jacobian);
             }
         }
-        for (stage, weight) in [1.0, 2.0, 2.0, 1.0].into_iter().enumerate() {
-            m.axpy(weight * h / 6.0, &km[stage], 1.0);
-            p.zip_apply(&kp[stage], |a, b| *a += b * (weight * h / 6.0));
-            if let Some(s) = sensitivity.as_mut() {
-                let Sensitivity { phi, kphi, .. } = s;
-                phi.zip_apply(&kphi[stage], |a, b| *a += b * (weight * h / 6.0));
+        let sixth = h / 6.0;
+        // x += h/6 (k₁ + 2k₂ + 2k₃ + k₄).
+        let combine = |x: &mut [f64], k: [&[f64]; 4]| {
+            for (i, x) in x.iter_mut().enumerate() {
+                *x += sixth * (k[0][i] + 2.0 * (k[1][i] + k[2][i]) + k[3][i]);
             }
+        };
+        combine(m.as_mut_slice(), core::array::from_fn(|s| km[s].as_slice()));
+        combine(p.as_mut_slice(), core::array::from_fn(|s| kp[s].as_slice()));
+        if let Some(s) = sensitivity.as_mut() {
+            let Sensitivity { phi, kphi, .. } = s;
+            combine(
+                phi.as_mut_slice(),
+                core::array::from_fn(|s| kphi[s].as_slice()),
+            );
         }
         crate::linalg::symmetrize(p);
     }
@@ -186,6 +211,14 @@ pub(crate) fn rk4_moments(
         s.predicted.1.copy_from(p);
     }
     Ok(())
+}
+
+/// `out = x + along · k` (a stage's point from the state and the previous stage's rates).
+#[inline]
+fn along_rates(out: &mut [f64], x: &[f64], k: &[f64], along: f64) {
+    for ((o, x), k) in out.iter_mut().zip(x).zip(k) {
+        *o = x + along * k;
+    }
 }
 
 /// A transition's moments through the map, `(F̄, Cov F, A)` into `(mean, cov, a)` with `A` the
