@@ -215,6 +215,9 @@ fn eval_table_batch<'s>(
     )
 }
 
+/// Fewer points than this are evaluated one by one by [`eval_programs_batch`].
+const FEW_POINTS: usize = 8;
+
 /// [`VectorFunction::eval_batch`] of a table of programs (`None`: identically zero) over
 /// points of `n` inputs.
 pub(crate) fn eval_programs_batch<'s>(
@@ -225,6 +228,20 @@ pub(crate) fn eval_programs_batch<'s>(
     scratch: &mut BatchScratch,
 ) {
     let k = points.len() / n;
+    if k < FEW_POINTS && n <= MAX_INPUTS {
+        // A handful of points (a UKF's sigma points): point by point on scalars, the same
+        // operations and bits ([`Program::eval`]) without a pass's setup per instruction.
+        let mut x = [0.0; MAX_INPUTS];
+        for p in 0..k {
+            for (j, x) in x.iter_mut().take(n).enumerate() {
+                *x = points[j * k + p];
+            }
+            for (r, s) in table.clone().enumerate() {
+                out[r * k + p] = s.map_or(0.0, |s| s.eval(&x[..n]));
+            }
+        }
+        return;
+    }
     let registers = table
         .clone()
         .flatten()
@@ -372,6 +389,35 @@ mod tests {
             let want = driven.components[0].eval(&[*x, t, u]);
             assert_eq!(fixed.0[0].eval(&[*x]).to_bits(), want.to_bits(), "at {x}");
             assert_eq!(b.to_bits(), want.to_bits(), "batch at {x}");
+        }
+    }
+
+    /// A batch of every size from 1 to 40 points — a few evaluated one by one, more in
+    /// blocks — gives each point the bits of its own evaluation, for a 2-D range–bearing
+    /// measurement function.
+    #[test]
+    fn batches_of_any_size_equal_points_to_the_last_bit() {
+        let f = ExpressionFunction::parse(
+            "h",
+            &strings(&["sqrt(x1^2 + x2^2)", "atan(x2/x1) + exp(-x1)"]),
+            2,
+            2,
+        )
+        .unwrap();
+        let mut scratch = BatchScratch::default();
+        for k in 1..=40 {
+            let xs: Vec<[f64; 2]> = (0..k)
+                .map(|i| [1.0 + 0.37 * i as f64, -2.0 + 0.11 * (i * i) as f64])
+                .collect();
+            let points: Vec<f64> = (0..2).flat_map(|j| xs.iter().map(move |x| x[j])).collect();
+            let mut out = vec![0.0; 2 * k];
+            f.eval_batch(&points, &mut out, &mut scratch);
+            for (p, x) in xs.iter().enumerate() {
+                let want = f.value(x);
+                for r in 0..2 {
+                    assert_eq!(out[r * k + p].to_bits(), want[r].to_bits(), "{k} points");
+                }
+            }
         }
     }
 
