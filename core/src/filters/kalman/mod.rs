@@ -503,7 +503,9 @@ impl GaussianState {
 
     /// The prediction through a discrete-time map over `dt`: its k transitions
     /// ([`crate::Model::transitions`]), each by [`propagate::transition`] with the map's
-    /// `moments`; the earlier transitions of a driven model at the times they reach.
+    /// `moments` — or with the exact moments of the filter's own map when it is affine
+    /// ([`GaussianState::with_affine_map`]); the earlier transitions of a driven model at the
+    /// times they reach.
     pub(crate) fn predict_transitions(
         &mut self,
         step: &StepModels<'_>,

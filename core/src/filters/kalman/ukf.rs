@@ -156,7 +156,9 @@ fn linearise(p: &DMatrix<f64>, c: &DMatrix<f64>, a: &mut [f64]) -> Result<(), Fi
 ///
 /// A discrete-time map ([`crate::Dynamics::Discrete`]) is predicted by the unscented
 /// transform itself, one transition at a time: `m ← Σ Wᵐ F(χᵢ)`,
-/// `P ← Σ Wᶜ (F(χᵢ) − m)(F(χᵢ) − m)ᵀ + Q` (Wan & van der Merwe 2000).
+/// `P ← Σ Wᶜ (F(χᵢ) − m)(F(χᵢ) − m)ᵀ + Q` (Wan & van der Merwe 2000) — or, for a map that
+/// is affine over the domain, by `A m + b` and `A P Aᵀ + Q`, which the transform gives exactly
+/// for such a map, without evaluating it at the sigma points.
 ///
 /// Prediction integrates the sigma-point moment equations of the continuous–discrete UKF
 /// (Särkkä 2007) by RK4: with sigma points χᵢ of (m, P),
