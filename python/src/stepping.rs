@@ -209,17 +209,22 @@ impl Stepper {
         }
         let (n, m) = (self.n, self.m);
         let mut means = Vec::with_capacity(count * n);
-        let mut covs = Vec::new();
         // One estimate's storage for the whole run (filled in place after each step).
         let mut est = self.filter.estimate();
+        let mut covs = Vec::with_capacity(if est.covariance.is_some() {
+            count * n * n
+        } else {
+            0
+        });
         for (k, dt) in dts.iter().enumerate() {
             self.step_values(&values[k * m..(k + 1) * m], *dt, None)
                 .map_err(|e| errors::raise("FilterError", format!("row {k}: {e}"), &[]))?;
             self.filter.estimate_into(&mut est);
             means.extend_from_slice(est.mean.as_slice());
             if let Some(p) = &est.covariance {
-                // Row by row (nalgebra is column-major).
-                covs.extend((0..n).flat_map(|i| (0..n).map(move |j| p[(i, j)])));
+                // Row by row (nalgebra is column-major: row i is every n-th value from i).
+                let p = p.as_slice();
+                covs.extend((0..n).flat_map(|i| p[i..].iter().step_by(n)));
             }
         }
         let covs = if covs.len() == count * n * n && count > 0 {

@@ -381,10 +381,55 @@ impl Expression {
     /// The program computing node `id` (each node reachable from it once), an integer power
     /// 0 ≤ k ≤ [`MAX_POWI`] as multiplications.
     pub(crate) fn program(&self, id: usize) -> Program {
+        self.program_of(&[Some(id)])
+    }
+
+    /// One program whose results are nodes `ids` (`None`: zero), every node reachable from
+    /// them computed once, with the operations [`Expression::program`] gives each alone (so
+    /// the same bits).
+    fn program_of(&self, ids: &[Option<usize>]) -> Program {
         let mut ssa = Vec::new();
         let mut done: Vec<Option<Operand>> = alloc::vec![None; self.nodes.len()];
-        let result = self.emit(id, &mut ssa, &mut done);
-        Program::from_ssa(&ssa, result)
+        let results: Vec<Operand> = ids
+            .iter()
+            .map(|id| id.map_or(Operand::Const(0.0), |id| self.emit(id, &mut ssa, &mut done)))
+            .collect();
+        Program::from_ssa(&ssa, &results)
+    }
+
+    /// `components` (each a function of the n state variables) and their partial derivatives
+    /// as one program ([`Program::eval_all`]): results `0..m` the values, then `m + i n + j` =
+    /// ∂g_i/∂x_j — the table [`Expression::partial`] gives, without evaluating twice what a
+    /// value and its derivatives share (`x³` and `3x²`, `e^u` and its derivative `e^u u′`).
+    /// `None` when some function has no exact derivative.
+    pub(crate) fn with_jacobian(components: &[&Expression], n: usize) -> Option<Program> {
+        let mut all = Expression {
+            nodes: Vec::new(),
+            root: 0,
+        };
+        let roots: Vec<usize> = components.iter().map(|c| all.append(c)).collect();
+        let mut ids: Vec<Option<usize>> = roots.iter().map(|&r| Some(r)).collect();
+        for &root in &roots {
+            for j in 0..n {
+                let d = all.derivative(root, j)?;
+                ids.push((!all.is(d, 0.0)).then_some(d));
+            }
+        }
+        Some(all.program_of(&ids))
+    }
+
+    /// Appends the nodes of `other` (its node i becomes node `offset + i`); returns its root's
+    /// new index.
+    fn append(&mut self, other: &Expression) -> usize {
+        let offset = self.nodes.len();
+        self.nodes
+            .extend(other.nodes.iter().map(|node| match *node {
+                Node::Neg(a) => Node::Neg(a + offset),
+                Node::Unary(name, f, a) => Node::Unary(name, f, a + offset),
+                Node::Binary(op, a, b) => Node::Binary(op, a + offset, b + offset),
+                leaf => leaf,
+            }));
+        offset + other.root
     }
 
     fn emit(&self, id: usize, ssa: &mut Vec<Operation>, done: &mut [Option<Operand>]) -> Operand {

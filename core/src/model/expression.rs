@@ -48,6 +48,8 @@ struct ExactDerivatives {
     jacobian: Vec<Option<Scalar>>,
     /// `hessian[(i * n + j) * n + l]` = ∂²g_i/∂x_j∂x_l.
     hessian: Vec<Option<Scalar>>,
+    /// The values and `jacobian` in one program ([`Expression::with_jacobian`]).
+    with_jacobian: Program,
 }
 
 /// A [`VectorFunction`] given by text expressions.
@@ -187,7 +189,13 @@ fn exact_derivatives(components: &[Scalar], n: usize) -> Option<ExactDerivatives
             jacobian.push(d);
         }
     }
-    Some(ExactDerivatives { jacobian, hessian })
+    let expressions: Vec<&Expression> = components.iter().map(|c| &c.expr).collect();
+    let with_jacobian = Expression::with_jacobian(&expressions, n)?;
+    Some(ExactDerivatives {
+        jacobian,
+        hessian,
+        with_jacobian,
+    })
 }
 
 fn eval_table(table: &[Option<Scalar>], x: &[f64], out: &mut [f64]) {
@@ -295,6 +303,21 @@ impl VectorFunction for ExpressionFunction {
             None => {
                 let f = |y: &[f64], o: &mut [f64]| self.eval(y, o);
                 numerical_jacobian(&f, self.n, self.components.len(), x, out)
+            }
+        }
+    }
+    fn eval_with_jacobian(&self, x: &[f64], value: &mut [f64], jacobian: &mut [f64]) {
+        match &self.exact {
+            Some(d) => {
+                let m = value.len();
+                d.with_jacobian.eval_all(x, |r, v| match r.checked_sub(m) {
+                    None => value[r] = v,
+                    Some(e) => jacobian[e] = v,
+                })
+            }
+            None => {
+                self.eval(x, value);
+                self.jacobian(x, jacobian)
             }
         }
     }
@@ -417,6 +440,27 @@ mod tests {
                 for r in 0..2 {
                     assert_eq!(out[r * k + p].to_bits(), want[r].to_bits(), "{k} points");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn values_with_the_jacobian_equal_each_alone_to_the_last_bit() {
+        // Shared subexpressions (x1^3, exp(-x1), the quotient), a constant and a zero
+        // derivative, and a function without an exact derivative (erf: both numerical).
+        for texts in [
+            &["x1 - x1^3*x2", "exp(-x1)/(1 + x2^2) + sin(x1*x2)", "2.5"][..],
+            &["x2 + erf(x1)", "x1*x2", "x1"][..],
+        ] {
+            let f = ExpressionFunction::parse("f", &strings(texts), 2, 3).unwrap();
+            for x in [[0.3, -1.2], [-2.0, 0.7], [1e-3, 40.0]] {
+                let (mut value, mut jacobian) = (vec![f64::NAN; 3], vec![f64::NAN; 6]);
+                f.eval_with_jacobian(&x, &mut value, &mut jacobian);
+                let mut alone = vec![0.0; 6];
+                f.jacobian(&x, &mut alone);
+                let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&value), bits(&f.value(&x)), "{texts:?} at {x:?}");
+                assert_eq!(bits(&jacobian), bits(&alone), "{texts:?} at {x:?}");
             }
         }
     }

@@ -31,6 +31,13 @@ pub trait VectorFunction: Send + Sync {
     fn eval(&self, x: &[f64], out: &mut [f64]);
     /// Writes the Jacobian, row-major: `out[i * n + j] = ∂g_i/∂x_j` (length m·n).
     fn jacobian(&self, x: &[f64], out: &mut [f64]);
+    /// Writes `g(x)` into `value` and the Jacobian into `jacobian` (as
+    /// [`VectorFunction::eval`] and [`VectorFunction::jacobian`], the same values): text
+    /// expressions compute the two in one compiled program, what they share once.
+    fn eval_with_jacobian(&self, x: &[f64], value: &mut [f64], jacobian: &mut [f64]) {
+        self.eval(x, value);
+        self.jacobian(x, jacobian);
+    }
     /// Writes the Hessian of component `i`, row-major: `out[j * n + l] = ∂²g_i/∂x_j∂x_l`.
     fn hessian(&self, i: usize, x: &[f64], out: &mut [f64]);
     /// Whether derivatives are exact or numerical.

@@ -143,20 +143,22 @@ struct Instruction {
     operation: Operation,
 }
 
-/// A compiled scalar function of the state: instructions over registers and the operand that
-/// holds the result.
+/// A compiled scalar function of the state: instructions over registers and the operands
+/// that hold the results — one for an expression, several for a function and its partial
+/// derivatives computed together ([`Program::eval_all`]), sharing what they have in common.
 #[derive(Clone, Debug)]
 pub(crate) struct Program {
     code: Vec<Instruction>,
     registers: usize,
-    result: Operand,
+    /// The results; a batch ([`Program::run`]) and [`Program::eval`] give the first.
+    results: Vec<Operand>,
 }
 
 impl Program {
     /// A program from operations in single assignment form (`ssa[i]` defines value i, read as
-    /// `Operand::Reg(i)` by later operations) and the operand holding the result. Registers
+    /// `Operand::Reg(i)` by later operations) and the operands holding the results. Registers
     /// are reused once a value has been read for the last time.
-    pub(crate) fn from_ssa(ssa: &[Operation], result: Operand) -> Program {
+    pub(crate) fn from_ssa(ssa: &[Operation], results: &[Operand]) -> Program {
         let mut last_use = alloc::vec![usize::MAX; ssa.len()];
         for (i, op) in ssa.iter().enumerate() {
             for r in op.operands().into_iter().flatten() {
@@ -165,8 +167,10 @@ impl Program {
                 }
             }
         }
-        if let Operand::Reg(v) = result {
-            last_use[v] = usize::MAX - 1;
+        for result in results {
+            if let Operand::Reg(v) = *result {
+                last_use[v] = usize::MAX - 1;
+            }
         }
         let mut physical = alloc::vec![0usize; ssa.len()];
         let mut free: Vec<usize> = Vec::new();
@@ -195,14 +199,17 @@ impl Program {
                 }
             }
         }
-        let result = match result {
-            Operand::Reg(v) => Operand::Reg(physical[v]),
-            other => other,
-        };
+        let results = results
+            .iter()
+            .map(|result| match *result {
+                Operand::Reg(v) => Operand::Reg(physical[v]),
+                other => other,
+            })
+            .collect();
         Program {
             code,
             registers,
-            result,
+            results,
         }
     }
 
@@ -226,7 +233,7 @@ impl Program {
     /// The constant value, when the program is one.
     #[cfg(test)]
     pub(crate) fn constant(&self) -> Option<f64> {
-        match self.result {
+        match self.results[0] {
             Operand::Const(c) => Some(c),
             _ => None,
         }
@@ -234,7 +241,7 @@ impl Program {
 
     /// Evaluates at `lanes` points: `inputs[j]` holds component j of every point (at least
     /// `lanes` values each), `registers` at least `self.registers() * lanes` values; the value
-    /// at point p is written to `out[p]`.
+    /// (the first result) at point p is written to `out[p]`.
     pub(crate) fn run(
         &self,
         inputs: &[&[f64]],
@@ -246,7 +253,7 @@ impl Program {
             let (dst, a, b) = operands(registers, lanes, ins.dst, &ins.operation, inputs);
             apply(&ins.operation, dst, a, b);
         }
-        match self.result {
+        match self.results[0] {
             Operand::Const(c) => out[..lanes].fill(c),
             Operand::Var(j) => out[..lanes].copy_from_slice(&inputs[j][..lanes]),
             Operand::Reg(r) => out[..lanes].copy_from_slice(&registers[r * lanes..(r + 1) * lanes]),
@@ -288,7 +295,7 @@ impl Program {
         Program {
             code,
             registers: self.registers,
-            result: fixed(self.result, &known),
+            results: self.results.iter().map(|&r| fixed(r, &known)).collect(),
         }
     }
 
@@ -296,6 +303,22 @@ impl Program {
     /// the same operations as a batch's passes, so the same bits), registers on the stack up
     /// to 32.
     pub(crate) fn eval(&self, x: &[f64]) -> f64 {
+        self.at_point(x, |registers| read(self.results[0], x, registers))
+    }
+
+    /// Every result at one point `x` (as [`Program::eval`]), result r handed to `put(r, value)`:
+    /// a function and its derivatives in one pass over the instructions they share.
+    pub(crate) fn eval_all(&self, x: &[f64], mut put: impl FnMut(usize, f64)) {
+        self.at_point(x, |registers| {
+            for (r, &o) in self.results.iter().enumerate() {
+                put(r, read(o, x, registers));
+            }
+        })
+    }
+
+    /// Runs the instructions at `x` on scalars, then hands the registers to `results`.
+    #[inline(always)]
+    fn at_point<R>(&self, x: &[f64], results: impl FnOnce(&[f64]) -> R) -> R {
         let mut on_stack = [0.0; 32];
         let mut on_heap = Vec::new();
         let registers = if self.registers <= on_stack.len() {
@@ -304,18 +327,23 @@ impl Program {
             on_heap.resize(self.registers, 0.0);
             &mut on_heap[..]
         };
-        let read = |o: Operand, registers: &[f64]| match o {
-            Operand::Var(j) => x[j],
-            Operand::Const(c) => c,
-            Operand::Reg(r) => registers[r],
-        };
         for ins in &self.code {
             let [a, b] = ins.operation.operands();
-            let a = a.map_or(0.0, |o| read(o, registers));
-            let b = b.map_or(0.0, |o| read(o, registers));
+            let a = a.map_or(0.0, |o| read(o, x, registers));
+            let b = b.map_or(0.0, |o| read(o, x, registers));
             registers[ins.dst] = ins.operation.at(a, b);
         }
-        read(self.result, registers)
+        results(registers)
+    }
+}
+
+/// The value of operand `o` at point `x` with scalar `registers`.
+#[inline(always)]
+fn read(o: Operand, x: &[f64], registers: &[f64]) -> f64 {
+    match o {
+        Operand::Var(j) => x[j],
+        Operand::Const(c) => c,
+        Operand::Reg(r) => registers[r],
     }
 }
 
@@ -441,7 +469,7 @@ mod tests {
             Operation::Div(Operand::Const(3.0), Operand::Var(0)),
             Operation::Sub(Operand::Reg(1), Operand::Reg(2)),
         ];
-        Program::from_ssa(&ssa, Operand::Reg(3))
+        Program::from_ssa(&ssa, &[Operand::Reg(3)])
     }
 
     #[test]
@@ -465,7 +493,7 @@ mod tests {
             Operation::Unary(libm::exp, Operand::Var(0)),
             Operation::Neg(Operand::Var(0)),
         ];
-        let p = Program::from_ssa(&ssa, Operand::Reg(1));
+        let p = Program::from_ssa(&ssa, &[Operand::Reg(1)]);
         assert_eq!(p.len(), 1);
         assert_eq!(p.eval(&[2.5]), -2.5);
     }

@@ -194,9 +194,7 @@ impl Measurement {
     /// missing rows).
     pub(crate) fn predict_into(&self, model: &Model, x: &[f64], out: &mut [f64]) {
         model.observation.eval(x, out);
-        for (v, seen) in out.iter_mut().zip(&self.observed) {
-            *v = if *seen { *v * self.scale } else { 0.0 };
-        }
+        self.scale_predicted(out);
     }
 
     /// `scale · ∂h/∂x` at x into `out` (m × n; 0 in missing rows), through `rows` (m·n,
@@ -209,7 +207,32 @@ impl Measurement {
         out: &mut DMatrix<f64>,
     ) {
         model.observation.jacobian(x, rows);
-        let n = model.n;
+        self.scale_jacobian(model.n, rows, out);
+    }
+
+    /// [`Measurement::predict_into`] (into `predicted`) and [`Measurement::jacobian_into`] at
+    /// the same x, h and its Jacobian evaluated together
+    /// ([`crate::model::VectorFunction::eval_with_jacobian`]).
+    pub(crate) fn linearize_into(
+        &self,
+        model: &Model,
+        x: &[f64],
+        predicted: &mut [f64],
+        rows: &mut [f64],
+        out: &mut DMatrix<f64>,
+    ) {
+        model.observation.eval_with_jacobian(x, predicted, rows);
+        self.scale_predicted(predicted);
+        self.scale_jacobian(model.n, rows, out);
+    }
+
+    fn scale_predicted(&self, out: &mut [f64]) {
+        for (v, seen) in out.iter_mut().zip(&self.observed) {
+            *v = if *seen { *v * self.scale } else { 0.0 };
+        }
+    }
+
+    fn scale_jacobian(&self, n: usize, rows: &[f64], out: &mut DMatrix<f64>) {
         for (i, row) in rows.chunks_exact(n).enumerate() {
             let seen = self.observed[i];
             for (j, v) in row.iter().enumerate() {

@@ -449,8 +449,13 @@ impl GaussianState {
     ) {
         let (work, parts) = (&mut self.work, &mut self.parts);
         let x = at.unwrap_or(&self.mean).as_slice();
-        meas.jacobian_into(model, x, &mut work.rows, &mut work.h);
-        meas.predict_into(model, x, parts.residual.as_mut_slice());
+        meas.linearize_into(
+            model,
+            x,
+            parts.residual.as_mut_slice(),
+            &mut work.rows,
+            &mut work.h,
+        );
         parts.observed = meas.count;
         parts.residual.zip_apply(&meas.value, |r, z| *r = z - *r);
         // P_xz = P Hᵀ.

@@ -110,23 +110,29 @@ pub(crate) fn linearized_rates(
     (dm, dp): (&mut DVector<f64>, &mut DMatrix<f64>),
 ) {
     let n = model.n;
-    model.drift.eval(m.as_slice(), dm.as_mut_slice());
-    model.drift.jacobian(m.as_slice(), jacobian);
+    model
+        .drift
+        .eval_with_jacobian(m.as_slice(), dm.as_mut_slice(), jacobian);
     // (F P)_ij = Σ_k F_ik P_kj, and P Fᵀ = (F P)ᵀ (P symmetric): F P once, then its
     // transpose added (P column-major: column j is P's row j).
     let (p, out) = (p.as_slice(), dp.as_mut_slice());
-    for j in 0..n {
-        let column = &p[j * n..(j + 1) * n];
-        for i in 0..n {
-            let row = &jacobian[i * n..(i + 1) * n];
-            out[j * n + i] = row.iter().zip(column).map(|(f, p)| f * p).sum();
+    if n == 1 {
+        // dP/dt = 2 F P: the value of the loops below (x + x = 2x exactly), without them.
+        out[0] = 2.0 * (jacobian[0] * p[0]);
+    } else {
+        for j in 0..n {
+            let column = &p[j * n..(j + 1) * n];
+            for i in 0..n {
+                let row = &jacobian[i * n..(i + 1) * n];
+                out[j * n + i] = row.iter().zip(column).map(|(f, p)| f * p).sum();
+            }
         }
-    }
-    for j in 0..n {
-        for i in 0..=j {
-            let s = out[j * n + i] + out[i * n + j];
-            out[j * n + i] = s;
-            out[i * n + j] = s;
+        for j in 0..n {
+            for i in 0..=j {
+                let s = out[j * n + i] + out[i * n + j];
+                out[j * n + i] = s;
+                out[i * n + j] = s;
+            }
         }
     }
     match q.constant() {
