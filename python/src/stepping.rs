@@ -216,15 +216,16 @@ impl Stepper {
         } else {
             0
         });
+        let mut rows_first = nalgebra::DMatrix::zeros(n, n);
         for (k, dt) in dts.iter().enumerate() {
             self.step_values(&values[k * m..(k + 1) * m], *dt, None)
                 .map_err(|e| errors::raise("FilterError", format!("row {k}: {e}"), &[]))?;
             self.filter.estimate_into(&mut est);
             means.extend_from_slice(est.mean.as_slice());
             if let Some(p) = &est.covariance {
-                // Row by row (nalgebra is column-major: row i is every n-th value from i).
-                let p = p.as_slice();
-                covs.extend((0..n).flat_map(|i| p[i..].iter().step_by(n)));
+                // Row by row: the transpose of nalgebra's column-major storage.
+                p.transpose_to(&mut rows_first);
+                covs.extend_from_slice(rows_first.as_slice());
             }
         }
         let covs = if covs.len() == count * n * n && count > 0 {
