@@ -140,6 +140,8 @@ if grep -q "Compiling zakai v" target/wheel.log; then
 fi
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall target/wheels/zakai-*.whl
 ZAKAI_NO_SKIPS=1 "$venv/bin/python" -m pytest -q python/tests
+# The docstrings' examples, against the installed package.
+"$venv/bin/python" -m pytest -q -p no:cacheprovider --doctest-modules --pyargs zakai
 "$venv/bin/python" python/examples/tour.py > /dev/null
 joined determinism
 

@@ -182,6 +182,10 @@ pub mod method {
     };
     pub use crate::filters::params::{Declared, ParamInfo, ParamKind};
 }
+/// Predictive distributions of states and observations, and forecasts with their intervals.
+pub mod predictive {
+    pub use crate::filters::predictive::{forecast, Forecast, ObservationLaw, Observing, StateLaw};
+}
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,
 };

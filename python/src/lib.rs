@@ -31,6 +31,7 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(runs::run, m)?)?;
     m.add_function(wrap_pyfunction!(runs::filter_recorded, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::forecast_recorded, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::run_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_from_runs, m)?)?;

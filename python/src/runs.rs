@@ -322,6 +322,46 @@ pub fn filter_recorded<'py>(
     result_dict(py, &result, &e)
 }
 
+/// The scenario's one method through a user's observations (as [`filter_recorded`] takes
+/// them), then `steps` steps of `dt` ahead: `(the last observation's time, the method's
+/// name, the forecast as `stepping::forecast_dict` gives it, a Stepper holding the filter at
+/// the last observation)`; a FilterError when the method failed on the data or ahead.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, seed, steps, dt, level, inputs=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn forecast_recorded<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    seed: u64,
+    steps: usize,
+    dt: f64,
+    level: f64,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<(f64, String, Bound<'py, PyDict>, crate::stepping::Stepper)> {
+    crate::stepping::check_forecast(steps, dt, level)?;
+    let e = experiment(json)?;
+    if e.config().methods.len() != 1 {
+        return Err(errors::config("methods", "a forecast is of one method"));
+    }
+    let recording = recording_of(&e, &observations, times.as_ref(), None)?;
+    let recording = with_inputs(&e, recording, inputs.as_ref())?;
+    let mut result = e
+        .forecast_recorded(recording, seed, dt, steps)
+        .map_err(errors::from_core)?;
+    let (name, forecast) = result.methods.remove(0);
+    let (filter, ahead) =
+        forecast.map_err(|why| errors::raise("FilterError", format!("{name}: {why}"), &[]))?;
+    let stepper = crate::stepping::Stepper::of(filter, e.model(), e.chosen_defaults().to_vec());
+    Ok((
+        result.last,
+        name,
+        crate::stepping::forecast_dict(py, &ahead, level)?,
+        stepper,
+    ))
+}
+
 /// A user's observations (rows of m values; increments for continuous models, measurements for
 /// discrete ones) at `times` (τ₀…τ_N; every Δτ from 0 when absent), with the true states when
 /// known, as a recording for `e`'s model — every mismatch in the caller's words.

@@ -17,6 +17,8 @@ use crate::runs::experiment;
 #[pyclass(unsendable, module = "zakai._zakai")]
 pub struct Stepper {
     filter: Box<dyn Filter>,
+    /// The filter's model (for its predictive observation laws).
+    model: zakai::Model,
     n: usize,
     m: usize,
     continuous: bool,
@@ -112,15 +114,7 @@ impl Stepper {
                 method_seed(seed, 0),
             )
             .map_err(errors::from_core)?;
-        let model = e.model();
-        Ok(Stepper {
-            filter,
-            n: model.n,
-            m: model.m,
-            continuous: matches!(model.observations, ObservationModel::Continuous { .. }),
-            chosen: e.chosen_defaults().to_vec(),
-            concerns: Vec::new(),
-        })
+        Ok(Stepper::of(filter, e.model(), e.chosen_defaults().to_vec()))
     }
 
     /// Predicts over `dt` and assimilates one observation (an increment dy for continuous
@@ -156,6 +150,21 @@ impl Stepper {
         .map_err(errors::from_filter)
     }
 
+    /// The forecast `dt`, `2 dt`, … `steps · dt` ahead from a fork (the filter does not
+    /// move), as [`forecast_dict`] gives it.
+    fn forecast<'py>(
+        &self,
+        py: Python<'py>,
+        steps: usize,
+        dt: f64,
+        level: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        check_forecast(steps, dt, level)?;
+        let ahead = zakai::predictive::forecast(&*self.filter, &self.model, dt, steps)
+            .map_err(errors::from_filter)?;
+        forecast_dict(py, &ahead, level)
+    }
+
     /// Assimilates the measurement `z` at the current time (discrete models).
     fn update(&mut self, z: PyReadonlyArrayDyn<'_, f64>) -> PyResult<()> {
         if self.continuous {
@@ -180,6 +189,7 @@ impl Stepper {
     fn fork(&self) -> Stepper {
         Stepper {
             filter: self.filter.fork(),
+            model: self.model.clone(),
             n: self.n,
             m: self.m,
             continuous: self.continuous,
@@ -362,4 +372,93 @@ impl Stepper {
     fn __repr__(&self) -> String {
         format!("Filter({}, n={}, m={})", self.filter.name(), self.n, self.m)
     }
+}
+
+impl Stepper {
+    /// A stepper around `filter`, a filter of `model`.
+    pub fn of(filter: Box<dyn Filter>, model: &zakai::Model, chosen: Vec<String>) -> Stepper {
+        Stepper {
+            filter,
+            model: model.clone(),
+            n: model.n,
+            m: model.m,
+            continuous: matches!(model.observations, ObservationModel::Continuous { .. }),
+            chosen,
+            concerns: Vec::new(),
+        }
+    }
+}
+
+/// A forecast's `steps`, `dt` and `level`, or the error naming the one out of range.
+pub fn check_forecast(steps: usize, dt: f64, level: f64) -> PyResult<()> {
+    if !(level > 0.0 && level < 1.0) {
+        return Err(errors::config(
+            "level",
+            format!("must be strictly between 0 and 1 (got {level})"),
+        ));
+    }
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(errors::config(
+            "dt",
+            format!("must be positive and finite (got {dt})"),
+        ));
+    }
+    if steps == 0 || steps > 100_000 {
+        return Err(errors::config(
+            "steps",
+            format!("must be between 1 and 100000 (got {steps})"),
+        ));
+    }
+    Ok(())
+}
+
+/// A forecast as a dict of arrays: `ahead` (steps), `state_mean`, `state_sd`, `state_lower`,
+/// `state_upper` (steps × n), `observation_mean`, `observation_sd`, `observation_lower`,
+/// `observation_upper` (steps × m) — the bounds of central intervals of probability `level` —
+/// and `count` (whether the observation is a count).
+pub fn forecast_dict<'py>(
+    py: Python<'py>,
+    ahead: &[zakai::predictive::Forecast],
+    level: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let steps = ahead.len();
+    let (n, m) = ahead
+        .first()
+        .map_or((0, 0), |a| (a.state.dim(), a.observation.dim()));
+    let mut columns: [Vec<f64>; 8] = Default::default();
+    for a in ahead {
+        for j in 0..n {
+            let (mean, sd) = a.state.mean_and_sd(j);
+            let (lo, hi) = a.state.interval(j, level);
+            for (c, v) in columns[..4].iter_mut().zip([mean, sd, lo, hi]) {
+                c.push(v);
+            }
+        }
+        for j in 0..m {
+            let (mean, sd) = a.observation.mean_and_sd(j);
+            let (lo, hi) = a.observation.interval(j, level);
+            for (c, v) in columns[4..].iter_mut().zip([mean, sd, lo, hi]) {
+                c.push(v);
+            }
+        }
+    }
+    let out = PyDict::new(py);
+    out.set_item("ahead", ahead.iter().map(|a| a.ahead).collect::<Vec<_>>())?;
+    let names = ["mean", "sd", "lower", "upper"];
+    for (k, column) in columns.into_iter().enumerate() {
+        let (what, width) = if k < 4 {
+            ("state", n)
+        } else {
+            ("observation", m)
+        };
+        out.set_item(
+            format!("{what}_{}", names[k % 4]),
+            shaped(py, column, &[steps, width])?,
+        )?;
+    }
+    out.set_item(
+        "count",
+        ahead.first().is_some_and(|a| a.observation.is_count()),
+    )?;
+    Ok(out)
 }

@@ -310,6 +310,12 @@ macro_rules! kept_estimate_accessors {
             Some(self.grid.view(&self.$u))
         }
 
+        fn state_law(
+            &self,
+        ) -> Result<crate::filters::predictive::StateLaw, crate::error::FilterError> {
+            crate::filters::predictive::StateLaw::of_grid(&self.grid.view(&self.$u))
+        }
+
         fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
             self.grid.marginal(&self.$u, dim, grid, out);
         }

@@ -43,6 +43,7 @@ mod observation;
 pub(crate) mod params;
 pub(crate) mod particle;
 pub(crate) mod point_mass;
+pub(crate) mod predictive;
 pub(crate) mod resolution;
 pub(crate) mod score;
 mod self_check;
@@ -216,6 +217,14 @@ pub trait Filter: core::fmt::Debug + Fork {
     /// This filter as a smoother, when it is one (what [`Filter::smoother`] returned).
     fn as_smoother(&mut self) -> Option<&mut dyn smoothing::Smoother> {
         None
+    }
+    /// The law of the state the filter holds, for predictive distributions
+    /// ([`predictive::ObservationLaw`], [`predictive::forecast`]): the particle filter's
+    /// cloud, a grid or spectral filter's density at its nodes, the Gaussian-sum filter's
+    /// mixture; this default, the Gaussian of the estimate (the Kalman family, the direct
+    /// method), or an error when the estimate has no covariance.
+    fn state_law(&self) -> Result<predictive::StateLaw, FilterError> {
+        predictive::StateLaw::of_estimate(self.name(), self.estimate())
     }
     /// The current estimate.
     fn estimate(&self) -> Estimate;

@@ -22,7 +22,8 @@ command line's messages.
 The package mirrors the Rust side: :mod:`zakai.models` (``Model``, ``Prior``),
 :mod:`zakai.scenario` (``Scenario``, presets, the method catalogue), :mod:`zakai.runs`
 (``simulate``, ``run``, ``filter``, ``smooth``, ``monte_carlo``), :mod:`zakai.fitting` (``fit``,
-``profile``, ``log_likelihood``: a scenario's parameters from your data), :mod:`zakai.results` (``RunResult``,
+``profile``, ``log_likelihood``: a scenario's parameters from your data), :mod:`zakai.forecasting`
+(``forecast``, ``Forecast``: predictive intervals of states and observations), :mod:`zakai.results` (``RunResult``,
 ``MethodResult``, ``Smoothed``, ``MonteCarloTable``), :mod:`zakai.stepping` (the stepping ``Filter``) and
 :mod:`zakai.errors`; everything is also here, at the top.
 """
@@ -32,6 +33,7 @@ from __future__ import annotations
 from . import _zakai
 from ._convert import ArrayLike, MethodSpec
 from .fitting import FitResult, Profile, fit, log_likelihood, profile
+from .forecasting import Forecast, forecast
 from .errors import (
     ConfigError,
     DimensionError,
@@ -68,6 +70,8 @@ __all__ = [
     "fit",
     "profile",
     "log_likelihood",
+    "forecast",
+    "Forecast",
     "FitResult",
     "Profile",
     "set_memory_cap",

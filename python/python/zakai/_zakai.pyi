@@ -27,6 +27,16 @@ def filter_recorded(
     seed: int,
     smooth: bool = False,
 ) -> dict[str, Any]: ...
+def forecast_recorded(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    seed: int,
+    steps: int,
+    dt: float,
+    level: float,
+    inputs: Optional[npt.NDArray[np.float64]] = None,
+) -> tuple[float, str, dict[str, Any], "Stepper"]: ...
 def monte_carlo_json(
     json: str, runs: int, seed: int, progress: Optional[Callable[[int, int], Any]] = None
 ) -> str: ...
@@ -96,6 +106,7 @@ class Stepper:
     @property
     def map(self) -> Optional[npt.NDArray[np.float64]]: ...
     def self_check(self) -> list[dict[str, Any]]: ...
+    def forecast(self, steps: int, dt: float, level: float) -> dict[str, Any]: ...
     def density(self, grid: npt.NDArray[np.float64], dim: int = 0) -> npt.NDArray[np.float64]: ...
     def density2d(
         self,

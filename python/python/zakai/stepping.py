@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Optional, Sequence
 
 import numpy as np
 
@@ -11,6 +11,9 @@ from .errors import ConfigError
 from ._convert import ArrayLike, _array
 from .models import Model, Prior
 from .scenario import Scenario
+
+if TYPE_CHECKING:
+    from .forecasting import Forecast
 
 
 
@@ -90,6 +93,41 @@ class Filter:
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
         # Whether the filter is still at the prior's time (no step taken yet).
         self._at_prior = True
+
+    @classmethod
+    def _wrap(cls, scenario: Scenario, inner: Any) -> "Filter":
+        """A Filter around a stepper already past the prior (a forecast's origin)."""
+        f = cls.__new__(cls)
+        f.scenario = scenario
+        f._inner = inner
+        f._at_prior = False
+        return f
+
+    def forecast(
+        self, steps: int, dt: Optional[float] = None, level: float = 0.95
+    ) -> "Forecast":
+        """The predictive distributions of the state and of the observations ``dt``,
+        ``2 dt``, … ``steps · dt`` ahead (Δτ when ``dt`` is absent), with central intervals of
+        probability ``level``, from a copy: the filter itself does not move. See
+        :class:`Forecast` for what each method's laws are.
+
+        Examples
+        --------
+        >>> import zakai
+        >>> model = zakai.Model.discrete("0", "x", noise_cov=0.3, diffusion=0.5)
+        >>> f = zakai.Filter("kalman", model, zakai.Prior.gaussian(0.0, 1.0), dt_obs=1.0)
+        >>> f.update([0.4])
+        >>> ahead = f.forecast(2)
+        >>> round(float(ahead.observation_sd[0] ** 2), 6)  # 0.3/1.3 + 0.25 + 0.3: P + q + r
+        0.780769
+        """
+        from .forecasting import Forecast
+
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)):
+            raise ConfigError(f"steps: must be a whole number (got {steps!r})")
+        step = self._dt(dt)
+        raw = self._inner.forecast(int(steps), step, float(level))
+        return Forecast(raw, start=0.0, dt=step, level=level, origin=self.copy())
 
     def _dt(self, dt: Optional[float]) -> float:
         if dt is None:

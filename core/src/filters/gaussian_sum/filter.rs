@@ -759,6 +759,16 @@ impl Filter for GaussianSum {
         }
     }
 
+    /// The mixture.
+    fn state_law(&self) -> Result<crate::filters::predictive::StateLaw, FilterError> {
+        Ok(crate::filters::predictive::StateLaw::GaussianSum(
+            self.mixture()
+                .iter()
+                .map(|c| (c.w, c.m.clone(), c.p.clone()))
+                .collect(),
+        ))
+    }
+
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         let mut one = alloc::vec![0.0; grid.len()];

@@ -743,6 +743,16 @@ impl Filter for Pf {
         crate::filters::marginal::kernel_density(self.component(dim), &self.weights, grid, out);
     }
 
+    /// The cloud: the particles with their weights.
+    fn state_law(&self) -> Result<crate::filters::predictive::StateLaw, FilterError> {
+        Ok(crate::filters::predictive::StateLaw::Points {
+            n: self.model.n,
+            points: self.particles.clone(),
+            weights: self.weights.clone(),
+            cells: None,
+        })
+    }
+
     fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
         let points = self
             .component(dims.0)

@@ -428,6 +428,25 @@ impl Spectral {
     /// the basis at the points for a kept component and the basis' integrals (only φ_0's is
     /// not zero) for every other one.
     fn marginal(&self, kept: &[(usize, &[f64])], out: &mut [f64]) {
+        let values = self.projected(kept);
+        // `values` runs over the kept components in increasing order; `out` in `kept`'s order.
+        let swapped = kept.len() == 2 && kept[0].0 > kept[1].0;
+        let (first, second) = (kept[0].1.len(), kept.get(1).map_or(1, |k| k.1.len()));
+        for j in 0..second {
+            for i in 0..first {
+                let v = if swapped {
+                    values[j + second * i]
+                } else {
+                    values[i + first * j]
+                };
+                out[i + first * j] = v.max(0.0);
+            }
+        }
+    }
+
+    /// The projected density's marginal over the components `kept` at their points, the
+    /// kept components in increasing order with the first fastest (not clipped).
+    fn projected(&self, kept: &[(usize, &[f64])]) -> Vec<f64> {
         let n = self.layout.dims();
         let on = &self.layout.online;
         let factors: Vec<DMatrix<f64>> = (0..n)
@@ -446,19 +465,7 @@ impl Spectral {
         let mut values = vec![0.0; len];
         let mut scratch = [Vec::new(), Vec::new()];
         tensor::multilinear(&factors, &self.coeffs, on, &mut scratch, &mut values);
-        // `values` runs over the kept components in increasing order; `out` in `kept`'s order.
-        let swapped = kept.len() == 2 && kept[0].0 > kept[1].0;
-        let (first, second) = (kept[0].1.len(), kept.get(1).map_or(1, |k| k.1.len()));
-        for j in 0..second {
-            for i in 0..first {
-                let v = if swapped {
-                    values[j + second * i]
-                } else {
-                    values[i + first * j]
-                };
-                out[i + first * j] = v.max(0.0);
-            }
-        }
+        values
     }
 
     /// The robust-form factor `exp(hᵀS⁻¹Δy)` (42) — times `exp(−½hᵀS⁻¹h T₀)` per interval T₀
@@ -718,6 +725,47 @@ impl Filter for Spectral {
             }
         }
         stepped
+    }
+
+    /// The projected density (39) at the midpoints of a raster of the domain (256 cells
+    /// across in 1-D, 96 in 2-D, 32 in 3-D, 12 beyond), clipped at zero, as the nodes' masses.
+    fn state_law(&self) -> Result<crate::filters::predictive::StateLaw, FilterError> {
+        let n = self.layout.dims();
+        let per = match n {
+            1 => 256,
+            2 => 96,
+            3 => 32,
+            _ => 12,
+        };
+        let (axes, cells): (Vec<Vec<f64>>, Vec<f64>) = (0..n)
+            .map(|d| {
+                let (c, r) = (self.layout.centre[d], self.layout.half_width[d]);
+                let h = 2.0 * r / per as f64;
+                ((0..per).map(|i| c - r + (i as f64 + 0.5) * h).collect(), h)
+            })
+            .unzip();
+        let kept: Vec<(usize, &[f64])> =
+            axes.iter().enumerate().map(|(d, a)| (d, &a[..])).collect();
+        let values = self.projected(&kept);
+        let k = values.len();
+        let total: f64 = values.iter().map(|v| v.max(0.0)).sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Err(FilterError::MassLost);
+        }
+        let mut points = vec![0.0; n * k];
+        for i in 0..k {
+            let mut index = i;
+            for (d, axis) in axes.iter().enumerate() {
+                points[d * k + i] = axis[index % per];
+                index /= per;
+            }
+        }
+        Ok(crate::filters::predictive::StateLaw::Points {
+            n,
+            points,
+            weights: values.iter().map(|v| v.max(0.0) / total).collect(),
+            cells: Some(cells),
+        })
     }
 
     /// The marginal of the projected density (39) on the on-line basis, clipped at zero;

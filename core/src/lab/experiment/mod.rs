@@ -52,6 +52,20 @@ pub struct Experiment {
     chosen: Vec<String>,
 }
 
+/// What [`Experiment::forecast_recorded`] returns.
+#[derive(Debug)]
+pub struct RecordedForecast {
+    /// The time of the last observation, which the forecast's times count from.
+    pub last: f64,
+    /// Per method: its name, and its filter at the last observation with its forecast, or why
+    /// there is none.
+    #[allow(clippy::type_complexity)]
+    pub methods: Vec<(
+        String,
+        Result<(Box<dyn Filter>, Vec<crate::filters::predictive::Forecast>), String>,
+    )>,
+}
+
 /// The seed of method `index` in the run with seed `seed` (independent of the truth's stream).
 pub fn method_seed(seed: u64, index: usize) -> u64 {
     seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))
@@ -349,6 +363,41 @@ impl Experiment {
             run.complete(clock, &mut Silent);
             Ok(run.finish())
         })
+    }
+
+    /// Every method through the whole `recording`, then its forecast `dt`, `2 dt`, …
+    /// `steps · dt` after the last observation ([`crate::predictive::forecast`]): per method
+    /// its name and its filter at the last observation with the forecast, or why there is
+    /// none (the method failed on the data, or its forecast failed).
+    pub fn forecast_recorded(
+        &self,
+        recording: Recording,
+        seed: u64,
+        dt: f64,
+        steps: usize,
+    ) -> Result<RecordedForecast, ZakaiError> {
+        let last = recording.times.last().copied().unwrap_or(0.0);
+        let mut run = self.start_recorded(recording, seed)?;
+        run.complete(None, &mut Silent);
+        let methods = run
+            .tracks()
+            .iter()
+            .zip(run.filters())
+            .map(|(track, filter)| {
+                let forecast = match &track.failure {
+                    Some(f) => Err(alloc::format!(
+                        "failed at observation {}: {}",
+                        f.k,
+                        f.message
+                    )),
+                    None => crate::filters::predictive::forecast(&**filter, &self.model, dt, steps)
+                        .map(|ahead| (filter.fork(), ahead))
+                        .map_err(|e| e.to_string()),
+                };
+                (track.name.clone(), forecast)
+            })
+            .collect();
+        Ok(RecordedForecast { last, methods })
     }
 
     /// As [`Experiment::start_recorded`], timing every filter's build with `clock`.
