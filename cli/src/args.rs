@@ -103,6 +103,11 @@ pub(crate) enum Command {
     /// (RTS for the Gaussian filters, forward–backward on the grid, FFBSi for the particle
     /// filter); methods without one say why. Arguments as for `filter`.
     Smooth(FilterArgs),
+    /// Forecast after recorded observations: every method of the scenario through the data
+    /// (as `filter`), then the predictive distributions of the state and of the observation
+    /// --steps steps of --dt ahead, with central intervals of probability --level (quantiles
+    /// of each method's own law: a Gaussian's, a cloud's, a grid's; integers for counts).
+    Forecast(ForecastArgs),
     /// Run a scenario once or as a Monte Carlo job and print per-method results.
     Run(RunArgs),
     /// Fit the scenario's parameters to recorded observations by maximum likelihood under
@@ -237,6 +242,27 @@ pub(crate) struct FilterArgs {
     /// The true states (CSV `t,x1,…` at the observation times), for errors.
     #[arg(long)]
     pub(crate) truth: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) output: Output,
+}
+
+/// `zakai forecast`.
+#[derive(Args)]
+pub(crate) struct ForecastArgs {
+    #[command(flatten)]
+    pub(crate) selection: Selection,
+    /// The observations (CSV, as for `zakai filter`).
+    #[arg(long)]
+    pub(crate) observations: PathBuf,
+    /// Steps ahead.
+    #[arg(long, default_value_t = 10)]
+    pub(crate) steps: usize,
+    /// The step (default: the scenario's Δτ).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) dt: Option<f64>,
+    /// Probability of the central intervals.
+    #[arg(long, default_value_t = 0.95)]
+    pub(crate) level: f64,
     #[command(flatten)]
     pub(crate) output: Output,
 }

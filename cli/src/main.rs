@@ -20,6 +20,7 @@
 //! Errors are one-line messages on stderr with a non-zero exit status; nothing panics.
 
 mod fit;
+mod forecast;
 mod frontier_plot;
 mod output;
 mod profile_plot;
@@ -393,6 +394,7 @@ fn main() -> ExitCode {
             csv,
         } => jcurve(&scenario, seed, runs, per_interval, csv),
         Command::Run(args) => run(&args),
+        Command::Forecast(args) => forecast::command(&args),
         Command::Fit(args) => fit_command(&args),
     };
     match result {

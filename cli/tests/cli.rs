@@ -1004,3 +1004,90 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
         &format!("Nile with G(x) = {s}√|x|"),
     );
 }
+
+/// `zakai forecast` on a local level with a gap at the end: the Kalman filter's forecast
+/// computed here by hand (m, P + s q; the measurement's P + s q + r), in the CSV, the table
+/// and the JSON; counts of a Poisson series as integers; bad requests refused.
+#[test]
+fn forecast_prints_the_predictive_intervals_in_every_format() {
+    let z = [1.2, 0.7, 1.9, 2.4, f64::NAN, 2.0];
+    let mut csv = String::from("t,z1\n");
+    for (k, v) in z.iter().enumerate() {
+        let cell = if v.is_nan() {
+            String::new()
+        } else {
+            v.to_string()
+        };
+        csv.push_str(&format!("{k},{cell}\n"));
+    }
+    let obs = temp_file("forecast-obs.csv", &csv);
+    let scenario = temp_file(
+        "forecast-scenario.json",
+        r#"{ "name": "level", "model": { "drift": ["0"], "observation": ["x"], "diffusion": [[0.5]],
+             "noise": { "kind": "discrete", "mixture": [{ "mean": [0], "cov": [[0.3]] }] } },
+             "prior": { "kind": "gaussian", "mean": [0], "cov": [[4]] },
+             "domain": [[-10, 14]], "time": { "dt_obs": 1 },
+             "methods": [{ "method": "kalman" }] }"#,
+    );
+    let with_steps = |steps: &str, format: &str, extra: &[&str]| {
+        let mut all = vec![
+            "forecast",
+            scenario.to_str().unwrap(),
+            "--observations",
+            obs.to_str().unwrap(),
+            "--steps",
+            steps,
+            "--format",
+            format,
+        ];
+        all.extend_from_slice(extra);
+        zakai(&all)
+    };
+    let args = |format: &str, extra: &[&str]| with_steps("3", format, extra);
+    let (q, r) = (0.25, 0.3);
+    let (mut m, mut p) = (0.0, 4.0);
+    for (k, v) in z.iter().enumerate() {
+        if k > 0 {
+            p += q;
+        }
+        if !v.is_nan() {
+            let g = p / (p + r);
+            m += g * (v - m);
+            p -= g * p;
+        }
+    }
+    let z975 = 1.959963984540054;
+    let o = args("csv", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("method,t,component,mean,sd,lower,upper"));
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 6, "{text}");
+    for (i, row) in rows.iter().enumerate() {
+        let s = (i / 2 + 1) as f64;
+        let value = |c: usize| row[c].parse::<f64>().unwrap();
+        assert_eq!(value(1), 5.0 + s);
+        let var = p + s * q + if row[2] == "z1" { r } else { 0.0 };
+        assert!((value(3) - m).abs() < 1e-12, "{row:?}");
+        assert!((value(4) - var.sqrt()).abs() < 1e-12, "{row:?}");
+        assert!((value(5) - (m - z975 * var.sqrt())).abs() < 1e-8, "{row:?}");
+        assert!((value(6) - (m + z975 * var.sqrt())).abs() < 1e-8, "{row:?}");
+    }
+    let o = args("json", &["--level", "0.5"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["level"], 0.5);
+    let last = &v["methods"][0]["steps"][2]["observation"][0];
+    let sd = (p + 3.0 * q + r).sqrt();
+    assert!((last["upper"].as_f64().unwrap() - (m + 0.6744897501960817 * sd)).abs() < 1e-8);
+    let table = String::from_utf8(args("table", &[]).stdout).unwrap();
+    assert!(
+        table.contains("KF — steps of 1 ahead, 95% intervals"),
+        "{table}"
+    );
+    assert_clean_failure(&args("csv", &["--level", "1"]), "--level");
+    assert_clean_failure(&with_steps("0", "csv", &[]), "--steps");
+    assert_clean_failure(&args("csv", &["--dt", "-1"]), "--dt");
+}

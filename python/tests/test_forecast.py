@@ -80,6 +80,11 @@ def test_a_forecast_continues_the_data_s_pandas_index(sm):
     dated = pd.Series(flow, index=pd.date_range("1871-01-01", periods=len(flow), freq="YS"))
     frame = zakai.forecast(local_level(), dated, 2).to_pandas()
     assert list(frame.index) == [pd.Timestamp("1971-01-01"), pd.Timestamp("1972-01-01")]
+    # Irregular dates read in years: the forecast's dates a year apart after the last.
+    gappy = pd.Series([1120.0, 1160.0, 1010.0],
+                      index=pd.to_datetime(["1871-07-01", "1873-07-01", "1874-07-01"]))
+    frame = zakai.forecast(local_level(), gappy, 2, time_unit="Y").to_pandas()
+    assert list(frame.index) == [pd.Timestamp("1875-07-01"), pd.Timestamp("1876-07-01")]
     html = f._repr_html_()
     assert "<table>" in html and "1971" in html
     assert len(repr(f)) < 200

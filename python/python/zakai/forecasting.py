@@ -175,18 +175,37 @@ class Forecast:
         )
 
 
-def _continued_index(index: Any, steps: int) -> Any:
-    """The ``steps`` labels after a pandas index's last: at its frequency for dates and
-    periods; None when it has none."""
+# The offset of one time unit of datetimes (as `time_unit` names them).
+_UNITS = {"s": "seconds", "min": "minutes", "h": "hours", "D": "days", "W": "weeks",
+          "M": "months", "Q": "months", "Y": "years"}
+
+
+def _continued_index(index: Any, steps: int, dt: float, unit: Optional[str]) -> Any:
+    """The labels of ``steps`` steps of ``dt`` after a pandas index's last: dates ``dt``
+    time units apart when ``unit`` (the ``time_unit`` given) says what a unit is; else
+    periods and dates ``dt`` of their frequency apart; None otherwise (the forecast is then
+    indexed by its times)."""
     import pandas as pd
 
-    if isinstance(index, pd.PeriodIndex):
-        return pd.period_range(index[-1] + 1, periods=steps, freq=index.freq, name=index.name)
-    if isinstance(index, pd.DatetimeIndex):
-        freq = index.freq or (pd.infer_freq(index) if len(index) >= 3 else None)
-        if freq is None:
-            return None
-        return pd.date_range(index[-1], periods=steps + 1, freq=freq, name=index.name)[1:]
+    whole = float(dt).is_integer()
+    if isinstance(index, pd.PeriodIndex) and whole:
+        return pd.period_range(index[-1] + int(dt), periods=steps, freq=index.freq * int(dt),
+                               name=index.name)
+    if not isinstance(index, pd.DatetimeIndex):
+        return None
+    freq = index.freq or (pd.infer_freq(index) if len(index) >= 3 else None)
+    if freq is not None and whole and unit not in _UNITS:
+        return pd.date_range(index[-1], periods=steps + 1, freq=freq * int(dt), name=index.name)[1:]
+    if unit in _UNITS:
+        size = dt * (3 if unit == "Q" else 1)
+        if _UNITS[unit] in ("months", "years"):
+            if not float(size).is_integer():
+                return None
+            offsets = [pd.DateOffset(**{_UNITS[unit]: int(size) * k}) for k in range(1, steps + 1)]
+            return pd.DatetimeIndex([index[-1] + o for o in offsets], name=index.name)
+        delta = pd.Timedelta(**{_UNITS[unit]: size})
+        return pd.DatetimeIndex([index[-1] + delta * k for k in range(1, steps + 1)],
+                                name=index.name)
     return None
 
 
@@ -279,5 +298,6 @@ def forecast(
     origin = Filter._wrap(Scenario.from_json(text), inner)
     out = Forecast(raw, start=last, dt=step, level=level, origin=origin)
     if index is not None and len(index) > 0:
-        out.index = _continued_index(index, int(steps))
+        # Dates step by their frequency unless a unit was given for them.
+        out.index = _continued_index(index, int(steps), step, time_unit)
     return out
