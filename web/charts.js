@@ -8,10 +8,10 @@ import { color, dash, lineSample, markerSymbol, OBS_COLORS } from './looks.js';
 import { labels, state } from './state.js';
 import { worker } from './channel.js';
 import {
-  clamp, densityHeight, densityPoints, observationData, presenting, showStepPhase, shownDim, shownFrame, shownRow,
-  smoothedDensity, smoothedShown, updateScrub,
+  clamp, densityHeight, densityPoints, presenting, showStepPhase, shownDim, shownFrame, shownRow,
+  smoothedDensity, smoothedShown, updateScrub, forecastShown,
 } from './view.js';
-import { blindSpans, densityData, errorChoices, errorData, innovationData, render, trajectoryData } from './series.js';
+import { blindSpans, densityData, errorChoices, errorData, innovationData, observationSeries, render, trajectoryData } from './series.js';
 
 // Labels of a log axis: whole decades only, at most five of them (every k-th decade when the
 // errors span many, e.g. a scheme equal to the reference to round-off).
@@ -143,6 +143,18 @@ export function makePlots(info, recorded = null) {
   worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
 }
 
+// A forecast's three series — the predictive mean, dotted, and the interval's upper and lower
+// edges, shaded between — appended to `series` (the band to `bands`).
+function forecastSeries(series, bands, label, stroke) {
+  const upper = series.length + 1;
+  series.push(
+    { label: `${label} forecast`, stroke, width: 1.5, dash: [1, 3] },
+    { label: `${label} forecast upper`, stroke: 'transparent', width: 0 },
+    { label: `${label} forecast lower`, stroke: 'transparent', width: 0 },
+  );
+  bands.push({ series: [upper, upper + 1], fill: `${stroke}1f` });
+}
+
 // The uPlot charts of the run on screen (rebuilt, keeping the data, when presentation mode
 // changes the type size).
 export function makeCharts() {
@@ -166,10 +178,16 @@ export function makeCharts() {
   // with the smoothed estimates shown, the filters' estimates there instead.
   if (smoothedShown()) names.forEach((m, i) => series.push({ label: `${m} filtered`, stroke: `${color(i)}8c`, width: 1.5, dash: [2, 3] }));
   else (state.previous?.labels ?? []).forEach((m, i) => series.push({ label: `previous ${m}`, stroke: `${color(i)}59`, width: 1, dash: [1, 2] }));
+  // The forecast past the present: each method's predictive mean (dotted) and the edges of its
+  // interval, shaded (series.js trajectoryData appends them in this order).
+  state.forecastSeries = forecastShown() ? series.length : null;
+  if (forecastShown()) names.forEach((m, i) => forecastSeries(series, bands, m, color(i)));
+  // Time runs to the end of the data, or of the forecast past it.
+  const tEnd = () => Math.max(info.t_end, forecastShown() ? state.forecast.times.at(-1) : -Infinity);
   state.trajPlot?.destroy();
   state.trajPlot = new uPlot({
     ...plotSize('trajectory-plot', 'trajectory'), series, bands,
-    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
+    scales: { x: { time: false, range: () => [info.t_start, tEnd()] }, y: { range: safeRange } },
     axes: [{ label: 't', ...axisFont }, { label: `x${shownDim() + 1}`, ...axisFont }],
     // The method chips under the plot are its legend (line style, colour, show/hide).
     legend: { show: false },
@@ -183,15 +201,23 @@ export function makeCharts() {
   $('trajectory-plot').appendChild($('method-chips'));
   // The observations under the trajectory, on the same time axis; missing values break the line.
   const oseries = [{}, ...Array.from({ length: info.m }, (_, j) => ({ label: `${info.continuous ? 'y' : 'z'}${j + 1}`, stroke: OBS_COLORS[j % OBS_COLORS.length], width: 1.5, points: { show: !info.continuous, size: 3 } }))];
+  // Each next measurement's predictive mean and interval, per method and component (series.js
+  // observationSeries appends them in this order); none for increments of continuous ones.
+  const obands = [];
+  if (forecastShown() && !state.forecast.increments) {
+    names.forEach((m, i) => {
+      for (let j = 0; j < info.m; j++) forecastSeries(oseries, obands, `${m} z${j + 1}`, color(i));
+    });
+  }
   state.obsPlot?.destroy();
   state.obsPlot = new uPlot({
-    ...plotSize('observations-plot', 'observations'), series: oseries,
-    scales: { x: { time: false, range: () => [info.t_start, info.t_end] }, y: { range: safeRange } },
+    ...plotSize('observations-plot', 'observations'), series: oseries, bands: obands,
+    scales: { x: { time: false, range: () => [info.t_start, tEnd()] }, y: { range: safeRange } },
     // The time axis without a label (the trajectory plot's above names it): uPlot reserves a
     // label's height for any label, even an empty one.
     axes: [{ ...axisFont, size: timeTicksSize() }, { label: info.continuous ? 'y' : 'z', ...axisFont, space: 24 }],
     legend: { show: info.m > 1 },
-  }, state.data ? observationData() : oseries.map(() => []), $('observations-plot'));
+  }, state.data ? observationSeries() : oseries.map(() => []), $('observations-plot'));
   const dseries = [{}];
   names.forEach((m, i) => dseries.push({ label: m, stroke: color(i), dash: dash(i), width: 2 }));
   // The step in two halves: each method's prediction (thin, dashed) and the likelihood of the
@@ -266,6 +292,7 @@ function showMethods() {
     state.trajPlot.setSeries(2 + 2 * M + 2 * i, { show });
     state.trajPlot.setSeries(3 + 2 * M + 2 * i, { show });
     if (smoothedShown()) state.trajPlot.setSeries(2 + 4 * M + i, { show });
+    if (state.forecastSeries != null) [0, 1, 2].forEach((k) => state.trajPlot.setSeries(state.forecastSeries + 3 * i + k, { show }));
     state.densityPlot.setSeries(1 + i, { show });
     state.densityPlot.setSeries(1 + M + i, { show });
     state.innovPlot.setSeries(1 + i, { show });

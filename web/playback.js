@@ -8,6 +8,7 @@ import { densityHeight, densityPoints, setPlaying, showStepPhase, shownRow } fro
 import { applyFrame, render } from './series.js';
 import { makeCharts, resetHeatStrip } from './charts.js';
 import { dropSmoothed, requestSmoothing, setupSmoothing } from './smoothing.js';
+import { dropForecast, requestForecast, setupForecast } from './forecast.js';
 import { formChanged } from './form.js';
 import { checkedForm } from './problems.js';
 import { apply } from './session.js';
@@ -58,6 +59,7 @@ export function loop(ts) {
   if (state.queue.length) {
     const frames = state.queue.splice(0);
     if (state.smoothed && frames.some((f) => f.to > f.from)) dropSmoothed('the run moved on: tick "smoothed" again to smooth the rows so far');
+    if (state.forecast && frames.some((f) => f.to > f.from)) dropForecast('the run moved on: tick "forecast" again to forecast from its present');
     frames.forEach(applyFrame);
     if (state.preview?.phase === 'updated') showStepPhase();
     state.intervalTimes.push([ts, frames.reduce((a, f) => a + f.to - f.from, 0)]);
@@ -118,6 +120,7 @@ export function setupPlayback() {
     resetHeatStrip();
     render();
     requestSmoothing();
+    requestForecast();
   });
   $('density-method').addEventListener('change', () => {
     worker.postMessage({ type: 'view', view: { densityMethod: Number($('density-method').value) || 0 } });
@@ -126,6 +129,7 @@ export function setupPlayback() {
     requestSmoothing();
   });
   setupSmoothing();
+  setupForecast();
   $('scrub').addEventListener('input', () => scrubTo(Number($('scrub').value)));
   $('scrub-live').addEventListener('click', () => scrubTo(Infinity));
   $('present').addEventListener('click', () => setPresent(!document.body.classList.contains('present')));

@@ -7,7 +7,7 @@ import { $, el, fillOptions } from './dom.js';
 import { drawHeatmap2d } from './canvas-plots.js';
 import { color } from './looks.js';
 import { labels, state } from './state.js';
-import { bandsShown, densityHeight, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
+import { bandsShown, densityHeight, forecastShown, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
 function showLogConcavity(c) {
@@ -92,9 +92,41 @@ export function applyFrame(frame) {
   if (state.failures.size) $('run-error').textContent = `${[...state.failures.values()].join('\n')}\nThe other methods continue; reset (r) starts the run again. A failed method whose state is intact is drawn on, dashed, from its ✕.`;
 }
 
-// The trajectory plot's series for the shown component: times, truth, estimates, what failed
-// methods went on estimating, the ±2σ band edges.
+// The trajectory plot's series for the shown component: the run's (below), then, with a
+// forecast shown, each method's predictive mean and interval edges past the present.
 export function trajectoryData() {
+  const run = runTrajectory();
+  if (!forecastShown()) return run;
+  const f = state.forecast;
+  const dim = shownDim();
+  const n = state.info.n;
+  // From the present (the run's last estimate and its ±2σ band) into the forecast.
+  const d = state.data;
+  const last = d.times.length - 1;
+  const now = [d.est, d.hi, d.lo];
+  const column = (m, i, b, bound) => [m.failure ? null : now[b][i][dim][last] ?? null,
+    ...f.times.map((_, k) => (m.failure ? null : m.state[bound][k * n + dim] ?? null))];
+  const ahead = [[d.times[last], ...f.times],
+    ...f.methods.flatMap((m, i) => [column(m, i, 0, 'mean'), column(m, i, 1, 'upper'), column(m, i, 2, 'lower')])];
+  return uPlot.join([run, ahead], [run.map(() => 1), ahead.map(() => 1)]);
+}
+
+// The observation plot's series: the observations, then, with a forecast of discrete
+// measurements shown, each method's predictive mean and interval of each next measurement
+// (component by component).
+export function observationSeries() {
+  const obs = observationData();
+  if (!forecastShown() || state.forecast.increments) return obs;
+  const f = state.forecast;
+  const m = state.info.m;
+  const column = (method, bound, j) => f.times.map((_, k) => (method.failure ? null : method.observation[bound][k * m + j] ?? null));
+  const ahead = [f.times, ...f.methods.flatMap((method) => Array.from({ length: m }, (_, j) => ['mean', 'upper', 'lower'].map((b) => column(method, b, j))).flat())];
+  return uPlot.join([obs, ahead], [obs.map(() => 1), ahead.map(() => 1)]);
+}
+
+// The run's series on the trajectory plot: times, truth, estimates, what failed methods went
+// on estimating, the ±2σ band edges.
+function runTrajectory() {
   const d = state.data;
   const dim = shownDim();
   const none = d.times.map(() => null);
@@ -258,7 +290,7 @@ export function render() {
   if (!d || !state.heatStrip) return;
   const dim = shownDim();
   state.trajPlot.setData(trajectoryData());
-  state.obsPlot.setData(observationData());
+  state.obsPlot.setData(observationSeries());
   if (!$('errors-figure').hidden) state.errPlot.setData(errorData());
   if (!$('innovations-figure').hidden) state.innovPlot.setData(innovationData());
   const density = densityData();

@@ -8,6 +8,7 @@ import { setPlaying, showStepPhase } from './view.js';
 import { render } from './series.js';
 import { makePlots } from './charts.js';
 import { dropSmoothed, receiveSmoothed } from './smoothing.js';
+import { dropForecast, receiveForecast } from './forecast.js';
 import { EDITED, fillForm, noiseKindOptions, showStructure, showSuitability } from './form.js';
 import { checkedForm, revealFirstProblem, showProblems } from './problems.js';
 import { configFromAddress } from './export.js';
@@ -120,6 +121,7 @@ export function setupSession(hooks = {}) {
         state.queue.length = 0;
         state.lastDensity = null;
         dropSmoothed('');
+        dropForecast('');
         // The run on screen becomes the previous run, drawn faintly under the new one.
         if (state.data?.times.length > 1 && state.info) {
           state.previous = { times: state.data.times, est: state.data.est, labels: labels(), n: state.info.n, path: state.shownPath };
@@ -152,6 +154,9 @@ export function setupSession(hooks = {}) {
         break;
       case 'smoothed':
         receiveSmoothed(data);
+        break;
+      case 'forecast':
+        receiveForecast(data);
         break;
       case 'preview':
         if (data.load !== state.loadSeq) break;

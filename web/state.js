@@ -35,6 +35,8 @@ export const state = {
   previous: null, // {times, est, labels, n, path} of the run before the last change, drawn faintly
   shownPath: null, // runPath() of the run on screen, taken when it loaded
   smoothed: null, // the smoothers over the rows so far (smoothing.js): {rows, dim, method, grid, points, densities, methods, est, lo, hi}
+  forecast: null, // the forecasts from the present (forecast.js): {times, methods: [{times, state, observation} | {failure}], increments}
+  forecastSeries: null, // the trajectory plot's first forecast series, when a forecast is drawn
   reference: -1, // the method the error plot measures against (-1: none)
   diagnostics: null, // per method: mse, failed, failed_at, concerns … (the last frame's)
   summary: null, // the last frame's step summary (position, finished, failures)

@@ -35,6 +35,8 @@ export function shownFrame() {
 }
 // Whether the smoothed estimates are on screen.
 export const smoothedShown = () => $('smoothed').checked && state.smoothed != null;
+// Whether a forecast is drawn past the present (forecast.js).
+export const forecastShown = () => $('forecast').checked && state.forecast != null && state.forecast.times.length > 0;
 // The smoothed density of the heat strip's method and component at `row`, or null.
 export function smoothedDensity(row, dim, method) {
   const s = state.smoothed;

@@ -245,6 +245,20 @@ self.onmessage = async ({ data }) => {
       // Every method's smoother over the rows so far, the run unmoved.
       guard(() => post({ type: 'smoothed', load: loadId, dim: data.dim, densityMethod: data.densityMethod, result: session.smooth(data.densityMethod, data.dim, data.points) }));
       break;
+    case 'forecast':
+      // Every method's forecast from the rows so far, the run unmoved (a method that cannot
+      // forecast says why).
+      guard(() => post({
+        type: 'forecast', load: loadId,
+        methods: info.methods.map((_, i) => {
+          try {
+            return session.forecast(i, data.dt, data.steps, data.level);
+          } catch (e) {
+            return { failure: String(e.message ?? e) };
+          }
+        }),
+      }));
+      break;
     case 'preview':
       // The next step's predict half (and the next observation's likelihood), the run unmoved.
       guard(() => post({ type: 'preview', load: loadId, preview: session.preview(view.dim, view.points) }));

@@ -670,6 +670,44 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       console.log(`smoothed across the gaps: ${smoothedMethods} of ${smoothRun.methods.length} methods as the CLI's`);
       assert.ok(smoothedMethods >= 8, 'the Gaussian, particle and Yau–Yau smoothers');
       await data.screenshot({ path: `${artifacts}/recorded-gaps-smoothed.png` });
+      // Forecast on the page from the end of the same recording: each method's predictive
+      // mean and interval are `zakai forecast`'s on the same file (the particle filter's
+      // draws included), or both say there is none; drawn past the data's end.
+      await data.uncheck('#smoothed');
+      await data.fill('#forecast-steps', '5');
+      await data.check('#forecast');
+      await data.waitForFunction(() => window.zakaiPage.forecast != null, null, { timeout: 60000 });
+      const level = 0.9544997361036416; // forecast.js FORECAST_LEVEL: the probability of ±2σ
+      const cliForecast = JSON.parse(execFileSync(cli, ['forecast', 'cubic-sensor-1d', '--observations', gapPath, '--seed', '1', '--steps', '5', '--level', String(level), '--format', 'json']));
+      const pageForecast = await data.evaluate(() => ({
+        methods: window.zakaiPage.forecast.methods,
+        xmax: window.zakaiPage.trajPlot.scales.x.max,
+        drawn: window.zakaiPage.trajPlot.data.length,
+        status: document.getElementById('forecast-status').textContent,
+      }));
+      let forecasts = 0;
+      cliForecast.methods.forEach((m, i) => {
+        const p = pageForecast.methods[i];
+        if (m.failure) {
+          assert.ok(p.failure, `${m.name}: no forecast on the page either`);
+          return;
+        }
+        forecasts += 1;
+        m.steps.forEach((step, k) => {
+          assert.ok(Math.abs(p.times[k] - step.t) < 1e-9, `${m.name} forecast time ${k}`);
+          for (const what of ['mean', 'lower', 'upper']) {
+            const v = step.state[0][what];
+            assert.ok(Math.abs(p.state[what][k] - v) <= 1e-9 * Math.max(1, Math.abs(v)), `${m.name} forecast ${what} ${k}: page ${p.state[what][k]}, CLI ${v}`);
+            const o = step.observation[0][what];
+            assert.ok(Math.abs(p.observation[what][k] - o) <= 1e-9 * Math.max(1, Math.abs(o)), `${m.name} increment forecast ${what} ${k}: page ${p.observation[what][k]}, CLI ${o}`);
+          }
+        });
+      });
+      console.log(`forecast after the gaps: ${forecasts} of ${cliForecast.methods.length} methods as the CLI's`);
+      assert.ok(forecasts >= 8, 'the Gaussian, particle, Yau–Yau and spectral forecasts');
+      assert.ok(Math.abs(pageForecast.xmax - cliForecast.methods.find((m) => !m.failure).steps.at(-1).t) < 1e-9, 'the time axis runs to the forecast\'s end');
+      assert.match(pageForecast.status, /^5 steps of Δτ = 0\.01 after t = /);
+      await data.screenshot({ path: `${artifacts}/recorded-gaps-forecast.png` });
     }
     await data.close();
   }

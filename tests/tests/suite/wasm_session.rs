@@ -222,32 +222,64 @@ fn a_session_takes_pushed_observations() {
     assert!(e.contains("recorded observations"), "{e}");
 }
 
+/// What `Session::forecast` returns, as the page reads it.
+#[derive(serde::Deserialize)]
+struct Ahead {
+    times: Vec<f64>,
+    increments: bool,
+    state: Bands,
+    observation: Bands,
+}
+
+#[derive(serde::Deserialize)]
+struct Bands {
+    mean: Vec<Option<f64>>,
+    sd: Vec<Option<f64>>,
+    lower: Vec<Option<f64>>,
+    upper: Vec<Option<f64>>,
+}
+
 /// A forecast from the middle of a run: every method of the cubic sensor predicts 20 steps
 /// of Δτ on a fork (the run does not move: its estimates and position stay), the spread grows
-/// from the first step to the last, and bad requests are errors, not panics.
+/// from the first step to the last, each interval holds its mean, the increments' law is
+/// centred on h(x̂) Δτ = x̂³ Δτ for the Gaussian filters, and bad requests are errors, not
+/// panics.
 #[wasm_bindgen_test]
 fn a_forecast_forks_each_method() {
     let mut s = Session::new(config_js("cubic-sensor-1d"), Some(3.0)).unwrap();
     s.step(30).unwrap();
     let (position, before) = (s.position(), s.estimates(0, 0, 100));
+    let now = s.times(0, 100)[position - 1];
     let mut forecast = 0;
     for i in 0..6 {
         if s.estimates(i, 0, 100).len() < position {
             // Failed (the track-loss rule): no forecast, an error.
-            assert!(s.forecast(i, 0.01, 20).is_err(), "method {i}");
+            assert!(s.forecast(i, 0.01, 20, 0.95).is_err(), "method {i}");
             continue;
         }
         forecast += 1;
-        let f = s.forecast(i, 0.01, 20).unwrap();
-        assert_eq!(f.len(), 40, "method {i}: 20 means and 20 sds");
-        assert!(f.iter().all(|v| v.is_finite()), "method {i}");
-        let (first_sd, last_sd) = (f[20], f[39]);
+        let f: Ahead =
+            serde_wasm_bindgen::from_value(s.forecast(i, 0.01, 20, 0.95).unwrap()).unwrap();
+        assert!(f.increments);
+        assert_eq!(f.times.len(), 20);
+        assert!(
+            (f.times[0] - (now + 0.01)).abs() < 1e-12 && (f.times[19] - (now + 0.2)).abs() < 1e-12
+        );
+        for b in [&f.state, &f.observation] {
+            assert_eq!(b.mean.len(), 20, "method {i}: one component");
+            for k in 0..20 {
+                let [m, lo, hi] = [b.mean[k], b.lower[k], b.upper[k]].map(|v| v.unwrap());
+                assert!(lo < m && m < hi, "method {i}, step {k}: {lo} {m} {hi}");
+            }
+        }
+        let (first_sd, last_sd) = (f.state.sd[0].unwrap(), f.state.sd[19].unwrap());
         assert!(last_sd >= first_sd, "method {i}: {first_sd} then {last_sd}");
     }
     assert!(forecast >= 4, "{forecast} methods forecast");
     assert_eq!(s.position(), position);
     assert_eq!(s.estimates(0, 0, 100), before);
-    assert!(s.forecast(0, -1.0, 3).is_err());
-    assert!(s.forecast(0, f64::NAN, 3).is_err());
-    assert!(s.forecast(99, 0.01, 3).is_err());
+    assert!(s.forecast(0, -1.0, 3, 0.95).is_err());
+    assert!(s.forecast(0, f64::NAN, 3, 0.95).is_err());
+    assert!(s.forecast(0, 0.01, 3, 1.0).is_err());
+    assert!(s.forecast(99, 0.01, 3, 0.95).is_err());
 }

@@ -8,6 +8,7 @@ use zakai::lab::experiment::Experiment;
 use zakai::lab::experiment::{ExperimentRun, Observer};
 
 mod densities;
+mod forecast;
 mod smoothing;
 mod tracks;
 

@@ -1,7 +1,7 @@
 //! A session's tracks over a range of steps: times, truth, observations, estimates, standard
-//! deviations, innovations, forecasts, and per-method diagnostics.
+//! deviations, innovations and per-method diagnostics.
 
-use crate::{js_error, to_js};
+use crate::to_js;
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -93,38 +93,6 @@ impl Session {
                 (0..n).map(move |j| p[j * n + j].max(0.0).sqrt())
             })
             .collect()
-    }
-
-    /// The forecast of method `index` from where the run is: `steps` predictions of `dt`
-    /// each on a fork of the filter (the run does not move), as `steps` rows of the n means
-    /// then `steps` rows of the n standard deviations (0 where the method has no covariance);
-    /// an error for a failed method, a step that is not positive and finite, or more than
-    /// 10 000 steps.
-    pub fn forecast(&self, index: usize, dt: f64, steps: usize) -> Result<Vec<f64>, JsError> {
-        if !(dt > 0.0 && dt.is_finite()) || steps > 10_000 {
-            return Err(js_error(format!(
-                "a forecast needs a positive finite step and at most 10000 steps, got {dt} × {steps}"
-            )));
-        }
-        let (Some(filter), Some(track)) =
-            (self.run.filters().get(index), self.run.tracks().get(index))
-        else {
-            return Err(js_error(format!("no method {index}")));
-        };
-        if track.failed() {
-            return Err(js_error(format!("{} has failed: no forecast", track.name)));
-        }
-        let ahead = filter.forecast(dt, steps).map_err(js_error)?;
-        let mut out: Vec<f64> = ahead.iter().flat_map(|e| e.mean.iter().copied()).collect();
-        for e in &ahead {
-            let n = e.mean.len();
-            out.extend((0..n).map(|j| {
-                e.covariance
-                    .as_ref()
-                    .map_or(0.0, |p| p[(j, j)].max(0.0).sqrt())
-            }));
-        }
-        Ok(out)
     }
 
     /// Estimate rows `from..to` of method `index`, row-major (fewer rows after a failure).
