@@ -21,6 +21,20 @@ fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
     path
 }
 
+/// Measurements `z` at times 0, 1, 2, … as the CSV `zakai filter` reads (NaN: an empty field).
+fn measurements_csv(z: &[f64]) -> String {
+    let mut csv = String::from("t,z1\n");
+    for (k, v) in z.iter().enumerate() {
+        let cell = if v.is_nan() {
+            String::new()
+        } else {
+            v.to_string()
+        };
+        csv.push_str(&format!("{k},{cell}\n"));
+    }
+    csv
+}
+
 fn assert_clean_failure(o: &Output, needle: &str) {
     assert!(!o.status.success(), "should fail");
     let err = stderr(o);
@@ -688,15 +702,7 @@ fn smooth_writes_the_smoothed_estimates_beside_the_filtered() {
         2.0,
         2.8,
     ];
-    let mut csv = String::from("t,z1\n");
-    for (k, v) in z.iter().enumerate() {
-        let cell = if v.is_nan() {
-            String::new()
-        } else {
-            v.to_string()
-        };
-        csv.push_str(&format!("{k},{cell}\n"));
-    }
+    let csv = measurements_csv(&z);
     let obs = temp_file("smooth-obs.csv", &csv);
     let scenario = temp_file(
         "smooth-scenario.json",
@@ -1011,15 +1017,7 @@ fn filter_takes_a_state_dependent_diffusion_on_a_recorded_series() {
 #[test]
 fn forecast_prints_the_predictive_intervals_in_every_format() {
     let z = [1.2, 0.7, 1.9, 2.4, f64::NAN, 2.0];
-    let mut csv = String::from("t,z1\n");
-    for (k, v) in z.iter().enumerate() {
-        let cell = if v.is_nan() {
-            String::new()
-        } else {
-            v.to_string()
-        };
-        csv.push_str(&format!("{k},{cell}\n"));
-    }
+    let csv = measurements_csv(&z);
     let obs = temp_file("forecast-obs.csv", &csv);
     let scenario = temp_file(
         "forecast-scenario.json",

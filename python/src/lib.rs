@@ -32,6 +32,8 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(runs::run, m)?)?;
     m.add_function(wrap_pyfunction!(runs::filter_recorded, m)?)?;
     m.add_function(wrap_pyfunction!(runs::forecast_recorded, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::ljung_box, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::pit_uniformity, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::run_json, m)?)?;
     m.add_function(wrap_pyfunction!(runs::monte_carlo_from_runs, m)?)?;

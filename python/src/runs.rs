@@ -298,7 +298,7 @@ fn regular_times(count: usize, dt_obs: f64) -> Vec<f64> {
 /// With `smooth`, each method runs as its fixed-interval smoother and its record carries the
 /// smoothed estimates.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, truth, seed, smooth=false, inputs=None))]
+#[pyo3(signature = (json, observations, times, truth, seed, smooth=false, inputs=None, checks=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn filter_recorded<'py>(
     py: Python<'py>,
@@ -309,17 +309,40 @@ pub fn filter_recorded<'py>(
     seed: u64,
     smooth: bool,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+    checks: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
     let recording = recording_of(&e, &observations, times.as_ref(), truth.as_ref())?;
     let recording = with_inputs(&e, recording, inputs.as_ref())?;
+    if smooth && checks {
+        return Err(errors::config(
+            "checks",
+            "the predictive checks are of the filter: run zakai.filter(..., checks=True)",
+        ));
+    }
     let result = py
-        .detach(|| match smooth {
-            true => e.smooth_recorded(recording, seed),
-            false => e.filter_recorded(recording, seed),
+        .detach(|| match (smooth, checks) {
+            (true, _) => e.smooth_recorded(recording, seed),
+            (false, true) => e.check_recorded(recording, seed),
+            (false, false) => e.filter_recorded(recording, seed),
         })
         .map_err(errors::from_core)?;
     result_dict(py, &result, &e)
+}
+
+/// The Ljung–Box test of `errors` (NaN skipped) at `lags` lags: `(Q, p-value, count)`, or
+/// `None` with too few values ([`zakai::lab::checks::ljung_box`]).
+#[pyfunction]
+pub fn ljung_box(errors: Vec<f64>, lags: usize) -> Option<(f64, f64, usize)> {
+    zakai::lab::checks::ljung_box(&errors, lags).map(|t| (t.statistic, t.p_value, t.count))
+}
+
+/// The Kolmogorov–Smirnov test of `pit` (NaN skipped) against the uniform law:
+/// `(D, p-value, count)`, or `None` with too few values
+/// ([`zakai::lab::checks::pit_uniformity`]).
+#[pyfunction]
+pub fn pit_uniformity(pit: Vec<f64>) -> Option<(f64, f64, usize)> {
+    zakai::lab::checks::pit_uniformity(&pit).map(|t| (t.statistic, t.p_value, t.count))
 }
 
 /// The scenario's one method through a user's observations (as [`filter_recorded`] takes
@@ -614,6 +637,17 @@ fn result_dict<'py>(
             padded(py, track.log_likelihoods.clone(), count, &[])?,
         )?;
         md.set_item("log_likelihood", track.log_likelihood())?;
+        // The one-step predictive checks, when the run recorded them (`checks=True`).
+        for (name, values) in [
+            ("pit", &track.pit),
+            ("standardized", &track.standardized),
+            ("innovations", &track.innovations),
+        ] {
+            match values.is_empty() {
+                true => md.set_item(name, py.None())?,
+                false => md.set_item(name, padded(py, values.clone(), count, &[m])?)?,
+            }
+        }
         md.set_item("seconds_per_step", track.seconds_per_step())?;
         md.set_item("build_seconds", track.build_seconds)?;
         match &track.smoothed {

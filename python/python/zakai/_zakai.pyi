@@ -26,7 +26,11 @@ def filter_recorded(
     truth: Optional[npt.NDArray[np.float64]],
     seed: int,
     smooth: bool = False,
+    inputs: Optional[npt.NDArray[np.float64]] = None,
+    checks: bool = False,
 ) -> dict[str, Any]: ...
+def ljung_box(errors: list[float], lags: int) -> Optional[tuple[float, float, int]]: ...
+def pit_uniformity(pit: list[float]) -> Optional[tuple[float, float, int]]: ...
 def forecast_recorded(
     json: str,
     observations: npt.NDArray[np.float64],

@@ -3,10 +3,14 @@ times, with pandas views), :class:`MethodResult` and :class:`MonteCarloTable`.""
 
 from __future__ import annotations
 
+import html
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
+
+from . import _zakai
+from .errors import ConfigError
 
 
 
@@ -87,6 +91,18 @@ class MethodResult:
     key : str or None
         The method's catalogue key (``"kalman"``, ``"pf"``); :attr:`RunResult.methods` finds
         the result by it as well as by the display name.
+    pit : ndarray, shape (N + 1, m), or None
+        With ``checks=True`` (:func:`zakai.filter`): the probability integral transform of
+        each observation under the law the method predicted for it before seeing it,
+        ``u = F(z)`` per component — uniform on (0, 1) and independent over the rows when the
+        model and the method are right (Dawid 1984); for counts the randomised
+        ``F(z − 1) + V (F(z) − F(z − 1))``. NaN where missing (and at row 0 of increments).
+    standardized_innovations : ndarray, shape (N + 1, m), or None
+        With ``checks=True``: ``(z − E z) / sd z`` under the same law — for a Gaussian law
+        statsmodels' ``standardized_forecasts_error``.
+    innovations : ndarray, shape (N + 1, m), or None
+        With ``checks=True`` and discrete measurements: ``z − h(x̂⁻)``, the measurement less h
+        at the mean the method predicted.
     """
 
     name: str
@@ -101,6 +117,37 @@ class MethodResult:
     build_seconds: float
     smoothed: Optional[Smoothed] = None
     key: Optional[str] = None
+    pit: Optional[np.ndarray] = None
+    standardized_innovations: Optional[np.ndarray] = None
+    innovations: Optional[np.ndarray] = None
+
+    def diagnostics(self, lags: int = 10) -> "Diagnostics":
+        """The tests of the model on this method's one-step predictions (needs a run with
+        ``checks=True``): per observed component the Ljung–Box test of the standardised
+        innovations at ``lags`` lags (Ljung & Box 1978; statsmodels' ``acorr_ljungbox``) and
+        the Kolmogorov–Smirnov test of the PIT's uniformity, with their p-values. Small
+        p-values say the model (or the method's approximation of its posterior) does not
+        describe the data: correlated errors, or predictive laws too narrow, too wide or
+        off-centre."""
+        if self.pit is None or self.standardized_innovations is None:
+            raise ConfigError(
+                "diagnostics: this run did not record its predictive checks; run "
+                "zakai.filter(..., checks=True)"
+            )
+        rows = []
+        for j in range(self.pit.shape[1]):
+            lb = _zakai.ljung_box(self.standardized_innovations[:, j].tolist(), int(lags))
+            ks = _zakai.pit_uniformity(self.pit[:, j].tolist())
+            rows.append({
+                "component": j + 1,
+                "ljung_box": None if lb is None else lb[0],
+                "ljung_box_p": None if lb is None else lb[1],
+                "lags": int(lags),
+                "pit_ks": None if ks is None else ks[0],
+                "pit_ks_p": None if ks is None else ks[1],
+                "count": 0 if ks is None else ks[2],
+            })
+        return Diagnostics(self.name, rows)
 
     @property
     def warned(self) -> bool:
@@ -114,6 +161,54 @@ class MethodResult:
             return None
         return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
 
+
+
+class Diagnostics:
+    """The tests of a model on one method's one-step predictions
+    (:meth:`MethodResult.diagnostics`): per observed component the Ljung–Box statistic and
+    p-value of the standardised innovations, and the Kolmogorov–Smirnov distance of the PIT
+    from the uniform law and its p-value.
+
+    Attributes
+    ----------
+    method : str
+    rows : list of dict
+        ``component``, ``ljung_box``, ``ljung_box_p``, ``lags``, ``pit_ks``, ``pit_ks_p``,
+        ``count`` (the observations used).
+    """
+
+    __slots__ = ("method", "rows")
+
+    def __init__(self, method: str, rows: list[dict[str, Any]]) -> None:
+        self.method = method
+        self.rows = rows
+
+    def to_pandas(self) -> Any:
+        """The rows as a DataFrame indexed by component."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows).set_index("component")
+
+    def __repr__(self) -> str:
+        def p(v: Optional[float]) -> str:
+            return "—" if v is None else f"{v:.3g}"
+
+        parts = [f"z{r['component']}: Ljung–Box p = {p(r['ljung_box_p'])}, PIT uniform p = {p(r['pit_ks_p'])}"
+                 for r in self.rows]
+        return f"Diagnostics({self.method}; " + "; ".join(parts) + ")"
+
+    def _repr_html_(self) -> str:
+        def f(v: Optional[float]) -> str:
+            return "—" if v is None else f"{v:.4g}"
+
+        head = ("<tr><th>component</th><th>Ljung–Box Q</th><th>p</th><th>PIT KS D</th>"
+                "<th>p</th><th>n</th></tr>")
+        body = "".join(
+            f"<tr><td>{r['component']}</td><td>{f(r['ljung_box'])}</td><td>{f(r['ljung_box_p'])}</td>"
+            f"<td>{f(r['pit_ks'])}</td><td>{f(r['pit_ks_p'])}</td><td>{r['count']}</td></tr>"
+            for r in self.rows
+        )
+        return f"<b>Diagnostics</b> of {html.escape(self.method)}<table>{head}{body}</table>"
 
 
 class Methods(dict):  # type: ignore[type-arg]
@@ -224,6 +319,9 @@ class RunResult:
                 build_seconds=m["build_seconds"],
                 smoothed=None if sm is None else Smoothed(**sm),
                 key=m.get("key"),
+                pit=m.get("pit"),
+                standardized_innovations=m.get("standardized"),
+                innovations=m.get("innovations"),
             )
         return cls(
             seed=d["seed"],

@@ -94,6 +94,7 @@ def filter(
     *,
     inputs: Optional[ArrayLike] = None,
     time_unit: Optional[str] = None,
+    checks: bool = False,
 ) -> RunResult:
     """Every method of the scenario on your observations.
 
@@ -131,9 +132,25 @@ def filter(
         the first divided by it) or ``"M"``, ``"Q"``, ``"Y"`` (whole calendar periods since
         the first: a month is one step whatever its length). Needed for datetimes without a
         frequency; overrides an index's frequency.
+    checks : bool
+        Record each observation's one-step predictive checks — its PIT and standardised
+        error under the law each method predicted for it, and for discrete measurements the
+        innovation (:attr:`MethodResult.pit`, :attr:`MethodResult.standardized_innovations`,
+        :attr:`MethodResult.innovations`) — for :meth:`MethodResult.diagnostics`. Each step
+        then costs a second prediction (on a copy of the filter).
+
+    Examples
+    --------
+    >>> import numpy as np, zakai
+    >>> model = zakai.Model.discrete("0", "x", noise_cov=0.3, diffusion=0.5)
+    >>> sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 4.0), ["kalman"], dt_obs=1.0)
+    >>> r = zakai.filter(sc, np.array([1.2, 0.7, 1.9, np.nan, 2.4]), checks=True)
+    >>> r.methods["KF"].pit.shape, bool(np.isnan(r.methods["KF"].pit[3, 0]))
+    ((5, 1), True)
     """
     return _recorded(
-        scenario, observations, times, truth, seed, smooth=False, inputs=inputs, time_unit=time_unit
+        scenario, observations, times, truth, seed, smooth=False, inputs=inputs,
+        time_unit=time_unit, checks=checks,
     )
 
 
@@ -156,6 +173,7 @@ def _recorded(
     smooth: bool,
     inputs: Optional[ArrayLike] = None,
     time_unit: Optional[str] = None,
+    checks: bool = False,
 ) -> RunResult:
     """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
@@ -171,6 +189,7 @@ def _recorded(
             _seed(sc, seed),
             smooth,
             _inputs(inputs),
+            bool(checks),
         )
     )
     result.time_unit = unit

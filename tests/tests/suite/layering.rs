@@ -5,7 +5,7 @@
 //! `lab::scenario`). Order, bottom to top (as the crate doc lists it; `testing`, the unit
 //! tests' attribute, sits below them all): validate → error → linalg → random → grid, model →
 //! simulate → diagnostics → filters → lab: bibliography → scenario → recording, metrics,
-//! papers → experiment → study, fit → reproduction.
+//! checks, papers → experiment → study, fit → reproduction.
 // Reads the core's sources from the file system: native only.
 #![cfg(not(target_arch = "wasm32"))]
 
@@ -25,7 +25,12 @@ const LAYERS: &[&[&str]] = &[
     &["filters"],
     &["lab::bibliography"],
     &["lab::scenario"],
-    &["lab::recording", "lab::metrics", "lab::papers"],
+    &[
+        "lab::recording",
+        "lab::metrics",
+        "lab::checks",
+        "lab::papers",
+    ],
     &["lab::experiment"],
     &["lab::study", "lab::fit"],
     &["lab::reproduction"],

@@ -28,6 +28,7 @@ mod monte_carlo_table;
 mod own_data;
 mod parameters;
 mod particle;
+mod predictive_checks;
 mod properties;
 // 000's Monte Carlo reproductions run once, natively, as the stiff property test below.
 #[cfg(not(target_arch = "wasm32"))]

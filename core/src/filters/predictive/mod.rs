@@ -42,8 +42,8 @@ use crate::model::{BatchScratch, GaussianMixture, Model, ObservationModel};
 
 use super::{Estimate, Filter};
 
-pub(crate) use laws::normal_cdf;
 use laws::{count_quantile, gauss_hermite, poisson_cdf, student_t_cdf};
+pub(crate) use laws::{normal_cdf, upper_incomplete_gamma};
 
 /// Gauss–Hermite points per dimension for a Gaussian state through a non-Gaussian
 /// measurement density, at most (fewer in higher dimensions: q^n ≤ [`MAX_HERMITE_POINTS`]).

@@ -260,7 +260,13 @@ impl Experiment {
         }
         // The simulator's output fits the model by construction (and a truth that blew up is
         // the methods' problem to meet, not an input error).
-        self.start_checked(self.observed(self.simulate(seed)?), seed, clock, None)
+        self.start_checked(
+            self.observed(self.simulate(seed)?),
+            seed,
+            clock,
+            None,
+            false,
+        )
     }
 
     /// Every problem with running this experiment's methods on `recording`: its own problems
@@ -400,6 +406,22 @@ impl Experiment {
         Ok(RecordedForecast { last, methods })
     }
 
+    /// As [`Experiment::filter_recorded`], recording each observation's one-step predictive
+    /// checks ([`ExperimentRun::record_checks`]: its PIT and standardised error under the law
+    /// each method predicted for it, and for discrete measurements the innovations), for
+    /// [`crate::lab::checks`]' tests; `seed` also seeds the randomised PIT of counts.
+    pub fn check_recorded(&self, recording: Recording, seed: u64) -> Result<RunResult, ZakaiError> {
+        let problems = self.recording_problems(&recording);
+        if !problems.is_empty() {
+            return Err(ZakaiError::Config(problems));
+        }
+        with_standard_clock(|clock| {
+            let mut run = self.start_checked(recording, seed, clock, None, true)?;
+            run.complete(clock, &mut Silent);
+            Ok(run.finish())
+        })
+    }
+
     /// As [`Experiment::start_recorded`], timing every filter's build with `clock`.
     pub fn start_recorded_timed(
         &self,
@@ -411,7 +433,7 @@ impl Experiment {
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
         }
-        self.start_checked(recording, seed, clock, None)
+        self.start_checked(recording, seed, clock, None, false)
     }
 
     /// Every method over the whole `recording` as its fixed-interval smoother
@@ -444,7 +466,7 @@ impl Experiment {
         }
         with_standard_clock(|clock| {
             let plan = crate::filters::smoothing::SmoothingPlan::for_steps(recording.times.len());
-            let mut run = self.start_checked(recording, seed, clock, Some(plan))?;
+            let mut run = self.start_checked(recording, seed, clock, Some(plan), false)?;
             run.complete(clock, &mut Silent);
             run.smooth(clock, visit);
             Ok(run.finish())
@@ -458,6 +480,7 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
         smoothing: Option<crate::filters::smoothing::SmoothingPlan>,
+        checks: bool,
     ) -> Result<ExperimentRun, ZakaiError> {
         let mut filters: Vec<Box<dyn Filter>> = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
@@ -504,6 +527,8 @@ impl Experiment {
                 timed_steps: 0,
                 build_seconds,
                 innovations: Vec::new(),
+                pit: Vec::new(),
+                standardized: Vec::new(),
                 log_likelihoods: Vec::with_capacity(rows),
                 after_failure: Vec::new(),
                 off_track_since: None,
@@ -539,7 +564,13 @@ impl Experiment {
                 .collect(),
             follow_failed: false,
             innovations: None,
+            checks: None,
         };
+        if checks {
+            // From observation 0 on (a measurement at the prior's time is checked against it).
+            run.record_innovations(&self.model);
+            run.record_checks(&self.model, seed);
+        }
         run.observe(0, None, &mut Silent);
         Ok(run)
     }

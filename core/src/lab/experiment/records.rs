@@ -148,6 +148,16 @@ pub struct MethodTrack {
     /// them ([`ExperimentRun::record_innovations`](super::ExperimentRun::record_innovations)).
     #[serde(with = "crate::lab::recording::bits")]
     pub innovations: Vec<f64>,
+    /// The probability integral transform of each observation under the law the method
+    /// predicted for it (m per row of `estimates`; NaN where a component is missing or the
+    /// law is not defined): uniform and independent when model and method are right. Empty
+    /// unless the run records its checks
+    /// ([`ExperimentRun::record_checks`](super::ExperimentRun::record_checks)).
+    #[serde(default, with = "crate::lab::recording::bits")]
+    pub pit: Vec<f64>,
+    /// The standardised one-step errors `(z − E z) / sd z` under the same law (as `pit`).
+    #[serde(default, with = "crate::lab::recording::bits")]
+    pub standardized: Vec<f64>,
     /// The log-likelihood of each row's observation given the ones before it
     /// ([`crate::Filter::log_likelihood`]; one per row of `estimates`, 0 where nothing was
     /// observed, NaN where the method gives none).

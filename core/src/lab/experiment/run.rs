@@ -78,20 +78,30 @@ pub struct ExperimentRun {
     /// With discrete measurements, the model whose h gives each method's innovations
     /// ([`MethodTrack::innovations`]), and the row being computed.
     pub(super) innovations: Option<(Model, Vec<f64>)>,
+    /// The one-step predictive checks being recorded ([`ExperimentRun::record_checks`]).
+    pub(super) checks: Option<PredictiveChecks>,
 }
 
-/// `row = z − h(x̂⁻)` for the measurement `obs`, with `x̂⁻` the mean `filter` predicts for its
-/// time (its own mean when `obs.dt` is 0); NaN where z is missing or the prediction fails.
-pub(super) fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, row: &mut [f64]) {
-    let predicted = if obs.dt > 0.0 {
-        let mut ahead = filter.fork();
-        ahead
-            .step(&obs.predicting())
-            .ok()
-            .map(|()| ahead.estimate().mean)
-    } else {
-        Some(filter.estimate().mean)
-    };
+/// `filter` predicted to `obs`'s time, on a fork (unmoved when `obs.dt` is 0): what it expects
+/// before it sees `obs`; `None` when the prediction fails.
+pub(super) fn predicted(filter: &dyn Filter, obs: &Observation) -> Option<Box<dyn Filter>> {
+    let mut ahead = filter.fork();
+    if obs.dt > 0.0 {
+        ahead.step(&obs.predicting()).ok()?;
+    }
+    Some(ahead)
+}
+
+/// `row = z − h(x̂⁻)` for the measurement `obs`, with `x̂⁻` the mean of `predicted` (the
+/// filter predicted to its time, [`predicted`]); NaN where z is missing or the prediction
+/// failed.
+pub(super) fn innovation(
+    predicted: Option<&dyn Filter>,
+    model: &Model,
+    obs: &Observation,
+    row: &mut [f64],
+) {
+    let predicted = predicted.map(|f| f.estimate().mean);
     // A driven model's h at the measurement's time and inputs.
     let frozen = obs.frozen(model).ok().flatten();
     let model = frozen
@@ -105,6 +115,72 @@ pub(super) fn innovation(filter: &dyn Filter, model: &Model, obs: &Observation, 
             }
         }
         _ => row.iter_mut().for_each(|r| *r = f64::NAN),
+    }
+}
+
+/// The one-step predictive checks of a run ([`ExperimentRun::record_checks`]): for each
+/// observation, from the law the method predicts for it before seeing it
+/// ([`crate::predictive::ObservationLaw`]), per component the probability integral transform
+/// `u = F(z)` — uniform on (0, 1) and independent over the steps when the model and the method
+/// are right (Dawid 1984; for counts the randomised `F(z − 1) + V (F(z) − F(z − 1))`, V
+/// uniform, Brockwell 2007) — and the standardised error `(z − E z) / sd z`; NaN where the
+/// component is missing or the law is not defined (a log-density measurement).
+#[derive(Clone, Debug)]
+pub(super) struct PredictiveChecks {
+    model: Model,
+    rng: crate::random::SimRng,
+    /// The row being computed.
+    pub(super) pit: Vec<f64>,
+    pub(super) standardized: Vec<f64>,
+}
+
+impl PredictiveChecks {
+    fn new(model: &Model, seed: u64) -> Self {
+        PredictiveChecks {
+            model: model.clone(),
+            rng: crate::random::rng_from_seed(seed),
+            pit: alloc::vec![f64::NAN; model.m],
+            standardized: alloc::vec![f64::NAN; model.m],
+        }
+    }
+
+    /// The row of `obs` from `predicted` (the filter at its time, [`predicted`]; `None`: NaN).
+    fn compute(&mut self, predicted: Option<&dyn Filter>, obs: &Observation) {
+        use rand::RngExt;
+        self.pit.fill(f64::NAN);
+        self.standardized.fill(f64::NAN);
+        let Some(filter) = predicted else { return };
+        // A driven model's measurement at the observation's time and inputs.
+        let frozen = obs.frozen(&self.model).ok().flatten();
+        let model = frozen
+            .as_ref()
+            .map_or(&self.model, |(_, measurement)| measurement);
+        let observing = match obs.kind {
+            ObservationKind::Increment => crate::predictive::Observing::Increment(obs.dt),
+            ObservationKind::Measurement => crate::predictive::Observing::Measurement,
+        };
+        let Ok(law) = filter
+            .state_law()
+            .and_then(|state| crate::predictive::ObservationLaw::of(model, &state, observing))
+        else {
+            return;
+        };
+        for (j, z) in obs.value.iter().enumerate().take(self.pit.len()) {
+            if !z.is_finite() {
+                continue;
+            }
+            let upper = law.cdf(j, *z);
+            self.pit[j] = if law.is_count() {
+                let lower = law.cdf(j, z - 1.0);
+                lower + self.rng.random::<f64>() * (upper - lower)
+            } else {
+                upper
+            };
+            let (mean, sd) = law.mean_and_sd(j);
+            if sd > 0.0 && sd.is_finite() {
+                self.standardized[j] = (z - mean) / sd;
+            }
+        }
     }
 }
 
@@ -252,9 +328,18 @@ impl ExperimentRun {
             }
             return;
         }
-        // The innovation, from the prediction on a fork (before the step moves the filter).
-        if let Some((model, row)) = &mut self.innovations {
-            innovation(filter.as_ref(), model, &obs, row);
+        // The innovation and the predictive checks, from the prediction on a fork (before the
+        // step moves the filter).
+        if self.innovations.is_some() || self.checks.is_some() {
+            let ahead = predicted(filter.as_ref(), &obs);
+            let ahead = ahead.as_deref();
+            if let Some((model, row)) = &mut self.innovations {
+                innovation(ahead, model, &obs, row);
+            }
+            if let Some(checks) = &mut self.checks {
+                let first_increment = k == 0 && t.continuous;
+                checks.compute((!first_increment).then_some(ahead).flatten(), &obs);
+            }
         }
         // Observation 0 is no step of the recursion (nothing, or the update at τ₀): untimed.
         let start = clock
@@ -341,6 +426,10 @@ impl ExperimentRun {
                 if let Some((_, row)) = &self.innovations {
                     append(&mut track.innovations, row);
                 }
+                if let Some(checks) = &self.checks {
+                    append(&mut track.pit, &checks.pit);
+                    append(&mut track.standardized, &checks.standardized);
+                }
                 if let Some(p) = &est.covariance {
                     // nalgebra is column-major; P is symmetric, so rows read the same.
                     append(&mut track.covariances, p.as_slice());
@@ -406,6 +495,21 @@ impl ExperimentRun {
             track.innovations = alloc::vec![f64::NAN; track.rows() * model.m];
         }
         self.innovations = Some((model.clone(), alloc::vec![0.0; model.m]));
+    }
+
+    /// Records every method's one-step predictive checks from the next observation on
+    /// ([`MethodTrack::pit`], [`MethodTrack::standardized`]; rows so far NaN; `model` is the
+    /// run's, `seed` seeds the randomised PIT of counts). Each costs a fork and a prediction
+    /// per step (shared with the innovations').
+    pub fn record_checks(&mut self, model: &Model, seed: u64) {
+        if self.checks.is_some() {
+            return;
+        }
+        for track in &mut self.tracks {
+            track.pit = alloc::vec![f64::NAN; track.rows() * model.m];
+            track.standardized = alloc::vec![f64::NAN; track.rows() * model.m];
+        }
+        self.checks = Some(PredictiveChecks::new(model, seed));
     }
 
     /// Processes up to `count` further observations; returns how many were processed.
