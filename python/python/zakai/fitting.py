@@ -203,6 +203,29 @@ class FitResult:
             index=pd.Index(names, name="parameter"),
         )
 
+    def __repr__(self) -> str:
+        est = ", ".join(f"{n}={self.params[n]:.4g}±{self.stderr[n]:.2g}" for n in self.params)
+        return f"FitResult({self.method}: {est}; ln L = {self.loglik:.6g}, n = {self.nobs})"
+
+    def _repr_html_(self) -> str:
+        import html
+
+        rows = "".join(
+            f"<tr><td>{html.escape(n)}</td><td>{self.params[n]:.6g}</td><td>{self.stderr[n]:.4g}</td>"
+            f"<td>[{self.intervals.get(n, (float('nan'),) * 2)[0]:.4g}, "
+            f"{self.intervals.get(n, (float('nan'),) * 2)[1]:.4g}]</td></tr>"
+            for n in self.params
+        )
+        notes = "".join(f"<li>{html.escape(n)}</li>" for n in self.notes)
+        return (
+            f"<b>Maximum-likelihood fit</b> — {html.escape(self.method)}, {self.nobs} observations"
+            "<table><tr><th>parameter</th><th>estimate</th><th>stderr</th><th>95 % interval</th></tr>"
+            f"{rows}</table>ln L = {self.loglik:.6f}, AIC = {self.aic:.4f}, BIC = {self.bic:.4f}; "
+            f"{html.escape(self.optimiser)}, {self.nit} iterations"
+            + (", converged" if self.converged else ", <b>not converged</b>")
+            + (f"<ul>{notes}</ul>" if notes else "")
+        )
+
     def __str__(self) -> str:
         lines = [f"Maximum-likelihood fit — {self.method}, {self.nobs} observations"]
         for n in self.params:
@@ -334,6 +357,27 @@ class Profile:
         import pandas as pd
 
         return pd.DataFrame(self.loglik, index=pd.Index(self.values, name=self.parameter))
+
+    def __repr__(self) -> str:
+        best = ", ".join(
+            f"{m}: {self.parameter}* = {v[0]:.4g}" if v is not None else f"{m}: —"
+            for m, v in self.maxima.items()
+        )
+        return (f"Profile({self.parameter}, {len(self.values)} values in "
+                f"[{self.values[0]:.4g}, {self.values[-1]:.4g}]; {best})")
+
+    def _repr_html_(self) -> str:
+        import html
+
+        rows = "".join(
+            f"<tr><td>{html.escape(m)}</td><td>{'—' if v is None else f'{v[0]:.6g}'}</td>"
+            f"<td>{'—' if v is None else f'{v[1]:.6g}'}</td>"
+            f"<td>{html.escape('; '.join(self.notes.get(m, [])))}</td></tr>"
+            for m, v in self.maxima.items()
+        )
+        return (f"<b>Profile</b> of ln L along {html.escape(self.parameter)}, {len(self.values)} values"
+                f"<table><tr><th>method</th><th>{html.escape(self.parameter)}*</th><th>ln L</th>"
+                f"<th>notes</th></tr>{rows}</table>")
 
 
 

@@ -52,6 +52,12 @@ class Smoothed:
         """Smoothed standard deviations (N + 1, n)."""
         return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
 
+    def __repr__(self) -> str:
+        if self.failure is not None:
+            return f"Smoothed(none: {_short(self.failure)})"
+        mse = "" if self.mse is None else f", MSE {self.mse:.4g}"
+        return f"Smoothed({self.smoother}, rows={len(self.estimates)}{mse})"
+
 
 @dataclass(slots=True)
 class MethodResult:
@@ -154,6 +160,30 @@ class MethodResult:
         """Whether a self-check warned during the run."""
         return bool(self.concerns)
 
+    def _summary(self) -> list[str]:
+        """The method's numbers in a few words each."""
+        out = []
+        if self.mse is not None:
+            out.append(f"MSE {self.mse:.4g}")
+        if self.log_likelihood is not None:
+            out.append(f"ln L {self.log_likelihood:.6g}")
+        out.append(f"{self.seconds_per_step * 1e6:.3g} µs/step")
+        if self.failure is not None:
+            out.append(f"failed at t = {self.failure[1]:.4g}: {_short(self.failure[2])}")
+        if self.concerns:
+            out.append(f"{len(self.concerns)} self-check warning(s)")
+        if self.pit is not None:
+            out.append("checked")
+        return out
+
+    def __repr__(self) -> str:
+        rows, n = self.estimates.shape
+        return f"MethodResult({self.name}, rows={rows}, n={n}; " + "; ".join(self._summary()) + ")"
+
+    def _repr_html_(self) -> str:
+        return (f"<b>{html.escape(self.name)}</b> — {len(self.estimates)} rows: "
+                + html.escape("; ".join(self._summary())))
+
     @property
     def sds(self) -> Optional[np.ndarray]:
         """Standard deviations (N + 1, n) from the covariances, or ``None``."""
@@ -161,6 +191,11 @@ class MethodResult:
             return None
         return np.sqrt(np.clip(np.diagonal(self.covariances, axis1=1, axis2=2), 0.0, None))
 
+
+
+def _short(text: str, limit: int = 120) -> str:
+    """``text`` cut to ``limit`` characters (with an ellipsis)."""
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 class Diagnostics:
@@ -357,6 +392,26 @@ class RunResult:
 
     def __repr__(self) -> str:
         return f"RunResult(seed={self.seed}, steps={len(self.times) - 1}, methods={list(self.methods)})"
+
+    def _repr_html_(self) -> str:
+        head = ("<tr><th>method</th><th>last estimate</th><th>MSE</th><th>ln L</th>"
+                "<th>µs/step</th><th>notes</th></tr>")
+        rows = []
+        for key, m in self.methods.items():
+            last = m.estimates[-1]
+            est = "—" if np.isnan(last).any() else ", ".join(f"{v:.4g}" for v in last)
+            notes = []
+            if m.failure is not None:
+                notes.append(f"failed at t = {m.failure[1]:.4g}: {_short(m.failure[2])}")
+            notes += [_short(c["text"]) for c in m.concerns]
+            rows.append(
+                f"<tr><td>{html.escape(key)}</td><td>{est}</td>"
+                f"<td>{'—' if m.mse is None else f'{m.mse:.4g}'}</td>"
+                f"<td>{'—' if m.log_likelihood is None else f'{m.log_likelihood:.6g}'}</td>"
+                f"<td>{m.seconds_per_step * 1e6:.3g}</td><td>{html.escape('; '.join(notes))}</td></tr>"
+            )
+        return (f"<b>Run</b>: {len(self.times) - 1} steps, seed {self.seed}"
+                f"<table>{head}{''.join(rows)}</table>")
 
 
 

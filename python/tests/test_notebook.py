@@ -1,0 +1,41 @@
+"""Results that read well in a notebook: every result's repr a line of a few hundred
+characters at most (no arrays), and an HTML table for Jupyter."""
+
+import numpy as np
+import pytest
+
+import zakai
+
+
+@pytest.fixture(scope="module")
+def level():
+    model = zakai.Model.discrete("0", "x", noise_cov="r", diffusion="sqrt(q)")
+    sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 4.0), ["kalman", "pf"], dt_obs=1.0,
+                        t_final=60.0, domain=[(-15, 15)], seed=2,
+                        parameters={"q": (0.3, (0, None)), "r": (0.5, (0, None))})
+    times, states, z = zakai.simulate(sc)
+    return sc, times, states, z
+
+
+def test_every_result_has_a_short_repr_and_an_html_table(level):
+    sc, times, states, z = level
+    run = zakai.filter(sc, z, times=times, truth=states, checks=True)
+    smoothed = zakai.smooth(sc, z, times=times)
+    fit = zakai.fit(sc, z, "kalman", times=times)
+    prof = zakai.profile(sc, z, "r", points=5, times=times)
+    ahead = zakai.forecast(sc, z, 3, times=times)
+    diagnostics = run.methods["KF"].diagnostics()
+    shown = [run, run.methods["KF"], smoothed.methods["KF"].smoothed, fit, prof, ahead, diagnostics]
+    for obj in shown:
+        text = repr(obj)
+        assert len(text) < 300, f"{type(obj).__name__}: {len(text)} characters: {text}"
+        assert "array(" not in text and "\n" not in text, text
+    for obj in [run, fit, prof, ahead, diagnostics]:
+        page = obj._repr_html_()
+        assert "<table>" in page and len(page) < 20_000, type(obj).__name__
+    # The numbers in the table are the result's.
+    assert f"{fit.params['q']:.6g}" in fit._repr_html_()
+    assert f"{run.methods['KF'].mse:.4g}" in run._repr_html_()
+    # Found by catalogue key as by display name.
+    assert run.methods["kalman"] is run.methods["KF"]
+    assert np.isfinite(fit.aic) and fit.bic > fit.aic
