@@ -39,3 +39,30 @@ def test_every_result_has_a_short_repr_and_an_html_table(level):
     # Found by catalogue key as by display name.
     assert run.methods["kalman"] is run.methods["KF"]
     assert np.isfinite(fit.aic) and fit.bic > fit.aic
+
+
+def test_a_filter_pickles_and_steps_on_identically(level):
+    import pickle
+
+    sc, times, states, z = level
+    model = zakai.Model.discrete("0", "x", noise_cov=0.5, diffusion=0.6)
+    for method in ("kalman", "pf", "separation"):
+        f = zakai.Filter(method, model, zakai.Prior.gaussian(0.0, 4.0), dt_obs=1.0,
+                         domain=[(-15, 15)], seed=9)
+        f.run(z[:20, 0])
+        f.predict(0.5)
+        f.step([z[20, 0]], 0.5)
+        twin = pickle.loads(pickle.dumps(f))
+        np.testing.assert_array_equal(twin.mean, f.mean)
+        for k in range(21, 30):
+            f.step([z[k, 0]])
+            twin.step([z[k, 0]])
+        # The same bits after the same steps (the particle filter's draws included).
+        np.testing.assert_array_equal(twin.mean, f.mean)
+        np.testing.assert_array_equal(twin.cov, f.cov)
+        assert twin.log_likelihood == f.log_likelihood
+        # A copy pickles too; a forecast's origin (a run's state) says why it does not.
+        assert pickle.loads(pickle.dumps(f.copy())).mean[0] == f.mean[0]
+    origin = zakai.forecast(sc, z, 2, times=times)._origin
+    with pytest.raises(TypeError, match="forecast's origin"):
+        pickle.dumps(origin)

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any, Optional, Sequence
 import numpy as np
 
 from . import _zakai
-from .errors import ConfigError
+from .errors import ConfigError, FilterError
 from ._convert import ArrayLike, _array
 from .models import Model, Prior
 from .scenario import Scenario
@@ -63,7 +63,7 @@ class Filter:
 
     # A misspelt or FilterPy-style attribute (``f.x = …``) raises AttributeError instead of
     # being accepted and ignored.
-    __slots__ = ("scenario", "_inner", "_at_prior")
+    __slots__ = ("scenario", "_inner", "_at_prior", "_seed", "_log")
 
     def __init__(
         self,
@@ -93,6 +93,9 @@ class Filter:
         self._inner = _zakai.Stepper(scenario._text(), int(seed))
         # Whether the filter is still at the prior's time (no step taken yet).
         self._at_prior = True
+        # The seed and every call that moved the filter, for pickling (see __reduce__).
+        self._seed = int(seed)
+        self._log: Optional[list[tuple[Any, ...]]] = []
 
     @classmethod
     def _wrap(cls, scenario: Scenario, inner: Any) -> "Filter":
@@ -101,6 +104,35 @@ class Filter:
         f.scenario = scenario
         f._inner = inner
         f._at_prior = False
+        # Its past is a run's, not calls of its own: it has nothing to replay.
+        f._seed = None
+        f._log = None
+        return f
+
+    def _record(self, call: tuple[Any, ...]) -> None:
+        """Notes a call that moved the filter (after it succeeded)."""
+        if self._log is not None:
+            self._log.append(call)
+
+    @classmethod
+    def _restore(cls, text: str, seed: int, log: list[tuple[Any, ...]], at_prior: bool) -> "Filter":
+        """A pickled filter: built again from its scenario and seed, its calls replayed (every
+        method is deterministic given its seed, so its state is the one pickled, to the bit)."""
+        f = cls.__new__(cls)
+        f.scenario = Scenario.from_json(text)
+        f._inner = _zakai.Stepper(text, seed)
+        f._seed = seed
+        f._log = []
+        for name, *args in log:
+            if name == "run!":
+                try:
+                    f._inner.run(*args)
+                except FilterError:
+                    pass
+            else:
+                getattr(f._inner, name)(*args)
+            f._log.append((name, *args))
+        f._at_prior = at_prior
         return f
 
     def forecast(
@@ -151,7 +183,9 @@ class Filter:
         (:meth:`Model.with_inputs`) needs the observation's time ``t`` and the known inputs
         ``u`` over the interval that ends at it. A step that fails raises
         :class:`FilterError` and leaves the filter as it was."""
-        self._inner.step(_array(observation, "observation"), self._dt(dt), *_drive(t, u))
+        args = (_array(observation, "observation"), self._dt(dt), *_drive(t, u))
+        self._inner.step(*args)
+        self._record(("step", *args))
         self._at_prior = False
 
     def predict(
@@ -164,13 +198,17 @@ class Filter:
         """Predicts over ``dt`` (Δτ when absent) without an observation: a gap in the data,
         or a forecast (on a :meth:`copy`, to keep the filter itself at the present). A driven
         model needs the time ``t`` it predicts to and the inputs ``u`` held until then."""
-        self._inner.predict(self._dt(dt), *_drive(t, u))
+        args = (self._dt(dt), *_drive(t, u))
+        self._inner.predict(*args)
+        self._record(("predict", *args))
         self._at_prior = False
 
     def update(self, z: ArrayLike) -> None:
         """Assimilates the measurement ``z`` at the current time, without predicting
         (discrete models; NaN components are missing)."""
-        self._inner.update(_array(z, "z"))
+        z = _array(z, "z")
+        self._inner.update(z)
+        self._record(("update", z))
         self._at_prior = False
 
     @property
@@ -188,6 +226,8 @@ class Filter:
         twin.scenario = self.scenario.copy()
         twin._inner = self._inner.fork()
         twin._at_prior = self._at_prior
+        twin._seed = self._seed
+        twin._log = None if self._log is None else list(self._log)
         return twin
 
     def __copy__(self) -> "Filter":
@@ -197,11 +237,16 @@ class Filter:
         return self.copy()
 
     def __reduce__(self) -> Any:
-        raise TypeError(
-            "a zakai.Filter holds its state in native memory and cannot be pickled; "
-            "keep its scenario (f.scenario.to_json()) and the observations, and step a new "
-            "Filter through them, or copy it in the same process with f.copy()"
-        )
+        """Pickles the filter as its scenario, its seed and the calls that moved it: unpickled,
+        it is built again and the calls replayed, so it holds the state pickled (every method
+        is deterministic given its seed) and steps on identically. Unpickling costs the
+        replay's time; the pickle grows with the observations the filter has seen."""
+        if self._log is None:
+            raise TypeError(
+                "this zakai.Filter is a forecast's origin, the state a whole run left: it "
+                "cannot be pickled; pickle the scenario and the observations instead"
+            )
+        return (Filter._restore, (self.scenario._text(), self._seed, list(self._log), self._at_prior))
 
     def run(
         self, observations: ArrayLike, dts: Optional[ArrayLike] = None
@@ -222,7 +267,13 @@ class Filter:
                 steps[0] = 0.0
         else:
             steps = _array(dts, "dts")
-        result = self._inner.run(obs, steps)
+        try:
+            result = self._inner.run(obs, steps)
+        except FilterError:
+            # The rows before the one that failed were taken: a replay fails at the same row.
+            self._record(("run!", obs, steps))
+            raise
+        self._record(("run", obs, steps))
         self._at_prior = self._at_prior and rows == 0
         return result
 
