@@ -66,3 +66,26 @@ def test_a_filter_pickles_and_steps_on_identically(level):
     origin = zakai.forecast(sc, z, 2, times=times)._origin
     with pytest.raises(TypeError, match="forecast's origin"):
         pickle.dumps(origin)
+
+
+def test_results_plot_with_matplotlib(level):
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sc, times, states, z = level
+    run = zakai.filter(sc, z, times=times, truth=states, checks=True)
+    figures = [
+        run.plot(),
+        run.methods["KF"].plot(),
+        run.methods["KF"].diagnostics().plot(),
+        zakai.forecast(sc, z, 5, times=times).plot(),
+        zakai.profile(sc, z, "r", points=5, times=times).plot(),
+    ]
+    for fig in figures:
+        assert isinstance(fig, matplotlib.figure.Figure)
+        assert sum(len(ax.lines) + len(ax.collections) + len(ax.patches) for ax in fig.axes) > 0
+    # The run's figure draws every method and the truth, the diagnostics' four panels.
+    assert len(figures[0].axes[0].lines) == 1 + len(run.methods)
+    assert len(figures[2].axes) == 4
+    plt.close("all")

@@ -358,6 +358,13 @@ class Profile:
 
         return pd.DataFrame(self.loglik, index=pd.Index(self.values, name=self.parameter))
 
+    def plot(self, level: float = 0.95) -> Any:
+        """ln L along the parameter for every method, its maximum marked and the
+        likelihood-ratio level ``ln L(θ*) − ½ χ²₁(level)`` dotted (matplotlib); the Figure."""
+        from . import plotting
+
+        return plotting.profile(self, level)
+
     def __repr__(self) -> str:
         best = ", ".join(
             f"{m}: {self.parameter}* = {v[0]:.4g}" if v is not None else f"{m}: —"

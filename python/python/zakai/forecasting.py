@@ -140,6 +140,13 @@ class Forecast:
         index = self.index if self.index is not None else pd.Index(self.times, name="t")
         return pd.DataFrame(columns, index=index)
 
+    def plot(self) -> Any:
+        """The fan: the state's and the observation's predictive means and intervals over the
+        steps ahead (matplotlib); the Figure."""
+        from . import plotting
+
+        return plotting.forecast(self)
+
     def __repr__(self) -> str:
         return (
             f"Forecast({self.method}, steps={self.steps}, t={self.times[0]:g}…{self.times[-1]:g}, "

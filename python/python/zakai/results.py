@@ -126,6 +126,14 @@ class MethodResult:
     pit: Optional[np.ndarray] = None
     standardized_innovations: Optional[np.ndarray] = None
     innovations: Optional[np.ndarray] = None
+    times: Optional[np.ndarray] = None
+
+    def plot(self, dim: int = 0) -> Any:
+        """The estimates of component ``dim`` with ±2σ bands (matplotlib); the Figure."""
+        from . import plotting
+
+        times = self.times if self.times is not None else np.arange(len(self.estimates))
+        return plotting.method(self, times, dim)
 
     def diagnostics(self, lags: int = 10) -> "Diagnostics":
         """The tests of the model on this method's one-step predictions (needs a run with
@@ -153,7 +161,7 @@ class MethodResult:
                 "pit_ks_p": None if ks is None else ks[1],
                 "count": 0 if ks is None else ks[2],
             })
-        return Diagnostics(self.name, rows)
+        return Diagnostics(self.name, rows, self.pit, self.standardized_innovations)
 
     @property
     def warned(self) -> bool:
@@ -212,11 +220,21 @@ class Diagnostics:
         ``count`` (the observations used).
     """
 
-    __slots__ = ("method", "rows")
+    __slots__ = ("method", "rows", "pit", "standardized")
 
-    def __init__(self, method: str, rows: list[dict[str, Any]]) -> None:
+    def __init__(self, method: str, rows: list[dict[str, Any]], pit: np.ndarray,
+                 standardized: np.ndarray) -> None:
         self.method = method
         self.rows = rows
+        self.pit = pit
+        self.standardized = standardized
+
+    def plot(self, component: int = 1) -> Any:
+        """The 2 × 2 figure of the checks of observation component ``component`` (1-based):
+        standardised innovations, PIT histogram, normal Q-Q plot, correlogram; the Figure."""
+        from . import plotting
+
+        return plotting.diagnostics(self, component)
 
     def to_pandas(self) -> Any:
         """The rows as a DataFrame indexed by component."""
@@ -357,6 +375,7 @@ class RunResult:
                 pit=m.get("pit"),
                 standardized_innovations=m.get("standardized"),
                 innovations=m.get("innovations"),
+                times=d["times"],
             )
         return cls(
             seed=d["seed"],
@@ -392,6 +411,14 @@ class RunResult:
 
     def __repr__(self) -> str:
         return f"RunResult(seed={self.seed}, steps={len(self.times) - 1}, methods={list(self.methods)})"
+
+    def plot(self, dim: int = 0, methods: Optional[list[str]] = None) -> Any:
+        """Every method's estimates of component ``dim`` with ±2σ bands, the truth when known,
+        and the observations below (matplotlib); ``methods`` (names or keys) to show some
+        only. The Figure."""
+        from . import plotting
+
+        return plotting.run(self, dim, methods)
 
     def _repr_html_(self) -> str:
         head = ("<tr><th>method</th><th>last estimate</th><th>MSE</th><th>ln L</th>"

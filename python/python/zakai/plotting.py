@@ -1,0 +1,155 @@
+"""Figures of results (matplotlib, an optional dependency imported only here): what the
+``.plot()`` methods of :class:`RunResult`, :class:`MethodResult`, :class:`Forecast`,
+:class:`Profile` and :class:`Diagnostics` draw. Each returns the matplotlib Figure."""
+
+from __future__ import annotations
+
+from statistics import NormalDist
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+
+def _pyplot() -> Any:
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("plots need matplotlib (pip install matplotlib)") from e
+    return plt
+
+
+def run(result: Any, dim: int = 0, methods: Optional[Sequence[str]] = None) -> Any:
+    """The estimates of component ``dim`` with ±2σ bands, the truth when known, and the
+    observations below (a continuous model's path y(t) = Σ Δy)."""
+    plt = _pyplot()
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 6),
+                                      gridspec_kw={"height_ratios": [3, 1]})
+    t = result.times
+    if result.truth is not None:
+        top.plot(t, result.truth[:, dim], color="black", lw=1.5, label="truth")
+    for key, m in result.methods.items():
+        if methods is not None and key not in methods and m.key not in methods:
+            continue
+        _estimate(top, t, m, dim, key)
+    top.set_ylabel(f"x{dim + 1}")
+    top.legend(loc="best", fontsize="small")
+    obs = result.observations
+    if result.continuous:
+        path = np.nancumsum(np.nan_to_num(obs, nan=0.0), axis=0)
+        path[np.isnan(obs)] = np.nan
+        bottom.plot(t, path, lw=1)
+        bottom.set_ylabel("y")
+    else:
+        bottom.plot(t, obs, ".", ms=3)
+        bottom.set_ylabel("z")
+    bottom.set_xlabel("t")
+    fig.tight_layout()
+    return fig
+
+
+def _estimate(ax: Any, t: np.ndarray, m: Any, dim: int, label: str) -> None:
+    line, = ax.plot(t, m.estimates[:, dim], lw=1.2, label=label)
+    sds = m.sds
+    if sds is not None:
+        lo = m.estimates[:, dim] - 2 * sds[:, dim]
+        hi = m.estimates[:, dim] + 2 * sds[:, dim]
+        ax.fill_between(t, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+
+
+def method(m: Any, times: np.ndarray, dim: int = 0) -> Any:
+    """One method's estimates of component ``dim`` with ±2σ bands."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 4))
+    _estimate(ax, times, m, dim, m.name)
+    ax.set_xlabel("t")
+    ax.set_ylabel(f"x{dim + 1}")
+    ax.legend(loc="best", fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def diagnostics(d: Any, component: int = 1) -> Any:
+    """The 2 × 2 figure of a method's checks (statsmodels' ``plot_diagnostics`` with the PIT
+    histogram in place of the residuals'): the standardised innovations over the rows, the
+    PIT's histogram against the uniform, the innovations' normal Q-Q plot, and their
+    correlogram with ±1.96/√n."""
+    plt = _pyplot()
+    j = component - 1
+    e = d.standardized[:, j]
+    pit = d.pit[:, j]
+    seen = np.isfinite(e)
+    fig, ax = plt.subplots(2, 2, figsize=(10, 7))
+    ax[0, 0].plot(np.flatnonzero(seen), e[seen], lw=0.8)
+    ax[0, 0].axhline(0, color="gray", lw=0.5)
+    ax[0, 0].set_title("standardised innovations")
+    ax[0, 1].hist(pit[np.isfinite(pit)], bins=10, range=(0, 1), density=True, alpha=0.7)
+    ax[0, 1].axhline(1, color="black", lw=1)
+    row = d.rows[j]
+    p = row["pit_ks_p"]
+    ax[0, 1].set_title("PIT histogram" + ("" if p is None else f" (uniform: p = {p:.3g})"))
+    x = np.sort(e[seen])
+    n = len(x)
+    if n:
+        normal = NormalDist()
+        q = np.array([normal.inv_cdf((i + 0.5) / n) for i in range(n)])
+        ax[1, 0].plot(q, x, ".", ms=3)
+        ax[1, 0].plot(q, q, color="black", lw=1)
+    ax[1, 0].set_title("normal Q-Q")
+    lags = int(row["lags"])
+    if n > lags + 1:
+        centred = e[seen] - e[seen].mean()
+        c0 = float(centred @ centred)
+        r = [float(centred[k:] @ centred[:-k]) / c0 for k in range(1, lags + 1)]
+        ax[1, 1].bar(range(1, lags + 1), r, width=0.4)
+        ax[1, 1].axhline(1.96 / np.sqrt(n), color="gray", ls="--", lw=0.8)
+        ax[1, 1].axhline(-1.96 / np.sqrt(n), color="gray", ls="--", lw=0.8)
+    lb = row["ljung_box_p"]
+    ax[1, 1].set_title("correlogram" + ("" if lb is None else f" (Ljung–Box: p = {lb:.3g})"))
+    fig.suptitle(f"{d.method}: checks of z{component}")
+    fig.tight_layout()
+    return fig
+
+
+def forecast(f: Any) -> Any:
+    """The forecast fan: the state's and the observation's predictive means and central
+    intervals over the steps ahead."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 6))
+    t = f.times
+    for ax, mean, interval, label in (
+        (axes[0], f.state_mean, f.state_interval, "x"),
+        (axes[1], f.observation_mean, f.observation_interval,
+         "Δy" if f.observing == "increment" else "z"),
+    ):
+        mean = mean.reshape(len(t), -1)
+        interval = interval.reshape(len(t), mean.shape[1], 2)
+        for j in range(mean.shape[1]):
+            line, = ax.plot(t, mean[:, j], lw=1.2, label=f"{label}{j + 1} mean")
+            ax.fill_between(t, interval[:, j, 0], interval[:, j, 1], color=line.get_color(),
+                            alpha=0.2, lw=0, label=f"{f.level:.0%} interval")
+        ax.set_ylabel(label)
+        ax.legend(loc="best", fontsize="small")
+    axes[1].set_xlabel("t")
+    fig.suptitle(f"forecast by {f.method}")
+    fig.tight_layout()
+    return fig
+
+
+def profile(p: Any, level: float = 0.95) -> Any:
+    """ln L along the parameter per method, each maximum marked and the likelihood-ratio
+    interval's level drawn: ln L(θ*) − ½ χ²₁(level) (a horizontal line per method)."""
+    plt = _pyplot()
+    half = 0.5 * NormalDist().inv_cdf(0.5 + level / 2) ** 2
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for name, ll in p.loglik.items():
+        line, = ax.plot(p.values, ll, lw=1.2, label=name)
+        best = p.maxima.get(name)
+        if best is not None:
+            ax.plot([best[0]], [best[1]], "o", color=line.get_color())
+            ax.axhline(best[1] - half, color=line.get_color(), ls=":", lw=0.8)
+    ax.set_xlabel(p.parameter)
+    ax.set_ylabel("ln L")
+    ax.set_title(f"ln L along {p.parameter} (dotted: the {level:.0%} likelihood-ratio level)")
+    ax.legend(loc="best", fontsize="small")
+    fig.tight_layout()
+    return fig
