@@ -89,3 +89,23 @@ def test_results_plot_with_matplotlib(level):
     assert len(figures[0].axes[0].lines) == 1 + len(run.methods)
     assert len(figures[2].axes) == 4
     plt.close("all")
+
+
+def test_the_example_notebook_runs(tmp_path):
+    """python/examples/nile.ipynb, executed cell by cell in a fresh kernel: every cell runs
+    without an error (its outputs are not kept in the repository)."""
+    import pathlib
+
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    pytest.importorskip("matplotlib")
+    path = pathlib.Path(__file__).parents[1] / "examples" / "nile.ipynb"
+    nb = nbformat.read(path, as_version=4)
+    assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), "outputs committed"
+    client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                                     resources={"metadata": {"path": str(tmp_path)}})
+    client.execute()
+    shown = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    # The notebook's tables are HTML (the results' _repr_html_), its plots images.
+    assert any("text/html" in o.get("data", {}) for o in shown)
+    assert any("image/png" in o.get("data", {}) for o in shown)
