@@ -162,6 +162,84 @@ class FitResult:
     time_unit: Optional[str] = None
     njev: int = 0
     optimiser: str = "Nelder–Mead"
+    # What the fit was of — (one-method scenario, observations, times, time_unit, seed,
+    # inputs) — for profile_interval; None for a FitResult made by hand.
+    _source: Any = field(default=None, repr=False, compare=False)
+
+    def profile_interval(self, name: str, level: float = 0.95, points: int = 15) -> tuple[float, float]:
+        """The likelihood-ratio interval of parameter ``name``: the values θ where the profile
+        log-likelihood (ln L maximised over the other fitted parameters) is within
+        ``½ χ²₁(level)`` of its maximum ln L(θ̂) (Wilks 1938) — unlike the Wald interval
+        (:attr:`intervals`) it follows the likelihood's shape. Found by :func:`profile` on
+        ``points`` values each side of θ̂, widened until the level is crossed (to the bound,
+        which is then the end, when it is not), and linear interpolation between the two
+        values around each crossing.
+
+        Examples
+        --------
+        >>> import numpy as np, zakai
+        >>> model = zakai.Model.discrete("0", "x", noise_cov="r", diffusion=0.5)
+        >>> sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 4.0), ["kalman"], dt_obs=1.0,
+        ...                     parameters={"r": (0.3, (0, None))})
+        >>> z = np.sin(np.arange(40) / 3.0) + 0.5 * np.cos(np.arange(40) * 1.7)
+        >>> fit = zakai.fit(sc, z, "kalman")
+        >>> lo, hi = fit.profile_interval("r")
+        >>> bool(lo < fit.params["r"] < hi)
+        True
+        """
+        from statistics import NormalDist
+
+        if self._source is None:
+            raise ConfigError("profile_interval: this FitResult does not come from zakai.fit")
+        if name not in self.params:
+            raise ConfigError(f"profile_interval: {name!r} was not fitted ({list(self.params)})")
+        if not 0.0 < level < 1.0:
+            raise ConfigError(f"level: must be strictly between 0 and 1 (got {level})")
+        sc, obs, times, time_unit, seed, inputs = self._source
+        at_fit = sc.copy()
+        declared = at_fit.parameters
+        at_fit.parameters = {
+            n: ((self.params[n] if n in self.params else spec["value"]),
+                tuple(spec.get("bounds", (None, None))))
+            for n, spec in declared.items()
+        }
+        others = [n for n in self.params if n != name]
+        theta = self.params[name]
+        lower, upper = self.bounds[name]
+        drop = 0.5 * NormalDist().inv_cdf(0.5 + level / 2) ** 2
+        target = self.loglik - drop
+        wald = self.intervals.get(name, (float("nan"), float("nan")))
+        spread = abs(theta) * 0.5 + 1e-12
+        if np.isfinite(self.stderr.get(name, np.nan)) and self.stderr[name] > 0:
+            spread = 2.0 * self.stderr[name]
+
+        def end(sign: int) -> float:
+            reach = spread if not np.isfinite(wald[(sign + 1) // 2]) else max(
+                spread, 1.5 * abs(wald[(sign + 1) // 2] - theta))
+            bound = upper if sign > 0 else lower
+            for _ in range(6):
+                far = theta + sign * reach
+                if bound is not None and (far - bound) * sign >= 0:
+                    # Up to the bound (short of it by a hundredth of the way there).
+                    far = bound - sign * 0.01 * abs(bound - theta)
+                values = np.linspace(theta, far, points + 1)[1:]
+                ll = profile(at_fit, obs, name, values=values, refit=others or None,
+                             times=times, time_unit=time_unit, seed=seed, inputs=inputs)
+                curve = np.concatenate([[self.loglik], next(iter(ll.loglik.values()))])
+                xs = np.concatenate([[theta], values])
+                below = np.flatnonzero(curve < target)
+                if below.size:
+                    k = int(below[0])
+                    x0, x1, y0, y1 = xs[k - 1], xs[k], curve[k - 1], curve[k]
+                    if not np.isfinite(y1):
+                        return float(x1)
+                    return float(x0 + (target - y0) * (x1 - x0) / (y1 - y0))
+                if bound is not None and (far - bound) * sign >= -0.011 * abs(bound - theta):
+                    return float(bound)
+                reach *= 2.0
+            return float("inf") * sign
+
+        return (end(-1), end(+1))
 
     @property
     def aic(self) -> float:
@@ -318,7 +396,15 @@ def fit(
         time_unit=unit,
         njev=d["scores"],
         optimiser=d["optimiser"],
+        _source=(_single_method(sc, index), obs, t, None, s, u),
     )
+
+
+def _single_method(sc: Scenario, index: int) -> Scenario:
+    """The scenario with its method ``index`` only."""
+    single = sc.copy()
+    single.config["methods"] = [sc.config["methods"][index]]
+    return single
 
 
 
