@@ -6,18 +6,12 @@ import numpy as np
 import pytest
 
 import zakai
+from data import nile
 from zakai.errors import ConfigError
 
 PRIOR = (1120.0, 1e7)
 Q, R = 1469.1, 15098.5
 
-
-def nile(sm):
-    data = sm.datasets.nile.load_pandas().data
-    years = data["year"].to_numpy(dtype=float)
-    flow = data["volume"].to_numpy(dtype=float).copy()
-    flow[(years >= 1890) & (years <= 1892)] = np.nan
-    return years, flow
 
 
 def level(r=R, methods=("kalman",)):

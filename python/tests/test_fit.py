@@ -9,19 +9,12 @@ import pandas as pd
 import pytest
 
 import zakai
+from data import nile
 from zakai.errors import ConfigError
 
 
 PRIOR = (1120.0, 1e7)
 
-
-def nile(sm):
-    """The Nile's annual flow 1871–1970 (statsmodels' copy), years 1890–1892 unknown."""
-    data = sm.datasets.nile.load_pandas().data
-    years = data["year"].to_numpy(dtype=float)
-    flow = data["volume"].to_numpy(dtype=float).copy()
-    flow[(years >= 1890) & (years <= 1892)] = np.nan
-    return years, flow
 
 
 def local_level(methods=("kalman",)):

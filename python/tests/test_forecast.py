@@ -6,20 +6,13 @@ import pandas as pd
 import pytest
 
 import zakai
+from data import nile
 from zakai.errors import ConfigError, FilterError
 
 PRIOR = (1120.0, 1e7)
 # The local level's variances near their maximum-likelihood values (test_fit.py).
 Q, R = 1469.1, 15098.5
 
-
-def nile(sm):
-    """The Nile's annual flow 1871–1970, years 1890–1892 unknown."""
-    data = sm.datasets.nile.load_pandas().data
-    years = data["year"].to_numpy(dtype=float)
-    flow = data["volume"].to_numpy(dtype=float).copy()
-    flow[(years >= 1890) & (years <= 1892)] = np.nan
-    return years, flow
 
 
 def local_level(methods=("kalman",), **params):
