@@ -12,7 +12,9 @@
 //!   (1970) modified statistic `(√n + 0.12 + 0.11/√n) D`:
 //!   `P(K > x) = 2 Σ_{j≥1} (−1)^{j−1} e^{−2 j² x²}`.
 //!
-//! Both skip NaN (missing values, steps without a law).
+//! Both skip values that are not finite (missing values, steps without a law) and join the
+//! rest, as statsmodels' `acorr_ljungbox` does on the observed values: across a gap a lag
+//! pairs the values on either side of it.
 
 use alloc::vec::Vec;
 

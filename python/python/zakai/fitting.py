@@ -172,8 +172,9 @@ class FitResult:
         ``½ χ²₁(level)`` of its maximum ln L(θ̂) (Wilks 1938) — unlike the Wald interval
         (:attr:`intervals`) it follows the likelihood's shape. Found by :func:`profile` on
         ``points`` values each side of θ̂, widened until the level is crossed (to the bound,
-        which is then the end, when it is not), and linear interpolation between the two
-        values around each crossing.
+        which is then the end, when it is not; ±inf when an unbounded side is not crossed
+        within 2⁶ times its first reach), and linear interpolation between the two values
+        around each crossing.
 
         Examples
         --------
@@ -209,7 +210,7 @@ class FitResult:
         drop = 0.5 * NormalDist().inv_cdf(0.5 + level / 2) ** 2
         target = self.loglik - drop
         wald = self.intervals.get(name, (float("nan"), float("nan")))
-        spread = abs(theta) * 0.5 + 1e-12
+        spread = abs(theta) * 0.5 or 1.0
         if np.isfinite(self.stderr.get(name, np.nan)) and self.stderr[name] > 0:
             spread = 2.0 * self.stderr[name]
 
@@ -227,7 +228,8 @@ class FitResult:
                              times=times, time_unit=time_unit, seed=seed, inputs=inputs)
                 curve = np.concatenate([[self.loglik], next(iter(ll.loglik.values()))])
                 xs = np.concatenate([[theta], values])
-                below = np.flatnonzero(curve < target)
+                # A value where the method failed (−inf, NaN) counts as below the level.
+                below = np.flatnonzero(~(curve >= target))
                 if below.size:
                     k = int(below[0])
                     x0, x1, y0, y1 = xs[k - 1], xs[k], curve[k - 1], curve[k]

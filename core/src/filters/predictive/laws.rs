@@ -9,8 +9,9 @@
 //!   function (its series below a + 1, its continued fraction above).
 //!
 //! The continued fractions and the series are those of Abramowitz & Stegun 26.5.8 and 6.5.29,
-//! 6.5.31; they converge to a relative 1e-15 in at most a few hundred terms for the arguments
-//! a filter's predictive laws reach.
+//! 6.5.31, summed to a relative 1e-15 or at most 10 000 terms: near x ≈ a they need O(√a)
+//! terms, so counts beyond some 10⁷ would be truncated (a rate a filter of counts does not
+//! reach).
 
 use crate::model::measurement::ln_gamma;
 

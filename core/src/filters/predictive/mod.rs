@@ -23,6 +23,9 @@
 //!   the points' formula.
 //! * **Gaussian sum** — each component as a Gaussian, weighted.
 //!
+//! An increment's law is taken under the state's law at the end of its interval (as the
+//! filters' own steps take h over one interval), an O(Δτ²) approximation.
+//!
 //! Intervals are central: `[F⁻¹((1 − level)/2), F⁻¹((1 + level)/2)]` of each component's
 //! marginal distribution function F (quantiles, not mean ± z·sd, so a skewed or
 //! heavy-tailed predictive law gets a skewed or wide interval; for counts the integer
@@ -219,6 +222,8 @@ struct Moments {
     weight: f64,
     first: f64,
     second: f64,
+    /// Whether a part has an infinite variance.
+    unbounded: bool,
 }
 
 impl Moments {
@@ -226,10 +231,16 @@ impl Moments {
         self.weight += w;
         self.first += w * mean;
         self.second += w * (var + mean * mean);
+        self.unbounded |= w > 0.0 && var == f64::INFINITY;
     }
 
+    /// The mean and standard deviation; a part of infinite variance (Student's t with
+    /// ν ≤ 2) gives an infinite sd, whatever the mean (undefined, NaN, for ν ≤ 1).
     fn mean_and_sd(&self) -> (f64, f64) {
         let mean = self.first / self.weight;
+        if self.unbounded {
+            return (mean, f64::INFINITY);
+        }
         let var = self.second / self.weight - mean * mean;
         (mean, libm::sqrt(var.max(0.0)))
     }
@@ -547,12 +558,16 @@ fn linearised(
 fn hermite_points(state: &StateLaw) -> Result<StateLaw, FilterError> {
     let parts = gaussians_of(state).expect("a Gaussian law");
     let n = state.dim();
+    let points = |q: usize| u32::try_from(n).ok().and_then(|n| q.checked_pow(n));
     let mut q = HERMITE_PER_DIMENSION;
-    while q > 2
-        && q.checked_pow(n as u32)
-            .is_none_or(|t| t > MAX_HERMITE_POINTS)
-    {
+    while q > 2 && points(q).is_none_or(|t| t > MAX_HERMITE_POINTS) {
         q -= 1;
+    }
+    if points(q).is_none_or(|t| t > MAX_HERMITE_POINTS) {
+        return Err(FilterError::Unsuitable(format!(
+            "a Gaussian state of {n} dimensions through this measurement density needs more \
+             than {MAX_HERMITE_POINTS} Gauss–Hermite points (2^{n}): no predictive law"
+        )));
     }
     let (nodes, node_weights) = gauss_hermite(q);
     let per = q.pow(n as u32);
@@ -848,6 +863,38 @@ mod tests {
                 law.cdf(0, z)
             );
         }
+    }
+
+    /// Cauchy noise (ν = 1): no mean, an infinite sd, and still a finite interval (from the
+    /// quantiles); a Gaussian state of 13 dimensions through it is refused, not enumerated.
+    #[test]
+    fn heavy_tails_have_intervals_and_large_states_are_refused() {
+        let t = |n: usize| {
+            let drift: Vec<&str> = (0..n).map(|_| "0").collect();
+            Model::from_text(
+                &drift,
+                &["x1"],
+                Noise::Measurement(MeasurementDensity::student_t(1.0, 0.5).unwrap()),
+            )
+            .unwrap()
+        };
+        let law =
+            ObservationLaw::of(&t(1), &gaussian(&[2.0], &[0.04]), Observing::Measurement).unwrap();
+        let (mean, sd) = law.mean_and_sd(0);
+        assert!(mean.is_nan() && sd == f64::INFINITY, "{mean} {sd}");
+        let (lo, hi) = law.interval(0, 0.5);
+        assert!(
+            lo.is_finite() && hi.is_finite() && lo < 2.0 && 2.0 < hi,
+            "{lo} {hi}"
+        );
+        assert!((law.cdf(0, lo) - 0.25).abs() < 1e-9 && (law.cdf(0, hi) - 0.75).abs() < 1e-9);
+        let n = 13;
+        let big = StateLaw::Gaussian {
+            mean: DVector::zeros(n),
+            cov: DMatrix::identity(n, n),
+        };
+        let refused = ObservationLaw::of(&t(n), &big, Observing::Measurement).unwrap_err();
+        assert!(format!("{refused}").contains("Gauss–Hermite"), "{refused}");
     }
 
     /// A grid node's mass spread over its cell: two nodes of width 1 put a quarter of the
