@@ -298,7 +298,7 @@ fn regular_times(count: usize, dt_obs: f64) -> Vec<f64> {
 /// With `smooth`, each method runs as its fixed-interval smoother and its record carries the
 /// smoothed estimates.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, truth, seed, smooth=false, inputs=None, checks=false))]
+#[pyo3(signature = (json, observations, times, truth, seed, smooth=false, inputs=None, checks=false, marginals=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn filter_recorded<'py>(
     py: Python<'py>,
@@ -310,21 +310,23 @@ pub fn filter_recorded<'py>(
     smooth: bool,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
     checks: bool,
+    marginals: Option<(usize, Vec<f64>)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let e = experiment(json)?;
     let recording = recording_of(&e, &observations, times.as_ref(), truth.as_ref())?;
     let recording = with_inputs(&e, recording, inputs.as_ref())?;
-    if smooth && checks {
+    if smooth && (checks || marginals.is_some()) {
         return Err(errors::config(
             "checks",
-            "the predictive checks are of the filter: run zakai.filter(..., checks=True)",
+            "the predictive checks and the densities over time are the filter's: run \
+             zakai.filter(..., checks=True, density_grid=...)",
         ));
     }
+    let keep = zakai::lab::experiment::Keep { checks, marginals };
     let result = py
-        .detach(|| match (smooth, checks) {
-            (true, _) => e.smooth_recorded(recording, seed),
-            (false, true) => e.check_recorded(recording, seed),
-            (false, false) => e.filter_recorded(recording, seed),
+        .detach(|| match smooth {
+            true => e.smooth_recorded(recording, seed),
+            false => e.filter_recorded_keeping(recording, seed, &keep),
         })
         .map_err(errors::from_core)?;
     result_dict(py, &result, &e)
@@ -646,6 +648,17 @@ fn result_dict<'py>(
             match values.is_empty() {
                 true => md.set_item(name, py.None())?,
                 false => md.set_item(name, padded(py, values.clone(), count, &[m])?)?,
+            }
+        }
+        // Each row's marginal density, when the run kept them (`density_grid=`).
+        match track.marginals.is_empty() || count == 0 {
+            true => md.set_item("densities", py.None())?,
+            false => {
+                let points = track.marginals.len() / track.rows().max(1);
+                md.set_item(
+                    "densities",
+                    padded(py, track.marginals.clone(), count, &[points])?,
+                )?
             }
         }
         md.set_item("seconds_per_step", track.seconds_per_step())?;

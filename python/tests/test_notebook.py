@@ -109,3 +109,29 @@ def test_the_example_notebook_runs(tmp_path):
     # The notebook's tables are HTML (the results' _repr_html_), its plots images.
     assert any("text/html" in o.get("data", {}) for o in shown)
     assert any("image/png" in o.get("data", {}) for o in shown)
+
+
+def test_densities_over_time_are_kept_and_drawn(level):
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sc, times, states, z = level
+    grid = np.linspace(-6, 6, 121)
+    run = zakai.filter(sc, z, times=times, density_grid=grid)
+    kf = run.methods["KF"]
+    assert kf.densities.shape == (len(times), len(grid))
+    # The Kalman filter's density is the Gaussian of its estimate, row by row.
+    sd = kf.sds[:, 0]
+    gauss = np.exp(-0.5 * ((grid[None, :] - kf.estimates[:, :1]) / sd[:, None]) ** 2) / (
+        sd[:, None] * np.sqrt(2 * np.pi))
+    np.testing.assert_allclose(kf.densities, gauss, rtol=1e-9, atol=1e-12)
+    # Every method's integrates to about one on the grid.
+    for m in run.methods.values():
+        mass = np.trapezoid(m.densities, grid, axis=1)
+        assert np.all(np.abs(mass - 1) < 0.05), (m.name, mass.min(), mass.max())
+    fig = kf.plot()
+    assert len(fig.axes) == 2 and len(fig.axes[1].collections) == 1
+    plt.close("all")
+    with pytest.raises(zakai.ConfigError, match="marginals"):
+        zakai.filter(sc, z, times=times, density_grid=grid, density_dim=3)

@@ -57,13 +57,30 @@ def _estimate(ax: Any, t: np.ndarray, m: Any, dim: int, label: str) -> None:
 
 
 def method(m: Any, times: np.ndarray, dim: int = 0) -> Any:
-    """One method's estimates of component ``dim`` with ±2σ bands."""
+    """One method's estimates of component ``dim`` with ±2σ bands, and beneath, when the run
+    kept them, its marginal densities over time as a heat strip (each column the density
+    after that row, scaled to its own maximum, as the playground's)."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(9, 4))
+    strip = m.densities is not None and m.density_grid is not None
+    if strip:
+        fig, (ax, heat) = plt.subplots(2, 1, sharex=True, figsize=(9, 6),
+                                       gridspec_kw={"height_ratios": [1, 1]})
+    else:
+        fig, ax = plt.subplots(figsize=(9, 4))
     _estimate(ax, times, m, dim, m.name)
-    ax.set_xlabel("t")
     ax.set_ylabel(f"x{dim + 1}")
     ax.legend(loc="best", fontsize="small")
+    if strip:
+        d = np.nan_to_num(m.densities, nan=0.0)
+        top = d.max(axis=1, keepdims=True)
+        scaled = np.divide(d, top, out=np.zeros_like(d), where=top > 0)
+        grid = m.density_grid
+        heat.pcolormesh(times, grid, scaled.T, shading="nearest", cmap="viridis")
+        heat.set_ylabel(f"x{m.density_dim + 1}")
+        heat.set_title("p / max p over time", fontsize="small")
+        heat.set_xlabel("t")
+    else:
+        ax.set_xlabel("t")
     fig.tight_layout()
     return fig
 

@@ -109,6 +109,9 @@ class MethodResult:
     innovations : ndarray, shape (N + 1, m), or None
         With ``checks=True`` and discrete measurements: ``z − h(x̂⁻)``, the measurement less h
         at the mean the method predicted.
+    densities : ndarray, shape (N + 1, points), or None
+        With ``density_grid=``: the marginal density of component ``density_dim`` at the
+        points ``density_grid`` after each row.
     """
 
     name: str
@@ -127,9 +130,14 @@ class MethodResult:
     standardized_innovations: Optional[np.ndarray] = None
     innovations: Optional[np.ndarray] = None
     times: Optional[np.ndarray] = None
+    densities: Optional[np.ndarray] = None
+    density_grid: Optional[np.ndarray] = None
+    density_dim: int = 0
 
     def plot(self, dim: int = 0) -> Any:
-        """The estimates of component ``dim`` with ±2σ bands (matplotlib); the Figure."""
+        """The estimates of component ``dim`` with ±2σ bands and, when the run kept them
+        (``density_grid=``), the marginal densities over time as a heat strip beneath
+        (matplotlib); the Figure."""
         from . import plotting
 
         times = self.times if self.times is not None else np.arange(len(self.estimates))
@@ -376,6 +384,7 @@ class RunResult:
                 standardized_innovations=m.get("standardized"),
                 innovations=m.get("innovations"),
                 times=d["times"],
+                densities=m.get("densities"),
             )
         return cls(
             seed=d["seed"],

@@ -95,6 +95,8 @@ def filter(
     inputs: Optional[ArrayLike] = None,
     time_unit: Optional[str] = None,
     checks: bool = False,
+    density_grid: Optional[ArrayLike] = None,
+    density_dim: int = 0,
 ) -> RunResult:
     """Every method of the scenario on your observations.
 
@@ -138,6 +140,13 @@ def filter(
         innovation (:attr:`MethodResult.pit`, :attr:`MethodResult.standardized_innovations`,
         :attr:`MethodResult.innovations`) — for :meth:`MethodResult.diagnostics`. Each step
         then costs a second prediction (on a copy of the filter).
+    density_grid : array_like, optional
+        Points at which to keep each method's marginal density of state component
+        ``density_dim`` after every observation (:attr:`MethodResult.densities`, drawn as a
+        heat strip by :meth:`MethodResult.plot`): a grid or spectral filter's own density,
+        the particle filter's kernel estimate, the Gaussian of the others.
+    density_dim : int
+        The component of ``density_grid`` (0-based).
 
     Examples
     --------
@@ -148,10 +157,18 @@ def filter(
     >>> r.methods["KF"].pit.shape, bool(np.isnan(r.methods["KF"].pit[3, 0]))
     ((5, 1), True)
     """
-    return _recorded(
+    grid = None
+    if density_grid is not None:
+        points = np.asarray(density_grid, dtype=float).ravel()
+        grid = (int(density_dim), points.tolist())
+    result = _recorded(
         scenario, observations, times, truth, seed, smooth=False, inputs=inputs,
-        time_unit=time_unit, checks=checks,
+        time_unit=time_unit, checks=checks, marginals=grid,
     )
+    if grid is not None:
+        for m in result.methods.values():
+            m.density_grid, m.density_dim = np.asarray(grid[1]), grid[0]
+    return result
 
 
 
@@ -174,6 +191,7 @@ def _recorded(
     inputs: Optional[ArrayLike] = None,
     time_unit: Optional[str] = None,
     checks: bool = False,
+    marginals: Optional[tuple[int, list[float]]] = None,
 ) -> RunResult:
     """:func:`filter`, or with ``smooth`` :func:`smooth`."""
     sc = _scenario(scenario)
@@ -190,6 +208,7 @@ def _recorded(
             smooth,
             _inputs(inputs),
             bool(checks),
+            marginals,
         )
     )
     result.time_unit = unit

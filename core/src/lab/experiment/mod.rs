@@ -52,6 +52,16 @@ pub struct Experiment {
     chosen: Vec<String>,
 }
 
+/// What a recorded run keeps beside the estimates ([`Experiment::filter_recorded_keeping`]).
+#[derive(Clone, Debug, Default)]
+pub struct Keep {
+    /// The one-step predictive checks ([`ExperimentRun::record_checks`]).
+    pub checks: bool,
+    /// Each row's marginal density of state component `.0` at the points `.1`
+    /// ([`ExperimentRun::record_marginals`]).
+    pub marginals: Option<(usize, Vec<f64>)>,
+}
+
 /// What [`Experiment::forecast_recorded`] returns.
 #[derive(Debug)]
 pub struct RecordedForecast {
@@ -265,7 +275,7 @@ impl Experiment {
             seed,
             clock,
             None,
-            false,
+            &Keep::default(),
         )
     }
 
@@ -411,12 +421,42 @@ impl Experiment {
     /// each method predicted for it, and for discrete measurements the innovations), for
     /// [`crate::lab::checks`]' tests; `seed` also seeds the randomised PIT of counts.
     pub fn check_recorded(&self, recording: Recording, seed: u64) -> Result<RunResult, ZakaiError> {
+        let keep = Keep {
+            checks: true,
+            ..Keep::default()
+        };
+        self.filter_recorded_keeping(recording, seed, &keep)
+    }
+
+    /// As [`Experiment::filter_recorded`], keeping beside the estimates what `keep` asks
+    /// for, from observation 0 on: the one-step predictive checks (see
+    /// [`Experiment::check_recorded`]) and each row's marginal density of a state component
+    /// ([`MethodTrack::marginals`]).
+    pub fn filter_recorded_keeping(
+        &self,
+        recording: Recording,
+        seed: u64,
+        keep: &Keep,
+    ) -> Result<RunResult, ZakaiError> {
         let problems = self.recording_problems(&recording);
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
         }
+        if let Some((dim, grid)) = &keep.marginals {
+            if *dim >= self.model.n || grid.is_empty() || grid.iter().any(|x| !x.is_finite()) {
+                return Err(ZakaiError::Config(alloc::vec![ConfigProblem::new(
+                    "marginals",
+                    alloc::format!(
+                        "a density of component {dim} (of n = {}) on {} points: needs a state \
+                         component and finite points",
+                        self.model.n,
+                        grid.len()
+                    ),
+                )]));
+            }
+        }
         with_standard_clock(|clock| {
-            let mut run = self.start_checked(recording, seed, clock, None, true)?;
+            let mut run = self.start_checked(recording, seed, clock, None, keep)?;
             run.complete(clock, &mut Silent);
             Ok(run.finish())
         })
@@ -433,7 +473,7 @@ impl Experiment {
         if !problems.is_empty() {
             return Err(ZakaiError::Config(problems));
         }
-        self.start_checked(recording, seed, clock, None, false)
+        self.start_checked(recording, seed, clock, None, &Keep::default())
     }
 
     /// Every method over the whole `recording` as its fixed-interval smoother
@@ -466,7 +506,8 @@ impl Experiment {
         }
         with_standard_clock(|clock| {
             let plan = crate::filters::smoothing::SmoothingPlan::for_steps(recording.times.len());
-            let mut run = self.start_checked(recording, seed, clock, Some(plan), false)?;
+            let mut run =
+                self.start_checked(recording, seed, clock, Some(plan), &Keep::default())?;
             run.complete(clock, &mut Silent);
             run.smooth(clock, visit);
             Ok(run.finish())
@@ -480,7 +521,7 @@ impl Experiment {
         seed: u64,
         clock: Option<&dyn Clock>,
         smoothing: Option<crate::filters::smoothing::SmoothingPlan>,
-        checks: bool,
+        keep: &Keep,
     ) -> Result<ExperimentRun, ZakaiError> {
         let mut filters: Vec<Box<dyn Filter>> = Vec::with_capacity(self.config.methods.len());
         let mut build_seconds = Vec::with_capacity(self.config.methods.len());
@@ -529,6 +570,7 @@ impl Experiment {
                 innovations: Vec::new(),
                 pit: Vec::new(),
                 standardized: Vec::new(),
+                marginals: Vec::new(),
                 log_likelihoods: Vec::with_capacity(rows),
                 after_failure: Vec::new(),
                 off_track_since: None,
@@ -565,11 +607,15 @@ impl Experiment {
             follow_failed: false,
             innovations: None,
             checks: None,
+            marginals: None,
         };
-        if checks {
+        if keep.checks {
             // From observation 0 on (a measurement at the prior's time is checked against it).
             run.record_innovations(&self.model);
             run.record_checks(&self.model, seed);
+        }
+        if let Some((dim, grid)) = &keep.marginals {
+            run.record_marginals(*dim, grid);
         }
         run.observe(0, None, &mut Silent);
         Ok(run)

@@ -158,6 +158,11 @@ pub struct MethodTrack {
     /// The standardised one-step errors `(z − E z) / sd z` under the same law (as `pit`).
     #[serde(default, with = "crate::lab::recording::bits")]
     pub standardized: Vec<f64>,
+    /// Each row's marginal density of one state component at the run's points (as many per
+    /// row as points), when the run records them
+    /// ([`ExperimentRun::record_marginals`](super::ExperimentRun::record_marginals)).
+    #[serde(default, with = "crate::lab::recording::bits")]
+    pub marginals: Vec<f64>,
     /// The log-likelihood of each row's observation given the ones before it
     /// ([`crate::Filter::log_likelihood`]; one per row of `estimates`, 0 where nothing was
     /// observed, NaN where the method gives none).

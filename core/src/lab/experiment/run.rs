@@ -80,6 +80,9 @@ pub struct ExperimentRun {
     pub(super) innovations: Option<(Model, Vec<f64>)>,
     /// The one-step predictive checks being recorded ([`ExperimentRun::record_checks`]).
     pub(super) checks: Option<PredictiveChecks>,
+    /// The component and points of the marginal densities being recorded
+    /// ([`ExperimentRun::record_marginals`]), and the row being computed.
+    pub(super) marginals: Option<(usize, Vec<f64>, Vec<f64>)>,
 }
 
 /// `filter` predicted to `obs`'s time, on a fork (unmoved when `obs.dt` is 0): what it expects
@@ -430,6 +433,10 @@ impl ExperimentRun {
                     append(&mut track.pit, &checks.pit);
                     append(&mut track.standardized, &checks.standardized);
                 }
+                if let Some((dim, grid, row)) = &mut self.marginals {
+                    filter.marginal_density(*dim, grid, row);
+                    append(&mut track.marginals, row);
+                }
                 if let Some(p) = &est.covariance {
                     // nalgebra is column-major; P is symmetric, so rows read the same.
                     append(&mut track.covariances, p.as_slice());
@@ -510,6 +517,20 @@ impl ExperimentRun {
             track.standardized = alloc::vec![f64::NAN; track.rows() * model.m];
         }
         self.checks = Some(PredictiveChecks::new(model, seed));
+    }
+
+    /// Records every method's marginal density of state component `dim` at the points `grid`
+    /// after each observation from the next on ([`MethodTrack::marginals`]; rows so far NaN):
+    /// a grid or spectral filter's own density, the particle filter's kernel estimate, the
+    /// Gaussian (or mixture) of the others ([`Filter::marginal_density`]).
+    pub fn record_marginals(&mut self, dim: usize, grid: &[f64]) {
+        if self.marginals.is_some() {
+            return;
+        }
+        for track in &mut self.tracks {
+            track.marginals = alloc::vec![f64::NAN; track.rows() * grid.len()];
+        }
+        self.marginals = Some((dim, grid.to_vec(), alloc::vec![0.0; grid.len()]));
     }
 
     /// Processes up to `count` further observations; returns how many were processed.
