@@ -81,6 +81,7 @@ def test_results_plot_with_matplotlib(level):
         run.methods["KF"].diagnostics().plot(),
         zakai.forecast(sc, z, 5, times=times).plot(),
         zakai.profile(sc, z, "r", points=5, times=times).plot(),
+        zakai.fit(sc, z, "kalman", times=times).plot(points=7),
     ]
     for fig in figures:
         assert isinstance(fig, matplotlib.figure.Figure)
@@ -88,6 +89,7 @@ def test_results_plot_with_matplotlib(level):
     # The run's figure draws every method and the truth, the diagnostics' four panels.
     assert len(figures[0].axes[0].lines) == 1 + len(run.methods)
     assert len(figures[2].axes) == 4
+    assert len(figures[5].axes) == 2  # one profile per fitted parameter (q, r)
     plt.close("all")
 
 

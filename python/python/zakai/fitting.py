@@ -166,6 +166,14 @@ class FitResult:
     # inputs) — for profile_interval; None for a FitResult made by hand.
     _source: Any = field(default=None, repr=False, compare=False)
 
+    def plot(self, names: Optional[Sequence[str]] = None, points: int = 21, level: float = 0.95) -> Any:
+        """Each fitted parameter's (or those of ``names``) profile log-likelihood around θ̂,
+        with θ̂, the Wald interval shaded and the likelihood-ratio level dotted (matplotlib);
+        the Figure. Each profile refits the other parameters at ``points`` values."""
+        from . import plotting
+
+        return plotting.fit(self, names, points, level)
+
     def profile_interval(self, name: str, level: float = 0.95, points: int = 15) -> tuple[float, float]:
         """The likelihood-ratio interval of parameter ``name``: the values θ where the profile
         log-likelihood (ln L maximised over the other fitted parameters) is within

@@ -170,3 +170,52 @@ def profile(p: Any, level: float = 0.95) -> Any:
     ax.legend(loc="best", fontsize="small")
     fig.tight_layout()
     return fig
+
+
+def fit(f: Any, names: Optional[Sequence[str]] = None, points: int = 21, level: float = 0.95) -> Any:
+    """Each fitted parameter's profile log-likelihood around θ̂ (the others refitted at each
+    value, :func:`zakai.profile`), with θ̂, the Wald interval shaded and the likelihood-ratio
+    level ``ln L(θ̂) − ½ χ²₁(level)`` dotted: where the two intervals differ, the likelihood is
+    not the parabola the Wald interval assumes."""
+    from .fitting import profile
+
+    plt = _pyplot()
+    if f._source is None:
+        from .errors import ConfigError
+
+        raise ConfigError("plot: this FitResult does not come from zakai.fit")
+    names = list(names or f.params)
+    sc, obs, times, time_unit, seed, inputs = f._source
+    at_fit = sc.copy()
+    at_fit.parameters = {
+        n: ((f.params[n] if n in f.params else spec["value"]), tuple(spec.get("bounds", (None, None))))
+        for n, spec in sc.parameters.items()
+    }
+    half = 0.5 * NormalDist().inv_cdf(0.5 + level / 2) ** 2
+    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 4), squeeze=False)
+    for ax, name in zip(axes[0], names):
+        theta = f.params[name]
+        lo, hi = f.intervals.get(name, (np.nan, np.nan))
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            lo, hi = theta - (abs(theta) or 1.0), theta + (abs(theta) or 1.0)
+        a, b = f.bounds[name]
+        left, right = theta - 1.5 * (theta - lo), theta + 1.5 * (hi - theta)
+        if a is not None:
+            left = max(left, a + 0.01 * (theta - a))
+        if b is not None:
+            right = min(right, b - 0.01 * (b - theta))
+        values = np.linspace(left, right, points)
+        others = [n for n in f.params if n != name]
+        p = profile(at_fit, obs, name, values=values, refit=others or None, times=times,
+                    time_unit=time_unit, seed=seed, inputs=inputs)
+        ax.plot(values, next(iter(p.loglik.values())), lw=1.2)
+        ax.axvline(theta, color="black", lw=0.8)
+        ax.axvspan(*f.intervals.get(name, (theta, theta)), color="gray", alpha=0.15,
+                   label=f"Wald {level:.0%}")
+        ax.axhline(f.loglik - half, color="gray", ls=":", lw=1, label=f"LR {level:.0%} level")
+        ax.set_xlabel(name)
+        ax.set_ylabel("profile ln L")
+        ax.legend(loc="lower center", fontsize="small")
+    fig.suptitle(f"fit by {f.method}: ln L = {f.loglik:.6g}")
+    fig.tight_layout()
+    return fig
