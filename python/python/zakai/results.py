@@ -150,7 +150,20 @@ class MethodResult:
         the Kolmogorov–Smirnov test of the PIT's uniformity, with their p-values. Small
         p-values say the model (or the method's approximation of its posterior) does not
         describe the data: correlated errors, or predictive laws too narrow, too wide or
-        off-centre."""
+        off-centre.
+
+        Examples
+        --------
+        >>> import numpy as np, zakai
+        >>> model = zakai.Model.discrete("-0.3*x", "x", noise_cov=0.5, diffusion=0.8)
+        >>> sc = zakai.Scenario(model, zakai.Prior.gaussian(0.0, 1.0), ["kalman"],
+        ...                     dt_obs=1.0, t_final=200.0, seed=1)
+        >>> times, _, z = zakai.simulate(sc)
+        >>> d = zakai.filter(sc, z, times=times, checks=True).methods["KF"].diagnostics()
+        >>> row = d.rows[0]
+        >>> row["count"], row["pit_ks_p"] > 0.01, row["ljung_box_p"] > 0.01
+        (201, True, True)
+        """
         if self.pit is None or self.standardized_innovations is None:
             raise ConfigError(
                 "diagnostics: this run did not record its predictive checks; run "
