@@ -290,3 +290,25 @@ def test_the_likelihood_ratio_interval_is_where_statsmodels_profile_drops_by_the
     assert whole.profile_interval("q") == pytest.approx((260.6, 5983.9), rel=5e-3)
     with pytest.raises(ConfigError, match="not fitted"):
         fitted.profile_interval("s")
+
+
+def test_parameters_carry_priors_validated_with_their_field():
+    model = zakai.Model.discrete("0", "x", noise_cov="r", diffusion="sqrt(q)")
+    prior = zakai.Prior.gaussian(1120.0, 1e7)
+    sc = zakai.Scenario(model, prior, ["kalman"], dt_obs=1.0,
+                        parameters={"q": (1000.0, (0, None), ("lognormal", 7.0, 1.0)),
+                                    "r": {"value": 1e4, "bounds": (1.0, 1e6), "prior": "uniform"}})
+    assert sc.parameters["q"]["prior"] == {"kind": "lognormal", "mu": 7.0, "sigma": 1.0}
+    assert sc.parameters["r"]["prior"] == {"kind": "uniform"}
+    again = zakai.Scenario.from_json(sc.to_json())
+    assert again.parameters == sc.parameters
+    bad = [
+        ({"q": (1000.0, (0, None), ("gamma", -1.0, 1.0)), "r": 1e4}, "parameters.q.prior.shape"),
+        ({"q": (1000.0, (0, None), "uniform"), "r": 1e4}, "both be finite"),
+        ({"q": (-5.0, None, ("lognormal", 0.0, 1.0)), "r": 1e4}, "parameters.q.value"),
+        ({"q": (1000.0, (0, None), ("beta", 1.0)), "r": 1e4}, "beta takes 2"),
+        ({"q": (1000.0, (0, None), ("cauchy", 0.0, 1.0)), "r": 1e4}, "kind one of"),
+    ]
+    for params, message in bad:
+        with pytest.raises(ConfigError, match=message):
+            zakai.Scenario(model, prior, ["kalman"], dt_obs=1.0, parameters=params)

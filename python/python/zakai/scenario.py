@@ -60,15 +60,57 @@ def _method_config(spec: MethodSpec) -> dict[str, Any]:
 
 
 
+# The numbers of each prior kind, in the order a tuple gives them (``("lognormal", 7.0, 1.0)``).
+_PRIOR_FIELDS = {
+    "uniform": (),
+    "normal": ("mean", "sd"),
+    "lognormal": ("mu", "sigma"),
+    "gamma": ("shape", "rate"),
+    "inverse_gamma": ("shape", "scale"),
+    "half_normal": ("sd",),
+    "beta": ("a", "b"),
+}
+
+
+def _prior(name: str, prior: Any) -> dict[str, Any]:
+    """A parameter's prior as JSON, from a dict or a tuple ``(kind, number, …)``."""
+    if isinstance(prior, Mapping):
+        return dict(prior)
+    if isinstance(prior, str):
+        prior = (prior,)
+    if not isinstance(prior, (tuple, list)) or not prior or prior[0] not in _PRIOR_FIELDS:
+        raise ConfigError(
+            f"parameters.{name}.prior: give (kind, numbers…) with kind one of "
+            f"{', '.join(_PRIOR_FIELDS)}, got {prior!r}"
+        )
+    kind, *numbers = prior
+    fields = _PRIOR_FIELDS[kind]
+    if len(numbers) != len(fields):
+        raise ConfigError(
+            f"parameters.{name}.prior: {kind} takes {len(fields)} number(s) "
+            f"({', '.join(fields) or 'none: it is on the bounds'}), got {len(numbers)}"
+        )
+    return {"kind": kind, **{f: float(v) for f, v in zip(fields, numbers)}}
+
+
 def _parameter(name: str, value: Any) -> dict[str, Any]:
-    """One parameter's JSON from a value, ``(value, (lo, hi))`` or a dict."""
+    """One parameter's JSON from a value, ``(value, (lo, hi))``, ``(value, (lo, hi), prior)``
+    or a dict (its ``"prior"`` a dict or a tuple ``(kind, numbers…)``)."""
     if isinstance(value, Mapping):
-        return dict(value)
+        out = dict(value)
+        if out.get("prior") is not None:
+            out["prior"] = _prior(name, out["prior"])
+        return out
     bounds = None
+    prior = None
     if isinstance(value, (tuple, list)):
-        if len(value) != 2:
-            raise ConfigError(f"parameters.{name}: give a value or (value, (lower, upper)), got {value!r}")
-        value, bounds = value
+        if len(value) not in (2, 3):
+            raise ConfigError(
+                f"parameters.{name}: give a value, (value, (lower, upper)) or "
+                f"(value, (lower, upper), prior), got {value!r}"
+            )
+        value, bounds, *rest = value
+        prior = rest[0] if rest else None
         if bounds is not None:
             lo, hi = bounds
             bounds = [None if lo is None else float(lo), None if hi is None else float(hi)]
@@ -79,6 +121,8 @@ def _parameter(name: str, value: Any) -> dict[str, Any]:
     out: dict[str, Any] = {"value": v}
     if bounds is not None:
         out["bounds"] = bounds
+    if prior is not None:
+        out["prior"] = _prior(name, prior)
     return out
 
 

@@ -4,6 +4,7 @@
 
 mod methods;
 pub mod noise_kinds;
+pub mod parameter_prior;
 pub mod parameters;
 pub mod presets;
 

@@ -33,6 +33,10 @@ pub struct ParameterConfig {
     /// `[lower, upper]`; `null` (or no `bounds`) leaves that side open.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bounds: Option<[Option<f64>; 2]>,
+    /// The prior distribution of a Bayesian analysis (uniform on the bounds when absent and
+    /// both are finite; see [`super::parameter_prior`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<super::parameter_prior::ParameterPrior>,
 }
 
 impl ParameterConfig {
@@ -41,6 +45,7 @@ impl ParameterConfig {
         ParameterConfig {
             value,
             bounds: None,
+            prior: None,
         }
     }
 
@@ -50,6 +55,7 @@ impl ParameterConfig {
         ParameterConfig {
             value,
             bounds: Some([side(lower), side(upper)]),
+            prior: None,
         }
     }
 
@@ -276,6 +282,8 @@ pub(crate) fn check_parameters(
                 format!("{field}.value"),
                 format!("{} lies outside the bounds [{lo}, {hi}]", p.value),
             ));
+        } else if let Some(prior) = &p.prior {
+            prior.check(&field, p.value, (lo, hi), problems);
         }
         if identifier && !taken && !used.iter().any(|u| u == name) {
             problems.push(ConfigProblem::new(
