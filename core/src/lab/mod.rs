@@ -3,7 +3,8 @@
 //! papers' examples in [`scenario::presets`] and the method catalogue in
 //! [`scenario::catalogue`]), recorded observations ([`recording::Recording`]), the driver that
 //! feeds every method the same data ([`experiment::Experiment`]), error metrics
-//! ([`metrics`]), tests of a model against its data ([`checks`]), Monte Carlo tables, convergence checks and accuracy/cost frontiers
+//! ([`metrics`]), tests of a model against its data ([`checks`]), convergence diagnostics
+//! of Markov chains ([`mcmc`]), Monte Carlo tables, convergence checks and accuracy/cost frontiers
 //! ([`study`]), maximum-likelihood fits and likelihood profiles of a scenario's parameters
 //! ([`fit`]), and the papers' tables as data ([`papers`]) and rerun ([`reproduction`]), the
 //! papers cited by authors and year ([`bibliography`]).
@@ -12,12 +13,13 @@
 //! filters its own observations needs only the crate root.
 //!
 //! Bottom to top (a module uses only those before it, tested): [`bibliography`] → [`scenario`] → [`recording`],
-//! [`metrics`], [`checks`], [`papers`] → [`experiment`] → [`study`], [`fit`] → [`reproduction`].
+//! [`metrics`], [`checks`], [`mcmc`], [`papers`] → [`experiment`] → [`study`], [`fit`] → [`reproduction`].
 
 pub mod bibliography;
 pub mod checks;
 pub mod experiment;
 pub mod fit;
+pub mod mcmc;
 pub mod metrics;
 pub mod papers;
 pub mod recording;

@@ -5,7 +5,7 @@
 //! `lab::scenario`). Order, bottom to top (as the crate doc lists it; `testing`, the unit
 //! tests' attribute, sits below them all): validate → error → linalg → random → grid, model →
 //! simulate → diagnostics → filters → lab: bibliography → scenario → recording, metrics,
-//! checks, papers → experiment → study, fit → reproduction.
+//! checks, mcmc, papers → experiment → study, fit → reproduction.
 // Reads the core's sources from the file system: native only.
 #![cfg(not(target_arch = "wasm32"))]
 

@@ -48,6 +48,11 @@ use super::{Estimate, Filter};
 use laws::{count_quantile, gauss_hermite, poisson_cdf, student_t_cdf};
 pub(crate) use laws::{normal_cdf, upper_incomplete_gamma};
 
+/// Φ⁻¹(p), the standard normal quantile (0 < p < 1), by the quantile search of the laws.
+pub(crate) fn normal_quantile(p: f64) -> f64 {
+    laws::continuous_quantile(normal_cdf, p, 0.0, 1.0)
+}
+
 /// Gauss–Hermite points per dimension for a Gaussian state through a non-Gaussian
 /// measurement density, at most (fewer in higher dimensions: q^n ≤ [`MAX_HERMITE_POINTS`]).
 const HERMITE_PER_DIMENSION: usize = 20;
