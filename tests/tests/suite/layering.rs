@@ -29,6 +29,7 @@ const LAYERS: &[&[&str]] = &[
         "lab::recording",
         "lab::metrics",
         "lab::checks",
+        "lab::mcmc",
         "lab::papers",
     ],
     &["lab::experiment"],
