@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use serde_json::{json, Value};
 use zakai::lab::recording::Recording;
-use zakai::predictive::Forecast;
+use zakai::predictive::{Band, Forecast};
 
 use crate::args::ForecastArgs;
 use crate::Format;
@@ -19,8 +19,8 @@ struct Rows {
 
 struct Step {
     t: f64,
-    state: Vec<[f64; 4]>,
-    observation: Vec<[f64; 4]>,
+    state: Vec<Band>,
+    observation: Vec<Band>,
 }
 
 /// Runs the command.
@@ -70,21 +70,11 @@ pub(crate) fn command(a: &ForecastArgs) -> Result<(), String> {
 }
 
 fn step(f: &Forecast, last: f64, level: f64) -> Step {
-    let component =
-        |mean_sd: (f64, f64), interval: (f64, f64)| [mean_sd.0, mean_sd.1, interval.0, interval.1];
+    let (state, observation) = f.bands(level);
     Step {
         t: last + f.ahead,
-        state: (0..f.state.dim())
-            .map(|j| component(f.state.mean_and_sd(j), f.state.interval(j, level)))
-            .collect(),
-        observation: (0..f.observation.dim())
-            .map(|j| {
-                component(
-                    f.observation.mean_and_sd(j),
-                    f.observation.interval(j, level),
-                )
-            })
-            .collect(),
+        state,
+        observation,
     }
 }
 
@@ -104,27 +94,21 @@ fn table(methods: &[Rows], observed: &str, level: f64, dt: f64) -> String {
             Ok(steps) => {
                 let Some(first) = steps.first() else { continue };
                 let mut head = format!("{:>12}", "t");
-                for j in 0..first.state.len() {
-                    let _ = write!(
-                        head,
-                        " {:>12} {:>27}",
-                        format!("x{} mean", j + 1),
-                        "interval"
-                    );
-                }
-                for j in 0..first.observation.len() {
-                    let _ = write!(
-                        head,
-                        " {:>12} {:>27}",
-                        format!("{observed}{} mean", j + 1),
-                        "interval"
-                    );
+                let names = (1..=first.state.len())
+                    .map(|j| format!("x{j} mean"))
+                    .chain((1..=first.observation.len()).map(|j| format!("{observed}{j} mean")));
+                for name in names {
+                    let _ = write!(head, " {name:>12} {:>27}", "interval");
                 }
                 let _ = writeln!(s, "{head}");
                 for step in steps {
                     let _ = write!(s, "{:>12.6}", step.t);
                     for c in step.state.iter().chain(&step.observation) {
-                        let _ = write!(s, " {:>12.6} [{:>12.6}, {:>12.6}]", c[0], c[2], c[3]);
+                        let _ = write!(
+                            s,
+                            " {:>12.6} [{:>12.6}, {:>12.6}]",
+                            c.mean, c.lower, c.upper
+                        );
                     }
                     s.push('\n');
                 }
@@ -136,7 +120,8 @@ fn table(methods: &[Rows], observed: &str, level: f64, dt: f64) -> String {
 }
 
 fn json_text(methods: &[Rows], last: f64, dt: f64, level: f64, continuous: bool) -> String {
-    let component = |c: &[f64; 4]| json!({"mean": c[0], "sd": c[1], "lower": c[2], "upper": c[3]});
+    let component =
+        |c: &Band| json!({"mean": c.mean, "sd": c.sd, "lower": c.lower, "upper": c.upper});
     let methods: Vec<Value> = methods
         .iter()
         .map(|m| match &m.steps {
@@ -185,7 +170,7 @@ fn csv(methods: &[Rows], observed: &str) -> String {
                 let _ = writeln!(
                     s,
                     "\"{name}\",{},{label},{},{},{},{}",
-                    step.t, c[0], c[1], c[2], c[3]
+                    step.t, c.mean, c.sd, c.lower, c.upper
                 );
             }
         }

@@ -184,7 +184,9 @@ pub mod method {
 }
 /// Predictive distributions of states and observations, and forecasts with their intervals.
 pub mod predictive {
-    pub use crate::filters::predictive::{forecast, Forecast, ObservationLaw, Observing, StateLaw};
+    pub use crate::filters::predictive::{
+        forecast, Band, Forecast, ObservationLaw, Observing, StateLaw,
+    };
 }
 pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,

@@ -427,18 +427,15 @@ pub fn forecast_dict<'py>(
         .map_or((0, 0), |a| (a.state.dim(), a.observation.dim()));
     let mut columns: [Vec<f64>; 8] = Default::default();
     for a in ahead {
-        for j in 0..n {
-            let (mean, sd) = a.state.mean_and_sd(j);
-            let (lo, hi) = a.state.interval(j, level);
-            for (c, v) in columns[..4].iter_mut().zip([mean, sd, lo, hi]) {
-                c.push(v);
-            }
-        }
-        for j in 0..m {
-            let (mean, sd) = a.observation.mean_and_sd(j);
-            let (lo, hi) = a.observation.interval(j, level);
-            for (c, v) in columns[4..].iter_mut().zip([mean, sd, lo, hi]) {
-                c.push(v);
+        let (state, observation) = a.bands(level);
+        for (offset, bands) in [(0, state), (4, observation)] {
+            for b in bands {
+                for (c, v) in columns[offset..offset + 4]
+                    .iter_mut()
+                    .zip([b.mean, b.sd, b.lower, b.upper])
+                {
+                    c.push(v);
+                }
             }
         }
     }

@@ -33,12 +33,12 @@ struct Bands {
 }
 
 impl Bands {
-    fn push(&mut self, (mean, sd): (f64, f64), (lower, upper): (f64, f64)) {
+    fn push(&mut self, b: &zakai::predictive::Band) {
         let finite = |v: f64| v.is_finite().then_some(v);
-        self.mean.push(finite(mean));
-        self.sd.push(finite(sd));
-        self.lower.push(finite(lower));
-        self.upper.push(finite(upper));
+        self.mean.push(finite(b.mean));
+        self.sd.push(finite(b.sd));
+        self.lower.push(finite(b.lower));
+        self.upper.push(finite(b.upper));
     }
 }
 
@@ -81,15 +81,9 @@ impl Session {
             .unwrap_or(0.0);
         let (mut state, mut observation) = (Bands::default(), Bands::default());
         for a in &ahead {
-            for j in 0..a.state.dim() {
-                state.push(a.state.mean_and_sd(j), a.state.interval(j, level));
-            }
-            for j in 0..a.observation.dim() {
-                observation.push(
-                    a.observation.mean_and_sd(j),
-                    a.observation.interval(j, level),
-                );
-            }
+            let (s, o) = a.bands(level);
+            s.iter().for_each(|b| state.push(b));
+            o.iter().for_each(|b| observation.push(b));
         }
         to_js(&Ahead {
             times: ahead.iter().map(|a| now + a.ahead).collect(),

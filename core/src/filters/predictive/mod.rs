@@ -683,6 +683,60 @@ pub struct Forecast {
     pub observation: ObservationLaw,
 }
 
+/// One component's predictive mean, standard deviation and central interval
+/// ([`Forecast::bands`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Band {
+    /// The mean (NaN where undefined).
+    pub mean: f64,
+    /// The standard deviation (infinite where the variance is).
+    pub sd: f64,
+    /// The interval's lower end.
+    pub lower: f64,
+    /// The interval's upper end.
+    pub upper: f64,
+}
+
+impl Band {
+    fn of(
+        mean_and_sd: impl Fn(usize) -> (f64, f64),
+        interval: impl Fn(usize) -> (f64, f64),
+        dim: usize,
+    ) -> Vec<Band> {
+        (0..dim)
+            .map(|j| {
+                let ((mean, sd), (lower, upper)) = (mean_and_sd(j), interval(j));
+                Band {
+                    mean,
+                    sd,
+                    lower,
+                    upper,
+                }
+            })
+            .collect()
+    }
+}
+
+impl Forecast {
+    /// The state's bands, then the observation's, per component, with central intervals of
+    /// probability `level`: what a table or a plot of the forecast shows.
+    pub fn bands(&self, level: f64) -> (Vec<Band>, Vec<Band>) {
+        let (state, obs) = (&self.state, &self.observation);
+        (
+            Band::of(
+                |j| state.mean_and_sd(j),
+                |j| state.interval(j, level),
+                state.dim(),
+            ),
+            Band::of(
+                |j| obs.mean_and_sd(j),
+                |j| obs.interval(j, level),
+                obs.dim(),
+            ),
+        )
+    }
+}
+
 /// The forecast `dt`, `2 dt`, … `steps · dt` ahead of `filter` (which does not move), with
 /// the laws of the state and of the observation at each: [`Filter::forecast`] with what an
 /// interval needs. `model` is the filter's (autonomous) model.
