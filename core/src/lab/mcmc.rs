@@ -77,7 +77,7 @@ fn split_chains(chains: &[&[f64]]) -> Vec<Vec<f64>> {
 }
 
 /// The `p`-quantile of `values` (linear interpolation between order statistics).
-fn quantile(values: &[f64], p: f64) -> f64 {
+pub fn quantile(values: &[f64], p: f64) -> f64 {
     let mut sorted = values.to_vec();
     sorted.sort_by(f64::total_cmp);
     let at = p * (sorted.len() - 1) as f64;

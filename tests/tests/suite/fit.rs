@@ -10,10 +10,10 @@ use zakai_tests::test;
 use zakai_tests::NILE;
 
 /// The prior of the level at 1871: near-diffuse, N(1120, 10⁷).
-const PRIOR: (f64, f64) = (1120.0, 1e7);
+pub(crate) const PRIOR: (f64, f64) = (1120.0, 1e7);
 
 /// The local level dx = √q dW, z = x + v (Var v = r), q and r its parameters.
-fn local_level(methods: &str) -> ScenarioConfig {
+pub(crate) fn local_level(methods: &str) -> ScenarioConfig {
     serde_json::from_str(&format!(
         r#"{{ "name": "nile",
         "parameters": {{ "q": {{ "value": 1000, "bounds": [0, null] }},
@@ -27,14 +27,14 @@ fn local_level(methods: &str) -> ScenarioConfig {
     .unwrap()
 }
 
-fn nile() -> Recording {
+pub(crate) fn nile() -> Recording {
     let years = (0..100).map(|k| 1871.0 + k as f64).collect();
     Recording::measurements(1, 1, years, &NILE).unwrap()
 }
 
 /// The local level's log-likelihood, written here: the scalar Kalman filter's prediction
 /// errors, ln N(z_k; m_k, p_k + r) summed.
-fn reference(q: f64, r: f64) -> f64 {
+pub(crate) fn reference(q: f64, r: f64) -> f64 {
     let (mut m, mut p) = PRIOR;
     let mut total = 0.0;
     for (k, &z) in NILE.iter().enumerate() {

@@ -5,7 +5,7 @@
 //! `lab::scenario`). Order, bottom to top (as the crate doc lists it; `testing`, the unit
 //! tests' attribute, sits below them all): validate → error → linalg → random → grid, model →
 //! simulate → diagnostics → filters → lab: bibliography → scenario → recording, metrics,
-//! checks, mcmc, papers → experiment → study, fit → reproduction.
+//! checks, mcmc, papers → experiment → study, fit → posterior, reproduction.
 // Reads the core's sources from the file system: native only.
 #![cfg(not(target_arch = "wasm32"))]
 
@@ -34,7 +34,7 @@ const LAYERS: &[&[&str]] = &[
     ],
     &["lab::experiment"],
     &["lab::study", "lab::fit"],
-    &["lab::reproduction"],
+    &["lab::posterior", "lab::reproduction"],
 ];
 
 fn layer(module: &str) -> Option<usize> {

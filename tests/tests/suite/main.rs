@@ -28,6 +28,9 @@ mod monte_carlo_table;
 mod own_data;
 mod parameters;
 mod particle;
+// Thousands of likelihood runs a test: natively, once (the sampler's numbers are the core's).
+#[cfg(not(target_arch = "wasm32"))]
+mod posterior;
 mod predictive_checks;
 mod properties;
 // 000's Monte Carlo reproductions run once, natively, as the stiff property test below.

@@ -45,6 +45,7 @@ use alloc::vec::Vec;
 use crate::error::ZakaiError;
 use crate::lab::experiment::Experiment;
 use crate::lab::recording::Recording;
+use crate::lab::scenario::parameter_prior::ParameterPrior;
 use crate::lab::scenario::ScenarioConfig;
 use crate::validate::ConfigProblem;
 
@@ -62,6 +63,14 @@ pub trait Evaluate {
     /// ln p(data | θ) at every point of `points`; `f64::NEG_INFINITY` where the method
     /// failed on the data (its run stopped or gave no likelihood) at that point.
     fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64>;
+
+    /// The same with the method's random numbers at point i drawn from `seeds[i]` (fresh
+    /// random numbers at every point, as particle marginal Metropolis–Hastings needs), or
+    /// `None` when this evaluator cannot reseed the method (the default). For a method that
+    /// draws no random numbers it is [`Evaluate::log_likelihoods`].
+    fn log_likelihoods_seeded(&self, _points: &[Vec<f64>], _seeds: &[u64]) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// What a fit and a profile need of a log-likelihood ln L(θ): the parameters it varies, their
@@ -75,6 +84,9 @@ pub trait LogLikelihood: Evaluate {
     fn bounds(&self) -> &[(f64, f64)];
     /// Their starting values.
     fn start(&self) -> &[f64];
+    /// Their prior distributions as declared (`None` where none is: a posterior then puts a
+    /// uniform prior on finite bounds, and refuses open ones).
+    fn priors(&self) -> &[Option<ParameterPrior>];
     /// ln L(θ) from one run; an error that names the problem when θ is not admissible, the
     /// filter does not build at θ or the method fails on the data.
     fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError>;
@@ -106,6 +118,7 @@ pub struct Likelihood {
     names: Vec<String>,
     bounds: Vec<(f64, f64)>,
     start: Vec<f64>,
+    priors: Vec<Option<ParameterPrior>>,
     seed: u64,
     method: String,
     chosen: Vec<String>,
@@ -198,7 +211,12 @@ impl Likelihood {
             .map(|n| config.parameters[n].interval())
             .collect();
         let start = names.iter().map(|n| config.parameters[n].value).collect();
+        let priors = names
+            .iter()
+            .map(|n| config.parameters[n].prior.clone())
+            .collect();
         Ok(Likelihood {
+            priors,
             method: experiment.method_names()[0].to_string(),
             chosen: experiment.chosen_defaults().to_vec(),
             config,
@@ -258,8 +276,16 @@ impl Likelihood {
     /// covariance that is no longer positive definite …), or when the method fails on the
     /// data (the failure is named).
     pub fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
+        self.log_likelihood_seeded(theta, self.seed)
+    }
+
+    /// [`Likelihood::log_likelihood`] with the method's random numbers from `seed` instead of
+    /// the likelihood's own.
+    pub fn log_likelihood_seeded(&self, theta: &[f64], seed: u64) -> Result<f64, ZakaiError> {
         check_point(&self.names, &self.bounds, theta)?;
-        let run = self.run_at(theta)?;
+        let run = self
+            .experiment_at(theta)?
+            .filter_recorded(self.recording.clone(), seed)?;
         let track = &run.methods[0];
         match (&track.failure, track.log_likelihood()) {
             (None, Some(l)) if !l.is_nan() => Ok(l),
@@ -342,6 +368,11 @@ impl Likelihood {
     fn run_at(&self, theta: &[f64]) -> Result<crate::lab::experiment::RunResult, ZakaiError> {
         self.experiment_at(theta)?
             .filter_recorded(self.recording.clone(), self.seed)
+    }
+
+    /// The declared priors of the parameters it varies, in order.
+    pub fn priors(&self) -> &[Option<ParameterPrior>] {
+        &self.priors
     }
 
     /// The scenario at θ, its sizes as chosen at the start.
@@ -443,6 +474,9 @@ impl LogLikelihood for Likelihood {
     fn start(&self) -> &[f64] {
         Likelihood::start(self)
     }
+    fn priors(&self) -> &[Option<ParameterPrior>] {
+        Likelihood::priors(self)
+    }
     fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
         Likelihood::log_likelihood(self, theta)
     }
@@ -476,6 +510,23 @@ impl Evaluate for Likelihood {
         #[cfg(not(feature = "parallel"))]
         {
             points.iter().map(|p| self.value(p)).collect()
+        }
+    }
+
+    /// One run per point with its own seed, on rayon's pool with the `parallel` feature.
+    fn log_likelihoods_seeded(&self, points: &[Vec<f64>], seeds: &[u64]) -> Option<Vec<f64>> {
+        let value = |(p, &s): (&Vec<f64>, &u64)| {
+            self.log_likelihood_seeded(p, s)
+                .unwrap_or(f64::NEG_INFINITY)
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            Some(points.par_iter().zip(seeds).map(value).collect())
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            Some(points.iter().zip(seeds).map(value).collect())
         }
     }
 }

@@ -13,6 +13,7 @@ use crate::error::ZakaiError;
 use crate::filters::method::Method;
 use crate::filters::{Filter, Observation};
 use crate::lab::experiment::ConcernRecord;
+use crate::lab::scenario::parameter_prior::ParameterPrior;
 use crate::lab::scenario::parameters::ParameterConfig;
 use crate::validate::ConfigProblem;
 
@@ -67,6 +68,7 @@ pub struct FilterLikelihood<'a> {
     names: Vec<String>,
     bounds: Vec<(f64, f64)>,
     start: Vec<f64>,
+    priors: Vec<Option<ParameterPrior>>,
     method: String,
     random: bool,
 }
@@ -127,6 +129,8 @@ impl<'a> FilterLikelihood<'a> {
                         p.value
                     ),
                 ));
+            } else if let Some(prior) = &p.prior {
+                prior.check(&field, p.value, (lo, hi), &mut problems);
             }
         }
         if !problems.is_empty() {
@@ -138,6 +142,7 @@ impl<'a> FilterLikelihood<'a> {
             names: parameters.iter().map(|(n, _)| n.to_string()).collect(),
             bounds: parameters.iter().map(|(_, p)| p.interval()).collect(),
             start: parameters.iter().map(|(_, p)| p.value).collect(),
+            priors: parameters.iter().map(|(_, p)| p.prior.clone()).collect(),
             method: M::info().name,
             random: M::RANDOM,
         })
@@ -206,6 +211,9 @@ impl LogLikelihood for FilterLikelihood<'_> {
     }
     fn start(&self) -> &[f64] {
         &self.start
+    }
+    fn priors(&self) -> &[Option<ParameterPrior>] {
+        &self.priors
     }
     fn log_likelihood(&self, theta: &[f64]) -> Result<f64, ZakaiError> {
         self.run(theta, None)

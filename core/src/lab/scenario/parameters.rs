@@ -59,6 +59,13 @@ impl ParameterConfig {
         }
     }
 
+    /// The same with a prior distribution (for a posterior; see
+    /// [`super::parameter_prior`]).
+    pub fn with_prior(mut self, prior: super::parameter_prior::ParameterPrior) -> Self {
+        self.prior = Some(prior);
+        self
+    }
+
     /// `(lower, upper)`, infinite where open.
     pub fn interval(&self) -> (f64, f64) {
         let [lo, hi] = self.bounds.unwrap_or([None, None]);

@@ -1,0 +1,649 @@
+//! The posterior distribution of a model's parameters given recorded data,
+//! p(θ | z) ∝ L(θ) p(θ), by Markov chain Monte Carlo on any [`LogLikelihood`].
+//!
+//! * **Adaptive random-walk Metropolis** ([`Sampler::Metropolis`]; Haario, Saksman &
+//!   Tamminen 2001, with its details in `adaptive`) for a likelihood that is a deterministic
+//!   function of θ: exact for the Kalman filters on a linear-Gaussian model, the grid and
+//!   spectral filters' normalising constants (converging to the exact likelihood of a
+//!   nonlinear, non-Gaussian model as the grid is refined), and the Gaussian approximations
+//!   of the EKF, UKF, IEKF, IOKF and the direct method (their posterior is that of the
+//!   approximate likelihood). The chain moves in the unbounded variables of [`Transform`],
+//!   with the Jacobian of the change of variables in its target.
+//! * **Particle marginal Metropolis–Hastings** ([`Sampler::PseudoMarginal`]; Andrieu, Doucet
+//!   & Holenstein 2010, "Particle Markov chain Monte Carlo methods", JRSS B 72, 269–342) for
+//!   the particle filter: the same proposal, the likelihood at each proposal a fresh
+//!   unbiased estimate (new random numbers), the current state's estimate kept until a
+//!   proposal is accepted. The chain then targets the exact posterior, however noisy the
+//!   estimate; the noise only costs mixing (a sticky chain when Var ln L̂ ≳ 3: Doucet, Pitt,
+//!   Deligiannidis & Kohn 2015). With [`RandomNumbers::Common`] every proposal uses the same
+//!   seed instead — a smooth-looking but biased likelihood, said so in the notes.
+//!
+//! Several chains run in lock step: at each iteration every chain proposes, and the
+//! proposals go to the [`Evaluate`] as one batch (rayon's pool natively, an executor from
+//! Python). Each chain starts from a draw around the given start (the maximum-likelihood
+//! estimate, when the caller has one, with its covariance as the first proposal's), adapts
+//! its proposal during the warm-up and keeps the draws after it.
+//!
+//! [`Posterior::summary`] gives each parameter's mean, standard deviation, quantiles,
+//! Monte Carlo standard error and the convergence diagnostics of [`crate::lab::mcmc`]
+//! (rank-normalised split-R̂, bulk and tail ESS: Vehtari et al. 2021); the notes warn when
+//! R̂ > 1.01 or an ESS < 400 (their recommended thresholds), or when a chain hardly moves.
+
+mod adaptive;
+mod target;
+
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::vec;
+use alloc::vec::Vec;
+
+use serde::Serialize;
+
+use crate::error::ZakaiError;
+use crate::lab::fit::{Evaluate, LogLikelihood, Transform};
+use crate::lab::mcmc::{diagnose, quantile, ChainDiagnostics};
+use crate::lab::scenario::parameter_prior::ParameterPrior;
+use crate::random::{rng_from_seed, SimRng};
+use crate::validate::ConfigProblem;
+use adaptive::Proposal;
+use target::Target;
+
+/// The R̂ above which the notes warn (Vehtari et al. 2021).
+pub const RHAT_WARNING: f64 = 1.01;
+/// The effective sample size below which the notes warn (Vehtari et al. 2021: 100 per chain
+/// for 4 chains).
+pub const ESS_WARNING: f64 = 400.0;
+/// The most values (draws × chains × (parameters + 2)) a posterior may hold.
+pub const MAX_VALUES: usize = 50_000_000;
+
+/// Which sampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Sampler {
+    /// Particle marginal Metropolis–Hastings for a method that draws random numbers, else
+    /// adaptive random-walk Metropolis.
+    #[default]
+    Automatic,
+    /// Adaptive random-walk Metropolis, the likelihood taken as a function of θ (a random
+    /// method's with common random numbers).
+    Metropolis,
+    /// Particle marginal Metropolis–Hastings (for a method without random numbers it is
+    /// random-walk Metropolis).
+    PseudoMarginal,
+}
+
+/// The random numbers of a pseudo-marginal sampler's likelihood estimates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RandomNumbers {
+    /// New random numbers at each proposal: the exact posterior.
+    #[default]
+    Fresh,
+    /// The likelihood's own seed at every proposal (common random numbers): the posterior of
+    /// one fixed realisation of the estimate, biased.
+    Common,
+}
+
+/// What a sampler draws and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleOptions {
+    /// Draws kept per chain (after the warm-up).
+    pub draws: usize,
+    /// Warm-up iterations per chain (adapting the proposal; discarded).
+    pub warmup: usize,
+    /// Chains (at least 1; R̂ needs 2 or more).
+    pub chains: usize,
+    /// The seed of the chains' proposals and of the fresh likelihood estimates.
+    pub seed: u64,
+    /// The sampler ([`Sampler::Automatic`] by default).
+    pub sampler: Sampler,
+    /// The pseudo-marginal sampler's random numbers ([`RandomNumbers::Fresh`] by default).
+    pub random_numbers: RandomNumbers,
+    /// Where the chains start from (θ; the likelihood's start when `None`): each chain at a
+    /// draw from the initial proposal's distribution around it.
+    pub start: Option<Vec<f64>>,
+    /// The covariance of θ near the start, p × p row-major (a fit's asymptotic covariance):
+    /// the first proposal's shape. `None`: independent steps of 0.1 in each unbounded
+    /// variable (a tenth of |θ| on an open interval).
+    pub covariance: Option<Vec<f64>>,
+}
+
+impl Default for SampleOptions {
+    fn default() -> Self {
+        SampleOptions {
+            draws: 1000,
+            warmup: 1000,
+            chains: 4,
+            seed: 1,
+            sampler: Sampler::Automatic,
+            random_numbers: RandomNumbers::Fresh,
+            start: None,
+            covariance: None,
+        }
+    }
+}
+
+/// One chain's draws.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Chain {
+    /// θ at each kept draw, row-major (draws × parameters).
+    pub theta: Vec<f64>,
+    /// ln L(θ) at each draw (the estimate a pseudo-marginal chain carries).
+    pub log_likelihood: Vec<f64>,
+    /// ln p(θ) at each draw.
+    pub log_prior: Vec<f64>,
+    /// The fraction of proposals accepted after the warm-up.
+    pub acceptance: f64,
+    /// The proposal's scale λ reached in the warm-up.
+    pub scale: f64,
+    /// θ where the chain started.
+    pub start: Vec<f64>,
+}
+
+/// One parameter's posterior in numbers.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParameterSummary {
+    /// The parameter.
+    pub name: String,
+    /// Posterior mean.
+    pub mean: f64,
+    /// Posterior standard deviation.
+    pub sd: f64,
+    /// 5 % quantile.
+    pub q05: f64,
+    /// Median.
+    pub median: f64,
+    /// 95 % quantile.
+    pub q95: f64,
+    /// Monte Carlo standard error of the mean, `sd/√ESS_bulk`.
+    pub mcse: f64,
+    /// R̂ and ESS (`None` with fewer than 4 draws per chain).
+    pub diagnostics: Option<ChainDiagnostics>,
+}
+
+/// Draws from a posterior and what to make of them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Posterior {
+    /// The method whose likelihood was used.
+    pub method: String,
+    /// The sampler: `"adaptive random-walk Metropolis"` or `"particle marginal
+    /// Metropolis–Hastings"`.
+    pub sampler: String,
+    /// The parameters, in order.
+    pub names: Vec<String>,
+    /// Their priors (uniform where none was declared).
+    pub priors: Vec<ParameterPrior>,
+    /// Their bounds.
+    pub bounds: Vec<(f64, f64)>,
+    /// The chains.
+    pub chains: Vec<Chain>,
+    /// Draws kept per chain.
+    pub draws: usize,
+    /// Warm-up iterations per chain.
+    pub warmup: usize,
+    /// Log-likelihood evaluations (filter runs).
+    pub evaluations: usize,
+    /// Observations the likelihood is of.
+    pub observations: usize,
+    /// What to know before using the draws: R̂ or ESS short of the thresholds, a stuck
+    /// chain, common random numbers.
+    pub notes: Vec<String>,
+}
+
+impl Posterior {
+    /// Parameter `p`'s draws, one vector per chain.
+    pub fn values(&self, p: usize) -> Vec<Vec<f64>> {
+        let n = self.names.len();
+        self.chains
+            .iter()
+            .map(|c| c.theta.iter().skip(p).step_by(n).copied().collect())
+            .collect()
+    }
+
+    /// The mean acceptance rate over the chains.
+    pub fn acceptance(&self) -> f64 {
+        self.chains.iter().map(|c| c.acceptance).sum::<f64>() / self.chains.len() as f64
+    }
+
+    /// Each parameter's posterior mean, sd, 5 %, 50 % and 95 % quantiles, Monte Carlo
+    /// standard error and diagnostics, over all chains' draws.
+    pub fn summary(&self) -> Vec<ParameterSummary> {
+        (0..self.names.len())
+            .map(|p| {
+                let chains = self.values(p);
+                let all: Vec<f64> = chains.iter().flatten().copied().collect();
+                let n = all.len() as f64;
+                let mean = all.iter().sum::<f64>() / n;
+                let var = all.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+                let sd = libm::sqrt(var);
+                let slices: Vec<&[f64]> = chains.iter().map(Vec::as_slice).collect();
+                let diagnostics = diagnose(&slices);
+                ParameterSummary {
+                    name: self.names[p].clone(),
+                    mean,
+                    sd,
+                    q05: quantile(&all, 0.05),
+                    median: quantile(&all, 0.5),
+                    q95: quantile(&all, 0.95),
+                    mcse: diagnostics.map_or(f64::NAN, |d| sd / libm::sqrt(d.ess_bulk)),
+                    diagnostics,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The state of one chain.
+struct State {
+    u: Vec<f64>,
+    theta: Vec<f64>,
+    log_likelihood: f64,
+    log_prior: f64,
+    log_jacobian: f64,
+}
+
+impl State {
+    /// ln π(u) of the sampler's target, the Jacobian included.
+    fn log_target(&self) -> f64 {
+        self.log_likelihood + self.log_prior + self.log_jacobian
+    }
+}
+
+/// Draws from the posterior of `likelihood`'s parameters (their priors from
+/// [`LogLikelihood::priors`]), the likelihood's batches evaluated by `evaluate`.
+/// `progress(t, total)` is called after each iteration; returning `false` stops the sampler
+/// with an error.
+///
+/// Errors, before any run: a parameter with neither a prior nor finite bounds, options out
+/// of range (no draws or chains, more than [`MAX_VALUES`] values), a start outside the
+/// bounds or of zero prior density, a covariance that is not positive definite, fresh
+/// random numbers asked of an evaluator that cannot reseed the method; after: no chain
+/// start where the method runs.
+pub fn sample(
+    likelihood: &dyn LogLikelihood,
+    evaluate: &dyn Evaluate,
+    options: &SampleOptions,
+    progress: &dyn Fn(usize, usize) -> bool,
+) -> Result<Posterior, ZakaiError> {
+    let target = Target::new(likelihood)?;
+    let p = target.dim();
+    check_options(options, p)?;
+    let random = likelihood.random_numbers().is_some();
+    let pseudo_marginal = random && options.sampler != Sampler::Metropolis;
+    let fresh = pseudo_marginal && options.random_numbers == RandomNumbers::Fresh;
+    if fresh && evaluate.log_likelihoods_seeded(&[], &[]).is_none() {
+        return Err(ZakaiError::Config(vec![ConfigProblem::new(
+            "sampler",
+            format!(
+                "particle marginal Metropolis–Hastings needs a fresh likelihood estimate at each proposal, and this evaluator of {} cannot reseed it (use common random numbers, or a scenario's likelihood)",
+                likelihood.method()
+            ),
+        )]));
+    }
+    let start = options
+        .start
+        .clone()
+        .unwrap_or_else(|| likelihood.start().to_vec());
+    check_start(likelihood, &target, &start)?;
+    let u0 = target.free(&start);
+    let c0 = initial_covariance(&target, &start, options.covariance.as_deref())?;
+    let proposal = Proposal::new(&c0, p).ok_or_else(|| {
+        ZakaiError::Config(vec![ConfigProblem::new(
+            "covariance",
+            "is not positive definite on the unbounded scale",
+        )])
+    })?;
+    let chains = options.chains;
+    let mut rngs: Vec<SimRng> = (0..chains)
+        .map(|c| rng_from_seed(crate::lab::experiment::method_seed(options.seed, c)))
+        .collect();
+    let seed_of = |c: usize, t: usize| {
+        crate::lab::experiment::method_seed(options.seed ^ ((t as u64) << 20), c + 1)
+    };
+    let evaluate_batch = |points: &[Vec<f64>], seeds: &[u64]| -> Vec<f64> {
+        if fresh {
+            evaluate
+                .log_likelihoods_seeded(points, seeds)
+                .unwrap_or_else(|| vec![f64::NEG_INFINITY; points.len()])
+        } else {
+            evaluate.log_likelihoods(points)
+        }
+    };
+    let mut evaluations = 0;
+    let mut states = start_states(
+        &target,
+        (&u0, &c0),
+        &mut rngs,
+        &mut evaluations,
+        &|points, seeds| evaluate_batch(points, seeds),
+        &seed_of,
+    )
+    .ok_or_else(|| {
+        let why = likelihood
+            .log_likelihood(&start)
+            .err()
+            .map_or_else(String::new, |e| format!(": at the start, {e}"));
+        ZakaiError::Other(format!(
+            "no chain could start: {} gives no finite log-likelihood near the start{why}",
+            likelihood.method()
+        ))
+    })?;
+    let mut proposals = vec![proposal; chains];
+    let total = options.warmup + options.draws;
+    let mut out: Vec<Chain> = states
+        .iter()
+        .map(|s| Chain {
+            theta: Vec::with_capacity(options.draws * p),
+            log_likelihood: Vec::with_capacity(options.draws),
+            log_prior: Vec::with_capacity(options.draws),
+            acceptance: 0.0,
+            scale: 1.0,
+            start: s.theta.clone(),
+        })
+        .collect();
+    let mut accepted = vec![0usize; chains];
+    for t in 1..=total {
+        let candidates: Vec<State> = (0..chains)
+            .map(|c| {
+                let u = proposals[c].propose(&states[c].u, &mut rngs[c]);
+                state_at(&target, u)
+            })
+            .collect();
+        // Only the proposals inside the prior's support cost a run.
+        let live: Vec<usize> = (0..chains)
+            .filter(|&c| candidates[c].log_prior + candidates[c].log_jacobian > f64::NEG_INFINITY)
+            .collect();
+        let points: Vec<Vec<f64>> = live.iter().map(|&c| candidates[c].theta.clone()).collect();
+        let seeds: Vec<u64> = live.iter().map(|&c| seed_of(c, t)).collect();
+        let values = evaluate_batch(&points, &seeds);
+        evaluations += points.len();
+        let mut candidates: Vec<Option<State>> = candidates.into_iter().map(Some).collect();
+        for (&c, value) in live.iter().zip(values) {
+            let mut candidate = candidates[c].take().expect("each chain proposes once");
+            candidate.log_likelihood = value;
+            let log_ratio = candidate.log_target() - states[c].log_target();
+            let alpha = if log_ratio.is_nan() {
+                0.0
+            } else {
+                libm::exp(log_ratio.min(0.0))
+            };
+            let u: f64 = rand::RngExt::random(&mut rngs[c]);
+            if u < alpha {
+                states[c] = candidate;
+                if t > options.warmup {
+                    accepted[c] += 1;
+                }
+            }
+            if t <= options.warmup {
+                proposals[c].adapt(t, &states[c].u, alpha);
+            }
+        }
+        // A proposal outside the support is rejected without a run.
+        for c in (0..chains).filter(|c| !live.contains(c)) {
+            if t <= options.warmup {
+                proposals[c].adapt(t, &states[c].u, 0.0);
+            }
+        }
+        if t > options.warmup {
+            for (chain, state) in out.iter_mut().zip(&states) {
+                chain.theta.extend_from_slice(&state.theta);
+                chain.log_likelihood.push(state.log_likelihood);
+                chain.log_prior.push(state.log_prior);
+            }
+        }
+        if !progress(t, total) {
+            return Err(ZakaiError::Other(format!(
+                "sampling stopped at iteration {t} of {total}"
+            )));
+        }
+    }
+    for ((chain, proposal), a) in out.iter_mut().zip(&proposals).zip(&accepted) {
+        chain.acceptance = *a as f64 / options.draws as f64;
+        chain.scale = proposal.scale();
+    }
+    let mut posterior = Posterior {
+        method: likelihood.method().to_string(),
+        sampler: if pseudo_marginal {
+            "particle marginal Metropolis–Hastings"
+        } else {
+            "adaptive random-walk Metropolis"
+        }
+        .to_string(),
+        names: likelihood.names().to_vec(),
+        priors: target.priors.clone(),
+        bounds: target.bounds.clone(),
+        chains: out,
+        draws: options.draws,
+        warmup: options.warmup,
+        evaluations,
+        observations: likelihood.observations(),
+        notes: Vec::new(),
+    };
+    posterior.notes = notes(&posterior, likelihood, pseudo_marginal && !fresh, random);
+    Ok(posterior)
+}
+
+/// The options' problems: no draws or chains, too many values to hold.
+fn check_options(options: &SampleOptions, p: usize) -> Result<(), ZakaiError> {
+    let mut problems = Vec::new();
+    if options.draws == 0 {
+        problems.push(ConfigProblem::new("draws", "must be at least 1"));
+    }
+    if !(1..=1024).contains(&options.chains) {
+        problems.push(ConfigProblem::new(
+            "chains",
+            format!("must be in [1, 1024], got {}", options.chains),
+        ));
+    }
+    if !problems.is_empty() {
+        return Err(ZakaiError::Config(problems));
+    }
+    let values = options
+        .draws
+        .saturating_mul(options.chains)
+        .saturating_mul(p + 2);
+    if values > MAX_VALUES {
+        return Err(ZakaiError::TooLarge {
+            what: format!(
+                "{} draws × {} chains × {} values",
+                options.draws,
+                options.chains,
+                p + 2
+            ),
+            limit: MAX_VALUES,
+            unit: "values",
+        });
+    }
+    Ok(())
+}
+
+/// The start's problems: wrong length, outside the bounds, zero prior density.
+fn check_start(
+    likelihood: &dyn LogLikelihood,
+    target: &Target,
+    start: &[f64],
+) -> Result<(), ZakaiError> {
+    if start.len() != target.dim() {
+        return Err(ZakaiError::Dimension(format!(
+            "a start of {} values for {} parameters",
+            start.len(),
+            target.dim()
+        )));
+    }
+    let problems: Vec<ConfigProblem> = likelihood
+        .names()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| {
+            let (lo, hi) = target.bounds[i];
+            let v = start[i];
+            if !(v.is_finite() && lo <= v && v <= hi) {
+                Some(format!("{v} is not a finite value in [{lo}, {hi}]"))
+            } else if target.priors[i].log_density(v, (lo, hi)) == f64::NEG_INFINITY {
+                Some(format!("the prior's density is zero at {v}"))
+            } else {
+                None
+            }
+            .map(|why| ConfigProblem::new(format!("start.{name}"), why))
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(ZakaiError::Config(problems))
+    }
+}
+
+/// The first proposal's covariance on the unbounded scale (p × p row-major): `covariance`
+/// carried by the delta method, `J⁻¹ Σ J⁻¹` with `J = diag(dθ/du)` at the start, or
+/// independent steps — 0.1 in each unbounded variable, a tenth of max(|θ|, 1) on an open
+/// interval.
+fn initial_covariance(
+    target: &Target,
+    start: &[f64],
+    covariance: Option<&[f64]>,
+) -> Result<Vec<f64>, ZakaiError> {
+    let p = target.dim();
+    let slopes = target.slopes(start);
+    match covariance {
+        Some(sigma) if sigma.len() != p * p => Err(ZakaiError::Dimension(format!(
+            "a covariance of {} values for {p} parameters",
+            sigma.len()
+        ))),
+        Some(sigma) => Ok((0..p * p)
+            .map(|k| sigma[k] / (slopes[k / p] * slopes[k % p]))
+            .collect()),
+        None => Ok((0..p * p)
+            .map(|k| {
+                if k / p != k % p {
+                    return 0.0;
+                }
+                let i = k / p;
+                let sd = if Transform::of(target.bounds[i]) == Transform::Identity {
+                    0.1 * start[i].abs().max(1.0)
+                } else {
+                    0.1
+                };
+                sd * sd
+            })
+            .collect()),
+    }
+}
+
+/// The state at u, its likelihood not yet evaluated (−∞).
+fn state_at(target: &Target, u: Vec<f64>) -> State {
+    let theta = target.theta(&u);
+    State {
+        log_prior: target.log_prior(&theta),
+        log_jacobian: target.log_jacobian(&theta),
+        log_likelihood: f64::NEG_INFINITY,
+        theta,
+        u,
+    }
+}
+
+/// Each chain's first state: a draw from N(u₀, C₀) with a finite target, up to 20 tries a
+/// chain (the batches of the chains still looking evaluated together); `None` when one chain
+/// found none.
+fn start_states(
+    target: &Target,
+    (u0, c0): (&[f64], &[f64]),
+    rngs: &mut [SimRng],
+    evaluations: &mut usize,
+    evaluate: &dyn Fn(&[Vec<f64>], &[u64]) -> Vec<f64>,
+    seed_of: &dyn Fn(usize, usize) -> u64,
+) -> Option<Vec<State>> {
+    let p = target.dim();
+    let spread = Proposal::new(c0, p)?;
+    let mut states: Vec<Option<State>> = (0..rngs.len()).map(|_| None).collect();
+    for attempt in 0..20 {
+        let waiting: Vec<usize> = (0..rngs.len()).filter(|&c| states[c].is_none()).collect();
+        if waiting.is_empty() {
+            break;
+        }
+        let candidates: Vec<State> = waiting
+            .iter()
+            .map(|&c| {
+                // The proposal's factor is that of s_d C₀; undo s_d for a draw from N(u₀, C₀),
+                // the first try of chain 0 at u₀ itself.
+                let u = if attempt == 0 && c == 0 {
+                    u0.to_vec()
+                } else {
+                    let step = spread.propose(&vec![0.0; p], &mut rngs[c]);
+                    let s = libm::sqrt(p as f64) / 2.38;
+                    u0.iter().zip(step).map(|(a, b)| a + s * b).collect()
+                };
+                state_at(target, u)
+            })
+            .collect();
+        let points: Vec<Vec<f64>> = candidates.iter().map(|s| s.theta.clone()).collect();
+        let seeds: Vec<u64> = waiting.iter().map(|&c| seed_of(c, 0)).collect();
+        let values = evaluate(&points, &seeds);
+        *evaluations += points.len();
+        for ((&c, mut s), v) in waiting.iter().zip(candidates).zip(values) {
+            s.log_likelihood = v;
+            if s.log_target().is_finite() {
+                states[c] = Some(s);
+            }
+        }
+    }
+    states.into_iter().collect()
+}
+
+/// The notes of a posterior: each parameter's R̂ and ESS against the thresholds, chains that
+/// hardly moved, common random numbers, and a random likelihood under plain Metropolis.
+fn notes(
+    posterior: &Posterior,
+    likelihood: &dyn LogLikelihood,
+    common: bool,
+    random: bool,
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for s in posterior.summary() {
+        match s.diagnostics {
+            None => notes.push(format!(
+                "{}: too few draws per chain (fewer than 4) for R̂ and ESS",
+                s.name
+            )),
+            Some(d) => {
+                if d.rhat > RHAT_WARNING {
+                    notes.push(format!(
+                        "{}: R̂ = {:.3} > {RHAT_WARNING}: the chains disagree; run longer (more draws and warm-up)",
+                        s.name, d.rhat
+                    ));
+                }
+                if d.ess_bulk.min(d.ess_tail) < ESS_WARNING {
+                    notes.push(format!(
+                        "{}: effective sample size {:.0} (bulk) and {:.0} (tail), below {ESS_WARNING}: the quantiles are uncertain; draw more",
+                        s.name, d.ess_bulk, d.ess_tail
+                    ));
+                }
+            }
+        }
+    }
+    for (c, chain) in posterior.chains.iter().enumerate() {
+        if chain.acceptance < 0.05 {
+            let advice = if random && !common {
+                "the likelihood estimate is too noisy: more particles (aim for Var ln L̂ ≈ 1–2)"
+            } else {
+                "a longer warm-up, or a start nearer the mode"
+            };
+            notes.push(format!(
+                "chain {c} accepted {:.1} % of its proposals: {advice}",
+                100.0 * chain.acceptance
+            ));
+        }
+    }
+    if common {
+        notes.push(format!(
+            "{}'s likelihood with common random numbers ({}) is one fixed realisation of its estimate: the draws are from the posterior under that function, not the exact posterior (fresh random numbers sample the exact one)",
+            likelihood.method(),
+            likelihood.random_numbers().unwrap_or_default()
+        ));
+    } else if random && posterior.sampler == "adaptive random-walk Metropolis" {
+        notes.push(format!(
+            "{}'s likelihood with common random numbers ({}) under random-walk Metropolis: a fixed realisation of the estimate, not the exact posterior",
+            likelihood.method(),
+            likelihood.random_numbers().unwrap_or_default()
+        ));
+    }
+    notes
+}
