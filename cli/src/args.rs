@@ -115,6 +115,12 @@ pub(crate) enum Command {
     /// Nelder–Mead; standard errors from the observed information), or with --profile draw the log-likelihood along one parameter for every
     /// selected method.
     Fit(FitArgs),
+    /// Draw from the posterior of the scenario's parameters given recorded observations under
+    /// one method (their priors from the scenario, uniform on finite bounds when absent):
+    /// adaptive random-walk Metropolis on a deterministic likelihood, particle marginal
+    /// Metropolis–Hastings on the particle filter's; chains started around the
+    /// maximum-likelihood estimate; R̂ and effective sample sizes with each summary.
+    Sample(SampleArgs),
 }
 
 /// `zakai fit`.
@@ -154,6 +160,61 @@ pub(crate) struct FitArgs {
     pub(crate) optimiser: OptimiserArg,
     #[command(flatten)]
     pub(crate) output: Output,
+}
+
+/// `zakai sample`.
+#[derive(Args)]
+pub(crate) struct SampleArgs {
+    #[command(flatten)]
+    pub(crate) selection: Selection,
+    /// The observations (CSV, as for `zakai filter`).
+    #[arg(long)]
+    pub(crate) observations: PathBuf,
+    /// The method whose likelihood is used (a catalogue key; default: the scenario's first
+    /// method, or the first of --methods).
+    #[arg(long)]
+    pub(crate) method: Option<String>,
+    /// Comma-separated parameters to sample (default: all the scenario declares); the others
+    /// keep their values.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) params: Option<Vec<String>>,
+    /// Draws kept per chain.
+    #[arg(long, default_value_t = 1000)]
+    pub(crate) draws: usize,
+    /// Warm-up iterations per chain (the proposal adapts; discarded).
+    #[arg(long, default_value_t = 1000)]
+    pub(crate) warmup: usize,
+    /// Chains.
+    #[arg(long, default_value_t = 4)]
+    pub(crate) chains: usize,
+    /// The sampler: `auto` (PMMH for the particle filter, else random-walk Metropolis),
+    /// `metropolis` or `pmmh`.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Auto)]
+    pub(crate) sampler: SamplerArg,
+    /// PMMH with the same random numbers at every proposal (a smooth but biased likelihood)
+    /// instead of fresh ones.
+    #[arg(long)]
+    pub(crate) common_random_numbers: bool,
+    /// Start the chains around the scenario's values rather than the maximum-likelihood
+    /// estimate (no fit first).
+    #[arg(long)]
+    pub(crate) no_fit: bool,
+    /// Where to draw the chains' traces and marginal histograms, the prior drawn in (SVG).
+    #[arg(long)]
+    pub(crate) svg: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) output: Output,
+}
+
+/// `zakai sample --sampler`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SamplerArg {
+    /// PMMH for a method that draws random numbers, else random-walk Metropolis.
+    Auto,
+    /// Adaptive random-walk Metropolis.
+    Metropolis,
+    /// Particle marginal Metropolis–Hastings.
+    Pmmh,
 }
 
 /// `zakai fit --optimiser`.

@@ -11,6 +11,9 @@
 //!           [--format table|json|csv] [--out FILE]
 //! zakai fit <preset|file.json> --observations obs.csv --profile a [--methods …]
 //!           [--points N] [--range LO,HI] [--svg FILE] [--out FILE]
+//! zakai sample <preset|file.json> --observations obs.csv [--method KEY] [--params a,b]
+//!              [--draws N] [--warmup N] [--chains C] [--seed S] [--svg FILE]
+//!              [--format table|json|csv] [--out FILE]
 //! zakai simulate <preset|file.json> [--seed S] [--format json|csv] [--out FILE]
 //!                [--truth-out FILE]
 //! zakai reproduce [table|figure|all] [--runs N]
@@ -25,6 +28,8 @@ mod frontier_plot;
 mod output;
 mod profile_plot;
 mod recorded;
+mod sample;
+mod sample_plot;
 
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -396,6 +401,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run(&args),
         Command::Forecast(args) => forecast::command(&args),
         Command::Fit(args) => fit_command(&args),
+        Command::Sample(args) => sample::command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1089,3 +1089,92 @@ fn forecast_prints_the_predictive_intervals_in_every_format() {
     assert_clean_failure(&with_steps("0", "csv", &[]), "--steps");
     assert_clean_failure(&args("csv", &["--dt", "-1"]), "--dt");
 }
+
+/// The Nile's local level with q under a log-normal prior (on [0, ∞)) and r uniform on
+/// [0, 40 000], the Kalman filter's likelihood.
+const NILE_POSTERIOR: &str = r#"{ "name": "nile",
+ "parameters": { "q": { "value": 1000, "bounds": [0, null], "prior": {"kind": "lognormal", "mu": 7, "sigma": 2} },
+                 "r": { "value": 10000, "bounds": [0, 40000] } },
+ "model": { "drift": ["0"], "observation": ["x"], "diffusion": [["sqrt(q)"]],
+            "noise": { "kind": "discrete", "mixture": [{ "mean": [0], "cov": [["r"]] }] } },
+ "prior": { "kind": "gaussian", "mean": [1120], "cov": [[1e7]] },
+ "domain": [[-2000, 4000]], "time": { "dt_obs": 1 }, "methods": [{"method": "kalman"}] }"#;
+
+/// `zakai sample` on the Nile (a gap of ten years): the CSV has one row per draw (`chain`,
+/// `draw`, `q`, `r`, `lp`) and its draws' means are the JSON summary's (the same seed, the
+/// same chains); the table names the sampler and the start; the SVG is written; bad requests
+/// fail with one line.
+#[test]
+fn sample_writes_every_draw_the_summary_and_the_plot_and_refuses_bad_requests() {
+    // Writes the observations (with the gap) and the scenario, and filters them once.
+    filter_the_nile("sample", NILE_POSTERIOR);
+    let dir = std::env::temp_dir().join(format!("zakai-cli-test-{}", std::process::id()));
+    let (obs, scenario) = (dir.join("sample-obs.csv"), dir.join("sample-scenario.json"));
+    let (csv, svg) = (dir.join("draws.csv"), dir.join("posterior.svg"));
+    let base = [
+        "sample",
+        scenario.to_str().unwrap(),
+        "--observations",
+        obs.to_str().unwrap(),
+        "--draws",
+        "300",
+        "--warmup",
+        "300",
+        "--seed",
+        "4",
+    ];
+    let o = zakai(
+        &[
+            &base[..],
+            &[
+                "--out",
+                csv.to_str().unwrap(),
+                "--svg",
+                svg.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "chain,draw,q,r,lp");
+    assert_eq!(lines.len(), 1 + 4 * 300);
+    let rows: Vec<Vec<f64>> = lines[1..]
+        .iter()
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert!(rows
+        .iter()
+        .all(|r| r[2] > 0.0 && (0.0..=40_000.0).contains(&r[3]) && r[4].is_finite()));
+    let json = zakai(&[&base[..], &["--format", "json"]].concat());
+    assert!(json.status.success(), "{}", stderr(&json));
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(v["sampler"], "adaptive random-walk Metropolis");
+    for (i, name) in ["q", "r"].iter().enumerate() {
+        let s = &v["summary"][i];
+        assert_eq!(s["name"], *name);
+        let mean = rows.iter().map(|r| r[2 + i]).sum::<f64>() / rows.len() as f64;
+        let want = s["mean"].as_f64().unwrap();
+        assert!(
+            (mean - want).abs() < 1e-9 * want.abs(),
+            "{name}: {mean} vs {want}"
+        );
+        assert!(s["diagnostics"]["rhat"].as_f64().unwrap() > 0.9, "{s}");
+    }
+    let table = String::from_utf8_lossy(&zakai(&base).stdout).into_owned();
+    assert!(
+        table.contains("adaptive random-walk Metropolis")
+            && table.contains("maximum-likelihood estimate")
+            && table.contains("lognormal(mu = 7.0, sigma = 2.0) on [0, inf]"),
+        "{table}"
+    );
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawn.contains("<svg") && drawn.contains("prior"));
+    assert_clean_failure(&zakai(&[&base[..], &["--chains", "0"]].concat()), "chains");
+    let open = dir.join("open.json");
+    std::fs::write(&open, NILE_POSTERIOR.replace("[0, 40000]", "[0, null]")).unwrap();
+    let mut args = base.to_vec();
+    args[1] = open.to_str().unwrap();
+    assert_clean_failure(&zakai(&args), "parameters.r.prior");
+}

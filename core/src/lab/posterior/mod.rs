@@ -18,6 +18,9 @@
 //!   Deligiannidis & Kohn 2015). With [`RandomNumbers::Common`] every proposal uses the same
 //!   seed instead — a smooth-looking but biased likelihood, said so in the notes.
 //!
+//! With the `fit` feature, [`sample_from_estimate`] starts the chains around the
+//! maximum-likelihood estimate, the first proposal shaped by its covariance.
+//!
 //! Several chains run in lock step: at each iteration every chain proposes, and the
 //! proposals go to the [`Evaluate`] as one batch (rayon's pool natively, an executor from
 //! Python). Each chain starts from a draw around the given start (the maximum-likelihood
@@ -30,7 +33,12 @@
 //! R̂ > 1.01 or an ESS < 400 (their recommended thresholds), or when a chain hardly moves.
 
 mod adaptive;
+#[cfg(feature = "fit")]
+mod from_estimate;
 mod target;
+
+#[cfg(feature = "fit")]
+pub use from_estimate::sample_from_estimate;
 
 use alloc::format;
 use alloc::string::{String, ToString};

@@ -206,6 +206,47 @@ impl ParameterPrior {
     }
 }
 
+#[cfg(feature = "std")]
+impl ParameterPrior {
+    /// The distribution function P(X ≤ x) of the prior before the bounds (a uniform prior's
+    /// on `bounds`): Φ for the normal, log-normal and half-normal kinds, the regularised
+    /// incomplete gamma function for the gamma and inverse-gamma ones
+    /// (P(α, βx) and Q(α, β/x)), the regularised incomplete beta function I_x(a, b) for the
+    /// beta.
+    pub fn cdf(&self, x: f64, (lo, hi): (f64, f64)) -> f64 {
+        let phi = |u: f64| 0.5 * libm::erfc(-u / core::f64::consts::SQRT_2);
+        let (s_lo, s_hi) = self.support();
+        if x.is_nan() {
+            return f64::NAN;
+        }
+        if x <= s_lo {
+            return 0.0;
+        }
+        if x >= s_hi {
+            return 1.0;
+        }
+        match *self {
+            ParameterPrior::Uniform => ((x - lo) / (hi - lo)).clamp(0.0, 1.0),
+            ParameterPrior::Normal { mean, sd } => phi((x - mean) / sd),
+            ParameterPrior::LogNormal { mu, sigma } => phi((libm::log(x) - mu) / sigma),
+            ParameterPrior::Gamma { shape, rate } => puruspe::gammp(shape, rate * x),
+            ParameterPrior::InverseGamma { shape, scale } => puruspe::gammq(shape, scale / x),
+            ParameterPrior::HalfNormal { sd } => libm::erf(x / (sd * core::f64::consts::SQRT_2)),
+            ParameterPrior::Beta { a, b } => puruspe::betai(a, b, x),
+        }
+    }
+
+    /// The prior's probability of the bounds, `F(hi) − F(lo)` (1 for a uniform prior).
+    pub fn mass(&self, bounds: (f64, f64)) -> f64 {
+        self.cdf(bounds.1, bounds) - self.cdf(bounds.0, bounds)
+    }
+
+    /// The density restricted to the bounds and normalised on them: `p(x)/mass`.
+    pub fn density(&self, x: f64, bounds: (f64, f64)) -> f64 {
+        libm::exp(self.log_density(x, bounds)) / self.mass(bounds)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,13 +286,40 @@ mod tests {
             (ParameterPrior::HalfNormal { sd: 1.5 }, 0.0, 15.0),
             (ParameterPrior::Beta { a: 2.0, b: 3.5 }, 0.0, 1.0),
         ];
-        for (prior, a, b) in cases {
+        for (prior, a, b) in cases.clone() {
             let cells = 400_000;
             let h = (b - a) / cells as f64;
             let mass: f64 = (0..cells)
                 .map(|i| libm::exp(prior.log_density(a + (i as f64 + 0.5) * h, open)) * h)
                 .sum();
             assert!((mass - 1.0).abs() < 2e-4, "{prior:?}: {mass}");
+        }
+        // The distribution functions: the same integral up to a few points, and the mass of
+        // a box.
+        #[cfg(feature = "std")]
+        for (prior, a, b) in cases {
+            let integral = |to: f64| -> f64 {
+                let cells = 200_000;
+                let from = if a < -20.0 { a } else { prior.support().0 };
+                let h = (to - from) / cells as f64;
+                (0..cells)
+                    .map(|i| libm::exp(prior.log_density(from + (i as f64 + 0.5) * h, open)) * h)
+                    .sum()
+            };
+            for t in [0.1, 0.3, 0.5, 0.8] {
+                let x = a.max(0.0) + t * (b.min(5.0) - a.max(0.0));
+                let (got, want) = (prior.cdf(x, open), integral(x));
+                assert!(
+                    (got - want).abs() < 2e-4,
+                    "{prior:?} at {x}: {got} vs {want}"
+                );
+            }
+            let bounds = (a.max(0.0) + 0.1, b.min(5.0));
+            let mass = integral(bounds.1) - integral(bounds.0);
+            assert!(
+                (prior.mass(bounds) - mass).abs() < 4e-4,
+                "{prior:?}: {mass}"
+            );
         }
         // Closed forms: N(1; 1, 4) = 1/(2√2π); Gamma(2; 1, 1) = 2e⁻²; Beta(½; 2, 2) = 1.5.
         let normal = ParameterPrior::Normal { mean: 1.0, sd: 2.0 };
