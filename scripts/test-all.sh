@@ -129,7 +129,7 @@ behind determinism node tests/web/determinism.mjs
 venv="$ZAKAI_CACHE/py-venv"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest filterpy pandas statsmodels "dask[distributed]" \
-  matplotlib nbformat nbclient ipykernel
+  matplotlib nbformat nbclient ipykernel arviz
 rm -f target/wheels/zakai-*.whl
 # The test profile (optimised, debug assertions on), whose dependencies the cache already
 # holds from the Rust tests; a user's `pip install` builds the release profile.

@@ -9,6 +9,7 @@ use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use zakai::lab::fit::{maximise, Evaluate, FitOptions, Likelihood, Optimiser};
+use zakai::lab::posterior::{sample_from_estimate, RandomNumbers, SampleOptions, Sampler};
 use zakai::lab::recording::Recording;
 use zakai::lab::scenario::ScenarioConfig;
 
@@ -25,17 +26,23 @@ struct PyEvaluate<'a> {
     error: RefCell<Option<PyErr>>,
 }
 
-impl Evaluate for PyEvaluate<'_> {
-    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+impl PyEvaluate<'_> {
+    /// `callable(method, names, points)`, or with `seeds` as a fourth argument (a seed per
+    /// point); every point failed once an error is kept.
+    fn call(&self, points: &[Vec<f64>], seeds: Option<&[u64]>) -> Vec<f64> {
         let failed = vec![f64::NEG_INFINITY; points.len()];
         if self.error.borrow().is_some() {
             return failed;
         }
         Python::attach(|py| {
-            let values = self
-                .callable
-                .call1(py, (self.method, self.names.to_vec(), points.to_vec()))
-                .and_then(|r| r.extract::<Vec<f64>>(py));
+            let (method, names) = (self.method, self.names.to_vec());
+            let values = match seeds {
+                None => self.callable.call1(py, (method, names, points.to_vec())),
+                Some(s) => self
+                    .callable
+                    .call1(py, (method, names, points.to_vec(), s.to_vec())),
+            }
+            .and_then(|r| r.extract::<Vec<f64>>(py));
             match values {
                 Ok(v) if v.len() == points.len() => v
                     .into_iter()
@@ -55,6 +62,16 @@ impl Evaluate for PyEvaluate<'_> {
                 }
             }
         })
+    }
+}
+
+impl Evaluate for PyEvaluate<'_> {
+    fn log_likelihoods(&self, points: &[Vec<f64>]) -> Vec<f64> {
+        self.call(points, None)
+    }
+
+    fn log_likelihoods_seeded(&self, points: &[Vec<f64>], seeds: &[u64]) -> Option<Vec<f64>> {
+        Some(self.call(points, Some(seeds)))
     }
 }
 
@@ -276,4 +293,79 @@ pub fn profile<'py>(
         out.append(d)?;
     }
     Ok((values, out))
+}
+
+/// Draws from the posterior of `names` (all the scenario's when empty) under method
+/// `method`: the posterior (its chains, priors and notes) and its summary as JSON;
+/// `evaluator(method, names, points, seeds)` runs the batches when given. `sampler` is
+/// `"auto"`, `"metropolis"` or `"pmmh"`; `fit_start` starts the chains around the
+/// maximum-likelihood estimate.
+#[pyfunction]
+#[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn sample<'py>(
+    py: Python<'py>,
+    json: &str,
+    observations: PyReadonlyArrayDyn<'py, f64>,
+    times: Option<PyReadonlyArrayDyn<'py, f64>>,
+    method: usize,
+    names: Vec<String>,
+    seed: u64,
+    draws: usize,
+    warmup: usize,
+    chains: usize,
+    sampler: &str,
+    common: bool,
+    fit_start: bool,
+    evaluator: Option<Py<PyAny>>,
+    inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<String> {
+    let sampler = match sampler {
+        "auto" => Sampler::Automatic,
+        "metropolis" => Sampler::Metropolis,
+        "pmmh" => Sampler::PseudoMarginal,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "sampler must be 'auto', 'metropolis' or 'pmmh', got {other:?}"
+            )))
+        }
+    };
+    let arrays = (&observations, times.as_ref(), inputs.as_ref());
+    let l = likelihood(json, arrays, method, &names, seed)?;
+    let options = SampleOptions {
+        draws,
+        warmup,
+        chains,
+        seed,
+        sampler,
+        random_numbers: if common {
+            RandomNumbers::Common
+        } else {
+            RandomNumbers::Fresh
+        },
+        start: (!fit_start).then(|| l.start().to_vec()),
+        covariance: None,
+    };
+    let (posterior, _) = match &evaluator {
+        None => py.detach(|| sample_from_estimate(&l, &l, &options, &|_, _| true)),
+        Some(callable) => through(callable, method, l.names(), |remote| {
+            sample_from_estimate(&l, remote, &options, &|_, _| true)
+        })?,
+    }
+    .map_err(errors::from_core)?;
+    let value = serde_json::json!({
+        "posterior": posterior,
+        "summary": posterior.summary(),
+        "chosen_defaults": l.chosen_defaults(),
+    });
+    Ok(serde_json::to_string(&value).unwrap_or_default())
+}
+
+/// The density of the prior `json` (a parameter's `"prior"` object) restricted to the bounds
+/// `(lo, hi)` and normalised on them, at each of `x`.
+#[pyfunction]
+pub fn prior_density(json: &str, lo: f64, hi: f64, x: Vec<f64>) -> PyResult<Vec<f64>> {
+    let prior: zakai::lab::scenario::parameter_prior::ParameterPrior =
+        serde_json::from_str(json).map_err(|e| errors::config("prior", e.to_string()))?;
+    Ok(x.iter().map(|&v| prior.density(v, (lo, hi))).collect())
 }

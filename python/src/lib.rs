@@ -41,6 +41,8 @@ fn _zakai(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit::scenario_log_likelihood, m)?)?;
     m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
     m.add_function(wrap_pyfunction!(fit::profile, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::sample, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::prior_density, m)?)?;
     m.add_class::<stepping::Stepper>()?;
     Ok(())
 }

@@ -33,6 +33,7 @@ from __future__ import annotations
 from . import _zakai
 from ._convert import ArrayLike, MethodSpec
 from .fitting import FitResult, Profile, fit, log_likelihood, profile
+from .posterior import Posterior, sample
 from .forecasting import Forecast, forecast
 from .errors import (
     ConfigError,

@@ -74,6 +74,23 @@ def fit(
     seed: int,
     evaluator: Optional[Any] = None,
 ) -> dict[str, Any]: ...
+def sample(
+    json: str,
+    observations: npt.NDArray[np.float64],
+    times: Optional[npt.NDArray[np.float64]],
+    method: int,
+    names: list[str],
+    seed: int,
+    draws: int,
+    warmup: int,
+    chains: int,
+    sampler: str,
+    common: bool,
+    fit_start: bool,
+    evaluator: Optional[Any] = None,
+    inputs: Optional[npt.NDArray[np.float64]] = None,
+) -> str: ...
+def prior_density(json: str, lo: float, hi: float, x: list[float]) -> list[float]: ...
 def profile(
     json: str,
     observations: npt.NDArray[np.float64],

@@ -84,10 +84,17 @@ def _evaluator(
         return None
     _check_executor(executor)
 
-    def evaluate(method: int, names: list[str], points: list[list[float]]) -> list[float]:
+    def evaluate(
+        method: int,
+        names: list[str],
+        points: list[list[float]],
+        seeds: Optional[list[int]] = None,
+    ) -> list[float]:
+        # A seed per point when the sampler asks for fresh random numbers (PMMH).
+        each = seeds if seeds is not None else [seed] * len(points)
         futures = [
-            executor.submit(_task, (text, obs, times, method, names, seed, list(p), inputs))
-            for p in points
+            executor.submit(_task, (text, obs, times, method, names, s, list(p), inputs))
+            for p, s in zip(points, each)
         ]
         return [float(f.result()) for f in futures]
 

@@ -219,3 +219,27 @@ def fit(f: Any, names: Optional[Sequence[str]] = None, points: int = 21, level: 
     fig.suptitle(f"fit by {f.method}: ln L = {f.loglik:.6g}")
     fig.tight_layout()
     return fig
+
+
+def posterior(p: Any) -> Any:
+    """A :class:`~zakai.Posterior`: for each parameter its chains' traces (left) and the
+    histogram of all draws as a density with the prior's density over it (right)."""
+    plt = _pyplot()
+    n = len(p.names)
+    fig, axes = plt.subplots(n, 2, figsize=(10, 2.6 * n), squeeze=False)
+    for i, name in enumerate(p.names):
+        values = p.values(name)
+        trace, marginal = axes[i]
+        for c, chain in enumerate(values):
+            trace.plot(chain, lw=0.6, alpha=0.8, label=f"chain {c}")
+        trace.set_ylabel(name)
+        trace.set_xlabel("draw")
+        marginal.hist(values.ravel(), bins=40, density=True, alpha=0.5, label="posterior draws")
+        x = np.linspace(values.min(), values.max(), 200)
+        marginal.plot(x, p.prior_density(name, x), "k--", label="prior")
+        marginal.set_xlabel(name)
+        marginal.set_ylabel("density")
+    axes[0][1].legend()
+    fig.suptitle(f"Posterior under {p.method} ({p.sampler})")
+    fig.tight_layout()
+    return fig
