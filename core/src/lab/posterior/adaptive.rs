@@ -89,9 +89,9 @@ impl Proposal {
         for (m, dx) in self.mean.iter_mut().zip(&delta) {
             *m += dx / n;
         }
-        for i in 0..d {
-            for j in 0..d {
-                self.products[i * d + j] += delta[i] * (state[j] - self.mean[j]);
+        for (row, di) in self.products.chunks_mut(d).zip(&delta) {
+            for ((p, x), m) in row.iter_mut().zip(state).zip(&self.mean) {
+                *p += di * (x - m);
             }
         }
         if self.count >= initial_period(d) {

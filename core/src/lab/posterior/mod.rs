@@ -239,6 +239,9 @@ impl Posterior {
     }
 }
 
+/// Evaluates a batch of points, each with its seed.
+type Batch<'a> = dyn Fn(&[Vec<f64>], &[u64]) -> Vec<f64> + 'a;
+
 /// The state of one chain.
 struct State {
     u: Vec<f64>,
@@ -556,7 +559,7 @@ fn start_states(
     (u0, c0): (&[f64], &[f64]),
     rngs: &mut [SimRng],
     evaluations: &mut usize,
-    evaluate: &dyn Fn(&[Vec<f64>], &[u64]) -> Vec<f64>,
+    evaluate: &Batch<'_>,
     seed_of: &dyn Fn(usize, usize) -> u64,
 ) -> Option<Vec<State>> {
     let p = target.dim();
