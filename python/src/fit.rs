@@ -96,6 +96,36 @@ fn through<T>(
     }
 }
 
+/// `run` with the likelihood's batches on every core (the GIL released), or handed to
+/// `evaluator` when given.
+fn evaluated<T: Send>(
+    py: Python<'_>,
+    l: &Likelihood,
+    evaluator: Option<&Py<PyAny>>,
+    method: usize,
+    run: impl Fn(&dyn Evaluate) -> T + Send + Sync,
+) -> PyResult<T> {
+    match evaluator {
+        None => Ok(py.detach(|| run(l))),
+        Some(callable) => through(callable, method, l.names(), run),
+    }
+}
+
+/// The option of `choices` named `value`, else a `ValueError` listing them.
+fn choice<T: Copy>(what: &str, value: &str, choices: &[(&str, T)]) -> PyResult<T> {
+    choices
+        .iter()
+        .find(|(name, _)| *name == value)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<String> = choices.iter().map(|(n, _)| format!("'{n}'")).collect();
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "{what} must be {}, got {value:?}",
+                names.join(", ")
+            ))
+        })
+}
+
 /// A recording's arrays as Python passes them: the observations, their times and the known
 /// inputs.
 type Arrays<'a, 'py> = (
@@ -190,28 +220,24 @@ pub fn fit<'py>(
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
     optimiser: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let optimiser = match optimiser {
-        "auto" => Optimiser::Automatic,
-        "nelder-mead" => Optimiser::NelderMead,
-        "lbfgs" => Optimiser::Lbfgs,
-        other => {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "optimiser must be 'auto', 'nelder-mead' or 'lbfgs', got {other:?}"
-            )))
-        }
-    };
+    let optimiser = choice(
+        "optimiser",
+        optimiser,
+        &[
+            ("auto", Optimiser::Automatic),
+            ("nelder-mead", Optimiser::NelderMead),
+            ("lbfgs", Optimiser::Lbfgs),
+        ],
+    )?;
     let arrays = (&observations, times.as_ref(), inputs.as_ref());
     let l = likelihood(json, arrays, method, &names, seed)?;
     let options = FitOptions {
         optimiser,
         ..FitOptions::default()
     };
-    let result = match &evaluator {
-        None => py.detach(|| maximise(&l, &l, &options, &|_, _| {})),
-        Some(callable) => through(callable, method, l.names(), |remote| {
-            maximise(&l, remote, &options, &|_, _| {})
-        })?,
-    }
+    let result = evaluated(py, &l, evaluator.as_ref(), method, |evaluate| {
+        maximise(&l, evaluate, &options, &|_, _| {})
+    })?
     .map_err(errors::from_core)?;
     let d = PyDict::new(py);
     d.set_item("method", &result.method)?;
@@ -320,16 +346,15 @@ pub fn sample<'py>(
     evaluator: Option<Py<PyAny>>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<String> {
-    let sampler = match sampler {
-        "auto" => Sampler::Automatic,
-        "metropolis" => Sampler::Metropolis,
-        "pmmh" => Sampler::PseudoMarginal,
-        other => {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "sampler must be 'auto', 'metropolis' or 'pmmh', got {other:?}"
-            )))
-        }
-    };
+    let sampler = choice(
+        "sampler",
+        sampler,
+        &[
+            ("auto", Sampler::Automatic),
+            ("metropolis", Sampler::Metropolis),
+            ("pmmh", Sampler::PseudoMarginal),
+        ],
+    )?;
     let arrays = (&observations, times.as_ref(), inputs.as_ref());
     let l = likelihood(json, arrays, method, &names, seed)?;
     let options = SampleOptions {
@@ -346,12 +371,9 @@ pub fn sample<'py>(
         start: (!fit_start).then(|| l.start().to_vec()),
         covariance: None,
     };
-    let (posterior, _) = match &evaluator {
-        None => py.detach(|| sample_from_estimate(&l, &l, &options, &|_, _| true)),
-        Some(callable) => through(callable, method, l.names(), |remote| {
-            sample_from_estimate(&l, remote, &options, &|_, _| true)
-        })?,
-    }
+    let (posterior, _) = evaluated(py, &l, evaluator.as_ref(), method, |evaluate| {
+        sample_from_estimate(&l, evaluate, &options, &|_, _| true)
+    })?
     .map_err(errors::from_core)?;
     let value = serde_json::json!({
         "posterior": posterior,
