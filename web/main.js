@@ -14,6 +14,7 @@ import { setupExport } from './export.js';
 import { markStaleTables, setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
 import { restoreRunningRecording, setupFiles } from './data-files.js';
 import { markStaleProfile, setupLikelihood, startProfile } from './likelihood.js';
+import { markStalePosterior, setupPosterior } from './posterior.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
@@ -82,6 +83,7 @@ setupSession({
   onLoaded: (config) => {
     markStaleTables(config);
     markStaleProfile(config);
+    markStalePosterior(config);
   },
   onLoadRefused: restoreRunningRecording,
 });
@@ -89,6 +91,7 @@ setupPlayback();
 setupExport();
 setupMonteCarlo();
 setupLikelihood();
+setupPosterior();
 setupFiles();
 worker.postMessage({ type: 'init' });
 requestAnimationFrame(loop);

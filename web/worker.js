@@ -155,8 +155,13 @@ self.onmessage = async ({ data }) => {
       unitJob('profile', () => new zakai.LikelihoodProfile(data.config, data.parameter, data.points, data.seed, data.observations ?? undefined),
         (job) => job.result());
       break;
+    case 'posteriorStart':
+      unitJob('posterior', () => new zakai.PosteriorJob(data.config, data.method, data.draws, data.warmup, data.chains, data.seed, data.observations ?? undefined),
+        (job) => job.result());
+      break;
     case 'mcCancel':
     case 'profileCancel':
+    case 'posteriorCancel':
       cancelled = true;
       break;
     case 'check':

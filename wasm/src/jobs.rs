@@ -87,16 +87,7 @@ impl LikelihoodProfile {
             )));
         }
         let values = zakai::lab::fit::profile_grid(p.interval(), p.value, points);
-        let experiment = Experiment::new(config.clone()).map_err(js_error)?;
-        let recording = match observations {
-            Some(csv) => zakai::lab::recording::Recording::from_csv(
-                experiment.model().n,
-                csv.as_bytes(),
-                None,
-            )
-            .map_err(js_error)?,
-            None => experiment.simulate(seed).map_err(js_error)?.into(),
-        };
+        let recording = data_on_screen(&config, seed, observations)?;
         let names = [parameter.to_string()];
         let likelihoods = (0..config.methods.len())
             .map(|i| {
@@ -178,6 +169,213 @@ impl LikelihoodProfile {
             parameter: self.likelihoods[0].names()[0].clone(),
             values: self.values.clone(),
             methods: rows,
+        })
+    }
+}
+
+/// The data a likelihood is of: the recording `observations` (CSV text, as for
+/// [`Session::from_recording`](crate::Session::from_recording)) or, when absent, the run of
+/// `config` simulated with `seed`.
+fn data_on_screen(
+    config: &zakai::lab::scenario::ScenarioConfig,
+    seed: u64,
+    observations: Option<String>,
+) -> Result<zakai::lab::recording::Recording, JsError> {
+    let experiment = Experiment::new(config.clone()).map_err(js_error)?;
+    match observations {
+        Some(csv) => {
+            zakai::lab::recording::Recording::from_csv(experiment.model().n, csv.as_bytes(), None)
+                .map_err(js_error)
+        }
+        None => Ok(experiment.simulate(seed).map_err(js_error)?.into()),
+    }
+}
+
+/// Cells per side of the likelihood grid drawn under two parameters' joint draws.
+const CONTOUR_CELLS: usize = 14;
+
+/// Draws from the posterior of the scenario's parameters under one method, on the data on
+/// screen — the page's Posterior view ([`zakai::lab::posterior`]). One iteration of every
+/// chain per [`PosteriorJob::run_next`] (one filter run per chain), so the worker shows the
+/// chains as they grow and can stop between iterations; with two parameters, then
+/// `CONTOUR_CELLS²` more runs for ln L on a grid over the draws (the joint plot's
+/// likelihood-ratio regions).
+#[wasm_bindgen]
+pub struct PosteriorJob {
+    likelihood: zakai::lab::fit::Likelihood,
+    chains: zakai::lab::posterior::Chains,
+    /// The grid's axes, fixed when the sampling ends, and ln L at its points so far.
+    grid: Option<(Vec<f64>, Vec<f64>)>,
+    grid_values: Vec<f64>,
+}
+
+#[wasm_bindgen]
+impl PosteriorJob {
+    /// `draws` per chain after `warmup`, `chains` chains, under method `method` (an index
+    /// into the scenario's methods), the chains started around the scenario's values;
+    /// `observations` as for [`LikelihoodProfile::new`].
+    #[wasm_bindgen(constructor)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        config: JsValue,
+        method: usize,
+        draws: usize,
+        warmup: usize,
+        chains: usize,
+        seed: f64,
+        observations: Option<String>,
+    ) -> Result<PosteriorJob, JsError> {
+        let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
+        let seed = seed_from_js(seed)?;
+        if draws > 100_000 || warmup > 100_000 || chains > 16 {
+            return Err(js_error(format!(
+                "draws and warm-up at most 100000, chains at most 16 in the page (got {draws}, {warmup}, {chains})"
+            )));
+        }
+        let recording = data_on_screen(&config, seed, observations)?;
+        let likelihood = zakai::lab::fit::Likelihood::new(&config, recording, method, &[], seed)
+            .map_err(js_error)?;
+        let options = zakai::lab::posterior::SampleOptions {
+            draws,
+            warmup,
+            chains,
+            seed,
+            ..Default::default()
+        };
+        let chains = zakai::lab::posterior::Chains::new(&likelihood, &likelihood, &options)
+            .map_err(js_error)?;
+        Ok(PosteriorJob {
+            likelihood,
+            chains,
+            grid: None,
+            grid_values: Vec::new(),
+        })
+    }
+
+    /// Units in all: the sampler's iterations, and the grid's runs with two parameters.
+    pub fn total(&self) -> usize {
+        let grid = if self.likelihood.names().len() == 2 {
+            CONTOUR_CELLS * CONTOUR_CELLS
+        } else {
+            0
+        };
+        self.chains.total() + grid
+    }
+
+    /// Runs the next unit (an iteration of every chain, or a grid point); returns how many
+    /// are done.
+    #[wasm_bindgen(js_name = runNext)]
+    pub fn run_next(&mut self) -> usize {
+        if !self.chains.is_done() {
+            self.chains.step(&self.likelihood);
+        } else if self.likelihood.names().len() == 2
+            && self.grid_values.len() < CONTOUR_CELLS * CONTOUR_CELLS
+        {
+            let (x, y) = self.grid.get_or_insert_with(|| {
+                let p = self.chains.posterior();
+                let axis = |i: usize| {
+                    let v: Vec<f64> = p.values(i).concat();
+                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    let pad = 0.1 * (hi - lo);
+                    let (lo, hi) = ((lo - pad).max(p.bounds[i].0), (hi + pad).min(p.bounds[i].1));
+                    (0..CONTOUR_CELLS)
+                        .map(|k| lo + (hi - lo) * (k as f64 + 0.5) / CONTOUR_CELLS as f64)
+                        .collect::<Vec<f64>>()
+                };
+                (axis(0), axis(1))
+            });
+            let k = self.grid_values.len();
+            let point = [x[k / CONTOUR_CELLS], y[k % CONTOUR_CELLS]];
+            self.grid_values.push(self.likelihood.value(&point));
+        }
+        self.chains.iteration() + self.grid_values.len()
+    }
+
+    /// The posterior so far: `{names, method, sampler, draws (kept per chain), warmup,
+    /// chains: [[values of parameter 0], [values of parameter 1] …] per chain, acceptance,
+    /// summary: [{name, mean, sd, q05, median, q95, mcse, diagnostics}], notes, priors:
+    /// [{x, density}] per parameter over the draws' range, grid: {x, y, log_likelihoods
+    /// (row-major, x slowest; null where failed)} or null}`.
+    pub fn result(&self) -> Result<JsValue, JsError> {
+        #[derive(Serialize)]
+        struct PriorCurve {
+            x: Vec<f64>,
+            density: Vec<Option<f64>>,
+        }
+        #[derive(Serialize)]
+        struct Grid {
+            x: Vec<f64>,
+            y: Vec<f64>,
+            log_likelihoods: Vec<Option<f64>>,
+        }
+        #[derive(Serialize)]
+        struct Out {
+            names: Vec<String>,
+            method: String,
+            sampler: String,
+            draws: usize,
+            warmup: usize,
+            iteration: usize,
+            chains: Vec<Vec<Vec<f64>>>,
+            acceptance: Vec<f64>,
+            summary: Vec<zakai::lab::posterior::ParameterSummary>,
+            notes: Vec<String>,
+            priors: Vec<PriorCurve>,
+            grid: Option<Grid>,
+        }
+        let p = self.chains.posterior();
+        let per_chain: Vec<Vec<Vec<f64>>> = (0..p.chains.len())
+            .map(|c| (0..p.names.len()).map(|i| p.values(i)[c].clone()).collect())
+            .collect();
+        let priors = (0..p.names.len())
+            .map(|i| {
+                let v: Vec<f64> = p.values(i).concat();
+                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let x: Vec<f64> = if hi > lo {
+                    (0..=100)
+                        .map(|k| lo + (hi - lo) * k as f64 / 100.0)
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                let density = x
+                    .iter()
+                    .map(|&v| {
+                        let d = p.priors[i].density(v, p.bounds[i]);
+                        d.is_finite().then_some(d)
+                    })
+                    .collect();
+                PriorCurve { x, density }
+            })
+            .collect();
+        let grid = self.grid.as_ref().map(|(x, y)| Grid {
+            x: x.clone(),
+            y: y.clone(),
+            log_likelihoods: self
+                .grid_values
+                .iter()
+                .map(|v| v.is_finite().then_some(*v))
+                .collect(),
+        });
+        to_js(&Out {
+            summary: if p.draws >= 4 {
+                p.summary()
+            } else {
+                Vec::new()
+            },
+            names: p.names.clone(),
+            method: p.method.clone(),
+            sampler: p.sampler.clone(),
+            draws: p.draws,
+            warmup: p.warmup,
+            iteration: self.chains.iteration(),
+            acceptance: p.chains.iter().map(|c| c.acceptance).collect(),
+            notes: p.notes.clone(),
+            chains: per_chain,
+            priors,
+            grid,
         })
     }
 }

@@ -239,10 +239,8 @@ impl Posterior {
     }
 }
 
-/// Evaluates a batch of points, each with its seed.
-type Batch<'a> = dyn Fn(&[Vec<f64>], &[u64]) -> Vec<f64> + 'a;
-
 /// The state of one chain.
+#[derive(Clone, Debug)]
 struct State {
     u: Vec<f64>,
     theta: Vec<f64>,
@@ -259,177 +257,326 @@ impl State {
 }
 
 /// Draws from the posterior of `likelihood`'s parameters (their priors from
-/// [`LogLikelihood::priors`]), the likelihood's batches evaluated by `evaluate`.
-/// `progress(t, total)` is called after each iteration; returning `false` stops the sampler
-/// with an error.
+/// [`LogLikelihood::priors`]), the likelihood's batches evaluated by `evaluate`: a
+/// [`Chains`] run to the end. `progress(t, total)` is called after each iteration; returning
+/// `false` stops the sampler with an error.
 ///
-/// Errors, before any run: a parameter with neither a prior nor finite bounds, options out
-/// of range (no draws or chains, more than [`MAX_VALUES`] values), a start outside the
-/// bounds or of zero prior density, a covariance that is not positive definite, fresh
-/// random numbers asked of an evaluator that cannot reseed the method; after: no chain
-/// start where the method runs.
+/// Errors are those of [`Chains::new`].
 pub fn sample(
     likelihood: &dyn LogLikelihood,
     evaluate: &dyn Evaluate,
     options: &SampleOptions,
     progress: &dyn Fn(usize, usize) -> bool,
 ) -> Result<Posterior, ZakaiError> {
-    let target = Target::new(likelihood)?;
-    let p = target.dim();
-    check_options(options, p)?;
-    let random = likelihood.random_numbers().is_some();
-    let pseudo_marginal = random && options.sampler != Sampler::Metropolis;
-    let fresh = pseudo_marginal && options.random_numbers == RandomNumbers::Fresh;
-    if fresh && evaluate.log_likelihoods_seeded(&[], &[]).is_none() {
-        return Err(ZakaiError::Config(vec![ConfigProblem::new(
-            "sampler",
-            format!(
-                "particle marginal Metropolis–Hastings needs a fresh likelihood estimate at each proposal, and this evaluator of {} cannot reseed it (use common random numbers, or a scenario's likelihood)",
-                likelihood.method()
-            ),
-        )]));
+    let mut chains = Chains::new(likelihood, evaluate, options)?;
+    while !chains.is_done() {
+        chains.step(evaluate);
+        if !progress(chains.iteration(), chains.total()) {
+            return Err(ZakaiError::Other(format!(
+                "sampling stopped at iteration {} of {}",
+                chains.iteration(),
+                chains.total()
+            )));
+        }
     }
-    let start = options
-        .start
-        .clone()
-        .unwrap_or_else(|| likelihood.start().to_vec());
-    check_start(likelihood, &target, &start)?;
-    let u0 = target.free(&start);
-    let c0 = initial_covariance(&target, &start, options.covariance.as_deref())?;
-    let proposal = Proposal::new(&c0, p).ok_or_else(|| {
-        ZakaiError::Config(vec![ConfigProblem::new(
-            "covariance",
-            "is not positive definite on the unbounded scale",
-        )])
-    })?;
-    let chains = options.chains;
-    let mut rngs: Vec<SimRng> = (0..chains)
-        .map(|c| rng_from_seed(crate::lab::experiment::method_seed(options.seed, c)))
-        .collect();
-    let seed_of = |c: usize, t: usize| {
-        crate::lab::experiment::method_seed(options.seed ^ ((t as u64) << 20), c + 1)
-    };
-    let evaluate_batch = |points: &[Vec<f64>], seeds: &[u64]| -> Vec<f64> {
-        if fresh {
+    Ok(chains.posterior())
+}
+
+/// Several chains of a sampler, one iteration at a time ([`Chains::step`]), so that a caller
+/// can show the draws as they come and stop between iterations (the playground's worker);
+/// [`sample`] runs them to the end.
+#[derive(Clone, Debug)]
+pub struct Chains {
+    options: SampleOptions,
+    target: Target,
+    /// Fresh random numbers at each proposal (PMMH).
+    fresh: bool,
+    pseudo_marginal: bool,
+    random: bool,
+    method: String,
+    random_numbers: String,
+    names: Vec<String>,
+    observations: usize,
+    rngs: Vec<SimRng>,
+    proposals: Vec<Proposal>,
+    states: Vec<State>,
+    out: Vec<Chain>,
+    accepted: Vec<usize>,
+    /// Iterations done.
+    t: usize,
+    evaluations: usize,
+}
+
+impl Chains {
+    /// Chains started around `options.start` (the likelihood's start when `None`), each at
+    /// its first state (one batch of evaluations, more for a chain whose draw failed).
+    ///
+    /// Errors, before any run: a parameter with neither a prior nor finite bounds, options
+    /// out of range (no draws or chains, more than [`MAX_VALUES`] values), a start outside
+    /// the bounds or of zero prior density, a covariance that is not positive definite,
+    /// fresh random numbers asked of an evaluator that cannot reseed the method; after: no
+    /// chain start where the method runs.
+    pub fn new(
+        likelihood: &dyn LogLikelihood,
+        evaluate: &dyn Evaluate,
+        options: &SampleOptions,
+    ) -> Result<Chains, ZakaiError> {
+        let target = Target::new(likelihood)?;
+        let p = target.dim();
+        check_options(options, p)?;
+        let random = likelihood.random_numbers().is_some();
+        let pseudo_marginal = random && options.sampler != Sampler::Metropolis;
+        let fresh = pseudo_marginal && options.random_numbers == RandomNumbers::Fresh;
+        if fresh && evaluate.log_likelihoods_seeded(&[], &[]).is_none() {
+            return Err(ZakaiError::Config(vec![ConfigProblem::new(
+                "sampler",
+                format!(
+                    "particle marginal Metropolis–Hastings needs a fresh likelihood estimate at each proposal, and this evaluator of {} cannot reseed it (use common random numbers, or a scenario's likelihood)",
+                    likelihood.method()
+                ),
+            )]));
+        }
+        let start = options
+            .start
+            .clone()
+            .unwrap_or_else(|| likelihood.start().to_vec());
+        check_start(likelihood, &target, &start)?;
+        let u0 = target.free(&start);
+        let c0 = initial_covariance(&target, &start, options.covariance.as_deref())?;
+        let proposal = Proposal::new(&c0, p).ok_or_else(|| {
+            ZakaiError::Config(vec![ConfigProblem::new(
+                "covariance",
+                "is not positive definite on the unbounded scale",
+            )])
+        })?;
+        let mut chains = Chains {
+            rngs: (0..options.chains)
+                .map(|c| rng_from_seed(crate::lab::experiment::method_seed(options.seed, c)))
+                .collect(),
+            proposals: vec![proposal; options.chains],
+            states: Vec::new(),
+            out: Vec::new(),
+            accepted: vec![0; options.chains],
+            options: options.clone(),
+            target,
+            fresh,
+            pseudo_marginal,
+            random,
+            method: likelihood.method().to_string(),
+            random_numbers: likelihood.random_numbers().unwrap_or_default(),
+            names: likelihood.names().to_vec(),
+            observations: likelihood.observations(),
+            t: 0,
+            evaluations: 0,
+        };
+        chains.states = chains.start_states(evaluate, (&u0, &c0)).ok_or_else(|| {
+            let why = likelihood
+                .log_likelihood(&start)
+                .err()
+                .map_or_else(String::new, |e| format!(": at the start, {e}"));
+            ZakaiError::Other(format!(
+                "no chain could start: {} gives no finite log-likelihood near the start{why}",
+                likelihood.method()
+            ))
+        })?;
+        chains.out = chains
+            .states
+            .iter()
+            .map(|s| Chain {
+                theta: Vec::with_capacity(options.draws * p),
+                log_likelihood: Vec::with_capacity(options.draws),
+                log_prior: Vec::with_capacity(options.draws),
+                acceptance: 0.0,
+                scale: 1.0,
+                start: s.theta.clone(),
+            })
+            .collect();
+        Ok(chains)
+    }
+
+    /// Iterations done (warm-up included).
+    pub fn iteration(&self) -> usize {
+        self.t
+    }
+
+    /// Iterations in all: warm-up and draws.
+    pub fn total(&self) -> usize {
+        self.options.warmup + self.options.draws
+    }
+
+    /// Whether every iteration is done.
+    pub fn is_done(&self) -> bool {
+        self.t >= self.total()
+    }
+
+    /// The seed of chain c's likelihood estimate at iteration t (fresh random numbers).
+    fn seed_of(&self, c: usize, t: usize) -> u64 {
+        crate::lab::experiment::method_seed(self.options.seed ^ ((t as u64) << 20), c + 1)
+    }
+
+    /// ln L at each point: with its seed for fresh random numbers, else as the likelihood is.
+    fn evaluate_batch(
+        &self,
+        evaluate: &dyn Evaluate,
+        points: &[Vec<f64>],
+        seeds: &[u64],
+    ) -> Vec<f64> {
+        if self.fresh {
             evaluate
                 .log_likelihoods_seeded(points, seeds)
                 .unwrap_or_else(|| vec![f64::NEG_INFINITY; points.len()])
         } else {
             evaluate.log_likelihoods(points)
         }
-    };
-    let mut evaluations = 0;
-    let mut states = start_states(
-        &target,
-        (&u0, &c0),
-        &mut rngs,
-        &mut evaluations,
-        &|points, seeds| evaluate_batch(points, seeds),
-        &seed_of,
-    )
-    .ok_or_else(|| {
-        let why = likelihood
-            .log_likelihood(&start)
-            .err()
-            .map_or_else(String::new, |e| format!(": at the start, {e}"));
-        ZakaiError::Other(format!(
-            "no chain could start: {} gives no finite log-likelihood near the start{why}",
-            likelihood.method()
-        ))
-    })?;
-    let mut proposals = vec![proposal; chains];
-    let total = options.warmup + options.draws;
-    let mut out: Vec<Chain> = states
-        .iter()
-        .map(|s| Chain {
-            theta: Vec::with_capacity(options.draws * p),
-            log_likelihood: Vec::with_capacity(options.draws),
-            log_prior: Vec::with_capacity(options.draws),
-            acceptance: 0.0,
-            scale: 1.0,
-            start: s.theta.clone(),
-        })
-        .collect();
-    let mut accepted = vec![0usize; chains];
-    for t in 1..=total {
-        let candidates: Vec<State> = (0..chains)
+    }
+
+    /// Each chain's first state: a draw from N(u₀, C₀) with a finite target (chain 0's first
+    /// try at u₀ itself), up to 20 tries a chain, the chains still looking evaluated together;
+    /// `None` when one chain found none.
+    fn start_states(
+        &mut self,
+        evaluate: &dyn Evaluate,
+        (u0, c0): (&[f64], &[f64]),
+    ) -> Option<Vec<State>> {
+        let p = self.target.dim();
+        let spread = Proposal::new(c0, p)?;
+        let chains = self.options.chains;
+        let mut states: Vec<Option<State>> = (0..chains).map(|_| None).collect();
+        for attempt in 0..20 {
+            let waiting: Vec<usize> = (0..chains).filter(|&c| states[c].is_none()).collect();
+            if waiting.is_empty() {
+                break;
+            }
+            let candidates: Vec<State> = waiting
+                .iter()
+                .map(|&c| {
+                    // The proposal's factor is that of s_d C₀: undone for a draw from N(u₀, C₀).
+                    let u = if attempt == 0 && c == 0 {
+                        u0.to_vec()
+                    } else {
+                        let step = spread.propose(&vec![0.0; p], &mut self.rngs[c]);
+                        let s = libm::sqrt(p as f64) / 2.38;
+                        u0.iter().zip(step).map(|(a, b)| a + s * b).collect()
+                    };
+                    state_at(&self.target, u)
+                })
+                .collect();
+            let points: Vec<Vec<f64>> = candidates.iter().map(|s| s.theta.clone()).collect();
+            let seeds: Vec<u64> = waiting.iter().map(|&c| self.seed_of(c, 0)).collect();
+            let values = self.evaluate_batch(evaluate, &points, &seeds);
+            self.evaluations += points.len();
+            for ((&c, mut s), v) in waiting.iter().zip(candidates).zip(values) {
+                s.log_likelihood = v;
+                if s.log_target().is_finite() {
+                    states[c] = Some(s);
+                }
+            }
+        }
+        states.into_iter().collect()
+    }
+
+    /// One iteration of every chain: each proposes, the proposals inside the prior's support
+    /// are evaluated in one batch, each accepts or rejects; in the warm-up the proposals
+    /// adapt, after it the states are kept. Nothing once every iteration is done.
+    pub fn step(&mut self, evaluate: &dyn Evaluate) {
+        if self.is_done() {
+            return;
+        }
+        self.t += 1;
+        let (t, chains, warm) = (self.t, self.options.chains, self.t <= self.options.warmup);
+        let mut candidates: Vec<Option<State>> = (0..chains)
             .map(|c| {
-                let u = proposals[c].propose(&states[c].u, &mut rngs[c]);
-                state_at(&target, u)
+                let u = self.proposals[c].propose(&self.states[c].u, &mut self.rngs[c]);
+                Some(state_at(&self.target, u))
             })
             .collect();
-        // Only the proposals inside the prior's support cost a run.
+        // Only the proposals inside the prior's support cost a run; the others are rejected.
         let live: Vec<usize> = (0..chains)
-            .filter(|&c| candidates[c].log_prior + candidates[c].log_jacobian > f64::NEG_INFINITY)
+            .filter(|&c| {
+                candidates[c]
+                    .as_ref()
+                    .is_some_and(|s| s.log_prior + s.log_jacobian > f64::NEG_INFINITY)
+            })
             .collect();
-        let points: Vec<Vec<f64>> = live.iter().map(|&c| candidates[c].theta.clone()).collect();
-        let seeds: Vec<u64> = live.iter().map(|&c| seed_of(c, t)).collect();
-        let values = evaluate_batch(&points, &seeds);
-        evaluations += points.len();
-        let mut candidates: Vec<Option<State>> = candidates.into_iter().map(Some).collect();
+        let points: Vec<Vec<f64>> = live
+            .iter()
+            .filter_map(|&c| candidates[c].as_ref().map(|s| s.theta.clone()))
+            .collect();
+        let seeds: Vec<u64> = live.iter().map(|&c| self.seed_of(c, t)).collect();
+        let values = self.evaluate_batch(evaluate, &points, &seeds);
+        self.evaluations += points.len();
+        let mut alphas = vec![0.0; chains];
         for (&c, value) in live.iter().zip(values) {
-            let mut candidate = candidates[c].take().expect("each chain proposes once");
+            let Some(mut candidate) = candidates[c].take() else {
+                continue;
+            };
             candidate.log_likelihood = value;
-            let log_ratio = candidate.log_target() - states[c].log_target();
-            let alpha = if log_ratio.is_nan() {
+            let log_ratio = candidate.log_target() - self.states[c].log_target();
+            alphas[c] = if log_ratio.is_nan() {
                 0.0
             } else {
                 libm::exp(log_ratio.min(0.0))
             };
-            let u: f64 = rand::RngExt::random(&mut rngs[c]);
-            if u < alpha {
-                states[c] = candidate;
-                if t > options.warmup {
-                    accepted[c] += 1;
+            let u: f64 = rand::RngExt::random(&mut self.rngs[c]);
+            if u < alphas[c] {
+                self.states[c] = candidate;
+                if !warm {
+                    self.accepted[c] += 1;
                 }
             }
-            if t <= options.warmup {
-                proposals[c].adapt(t, &states[c].u, alpha);
-            }
         }
-        // A proposal outside the support is rejected without a run.
-        for c in (0..chains).filter(|c| !live.contains(c)) {
-            if t <= options.warmup {
-                proposals[c].adapt(t, &states[c].u, 0.0);
-            }
-        }
-        if t > options.warmup {
-            for (chain, state) in out.iter_mut().zip(&states) {
+        for (c, alpha) in alphas.iter().enumerate() {
+            if warm {
+                self.proposals[c].adapt(t, &self.states[c].u, *alpha);
+            } else {
+                let (chain, state) = (&mut self.out[c], &self.states[c]);
                 chain.theta.extend_from_slice(&state.theta);
                 chain.log_likelihood.push(state.log_likelihood);
                 chain.log_prior.push(state.log_prior);
             }
         }
-        if !progress(t, total) {
-            return Err(ZakaiError::Other(format!(
-                "sampling stopped at iteration {t} of {total}"
-            )));
-        }
     }
-    for ((chain, proposal), a) in out.iter_mut().zip(&proposals).zip(&accepted) {
-        chain.acceptance = *a as f64 / options.draws as f64;
-        chain.scale = proposal.scale();
-    }
-    let mut posterior = Posterior {
-        method: likelihood.method().to_string(),
-        sampler: if pseudo_marginal {
-            "particle marginal Metropolis–Hastings"
-        } else {
-            "adaptive random-walk Metropolis"
+
+    /// The draws kept so far (all of them once done), with their notes.
+    pub fn posterior(&self) -> Posterior {
+        let kept = self.t.saturating_sub(self.options.warmup);
+        let mut chains = self.out.clone();
+        for ((chain, proposal), a) in chains.iter_mut().zip(&self.proposals).zip(&self.accepted) {
+            chain.acceptance = if kept > 0 {
+                *a as f64 / kept as f64
+            } else {
+                0.0
+            };
+            chain.scale = proposal.scale();
         }
-        .to_string(),
-        names: likelihood.names().to_vec(),
-        priors: target.priors.clone(),
-        bounds: target.bounds.clone(),
-        chains: out,
-        draws: options.draws,
-        warmup: options.warmup,
-        evaluations,
-        observations: likelihood.observations(),
-        notes: Vec::new(),
-    };
-    posterior.notes = notes(&posterior, likelihood, pseudo_marginal && !fresh, random);
-    Ok(posterior)
+        let mut posterior = Posterior {
+            method: self.method.clone(),
+            sampler: if self.pseudo_marginal {
+                "particle marginal Metropolis–Hastings"
+            } else {
+                "adaptive random-walk Metropolis"
+            }
+            .to_string(),
+            names: self.names.clone(),
+            priors: self.target.priors.clone(),
+            bounds: self.target.bounds.clone(),
+            chains,
+            draws: kept,
+            warmup: self.options.warmup,
+            evaluations: self.evaluations,
+            observations: self.observations,
+            notes: Vec::new(),
+        };
+        if kept > 0 {
+            posterior.notes = notes(
+                &posterior,
+                (&self.method, &self.random_numbers),
+                self.pseudo_marginal && !self.fresh,
+                self.random,
+            );
+        }
+        posterior
+    }
 }
 
 /// The options' problems: no draws or chains, too many values to hold.
@@ -551,59 +698,11 @@ fn state_at(target: &Target, u: Vec<f64>) -> State {
     }
 }
 
-/// Each chain's first state: a draw from N(u₀, C₀) with a finite target, up to 20 tries a
-/// chain (the batches of the chains still looking evaluated together); `None` when one chain
-/// found none.
-fn start_states(
-    target: &Target,
-    (u0, c0): (&[f64], &[f64]),
-    rngs: &mut [SimRng],
-    evaluations: &mut usize,
-    evaluate: &Batch<'_>,
-    seed_of: &dyn Fn(usize, usize) -> u64,
-) -> Option<Vec<State>> {
-    let p = target.dim();
-    let spread = Proposal::new(c0, p)?;
-    let mut states: Vec<Option<State>> = (0..rngs.len()).map(|_| None).collect();
-    for attempt in 0..20 {
-        let waiting: Vec<usize> = (0..rngs.len()).filter(|&c| states[c].is_none()).collect();
-        if waiting.is_empty() {
-            break;
-        }
-        let candidates: Vec<State> = waiting
-            .iter()
-            .map(|&c| {
-                // The proposal's factor is that of s_d C₀; undo s_d for a draw from N(u₀, C₀),
-                // the first try of chain 0 at u₀ itself.
-                let u = if attempt == 0 && c == 0 {
-                    u0.to_vec()
-                } else {
-                    let step = spread.propose(&vec![0.0; p], &mut rngs[c]);
-                    let s = libm::sqrt(p as f64) / 2.38;
-                    u0.iter().zip(step).map(|(a, b)| a + s * b).collect()
-                };
-                state_at(target, u)
-            })
-            .collect();
-        let points: Vec<Vec<f64>> = candidates.iter().map(|s| s.theta.clone()).collect();
-        let seeds: Vec<u64> = waiting.iter().map(|&c| seed_of(c, 0)).collect();
-        let values = evaluate(&points, &seeds);
-        *evaluations += points.len();
-        for ((&c, mut s), v) in waiting.iter().zip(candidates).zip(values) {
-            s.log_likelihood = v;
-            if s.log_target().is_finite() {
-                states[c] = Some(s);
-            }
-        }
-    }
-    states.into_iter().collect()
-}
-
 /// The notes of a posterior: each parameter's R̂ and ESS against the thresholds, chains that
 /// hardly moved, common random numbers, and a random likelihood under plain Metropolis.
 fn notes(
     posterior: &Posterior,
-    likelihood: &dyn LogLikelihood,
+    (method, random_numbers): (&str, &str),
     common: bool,
     random: bool,
 ) -> Vec<String> {
@@ -646,14 +745,12 @@ fn notes(
     if common {
         notes.push(format!(
             "{}'s likelihood with common random numbers ({}) is one fixed realisation of its estimate: the draws are from the posterior under that function, not the exact posterior (fresh random numbers sample the exact one)",
-            likelihood.method(),
-            likelihood.random_numbers().unwrap_or_default()
+            method, random_numbers
         ));
     } else if random && posterior.sampler == "adaptive random-walk Metropolis" {
         notes.push(format!(
             "{}'s likelihood with common random numbers ({}) under random-walk Metropolis: a fixed realisation of the estimate, not the exact posterior",
-            likelihood.method(),
-            likelihood.random_numbers().unwrap_or_default()
+            method, random_numbers
         ));
     }
     notes
