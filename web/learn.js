@@ -90,6 +90,7 @@ async function openLesson(page, id) {
     if (t.mc) return page.monteCarlo(t.mc);
     if (t.check) return page.checkConvergence();
     if (t.likelihood) return page.likelihood(t.likelihood);
+    if (t.posterior) return page.posterior(t.posterior);
     if (t.view) return page.view(t.view);
     // A try with `preset` runs that preset with the lesson's seed; else `change` edits the
     // lesson's scenario.

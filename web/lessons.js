@@ -8,7 +8,8 @@
 // and `method(key, params)` (the catalogue's defaults with `params` over them). The failure
 // rule's track-loss test is off unless the lesson is about it (`trackLoss: true`). A "try
 // this" action's `change(config, method)` edits the running config in place; `mc` runs the
-// Monte Carlo panel and `check` the convergence check instead, `view` turns on a view; its
+// Monte Carlo panel, `check` the convergence check, `likelihood` the Likelihood view and
+// `posterior` the Posterior view's sampler instead, `view` turns on a view; its
 // `expect` says what the changed run shows (asserted by tests/web/lessons.mjs). `opens` lists
 // the panels (<details> ids) the lesson's text refers to, opened with the lesson; `speed` the
 // observation intervals played per frame (5 unless given), one kept density per frame.
@@ -408,6 +409,39 @@ export const LESSONS = [
       },
     ],
   },
+  {
+    id: 'posterior',
+    title: '13. From a best fit to a posterior',
+    preset: 'cubic-sensor-fit',
+    seed: 3,
+    opens: ['post-panel'],
+    scenario: (c) => c,
+    body: [
+      'Lesson 8 drew the likelihood $L(q, r) = p(z_0, \\dots, z_N \\mid q, r)$ of the cubic sensor\'s data along one noise level. A maximum-likelihood fit reports its highest point and a standard error from its curvature there. Bayes\' rule reports instead a distribution over the unknowns, the posterior:',
+      '$$p(q, r \\mid z_{0:N}) = \\frac{L(q, r)\\, p(q, r)}{\\iint L(q\', r\')\\, p(q\', r\')\\, dq\'\\, dr\'},$$',
+      'where $p(q, r)$ is the prior. Here it is uniform on the parameters\' bounds, $q \\in [0.01, 4]$ and $r \\in [0.05, 4]$, so the posterior is the likelihood restricted to that box and normalised: its shape — skewed, bounded, with the two unknowns traded against each other — is the likelihood\'s own, which a point and a standard error summarise only when it is close to a Gaussian.',
+      'Each value of $L$ is a whole filter run, so the posterior is explored by a Markov chain that needs only ratios of $L\\,p$ (Metropolis, Rosenbluth, Rosenbluth, Teller & Teller 1953; Hastings 1970). From its current point $\\theta = (q, r)$ the chain proposes $\\theta\' = \\theta + \\varepsilon$, a Gaussian step, and moves there with probability',
+      '$$\\alpha = \\min\\Big(1,\\ \\frac{L(\\theta\')\\, p(\\theta\')}{L(\\theta)\\, p(\\theta)}\\Big),$$',
+      'else stays. The chain\'s states are then draws from the posterior, correlated ones. The steps are taken on an unbounded scale, $u = \\ln\\frac{\\theta - a}{b - \\theta}$ for $\\theta \\in [a, b]$, with the factor $|d\\theta/du|$ in the ratio so that the target stays $p(\\theta \\mid z)$; their covariance adapts during a warm-up to the chain\'s own (Haario, Saksman & Tamminen 2001) and is then fixed.',
+      'Four chains from different starting points: if they have forgotten where they started, they describe the same distribution and the rank-normalised split $\\hat R$, a ratio of the spread between chains to the spread within them, is near 1 — below 1.01 (Vehtari, Gelman, Simpson, Carpenter & Bürkner 2021). The effective sample size (ESS) is the number of independent draws the correlated ones are worth, for the bulk and for the 5 % and 95 % quantiles; below 400 their Monte Carlo error is too large to report them to two digits.',
+      'The same data as lesson 8 (seed 3, 301 measurements, simulated with $q = 0.49$ and $r = 0.5$). The command zakai sample cubic-sensor-fit --observations obs.csv --method separation (and zakai.sample in Python) draws the same posterior, starting from the maximum-likelihood estimate.',
+    ],
+    lookFor: [
+      'The Posterior panel below the plots: each parameter\'s traces (one line per chain, drawn as the chains go), its histogram with the prior dashed, the two parameters\' joint draws over the likelihood\'s regions, and the table of means, intervals, $\\hat R$ and ESS with the notes under it.',
+    ],
+    tryThis: [
+      {
+        label: 'sample the SA\'s posterior of q and r',
+        posterior: { method: 'separation', draws: 600, warmup: 400, chains: 4 },
+        expect: 'after 4 004 runs of the separation approach (4 chains × 1 000 iterations, and 4 starts): $r$\'s 90 % interval [0.35, 0.51] around its mean 0.43; $q$\'s [0.49, 0.91], its mean 0.69 above its median 0.68 (a longer tail to the right), and the true 0.49 at its lower end. The joint draws lean — a larger $q$ goes with a smaller $r$ (correlation −0.34): more signal noise and less measurement noise explain the same spread of the data. With 600 kept draws a chain the notes warn: the ESS of both parameters is below 400 (242 to 391) and $\\hat R$ of $r$ is 1.018; the intervals\' ends are uncertain in their second digit, and longer chains would settle them.',
+      },
+      {
+        label: 'the same with the EKF\'s likelihood',
+        posterior: { method: 'ekf', draws: 600, warmup: 400, chains: 4 },
+        expect: 'the draws of $q$ spread over its whole box — mean 2.00 and sd 1.17, against the uniform prior\'s 2.005 and 1.15: the EKF\'s likelihood does not depend on $q$ at all (its gain is 0, lesson 8, and every prediction is $N(0, r)$), so its posterior of $q$ is its prior. Its posterior of $r$ is narrow and wrong: 90 % in [0.83, 1.09], around the mean square of the measurements 0.947, nowhere near the true 0.5. A posterior is only as good as the likelihood it is made of.',
+      },
+    ],
+  },
 ];
 
 /** The papers Zakai implements, in full, and the classics the lessons cite. */
@@ -430,4 +464,8 @@ export const REFERENCES = [
   ['', 'M. Šimandl, J. Královec and T. Söderström, “Advanced point-mass method for nonlinear state estimation”, Automatica 42(7), 2006.'],
   ['', 'R. S. Bucy and K. D. Senne, “Digital synthesis of non-linear filters”, Automatica 7(3), 1971.'],
   ['', 'M. S. Arulampalam, S. Maskell, N. Gordon and T. Clapp, “A tutorial on particle filters for online nonlinear/non-Gaussian Bayesian tracking”, IEEE Transactions on Signal Processing 50(2), 2002.'],
+  ['', 'N. Metropolis, A. W. Rosenbluth, M. N. Rosenbluth, A. H. Teller and E. Teller, “Equation of state calculations by fast computing machines”, Journal of Chemical Physics 21(6), 1953.'],
+  ['', 'W. K. Hastings, “Monte Carlo sampling methods using Markov chains and their applications”, Biometrika 57(1), 1970.'],
+  ['', 'H. Haario, E. Saksman and J. Tamminen, “An adaptive Metropolis algorithm”, Bernoulli 7(2), 2001.'],
+  ['', 'A. Vehtari, A. Gelman, D. Simpson, B. Carpenter and P.-C. Bürkner, “Rank-normalization, folding, and localization: an improved R̂ for assessing convergence of MCMC”, Bayesian Analysis 16(2), 2021.'],
 ];

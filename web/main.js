@@ -14,7 +14,7 @@ import { setupExport } from './export.js';
 import { markStaleTables, setupMonteCarlo, startConvergenceCheck, startMonteCarlo } from './montecarlo.js';
 import { restoreRunningRecording, setupFiles } from './data-files.js';
 import { markStaleProfile, setupLikelihood, startProfile } from './likelihood.js';
-import { markStalePosterior, setupPosterior } from './posterior.js';
+import { markStalePosterior, setupPosterior, startPosterior } from './posterior.js';
 
 // Served: the note on how to serve the page (all a file:// visitor sees) goes.
 $('served-note')?.remove();
@@ -65,6 +65,11 @@ const learnHooks = {
     $('lik-panel').open = true;
     startProfile(parameter);
     showPanel('lik-panel', 'lik-plot');
+  },
+  posterior(options) {
+    $('post-panel').open = true;
+    startPosterior(options);
+    showPanel('post-panel', 'post-plots');
   },
   view(name) {
     const box = $(name);

@@ -37,10 +37,17 @@ function showMethods() {
   if (current && Number(current) < config.methods.length) $('post-method').value = current;
 }
 
-function startPosterior() {
+// Starts the sampler; `options` (a lesson's) sets the method by key, the draws, warm-up and
+// chains first.
+export function startPosterior(options) {
   const config = checkedForm();
   if (!config) return;
   showMethods();
+  if (options) {
+    const index = config.methods.findIndex((m) => m.method === options.method);
+    if (index >= 0) $('post-method').value = String(index);
+    for (const key of ['draws', 'warmup', 'chains']) if (options[key] != null) $(`post-${key}`).value = String(options[key]);
+  }
   const int = (id, lo, hi, fallback) => Math.max(lo, Math.min(hi, Number($(id).value) | 0 || fallback));
   const draws = int('post-draws', 10, 100000, 1000);
   const warmup = int('post-warmup', 0, 100000, 1000);
@@ -107,7 +114,7 @@ function draw(result) {
   )));
   $('post-notes').replaceChildren(...result.notes.map((n) => el('li', { textContent: n })));
   const rates = result.acceptance.map((a) => a.toFixed(2)).join(', ');
-  $('post-about').textContent = `${result.method}, ${result.sampler}: ${result.chains.length} chains × ${result.draws} draws after ${result.warmup} of warm-up; acceptance ${rates}`;
+  $('post-about').textContent = `${result.method}, ${result.sampler}: ${result.chains.length} chains × ${result.draws} draws after ${result.warmup} of warm-up, ${result.evaluations} filter runs; acceptance ${rates}`;
   $('post-csv').disabled = result.draws === 0;
 }
 
@@ -192,7 +199,7 @@ function drawJoint(canvas, w, h, result) {
   ctx.rotate(-Math.PI / 2);
   ctx.fillText(`${result.names[1]}: ${fmt(y0)} … ${fmt(y1)}`, 0, 0);
   ctx.restore();
-  ctx.fillText('draws (dots) over ln L within 1.15, 3.0, 4.6 of its maximum (68, 95, 99 % likelihood-ratio regions)', pad.l, 12);
+  ctx.fillText('draws over ln L within 1.15, 3.0, 4.6 of its top (68, 95, 99 % regions)', pad.l, 12);
 }
 
 function exportCsv() {
@@ -210,7 +217,7 @@ export function setupPosterior() {
     $('post-none').hidden = e.detail.length > 0;
   });
   $('post-panel').addEventListener('toggle', () => { if ($('post-panel').open) showMethods(); });
-  $('post-start').addEventListener('click', startPosterior);
+  $('post-start').addEventListener('click', () => startPosterior());
   $('post-cancel').addEventListener('click', () => postJob({ type: 'posteriorCancel' }));
   $('post-csv').addEventListener('click', exportCsv);
   onJobMessage('posteriorProgress', (d) => {

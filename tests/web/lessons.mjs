@@ -763,6 +763,59 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.equal(lingering, 31, 'the truth within 3 of ±7 at 31 of the 51 times');
   }
 
+  // Lesson 13: the posterior of q and r on lesson 8's data, with the SA's likelihood and with
+  // the EKF's, in the Posterior panel (the worker's sampler; the same draws as `zakai sample
+  // … --seed 3 --no-fit --draws 600 --warmup 400`, the wasm and native numbers being equal).
+  {
+    const near = (a, b, tol) => Math.abs(a - b) <= tol;
+    await openLesson('posterior');
+    const sampled = async (label) => {
+      await page.click(`#lesson button.try:has-text("${label}")`);
+      await page.waitForFunction(() => /finished|error|cancelled/.test(document.getElementById('post-status').textContent) && !document.getElementById('post-start').disabled, null, { timeout: 300000 });
+      assert.match(await page.textContent('#post-status'), /^finished/);
+      return page.evaluate(() => {
+        const p = window.zakaiPage.posterior;
+        const q = p.chains.flatMap((c) => c[0]);
+        const r = p.chains.flatMap((c) => c[1]);
+        const mean = (v) => v.reduce((a, b) => a + b, 0) / v.length;
+        const [mq, mr] = [mean(q), mean(r)];
+        const sd = (v, m) => Math.sqrt(v.reduce((a, x) => a + (x - m) ** 2, 0) / (v.length - 1));
+        const corr = q.reduce((a, v, k) => a + (v - mq) * (r[k] - mr), 0) / (q.length - 1) / (sd(q, mq) * sd(r, mr));
+        const [sq, sr] = p.summary;
+        return { sq, sr, corr, evaluations: p.evaluations, chains: p.chains.length, draws: p.draws, warmup: p.warmup, notes: p.notes, grid: p.grid, about: document.getElementById('post-about').textContent, rows: document.querySelectorAll('#post-table tbody tr').length, joint: !!document.getElementById('post-joint') };
+      });
+    };
+    const sa = await sampled("sample the SA's posterior");
+    console.log('lesson 13, SA:', JSON.stringify({ q: sa.sq, r: sa.sr, corr: sa.corr, evaluations: sa.evaluations }));
+    assert.ok(sa.chains === 4 && sa.draws === 600 && sa.warmup === 400 && sa.evaluations === 4004, '4 chains × 1000 iterations, 4004 runs');
+    assert.match(sa.about, /4004 filter runs/);
+    assert.ok(sa.rows === 2 && sa.joint, 'the table and the joint plot');
+    assert.ok(near(sa.sr.q05, 0.35, 0.005) && near(sa.sr.q95, 0.51, 0.005) && near(sa.sr.mean, 0.43, 0.005), "r's 90 % interval [0.35, 0.51], mean 0.43");
+    assert.ok(near(sa.sq.q05, 0.49, 0.005) && near(sa.sq.q95, 0.91, 0.005), "q's [0.49, 0.91], the truth 0.49 at its lower end");
+    assert.ok(near(sa.sq.mean, 0.69, 0.005) && near(sa.sq.median, 0.68, 0.005) && sa.sq.mean > sa.sq.median, "q's mean 0.69 above its median 0.68");
+    assert.ok(near(sa.corr, -0.34, 0.005), 'correlation −0.34');
+    const ess = [sa.sq, sa.sr].flatMap((s) => [s.diagnostics.ess_bulk, s.diagnostics.ess_tail]);
+    assert.ok(ess.every((e) => e < 400) && near(Math.min(...ess), 242, 0.5) && near(Math.max(...ess), 391, 0.5), `ESS 242 to 391, below 400: ${ess}`);
+    assert.ok(near(sa.sr.diagnostics.rhat, 1.018, 0.0005), "R̂ of r 1.018");
+    assert.ok(sa.notes.some((n) => /^r: effective sample size/.test(n)) && sa.notes.some((n) => /^q: effective sample size/.test(n)), 'the notes warn');
+    await page.evaluate(() => document.getElementById('post-panel').scrollIntoView());
+    await page.screenshot({ path: `${artifacts}/lesson-posterior.png` });
+    const ekf = await sampled("the same with the EKF's likelihood");
+    console.log('lesson 13, EKF:', JSON.stringify({ q: ekf.sq, r: ekf.sr }));
+    // The uniform prior on [0.01, 4]: mean 2.005, sd 3.99/√12.
+    assert.ok(near(ekf.sq.mean, 2.0, 0.005) && near(ekf.sq.sd, 1.17, 0.005), 'q: mean 2.00, sd 1.17');
+    assert.ok(near((0.01 + 4) / 2, 2.005, 1e-12) && near(3.99 / Math.sqrt(12), 1.15, 0.005), "the prior's 2.005 and 1.15");
+    // ln L of the EKF on the grid does not change with q (rows of the grid are q's values).
+    const g = ekf.grid;
+    const cells = g.x.length;
+    const flat = g.y.every((_, j) => g.x.every((_, i) => g.log_likelihoods[i * cells + j] === g.log_likelihoods[j]));
+    assert.ok(flat, "the EKF's ln L the same at every q");
+    assert.ok(near(ekf.sr.q05, 0.83, 0.005) && near(ekf.sr.q95, 1.09, 0.005), "r: 90 % in [0.83, 1.09]");
+    const z13 = await page.evaluate(() => window.zakaiPage.data.full?.obs[0] ?? window.zakaiPage.data.obs[0]);
+    const meanSquare13 = z13.reduce((a, v) => a + v * v, 0) / z13.length;
+    assert.ok(near(meanSquare13, 0.947, 0.0005) && ekf.sr.q05 < meanSquare13 && meanSquare13 < ekf.sr.q95 && ekf.sr.q05 > 0.5, 'around the mean square 0.947, far from 0.5');
+  }
+
   // A run the page refuses reports why (a broken drift expression, with its position); the
   // Kalman–Bucy filter on a cubic sensor is run and marked "does not apply here".
   await openLesson('kalman-bucy');

@@ -293,6 +293,7 @@ impl PosteriorJob {
     }
 
     /// The posterior so far: `{names, method, sampler, draws (kept per chain), warmup,
+    /// iteration, evaluations (the sampler's filter runs),
     /// chains: [[values of parameter 0], [values of parameter 1] …] per chain, acceptance,
     /// summary: [{name, mean, sd, q05, median, q95, mcse, diagnostics}], notes, priors:
     /// [{x, density}] per parameter over the draws' range, grid: {x, y, log_likelihoods
@@ -317,6 +318,7 @@ impl PosteriorJob {
             draws: usize,
             warmup: usize,
             iteration: usize,
+            evaluations: usize,
             chains: Vec<Vec<Vec<f64>>>,
             acceptance: Vec<f64>,
             summary: Vec<zakai::lab::posterior::ParameterSummary>,
@@ -371,6 +373,7 @@ impl PosteriorJob {
             draws: p.draws,
             warmup: p.warmup,
             iteration: self.chains.iteration(),
+            evaluations: p.evaluations,
             acceptance: p.chains.iter().map(|c| c.acceptance).collect(),
             notes: p.notes.clone(),
             chains: per_chain,
