@@ -188,7 +188,7 @@ pub(crate) struct SampleArgs {
     #[arg(long, default_value_t = 4)]
     pub(crate) chains: usize,
     /// The sampler: `auto` (PMMH for the particle filter, else random-walk Metropolis),
-    /// `metropolis` or `pmmh`.
+    /// `metropolis`, `pmmh` or `langevin` (on the method's score, where it gives one).
     #[arg(long, value_enum, default_value_t = SamplerArg::Auto)]
     pub(crate) sampler: SamplerArg,
     /// PMMH with the same random numbers at every proposal (a smooth but biased likelihood)
@@ -215,6 +215,9 @@ pub enum SamplerArg {
     Metropolis,
     /// Particle marginal Metropolis–Hastings.
     Pmmh,
+    /// Metropolis-adjusted Langevin steps on the method's score (the Kalman, point-mass, SA
+    /// and FDM filters).
+    Langevin,
 }
 
 /// `zakai fit --optimiser`.

@@ -39,6 +39,7 @@ pub(crate) fn command(a: &SampleArgs) -> Result<(), String> {
             SamplerArg::Auto => Sampler::Automatic,
             SamplerArg::Metropolis => Sampler::Metropolis,
             SamplerArg::Pmmh => Sampler::PseudoMarginal,
+            SamplerArg::Langevin => Sampler::Langevin,
         },
         random_numbers: if a.common_random_numbers {
             RandomNumbers::Common

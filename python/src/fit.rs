@@ -324,7 +324,7 @@ pub fn profile<'py>(
 /// Draws from the posterior of `names` (all the scenario's when empty) under method
 /// `method`: the posterior (its chains, priors and notes) and its summary as JSON;
 /// `evaluator(method, names, points, seeds)` runs the batches when given. `sampler` is
-/// `"auto"`, `"metropolis"` or `"pmmh"`; `fit_start` starts the chains around the
+/// `"auto"`, `"metropolis"`, `"pmmh"` or `"langevin"`; `fit_start` starts the chains around the
 /// maximum-likelihood estimate.
 #[pyfunction]
 #[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None))]
@@ -353,6 +353,7 @@ pub fn sample<'py>(
             ("auto", Sampler::Automatic),
             ("metropolis", Sampler::Metropolis),
             ("pmmh", Sampler::PseudoMarginal),
+            ("langevin", Sampler::Langevin),
         ],
     )?;
     let arrays = (&observations, times.as_ref(), inputs.as_ref());

@@ -201,9 +201,11 @@ def sample(
     draws, warmup, chains : int, optional
         Draws kept per chain, warm-up iterations per chain (the proposal adapts; discarded),
         and the number of chains (1000, 1000, 4).
-    sampler : {"auto", "metropolis", "pmmh"}, optional
+    sampler : {"auto", "metropolis", "pmmh", "langevin"}, optional
         ``"auto"``: particle marginal Metropolis–Hastings for the particle filter, adaptive
-        random-walk Metropolis otherwise.
+        random-walk Metropolis otherwise; ``"langevin"``: Metropolis-adjusted Langevin steps
+        on the method's score (the Kalman, point-mass, separation and implicit FDM filters),
+        which mix faster per draw.
     common_random_numbers : bool, optional
         PMMH with the same random numbers at every proposal: a smooth but biased likelihood
         (the notes say so). Fresh numbers by default — the exact posterior.

@@ -71,6 +71,13 @@ pub trait Evaluate {
     fn log_likelihoods_seeded(&self, _points: &[Vec<f64>], _seeds: &[u64]) -> Option<Vec<f64>> {
         None
     }
+
+    /// ln L and its gradient ([`crate::Filter::score`]) at every point (`None` for a point
+    /// where the method failed or is not admissible), or `None` when this evaluator gives no
+    /// scores (the default) or the method has none.
+    fn scores(&self, _points: &[Vec<f64>]) -> Option<Vec<Option<crate::filters::Score>>> {
+        None
+    }
 }
 
 /// What a fit and a profile need of a log-likelihood ln L(θ): the parameters it varies, their
@@ -510,6 +517,26 @@ impl Evaluate for Likelihood {
         #[cfg(not(feature = "parallel"))]
         {
             points.iter().map(|p| self.value(p)).collect()
+        }
+    }
+
+    /// One score per point, on rayon's pool with the `parallel` feature.
+    fn scores(&self, points: &[Vec<f64>]) -> Option<Vec<Option<crate::filters::Score>>> {
+        if !self.config.methods[0].has_score() {
+            return None;
+        }
+        let score = |p: &Vec<f64>| match self.score(p) {
+            Some(Ok(s)) if s.log_likelihood.is_finite() => Some(s),
+            _ => None,
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            Some(points.par_iter().map(score).collect())
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            Some(points.iter().map(score).collect())
         }
     }
 

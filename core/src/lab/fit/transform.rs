@@ -68,6 +68,17 @@ impl Transform {
         }
     }
 
+    /// `d ln(dθ/du) / du` at θ: 0 on the whole line, 1 for `lo + eᵘ`, −1 for `hi − e^{−u}`,
+    /// `1 − 2σ(u) = 1 − 2(θ − lo)/(hi − lo)` on an interval.
+    pub(crate) fn log_slope_derivative(self, theta: f64) -> f64 {
+        match self {
+            Transform::Identity => 0.0,
+            Transform::Lower(_) => 1.0,
+            Transform::Upper(_) => -1.0,
+            Transform::Interval(lo, hi) => 1.0 - 2.0 * (theta - lo) / (hi - lo),
+        }
+    }
+
     /// The Wald interval `θ̂ ± z·se` computed where the fit moved, on the unbounded scale
     /// u, and mapped back: `θ(û ± z·se_u)` with `se_u = se/|dθ/du|` (the delta method), so
     /// that it stays inside the bounds (a variance's interval is `lo + (θ̂ − lo)·e^(±z se/(θ̂ −

@@ -13,6 +13,8 @@
 //! proposal and α* the target rate (0.44 in one dimension, 0.234 in more: Roberts, Gelman &
 //! Gilks 1997; Roberts & Rosenthal 2001).
 //!
+//! The same learning serves the Langevin proposal ([`Kind::Langevin`]), preconditioned by C.
+//!
 //! Adaptation runs during the warm-up only: the draws kept come from a fixed random-walk
 //! kernel, so they are an ordinary Metropolis–Hastings chain whatever the adaptation did.
 
@@ -28,9 +30,33 @@ fn initial_period(d: usize) -> usize {
     (10 * d).max(100)
 }
 
+/// A random walk or a Langevin step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// `u' = u + λ L z`, `L Lᵀ = s_d C`, `s_d = 2.38²/d`, α* = 0.234 (0.44 in one dimension).
+    RandomWalk,
+    /// The Metropolis-adjusted Langevin algorithm (Roberts & Tweedie 1996, "Exponential
+    /// convergence of Langevin distributions and their discrete approximations", Bernoulli 2,
+    /// 341–363), preconditioned by C: `u' = u + ½ λ² L Lᵀ ∇ ln π(u) + λ L z`, `L Lᵀ = s_d C`,
+    /// `s_d = 1.65²/d^{1/3}` and α* = 0.574 (Roberts & Rosenthal 1998, "Optimal scaling of
+    /// discrete approximations to Langevin diffusions", JRSS B 60, 255–268).
+    Langevin,
+}
+
+impl Kind {
+    /// `s_d`.
+    fn scale(self, d: usize) -> f64 {
+        match self {
+            Kind::RandomWalk => 2.38 * 2.38 / d as f64,
+            Kind::Langevin => 1.65 * 1.65 / libm::cbrt(d as f64),
+        }
+    }
+}
+
 /// One chain's proposal and what it has learned.
 #[derive(Clone, Debug)]
 pub(super) struct Proposal {
+    kind: Kind,
     d: usize,
     /// The Cholesky factor of `s_d C₀`, row-major lower triangle.
     initial: Vec<f64>,
@@ -47,12 +73,12 @@ pub(super) struct Proposal {
 }
 
 impl Proposal {
-    /// A proposal of dimension d with initial covariance `c0` (d × d row-major, positive
-    /// definite).
-    pub(super) fn new(c0: &[f64], d: usize) -> Option<Self> {
-        let s_d = 2.38 * 2.38 / d as f64;
-        let factor = cholesky(c0, d, s_d)?;
+    /// A proposal of `kind` and dimension d with initial covariance `c0` (d × d row-major,
+    /// positive definite).
+    pub(super) fn new(kind: Kind, c0: &[f64], d: usize) -> Option<Self> {
+        let factor = cholesky(c0, d, kind.scale(d))?;
         Some(Proposal {
+            kind,
             d,
             initial: factor.clone(),
             factor,
@@ -60,8 +86,60 @@ impl Proposal {
             count: 0,
             mean: vec![0.0; d],
             products: vec![0.0; d * d],
-            target_rate: if d == 1 { 0.44 } else { 0.234 },
+            target_rate: match kind {
+                Kind::RandomWalk if d == 1 => 0.44,
+                Kind::RandomWalk => 0.234,
+                Kind::Langevin => 0.574,
+            },
         })
+    }
+
+    /// `L v`.
+    fn times_factor(&self, v: &[f64]) -> Vec<f64> {
+        (0..self.d)
+            .map(|i| (0..=i).map(|j| self.factor[i * self.d + j] * v[j]).sum())
+            .collect()
+    }
+
+    /// The Langevin step's mean from u with gradient g: `u + ½ λ² L Lᵀ g`.
+    fn langevin_mean(&self, u: &[f64], g: &[f64]) -> Vec<f64> {
+        let d = self.d;
+        let lt_g: Vec<f64> = (0..d)
+            .map(|j| (j..d).map(|i| self.factor[i * d + j] * g[i]).sum())
+            .collect();
+        let drift = self.times_factor(&lt_g);
+        let h = libm::exp(2.0 * self.log_scale);
+        u.iter().zip(drift).map(|(a, b)| a + 0.5 * h * b).collect()
+    }
+
+    /// A Langevin proposal from u with gradient g.
+    pub(super) fn propose_langevin(&self, u: &[f64], g: &[f64], rng: &mut SimRng) -> Vec<f64> {
+        let z: Vec<f64> = (0..self.d).map(|_| standard_normal(rng)).collect();
+        let scale = libm::exp(self.log_scale);
+        self.langevin_mean(u, g)
+            .iter()
+            .zip(self.times_factor(&z))
+            .map(|(m, s)| m + scale * s)
+            .collect()
+    }
+
+    /// `ln q(to | from)` of the Langevin proposal up to its constant (the same both ways):
+    /// `−|L⁻¹(to − mean(from))|² / (2 λ²)`.
+    pub(super) fn langevin_log_density(&self, from: &[f64], g: &[f64], to: &[f64]) -> f64 {
+        let d = self.d;
+        let r: Vec<f64> = to
+            .iter()
+            .zip(self.langevin_mean(from, g))
+            .map(|(t, m)| t - m)
+            .collect();
+        // Forward substitution L y = r.
+        let mut y = vec![0.0; d];
+        for i in 0..d {
+            let known: f64 = (0..i).map(|j| self.factor[i * d + j] * y[j]).sum();
+            y[i] = (r[i] - known) / self.factor[i * d + i];
+        }
+        let h = libm::exp(2.0 * self.log_scale);
+        -y.iter().map(|v| v * v).sum::<f64>() / (2.0 * h)
     }
 
     /// A proposal from `u`.
@@ -102,8 +180,7 @@ impl Proposal {
                 regular[i * d + i] += 1e-10 * trace.max(f64::MIN_POSITIVE);
             }
             // A chain that has not moved yet keeps its initial factor.
-            self.factor =
-                cholesky(&regular, d, 2.38 * 2.38 / d as f64).unwrap_or(self.initial.clone());
+            self.factor = cholesky(&regular, d, self.kind.scale(d)).unwrap_or(self.initial.clone());
         }
     }
 

@@ -53,7 +53,7 @@ use crate::lab::mcmc::{diagnose, quantile, ChainDiagnostics};
 use crate::lab::scenario::parameter_prior::ParameterPrior;
 use crate::random::{rng_from_seed, SimRng};
 use crate::validate::ConfigProblem;
-use adaptive::Proposal;
+use adaptive::{Kind, Proposal};
 use target::Target;
 
 /// The R̂ above which the notes warn (Vehtari et al. 2021).
@@ -77,6 +77,10 @@ pub enum Sampler {
     /// Particle marginal Metropolis–Hastings (for a method without random numbers it is
     /// random-walk Metropolis).
     PseudoMarginal,
+    /// The Metropolis-adjusted Langevin algorithm on the method's score (ln L and its
+    /// gradient, [`crate::Filter::score`]: the Kalman, point-mass, SA and FDM filters), the
+    /// steps preconditioned by the adapted covariance; an error for a method without one.
+    Langevin,
 }
 
 /// The random numbers of a pseudo-marginal sampler's likelihood estimates.
@@ -247,6 +251,8 @@ struct State {
     log_likelihood: f64,
     log_prior: f64,
     log_jacobian: f64,
+    /// ∇_u ln π(u) (Langevin only; empty otherwise).
+    gradient: Vec<f64>,
 }
 
 impl State {
@@ -292,6 +298,8 @@ pub struct Chains {
     /// Fresh random numbers at each proposal (PMMH).
     fresh: bool,
     pseudo_marginal: bool,
+    /// Langevin steps on the score.
+    langevin: bool,
     random: bool,
     method: String,
     random_numbers: String,
@@ -325,8 +333,19 @@ impl Chains {
         let p = target.dim();
         check_options(options, p)?;
         let random = likelihood.random_numbers().is_some();
-        let pseudo_marginal = random && options.sampler != Sampler::Metropolis;
+        let langevin = options.sampler == Sampler::Langevin;
+        let pseudo_marginal =
+            random && !matches!(options.sampler, Sampler::Metropolis | Sampler::Langevin);
         let fresh = pseudo_marginal && options.random_numbers == RandomNumbers::Fresh;
+        if langevin && (random || evaluate.scores(&[]).is_none()) {
+            return Err(ZakaiError::Config(vec![ConfigProblem::new(
+                "sampler",
+                format!(
+                    "Langevin steps need the gradient of ln L, and {} gives no score here (the Kalman, point-mass, SA and FDM filters do): use random-walk Metropolis",
+                    likelihood.method()
+                ),
+            )]));
+        }
         if fresh && evaluate.log_likelihoods_seeded(&[], &[]).is_none() {
             return Err(ZakaiError::Config(vec![ConfigProblem::new(
                 "sampler",
@@ -343,7 +362,12 @@ impl Chains {
         check_start(likelihood, &target, &start)?;
         let u0 = target.free(&start);
         let c0 = initial_covariance(&target, &start, options.covariance.as_deref())?;
-        let proposal = Proposal::new(&c0, p).ok_or_else(|| {
+        let kind = if langevin {
+            Kind::Langevin
+        } else {
+            Kind::RandomWalk
+        };
+        let proposal = Proposal::new(kind, &c0, p).ok_or_else(|| {
             ZakaiError::Config(vec![ConfigProblem::new(
                 "covariance",
                 "is not positive definite on the unbounded scale",
@@ -361,6 +385,7 @@ impl Chains {
             target,
             fresh,
             pseudo_marginal,
+            langevin,
             random,
             method: likelihood.method().to_string(),
             random_numbers: likelihood.random_numbers().unwrap_or_default(),
@@ -430,6 +455,30 @@ impl Chains {
         }
     }
 
+    /// Sets each state's ln L (and, for Langevin steps, ∇_u ln π) from one batch.
+    fn evaluate_states(&self, evaluate: &dyn Evaluate, states: &mut [&mut State], seeds: &[u64]) {
+        let points: Vec<Vec<f64>> = states.iter().map(|s| s.theta.clone()).collect();
+        if self.langevin {
+            let scores = evaluate
+                .scores(&points)
+                .unwrap_or_else(|| vec![None; points.len()]);
+            for (s, score) in states.iter_mut().zip(scores) {
+                match score {
+                    Some(score) => {
+                        s.log_likelihood = score.log_likelihood;
+                        s.gradient = self.target.free_gradient(&s.theta, &score.gradient);
+                    }
+                    None => s.log_likelihood = f64::NEG_INFINITY,
+                }
+            }
+        } else {
+            let values = self.evaluate_batch(evaluate, &points, seeds);
+            for (s, v) in states.iter_mut().zip(values) {
+                s.log_likelihood = v;
+            }
+        }
+    }
+
     /// Each chain's first state: a draw from N(u₀, C₀) with a finite target (chain 0's first
     /// try at u₀ itself), up to 20 tries a chain, the chains still looking evaluated together;
     /// `None` when one chain found none.
@@ -439,7 +488,7 @@ impl Chains {
         (u0, c0): (&[f64], &[f64]),
     ) -> Option<Vec<State>> {
         let p = self.target.dim();
-        let spread = Proposal::new(c0, p)?;
+        let spread = Proposal::new(Kind::RandomWalk, c0, p)?;
         let chains = self.options.chains;
         let mut states: Vec<Option<State>> = (0..chains).map(|_| None).collect();
         for attempt in 0..20 {
@@ -461,13 +510,16 @@ impl Chains {
                     state_at(&self.target, u)
                 })
                 .collect();
-            let points: Vec<Vec<f64>> = candidates.iter().map(|s| s.theta.clone()).collect();
+            let mut candidates = candidates;
             let seeds: Vec<u64> = waiting.iter().map(|&c| self.seed_of(c, 0)).collect();
-            let values = self.evaluate_batch(evaluate, &points, &seeds);
-            self.evaluations += points.len();
-            for ((&c, mut s), v) in waiting.iter().zip(candidates).zip(values) {
-                s.log_likelihood = v;
-                if s.log_target().is_finite() {
+            self.evaluate_states(
+                evaluate,
+                &mut candidates.iter_mut().collect::<Vec<_>>(),
+                &seeds,
+            );
+            self.evaluations += candidates.len();
+            for (&c, s) in waiting.iter().zip(candidates) {
+                if s.log_target().is_finite() && s.gradient.iter().all(|g| g.is_finite()) {
                     states[c] = Some(s);
                 }
             }
@@ -486,7 +538,12 @@ impl Chains {
         let (t, chains, warm) = (self.t, self.options.chains, self.t <= self.options.warmup);
         let mut candidates: Vec<Option<State>> = (0..chains)
             .map(|c| {
-                let u = self.proposals[c].propose(&self.states[c].u, &mut self.rngs[c]);
+                let (proposal, state) = (&self.proposals[c], &self.states[c]);
+                let u = if self.langevin {
+                    proposal.propose_langevin(&state.u, &state.gradient, &mut self.rngs[c])
+                } else {
+                    proposal.propose(&state.u, &mut self.rngs[c])
+                };
                 Some(state_at(&self.target, u))
             })
             .collect();
@@ -498,20 +555,32 @@ impl Chains {
                     .is_some_and(|s| s.log_prior + s.log_jacobian > f64::NEG_INFINITY)
             })
             .collect();
-        let points: Vec<Vec<f64>> = live
-            .iter()
-            .filter_map(|&c| candidates[c].as_ref().map(|s| s.theta.clone()))
-            .collect();
         let seeds: Vec<u64> = live.iter().map(|&c| self.seed_of(c, t)).collect();
-        let values = self.evaluate_batch(evaluate, &points, &seeds);
-        self.evaluations += points.len();
+        let mut evaluated: Vec<State> = live.iter().filter_map(|&c| candidates[c].take()).collect();
+        self.evaluate_states(
+            evaluate,
+            &mut evaluated.iter_mut().collect::<Vec<_>>(),
+            &seeds,
+        );
+        self.evaluations += evaluated.len();
+        for (&c, s) in live.iter().zip(evaluated) {
+            candidates[c] = Some(s);
+        }
         let mut alphas = vec![0.0; chains];
-        for (&c, value) in live.iter().zip(values) {
-            let Some(mut candidate) = candidates[c].take() else {
+        for &c in &live {
+            let Some(candidate) = candidates[c].take() else {
                 continue;
             };
-            candidate.log_likelihood = value;
-            let log_ratio = candidate.log_target() - self.states[c].log_target();
+            let mut log_ratio = candidate.log_target() - self.states[c].log_target();
+            if self.langevin {
+                let (proposal, state) = (&self.proposals[c], &self.states[c]);
+                log_ratio +=
+                    proposal.langevin_log_density(&candidate.u, &candidate.gradient, &state.u)
+                        - proposal.langevin_log_density(&state.u, &state.gradient, &candidate.u);
+                if candidate.gradient.iter().any(|g| !g.is_finite()) {
+                    log_ratio = f64::NEG_INFINITY;
+                }
+            }
             alphas[c] = if log_ratio.is_nan() {
                 0.0
             } else {
@@ -553,6 +622,8 @@ impl Chains {
             method: self.method.clone(),
             sampler: if self.pseudo_marginal {
                 "particle marginal Metropolis–Hastings"
+            } else if self.langevin {
+                "adaptive Metropolis-adjusted Langevin"
             } else {
                 "adaptive random-walk Metropolis"
             }
@@ -693,6 +764,7 @@ fn state_at(target: &Target, u: Vec<f64>) -> State {
         log_prior: target.log_prior(&theta),
         log_jacobian: target.log_jacobian(&theta),
         log_likelihood: f64::NEG_INFINITY,
+        gradient: Vec::new(),
         theta,
         u,
     }

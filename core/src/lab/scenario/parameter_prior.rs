@@ -143,6 +143,22 @@ impl ParameterPrior {
         }
     }
 
+    /// `d ln p(x) / dx` inside the support (where the density is positive; its value at a
+    /// point outside is meaningless).
+    pub fn log_density_derivative(&self, x: f64) -> f64 {
+        match *self {
+            ParameterPrior::Uniform => 0.0,
+            ParameterPrior::Normal { mean, sd } => -(x - mean) / (sd * sd),
+            ParameterPrior::LogNormal { mu, sigma } => {
+                -(libm::log(x) - mu) / (sigma * sigma * x) - 1.0 / x
+            }
+            ParameterPrior::Gamma { shape, rate } => (shape - 1.0) / x - rate,
+            ParameterPrior::InverseGamma { shape, scale } => -(shape + 1.0) / x + scale / (x * x),
+            ParameterPrior::HalfNormal { sd } => -x / (sd * sd),
+            ParameterPrior::Beta { a, b } => (a - 1.0) / x - (b - 1.0) / (1.0 - x),
+        }
+    }
+
     /// The problems with this prior of the parameter at `field` with `value` and `bounds`:
     /// its numbers (finite, positive where they must be), a uniform prior without two finite
     /// bounds, a support that misses the bounds, a value of zero prior density.

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Issue 64, item 5: effective samples per second of the posterior samplers on the AR(1)
+# stochastic-volatility model — μ, ρ, σ unknown (uniform priors on [−3, 1], [0, 0.999],
+# [0.01, 1]), 750 returns simulated from `particles`' values (seed 11, as scripts/bench-fit.sh),
+# the point-mass filter at its 400 cells — by the release CLI: random-walk Metropolis (4 chains
+# × 4500 draws after 500 of warm-up) and Metropolis-adjusted Langevin steps on the filter's
+# score (4 × 1000 after 500). Prints each run's summary (ESS bulk and tail per parameter) and
+# wall time (the starting fit included).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build -q --release -p zakai-cli
+zakai="${CARGO_TARGET_DIR:-target}/release/zakai"
+dir=target/bench-posterior
+mkdir -p "$dir"
+"$zakai" show sv-ar1 | python3 -c '
+import json, sys
+c = json.load(sys.stdin)
+c["time"]["t_final"] = 749.0
+json.dump(c, sys.stdout)' > "$dir/sv-truth.json"
+"$zakai" simulate "$dir/sv-truth.json" --seed 11 --format csv --out "$dir/sv.csv"
+python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))
+c["parameters"] = {"mu": {"value": -1.0, "bounds": [-3, 1]},
+                   "rho": {"value": 0.9, "bounds": [0.0, 0.999]},
+                   "sigma": {"value": 0.3, "bounds": [0.01, 1.0]}}
+c["model"]["drift"] = ["mu + rho*(x - mu)"]
+c["model"]["diffusion"] = [["sigma"]]
+c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["sigma^2/(1 - rho^2)"]]}
+c["methods"] = [m for m in c["methods"] if m["method"] == "point_mass"]
+json.dump(c, sys.stdout)' "$dir/sv-truth.json" > "$dir/sv-posterior.json"
+for run in "metropolis 4500" "langevin 1000"; do
+  set -- $run
+  start=$(date +%s.%N)
+  "$zakai" sample "$dir/sv-posterior.json" --observations "$dir/sv.csv" --sampler "$1" \
+    --draws "$2" --warmup 500 --seed 1 > "$dir/sv-$1.txt"
+  end=$(date +%s.%N)
+  printf 'SV posterior, %-10s %7.1f s\n' "$1" "$(echo "$end - $start" | bc)"
+  sed -n '1,6p' "$dir/sv-$1.txt"
+done
