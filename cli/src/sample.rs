@@ -124,9 +124,14 @@ pub(crate) fn render(p: &Posterior, seconds: f64, format: Format) -> String {
                 .iter()
                 .map(|c| format!("{:.2}", c.acceptance))
                 .collect();
+            let runs = if p.sampler.contains("Langevin") {
+                "scores"
+            } else {
+                "evaluations"
+            };
             let _ = writeln!(
                 s,
-                "acceptance {} (chains {}); {} evaluations in {seconds:.2} s",
+                "acceptance {} (chains {}); {} {runs} in {seconds:.2} s",
                 format_args!("{:.2}", p.acceptance()),
                 rates.join(", "),
                 p.evaluations

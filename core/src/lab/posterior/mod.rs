@@ -18,7 +18,7 @@
 //!   Deligiannidis & Kohn 2015). With [`RandomNumbers::Common`] every proposal uses the same
 //!   seed instead — a smooth-looking but biased likelihood, said so in the notes.
 //!
-//! With the `fit` feature, [`sample_from_estimate`] starts the chains around the
+//! With the `fit` feature, `sample_from_estimate` starts the chains around the
 //! maximum-likelihood estimate, the first proposal shaped by its covariance.
 //!
 //! Several chains run in lock step: at each iteration every chain proposes, and the
@@ -191,7 +191,8 @@ pub struct Posterior {
     pub draws: usize,
     /// Warm-up iterations per chain.
     pub warmup: usize,
-    /// Log-likelihood evaluations (filter runs).
+    /// Log-likelihood evaluations (filter runs; scores with Langevin steps, the starting fit's
+    /// evaluations included after `sample_from_estimate`).
     pub evaluations: usize,
     /// Observations the likelihood is of.
     pub observations: usize,
