@@ -3,9 +3,10 @@
 # stochastic-volatility model — μ, ρ, σ unknown (uniform priors on [−3, 1], [0, 0.999],
 # [0.01, 1]), 750 returns simulated from `particles`' values (seed 11, as scripts/bench-fit.sh),
 # the point-mass filter at its 400 cells — by the release CLI: random-walk Metropolis (4 chains
-# × 4500 draws after 500 of warm-up) and Metropolis-adjusted Langevin steps on the filter's
-# score (4 × 1000 after 500). Prints each run's summary (ESS bulk and tail per parameter) and
-# wall time (the starting fit included).
+# × 4500 draws after 500 of warm-up), the same with delayed acceptance screened by the
+# point-mass filter on 100 cells (4 × 6000 after 500), and Metropolis-adjusted Langevin steps
+# on the filter's score (4 × 1000 after 500). Prints each run's summary (ESS bulk and tail per
+# parameter) and wall time (the starting fit included).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build -q --release -p zakai-cli
@@ -29,12 +30,16 @@ c["model"]["diffusion"] = [["sigma"]]
 c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["sigma^2/(1 - rho^2)"]]}
 c["methods"] = [m for m in c["methods"] if m["method"] == "point_mass"]
 json.dump(c, sys.stdout)' "$dir/sv-truth.json" > "$dir/sv-posterior.json"
-for run in "metropolis 4500" "langevin 1000"; do
-  set -- $run
+run() {
+  local name=$1
+  shift
   start=$(date +%s.%N)
-  "$zakai" sample "$dir/sv-posterior.json" --observations "$dir/sv.csv" --sampler "$1" \
-    --draws "$2" --warmup 500 --seed 1 > "$dir/sv-$1.txt"
+  "$zakai" sample "$dir/sv-posterior.json" --observations "$dir/sv.csv" --warmup 500 --seed 1 \
+    "$@" > "$dir/sv-$name.txt"
   end=$(date +%s.%N)
-  printf 'SV posterior, %-10s %7.1f s\n' "$1" "$(echo "$end - $start" | bc)"
-  sed -n '1,6p' "$dir/sv-$1.txt"
-done
+  printf 'SV posterior, %-18s %7.1f s\n' "$name" "$(echo "$end - $start" | bc)"
+  sed -n '1,6p' "$dir/sv-$name.txt"
+}
+run metropolis --draws 4500
+run delayed-acceptance --draws 6000 --surrogate '{"method":"point_mass","cells":[100]}'
+run langevin --draws 1000 --sampler langevin

@@ -195,6 +195,11 @@ pub(crate) struct SampleArgs {
     /// instead of fresh ones.
     #[arg(long)]
     pub(crate) common_random_numbers: bool,
+    /// Delayed acceptance: screen each proposal with this cheaper method's likelihood first
+    /// (a catalogue key, or a method as JSON, e.g. '{"method":"point_mass","cells":[100]}'),
+    /// and run --method only on the proposals it passes; the draws stay exact for --method.
+    #[arg(long)]
+    pub(crate) surrogate: Option<String>,
     /// Start the chains around the scenario's values rather than the maximum-likelihood
     /// estimate (no fit first).
     #[arg(long)]

@@ -30,6 +30,24 @@ pub(crate) fn command(a: &SampleArgs) -> Result<(), String> {
     for note in likelihood.chosen_defaults() {
         eprintln!("default from the problem (held at every point) — {note}");
     }
+    let surrogate = match &a.surrogate {
+        None => None,
+        Some(spec) => {
+            let mut screen = config.clone();
+            if spec.trim_start().starts_with('{') {
+                let method = serde_json::from_str(spec)
+                    .map_err(|e| format!("--surrogate: invalid method JSON: {e}"))?;
+                screen.methods = vec![method];
+            } else {
+                crate::select_methods(&mut screen, std::slice::from_ref(spec))?;
+            }
+            let recording = likelihood.recording().clone();
+            Some(
+                Likelihood::new(&screen, recording, 0, &names, seed)
+                    .map_err(|e| format!("--surrogate: {e}"))?,
+            )
+        }
+    };
     let options = SampleOptions {
         draws: a.draws,
         warmup: a.warmup,
@@ -59,7 +77,10 @@ pub(crate) fn command(a: &SampleArgs) -> Result<(), String> {
         bar.set_position(t as u64);
         true
     };
-    let result = sample_from_estimate(&likelihood, &likelihood, &options, &progress);
+    let screen = surrogate
+        .as_ref()
+        .map(|s| s as &dyn zakai::lab::fit::Evaluate);
+    let result = sample_from_estimate(&likelihood, &likelihood, screen, &options, &progress);
     bar.finish_and_clear();
     let (posterior, _) = result.map_err(|e| e.to_string())?;
     let seconds = clock.elapsed().as_secs_f64();

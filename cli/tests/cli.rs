@@ -1172,6 +1172,14 @@ fn sample_writes_every_draw_the_summary_and_the_plot_and_refuses_bad_requests() 
     let drawn = std::fs::read_to_string(&svg).unwrap();
     assert!(drawn.contains("<svg") && drawn.contains("prior"));
     assert_clean_failure(&zakai(&[&base[..], &["--chains", "0"]].concat()), "chains");
+    // Delayed acceptance screened by the UKF (here the Kalman filter's equal): said in a note.
+    let screened = zakai(&[&base[..], &["--surrogate", "ukf"]].concat());
+    assert!(screened.status.success(), "{}", stderr(&screened));
+    assert!(String::from_utf8_lossy(&screened.stdout).contains("note: delayed acceptance"));
+    assert_clean_failure(
+        &zakai(&[&base[..], &["--surrogate", "nosuch"]].concat()),
+        "unknown method",
+    );
     let open = dir.join("open.json");
     std::fs::write(&open, NILE_POSTERIOR.replace("[0, 40000]", "[0, null]")).unwrap();
     let mut args = base.to_vec();

@@ -373,7 +373,7 @@ pub fn sample<'py>(
         covariance: None,
     };
     let (posterior, _) = evaluated(py, &l, evaluator.as_ref(), method, |evaluate| {
-        sample_from_estimate(&l, evaluate, &options, &|_, _| true)
+        sample_from_estimate(&l, evaluate, None, &options, &|_, _| true)
     })?
     .map_err(errors::from_core)?;
     let value = serde_json::json!({

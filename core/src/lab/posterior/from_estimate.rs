@@ -7,11 +7,12 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use super::{sample, Posterior, SampleOptions};
+use super::{run_chains, Posterior, SampleOptions};
 use crate::error::ZakaiError;
 use crate::lab::fit::{maximise, Evaluate, FitOptions, FitResult, LogLikelihood};
 
-/// [`sample`] with the chains started around the maximum-likelihood estimate (and the first
+/// [`super::sample`] (or, with a `surrogate`, [`super::sample_screened`]) with the chains
+/// started around the maximum-likelihood estimate (and the first
 /// proposal shaped by its covariance, where the fit gives one) — unless `options.start` is
 /// already set. When the fit fails, or its estimate has zero prior density (on a bound the
 /// prior excludes), the chains start around the likelihood's start, and a note says why.
@@ -20,11 +21,12 @@ use crate::lab::fit::{maximise, Evaluate, FitOptions, FitResult, LogLikelihood};
 pub fn sample_from_estimate(
     likelihood: &dyn LogLikelihood,
     evaluate: &dyn Evaluate,
+    surrogate: Option<&dyn Evaluate>,
     options: &SampleOptions,
     progress: &dyn Fn(usize, usize) -> bool,
 ) -> Result<(Posterior, Option<FitResult>), ZakaiError> {
     if options.start.is_some() {
-        return sample(likelihood, evaluate, options, progress).map(|p| (p, None));
+        return run_chains(likelihood, evaluate, surrogate, options, progress).map(|p| (p, None));
     }
     // Problems with the priors come before the fit's runs.
     super::target::Target::new(likelihood)?;
@@ -62,7 +64,7 @@ pub fn sample_from_estimate(
             "no maximum-likelihood start ({e}): chains started around the scenario's values"
         ),
     };
-    let mut posterior = sample(likelihood, evaluate, &chosen, progress)?;
+    let mut posterior = run_chains(likelihood, evaluate, surrogate, &chosen, progress)?;
     posterior.notes.insert(0, note);
     let fit = fit.ok();
     if let Some(f) = &fit {

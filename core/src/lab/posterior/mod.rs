@@ -254,6 +254,8 @@ struct State {
     log_jacobian: f64,
     /// ∇_u ln π(u) (Langevin only; empty otherwise).
     gradient: Vec<f64>,
+    /// ln L̃(θ) of a delayed-acceptance surrogate (NaN until evaluated).
+    surrogate: f64,
 }
 
 impl State {
@@ -275,9 +277,49 @@ pub fn sample(
     options: &SampleOptions,
     progress: &dyn Fn(usize, usize) -> bool,
 ) -> Result<Posterior, ZakaiError> {
+    run_chains(likelihood, evaluate, None, options, progress)
+}
+
+/// [`sample`] with delayed acceptance (see [`Chains::step_screened`]): every proposal screened
+/// first by `surrogate`, a cheaper likelihood of the same parameters (a coarser grid, a
+/// Kalman-type approximation), and only those it passes evaluated by `evaluate`. The draws are
+/// still from the posterior of `likelihood`. Refused for Langevin steps and for a likelihood
+/// with random numbers.
+pub fn sample_screened(
+    likelihood: &dyn LogLikelihood,
+    evaluate: &dyn Evaluate,
+    surrogate: &dyn Evaluate,
+    options: &SampleOptions,
+    progress: &dyn Fn(usize, usize) -> bool,
+) -> Result<Posterior, ZakaiError> {
+    run_chains(likelihood, evaluate, Some(surrogate), options, progress)
+}
+
+/// The chains of [`sample`] or [`sample_screened`] run to the end.
+fn run_chains(
+    likelihood: &dyn LogLikelihood,
+    evaluate: &dyn Evaluate,
+    surrogate: Option<&dyn Evaluate>,
+    options: &SampleOptions,
+    progress: &dyn Fn(usize, usize) -> bool,
+) -> Result<Posterior, ZakaiError> {
+    if surrogate.is_some()
+        && (options.sampler == Sampler::Langevin || likelihood.random_numbers().is_some())
+    {
+        return Err(ZakaiError::Config(vec![ConfigProblem::new(
+            "surrogate",
+            format!(
+                "delayed acceptance screens random-walk proposals on a deterministic likelihood: not with Langevin steps or {}'s random estimate",
+                likelihood.method()
+            ),
+        )]));
+    }
     let mut chains = Chains::new(likelihood, evaluate, options)?;
     while !chains.is_done() {
-        chains.step(evaluate);
+        match surrogate {
+            Some(s) => chains.step_screened(evaluate, s),
+            None => chains.step(evaluate),
+        }
         if !progress(chains.iteration(), chains.total()) {
             return Err(ZakaiError::Other(format!(
                 "sampling stopped at iteration {} of {}",
@@ -314,6 +356,8 @@ pub struct Chains {
     /// Iterations done.
     t: usize,
     evaluations: usize,
+    /// Surrogate evaluations of delayed acceptance.
+    screenings: usize,
 }
 
 impl Chains {
@@ -394,6 +438,7 @@ impl Chains {
             observations: likelihood.observations(),
             t: 0,
             evaluations: 0,
+            screenings: 0,
         };
         chains.states = chains.start_states(evaluate, (&u0, &c0)).ok_or_else(|| {
             let why = likelihood
@@ -532,42 +577,12 @@ impl Chains {
     /// are evaluated in one batch, each accepts or rejects; in the warm-up the proposals
     /// adapt, after it the states are kept. Nothing once every iteration is done.
     pub fn step(&mut self, evaluate: &dyn Evaluate) {
-        if self.is_done() {
+        let Some((t, mut candidates, live)) = self.propose_all() else {
             return;
-        }
-        self.t += 1;
-        let (t, chains, warm) = (self.t, self.options.chains, self.t <= self.options.warmup);
-        let mut candidates: Vec<Option<State>> = (0..chains)
-            .map(|c| {
-                let (proposal, state) = (&self.proposals[c], &self.states[c]);
-                let u = if self.langevin {
-                    proposal.propose_langevin(&state.u, &state.gradient, &mut self.rngs[c])
-                } else {
-                    proposal.propose(&state.u, &mut self.rngs[c])
-                };
-                Some(state_at(&self.target, u))
-            })
-            .collect();
-        // Only the proposals inside the prior's support cost a run; the others are rejected.
-        let live: Vec<usize> = (0..chains)
-            .filter(|&c| {
-                candidates[c]
-                    .as_ref()
-                    .is_some_and(|s| s.log_prior + s.log_jacobian > f64::NEG_INFINITY)
-            })
-            .collect();
+        };
         let seeds: Vec<u64> = live.iter().map(|&c| self.seed_of(c, t)).collect();
-        let mut evaluated: Vec<State> = live.iter().filter_map(|&c| candidates[c].take()).collect();
-        self.evaluate_states(
-            evaluate,
-            &mut evaluated.iter_mut().collect::<Vec<_>>(),
-            &seeds,
-        );
-        self.evaluations += evaluated.len();
-        for (&c, s) in live.iter().zip(evaluated) {
-            candidates[c] = Some(s);
-        }
-        let mut alphas = vec![0.0; chains];
+        self.evaluate_live(evaluate, &mut candidates, &live, &seeds);
+        let mut alphas = vec![0.0; self.options.chains];
         for &c in &live {
             let Some(candidate) = candidates[c].take() else {
                 continue;
@@ -582,19 +597,144 @@ impl Chains {
                     log_ratio = f64::NEG_INFINITY;
                 }
             }
-            alphas[c] = if log_ratio.is_nan() {
-                0.0
-            } else {
-                libm::exp(log_ratio.min(0.0))
+            alphas[c] = acceptance_of(log_ratio);
+            self.accept_or_not(c, candidate, alphas[c]);
+        }
+        self.finish_iteration(t, &alphas);
+    }
+
+    /// One iteration with delayed acceptance (Christen & Fox 2005, "Markov chain Monte Carlo
+    /// using an approximation", J. Comput. Graph. Statist. 14, 795–810): each proposal is
+    /// first screened with a cheap `surrogate` likelihood L̃ — accepted for the full run with
+    /// probability `min(1, L̃(θ′)p(θ′)J′ / L̃(θ)p(θ)J)` — and only the survivors are
+    /// evaluated by `evaluate`, then accepted with `min(1, L(θ′)L̃(θ) / L(θ)L̃(θ′))`. The chain
+    /// still targets the posterior of L exactly; the surrogate only decides where to spend the
+    /// runs. Random-walk proposals on a likelihood without random numbers.
+    pub fn step_screened(&mut self, evaluate: &dyn Evaluate, surrogate: &dyn Evaluate) {
+        // The current states' surrogate values, once.
+        let unknown: Vec<usize> = (0..self.options.chains)
+            .filter(|&c| self.states[c].surrogate.is_nan())
+            .collect();
+        if !unknown.is_empty() {
+            let points: Vec<Vec<f64>> = unknown
+                .iter()
+                .map(|&c| self.states[c].theta.clone())
+                .collect();
+            for (&c, v) in unknown.iter().zip(surrogate.log_likelihoods(&points)) {
+                self.states[c].surrogate = v;
+            }
+            self.screenings += points.len();
+        }
+        let Some((t, mut candidates, live)) = self.propose_all() else {
+            return;
+        };
+        let points: Vec<Vec<f64>> = live
+            .iter()
+            .filter_map(|&c| candidates[c].as_ref().map(|s| s.theta.clone()))
+            .collect();
+        let screened = surrogate.log_likelihoods(&points);
+        self.screenings += points.len();
+        // Stage one on the surrogate.
+        let mut first = vec![0.0; self.options.chains];
+        let mut passed = Vec::new();
+        for (&c, v) in live.iter().zip(screened) {
+            let Some(candidate) = candidates[c].as_mut() else {
+                continue;
             };
+            candidate.surrogate = v;
+            let state = &self.states[c];
+            let prior =
+                candidate.log_prior + candidate.log_jacobian - state.log_prior - state.log_jacobian;
+            first[c] = acceptance_of(v - state.surrogate + prior);
             let u: f64 = rand::RngExt::random(&mut self.rngs[c]);
-            if u < alphas[c] {
-                self.states[c] = candidate;
-                if !warm {
-                    self.accepted[c] += 1;
-                }
+            if u < first[c] {
+                passed.push(c);
             }
         }
+        // Stage two on the likelihood, for those that passed.
+        let seeds: Vec<u64> = passed.iter().map(|&c| self.seed_of(c, t)).collect();
+        self.evaluate_live(evaluate, &mut candidates, &passed, &seeds);
+        let mut alphas = vec![0.0; self.options.chains];
+        for &c in &passed {
+            let Some(candidate) = candidates[c].take() else {
+                continue;
+            };
+            let state = &self.states[c];
+            let second = acceptance_of(
+                (candidate.log_likelihood - state.log_likelihood)
+                    - (candidate.surrogate - state.surrogate),
+            );
+            alphas[c] = first[c] * second;
+            self.accept_or_not(c, candidate, second);
+        }
+        self.finish_iteration(t, &alphas);
+    }
+
+    /// Every chain's proposal for the next iteration, and which lie inside the prior's
+    /// support (the others are rejected without a run); `None` once every iteration is done.
+    #[allow(clippy::type_complexity)]
+    fn propose_all(&mut self) -> Option<(usize, Vec<Option<State>>, Vec<usize>)> {
+        if self.is_done() {
+            return None;
+        }
+        self.t += 1;
+        let candidates: Vec<Option<State>> = (0..self.options.chains)
+            .map(|c| {
+                let (proposal, state) = (&self.proposals[c], &self.states[c]);
+                let u = if self.langevin {
+                    proposal.propose_langevin(&state.u, &state.gradient, &mut self.rngs[c])
+                } else {
+                    proposal.propose(&state.u, &mut self.rngs[c])
+                };
+                Some(state_at(&self.target, u))
+            })
+            .collect();
+        let live: Vec<usize> = (0..self.options.chains)
+            .filter(|&c| {
+                candidates[c]
+                    .as_ref()
+                    .is_some_and(|s| s.log_prior + s.log_jacobian > f64::NEG_INFINITY)
+            })
+            .collect();
+        Some((self.t, candidates, live))
+    }
+
+    /// Evaluates the candidates of chains `which` in one batch.
+    fn evaluate_live(
+        &mut self,
+        evaluate: &dyn Evaluate,
+        candidates: &mut [Option<State>],
+        which: &[usize],
+        seeds: &[u64],
+    ) {
+        let mut evaluated: Vec<State> =
+            which.iter().filter_map(|&c| candidates[c].take()).collect();
+        self.evaluate_states(
+            evaluate,
+            &mut evaluated.iter_mut().collect::<Vec<_>>(),
+            seeds,
+        );
+        self.evaluations += evaluated.len();
+        for (&c, s) in which.iter().zip(evaluated) {
+            candidates[c] = Some(s);
+        }
+    }
+
+    /// Chain c moves to `candidate` with probability `alpha` (one uniform draw).
+    fn accept_or_not(&mut self, c: usize, candidate: State, alpha: f64) {
+        let u: f64 = rand::RngExt::random(&mut self.rngs[c]);
+        if u < alpha {
+            self.states[c] = candidate;
+            if self.t > self.options.warmup {
+                self.accepted[c] += 1;
+            }
+        }
+    }
+
+    /// The end of iteration t: in the warm-up the proposals learn from the states and
+    /// acceptance probabilities `alphas`; after it the states are kept.
+    fn finish_iteration(&mut self, t: usize, alphas: &[f64]) {
+        let warm = t <= self.options.warmup;
         for (c, alpha) in alphas.iter().enumerate() {
             if warm {
                 self.proposals[c].adapt(t, &self.states[c].u, *alpha);
@@ -639,15 +779,30 @@ impl Chains {
             observations: self.observations,
             notes: Vec::new(),
         };
+        if self.screenings > 0 {
+            posterior.notes.push(format!(
+                "delayed acceptance: {} runs of the surrogate screened the proposals, {} runs of {} (the starts included) evaluated those that passed",
+                self.screenings, self.evaluations, self.method
+            ));
+        }
         if kept > 0 {
-            posterior.notes = notes(
+            posterior.notes.extend(notes(
                 &posterior,
                 (&self.method, &self.random_numbers),
                 self.pseudo_marginal && !self.fresh,
                 self.random,
-            );
+            ));
         }
         posterior
+    }
+}
+
+/// `min(1, e^{log_ratio})`, 0 for NaN.
+fn acceptance_of(log_ratio: f64) -> f64 {
+    if log_ratio.is_nan() {
+        0.0
+    } else {
+        libm::exp(log_ratio.min(0.0))
     }
 }
 
@@ -766,6 +921,7 @@ fn state_at(target: &Target, u: Vec<f64>) -> State {
         log_jacobian: target.log_jacobian(&theta),
         log_likelihood: f64::NEG_INFINITY,
         gradient: Vec::new(),
+        surrogate: f64::NAN,
         theta,
         u,
     }
