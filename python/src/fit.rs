@@ -325,9 +325,10 @@ pub fn profile<'py>(
 /// `method`: the posterior (its chains, priors and notes) and its summary as JSON;
 /// `evaluator(method, names, points, seeds)` runs the batches when given. `sampler` is
 /// `"auto"`, `"metropolis"`, `"pmmh"` or `"langevin"`; `fit_start` starts the chains around the
-/// maximum-likelihood estimate.
+/// maximum-likelihood estimate; `surrogate` (a method index) screens the proposals first
+/// (delayed acceptance).
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None))]
+#[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None, surrogate=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn sample<'py>(
     py: Python<'py>,
@@ -345,6 +346,7 @@ pub fn sample<'py>(
     fit_start: bool,
     evaluator: Option<Py<PyAny>>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
+    surrogate: Option<usize>,
 ) -> PyResult<String> {
     let sampler = choice(
         "sampler",
@@ -358,6 +360,11 @@ pub fn sample<'py>(
     )?;
     let arrays = (&observations, times.as_ref(), inputs.as_ref());
     let l = likelihood(json, arrays, method, &names, seed)?;
+    // Delayed acceptance's screen: method `surrogate` of the scenario, run in this process.
+    let screen = match surrogate {
+        Some(index) => Some(likelihood(json, arrays, index, &names, seed)?),
+        None => None,
+    };
     let options = SampleOptions {
         draws,
         warmup,
@@ -373,7 +380,8 @@ pub fn sample<'py>(
         covariance: None,
     };
     let (posterior, _) = evaluated(py, &l, evaluator.as_ref(), method, |evaluate| {
-        sample_from_estimate(&l, evaluate, None, &options, &|_, _| true)
+        let screen = screen.as_ref().map(|s| s as &dyn Evaluate);
+        sample_from_estimate(&l, evaluate, screen, &options, &|_, _| true)
     })?
     .map_err(errors::from_core)?;
     let value = serde_json::json!({

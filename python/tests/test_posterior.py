@@ -120,6 +120,19 @@ def test_pmmh_on_an_executor_draws_the_same_chains():
     assert any("not the exact posterior" in n for n in common.notes)
 
 
+def test_delayed_acceptance_screens_with_a_cheaper_method(sm):
+    """A surrogate (here the UKF, the Kalman filter's equal on this linear model) screens the
+    proposals: said in the notes, and the draws summarised as usual."""
+    years, flow = nile(sm)
+    post = zakai.sample(local_level(), flow, "kalman", times=years, draws=300, warmup=300,
+                        seed=2, surrogate="ukf")
+    assert any(n.startswith("delayed acceptance") for n in post.notes), post.notes
+    assert post.summary().loc["q", "mean"] > 0
+    with pytest.raises(ConfigError, match="surrogate"):
+        zakai.sample(local_level(), flow, "kalman", times=years, surrogate="ukf",
+                     sampler="langevin")
+
+
 def test_bad_requests_are_refused_before_any_run(sm):
     years, flow = nile(sm)
     open_box = local_level(box={"q": (0.0, None), "r": (0.0, None)})

@@ -89,6 +89,7 @@ def sample(
     fit_start: bool,
     evaluator: Optional[Any] = None,
     inputs: Optional[npt.NDArray[np.float64]] = None,
+    surrogate: Optional[int] = None,
 ) -> str: ...
 def prior_density(json: str, lo: float, hi: float, x: list[float]) -> list[float]: ...
 def profile(

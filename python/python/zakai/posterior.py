@@ -180,6 +180,7 @@ def sample(
     sampler: str = "auto",
     common_random_numbers: bool = False,
     start_from_fit: bool = True,
+    surrogate: Union[str, int, None] = None,
     times: Optional[ArrayLike] = None,
     time_unit: Optional[str] = None,
     seed: Optional[int] = None,
@@ -212,6 +213,12 @@ def sample(
     start_from_fit : bool, optional
         Start the chains around the maximum-likelihood estimate (default), or around the
         scenario's values.
+    surrogate : str or int, optional
+        Delayed acceptance (Christen & Fox 2005): a cheaper method of the scenario (a key,
+        added with its defaults if absent, or an index — e.g. a coarser grid added to the
+        scenario's methods) whose likelihood screens each proposal before ``method`` runs on
+        it; the draws stay exact for ``method``. Random-walk proposals on a method without
+        random numbers; run in this process even with an ``executor``.
     times, time_unit, seed, executor, inputs
         As for :func:`zakai.fit`; with an ``executor`` each iteration's proposals (one per
         chain) go to its workers.
@@ -246,6 +253,9 @@ def sample(
 
             raise ConfigError(f"{name}: a nonnegative integer, not {v!r}")
     sc, index = _method_index(_scenario(scenario), method)
+    screen = None
+    if surrogate is not None:
+        sc, screen = _method_index(sc, surrogate)
     obs, t, _unit = _observations(observations, times, time_unit)
     s = _seed(sc, seed)
     text, box = sc._text_for(obs, t)
@@ -253,7 +263,7 @@ def sample(
     out = json.loads(_zakai.sample(
         text, obs, t, index, list(params or []), s, int(draws), int(warmup), int(chains),
         sampler, bool(common_random_numbers), bool(start_from_fit),
-        _evaluator(executor, text, obs, t, s, u), u,
+        _evaluator(executor, text, obs, t, s, u), u, screen,
     ))
     p = out["posterior"]
     names = p["names"]
