@@ -196,7 +196,7 @@ pub(crate) struct SampleArgs {
     #[arg(long)]
     pub(crate) common_random_numbers: bool,
     /// Delayed acceptance: screen each proposal with this cheaper method's likelihood first
-    /// (a catalogue key, or a method as JSON, e.g. '{"method":"point_mass","cells":[100]}'),
+    /// (a catalogue key, or a method as JSON, e.g. `{"method":"point_mass","cells":[100]}`),
     /// and run --method only on the proposals it passes; the draws stay exact for --method.
     #[arg(long)]
     pub(crate) surrogate: Option<String>,
