@@ -31,23 +31,8 @@ printf 'one zakai filter run of the separation filter: %.3f s\n' "$(echo "$end -
 # (the sv-ar1 preset with them unknown, started at −1, 0.9, 0.3) fitted to 750 returns
 # simulated from particles' values (seed 11) by the point-mass filter at its 400 cells — by
 # L-BFGS on its score (the default) and by Nelder–Mead.
-"$zakai" show sv-ar1 | python3 -c '
-import json, sys
-c = json.load(sys.stdin)
-c["time"]["t_final"] = 749.0
-json.dump(c, sys.stdout)' > "$dir/sv-truth.json"
-"$zakai" simulate "$dir/sv-truth.json" --seed 11 --format csv --out "$dir/sv.csv"
-python3 -c '
-import json, sys
-c = json.load(open(sys.argv[1]))
-c["parameters"] = {"mu": {"value": -1.0, "bounds": [-3, 1]},
-                   "rho": {"value": 0.9, "bounds": [0.0, 0.999]},
-                   "sigma": {"value": 0.3, "bounds": [0.01, 1.0]}}
-c["model"]["drift"] = ["mu + rho*(x - mu)"]
-c["model"]["diffusion"] = [["sigma"]]
-c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["sigma^2/(1 - rho^2)"]]}
-c["methods"] = [m for m in c["methods"] if m["method"] == "point_mass"]
-json.dump(c, sys.stdout)' "$dir/sv-truth.json" > "$dir/sv-fit.json"
+. scripts/lib/sv-ar1.sh
+sv_ar1 "$zakai" "$dir"
 for optimiser in lbfgs nelder-mead; do
   start=$(date +%s.%N)
   "$zakai" fit "$dir/sv-fit.json" --observations "$dir/sv.csv" --optimiser "$optimiser" > "$dir/sv-$optimiser.txt"

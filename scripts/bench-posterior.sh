@@ -13,28 +13,13 @@ cargo build -q --release -p zakai-cli
 zakai="${CARGO_TARGET_DIR:-target}/release/zakai"
 dir=target/bench-posterior
 mkdir -p "$dir"
-"$zakai" show sv-ar1 | python3 -c '
-import json, sys
-c = json.load(sys.stdin)
-c["time"]["t_final"] = 749.0
-json.dump(c, sys.stdout)' > "$dir/sv-truth.json"
-"$zakai" simulate "$dir/sv-truth.json" --seed 11 --format csv --out "$dir/sv.csv"
-python3 -c '
-import json, sys
-c = json.load(open(sys.argv[1]))
-c["parameters"] = {"mu": {"value": -1.0, "bounds": [-3, 1]},
-                   "rho": {"value": 0.9, "bounds": [0.0, 0.999]},
-                   "sigma": {"value": 0.3, "bounds": [0.01, 1.0]}}
-c["model"]["drift"] = ["mu + rho*(x - mu)"]
-c["model"]["diffusion"] = [["sigma"]]
-c["prior"] = {"kind": "gaussian", "mean": ["mu"], "cov": [["sigma^2/(1 - rho^2)"]]}
-c["methods"] = [m for m in c["methods"] if m["method"] == "point_mass"]
-json.dump(c, sys.stdout)' "$dir/sv-truth.json" > "$dir/sv-posterior.json"
+. scripts/lib/sv-ar1.sh
+sv_ar1 "$zakai" "$dir"
 run() {
   local name=$1
   shift
   start=$(date +%s.%N)
-  "$zakai" sample "$dir/sv-posterior.json" --observations "$dir/sv.csv" --warmup 500 --seed 1 \
+  "$zakai" sample "$dir/sv-fit.json" --observations "$dir/sv.csv" --warmup 500 --seed 1 \
     "$@" > "$dir/sv-$name.txt"
   end=$(date +%s.%N)
   printf 'SV posterior, %-18s %7.1f s\n' "$name" "$(echo "$end - $start" | bc)"
