@@ -191,6 +191,15 @@ fn data_on_screen(
     }
 }
 
+/// The least and the largest of `values` (∞ and −∞ when there are none).
+fn range_of(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
 /// Cells per side of the likelihood grid drawn under two parameters' joint draws.
 const CONTOUR_CELLS: usize = 14;
 
@@ -274,9 +283,7 @@ impl PosteriorJob {
             let (x, y) = self.grid.get_or_insert_with(|| {
                 let p = self.chains.posterior();
                 let axis = |i: usize| {
-                    let v: Vec<f64> = p.values(i).concat();
-                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    let (lo, hi) = range_of(&p.values(i).concat());
                     let pad = 0.1 * (hi - lo);
                     let (lo, hi) = ((lo - pad).max(p.bounds[i].0), (hi + pad).min(p.bounds[i].1));
                     (0..CONTOUR_CELLS)
@@ -327,14 +334,14 @@ impl PosteriorJob {
             grid: Option<Grid>,
         }
         let p = self.chains.posterior();
+        // Each parameter's draws, one vector per chain: computed once.
+        let values: Vec<Vec<Vec<f64>>> = (0..p.names.len()).map(|i| p.values(i)).collect();
         let per_chain: Vec<Vec<Vec<f64>>> = (0..p.chains.len())
-            .map(|c| (0..p.names.len()).map(|i| p.values(i)[c].clone()).collect())
+            .map(|c| values.iter().map(|v| v[c].clone()).collect())
             .collect();
         let priors = (0..p.names.len())
             .map(|i| {
-                let v: Vec<f64> = p.values(i).concat();
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let (lo, hi) = range_of(&values[i].concat());
                 let x: Vec<f64> = if hi > lo {
                     (0..=100)
                         .map(|k| lo + (hi - lo) * k as f64 / 100.0)

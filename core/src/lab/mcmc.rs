@@ -116,7 +116,7 @@ fn rank_normalise(chains: &[Vec<f64>]) -> Vec<Vec<f64>> {
 }
 
 /// The mean and the variance (n − 1) of a chain.
-fn mean_and_variance(c: &[f64]) -> (f64, f64) {
+pub fn mean_and_variance(c: &[f64]) -> (f64, f64) {
     let n = c.len() as f64;
     let mean = c.iter().sum::<f64>() / n;
     (

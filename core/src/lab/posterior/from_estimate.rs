@@ -29,12 +29,11 @@ pub fn sample_from_estimate(
         return run_chains(likelihood, evaluate, surrogate, options, progress).map(|p| (p, None));
     }
     // Problems with the priors come before the fit's runs.
-    super::target::Target::new(likelihood)?;
+    let target = super::target::Target::new(likelihood)?;
     let fit = maximise(likelihood, evaluate, &FitOptions::default(), &|_, _| {});
     let mut chosen = options.clone();
     let note: String = match &fit {
         Ok(f) => {
-            let target = super::target::Target::new(likelihood)?;
             if target.log_prior(&f.estimate).is_finite() {
                 chosen.start = Some(f.estimate.clone());
                 chosen.covariance = f.covariance.clone();

@@ -49,7 +49,7 @@ use serde::Serialize;
 
 use crate::error::ZakaiError;
 use crate::lab::fit::{Evaluate, LogLikelihood, Transform};
-use crate::lab::mcmc::{diagnose, quantile, ChainDiagnostics};
+use crate::lab::mcmc::{diagnose, mean_and_variance, quantile, ChainDiagnostics};
 use crate::lab::scenario::parameter_prior::ParameterPrior;
 use crate::random::{rng_from_seed, SimRng};
 use crate::validate::ConfigProblem;
@@ -223,9 +223,7 @@ impl Posterior {
             .map(|p| {
                 let chains = self.values(p);
                 let all: Vec<f64> = chains.iter().flatten().copied().collect();
-                let n = all.len() as f64;
-                let mean = all.iter().sum::<f64>() / n;
-                let var = all.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+                let (mean, var) = mean_and_variance(&all);
                 let sd = libm::sqrt(var);
                 let slices: Vec<&[f64]> = chains.iter().map(Vec::as_slice).collect();
                 let diagnostics = diagnose(&slices);
