@@ -193,8 +193,14 @@ pub(crate) struct SampleArgs {
     pub(crate) sampler: SamplerArg,
     /// PMMH with the same random numbers at every proposal (a smooth but biased likelihood)
     /// instead of fresh ones.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "correlation")]
     pub(crate) common_random_numbers: bool,
+    /// Correlated pseudo-marginal steps (Deligiannidis, Doucet & Pitt 2018): the particle
+    /// filter's random numbers move with each proposal by U' = ρU + √(1 − ρ²)ε with this ρ in
+    /// [0, 1) (e.g. 0.99), so that far fewer particles keep the chain moving; still the
+    /// exact posterior.
+    #[arg(long, value_name = "RHO")]
+    pub(crate) correlation: Option<f64>,
     /// Delayed acceptance: screen each proposal with this cheaper method's likelihood first
     /// (a catalogue key, or a method as JSON, e.g. `{"method":"point_mass","cells":[100]}`),
     /// and run --method only on the proposals it passes; the draws stay exact for --method.

@@ -59,10 +59,10 @@ pub(crate) fn command(a: &SampleArgs) -> Result<(), String> {
             SamplerArg::Pmmh => Sampler::PseudoMarginal,
             SamplerArg::Langevin => Sampler::Langevin,
         },
-        random_numbers: if a.common_random_numbers {
-            RandomNumbers::Common
-        } else {
-            RandomNumbers::Fresh
+        random_numbers: match (a.common_random_numbers, a.correlation) {
+            (_, Some(rho)) => RandomNumbers::Correlated(rho),
+            (true, None) => RandomNumbers::Common,
+            (false, None) => RandomNumbers::Fresh,
         },
         // A start of the scenario's values skips the fit.
         start: a.no_fit.then(|| likelihood.start().to_vec()),

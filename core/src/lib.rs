@@ -211,7 +211,7 @@ pub use filters::kalman::{
     Ekf, EkfParams, GaussianInit, Iekf, IekfParams, Iokf, IokfParams, Kalman, KalmanParams,
     MapKalman, MapSolver, Ukf, UkfParams,
 };
-pub use filters::particle::{Pf, PfParams};
+pub use filters::particle::{Pf, PfParams, SuppliedNormals};
 pub use filters::point_mass::{PointMass, PointMassParams};
 pub use filters::spectral::{Spectral, SpectralParams};
 pub use filters::yau_fd::{

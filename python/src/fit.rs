@@ -326,9 +326,9 @@ pub fn profile<'py>(
 /// `evaluator(method, names, points, seeds)` runs the batches when given. `sampler` is
 /// `"auto"`, `"metropolis"`, `"pmmh"` or `"langevin"`; `fit_start` starts the chains around the
 /// maximum-likelihood estimate; `surrogate` (a method index) screens the proposals first
-/// (delayed acceptance).
+/// (delayed acceptance); `correlation` ρ gives correlated pseudo-marginal steps.
 #[pyfunction]
-#[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None, surrogate=None))]
+#[pyo3(signature = (json, observations, times, method, names, seed, draws, warmup, chains, sampler, common, fit_start, evaluator=None, inputs=None, surrogate=None, correlation=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn sample<'py>(
     py: Python<'py>,
@@ -347,6 +347,7 @@ pub fn sample<'py>(
     evaluator: Option<Py<PyAny>>,
     inputs: Option<PyReadonlyArrayDyn<'py, f64>>,
     surrogate: Option<usize>,
+    correlation: Option<f64>,
 ) -> PyResult<String> {
     let sampler = choice(
         "sampler",
@@ -371,10 +372,16 @@ pub fn sample<'py>(
         chains,
         seed,
         sampler,
-        random_numbers: if common {
-            RandomNumbers::Common
-        } else {
-            RandomNumbers::Fresh
+        random_numbers: match (common, correlation) {
+            (true, Some(_)) => {
+                return Err(crate::errors::config(
+                    "correlation",
+                    "with common_random_numbers: one or the other (common numbers are ρ = 1 without the exactness)",
+                ))
+            }
+            (_, Some(rho)) => RandomNumbers::Correlated(rho),
+            (true, None) => RandomNumbers::Common,
+            (false, None) => RandomNumbers::Fresh,
         },
         start: (!fit_start).then(|| l.start().to_vec()),
         covariance: None,

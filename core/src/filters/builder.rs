@@ -255,6 +255,7 @@ impl<'m, M: Method> Builder<'m, M> {
                 probes: &probes,
                 bounds: &bounds,
                 dt_obs: self.dt,
+                supplied: None,
             },
             &params,
             name,

@@ -37,6 +37,10 @@ pub struct BuildContext<'a> {
     /// Δτ, the observation interval, for methods built for one interval length
     /// ([`Method::NEEDS_INTERVAL`]).
     pub dt_obs: Option<f64>,
+    /// Standard normals for the particle filter to read its random numbers from instead of
+    /// a generator seeded by `seed` (the correlated pseudo-marginal method's auxiliary
+    /// variables, [`crate::SuppliedNormals`]); deterministic methods ignore them.
+    pub supplied: Option<&'a alloc::sync::Arc<crate::filters::SuppliedNormals>>,
 }
 
 impl BuildContext<'_> {

@@ -42,6 +42,7 @@ pub(crate) mod method;
 mod observation;
 pub(crate) mod params;
 pub(crate) mod particle;
+pub(crate) use particle::SuppliedNormals;
 pub(crate) mod point_mass;
 pub(crate) mod predictive;
 pub(crate) mod resolution;

@@ -50,6 +50,28 @@ impl Prior {
             Prior::Density(d) => d.sample(rng),
         }
     }
+    /// One draw of x₀ as a function of `z`, n + 1 standard normals: the first picks a
+    /// mixture component (or a cell of a tabulated density) by its uniform Φ(z₀), the rest
+    /// give μ + L ξ (or the place in the cell, by Φ(z_j)). Continuous in `z` within a component
+    /// or cell, for the correlated pseudo-marginal method's auxiliary variables
+    /// (Deligiannidis, Doucet & Pitt 2018).
+    pub fn sample_from_normals(&self, z: &[f64]) -> DVector<f64> {
+        let phi = |z: f64| {
+            (0.5 * libm::erfc(-z * core::f64::consts::FRAC_1_SQRT_2)).min(1.0 - f64::EPSILON)
+        };
+        let mut x = DVector::from_column_slice(&z[1..]);
+        match self {
+            Prior::Mixture(m) => m.pick(phi(z[0])).transform(x.as_mut_slice()),
+            Prior::Density(d) => {
+                let cell = d.cell_of(phi(z[0]));
+                centre(cell, d.cells_per_dim, &d.lower, &d.cell, x.as_mut_slice());
+                for ((xi, h), zi) in x.iter_mut().zip(&d.cell).zip(&z[1..]) {
+                    *xi += (phi(*zi) - 0.5) * h;
+                }
+            }
+        }
+        x
+    }
     /// The unnormalised density σ₀(x) (grid methods evaluate it at their nodes).
     pub fn density(&self, x: &[f64]) -> f64 {
         match self {
@@ -142,9 +164,13 @@ impl TabulatedDensity {
         })
     }
 
+    /// The cell a uniform `u` picks by the cumulative masses.
+    fn cell_of(&self, u: f64) -> usize {
+        self.cdf.partition_point(|&c| c < u).min(self.cdf.len() - 1)
+    }
+
     fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> DVector<f64> {
-        let u: f64 = rand::RngExt::random(rng);
-        let idx = self.cdf.partition_point(|&c| c < u).min(self.cdf.len() - 1);
+        let idx = self.cell_of(rand::RngExt::random(rng));
         let mut x = vec![0.0; self.lower.len()];
         centre(idx, self.cells_per_dim, &self.lower, &self.cell, &mut x);
         for (xi, h) in x.iter_mut().zip(&self.cell) {

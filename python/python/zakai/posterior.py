@@ -179,6 +179,7 @@ def sample(
     chains: int = 4,
     sampler: str = "auto",
     common_random_numbers: bool = False,
+    correlation: Optional[float] = None,
     start_from_fit: bool = True,
     surrogate: Union[str, int, None] = None,
     times: Optional[ArrayLike] = None,
@@ -210,6 +211,12 @@ def sample(
     common_random_numbers : bool, optional
         PMMH with the same random numbers at every proposal: a smooth but biased likelihood
         (the notes say so). Fresh numbers by default — the exact posterior.
+    correlation : float, optional
+        Correlated pseudo-marginal steps (Deligiannidis, Doucet & Pitt 2018) for the particle
+        filter: its random numbers U move with each proposal by ``U' = ρU + √(1 − ρ²)ε`` with
+        this ρ in [0, 1) (e.g. 0.99), so that successive estimates share most of their noise
+        and far fewer particles keep the chain moving — still the exact posterior. In this
+        process only (not with an ``executor``).
     start_from_fit : bool, optional
         Start the chains around the maximum-likelihood estimate (default), or around the
         scenario's values.
@@ -264,6 +271,7 @@ def sample(
         text, obs, t, index, list(params or []), s, int(draws), int(warmup), int(chains),
         sampler, bool(common_random_numbers), bool(start_from_fit),
         _evaluator(executor, text, obs, t, s, u), u, screen,
+        None if correlation is None else float(correlation),
     ))
     p = out["posterior"]
     names = p["names"]

@@ -215,6 +215,7 @@ fn a_wrong_observation_is_an_error_not_a_panic() {
         probes: &[],
         bounds: &bounds,
         dt_obs: Some(0.01),
+        supplied: None,
     };
     let mut filter = experiment.config().methods[1]
         .build("EKF".into(), &ctx)

@@ -5,14 +5,13 @@ use alloc::string::String;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use rand::RngExt;
-
+use super::draws::{hilbert_order, Draws};
 use super::PfParams;
 use crate::error::FilterError;
 use crate::filters::{kind_of, Estimate, Filter, Observation, Observed};
 use crate::linalg::cholesky;
 use crate::model::{BatchScratch, Diffusion, Model, ObservationModel};
-use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
+use crate::random::NormalZiggurat;
 
 /// The particle filter's self-check: the effective sample size after weighting (before any
 /// resampling) as a share of N. Below 1 % the posterior rests on a handful of particles.
@@ -100,7 +99,8 @@ pub struct Pf {
     /// A driven model ([`crate::Inputs`]), frozen into `model` at each step.
     pub(super) driven: Option<Model>,
     pub(super) params: PfParams,
-    pub(super) rng: SimRng,
+    /// Its random numbers: its own generator, or supplied normals ([`super::draws`]).
+    pub(super) draws: Draws,
     normal: NormalZiggurat,
     /// Component j of particle i at `particles[j * N + i]`.
     pub(super) particles: Vec<f64>,
@@ -138,6 +138,11 @@ pub struct Pf {
     observed_rows: Vec<usize>,
     scratch: BatchScratch,
     resamples: usize,
+    /// The particles' order along the Hilbert curve and its keys, and the weights in that
+    /// order, when resampling sorts ([`Draws::is_supplied`]).
+    order: Vec<usize>,
+    keys: Vec<u128>,
+    sorted_weights: Vec<f64>,
     /// The effective sample size after the last weighting.
     last_ess: f64,
     /// Distinct particles kept by the last resampling (N when the last step did not resample).
@@ -153,7 +158,8 @@ pub struct Pf {
 }
 
 impl Pf {
-    /// Draws N particles from the prior with a generator seeded by `seed`.
+    /// Draws N particles from the prior with a generator seeded by `seed`, or from the
+    /// supplied normals ([`crate::filters::method::BuildContext::supplied`]).
     pub(crate) fn new(
         name: String,
         ctx: &crate::filters::method::BuildContext,
@@ -163,11 +169,12 @@ impl Pf {
         if let Some((field, msg)) = params.problems().into_iter().next() {
             return Err(FilterError::Unsuitable(format!("PF {field}: {msg}")));
         }
-        let mut rng = rng_from_seed(seed);
+        let mut draws = Draws::new(seed, ctx.supplied);
         let (n, m, count) = (model.n, model.m, params.particles);
         let mut particles = vec![0.0; count * n];
+        let mut z = Vec::new();
         for i in 0..count {
-            let x = prior.sample(&mut rng);
+            let x = draws.prior_draw(prior, &mut z);
             for j in 0..n {
                 particles[j * count + i] = x[j];
             }
@@ -202,7 +209,7 @@ impl Pf {
             model: model.clone(),
             driven: model.is_driven().then(|| model.clone()),
             params: params.clone(),
-            rng,
+            draws,
             normal: NormalZiggurat::new(),
             particles,
             log_weights: vec![-libm::log(count as f64); count],
@@ -233,6 +240,9 @@ impl Pf {
             observed_rows: Vec::with_capacity(m),
             scratch: BatchScratch::default(),
             resamples: 0,
+            order: Vec::new(),
+            keys: Vec::new(),
+            sorted_weights: Vec::new(),
             last_ess: count as f64,
             last_unique: count,
             substeps: crate::filters::Substeps::new(params.substeps.unwrap_or(1), ctx.dt_obs),
@@ -294,7 +304,7 @@ impl Pf {
         }
         if let Some(exact) = &mut self.exact {
             // x' ~ N(Φ x + Γb, Q_Δ): one draw over the whole interval.
-            self.normal.fill(&mut self.rng, &mut self.noise);
+            self.draws.normals(&self.normal, &mut self.noise);
             super::exact::draw(
                 exact.over(dt),
                 &self.particles,
@@ -335,12 +345,12 @@ impl Pf {
             } else if let Some(trail) = &mut self.trail {
                 trail.extend_from_slice(&self.resampled);
             }
-            self.normal.fill(&mut self.rng, &mut self.noise);
+            self.draws.normals(&self.normal, &mut self.noise);
             if let (true, Some(w)) = (discrete, &self.model.transition_mixture) {
                 // x ← F(x) + w, w drawn from the mixture: a component per particle, then
                 // its mean and factor applied to the particle's normals.
                 for i in 0..count {
-                    let c = w.mixture().pick(self.rng.random());
+                    let c = w.mixture().pick(self.draws.uniform());
                     for (l, xi) in self.point.iter_mut().enumerate() {
                         *xi = self.noise[l * count + i];
                     }
@@ -500,12 +510,30 @@ impl Pf {
         Ok(total - reference)
     }
 
-    /// Systematic resampling with one uniform u ([`systematic_ancestors`]), the particles
-    /// gathered from their ancestors one component at a time.
-    fn resample(&mut self) {
+    /// Systematic resampling with the uniform `u` ([`systematic_ancestors`]), the particles
+    /// gathered from their ancestors one component at a time. With supplied normals the
+    /// particles are taken in their Hilbert order ([`hilbert_order`]; Deligiannidis, Doucet &
+    /// Pitt 2018, §4.1).
+    fn resample(&mut self, u: f64) {
         let (n, count) = (self.model.n, self.params.particles);
-        let u: f64 = self.rng.random();
-        let unique = systematic_ancestors(&self.weights, u, &mut self.starts, &mut self.ancestors);
+        let unique = if self.draws.is_supplied() {
+            hilbert_order(&self.particles, n, &mut self.order, &mut self.keys);
+            self.sorted_weights.clear();
+            self.sorted_weights
+                .extend(self.order.iter().map(|&i| self.weights[i]));
+            let unique = systematic_ancestors(
+                &self.sorted_weights,
+                u,
+                &mut self.starts,
+                &mut self.ancestors,
+            );
+            for a in &mut self.ancestors {
+                *a = self.order[*a];
+            }
+            unique
+        } else {
+            systematic_ancestors(&self.weights, u, &mut self.starts, &mut self.ancestors)
+        };
         for d in 0..n {
             let from = &self.particles[d * count..(d + 1) * count];
             let to = &mut self.resampled[d * count..(d + 1) * count];
@@ -663,14 +691,14 @@ impl Filter for Pf {
         let moved = obs.dt > 0.0;
         // The particles move into the spare buffer and the weights into the next ones; only
         // a step that succeeds swaps them in (and keeps the generator's advance).
-        let rng = self.rng.clone();
+        let draws = self.draws.clone();
         if let Some((dynamics, _)) = &frozen {
             self.freeze_dynamics(dynamics);
         }
         if moved {
             let trail_len = self.trail.as_ref().map(Vec::len);
             if let Err(e) = self.predict_into_spare(obs.dt, obs.inputs) {
-                self.rng = rng;
+                self.draws = draws;
                 if let (Some(trail), Some(len)) = (&mut self.trail, trail_len) {
                     trail.truncate(len);
                 }
@@ -685,7 +713,7 @@ impl Filter for Pf {
             match self.weigh(obs, observed, moved) {
                 Ok(ll) => log_likelihood = ll,
                 Err(e) => {
-                    self.rng = rng;
+                    self.draws = draws;
                     return Err(e);
                 }
             }
@@ -701,8 +729,13 @@ impl Filter for Pf {
         }
         self.last_ess = self.effective_sample_size();
         self.last_unique = self.params.particles;
+        // With supplied normals the uniform is read at every step, resampled or not, so that
+        // each random number keeps its place in U whatever θ does to the weights.
+        let supplied = self.draws.is_supplied();
+        let u = supplied.then(|| self.draws.uniform());
         if self.last_ess < self.params.ess_threshold * self.params.particles as f64 {
-            self.resample();
+            let u = u.unwrap_or_else(|| self.draws.uniform());
+            self.resample(u);
         }
         Ok(())
     }

@@ -30,7 +30,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{DMatrix, DVector};
-use rand::{Rng, RngExt};
+use rand::RngExt;
 
 use super::Pf;
 use crate::error::FilterError;
@@ -97,7 +97,7 @@ impl Pf {
         let mut filter = self.clone();
         filter.trail = Some(Vec::new());
         // The backward draws use a stream of their own, seeded from the filter's.
-        let rng = rng_from_seed(filter.rng.clone().next_u64() ^ 0x9e37_79b9_7f4a_7c15);
+        let rng = rng_from_seed(filter.draws.derived_seed() ^ 0x9e37_79b9_7f4a_7c15);
         Ok(Box::new(Ffbsi {
             start: (filter.particles.clone(), filter.log_weights.clone()),
             filter,

@@ -811,6 +811,7 @@ mod tests {
                 probes: &[],
                 bounds: &bounds,
                 dt_obs: Some(0.01),
+                supplied: None,
             };
             let mut f = YauYauFilter::new("t".into(), scheme, &ctx, &params).expect("filter");
             let len = f.grid().len();

@@ -50,6 +50,8 @@ pub struct Experiment {
     names: Vec<String>,
     probes: Vec<Vec<f64>>,
     chosen: Vec<String>,
+    /// The particle filter's random numbers, when supplied ([`Experiment::with_supplied_normals`]).
+    supplied: Option<alloc::sync::Arc<crate::filters::SuppliedNormals>>,
 }
 
 /// What a recorded run keeps beside the estimates ([`Experiment::filter_recorded_keeping`]).
@@ -106,6 +108,7 @@ impl Experiment {
             names,
             probes,
             chosen,
+            supplied: None,
         })
     }
 
@@ -127,6 +130,17 @@ impl Experiment {
     pub fn prior(&self) -> &Prior {
         &self.prior
     }
+    /// This experiment with the particle filter reading its random numbers from `normals`
+    /// instead of its seeded generator ([`crate::SuppliedNormals`]: the correlated
+    /// pseudo-marginal method's auxiliary variables).
+    pub fn with_supplied_normals(
+        mut self,
+        normals: alloc::sync::Arc<crate::filters::SuppliedNormals>,
+    ) -> Self {
+        self.supplied = Some(normals);
+        self
+    }
+
     /// Method display names.
     pub fn method_names(&self) -> &[String] {
         &self.names
@@ -151,6 +165,7 @@ impl Experiment {
                 probes: &self.probes,
                 bounds: &bounds,
                 dt_obs: Some(self.config.time.dt_obs),
+                supplied: self.supplied.as_ref(),
             },
         )
     }

@@ -72,6 +72,17 @@ pub trait Evaluate {
         None
     }
 
+    /// The same with the method's random numbers at point i read from `normals[i]` (the
+    /// correlated pseudo-marginal method's auxiliary variables, [`crate::SuppliedNormals`]),
+    /// or `None` when this evaluator cannot supply them (the default).
+    fn log_likelihoods_correlated(
+        &self,
+        _points: &[Vec<f64>],
+        _normals: &[alloc::sync::Arc<crate::SuppliedNormals>],
+    ) -> Option<Vec<f64>> {
+        None
+    }
+
     /// ln L and its gradient ([`crate::Filter::score`]) at every point (`None` for a point
     /// where the method failed or is not admissible), or `None` when this evaluator gives no
     /// scores (the default) or the method has none.
@@ -290,9 +301,26 @@ impl Likelihood {
     /// the likelihood's own.
     pub fn log_likelihood_seeded(&self, theta: &[f64], seed: u64) -> Result<f64, ZakaiError> {
         check_point(&self.names, &self.bounds, theta)?;
-        let run = self
+        self.log_likelihood_of(self.experiment_at(theta)?, seed)
+    }
+
+    /// [`Likelihood::log_likelihood`] with the particle filter's random numbers read from
+    /// `normals` ([`crate::SuppliedNormals`]; a method without random numbers ignores them).
+    pub fn log_likelihood_correlated(
+        &self,
+        theta: &[f64],
+        normals: &alloc::sync::Arc<crate::SuppliedNormals>,
+    ) -> Result<f64, ZakaiError> {
+        check_point(&self.names, &self.bounds, theta)?;
+        let experiment = self
             .experiment_at(theta)?
-            .filter_recorded(self.recording.clone(), seed)?;
+            .with_supplied_normals(normals.clone());
+        self.log_likelihood_of(experiment, self.seed)
+    }
+
+    /// ln L from one run of `experiment` (the model at θ) with `seed`.
+    fn log_likelihood_of(&self, experiment: Experiment, seed: u64) -> Result<f64, ZakaiError> {
+        let run = experiment.filter_recorded(self.recording.clone(), seed)?;
         let track = &run.methods[0];
         match (&track.failure, track.log_likelihood()) {
             (None, Some(l)) if !l.is_nan() => Ok(l),
@@ -542,19 +570,39 @@ impl Evaluate for Likelihood {
 
     /// One run per point with its own seed, on rayon's pool with the `parallel` feature.
     fn log_likelihoods_seeded(&self, points: &[Vec<f64>], seeds: &[u64]) -> Option<Vec<f64>> {
-        let value = |(p, &s): (&Vec<f64>, &u64)| {
+        Some(each_point(points, seeds, |p, &s| {
             self.log_likelihood_seeded(p, s)
-                .unwrap_or(f64::NEG_INFINITY)
-        };
-        #[cfg(feature = "parallel")]
-        {
-            use rayon::prelude::*;
-            Some(points.par_iter().zip(seeds).map(value).collect())
-        }
-        #[cfg(not(feature = "parallel"))]
-        {
-            Some(points.iter().zip(seeds).map(value).collect())
-        }
+        }))
+    }
+
+    /// One run per point with its own normals, on rayon's pool with the `parallel` feature.
+    fn log_likelihoods_correlated(
+        &self,
+        points: &[Vec<f64>],
+        normals: &[alloc::sync::Arc<crate::SuppliedNormals>],
+    ) -> Option<Vec<f64>> {
+        Some(each_point(points, normals, |p, u| {
+            self.log_likelihood_correlated(p, u)
+        }))
+    }
+}
+
+/// `value(point, with)` at every point with its companion, −∞ where it fails; on rayon's pool
+/// with the `parallel` feature.
+fn each_point<W: Sync>(
+    points: &[Vec<f64>],
+    with: &[W],
+    value: impl Fn(&Vec<f64>, &W) -> Result<f64, ZakaiError> + Sync,
+) -> Vec<f64> {
+    let value = |(p, w): (&Vec<f64>, &W)| value(p, w).unwrap_or(f64::NEG_INFINITY);
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        points.par_iter().zip(with).map(value).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        points.iter().zip(with).map(value).collect()
     }
 }
 

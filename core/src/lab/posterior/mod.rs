@@ -15,8 +15,13 @@
 //!   unbiased estimate (new random numbers), the current state's estimate kept until a
 //!   proposal is accepted. The chain then targets the exact posterior, however noisy the
 //!   estimate; the noise only costs mixing (a sticky chain when Var ln L̂ ≳ 3: Doucet, Pitt,
-//!   Deligiannidis & Kohn 2015). With [`RandomNumbers::Common`] every proposal uses the same
-//!   seed instead — a smooth-looking but biased likelihood, said so in the notes.
+//!   Deligiannidis & Kohn 2015). With [`RandomNumbers::Correlated`] the filter's random
+//!   numbers are part of the chain's state and move with θ by a Crank–Nicolson step
+//!   (the correlated pseudo-marginal method of Deligiannidis, Doucet & Pitt 2018): still the
+//!   exact posterior, with estimates at successive proposals that share most of their noise,
+//!   so that far fewer particles keep the chain moving. With [`RandomNumbers::Common`] every
+//!   proposal uses the same seed instead — a smooth-looking but biased likelihood, said so in
+//!   the notes.
 //!
 //! With the `fit` feature, `sample_from_estimate` starts the chains around the
 //! maximum-likelihood estimate, the first proposal shaped by its covariance.
@@ -33,6 +38,7 @@
 //! R̂ > 1.01 or an ESS < 400 (their recommended thresholds), or when a chain hardly moves.
 
 mod adaptive;
+mod correlated;
 #[cfg(feature = "fit")]
 mod from_estimate;
 mod target;
@@ -40,8 +46,11 @@ mod target;
 #[cfg(feature = "fit")]
 pub use from_estimate::sample_from_estimate;
 
+pub use correlated::MAX_AUXILIARY;
+
 use alloc::format;
 use alloc::string::{String, ToString};
+use alloc::sync::Arc;
 use alloc::vec;
 use alloc::vec::Vec;
 
@@ -51,8 +60,9 @@ use crate::error::ZakaiError;
 use crate::lab::fit::{Evaluate, LogLikelihood, Transform};
 use crate::lab::mcmc::{diagnose, mean_and_variance, quantile, ChainDiagnostics};
 use crate::lab::scenario::parameter_prior::ParameterPrior;
-use crate::random::{rng_from_seed, SimRng};
+use crate::random::{rng_from_seed, NormalZiggurat, SimRng};
 use crate::validate::ConfigProblem;
+use crate::SuppliedNormals;
 use adaptive::{Kind, Proposal};
 use target::Target;
 
@@ -84,11 +94,18 @@ pub enum Sampler {
 }
 
 /// The random numbers of a pseudo-marginal sampler's likelihood estimates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub enum RandomNumbers {
     /// New random numbers at each proposal: the exact posterior.
     #[default]
     Fresh,
+    /// The filter's random numbers U moved with each proposal by `U' = ρ U + √(1 − ρ²) ε`
+    /// with this ρ in [0, 1) (Deligiannidis, Doucet & Pitt 2018): the exact posterior, the
+    /// estimates at successive proposals correlated (ρ = 0 is [`RandomNumbers::Fresh`];
+    /// 0.99 or more is typical). The evaluator must supply the numbers
+    /// ([`Evaluate::log_likelihoods_correlated`]), and a chain holds every one a run reads
+    /// (at most [`MAX_AUXILIARY`]).
+    Correlated(f64),
     /// The likelihood's own seed at every proposal (common random numbers): the posterior of
     /// one fixed realisation of the estimate, biased.
     Common,
@@ -176,7 +193,8 @@ pub struct ParameterSummary {
 pub struct Posterior {
     /// The method whose likelihood was used.
     pub method: String,
-    /// The sampler: `"adaptive random-walk Metropolis"` or `"particle marginal
+    /// The sampler: `"adaptive random-walk Metropolis"`, `"adaptive Metropolis-adjusted
+    /// Langevin"`, `"particle marginal Metropolis–Hastings"` or `"correlated pseudo-marginal
     /// Metropolis–Hastings"`.
     pub sampler: String,
     /// The parameters, in order.
@@ -254,6 +272,9 @@ struct State {
     gradient: Vec<f64>,
     /// ln L̃(θ) of a delayed-acceptance surrogate (NaN until evaluated).
     surrogate: f64,
+    /// The particle filter's random numbers at this state (correlated pseudo-marginal steps
+    /// only).
+    normals: Option<Arc<SuppliedNormals>>,
 }
 
 impl State {
@@ -338,6 +359,8 @@ pub struct Chains {
     target: Target,
     /// Fresh random numbers at each proposal (PMMH).
     fresh: bool,
+    /// ρ of correlated pseudo-marginal steps, and the normal sampler of their ε.
+    correlated: Option<(f64, NormalZiggurat)>,
     pseudo_marginal: bool,
     /// Langevin steps on the score.
     langevin: bool,
@@ -356,6 +379,8 @@ pub struct Chains {
     evaluations: usize,
     /// Surrogate evaluations of delayed acceptance.
     screenings: usize,
+    /// Why a state's auxiliary variables could not be kept (too many), when that happened.
+    too_large: Option<ZakaiError>,
 }
 
 impl Chains {
@@ -380,6 +405,19 @@ impl Chains {
         let pseudo_marginal =
             random && !matches!(options.sampler, Sampler::Metropolis | Sampler::Langevin);
         let fresh = pseudo_marginal && options.random_numbers == RandomNumbers::Fresh;
+        let correlated = match options.random_numbers {
+            RandomNumbers::Correlated(rho) if pseudo_marginal => Some(rho),
+            _ => None,
+        };
+        if correlated.is_some() && evaluate.log_likelihoods_correlated(&[], &[]).is_none() {
+            return Err(ZakaiError::Config(vec![ConfigProblem::new(
+                "random_numbers",
+                format!(
+                    "correlated pseudo-marginal steps read the particle filter's random numbers from the chain, and this evaluator of {} cannot supply them (use a scenario's likelihood in process)",
+                    likelihood.method()
+                ),
+            )]));
+        }
         if langevin && (random || evaluate.scores(&[]).is_none()) {
             return Err(ZakaiError::Config(vec![ConfigProblem::new(
                 "sampler",
@@ -427,6 +465,7 @@ impl Chains {
             options: options.clone(),
             target,
             fresh,
+            correlated: correlated.map(|rho| (rho, NormalZiggurat::new())),
             pseudo_marginal,
             langevin,
             random,
@@ -437,8 +476,13 @@ impl Chains {
             t: 0,
             evaluations: 0,
             screenings: 0,
+            too_large: None,
         };
-        chains.states = chains.start_states(evaluate, (&u0, &c0)).ok_or_else(|| {
+        let states = chains.start_states(evaluate, (&u0, &c0));
+        if let Some(e) = chains.too_large.take() {
+            return Err(e);
+        }
+        chains.states = states.ok_or_else(|| {
             let why = likelihood
                 .log_likelihood(&start)
                 .err()
@@ -499,10 +543,41 @@ impl Chains {
         }
     }
 
-    /// Sets each state's ln L (and, for Langevin steps, ∇_u ln π) from one batch.
-    fn evaluate_states(&self, evaluate: &dyn Evaluate, states: &mut [&mut State], seeds: &[u64]) {
+    /// Sets each state's ln L (and, for Langevin steps, ∇_u ln π) from one batch; with
+    /// correlated pseudo-marginal steps, each state's estimate from its own normals, which are
+    /// then made as long as the run read ([`correlated::materialised`]; a state whose run read
+    /// more than [`MAX_AUXILIARY`] fails, and the error is kept).
+    fn evaluate_states(
+        &mut self,
+        evaluate: &dyn Evaluate,
+        states: &mut [&mut State],
+        seeds: &[u64],
+    ) {
         let points: Vec<Vec<f64>> = states.iter().map(|s| s.theta.clone()).collect();
-        if self.langevin {
+        if self.correlated.is_some() {
+            let normals: Vec<Arc<SuppliedNormals>> = states
+                .iter()
+                .zip(seeds)
+                .map(|(s, &seed)| {
+                    s.normals
+                        .clone()
+                        .unwrap_or_else(|| Arc::new(SuppliedNormals::new(Vec::new(), seed)))
+                })
+                .collect();
+            let values = evaluate
+                .log_likelihoods_correlated(&points, &normals)
+                .unwrap_or_else(|| vec![f64::NEG_INFINITY; points.len()]);
+            for ((s, v), u) in states.iter_mut().zip(values).zip(normals) {
+                s.log_likelihood = v;
+                match correlated::materialised(u, &self.method) {
+                    Ok(u) => s.normals = Some(u),
+                    Err(e) => {
+                        s.log_likelihood = f64::NEG_INFINITY;
+                        self.too_large = Some(e);
+                    }
+                }
+            }
+        } else if self.langevin {
             let scores = evaluate
                 .scores(&points)
                 .unwrap_or_else(|| vec![None; points.len()]);
@@ -684,7 +759,16 @@ impl Chains {
                 } else {
                     proposal.propose(&state.u, &mut self.rngs[c])
                 };
-                Some(state_at(&self.target, u))
+                let mut candidate = state_at(&self.target, u);
+                if let (Some((rho, normal)), Some(current)) = (&self.correlated, &state.normals) {
+                    candidate.normals = Some(correlated::propose(
+                        current,
+                        *rho,
+                        &mut self.rngs[c],
+                        normal,
+                    ));
+                }
+                Some(candidate)
             })
             .collect();
         let live: Vec<usize> = (0..self.options.chains)
@@ -759,7 +843,9 @@ impl Chains {
         }
         let mut posterior = Posterior {
             method: self.method.clone(),
-            sampler: if self.pseudo_marginal {
+            sampler: if self.correlated.is_some() {
+                "correlated pseudo-marginal Metropolis–Hastings"
+            } else if self.pseudo_marginal {
                 "particle marginal Metropolis–Hastings"
             } else if self.langevin {
                 "adaptive Metropolis-adjusted Langevin"
@@ -787,7 +873,7 @@ impl Chains {
             posterior.notes.extend(notes(
                 &posterior,
                 (&self.method, &self.random_numbers),
-                self.pseudo_marginal && !self.fresh,
+                self.pseudo_marginal && self.options.random_numbers == RandomNumbers::Common,
                 self.random,
             ));
         }
@@ -809,6 +895,14 @@ fn check_options(options: &SampleOptions, p: usize) -> Result<(), ZakaiError> {
     let mut problems = Vec::new();
     if options.draws == 0 {
         problems.push(ConfigProblem::new("draws", "must be at least 1"));
+    }
+    if let RandomNumbers::Correlated(rho) = options.random_numbers {
+        if !(0.0..1.0).contains(&rho) {
+            problems.push(ConfigProblem::new(
+                "correlation",
+                format!("ρ must be in [0, 1), got {rho}"),
+            ));
+        }
     }
     if !(1..=1024).contains(&options.chains) {
         problems.push(ConfigProblem::new(
@@ -920,6 +1014,7 @@ fn state_at(target: &Target, u: Vec<f64>) -> State {
         log_likelihood: f64::NEG_INFINITY,
         gradient: Vec::new(),
         surrogate: f64::NAN,
+        normals: None,
         theta,
         u,
     }
@@ -958,7 +1053,9 @@ fn notes(
     }
     for (c, chain) in posterior.chains.iter().enumerate() {
         if chain.acceptance < 0.05 {
-            let advice = if random && !common {
+            let advice = if posterior.sampler.starts_with("correlated") {
+                "the ratio of successive estimates is too noisy: more particles, or ρ nearer 1"
+            } else if random && !common {
                 "the likelihood estimate is too noisy: more particles (aim for Var ln L̂ ≈ 1–2)"
             } else {
                 "a longer warm-up, or a start nearer the mode"

@@ -123,6 +123,7 @@ pub fn j_curve(
         probes: &probes,
         bounds: &bounds,
         dt_obs: Some(dt_obs),
+        supplied: None,
     };
     let mut grids = Vec::new();
     let mut gsf_params = GaussianSumParams::default();
