@@ -193,7 +193,7 @@ pub(crate) struct SampleArgs {
     pub(crate) sampler: SamplerArg,
     /// PMMH with the same random numbers at every proposal (a smooth but biased likelihood)
     /// instead of fresh ones.
-    #[arg(long, conflicts_with = "correlation")]
+    #[arg(long)]
     pub(crate) common_random_numbers: bool,
     /// Correlated pseudo-marginal steps (Deligiannidis, Doucet & Pitt 2018): the particle
     /// filter's random numbers move with each proposal by U' = ρU + √(1 − ρ²)ε with this ρ in

@@ -22,6 +22,9 @@ pub(crate) fn command(a: &SampleArgs) -> Result<(), String> {
     if let Some(key) = &a.method {
         crate::select_methods(&mut config, std::slice::from_ref(key))?;
     }
+    if a.common_random_numbers && a.correlation.is_some() {
+        return Err("--correlation with --common-random-numbers: one or the other (common numbers are ρ = 1 without the exactness)".into());
+    }
     let seed = a.selection.seed.unwrap_or(config.seed);
     let recording = crate::fit::recording(config.state_dim(), &a.observations)?;
     let names = a.params.clone().unwrap_or_default();

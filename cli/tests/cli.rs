@@ -1180,6 +1180,21 @@ fn sample_writes_every_draw_the_summary_and_the_plot_and_refuses_bad_requests() 
         &zakai(&[&base[..], &["--surrogate", "nosuch"]].concat()),
         "unknown method",
     );
+    // Correlated pseudo-marginal steps: ρ in [0, 1), and not with common random numbers.
+    assert_clean_failure(
+        &zakai(&[&base[..], &["--correlation", "1.5"]].concat()),
+        "ρ must be in [0, 1)",
+    );
+    assert_clean_failure(
+        &zakai(
+            &[
+                &base[..],
+                &["--correlation", "0.9", "--common-random-numbers"],
+            ]
+            .concat(),
+        ),
+        "one or the other",
+    );
     let open = dir.join("open.json");
     std::fs::write(&open, NILE_POSTERIOR.replace("[0, 40000]", "[0, null]")).unwrap();
     let mut args = base.to_vec();

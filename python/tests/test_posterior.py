@@ -118,6 +118,18 @@ def test_pmmh_on_an_executor_draws_the_same_chains():
     common = zakai.sample(sc, z, draws=60, warmup=40, chains=2, seed=5, start_from_fit=False,
                           common_random_numbers=True)
     assert any("not the exact posterior" in n for n in common.notes)
+    # Correlated pseudo-marginal steps: in this process only, and not with common numbers.
+    correlated = zakai.sample(sc, z, draws=60, warmup=40, chains=2, seed=5,
+                              start_from_fit=False, correlation=0.99)
+    assert correlated.sampler == "correlated pseudo-marginal Metropolis–Hastings"
+    assert not any("not the exact posterior" in n for n in correlated.notes)
+    with ThreadPoolExecutor(2) as pool, pytest.raises(ConfigError, match="cannot supply"):
+        zakai.sample(sc, z, draws=60, warmup=40, seed=5, start_from_fit=False,
+                     correlation=0.99, executor=pool)
+    with pytest.raises(ConfigError, match="correlation"):
+        zakai.sample(sc, z, correlation=0.99, common_random_numbers=True)
+    with pytest.raises(ConfigError, match="correlation"):
+        zakai.sample(sc, z, correlation=1.0)
 
 
 def test_delayed_acceptance_screens_with_a_cheaper_method(sm):
