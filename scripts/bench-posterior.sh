@@ -5,8 +5,11 @@
 # the point-mass filter at its 400 cells — by the release CLI: random-walk Metropolis (4 chains
 # × 4500 draws after 500 of warm-up), the same with delayed acceptance screened by the
 # point-mass filter on 100 cells (4 × 6000 after 500), and Metropolis-adjusted Langevin steps
-# on the filter's score (4 × 1000 after 500). Prints each run's summary (ESS bulk and tail per
-# parameter) and wall time (the starting fit included).
+# on the filter's score (4 × 1000 after 500); then the particle filter's pseudo-marginal
+# samplers, started at the point-mass filter's maximum-likelihood estimate (no fit): PMMH with
+# fresh random numbers and correlated pseudo-marginal steps (ρ = 0.99) at 25, 50 and 100
+# particles (4 × 5000 after 500). Prints each run's summary (ESS bulk and tail per parameter)
+# and wall time (the starting fit included where there is one).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build -q --release -p zakai-cli
@@ -28,3 +31,26 @@ run() {
 run metropolis --draws 4500
 run delayed-acceptance --draws 6000 --surrogate '{"method":"point_mass","cells":[100]}'
 run langevin --draws 1000 --sampler langevin
+# The particle filter's samplers: the scenario with the PF alone, started at the 400-cell
+# point-mass filter's estimate (zakai fit on sv-fit.json: μ = −1.248, ρ = 0.943, σ = 0.180).
+for n in 25 50 100; do
+  python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))
+for k, v in (("mu", -1.248), ("rho", 0.943), ("sigma", 0.180)):
+    c["parameters"][k]["value"] = v
+c["methods"] = [{"method": "pf", "particles": int(sys.argv[2])}]
+json.dump(c, sys.stdout)' "$dir/sv-fit.json" "$n" > "$dir/sv-pf$n.json"
+  run_pf() {
+    local name=$1
+    shift
+    start=$(date +%s.%N)
+    "$zakai" sample "$dir/sv-pf$n.json" --observations "$dir/sv.csv" --warmup 500 --seed 1 \
+      --no-fit --draws 5000 "$@" > "$dir/sv-$name.txt"
+    end=$(date +%s.%N)
+    printf 'SV posterior, %-18s %7.1f s\n' "$name" "$(echo "$end - $start" | bc)"
+    sed -n '1,6p' "$dir/sv-$name.txt"
+  }
+  run_pf "pmmh-pf$n"
+  run_pf "correlated-pf$n" --correlation 0.99
+done

@@ -35,6 +35,22 @@ function showMethods() {
   const current = $('post-method').value;
   fillOptions($('post-method'), config.methods.map((m, i) => [i, m.method]));
   if (current && Number(current) < config.methods.length) $('post-method').value = current;
+  const screen = $('post-surrogate').value;
+  fillOptions($('post-surrogate'), [['', 'nothing'], ...config.methods.map((m, i) => [i, m.method])]);
+  if (screen && Number(screen) < config.methods.length) $('post-surrogate').value = screen;
+}
+
+// The sampler's choices as the job takes them: the sampler's key, ρ for correlated
+// random numbers, and the screening method's index.
+function samplerChoice() {
+  const choice = $('post-sampler').value;
+  const correlated = choice === 'correlated';
+  const screen = $('post-surrogate').value;
+  return {
+    sampler: correlated ? 'pmmh' : choice,
+    correlation: correlated ? Number($('post-rho').value) : null,
+    surrogate: screen === '' ? null : Number(screen),
+  };
 }
 
 // Starts the sampler; `options` (a lesson's) sets the method by key, the draws, warm-up and
@@ -47,6 +63,9 @@ export function startPosterior(options) {
     const index = config.methods.findIndex((m) => m.method === options.method);
     if (index >= 0) $('post-method').value = String(index);
     for (const key of ['draws', 'warmup', 'chains']) if (options[key] != null) $(`post-${key}`).value = String(options[key]);
+    $('post-sampler').value = options.sampler ?? 'auto';
+    $('post-rho-label').hidden = $('post-sampler').value !== 'correlated';
+    $('post-surrogate').value = '';
   }
   const int = (id, lo, hi, fallback) => Math.max(lo, Math.min(hi, Number($(id).value) | 0 || fallback));
   const draws = int('post-draws', 10, 100000, 1000);
@@ -62,6 +81,7 @@ export function startPosterior(options) {
   postJob({
     type: 'posteriorStart', config, method: Number($('post-method').value) || 0,
     draws, warmup, chains, seed: config.seed, observations: state.recording?.text ?? null,
+    ...samplerChoice(),
   });
 }
 
@@ -218,6 +238,7 @@ export function setupPosterior() {
   });
   $('post-panel').addEventListener('toggle', () => { if ($('post-panel').open) showMethods(); });
   $('post-start').addEventListener('click', () => startPosterior());
+  $('post-sampler').addEventListener('change', () => { $('post-rho-label').hidden = $('post-sampler').value !== 'correlated'; });
   $('post-cancel').addEventListener('click', () => postJob({ type: 'posteriorCancel' }));
   $('post-csv').addEventListener('click', exportCsv);
   onJobMessage('posteriorProgress', (d) => {

@@ -156,7 +156,7 @@ self.onmessage = async ({ data }) => {
         (job) => job.result());
       break;
     case 'posteriorStart':
-      unitJob('posterior', () => new zakai.PosteriorJob(data.config, data.method, data.draws, data.warmup, data.chains, data.seed, data.observations ?? undefined),
+      unitJob('posterior', () => new zakai.PosteriorJob(data.config, data.method, data.draws, data.warmup, data.chains, data.seed, data.observations ?? undefined, data.sampler ?? undefined, data.correlation ?? undefined, data.surrogate ?? undefined),
         (job) => job.result());
       break;
     case 'mcCancel':

@@ -270,6 +270,36 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   await stepOnce();
   await page.screenshot({ path: `${artifacts}/playground-memory-cap.png` });
 
+  // 7b. The Posterior panel's sampler choices reach the worker's sampler: Langevin steps on the
+  //     EKF (no score) are refused with the reason; the UKF screened by the EKF (delayed
+  //     acceptance) says so in its notes; correlated random numbers show their ρ, and one
+  //     outside [0, 1) is refused before any run.
+  await load(`${url}?preset=cubic-sensor-fit`, 'cubic-sensor-fit');
+  await page.evaluate(() => { document.getElementById('post-panel').open = true; });
+  await page.waitForFunction(() => document.querySelectorAll('#post-surrogate option').length === 4, null, { timeout: 10000 });
+  const sampleWith = async (choices) => {
+    for (const [id, v] of Object.entries(choices)) {
+      if ((await page.$eval(`#${id}`, (e) => e.tagName)) === 'SELECT') await page.selectOption(`#${id}`, v);
+      else await page.fill(`#${id}`, v);
+    }
+    await page.click('#post-start');
+    await page.waitForFunction(() => /finished|error|cancelled/.test(document.getElementById('post-status').textContent) && !document.getElementById('post-start').disabled, null, { timeout: 120000 });
+    return page.evaluate(() => ({
+      status: document.getElementById('post-status').textContent,
+      notes: [...document.querySelectorAll('#post-notes li')].map((l) => l.textContent),
+    }));
+  };
+  let chosen = await sampleWith({ 'post-method': '1', 'post-sampler': 'langevin', 'post-draws': '40', 'post-warmup': '40', 'post-chains': '2' });
+  assert.match(chosen.status, /^error: .*Langevin steps need the gradient/);
+  chosen = await sampleWith({ 'post-method': '2', 'post-sampler': 'auto', 'post-surrogate': '1' });
+  assert.match(chosen.status, /^finished/);
+  assert.ok(chosen.notes.some((n) => n.startsWith('delayed acceptance')), `screened: ${chosen.notes}`);
+  assert.equal(await page.isVisible('#post-rho'), false);
+  await page.selectOption('#post-sampler', 'correlated');
+  assert.equal(await page.isVisible('#post-rho'), true);
+  chosen = await sampleWith({ 'post-surrogate': '', 'post-rho': '1.5' });
+  assert.match(chosen.status, /^error: .*ρ must be in \[0, 1\)/);
+
   // 8. The whole configuration lives in the URL: a shared link restores it, same seed, same run.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   await page.fill('#seed', '7');

@@ -212,6 +212,8 @@ const CONTOUR_CELLS: usize = 14;
 #[wasm_bindgen]
 pub struct PosteriorJob {
     likelihood: zakai::lab::fit::Likelihood,
+    /// Delayed acceptance's screen, when one is chosen.
+    surrogate: Option<zakai::lab::fit::Likelihood>,
     chains: zakai::lab::posterior::Chains,
     /// The grid's axes, fixed when the sampling ends, and ln L at its points so far.
     grid: Option<(Vec<f64>, Vec<f64>)>,
@@ -222,7 +224,10 @@ pub struct PosteriorJob {
 impl PosteriorJob {
     /// `draws` per chain after `warmup`, `chains` chains, under method `method` (an index
     /// into the scenario's methods), the chains started around the scenario's values;
-    /// `observations` as for [`LikelihoodProfile::new`].
+    /// `observations` as for [`LikelihoodProfile::new`]. `sampler`: `"auto"` (the default),
+    /// `"metropolis"`, `"pmmh"` or `"langevin"`; `correlation`: ρ of correlated
+    /// pseudo-marginal steps for a particle filter; `surrogate`: the index of a cheaper
+    /// method of the scenario that screens each proposal first (delayed acceptance).
     #[wasm_bindgen(constructor)]
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -233,7 +238,11 @@ impl PosteriorJob {
         chains: usize,
         seed: f64,
         observations: Option<String>,
+        sampler: Option<String>,
+        correlation: Option<f64>,
+        surrogate: Option<usize>,
     ) -> Result<PosteriorJob, JsError> {
+        use zakai::lab::posterior::{RandomNumbers, Sampler};
         let config = parse_config(config).map_err(|p| js_error(&p[0].message))?;
         let seed = seed_from_js(seed)?;
         if draws > 100_000 || warmup > 100_000 || chains > 16 {
@@ -242,6 +251,24 @@ impl PosteriorJob {
             )));
         }
         let recording = data_on_screen(&config, seed, observations)?;
+        let sampler = match sampler.as_deref().unwrap_or("auto") {
+            "auto" => Sampler::Automatic,
+            "metropolis" => Sampler::Metropolis,
+            "pmmh" => Sampler::PseudoMarginal,
+            "langevin" => Sampler::Langevin,
+            other => {
+                return Err(js_error(format!(
+                    "sampler: auto, metropolis, pmmh or langevin, not {other:?}"
+                )))
+            }
+        };
+        let screen = match surrogate {
+            Some(i) => Some(
+                zakai::lab::fit::Likelihood::new(&config, recording.clone(), i, &[], seed)
+                    .map_err(js_error)?,
+            ),
+            None => None,
+        };
         let likelihood = zakai::lab::fit::Likelihood::new(&config, recording, method, &[], seed)
             .map_err(js_error)?;
         let options = zakai::lab::posterior::SampleOptions {
@@ -249,12 +276,18 @@ impl PosteriorJob {
             warmup,
             chains,
             seed,
+            sampler,
+            random_numbers: correlation.map_or(RandomNumbers::Fresh, RandomNumbers::Correlated),
             ..Default::default()
         };
+        if screen.is_some() {
+            zakai::lab::posterior::check_screening(&likelihood, &options).map_err(js_error)?;
+        }
         let chains = zakai::lab::posterior::Chains::new(&likelihood, &likelihood, &options)
             .map_err(js_error)?;
         Ok(PosteriorJob {
             likelihood,
+            surrogate: screen,
             chains,
             grid: None,
             grid_values: Vec::new(),
@@ -276,7 +309,10 @@ impl PosteriorJob {
     #[wasm_bindgen(js_name = runNext)]
     pub fn run_next(&mut self) -> usize {
         if !self.chains.is_done() {
-            self.chains.step(&self.likelihood);
+            match &self.surrogate {
+                Some(screen) => self.chains.step_screened(&self.likelihood, screen),
+                None => self.chains.step(&self.likelihood),
+            }
         } else if self.likelihood.names().len() == 2
             && self.grid_values.len() < CONTOUR_CELLS * CONTOUR_CELLS
         {

@@ -314,6 +314,25 @@ pub fn sample_screened(
     run_chains(likelihood, evaluate, Some(surrogate), options, progress)
 }
 
+/// Whether delayed acceptance ([`Chains::step_screened`]) can run with `options` on
+/// `likelihood`: random-walk proposals on a deterministic likelihood; an error that says why
+/// not (Langevin steps, or a method with random numbers).
+pub fn check_screening(
+    likelihood: &dyn LogLikelihood,
+    options: &SampleOptions,
+) -> Result<(), ZakaiError> {
+    if options.sampler == Sampler::Langevin || likelihood.random_numbers().is_some() {
+        return Err(ZakaiError::Config(vec![ConfigProblem::new(
+            "surrogate",
+            format!(
+                "delayed acceptance screens random-walk proposals on a deterministic likelihood: not with Langevin steps or {}'s random estimate",
+                likelihood.method()
+            ),
+        )]));
+    }
+    Ok(())
+}
+
 /// The chains of [`sample`] or [`sample_screened`] run to the end.
 fn run_chains(
     likelihood: &dyn LogLikelihood,
@@ -322,16 +341,8 @@ fn run_chains(
     options: &SampleOptions,
     progress: &dyn Fn(usize, usize) -> bool,
 ) -> Result<Posterior, ZakaiError> {
-    if surrogate.is_some()
-        && (options.sampler == Sampler::Langevin || likelihood.random_numbers().is_some())
-    {
-        return Err(ZakaiError::Config(vec![ConfigProblem::new(
-            "surrogate",
-            format!(
-                "delayed acceptance screens random-walk proposals on a deterministic likelihood: not with Langevin steps or {}'s random estimate",
-                likelihood.method()
-            ),
-        )]));
+    if surrogate.is_some() {
+        check_screening(likelihood, options)?;
     }
     let mut chains = Chains::new(likelihood, evaluate, options)?;
     while !chains.is_done() {
