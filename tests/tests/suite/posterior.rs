@@ -425,6 +425,27 @@ fn ou_poisson(method: serde_json::Value) -> ScenarioConfig {
     .expect("a valid scenario")
 }
 
+/// The Ornstein–Uhlenbeck–Poisson data (simulated with seed 11), the particle filter's
+/// likelihood of it with `particles`, and the reference marginals of (a, c): the implicit
+/// FDM's likelihood (200 cells) integrated over a 40² grid of the box.
+fn ou_poisson_reference(particles: usize) -> (Likelihood, [Marginal; 2]) {
+    use zakai::lab::fit::Evaluate;
+    let truth = zakai::lab::experiment::Experiment::new(ou_poisson(
+        serde_json::json!({ "method": "separation" }),
+    ))
+    .unwrap();
+    let data: Recording = truth.simulate(11).unwrap().into();
+    let likelihood = |method: serde_json::Value| {
+        Likelihood::new(&ou_poisson(method), data.clone(), 0, &[], 9).unwrap()
+    };
+    let grid = likelihood(serde_json::json!({ "method": "implicit_fdm", "cells": [200] }));
+    let (a, c) = grid_posterior([(0.2, 4.0), (0.5, 8.0)], 40, |points| {
+        grid.log_likelihoods(points)
+    });
+    let pf = likelihood(serde_json::json!({ "method": "pf", "particles": particles }));
+    (pf, [a, c])
+}
+
 /// On a nonlinear, non-Gaussian model, particle marginal Metropolis–Hastings with the
 /// particle filter (400 particles, fresh random numbers at each proposal) samples the
 /// posterior of the grid filter's likelihood: the implicit FDM's (deterministic, converging
@@ -434,30 +455,7 @@ fn ou_poisson(method: serde_json::Value) -> ScenarioConfig {
 /// with it as in `agrees_with`.
 #[test]
 fn pmmh_with_the_particle_filter_samples_the_grid_likelihood_posterior() {
-    use zakai::lab::fit::Evaluate;
-    let box_ = [(0.2, 4.0), (0.5, 8.0)];
-    let truth = zakai::lab::experiment::Experiment::new(ou_poisson(
-        serde_json::json!({ "method": "separation" }),
-    ))
-    .unwrap();
-    let data: Recording = truth.simulate(11).unwrap().into();
-    let grid = Likelihood::new(
-        &ou_poisson(serde_json::json!({ "method": "implicit_fdm", "cells": [200] })),
-        data.clone(),
-        0,
-        &[],
-        9,
-    )
-    .unwrap();
-    let (a, c) = grid_posterior(box_, 40, |points| grid.log_likelihoods(points));
-    let pf = Likelihood::new(
-        &ou_poisson(serde_json::json!({ "method": "pf", "particles": 400 })),
-        data,
-        0,
-        &[],
-        9,
-    )
-    .unwrap();
+    let (pf, [a, c]) = ou_poisson_reference(400);
     let options = SampleOptions {
         draws: 3000,
         warmup: 1000,
@@ -478,32 +476,9 @@ fn pmmh_with_the_particle_filter_samples_the_grid_likelihood_posterior() {
 #[test]
 fn correlated_pseudo_marginal_steps_sample_it_with_a_tenth_of_the_particles() {
     use std::sync::Arc;
-    use zakai::lab::fit::Evaluate;
     use zakai::lab::posterior::RandomNumbers;
     use zakai::SuppliedNormals;
-    let box_ = [(0.2, 4.0), (0.5, 8.0)];
-    let truth = zakai::lab::experiment::Experiment::new(ou_poisson(
-        serde_json::json!({ "method": "separation" }),
-    ))
-    .unwrap();
-    let data: Recording = truth.simulate(11).unwrap().into();
-    let grid = Likelihood::new(
-        &ou_poisson(serde_json::json!({ "method": "implicit_fdm", "cells": [200] })),
-        data.clone(),
-        0,
-        &[],
-        9,
-    )
-    .unwrap();
-    let (a, c) = grid_posterior(box_, 40, |points| grid.log_likelihoods(points));
-    let pf = Likelihood::new(
-        &ou_poisson(serde_json::json!({ "method": "pf", "particles": 40 })),
-        data.clone(),
-        0,
-        &[],
-        9,
-    )
-    .unwrap();
+    let (pf, [a, c]) = ou_poisson_reference(40);
     // The noise of a log-likelihood ratio between (1, 2) and (1.05, 2.1).
     let (here, there) = (vec![1.0, 2.0], vec![1.05, 2.1]);
     // Standard normals by Box–Muller on SplitMix64 (Steele, Lea & Flood 2014).
