@@ -243,6 +243,7 @@ fn hilbert_index(x: &mut [u64], bits: u32) -> u128 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     /// The Hilbert curve of order 1 and 2 in the plane visits the cells in the order of its
     /// drawing (Skilling 2004, Fig. 1): consecutive indices are neighbouring cells, and every

@@ -69,6 +69,7 @@ pub(super) fn materialised(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::test;
 
     /// The Crank–Nicolson step keeps N(0, 1): from standard normals, the proposal's mean and
     /// variance stay 0 and 1 (within 4 standard errors of 10⁵ draws), and its correlation
