@@ -64,6 +64,7 @@ export function startPosterior(options) {
     if (index >= 0) $('post-method').value = String(index);
     for (const key of ['draws', 'warmup', 'chains']) if (options[key] != null) $(`post-${key}`).value = String(options[key]);
     $('post-sampler').value = options.sampler ?? 'auto';
+    if (options.rho != null) $('post-rho').value = String(options.rho);
     $('post-rho-label').hidden = $('post-sampler').value !== 'correlated';
     $('post-surrogate').value = '';
   }

@@ -289,16 +289,16 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
       notes: [...document.querySelectorAll('#post-notes li')].map((l) => l.textContent),
     }));
   };
-  let chosen = await sampleWith({ 'post-method': '1', 'post-sampler': 'langevin', 'post-draws': '40', 'post-warmup': '40', 'post-chains': '2' });
-  assert.match(chosen.status, /^error: .*Langevin steps need the gradient/);
-  chosen = await sampleWith({ 'post-method': '2', 'post-sampler': 'auto', 'post-surrogate': '1' });
-  assert.match(chosen.status, /^finished/);
-  assert.ok(chosen.notes.some((n) => n.startsWith('delayed acceptance')), `screened: ${chosen.notes}`);
+  let picked = await sampleWith({ 'post-method': '1', 'post-sampler': 'langevin', 'post-draws': '40', 'post-warmup': '40', 'post-chains': '2' });
+  assert.match(picked.status, /^error: .*Langevin steps need the gradient/);
+  picked = await sampleWith({ 'post-method': '2', 'post-sampler': 'auto', 'post-surrogate': '1' });
+  assert.match(picked.status, /^finished/);
+  assert.ok(picked.notes.some((n) => n.startsWith('delayed acceptance')), `screened: ${picked.notes}`);
   assert.equal(await page.isVisible('#post-rho'), false);
   await page.selectOption('#post-sampler', 'correlated');
   assert.equal(await page.isVisible('#post-rho'), true);
-  chosen = await sampleWith({ 'post-surrogate': '', 'post-rho': '1.5' });
-  assert.match(chosen.status, /^error: .*ρ must be in \[0, 1\)/);
+  picked = await sampleWith({ 'post-surrogate': '', 'post-rho': '1.5' });
+  assert.match(picked.status, /^error: .*ρ must be in \[0, 1\)/);
 
   // 8. The whole configuration lives in the URL: a shared link restores it, same seed, same run.
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');

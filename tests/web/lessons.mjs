@@ -782,7 +782,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
         const sd = (v, m) => Math.sqrt(v.reduce((a, x) => a + (x - m) ** 2, 0) / (v.length - 1));
         const corr = q.reduce((a, v, k) => a + (v - mq) * (r[k] - mr), 0) / (q.length - 1) / (sd(q, mq) * sd(r, mr));
         const [sq, sr] = p.summary;
-        return { sq, sr, corr, evaluations: p.evaluations, chains: p.chains.length, draws: p.draws, warmup: p.warmup, notes: p.notes, grid: p.grid, about: document.getElementById('post-about').textContent, rows: document.querySelectorAll('#post-table tbody tr').length, joint: !!document.getElementById('post-joint') };
+        return { sq, sr, corr, acceptance: p.acceptance.reduce((a, b) => a + b, 0) / p.acceptance.length, evaluations: p.evaluations, chains: p.chains.length, draws: p.draws, warmup: p.warmup, notes: p.notes, grid: p.grid, about: document.getElementById('post-about').textContent, rows: document.querySelectorAll('#post-table tbody tr').length, joint: !!document.getElementById('post-joint') };
       });
     };
     const sa = await sampled("sample the SA's posterior");
@@ -814,6 +814,24 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     const z13 = await page.evaluate(() => window.zakaiPage.data.full?.obs[0] ?? window.zakaiPage.data.obs[0]);
     const meanSquare13 = z13.reduce((a, v) => a + v * v, 0) / z13.length;
     assert.ok(near(meanSquare13, 0.947, 0.0005) && ekf.sr.q05 < meanSquare13 && meanSquare13 < ekf.sr.q95 && ekf.sr.q05 > 0.5, 'around the mean square 0.947, far from 0.5');
+    // The particle filter (200 particles, added by the lesson): PMMH with fresh random numbers,
+    // then correlated ones (ρ = 0.99).
+    const essOf = (x) => [x.sq, x.sr].flatMap((s) => [s.diagnostics.ess_bulk, s.diagnostics.ess_tail]);
+    const fresh = await sampled("the particle filter's posterior, fresh random numbers");
+    console.log('lesson 13, PF fresh:', JSON.stringify({ q: fresh.sq, r: fresh.sr, acceptance: fresh.acceptance }));
+    assert.match(fresh.about, /^PF\(200\), particle marginal Metropolis–Hastings/);
+    assert.ok(near(fresh.acceptance, 0.17, 0.005), `accepts 17 %: ${fresh.acceptance}`);
+    assert.ok(near(fresh.sq.diagnostics.rhat, 2.2, 0.05) && near(fresh.sr.diagnostics.rhat, 1.7, 0.05), 'R̂ 2.2 for q, 1.7 for r');
+    assert.ok(near(Math.min(...essOf(fresh)), 5, 0.5) && near(Math.max(...essOf(fresh)), 22, 0.5), `ESS 5 to 22: ${essOf(fresh)}`);
+    const correlated = await sampled('the same with correlated random numbers');
+    console.log('lesson 13, PF correlated:', JSON.stringify({ q: correlated.sq, r: correlated.sr, acceptance: correlated.acceptance }));
+    assert.match(correlated.about, /^PF\(200\), correlated pseudo-marginal Metropolis–Hastings/);
+    assert.ok(near(correlated.acceptance, 0.22, 0.005), `accepts 22 %: ${correlated.acceptance}`);
+    assert.ok(near(correlated.sq.diagnostics.rhat, 1.06, 0.005) && near(correlated.sr.diagnostics.rhat, 1.03, 0.005), 'R̂ 1.06 and 1.03');
+    assert.ok(near(correlated.sq.mean, 0.73, 0.005) && near(correlated.sr.mean, 0.44, 0.005), 'means 0.73 and 0.44');
+    assert.ok(near(sa.sq.mean, 0.69, 0.005) && near(sa.sr.mean, 0.43, 0.005), "the SA's 0.69 and 0.43");
+    assert.ok(near(Math.min(...essOf(correlated)), 63, 0.5) && near(Math.max(...essOf(correlated)), 359, 0.5), `ESS 63 to 359: ${essOf(correlated)}`);
+    assert.ok(correlated.notes.some((n) => /effective sample size/.test(n)), 'the notes ask for more draws');
   }
 
   // A run the page refuses reports why (a broken drift expression, with its position); the
