@@ -820,18 +820,21 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     const fresh = await sampled("the particle filter's posterior, fresh random numbers");
     console.log('lesson 13, PF fresh:', JSON.stringify({ q: fresh.sq, r: fresh.sr, acceptance: fresh.acceptance }));
     assert.match(fresh.about, /^PF\(200\), particle marginal Metropolis–Hastings/);
+    assert.ok(fresh.chains === 4 && fresh.draws === 600 && fresh.warmup === 400, '4 chains, 400 warm-up iterations and 600 draws');
     assert.ok(near(fresh.acceptance, 0.17, 0.005), `accepts 17 %: ${fresh.acceptance}`);
     assert.ok(near(fresh.sq.diagnostics.rhat, 2.2, 0.05) && near(fresh.sr.diagnostics.rhat, 1.7, 0.05), 'R̂ 2.2 for q, 1.7 for r');
     assert.ok(near(Math.min(...essOf(fresh)), 5, 0.5) && near(Math.max(...essOf(fresh)), 22, 0.5), `ESS 5 to 22: ${essOf(fresh)}`);
     const correlated = await sampled('the same with correlated random numbers');
     console.log('lesson 13, PF correlated:', JSON.stringify({ q: correlated.sq, r: correlated.sr, acceptance: correlated.acceptance }));
     assert.match(correlated.about, /^PF\(200\), correlated pseudo-marginal Metropolis–Hastings/);
+    assert.ok(correlated.chains === 4 && correlated.draws === 600 && correlated.warmup === 400, 'the same iterations');
     assert.ok(near(correlated.acceptance, 0.22, 0.005), `accepts 22 %: ${correlated.acceptance}`);
     assert.ok(near(correlated.sq.diagnostics.rhat, 1.06, 0.005) && near(correlated.sr.diagnostics.rhat, 1.03, 0.005), 'R̂ 1.06 and 1.03');
     assert.ok(near(correlated.sq.mean, 0.73, 0.005) && near(correlated.sr.mean, 0.44, 0.005), 'means 0.73 and 0.44');
     assert.ok(near(sa.sq.mean, 0.69, 0.005) && near(sa.sr.mean, 0.43, 0.005), "the SA's 0.69 and 0.43");
     assert.ok(near(Math.min(...essOf(correlated)), 63, 0.5) && near(Math.max(...essOf(correlated)), 359, 0.5), `ESS 63 to 359: ${essOf(correlated)}`);
     assert.ok(correlated.notes.some((n) => /effective sample size/.test(n)), 'the notes ask for more draws');
+    assert.ok(correlated.notes.some((n) => /^q: R̂ = .* > 1\.01/.test(n)) && correlated.notes.some((n) => /^r: R̂ = .* > 1\.01/.test(n)), 'both R̂ above 1.01, said in the notes');
   }
 
   // A run the page refuses reports why (a broken drift expression, with its position); the
