@@ -17,7 +17,10 @@
 //! `z_j = y_{2j} + i y_{2j+1}` gives `E_k = (Z_k + conj Z_{L−k})/2` and
 //! `O_k = (Z_k − conj Z_{L−k})/(2i)`, the DFTs of the even and odd samples, and
 //! `Y_k = E_k + e^{−2πik/M} O_k` — computed inside the unpacking pass, so that the spectrum is
-//! never stored. For odd M, the complex FFT of length M of y itself.
+//! never stored. For odd M, the complex FFT of length M of y itself. Where L is odd with a
+//! prime factor from 13 to 31 (N = 2001: L = 1001 = 7·11·13), the FFT of length L is
+//! `odd_fft`'s vectorised Stockham stages instead of rustfft's plan, whose butterflies for
+//! those primes are scalar.
 
 use alloc::sync::Arc;
 use alloc::vec;
@@ -25,6 +28,8 @@ use alloc::vec::Vec;
 
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
+
+use super::odd_fft::OddFft;
 
 /// A planned DST-I of one length with its scratch buffers. (Public for the benchmark of a bare
 /// transform pair, through `zakai::internals` with the feature `unstable-internals`; without
@@ -61,6 +66,9 @@ impl core::fmt::Debug for DstPlan {
 #[derive(Clone)]
 struct HalfLength {
     fft: Arc<dyn Fft<f64>>,
+    /// The same FFT by vectorised Stockham stages, where the length is odd with a factor
+    /// rustfft runs as a scalar butterfly.
+    odd: Option<OddFft>,
     /// `z_j = y_{2j} + i y_{2j+1}`, transformed in place.
     z: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
@@ -212,6 +220,7 @@ impl DstPlan {
                 })
                 .collect();
             HalfLength {
+                odd: OddFft::plan(l),
                 z: vec![Complex::new(0.0, 0.0); l],
                 scratch: vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()],
                 fft,
@@ -234,8 +243,14 @@ impl DstPlan {
         match &mut self.half {
             Some(h) => {
                 mix_line(bytemuck::cast_slice_mut(&mut h.z), &self.sines, x);
-                h.fft.process_with_scratch(&mut h.z, &mut h.scratch);
-                unpack_half(&h.z, &h.twiddles, x);
+                let spectrum = match &mut h.odd {
+                    Some(odd) => odd.process(&mut h.z),
+                    None => {
+                        h.fft.process_with_scratch(&mut h.z, &mut h.scratch);
+                        &h.z
+                    }
+                };
+                unpack_half(spectrum, &h.twiddles, x);
             }
             None => {
                 let z = &mut self.batch;

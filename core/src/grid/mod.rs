@@ -12,6 +12,9 @@ pub(crate) mod cross;
 pub(crate) mod dst;
 /// Tridiagonal systems along grid lines (the dimension-split implicit steps).
 pub(crate) mod lines;
+/// Odd-length FFTs by vectorised Stockham stages (the DST's half length).
+#[cfg(feature = "std")]
+mod odd_fft;
 
 use alloc::format;
 use alloc::vec;

@@ -316,10 +316,21 @@ fn exp_nonpositive_with(x: f64, madd: impl Fn(f64, f64, f64) -> f64) -> f64 {
 pub(crate) fn scale_by_exp(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
     if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F and FMA, checked just above.
+            return unsafe { scale_by_exp_wide(u, a, shift, flush) };
+        }
         // SAFETY: the CPU supports AVX2 and FMA, checked just above.
         return unsafe { scale_by_exp_fused(u, a, shift, flush) };
     }
     scale_by_exp_with(u, a, shift, flush, separate);
+}
+
+/// [`scale_by_exp_fused`] on eight lanes (AVX-512F): the same operations, so the same bits.
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+#[target_feature(enable = "avx512f,fma")]
+unsafe fn scale_by_exp_wide(u: &mut [f64], a: &[f64], shift: f64, flush: f64) {
+    scale_by_exp_with(u, a, shift, flush, f64::mul_add);
 }
 
 /// [`scale_by_exp`] compiled with AVX2 and FMA, its multiply–adds as `f64::mul_add`.
