@@ -111,7 +111,7 @@ fn ends(x: &[f64]) -> impl Iterator<Item = (&f64, &f64)> {
     x.iter().zip(x.iter().rev())
 }
 
-crate::linalg::simd::per_node_kernel! {
+crate::linalg::simd::per_node_kernel! { wide:
     /// `y_0 = 0`, `y_j = mix(sin(jπ/M), x_j, x_{M−j})` for one line.
     fn mix_line(y: &mut [f64], sines: &[f64], x: &[f64]) {
         y[0] = 0.0;
