@@ -446,6 +446,8 @@ impl Expression {
                     "exp" => Operation::Exp(a),
                     "ln" | "log" => Operation::Ln(a),
                     "abs" => Operation::Abs(a),
+                    "atan" => Operation::Atan(a),
+                    "sqrt" => Operation::Sqrt(a),
                     _ => Operation::Unary(f, a),
                 }
             }

@@ -7,7 +7,7 @@
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
 //! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
 //! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp` and `ln`
-//! are passes that vectorise ([`crate::linalg::elementary`]), and so is `abs`.
+//! `atan` and `sqrt` are passes that vectorise ([`crate::linalg::elementary`]), and so is `abs`.
 //!
 //! The per-point value of an expression runs the same operations on scalars, instruction by
 //! instruction (without a pass's dispatch per instruction), so the batch and the point-wise
@@ -51,6 +51,10 @@ pub(crate) enum Operation {
     Ln(Operand),
     /// `|a|` (a pass that vectorises).
     Abs(Operand),
+    /// `atan a` ([`crate::linalg::elementary::atan`], a pass that vectorises).
+    Atan(Operand),
+    /// `√a` (a pass that vectorises where the processor has the instruction).
+    Sqrt(Operand),
     /// `a + b`.
     Add(Operand, Operand),
     /// `a - b`.
@@ -74,6 +78,8 @@ impl Operation {
             | Operation::Exp(a)
             | Operation::Ln(a)
             | Operation::Abs(a)
+            | Operation::Atan(a)
+            | Operation::Sqrt(a)
             | Operation::PowI(a, _) => [Some(a), None],
             Operation::Add(a, b)
             | Operation::Sub(a, b)
@@ -92,6 +98,8 @@ impl Operation {
             Operation::Exp(_) => crate::linalg::elementary::exp(a),
             Operation::Ln(_) => crate::linalg::elementary::ln(a),
             Operation::Abs(_) => libm::fabs(a),
+            Operation::Atan(_) => crate::linalg::elementary::atan(a),
+            Operation::Sqrt(_) => crate::linalg::elementary::sqrt(a),
             Operation::Add(..) => a + b,
             Operation::Sub(..) => a - b,
             Operation::Mul(..) => a * b,
@@ -108,6 +116,8 @@ impl Operation {
             Operation::Exp(a) => Operation::Exp(f(a)),
             Operation::Ln(a) => Operation::Ln(f(a)),
             Operation::Abs(a) => Operation::Abs(f(a)),
+            Operation::Atan(a) => Operation::Atan(f(a)),
+            Operation::Sqrt(a) => Operation::Sqrt(f(a)),
             Operation::PowI(a, k) => Operation::PowI(f(a), k),
             Operation::Add(a, b) => Operation::Add(f(a), f(b)),
             Operation::Sub(a, b) => Operation::Sub(f(a), f(b)),
@@ -432,8 +442,8 @@ fn map2(dst: &mut [f64], a: Arg, b: Arg, f: impl Fn(f64, f64) -> f64) {
 
 crate::linalg::simd::per_node_kernel! {
     wide:
-    /// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln` and `abs`
-    /// are monomorphic loops that vectorise (compiled for AVX2 and AVX-512 too, see
+    /// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln`, `abs`,
+    /// `atan` and `sqrt` are monomorphic loops that vectorise (compiled for AVX2 and AVX-512 too, see
     /// [`crate::linalg::simd`]); other functions are called per value.
     fn apply(operation: &Operation, dst: &mut [f64], a: Arg<'_>, b: Arg<'_>) {
         match *operation {
@@ -442,6 +452,8 @@ crate::linalg::simd::per_node_kernel! {
             Operation::Exp(_) => map1(dst, a, crate::linalg::elementary::exp),
             Operation::Ln(_) => map1(dst, a, crate::linalg::elementary::ln),
             Operation::Abs(_) => map1(dst, a, libm::fabs),
+            Operation::Atan(_) => map1(dst, a, crate::linalg::elementary::atan),
+            Operation::Sqrt(_) => map1(dst, a, crate::linalg::elementary::sqrt),
             Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
             Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
             Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),

@@ -57,7 +57,8 @@ fn fract(v: f64) -> f64 {
 }
 
 /// The functions of `FUNCTIONS`, by name, every transcendental one computed by the pure-Rust
-/// `libm` crate rather than the platform's maths library, so that an expression gives
+/// `libm` crate or the crate's own branch-free `exp`, `ln` and `atan` and correctly rounded `sqrt`
+/// ([`crate::linalg::elementary`]) rather than the platform's maths library, so that an expression gives
 /// bit-identical values natively and in wasm (same seed → same trajectory everywhere).
 const FUNCTION_TABLE: &[(&str, RealFn)] = &[
     ("abs", libm::fabs),
@@ -67,7 +68,7 @@ const FUNCTION_TABLE: &[(&str, RealFn)] = &[
     ("tan", libm::tan),
     ("asin", libm::asin),
     ("acos", libm::acos),
-    ("atan", libm::atan),
+    ("atan", crate::linalg::elementary::atan),
     ("sinh", libm::sinh),
     ("cosh", libm::cosh),
     ("tanh", libm::tanh),
@@ -80,7 +81,7 @@ const FUNCTION_TABLE: &[(&str, RealFn)] = &[
     ("trunc", libm::trunc),
     ("fract", fract),
     ("exp", crate::linalg::elementary::exp),
-    ("sqrt", libm::sqrt),
+    ("sqrt", crate::linalg::elementary::sqrt),
     ("cbrt", libm::cbrt),
     ("ln", crate::linalg::elementary::ln),
     ("log", crate::linalg::elementary::ln),

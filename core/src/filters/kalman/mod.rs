@@ -425,9 +425,7 @@ impl GaussianState {
         lower_cholesky_solve(&work.factor, &mut work.whitened);
         // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ, column by column.
         work.gain_t.tr_copy_from(pxz);
-        for mut column in work.gain_t.column_iter_mut() {
-            crate::linalg::lower_cholesky_solve_slice(&work.factor, column.as_mut_slice());
-        }
+        crate::linalg::lower_cholesky_solve_columns(&work.factor, work.gain_t.as_mut_slice());
         Ok(residual.dot(&work.whitened))
     }
 

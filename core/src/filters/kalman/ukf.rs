@@ -119,12 +119,20 @@ impl SigmaPoints {
             let first = if symmetric { r } else { 0 };
             for (s, ms) in mb.iter().enumerate().skip(first) {
                 let bs = &b[s * c..(s + 1) * c];
-                // The centre point's weight differs; the 2n others share one.
-                let rest: f64 = ar[1..]
-                    .iter()
-                    .zip(&bs[1..])
-                    .map(|(x, y)| (x - mr) * (y - ms))
-                    .sum();
+                // The centre point's weight differs; the 2n others share one, summed in four
+                // running parts (independent additions, not one chain).
+                let mut parts = [0.0; 4];
+                let (x4, y4) = (ar[1..].chunks_exact(4), bs[1..].chunks_exact(4));
+                let tail = x4.remainder().iter().zip(y4.remainder());
+                for (x, y) in x4.zip(y4) {
+                    for l in 0..4 {
+                        parts[l] += (x[l] - mr) * (y[l] - ms);
+                    }
+                }
+                for (l, (x, y)) in tail.enumerate() {
+                    parts[l] += (x - mr) * (y - ms);
+                }
+                let rest = (parts[0] + parts[1]) + (parts[2] + parts[3]);
                 let value = w.cov0 * (ar[0] - mr) * (bs[0] - ms) + w.rest * rest;
                 out[(r, s)] = value;
                 if symmetric {
