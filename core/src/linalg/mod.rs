@@ -2,10 +2,10 @@
 
 pub(crate) mod elementary;
 pub(crate) mod simd;
+pub(crate) mod small;
 
 use simd::per_node_kernel;
 
-use alloc::vec::Vec;
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use crate::error::FilterError;
@@ -85,30 +85,7 @@ pub(crate) fn cholesky_in(
 /// positive definite — `l` is then partly written but keeps its storage, so a caller that
 /// damps and retries (the IOKF's Levenberg loop) allocates nothing.
 pub(crate) fn lower_cholesky_into(a: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
-    let n = a.nrows();
-    // Column-major: entry (i, j) at j n + i.
-    let (a, l) = (a.as_slice(), l.as_mut_slice());
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= l[k * n + j] * l[k * n + j];
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return false;
-        }
-        let d = elementary::sqrt(d);
-        l[j * n + j] = d;
-        // One division per column, products below it.
-        let inv = 1.0 / d;
-        for i in j + 1..n {
-            let mut v = a[j * n + i];
-            for k in 0..j {
-                v -= l[k * n + i] * l[k * n + j];
-            }
-            l[j * n + i] = v * inv;
-        }
-    }
-    true
+    small::cholesky(a.nrows(), a.as_slice(), l.as_mut_slice())
 }
 
 /// [`lower_cholesky_into`] with the filters' errors: a non-finite `a` is
@@ -143,38 +120,7 @@ pub(crate) fn lower_cholesky_solve_slice(l: &DMatrix<f64>, x: &mut [f64]) {
 /// [`lower_cholesky_solve_slice`] on each of the consecutive columns of length n in `x` (a
 /// column-major matrix's storage), with the diagonal's reciprocals taken once for all of them.
 pub(crate) fn lower_cholesky_solve_columns(l: &DMatrix<f64>, x: &mut [f64]) {
-    let n = l.nrows();
-    if n == 0 {
-        return;
-    }
-    let l = l.as_slice();
-    let mut small = [0.0; 8];
-    let mut large = Vec::new();
-    let inv: &mut [f64] = if n <= small.len() {
-        &mut small[..n]
-    } else {
-        large.resize(n, 0.0);
-        &mut large
-    };
-    for (i, v) in inv.iter_mut().enumerate() {
-        *v = 1.0 / l[i * n + i];
-    }
-    for x in x.chunks_exact_mut(n) {
-        for i in 0..n {
-            let mut v = x[i];
-            for k in 0..i {
-                v -= l[k * n + i] * x[k];
-            }
-            x[i] = v * inv[i];
-        }
-        for i in (0..n).rev() {
-            let mut v = x[i];
-            for k in i + 1..n {
-                v -= l[i * n + k] * x[k];
-            }
-            x[i] = v * inv[i];
-        }
-    }
+    small::cholesky_solve(l.nrows(), l.as_slice(), x);
 }
 
 /// Fails when any entry is NaN or infinite.

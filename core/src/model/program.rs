@@ -98,7 +98,7 @@ impl Operation {
             Operation::Exp(_) => crate::linalg::elementary::exp(a),
             Operation::Ln(_) => crate::linalg::elementary::ln(a),
             Operation::Abs(_) => libm::fabs(a),
-            Operation::Atan(_) => crate::linalg::elementary::atan(a),
+            Operation::Atan(_) => atan_out_of_line(a),
             Operation::Sqrt(_) => crate::linalg::elementary::sqrt(a),
             Operation::Add(..) => a + b,
             Operation::Sub(..) => a - b,
@@ -355,6 +355,14 @@ fn read(o: Operand, x: &[f64], registers: &[f64]) -> f64 {
         Operand::Const(c) => c,
         Operand::Reg(r) => registers[r],
     }
+}
+
+/// [`crate::linalg::elementary::atan`] as a call, for the scalar interpreter: inlined there,
+/// its two divisions and selects crowd the loop that every instruction runs through (the same
+/// operations, so the same bits as the batch pass's inlined copy).
+#[inline(never)]
+fn atan_out_of_line(x: f64) -> f64 {
+    crate::linalg::elementary::atan(x)
 }
 
 /// Most state components whose slices a batch evaluation keeps on the stack (more are

@@ -431,7 +431,12 @@ impl GaussianState {
 
     /// `P −= P_xz Kᵀ` with the gain of the last [`GaussianState::gain`], kept symmetric.
     pub(crate) fn downdate_covariance(&mut self) -> Result<(), FilterError> {
-        self.cov.gemm(-1.0, &self.parts.pxz, &self.work.gain_t, 1.0);
+        crate::linalg::small::subtract_product(
+            self.cov.nrows(),
+            self.cov.as_mut_slice(),
+            self.parts.pxz.as_slice(),
+            self.work.gain_t.as_slice(),
+        );
         symmetrize(&mut self.cov);
         self.check()
     }
@@ -456,15 +461,12 @@ impl GaussianState {
         );
         parts.observed = meas.count;
         parts.residual.zip_apply(&meas.value, |r, z| *r = z - *r);
-        // P_xz = P Hᵀ.
-        let (m, n) = work.h.shape();
-        for i in 0..n {
-            for j in 0..m {
-                parts.pxz[(i, j)] = (0..n).map(|k| self.cov[(i, k)] * work.h[(j, k)]).sum();
-            }
-        }
+        // P_xz = P Hᵀ, P_zz = R + H P_xz.
+        let n = work.h.ncols();
+        let (h, pxz) = (work.h.as_slice(), parts.pxz.as_mut_slice());
+        crate::linalg::small::times_transpose(n, self.cov.as_slice(), h, pxz);
         parts.pzz.copy_from(&meas.noise_cov);
-        parts.pzz.gemm(1.0, &work.h, &parts.pxz, 1.0);
+        crate::linalg::small::add_product(n, parts.pzz.as_mut_slice(), h, pxz);
     }
 
     /// The Kalman update with h linearised at the current mean (KF, EKF):

@@ -339,10 +339,13 @@ impl AffineMap {
         (mean, cov): (&mut DVector<f64>, &mut DMatrix<f64>),
         jacobian: &mut [f64],
     ) {
-        mean.copy_from(&self.b);
-        mean.gemv(1.0, &self.a, m, 1.0);
-        self.pat.gemm(1.0, p, &self.at, 0.0);
-        cov.gemm(1.0, &self.a, &self.pat, 0.0);
+        crate::linalg::small::affine_moments(
+            m.len(),
+            (self.a.as_slice(), self.b.as_slice()),
+            (m.as_slice(), p.as_slice()),
+            self.pat.as_mut_slice(),
+            (mean.as_mut_slice(), cov.as_mut_slice()),
+        );
         jacobian.copy_from_slice(self.at.as_slice());
     }
 }

@@ -141,6 +141,25 @@ impl SigmaPoints {
             }
         }
     }
+
+    /// The cross-covariance of the points of the last [`SigmaPoints::place`] with `images`
+    /// (component-major), `out[(r, s)] = Σᵢ Wᵢᶜ (χ_r,i − m_r)(a_s,i − ā_s)`, from the points'
+    /// construction: `χ₀ − m = 0` and `χ_{±i} − m = ±√(n+λ) Lᵢ`, so that the images' mean
+    /// cancels and `out = W √(n+λ) L D` with `D_is = a_s,+i − a_s,−i` — a triangular product in
+    /// place of a sum over the 2n + 1 points per entry.
+    fn cross_with_points(&self, w: &Weights, images: &[f64], out: &mut DMatrix<f64>) {
+        let (n, c) = (self.factor.nrows(), self.count);
+        let scale = w.rest * w.spread;
+        let l = self.factor.as_slice();
+        for (s, row) in images.chunks_exact(c).enumerate() {
+            let (plus, minus) = row[1..].split_at(n);
+            for r in 0..n {
+                // Row r of the lower-triangular L: L(r, i) at i n + r, i ≤ r.
+                let v: f64 = (0..=r).map(|i| l[i * n + r] * (plus[i] - minus[i])).sum();
+                out[(r, s)] = scale * v;
+            }
+        }
+    }
 }
 
 /// The unscented Kalman filter.
@@ -347,12 +366,7 @@ impl Ukf {
         sigma.mean(w, zs, zhat);
         sigma.cross_cov(w, (zs, zhat), (zs, zhat), &mut parts.pzz);
         parts.pzz += &meas.noise_cov;
-        sigma.cross_cov(
-            w,
-            (&sigma.points, state.mean.as_slice()),
-            (zs, zhat),
-            &mut parts.pxz,
-        );
+        sigma.cross_with_points(w, zs, &mut parts.pxz);
         for (r, z) in zhat.iter_mut().zip(meas.value.iter()) {
             *r = z - *r;
         }
