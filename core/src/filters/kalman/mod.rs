@@ -500,6 +500,9 @@ impl GaussianState {
             };
             return self.predict_transitions(&step, dt, &mut propagate::linearized_map);
         }
+        if let (1, None, Some(q)) = (model.n, &self.moments.sensitivity, q.constant()) {
+            return self.predict_scalar(model, q[(0, 0)], dt, substeps);
+        }
         self.predict_with(dt, substeps, |at, rates, jacobian| {
             propagate::linearized_rates(model, q, jacobian, at, rates);
             Ok(())
@@ -576,6 +579,39 @@ impl GaussianState {
             &mut self.moments,
             rates,
         )?;
+        self.check()
+    }
+
+    /// [`GaussianState::predict_linearized`] of a scalar state with a constant Q, when no
+    /// sensitivity is tracked: [`propagate::rk4_moments`] of [`propagate::linearized_rates`] on
+    /// two numbers (`dm/dt = f(m)`, `dP/dt = 2 f′(m) P + Q`), the same operations in the same
+    /// order — so the same bits — without the n-dimensional storage.
+    fn predict_scalar(
+        &mut self,
+        model: &crate::model::Model,
+        q: f64,
+        dt: f64,
+        substeps: usize,
+    ) -> Result<(), FilterError> {
+        let h = dt / substeps as f64;
+        let rates = |m: f64, p: f64| {
+            let (mut f, mut a) = ([0.0], [0.0]);
+            model.drift.eval_with_jacobian(&[m], &mut f, &mut a);
+            (f[0], 2.0 * (a[0] * p) + q)
+        };
+        let (mut m, mut p) = (self.mean[0], self.cov[(0, 0)]);
+        for _ in 0..substeps {
+            let k0 = rates(m, p);
+            let half = 0.5 * h;
+            let k1 = rates(m + half * k0.0, p + half * k0.1);
+            let k2 = rates(m + half * k1.0, p + half * k1.1);
+            let k3 = rates(m + h * k2.0, p + h * k2.1);
+            let sixth = h / 6.0;
+            m += sixth * (k0.0 + 2.0 * (k1.0 + k2.0) + k3.0);
+            p += sixth * (k0.1 + 2.0 * (k1.1 + k2.1) + k3.1);
+        }
+        self.mean[0] = m;
+        self.cov[(0, 0)] = p;
         self.check()
     }
 
@@ -771,6 +807,47 @@ impl DrivenStep {
 mod tests {
     use super::{InnovationWindow, NIS_WINDOW};
     use crate::testing::test;
+
+    /// The scalar prediction gives the general RK4's bits: one state predicted both ways (the
+    /// general path taken by tracking the transition's sensitivity, which changes nothing in
+    /// m and P).
+    #[test]
+    fn the_scalar_prediction_is_the_general_one_to_the_bit() {
+        use crate::model::{Model, Noise};
+        let model = Model::from_text(&["x - x^3 + 0.3*sin(x)"], &["x"], Noise::discrete(0.1))
+            .unwrap()
+            .with_diffusion(nalgebra::DMatrix::from_element(1, 1, 0.7))
+            .unwrap();
+        let q = model.process_noise();
+        let start = |track: bool| {
+            let mut state = super::GaussianState::initial(
+                nalgebra::DVector::from_element(1, 0.8),
+                nalgebra::DMatrix::from_element(1, 1, 0.3),
+                &super::GaussianInit::default(),
+                1,
+            );
+            if track {
+                state.track_transitions();
+            }
+            state
+        };
+        let (mut scalar, mut general) = (start(false), start(true));
+        for dt in [0.1, 0.25, 0.03] {
+            scalar.predict_linearized(&model, &q, dt, 4).unwrap();
+            general.predict_linearized(&model, &q, dt, 4).unwrap();
+            assert_eq!(
+                scalar.mean[0].to_bits(),
+                general.mean[0].to_bits(),
+                "dt = {dt}"
+            );
+            assert_eq!(
+                scalar.cov[(0, 0)].to_bits(),
+                general.cov[(0, 0)].to_bits(),
+                "dt = {dt}"
+            );
+        }
+        assert!(scalar.mean[0] != 0.8, "the state moved");
+    }
 
     /// A push undone by a rollback leaves the window as it was — its mean, and the means
     /// after the same later pushes — at every position of the ring, the wrap included.
