@@ -35,7 +35,7 @@ const fn size<const N: usize>(n: usize) -> usize {
 }
 
 /// The lower Cholesky factor L of the n × n matrix `a` into `l` (its strict upper triangle
-/// left as it was), one division per column; `false` when a pivot is not positive and finite
+/// left as it was), products by `1/L_jj` below the diagonal; `false` when a pivot is not positive and finite
 /// (a not positive definite or not finite), `l` then partly written.
 pub(crate) fn cholesky(n: usize, a: &[f64], l: &mut [f64]) -> bool {
     unrolled!(n, cholesky_of(a, l))
@@ -53,9 +53,11 @@ fn cholesky_of<const N: usize>(n: usize, a: &[f64], l: &mut [f64]) -> bool {
         if !(d > 0.0 && d.is_finite()) {
             return false;
         }
-        let d = super::elementary::sqrt(d);
-        l[j * n + j] = d;
-        let inv = 1.0 / d;
+        // 1/√d as √d · (1/d): the root and the division side by side, not one after the
+        // other (the factorisation is a chain of them, column after column).
+        let (root, reciprocal) = (super::elementary::sqrt(d), 1.0 / d);
+        l[j * n + j] = root;
+        let inv = root * reciprocal;
         for i in j + 1..n {
             let mut v = a[j * n + i];
             for k in 0..j {
@@ -177,13 +179,13 @@ pub(crate) fn subtract_product(n: usize, p: &mut [f64], c: &[f64], kt: &[f64]) {
 fn subtract_product_of<const N: usize>(n: usize, p: &mut [f64], c: &[f64], kt: &[f64]) {
     let n = size::<N>(n);
     let k = c.len() / n.max(1);
-    for j in 0..n {
-        for i in 0..n {
-            let mut v = 0.0;
-            for s in 0..k {
-                v += c[s * n + i] * kt[j * k + s];
+    // One rank-one update per column s of C: the loops over i and j of constant length.
+    for (s, column) in c.chunks_exact(n).enumerate() {
+        for j in 0..n {
+            let w = kt[j * k + s];
+            for i in 0..n {
+                p[j * n + i] -= column[i] * w;
             }
-            p[j * n + i] -= v;
         }
     }
 }

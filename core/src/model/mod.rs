@@ -167,7 +167,10 @@ impl Dynamics {
             ));
         };
         let periods = dt / period;
-        let k = libm::round(periods);
+        // The nearest integer by adding and taking away 1.5·2⁵² (exact below 2⁵¹; a count that
+        // large, NaN or a half-way one is refused below either way).
+        const ROUND: f64 = 6_755_399_441_055_744.0;
+        let k = (periods + ROUND) - ROUND;
         if (0.0..=MAX_TRANSITIONS as f64).contains(&k) && libm::fabs(periods - k) <= 1e-6 {
             Ok(k as usize)
         } else {

@@ -322,8 +322,14 @@ impl GaussianState {
     /// that [`GaussianState::restore`] can undo a step that fails; the step to come starts
     /// with a log-likelihood of 0 (nothing observed yet).
     pub(crate) fn save(&mut self) {
-        self.saved.0.copy_from(&self.mean);
-        self.saved.1.copy_from(&self.cov);
+        self.saved
+            .0
+            .as_mut_slice()
+            .copy_from_slice(self.mean.as_slice());
+        self.saved
+            .1
+            .as_mut_slice()
+            .copy_from_slice(self.cov.as_slice());
         self.saved.2 = self.innovations.mark();
         self.saved.3 = self.log_likelihood;
         self.log_likelihood = 0.0;
@@ -359,8 +365,15 @@ impl GaussianState {
         self.innovations.push(nis, self.parts.observed);
         let log_density = self.innovation_log_density(nis);
         self.record_log_likelihood(log_density, meas)?;
-        self.mean
-            .gemv_tr(1.0, &self.work.gain_t, &self.parts.residual, 1.0);
+        // m += K r: Kᵀ's column i (contiguous) against r.
+        let (gain_t, r) = (&self.work.gain_t, self.parts.residual.as_slice());
+        for (m, column) in self
+            .mean
+            .iter_mut()
+            .zip(gain_t.as_slice().chunks_exact(r.len()))
+        {
+            *m += column.iter().zip(r).map(|(k, r)| k * r).sum::<f64>();
+        }
         self.downdate_covariance()
     }
 

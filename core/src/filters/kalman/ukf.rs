@@ -365,7 +365,8 @@ impl Ukf {
         let zhat = parts.residual.as_mut_slice();
         sigma.mean(w, zs, zhat);
         sigma.cross_cov(w, (zs, zhat), (zs, zhat), &mut parts.pzz);
-        parts.pzz += &meas.noise_cov;
+        let noise = meas.noise_cov.as_slice();
+        parts.pzz.iter_mut().zip(noise).for_each(|(p, r)| *p += r);
         sigma.cross_with_points(w, zs, &mut parts.pxz);
         for (r, z) in zhat.iter_mut().zip(meas.value.iter()) {
             *r = z - *r;
