@@ -33,6 +33,9 @@ pub(crate) struct MeasurementForm {
     offset: DVector<f64>,
     noise_cov: DMatrix<f64>,
     current: Measurement,
+    /// Whether `current`'s R is the constant `noise_cov` as it stands (no component was
+    /// missing from the last measurement), so that the next need not copy it again.
+    current_is_constant: bool,
 }
 
 /// The measurement equation for one observation.
@@ -105,6 +108,7 @@ impl MeasurementForm {
             offset,
             noise_cov,
             current,
+            current_is_constant: false,
         })
     }
 
@@ -147,9 +151,14 @@ impl MeasurementForm {
         }
         let current = &mut self.current;
         current.scale = if self.continuous { obs.dt } else { 1.0 };
-        current.noise_cov.copy_from(&self.noise_cov);
-        if self.continuous {
-            current.noise_cov *= obs.dt;
+        // A constant R that the last measurement left whole (all its components seen) is
+        // already in place.
+        let constant = !self.continuous && current.state_noise.is_none();
+        if !(constant && self.current_is_constant) {
+            current.noise_cov.copy_from(&self.noise_cov);
+            if self.continuous {
+                current.noise_cov *= obs.dt;
+            }
         }
         current.count = 0;
         for (i, (z, o)) in obs.value.iter().zip(&self.offset).enumerate() {
@@ -164,6 +173,7 @@ impl MeasurementForm {
                 current.noise_cov[(i, i)] = 1.0;
             }
         }
+        self.current_is_constant = constant && current.count == current.observed.len();
         if current.scale == 0.0 {
             // An increment over no time: nothing to assimilate.
             return Ok(None);

@@ -79,15 +79,18 @@ impl SigmaPoints {
     ) -> Result<(), FilterError> {
         let (n, c) = (m.len(), self.count);
         crate::linalg::lower_cholesky_checked(p, &mut self.factor, "covariance")?;
-        let l = &self.factor;
-        for j in 0..n {
-            let row = &mut self.points[j * c..(j + 1) * c];
-            row[0] = m[j];
+        let l = self.factor.as_slice();
+        for (j, row) in self.points.chunks_exact_mut(c).take(n).enumerate() {
+            let (centre, rest) = row.split_first_mut().expect("2n + 1 points");
+            let (plus, minus) = rest.split_at_mut(n);
+            let mj = m[j];
+            *centre = mj;
+            // Only the lower triangle of the factor is L: L(j, i) at i n + j for i ≤ j; above
+            // it the points keep m's component (m ± 0).
             for i in 0..n {
-                // Only the lower triangle of the factor is L.
-                let v = if j >= i { l[(j, i)] * w.spread } else { 0.0 };
-                row[1 + i] = m[j] + v;
-                row[1 + n + i] = m[j] - v;
+                let v = if i <= j { l[i * n + j] * w.spread } else { 0.0 };
+                plus[i] = mj + v;
+                minus[i] = mj - v;
             }
         }
         Ok(())
