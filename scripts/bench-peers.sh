@@ -25,7 +25,8 @@ rm -f target/wheels/zakai-*.whl
 "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --no-deps --force-reinstall target/wheels/zakai-*.whl
 cargo build -q --release -p zakai-cli
-zakai=target/release/zakai
+# Where cargo put it (CARGO_TARGET_DIR, as the test command sets it, or ./target).
+zakai="${CARGO_TARGET_DIR:-target}/release/zakai"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

@@ -34,6 +34,29 @@ const fn size<const N: usize>(n: usize) -> usize {
     }
 }
 
+/// `dst.copy_from_slice(src)`, of a constant length (moves, not a call to `memmove`) for the
+/// vectors and matrices of states of one to four components (lengths 1–4, 9 and 16).
+#[inline(always)]
+pub(crate) fn copy(dst: &mut [f64], src: &[f64]) {
+    #[inline(always)]
+    fn fixed<const L: usize>(dst: &mut [f64], src: &[f64]) {
+        let (dst, src): (&mut [f64; L], &[f64; L]) = (
+            dst.try_into().expect("equal lengths"),
+            src.try_into().expect("equal lengths"),
+        );
+        *dst = *src;
+    }
+    match src.len() {
+        1 => fixed::<1>(dst, src),
+        2 => fixed::<2>(dst, src),
+        3 => fixed::<3>(dst, src),
+        4 => fixed::<4>(dst, src),
+        9 => fixed::<9>(dst, src),
+        16 => fixed::<16>(dst, src),
+        _ => dst.copy_from_slice(src),
+    }
+}
+
 /// The lower Cholesky factor L of the n × n matrix `a` into `l` (its strict upper triangle
 /// left as it was), products by `1/L_jj` below the diagonal; `false` when a pivot is not positive and finite
 /// (a not positive definite or not finite), `l` then partly written.

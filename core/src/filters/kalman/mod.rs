@@ -322,14 +322,9 @@ impl GaussianState {
     /// that [`GaussianState::restore`] can undo a step that fails; the step to come starts
     /// with a log-likelihood of 0 (nothing observed yet).
     pub(crate) fn save(&mut self) {
-        self.saved
-            .0
-            .as_mut_slice()
-            .copy_from_slice(self.mean.as_slice());
-        self.saved
-            .1
-            .as_mut_slice()
-            .copy_from_slice(self.cov.as_slice());
+        let copy = crate::linalg::small::copy;
+        copy(self.saved.0.as_mut_slice(), self.mean.as_slice());
+        copy(self.saved.1.as_mut_slice(), self.cov.as_slice());
         self.saved.2 = self.innovations.mark();
         self.saved.3 = self.log_likelihood;
         self.log_likelihood = 0.0;
@@ -385,7 +380,7 @@ impl GaussianState {
         let factor = &self.work.factor;
         -0.5 * nis
             - (0..factor.nrows())
-                .map(|i| libm::log(factor[(i, i)]))
+                .map(|i| crate::linalg::elementary::ln(factor[(i, i)]))
                 .sum::<f64>()
     }
 
@@ -415,7 +410,7 @@ impl GaussianState {
             let quadratic = meas.value.dot(&work.noise_whitened);
             work.noise_factor = chol.unpack_dirty();
             let half_log_det: f64 = (0..work.noise_factor.nrows())
-                .map(|i| libm::log(work.noise_factor[(i, i)]))
+                .map(|i| crate::linalg::elementary::ln(work.noise_factor[(i, i)]))
                 .sum();
             ll -= -0.5 * quadratic
                 - half_log_det
@@ -434,7 +429,7 @@ impl GaussianState {
         } = &self.parts;
         let work = &mut self.work;
         crate::linalg::lower_cholesky_checked(pzz, &mut work.factor, "innovation covariance")?;
-        work.whitened.copy_from(residual);
+        crate::linalg::small::copy(work.whitened.as_mut_slice(), residual.as_slice());
         lower_cholesky_solve(&work.factor, &mut work.whitened);
         // K = P_xz P_zz⁻¹  ⇔  P_zz Kᵀ = P_xzᵀ, column by column.
         work.gain_t.tr_copy_from(pxz);
@@ -478,7 +473,7 @@ impl GaussianState {
         let n = work.h.ncols();
         let (h, pxz) = (work.h.as_slice(), parts.pxz.as_mut_slice());
         crate::linalg::small::times_transpose(n, self.cov.as_slice(), h, pxz);
-        parts.pzz.copy_from(&meas.noise_cov);
+        crate::linalg::small::copy(parts.pzz.as_mut_slice(), meas.noise_cov.as_slice());
         crate::linalg::small::add_product(n, parts.pzz.as_mut_slice(), h, pxz);
     }
 

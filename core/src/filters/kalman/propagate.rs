@@ -262,8 +262,8 @@ pub(crate) fn transition(
     if let Some(w) = &model.transition_mixture {
         km[0] += w.mean();
     }
-    m.copy_from(&km[0]);
-    p.copy_from(&kp[0]);
+    crate::linalg::small::copy(m.as_mut_slice(), km[0].as_slice());
+    crate::linalg::small::copy(p.as_mut_slice(), kp[0].as_slice());
     crate::linalg::symmetrize(p);
     if let Some(s) = sensitivity.as_mut() {
         s.stage(0, 0.0, jacobian);

@@ -132,7 +132,12 @@ fn gaussian_log_density(
         .clone()
         .cholesky()
         .ok_or(FilterError::NotPositiveDefinite { what })?;
-    let half_log_det: f64 = chol.l().diagonal().iter().map(|v| libm::log(*v)).sum();
+    let half_log_det: f64 = chol
+        .l()
+        .diagonal()
+        .iter()
+        .map(|v| crate::linalg::elementary::ln(*v))
+        .sum();
     let whitened = chol.solve(r);
     let k = r.len() as f64;
     let value = -0.5 * (k * crate::model::measurement::LN_TAU + r.dot(&whitened)) - half_log_det;
