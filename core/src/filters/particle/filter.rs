@@ -526,13 +526,20 @@ impl Pf {
                 u,
                 &mut self.starts,
                 &mut self.ancestors,
+                &mut self.resampled,
             );
             for a in &mut self.ancestors {
                 *a = self.order[*a];
             }
             unique
         } else {
-            systematic_ancestors(&self.weights, u, &mut self.starts, &mut self.ancestors)
+            systematic_ancestors(
+                &self.weights,
+                u,
+                &mut self.starts,
+                &mut self.ancestors,
+                &mut self.resampled,
+            )
         };
         for d in 0..n {
             let from = &self.particles[d * count..(d + 1) * count];
@@ -598,7 +605,8 @@ crate::linalg::simd::per_node_kernel! {
 
 /// Systematic resampling's ancestors: points `t_j = (u + j)/N` on the CDF `c_i` of the
 /// normalised weights; slot j copies the particle i with `c_{i−1} < t_j ≤ c_i`, written to
-/// `ancestors` (N); returns how many particles have copies. `starts` (N + 1) is scratch.
+/// `ancestors` (N); returns how many particles have copies. `starts` (N + 1, all zero, and
+/// left so) and `running` (at least N − N/4) are scratch.
 ///
 /// Without a branch per copy (a walk that copies while the next point lies below the CDF
 /// mispredicts on most particles: a third of the particle filter's step at 10⁴ particles):
@@ -612,23 +620,98 @@ fn systematic_ancestors(
     u: f64,
     starts: &mut [usize],
     ancestors: &mut [usize],
+    running: &mut [f64],
 ) -> usize {
     let count = weights.len();
     let slots = count as f64;
-    starts.fill(0);
+    let end_of = |c: f64| {
+        // `max` takes 0 for a NaN, so the value lies in [0, N]: truncated without the
+        // saturating conversion's range checks.
+        let slot = (slots * c - u + 1.0).max(0.0).min(slots);
+        // SAFETY: `slot` is finite and within [0, N], N = count < 2⁶³ (through i64: one
+        // instruction, where the conversion to an unsigned integer takes a branch-free pair).
+        unsafe { slot.to_int_unchecked::<i64>() as usize }
+    };
+    // Four independent chains of additions instead of one: the CDF of the first quarter, and
+    // the other quarters' running sums from 0 (into `running`), each quarter's CDF the last
+    // value of the one before plus them — non-decreasing across the quarters, as the slots
+    // need.
+    const CHAINS: usize = 4;
+    let quarter = count / CHAINS;
+    let (first, rest) = weights.split_at(quarter);
+    let running = &mut running[..rest.len()];
     let (mut cumulative, mut start, mut unique) = (0.0, 0, 0);
-    for (i, w) in weights.iter().enumerate() {
+    let mut step = |i: usize, c: f64, start: &mut usize| {
+        let end = end_of(c);
+        starts[*start] = i;
+        unique += usize::from(end > *start);
+        *start = end;
+    };
+    // The later quarters' sums side by side with the first's CDF (the last quarter also
+    // takes the remainder, finished after).
+    let mut sums = [0.0; CHAINS - 1];
+    for (i, w) in first.iter().enumerate() {
         cumulative += w;
-        let end = (slots * cumulative - u + 1.0).clamp(0.0, slots) as usize;
-        starts[start] = i;
-        unique += usize::from(end > start);
-        start = end;
+        for (b, sum) in sums.iter_mut().enumerate() {
+            let at = b * quarter + i;
+            *sum += rest[at];
+            running[at] = *sum;
+        }
+        step(i, cumulative, &mut start);
+    }
+    let last = (CHAINS - 2) * quarter;
+    for at in last + quarter..rest.len() {
+        sums[CHAINS - 2] += rest[at];
+        running[at] = sums[CHAINS - 2];
+    }
+    // Later quarter b covers `running[b q..(b + 1) q]`, the last one to the end.
+    for b in 0..CHAINS - 1 {
+        let (from, to) = (
+            b * quarter,
+            if b + 2 == CHAINS {
+                rest.len()
+            } else {
+                (b + 1) * quarter
+            },
+        );
+        let base = cumulative;
+        for (at, r) in running[from..to].iter().enumerate() {
+            step(quarter + from + at, base + r, &mut start);
+        }
+        if to > from {
+            cumulative = base + running[to - 1];
+        }
     }
     starts[start] = count - 1;
-    let mut owner = 0;
-    for (a, &s) in ancestors.iter_mut().zip(starts.iter()) {
-        owner = owner.max(s);
-        *a = owner;
+    // The owners: a running maximum over the slots, in CHAINS blocks side by side (each
+    // block's own maximum, then the blocks before it carried in), the slots zeroed again for
+    // the next call as they are read.
+    let mut owners = [0usize; CHAINS];
+    let take = |at: usize, owner: &mut usize, starts: &mut [usize], ancestors: &mut [usize]| {
+        *owner = (*owner).max(starts[at]);
+        starts[at] = 0;
+        ancestors[at] = *owner;
+    };
+    for k in 0..quarter {
+        for (b, owner) in owners.iter_mut().enumerate() {
+            take(b * quarter + k, owner, starts, ancestors);
+        }
+    }
+    for at in CHAINS * quarter..count {
+        take(at, &mut owners[CHAINS - 1], starts, ancestors);
+    }
+    starts[count] = 0;
+    let mut carry = owners[0];
+    for b in 1..CHAINS {
+        let to = if b + 1 == CHAINS {
+            count
+        } else {
+            (b + 1) * quarter
+        };
+        ancestors[b * quarter..to]
+            .iter_mut()
+            .for_each(|a| *a = (*a).max(carry));
+        carry = carry.max(owners[b]);
     }
     unique
 }
@@ -886,7 +969,9 @@ mod tests {
             let total: f64 = raw.iter().sum();
             let weights: Vec<f64> = raw.iter().map(|w| w / total).collect();
             let (mut starts, mut ancestors) = (vec![0; n + 1], vec![0; n]);
-            let unique = systematic_ancestors(&weights, u, &mut starts, &mut ancestors);
+            let mut running = vec![0.0; n];
+            let unique =
+                systematic_ancestors(&weights, u, &mut starts, &mut ancestors, &mut running);
             let expected = walk(&weights, u);
             assert_eq!(ancestors, expected, "N = {n}, u = {u}");
             let mut distinct = expected.clone();
@@ -899,7 +984,7 @@ mod tests {
         weights[17] = 1.0;
         let (mut starts, mut ancestors) = (vec![0; 51], vec![0; 50]);
         assert_eq!(
-            systematic_ancestors(&weights, 0.4, &mut starts, &mut ancestors),
+            systematic_ancestors(&weights, 0.4, &mut starts, &mut ancestors, &mut [0.0; 50]),
             1
         );
         assert!(ancestors.iter().all(|&a| a == 17));
