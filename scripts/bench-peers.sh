@@ -50,7 +50,15 @@ def ukf(s):
 def qiem(s):
     s["time"].update(t_final=0.2, dt_obs=1e-4)
     s["methods"] = [{"method": "qiem", "points": [2001], "dt": 1e-4}]
-for name, change in [("pf", pf), ("ukf", ukf), ("qiem", qiem)]:
+def qiem2d(s):
+    # Two independent cubic sensors: dx_i = dv_i, dy_i = x_i^3 dt + dw_i on [-4, 4]^2.
+    s["model"].update(drift=["0", "0"], observation=["x1^3", "x2^3"])
+    s["prior"].update(mean=[1.0, 1.0], cov=[[0.1, 0.0], [0.0, 0.1]])
+    s["initial_state"] = [1.0, 1.0]
+    s["domain"] = [[-4.0, 4.0], [-4.0, 4.0]]
+    s["time"].update(t_final=0.02, dt_obs=1e-4)
+    s["methods"] = [{"method": "qiem", "points": [256, 256], "dt": 1e-4}]
+for name, change in [("pf", pf), ("ukf", ukf), ("qiem", qiem), ("qiem2d", qiem2d)]:
     scenario(name, change)
 PY
 
@@ -62,19 +70,20 @@ zakai_step() {
   done | sort -g | head -n 1
 }
 declare -A ours
-for w in pf ukf qiem; do ours[$w]=$(zakai_step "$w"); done
+for w in pf ukf qiem qiem2d; do ours[$w]=$(zakai_step "$w"); done
 peers=$("$venv/bin/python" scripts/peers/peers.py)
 from_python=$(cd scripts/peers && "../../$venv/bin/python" from_python.py)
 
-"$venv/bin/python" - "$peers" "$from_python" "${ours[pf]}" "${ours[ukf]}" "${ours[qiem]}" <<'PY'
+"$venv/bin/python" - "$peers" "$from_python" "${ours[pf]}" "${ours[ukf]}" "${ours[qiem]}" "${ours[qiem2d]}" <<'PY'
 import json, sys
 peers = json.loads(sys.argv[1])
 from_python = json.loads(sys.argv[2])
-ours = dict(zip(["pf", "ukf", "qiem"], map(float, sys.argv[3:6])))
+ours = dict(zip(["pf", "ukf", "qiem", "qiem2d"], map(float, sys.argv[3:7])))
 names = {
     "pf": ("bootstrap PF, 10^4 particles, resampling every step", "NumPy"),
     "ukf": ("UKF 1-D, z = x^3 + v, predict + update", "FilterPy"),
     "qiem": ("QIEM 1-D, 2001 nodes, dt = 1e-4", "SciPy DST"),
+    "qiem2d": ("QIEM 2-D, 256^2 nodes, dt = 1e-4", "SciPy dstn"),
 }
 print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'Zakai/step':>12} {'ratio':>8}")
 for k, (work, peer) in names.items():
@@ -84,6 +93,8 @@ print()
 print("Zakai called from Python (zakai.Filter): a step() call per observation, or run() over all")
 print(f"{'work':<54} {'peer':<10} {'peer/step':>12} {'step()':>10} {'ratio':>7} {'run()':>10} {'ratio':>7}")
 for k, (work, peer) in names.items():
+    if k not in from_python:
+        continue
     p, s, r = peers[k], from_python[k]["step"], from_python[k]["run"]
     print(f"{work:<54} {peer:<10} {p * 1e6:>10.2f}µs {s * 1e6:>8.2f}µs {p / s:>6.1f}× {r * 1e6:>8.2f}µs {p / r:>6.1f}×")
 PY

@@ -8,7 +8,8 @@ scripts/bench-peers.sh times (written for Zakai; see BENCHMARKS.md):
        (Q = dt = 0.01), van der Merwe points alpha = 0.5, beta = 2, kappa = 0: predict + update;
 * qiem the quasi-implicit Yau-Yau step of 000 (18) on 2001 nodes of [-4, 4], f = 0, h = x^3,
        dt = 1e-4: the factor exp(h dy - h^2 dt / 2) (shifted), the Laplacian solved by
-       SciPy's DST-I, normalisation, mean.
+       SciPy's DST-I, normalisation, mean;
+* qiem2d the same on 256^2 nodes of [-4, 4]^2, h = (x1^3, x2^3), dt = 1e-4: SciPy's dstn/idstn.
 
 Prints one JSON object: seconds per step of each.
 """
@@ -17,7 +18,7 @@ import sys
 import time
 
 import numpy as np
-from scipy.fft import dst, idst
+from scipy.fft import dst, dstn, idst, idstn
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 
@@ -114,7 +115,38 @@ def qiem(steps=2000, nodes=2001, dt=1e-4, bounds=(-4.0, 4.0)):
     return best_of(3, run)
 
 
+def qiem2d(steps=200, nodes=256, dt=1e-4, bounds=(-4.0, 4.0)):
+    rng = np.random.default_rng(1)
+    dy = np.stack([simulate(steps, dt, rng)[1] for _ in range(2)], axis=1)
+    ds = (bounds[1] - bounds[0]) / (nodes + 1)
+    axis = bounds[0] + ds * np.arange(1, nodes + 1)
+    # First dimension fastest, as Zakai stores its grid: u[i2, i1].
+    x2, x1 = np.meshgrid(axis, axis, indexing="ij")
+    h1, h2 = x1**3, x2**3
+    half_hh = 0.5 * (h1 * h1 + h2 * h2) * dt
+    j = np.arange(1, nodes + 1)
+    sin2 = np.sin(j * np.pi / (2 * (nodes + 1))) ** 2
+    divisor = 1.0 + dt * (2.0 / ds**2) * (sin2[:, None] + sin2[None, :])
+
+    def run():
+        u = np.exp(-((x1 - 1.0) ** 2 + (x2 - 1.0) ** 2) / 0.2)
+        u /= u.sum() * ds * ds
+        start = time.perf_counter()
+        for k in range(steps):
+            a = h1 * dy[k, 0] + h2 * dy[k, 1] - half_hh
+            u *= np.exp(a - a.max())
+            u = idstn(dstn(u, type=1) / divisor, type=1)
+            np.maximum(u, 0.0, out=u)
+            u /= u.sum() * ds * ds
+            mean = (np.sum(u * x1) * ds * ds, np.sum(u * x2) * ds * ds)
+        elapsed = time.perf_counter() - start
+        assert np.all(np.isfinite(mean))
+        return elapsed / steps
+
+    return best_of(3, run)
+
+
 if __name__ == "__main__":
-    which = sys.argv[1:] or ["pf", "ukf", "qiem"]
+    which = sys.argv[1:] or ["pf", "ukf", "qiem", "qiem2d"]
     out = {name: globals()[name]() for name in which}
     print(json.dumps(out))

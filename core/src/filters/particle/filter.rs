@@ -606,7 +606,7 @@ crate::linalg::simd::per_node_kernel! {
 /// Systematic resampling's ancestors: points `t_j = (u + j)/N` on the CDF `c_i` of the
 /// normalised weights; slot j copies the particle i with `c_{i−1} < t_j ≤ c_i`, written to
 /// `ancestors` (N); returns how many particles have copies. `starts` (N + 1, all zero, and
-/// left so) and `running` (at least N − N/4) are scratch.
+/// left so) and `running` (at least N) are scratch.
 ///
 /// Without a branch per copy (a walk that copies while the next point lies below the CDF
 /// mispredicts on most particles: a third of the particle filter's step at 10⁴ particles):
@@ -623,64 +623,49 @@ fn systematic_ancestors(
     running: &mut [f64],
 ) -> usize {
     let count = weights.len();
-    let slots = count as f64;
-    let end_of = |c: f64| {
-        // `max` takes 0 for a NaN, so the value lies in [0, N]: truncated without the
-        // saturating conversion's range checks.
-        let slot = (slots * c - u + 1.0).max(0.0).min(slots);
-        // SAFETY: `slot` is finite and within [0, N], N = count < 2⁶³ (through i64: one
-        // instruction, where the conversion to an unsigned integer takes a branch-free pair).
-        unsafe { slot.to_int_unchecked::<i64>() as usize }
-    };
-    // Four independent chains of additions instead of one: the CDF of the first quarter, and
-    // the other quarters' running sums from 0 (into `running`), each quarter's CDF the last
-    // value of the one before plus them — non-decreasing across the quarters, as the slots
-    // need.
+    let running = &mut running[..count];
+    // The CDF in four independent chains of additions instead of one: each quarter's running
+    // sums from 0 side by side, then each quarter's CDF the last value of the one before plus
+    // them — non-decreasing across the quarters, as the slots need.
     const CHAINS: usize = 4;
     let quarter = count / CHAINS;
-    let (first, rest) = weights.split_at(quarter);
-    let running = &mut running[..rest.len()];
-    let (mut cumulative, mut start, mut unique) = (0.0, 0, 0);
-    let mut step = |i: usize, c: f64, start: &mut usize| {
-        let end = end_of(c);
-        starts[*start] = i;
-        unique += usize::from(end > *start);
-        *start = end;
-    };
-    // The later quarters' sums side by side with the first's CDF (the last quarter also
-    // takes the remainder, finished after).
-    let mut sums = [0.0; CHAINS - 1];
-    for (i, w) in first.iter().enumerate() {
-        cumulative += w;
+    let mut sums = [0.0; CHAINS];
+    for k in 0..quarter {
         for (b, sum) in sums.iter_mut().enumerate() {
-            let at = b * quarter + i;
-            *sum += rest[at];
-            running[at] = *sum;
+            *sum += weights[b * quarter + k];
+            running[b * quarter + k] = *sum;
         }
-        step(i, cumulative, &mut start);
     }
-    let last = (CHAINS - 2) * quarter;
-    for at in last + quarter..rest.len() {
-        sums[CHAINS - 2] += rest[at];
-        running[at] = sums[CHAINS - 2];
+    for at in CHAINS * quarter..count {
+        sums[CHAINS - 1] += weights[at];
+        running[at] = sums[CHAINS - 1];
     }
-    // Later quarter b covers `running[b q..(b + 1) q]`, the last one to the end.
-    for b in 0..CHAINS - 1 {
-        let (from, to) = (
-            b * quarter,
-            if b + 2 == CHAINS {
-                rest.len()
-            } else {
-                (b + 1) * quarter
-            },
-        );
-        let base = cumulative;
-        for (at, r) in running[from..to].iter().enumerate() {
-            step(quarter + from + at, base + r, &mut start);
+    let mut base = 0.0;
+    for b in 0..CHAINS {
+        let to = if b + 1 == CHAINS {
+            count
+        } else {
+            (b + 1) * quarter
+        };
+        let block = &mut running[b * quarter..to];
+        if b > 0 {
+            block.iter_mut().for_each(|c| *c += base);
         }
-        if to > from {
-            cumulative = base + running[to - 1];
+        if let Some(&last) = block.last() {
+            base = last;
         }
+    }
+    // Each particle's end slot `N c_i − u + 1` in [0, N] (a vector pass), truncated below.
+    slot_ends(running, count as f64, u);
+    // Particle i writes its index at its start e_{i−1}.
+    let (mut start, mut unique) = (0, 0);
+    for (i, e) in running.iter().enumerate() {
+        // SAFETY: `slot_ends` left e finite and within [0, N], N = count < 2⁶³ (through
+        // i64: one instruction, where the conversion to an unsigned integer takes two).
+        let end = unsafe { e.to_int_unchecked::<i64>() as usize };
+        starts[start] = i;
+        unique += usize::from(end > start);
+        start = end;
     }
     starts[start] = count - 1;
     // The owners: a running maximum over the slots, in CHAINS blocks side by side (each
@@ -714,6 +699,17 @@ fn systematic_ancestors(
         carry = carry.max(owners[b]);
     }
     unique
+}
+
+crate::linalg::simd::per_node_kernel! {
+    wide:
+    /// `c ← clamp(N c − u + 1, 0, N)`: the end slots of systematic resampling from the CDF
+    /// (`max` takes 0 for a NaN, so every value ends within [0, N]).
+    fn slot_ends(cdf: &mut [f64], slots: f64, u: f64) {
+        for c in cdf.iter_mut() {
+            *c = (slots * *c - u + 1.0).max(0.0).min(slots);
+        }
+    }
 }
 
 crate::linalg::simd::per_node_kernel! {
