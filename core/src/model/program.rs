@@ -259,10 +259,7 @@ impl Program {
         registers: &mut [f64],
         out: &mut [f64],
     ) {
-        for ins in &self.code {
-            let (dst, a, b) = operands(registers, lanes, ins.dst, &ins.operation, inputs);
-            apply(&ins.operation, dst, a, b);
-        }
+        run_code(&self.code, inputs, lanes, registers);
         match self.results[0] {
             Operand::Const(c) => out[..lanes].fill(c),
             Operand::Var(j) => out[..lanes].copy_from_slice(&inputs[j][..lanes]),
@@ -450,29 +447,41 @@ fn map2(dst: &mut [f64], a: Arg, b: Arg, f: impl Fn(f64, f64) -> f64) {
 
 crate::linalg::simd::per_node_kernel! {
     wide:
-    /// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln`, `abs`,
-    /// `atan` and `sqrt` are monomorphic loops that vectorise (compiled for AVX2 and AVX-512 too, see
-    /// [`crate::linalg::simd`]); other functions are called per value.
-    fn apply(operation: &Operation, dst: &mut [f64], a: Arg<'_>, b: Arg<'_>) {
-        match *operation {
-            Operation::Neg(_) => map1(dst, a, |x| -x),
-            Operation::Unary(f, _) => map1(dst, a, f),
-            Operation::Exp(_) => map1(dst, a, crate::linalg::elementary::exp),
-            Operation::Ln(_) => map1(dst, a, crate::linalg::elementary::ln),
-            Operation::Abs(_) => map1(dst, a, libm::fabs),
-            Operation::Atan(_) => map1(dst, a, crate::linalg::elementary::atan),
-            Operation::Sqrt(_) => map1(dst, a, crate::linalg::elementary::sqrt),
-            Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
-            Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
-            Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
-            Operation::Div(..) => map2(dst, a, b, |x, y| x / y),
-            Operation::PowI(_, k) => match k {
-                2 => map1(dst, a, |x| x * x),
-                3 => map1(dst, a, |x| x * x * x),
-                _ => map1(dst, a, |x| pow_int(x, k)),
-            },
-            Operation::Binary(f, ..) => map2(dst, a, b, f),
+    /// The instructions of a program over one block of `lanes` points: [`apply`]'s passes,
+    /// compiled for AVX2 and AVX-512 too (see [`crate::linalg::simd`]), the CPU asked once per
+    /// block rather than once per instruction — which matters for the few points of a UKF's
+    /// sigma set.
+    fn run_code(code: &[Instruction], inputs: &[&[f64]], lanes: usize, registers: &mut [f64]) {
+        for ins in code {
+            let (dst, a, b) = operands(registers, lanes, ins.dst, &ins.operation, inputs);
+            apply(&ins.operation, dst, a, b);
         }
+    }
+}
+
+/// One pass of `operation` over the block; the arithmetic arms and `exp`, `ln`, `abs`,
+/// `atan` and `sqrt` are monomorphic loops that vectorise; other functions are called per
+/// value.
+#[inline(always)]
+fn apply(operation: &Operation, dst: &mut [f64], a: Arg<'_>, b: Arg<'_>) {
+    match *operation {
+        Operation::Neg(_) => map1(dst, a, |x| -x),
+        Operation::Unary(f, _) => map1(dst, a, f),
+        Operation::Exp(_) => map1(dst, a, crate::linalg::elementary::exp),
+        Operation::Ln(_) => map1(dst, a, crate::linalg::elementary::ln),
+        Operation::Abs(_) => map1(dst, a, libm::fabs),
+        Operation::Atan(_) => map1(dst, a, crate::linalg::elementary::atan),
+        Operation::Sqrt(_) => map1(dst, a, crate::linalg::elementary::sqrt),
+        Operation::Add(..) => map2(dst, a, b, |x, y| x + y),
+        Operation::Sub(..) => map2(dst, a, b, |x, y| x - y),
+        Operation::Mul(..) => map2(dst, a, b, |x, y| x * y),
+        Operation::Div(..) => map2(dst, a, b, |x, y| x / y),
+        Operation::PowI(_, k) => match k {
+            2 => map1(dst, a, |x| x * x),
+            3 => map1(dst, a, |x| x * x * x),
+            _ => map1(dst, a, |x| pow_int(x, k)),
+        },
+        Operation::Binary(f, ..) => map2(dst, a, b, f),
     }
 }
 
