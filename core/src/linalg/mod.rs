@@ -105,19 +105,13 @@ pub(crate) fn lower_cholesky_checked(
     }
 }
 
-/// `x ← (L Lᵀ)⁻¹ x` with L from [`lower_cholesky_into`].
+/// `x ← (L Lᵀ)⁻¹ x` with L from [`lower_cholesky_into`]: forward then back substitution,
+/// reading only the lower triangle of `l` (its diagonal is positive: neither can fail).
 pub(crate) fn lower_cholesky_solve(l: &DMatrix<f64>, x: &mut DVector<f64>) {
-    lower_cholesky_solve_slice(l, x.as_mut_slice());
+    lower_cholesky_solve_columns(l, x.as_mut_slice());
 }
 
-/// [`lower_cholesky_solve`] on a slice (a column of a matrix): forward then back
-/// substitution, reading only the lower triangle of `l` (its diagonal is positive: neither
-/// can fail).
-pub(crate) fn lower_cholesky_solve_slice(l: &DMatrix<f64>, x: &mut [f64]) {
-    lower_cholesky_solve_columns(l, x);
-}
-
-/// [`lower_cholesky_solve_slice`] on each of the consecutive columns of length n in `x` (a
+/// [`lower_cholesky_solve`] on each of the consecutive columns of length n in `x` (a
 /// column-major matrix's storage), with the diagonal's reciprocals taken once for all of them.
 pub(crate) fn lower_cholesky_solve_columns(l: &DMatrix<f64>, x: &mut [f64]) {
     small::cholesky_solve(l.nrows(), l.as_slice(), x);
