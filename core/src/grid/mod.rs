@@ -15,6 +15,8 @@ pub(crate) mod lines;
 /// Odd-length FFTs by vectorised Stockham stages (the DST's half length).
 #[cfg(feature = "std")]
 mod odd_fft;
+/// Tensors in tensor-train format (groundwork for the filters beyond three dimensions).
+pub(crate) mod tt;
 
 use alloc::format;
 use alloc::vec;
