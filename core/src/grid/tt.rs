@@ -235,31 +235,17 @@ impl TensorTrain {
                 }
             })
             .collect();
-        let cores = (0..d)
-            .map(|k| {
-                let (a, b) = (self.slices(k), other.slices(k));
-                let slices: Vec<DMatrix<f64>> = a
-                    .iter()
-                    .zip(&b)
-                    .map(|(ai, bi)| {
-                        let mut s = DMatrix::zeros(ranks[k], ranks[k + 1]);
-                        let (row, col) = (
-                            if k == 0 { 0 } else { ai.nrows() },
-                            if k + 1 == d { 0 } else { ai.ncols() },
-                        );
-                        s.view_mut((0, 0), ai.shape()).copy_from(ai);
-                        s.view_mut((row, col), bi.shape()).copy_from(bi);
-                        s
-                    })
-                    .collect();
-                Self::from_slices(&slices)
-            })
-            .collect();
-        TensorTrain {
-            shape: self.shape.clone(),
-            ranks,
-            cores,
-        }
+        self.slice_by_slice(other, ranks, |k, ai, bi| {
+            // B's block below A's (but in the first core) and right of it (but in the last).
+            let (row, col) = (
+                if k == 0 { 0 } else { ai.nrows() },
+                if k + 1 == d { 0 } else { ai.ncols() },
+            );
+            let mut s = DMatrix::zeros(row + bi.nrows(), col + bi.ncols());
+            s.view_mut((0, 0), ai.shape()).copy_from(ai);
+            s.view_mut((row, col), bi.shape()).copy_from(bi);
+            s
+        })
     }
 
     /// `A ⊙ B` (elementwise): the cores' slices' Kronecker products; ranks multiply (round
@@ -272,13 +258,23 @@ impl TensorTrain {
             .zip(&other.ranks)
             .map(|(a, b)| a * b)
             .collect();
+        self.slice_by_slice(other, ranks, |_, a, b| a.kronecker(b))
+    }
+
+    /// The tensor of `ranks` whose core k has the slices `combine(k, A_k(i), B_k(i))`.
+    fn slice_by_slice(
+        &self,
+        other: &TensorTrain,
+        ranks: Vec<usize>,
+        combine: impl Fn(usize, &DMatrix<f64>, &DMatrix<f64>) -> DMatrix<f64>,
+    ) -> TensorTrain {
         let cores = (0..self.shape.len())
             .map(|k| {
                 let slices: Vec<DMatrix<f64>> = self
                     .slices(k)
                     .iter()
                     .zip(&other.slices(k))
-                    .map(|(a, b)| a.kronecker(b))
+                    .map(|(a, b)| combine(k, a, b))
                     .collect();
                 Self::from_slices(&slices)
             })
