@@ -6,7 +6,7 @@
 //! registers reused once a value is dead. Evaluation runs one pass per instruction over a
 //! block of [`BLOCK`] points (structure of arrays), as NumPy runs one pass per operation over
 //! an array: the arithmetic operators are plain loops the compiler vectorises, and functions
-//! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp` and `ln`
+//! (`sin`, `cos`, …) are called per element without any interpretation per point; `exp`, `ln`,
 //! `atan` and `sqrt` are passes that vectorise ([`crate::linalg::elementary`]), and so is `abs`.
 //!
 //! The per-point value of an expression runs the same operations on scalars, instruction by

@@ -629,6 +629,14 @@ fn systematic_ancestors(
     // them — non-decreasing across the quarters, as the slots need.
     const CHAINS: usize = 4;
     let quarter = count / CHAINS;
+    // Block b is `b q..block_end(b)`, the last one taking the remainder.
+    let block_end = |b: usize| {
+        if b + 1 == CHAINS {
+            count
+        } else {
+            (b + 1) * quarter
+        }
+    };
     let mut sums = [0.0; CHAINS];
     for k in 0..quarter {
         for (b, sum) in sums.iter_mut().enumerate() {
@@ -642,12 +650,7 @@ fn systematic_ancestors(
     }
     let mut base = 0.0;
     for b in 0..CHAINS {
-        let to = if b + 1 == CHAINS {
-            count
-        } else {
-            (b + 1) * quarter
-        };
-        let block = &mut running[b * quarter..to];
+        let block = &mut running[b * quarter..block_end(b)];
         if b > 0 {
             block.iter_mut().for_each(|c| *c += base);
         }
@@ -688,12 +691,7 @@ fn systematic_ancestors(
     starts[count] = 0;
     let mut carry = owners[0];
     for b in 1..CHAINS {
-        let to = if b + 1 == CHAINS {
-            count
-        } else {
-            (b + 1) * quarter
-        };
-        ancestors[b * quarter..to]
+        ancestors[b * quarter..block_end(b)]
             .iter_mut()
             .for_each(|a| *a = (*a).max(carry));
         carry = carry.max(owners[b]);
