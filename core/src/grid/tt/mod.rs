@@ -14,10 +14,18 @@
 //! [`super::TensorGrid`] stores densities.
 #![cfg_attr(not(test), allow(dead_code))]
 
+mod cross;
+mod maxvol;
+mod svd;
+
+pub(crate) use cross::{cross, CrossOptions, CrossReport};
+
 use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::DMatrix;
+
+use svd::{sorted_svd, truncation_rank};
 
 /// A tensor in TT format (module doc).
 #[derive(Clone, Debug, PartialEq)]
@@ -26,83 +34,6 @@ pub(crate) struct TensorTrain {
     /// `r₀ … r_d`, with `r₀ = r_d = 1`.
     ranks: Vec<usize>,
     cores: Vec<Vec<f64>>,
-}
-
-/// The rank at which a truncated SVD with singular values `s` (descending) keeps the error
-/// `(Σ_{j ≥ r} s_j²)^{1/2}` within `threshold`, at least 1 and at most `cap`.
-fn truncation_rank(s: &[f64], threshold: f64, cap: usize) -> usize {
-    let mut tail = 0.0;
-    let mut rank = s.len();
-    for (j, v) in s.iter().enumerate().rev() {
-        tail += v * v;
-        if libm::sqrt(tail) > threshold {
-            break;
-        }
-        rank = j;
-    }
-    rank.clamp(1, cap.max(1)).min(s.len())
-}
-
-/// The SVD of `m` with its singular values in descending order: `(U, s, Vᵀ)`, thin (k =
-/// min(rows, cols) columns of U). By one-sided Jacobi rotations (Hestenes 1958; Demmel &
-/// Veselić 1992, accurate to the singular values' own size) on the taller orientation, not by
-/// nalgebra's `svd(true, true)`: nalgebra 0.35's can return wrong singular values when the
-/// vectors are asked for (dimforge/nalgebra#1172, open: a rank-one 4 × 30 unfolding came back
-/// with σ₁ = 139.5 against its Frobenius norm 119.07 — `decomposes_exactly` below). A column
-/// of zeros gives a zero column of U.
-fn sorted_svd(m: DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>, DMatrix<f64>) {
-    let wide = m.ncols() > m.nrows();
-    let mut a = if wide { m.transpose() } else { m };
-    let (rows, cols) = a.shape();
-    let mut v = DMatrix::<f64>::identity(cols, cols);
-    for _sweep in 0..60 {
-        let mut rotated = false;
-        for p in 0..cols {
-            for q in p + 1..cols {
-                let alpha = a.column(p).norm_squared();
-                let beta = a.column(q).norm_squared();
-                let gamma = a.column(p).dot(&a.column(q));
-                if gamma == 0.0 || libm::fabs(gamma) <= f64::EPSILON * libm::sqrt(alpha * beta) {
-                    continue;
-                }
-                rotated = true;
-                let zeta = (beta - alpha) / (2.0 * gamma);
-                let t =
-                    libm::copysign(1.0, zeta) / (libm::fabs(zeta) + libm::sqrt(1.0 + zeta * zeta));
-                let c = 1.0 / libm::sqrt(1.0 + t * t);
-                let s = c * t;
-                for m in [&mut a, &mut v] {
-                    for i in 0..m.nrows() {
-                        let (x, y) = (m[(i, p)], m[(i, q)]);
-                        m[(i, p)] = c * x - s * y;
-                        m[(i, q)] = s * x + c * y;
-                    }
-                }
-            }
-        }
-        if !rotated {
-            break;
-        }
-    }
-    let norms: Vec<f64> = (0..cols).map(|j| a.column(j).norm()).collect();
-    let mut order: Vec<usize> = (0..cols).collect();
-    order.sort_by(|&x, &y| norms[y].total_cmp(&norms[x]));
-    let s: Vec<f64> = order.iter().map(|&j| norms[j]).collect();
-    let left = DMatrix::from_fn(rows, cols, |i, j| {
-        let (col, sigma) = (order[j], s[j]);
-        if sigma > 0.0 {
-            a[(i, col)] / sigma
-        } else {
-            0.0
-        }
-    });
-    let right = DMatrix::from_fn(cols, cols, |i, j| v[(j, order[i])]);
-    if wide {
-        // mᵀ = L Σ R ⇒ m = Rᵀ Σ Lᵀ.
-        (right.transpose(), s, left.transpose())
-    } else {
-        (left, s, right)
-    }
 }
 
 impl TensorTrain {
@@ -126,7 +57,7 @@ impl TensorTrain {
             let rows = ranks[ranks.len() - 1] * n;
             let cols = rest.len() / rows;
             let (u, s, vt) = sorted_svd(DMatrix::from_column_slice(rows, cols, &rest));
-            let r = truncation_rank(&s, threshold, max_rank);
+            let (r, _) = truncation_rank(&s, threshold, max_rank);
             cores.push(u.columns(0, r).iter().copied().collect());
             // Σ_r V_rᵀ (r × cols), column-major: the next unfolding's storage.
             let mut next = vt.rows(0, r).into_owned();
@@ -138,6 +69,96 @@ impl TensorTrain {
         }
         cores.push(rest);
         ranks.push(1);
+        TensorTrain {
+            shape: shape.to_vec(),
+            ranks,
+            cores,
+        }
+    }
+
+    /// The rank-one tensor `A(i) = Π_k v_k(i_k)`.
+    pub(crate) fn rank_one(vectors: &[Vec<f64>]) -> Self {
+        TensorTrain {
+            shape: vectors.iter().map(Vec::len).collect(),
+            ranks: vec![1; vectors.len() + 1],
+            cores: vectors.to_vec(),
+        }
+    }
+
+    /// Points per dimension.
+    pub(crate) fn shape(&self) -> &[usize] {
+        &self.shape
+    }
+
+    /// `A(i)` at one multi-index: the product of the slices, left to right.
+    pub(crate) fn value_at(&self, idx: &[usize]) -> f64 {
+        let mut row = vec![1.0];
+        for (k, &i) in idx.iter().enumerate() {
+            let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+            let core = &self.cores[k];
+            row = (0..r_next)
+                .map(|b| (0..r).map(|a| row[a] * core[a + r * i + r * n * b]).sum())
+                .collect();
+        }
+        row[0]
+    }
+
+    /// `c A`.
+    pub(crate) fn scaled(&self, c: f64) -> TensorTrain {
+        let mut out = self.clone();
+        out.scale(c);
+        out
+    }
+
+    /// `A ← c A` (the first core scaled).
+    pub(crate) fn scale(&mut self, c: f64) {
+        self.cores[0].iter_mut().for_each(|v| *v *= c);
+    }
+
+    /// The matrix `M` (`n_k × n_k`) applied along dimension k,
+    /// `A'(…, i_k, …) = Σ_j M(i_k, j) A(…, j, …)`: every slice `G_k(i) ← Σ_j M(i, j) G_k(j)`,
+    /// the ranks unchanged (a one-dimensional operator of a tensor-product grid, Kronecker
+    /// factor `I ⊗ ⋯ ⊗ M ⊗ ⋯ ⊗ I`).
+    pub(crate) fn apply_mode(&mut self, k: usize, m: &DMatrix<f64>) {
+        let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+        assert_eq!(m.shape(), (n, n), "an operator of dimension {k}'s points");
+        let transposed = m.transpose();
+        let core = &mut self.cores[k];
+        for b in 0..r_next {
+            let block = &mut core[r * n * b..r * n * (b + 1)];
+            let mixed = DMatrix::from_column_slice(r, n, block) * &transposed;
+            block.copy_from_slice(mixed.as_slice());
+        }
+    }
+
+    /// The tensor on a grid of `shape` equal to `self` in the dimensions `modes` (ascending,
+    /// one per dimension of `self`) and constant along the others: a function of a few
+    /// coordinates on the whole grid. A dimension between two of `modes` carries the rank of
+    /// the cut it sits in (its slices are identity matrices).
+    pub(crate) fn embed(&self, modes: &[usize], shape: &[usize]) -> TensorTrain {
+        assert_eq!(modes.len(), self.shape.len(), "one mode per dimension");
+        let mut ranks = vec![1; shape.len() + 1];
+        let mut cores = Vec::with_capacity(shape.len());
+        let mut next = 0;
+        for (k, &n) in shape.iter().enumerate() {
+            if modes.get(next) == Some(&k) {
+                assert_eq!(self.shape[next], n, "points of dimension {k}");
+                cores.push(self.cores[next].clone());
+                ranks[k + 1] = self.ranks[next + 1];
+                next += 1;
+            } else {
+                let r = ranks[k];
+                let mut core = vec![0.0; r * n * r];
+                for i in 0..n {
+                    for a in 0..r {
+                        core[a + r * i + r * n * a] = 1.0;
+                    }
+                }
+                cores.push(core);
+                ranks[k + 1] = r;
+            }
+        }
+        assert_eq!(next, modes.len(), "modes ascending and within the shape");
         TensorTrain {
             shape: shape.to_vec(),
             ranks,
@@ -289,8 +310,10 @@ impl TensorTrain {
     /// TT-rounding (Oseledets 2011, Algorithm 2, left to right then back): the cores made
     /// left-orthogonal by QR, then truncated SVDs from the last core back, each within
     /// `ε ‖A‖_F / √(d − 1)` — the result within `ε ‖A‖_F` of A — and each rank at most
-    /// `max_rank`.
-    pub(crate) fn round(&mut self, eps: f64, max_rank: usize) {
+    /// `max_rank`. Returns the error made relative to ‖A‖_F, `(Σ_k tail_k²)^{1/2} / ‖A‖_F`
+    /// (exact: the truncations are orthogonal to each other), more than ε only where the
+    /// rank cap cut.
+    pub(crate) fn round(&mut self, eps: f64, max_rank: usize) -> f64 {
         let d = self.shape.len();
         for k in 0..d - 1 {
             let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
@@ -305,11 +328,13 @@ impl TensorTrain {
         }
         let norm = libm::sqrt(self.cores[d - 1].iter().map(|v| v * v).sum::<f64>());
         let threshold = eps * norm / libm::sqrt((d.max(2) - 1) as f64);
+        let mut discarded = 0.0;
         for k in (1..d).rev() {
             let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
             let right = DMatrix::from_column_slice(r, n * r_next, &self.cores[k]);
             let (u, s, vt) = sorted_svd(right);
-            let rank = truncation_rank(&s, threshold, max_rank);
+            let (rank, tail) = truncation_rank(&s, threshold, max_rank);
+            discarded += tail;
             self.cores[k] = vt.rows(0, rank).into_owned().as_slice().to_vec();
             let mut us = u.columns(0, rank).into_owned();
             for (j, mut column) in us.column_iter_mut().enumerate() {
@@ -319,6 +344,11 @@ impl TensorTrain {
             let left = DMatrix::from_column_slice(r_prev * n_prev, r, &self.cores[k - 1]);
             self.cores[k - 1] = (left * us).as_slice().to_vec();
             self.ranks[k] = rank;
+        }
+        if norm > 0.0 {
+            libm::sqrt(discarded) / norm
+        } else {
+            0.0
         }
     }
 
@@ -341,21 +371,39 @@ impl TensorTrain {
         m
     }
 
+    /// `Π_{k ∈ range} Σ_i G_k(i)`: the dimensions of `range` summed out.
+    fn summed(&self, range: core::ops::Range<usize>) -> DMatrix<f64> {
+        let mut m = DMatrix::identity(self.ranks[range.start], self.ranks[range.start]);
+        for k in range {
+            m = &m * self.weighted_sum(k, &vec![1.0; self.shape[k]]);
+        }
+        m
+    }
+
     /// The marginal of dimension j: `Σ_{i_k, k ≠ j} A(i)` for each `i_j`.
     pub(crate) fn marginal(&self, j: usize) -> Vec<f64> {
-        let ones = |k: usize| vec![1.0; self.shape[k]];
-        let mut left = DMatrix::from_element(1, 1, 1.0);
-        for k in 0..j {
-            left = &left * self.weighted_sum(k, &ones(k));
-        }
-        let mut right = DMatrix::from_element(1, 1, 1.0);
-        for k in (j + 1..self.shape.len()).rev() {
-            right = self.weighted_sum(k, &ones(k)) * &right;
-        }
+        let left = self.summed(0..j);
+        let right = self.summed(j + 1..self.shape.len());
         self.slices(j)
             .iter()
             .map(|s| (&left * s * &right)[(0, 0)])
             .collect()
+    }
+
+    /// The marginal of dimensions j < l: `Σ` over the others for each `(i_j, i_l)`, as an
+    /// `n_j × n_l` array with `i_j` fastest.
+    pub(crate) fn marginal_2d(&self, j: usize, l: usize) -> Vec<f64> {
+        assert!(j < l && l < self.shape.len(), "two dimensions in order");
+        let left = self.summed(0..j);
+        let middle = self.summed(j + 1..l);
+        let right = self.summed(l + 1..self.shape.len());
+        let first: Vec<DMatrix<f64>> = self.slices(j).iter().map(|s| &left * s * &middle).collect();
+        let second: Vec<DMatrix<f64>> = self.slices(l).iter().map(|s| s * &right).collect();
+        let mut out = Vec::with_capacity(first.len() * second.len());
+        for b in &second {
+            out.extend(first.iter().map(|a| (a * b)[(0, 0)]));
+        }
+        out
     }
 }
 
@@ -512,6 +560,210 @@ mod tests {
                 }
             }
             assert!(a.storage() < fa.len() || shape.len() == 2);
+        }
+    }
+
+    /// A multi-index from its flat position (first index fastest).
+    fn unflatten(mut flat: usize, shape: &[usize]) -> Vec<usize> {
+        shape
+            .iter()
+            .map(|&n| {
+                let i = flat % n;
+                flat /= n;
+                i
+            })
+            .collect()
+    }
+
+    /// The full array of `f` at the nodes `i / (n − 1)` of `shape`.
+    fn tabulated(shape: &[usize], f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
+        let len: usize = shape.iter().product();
+        (0..len)
+            .map(|flat| {
+                let x: Vec<f64> = unflatten(flat, shape)
+                    .iter()
+                    .zip(shape)
+                    .map(|(&i, &n)| i as f64 / (n - 1) as f64)
+                    .collect();
+                f(&x)
+            })
+            .collect()
+    }
+
+    /// A random tensor of the given ranks (entries uniform in [−1, 1) from a fixed seed).
+    fn random_tt(shape: &[usize], inner: &[usize], seed: u64) -> TensorTrain {
+        use rand::RngExt;
+        let mut rng = crate::random::rng_from_seed(seed);
+        let mut ranks = vec![1];
+        ranks.extend_from_slice(inner);
+        ranks.push(1);
+        let cores = (0..shape.len())
+            .map(|k| {
+                (0..ranks[k] * shape[k] * ranks[k + 1])
+                    .map(|_| rng.random_range(-1.0..1.0))
+                    .collect()
+            })
+            .collect();
+        TensorTrain {
+            shape: shape.to_vec(),
+            ranks,
+            cores,
+        }
+    }
+
+    /// Rounding's bound as a property: over random tensors of 2–5 dimensions and ranks up
+    /// to 6, and tolerances from 10⁻¹⁰ to 0.5, the rounded tensor is within ε‖A‖ of A
+    /// (plus 10⁻¹² for the arithmetic), the reported error is the error made, and no rank
+    /// exceeds the cap; with no cap the ranks never grow.
+    #[test]
+    fn rounding_keeps_its_error_bound_on_random_tensors() {
+        for seed in 0..40u64 {
+            let d = 2 + (seed % 4) as usize;
+            let shape: Vec<usize> = (0..d).map(|k| 3 + ((seed as usize + k) % 4)).collect();
+            let inner: Vec<usize> = (1..d).map(|k| 1 + ((seed as usize * 7 + k) % 6)).collect();
+            let a = random_tt(&shape, &inner, seed);
+            let full = a.to_full();
+            let norm = frobenius(&full);
+            let eps = [1e-10, 1e-3, 0.05, 0.2, 0.5][(seed % 5) as usize];
+            let mut rounded = a.clone();
+            let reported = rounded.round(eps, usize::MAX);
+            let error = distance(&rounded.to_full(), &full);
+            assert!(
+                error <= eps * norm + 1e-12 * norm,
+                "seed {seed}: {error} > {eps} ‖A‖"
+            );
+            assert!(
+                (error - reported * norm).abs() <= 1e-9 * norm,
+                "seed {seed}"
+            );
+            assert!(rounded.ranks().iter().zip(a.ranks()).all(|(r, s)| r <= s));
+            let mut capped = a.clone();
+            let reported = capped.round(0.0, 2);
+            assert!(capped.ranks().iter().all(|&r| r <= 2), "seed {seed}");
+            let error = distance(&capped.to_full(), &full);
+            assert!(
+                (error - reported * norm).abs() <= 1e-9 * norm,
+                "seed {seed}"
+            );
+        }
+    }
+
+    /// Values at single entries, scaling, one-dimensional operators, embedding and 2-D
+    /// marginals, against the full arrays.
+    #[test]
+    fn entries_operators_embedding_and_pair_marginals_equal_the_full_arrays() {
+        let shape = [4usize, 5, 3, 6];
+        let full = separable_sum(&shape, 3);
+        let a = TensorTrain::from_full(&full, &shape, 1e-13, 20);
+        let mass: f64 = full.iter().sum();
+        for flat in [0, 17, 101, full.len() - 1] {
+            let idx = unflatten(flat, &shape);
+            assert!((a.value_at(&idx) - full[flat]).abs() <= 1e-12 * mass);
+        }
+        assert!(
+            distance(
+                &a.scaled(-2.5).to_full(),
+                &full.iter().map(|v| -2.5 * v).collect::<Vec<_>>()
+            ) <= 1e-12 * mass
+        );
+        // M along dimension 1: out(i) = Σ_j M(i_1, j) A(i with i_1 = j).
+        let m = DMatrix::from_fn(5, 5, |i, j| libm::sin((3 * i + j) as f64));
+        let mut applied = a.clone();
+        applied.apply_mode(1, &m);
+        let got = applied.to_full();
+        for (flat, v) in got.iter().enumerate() {
+            let idx = unflatten(flat, &shape);
+            let expected: f64 = (0..5)
+                .map(|j| {
+                    let mut other = idx.clone();
+                    other[1] = j;
+                    let f = other[0] + 4 * (other[1] + 5 * (other[2] + 3 * other[3]));
+                    m[(idx[1], j)] * full[f]
+                })
+                .sum();
+            assert!((v - expected).abs() <= 1e-11 * mass, "{idx:?}");
+        }
+        // A function of dimensions 1 and 3 only, embedded in four.
+        let sub_shape = [5usize, 6];
+        let sub_full = separable_sum(&sub_shape, 2);
+        let sub = TensorTrain::from_full(&sub_full, &sub_shape, 1e-13, 20);
+        let embedded = sub.embed(&[1, 3], &shape);
+        assert_eq!(embedded.ranks(), &[1, 1, 2, 2, 1]);
+        for (flat, v) in embedded.to_full().iter().enumerate() {
+            let idx = unflatten(flat, &shape);
+            assert!((v - sub_full[idx[1] + 5 * idx[3]]).abs() <= 1e-12 * frobenius(&sub_full));
+        }
+        for (j, l) in [(0usize, 1usize), (0, 3), (1, 2), (1, 3), (2, 3)] {
+            let pair = a.marginal_2d(j, l);
+            let mut expected = vec![0.0; shape[j] * shape[l]];
+            for (flat, v) in full.iter().enumerate() {
+                let idx = unflatten(flat, &shape);
+                expected[idx[j] + shape[j] * idx[l]] += v;
+            }
+            assert!(distance(&pair, &expected) <= 1e-11 * mass, "({j}, {l})");
+        }
+    }
+
+    /// Cross approximation of functions given pointwise, against their full arrays: a
+    /// separable sum found at its rank, a correlated Gaussian (not separable) and
+    /// `1 / (1 + Σ x_k)` within a small multiple of ε, each from one start point.
+    #[test]
+    fn cross_approximates_functions_given_pointwise() {
+        type F = fn(&[f64]) -> f64;
+        let gaussian: F = |x| {
+            let (a, b, c, e) = (x[0] - 0.5, x[1] - 0.4, x[2] - 0.6, x[3] - 0.5);
+            libm::exp(
+                -8.0 * (a * a + b * b + c * c + e * e - 1.2 * a * b - 0.8 * b * c + 0.9 * c * e),
+            )
+        };
+        let hilbert: F = |x| 1.0 / (1.0 + x.iter().sum::<f64>());
+        let separable: F = |x| {
+            x.iter().map(|v| libm::cos(*v)).product::<f64>()
+                + x.iter()
+                    .enumerate()
+                    .map(|(k, v)| libm::sin(v * (k + 1) as f64) + 1.5)
+                    .product::<f64>()
+        };
+        for (name, f, shape, tolerance) in [
+            ("separable", separable, vec![9usize, 11, 10, 8], 1e-9),
+            ("gaussian", gaussian, vec![16, 18, 17, 16], 1e-5),
+            ("hilbert", hilbert, vec![12, 12, 12, 12, 12], 1e-5),
+        ] {
+            let full = tabulated(&shape, f);
+            let d = shape.len();
+            let options = CrossOptions {
+                eps: 1e-8,
+                max_rank: 30,
+                max_sweeps: 10,
+                start: vec![shape.iter().map(|n| n / 2).collect()],
+            };
+            let (tt, report) = cross(
+                &shape,
+                |points: &[usize], out: &mut [f64]| -> Result<(), ()> {
+                    for (p, o) in points.chunks(d).zip(out.iter_mut()) {
+                        let x: Vec<f64> = p
+                            .iter()
+                            .zip(&shape)
+                            .map(|(&i, &n)| i as f64 / (n - 1) as f64)
+                            .collect();
+                        *o = f(&x);
+                    }
+                    Ok(())
+                },
+                &options,
+            )
+            .unwrap();
+            let error = distance(&tt.to_full(), &full) / frobenius(&full);
+            assert!(report.converged, "{name}: {report:?}");
+            assert!(
+                error <= tolerance,
+                "{name}: relative error {error}, ranks {:?}",
+                tt.ranks()
+            );
+            assert!(report.evaluations < full.len(), "{name}: {report:?}");
+            if name == "separable" {
+                assert!(tt.ranks().iter().all(|&r| r <= 2), "{:?}", tt.ranks());
+            }
         }
     }
 }

@@ -1,0 +1,116 @@
+//! The truncated SVDs of TT-SVD, rounding and cross approximation.
+
+use alloc::vec::Vec;
+
+use nalgebra::DMatrix;
+
+/// The rank at which a truncated SVD with singular values `s` (descending) keeps the error
+/// `(Σ_{j ≥ r} s_j²)^{1/2}` within `threshold`, at least 1 and at most `cap`, with the square
+/// of the error it leaves, `Σ_{j ≥ r} s_j²` (more than `threshold²` only where `cap` cut).
+pub(super) fn truncation_rank(s: &[f64], threshold: f64, cap: usize) -> (usize, f64) {
+    let mut tail = 0.0;
+    let mut rank = s.len();
+    for (j, v) in s.iter().enumerate().rev() {
+        tail += v * v;
+        if libm::sqrt(tail) > threshold {
+            break;
+        }
+        rank = j;
+    }
+    let rank = rank.clamp(1, cap.max(1)).min(s.len());
+    (rank, s[rank.min(s.len())..].iter().map(|v| v * v).sum())
+}
+
+/// The SVD of `m` with its singular values in descending order: `(U, s, Vᵀ)`, thin (k =
+/// min(rows, cols) columns of U). By one-sided Jacobi rotations (Hestenes 1958; Demmel &
+/// Veselić 1992, accurate to the singular values' own size) on the taller orientation, not by
+/// nalgebra's `svd(true, true)`: nalgebra 0.35's can return wrong singular values when the
+/// vectors are asked for (dimforge/nalgebra#1172, open: a rank-one 4 × 30 unfolding came back
+/// with σ₁ = 139.5 against its Frobenius norm 119.07 — `decomposes_exactly` below). A column
+/// of zeros gives a zero column of U.
+///
+/// A matrix more than twice as tall as wide (in its taller orientation) is first reduced by a
+/// Householder QR, `A = Q R`, and the rotations work on the square R (`U = Q U_R`): the sweeps
+/// then cost `cols³` instead of `rows · cols²` each.
+pub(super) fn sorted_svd(m: DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>, DMatrix<f64>) {
+    let wide = m.ncols() > m.nrows();
+    let tall = if wide { m.transpose() } else { m };
+    let (u, s, vt) = if tall.nrows() > 2 * tall.ncols() {
+        let qr = tall.qr();
+        let (q, r) = (qr.q(), qr.r());
+        let (u, s, vt) = jacobi_svd(r);
+        (q * u, s, vt)
+    } else {
+        jacobi_svd(tall)
+    };
+    if wide {
+        // mᵀ = U Σ Vᵀ ⇒ m = V Σ Uᵀ.
+        (vt.transpose(), s, u.transpose())
+    } else {
+        (u, s, vt)
+    }
+}
+
+/// [`sorted_svd`] of a matrix at least as tall as wide, by one-sided Jacobi rotations.
+fn jacobi_svd(mut a: DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>, DMatrix<f64>) {
+    let (rows, cols) = a.shape();
+    let mut v = DMatrix::<f64>::identity(cols, cols);
+    for _sweep in 0..60 {
+        let mut rotated = false;
+        for p in 0..cols {
+            for q in p + 1..cols {
+                let (cp, cq) = columns(a.as_mut_slice(), rows, p, q);
+                let (mut alpha, mut beta, mut gamma) = (0.0, 0.0, 0.0);
+                for (x, y) in cp.iter().zip(cq.iter()) {
+                    alpha += x * x;
+                    beta += y * y;
+                    gamma += x * y;
+                }
+                if gamma == 0.0 || libm::fabs(gamma) <= f64::EPSILON * libm::sqrt(alpha * beta) {
+                    continue;
+                }
+                rotated = true;
+                let zeta = (beta - alpha) / (2.0 * gamma);
+                let t =
+                    libm::copysign(1.0, zeta) / (libm::fabs(zeta) + libm::sqrt(1.0 + zeta * zeta));
+                let c = 1.0 / libm::sqrt(1.0 + t * t);
+                let s = c * t;
+                rotate(cp, cq, c, s);
+                let (vp, vq) = columns(v.as_mut_slice(), cols, p, q);
+                rotate(vp, vq, c, s);
+            }
+        }
+        if !rotated {
+            break;
+        }
+    }
+    let norms: Vec<f64> = (0..cols).map(|j| a.column(j).norm()).collect();
+    let mut order: Vec<usize> = (0..cols).collect();
+    order.sort_by(|&x, &y| norms[y].total_cmp(&norms[x]));
+    let s: Vec<f64> = order.iter().map(|&j| norms[j]).collect();
+    let left = DMatrix::from_fn(rows, cols, |i, j| {
+        let (col, sigma) = (order[j], s[j]);
+        if sigma > 0.0 {
+            a[(i, col)] / sigma
+        } else {
+            0.0
+        }
+    });
+    let right = DMatrix::from_fn(cols, cols, |i, j| v[(j, order[i])]);
+    (left, s, right)
+}
+
+/// Columns p < q of a column-major matrix with `rows` rows, both mutable.
+fn columns(data: &mut [f64], rows: usize, p: usize, q: usize) -> (&mut [f64], &mut [f64]) {
+    let (head, tail) = data.split_at_mut(q * rows);
+    (&mut head[p * rows..(p + 1) * rows], &mut tail[..rows])
+}
+
+/// The plane rotation `(x, y) ← (c x − s y, s x + c y)` of two columns.
+fn rotate(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
+    for (a, b) in x.iter_mut().zip(y.iter_mut()) {
+        let (u, w) = (*a, *b);
+        *a = c * u - s * w;
+        *b = s * u + c * w;
+    }
+}
