@@ -25,6 +25,7 @@
 //! | off-line/on-line spectral (Legendre) Yau–Yau filter | [`Spectral`] | 004: Shi, Chen & Yau (2021) |
 //! | Gaussian-sum filter (exact for linear models with mixtures) | [`GaussianSum`] | Sorenson & Alspach (1971) |
 //! | point-mass filter for discrete-time models `x_k = F(x_(k−1)) + w_k` ([`Dynamics`]) | [`PointMass`] | Šimandl, Královec & Söderström (2006) |
+//! | the Yau–Yau grid filter in tensor-train format, 1–12 dimensions | [`TensorTrainFilter`] | Li, Wang, Yau & Zhang (2023); Matoušek et al. (2024) |
 //!
 //! ## Filtering your own observations
 //!
@@ -81,6 +82,7 @@
 //! | [`Spectral`] | [`SpectralParams`] |
 //! | [`GaussianSum`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
 //! | [`PointMass`] | [`PointMassParams`] |
+//! | [`TensorTrainFilter`] | [`TensorTrainParams`] |
 //!
 //! | markers (schemes) | filter type | parameters |
 //! |---|---|---|
@@ -213,6 +215,7 @@ pub use filters::kalman::{
 };
 pub use filters::particle::{Pf, PfParams, SuppliedNormals};
 pub use filters::point_mass::{PointMass, PointMassParams};
+pub use filters::tensor_train::{TensorTrainFilter, TensorTrainParams};
 pub use filters::spectral::{Spectral, SpectralParams};
 pub use filters::yau_fd::{
     Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,

@@ -8,7 +8,9 @@
 //! * [`spectral`] — the off-line/on-line spectral Yau–Yau filter of 004 (Legendre basis);
 //! * [`direct`] — the direct method of 002 (Gaussian approximation and Riccati ODEs);
 //! * [`fpe_split`] — the continuous–discrete Fokker–Planck grid filters of 001;
-//! * [`gaussian_sum`] — the exact Gaussian-sum filter of linear models with mixtures.
+//! * [`gaussian_sum`] — the exact Gaussian-sum filter of linear models with mixtures;
+//! * [`tensor_train`] — the Yau–Yau grid filter in tensor-train format, beyond three
+//!   dimensions.
 //!
 //! Every family folder has the same shape: `mod.rs` (the module doc — idea, equations,
 //! example, cost — and the family's public names), `params.rs` (its parameters, each
@@ -50,6 +52,7 @@ pub(crate) mod score;
 mod self_check;
 pub(crate) mod smoothing;
 pub(crate) mod spectral;
+pub(crate) mod tensor_train;
 pub(crate) mod yau_fd;
 
 use alloc::string::String;

@@ -899,6 +899,18 @@ pub(crate) fn reads_state(text: &str, n: usize) -> bool {
         .any(|(name, _)| variable_index(name, n).is_some())
 }
 
+/// The state variables `text` reads in an `n`-dimensional model, as ascending indices (the
+/// dimensions a function of the state depends on, for the tensor-train filter's blocks).
+pub(crate) fn variables_read(text: &str, n: usize) -> Vec<usize> {
+    let mut read: Vec<usize> = free_names(text)
+        .iter()
+        .filter_map(|(name, _)| variable_index(name, n))
+        .collect();
+    read.sort_unstable();
+    read.dedup();
+    read
+}
+
 /// Whether `text` reads the time `t` or a known input `u1`, `u2`, … of a driven model
 /// ([`crate::Inputs`]).
 pub(crate) fn reads_drive(text: &str) -> bool {

@@ -45,6 +45,7 @@ mod state_diffusion;
 // the core's, the same in WebAssembly.
 #[cfg(not(target_arch = "wasm32"))]
 mod stiff_edges;
+mod tensor_train;
 mod test_attributes;
 mod time_and_inputs;
 // The playground's wasm `Session`, in a wasm runtime.

@@ -371,6 +371,86 @@ impl TensorTrain {
         m
     }
 
+    /// Makes the cores before `s` left-orthogonal and those after `e` right-orthogonal (by QR
+    /// sweeps from both ends towards the block `s..=e`), the tensor unchanged: the block's
+    /// Frobenius norm is then the tensor's, and a truncation inside the block errs by as much
+    /// in the whole tensor as in the block.
+    pub(crate) fn orthogonalise_around(&mut self, s: usize, e: usize) {
+        for k in 0..s {
+            let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+            let qr = DMatrix::from_column_slice(r * n, r_next, &self.cores[k]).qr();
+            let (q, rr) = (qr.q(), qr.r());
+            self.cores[k] = q.as_slice().to_vec();
+            let (n2, r2) = (self.shape[k + 1], self.ranks[k + 2]);
+            let next = DMatrix::from_column_slice(r_next, n2 * r2, &self.cores[k + 1]);
+            self.cores[k + 1] = (rr * next).as_slice().to_vec();
+            self.ranks[k + 1] = q.ncols();
+        }
+        for k in (e + 1..self.shape.len()).rev() {
+            let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+            // Core k as r × (n r_next) = L Q with Q's rows orthonormal: the QR of its transpose.
+            let qr = DMatrix::from_column_slice(r, n * r_next, &self.cores[k])
+                .transpose()
+                .qr();
+            let (q, rr) = (qr.q(), qr.r());
+            self.cores[k] = q.transpose().as_slice().to_vec();
+            let (r_prev, n_prev) = (self.ranks[k - 1], self.shape[k - 1]);
+            let prev = DMatrix::from_column_slice(r_prev * n_prev, r, &self.cores[k - 1]);
+            self.cores[k - 1] = (prev * rr.transpose()).as_slice().to_vec();
+            self.ranks[k] = q.ncols();
+        }
+    }
+
+    /// The cores `s..=e` multiplied out: the block `B(a, i_s, …, i_e, b)` at
+    /// `a + r_s (i_s + n_s (i_{s+1} + ⋯)) + r_s N b`, with N the block's points and
+    /// `(r_s, N, r_{e+1})` returned with it.
+    pub(crate) fn block(&self, s: usize, e: usize) -> (Vec<f64>, [usize; 3]) {
+        let mut m = self.cores[s].clone();
+        let mut rows = self.ranks[s] * self.shape[s];
+        for k in s + 1..=e {
+            let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+            let left = DMatrix::from_column_slice(rows, r, &m);
+            let right = DMatrix::from_column_slice(r, n * r_next, &self.cores[k]);
+            m = (left * right).as_slice().to_vec();
+            rows *= n;
+        }
+        let points = rows / self.ranks[s];
+        (m, [self.ranks[s], points, self.ranks[e + 1]])
+    }
+
+    /// Replaces the cores `s..=e` by the TT-SVD of `values` (a block as
+    /// [`TensorTrain::block`] lays it out, with the same outer ranks), each truncation within
+    /// `ε ‖B‖_F / √(e − s)` and rank at most `max_rank`; returns the error made relative to
+    /// ‖B‖_F. After [`TensorTrain::orthogonalise_around`]`(s, e)` that is the error in the
+    /// whole tensor.
+    pub(crate) fn set_block(&mut self, s: usize, e: usize, values: Vec<f64>, eps: f64, max_rank: usize) -> f64 {
+        let norm = libm::sqrt(values.iter().map(|v| v * v).sum::<f64>());
+        let threshold = eps * norm / libm::sqrt((e - s).max(1) as f64);
+        let mut discarded = 0.0;
+        let mut rest = values;
+        let mut rows = self.ranks[s] * self.shape[s];
+        for k in s..e {
+            let cols = rest.len() / rows;
+            let (u, sv, vt) = sorted_svd(DMatrix::from_column_slice(rows, cols, &rest));
+            let (r, tail) = truncation_rank(&sv, threshold, max_rank);
+            discarded += tail;
+            self.cores[k] = u.columns(0, r).iter().copied().collect();
+            let mut next = vt.rows(0, r).into_owned();
+            for (j, mut row) in next.row_iter_mut().enumerate() {
+                row *= sv[j];
+            }
+            rest = next.as_slice().to_vec();
+            self.ranks[k + 1] = r;
+            rows = r * self.shape[k + 1];
+        }
+        self.cores[e] = rest;
+        if norm > 0.0 {
+            libm::sqrt(discarded) / norm
+        } else {
+            0.0
+        }
+    }
+
     /// `Π_{k ∈ range} Σ_i G_k(i)`: the dimensions of `range` summed out.
     fn summed(&self, range: core::ops::Range<usize>) -> DMatrix<f64> {
         let mut m = DMatrix::identity(self.ranks[range.start], self.ranks[range.start]);

@@ -22,6 +22,7 @@ use crate::filters::method::{BuildContext, Method, MethodInfo, ProblemContext};
 use crate::filters::particle::Pf;
 use crate::filters::point_mass::PointMass;
 use crate::filters::spectral::Spectral;
+use crate::filters::tensor_train::TensorTrainFilter;
 use crate::filters::yau_fd::{Iem, Qiem, Qiem4, Spt};
 use crate::filters::Filter;
 use crate::model::{Model, Prior};
@@ -226,6 +227,7 @@ registry! {
     ImplicitFdm => ImplicitFdm,
     GaussianSum => GaussianSum,
     PointMass => PointMass,
+    TensorTrain => TensorTrainFilter,
 }
 
 impl MethodConfig {

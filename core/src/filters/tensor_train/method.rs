@@ -1,0 +1,117 @@
+//! The tensor-train filter registered as a [`Method`].
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use super::filter::check_model;
+use super::params::MAX_DIMENSIONS;
+use super::structure::Axes;
+use super::{TensorTrainFilter, TensorTrainParams};
+use crate::error::ZakaiError;
+use crate::filters::builder::builder_fn;
+use crate::filters::method::{problems_from, BuildContext, Method, MethodInfo, ProblemContext, Support, Takes};
+use crate::filters::params::Declared;
+use crate::validate::ConfigProblem;
+
+builder_fn!(TensorTrainFilter);
+
+impl Method for TensorTrainFilter {
+    const KEY: &'static str = "tt";
+    const ALIASES: &'static [&'static str] = &["tensor_train"];
+    const NEEDS_DOMAIN: bool = true;
+    const DENSITY: bool = true;
+    const STATE_DIFFUSION: Support = Support::Refused(
+        "its one-dimensional flows are made once for a constant diagonal G Gᵀ",
+    );
+    const INPUTS: Support = Support::Refused("its flows and blocks are made once, for an autonomous model");
+    const DISCRETE_TIME: Support = Support::Refused(
+        "it solves the Fokker–Planck equation between observations (a transition kernel in TT format is not implemented)",
+    );
+    type Params = TensorTrainParams;
+    type Filter = TensorTrainFilter;
+
+    fn info() -> MethodInfo {
+        MethodInfo {
+            key: Self::KEY.into(),
+            name: "TT".into(),
+            summary: "the Yau–Yau grid filter in tensor-train format, for 2 to 12 dimensions".into(),
+            paper: "Li, Wang, Yau & Zhang (2023), IEEE TAC 68; Matoušek, Brandner, Duník & Punčochář (2024); 000 (15), 001 (3), (6)".into(),
+            takes: Takes::Both,
+            dims: format!("1–{MAX_DIMENSIONS}"),
+            params: TensorTrainParams::form(),
+            json_only: TensorTrainParams::json_only(),
+        }
+    }
+    fn display_name(p: &TensorTrainParams) -> String {
+        format!("TT(r≤{})", p.max_rank)
+    }
+    fn label(p: &TensorTrainParams, n: usize) -> String {
+        format!(
+            "TT({}, r≤{})",
+            crate::filters::method::shape_text(&p.shape(n)),
+            p.max_rank
+        )
+    }
+    fn grid_shape(p: &TensorTrainParams, n: usize) -> Option<Vec<usize>> {
+        Some(p.shape(n))
+    }
+    fn problems(p: &TensorTrainParams, n: usize) -> Vec<ConfigProblem> {
+        let mut problems = problems_from(p.problems(n));
+        if n > MAX_DIMENSIONS {
+            problems.push(ConfigProblem::new(
+                "method",
+                format!("the tensor-train filter is for 1–{MAX_DIMENSIONS} dimensions, and the model has n = {n}"),
+            ));
+        }
+        problems
+    }
+    fn suitability(problem: &ProblemContext, p: &TensorTrainParams) -> Result<(), String> {
+        check_model(problem.model).map_err(|e| format!("{e}"))?;
+        let n = problem.model.n;
+        if !p.problems(n).is_empty() || problem.bounds.len() != n || n > MAX_DIMENSIONS {
+            return Ok(()); // reported with the parameters and the domain
+        }
+        let axes = Axes::new(problem.bounds, &p.shape(n));
+        super::kolmogorov::Kolmogorov::new(problem.model, &axes, p.max_rank).map_err(|e| format!("{e}"))?;
+        super::likelihood::Likelihood::new(problem.model, &axes, p.max_rank).map_err(|e| format!("{e}"))?;
+        Ok(())
+    }
+    fn memory(p: &TensorTrainParams, n: usize) -> Option<usize> {
+        // The density and its working copy at the rank cap, the QR and SVD work of one core
+        // (a few times a core), and the largest block, at most the cap on blocks.
+        let shape = p.shape(n);
+        let r = p.max_rank;
+        let cores = shape
+            .iter()
+            .try_fold(0usize, |a, &k| a.checked_add(k.checked_mul(r)?.checked_mul(r)?))?;
+        let block = super::structure::BLOCK_NUMBERS.min(
+            shape
+                .iter()
+                .take(2)
+                .try_fold(1usize, |a, &k| a.checked_mul(k))?
+                .checked_mul(r)?
+                .checked_mul(r)?,
+        );
+        cores.checked_mul(6)?.checked_add(block.checked_mul(3)?)?.checked_mul(8)
+    }
+    fn build(
+        ctx: &BuildContext,
+        p: &TensorTrainParams,
+        name: String,
+    ) -> Result<TensorTrainFilter, ZakaiError> {
+        TensorTrainFilter::new(name, ctx, p)
+    }
+    fn refined(p: &TensorTrainParams, n: usize) -> Option<(TensorTrainParams, String)> {
+        let from = p.shape(n);
+        let points: Vec<usize> = from.iter().map(|&c| 2 * c).collect();
+        let refined = TensorTrainParams {
+            points: points.clone(),
+            ..p.clone()
+        };
+        refined
+            .problems(n)
+            .is_empty()
+            .then(|| (refined, format!("points {from:?} → {points:?}")))
+    }
+}

@@ -1,0 +1,61 @@
+//! The tensor-train filter's parameters, each declared once.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use crate::filters::params::{parameters, Declared};
+use crate::filters::{count_problem, per_dimension};
+
+/// Points per dimension when none are given.
+pub(super) const DEFAULT_POINTS: usize = 64;
+
+/// Most points in one dimension.
+pub(crate) const MAX_POINTS: usize = 4096;
+
+/// Most dimensions.
+pub(crate) const MAX_DIMENSIONS: usize = 12;
+
+/// Largest rank cap.
+pub(crate) const MAX_RANK: usize = 200;
+
+parameters! {
+    /// Parameters of the tensor-train filter ([`TensorTrainFilter`](super::TensorTrainFilter)).
+    pub struct TensorTrainParams {
+        /// Grid points per dimension over the domain (one number: the same in every
+        /// dimension; empty: 64 in each).
+        points: Vec<usize> = Vec::new() => int_list "points", at_least(3);
+        /// Relative accuracy of every rounding, cross approximation and block split: each
+        /// keeps the density within `eps` of itself in the Frobenius norm.
+        eps: f64 = 1e-7 => number "rounding tolerance ε", range(1e-14, 0.1);
+        /// The largest TT rank the density may take (a rounding that needs more keeps this
+        /// many and reports its error in the self-check).
+        max_rank: usize = 30 => int "rank cap", range(1, MAX_RANK);
+    }
+}
+
+impl TensorTrainParams {
+    /// Points per dimension for an `n`-dimensional model.
+    pub fn shape(&self, n: usize) -> Vec<usize> {
+        if self.points.is_empty() {
+            alloc::vec![DEFAULT_POINTS; n]
+        } else {
+            per_dimension(&self.points, n)
+        }
+    }
+
+    /// Every problem with the parameters for an `n`-dimensional model.
+    pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
+        let mut p = self.range_problems();
+        if !self.points.is_empty() {
+            count_problem("points", &self.points, n, &mut p);
+            if let Some(big) = self.points.iter().find(|&&v| v > MAX_POINTS) {
+                p.push((
+                    "points",
+                    format!("{big} points in one dimension are more than the {MAX_POINTS} the tensor-train filter takes"),
+                ));
+            }
+        }
+        p
+    }
+}
