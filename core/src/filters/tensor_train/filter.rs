@@ -12,7 +12,9 @@ use super::structure::Axes;
 use super::TensorTrainParams;
 use crate::error::{FilterError, ZakaiError};
 use crate::filters::self_check::{BOUNDARY_MASS_CHECK, BOUNDARY_MASS_THRESHOLD};
-use crate::filters::{kind_of, Concern, Estimate, Filter, Observation, Observed, WIDTH_IN_CELLS_THRESHOLD};
+use crate::filters::{
+    kind_of, Concern, Estimate, Filter, Observation, Observed, WIDTH_IN_CELLS_THRESHOLD,
+};
 use crate::grid::tt::{cross, CrossOptions, CrossReport, TensorTrain};
 use crate::grid::TensorGrid;
 use crate::model::{Model, Prior};
@@ -147,7 +149,10 @@ fn prior_tt(
                         let (m, v) = (only.mean[k], cov[(k, k)]);
                         axes.nodes[k]
                             .iter()
-                            .map(|x| libm::exp(-0.5 * (x - m) * (x - m) / v) / libm::sqrt(2.0 * core::f64::consts::PI * v))
+                            .map(|x| {
+                                libm::exp(-0.5 * (x - m) * (x - m) / v)
+                                    / libm::sqrt(2.0 * core::f64::consts::PI * v)
+                            })
                             .collect()
                     })
                     .collect::<Vec<Vec<f64>>>();
@@ -187,7 +192,9 @@ fn prior_tt(
                 }
                 *o = prior.density(&x);
                 if !o.is_finite() {
-                    return Err(FilterError::NonFinite { what: "prior density" });
+                    return Err(FilterError::NonFinite {
+                        what: "prior density",
+                    });
                 }
             }
             Ok(())
@@ -293,14 +300,23 @@ impl TensorTrainFilter {
                 cov[(l, k)] = c;
             }
         }
-        if estimate.mean.iter().chain(cov.iter()).any(|v| !v.is_finite()) {
+        if estimate
+            .mean
+            .iter()
+            .chain(cov.iter())
+            .any(|v| !v.is_finite())
+        {
             return Err(FilterError::NonFinite { what: "mean" });
         }
         Ok(estimate)
     }
 
     /// The step on a copy of the density: `(density, log-likelihood, truncation, lost)`.
-    fn advance(&mut self, obs: &Observation, observed: Observed) -> Result<(TensorTrain, f64, f64, f64), FilterError> {
+    fn advance(
+        &mut self,
+        obs: &Observation,
+        observed: Observed,
+    ) -> Result<(TensorTrain, f64, f64, f64), FilterError> {
         let mut p = self.density.clone();
         let mut truncation = 0.0;
         let mut lost = 0.0;
@@ -312,7 +328,9 @@ impl TensorTrainFilter {
                 1
             };
             for _ in 0..pieces {
-                truncation += self.kolmogorov.step(&mut p, obs.dt / pieces as f64, self.eps, self.max_rank);
+                truncation +=
+                    self.kolmogorov
+                        .step(&mut p, obs.dt / pieces as f64, self.eps, self.max_rank);
             }
             let after = self.mass(&p);
             lost = (1.0 - after / before).max(0.0);
@@ -320,7 +338,14 @@ impl TensorTrainFilter {
         let mut log_likelihood = 0.0;
         if observed != Observed::Nothing {
             let before = self.mass(&p);
-            let (shift, error) = self.likelihood.update(&mut p, &self.axes, obs.value, obs.dt, self.eps, self.max_rank)?;
+            let (shift, error) = self.likelihood.update(
+                &mut p,
+                &self.axes,
+                obs.value,
+                obs.dt,
+                self.eps,
+                self.max_rank,
+            )?;
             truncation += error;
             let after = self.mass(&p);
             if !(after > 0.0 && after.is_finite()) {
@@ -365,7 +390,11 @@ impl Filter for TensorTrainFilter {
             .axes
             .nodes
             .iter()
-            .map(|v| (0..v.len()).map(|i| if i < 2 || i + 2 >= v.len() { 0.0 } else { 1.0 }).collect())
+            .map(|v| {
+                (0..v.len())
+                    .map(|i| if i < 2 || i + 2 >= v.len() { 0.0 } else { 1.0 })
+                    .collect()
+            })
             .collect();
         let weights: Vec<&[f64]> = inner.iter().map(Vec::as_slice).collect();
         let near = 1.0 - self.density.contract(&weights) * self.axes.cell_volume();
@@ -424,7 +453,12 @@ impl Filter for TensorTrainFilter {
             return;
         };
         let scale = self.axes.cell_volume() / self.axes.spacing[dim];
-        let values: Vec<f64> = self.density.marginal(dim).iter().map(|v| v * scale).collect();
+        let values: Vec<f64> = self
+            .density
+            .marginal(dim)
+            .iter()
+            .map(|v| v * scale)
+            .collect();
         sub.marginal(&values, 0, grid, out);
     }
 

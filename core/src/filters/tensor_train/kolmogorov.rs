@@ -62,10 +62,9 @@ impl Kolmogorov {
     /// wider than the memory cap at `max_rank` is refused with the term that made it.
     pub(super) fn new(model: &Model, axes: &Axes, max_rank: usize) -> Result<Self, FilterError> {
         let n = model.n;
-        let g = model
-            .diffusion
-            .constant()
-            .ok_or_else(|| FilterError::Unsuitable("the tensor-train filter needs a constant diffusion G".into()))?;
+        let g = model.diffusion.constant().ok_or_else(|| {
+            FilterError::Unsuitable("the tensor-train filter needs a constant diffusion G".into())
+        })?;
         let a = g * g.transpose();
         let shape = axes.shape();
         let drift = model.drift.as_ref();
@@ -99,13 +98,24 @@ impl Kolmogorov {
                 dims.sort_unstable();
                 dims.dedup();
                 let block = span(&dims);
-                check_block(&shape, block, max_rank, &alloc::format!("the drift's component f_{}", k + 1))
-                    .map_err(FilterError::Unsuitable)?;
+                check_block(
+                    &shape,
+                    block,
+                    max_rank,
+                    &alloc::format!("the drift's component f_{}", k + 1),
+                )
+                .map_err(FilterError::Unsuitable)?;
                 let all: Vec<usize> = (block.0..=block.1).collect();
                 let points = axes.points_on(&all);
-                let f = axes.tabulate(drift, &all, "the drift f")?[k * points..(k + 1) * points].to_vec();
+                let f = axes.tabulate(drift, &all, "the drift f")?[k * points..(k + 1) * points]
+                    .to_vec();
                 let speed = f.iter().fold(0.0, |m: f64, v| m.max(libm::fabs(*v))) / h;
-                blocks.push(BlockFlow { c: k, block, f, speed });
+                blocks.push(BlockFlow {
+                    c: k,
+                    block,
+                    f,
+                    speed,
+                });
             }
         }
         Ok(Kolmogorov {
@@ -166,7 +176,14 @@ impl Kolmogorov {
     }
 
     /// Block flow `b` over τ on `p` (module doc); returns its split's relative error.
-    fn block_flow(&self, b: usize, p: &mut TensorTrain, tau: f64, eps: f64, max_rank: usize) -> f64 {
+    fn block_flow(
+        &self,
+        b: usize,
+        p: &mut TensorTrain,
+        tau: f64,
+        eps: f64,
+        max_rank: usize,
+    ) -> f64 {
         let flow = &self.blocks[b];
         let (s, e) = flow.block;
         p.orthogonalise_around(s, e);
@@ -185,13 +202,22 @@ impl Kolmogorov {
             }
             for (idx, o) in out.iter_mut().enumerate() {
                 let i_c = (idx / stride) % n_c;
-                let up = if i_c + 1 < n_c { flux[idx + stride] } else { 0.0 };
+                let up = if i_c + 1 < n_c {
+                    flux[idx + stride]
+                } else {
+                    0.0
+                };
                 let down = if i_c > 0 { flux[idx - stride] } else { 0.0 };
                 *o = -(up - down) / (2.0 * h);
             }
         };
         let len = u.len();
-        let (mut k1, mut k2, mut k3, mut k4) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![0.0; len]);
+        let (mut k1, mut k2, mut k3, mut k4) = (
+            vec![0.0; len],
+            vec![0.0; len],
+            vec![0.0; len],
+            vec![0.0; len],
+        );
         let mut stage = vec![0.0; len];
         for _ in 0..steps {
             rate(&u, &mut k1);

@@ -49,7 +49,10 @@ fn groups(observed: &[usize], linked: impl Fn(usize, usize) -> bool) -> Vec<Vec<
         for b in a + 1..observed.len() {
             if linked(observed[a], observed[b]) {
                 let (from, to) = (label[b], label[a]);
-                label.iter_mut().filter(|l| **l == from).for_each(|l| *l = to);
+                label
+                    .iter_mut()
+                    .filter(|l| **l == from)
+                    .for_each(|l| *l = to);
             }
         }
     }
@@ -101,7 +104,10 @@ impl Likelihood {
                 &axes.shape(),
                 span(&factor.dims),
                 max_rank,
-                &format!("the observation's component(s) {:?}", factor.components.iter().map(|c| c + 1).collect::<Vec<_>>()),
+                &format!(
+                    "the observation's component(s) {:?}",
+                    factor.components.iter().map(|c| c + 1).collect::<Vec<_>>()
+                ),
             )
             .map_err(FilterError::Unsuitable)?;
         }
@@ -120,7 +126,8 @@ impl Likelihood {
                         let c = noise.components();
                         c.len() == 1 && {
                             let cov = &c[0].cov;
-                            (0..cov.nrows()).all(|i| (0..cov.ncols()).all(|j| i == j || cov[(i, j)] == 0.0))
+                            (0..cov.nrows())
+                                .all(|i| (0..cov.ncols()).all(|j| i == j || cov[(i, j)] == 0.0))
                         }
                     }
                     MeasurementDensity::LogDensity(_) => false,
@@ -136,7 +143,10 @@ impl Likelihood {
         grouped
             .into_iter()
             .map(|components| {
-                let mut dims: Vec<usize> = components.iter().flat_map(|&j| self.reads[j].clone()).collect();
+                let mut dims: Vec<usize> = components
+                    .iter()
+                    .flat_map(|&j| self.reads[j].clone())
+                    .collect();
                 dims.sort_unstable();
                 dims.dedup();
                 Factor { components, dims }
@@ -185,15 +195,27 @@ impl Likelihood {
     }
 
     /// The log of `factor` at the nodes of the sub-grid of its dimensions.
-    fn log_factor(&self, factor: &Factor, axes: &Axes, value: &[f64], dt: f64) -> Result<Vec<f64>, FilterError> {
+    fn log_factor(
+        &self,
+        factor: &Factor,
+        axes: &Axes,
+        value: &[f64],
+        dt: f64,
+    ) -> Result<Vec<f64>, FilterError> {
         let model = &self.model;
-        let h = axes.tabulate(model.observation.as_ref(), &factor.dims, "the observation function h")?;
+        let h = axes.tabulate(
+            model.observation.as_ref(),
+            &factor.dims,
+            "the observation function h",
+        )?;
         let points = axes.points_on(&factor.dims);
         let comps = &factor.components;
         let mut out = vec![0.0; points];
         match &model.observations {
             ObservationModel::Continuous { noise_cov } => {
-                let s = DMatrix::from_fn(comps.len(), comps.len(), |a, b| noise_cov[(comps[a], comps[b])]);
+                let s = DMatrix::from_fn(comps.len(), comps.len(), |a, b| {
+                    noise_cov[(comps[a], comps[b])]
+                });
                 let s_inv = s.try_inverse().ok_or(FilterError::NotPositiveDefinite {
                     what: "observation noise covariance",
                 })?;
@@ -219,7 +241,11 @@ impl Likelihood {
                 let marginal: Option<GaussianMixture> = match density {
                     MeasurementDensity::Additive(noise) => {
                         let kept: Vec<bool> = (0..model.m).map(|j| comps.contains(&j)).collect();
-                        Some(noise.marginal(&kept).map_err(|e| FilterError::Likelihood(format!("{e}")))?)
+                        Some(
+                            noise
+                                .marginal(&kept)
+                                .map_err(|e| FilterError::Likelihood(format!("{e}")))?,
+                        )
                     }
                     _ => None,
                 };

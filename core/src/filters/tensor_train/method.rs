@@ -10,7 +10,9 @@ use super::structure::Axes;
 use super::{TensorTrainFilter, TensorTrainParams};
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
-use crate::filters::method::{problems_from, BuildContext, Method, MethodInfo, ProblemContext, Support, Takes};
+use crate::filters::method::{
+    problems_from, BuildContext, Method, MethodInfo, ProblemContext, Support, Takes,
+};
 use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
 
@@ -21,10 +23,10 @@ impl Method for TensorTrainFilter {
     const ALIASES: &'static [&'static str] = &["tensor_train"];
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
-    const STATE_DIFFUSION: Support = Support::Refused(
-        "its one-dimensional flows are made once for a constant diagonal G Gᵀ",
-    );
-    const INPUTS: Support = Support::Refused("its flows and blocks are made once, for an autonomous model");
+    const STATE_DIFFUSION: Support =
+        Support::Refused("its one-dimensional flows are made once for a constant diagonal G Gᵀ");
+    const INPUTS: Support =
+        Support::Refused("its flows and blocks are made once, for an autonomous model");
     const DISCRETE_TIME: Support = Support::Refused(
         "it solves the Fokker–Planck equation between observations (a transition kernel in TT format is not implemented)",
     );
@@ -73,8 +75,10 @@ impl Method for TensorTrainFilter {
             return Ok(()); // reported with the parameters and the domain
         }
         let axes = Axes::new(problem.bounds, &p.shape(n));
-        super::kolmogorov::Kolmogorov::new(problem.model, &axes, p.max_rank).map_err(|e| format!("{e}"))?;
-        super::likelihood::Likelihood::new(problem.model, &axes, p.max_rank).map_err(|e| format!("{e}"))?;
+        super::kolmogorov::Kolmogorov::new(problem.model, &axes, p.max_rank)
+            .map_err(|e| format!("{e}"))?;
+        super::likelihood::Likelihood::new(problem.model, &axes, p.max_rank)
+            .map_err(|e| format!("{e}"))?;
         Ok(())
     }
     fn memory(p: &TensorTrainParams, n: usize) -> Option<usize> {
@@ -82,9 +86,9 @@ impl Method for TensorTrainFilter {
         // (a few times a core), and the largest block, at most the cap on blocks.
         let shape = p.shape(n);
         let r = p.max_rank;
-        let cores = shape
-            .iter()
-            .try_fold(0usize, |a, &k| a.checked_add(k.checked_mul(r)?.checked_mul(r)?))?;
+        let cores = shape.iter().try_fold(0usize, |a, &k| {
+            a.checked_add(k.checked_mul(r)?.checked_mul(r)?)
+        })?;
         let block = super::structure::BLOCK_NUMBERS.min(
             shape
                 .iter()
@@ -93,7 +97,10 @@ impl Method for TensorTrainFilter {
                 .checked_mul(r)?
                 .checked_mul(r)?,
         );
-        cores.checked_mul(6)?.checked_add(block.checked_mul(3)?)?.checked_mul(8)
+        cores
+            .checked_mul(6)?
+            .checked_add(block.checked_mul(3)?)?
+            .checked_mul(8)
     }
     fn build(
         ctx: &BuildContext,

@@ -138,7 +138,13 @@ pub(super) fn check_block(
     let points = shape[s..=e]
         .iter()
         .try_fold(1usize, |a, &n| a.checked_mul(n));
-    let outer = |k: usize| if k == 0 || k == shape.len() { 1 } else { max_rank };
+    let outer = |k: usize| {
+        if k == 0 || k == shape.len() {
+            1
+        } else {
+            max_rank
+        }
+    };
     let numbers = points
         .and_then(|p| p.checked_mul(outer(s)))
         .and_then(|p| p.checked_mul(outer(e + 1)));
@@ -160,7 +166,11 @@ pub(super) fn check_block(
 
 /// For each point of the block `s..=e` (i_s fastest), its index on the sub-grid of `dims`
 /// (⊆ the block, ascending, `dims[0]` fastest): a function of `dims` spread over the block.
-pub(super) fn broadcast_index(shape: &[usize], (s, e): (usize, usize), dims: &[usize]) -> Vec<usize> {
+pub(super) fn broadcast_index(
+    shape: &[usize],
+    (s, e): (usize, usize),
+    dims: &[usize],
+) -> Vec<usize> {
     let mut stride = vec![0usize; e + 1 - s];
     let mut step = 1;
     for &d in dims {

@@ -22,7 +22,7 @@ use alloc::vec::Vec;
 use nalgebra::DMatrix;
 
 use super::maxvol::maxvol;
-use super::svd::{sorted_svd, truncation_rank};
+use super::svd::{sorted_svd, truncated_svd};
 use super::TensorTrain;
 
 /// Points evaluated per call of the function.
@@ -107,14 +107,8 @@ fn supercore<E>(
 /// The truncated SVD of a supercore: `(U_r, s_r, V_rᵀ)` within `eps ‖M‖_F`, rank at most
 /// `cap`.
 fn truncated(m: DMatrix<f64>, eps: f64, cap: usize) -> (DMatrix<f64>, Vec<f64>, DMatrix<f64>) {
-    let norm = m.norm();
-    let (u, s, vt) = sorted_svd(m);
-    let (r, _) = truncation_rank(&s, eps * norm, cap);
-    (
-        u.columns(0, r).into_owned(),
-        s[..r].to_vec(),
-        vt.rows(0, r).into_owned(),
-    )
+    let (u, s, vt, _) = truncated_svd(&m, eps * m.norm(), cap);
+    (u, s, vt)
 }
 
 /// `a b⁻¹` for a square `b` (the interpolation of the other rows by the chosen ones); a

@@ -25,7 +25,7 @@ use alloc::vec::Vec;
 
 use nalgebra::DMatrix;
 
-use svd::{sorted_svd, truncation_rank};
+use svd::{sorted_svd, truncated_svd, truncation_rank};
 
 /// A tensor in TT format (module doc).
 #[derive(Clone, Debug, PartialEq)]
@@ -423,7 +423,14 @@ impl TensorTrain {
     /// `ε ‖B‖_F / √(e − s)` and rank at most `max_rank`; returns the error made relative to
     /// ‖B‖_F. After [`TensorTrain::orthogonalise_around`]`(s, e)` that is the error in the
     /// whole tensor.
-    pub(crate) fn set_block(&mut self, s: usize, e: usize, values: Vec<f64>, eps: f64, max_rank: usize) -> f64 {
+    pub(crate) fn set_block(
+        &mut self,
+        s: usize,
+        e: usize,
+        values: Vec<f64>,
+        eps: f64,
+        max_rank: usize,
+    ) -> f64 {
         let norm = libm::sqrt(values.iter().map(|v| v * v).sum::<f64>());
         let threshold = eps * norm / libm::sqrt((e - s).max(1) as f64);
         let mut discarded = 0.0;
@@ -431,11 +438,12 @@ impl TensorTrain {
         let mut rows = self.ranks[s] * self.shape[s];
         for k in s..e {
             let cols = rest.len() / rows;
-            let (u, sv, vt) = sorted_svd(DMatrix::from_column_slice(rows, cols, &rest));
-            let (r, tail) = truncation_rank(&sv, threshold, max_rank);
+            let m = DMatrix::from_column_slice(rows, cols, &rest);
+            let (u, sv, vt, tail) = truncated_svd(&m, threshold, max_rank);
+            let r = sv.len();
             discarded += tail;
-            self.cores[k] = u.columns(0, r).iter().copied().collect();
-            let mut next = vt.rows(0, r).into_owned();
+            self.cores[k] = u.as_slice().to_vec();
+            let mut next = vt;
             for (j, mut row) in next.row_iter_mut().enumerate() {
                 row *= sv[j];
             }
