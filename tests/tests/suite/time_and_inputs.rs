@@ -236,6 +236,7 @@ fn time_invariant_methods_refuse_with_the_reason() {
             "spectral",
             "direct",
             "gaussian_sum",
+            "tensor_train",
         ]
         .contains(&entry.info.key.as_str());
         assert_eq!(refused, expected, "{}", entry.info.key);

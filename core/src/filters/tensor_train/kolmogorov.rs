@@ -141,7 +141,11 @@ impl Kolmogorov {
         if let Some((_, e)) = self.exponentials.iter().find(|(t, _)| *t == tau) {
             return e.clone();
         }
-        let e: Vec<DMatrix<f64>> = self.generators.iter().map(|l| (l * tau).exp()).collect();
+        let e: Vec<DMatrix<f64>> = self
+            .generators
+            .iter()
+            .map(|l| crate::linalg::expm(&(l * tau)))
+            .collect();
         if self.exponentials.len() == KEPT_LENGTHS {
             self.exponentials.remove(0);
         }

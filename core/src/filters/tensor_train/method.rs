@@ -19,8 +19,8 @@ use crate::validate::ConfigProblem;
 builder_fn!(TensorTrainFilter);
 
 impl Method for TensorTrainFilter {
-    const KEY: &'static str = "tt";
-    const ALIASES: &'static [&'static str] = &["tensor_train"];
+    const KEY: &'static str = "tensor_train";
+    const ALIASES: &'static [&'static str] = &["tt"];
     const NEEDS_DOMAIN: bool = true;
     const DENSITY: bool = true;
     const STATE_DIFFUSION: Support =
