@@ -1,8 +1,9 @@
 //! The tensor-train filter against exact references in high dimension (issue 63, item 4):
 //! the cubic sensor with independent components in d = 4, 6 and 10, whose exact filter is
 //! the product of d one-dimensional filters (each a fine one-dimensional Yau–Yau grid filter,
-//! QIEM, an independent implementation), and a coupled linear model in 6-D against the
-//! Kalman–Bucy filter.
+//! QIEM, an independent implementation), a coupled linear model in 6-D against the
+//! Kalman–Bucy filter, and 003's bearings-only tracking in 4-D (continuous dynamics, discrete
+//! measurements) against a large particle filter.
 
 use zakai::simulate::{rng_from_seed, simulate, TimeGrid};
 use zakai::{
@@ -171,4 +172,79 @@ fn coupled_linear_model_in_six_dimensions_matches_the_kalman_bucy_filter() {
     assert!(mean_error < 0.05, "{mean_error} sd");
     assert!(variance_error < 0.03, "{variance_error}");
     assert!(rank > 1, "{rank}");
+}
+
+/// 003's bearings-only tracking (the `bearings-only` preset: (p₁, p₂, v₁, v₂), constant
+/// velocity, two bearings in degrees) over `t_final`: the TT filter on `points` per dimension
+/// against a particle filter of `particles` particles drawing from the exact transition, on
+/// the same measurements. Returns, over the run and the components, the largest distance of
+/// the TT mean from the PF's in units of the PF's posterior sd, the largest relative
+/// difference of their sds, and the TT filter's largest rank.
+fn bearings_only(
+    t_final: f64,
+    domain: &[[f64; 2]],
+    points: &[usize],
+    particles: usize,
+) -> (f64, f64, usize) {
+    use zakai::lab::experiment::Experiment;
+    use zakai::lab::scenario::{presets::preset, MethodConfig};
+    let mut config = preset("bearings-only").unwrap();
+    config.time.t_final = t_final;
+    config.domain = domain.to_vec();
+    config.methods = vec![
+        MethodConfig::TensorTrain(TensorTrainParams {
+            points: points.to_vec(),
+            ..TensorTrainParams::default()
+        }),
+        MethodConfig::Pf(zakai::PfParams {
+            particles,
+            ..zakai::PfParams::default()
+        }),
+    ];
+    let run = Experiment::new(config).unwrap().run(11).unwrap();
+    let (tt, pf) = (&run.methods[0], &run.methods[1]);
+    assert!(
+        tt.failure.is_none() && pf.failure.is_none(),
+        "{:?} {:?}",
+        tt.failure,
+        pf.failure
+    );
+    let n = 4;
+    let (mut mean_gap, mut sd_gap) = (0.0f64, 0.0f64);
+    for (k, (a, b)) in tt
+        .estimates
+        .chunks(n)
+        .zip(pf.estimates.chunks(n))
+        .enumerate()
+    {
+        for i in 0..n {
+            let var_tt = tt.covariances[k * n * n + i * n + i];
+            let var_pf = pf.covariances[k * n * n + i * n + i];
+            mean_gap = mean_gap.max((a[i] - b[i]).abs() / var_pf.sqrt());
+            sd_gap = sd_gap.max((var_tt.sqrt() / var_pf.sqrt() - 1.0).abs());
+        }
+    }
+    let truncated = tt
+        .concerns
+        .iter()
+        .filter(|c| c.check.contains("truncation"))
+        .count();
+    (mean_gap, sd_gap, truncated)
+}
+
+/// Issue 63's reference (c), short: on 003's bearings-only model over one unit of time (100
+/// measurements, on a box that holds that horizon: positions on 160 points, spacing 0.09
+/// against a posterior sd near 0.33; velocities on 48, spacing 0.24 against 1.05) the TT
+/// filter's means stay within 0.05 posterior sd of a 200 000-particle PF's and its sds within
+/// 5 % (measured: 0.023 sd and 1.8 %; the PF's own Monte Carlo error, sd/√N_eff, is about
+/// 0.005 sd), and it raises no truncation concern. On the preset's box for T = 10
+/// ([−45, 45]² for the positions) 160 points are too coarse — the width self-check says so
+/// from the first step, and the means then differ by 0.3 sd.
+#[test]
+fn bearings_only_tracking_matches_a_large_particle_filter() {
+    let domain = [[-6.0, 8.0], [-6.0, 6.0], [-5.0, 7.0], [-6.0, 6.0]];
+    let (mean_gap, sd_gap, truncated) = bearings_only(1.0, &domain, &[160, 160, 48, 48], 200_000);
+    assert!(mean_gap < 0.05, "{mean_gap} sd");
+    assert!(sd_gap < 0.05, "{sd_gap}");
+    assert_eq!(truncated, 0);
 }

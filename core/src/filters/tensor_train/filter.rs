@@ -130,6 +130,25 @@ pub(super) fn check_model(model: &Model) -> Result<(), FilterError> {
     Ok(())
 }
 
+/// The grid in the train's order (chosen to keep coupled dimensions adjacent), the
+/// Kolmogorov step and the update of `model` on the box `bounds`: every block checked against
+/// the memory cap before anything large is allocated.
+pub(super) fn plan(
+    model: &Model,
+    bounds: &[(f64, f64)],
+    params: &TensorTrainParams,
+) -> Result<(Axes, Kolmogorov, Likelihood), FilterError> {
+    let shape = params.shape(model.n);
+    let likelihood = Likelihood::new(model);
+    let mut groups = super::kolmogorov::coupled_terms(model);
+    groups.extend(likelihood.factor_dims());
+    let order = super::structure::choose_order(&shape, &groups);
+    let axes = Axes::new(bounds, &shape, &order);
+    likelihood.check(&axes, params.max_rank)?;
+    let kolmogorov = Kolmogorov::new(model, &axes, params.max_rank)?;
+    Ok((axes, kolmogorov, likelihood))
+}
+
 /// The prior's density at the nodes as a tensor train: a product of one-dimensional normal
 /// densities for a Gaussian with diagonal covariance (exact, rank one), else a cross
 /// approximation of the density started at the nodes nearest the components' means.
@@ -146,7 +165,8 @@ fn prior_tt(
             if (0..d).all(|i| (0..d).all(|j| i == j || cov[(i, j)] == 0.0)) {
                 let vectors = (0..d)
                     .map(|k| {
-                        let (m, v) = (only.mean[k], cov[(k, k)]);
+                        let j = axes.order[k];
+                        let (m, v) = (only.mean[j], cov[(j, j)]);
                         axes.nodes[k]
                             .iter()
                             .map(|x| {
@@ -164,7 +184,7 @@ fn prior_tt(
         (0..d)
             .map(|k| {
                 let (lo, h, n) = (axes.nodes[k][0], axes.spacing[k], axes.nodes[k].len());
-                (libm::round((x[k] - lo) / h).max(0.0) as usize).min(n - 1)
+                (libm::round((x[axes.order[k]] - lo) / h).max(0.0) as usize).min(n - 1)
             })
             .collect()
     };
@@ -188,7 +208,7 @@ fn prior_tt(
         |points: &[usize], out: &mut [f64]| -> Result<(), FilterError> {
             for (p, o) in points.chunks(d).zip(out.iter_mut()) {
                 for k in 0..d {
-                    x[k] = axes.nodes[k][p[k]];
+                    x[axes.order[k]] = axes.nodes[k][p[k]];
                 }
                 *o = prior.density(&x);
                 if !o.is_finite() {
@@ -227,9 +247,7 @@ impl TensorTrainFilter {
                 bounds.len()
             )));
         }
-        let axes = Axes::new(bounds, &params.shape(n));
-        let kolmogorov = Kolmogorov::new(model, &axes, params.max_rank)?;
-        let likelihood = Likelihood::new(model, &axes, params.max_rank)?;
+        let (axes, kolmogorov, likelihood) = plan(model, bounds, params)?;
         let (density, prior_cross) = prior_tt(prior, &axes, params.eps, params.max_rank)?;
         let mut filter = TensorTrainFilter {
             name,
@@ -288,16 +306,18 @@ impl TensorTrainFilter {
             let w: Vec<&[f64]> = weights.iter().map(Vec::as_slice).collect();
             p.contract(&w) * volume
         };
+        let order = &self.axes.order;
         let mut estimate = Estimate::zeros(d);
-        for k in 0..d {
-            estimate.mean[k] = moment(&[k]);
+        for (k, &j) in order.iter().enumerate() {
+            estimate.mean[j] = moment(&[k]);
         }
         let cov = estimate.covariance.as_mut().expect("zeros has one");
         for k in 0..d {
             for l in 0..=k {
-                let c = moment(&[k, l]) - estimate.mean[k] * estimate.mean[l];
-                cov[(k, l)] = c;
-                cov[(l, k)] = c;
+                let (i, j) = (order[k], order[l]);
+                let c = moment(&[k, l]) - estimate.mean[i] * estimate.mean[j];
+                cov[(i, j)] = c;
+                cov[(j, i)] = c;
             }
         }
         if estimate
@@ -361,10 +381,14 @@ impl TensorTrainFilter {
         Ok((p, log_likelihood, truncation, lost))
     }
 
-    /// A one- or two-dimensional grid over `dims` of the filter's box (for marginals).
+    /// A one- or two-dimensional grid over the state dimensions `dims` of the filter's box
+    /// (for marginals).
     fn sub_grid(&self, dims: &[usize]) -> Option<TensorGrid> {
-        let bounds: Vec<(f64, f64)> = dims.iter().map(|&k| self.bounds[k]).collect();
-        let shape: Vec<usize> = dims.iter().map(|&k| self.axes.nodes[k].len()).collect();
+        let bounds: Vec<(f64, f64)> = dims.iter().map(|&j| self.bounds[j]).collect();
+        let shape: Vec<usize> = dims
+            .iter()
+            .map(|&j| self.axes.nodes[self.axes.mode[j]].len())
+            .collect();
         TensorGrid::new(&bounds, &shape).ok()
     }
 }
@@ -408,7 +432,10 @@ impl Filter for TensorTrainFilter {
         }
         if let Some(p) = &self.estimate.covariance {
             let cells = (0..self.axes.dim())
-                .map(|k| libm::sqrt(p[(k, k)].max(0.0)) / self.axes.spacing[k])
+                .map(|k| {
+                    let j = self.axes.order[k];
+                    libm::sqrt(p[(j, j)].max(0.0)) / self.axes.spacing[k]
+                })
                 .fold(f64::INFINITY, f64::min);
             if cells < WIDTH_IN_CELLS_THRESHOLD {
                 out.push(Concern::below(
@@ -452,23 +479,23 @@ impl Filter for TensorTrainFilter {
             out.iter_mut().for_each(|o| *o = 0.0);
             return;
         };
-        let scale = self.axes.cell_volume() / self.axes.spacing[dim];
-        let values: Vec<f64> = self
-            .density
-            .marginal(dim)
-            .iter()
-            .map(|v| v * scale)
-            .collect();
+        let k = self.axes.mode[dim];
+        let scale = self.axes.cell_volume() / self.axes.spacing[k];
+        let values: Vec<f64> = self.density.marginal(k).iter().map(|v| v * scale).collect();
         sub.marginal(&values, 0, grid, out);
     }
 
     fn marginal_density_2d(&self, dims: (usize, usize), xs: &[f64], ys: &[f64], out: &mut [f64]) {
-        let (a, b) = dims;
-        let (lo, hi) = (a.min(b), a.max(b));
-        let Some(sub) = self.sub_grid(&[a, b]).filter(|_| a != b) else {
+        let Some(sub) = self
+            .sub_grid(&[dims.0, dims.1])
+            .filter(|_| dims.0 != dims.1)
+        else {
             out.iter_mut().for_each(|o| *o = 0.0);
             return;
         };
+        // The modes of the two dimensions.
+        let (a, b) = (self.axes.mode[dims.0], self.axes.mode[dims.1]);
+        let (lo, hi) = (a.min(b), a.max(b));
         let scale = self.axes.cell_volume() / (self.axes.spacing[a] * self.axes.spacing[b]);
         let pair = self.density.marginal_2d(lo, hi);
         let (n_lo, n_hi) = (self.axes.nodes[lo].len(), self.axes.nodes[hi].len());

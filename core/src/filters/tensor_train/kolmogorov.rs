@@ -38,12 +38,37 @@ const KEPT_LENGTHS: usize = 4;
 /// The transport `−∂_c(f_c p)` on the block `s..=e`.
 #[derive(Clone, Debug)]
 struct BlockFlow {
+    /// The mode of the transport's direction.
     c: usize,
+    /// The block of modes.
     block: (usize, usize),
     /// `f_c` at the block's nodes (`i_s` fastest).
     f: Vec<f64>,
     /// `max |f_c| / h_c`: cells per unit time.
     speed: f64,
+}
+
+/// The state dimensions each drift component f_c reads.
+fn drift_reads(model: &Model) -> Vec<Vec<usize>> {
+    (0..model.n)
+        .map(|c| reads(model.drift.as_ref(), c, model.n))
+        .collect()
+}
+
+/// The state dimensions of each drift term that couples dimensions (what f_c reads, with c),
+/// for the choice of the train's order.
+pub(super) fn coupled_terms(model: &Model) -> Vec<Vec<usize>> {
+    drift_reads(model)
+        .into_iter()
+        .enumerate()
+        .filter(|(c, read)| read.iter().any(|j| j != c))
+        .map(|(c, mut read)| {
+            read.push(c);
+            read.sort_unstable();
+            read.dedup();
+            read
+        })
+        .collect()
 }
 
 /// The Kolmogorov step of a model on a grid (module doc).
@@ -68,19 +93,19 @@ impl Kolmogorov {
         let a = g * g.transpose();
         let shape = axes.shape();
         let drift = model.drift.as_ref();
-        let mut generators = Vec::with_capacity(n);
+        let mut generators = vec![DMatrix::zeros(0, 0); n];
         let mut blocks = Vec::new();
-        for k in 0..n {
-            let read = reads(drift, k, n);
+        for (c, read) in drift_reads(model).into_iter().enumerate() {
+            let k = axes.mode[c];
             let h = axes.spacing[k];
             let nk = shape[k];
-            let separable = read.iter().all(|&j| j == k);
+            let separable = read.iter().all(|&j| j == c);
             let f_k = if separable && !read.is_empty() {
-                axes.tabulate(drift, &[k], "the drift f")?[k * nk..(k + 1) * nk].to_vec()
+                axes.tabulate(drift, &[k], "the drift f")?[c * nk..(c + 1) * nk].to_vec()
             } else {
                 vec![0.0; nk]
             };
-            let diffusion = 0.5 * a[(k, k)] / (h * h);
+            let diffusion = 0.5 * a[(c, c)] / (h * h);
             let mut l = DMatrix::zeros(nk, nk);
             for i in 0..nk {
                 l[(i, i)] = -2.0 * diffusion;
@@ -91,23 +116,21 @@ impl Kolmogorov {
                     l[(i, i + 1)] = diffusion - f_k[i + 1] / (2.0 * h);
                 }
             }
-            generators.push(l);
+            generators[k] = l;
             if !separable {
-                let mut dims = read.clone();
-                dims.push(k);
-                dims.sort_unstable();
-                dims.dedup();
-                let block = span(&dims);
+                let mut dims = read;
+                dims.push(c);
+                let block = span(&axes.modes_of(&dims));
                 check_block(
                     &shape,
                     block,
                     max_rank,
-                    &alloc::format!("the drift's component f_{}", k + 1),
+                    &alloc::format!("the drift's component f_{}", c + 1),
                 )
                 .map_err(FilterError::Unsuitable)?;
                 let all: Vec<usize> = (block.0..=block.1).collect();
                 let points = axes.points_on(&all);
-                let f = axes.tabulate(drift, &all, "the drift f")?[k * points..(k + 1) * points]
+                let f = axes.tabulate(drift, &all, "the drift f")?[c * points..(c + 1) * points]
                     .to_vec();
                 let speed = f.iter().fold(0.0, |m: f64, v| m.max(libm::fabs(*v))) / h;
                 blocks.push(BlockFlow {
@@ -136,10 +159,10 @@ impl Kolmogorov {
         self.blocks.iter().fold(0.0, |m, b| m.max(b.speed))
     }
 
-    /// `exp(τ L_k)` for every k, made once per step length.
-    fn exponentials(&mut self, tau: f64) -> Vec<DMatrix<f64>> {
-        if let Some((_, e)) = self.exponentials.iter().find(|(t, _)| *t == tau) {
-            return e.clone();
+    /// The index in `exponentials` of `exp(τ L_k)` for every k, made once per step length.
+    fn exponentials(&mut self, tau: f64) -> usize {
+        if let Some(i) = self.exponentials.iter().position(|(t, _)| *t == tau) {
+            return i;
         }
         let e: Vec<DMatrix<f64>> = self
             .generators
@@ -149,23 +172,26 @@ impl Kolmogorov {
         if self.exponentials.len() == KEPT_LENGTHS {
             self.exponentials.remove(0);
         }
-        self.exponentials.push((tau, e.clone()));
-        e
+        self.exponentials.push((tau, e));
+        self.exponentials.len() - 1
+    }
+
+    /// The one-dimensional flows over τ (module doc).
+    fn one_dimensional(&mut self, p: &mut TensorTrain, tau: f64) {
+        let i = self.exponentials(tau);
+        for (k, e) in self.exponentials[i].1.iter().enumerate() {
+            p.apply_mode(k, e);
+        }
     }
 
     /// Advances `p` by τ; returns the relative error of the block splits' truncations
     /// (summed: a bound on their total).
     pub(super) fn step(&mut self, p: &mut TensorTrain, tau: f64, eps: f64, max_rank: usize) -> f64 {
         if self.blocks.is_empty() {
-            for (k, e) in self.exponentials(tau).iter().enumerate() {
-                p.apply_mode(k, e);
-            }
+            self.one_dimensional(p, tau);
             return 0.0;
         }
-        let half = self.exponentials(0.5 * tau);
-        for (k, e) in half.iter().enumerate() {
-            p.apply_mode(k, e);
-        }
+        self.one_dimensional(p, 0.5 * tau);
         let mut error = 0.0;
         let order: Vec<usize> = (0..self.blocks.len())
             .chain((0..self.blocks.len()).rev())
@@ -173,9 +199,7 @@ impl Kolmogorov {
         for b in order {
             error += self.block_flow(b, p, 0.5 * tau, eps, max_rank);
         }
-        for (k, e) in half.iter().enumerate() {
-            p.apply_mode(k, e);
-        }
+        self.one_dimensional(p, 0.5 * tau);
         error
     }
 

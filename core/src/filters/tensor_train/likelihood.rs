@@ -25,7 +25,7 @@ use crate::error::FilterError;
 use crate::grid::tt::TensorTrain;
 use crate::model::{GaussianMixture, MeasurementDensity, Model, ObservationModel};
 
-/// One factor: observation components and the dimensions they read.
+/// One factor: observation components and the state dimensions they read.
 #[derive(Clone, Debug)]
 struct Factor {
     components: Vec<usize>,
@@ -36,7 +36,7 @@ struct Factor {
 #[derive(Clone, Debug)]
 pub(super) struct Likelihood {
     model: Model,
-    /// The dimensions each observation component reads (h_j, and a heteroscedastic
+    /// The state dimensions each observation component reads (h_j, and a heteroscedastic
     /// variance's s_j).
     reads: Vec<Vec<usize>>,
 }
@@ -67,9 +67,8 @@ fn groups(observed: &[usize], linked: impl Fn(usize, usize) -> bool) -> Vec<Vec<
 }
 
 impl Likelihood {
-    /// The update of `model`; every factor's block checked against the memory cap at
-    /// `max_rank` (every component observed: a partial observation's blocks are no wider).
-    pub(super) fn new(model: &Model, axes: &Axes, max_rank: usize) -> Result<Self, FilterError> {
+    /// The update of `model`.
+    pub(super) fn new(model: &Model) -> Self {
         let n = model.n;
         let mut reads_of: Vec<Vec<usize>> = (0..model.m)
             .map(|j| reads(model.observation.as_ref(), j, n))
@@ -91,18 +90,30 @@ impl Likelihood {
             r.sort_unstable();
             r.dedup();
         }
-        let likelihood = Likelihood {
+        Likelihood {
             model: model.clone(),
             reads: reads_of,
-        };
-        let all: Vec<usize> = (0..model.m).collect();
-        for factor in likelihood.factors(&all) {
+        }
+    }
+
+    /// The state dimensions each factor of a whole observation reads (for the choice of the
+    /// train's order).
+    pub(super) fn factor_dims(&self) -> Vec<Vec<usize>> {
+        let all: Vec<usize> = (0..self.model.m).collect();
+        self.factors(&all).into_iter().map(|f| f.dims).collect()
+    }
+
+    /// Every factor's block checked against the memory cap at `max_rank` (every component
+    /// observed: a partial observation's blocks are no wider).
+    pub(super) fn check(&self, axes: &Axes, max_rank: usize) -> Result<(), FilterError> {
+        let all: Vec<usize> = (0..self.model.m).collect();
+        for factor in self.factors(&all) {
             if factor.dims.is_empty() {
                 continue;
             }
             check_block(
                 &axes.shape(),
-                span(&factor.dims),
+                span(&axes.modes_of(&factor.dims)),
                 max_rank,
                 &format!(
                     "the observation's component(s) {:?}",
@@ -111,7 +122,7 @@ impl Likelihood {
             )
             .map_err(FilterError::Unsuitable)?;
         }
-        Ok(likelihood)
+        Ok(())
     }
 
     /// The factors of an observation of the components `observed`.
@@ -169,7 +180,8 @@ impl Likelihood {
         let observed: Vec<usize> = (0..value.len()).filter(|&j| !value[j].is_nan()).collect();
         let (mut shift, mut error) = (0.0, 0.0);
         for factor in self.factors(&observed) {
-            let logs = self.log_factor(&factor, axes, value, dt)?;
+            let modes = axes.modes_of(&factor.dims);
+            let logs = self.log_factor(&factor, &modes, axes, value, dt)?;
             let top = logs.iter().fold(f64::NEG_INFINITY, |m, v| m.max(*v));
             if top == f64::NEG_INFINITY {
                 return Err(FilterError::Likelihood(
@@ -182,10 +194,10 @@ impl Likelihood {
                 // A factor that reads no dimension is a constant: its log is the shift.
                 continue;
             }
-            let (s, e) = span(&factor.dims);
+            let (s, e) = span(&modes);
             p.orthogonalise_around(s, e);
             let (mut block, [left, points, _]) = p.block(s, e);
-            let spread = broadcast_index(p.shape(), (s, e), &factor.dims);
+            let spread = broadcast_index(p.shape(), (s, e), &modes);
             for (idx, v) in block.iter_mut().enumerate() {
                 *v *= factor_values[spread[(idx / left) % points]];
             }
@@ -194,10 +206,11 @@ impl Likelihood {
         Ok((shift, error))
     }
 
-    /// The log of `factor` at the nodes of the sub-grid of its dimensions.
+    /// The log of `factor` at the nodes of the sub-grid of its `modes`.
     fn log_factor(
         &self,
         factor: &Factor,
+        modes: &[usize],
         axes: &Axes,
         value: &[f64],
         dt: f64,
@@ -205,10 +218,10 @@ impl Likelihood {
         let model = &self.model;
         let h = axes.tabulate(
             model.observation.as_ref(),
-            &factor.dims,
+            modes,
             "the observation function h",
         )?;
-        let points = axes.points_on(&factor.dims);
+        let points = axes.points_on(modes);
         let comps = &factor.components;
         let mut out = vec![0.0; points];
         match &model.observations {
@@ -252,17 +265,7 @@ impl Likelihood {
                 let mut residual = vec![0.0; comps.len()];
                 let mut work = vec![0.0; comps.len()];
                 for (q, o) in out.iter_mut().enumerate() {
-                    let mut rest = q;
-                    for (k, xk) in x.iter_mut().enumerate() {
-                        let nodes = &axes.nodes[k];
-                        *xk = if factor.dims.contains(&k) {
-                            let i = rest % nodes.len();
-                            rest /= nodes.len();
-                            nodes[i]
-                        } else {
-                            0.5 * (nodes[0] + nodes[nodes.len() - 1])
-                        };
-                    }
+                    axes.point(modes, q, &mut x);
                     for (j, v) in hx.iter_mut().enumerate() {
                         *v = h[j * points + q];
                     }

@@ -6,7 +6,6 @@ use alloc::vec::Vec;
 
 use super::filter::check_model;
 use super::params::MAX_DIMENSIONS;
-use super::structure::Axes;
 use super::{TensorTrainFilter, TensorTrainParams};
 use crate::error::ZakaiError;
 use crate::filters::builder::builder_fn;
@@ -17,6 +16,16 @@ use crate::filters::params::Declared;
 use crate::validate::ConfigProblem;
 
 builder_fn!(TensorTrainFilter);
+
+/// Bounds of the points chosen from the problem in one dimension (the posterior's expected
+/// width, `resolution::expected_width`): the one-dimensional flow is a dense `n × n`
+/// exponential, made in `O(n³)` (about a second at 512 points).
+const CHOSEN_POINTS_1D: (usize, usize) = (64, 512);
+
+/// Bounds of the points chosen per dimension from the prior's widths beyond one dimension: a
+/// block of two modes at 160 points and the default rank cap of 30 holds 23 million numbers,
+/// within `structure::BLOCK_NUMBERS`.
+const CHOSEN_POINTS: (usize, usize) = (32, 160);
 
 impl Method for TensorTrainFilter {
     const KEY: &'static str = "tensor_train";
@@ -74,12 +83,9 @@ impl Method for TensorTrainFilter {
         if !p.problems(n).is_empty() || problem.bounds.len() != n || n > MAX_DIMENSIONS {
             return Ok(()); // reported with the parameters and the domain
         }
-        let axes = Axes::new(problem.bounds, &p.shape(n));
-        super::kolmogorov::Kolmogorov::new(problem.model, &axes, p.max_rank)
-            .map_err(|e| format!("{e}"))?;
-        super::likelihood::Likelihood::new(problem.model, &axes, p.max_rank)
-            .map_err(|e| format!("{e}"))?;
-        Ok(())
+        super::filter::plan(problem.model, problem.bounds, p)
+            .map(|_| ())
+            .map_err(|e| format!("{e}"))
     }
     fn memory(p: &TensorTrainParams, n: usize) -> Option<usize> {
         // The density and its working copy at the rank cap, the QR and SVD work of one core
@@ -108,6 +114,53 @@ impl Method for TensorTrainFilter {
         name: String,
     ) -> Result<TensorTrainFilter, ZakaiError> {
         TensorTrainFilter::new(name, ctx, p)
+    }
+    fn problem_defaults(
+        p: &TensorTrainParams,
+        problem: &ProblemContext,
+    ) -> Option<(TensorTrainParams, String)> {
+        if !p.points.is_empty() || problem.bounds.len() != problem.model.n {
+            return None;
+        }
+        let (points, why) = if problem.model.n == 1 {
+            let width = crate::filters::resolution::expected_width(problem)?;
+            (
+                alloc::vec![width.count(problem.bounds[0], CHOSEN_POINTS_1D)],
+                width.describe(CHOSEN_POINTS_1D),
+            )
+        } else {
+            let cov = problem.prior.covariance();
+            let points = problem
+                .bounds
+                .iter()
+                .enumerate()
+                .map(|(k, &(lo, hi))| {
+                    let sd = libm::sqrt(cov[(k, k)].max(0.0));
+                    let wanted = (hi - lo) * crate::filters::resolution::POINTS_PER_SD / sd;
+                    if wanted.is_finite() {
+                        (libm::ceil(wanted) as usize).clamp(CHOSEN_POINTS.0, CHOSEN_POINTS.1)
+                    } else {
+                        CHOSEN_POINTS.1
+                    }
+                })
+                .collect();
+            (
+                points,
+                format!(
+                    "{} per prior sd in each dimension (within {}–{}); a posterior narrower than the prior needs more: the width self-check says so",
+                    crate::filters::resolution::POINTS_PER_SD,
+                    CHOSEN_POINTS.0,
+                    CHOSEN_POINTS.1
+                ),
+            )
+        };
+        Some((
+            TensorTrainParams {
+                points: points.clone(),
+                ..p.clone()
+            },
+            format!("points {points:?}, {why}"),
+        ))
     }
     fn refined(p: &TensorTrainParams, n: usize) -> Option<(TensorTrainParams, String)> {
         let from = p.shape(n);

@@ -23,7 +23,9 @@ parameters! {
     /// Parameters of the tensor-train filter ([`TensorTrainFilter`](super::TensorTrainFilter)).
     pub struct TensorTrainParams {
         /// Grid points per dimension over the domain (one number: the same in every
-        /// dimension; empty: 64 in each).
+        /// dimension; empty: chosen from the problem — in one dimension ten per narrowest
+        /// posterior sd to expect, beyond it ten per prior sd, 32–160 — or 64 in each when
+        /// built without one).
         points: Vec<usize> = Vec::new() => int_list "points", at_least(3);
         /// Relative accuracy of every rounding, cross approximation and block split: each
         /// keeps the density within `eps` of itself in the Frobenius norm.

@@ -364,11 +364,12 @@ impl TensorTrain {
 
     /// `Σ_i w(i) G_k(i)`.
     fn weighted_sum(&self, k: usize, w: &[f64]) -> DMatrix<f64> {
-        let mut m = DMatrix::zeros(self.ranks[k], self.ranks[k + 1]);
-        for (s, w) in self.slices(k).iter().zip(w) {
-            m += s * *w;
-        }
-        m
+        let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
+        let core = &self.cores[k];
+        DMatrix::from_fn(r, r_next, |a, b| {
+            let column = &core[r * n * b..r * n * (b + 1)];
+            (0..n).map(|i| w[i] * column[a + r * i]).sum()
+        })
     }
 
     /// Makes the cores before `s` left-orthogonal and those after `e` right-orthogonal (by QR
