@@ -82,7 +82,7 @@
 //! | [`Spectral`] | [`SpectralParams`] |
 //! | [`GaussianSum`] (its mixture reduction, [`Reduction`]) | [`GaussianSumParams`] |
 //! | [`PointMass`] | [`PointMassParams`] |
-//! | [`TensorTrainFilter`] | [`TensorTrainParams`] |
+//! | [`TensorTrainFilter`] | [`TensorTrainParams`] (its box, [`BoxMotion`]) |
 //!
 //! | markers (schemes) | filter type | parameters |
 //! |---|---|---|
@@ -216,7 +216,7 @@ pub use filters::kalman::{
 pub use filters::particle::{Pf, PfParams, SuppliedNormals};
 pub use filters::point_mass::{PointMass, PointMassParams};
 pub use filters::spectral::{Spectral, SpectralParams};
-pub use filters::tensor_train::{TensorTrainFilter, TensorTrainParams};
+pub use filters::tensor_train::{BoxMotion, TensorTrainFilter, TensorTrainParams};
 pub use filters::yau_fd::{
     Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,
 };

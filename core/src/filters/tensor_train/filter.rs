@@ -92,6 +92,8 @@ pub struct TensorTrainFilter {
     likelihood: Likelihood,
     eps: f64,
     max_rank: usize,
+    /// Whether the box follows the posterior ([`super::BoxMotion::Follow`]).
+    follow: bool,
     log_likelihood: f64,
     estimate: Estimate,
     /// The relative truncation error of the last step.
@@ -258,6 +260,7 @@ impl TensorTrainFilter {
             likelihood,
             eps: params.eps,
             max_rank: params.max_rank,
+            follow: params.motion == super::BoxMotion::Follow,
             log_likelihood: 0.0,
             estimate: Estimate::zeros(n),
             truncation: 0.0,
@@ -284,53 +287,73 @@ impl TensorTrainFilter {
         self.density.storage()
     }
 
-    /// `∫ p`: the nodes' sum times the cell volume.
+    /// `∫ p` on the filter's axes.
     fn mass(&self, p: &TensorTrain) -> f64 {
-        let ones: Vec<Vec<f64>> = self.axes.nodes.iter().map(|v| vec![1.0; v.len()]).collect();
-        let weights: Vec<&[f64]> = ones.iter().map(Vec::as_slice).collect();
-        p.contract(&weights) * self.axes.cell_volume()
+        mass_on(p, &self.axes)
     }
 
     /// The mean and covariance of a normalised density, by contraction.
     fn moments(&self, p: &TensorTrain) -> Result<Estimate, FilterError> {
-        let d = self.axes.dim();
-        let ones: Vec<Vec<f64>> = self.axes.nodes.iter().map(|v| vec![1.0; v.len()]).collect();
-        let volume = self.axes.cell_volume();
-        let moment = |dims: &[usize]| {
-            let mut weights: Vec<Vec<f64>> = ones.clone();
-            for &k in dims {
-                for (w, x) in weights[k].iter_mut().zip(&self.axes.nodes[k]) {
-                    *w *= x;
-                }
-            }
-            let w: Vec<&[f64]> = weights.iter().map(Vec::as_slice).collect();
-            p.contract(&w) * volume
-        };
-        let order = &self.axes.order;
-        let mut estimate = Estimate::zeros(d);
-        for (k, &j) in order.iter().enumerate() {
-            estimate.mean[j] = moment(&[k]);
-        }
-        let cov = estimate.covariance.as_mut().expect("zeros has one");
-        for k in 0..d {
-            for l in 0..=k {
-                let (i, j) = (order[k], order[l]);
-                let c = moment(&[k, l]) - estimate.mean[i] * estimate.mean[j];
-                cov[(i, j)] = c;
-                cov[(j, i)] = c;
-            }
-        }
-        if estimate
-            .mean
-            .iter()
-            .chain(cov.iter())
-            .any(|v| !v.is_finite())
-        {
-            return Err(FilterError::NonFinite { what: "mean" });
-        }
-        Ok(estimate)
+        moments_on(p, &self.axes)
     }
+}
 
+/// `∫ p`: the nodes' sum times the cell volume of `axes`.
+fn mass_on(p: &TensorTrain, axes: &Axes) -> f64 {
+    let ones: Vec<Vec<f64>> = axes.nodes.iter().map(|v| vec![1.0; v.len()]).collect();
+    let weights: Vec<&[f64]> = ones.iter().map(Vec::as_slice).collect();
+    p.contract(&weights) * axes.cell_volume()
+}
+
+/// A box moved by [`TensorTrainFilter::followed`]: its axes and bounds, and the share of the
+/// mass the move dropped.
+struct Moved {
+    axes: Axes,
+    bounds: Vec<(f64, f64)>,
+    dropped: f64,
+}
+
+/// The mean and covariance of a density normalised on `axes`, by contraction.
+fn moments_on(p: &TensorTrain, axes: &Axes) -> Result<Estimate, FilterError> {
+    let d = axes.dim();
+    let ones: Vec<Vec<f64>> = axes.nodes.iter().map(|v| vec![1.0; v.len()]).collect();
+    let volume = axes.cell_volume();
+    let moment = |dims: &[usize]| {
+        let mut weights: Vec<Vec<f64>> = ones.clone();
+        for &k in dims {
+            for (w, x) in weights[k].iter_mut().zip(&axes.nodes[k]) {
+                *w *= x;
+            }
+        }
+        let w: Vec<&[f64]> = weights.iter().map(Vec::as_slice).collect();
+        p.contract(&w) * volume
+    };
+    let order = &axes.order;
+    let mut estimate = Estimate::zeros(d);
+    for (k, &j) in order.iter().enumerate() {
+        estimate.mean[j] = moment(&[k]);
+    }
+    let cov = estimate.covariance.as_mut().expect("zeros has one");
+    for k in 0..d {
+        for l in 0..=k {
+            let (i, j) = (order[k], order[l]);
+            let c = moment(&[k, l]) - estimate.mean[i] * estimate.mean[j];
+            cov[(i, j)] = c;
+            cov[(j, i)] = c;
+        }
+    }
+    if estimate
+        .mean
+        .iter()
+        .chain(cov.iter())
+        .any(|v| !v.is_finite())
+    {
+        return Err(FilterError::NonFinite { what: "mean" });
+    }
+    Ok(estimate)
+}
+
+impl TensorTrainFilter {
     /// The step on a copy of the density: `(density, log-likelihood, truncation, lost)`.
     fn advance(
         &mut self,
@@ -381,6 +404,51 @@ impl TensorTrainFilter {
         Ok((p, log_likelihood, truncation, lost))
     }
 
+    /// With `follow`, the box translated by whole cells in every dimension whose posterior
+    /// mean has left the middle eighth of its axis, so that the mean is back at the centre:
+    /// the density moved with it (exactly, node for node; what leaves the box is dropped and
+    /// returned as a share of the mass), and the new axes and box; `None` when no dimension
+    /// moves.
+    fn followed(&self, density: &mut TensorTrain, estimate: &Estimate) -> Option<Moved> {
+        let mut axes = self.axes.clone();
+        let mut bounds = self.bounds.clone();
+        let mut moved = false;
+        let before = mass_on(density, &axes);
+        for k in 0..axes.dim() {
+            let j = axes.order[k];
+            let nodes = &axes.nodes[k];
+            let (n, h) = (nodes.len(), axes.spacing[k]);
+            let centre = 0.5 * (nodes[0] + nodes[n - 1]);
+            let offset = estimate.mean[j] - centre;
+            if libm::fabs(offset) <= (n + 1) as f64 * h / 16.0 {
+                continue;
+            }
+            let cells = libm::round(offset / h) as isize;
+            // New node i holds the old node i + cells.
+            let shift = nalgebra::DMatrix::from_fn(n, n, |i, l| {
+                if l as isize == i as isize + cells {
+                    1.0
+                } else {
+                    0.0
+                }
+            });
+            density.apply_mode(k, &shift);
+            let step = cells as f64 * h;
+            axes.nodes[k].iter_mut().for_each(|x| *x += step);
+            bounds[j] = (bounds[j].0 + step, bounds[j].1 + step);
+            moved = true;
+        }
+        if !moved {
+            return None;
+        }
+        let after = mass_on(density, &axes);
+        Some(Moved {
+            axes,
+            bounds,
+            dropped: (1.0 - after / before).max(0.0),
+        })
+    }
+
     /// A one- or two-dimensional grid over the state dimensions `dims` of the filter's box
     /// (for marginals).
     fn sub_grid(&self, dims: &[usize]) -> Option<TensorGrid> {
@@ -398,8 +466,29 @@ impl Filter for TensorTrainFilter {
 
     fn step(&mut self, obs: &Observation) -> Result<(), FilterError> {
         let observed = obs.check(&self.name, kind_of(&self.model), self.model.m)?;
-        let (density, log_likelihood, truncation, lost) = self.advance(obs, observed)?;
-        let estimate = self.moments(&density)?;
+        let (mut density, log_likelihood, truncation, mut lost) = self.advance(obs, observed)?;
+        let mut estimate = self.moments(&density)?;
+        if self.follow {
+            if let Some(Moved {
+                axes,
+                bounds,
+                dropped,
+            }) = self.followed(&mut density, &estimate)
+            {
+                let mut kolmogorov = Kolmogorov::new(&self.model, &axes, self.max_rank)?;
+                kolmogorov.keep_exponentials_of(&self.kolmogorov);
+                let mass = mass_on(&density, &axes);
+                if !(mass > 0.0 && mass.is_finite()) {
+                    return Err(FilterError::MassLost);
+                }
+                density.scale(1.0 / mass);
+                estimate = moments_on(&density, &axes)?;
+                self.axes = axes;
+                self.bounds = bounds;
+                self.kolmogorov = kolmogorov;
+                lost = 1.0 - (1.0 - lost) * (1.0 - dropped);
+            }
+        }
         self.density = density;
         self.log_likelihood = log_likelihood;
         self.truncation = truncation;

@@ -178,10 +178,18 @@ impl Likelihood {
         max_rank: usize,
     ) -> Result<(f64, f64), FilterError> {
         let observed: Vec<usize> = (0..value.len()).filter(|&j| !value[j].is_nan()).collect();
-        let (mut shift, mut error) = (0.0, 0.0);
+        // The factors' logs, those on the same modes added: one block operation each.
+        let mut merged: Vec<(Vec<usize>, Vec<f64>)> = Vec::new();
         for factor in self.factors(&observed) {
             let modes = axes.modes_of(&factor.dims);
             let logs = self.log_factor(&factor, &modes, axes, value, dt)?;
+            match merged.iter_mut().find(|(m, _)| *m == modes) {
+                Some((_, sum)) => sum.iter_mut().zip(&logs).for_each(|(a, b)| *a += b),
+                None => merged.push((modes, logs)),
+            }
+        }
+        let (mut shift, mut error) = (0.0, 0.0);
+        for (modes, logs) in merged {
             let top = logs.iter().fold(f64::NEG_INFINITY, |m, v| m.max(*v));
             if top == f64::NEG_INFINITY {
                 return Err(FilterError::Likelihood(
@@ -189,17 +197,20 @@ impl Likelihood {
                 ));
             }
             shift += top;
-            let factor_values: Vec<f64> = logs.iter().map(|v| libm::exp(v - top)).collect();
-            if factor.dims.is_empty() {
+            if modes.is_empty() {
                 // A factor that reads no dimension is a constant: its log is the shift.
                 continue;
             }
+            let values: Vec<f64> = logs.iter().map(|v| libm::exp(v - top)).collect();
             let (s, e) = span(&modes);
             p.orthogonalise_around(s, e);
             let (mut block, [left, points, _]) = p.block(s, e);
             let spread = broadcast_index(p.shape(), (s, e), &modes);
-            for (idx, v) in block.iter_mut().enumerate() {
-                *v *= factor_values[spread[(idx / left) % points]];
+            for column in block.chunks_mut(left * points) {
+                for (entries, &q) in column.chunks_mut(left).zip(&spread) {
+                    let factor = values[q];
+                    entries.iter_mut().for_each(|v| *v *= factor);
+                }
             }
             error += p.set_block(s, e, block, eps, max_rank);
         }

@@ -15,4 +15,4 @@ mod params;
 mod structure;
 
 pub use filter::TensorTrainFilter;
-pub use params::TensorTrainParams;
+pub use params::{BoxMotion, TensorTrainParams};

@@ -4,7 +4,9 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use crate::filters::params::{parameters, Declared};
+use serde::{Deserialize, Serialize};
+
+use crate::filters::params::{parameters, Choices, Declared};
 use crate::filters::{count_problem, per_dimension};
 
 /// Points per dimension when none are given.
@@ -33,7 +35,29 @@ parameters! {
         /// The largest TT rank the density may take (a rounding that needs more keeps this
         /// many and reports its error in the self-check).
         max_rank: usize = 30 => int "rank cap", range(1, MAX_RANK);
+        /// Whether the box stays where the domain puts it or follows the posterior
+        /// ([`BoxMotion`]).
+        motion: BoxMotion = BoxMotion::Fixed => choice "box";
     }
+}
+
+/// Where the tensor-train filter's box is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxMotion {
+    /// The domain, throughout.
+    #[default]
+    Fixed,
+    /// The domain's size, following the posterior: after a step whose posterior mean has
+    /// left the middle eighth of an axis, the box moves by whole cells along it (the
+    /// density node for node, exactly) to put the mean back at its centre — for a target
+    /// that travels far, with a posterior much narrower than its path, on few points. What
+    /// leaves the box is counted with the mass a prediction carries out.
+    Follow,
+}
+
+impl Choices for BoxMotion {
+    const NAMES: &'static [&'static str] = &["fixed", "follow"];
 }
 
 impl TensorTrainParams {
