@@ -344,6 +344,22 @@ pub(crate) fn memory_estimate<M: Method>(params: &M::Params, n: usize) -> Option
     M::memory(params, n).map(|b| b.max(SMALL_MEMORY))
 }
 
+/// The first of a family's `(field, message)` problems as the error building it returns, or
+/// `Ok` when there is none.
+pub(crate) fn refuse_problems(
+    method: &str,
+    problems: Vec<(&'static str, String)>,
+) -> Result<(), ZakaiError> {
+    match problems.into_iter().next() {
+        Some((field, message)) => Err(ZakaiError::InvalidParameter {
+            method: method.into(),
+            field,
+            message,
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Relative-field problems from a family's `(field, message)` list.
 pub(crate) fn problems_from(list: Vec<(&'static str, String)>) -> Vec<ConfigProblem> {
     list.into_iter()

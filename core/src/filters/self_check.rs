@@ -67,7 +67,20 @@ pub(crate) fn grid_self_check(
     out: &mut Vec<Concern>,
 ) {
     let mass = grid.mass(u);
-    let near = grid.mass_near_boundary(u, 2) / mass;
+    let widths: Vec<(f64, f64)> = match &estimate.covariance {
+        Some(p) => (0..grid.dim())
+            .map(|d| (p[(d, d)], grid.spacing()[d]))
+            .collect(),
+        None => Vec::new(),
+    };
+    density_concerns(grid.mass_near_boundary(u, 2) / mass, &widths, out);
+}
+
+/// The concerns every grid density shares: `near`, the share of its mass within two nodes
+/// of a face, above [`BOUNDARY_MASS_THRESHOLD`], and the posterior's narrowest width in
+/// cells — from `(variance, spacing)` per dimension — below
+/// [`WIDTH_IN_CELLS_THRESHOLD`].
+pub(crate) fn density_concerns(near: f64, widths: &[(f64, f64)], out: &mut Vec<Concern>) {
     if near > BOUNDARY_MASS_THRESHOLD {
         out.push(Concern::above(
             BOUNDARY_MASS_CHECK,
@@ -76,17 +89,16 @@ pub(crate) fn grid_self_check(
             "the density reaches the edge of the box and is cut off there: widen the domain",
         ));
     }
-    if let Some(p) = &estimate.covariance {
-        let cells = (0..grid.dim())
-            .map(|d| libm::sqrt(p[(d, d)].max(0.0)) / grid.spacing()[d])
-            .fold(f64::INFINITY, f64::min);
-        if cells < WIDTH_IN_CELLS_THRESHOLD {
-            out.push(Concern::below(
-                "posterior width in grid cells",
-                cells,
-                WIDTH_IN_CELLS_THRESHOLD,
-                "the posterior is narrower than the grid resolves: use more points or cells, or a smaller box",
-            ));
-        }
+    let cells = widths
+        .iter()
+        .map(|&(variance, spacing)| libm::sqrt(variance.max(0.0)) / spacing)
+        .fold(f64::INFINITY, f64::min);
+    if cells < WIDTH_IN_CELLS_THRESHOLD {
+        out.push(Concern::below(
+            "posterior width in grid cells",
+            cells,
+            WIDTH_IN_CELLS_THRESHOLD,
+            "the posterior is narrower than the grid resolves: use more points or cells, or a smaller box",
+        ));
     }
 }

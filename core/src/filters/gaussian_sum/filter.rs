@@ -237,13 +237,7 @@ impl GaussianSum {
         params: &GaussianSumParams,
     ) -> Result<Self, ZakaiError> {
         let (model, prior, probes) = (ctx.model, ctx.prior, ctx.probes);
-        if let Some((field, msg)) = params.problems().first() {
-            return Err(ZakaiError::InvalidParameter {
-                method: name,
-                field,
-                message: msg.clone(),
-            });
-        }
+        crate::filters::method::refuse_problems(&name, params.problems())?;
         let LinearMixtureModel {
             a,
             b,

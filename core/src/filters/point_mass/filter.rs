@@ -118,13 +118,7 @@ impl PointMass {
     ) -> Result<Self, ZakaiError> {
         let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let n = model.n;
-        if let Some((field, msg)) = params.problems(n).first() {
-            return Err(ZakaiError::InvalidParameter {
-                method: name,
-                field,
-                message: msg.clone(),
-            });
-        }
+        crate::filters::method::refuse_problems(&name, params.problems(n))?;
         check_model(&name, model)?;
         let grid = crate::filters::fpe_split::cells_over(bounds, &params.shape(n))?;
         // A driven model's kernel and measurement are made for each step, from the model at

@@ -11,10 +11,7 @@ use super::likelihood::Likelihood;
 use super::structure::Axes;
 use super::TensorTrainParams;
 use crate::error::{FilterError, ZakaiError};
-use crate::filters::self_check::{BOUNDARY_MASS_CHECK, BOUNDARY_MASS_THRESHOLD};
-use crate::filters::{
-    kind_of, Concern, Estimate, Filter, Observation, Observed, WIDTH_IN_CELLS_THRESHOLD,
-};
+use crate::filters::{kind_of, Concern, Estimate, Filter, Observation, Observed};
 use crate::grid::tt::{cross, CrossOptions, CrossReport, TensorTrain};
 use crate::grid::TensorGrid;
 use crate::model::{Model, Prior};
@@ -235,13 +232,7 @@ impl TensorTrainFilter {
     ) -> Result<Self, ZakaiError> {
         let (model, prior, bounds) = (ctx.model, ctx.prior, ctx.bounds);
         let n = model.n;
-        if let Some((field, msg)) = params.problems(n).first() {
-            return Err(ZakaiError::InvalidParameter {
-                method: name,
-                field,
-                message: msg.clone(),
-            });
-        }
+        crate::filters::method::refuse_problems(&name, params.problems(n))?;
         check_model(model)?;
         if bounds.len() != n {
             return Err(ZakaiError::Dimension(format!(
@@ -511,30 +502,16 @@ impl Filter for TensorTrainFilter {
             .collect();
         let weights: Vec<&[f64]> = inner.iter().map(Vec::as_slice).collect();
         let near = 1.0 - self.density.contract(&weights) * self.axes.cell_volume();
-        if near > BOUNDARY_MASS_THRESHOLD {
-            out.push(Concern::above(
-                BOUNDARY_MASS_CHECK,
-                near,
-                BOUNDARY_MASS_THRESHOLD,
-                "the density reaches the edge of the box and is cut off there: widen the domain",
-            ));
-        }
-        if let Some(p) = &self.estimate.covariance {
-            let cells = (0..self.axes.dim())
+        let widths: Vec<(f64, f64)> = match &self.estimate.covariance {
+            Some(p) => (0..self.axes.dim())
                 .map(|k| {
                     let j = self.axes.order[k];
-                    libm::sqrt(p[(j, j)].max(0.0)) / self.axes.spacing[k]
+                    (p[(j, j)], self.axes.spacing[k])
                 })
-                .fold(f64::INFINITY, f64::min);
-            if cells < WIDTH_IN_CELLS_THRESHOLD {
-                out.push(Concern::below(
-                    "posterior width in grid cells",
-                    cells,
-                    WIDTH_IN_CELLS_THRESHOLD,
-                    "the posterior is narrower than the grid resolves: use more points or a smaller box",
-                ));
-            }
-        }
+                .collect(),
+            None => Vec::new(),
+        };
+        crate::filters::self_check::density_concerns(near, &widths, out);
         if self.truncation > TRUNCATION_THRESHOLD {
             out.push(Concern::above(
                 "relative truncation error of the last step (TT rounding)",
