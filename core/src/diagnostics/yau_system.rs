@@ -620,7 +620,19 @@ fn fit_quadratic(
     let rows: Vec<f64> = pts.iter().flat_map(|x| row(x)).collect();
     let design = DMatrix::from_row_slice(pts.len(), cols, &rows);
     let rhs = DVector::from_column_slice(values);
-    let coef = design.clone().svd(true, true).solve(&rhs, 1e-12).ok()?;
+    // Least squares by Householder QR, not nalgebra's `svd(true, true)`, which can return
+    // wrong singular values (dimforge/nalgebra#1172); points that do not determine a
+    // quadratic (fewer than its coefficients, or a rank-deficient design) give no fit.
+    if pts.len() < cols {
+        return None;
+    }
+    let qr = design.clone().qr();
+    let r = qr.r();
+    let largest = r.diagonal().amax();
+    if r.diagonal().iter().any(|v| v.abs() <= 1e-12 * largest) {
+        return None;
+    }
+    let coef = r.solve_upper_triangular(&(qr.q().transpose() * &rhs))?;
     let residual = &design * &coef - &rhs;
     let (at, worst) = residual
         .iter()
