@@ -25,7 +25,7 @@ use alloc::vec::Vec;
 
 use nalgebra::DMatrix;
 
-use svd::{sorted_svd, truncated_svd, truncation_rank};
+use svd::{sorted_svd, truncated_svd_near, truncation_rank};
 
 /// A tensor in TT format (module doc).
 #[derive(Clone, Debug, PartialEq)]
@@ -440,7 +440,10 @@ impl TensorTrain {
         for k in s..e {
             let cols = rest.len() / rows;
             let m = DMatrix::from_column_slice(rows, cols, &rest);
-            let (u, sv, vt, tail) = truncated_svd(&m, threshold, max_rank);
+            // The rank the cut had before, doubled: what an operation on the block usually
+            // needs (the cap when it does not).
+            let guess = 2 * self.ranks[k + 1] + 2;
+            let (u, sv, vt, tail) = truncated_svd_near(&m, threshold, max_rank, guess);
             let r = sv.len();
             discarded += tail;
             self.cores[k] = u.as_slice().to_vec();
