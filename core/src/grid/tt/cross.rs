@@ -228,11 +228,7 @@ pub(crate) fn cross<E>(
             }
         }
         report.sweeps = sweep + 1;
-        let tt = TensorTrain {
-            shape: shape.to_vec(),
-            ranks: ranks.clone(),
-            cores: cores.clone(),
-        };
+        let tt = TensorTrain::of_cores(shape.to_vec(), ranks.clone(), cores.clone());
         if let Some(before) = &previous {
             let mut difference = tt.add(&before.scaled(-1.0));
             difference.round(1e-3, usize::MAX);

@@ -34,9 +34,31 @@ pub(crate) struct TensorTrain {
     /// `r₀ … r_d`, with `r₀ = r_d = 1`.
     ranks: Vec<usize>,
     cores: Vec<Vec<f64>>,
+    /// Cores `0..left_orthogonal` are known to be left-orthogonal (`Σ_i G(i)ᵀ G(i) = I`).
+    left_orthogonal: usize,
+    /// Cores `right_orthogonal..d` are known to be right-orthogonal (`Σ_i G(i) G(i)ᵀ = I`).
+    right_orthogonal: usize,
 }
 
 impl TensorTrain {
+    /// A train of these cores, none known to be orthogonal.
+    fn of_cores(shape: Vec<usize>, ranks: Vec<usize>, cores: Vec<Vec<f64>>) -> Self {
+        let d = shape.len();
+        TensorTrain {
+            shape,
+            ranks,
+            cores,
+            left_orthogonal: 0,
+            right_orthogonal: d,
+        }
+    }
+
+    /// Core k was changed: neither orthogonality of it is known any more.
+    fn changed(&mut self, k: usize) {
+        self.left_orthogonal = self.left_orthogonal.min(k);
+        self.right_orthogonal = self.right_orthogonal.max(k + 1);
+    }
+
     /// TT-SVD (Oseledets 2011, Algorithm 1) of the full array `values` (first index fastest)
     /// of `shape`: successive truncated SVDs of its unfoldings, each within
     /// `ε ‖A‖_F / √(d − 1)`, so that the whole error is at most `ε ‖A‖_F`, and each rank at
@@ -69,20 +91,18 @@ impl TensorTrain {
         }
         cores.push(rest);
         ranks.push(1);
-        TensorTrain {
-            shape: shape.to_vec(),
-            ranks,
-            cores,
-        }
+        let mut tt = Self::of_cores(shape.to_vec(), ranks, cores);
+        tt.left_orthogonal = d - 1;
+        tt
     }
 
     /// The rank-one tensor `A(i) = Π_k v_k(i_k)`.
     pub(crate) fn rank_one(vectors: &[Vec<f64>]) -> Self {
-        TensorTrain {
-            shape: vectors.iter().map(Vec::len).collect(),
-            ranks: vec![1; vectors.len() + 1],
-            cores: vectors.to_vec(),
-        }
+        Self::of_cores(
+            vectors.iter().map(Vec::len).collect(),
+            vec![1; vectors.len() + 1],
+            vectors.to_vec(),
+        )
     }
 
     /// Points per dimension.
@@ -113,6 +133,7 @@ impl TensorTrain {
     /// `A ← c A` (the first core scaled).
     pub(crate) fn scale(&mut self, c: f64) {
         self.cores[0].iter_mut().for_each(|v| *v *= c);
+        self.changed(0);
     }
 
     /// The matrix `M` (`n_k × n_k`) applied along dimension k,
@@ -123,6 +144,7 @@ impl TensorTrain {
         let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
         assert_eq!(m.shape(), (n, n), "an operator of dimension {k}'s points");
         let transposed = m.transpose();
+        self.changed(k);
         let core = &mut self.cores[k];
         for b in 0..r_next {
             let block = &mut core[r * n * b..r * n * (b + 1)];
@@ -159,11 +181,7 @@ impl TensorTrain {
             }
         }
         assert_eq!(next, modes.len(), "modes ascending and within the shape");
-        TensorTrain {
-            shape: shape.to_vec(),
-            ranks,
-            cores,
-        }
+        Self::of_cores(shape.to_vec(), ranks, cores)
     }
 
     /// The TT ranks `r₀ … r_d`.
@@ -245,6 +263,7 @@ impl TensorTrain {
                 .iter_mut()
                 .zip(&other.cores[0])
                 .for_each(|(a, b)| *a += b);
+            sum.changed(0);
             return sum;
         }
         let ranks: Vec<usize> = (0..=d)
@@ -300,11 +319,7 @@ impl TensorTrain {
                 Self::from_slices(&slices)
             })
             .collect();
-        TensorTrain {
-            shape: self.shape.clone(),
-            ranks,
-            cores,
-        }
+        Self::of_cores(self.shape.clone(), ranks, cores)
     }
 
     /// TT-rounding (Oseledets 2011, Algorithm 2, left to right then back): the cores made
@@ -315,17 +330,7 @@ impl TensorTrain {
     /// rank cap cut.
     pub(crate) fn round(&mut self, eps: f64, max_rank: usize) -> f64 {
         let d = self.shape.len();
-        for k in 0..d - 1 {
-            let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
-            let qr = DMatrix::from_column_slice(r * n, r_next, &self.cores[k]).qr();
-            let (q, rr) = (qr.q(), qr.r());
-            let r_new = q.ncols();
-            self.cores[k] = q.as_slice().to_vec();
-            let (n2, r2) = (self.shape[k + 1], self.ranks[k + 2]);
-            let next = DMatrix::from_column_slice(r_next, n2 * r2, &self.cores[k + 1]);
-            self.cores[k + 1] = (rr * next).as_slice().to_vec();
-            self.ranks[k + 1] = r_new;
-        }
+        self.orthogonalise_around(d - 1, d - 1);
         let norm = libm::sqrt(self.cores[d - 1].iter().map(|v| v * v).sum::<f64>());
         let threshold = eps * norm / libm::sqrt((d.max(2) - 1) as f64);
         let mut discarded = 0.0;
@@ -345,6 +350,8 @@ impl TensorTrain {
             self.cores[k - 1] = (left * us).as_slice().to_vec();
             self.ranks[k] = rank;
         }
+        self.left_orthogonal = 0;
+        self.right_orthogonal = 1;
         if norm > 0.0 {
             libm::sqrt(discarded) / norm
         } else {
@@ -377,7 +384,9 @@ impl TensorTrain {
     /// Frobenius norm is then the tensor's, and a truncation inside the block errs by as much
     /// in the whole tensor as in the block.
     pub(crate) fn orthogonalise_around(&mut self, s: usize, e: usize) {
-        for k in 0..s {
+        // Only the cores not known to be orthogonal already: the orthogonality centre moves.
+        let from = self.left_orthogonal.min(s);
+        for k in from..s {
             let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
             let qr = DMatrix::from_column_slice(r * n, r_next, &self.cores[k]).qr();
             let (q, rr) = (qr.q(), qr.r());
@@ -387,7 +396,12 @@ impl TensorTrain {
             self.cores[k + 1] = (rr * next).as_slice().to_vec();
             self.ranks[k + 1] = q.ncols();
         }
-        for k in (e + 1..self.shape.len()).rev() {
+        if from < s {
+            self.left_orthogonal = s;
+            self.right_orthogonal = self.right_orthogonal.max(s + 1);
+        }
+        let to = self.right_orthogonal.max(e + 1);
+        for k in (e + 1..to).rev() {
             let (r, n, r_next) = (self.ranks[k], self.shape[k], self.ranks[k + 1]);
             // Core k as r × (n r_next) = L Q with Q's rows orthonormal: the QR of its transpose.
             let qr = DMatrix::from_column_slice(r, n * r_next, &self.cores[k])
@@ -399,6 +413,10 @@ impl TensorTrain {
             let prev = DMatrix::from_column_slice(r_prev * n_prev, r, &self.cores[k - 1]);
             self.cores[k - 1] = (prev * rr.transpose()).as_slice().to_vec();
             self.ranks[k] = q.ncols();
+        }
+        if e + 1 < to {
+            self.right_orthogonal = e + 1;
+            self.left_orthogonal = self.left_orthogonal.min(e);
         }
     }
 
@@ -456,6 +474,13 @@ impl TensorTrain {
             rows = r * self.shape[k + 1];
         }
         self.cores[e] = rest;
+        // Cores s..e are the SVDs' left factors: left-orthogonal; core e is not.
+        self.left_orthogonal = if self.left_orthogonal >= s {
+            e
+        } else {
+            self.left_orthogonal
+        };
+        self.right_orthogonal = self.right_orthogonal.max(e + 1);
         if norm > 0.0 {
             libm::sqrt(discarded) / norm
         } else {
@@ -696,11 +721,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        TensorTrain {
-            shape: shape.to_vec(),
-            ranks,
-            cores,
-        }
+        TensorTrain::of_cores(shape.to_vec(), ranks, cores)
     }
 
     /// Rounding's bound as a property: over random tensors of 2–5 dimensions and ranks up
@@ -856,6 +877,55 @@ mod tests {
             if name == "separable" {
                 assert!(tt.ranks().iter().all(|&r| r <= 2), "{:?}", tt.ranks());
             }
+        }
+    }
+
+    /// Every core the train claims orthogonal is: after orthogonalising around blocks in
+    /// turn, splitting blocks back, one-dimensional operators and scaling (the operations the
+    /// filter makes, which move the orthogonality centre instead of sweeping every core), and
+    /// the tensor is unchanged by the orthogonalisations.
+    #[test]
+    fn orthogonality_is_tracked_as_the_centre_moves() {
+        let claims_hold = |tt: &TensorTrain| {
+            for k in 0..tt.shape.len() {
+                let (r, n, r_next) = (tt.ranks[k], tt.shape[k], tt.ranks[k + 1]);
+                if k < tt.left_orthogonal {
+                    let g = DMatrix::from_column_slice(r * n, r_next, &tt.cores[k]);
+                    let gram = g.transpose() * &g;
+                    assert!(
+                        (gram - DMatrix::identity(r_next, r_next)).amax() < 1e-12,
+                        "left {k}"
+                    );
+                }
+                if k >= tt.right_orthogonal {
+                    let g = DMatrix::from_column_slice(r, n * r_next, &tt.cores[k]);
+                    let gram = &g * g.transpose();
+                    assert!((gram - DMatrix::identity(r, r)).amax() < 1e-12, "right {k}");
+                }
+            }
+        };
+        let shape = [4usize, 5, 3, 6, 4];
+        let mut a = random_tt(&shape, &[2, 3, 3, 2], 9);
+        let full = a.to_full();
+        let norm = frobenius(&full);
+        for (s, e) in [(1usize, 2usize), (3, 4), (0, 0), (2, 3), (4, 4), (1, 1)] {
+            a.orthogonalise_around(s, e);
+            claims_hold(&a);
+            assert!(distance(&a.to_full(), &full) <= 1e-12 * norm, "({s}, {e})");
+            assert!(a.left_orthogonal >= s && a.right_orthogonal <= e + 1);
+        }
+        let m = DMatrix::from_fn(3, 3, |i, j| 1.0 + (i * 3 + j) as f64 * 0.1);
+        let mut b = a.clone();
+        for step in 0..6 {
+            let (s, e) = [(1usize, 2usize), (0, 1), (3, 4), (2, 2)][step % 4];
+            b.orthogonalise_around(s, e);
+            let (block, _) = b.block(s, e);
+            b.set_block(s, e, block, 1e-13, 50);
+            claims_hold(&b);
+            b.apply_mode(2, &m);
+            claims_hold(&b);
+            b.scale(1.5);
+            claims_hold(&b);
         }
     }
 }
