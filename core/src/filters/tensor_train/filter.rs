@@ -415,6 +415,9 @@ impl TensorTrainFilter {
                 continue;
             }
             let cells = libm::round(offset / h) as isize;
+            if cells == 0 {
+                continue;
+            }
             // New node i holds the old node i + cells.
             let shift = nalgebra::DMatrix::from_fn(n, n, |i, l| {
                 if l as isize == i as isize + cells {

@@ -4,7 +4,7 @@
 //! (Strang 1968) into flows each of which acts on a few adjacent dimensions:
 //!
 //! * **one-dimensional flows**, one per dimension k: the diffusion `½ a_kk ∂²_k` and, when
-//!   f_k reads x_k alone, its drift `−∂_k(f_k p)` — central differences, the matrix exponential
+//!   f_k reads x_k alone or is a constant, its drift `−∂_k(f_k p)` — central differences, the matrix exponential
 //!   `exp(τ L_k)` of the `n_k × n_k` generator applied along dimension k
 //!   ([`TensorTrain::apply_mode`]): exact in time, ranks unchanged. These flows commute;
 //! * **block flows**, one per drift component f_c that reads another dimension than c: the
@@ -102,7 +102,8 @@ impl Kolmogorov {
             let h = axes.spacing[k];
             let nk = shape[k];
             let separable = read.iter().all(|&j| j == c);
-            let f_k = if separable && !read.is_empty() {
+            // A component that reads x_c alone, or nothing (a constant), is in the 1-D flow.
+            let f_k = if separable {
                 axes.tabulate(drift, &[k], "the drift f")?[c * nk..(c + 1) * nk].to_vec()
             } else {
                 vec![0.0; nk]

@@ -46,7 +46,7 @@ impl Method for TensorTrainFilter {
         MethodInfo {
             key: Self::KEY.into(),
             name: "TT".into(),
-            summary: "the Yau–Yau grid filter in tensor-train format, for 2 to 12 dimensions".into(),
+            summary: "the Yau–Yau grid filter in tensor-train format, for up to 12 dimensions".into(),
             paper: "Li, Wang, Yau & Zhang (2023), IEEE TAC 68; Matoušek, Brandner, Duník & Punčochář (2024); 000 (15), 001 (3), (6)".into(),
             takes: Takes::Both,
             dims: format!("1–{MAX_DIMENSIONS}"),
@@ -89,19 +89,23 @@ impl Method for TensorTrainFilter {
     }
     fn memory(p: &TensorTrainParams, n: usize) -> Option<usize> {
         // The density and its working copy at the rank cap, the QR and SVD work of one core
-        // (a few times a core), and the largest block, at most the cap on blocks.
-        let shape = p.shape(n);
+        // (a few times a core), and three arrays of a block of the two widest dimensions with
+        // its outer ranks at the cap (one in 2-D, the cap in 3-D, its square beyond), at most
+        // the cap on blocks. A block flow holds up to nine such arrays at once (RK4's stages):
+        // this counts the three that are there whatever the ranks.
+        let mut shape = p.shape(n);
         let r = p.max_rank;
         let cores = shape.iter().try_fold(0usize, |a, &k| {
             a.checked_add(k.checked_mul(r)?.checked_mul(r)?)
         })?;
+        shape.sort_unstable_by(|a, b| b.cmp(a));
+        let outer = r.checked_pow(n.saturating_sub(2).min(2) as u32)?;
         let block = super::structure::BLOCK_NUMBERS.min(
             shape
                 .iter()
                 .take(2)
                 .try_fold(1usize, |a, &k| a.checked_mul(k))?
-                .checked_mul(r)?
-                .checked_mul(r)?,
+                .checked_mul(outer)?,
         );
         cores
             .checked_mul(6)?

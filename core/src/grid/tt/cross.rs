@@ -10,8 +10,9 @@
 //! an `(r_k n_k) × (n_{k+1} r_{k+2})` matrix; its truncated SVD `U Σ Vᵀ` (within ε‖M‖_F, at
 //! most the rank cap) gives the new rank, and the rows of U of nearly largest volume
 //! ([`super::maxvol`]) the next left set — going back, V's give the right sets. The cores
-//! are the interpolation `U Û⁻¹`, so the tensor equals the function on every entry the
-//! last sweep evaluated. Sweeps alternate in direction until two consecutive
+//! are the interpolation `U Û⁻¹` of the truncated `U Σ Vᵀ`: the tensor equals the function on
+//! the entries the last sweep evaluated up to that truncation (exactly where nothing was
+//! truncated). Sweeps alternate in direction until two consecutive
 //! approximations agree within ε (relative, Frobenius).
 //!
 //! Cost: `Σ_k r_k n_k n_{k+1} r_{k+2}` evaluations per sweep, and an SVD of each supercore.

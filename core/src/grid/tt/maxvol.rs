@@ -17,7 +17,8 @@ const SWAPS: usize = 100;
 /// `r` row indices of the `m × r` matrix `u` (`m ≥ r`) whose submatrix `Û` has a volume
 /// `|det Û|` that no single row swap grows by more than [`GROWTH`]: every entry of `u Û⁻¹` is
 /// then at most 1.05 in modulus, so the rows interpolate the others with bounded
-/// coefficients. Started from the pivots of Gaussian elimination with row pivoting; a
+/// coefficients — when the swaps stop for that reason; after [`SWAPS`] swaps, or at a
+/// singular `Û`, the rows found so far are returned without that bound. Started from the pivots of Gaussian elimination with row pivoting; a
 /// rank-deficient `u` gets its pivots where they can be found and unused rows after.
 pub(super) fn maxvol(u: &DMatrix<f64>) -> Vec<usize> {
     let (m, r) = u.shape();

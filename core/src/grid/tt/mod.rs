@@ -1,7 +1,7 @@
 //! Tensors on a tensor-product grid in tensor-train (TT) format: the groundwork of the
 //! low-rank grid filters beyond three dimensions (issue 63; Li, Wang, Yau & Zhang 2023, IEEE
-//! TAC 68; Matoušek, Brandner, Duník & Punčochář 2024, arXiv 2501.07942). Not yet used by a
-//! filter.
+//! TAC 68; Matoušek, Brandner, Duník & Punčochář 2024, arXiv 2501.07942): what the
+//! tensor-train filter (`filters::tensor_train`) keeps its density in.
 //!
 //! A d-way array `A(i₁, …, i_d)` is the product `G₁(i₁) G₂(i₂) ⋯ G_d(i_d)` of matrices
 //! `G_k(i_k)` of size `r_{k−1} × r_k` (`r₀ = r_d = 1`), the cores (Oseledets 2011, "Tensor-train
