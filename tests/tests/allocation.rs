@@ -52,14 +52,19 @@ static GLOBAL: Counting = Counting;
 
 /// The (preset, method) pairs whose steps take 0.25 ms or more natively (measured: the 2-D
 /// grid filters 20–55 ms, the 1-D grid filters on direct-4.3's fine grid 6–12 ms, the Gaussian
-/// sum 1.6 ms); every other pair takes under 0.25 ms.
-const HEAVY: [(&str, &str); 6] = [
+/// sum 1.6 ms, the tensor-train filter 0.25–8 ms: `zakai run <preset> --methods
+/// tensor_train`); every other pair takes under 0.25 ms.
+const HEAVY: [(&str, &str); 10] = [
     ("yau-2d", "qiem"),
     ("yau-2d", "iem"),
     ("yau-2d", "qiem4"),
     ("direct-4.3", "qiem"),
     ("direct-4.3", "iem"),
     ("sa-example-1", "gaussian_sum"),
+    ("cubic-sensor-1d", "tensor_train"),
+    ("sa-example-1", "tensor_train"),
+    ("direct-4.3", "tensor_train"),
+    ("yau-2d", "tensor_train"),
 ];
 
 /// Allocations of every applicable method on each preset over `steps` steps, each followed by
@@ -129,7 +134,7 @@ const LONG: usize = if cfg!(target_arch = "wasm32") {
 /// and reading its estimate with `Filter::estimate_into` into one reused `Estimate` — after 5
 /// warm-up steps: [`LONG`] steps each (10⁴ natively), or 200 for the few whose step takes
 /// 0.25 ms or more ([`HEAVY`]: the 2-D grid filters, the 1-D grid filters on direct-4.3's fine
-/// grid, the Gaussian sum), none stopping at an error. Returns how many methods it held.
+/// grid, the Gaussian sum, the tensor-train filter), none stopping at an error. Returns how many methods it held.
 fn every_method_allocates_nothing_on(preset: &str) -> usize {
     let mut held = 0;
     let mut long = 0;

@@ -243,8 +243,11 @@ impl Likelihood {
                 let s_inv = s.try_inverse().ok_or(FilterError::NotPositiveDefinite {
                     what: "observation noise covariance",
                 })?;
+                let mut hq = vec![0.0; comps.len()];
                 for (q, o) in out.iter_mut().enumerate() {
-                    let hq: Vec<f64> = comps.iter().map(|&j| h[j * points + q]).collect();
+                    for (v, &j) in hq.iter_mut().zip(comps) {
+                        *v = h[j * points + q];
+                    }
                     let mut sum = 0.0;
                     for a in 0..comps.len() {
                         let g: f64 = (0..comps.len()).map(|b| s_inv[(a, b)] * hq[b]).sum();
