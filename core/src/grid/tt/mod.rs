@@ -70,29 +70,9 @@ impl TensorTrain {
             shape.iter().product::<usize>(),
             "values of the shape"
         );
-        let norm = libm::sqrt(values.iter().map(|v| v * v).sum::<f64>());
-        let threshold = eps * norm / libm::sqrt((d.max(2) - 1) as f64);
-        let mut ranks = vec![1];
-        let mut cores = Vec::with_capacity(d);
-        let mut rest = values.to_vec();
-        for &n in &shape[..d - 1] {
-            let rows = ranks[ranks.len() - 1] * n;
-            let cols = rest.len() / rows;
-            let (u, s, vt) = sorted_svd(DMatrix::from_column_slice(rows, cols, &rest));
-            let (r, _) = truncation_rank(&s, threshold, max_rank);
-            cores.push(u.columns(0, r).iter().copied().collect());
-            // Σ_r V_rᵀ (r × cols), column-major: the next unfolding's storage.
-            let mut next = vt.rows(0, r).into_owned();
-            for (j, mut row) in next.row_iter_mut().enumerate() {
-                row *= s[j];
-            }
-            rest = next.as_slice().to_vec();
-            ranks.push(r);
-        }
-        cores.push(rest);
-        ranks.push(1);
-        let mut tt = Self::of_cores(shape.to_vec(), ranks, cores);
-        tt.left_orthogonal = d - 1;
+        // The whole array is one block of a rank-one train: its split is the TT-SVD.
+        let mut tt = Self::rank_one(&shape.iter().map(|&n| vec![0.0; n]).collect::<Vec<_>>());
+        tt.set_block(0, d - 1, values.to_vec(), eps, max_rank);
         tt
     }
 
