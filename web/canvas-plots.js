@@ -231,13 +231,14 @@ function marker(ctx, shape, x, y, r) {
 export const markerShape = (i) => MARKERS[i % MARKERS.length];
 
 /**
- * The 2-D heatmap: `values` on a `P × P` raster over `domain` (first component fastest),
+ * The 2-D heatmap: `values` on a `P × P` raster over `domain` (first component fastest; its
+ * axes named by `labels`),
  * coloured against its maximum with a numeric colour bar, at most `height` CSS pixels high; `curvature` (optional) tints in
  * red where ∇²(−log p) is not positive semidefinite; `marks` are estimates `{x, y, color, i}`
  * (thin hollow markers growing with the method's index, so coinciding ones stay visible) and
  * `truth` a white disc drawn over them.
  */
-export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = null, marks = [], truth = null }) {
+export function drawHeatmap2d(canvas, { height, values, P, domain, labels = ['x1', 'x2'], curvature = null, marks = [], truth = null }) {
   // The plot box square: the canvas is a little wider than high (colour bar on the right).
   const width = Math.max(260, Math.min(canvas.parentElement.clientWidth - 8, height * 1.16));
   sizeCanvas(canvas, width, width / 1.16);
@@ -252,7 +253,7 @@ export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = n
     const img = new ImageData(P, P);
     for (let j = 0; j < P; j++) {
       for (let i = 0; i < P; i++) {
-        // Row j of the raster is x2 = ys[j]; the canvas has x2 growing upwards.
+        // Row j of the raster is y = ys[j]; the canvas has y growing upwards.
         const v = values[i + P * j];
         let c = colormap(max > 0 ? v / max : 0);
         const k = curvature ? curvature[i + P * j] : NaN;
@@ -296,6 +297,6 @@ export function drawHeatmap2d(canvas, { height, values, P, domain, curvature = n
     ctx.stroke();
   }
   ctx.restore();
-  axes(ctx, b, [x0, x1], [y0, y1], 'x1', 'x2', scale);
+  axes(ctx, b, [x0, x1], [y0, y1], labels[0], labels[1], scale);
   colourBar(ctx, bar, max > 0 ? max : 1, 'density', scale);
 }

@@ -8,7 +8,7 @@ import { color, dash, lineSample, markerSymbol, OBS_COLORS } from './looks.js';
 import { labels, state } from './state.js';
 import { worker } from './channel.js';
 import {
-  clamp, densityHeight, densityPoints, presenting, showStepPhase, shownDim, shownFrame, shownRow,
+  clamp, densityHeight, densityPoints, heatmapPair, presenting, showStepPhase, shownDim, shownFrame, shownRow,
   smoothedDensity, smoothedShown, updateScrub, forecastShown,
 } from './view.js';
 import { blindSpans, densityData, errorChoices, errorData, innovationData, observationSeries, render, trajectoryData } from './series.js';
@@ -117,6 +117,11 @@ export function makePlots(info, recorded = null) {
   makeCharts();
   $('metrics').classList.toggle('no-truth', !info.has_truth);
   fillOptions($('heatmap-method'), names.map((m, i) => [i, m]));
+  // Beyond two dimensions the heatmap shows the joint marginal of any pair of components.
+  const pairs = [];
+  for (let a = 0; a < n; a++) for (let b = a + 1; b < n; b++) pairs.push([`${a},${b}`, `x${a + 1}, x${b + 1}`]);
+  fillOptions($('heatmap-pair'), pairs);
+  $('heatmap-pair').disabled = n < 3;
   $('heatmap-method').value = $('density-method').value;
   const key = $('heatmap-key');
   key.replaceChildren();
@@ -137,10 +142,10 @@ export function makePlots(info, recorded = null) {
       el('td', {}, lineSample(color(i), dash(i)), m), el('td', { className: 'mse' }, '–'), el('td', { className: 'status' }, 'running'), el('td', { className: 'loglik' }, '–'));
   }));
   $('timing').querySelector('tbody').replaceChildren(...names.map((m, i) => el('tr', { dataset: { method: String(i) } },
-    el('td', {}, m), el('td', { className: 'time' }, '–'), el('td', { className: 'concerns' }, '—'))));
+    el('td', {}, m), el('td', { className: 'time' }, '–'), el('td', { className: 'held' }, '—'), el('td', { className: 'concerns' }, '—'))));
   methodChips(names);
   updateScrub();
-  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, lcLayer: $('lc-layer').checked } });
+  worker.postMessage({ type: 'view', view: { dim: 0, points: densityPoints(), densityMethod: Number($('density-method').value) || 0, heatmapMethod: Number($('heatmap-method').value) || 0, heatmapPair: heatmapPair(), lcLayer: $('lc-layer').checked } });
 }
 
 // A forecast's three series — the predictive mean, dotted, and the interval's upper and lower

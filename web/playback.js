@@ -4,7 +4,7 @@
 import { $ } from './dom.js';
 import { state } from './state.js';
 import { worker } from './channel.js';
-import { densityHeight, densityPoints, setPlaying, showStepPhase, shownRow } from './view.js';
+import { densityHeight, densityPoints, heatmapPair, setPlaying, showStepPhase, shownRow } from './view.js';
 import { applyFrame, render } from './series.js';
 import { makeCharts, resetHeatStrip } from './charts.js';
 import { dropSmoothed, requestSmoothing, setupSmoothing } from './smoothing.js';
@@ -142,6 +142,7 @@ export function setupPlayback() {
     resizeTimer = setTimeout(fitPlots, 100);
   });
   $('heatmap-method').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapMethod: Number($('heatmap-method').value) || 0 }, redraw: true }));
+  $('heatmap-pair').addEventListener('change', () => worker.postMessage({ type: 'view', view: { heatmapPair: heatmapPair() }, redraw: true }));
   $('bands').addEventListener('change', () => render());
   $('previous').addEventListener('change', () => render());
   $('error-against').addEventListener('change', () => render());

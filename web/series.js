@@ -7,7 +7,7 @@ import { $, el, fillOptions } from './dom.js';
 import { drawHeatmap2d } from './canvas-plots.js';
 import { color } from './looks.js';
 import { labels, state } from './state.js';
-import { bandsShown, densityHeight, forecastShown, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
+import { bandsShown, densityHeight, forecastShown, heatmapPair, observationData, shownDim, shownFrame, shownRow, smoothedShown, updateScrub } from './view.js';
 
 // 003 §3: is the shown grid density log-concave (Hessian of −log p positive semidefinite)?
 function showLogConcavity(c) {
@@ -324,6 +324,7 @@ export function render() {
     if (t) {
       t.querySelector('.time').textContent = m.steps ? `${(m.ms_per_step * 1000).toFixed(1)} µs` : '–';
       t.querySelector('.concerns').textContent = m.concerns?.length ? m.concerns.join('\n') : 'within thresholds';
+      t.querySelector('.held').textContent = heldText(m.footprint);
     }
   });
   const warnings = (state.diagnostics ?? []).flatMap((m, i) => m.warnings.map((w) => `${labels()[i]}: ${w}`));
@@ -338,16 +339,28 @@ export function render() {
   updateScrub();
 }
 
+// A compressed density's footprint: its numbers against the full grid's, its ranks now and
+// the largest so far ('—' for the methods that do not compress theirs).
+function heldText(f) {
+  if (!f) return '—';
+  const sup = (digits) => [...digits].map((c) => '⁰¹²³⁴⁵⁶⁷⁸⁹'[Number(c)]).join('');
+  const grid = f.grid_points < 1e6 ? f.grid_points.toLocaleString('en-US') : f.grid_points.toExponential(2).replace(/e\+(\d+)$/, (_, e) => `·10${sup(e)}`);
+  return `${f.numbers.toLocaleString('en-US')} numbers for ${grid} grid points; ranks ${f.ranks.join('-')} (largest so far ${f.peak_ranks.join('-')})`;
+}
+
 // The 2-D heatmap of the shown frame, with the truth and every shown estimate then.
 export function drawHeatmap() {
   const f = shownFrame();
   const h2 = f?.heat2d;
   const d = state.data;
   const row = f?.row ?? shownRow();
-  const marks = d.est.map((e, i) => ({ x: e[0][row] ?? d.ghost[i][0][row], y: e[1][row] ?? d.ghost[i][1][row], color: color(i), i }))
+  // The pair the frame was drawn for (the selector may have moved on since).
+  const [a, b] = h2?.pair ?? heatmapPair();
+  const marks = d.est.map((e, i) => ({ x: e[a][row] ?? d.ghost[i][a][row], y: e[b][row] ?? d.ghost[i][b][row], color: color(i), i }))
     .filter((m, i) => m.x != null && m.y != null && !state.hidden.has(i));
   drawHeatmap2d($('heatmap'), {
-    height: densityHeight() + 60, values: h2?.values, P: h2?.points ?? 0, domain: state.info.domain, curvature: h2?.curvature, marks,
-    truth: state.info.has_truth && d.truth[0][row] != null ? [d.truth[0][row], d.truth[1][row]] : null,
+    height: densityHeight() + 60, values: h2?.values, P: h2?.points ?? 0, domain: [state.info.domain[a], state.info.domain[b]],
+    labels: [`x${a + 1}`, `x${b + 1}`], curvature: h2?.curvature, marks,
+    truth: state.info.has_truth && d.truth[a][row] != null ? [d.truth[a][row], d.truth[b][row]] : null,
   });
 }

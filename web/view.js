@@ -24,6 +24,8 @@ export const presenting = () => document.body.classList.contains('present');
 export const densityHeight = () => Math.round(clamp(window.innerHeight * (presenting() ? 0.24 : 0.22), 140, presenting() ? 400 : 260));
 // The state component on screen.
 export const shownDim = () => Number($('component').value) || 0;
+// The pair of components the heatmap shows (x1, x2 unless another pair is chosen).
+export const heatmapPair = () => ($('heatmap-pair').value || '0,1').split(',').map(Number);
 // The row on screen: the time slider's, or the latest.
 export const shownRow = () => (state.scrub ?? state.data.times.length - 1);
 // The kept frame at or before the shown row (its densities).

@@ -17,7 +17,7 @@ let info = null;
 let playing = false;
 let speed = 5;
 let awaitingAck = false;
-let view = { dim: 0, points: 200, densityMethod: 0, heatmapMethod: 0, heatmapPoints: 120, lcLayer: false };
+let view = { dim: 0, points: 200, densityMethod: 0, heatmapMethod: 0, heatmapPair: [0, 1], heatmapPoints: 120, lcLayer: false };
 let sent = 0; // rows already sent to the page
 // Which load of the page the session answers (the page drops what an older load sends).
 let loadId = 0;
@@ -48,14 +48,17 @@ function frame(summary) {
   // Log-concavity (003 §3) of the density shown in the heat strip, for grid methods.
   const concavity = session.logConcavity(view.densityMethod, LOG_CONCAVITY_FLOOR);
   const logConcave = concavity ? { logConcave: concavity.log_concave, worst: concavity.worst } : null;
-  // 2-D models: the heatmap's joint density of x1, x2 and, on request, its log-concavity map.
+  // Models of 2 or more dimensions: the heatmap's joint density of the chosen pair of
+  // components (x1, x2 unless changed) and, on request, its log-concavity map.
   let heat2d = null;
   if (info.n >= 2) {
     const P = view.heatmapPoints;
+    const [a, b] = view.heatmapPair;
     heat2d = {
       points: P,
-      values: session.density2d(view.heatmapMethod, P),
-      curvature: view.lcLayer ? session.logConcavity2d(view.heatmapMethod, P, LOG_CONCAVITY_FLOOR) : null,
+      pair: [a, b],
+      values: session.density2d(view.heatmapMethod, P, a, b),
+      curvature: view.lcLayer ? session.logConcavity2d(view.heatmapMethod, P, a, b, LOG_CONCAVITY_FLOOR) : null,
     };
   }
   sent = to;

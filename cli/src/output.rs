@@ -9,7 +9,7 @@ use zakai::lab::study::frontier::{Frontier, ReferenceCheck};
 use zakai::lab::reproduction::RowResult;
 
 use zakai::lab::experiment::Experiment;
-use zakai::lab::papers::PaperTable;
+use zakai::lab::papers::{PaperTable, Reported};
 use zakai::lab::study::monte_carlo::MonteCarloSummary;
 
 use crate::Format;
@@ -244,8 +244,12 @@ pub fn reproduction(table: &PaperTable, rows: &[RowResult], runs: usize) -> Stri
                     .join(" / "),
                 _ => "failed".into(),
             };
-            let paper = c.paper.as_deref().map_or("failed".into(), slash);
-            let ratio = match (&c.ours, &c.paper) {
+            let paper = match &c.paper {
+                Reported::Value(v) => slash(v),
+                Reported::Failed => "failed".into(),
+                Reported::NotInPaper => "not in paper".into(),
+            };
+            let ratio = match (&c.ours, c.paper.values()) {
                 (Some(o), Some(p)) => o
                     .iter()
                     .zip(p)

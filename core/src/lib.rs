@@ -194,8 +194,8 @@ pub use filters::smoothing::{
     smoothed_estimates, SmoothedStep, Smoother, SmootherInfo, Smoothing, SmoothingPlan,
 };
 pub use filters::{
-    observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Fork, Observation,
-    ObservationKind, Observed, Perturbation, Score,
+    observation_log_likelihoods, Concern, DensityView, Estimate, Filter, Footprint, Fork,
+    Observation, ObservationKind, Observed, Perturbation, Score,
 };
 /// The tensor grid a grid filter lives on ([`YauYauFilter::grid`],
 /// [`ContinuousDiscreteGrid::grid`]), and the moments of a density on it.

@@ -170,7 +170,9 @@ pub fn compare_with_paper(
     for row in &table.rows {
         let r = zakai::lab::reproduction::reproduce_row(&table, row, runs, &|| {}).expect("runs");
         for cell in &r.cells {
-            let Some(paper) = &cell.paper else { continue };
+            let Some(paper) = cell.paper.values() else {
+                continue;
+            };
             let ours = cell
                 .ours
                 .as_ref()

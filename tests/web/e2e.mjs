@@ -211,6 +211,30 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   const sa2 = await heatmapStats();
   assert.ok(sa2.lit > 10000 && sa2.colours > 20, `separation-approach heatmap drawn: ${JSON.stringify(sa2)}`);
   await page.screenshot({ path: `${artifacts}/playground-sa-example-2.png` });
+  // Beyond two dimensions the caption chooses the pair: the 4-D preset offers all six, and
+  // (x3, x4) redraws the TT filter's joint marginal of those two — the wasm's raster against
+  // the product of the two 1-D marginals it draws (the components are independent: rank 1).
+  await load(`${url}?preset=cubic-sensor-4d`, 'cubic-sensor-4d');
+  for (let i = 0; i < 3; i++) await stepOnce();
+  const pairs = await page.$$eval('#heatmap-pair option', (o) => o.map((x) => x.textContent));
+  assert.deepEqual(pairs, ['x1, x2', 'x1, x3', 'x1, x4', 'x2, x3', 'x2, x4', 'x3, x4'], 'six pairs');
+  await page.selectOption('#heatmap-pair', '2,3');
+  await page.waitForFunction(() => window.zakaiPage.lastDensity?.heat2d?.pair?.join() === '2,3', null, { timeout: 5000 });
+  await page.waitForTimeout(300);
+  const h34 = await heatmapStats();
+  assert.ok(!h34.hidden && h34.lit > 10000 && h34.colours > 20, `the (x3, x4) heatmap drawn: ${JSON.stringify(h34)}`);
+  const product = await page.evaluate(() => {
+    const h = window.zakaiPage.lastDensity.heat2d;
+    const P = h.points;
+    const v = Array.from(h.values);
+    const rows = Array.from({ length: P }, (_, j) => v.slice(j * P, (j + 1) * P).reduce((a, b) => a + b, 0));
+    const cols = Array.from({ length: P }, (_, i) => rows.reduce((a, _, j) => a + v[i + P * j], 0));
+    const total = rows.reduce((a, b) => a + b, 0);
+    let worst = 0;
+    for (let j = 0; j < P; j++) for (let i = 0; i < P; i++) worst = Math.max(worst, Math.abs(v[i + P * j] - cols[i] * rows[j] / total));
+    return worst / Math.max(...v);
+  });
+  assert.ok(product < 1e-9, `the (x3, x4) raster is the product of its marginals: ${product}`);
   await load(`${url}?preset=cubic-sensor-1d`, 'cubic-sensor-1d');
   assert.ok((await heatmapStats()).hidden, 'no heatmap for a 1-D model');
   await page.waitForFunction(() => document.querySelector('#unavailable-list li[data-method="kalman"]'), null, { timeout: 10000 });

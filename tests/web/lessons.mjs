@@ -142,7 +142,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.equal(await page.$$eval('#lesson [style]', (m) => m.length), 0, `${id}: no inline styles (CSP)`);
     // What the text points to is on screen: the timing table (lessons 2 and 7) and the
     // log-concavity note (6) in the diagnostics panel, opened with the lesson.
-    const pointsTo = { 'kalman-bucy': '#timing', spectral: '#timing', 'two-d': '#log-concavity' }[id];
+    const pointsTo = { 'kalman-bucy': '#timing', spectral: '#timing', 'two-d': '#log-concavity', 'tensor-train': '#timing' }[id];
     if (pointsTo) {
       assert.deepEqual(LESSONS.find((l) => l.id === id).opens, ['diagnostics-panel'], `${id} opens the diagnostics panel`);
       assert.ok(await page.isVisible(pointsTo), `${id}: ${pointsTo} visible`);
@@ -858,6 +858,85 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
   r = await run();
   assert.match(r.methods.KF.failure ?? '', /does not apply here/);
   assert.ok(!r.methods.QIEM.failed && !r.methods.EKF.failed, 'the others run');
+
+  // Lesson 14: the tensor-train filter's footprint, ranks and heatmap, on the 4-D cubic
+  // sensor, then a sensor of a sum and six dimensions.
+  {
+    const near = (a, b, tol) => Math.abs(a - b) <= tol;
+    const tt = () => page.evaluate(() => {
+      const { info, data, diagnostics, lastDensity } = window.zakaiPage;
+      const n = info.n;
+      const last = data.times.length - 1;
+      const byName = Object.fromEntries(info.methods.map((name, i) => {
+        const mse = Array.from({ length: n }, (_, j) => {
+          let s = 0, c = 0;
+          data.est[i][j].forEach((v, k) => { if (v != null) { s += (v - data.truth[j][k]) ** 2; c++; } });
+          return s / c;
+        });
+        return [name, { i, mse, total: diagnostics[i].mse, footprint: diagnostics[i].footprint, concerns: diagnostics[i].concerns }];
+      }));
+      const t = info.methods.findIndex((m) => m.startsWith('TT'));
+      const pf = info.methods.indexOf('PF(10000)');
+      // The PF(10000) mean's largest distance from the TT mean, in TT sds, per component.
+      const gap = Array.from({ length: n }, (_, j) => Math.max(...data.est[t][j].map((v, k) => Math.abs(v - data.est[pf][j][k]) / ((data.hi[t][j][k] - v) / 2))));
+      // The correlation of the heatmap's raster (the TT filter's joint marginal).
+      const h = lastDensity.heat2d;
+      const P = h.points;
+      const axis = (d) => Array.from({ length: P }, (_, i) => info.domain[d][0] + (info.domain[d][1] - info.domain[d][0]) * i / (P - 1));
+      const [xs, ys] = [axis(h.pair[0]), axis(h.pair[1])];
+      let [m, mx, my] = [0, 0, 0];
+      for (let j = 0; j < P; j++) for (let i = 0; i < P; i++) { const v = h.values[i + P * j]; m += v; mx += v * xs[i]; my += v * ys[j]; }
+      [mx, my] = [mx / m, my / m];
+      let [sxx, syy, sxy] = [0, 0, 0];
+      for (let j = 0; j < P; j++) for (let i = 0; i < P; i++) {
+        const v = h.values[i + P * j];
+        sxx += v * (xs[i] - mx) ** 2; syy += v * (ys[j] - my) ** 2; sxy += v * (xs[i] - mx) * (ys[j] - my);
+      }
+      const held = document.querySelector(`#timing tbody tr[data-method="${t}"] .held`).textContent;
+      return { n, tt: info.methods[t], byName, gap, heat: { pair: h.pair, t: lastDensity.t, corr: sxy / Math.sqrt(sxx * syy), method: document.getElementById('heatmap-method').value === String(t) }, held, t: data.times[last], heldVisible: !!document.querySelector('#diagnostics-panel[open]') };
+    });
+    await openLesson('tensor-train');
+    let x = await tt();
+    console.log('lesson 14:', JSON.stringify({ gap: x.gap, corr: x.heat.corr, held: x.held, mse: Object.fromEntries(Object.entries(x.byName).map(([k, v]) => [k, v.total])) }));
+    let m = x.byName[x.tt];
+    assert.ok(x.n === 4 && x.heldVisible && x.heat.method && x.heat.t === 5, 'four dimensions, the diagnostics open, the heatmap the TT filter\'s at t = 5');
+    assert.ok(m.footprint.numbers === 640 && m.footprint.grid_points === 160 ** 4 && near(160 ** 4, 6.55e8, 0.005e8), `640 numbers for 160⁴ ≈ 6.55·10⁸ points: ${JSON.stringify(m.footprint)}`);
+    assert.ok(near(160 ** 4 * 8 / 1e9, 5.2, 0.05) && near(160 ** 10, 1.1e22, 0.05e22) && Math.round(Math.sqrt(1 / 0.1) * 8 * 10 / 1) === 253, '5.2 GB; 160¹⁰ ≈ 1.1·10²²; 10 a prior sd would be 253');
+    assert.ok(m.footprint.ranks.every((r) => r === 1) && m.footprint.peak_ranks.every((r) => r === 1), `ranks 1 now and throughout: ${JSON.stringify(m.footprint)}`);
+    assert.equal(x.held, '640 numbers for 6.55·10⁸ grid points; ranks 1-1-1-1-1 (largest so far 1-1-1-1-1)', 'the column says so');
+    assert.ok(x.heat.pair[0] === 0 && x.heat.pair[1] === 1 && Math.abs(x.heat.corr) < 1e-10, `x1, x2: a product, correlation ${x.heat.corr}`);
+    const total = (k) => x.byName[k].total;
+    assert.ok(near(total(x.tt), 1.5223, 5e-5) && near(total('PF(10000)'), 1.5564, 5e-5) && near(total('PF(1000)'), 1.5112, 5e-5) && near(total('EKF'), 1.8552, 5e-5) && near(total('UKF'), 2.5935, 5e-5), 'MSEs 1.5223, 1.5564, 1.5112, 1.8552, 2.5935');
+    assert.ok(Math.max(...x.gap) <= 0.52 && near(x.gap[0], 0.51, 0.005) && x.gap.every((g) => g <= x.gap[0]), `PF(10000) within 0.52 TT sds, the largest 0.51 in x1: ${x.gap}`);
+    assert.ok(total('PF(1000)') < Math.min(total(x.tt), total('PF(10000)'), total('EKF'), total('UKF')), 'PF(1000) the smallest MSE on this run');
+    const first = m.mse;
+    await tryThis('a sensor of the sum: h₁ = (x₁ + x₂)³');
+    x = await tt();
+    m = x.byName[x.tt];
+    console.log('lesson 14, sum sensor:', JSON.stringify({ corr: x.heat.corr, held: x.held, fp: m.footprint, concerns: m.concerns }));
+    assert.ok(near(x.heat.corr, -0.56, 0.005) && x.heat.t === 5, `correlation −0.56 at t = 5: ${x.heat.corr}`);
+    assert.ok(m.footprint.peak_ranks[1] === 30 && m.footprint.ranks[1] === 19 && m.footprint.numbers === 6400, `r₁ up to the cap 30, 19 at t = 5, 6 400 numbers: ${JSON.stringify(m.footprint)}`);
+    assert.ok([0, 2, 3, 4].every((k) => m.footprint.peak_ranks[k] === 1), 'the other ranks 1 throughout');
+    assert.ok(near(m.mse[2], first[2], 1e-12) && near(m.mse[3], first[3], 1e-12) && near(m.mse[2], 0.6480, 5e-5) && near(m.mse[3], 0.3160, 5e-5), `x3, x4: the first run's MSEs 0.6480, 0.3160: ${m.mse} against ${first}`);
+    // Mehler: for correlation ρ the unfolding's singular values fall by q = |ρ|/(1 + √(1 − ρ²)),
+    // the relative error after r of them is q^r.
+    const q = 0.56 / (1 + Math.sqrt(1 - 0.56 ** 2));
+    assert.equal(Math.ceil(Math.log(1e-7) / Math.log(q)), 14, 'ρ = −0.56 needs 14 singular values for 10⁻⁷');
+    assert.ok(!m.concerns.some((c) => c.startsWith('relative truncation error')), 'the rounding\'s self-check silent');
+    assert.ok(m.concerns.length === 2 && /^mass near the boundary .* > 1\.0e-4 from t = 0\.92/.test(m.concerns[0]) && /^mass carried out of the box/.test(m.concerns[1]), `two self-checks warn, from t = 0.92: ${JSON.stringify(m.concerns)}`);
+    await tryThis('six sensors instead of four');
+    x = await tt();
+    m = x.byName[x.tt];
+    console.log('lesson 14, six sensors:', JSON.stringify({ held: x.held, mse: Object.fromEntries(Object.entries(x.byName).map(([k, v]) => [k, [v.total, v.mse[0]]])) }));
+    assert.ok(x.n === 6 && m.footprint.numbers === 960 && m.footprint.grid_points === 160 ** 6 && near(160 ** 6, 1.68e13, 0.005e13) && near(160 ** 6 * 8 / 1e12, 134, 0.5), `960 numbers for 160⁶ ≈ 1.68·10¹³ points (134 TB): ${JSON.stringify(m.footprint)}`);
+    assert.ok(m.footprint.peak_ranks.every((r) => r === 1), 'every rank 1 throughout');
+    assert.ok(near(total(x.tt), 2.1316, 5e-5) && near(total('PF(10000)'), 2.2937, 5e-5) && near(total('PF(1000)'), 2.1024, 5e-5) && near(total('EKF'), 5.3858, 5e-5) && near(total('UKF'), 5.8585, 5e-5), 'MSEs 2.1316, 2.2937, 2.1024, 5.3858, 5.8585');
+    assert.ok(near(x.byName.EKF.mse[0], 3.55, 0.005) && near(x.byName.UKF.mse[0], 3.50, 0.005) && near(m.mse[0], 0.33, 0.005), 'x1: 3.55, 3.50 against 0.33');
+    for (const k of ['EKF', 'UKF']) {
+      const c = x.byName[k].concerns;
+      assert.ok(c.length === 1 && /^normalised innovation squared .* from t = 2\.15/.test(c[0]), `${k}: innovations larger than its covariance says, from t = 2.15: ${JSON.stringify(c)}`);
+    }
+  }
 
   // Every lesson's rendering and layout checked, those no section opened here.
   for (const id of ids) if (!checked.has(id)) await openLesson(id);

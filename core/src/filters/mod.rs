@@ -242,6 +242,11 @@ pub trait Filter: core::fmt::Debug + Fork {
     fn density(&self) -> Option<DensityView<'_>> {
         None
     }
+    /// How many numbers hold the density, against the full grid they stand for, for a method
+    /// whose density is compressed (the tensor-train filter); `None` otherwise.
+    fn footprint(&self) -> Option<Footprint> {
+        None
+    }
     /// Warnings about the chosen parameters (violated stability or positivity conditions),
     /// known before the first step.
     fn warnings(&self) -> Vec<String> {
@@ -275,6 +280,21 @@ pub trait Filter: core::fmt::Debug + Fork {
         });
         marginal::gaussian_2d([est.mean[a], est.mean[b]], cov, xs, ys, out);
     }
+}
+
+/// What a compressed density costs to hold ([`Filter::footprint`]): the numbers kept and the
+/// points of the full tensor grid they stand for, with the tensor-train ranks `r₀ … r_d`
+/// now and the largest each has reached since the filter was built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Footprint {
+    /// Numbers the density is held in.
+    pub numbers: usize,
+    /// Points of the full tensor grid (a float: `160¹⁰` does not fit a `usize`).
+    pub grid_points: f64,
+    /// The ranks now, `r₀ = r_d = 1`.
+    pub ranks: Vec<usize>,
+    /// The largest value each rank has taken so far.
+    pub peak_ranks: Vec<usize>,
 }
 
 /// Cloning a filter behind `Box<dyn Filter>`: implemented for every [`Filter`] that is

@@ -35,8 +35,8 @@ pub struct CellResult {
     pub seconds_per_run: f64,
     /// Mean build (off-line) time (seconds).
     pub build_seconds: f64,
-    /// The paper's values (`None`: reported as failed).
-    pub paper: Option<Vec<f64>>,
+    /// What the paper reports.
+    pub paper: crate::lab::papers::Reported,
 }
 
 /// Our results for one row.

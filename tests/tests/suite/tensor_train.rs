@@ -147,10 +147,25 @@ fn coupled_linear(points: usize, steps: usize) -> (f64, f64, usize) {
         .build()
         .unwrap();
     let (mut mean_error, mut variance_error, mut rank) = (0.0f64, 0.0f64, 1usize);
+    let mut peaks = tt.ranks().to_vec();
     for k in 1..=steps {
         let dy = path.observation(k);
         kalman.step_increment(dt, dy).unwrap();
         tt.step_increment(dt, dy).unwrap();
+        peaks
+            .iter_mut()
+            .zip(tt.ranks())
+            .for_each(|(p, &r)| *p = (*p).max(r));
+        // What the filter says it holds: the train's numbers, Σ r_{k−1} n r_k, for the n^d
+        // points of the grid, its ranks, and the largest each has been.
+        let held = tt.footprint().expect("a TT filter reports its footprint");
+        let r = tt.ranks();
+        assert_eq!(
+            held.numbers,
+            (0..d).map(|i| r[i] * points * r[i + 1]).sum::<usize>()
+        );
+        assert_eq!(held.grid_points, (points as f64).powi(d as i32));
+        assert_eq!((held.ranks.as_slice(), &held.peak_ranks), (r, &peaks));
         let (exact, estimate) = (kalman.estimate(), tt.estimate());
         let (p, q) = (exact.covariance.unwrap(), estimate.covariance.unwrap());
         for i in 0..d {

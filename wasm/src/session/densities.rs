@@ -101,21 +101,22 @@ impl Session {
         })
     }
 
-    /// Method `index`'s current joint density of components 1 and 2 on the raster
-    /// `densityGrid(0, points) × densityGrid(1, points)` (first component fastest; empty for
-    /// 1-D models and failed methods).
-    pub fn density2d(&self, index: usize, points: usize) -> Vec<f64> {
+    /// Method `index`'s current joint (marginal) density of components `x` and `y` (from 0)
+    /// on the raster `densityGrid(x, points) × densityGrid(y, points)` (component `x`
+    /// fastest; empty for 1-D models, failed methods and a pair that is not two different
+    /// components of the state).
+    pub fn density2d(&self, index: usize, points: usize, x: usize, y: usize) -> Vec<f64> {
         let (Some(filter), Some(track)) =
             (self.run.filters().get(index), self.run.tracks().get(index))
         else {
             return Vec::new();
         };
-        if !track.has_state() || track.n < 2 {
+        if !track.has_state() || x == y || x.max(y) >= track.n {
             return Vec::new();
         }
-        let (xs, ys) = (self.density_grid(0, points), self.density_grid(1, points));
+        let (xs, ys) = (self.density_grid(x, points), self.density_grid(y, points));
         let mut out = vec![0.0; xs.len() * ys.len()];
-        filter.marginal_density_2d((0, 1), &xs, &ys, &mut out);
+        filter.marginal_density_2d((x, y), &xs, &ys, &mut out);
         out
     }
 
@@ -123,12 +124,19 @@ impl Session {
     /// raster point (NaN where the density is below `relative_floor` of its maximum or at the
     /// raster's edge): the log-concavity layer of the 2-D heatmap.
     #[wasm_bindgen(js_name = logConcavity2d)]
-    pub fn log_concavity_2d(&self, index: usize, points: usize, relative_floor: f64) -> Vec<f64> {
-        let values = self.density2d(index, points);
+    pub fn log_concavity_2d(
+        &self,
+        index: usize,
+        points: usize,
+        x: usize,
+        y: usize,
+        relative_floor: f64,
+    ) -> Vec<f64> {
+        let values = self.density2d(index, points, x, y);
         if values.is_empty() {
             return Vec::new();
         }
-        let (xs, ys) = (self.density_grid(0, points), self.density_grid(1, points));
+        let (xs, ys) = (self.density_grid(x, points), self.density_grid(y, points));
         // The raster's points are the interior nodes of a grid one spacing wider.
         let bounds: Vec<(f64, f64)> = [&xs, &ys]
             .iter()

@@ -26,6 +26,17 @@ struct MethodDiagnostics {
     warnings: Vec<String>,
     /// The self-checks that warned so far, one line each.
     concerns: Vec<String>,
+    /// A compressed density's numbers against its full grid ([`zakai::Footprint`]).
+    footprint: Option<Footprint>,
+}
+
+/// [`zakai::Footprint`] as the page reads it.
+#[derive(Serialize)]
+struct Footprint {
+    numbers: usize,
+    grid_points: f64,
+    ranks: Vec<usize>,
+    peak_ranks: Vec<usize>,
 }
 
 #[wasm_bindgen]
@@ -168,6 +179,12 @@ impl Session {
                 steps: t.steps,
                 warnings: self.run.filters()[i].warnings(),
                 concerns: t.concerns.iter().map(|c| c.describe()).collect(),
+                footprint: self.run.filters()[i].footprint().map(|f| Footprint {
+                    numbers: f.numbers,
+                    grid_points: f.grid_points,
+                    ranks: f.ranks,
+                    peak_ranks: f.peak_ranks,
+                }),
             })
             .collect();
         to_js(&list)

@@ -99,6 +99,8 @@ pub struct TensorTrainFilter {
     lost: f64,
     /// How the prior's cross approximation went (`None`: a product prior, exact).
     prior_cross: Option<CrossReport>,
+    /// The largest value each rank has taken since the filter was built.
+    peak_ranks: Vec<usize>,
 }
 
 /// A model the filter takes: an autonomous SDE with a constant diagonal `G Gᵀ`.
@@ -242,6 +244,7 @@ impl TensorTrainFilter {
         }
         let (axes, kolmogorov, likelihood) = plan(model, bounds, params)?;
         let (density, prior_cross) = prior_tt(prior, &axes, params.eps, params.max_rank)?;
+        let peak_ranks = density.ranks().to_vec();
         let mut filter = TensorTrainFilter {
             name,
             model: model.clone(),
@@ -257,6 +260,7 @@ impl TensorTrainFilter {
             truncation: 0.0,
             lost: 0.0,
             prior_cross,
+            peak_ranks,
             axes,
         };
         let mass = filter.mass(&filter.density);
@@ -483,6 +487,9 @@ impl Filter for TensorTrainFilter {
                 lost = 1.0 - (1.0 - lost) * (1.0 - dropped);
             }
         }
+        for (peak, &r) in self.peak_ranks.iter_mut().zip(density.ranks()) {
+            *peak = (*peak).max(r);
+        }
         self.density = density;
         self.log_likelihood = log_likelihood;
         self.truncation = truncation;
@@ -541,6 +548,16 @@ impl Filter for TensorTrainFilter {
                 ));
             }
         }
+    }
+
+    /// `Σ r_{k−1} n_k r_k` numbers for the `Π n_k` points of the grid.
+    fn footprint(&self) -> Option<crate::filters::Footprint> {
+        Some(crate::filters::Footprint {
+            numbers: self.storage(),
+            grid_points: self.axes.nodes.iter().map(|v| v.len() as f64).product(),
+            ranks: self.ranks().to_vec(),
+            peak_ranks: self.peak_ranks.clone(),
+        })
     }
 
     fn marginal_density(&self, dim: usize, grid: &[f64], out: &mut [f64]) {
