@@ -391,10 +391,10 @@ pub(crate) struct FrontierArgs {
     #[arg(long, value_delimiter = ',')]
     pub(crate) methods: Option<Vec<String>>,
     /// Grid points per dimension of the QIEM reference posterior (N + 1 a power of two or
-    /// 3·2^k keeps its DST fast).
+    /// 3·2^k keeps its DST fast); beyond three dimensions, of the tensor-train reference.
     #[arg(long, default_value_t = 767)]
     pub(crate) reference_points: usize,
-    /// Time step of the QIEM reference posterior.
+    /// Time step of the QIEM reference posterior (the tensor-train reference has none).
     #[arg(long, default_value_t = 1e-4)]
     pub(crate) reference_dt: f64,
     /// Runs of the convergence check of the reference (halved Δs and Δt).

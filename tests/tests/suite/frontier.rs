@@ -27,6 +27,22 @@ fn the_reference_is_exact_where_it_can_be_and_qiem_otherwise() {
         }
         other => panic!("{other:?}"),
     }
+    // Beyond three dimensions, where QIEM stops, the tensor-train filter, its twin at half the
+    // spacing; a model it refuses as well (a discrete-time map) has no reference.
+    let four = presets::preset("cubic-sensor-4d").unwrap();
+    let tt = reference(&four, 47, 1e-3).unwrap();
+    match (&tt.method, tt.finer.as_ref()) {
+        (MethodConfig::TensorTrain(a), Some(MethodConfig::TensorTrain(b))) => {
+            assert_eq!(
+                (a.points.as_slice(), b.points.as_slice()),
+                (&[47][..], &[95][..])
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut map = four.clone();
+    map.model.dynamics = zakai::lab::scenario::DynamicsKind::Discrete;
+    assert!(reference(&map, 47, 1e-3).is_err());
 }
 
 /// Refining the reference moves the posterior mean less and less: the check measures the
@@ -59,12 +75,13 @@ fn the_sweep_keeps_only_methods_that_apply() {
         f
     };
     let cubic = families(cubic());
-    for f in ["PF", "QIEM", "IEM", "Spectral", "EKF"] {
+    for f in ["PF", "QIEM", "IEM", "Spectral", "EKF", "TT"] {
         assert!(cubic.contains(&f), "{f} missing from {cubic:?}");
     }
     assert!(!cubic.contains(&"SA") && !cubic.contains(&"FDM"));
     let sa = families(presets::preset("sa-example-1").unwrap());
-    assert!(sa.contains(&"SA") && sa.contains(&"FDM") && sa.contains(&"PF"));
+    // The TT filter takes discrete measurements (001 (6)) as well as increments.
+    assert!(sa.contains(&"SA") && sa.contains(&"FDM") && sa.contains(&"PF") && sa.contains(&"TT"));
     assert!(!sa.contains(&"QIEM") && !sa.contains(&"Spectral"));
 }
 

@@ -5,7 +5,9 @@
 //! The floor is a *reference posterior*: the exact Gaussian-sum filter where it applies
 //! (linear models with discrete, mixture noise), else QIEM on a fine grid whose convergence is
 //! shown by [`reference_check`] — halving Δs and Δt must move the posterior mean by less than
-//! a tolerance (the issue asks for 1e-3) over a few runs.
+//! a tolerance (the issue asks for 1e-3) over a few runs. Beyond QIEM's three dimensions the
+//! grid is the tensor-train filter's (its twin halves Δs; its steps are exact one-dimensional
+//! flows and splitting, with no Δt of its own).
 //!
 //! All methods of a sweep run in one [`Experiment`], so they see the same truth and
 //! observations in every run: their MSEs are paired, and differences are not sampling noise.
@@ -22,6 +24,7 @@ use crate::filters::gaussian_sum::GaussianSumParams;
 use crate::filters::kalman::{EkfParams, IekfParams, UkfParams};
 use crate::filters::particle::PfParams;
 use crate::filters::spectral::SpectralParams;
+use crate::filters::tensor_train::TensorTrainParams;
 use crate::filters::yau_fd::YauYauParams;
 use crate::lab::experiment::Experiment;
 use crate::lab::scenario::{MethodConfig, ScenarioConfig};
@@ -65,7 +68,8 @@ pub struct Reference {
 
 /// The reference for `config`: the exact Gaussian-sum filter where it applies, else QIEM with
 /// `points` per dimension and step `dt` (the finer twin has `2·points + 1` points — half the
-/// spacing — and `dt/2`).
+/// spacing — and `dt/2`), else — beyond three dimensions — the tensor-train filter with
+/// `points` per dimension (its twin `2·points + 1`; `dt` does not apply).
 pub fn reference(config: &ScenarioConfig, points: usize, dt: f64) -> Result<Reference, ZakaiError> {
     let e = Experiment::new(ScenarioConfig {
         methods: vec![MethodConfig::Ekf(EkfParams::default())],
@@ -95,14 +99,32 @@ pub fn reference(config: &ScenarioConfig, points: usize, dt: f64) -> Result<Refe
         })
     };
     let method = qiem(points, dt);
-    if let Some(reason) = method.suitability(e.model(), e.prior(), &probes, &bounds) {
+    let Some(reason) = method.suitability(e.model(), e.prior(), &probes, &bounds) else {
+        return Ok(Reference {
+            finer: Some(qiem(2 * points + 1, dt / 2.0)),
+            label: format!("QIEM, {points} points per dimension, Δt = {dt:e}"),
+            method,
+        });
+    };
+    let tt = |p: usize| {
+        MethodConfig::TensorTrain(TensorTrainParams {
+            points: vec![p],
+            ..TensorTrainParams::default()
+        })
+    };
+    let method = tt(points);
+    if config.state_dim() <= 3
+        || method
+            .suitability(e.model(), e.prior(), &probes, &bounds)
+            .is_some()
+    {
         return Err(ZakaiError::Filter(crate::FilterError::Unsuitable(format!(
             "no reference posterior for this scenario: {reason}"
         ))));
     }
     Ok(Reference {
-        finer: Some(qiem(2 * points + 1, dt / 2.0)),
-        label: format!("QIEM, {points} points per dimension, Δt = {dt:e}"),
+        finer: Some(tt(2 * points + 1)),
+        label: format!("tensor-train filter, {points} points per dimension (ε 10⁻⁷, ranks ≤ 30)"),
         method,
     })
 }
@@ -257,6 +279,18 @@ pub fn default_sweep(config: &ScenarioConfig) -> Result<Vec<SweepPoint>, ZakaiEr
             })
         },
     );
+    // The tensor-train filter: in 1-D a grid filter like QIEM (its one-dimensional flow is the
+    // exact exponential), beyond it the only grid-exact method past three dimensions.
+    let tt_points: &[usize] = match n {
+        1 => &[48, 96, 192, 384],
+        _ => &[16, 32, 64, 128],
+    };
+    add(&mut all, "TT", "points", tt_points, &|p| {
+        MethodConfig::TensorTrain(TensorTrainParams {
+            points: vec![p],
+            ..TensorTrainParams::default()
+        })
+    });
     add(&mut all, "SA", "cells", &[25, 50, 100, 200, 400], &|c| {
         MethodConfig::Separation(FpeParams {
             cells: vec![c],
