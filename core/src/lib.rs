@@ -215,7 +215,7 @@ pub use filters::kalman::{
 };
 pub use filters::particle::{Pf, PfParams, SuppliedNormals};
 pub use filters::point_mass::{PointMass, PointMassParams};
-pub use filters::spectral::{Spectral, SpectralParams};
+pub use filters::spectral::{Spectral, SpectralBasis, SpectralParams};
 pub use filters::tensor_train::{BoxMotion, TensorTrainFilter, TensorTrainParams};
 pub use filters::yau_fd::{
     Iem, LikelihoodPlacement, PotentialTerm, Qiem, Qiem4, Scheme, Spt, YauYauFilter, YauYauParams,

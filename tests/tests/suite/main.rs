@@ -40,6 +40,7 @@ mod self_checks;
 mod simulator;
 mod smoothing;
 mod spectral;
+mod spectral_total_degree;
 mod state_diffusion;
 // The stiff property test (a minute and a half natively) runs once, natively: its numbers are
 // the core's, the same in WebAssembly.

@@ -14,7 +14,8 @@ use crate::linalg;
 use crate::model::dmz::{DmzCoefficients, LikelihoodPlacement, ObservedTerms, PartialIncrements};
 use crate::model::Model;
 
-use super::params::SpectralParams;
+use super::params::{SpectralBasis, SpectralParams};
+use super::total_degree::{self, Table, TotalDegree};
 use super::{legendre, offline, tensor};
 
 /// The resolved sizes for an n-dimensional model.
@@ -32,6 +33,8 @@ pub(crate) struct Layout {
     pub centre: Vec<f64>,
     /// Half-width of the domain per dimension.
     pub half_width: Vec<f64>,
+    /// Which products of the one-dimensional functions span the basis.
+    pub basis: SpectralBasis,
 }
 
 impl Layout {
@@ -53,9 +56,38 @@ impl SpectralParams {
             offline: vec![off; n],
             online: vec![on; n],
             quadrature: self.quadrature(n),
-            online_nodes: self.online_nodes.unwrap_or(off + on + 8),
+            online_nodes: self.online_nodes(n),
             centre: bounds.iter().map(|b| 0.5 * (b.0 + b.1)).collect(),
             half_width: bounds.iter().map(|b| 0.5 * (b.1 - b.0)).collect(),
+            basis: self.basis,
+        }
+    }
+}
+
+impl Layout {
+    /// The off-line and on-line sets of the total-degree basis (degree = count − 1).
+    fn total_degree(&self) -> (TotalDegree, TotalDegree) {
+        let dims = self.dims();
+        (
+            TotalDegree {
+                dims,
+                degree: self.offline[0] - 1,
+            },
+            TotalDegree {
+                dims,
+                degree: self.online[0] - 1,
+            },
+        )
+    }
+
+    /// Off-line and on-line coefficients.
+    fn lengths(&self) -> (usize, usize) {
+        match self.basis {
+            SpectralBasis::Tensor => (self.offline.iter().product(), self.online.iter().product()),
+            SpectralBasis::TotalDegree => {
+                let (off, on) = self.total_degree();
+                (off.len(), on.len())
+            }
         }
     }
 }
@@ -97,14 +129,104 @@ fn basis_at(points: &[f64], count: usize) -> DMatrix<f64> {
 }
 
 impl Propagation {
-    /// W as the on-line step applies it: in 1-D already followed by the evaluation at the
-    /// on-line nodes (`evaluate`).
-    fn new(w: DMatrix<f64>, evaluate: &[DMatrix<f64>]) -> Self {
-        if evaluate.len() == 1 {
-            Propagation::Nodal(&evaluate[0] * &w)
-        } else {
-            Propagation::Coefficients(w)
+    /// W as the on-line step applies it: for the tensor basis in 1-D already followed by the
+    /// evaluation at the on-line nodes.
+    fn new(w: DMatrix<f64>, online: &Online) -> Self {
+        match online {
+            Online::Tensor { evaluate, .. } if evaluate.len() == 1 => {
+                Propagation::Nodal(&evaluate[0] * &w)
+            }
+            _ => Propagation::Coefficients(w),
         }
+    }
+}
+
+/// How the on-line step goes between coefficients and the on-line nodes.
+#[derive(Clone, Debug)]
+enum Online {
+    /// The tensor basis: per dimension, the off-line basis at the on-line nodes (nodes × N₁)
+    /// and `B⁻¹ Φᵀ diag(w)` (39), nodal values to on-line coefficients (N₂ × nodes).
+    Tensor {
+        evaluate: Vec<DMatrix<f64>>,
+        project: Vec<DMatrix<f64>>,
+    },
+    /// The total-degree basis, by sum factorisation (`total_degree`).
+    TotalDegree(TotalDegreeOnline),
+}
+
+/// The total-degree basis' on-line part.
+#[derive(Clone, Debug)]
+struct TotalDegreeOnline {
+    offline: TotalDegree,
+    online: TotalDegree,
+    /// The off-line and on-line one-dimensional functions at the on-line nodes (nodes ×
+    /// count, column-major).
+    offline_table: DMatrix<f64>,
+    online_table: DMatrix<f64>,
+    /// The mass matrix of the on-line set, factored: the projection (39) solves with it.
+    mass: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// The on-line set's multi-indices (the self-check's degrees).
+    indices: Vec<Vec<usize>>,
+    /// `1/Π r_d`: the projection integrates on U = [−1, 1]ⁿ, as the tensor basis' does.
+    inverse_jacobian: f64,
+    /// The nodal values times the weights, and the sum factorisation's intermediates.
+    weighted: Vec<f64>,
+    scratch: Vec<Vec<f64>>,
+}
+
+impl TotalDegreeOnline {
+    fn new(layout: &Layout, nodes: &[f64]) -> Result<Self, FilterError> {
+        let (offline, online) = layout.total_degree();
+        let mass = total_degree::mass_matrix(online)
+            .cholesky()
+            .ok_or_else(|| {
+                FilterError::Unsuitable("the on-line mass matrix is not positive definite".into())
+            })?;
+        Ok(TotalDegreeOnline {
+            offline,
+            online,
+            offline_table: basis_at(nodes, offline.degree + 1),
+            online_table: basis_at(nodes, online.degree + 1),
+            mass,
+            indices: online.indices(),
+            inverse_jacobian: 1.0 / layout.half_width.iter().product::<f64>(),
+            weighted: Vec::new(),
+            scratch: total_degree::scratch(layout.dims()),
+        })
+    }
+
+    /// The same table in every dimension.
+    fn tables(table: &DMatrix<f64>, dims: usize) -> Vec<Table<'_>> {
+        let t = Table {
+            values: table.as_slice(),
+            points: table.nrows(),
+        };
+        vec![t; dims]
+    }
+
+    /// Off-line coefficients to values at the on-line nodes.
+    fn evaluate(&mut self, offline: &[f64], values: &mut [f64]) {
+        let tables = Self::tables(&self.offline_table, self.offline.dims);
+        total_degree::evaluate(self.offline, offline, &tables, values, &mut self.scratch);
+    }
+
+    /// The projection (39): `c = B⁻¹ ⟨ρ, φ_k⟩` on U, the inner products by the nodes' weights.
+    fn project(&mut self, values: &[f64], weight: &[f64], coeffs: &mut [f64]) {
+        self.weighted.clear();
+        let s = self.inverse_jacobian;
+        self.weighted
+            .extend(values.iter().zip(weight).map(|(v, w)| v * w * s));
+        let tables = Self::tables(&self.online_table, self.online.dims);
+        total_degree::project(
+            self.online,
+            &self.weighted,
+            &tables,
+            coeffs,
+            &mut self.scratch,
+        );
+        let len = coeffs.len();
+        let mut c = nalgebra::DVectorViewMut::from_slice(coeffs, len);
+        self.mass.solve_mut(&mut c);
     }
 }
 
@@ -158,10 +280,8 @@ pub struct Spectral {
     t0: f64,
     /// W of Algorithm 1, in 1-D already followed by the evaluation at the on-line nodes.
     propagation: Propagation,
-    /// Per dimension: the off-line basis at the on-line nodes (nodes × N₁), and
-    /// `B⁻¹ Φᵀ diag(w)`, nodal values to on-line coefficients (N₂ × nodes).
-    evaluate: Vec<DMatrix<f64>>,
-    project: Vec<DMatrix<f64>>,
+    /// Between coefficients and the on-line nodes.
+    online: Online,
     /// Per on-line node (first dimension fastest): quadrature weight times the Jacobian,
     /// coordinates per dimension, and S⁻¹h per observation component.
     weight: Vec<f64>,
@@ -244,10 +364,18 @@ impl Spectral {
         let propagation =
             offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);
-        let (evaluate, project): (Vec<_>, Vec<_>) = (0..n)
-            .map(|d| axis_matrices(layout.offline[d], layout.online[d], &xi, &w))
-            .unzip();
-        let propagation = Propagation::new(propagation, &evaluate);
+        let online = match layout.basis {
+            SpectralBasis::Tensor => {
+                let (evaluate, project) = (0..n)
+                    .map(|d| axis_matrices(layout.offline[d], layout.online[d], &xi, &w))
+                    .unzip();
+                Online::Tensor { evaluate, project }
+            }
+            SpectralBasis::TotalDegree => {
+                Online::TotalDegree(TotalDegreeOnline::new(&layout, &xi)?)
+            }
+        };
+        let propagation = Propagation::new(propagation, &online);
         let q = layout.online_nodes;
         let len = q.pow(n as u32);
         let index = |i: usize, d: usize| (i / q.pow(d as u32)) % q;
@@ -276,8 +404,7 @@ impl Spectral {
                 prior.density(&x)
             })
             .collect();
-        let offline_len: usize = layout.offline.iter().product();
-        let online_len: usize = layout.online.iter().product();
+        let (offline_len, online_len) = layout.lengths();
         let mut filter = Spectral {
             name,
             t0,
@@ -313,8 +440,7 @@ impl Spectral {
             remainders: LengthCache::new(crate::filters::REMAINDER_PLANS),
             whole_gap: None,
             gaps: LengthCache::new(crate::filters::REMAINDER_PLANS),
-            evaluate,
-            project,
+            online,
             layout,
         };
         filter.normalise_and_project()?;
@@ -329,17 +455,34 @@ impl Spectral {
         let mass = match self.layout.dims() {
             1 => estimate_at_nodes::<1>(values, weight, coords, out),
             2 => estimate_at_nodes::<2>(values, weight, coords, out),
-            _ => estimate_at_nodes::<3>(values, weight, coords, out),
+            3 => estimate_at_nodes::<3>(values, weight, coords, out),
+            4 => estimate_at_nodes::<4>(values, weight, coords, out),
+            5 => estimate_at_nodes::<5>(values, weight, coords, out),
+            _ => estimate_at_nodes::<6>(values, weight, coords, out),
         }?;
-        let shape = [self.layout.online_nodes; tensor::MAX_DIMS];
-        tensor::multilinear(
-            &self.project,
-            &self.values,
-            &shape[..self.project.len()],
-            &mut self.scratch,
-            &mut self.coeffs,
-        );
-        self.energy = scale_and_measure(&mut self.coeffs, 1.0 / mass, &self.layout.online);
+        match &mut self.online {
+            Online::Tensor { project, .. } => {
+                let shape = [self.layout.online_nodes; tensor::MAX_DIMS];
+                tensor::multilinear(
+                    project,
+                    &self.values,
+                    &shape[..project.len()],
+                    &mut self.scratch,
+                    &mut self.coeffs,
+                );
+                self.energy = scale_and_measure(&mut self.coeffs, 1.0 / mass, &self.layout.online);
+            }
+            Online::TotalDegree(o) => {
+                o.project(&self.values, &self.weight, &mut self.coeffs);
+                let (total, worst_tail) = total_degree::scale_and_measure(
+                    &mut self.coeffs,
+                    1.0 / mass,
+                    &o.indices,
+                    o.online.degree,
+                );
+                self.energy = Energy { total, worst_tail };
+            }
+        }
         Ok(mass)
     }
 
@@ -366,7 +509,7 @@ impl Spectral {
                 (self.t0, self.partitions),
                 false,
             )?;
-            self.whole_gap = Some(Propagation::new(w, &self.evaluate));
+            self.whole_gap = Some(Propagation::new(w, &self.online));
         }
         if rest > 0.0 {
             self.recent_first(|f| &mut f.gaps, rest, false)?;
@@ -393,7 +536,7 @@ impl Spectral {
             (length, partitions),
             with_likelihood,
         )?;
-        let made = Propagation::new(w, &self.evaluate);
+        let made = Propagation::new(w, &self.online);
         pick(self).insert(length, made);
         Ok(())
     }
@@ -414,13 +557,16 @@ impl Spectral {
             Propagation::Coefficients(w) => w,
         };
         linalg::combine_columns(&mut self.offline, w.as_slice(), &self.coeffs);
-        tensor::multilinear(
-            &self.evaluate,
-            &self.offline,
-            &self.layout.offline,
-            &mut self.scratch,
-            &mut self.values,
-        );
+        match &mut self.online {
+            Online::Tensor { evaluate, .. } => tensor::multilinear(
+                evaluate,
+                &self.offline,
+                &self.layout.offline,
+                &mut self.scratch,
+                &mut self.values,
+            ),
+            Online::TotalDegree(o) => o.evaluate(&self.offline, &mut self.values),
+        }
     }
 
     /// The marginal of the expansion on the on-line basis over the components `kept` (each
@@ -449,6 +595,34 @@ impl Spectral {
     fn projected(&self, kept: &[(usize, &[f64])]) -> Vec<f64> {
         let n = self.layout.dims();
         let on = &self.layout.online;
+        if let Online::TotalDegree(o) = &self.online {
+            // Per dimension a table: the functions at the kept points, or their integrals (one
+            // "point") for a dimension integrated out.
+            let tables: Vec<DMatrix<f64>> = (0..n)
+                .map(|d| match kept.iter().find(|(k, _)| *k == d) {
+                    Some((_, points)) => {
+                        let (c, r) = (self.layout.centre[d], self.layout.half_width[d]);
+                        let xi: Vec<f64> = points.iter().map(|x| (x - c) / r).collect();
+                        basis_at(&xi, on[d])
+                    }
+                    None => DMatrix::from_fn(1, on[d], |_, k| {
+                        self.layout.half_width[d] * legendre::basis_integral(k)
+                    }),
+                })
+                .collect();
+            let view: Vec<Table> = tables
+                .iter()
+                .map(|t| Table {
+                    values: t.as_slice(),
+                    points: t.nrows(),
+                })
+                .collect();
+            let len: usize = view.iter().map(|t| t.points).product();
+            let mut values = vec![0.0; len];
+            let mut scratch = total_degree::scratch(n);
+            total_degree::evaluate(o.online, &self.coeffs, &view, &mut values, &mut scratch);
+            return values;
+        }
         let factors: Vec<DMatrix<f64>> = (0..n)
             .map(|d| match kept.iter().find(|(k, _)| *k == d) {
                 Some((_, points)) => {

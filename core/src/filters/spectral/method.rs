@@ -44,16 +44,24 @@ impl Method for Spectral {
             summary: "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis".into(),
             paper: "004 Shi, Chen & Yau (2021), (17)–(42)".into(),
             takes: Takes::Increments,
-            dims: "1–3".into(),
+            dims: "1–3 (tensor basis), 1–6 (total degree)".into(),
             params: SpectralParams::form(),
             json_only: SpectralParams::json_only(),
         }
     }
-    fn display_name(_: &SpectralParams) -> String {
-        "Spectral".into()
+    fn display_name(p: &SpectralParams) -> String {
+        match p.basis {
+            super::SpectralBasis::Tensor => "Spectral".into(),
+            super::SpectralBasis::TotalDegree => "Spectral(total degree)".into(),
+        }
     }
-    /// `Spectral(N/N′)`: the off-line and on-line basis sizes (004 Alg. 1, 2), when set.
-    fn label(p: &SpectralParams, _: usize) -> String {
+    /// `Spectral(N/N′)`: the off-line and on-line basis sizes (004 Alg. 1, 2), when set;
+    /// `Spectral(|k| ≤ N/N′)` for the total-degree basis (its degrees).
+    fn label(p: &SpectralParams, n: usize) -> String {
+        if p.basis == super::SpectralBasis::TotalDegree {
+            let (off, on) = p.counts(n);
+            return format!("Spectral(|k| ≤ {}/{})", off - 1, on - 1);
+        }
         match (p.offline_basis, p.online_basis) {
             (Some(a), Some(b)) => format!("Spectral({a}/{b})"),
             (Some(a), None) | (None, Some(a)) => format!("Spectral({a})"),
@@ -73,8 +81,18 @@ impl Method for Spectral {
     }
     fn memory(p: &SpectralParams, n: usize) -> Option<usize> {
         // The off-line operator W (on × off), its weighted copy and the on-line projection,
-        // and the off-line Gram matrix (off × off).
+        // and the off-line Gram matrix (off × off); for the total-degree basis its set sizes
+        // and the on-line nodal arrays (about 2n + 5 numbers a node).
         let (off, on) = p.counts(n);
+        if p.basis == super::SpectralBasis::TotalDegree {
+            let m1 = super::total_degree::binomial(off - 1 + n, n);
+            let m2 = super::total_degree::binomial(on - 1 + n, n);
+            let nodes = p.online_nodes(n).checked_pow(n as u32)?;
+            return nodes
+                .checked_mul(2 * n + 5)?
+                .checked_add(m1.checked_mul(m1 + 3 * m2)?)?
+                .checked_mul(8);
+        }
         let (off, on) = (off.checked_pow(n as u32)?, on.checked_pow(n as u32)?);
         let values = off
             .checked_mul(on)?

@@ -27,9 +27,10 @@ mod method;
 pub(crate) mod offline;
 mod params;
 pub(crate) mod tensor;
+pub(crate) mod total_degree;
 
 pub(crate) use filter::Layout;
 pub use filter::Spectral;
 pub(crate) use method::{basis_for, FUNCTIONS_PER_SD};
-pub use params::SpectralParams;
 pub(crate) use params::MAX_BASIS;
+pub use params::{SpectralBasis, SpectralParams};

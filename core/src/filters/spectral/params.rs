@@ -4,10 +4,12 @@ use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use crate::filters::params::{parameters, Declared};
+use serde::{Deserialize, Serialize};
+
+use crate::filters::params::{parameters, Choices, Declared};
 use crate::model::dmz::LikelihoodPlacement;
 
-use super::tensor;
+use super::{tensor, total_degree};
 
 /// Largest number of basis functions per dimension.
 pub(crate) const MAX_BASIS: usize = 128;
@@ -38,17 +40,43 @@ parameters! {
         /// off-line step damps only by 1/(1 + ½hᵀS⁻¹h Δs) — for steep h far out in the domain
         /// that loses against exp(hᵀS⁻¹Δy) and the filter blows up.
         likelihood: LikelihoodPlacement = LikelihoodPlacement::InUpdate => choice "−½hᵀS⁻¹h goes";
+        /// The basis ([`SpectralBasis`]): tensor, the products with every degree below N + 1
+        /// in each dimension (1–3 D); total_degree, those of total degree at most N (1–6 D).
+        basis: SpectralBasis = SpectralBasis::Tensor => choice "basis";
     }
+}
+
+/// Which products of the one-dimensional generalized Legendre functions span the basis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpectralBasis {
+    /// `φ_k = Π φ_{k_d}` with every `k_d ≤ N`, `(N + 1)ⁿ` functions (004's appendix (48)), on
+    /// tensor Gauss–Legendre grids, in 1–3 dimensions.
+    #[default]
+    Tensor,
+    /// Those with `k_1 + ⋯ + k_n ≤ N`, `binomial(N + n, n)` functions — 004's "complete
+    /// polynomial basis" for "moderate-high dimensional cases" — in 1–6 dimensions; the off-line
+    /// step is one implicit Euler step (N′ = 1) with a constant `G Gᵀ`.
+    TotalDegree,
+}
+
+impl Choices for SpectralBasis {
+    const NAMES: &'static [&'static str] = &["tensor", "total_degree"];
 }
 
 impl SpectralParams {
     /// Off-line and on-line basis counts per dimension (N₁ + 1, N₂ + 1) for an `n`-dimensional
     /// model, the defaults filled in.
     pub fn counts(&self, n: usize) -> (usize, usize) {
-        let (off, on) = match n {
-            1 => (11, 16),
-            2 => (15, 15),
-            _ => (8, 8),
+        let (off, on) = match (self.basis, n) {
+            (_, 1) => (11, 16),
+            (_, 2) => (15, 15),
+            (SpectralBasis::Tensor, _) | (_, 3) => (8, 8),
+            // Total degree 8 (495 functions) in 4-D, 5 (252) in 5-D, 3 (84) in 6-D: off-line
+            // builds of 2–3 s (its Gram matrix on a tensor Gauss grid grows with qⁿ M²).
+            (_, 4) => (9, 9),
+            (_, 5) => (6, 6),
+            _ => (4, 4),
         };
         (
             self.offline_basis.unwrap_or(off),
@@ -59,21 +87,54 @@ impl SpectralParams {
     /// Gauss–Legendre nodes per dimension off-line: as set, else `2·max(N₁, N₂) + 24` for
     /// n ≤ 2 (24 degrees of room for polynomial models) and `2·max(N₁, N₂) + 4` for n = 3
     /// (whose tensor grid grows with the cube).
+    ///
+    /// The total-degree basis writes its derivatives out instead of differentiating an
+    /// interpolant, so its products need only be integrated: `max(N₁, N₂) + 4` nodes integrate
+    /// the product of two off-line functions exactly for a drift of degree at most 1 (each
+    /// has degree at most N + 2 per dimension; 2(N + 4) − 1 ≥ 2(N + 2) + 3).
     pub(super) fn quadrature(&self, n: usize) -> usize {
         let (off, on) = self.counts(n);
-        let room = if n <= 2 { 24 } else { 4 };
-        self.quadrature.unwrap_or(2 * off.max(on) + room)
+        let default = match self.basis {
+            SpectralBasis::TotalDegree => off.max(on) + 4,
+            SpectralBasis::Tensor if n <= 2 => 2 * off.max(on) + 24,
+            SpectralBasis::Tensor => 2 * off.max(on) + 4,
+        };
+        self.quadrature.unwrap_or(default)
+    }
+
+    /// Gauss–Legendre nodes per dimension on-line: as set, else `N₁ + N₂ + 8` (tensor basis)
+    /// or `⌈(N₁ + N₂ + 9)/2⌉` (total degree: the product of an off-line and an on-line function
+    /// has degree at most N₁ + N₂ + 2 per dimension, integrated exactly with 3 more degrees
+    /// for the observation factor, which is not a polynomial; its grid grows with the n-th
+    /// power).
+    pub(super) fn online_nodes(&self, n: usize) -> usize {
+        let (off, on) = self.counts(n);
+        let default = match self.basis {
+            SpectralBasis::TotalDegree => (off + on + 9).div_ceil(2).max(off.max(on) + 1),
+            SpectralBasis::Tensor => off + on + 8,
+        };
+        self.online_nodes.unwrap_or(default)
     }
 
     /// Every problem with these parameters for an n-dimensional model, `(field, message)`.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        if !(1..=tensor::MAX_DIMS).contains(&n) {
-            p.push((
-                "method",
-                format!("the spectral filter is built for n = 1, 2 and 3; the model has n = {n}"),
-            ));
-            return p;
+        match self.basis {
+            SpectralBasis::Tensor if !(1..=tensor::MAX_DIMS).contains(&n) => {
+                p.push((
+                    "method",
+                    format!("the spectral filter's tensor basis is built for n = 1, 2 and 3; the model has n = {n} (basis = total_degree goes to {})", total_degree::MAX_DIMS),
+                ));
+                return p;
+            }
+            SpectralBasis::TotalDegree if !(1..=total_degree::MAX_DIMS).contains(&n) => {
+                p.push((
+                    "method",
+                    format!("the spectral filter's total-degree basis is built for n = 1 to {}; the model has n = {n}", total_degree::MAX_DIMS),
+                ));
+                return p;
+            }
+            _ => {}
         }
         let (off, on) = self.counts(n);
         p.extend(self.range_problems());
@@ -94,7 +155,16 @@ impl SpectralParams {
                 ),
             ));
         }
-        let online_nodes = self.online_nodes.unwrap_or(off + on + 8);
+        if self.basis == SpectralBasis::TotalDegree && self.partitions != 1 {
+            p.push((
+                "partitions",
+                format!(
+                    "the total-degree basis' off-line step is one implicit Euler step over T₀ (N′ = 1, as 004 runs it), got N′ = {}",
+                    self.partitions
+                ),
+            ));
+        }
+        let online_nodes = self.online_nodes(n);
         if !flagged(&p, "online_nodes") && (online_nodes < largest + 1 || online_nodes > MAX_NODES)
         {
             p.push((
@@ -106,18 +176,31 @@ impl SpectralParams {
             ));
         }
         // The off-line matrices: nodes × functions, for Z, its weighted copy and the on-line
-        // basis.
+        // basis; for the total-degree basis, the on-line nodal arrays (values, weights, their
+        // coordinates, S⁻¹h and the potential: about 2n + 5 per node at m = n) and the
+        // off-line Gram matrix and right-hand sides.
         // Checked: impossible sizes overflow a 32-bit `usize` (wasm32).
         let n32 = n as u32;
-        let bytes = off
-            .checked_pow(n32)
-            .and_then(|z| z.checked_mul(2)?.checked_add(on.checked_pow(n32)?))
-            .and_then(|columns| {
-                quadrature
-                    .checked_pow(n32)?
-                    .checked_mul(columns)?
-                    .checked_mul(8)
-            });
+        let bytes = match self.basis {
+            SpectralBasis::Tensor => off
+                .checked_pow(n32)
+                .and_then(|z| z.checked_mul(2)?.checked_add(on.checked_pow(n32)?))
+                .and_then(|columns| {
+                    quadrature
+                        .checked_pow(n32)?
+                        .checked_mul(columns)?
+                        .checked_mul(8)
+                }),
+            SpectralBasis::TotalDegree => {
+                let m1 = total_degree::binomial(off - 1 + n, n);
+                let m2 = total_degree::binomial(on - 1 + n, n);
+                online_nodes
+                    .checked_pow(n32)
+                    .and_then(|nodes| nodes.checked_mul(2 * n + 5))
+                    .and_then(|v| v.checked_add(m1.checked_mul(m1 + 2 * m2)?))
+                    .and_then(|v| v.checked_mul(8))
+            }
+        };
         if bytes.is_none_or(|b| b > 256 << 20) {
             let size = bytes.map_or("more than the address space".into(), |b| {
                 format!("{} MiB", b >> 20)
