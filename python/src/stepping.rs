@@ -316,6 +316,21 @@ impl Stepper {
         }
     }
 
+    /// A compressed density's footprint (the tensor-train filter): `numbers` held,
+    /// `grid_points` of the full grid, `ranks` now and `peak_ranks`; `None` for the others.
+    #[getter]
+    fn footprint<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(f) = self.filter.footprint() else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("numbers", f.numbers)?;
+        d.set_item("grid_points", f.grid_points)?;
+        d.set_item("ranks", f.ranks)?;
+        d.set_item("peak_ranks", f.peak_ranks)?;
+        Ok(Some(d))
+    }
+
     /// The self-checks that cross their thresholds now, as dicts (empty when all is well).
     fn self_check<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         self.concerns.clear();

@@ -75,6 +75,23 @@ def test_stepping_filter_mean_cov_density_and_batch_run():
     assert one.name == "QIEM" and one.self_check() == []
 
 
+def test_the_tensor_train_filter_reports_what_it_holds():
+    """Four independent cubic sensors stay a product: rank one, 4 × 32 numbers for a grid of
+    32⁴ points; a Kalman-type filter holds no compressed density."""
+    d = 4
+    model = zakai.Model.continuous([f"-0.4*x{i}" for i in range(1, d + 1)],
+                                   [f"x{i}^3" for i in range(1, d + 1)])
+    prior = zakai.Prior.gaussian([1.0] * d, np.eye(d) * 0.5)
+    tt = zakai.Filter("tensor_train", model, prior, dt_obs=0.01, points=[32],
+                      domain=[(-4, 4)] * d)
+    for _ in range(5):
+        tt.step(np.full(d, 0.01))
+    f = tt.footprint
+    assert f["numbers"] == 4 * 32 and f["grid_points"] == 32.0 ** 4
+    assert f["ranks"] == [1] * 5 and f["peak_ranks"] == [1] * 5
+    assert zakai.Filter("ukf", model, prior, dt_obs=0.01).footprint is None
+
+
 def test_density2d_shape_and_mass():
     model = zakai.Model.continuous(["0", "0"], ["x1", "x2"])
     f = zakai.Filter("ukf", model, zakai.Prior.gaussian([0, 1], [[1, 0.3], [0.3, 0.5]]), dt_obs=0.1)

@@ -307,6 +307,13 @@ class Filter:
         """Notes of the sizes chosen from the problem."""
         return self._inner.chosen_defaults
 
+    @property
+    def footprint(self) -> Optional[dict[str, Any]]:
+        """How a compressed density is held (the tensor-train filter): ``numbers`` stored,
+        ``grid_points`` of the full grid they stand for, ``ranks`` (r₀ … r_d) now and
+        ``peak_ranks``, the largest each has been; ``None`` for the other methods."""
+        return self._inner.footprint
+
     def self_check(self) -> list[dict[str, Any]]:
         """The self-checks crossing their thresholds now (``check``, ``value``,
         ``threshold``, ``above``, ``advice``); empty when all is well."""
