@@ -893,7 +893,8 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
         sxx += v * (xs[i] - mx) ** 2; syy += v * (ys[j] - my) ** 2; sxy += v * (xs[i] - mx) * (ys[j] - my);
       }
       const held = document.querySelector(`#timing tbody tr[data-method="${t}"] .held`).textContent;
-      return { n, tt: info.methods[t], byName, gap, heat: { pair: h.pair, t: lastDensity.t, corr: sxy / Math.sqrt(sxx * syy), method: document.getElementById('heatmap-method').value === String(t) }, held, t: data.times[last], heldVisible: !!document.querySelector('#diagnostics-panel[open]') };
+      const chosen = document.getElementById('chosen-defaults').textContent;
+      return { n, tt: info.methods[t], byName, gap, truth: data.truth[0], chosen, heat: { pair: h.pair, t: lastDensity.t, corr: sxy / Math.sqrt(sxx * syy), method: document.getElementById('heatmap-method').value === String(t) }, held, t: data.times[last], heldVisible: !!document.querySelector('#diagnostics-panel[open]') };
     });
     await openLesson('tensor-train');
     let x = await tt();
@@ -902,6 +903,9 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(x.n === 4 && x.heldVisible && x.heat.method && x.heat.t === 5, 'four dimensions, the diagnostics open, the heatmap the TT filter\'s at t = 5');
     assert.ok(m.footprint.numbers === 640 && m.footprint.grid_points === 160 ** 4 && near(160 ** 4, 6.55e8, 0.005e8), `640 numbers for 160⁴ ≈ 6.55·10⁸ points: ${JSON.stringify(m.footprint)}`);
     assert.ok(near(160 ** 4 * 8 / 1e9, 5.2, 0.05) && near(160 ** 10, 1.1e22, 0.05e22) && Math.round(Math.sqrt(1 / 0.1) * 8 * 10 / 1) === 253, '5.2 GB; 160¹⁰ ≈ 1.1·10²²; 10 a prior sd would be 253');
+    assert.ok(near(8 / 161, 0.05, 0.0005) && near(Math.sqrt(0.1) / (8 / 161), 6.4, 0.05), '8/161 ≈ 0.05 apart, 6.4 per prior sd');
+    // The page says the points were chosen from the problem, at the default's cap.
+    assert.ok(/points \[160, 160, 160, 160\], 10 per prior sd in each dimension \(within 32–160\)/.test(x.chosen), `160 points, the most the default takes: ${x.chosen}`);
     assert.ok(m.footprint.ranks.every((r) => r === 1) && m.footprint.peak_ranks.every((r) => r === 1), `ranks 1 now and throughout: ${JSON.stringify(m.footprint)}`);
     assert.equal(x.held, '640 numbers for 6.55·10⁸ grid points; ranks 1-1-1-1-1 (largest so far 1-1-1-1-1)', 'the column says so');
     assert.ok(x.heat.pair[0] === 0 && x.heat.pair[1] === 1 && Math.abs(x.heat.corr) < 1e-10, `x1, x2: a product, correlation ${x.heat.corr}`);
@@ -910,6 +914,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     assert.ok(Math.max(...x.gap) <= 0.52 && near(x.gap[0], 0.51, 0.005) && x.gap.every((g) => g <= x.gap[0]), `PF(10000) within 0.52 TT sds, the largest 0.51 in x1: ${x.gap}`);
     assert.ok(total('PF(1000)') < Math.min(total(x.tt), total('PF(10000)'), total('EKF'), total('UKF')), 'PF(1000) the smallest MSE on this run');
     const first = m.mse;
+    const firstTruth = x.truth;
     await tryThis('a sensor of the sum: h₁ = (x₁ + x₂)³');
     x = await tt();
     m = x.byName[x.tt];
@@ -928,6 +933,7 @@ await browserTest(async ({ browser, url, consoleErrors }) => {
     x = await tt();
     m = x.byName[x.tt];
     console.log('lesson 14, six sensors:', JSON.stringify({ held: x.held, mse: Object.fromEntries(Object.entries(x.byName).map(([k, v]) => [k, [v.total, v.mse[0]]])) }));
+    assert.ok(x.truth.some((v, k) => Math.abs(v - firstTruth[k]) > 0.1), 'the same seed draws a different path in six dimensions');
     assert.ok(x.n === 6 && m.footprint.numbers === 960 && m.footprint.grid_points === 160 ** 6 && near(160 ** 6, 1.68e13, 0.005e13) && near(160 ** 6 * 8 / 1e12, 134, 0.5), `960 numbers for 160⁶ ≈ 1.68·10¹³ points (134 TB): ${JSON.stringify(m.footprint)}`);
     assert.ok(m.footprint.peak_ranks.every((r) => r === 1), 'every rank 1 throughout');
     assert.ok(near(total(x.tt), 2.1316, 5e-5) && near(total('PF(10000)'), 2.2937, 5e-5) && near(total('PF(1000)'), 2.1024, 5e-5) && near(total('EKF'), 5.3858, 5e-5) && near(total('UKF'), 5.8585, 5e-5), 'MSEs 2.1316, 2.2937, 2.1024, 5.3858, 5.8585');

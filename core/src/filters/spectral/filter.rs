@@ -66,7 +66,7 @@ impl SpectralParams {
 
 impl Layout {
     /// The off-line and on-line sets of the total-degree basis (degree = count − 1).
-    fn total_degree(&self) -> (TotalDegree, TotalDegree) {
+    pub(crate) fn total_degree(&self) -> (TotalDegree, TotalDegree) {
         let dims = self.dims();
         (
             TotalDegree {
@@ -195,19 +195,18 @@ impl TotalDegreeOnline {
         })
     }
 
-    /// The same table in every dimension.
-    fn tables(table: &DMatrix<f64>, dims: usize) -> Vec<Table<'_>> {
-        let t = Table {
-            values: table.as_slice(),
-            points: table.nrows(),
-        };
-        vec![t; dims]
-    }
-
     /// Off-line coefficients to values at the on-line nodes.
     fn evaluate(&mut self, offline: &[f64], values: &mut [f64]) {
-        let tables = Self::tables(&self.offline_table, self.offline.dims);
-        total_degree::evaluate(self.offline, offline, &tables, values, &mut self.scratch);
+        // The same table in every dimension.
+        let tables = [Table::of(&self.offline_table); total_degree::MAX_DIMS];
+        let dims = self.offline.dims;
+        total_degree::evaluate(
+            self.offline,
+            offline,
+            &tables[..dims],
+            values,
+            &mut self.scratch,
+        );
     }
 
     /// The projection (39): `c = B⁻¹ ⟨ρ, φ_k⟩` on U, the inner products by the nodes' weights.
@@ -216,11 +215,12 @@ impl TotalDegreeOnline {
         let s = self.inverse_jacobian;
         self.weighted
             .extend(values.iter().zip(weight).map(|(v, w)| v * w * s));
-        let tables = Self::tables(&self.online_table, self.online.dims);
+        let tables = [Table::of(&self.online_table); total_degree::MAX_DIMS];
+        let tables = &tables[..self.online.dims];
         total_degree::project(
             self.online,
             &self.weighted,
-            &tables,
+            tables,
             coeffs,
             &mut self.scratch,
         );
@@ -233,23 +233,25 @@ impl TotalDegreeOnline {
 /// W of Algorithm 1 as the on-line step applies it.
 #[derive(Clone, Debug)]
 enum Propagation {
-    /// 1-D: the evaluation at the on-line nodes times W (nodes × N₂), one product per step.
+    /// The tensor basis in 1-D: the evaluation at the on-line nodes times W (nodes × N₂), one
+    /// product per step.
     Nodal(DMatrix<f64>),
-    /// 2-D and 3-D: W itself (off-line coefficients × on-line coefficients); the evaluation
-    /// follows as a tensor product (W's rows are not a tensor product, so fusing would cost
-    /// more).
+    /// Otherwise W itself (off-line coefficients × on-line coefficients); the evaluation
+    /// follows as a tensor product or, for the total-degree basis, by sum factorisation (W's
+    /// rows are not a tensor product, so fusing would cost more).
     Coefficients(DMatrix<f64>),
 }
 
 /// The spectral Yau–Yau filter of 004.
 ///
 /// The off-line/on-line spectral Yau–Yau filter of 004 ("DMZ method"), on the generalized
-/// Legendre basis of its appendix, for n = 1, 2 and 3.
+/// Legendre basis of its appendix: the tensor basis (appendix (48)) for n = 1, 2 and 3, the
+/// complete basis of total degree ≤ N ([`crate::SpectralBasis::TotalDegree`]) for n = 1 to 6.
 ///
 /// The domain box is mapped affinely onto U = [−1, 1]ⁿ. Off-line (`offline`, Algorithm 1):
 /// the Kolmogorov equation (17) over one observation interval T₀ becomes a matrix W from the
-/// coefficients of the density on the on-line basis (N₂ functions per dimension) to those of
-/// the propagated density on the off-line basis (N₁ per dimension). On-line (Algorithm 2),
+/// coefficients of the density on the on-line basis (N₂ functions per dimension, or those of
+/// total degree below N₂) to those of the propagated density on the off-line basis (N₁). On-line (Algorithm 2),
 /// per observation interval and without keeping any past observation:
 ///
 /// 1. propagation (40): `g = W c`;
@@ -258,11 +260,13 @@ enum Propagation {
 ///    the constant cancels in the normalisation);
 /// 3. estimate (41): mean, covariance and the largest node from the nodal values;
 /// 4. projection (39) of the updated density onto the on-line basis: `c = B⁻¹⟨ρ, φ_k⟩`, the
-///    mass matrix B of (49) being the tensor product of the closed form.
+///    mass matrix B of (49) being the tensor product of the closed form (restricted to the
+///    total-degree set, factored once, for that basis).
 ///
-/// Steps 2 and 4 use the tensor structure: one matrix product per dimension (`tensor`); in
-/// 1-D the evaluation of step 2 is folded into W off-line, so steps 1–2 are one product, and
-/// the whole step is about a thousand multiply–adds and 35 exponentials. The density is a
+/// Steps 2 and 4 use the tensor structure: one matrix product per dimension (`tensor`), or
+/// sum factorisation over the last dimension for the total-degree basis (`total_degree`); for
+/// the tensor basis in 1-D the evaluation of step 2 is folded into W off-line, so steps 1–2
+/// are one product, and the whole step is about a thousand multiply–adds and 35 exponentials. The density is a
 /// polynomial and can dip below zero where it is small; the factor (42) sets those nodal
 /// values to zero before the update, and the plotted marginals are clipped at zero.
 ///
@@ -291,7 +295,8 @@ pub struct Spectral {
     potential: Vec<f64>,
     /// The factor's terms for increments with some components missing.
     partial: PartialIncrements,
-    /// On-line coefficients c (N₂ per dimension, first dimension fastest).
+    /// On-line coefficients c (N₂ per dimension, first dimension fastest; for the
+    /// total-degree basis in its set's order).
     coeffs: Vec<f64>,
     offline: Vec<f64>,
     values: Vec<f64>,
@@ -595,34 +600,8 @@ impl Spectral {
     fn projected(&self, kept: &[(usize, &[f64])]) -> Vec<f64> {
         let n = self.layout.dims();
         let on = &self.layout.online;
-        if let Online::TotalDegree(o) = &self.online {
-            // Per dimension a table: the functions at the kept points, or their integrals (one
-            // "point") for a dimension integrated out.
-            let tables: Vec<DMatrix<f64>> = (0..n)
-                .map(|d| match kept.iter().find(|(k, _)| *k == d) {
-                    Some((_, points)) => {
-                        let (c, r) = (self.layout.centre[d], self.layout.half_width[d]);
-                        let xi: Vec<f64> = points.iter().map(|x| (x - c) / r).collect();
-                        basis_at(&xi, on[d])
-                    }
-                    None => DMatrix::from_fn(1, on[d], |_, k| {
-                        self.layout.half_width[d] * legendre::basis_integral(k)
-                    }),
-                })
-                .collect();
-            let view: Vec<Table> = tables
-                .iter()
-                .map(|t| Table {
-                    values: t.as_slice(),
-                    points: t.nrows(),
-                })
-                .collect();
-            let len: usize = view.iter().map(|t| t.points).product();
-            let mut values = vec![0.0; len];
-            let mut scratch = total_degree::scratch(n);
-            total_degree::evaluate(o.online, &self.coeffs, &view, &mut values, &mut scratch);
-            return values;
-        }
+        // Per dimension: the functions at the kept points, or their integrals (one "point")
+        // for a dimension integrated out.
         let factors: Vec<DMatrix<f64>> = (0..n)
             .map(|d| match kept.iter().find(|(k, _)| *k == d) {
                 Some((_, points)) => {
@@ -635,6 +614,14 @@ impl Spectral {
                 }),
             })
             .collect();
+        if let Online::TotalDegree(o) = &self.online {
+            let view: Vec<Table> = factors.iter().map(Table::of).collect();
+            let len: usize = view.iter().map(|t| t.points).product();
+            let mut values = vec![0.0; len];
+            let mut scratch = total_degree::scratch(n);
+            total_degree::evaluate(o.online, &self.coeffs, &view, &mut values, &mut scratch);
+            return values;
+        }
         let len: usize = kept.iter().map(|(_, p)| p.len()).product();
         let mut values = vec![0.0; len];
         let mut scratch = [Vec::new(), Vec::new()];
@@ -905,11 +892,12 @@ impl Filter for Spectral {
     /// across in 1-D, 96 in 2-D, 32 in 3-D, 12 beyond), clipped at zero, as the nodes' masses.
     fn state_law(&self) -> Result<crate::filters::predictive::StateLaw, FilterError> {
         let n = self.layout.dims();
+        // Beyond three dimensions (the total-degree basis) about 10⁵ points: 17⁴, 10⁵, 6⁶.
         let per = match n {
             1 => 256,
             2 => 96,
             3 => 32,
-            _ => 12,
+            _ => libm::floor(libm::pow(1e5 + 1.0, 1.0 / n as f64)) as usize,
         };
         let (axes, cells): (Vec<Vec<f64>>, Vec<f64>) = (0..n)
             .map(|d| {

@@ -60,7 +60,11 @@ impl Method for Spectral {
     fn label(p: &SpectralParams, n: usize) -> String {
         if p.basis == super::SpectralBasis::TotalDegree {
             let (off, on) = p.counts(n);
-            return format!("Spectral(|k| ≤ {}/{})", off - 1, on - 1);
+            return format!(
+                "Spectral(|k| ≤ {}/{})",
+                off.saturating_sub(1),
+                on.saturating_sub(1)
+            );
         }
         match (p.offline_basis, p.online_basis) {
             (Some(a), Some(b)) => format!("Spectral({a}/{b})"),
@@ -85,13 +89,7 @@ impl Method for Spectral {
         // and the on-line nodal arrays (about 2n + 5 numbers a node).
         let (off, on) = p.counts(n);
         if p.basis == super::SpectralBasis::TotalDegree {
-            let m1 = super::total_degree::binomial(off - 1 + n, n);
-            let m2 = super::total_degree::binomial(on - 1 + n, n);
-            let nodes = p.online_nodes(n).checked_pow(n as u32)?;
-            return nodes
-                .checked_mul(2 * n + 5)?
-                .checked_add(m1.checked_mul(m1 + 3 * m2)?)?
-                .checked_mul(8);
+            return p.total_degree_bytes(n);
         }
         let (off, on) = (off.checked_pow(n as u32)?, on.checked_pow(n as u32)?);
         let values = off

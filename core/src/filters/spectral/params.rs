@@ -64,7 +64,25 @@ impl Choices for SpectralBasis {
     const NAMES: &'static [&'static str] = &["tensor", "total_degree"];
 }
 
+/// The most multiply–adds the total-degree basis' off-line step may take (about two minutes
+/// here: degree 5 in 6-D, 4.3·10¹¹, took 98 s).
+const OFFLINE_WORK: f64 = 5e11;
+
 impl SpectralParams {
+    /// Bytes the total-degree basis holds: its on-line nodal arrays (values, weights, their
+    /// coordinates, S⁻¹h and the potential: about 2n + 5 numbers a node at m = n) and the
+    /// off-line Gram matrix, its right-hand sides and W (`M₁(M₁ + 2M₂)`), or `None` beyond the
+    /// address space.
+    pub(crate) fn total_degree_bytes(&self, n: usize) -> Option<usize> {
+        let (off, on) = self.counts(n);
+        let (m1, m2) = total_degree::set_sizes(off, on, n);
+        self.online_nodes(n)
+            .checked_pow(n as u32)
+            .and_then(|nodes| nodes.checked_mul(2 * n + 5))
+            .and_then(|v| v.checked_add(m1.checked_mul(m1.checked_add(2 * m2)?)?))
+            .and_then(|v| v.checked_mul(8))
+    }
+
     /// Off-line and on-line basis counts per dimension (N₁ + 1, N₂ + 1) for an `n`-dimensional
     /// model, the defaults filled in.
     pub fn counts(&self, n: usize) -> (usize, usize) {
@@ -89,9 +107,11 @@ impl SpectralParams {
     /// (whose tensor grid grows with the cube).
     ///
     /// The total-degree basis writes its derivatives out instead of differentiating an
-    /// interpolant, so its products need only be integrated: `max(N₁, N₂) + 4` nodes integrate
-    /// the product of two off-line functions exactly for a drift of degree at most 1 (each
-    /// has degree at most N + 2 per dimension; 2(N + 4) − 1 ≥ 2(N + 2) + 3).
+    /// interpolant, so its products need only be integrated: with `c = N + 1` functions per
+    /// dimension (the larger count), `c + 4 = N + 5` nodes integrate polynomials of degree
+    /// `2N + 9` exactly, and the product of two functions `Z_l = (1 + Δs𝓛)φ_l` has degree at
+    /// most `2(N + 2 + p)` per dimension for a drift of degree p (φ_k has degree k + 2): exact
+    /// for p ≤ 2.
     pub(super) fn quadrature(&self, n: usize) -> usize {
         let (off, on) = self.counts(n);
         let default = match self.basis {
@@ -102,11 +122,11 @@ impl SpectralParams {
         self.quadrature.unwrap_or(default)
     }
 
-    /// Gauss–Legendre nodes per dimension on-line: as set, else `N₁ + N₂ + 8` (tensor basis)
-    /// or `⌈(N₁ + N₂ + 9)/2⌉` (total degree: the product of an off-line and an on-line function
-    /// has degree at most N₁ + N₂ + 2 per dimension, integrated exactly with 3 more degrees
-    /// for the observation factor, which is not a polynomial; its grid grows with the n-th
-    /// power).
+    /// Gauss–Legendre nodes per dimension on-line: as set, else `c₁ + c₂ + 8` for the counts
+    /// `c₁ = N₁ + 1`, `c₂ = N₂ + 1` (tensor basis), or `⌈(c₁ + c₂ + 9)/2⌉` (total degree, whose
+    /// grid grows with the n-th power: exact to degree `N₁ + N₂ + 10`, where the product of an
+    /// off-line and an on-line function has degree at most `N₁ + N₂ + 4` per dimension — six
+    /// degrees of room for the observation factor, which is not a polynomial).
     pub(super) fn online_nodes(&self, n: usize) -> usize {
         let (off, on) = self.counts(n);
         let default = match self.basis {
@@ -191,26 +211,37 @@ impl SpectralParams {
                         .checked_mul(columns)?
                         .checked_mul(8)
                 }),
-            SpectralBasis::TotalDegree => {
-                let m1 = total_degree::binomial(off - 1 + n, n);
-                let m2 = total_degree::binomial(on - 1 + n, n);
-                online_nodes
-                    .checked_pow(n32)
-                    .and_then(|nodes| nodes.checked_mul(2 * n + 5))
-                    .and_then(|v| v.checked_add(m1.checked_mul(m1 + 2 * m2)?))
-                    .and_then(|v| v.checked_mul(8))
-            }
+            SpectralBasis::TotalDegree => self.total_degree_bytes(n),
         };
         if bytes.is_none_or(|b| b > 256 << 20) {
             let size = bytes.map_or("more than the address space".into(), |b| {
                 format!("{} MiB", b >> 20)
             });
+            let (field, what) = match self.basis {
+                SpectralBasis::Tensor => ("quadrature", "nodes"),
+                SpectralBasis::TotalDegree => ("online_nodes", "on-line nodes"),
+            };
             p.push((
-                "quadrature",
+                field,
                 format!(
-                    "the off-line matrices would take {size} (cap 256 MiB); use fewer nodes or basis functions"
+                    "the off-line matrices would take {size} (cap 256 MiB); use fewer {what} or basis functions"
                 ),
             ));
+        }
+        if self.basis == SpectralBasis::TotalDegree {
+            // The off-line Gram matrix and right-hand sides: every node of the off-line grid
+            // against every pair of functions (measured about 4·10⁹ a second on one core).
+            let (m1, m2) = total_degree::set_sizes(off, on, n);
+            let work = libm::pow(quadrature as f64, n as f64) * m1 as f64 * (m1 + m2) as f64;
+            if work > OFFLINE_WORK {
+                p.push((
+                    "offline_basis",
+                    format!(
+                        "the off-line step would take about {work:.1e} multiply–adds ({} on-line and {m1} off-line functions on {quadrature}^{n} nodes; cap {OFFLINE_WORK:.0e}, about two minutes): use fewer basis functions",
+                        m2
+                    ),
+                ));
+            }
         }
         p
     }

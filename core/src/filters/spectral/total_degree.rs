@@ -34,10 +34,27 @@ use crate::model::Model;
 /// Largest state dimension of the total-degree basis.
 pub(crate) const MAX_DIMS: usize = 6;
 
-/// `binomial(n, k)`, saturating.
+/// `binomial(n, k)`, or `usize::MAX` when it does not fit (each partial product
+/// `binomial(n, i + 1)` is an integer, computed in 128 bits before the division).
 pub(crate) fn binomial(n: usize, k: usize) -> usize {
     let k = k.min(n.saturating_sub(k));
-    (0..k).fold(1usize, |acc, i| acc.saturating_mul(n - i) / (i + 1))
+    let mut acc: u128 = 1;
+    for i in 0..k {
+        acc = acc * (n - i) as u128 / (i + 1) as u128;
+        if acc > usize::MAX as u128 {
+            return usize::MAX;
+        }
+    }
+    acc as usize
+}
+
+/// The functions of the total-degree sets of the off-line and on-line counts (N + 1 each) in
+/// n dimensions, `(M₁, M₂)`.
+pub(crate) fn set_sizes(offline: usize, online: usize, n: usize) -> (usize, usize) {
+    (
+        binomial(offline.max(1) - 1 + n, n),
+        binomial(online.max(1) - 1 + n, n),
+    )
 }
 
 /// The multi-indices `k ∈ ℕⁿ` with `|k|₁ ≤ degree`, in the module's order.
@@ -84,6 +101,16 @@ impl TotalDegree {
 pub(crate) struct Table<'a> {
     pub values: &'a [f64],
     pub points: usize,
+}
+
+impl<'a> Table<'a> {
+    /// A (points × functions) matrix's columns.
+    pub(crate) fn of(m: &'a DMatrix<f64>) -> Self {
+        Table {
+            values: m.as_slice(),
+            points: m.nrows(),
+        }
+    }
 }
 
 /// `out[i_1 + q_1 i_2 + …] = Σ_{k ∈ set} c_k Π_d tables[d](i_d, k_d)` (first dimension
@@ -203,7 +230,10 @@ pub(crate) fn mass_matrix(set: TotalDegree) -> DMatrix<f64> {
 
 /// Of coefficients on `indices`: Σc² (after `c ← c·scale`) and, the largest over the
 /// dimensions, Σc² over the functions whose degree in that dimension is in the top quarter of
-/// `0..=degree` — the spectral self-check's numbers, as the tensor basis measures them.
+/// `0..=degree` — the spectral self-check's numbers, as the tensor basis measures them. (The
+/// share of the top quarter of the *total* degrees does not track the error: on the 2-D test
+/// model it is 0.66, 0.15 and 0.09 at degrees 8, 14 and 20, whose means are 0.27, 0.026 and
+/// 0.0027 sds off, where the per-dimension share falls 0.075, 0.0031, 0.00006.)
 pub(crate) fn scale_and_measure(
     coeffs: &mut [f64],
     scale: f64,
@@ -239,14 +269,7 @@ pub(crate) fn propagation_matrix(
     potential_in_operator: bool,
 ) -> Result<DMatrix<f64>, FilterError> {
     let n = layout.dims();
-    let offline = TotalDegree {
-        dims: n,
-        degree: layout.offline[0] - 1,
-    };
-    let online = TotalDegree {
-        dims: n,
-        degree: layout.online[0] - 1,
-    };
+    let (offline, online) = layout.total_degree();
     let q = layout.quadrature;
     let (xi, w) = legendre::gauss_legendre(q);
     // Per node of the 1-D rule: φ_k, φ_k′, φ_k″ of the off-line count, φ_k of the on-line.
@@ -291,19 +314,24 @@ pub(crate) fn propagation_matrix(
                     d1[d] = f1[k[d]] / r;
                     d2[d] = f2[k[d]] / (r * r);
                 }
-                let all: f64 = v[..n].iter().product();
-                // Π over the dimensions other than d (and e), from the values directly:
-                // every factor φ_k(ξ) may be zero, so no division.
-                let except = |skip: &[usize]| -> f64 {
-                    (0..n).filter(|d| !skip.contains(d)).map(|d| v[d]).product()
-                };
+                // Products of the values before and after each dimension: Π over the others
+                // without dividing (a factor φ_k(ξ) may be zero).
+                let mut before = [1.0; MAX_DIMS + 1];
+                let mut after = [1.0; MAX_DIMS + 1];
+                for d in 0..n {
+                    before[d + 1] = before[d] * v[d];
+                    after[n - 1 - d] = after[n - d] * v[n - 1 - d];
+                }
+                let all = before[n];
                 let mut l0 = -div * all;
                 for d in 0..n {
-                    let others = except(&[d]);
+                    let others = before[d] * after[d + 1];
                     l0 += 0.5 * a[(d, d)] * d2[d] * others - c.f[d][p] * d1[d] * others;
                     for e in d + 1..n {
                         if a[(d, e)] != 0.0 {
-                            l0 += a[(d, e)] * d1[d] * d1[e] * except(&[d, e]);
+                            // ½ (a_de + a_ed) ∂_d ∂_e φ, a symmetric.
+                            let between: f64 = v[d + 1..e].iter().product();
+                            l0 += a[(d, e)] * d1[d] * d1[e] * before[d] * between * after[e + 1];
                         }
                     }
                 }

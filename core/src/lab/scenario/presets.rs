@@ -313,9 +313,11 @@ pub fn all() -> Vec<ScenarioConfig> {
             paper: "004",
             title: "Four independent cubic sensors, a 4-D grid filter in tensor-train format",
             place: "Example 2 in four dimensions",
-            reference: "(46) without the coupling term, d = 4; the tensor-train Yau–Yau filter \
+            reference: "(46) with the drift −0.4 x_i in every component and no coupling term, \
+                d = 4; the tensor-train Yau–Yau filter \
                 of Li, Wang, Yau & Zhang (2023)",
-            description: "004's Example 2 in four dimensions and without its coupling: \
+            description: "004's Example 2's cubic sensors in four dimensions, with the drift \
+                −0.4 x_i in every component and without its coupling: \
                 dx_i = −0.4 x_i dt + dv_i, dy_i = x_i³ dt + dw_i (i = 1, …, 4), σ₀ ∝ \
                 exp(−|x − (1, 1, 1, 1)|²/(2·0.1)), x₀ = (1, 1, 1, 1), T = 5, Δτ = 0.01, UKF \
                 α = 0.01, β = 2, κ = 0 as in 004's Table 2. A full grid of 160 points a side \
