@@ -464,7 +464,7 @@ export const LESSONS = [
     seed: 1,
     scenario: (c) => c,
     body: [
-      'Every grid filter so far held the density at every node of a grid. With $n$ points along each of $d$ axes that is $n^d$ numbers, and the count multiplies by $n$ with every dimension — the curse of dimensionality (Bellman 1961). The preset takes the cubic sensors of Shi, Chen & Yau\'s (2021) Example 2 to four dimensions, with the drift $-0.4\, x_i$ in every component and without the example\'s coupling: four independent cubic sensors,',
+      'Every grid filter so far held the density at every node of a grid. With $n$ points along each of $d$ axes that is $n^d$ numbers, and the count multiplies by $n$ with every dimension — the curse of dimensionality (Bellman 1961). The preset takes the cubic sensors of Shi, Chen & Yau\'s (2021) Example 2 to four dimensions, with the drift $-0.4\\, x_i$ in every component and without the example\'s coupling: four independent cubic sensors,',
       '$$dx_i = -0.4\\, x_i\\, dt + dv_i, \\qquad dy_i = x_i^3\\, dt + dw_i, \\qquad i = 1, \\dots, 4,$$',
       'from $x_0 = (1, 1, 1, 1)$ with prior $N(x_0, 0.1\\, I)$ on the box $[-4, 4]^4$. The tensor-train filter below takes 160 points an axis, the most its default takes beyond one dimension (10 points per prior standard deviation would be 253; 160 interior points space the nodes $8/161 \\approx 0.05$ apart, 6.4 per prior standard deviation): a full grid would hold $160^4 \\approx 6.55 \\cdot 10^8$ values, 5.2 GB in double precision, and in ten dimensions $160^{10} \\approx 1.1 \\cdot 10^{22}$.',
       'The tensor-train (TT) format (Oseledets 2011) writes the value at node $(i_1, \\dots, i_d)$ as a product of matrices, one from each dimension:',
