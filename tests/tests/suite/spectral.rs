@@ -166,11 +166,17 @@ fn impossible_parameters_are_refused() {
     };
     four.initial_state = None;
     four.domain = vec![[-4.0, 4.0]; 4];
-    four.methods = vec![MethodConfig::Spectral(SpectralParams::default())];
+    four.methods = vec![MethodConfig::Spectral(SpectralParams {
+        basis: zakai::SpectralBasis::Tensor,
+        ..SpectralParams::default()
+    })];
     assert!(four
         .validate()
         .iter()
         .any(|p| p.message.contains("n = 1, 2 and 3")));
+    // The default basis (auto) takes the total-degree basis there.
+    four.methods = vec![MethodConfig::Spectral(SpectralParams::default())];
+    assert!(four.validate().is_empty(), "{:?}", four.validate());
     // 3-D: the default (8³) fits the off-line cap, 12³ does not.
     let mut three = linear_against_kalman(3, 8, 3.5);
     assert!(three.validate().is_empty(), "{:?}", three.validate());

@@ -202,7 +202,7 @@ fn total_degree_basis_in_four_five_and_six_dimensions_against_the_kalman_bucy_fi
 /// What the total-degree basis refuses, before anything is built: a dimension beyond 6, N′ ≠ 1,
 /// a basis of no functions, and an off-line step of more than 5·10¹¹ multiply–adds (degree 11
 /// in 6-D: 16⁶ nodes × 12 376 × 24 752 functions); the tensor basis beyond 3-D names the
-/// total-degree basis.
+/// total-degree basis, which the default (auto) takes there.
 #[test]
 fn the_total_degree_basis_refuses_what_it_cannot_do() {
     let total = |f: fn(&mut SpectralParams)| {
@@ -234,9 +234,27 @@ fn the_total_degree_basis_refuses_what_it_cannot_do() {
             .any(|(f, m)| *f == "offline_basis" && m.contains("multiply–adds")),
         "{big:?}"
     );
-    let tensor = SpectralParams::default().problems(4);
+    let tensor = SpectralParams {
+        basis: SpectralBasis::Tensor,
+        ..SpectralParams::default()
+    }
+    .problems(4);
     assert!(
         tensor.len() == 1 && tensor[0].1.contains("basis = total_degree"),
         "{tensor:?}"
     );
+    // The default, auto, is the tensor basis up to 3-D and the total-degree basis beyond.
+    let auto = SpectralParams::default();
+    assert_eq!(
+        (1..=6).map(|n| auto.basis_for(n)).collect::<Vec<_>>(),
+        [
+            SpectralBasis::Tensor,
+            SpectralBasis::Tensor,
+            SpectralBasis::Tensor,
+            SpectralBasis::TotalDegree,
+            SpectralBasis::TotalDegree,
+            SpectralBasis::TotalDegree
+        ]
+    );
+    assert!(auto.problems(6).is_empty());
 }

@@ -33,7 +33,8 @@ pub(crate) struct Layout {
     pub centre: Vec<f64>,
     /// Half-width of the domain per dimension.
     pub half_width: Vec<f64>,
-    /// Which products of the one-dimensional functions span the basis.
+    /// Which products of the one-dimensional functions span the basis (resolved: never
+    /// `Auto`).
     pub basis: SpectralBasis,
 }
 
@@ -59,7 +60,7 @@ impl SpectralParams {
             online_nodes: self.online_nodes(n),
             centre: bounds.iter().map(|b| 0.5 * (b.0 + b.1)).collect(),
             half_width: bounds.iter().map(|b| 0.5 * (b.1 - b.0)).collect(),
-            basis: self.basis,
+            basis: self.basis_for(n),
         }
     }
 }
@@ -83,7 +84,9 @@ impl Layout {
     /// Off-line and on-line coefficients.
     fn lengths(&self) -> (usize, usize) {
         match self.basis {
-            SpectralBasis::Tensor => (self.offline.iter().product(), self.online.iter().product()),
+            SpectralBasis::Auto | SpectralBasis::Tensor => {
+                (self.offline.iter().product(), self.online.iter().product())
+            }
             SpectralBasis::TotalDegree => {
                 let (off, on) = self.total_degree();
                 (off.len(), on.len())
@@ -370,7 +373,7 @@ impl Spectral {
             offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);
         let online = match layout.basis {
-            SpectralBasis::Tensor => {
+            SpectralBasis::Auto | SpectralBasis::Tensor => {
                 let (evaluate, project) = (0..n)
                     .map(|d| axis_matrices(layout.offline[d], layout.online[d], &xi, &w))
                     .unzip();

@@ -44,21 +44,21 @@ impl Method for Spectral {
             summary: "off-line/on-line spectral Yau–Yau filter, generalized Legendre basis".into(),
             paper: "004 Shi, Chen & Yau (2021), (17)–(42)".into(),
             takes: Takes::Increments,
-            dims: "1–3 (tensor basis), 1–6 (total degree)".into(),
+            dims: "1–6 (tensor basis to 3-D, total degree beyond)".into(),
             params: SpectralParams::form(),
             json_only: SpectralParams::json_only(),
         }
     }
     fn display_name(p: &SpectralParams) -> String {
         match p.basis {
-            super::SpectralBasis::Tensor => "Spectral".into(),
             super::SpectralBasis::TotalDegree => "Spectral(total degree)".into(),
+            _ => "Spectral".into(),
         }
     }
     /// `Spectral(N/N′)`: the off-line and on-line basis sizes (004 Alg. 1, 2), when set;
     /// `Spectral(|k| ≤ N/N′)` for the total-degree basis (its degrees).
     fn label(p: &SpectralParams, n: usize) -> String {
-        if p.basis == super::SpectralBasis::TotalDegree {
+        if p.basis_for(n) == super::SpectralBasis::TotalDegree {
             let (off, on) = p.counts(n);
             return format!(
                 "Spectral(|k| ≤ {}/{})",
@@ -88,7 +88,7 @@ impl Method for Spectral {
         // and the off-line Gram matrix (off × off); for the total-degree basis its set sizes
         // and the on-line nodal arrays (about 2n + 5 numbers a node).
         let (off, on) = p.counts(n);
-        if p.basis == super::SpectralBasis::TotalDegree {
+        if p.basis_for(n) == super::SpectralBasis::TotalDegree {
             return p.total_degree_bytes(n);
         }
         let (off, on) = (off.checked_pow(n as u32)?, on.checked_pow(n as u32)?);

@@ -41,8 +41,9 @@ parameters! {
         /// that loses against exp(hᵀS⁻¹Δy) and the filter blows up.
         likelihood: LikelihoodPlacement = LikelihoodPlacement::InUpdate => choice "−½hᵀS⁻¹h goes";
         /// The basis ([`SpectralBasis`]): tensor, the products with every degree below N + 1
-        /// in each dimension (1–3 D); total_degree, those of total degree at most N (1–6 D).
-        basis: SpectralBasis = SpectralBasis::Tensor => choice "basis";
+        /// in each dimension (1–3 D); total_degree, those of total degree at most N (1–6 D);
+        /// auto, the tensor basis up to three dimensions and the total-degree basis beyond.
+        basis: SpectralBasis = SpectralBasis::Auto => choice "basis";
     }
 }
 
@@ -50,9 +51,12 @@ parameters! {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SpectralBasis {
+    /// The tensor basis up to three dimensions, the total-degree basis beyond (the only one
+    /// there): chosen from the model's dimension.
+    #[default]
+    Auto,
     /// `φ_k = Π φ_{k_d}` with every `k_d ≤ N`, `(N + 1)ⁿ` functions (004's appendix (48)), on
     /// tensor Gauss–Legendre grids, in 1–3 dimensions.
-    #[default]
     Tensor,
     /// Those with `k_1 + ⋯ + k_n ≤ N`, `binomial(N + n, n)` functions — 004's "complete
     /// polynomial basis" for "moderate-high dimensional cases" — in 1–6 dimensions; the off-line
@@ -61,7 +65,7 @@ pub enum SpectralBasis {
 }
 
 impl Choices for SpectralBasis {
-    const NAMES: &'static [&'static str] = &["tensor", "total_degree"];
+    const NAMES: &'static [&'static str] = &["auto", "tensor", "total_degree"];
 }
 
 /// The most multiply–adds the total-degree basis' off-line step may take (about two minutes
@@ -69,6 +73,15 @@ impl Choices for SpectralBasis {
 const OFFLINE_WORK: f64 = 5e11;
 
 impl SpectralParams {
+    /// The basis for an n-dimensional model: as set, `Auto` resolved (never `Auto`).
+    pub fn basis_for(&self, n: usize) -> SpectralBasis {
+        match self.basis {
+            SpectralBasis::Auto if n <= tensor::MAX_DIMS => SpectralBasis::Tensor,
+            SpectralBasis::Auto => SpectralBasis::TotalDegree,
+            chosen => chosen,
+        }
+    }
+
     /// Bytes the total-degree basis holds: its on-line nodal arrays (values, weights, their
     /// coordinates, S⁻¹h and the potential: about 2n + 5 numbers a node at m = n) and the
     /// off-line Gram matrix, its right-hand sides and W (`M₁(M₁ + 2M₂)`), or `None` beyond the
@@ -86,7 +99,7 @@ impl SpectralParams {
     /// Off-line and on-line basis counts per dimension (N₁ + 1, N₂ + 1) for an `n`-dimensional
     /// model, the defaults filled in.
     pub fn counts(&self, n: usize) -> (usize, usize) {
-        let (off, on) = match (self.basis, n) {
+        let (off, on) = match (self.basis_for(n), n) {
             (_, 1) => (11, 16),
             (_, 2) => (15, 15),
             (SpectralBasis::Tensor, _) | (_, 3) => (8, 8),
@@ -114,10 +127,10 @@ impl SpectralParams {
     /// for p ≤ 2.
     pub(super) fn quadrature(&self, n: usize) -> usize {
         let (off, on) = self.counts(n);
-        let default = match self.basis {
+        let default = match self.basis_for(n) {
             SpectralBasis::TotalDegree => off.max(on) + 4,
-            SpectralBasis::Tensor if n <= 2 => 2 * off.max(on) + 24,
-            SpectralBasis::Tensor => 2 * off.max(on) + 4,
+            _ if n <= 2 => 2 * off.max(on) + 24,
+            _ => 2 * off.max(on) + 4,
         };
         self.quadrature.unwrap_or(default)
     }
@@ -129,9 +142,9 @@ impl SpectralParams {
     /// degrees of room for the observation factor, which is not a polynomial).
     pub(super) fn online_nodes(&self, n: usize) -> usize {
         let (off, on) = self.counts(n);
-        let default = match self.basis {
+        let default = match self.basis_for(n) {
             SpectralBasis::TotalDegree => (off + on + 9).div_ceil(2).max(off.max(on) + 1),
-            SpectralBasis::Tensor => off + on + 8,
+            _ => off + on + 8,
         };
         self.online_nodes.unwrap_or(default)
     }
@@ -139,7 +152,8 @@ impl SpectralParams {
     /// Every problem with these parameters for an n-dimensional model, `(field, message)`.
     pub fn problems(&self, n: usize) -> Vec<(&'static str, String)> {
         let mut p = Vec::new();
-        match self.basis {
+        let basis = self.basis_for(n);
+        match basis {
             SpectralBasis::Tensor if !(1..=tensor::MAX_DIMS).contains(&n) => {
                 p.push((
                     "method",
@@ -175,7 +189,7 @@ impl SpectralParams {
                 ),
             ));
         }
-        if self.basis == SpectralBasis::TotalDegree && self.partitions != 1 {
+        if basis == SpectralBasis::TotalDegree && self.partitions != 1 {
             p.push((
                 "partitions",
                 format!(
@@ -201,8 +215,8 @@ impl SpectralParams {
         // off-line Gram matrix and right-hand sides.
         // Checked: impossible sizes overflow a 32-bit `usize` (wasm32).
         let n32 = n as u32;
-        let bytes = match self.basis {
-            SpectralBasis::Tensor => off
+        let bytes = match basis {
+            SpectralBasis::Auto | SpectralBasis::Tensor => off
                 .checked_pow(n32)
                 .and_then(|z| z.checked_mul(2)?.checked_add(on.checked_pow(n32)?))
                 .and_then(|columns| {
@@ -217,9 +231,9 @@ impl SpectralParams {
             let size = bytes.map_or("more than the address space".into(), |b| {
                 format!("{} MiB", b >> 20)
             });
-            let (field, what) = match self.basis {
-                SpectralBasis::Tensor => ("quadrature", "nodes"),
+            let (field, what) = match basis {
                 SpectralBasis::TotalDegree => ("online_nodes", "on-line nodes"),
+                _ => ("quadrature", "nodes"),
             };
             p.push((
                 field,
@@ -228,7 +242,7 @@ impl SpectralParams {
                 ),
             ));
         }
-        if self.basis == SpectralBasis::TotalDegree {
+        if basis == SpectralBasis::TotalDegree {
             // The off-line Gram matrix and right-hand sides: every node of the off-line grid
             // against every pair of functions (measured about 4·10⁹ a second on one core).
             let (m1, m2) = total_degree::set_sizes(off, on, n);
