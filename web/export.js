@@ -104,7 +104,7 @@ function exportPng() {
     ['#trajectory-plot canvas', `estimates of x${shownDim() + 1} against time`],
     ['#heat', `posterior density over time of ${$('density-method').selectedOptions[0]?.textContent ?? ''}`],
     ['#density-plot canvas', 'posterior densities at the time shown (dashed: truth)'],
-    ['#heatmap', `joint density of x1, x2 of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
+    ['#heatmap', `joint density of ${$('heatmap-pair').selectedOptions[0]?.textContent ?? 'x1, x2'} of ${$('heatmap-method').selectedOptions[0]?.textContent ?? ''}`],
     ['#observations-plot canvas', $('observations-caption').textContent],
     ['#innovations-plot canvas', `innovations z${(Number($('innovation-component').value) || 0) + 1} − h(x̂⁻) of each method`],
     ['#errors-plot canvas', `error of each estimate of x${shownDim() + 1} against ${$('error-against').selectedOptions[0]?.textContent ?? ''} (log scale)`],
