@@ -215,17 +215,26 @@ pub(crate) fn propagation_matrix(
     }
     let a = z.transpose() * &wz;
     let d = wz.transpose() * online;
+    solve_normal_equations(a, &d)
+}
+
+/// W = A⁻¹ D, the normal equations (37)–(38) of Algorithm 1 solved by Cholesky; refused when
+/// A or D is not finite or A is not positive definite.
+pub(crate) fn solve_normal_equations(
+    a: DMatrix<f64>,
+    d: &DMatrix<f64>,
+) -> Result<DMatrix<f64>, FilterError> {
     if a.iter().chain(d.iter()).any(|v| !v.is_finite()) {
         return Err(FilterError::Unsuitable(
             "the spectral filter's off-line matrices are not finite: shrink the domain or T₀"
                 .into(),
         ));
     }
+    let functions = a.nrows();
     let chol = a.cholesky().ok_or_else(|| {
         FilterError::Unsuitable(format!(
-            "the normal matrix A (004 (38)) of {} off-line basis functions is not positive definite; use fewer off-line basis functions",
-            layout.offline.iter().product::<usize>()
+            "the normal matrix A (004 (38)) of {functions} off-line basis functions is not positive definite; use fewer off-line basis functions"
         ))
     })?;
-    Ok(chol.solve(&d))
+    Ok(chol.solve(d))
 }

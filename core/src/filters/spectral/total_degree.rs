@@ -19,7 +19,6 @@
 //!   tensor Gauss–Legendre grid, so that the functions' values at every node are never held at
 //!   once.
 
-use alloc::format;
 use alloc::vec;
 use alloc::vec::Vec;
 
@@ -351,18 +350,7 @@ pub(crate) fn propagation_matrix(
         gram.gemm_tr(1.0, &z, &z, 1.0);
         rhs.gemm_tr(1.0, &z, &phi, 1.0);
     }
-    if gram.iter().chain(rhs.iter()).any(|v| !v.is_finite()) {
-        return Err(FilterError::Unsuitable(
-            "the spectral filter's off-line matrices are not finite: shrink the domain or T₀"
-                .into(),
-        ));
-    }
-    let chol = gram.cholesky().ok_or_else(|| {
-        FilterError::Unsuitable(format!(
-            "the normal matrix A (004 (38)) of {m1} off-line basis functions is not positive definite; use fewer off-line basis functions"
-        ))
-    })?;
-    Ok(chol.solve(&rhs))
+    super::offline::solve_normal_equations(gram, &rhs)
 }
 
 /// `a = G Gᵀ`, which the total-degree off-line step needs constant (its derivatives are not
