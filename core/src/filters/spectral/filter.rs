@@ -95,6 +95,25 @@ impl Layout {
     }
 }
 
+/// Algorithm 1 for the layout's basis: over `t0` in `partitions` implicit Euler steps (the
+/// tensor basis), or in one (the total-degree basis takes N′ = 1, which its parameters check,
+/// and a shorter remainder or gap gets one as well).
+fn propagation_matrix(
+    model: &Model,
+    layout: &Layout,
+    (t0, partitions): (f64, usize),
+    potential_in_operator: bool,
+) -> Result<DMatrix<f64>, FilterError> {
+    match layout.basis {
+        SpectralBasis::TotalDegree => {
+            total_degree::propagation_matrix(model, layout, t0, potential_in_operator)
+        }
+        SpectralBasis::Auto | SpectralBasis::Tensor => {
+            offline::propagation_matrix(model, layout, (t0, partitions), potential_in_operator)
+        }
+    }
+}
+
 /// The per-dimension matrices of the on-line step: the off-line basis at the on-line nodes
 /// (nodes × N₁) and the projection `B⁻¹ Φᵀ diag(w)` (39) from nodal values to on-line
 /// coefficients (N₂ × nodes).
@@ -369,8 +388,7 @@ impl Spectral {
         }
         let layout = params.layout(n, bounds);
         let in_operator = params.likelihood == LikelihoodPlacement::InOperator;
-        let propagation =
-            offline::propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
+        let propagation = propagation_matrix(model, &layout, (t0, params.partitions), in_operator)?;
         let (xi, w) = legendre::gauss_legendre(layout.online_nodes);
         let online = match layout.basis {
             SpectralBasis::Auto | SpectralBasis::Tensor => {
@@ -511,12 +529,8 @@ impl Spectral {
     /// accurate.
     fn gap(&mut self, whole: bool, rest: f64) -> Result<(), FilterError> {
         if whole && self.whole_gap.is_none() {
-            let w = offline::propagation_matrix(
-                &self.model,
-                &self.layout,
-                (self.t0, self.partitions),
-                false,
-            )?;
+            let w =
+                propagation_matrix(&self.model, &self.layout, (self.t0, self.partitions), false)?;
             self.whole_gap = Some(Propagation::new(w, &self.online));
         }
         if rest > 0.0 {
@@ -538,7 +552,7 @@ impl Spectral {
             return Ok(());
         }
         let partitions = libm::ceil(self.partitions as f64 * length / self.t0).max(1.0) as usize;
-        let w = offline::propagation_matrix(
+        let w = propagation_matrix(
             &self.model,
             &self.layout,
             (length, partitions),

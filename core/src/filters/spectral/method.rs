@@ -108,7 +108,14 @@ impl Method for Spectral {
         p: &SpectralParams,
         problem: &ProblemContext,
     ) -> Option<(SpectralParams, String)> {
-        if problem.model.n != 1 || (p.online_basis.is_some() && p.offline_basis.is_some()) {
+        let n = problem.model.n;
+        if p.online_basis.is_some() && p.offline_basis.is_some() {
+            return None;
+        }
+        if p.basis_for(n) == super::SpectralBasis::TotalDegree {
+            return total_degree_defaults(p, problem);
+        }
+        if n != 1 {
             return None;
         }
         let (lo, hi) = problem.bounds[0];
@@ -144,6 +151,63 @@ impl Method for Spectral {
             .is_empty()
             .then(|| (refined, format!("{a}, {b}")))
     }
+}
+
+/// The off-line work a total-degree basis left unset may take, in multiply–adds of its Gram
+/// matrix and right-hand sides: 1.5·10¹⁰, a build of 2–3 s (degree 8 in 4-D, 5 in 5-D, 3 in
+/// 6-D; BENCHMARKS.md).
+const TOTAL_DEGREE_BUDGET: f64 = 1.5e10;
+
+/// The total-degree basis left unset: the functions per dimension the domain asks for against
+/// the prior's widest standard deviation ([`basis_for`], as in 1-D), at most as many as keep
+/// the off-line step within [`TOTAL_DEGREE_BUDGET`].
+fn total_degree_defaults(
+    p: &SpectralParams,
+    problem: &ProblemContext,
+) -> Option<(SpectralParams, String)> {
+    let n = problem.model.n;
+    let cov = problem.prior.covariance();
+    let (mut half, mut sd) = (0.0, 1.0);
+    for (d, &(lo, hi)) in problem.bounds.iter().enumerate() {
+        let (h, s) = (0.5 * (hi - lo), libm::sqrt(cov[(d, d)]));
+        if h / s > half / sd {
+            (half, sd) = (h, s);
+        }
+    }
+    let wanted = basis_for(half, sd)?;
+    let work = |count: usize| {
+        let (m1, m2) = super::total_degree::set_sizes(count, count, n);
+        let nodes = SpectralParams {
+            offline_basis: Some(count),
+            online_basis: Some(count),
+            ..p.clone()
+        }
+        .quadrature(n);
+        libm::pow(nodes as f64, n as f64) * m1 as f64 * (m1 + m2) as f64
+    };
+    let affordable = (2..=MAX_BASIS)
+        .take_while(|&c| work(c) <= TOTAL_DEGREE_BUDGET)
+        .last()
+        .unwrap_or(2);
+    let size = wanted.min(affordable);
+    let chosen = SpectralParams {
+        offline_basis: Some(p.offline_basis.unwrap_or(size)),
+        online_basis: Some(p.online_basis.unwrap_or(size)),
+        ..p.clone()
+    };
+    let functions = super::total_degree::binomial(size - 1 + n, n);
+    let note = if size < wanted {
+        format!(
+            "total degree {} ({functions} functions): the most whose off-line step stays within {TOTAL_DEGREE_BUDGET:.1e} multiply–adds; the domain's half-width {half:.3} against the prior's standard deviation {sd:.3} asks for {wanted} per dimension — the self-check says when the basis is too small for the posterior",
+            size - 1
+        )
+    } else {
+        format!(
+            "total degree {} ({functions} functions), chosen from the domain's half-width {half:.3} against the prior's standard deviation {sd:.3} ({FUNCTIONS_PER_SD} functions per sd, at least 16)",
+            size - 1
+        )
+    };
+    Some((chosen, note))
 }
 
 /// Legendre functions per prior standard deviation across the domain's half-width that a

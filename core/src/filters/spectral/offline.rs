@@ -168,11 +168,6 @@ pub(crate) fn propagation_matrix(
     (t0, partitions): (f64, usize),
     potential_in_operator: bool,
 ) -> Result<DMatrix<f64>, FilterError> {
-    if layout.basis == super::SpectralBasis::TotalDegree {
-        // One implicit Euler step over the whole length: N′ = 1 is what that basis takes (its
-        // parameters refuse another), and a shorter remainder or gap gets one as well.
-        return super::total_degree::propagation_matrix(model, layout, t0, potential_in_operator);
-    }
     let quadrature = layout.quadrature;
     let (x, w) = legendre::gauss_legendre(quadrature);
     let nodes = Nodes {
