@@ -115,9 +115,10 @@ impl SpectralParams {
         )
     }
 
-    /// Gauss–Legendre nodes per dimension off-line: as set, else `2·max(N₁, N₂) + 24` for
-    /// n ≤ 2 (24 degrees of room for polynomial models) and `2·max(N₁, N₂) + 4` for n = 3
-    /// (whose tensor grid grows with the cube).
+    /// Gauss–Legendre nodes per dimension off-line: as set, else, with `c₁ = N₁ + 1` and
+    /// `c₂ = N₂ + 1` functions per dimension, `2·max(c₁, c₂) + 24` for n ≤ 2 (24 degrees of
+    /// room for polynomial models) and `2·max(c₁, c₂) + 4` for n = 3 (whose tensor grid grows
+    /// with the cube).
     ///
     /// The total-degree basis writes its derivatives out instead of differentiating an
     /// interpolant, so its products need only be integrated: with `c = N + 1` functions per
