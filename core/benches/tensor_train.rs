@@ -17,6 +17,18 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use zakai::simulate::{rng_from_seed, simulate, TimeGrid};
 use zakai::{Filter, Model, Noise, TensorTrainFilter, TensorTrainParams};
 
+/// One step of Δτ = 0.01 with the increment `dy`, from a fresh copy of `filter` each time.
+fn one_step<F: Filter + Clone>(b: &mut criterion::Bencher, filter: &F, dy: &[f64]) {
+    b.iter_batched(
+        || filter.clone(),
+        |mut f| {
+            f.step_increment(0.01, dy).unwrap();
+            f
+        },
+        criterion::BatchSize::LargeInput,
+    )
+}
+
 /// The d-dimensional model: independent cubic sensors, or the coupled linear chain.
 fn model(d: usize, coupled: bool) -> Model {
     let drift: Vec<String> = (1..=d)
@@ -95,16 +107,7 @@ fn per_step(
         g.bench_with_input(
             BenchmarkId::from_parameter(label(d, max_rank)),
             &d,
-            |b, _| {
-                b.iter_batched(
-                    || tt.clone(),
-                    |mut f| {
-                        f.step_increment(0.01, &rows[0]).unwrap();
-                        f
-                    },
-                    criterion::BatchSize::LargeInput,
-                )
-            },
+            |b, _| one_step(b, &tt, &rows[0]),
         );
     }
     g.finish();
@@ -176,16 +179,7 @@ fn equal_accuracy(c: &mut Criterion) {
     // Stepped once: its exponentials made (they are kept for every later step).
     let mut warm = tt.clone();
     warm.step_increment(0.01, &rows[0]).unwrap();
-    g.bench_function("TT(64)", |b| {
-        b.iter_batched(
-            || warm.clone(),
-            |mut f| {
-                f.step_increment(0.01, &rows[1]).unwrap();
-                f
-            },
-            criterion::BatchSize::LargeInput,
-        )
-    });
+    g.bench_function("TT(64)", |b| one_step(b, &warm, &rows[1]));
     for particles in [1_000usize, 10_000, 100_000] {
         let pf = |seed: u64| {
             Pf::builder(&model)
@@ -207,14 +201,7 @@ fn equal_accuracy(c: &mut Criterion) {
         let mut filter = pf(1);
         filter.step_increment(0.01, &rows[0]).unwrap();
         g.bench_function(format!("PF({particles})"), |b| {
-            b.iter_batched(
-                || filter.clone(),
-                |mut f| {
-                    f.step_increment(0.01, &rows[1]).unwrap();
-                    f
-                },
-                criterion::BatchSize::LargeInput,
-            )
+            one_step(b, &filter, &rows[1])
         });
     }
     g.finish();
