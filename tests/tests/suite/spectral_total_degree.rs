@@ -258,3 +258,47 @@ fn the_total_degree_basis_refuses_what_it_cannot_do() {
     );
     assert!(auto.problems(6).is_empty());
 }
+
+/// A recorded series' irregularities on the total-degree basis: an interval of 1.3 Δτ (a
+/// remainder operator made for 0.3 Δτ), an increment with one component missing, one with
+/// both (a prediction), and a step refused for its length, which leaves the filter as it was.
+#[test]
+fn gaps_irregular_steps_and_refusals_leave_the_filter_consistent() {
+    let model = Model::from_text(&["-x1", "-x2"], &["x1", "x2"], Noise::continuous(1.0)).unwrap();
+    let cov = [[0.5, 0.0], [0.0, 0.5]];
+    let mut spectral = Spectral::builder(&model)
+        .prior_gaussian(&[0.3, -0.2], &cov)
+        .domain(&[(-3.0, 3.0), (-3.0, 3.0)])
+        .dt(0.01)
+        .params(SpectralParams {
+            offline_basis: Some(21),
+            online_basis: Some(21),
+            basis: SpectralBasis::TotalDegree,
+            ..SpectralParams::default()
+        })
+        .build()
+        .unwrap();
+    let mut kalman = Kalman::builder(&model)
+        .prior_gaussian(&[0.3, -0.2], &cov)
+        .build()
+        .unwrap();
+    let steps: [(f64, [f64; 2]); 4] = [
+        (0.01, [0.004, -0.003]),
+        (0.013, [0.006, f64::NAN]),
+        (0.01, [f64::NAN, f64::NAN]),
+        (0.01, [-0.002, 0.001]),
+    ];
+    for (dt, dy) in steps {
+        spectral.step_increment(dt, &dy).unwrap();
+        kalman.step_increment(dt, &dy).unwrap();
+        let (a, b) = (spectral.estimate(), kalman.estimate());
+        let p = b.covariance.unwrap();
+        for i in 0..2 {
+            let off = (a.mean[i] - b.mean[i]).abs() / p[(i, i)].sqrt();
+            assert!(off < 0.01, "dt {dt}, dy {dy:?}: component {i} {off} sd off");
+        }
+    }
+    let before = spectral.estimate();
+    assert!(spectral.step_increment(0.01, &[0.1]).is_err());
+    assert_eq!(spectral.estimate(), before);
+}
